@@ -1,0 +1,160 @@
+#include "engine/accel/accel_graph.h"
+
+#include "engine/core/timer.h"
+
+namespace strata {
+
+Result<std::unique_ptr<AccelGraph>> AccelGraph::create(const AccelConfig& config) {
+    auto device = EmbreeDevice::create(config.embree_config);
+    if (!device) return device.error();
+    return std::unique_ptr<AccelGraph>(new AccelGraph(config, std::move(device.value())));
+}
+
+AccelGraph::AccelGraph(const AccelConfig& config, std::unique_ptr<EmbreeDevice> device)
+    : m_config(config),
+      m_device(std::move(device)),
+      m_blas(*m_device),
+      m_tlas(make_embree_tlas(*m_device, config.tlas_prefer)) {}
+
+AccelGraph::~AccelGraph() {
+    // Instances hold references to BLASes: drop the TLAS first.
+    m_tlas.reset();
+}
+
+CommitPlan AccelGraph::plan(const Scene& scene) const {
+    Stopwatch clock;
+    CommitPlan plan;
+    RebuildReport& report = plan.report;
+    report.version = scene.version();
+    report.planned = true;
+    const ChangeTracker& changes = scene.changes();
+
+    // Step: meshes. Each dirty mesh gets at most one BLAS action.
+    constexpr uint32_t GEOMETRY_BITS = dirty::MeshAdded | dirty::MeshPoints | dirty::MeshTopology |
+                                       dirty::MeshRefitRequested | dirty::MeshRebuildRequested;
+    for (MeshHandle h : changes.meshes) {
+        const BlasRecord* built = m_blas.find(h);
+        const auto rec = scene.mesh(h);
+        if (!rec) {
+            if (built) {
+                plan.release.push_back(h);
+                report.released.push_back(built->mesh_id);
+            }
+            continue;
+        }
+        const MeshRecord& mesh = *rec.value();
+        if ((mesh.dirty & GEOMETRY_BITS) == 0) continue;
+
+        MeshBuildEntry entry;
+        entry.mesh = mesh.id;
+        entry.primitives = mesh.triangles.size();
+        std::optional<MeshMetrics> metrics;
+        bool rebuild = true;
+        if (!built) {
+            entry.reason = BuildReason::Added;
+        } else if (mesh.dirty & dirty::MeshTopology) {
+            entry.reason = BuildReason::TopologyChanged;
+        } else if (mesh.dirty & dirty::MeshRebuildRequested) {
+            entry.reason = BuildReason::RebuildRequested;
+        } else {
+            metrics = measure_mesh(mesh);
+            const BuildReason asked = (mesh.dirty & dirty::MeshPoints) ? BuildReason::PositionsChanged
+                                                                       : BuildReason::RefitRequested;
+            RefitDecision d = decide_refit(m_config.refit_policy, mesh.build, built->baseline,
+                                           *metrics, asked);
+            rebuild = d.rebuild;
+            entry.reason = d.reason;
+            entry.detail = std::move(d.detail);
+        }
+        if (rebuild) {
+            plan.rebuild.push_back(h);
+            plan.rebuild_metrics.push_back(metrics);
+            report.rebuilt.push_back(std::move(entry));
+            report.primitives_built += mesh.triangles.size();
+        } else {
+            plan.refit.push_back(h);
+            report.refit.push_back(std::move(entry));
+            report.primitives_refit += mesh.triangles.size();
+        }
+        // Instances of a changed BLAS must have their bounds re-read by the TLAS.
+        for (InstanceHandle user : mesh.users) {
+            if (m_tlas->holds(user)) plan.tlas.blas_changed.push_back(user);
+        }
+    }
+    report.blas_rebuilds = static_cast<uint32_t>(report.rebuilt.size());
+    report.blas_refits = static_cast<uint32_t>(report.refit.size());
+
+    // Step: instances. Shading-only changes (material, user id) need no TLAS work, and an
+    // instance added and removed within the same commit window leaves nothing to do.
+    for (InstanceHandle h : changes.instances) {
+        const auto rec = scene.instance(h);
+        if (!rec) {
+            if (m_tlas->holds(h)) plan.tlas.changed.push_back(h);
+        } else if (rec.value()->dirty & dirty::INSTANCE_TLAS_BITS) {
+            plan.tlas.changed.push_back(h);
+        }
+    }
+
+    // Step: TLAS action. An explicit rebuild request wins; otherwise any change is one update.
+    if (changes.scene_bits & dirty::TlasRebuildRequested) {
+        report.tlas_action = TlasAction::Rebuild;
+    } else if (!plan.tlas.empty() || (changes.scene_bits & dirty::TlasUpdateRequested)) {
+        report.tlas_action = TlasAction::Update;
+    }
+    report.tlas_instances = scene.instances().size();
+    report.phases.plan_ms = clock.ms();
+    return plan;
+}
+
+Result<RebuildReport> AccelGraph::execute(const Scene& scene, CommitPlan&& plan) {
+    Stopwatch total;
+    RebuildReport report = std::move(plan.report);
+    report.planned = false;
+
+    // Step: BLAS builds and refits, one mesh at a time (each Embree build is parallel inside).
+    Stopwatch blas_clock;
+    {
+        MemoryScope memory(*m_device, MemoryCategory::Blas);
+        for (std::size_t i = 0; i < plan.rebuild.size(); ++i) {
+            Stopwatch clock;
+            const MeshRecord& mesh = *scene.mesh(plan.rebuild[i]).value();
+            const MeshMetrics metrics =
+                plan.rebuild_metrics[i] ? *plan.rebuild_metrics[i] : measure_mesh(mesh);
+            if (Status s = m_blas.build(plan.rebuild[i], mesh, metrics); !s) return s.error();
+            report.rebuilt[i].ms = clock.ms();
+        }
+        for (std::size_t i = 0; i < plan.refit.size(); ++i) {
+            Stopwatch clock;
+            if (Status s = m_blas.refit(plan.refit[i], *scene.mesh(plan.refit[i]).value()); !s)
+                return s.error();
+            report.refit[i].ms = clock.ms();
+        }
+    }
+    report.phases.blas_ms = blas_clock.ms();
+
+    // Step: TLAS work.
+    Stopwatch tlas_clock;
+    if (report.tlas_action == TlasAction::Rebuild) {
+        if (Status s = m_tlas->rebuild(scene, m_blas); !s) return s.error();
+    } else if (report.tlas_action == TlasAction::Update) {
+        if (Status s = m_tlas->update(scene, m_blas, plan.tlas); !s) return s.error();
+    }
+    report.phases.tlas_ms = tlas_clock.ms();
+    report.tlas_instances = m_tlas->instance_count();
+
+    // Step: BLAS releases, after the TLAS has dropped the instances that still referenced them
+    // (Embree frees a BLAS only with its last reference).
+    blas_clock.restart();
+    {
+        MemoryScope memory(*m_device, MemoryCategory::Blas);
+        for (MeshHandle h : plan.release) m_blas.release(h);
+    }
+    report.phases.blas_ms += blas_clock.ms();
+
+    report.memory_blas_bytes = m_device->bytes(MemoryCategory::Blas);
+    report.memory_tlas_bytes = m_device->bytes(MemoryCategory::Tlas);
+    report.phases.total_ms = report.phases.plan_ms + total.ms();
+    return report;
+}
+
+}  // namespace strata

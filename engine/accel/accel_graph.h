@@ -1,0 +1,63 @@
+#pragma once
+// The acceleration graph: BLAS per mesh, one TLAS over instances, and the commit that brings them
+// in line with the scene doing the least work. A commit is planned first (pure: which BLASes to
+// rebuild, refit or release and what the TLAS needs, with reasons), then executed. GET /v1/plan
+// shows the plan without executing it.
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/accel/blas_store.h"
+#include "engine/accel/embree_device.h"
+#include "engine/accel/refit_policy.h"
+#include "engine/accel/report.h"
+#include "engine/accel/tlas.h"
+#include "engine/scene/scene.h"
+
+namespace strata {
+
+struct AccelConfig {
+    RefitPolicy refit_policy;
+    BuildPreference tlas_prefer = BuildPreference::FastTrace;
+    std::string embree_config;  ///< Embree device configuration string
+};
+
+/// A planned commit. The handle vectors run parallel to the report's entry lists.
+struct CommitPlan {
+    RebuildReport report;
+    std::vector<MeshHandle> rebuild;
+    std::vector<std::optional<MeshMetrics>> rebuild_metrics;  ///< measured while planning, if so
+    std::vector<MeshHandle> refit;
+    std::vector<MeshHandle> release;
+    TlasDelta tlas;
+};
+
+class AccelGraph {
+public:
+    static Result<std::unique_ptr<AccelGraph>> create(const AccelConfig& config);
+    ~AccelGraph();
+
+    /// What a commit of `scene`'s current changes would do. Makes no Embree call.
+    CommitPlan plan(const Scene& scene) const;
+    /// Carries out `plan`, made against the same scene state. Fills in times and memory.
+    Result<RebuildReport> execute(const Scene& scene, CommitPlan&& plan);
+
+    const TlasStrategy& tlas() const { return *m_tlas; }
+    const BlasStore& blas() const { return m_blas; }
+    const RefitPolicy& refit_policy() const { return m_config.refit_policy; }
+    void set_refit_policy(const RefitPolicy& p) { m_config.refit_policy = p; }
+
+    int64_t memory_bytes(MemoryCategory c) const { return m_device->bytes(c); }
+
+private:
+    AccelGraph(const AccelConfig& config, std::unique_ptr<EmbreeDevice> device);
+
+    AccelConfig m_config;
+    std::unique_ptr<EmbreeDevice> m_device;
+    BlasStore m_blas;
+    std::unique_ptr<TlasStrategy> m_tlas;
+};
+
+}  // namespace strata

@@ -1,0 +1,173 @@
+#include "engine/accel/blas_store.h"
+
+#include <cstring>
+
+#include <embree3/rtcore.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+namespace strata {
+
+namespace {
+
+struct SceneSetup {
+    RTCBuildQuality scene_quality;
+    RTCBuildQuality geometry_quality;
+};
+
+SceneSetup setup_for(const BuildOptions& o) {
+    if (o.allow_refit) return {RTC_BUILD_QUALITY_LOW, RTC_BUILD_QUALITY_REFIT};
+    if (o.prefer == BuildPreference::FastTrace) return {RTC_BUILD_QUALITY_HIGH, RTC_BUILD_QUALITY_HIGH};
+    return {RTC_BUILD_QUALITY_LOW, RTC_BUILD_QUALITY_LOW};
+}
+
+void copy_vertices(RTCGeometry g, const std::vector<Vec3>& positions, uint32_t begin, uint32_t end) {
+    static_assert(sizeof(Vec3) == 3 * sizeof(float));
+    auto* dst = static_cast<float*>(rtcGetGeometryBufferData(g, RTC_BUFFER_TYPE_VERTEX, 0));
+    std::memcpy(dst + std::size_t(begin) * 3, positions.data() + begin,
+                std::size_t(end - begin) * sizeof(Vec3));
+}
+
+void copy_triangles(RTCGeometry g, const std::vector<Triangle>& tris) {
+    static_assert(sizeof(Triangle) == 3 * sizeof(uint32_t));
+    auto* dst = rtcGetGeometryBufferData(g, RTC_BUFFER_TYPE_INDEX, 0);
+    std::memcpy(dst, tris.data(), tris.size() * sizeof(Triangle));
+}
+
+struct MetricsAccumulator {
+    Bounds3 bounds;
+    double triangle_area = 0.0;
+};
+
+}  // namespace
+
+MeshMetrics measure_mesh(const MeshRecord& mesh) {
+    const auto& p = mesh.positions;
+    const auto& t = mesh.triangles;
+    // Every vertex of a valid mesh may be unreferenced, so bounds come from the vertex array the
+    // BVH would see through the triangles: measure triangles only.
+    const MetricsAccumulator total = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, t.size(), 16384), MetricsAccumulator{},
+        [&](const tbb::blocked_range<std::size_t>& r, MetricsAccumulator acc) {
+            float area = 0.0f;
+            for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                Bounds3 b;
+                b.extend(p[t[i].x]);
+                b.extend(p[t[i].y]);
+                b.extend(p[t[i].z]);
+                area += b.surface_area();
+                acc.bounds.extend(b);
+            }
+            acc.triangle_area += double(area);
+            return acc;
+        },
+        [](MetricsAccumulator a, const MetricsAccumulator& b) {
+            a.bounds.extend(b.bounds);
+            a.triangle_area += b.triangle_area;
+            return a;
+        });
+    return {total.bounds.surface_area(), total.triangle_area};
+}
+
+BlasStore::~BlasStore() {
+    for (uint32_t slot = 0; slot < m_records.size(); ++slot) release_slot(slot);
+}
+
+const BlasRecord* BlasStore::find(MeshHandle h) const {
+    if (h.index >= m_records.size()) return nullptr;
+    const BlasRecord& r = m_records[h.index];
+    return r.scene && r.generation == h.generation ? &r : nullptr;
+}
+
+RTCSceneTy* BlasStore::scene(uint32_t slot) const {
+    return slot < m_records.size() ? m_records[slot].scene : nullptr;
+}
+
+void BlasStore::release_slot(uint32_t slot) {
+    BlasRecord& r = m_records[slot];
+    if (!r.scene) return;
+    m_primitives -= r.triangle_count;
+    rtcReleaseGeometry(r.geometry);
+    rtcReleaseScene(r.scene);
+    r = BlasRecord{};
+}
+
+bool BlasStore::release(MeshHandle h) {
+    if (!find(h)) return false;
+    release_slot(h.index);
+    return true;
+}
+
+Status BlasStore::build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics& metrics) {
+    if (h.index >= m_records.size()) m_records.resize(h.index + 1);
+    BlasRecord& r = m_records[h.index];
+    if (r.scene && (r.generation != h.generation || !(r.options == mesh.build))) release_slot(h.index);
+
+    const auto vertex_count = static_cast<uint32_t>(mesh.positions.size());
+    const auto triangle_count = static_cast<uint32_t>(mesh.triangles.size());
+    RTCDevice device = m_device.get();
+
+    // Step: create the scene and geometry the first time this mesh is built.
+    if (!r.scene) {
+        const SceneSetup setup = setup_for(mesh.build);
+        r.scene = rtcNewScene(device);
+        rtcSetSceneBuildQuality(r.scene, setup.scene_quality);
+        rtcSetSceneFlags(r.scene, RTC_SCENE_FLAG_NONE);
+        r.geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        rtcSetGeometryBuildQuality(r.geometry, setup.geometry_quality);
+        rtcAttachGeometryByID(r.scene, r.geometry, 0);
+        r.mesh_id = mesh.id;
+        r.generation = h.generation;
+        r.options = mesh.build;
+        r.vertex_count = r.triangle_count = 0;
+    }
+
+    // Step: (re)allocate buffers when sizes change, then upload everything.
+    if (r.vertex_count != vertex_count) {
+        rtcSetNewGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                sizeof(Vec3), vertex_count);
+    }
+    if (r.triangle_count != triangle_count) {
+        rtcSetNewGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                sizeof(Triangle), triangle_count);
+    }
+    if (Status s = m_device.status("allocating BLAS buffers"); !s) {
+        release_slot(h.index);
+        return s;
+    }
+    copy_vertices(r.geometry, mesh.positions, 0, vertex_count);
+    copy_triangles(r.geometry, mesh.triangles);
+    // Marking the index buffer modified moves the geometry's topology version, which is what
+    // makes a REFIT-quality geometry rebuild instead of refit.
+    rtcUpdateGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_VERTEX, 0);
+    rtcUpdateGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_INDEX, 0);
+    rtcCommitGeometry(r.geometry);
+    rtcCommitScene(r.scene);
+
+    m_primitives += triangle_count;
+    m_primitives -= r.triangle_count;
+    r.vertex_count = vertex_count;
+    r.triangle_count = triangle_count;
+    r.baseline = BuildBaseline{metrics, 0};
+    if (Status s = m_device.status("building BLAS"); !s) {
+        release_slot(h.index);
+        return s;
+    }
+    return {};
+}
+
+Status BlasStore::refit(MeshHandle h, const MeshRecord& mesh) {
+    BlasRecord* r = h.index < m_records.size() ? &m_records[h.index] : nullptr;
+    STRATA_CHECK(r && r->scene && r->generation == h.generation);
+    STRATA_CHECK(r->vertex_count == mesh.positions.size());
+    const uint32_t begin = std::min(mesh.dirty_begin, r->vertex_count);
+    const uint32_t end = std::min(mesh.dirty_end, r->vertex_count);
+    if (begin < end) copy_vertices(r->geometry, mesh.positions, begin, end);
+    rtcUpdateGeometryBuffer(r->geometry, RTC_BUFFER_TYPE_VERTEX, 0);
+    rtcCommitGeometry(r->geometry);
+    rtcCommitScene(r->scene);
+    ++r->baseline.refits_since_build;
+    return m_device.status("refitting BLAS");
+}
+
+}  // namespace strata

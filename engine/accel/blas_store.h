@@ -1,0 +1,75 @@
+#pragma once
+// One bottom-level acceleration structure (an Embree scene holding one triangle geometry) per
+// mesh slot. Any number of instances share it. Geometry lives in Embree-owned buffers that only
+// the commit writes, so edits never touch what a launch is tracing.
+//
+// Build options map onto Embree as follows (Embree honours a per-geometry quality only in a
+// scene of quality LOW, and only REFIT-quality geometry is refit on a vertex-only change):
+//
+//   allow_refit  prefer       scene quality  geometry quality  builder
+//   true         either       LOW            REFIT             SAH, then refit in place
+//   false        fast_trace   HIGH           HIGH              SAH with spatial splits
+//   false        fast_build   LOW            LOW               Morton
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "engine/accel/embree_device.h"
+#include "engine/accel/refit_policy.h"
+#include "engine/core/handle.h"
+#include "engine/core/result.h"
+#include "engine/scene/scene.h"
+
+struct RTCSceneTy;
+struct RTCGeometryTy;
+
+namespace strata {
+
+/// State of one built BLAS.
+struct BlasRecord {
+    std::string mesh_id;  ///< kept for reports after the mesh itself is removed
+    RTCSceneTy* scene = nullptr;
+    RTCGeometryTy* geometry = nullptr;
+    uint32_t generation = 0;  ///< generation of the mesh handle it was built for
+    uint32_t vertex_count = 0;
+    uint32_t triangle_count = 0;
+    BuildOptions options;
+    BuildBaseline baseline;  ///< drift reference for the refit policy
+};
+
+class BlasStore {
+public:
+    explicit BlasStore(EmbreeDevice& device) : m_device(device) {}
+    ~BlasStore();
+    BlasStore(const BlasStore&) = delete;
+    BlasStore& operator=(const BlasStore&) = delete;
+
+    /// The BLAS built for exactly this mesh handle, or nullptr.
+    const BlasRecord* find(MeshHandle h) const;
+    /// The Embree scene of the BLAS in `slot`, or nullptr.
+    RTCSceneTy* scene(uint32_t slot) const;
+
+    /// Builds (or rebuilds from scratch) the BLAS of `mesh` from its current data. A BLAS left in
+    /// the slot by an older mesh is released first.
+    Status build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics& metrics);
+    /// Refits the BLAS of `mesh` after uploading its dirty vertex range.
+    Status refit(MeshHandle h, const MeshRecord& mesh);
+    /// Frees the BLAS in the slot of `h` if it belongs to `h`; returns whether it did.
+    bool release(MeshHandle h);
+
+    /// Triangles over all BLASes.
+    uint64_t primitive_count() const { return m_primitives; }
+
+private:
+    void release_slot(uint32_t slot);
+
+    EmbreeDevice& m_device;
+    std::vector<BlasRecord> m_records;  ///< indexed by mesh slot
+    uint64_t m_primitives = 0;
+};
+
+/// Bounds and triangle-box areas of a mesh's current positions (parallel over large meshes).
+MeshMetrics measure_mesh(const MeshRecord& mesh);
+
+}  // namespace strata

@@ -1,0 +1,63 @@
+#include "engine/accel/embree_device.h"
+
+#include <embree3/rtcore.h>
+
+namespace strata {
+
+Result<std::unique_ptr<EmbreeDevice>> EmbreeDevice::create(const std::string& config) {
+    std::unique_ptr<EmbreeDevice> d(new EmbreeDevice());
+    d->m_device = rtcNewDevice(config.empty() ? nullptr : config.c_str());
+    if (!d->m_device) {
+        const RTCError code = rtcGetDeviceError(nullptr);
+        return make_error(ErrorCode::Internal,
+                          "cannot create the Embree device (error " + std::to_string(int(code)) + ")");
+    }
+    rtcSetDeviceErrorFunction(
+        d->m_device,
+        [](void* self, RTCError code, const char* msg) { on_error(self, int(code), msg); },
+        d.get());
+    rtcSetDeviceMemoryMonitorFunction(
+        d->m_device, [](void* self, ssize_t bytes, bool post) { return on_memory(self, bytes, post); },
+        d.get());
+    return d;
+}
+
+EmbreeDevice::~EmbreeDevice() {
+    if (m_device) rtcReleaseDevice(m_device);
+}
+
+void EmbreeDevice::on_error(void* self, int code, const char* message) {
+    auto* d = static_cast<EmbreeDevice*>(self);
+    std::lock_guard lock(d->m_error_mutex);
+    if (!d->m_error) {
+        d->m_error = make_error(ErrorCode::Internal, std::string("Embree error ") +
+                                                         std::to_string(code) + ": " +
+                                                         (message ? message : "(no message)"));
+    }
+}
+
+bool EmbreeDevice::on_memory(void* self, long bytes, bool /*post*/) {
+    auto* d = static_cast<EmbreeDevice*>(self);
+    // Embree's documented usage: accumulate every call's signed byte count (allocations positive,
+    // frees and undone allocations negative), whether it comes before or after the event.
+    const int c = d->m_category.load(std::memory_order_relaxed);
+    d->m_bytes[c].fetch_add(bytes, std::memory_order_relaxed);
+    return true;
+}
+
+std::optional<Error> EmbreeDevice::take_error() {
+    std::lock_guard lock(m_error_mutex);
+    std::optional<Error> e;
+    e.swap(m_error);
+    return e;
+}
+
+Status EmbreeDevice::status(const char* what) {
+    if (auto e = take_error()) {
+        e->message = std::string(what) + ": " + e->message;
+        return *e;
+    }
+    return {};
+}
+
+}  // namespace strata

@@ -1,0 +1,168 @@
+// TLAS strategy on Embree's own top level: one RTC_GEOMETRY_TYPE_INSTANCE per instance slot,
+// attached with rtcAttachGeometryByID so a hit's instID is the instance slot. An update touches
+// only the listed instances' geometries, but Embree then rebuilds its whole top-level BVH
+// (O(instances)); that cost is what a partitioned strategy would remove.
+
+#include <cstddef>
+#include <vector>
+
+#include <embree3/rtcore.h>
+
+#include "engine/accel/blas_store.h"
+#include "engine/accel/embree_device.h"
+#include "engine/accel/tlas.h"
+#include "engine/scene/scene.h"
+
+namespace strata {
+
+namespace {
+
+// Ray layouts are passed to Embree without copying.
+static_assert(sizeof(RayHit1) == sizeof(RTCRayHit));
+static_assert(offsetof(RayHit1, tfar) == offsetof(RTCRayHit, ray.tfar));
+static_assert(offsetof(RayHit1, ng_x) == offsetof(RTCRayHit, hit.Ng_x));
+static_assert(offsetof(RayHit1, inst_id) == offsetof(RTCRayHit, hit.instID));
+static_assert(sizeof(RayHit16) == sizeof(RTCRayHit16));
+static_assert(offsetof(RayHit16, tfar) == offsetof(RTCRayHit16, ray.tfar));
+static_assert(offsetof(RayHit16, ng_x) == offsetof(RTCRayHit16, hit.Ng_x));
+static_assert(offsetof(RayHit16, inst_id) == offsetof(RTCRayHit16, hit.instID));
+static_assert(sizeof(Ray16) == sizeof(RTCRay16));
+static_assert(offsetof(Ray16, flags) == offsetof(RTCRay16, flags));
+
+struct TlasInstance {
+    RTCGeometry geometry = nullptr;
+    RTCScene blas = nullptr;
+    uint32_t generation = 0;
+};
+
+class EmbreeTlas final : public TlasStrategy {
+public:
+    EmbreeTlas(EmbreeDevice& device, BuildPreference prefer) : m_device(device), m_prefer(prefer) {
+        create_scene();
+    }
+    ~EmbreeTlas() override {
+        release_all();
+        rtcReleaseScene(m_scene);
+    }
+
+    const char* name() const override { return "embree"; }
+
+    bool holds(InstanceHandle h) const override {
+        return h.index < m_instances.size() && m_instances[h.index].geometry &&
+               m_instances[h.index].generation == h.generation;
+    }
+
+    uint64_t instance_count() const override { return m_count; }
+
+    Status update(const Scene& scene, const BlasStore& blas, const TlasDelta& delta) override {
+        MemoryScope memory(m_device, MemoryCategory::Tlas);
+        for (InstanceHandle h : delta.changed) sync_instance(scene, blas, h);
+        for (InstanceHandle h : delta.blas_changed) {
+            // The BLAS object is the same; committing the instance makes Embree re-read its bounds.
+            if (holds(h)) rtcCommitGeometry(m_instances[h.index].geometry);
+        }
+        rtcCommitScene(m_scene);
+        return m_device.status("updating the TLAS");
+    }
+
+    Status rebuild(const Scene& scene, const BlasStore& blas) override {
+        MemoryScope memory(m_device, MemoryCategory::Tlas);
+        release_all();
+        rtcReleaseScene(m_scene);
+        create_scene();
+        scene.instances().for_each(
+            [&](InstanceHandle h, const InstanceRecord&) { sync_instance(scene, blas, h); });
+        rtcCommitScene(m_scene);
+        return m_device.status("rebuilding the TLAS");
+    }
+
+    void intersect1(RayHit1& ray, bool coherent) const override {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        ctx.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+        rtcIntersect1(m_scene, &ctx, reinterpret_cast<RTCRayHit*>(&ray));
+    }
+
+    void intersect16(const int* valid, RayHit16& rays, bool coherent) const override {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        ctx.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+        rtcIntersect16(valid, m_scene, &ctx, reinterpret_cast<RTCRayHit16*>(&rays));
+    }
+
+    void occluded16(const int* valid, Ray16& rays) const override {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+        rtcOccluded16(valid, m_scene, &ctx, reinterpret_cast<RTCRay16*>(&rays));
+    }
+
+private:
+    void create_scene() {
+        m_scene = rtcNewScene(m_device.get());
+        rtcSetSceneBuildQuality(m_scene, m_prefer == BuildPreference::FastTrace ? RTC_BUILD_QUALITY_MEDIUM
+                                                                                : RTC_BUILD_QUALITY_LOW);
+        rtcSetSceneFlags(m_scene, RTC_SCENE_FLAG_DYNAMIC);
+    }
+
+    void release_slot(uint32_t slot) {
+        TlasInstance& t = m_instances[slot];
+        if (!t.geometry) return;
+        rtcDetachGeometry(m_scene, slot);
+        rtcReleaseGeometry(t.geometry);
+        t = TlasInstance{};
+        --m_count;
+    }
+
+    void release_all() {
+        for (uint32_t slot = 0; slot < m_instances.size(); ++slot) release_slot(slot);
+    }
+
+    /// Makes the TLAS entry of `h`'s slot match the scene: created, updated or removed.
+    void sync_instance(const Scene& scene, const BlasStore& blas, InstanceHandle h) {
+        if (h.index >= m_instances.size()) m_instances.resize(h.index + 1);
+        TlasInstance& t = m_instances[h.index];
+        const auto inst = scene.instance(h);
+        if (!inst) {
+            if (t.geometry && t.generation == h.generation) release_slot(h.index);
+            return;
+        }
+        const InstanceRecord& r = *inst.value();
+        if (t.geometry && t.generation != h.generation) release_slot(h.index);
+        RTCScene blas_scene = blas.scene(r.mesh.index);
+        STRATA_CHECK(blas_scene != nullptr);
+        if (!t.geometry) {
+            t.geometry = rtcNewGeometry(m_device.get(), RTC_GEOMETRY_TYPE_INSTANCE);
+            t.generation = h.generation;
+            rtcAttachGeometryByID(m_scene, t.geometry, h.index);
+            ++m_count;
+        }
+        if (t.blas != blas_scene) {
+            rtcSetGeometryInstancedScene(t.geometry, blas_scene);
+            t.blas = blas_scene;
+        }
+        rtcSetGeometryTransform(t.geometry, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, r.transform.m.data());
+        rtcSetGeometryMask(t.geometry, r.mask);
+        if (r.visible) {
+            rtcEnableGeometry(t.geometry);
+        } else {
+            rtcDisableGeometry(t.geometry);
+        }
+        rtcCommitGeometry(t.geometry);
+    }
+
+
+    EmbreeDevice& m_device;
+    BuildPreference m_prefer;
+    RTCScene m_scene = nullptr;
+    std::vector<TlasInstance> m_instances;  ///< indexed by instance slot
+    uint64_t m_count = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<TlasStrategy> make_embree_tlas(EmbreeDevice& device, BuildPreference prefer) {
+    return std::make_unique<EmbreeTlas>(device, prefer);
+}
+
+}  // namespace strata

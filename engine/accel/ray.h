@@ -1,0 +1,44 @@
+#pragma once
+// Ray and hit records the renderer fills and the acceleration layer traces. Their layout is
+// identical to Embree's RTCRayHit and RTCRayHit16 (checked by static_asserts in the one file that
+// includes Embree), so tracing passes them through without copying.
+
+#include <cstdint>
+
+namespace strata {
+
+/// Id Embree and Strata use for "no hit".
+constexpr uint32_t INVALID_ID = 0xFFFFFFFFu;
+
+/// One ray and its hit. After a hit: `inst_id` is the instance slot, `prim_id` the triangle,
+/// `ng_*` the unnormalised geometric normal in the instance's object space.
+struct alignas(16) RayHit1 {
+    float org_x, org_y, org_z, tnear;
+    float dir_x, dir_y, dir_z, time;
+    float tfar;
+    uint32_t mask, id, flags;
+    float ng_x, ng_y, ng_z;
+    float u, v;
+    uint32_t prim_id, geom_id, inst_id;
+};
+
+/// Sixteen rays in SoA layout, traced as one packet.
+struct alignas(64) RayHit16 {
+    float org_x[16], org_y[16], org_z[16], tnear[16];
+    float dir_x[16], dir_y[16], dir_z[16], time[16];
+    float tfar[16];
+    uint32_t mask[16], id[16], flags[16];
+    float ng_x[16], ng_y[16], ng_z[16];
+    float u[16], v[16];
+    uint32_t prim_id[16], geom_id[16], inst_id[16];
+};
+
+/// Sixteen shadow rays: a miss leaves tfar unchanged, a hit sets it to -inf.
+struct alignas(64) Ray16 {
+    float org_x[16], org_y[16], org_z[16], tnear[16];
+    float dir_x[16], dir_y[16], dir_z[16], time[16];
+    float tfar[16];
+    uint32_t mask[16], id[16], flags[16];
+};
+
+}  // namespace strata

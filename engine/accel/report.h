@@ -1,0 +1,90 @@
+#pragma once
+// What a commit did (or, for a plan, would do), and the cumulative counters since start.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace strata {
+
+enum class TlasAction : uint8_t { None, Update, Rebuild };
+
+/// Why a BLAS is rebuilt or refit. Each has a stable wire name (build_reason_name).
+enum class BuildReason : uint8_t {
+    Added,             ///< rebuild: first build of a new mesh
+    TopologyChanged,   ///< rebuild: triangles (or vertex count) replaced
+    RebuildRequested,  ///< rebuild: mark_dirty {mesh, rebuild}
+    RefitNotAllowed,   ///< rebuild: positions moved but the mesh's build options forbid refit
+    BoundsGrowth,      ///< rebuild: refit policy, mesh bounds grew too much since the last build
+    TriangleGrowth,    ///< rebuild: refit policy, triangles stretched too much since the build
+    RefitLimit,        ///< rebuild: refit policy, too many refits since the last build
+    PositionsChanged,  ///< refit: vertex positions moved
+    RefitRequested,    ///< refit: mark_dirty {mesh, refit}
+};
+
+const char* tlas_action_name(TlasAction a);
+const char* build_reason_name(BuildReason r);
+
+/// One BLAS that was (or would be) rebuilt or refit.
+struct MeshBuildEntry {
+    std::string mesh;  ///< client id
+    BuildReason reason = BuildReason::Added;
+    std::string detail;  ///< human-readable: the measured drift against its limit, etc.
+    uint64_t primitives = 0;
+    double ms = 0.0;
+};
+
+/// Phase wall times of one commit, in milliseconds.
+struct CommitPhases {
+    double plan_ms = 0.0;   ///< dirty-list walk and refit-policy metrics
+    double blas_ms = 0.0;   ///< all BLAS builds, refits and releases
+    double tlas_ms = 0.0;   ///< the TLAS update or rebuild
+    double sync_ms = 0.0;   ///< copying shading data (materials, camera, lights) for launches
+    double total_ms = 0.0;
+};
+
+/// The rebuild report of one commit. For a plan, times and memory are zero and `planned` is true.
+struct RebuildReport {
+    uint64_t version = 0;
+    bool planned = false;
+    TlasAction tlas_action = TlasAction::None;
+    uint64_t tlas_instances = 0;  ///< instances the TLAS holds after the commit
+    std::vector<MeshBuildEntry> rebuilt;
+    std::vector<MeshBuildEntry> refit;
+    std::vector<std::string> released;  ///< meshes whose BLAS was freed (removed meshes)
+    uint32_t blas_rebuilds = 0;
+    uint32_t blas_refits = 0;
+    uint64_t primitives_built = 0;
+    uint64_t primitives_refit = 0;
+    int64_t memory_blas_bytes = 0;  ///< bytes Embree holds for BLASes, after the commit
+    int64_t memory_tlas_bytes = 0;  ///< bytes Embree holds for the TLAS, after the commit
+    CommitPhases phases;
+
+    /// True when the commit did no acceleration-structure work at all.
+    bool no_accel_work() const {
+        return tlas_action == TlasAction::None && rebuilt.empty() && refit.empty() && released.empty();
+    }
+    /// One line: "v12 tlas=update(3) rebuilds=1 refits=0 prims=4096 ms=1.25".
+    std::string summary() const;
+};
+
+/// Counters since the engine started.
+struct EngineCounters {
+    uint64_t batches_applied = 0;
+    uint64_t batches_rejected = 0;
+    uint64_t edits_applied = 0;
+    uint64_t commits = 0;
+    uint64_t noop_commits = 0;  ///< commits that found nothing to do
+    uint64_t blas_rebuilds = 0;
+    uint64_t blas_refits = 0;
+    uint64_t tlas_updates = 0;
+    uint64_t tlas_rebuilds = 0;
+    uint64_t primitives_built = 0;
+    uint64_t primitives_refit = 0;
+    uint64_t renders = 0;
+    uint64_t rays_traced = 0;
+    double commit_seconds = 0.0;
+    double render_seconds = 0.0;
+};
+
+}  // namespace strata

@@ -1,0 +1,147 @@
+#include "engine/engine.h"
+
+#include <cmath>
+
+#include "engine/core/timer.h"
+#include "engine/image/png.h"
+
+namespace strata {
+
+Result<std::unique_ptr<Engine>> Engine::create(const EngineConfig& config) {
+    auto accel = AccelGraph::create(config.accel);
+    if (!accel) return accel.error();
+    return std::unique_ptr<Engine>(new Engine(std::move(accel.value())));
+}
+
+Result<ApplyResult> Engine::apply(EditBatch&& batch) {
+    const std::size_t count = batch.edits.size();
+    Result<uint64_t> version = [&] {
+        std::unique_lock lock(m_scene_mutex);
+        return m_scene.apply(std::move(batch));
+    }();
+    std::lock_guard stats(m_stats_mutex);
+    if (!version) {
+        ++m_counters.batches_rejected;
+        return version.error();
+    }
+    ++m_counters.batches_applied;
+    m_counters.edits_applied += count;
+    return ApplyResult{version.value(), count};
+}
+
+Result<RebuildReport> Engine::commit() {
+    std::lock_guard launch_lock(m_launch_mutex);
+    return commit_locked();
+}
+
+Result<RebuildReport> Engine::commit_locked() {
+    Stopwatch clock;
+    std::unique_lock lock(m_scene_mutex);
+    RebuildReport report;
+    if (m_scene.changes().empty()) {
+        // Nothing changed: no planning, no Embree call.
+        report.version = m_scene.version();
+        report.tlas_instances = m_accel->tlas().instance_count();
+        report.memory_blas_bytes = m_accel->memory_bytes(MemoryCategory::Blas);
+        report.memory_tlas_bytes = m_accel->memory_bytes(MemoryCategory::Tlas);
+    } else {
+        auto executed = m_accel->execute(m_scene, m_accel->plan(m_scene));
+        if (!executed) return executed.error();
+        report = std::move(executed.value());
+        Stopwatch sync_clock;
+        m_frame.sync(m_scene);
+        report.phases.sync_ms = sync_clock.ms();
+        m_scene.clear_changes();
+    }
+    lock.unlock();
+    report.phases.total_ms = clock.ms();
+
+    std::lock_guard stats(m_stats_mutex);
+    EngineCounters& c = m_counters;
+    ++c.commits;
+    if (report.no_accel_work()) ++c.noop_commits;
+    c.blas_rebuilds += report.blas_rebuilds;
+    c.blas_refits += report.blas_refits;
+    c.tlas_updates += report.tlas_action == TlasAction::Update;
+    c.tlas_rebuilds += report.tlas_action == TlasAction::Rebuild;
+    c.primitives_built += report.primitives_built;
+    c.primitives_refit += report.primitives_refit;
+    c.commit_seconds += report.phases.total_ms / 1000.0;
+    m_last_report = report;
+    return report;
+}
+
+RebuildReport Engine::plan() const {
+    std::lock_guard launch_lock(m_launch_mutex);
+    std::shared_lock lock(m_scene_mutex);
+    return m_accel->plan(m_scene).report;
+}
+
+Result<PrimaryFrame> Engine::render_primary(const PrimarySettings& settings) {
+    Stopwatch clock;
+    auto frame = launch([&](const FrameState& state, const TlasStrategy& tlas,
+                            const RebuildReport& report) {
+        PrimaryFrame out;
+        strata::render_primary(tlas, state, settings, out.hits);
+        out.report = report;
+        out.version = state.version;
+        return out;
+    });
+    if (frame) add_rays(frame.value().hits.pixel_count(), clock.ms() / 1000.0);
+    return frame;
+}
+
+Result<RenderedImage> Engine::render(const RenderRequest& request) {
+    if (Status s = check_render_request(request); !s) return s.error();
+    if (request.format != ImageFormat::Png)
+        return make_error(ErrorCode::InvalidArgument, "only PNG output is available", "format");
+    PrimarySettings settings;
+    settings.width = request.width;
+    settings.height = request.height;
+    settings.camera = request.camera;
+    auto frame = render_primary(settings);
+    if (!frame) return frame.error();
+    Stopwatch encode_clock;
+    const HitBuffers& hits = frame.value().hits;
+    std::vector<uint8_t> rgb(hits.pixel_count() * 3);
+    linear_to_srgb8(hits.color.data(), hits.pixel_count(), std::exp2(request.exposure), rgb.data());
+    auto png = encode_png(rgb.data(), hits.width, hits.height, 3);
+    if (!png) return png.error();
+    RenderedImage image;
+    image.bytes = std::move(png.value());
+    image.content_type = "image/png";
+    image.version = frame.value().version;
+    image.report = std::move(frame.value().report);
+    image.samples = 1;
+    image.encode_ms = encode_clock.ms();
+    return image;
+}
+
+void Engine::add_rays(uint64_t rays, double seconds) {
+    std::lock_guard stats(m_stats_mutex);
+    ++m_counters.renders;
+    m_counters.rays_traced += rays;
+    m_counters.render_seconds += seconds;
+}
+
+EngineCounters Engine::counters() const {
+    std::lock_guard stats(m_stats_mutex);
+    return m_counters;
+}
+
+RebuildReport Engine::last_report() const {
+    std::lock_guard stats(m_stats_mutex);
+    return m_last_report;
+}
+
+void Engine::set_refit_policy(const RefitPolicy& p) {
+    std::lock_guard launch_lock(m_launch_mutex);
+    m_accel->set_refit_policy(p);
+}
+
+RefitPolicy Engine::refit_policy() const {
+    std::lock_guard launch_lock(m_launch_mutex);
+    return m_accel->refit_policy();
+}
+
+}  // namespace strata

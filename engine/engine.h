@@ -1,0 +1,110 @@
+#pragma once
+// The engine facade: the scene, the acceleration graph and the launch state behind one
+// thread-safe interface. It knows nothing of HTTP or JSON.
+//
+// Concurrency model
+//   - The editable scene is guarded by a reader/writer lock: apply() writes, queries read.
+//   - Commits and launches are serialised by a launch mutex. A commit takes the scene lock
+//     exclusively while it plans, builds and copies shading data, then releases it.
+//   - A render commits and then traces while holding only the launch mutex: edits keep landing
+//     in the scene meanwhile, but tracing reads only the acceleration structures and the frame
+//     state, which only a commit changes. Each render therefore sees exactly one version.
+//   Lock order is always launch, then scene.
+
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <shared_mutex>
+#include <utility>
+
+#include "engine/accel/accel_graph.h"
+#include "engine/render/frame_state.h"
+#include "engine/render/primary.h"
+#include "engine/render/render_request.h"
+
+namespace strata {
+
+struct EngineConfig {
+    AccelConfig accel;
+};
+
+/// Result of an applied batch.
+struct ApplyResult {
+    uint64_t version = 0;
+    std::size_t applied = 0;
+};
+
+/// A rendered frame's primary hits with the report of the commit the launch ran.
+struct PrimaryFrame {
+    HitBuffers hits;
+    RebuildReport report;
+    uint64_t version = 0;
+};
+
+class Engine {
+public:
+    static Result<std::unique_ptr<Engine>> create(const EngineConfig& config = {});
+
+    /// Validates and applies a batch atomically; the version moves by one on success.
+    Result<ApplyResult> apply(EditBatch&& batch);
+
+    /// Brings the acceleration graph in line with the scene, doing the least work.
+    Result<RebuildReport> commit();
+
+    /// What commit() would do now, without doing it.
+    RebuildReport plan() const;
+
+    /// Commits, renders and encodes one frame.
+    Result<RenderedImage> render(const RenderRequest& request);
+
+    /// Commits, then traces one primary ray per pixel.
+    Result<PrimaryFrame> render_primary(const PrimarySettings& settings);
+
+    /// Runs `f(const FrameState&, const TlasStrategy&, const RebuildReport&)` after a commit, with
+    /// launches serialised: the hook the renderer uses to trace one consistent version.
+    template <class F>
+    auto launch(F&& f) -> Result<decltype(f(std::declval<const FrameState&>(),
+                                            std::declval<const TlasStrategy&>(),
+                                            std::declval<const RebuildReport&>()))> {
+        std::lock_guard launch_lock(m_launch_mutex);
+        auto report = commit_locked();
+        if (!report) return report.error();
+        return f(m_frame, m_accel->tlas(), report.value());
+    }
+
+    /// Runs `f(const Scene&)` under the scene's read lock.
+    template <class F>
+    auto read(F&& f) const {
+        std::shared_lock lock(m_scene_mutex);
+        return f(m_scene);
+    }
+
+    /// Cumulative counters.
+    EngineCounters counters() const;
+    /// The report of the most recent commit (default-constructed before the first).
+    RebuildReport last_report() const;
+    /// Acceleration-structure memory now.
+    int64_t memory_bytes(MemoryCategory c) const { return m_accel->memory_bytes(c); }
+
+    void set_refit_policy(const RefitPolicy& p);
+    RefitPolicy refit_policy() const;
+
+    /// Counts rays a launch traced (called by renderers).
+    void add_rays(uint64_t rays, double seconds);
+
+private:
+    explicit Engine(std::unique_ptr<AccelGraph> accel) : m_accel(std::move(accel)) {}
+    Result<RebuildReport> commit_locked();
+
+    mutable std::mutex m_launch_mutex;
+    mutable std::shared_mutex m_scene_mutex;
+    Scene m_scene;
+    std::unique_ptr<AccelGraph> m_accel;
+    FrameState m_frame;
+
+    mutable std::mutex m_stats_mutex;
+    EngineCounters m_counters;
+    RebuildReport m_last_report;
+};
+
+}  // namespace strata

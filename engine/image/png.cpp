@@ -1,0 +1,123 @@
+#include "engine/image/png.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include <png.h>
+
+namespace strata {
+
+namespace {
+
+struct WriteState {
+    std::vector<uint8_t>* out;
+};
+
+void write_bytes(png_structp png, png_bytep data, png_size_t length) {
+    auto* state = static_cast<WriteState*>(png_get_io_ptr(png));
+    state->out->insert(state->out->end(), data, data + length);
+}
+
+void flush_nothing(png_structp) {}
+
+struct ReadState {
+    const uint8_t* data;
+    std::size_t size;
+    std::size_t offset;
+};
+
+void read_bytes(png_structp png, png_bytep out, png_size_t length) {
+    auto* state = static_cast<ReadState*>(png_get_io_ptr(png));
+    if (state->offset + length > state->size) png_error(png, "truncated PNG");
+    std::memcpy(out, state->data + state->offset, length);
+    state->offset += length;
+}
+
+uint8_t encode_srgb(float v) {
+    v = std::clamp(v, 0.0f, 1.0f);
+    const float s = v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
+    return static_cast<uint8_t>(s * 255.0f + 0.5f);
+}
+
+}  // namespace
+
+Result<std::vector<uint8_t>> encode_png(const uint8_t* pixels, uint32_t width, uint32_t height,
+                                        int channels, int zlib_level) {
+    if (channels != 3 && channels != 4)
+        return make_error(ErrorCode::InvalidArgument, "PNG needs 3 or 4 channels");
+    if (width == 0 || height == 0)
+        return make_error(ErrorCode::InvalidArgument, "PNG needs a non-empty image");
+    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+    png_infop info = png ? png_create_info_struct(png) : nullptr;
+    if (!png || !info) {
+        png_destroy_write_struct(&png, &info);
+        return make_error(ErrorCode::Internal, "libpng could not be initialised");
+    }
+    std::vector<uint8_t> out;
+    out.reserve(std::size_t(width) * height * channels / 2 + 1024);
+    WriteState state{&out};
+    // libpng reports errors by longjmp; nothing with a destructor lives between here and the end.
+    if (setjmp(png_jmpbuf(png))) {
+        png_destroy_write_struct(&png, &info);
+        return make_error(ErrorCode::Internal, "libpng failed to encode the frame");
+    }
+    png_set_write_fn(png, &state, write_bytes, flush_nothing);
+    png_set_IHDR(png, info, width, height, 8, channels == 4 ? PNG_COLOR_TYPE_RGBA : PNG_COLOR_TYPE_RGB,
+                 PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+    png_set_compression_level(png, std::clamp(zlib_level, 0, 9));
+    png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_SUB);
+    png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+    png_write_info(png, info);
+    const std::size_t stride = std::size_t(width) * channels;
+    for (uint32_t y = 0; y < height; ++y)
+        png_write_row(png, const_cast<png_bytep>(pixels + y * stride));
+    png_write_end(png, nullptr);
+    png_destroy_write_struct(&png, &info);
+    return out;
+}
+
+void linear_to_srgb8(const Vec3* linear, std::size_t count, float exposure, uint8_t* rgb_out) {
+    for (std::size_t i = 0; i < count; ++i) {
+        rgb_out[3 * i + 0] = encode_srgb(linear[i].x * exposure);
+        rgb_out[3 * i + 1] = encode_srgb(linear[i].y * exposure);
+        rgb_out[3 * i + 2] = encode_srgb(linear[i].z * exposure);
+    }
+}
+
+Result<DecodedImage> decode_png(const uint8_t* data, std::size_t size) {
+    if (size < 8 || png_sig_cmp(data, 0, 8) != 0)
+        return make_error(ErrorCode::InvalidArgument, "not a PNG file");
+    png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+    png_infop info = png ? png_create_info_struct(png) : nullptr;
+    if (!png || !info) {
+        png_destroy_read_struct(&png, &info, nullptr);
+        return make_error(ErrorCode::Internal, "libpng could not be initialised");
+    }
+    ReadState state{data, size, 0};
+    DecodedImage* image = new DecodedImage();  // owned below; survives a longjmp
+    if (setjmp(png_jmpbuf(png))) {
+        png_destroy_read_struct(&png, &info, nullptr);
+        delete image;
+        return make_error(ErrorCode::InvalidArgument, "corrupt PNG data");
+    }
+    png_set_read_fn(png, &state, read_bytes);
+    png_read_info(png, info);
+    png_set_expand(png);
+    png_set_strip_16(png);
+    png_set_gray_to_rgb(png);
+    png_read_update_info(png, info);
+    image->width = png_get_image_width(png, info);
+    image->height = png_get_image_height(png, info);
+    image->channels = png_get_channels(png, info);
+    const std::size_t stride = png_get_rowbytes(png, info);
+    image->pixels.resize(stride * image->height);
+    for (uint32_t y = 0; y < image->height; ++y) png_read_row(png, image->pixels.data() + y * stride, nullptr);
+    png_read_end(png, nullptr);
+    png_destroy_read_struct(&png, &info, nullptr);
+    DecodedImage result = std::move(*image);
+    delete image;
+    return result;
+}
+
+}  // namespace strata

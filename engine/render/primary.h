@@ -1,0 +1,40 @@
+#pragma once
+// Launch: one primary ray per pixel, traced in 4x4 packets over TBB tiles, producing per-pixel
+// hit buffers and a simply shaded image (albedo * (sun N.L + sky) + emission).
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "engine/accel/tlas.h"
+#include "engine/render/frame_state.h"
+
+namespace strata {
+
+struct PrimarySettings {
+    uint32_t width = 0;
+    uint32_t height = 0;
+    std::optional<Camera> camera;  ///< overrides the scene camera
+    uint32_t ray_mask = 0xFFFFFFFFu;
+};
+
+/// Per-pixel results, row-major from the top-left pixel. Misses have distance +inf and
+/// instance/primitive INVALID_ID.
+struct HitBuffers {
+    uint32_t width = 0;
+    uint32_t height = 0;
+    std::vector<float> distance;
+    std::vector<uint32_t> instance;   ///< instance slot
+    std::vector<uint32_t> primitive;  ///< triangle index in the mesh
+    std::vector<Vec3> normal;         ///< world-space unit geometric normal, facing the camera
+    std::vector<Vec3> color;          ///< linear RGB
+
+    void resize(uint32_t w, uint32_t h);
+    std::size_t pixel_count() const { return std::size_t(width) * height; }
+};
+
+/// Traces the primary rays of one frame.
+void render_primary(const TlasStrategy& tlas, const FrameState& frame,
+                    const PrimarySettings& settings, HitBuffers& out);
+
+}  // namespace strata

@@ -1,0 +1,62 @@
+#pragma once
+// What a client asks a launch for, and what comes back. The names mirror the HTTP render request
+// (width, height, format, spp, aovs, compression, accumulate, exposure, camera).
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "engine/accel/report.h"
+#include "engine/core/result.h"
+#include "engine/scene/types.h"
+
+namespace strata {
+
+enum class ImageFormat : uint8_t { Png, Exr };
+enum class ExrCompression : uint8_t { None, Zip, Piz };
+
+/// Arbitrary output variables a frame can carry besides the beauty image.
+enum class Aov : uint8_t { Color, Albedo, Normal, Depth, Position, InstanceId, PrimitiveId, MeshId };
+
+/// Wire names: "png"/"exr", "none"/"zip"/"piz", "color", "albedo", "normal", "depth", "position",
+/// "instance_id", "primitive_id", "mesh_id".
+const char* image_format_name(ImageFormat f);
+const char* exr_compression_name(ExrCompression c);
+const char* aov_name(Aov a);
+std::optional<ImageFormat> parse_image_format(std::string_view s);
+std::optional<ExrCompression> parse_exr_compression(std::string_view s);
+std::optional<Aov> parse_aov(std::string_view s);
+
+struct RenderRequest {
+    uint32_t width = 640;
+    uint32_t height = 360;
+    ImageFormat format = ImageFormat::Png;
+    uint32_t spp = 1;
+    std::vector<Aov> aovs;  ///< extra layers (EXR); the beauty image is always included
+    ExrCompression compression = ExrCompression::Zip;
+    bool accumulate = false;
+    float exposure = 0.0f;  ///< EV stops applied before tone mapping (PNG only)
+    std::optional<Camera> camera;
+};
+
+/// Largest frame the engine renders in one launch (the server may set a lower cap).
+constexpr uint64_t MAX_RENDER_PIXELS = 64ull * 1024 * 1024;
+constexpr uint32_t MAX_RENDER_SPP = 4096;
+
+/// Checks a request (sizes, spp, camera override, duplicate AOVs); the error names the field.
+Status check_render_request(const RenderRequest& r);
+
+/// An encoded frame with the report of the commit the launch ran.
+struct RenderedImage {
+    std::vector<uint8_t> bytes;
+    std::string content_type;  ///< "image/png" or "image/x-exr"
+    uint64_t version = 0;      ///< scene version the frame shows
+    RebuildReport report;
+    uint32_t samples = 0;      ///< samples per pixel in the frame (more when accumulating)
+    double render_ms = 0.0;    ///< tracing and shading
+    double encode_ms = 0.0;
+};
+
+}  // namespace strata

@@ -1,0 +1,73 @@
+#pragma once
+// Hydra-style dirty bits (OpenUSD pxr/imaging/hd/changeTracker.h). An edit ORs bits into the
+// object it touches and, the first time the object goes dirty, records its handle in the
+// ChangeTracker, so the commit visits only what changed.
+
+#include <cstdint>
+#include <vector>
+
+#include "engine/core/handle.h"
+
+namespace strata::dirty {
+
+enum MeshBits : uint32_t {
+    MeshAdded = 1u << 0,             ///< new mesh: needs its first build
+    MeshPoints = 1u << 1,            ///< vertex positions moved, same topology
+    MeshTopology = 1u << 2,          ///< triangles (and maybe vertex count) replaced
+    MeshRefitRequested = 1u << 3,    ///< mark_dirty {mesh, refit}
+    MeshRebuildRequested = 1u << 4,  ///< mark_dirty {mesh, rebuild}
+    MeshMaterial = 1u << 5,          ///< default material changed (shading only)
+    MeshRemoved = 1u << 6,
+};
+
+enum InstanceBits : uint32_t {
+    InstanceAdded = 1u << 0,
+    InstanceTransform = 1u << 1,
+    InstanceVisibility = 1u << 2,
+    InstanceMask = 1u << 3,
+    InstanceMaterial = 1u << 4,  ///< shading only
+    InstanceUserId = 1u << 5,    ///< shading only
+    InstanceRemoved = 1u << 6,
+};
+
+enum MaterialBits : uint32_t {
+    MaterialAdded = 1u << 0,
+    MaterialParams = 1u << 1,
+};
+
+/// Instance bits that change what the TLAS holds; the others only change shading.
+constexpr uint32_t INSTANCE_TLAS_BITS =
+    InstanceAdded | InstanceTransform | InstanceVisibility | InstanceMask | InstanceRemoved;
+
+enum SceneBits : uint32_t {
+    Camera = 1u << 0,
+    Lighting = 1u << 1,
+    TlasUpdateRequested = 1u << 2,   ///< mark_dirty {tlas, refit}
+    TlasRebuildRequested = 1u << 3,  ///< mark_dirty {tlas, rebuild}
+    Materials = 1u << 4,
+};
+
+}  // namespace strata::dirty
+
+namespace strata {
+
+/// Lists of objects touched since the last commit. Removed objects stay listed by their (now
+/// stale) handle so the acceleration layer can release what it built for them.
+struct ChangeTracker {
+    std::vector<MeshHandle> meshes;
+    std::vector<InstanceHandle> instances;
+    std::vector<MaterialHandle> materials;
+    uint32_t scene_bits = 0;
+
+    bool empty() const {
+        return meshes.empty() && instances.empty() && materials.empty() && scene_bits == 0;
+    }
+    void reset() {
+        meshes.clear();
+        instances.clear();
+        materials.clear();
+        scene_bits = 0;
+    }
+};
+
+}  // namespace strata

@@ -1,0 +1,123 @@
+#pragma once
+// Edits are plain structs (pbrt-v4's SceneEntity idea): the protocol layer fills them from JSON,
+// the scene validates a whole batch and only then applies it. Objects are named by their
+// client-facing string ids; the scene maps ids to handles.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "engine/scene/types.h"
+
+namespace strata {
+
+struct AddMesh {
+    std::string id;
+    std::vector<Vec3> positions;
+    std::vector<Triangle> triangles;
+    BuildOptions build;
+    std::optional<std::string> material;  ///< default material of the mesh's instances
+};
+
+/// New positions for vertices [offset, offset + positions.size()); vertex count is unchanged.
+struct UpdateMeshPositions {
+    std::string mesh;
+    uint32_t offset = 0;
+    std::vector<Vec3> positions;
+};
+
+/// New triangles, and optionally a whole new vertex array (which may change the vertex count).
+struct ReplaceMeshTopology {
+    std::string mesh;
+    std::optional<std::vector<Vec3>> positions;
+    std::vector<Triangle> triangles;
+};
+
+struct RemoveMesh {
+    std::string mesh;
+};
+
+struct AddMaterial {
+    std::string id;
+    Material material;
+};
+
+struct UpdateMaterial {
+    std::string material;
+    std::optional<Vec3> base_color;
+    std::optional<float> roughness;
+    std::optional<float> metallic;
+    std::optional<Vec3> emission;
+};
+
+struct AddInstance {
+    std::string id;
+    std::string mesh;
+    std::optional<std::string> material;  ///< overrides the mesh's default material
+    Affine transform;
+    bool visible = true;
+    uint32_t mask = 0xFFFFFFFFu;
+    uint32_t user_id = 0;
+};
+
+struct UpdateInstance {
+    std::string instance;
+    /// Set: a material id overrides; set to nullopt: back to the mesh's default material.
+    std::optional<std::optional<std::string>> material;
+    std::optional<Affine> transform;
+    std::optional<bool> visible;
+    std::optional<uint32_t> mask;
+    std::optional<uint32_t> user_id;
+};
+
+struct SetTransform {
+    std::string instance;
+    Affine transform;
+};
+
+struct RemoveInstance {
+    std::string instance;
+};
+
+enum class DirtyAction : uint8_t { Refit, Rebuild };
+
+/// Asks the next commit to refit or rebuild one mesh's BLAS, or to update or rebuild the TLAS.
+struct MarkDirty {
+    std::optional<std::string> mesh;  ///< nullopt: the TLAS
+    DirtyAction action = DirtyAction::Rebuild;
+};
+
+/// Camera fields to change; unset fields keep their value.
+struct SetCamera {
+    std::optional<Vec3> eye;
+    std::optional<Vec3> target;
+    std::optional<Vec3> up;
+    std::optional<float> fov_y_deg;
+};
+
+/// Lighting fields to change; unset fields keep their value.
+struct SetLighting {
+    std::optional<Vec3> sun_direction;
+    std::optional<Vec3> sun_color;
+    std::optional<Vec3> sky_color;
+    std::optional<float> sky_intensity;
+};
+
+/// Removes every mesh, instance and material and resets camera and lighting.
+struct Clear {};
+
+using Edit = std::variant<AddMesh, UpdateMeshPositions, ReplaceMeshTopology, RemoveMesh,
+                          AddMaterial, UpdateMaterial, AddInstance, UpdateInstance, SetTransform,
+                          RemoveInstance, MarkDirty, SetCamera, SetLighting, Clear>;
+
+/// The wire name of an edit's kind ("add_mesh", "set_transform", ...).
+const char* edit_name(const Edit& e);
+
+/// Edits applied atomically: all or none.
+struct EditBatch {
+    std::vector<Edit> edits;
+};
+
+}  // namespace strata

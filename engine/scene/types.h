@@ -1,0 +1,67 @@
+#pragma once
+// Plain scene value types: meshes, materials, camera and lighting.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "engine/core/math.h"
+#include "engine/core/result.h"
+
+namespace strata {
+
+using Triangle = glm::uvec3;
+
+/// What a mesh's BLAS optimises for, in the spirit of OptiX's PREFER_FAST_TRACE/_BUILD flags.
+enum class BuildPreference : uint8_t { FastTrace, FastBuild };
+
+/// Per-mesh build options (OptiX build flags mapped onto Embree build qualities, see blas_store).
+struct BuildOptions {
+    BuildPreference prefer = BuildPreference::FastTrace;
+    bool allow_refit = true;  ///< like OPTIX_BUILD_FLAG_ALLOW_UPDATE
+
+    friend bool operator==(const BuildOptions&, const BuildOptions&) = default;
+};
+
+const char* build_preference_name(BuildPreference p);
+
+/// Surface description. Colors are linear RGB.
+struct Material {
+    Vec3 base_color{0.8f};
+    float roughness = 0.5f;
+    float metallic = 0.0f;
+    Vec3 emission{0.0f};
+
+    friend bool operator==(const Material&, const Material&) = default;
+};
+
+/// Pinhole camera.
+struct Camera {
+    Vec3 eye{0.0f, 2.0f, 8.0f};
+    Vec3 target{0.0f};
+    Vec3 up{0.0f, 1.0f, 0.0f};
+    float fov_y_deg = 45.0f;
+
+    friend bool operator==(const Camera&, const Camera&) = default;
+};
+
+/// Directional sun plus a uniform sky. `sun_direction` points from the scene toward the sun.
+struct Lighting {
+    Vec3 sun_direction{0.4f, 0.8f, 0.45f};
+    Vec3 sun_color{1.0f, 0.95f, 0.9f};
+    Vec3 sky_color{0.45f, 0.6f, 0.85f};
+    float sky_intensity = 0.6f;
+
+    friend bool operator==(const Lighting&, const Lighting&) = default;
+};
+
+/// Checks a camera: finite, eye != target, up not along the view, fov in (0, 180).
+Status check_camera(const Camera& c);
+/// Checks lighting: finite, non-zero sun direction, non-negative colors and intensity.
+Status check_lighting(const Lighting& l);
+/// Checks a material: finite, colors and factors in range. The error names the field.
+Status check_material(const Material& m);
+
+}  // namespace strata

@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# Installs every Debian 12 package Strata needs. Idempotent; run as root (or with sudo).
+#
+#   scripts/install-deps.sh           build + test dependencies (default)
+#   scripts/install-deps.sh --runtime only the shared libraries strata-server needs at run time
+#
+# README, .ci/run and docker/Dockerfile all call this one script.
+set -euo pipefail
+
+mode=build
+case "${1:-}" in
+    --runtime) mode=runtime ;;
+    --build|"") mode=build ;;
+    -h|--help) sed -n '2,7p' "$0"; exit 0 ;;
+    *) echo "install-deps.sh: unknown option '$1' (use --build or --runtime)" >&2; exit 2 ;;
+esac
+
+runtime_pkgs=(
+    libembree3-3 libtbb12 libopenexr-3-1-30 libpng16-16 libspdlog1.10 ca-certificates
+)
+build_pkgs=(
+    build-essential cmake ninja-build pkg-config git ca-certificates
+    libembree-dev libglm-dev libopenexr-dev nlohmann-json3-dev libcpp-httplib-dev libtbb-dev
+    libgtest-dev libgmock-dev libbenchmark-dev libpng-dev
+    libtinygltf-dev libtinyobjloader-dev libcli11-dev libspdlog-dev
+    clang libclang-rt-14-dev
+    python3 python3-jsonschema python3-numpy
+    assimp-testmodels mmdebstrap
+)
+
+if [ "$mode" = runtime ]; then pkgs=("${runtime_pkgs[@]}"); else pkgs=("${build_pkgs[@]}"); fi
+
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
+
+missing=()
+for p in "${pkgs[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ "${#missing[@]}" -gt 0 ]; then
+    echo "install-deps: installing ${missing[*]}"
+    export DEBIAN_FRONTEND=noninteractive
+    $sudo apt-get update
+    $sudo apt-get install -y --no-install-recommends "${missing[@]}"
+else
+    echo "install-deps: all ${#pkgs[@]} packages present"
+fi

@@ -1,0 +1,229 @@
+// One test per row of the least-work table in the README: each pins the exact BLAS and TLAS work
+// a kind of edit causes at the next commit.
+
+#include <gtest/gtest.h>
+
+#include "tests/engine/test_util.h"
+
+namespace strata {
+namespace {
+
+using test::apply_ok;
+using test::commit_ok;
+using test::ids;
+using test::instance_edit;
+using test::mesh_edit;
+using ::testing::ElementsAre;
+
+/// Two meshes ("ball" with 3 instances, "crate" with 1) and a mesh nothing instances ("spare"),
+/// committed once so later commits start clean.
+class LeastWork : public ::testing::Test {
+protected:
+    void SetUp() override {
+        engine = test::make_engine();
+        apply_ok(*engine, mesh_edit("ball", make_sphere(1.0f, 16)), mesh_edit("crate", make_box(Vec3(1.0f))),
+                 mesh_edit("spare", make_plane(Vec3(2.0f), 4, 4)), AddMaterial{"red", {}},
+                 instance_edit("b0", "ball", {-3, 0, 0}), instance_edit("b1", "ball", {0, 0, 0}),
+                 instance_edit("b2", "ball", {3, 0, 0}), instance_edit("c0", "crate", {0, 3, 0}));
+        const RebuildReport first = commit_ok(*engine);
+        ASSERT_EQ(first.blas_rebuilds, 3u);
+        ASSERT_EQ(first.tlas_action, TlasAction::Update);
+    }
+
+    std::unique_ptr<Engine> engine;
+};
+
+TEST_F(LeastWork, NothingChangedDoesNothing) {
+    const RebuildReport r = commit_ok(*engine);
+    EXPECT_EQ(r.tlas_action, TlasAction::None);
+    EXPECT_EQ(r.blas_rebuilds, 0u);
+    EXPECT_EQ(r.blas_refits, 0u);
+    EXPECT_EQ(r.primitives_built + r.primitives_refit, 0u);
+    EXPECT_TRUE(r.no_accel_work());
+    EXPECT_EQ(r.tlas_instances, 4u);
+}
+
+TEST_F(LeastWork, CameraLightingAndMaterialEditsRebuildNothing) {
+    SetCamera cam;
+    cam.eye = Vec3(1, 2, 9);
+    SetLighting light;
+    light.sky_intensity = 0.2f;
+    UpdateMaterial mat;
+    mat.material = "red";
+    mat.base_color = Vec3(1, 0, 0);
+    UpdateInstance shading_only;
+    shading_only.instance = "b0";
+    shading_only.material = std::optional<std::string>("red");
+    apply_ok(*engine, cam, light, mat, shading_only);
+    const RebuildReport r = commit_ok(*engine);
+    EXPECT_EQ(r.tlas_action, TlasAction::None);
+    EXPECT_EQ(r.blas_rebuilds, 0u);
+    EXPECT_EQ(r.blas_refits, 0u);
+    EXPECT_TRUE(r.no_accel_work());
+}
+
+TEST_F(LeastWork, InstanceChangesAreOneTlasUpdateHoweverMany) {
+    UpdateInstance hide;
+    hide.instance = "b1";
+    hide.visible = false;
+    UpdateInstance mask;
+    mask.instance = "b2";
+    mask.mask = 0x2;
+    apply_ok(*engine, SetTransform{"b0", Affine::translation({-4, 0, 0})}, hide, mask,
+             instance_edit("b3", "ball", {6, 0, 0}), RemoveInstance{"c0"});
+    const RebuildReport r = commit_ok(*engine);
+    EXPECT_EQ(r.tlas_action, TlasAction::Update);
+    EXPECT_EQ(r.blas_rebuilds, 0u);
+    EXPECT_EQ(r.blas_refits, 0u);
+    EXPECT_EQ(r.primitives_built + r.primitives_refit, 0u);
+    EXPECT_EQ(r.tlas_instances, 4u);
+}
+
+TEST_F(LeastWork, MovedPositionsRefitOnlyThatMeshAndUpdateTheTlas) {
+    const uint64_t tris = make_sphere(1.0f, 16).triangles.size();
+    UpdateMeshPositions move;
+    move.mesh = "ball";
+    move.offset = 2;
+    move.positions = {Vec3(0.1f, 0.99f, 0.0f), Vec3(0.0f, 0.98f, 0.1f)};
+    apply_ok(*engine, move);
+    const RebuildReport r = commit_ok(*engine);
+    EXPECT_EQ(r.blas_rebuilds, 0u);
+    EXPECT_EQ(r.blas_refits, 1u);
+    EXPECT_THAT(ids(r.refit), ElementsAre("ball"));
+    EXPECT_EQ(r.refit[0].reason, BuildReason::PositionsChanged);
+    EXPECT_EQ(r.primitives_refit, tris);
+    EXPECT_EQ(r.tlas_action, TlasAction::Update);
+}
+
+TEST_F(LeastWork, MovedPositionsOfAnUninstancedMeshLeaveTheTlasAlone) {
+    MeshData plane = make_plane(Vec3(2.0f), 4, 4);
+    for (Vec3& p : plane.positions) p.y += 0.01f;
+    UpdateMeshPositions move;
+    move.mesh = "spare";
+    move.positions = plane.positions;
+    apply_ok(*engine, move);
+    const RebuildReport r = commit_ok(*engine);
+    EXPECT_THAT(ids(r.refit), ElementsAre("spare"));
+    EXPECT_EQ(r.blas_rebuilds, 0u);
+    EXPECT_EQ(r.tlas_action, TlasAction::None);
+}
+
+TEST_F(LeastWork, TopologyChangeRebuildsOnlyThatMesh) {
+    MeshData finer = make_sphere(1.0f, 24);
+    ReplaceMeshTopology topo;
+    topo.mesh = "ball";
+    topo.positions = finer.positions;
+    topo.triangles = finer.triangles;
+    apply_ok(*engine, topo);
+    const RebuildReport r = commit_ok(*engine);
+    EXPECT_THAT(ids(r.rebuilt), ElementsAre("ball"));
+    EXPECT_EQ(r.rebuilt[0].reason, BuildReason::TopologyChanged);
+    EXPECT_EQ(r.blas_rebuilds, 1u);
+    EXPECT_EQ(r.blas_refits, 0u);
+    EXPECT_EQ(r.primitives_built, finer.triangles.size());
+    EXPECT_EQ(r.tlas_action, TlasAction::Update);
+}
+
+TEST_F(LeastWork, AddedMeshIsBuiltAloneAndTouchesTheTlasOnlyWhenInstanced) {
+    apply_ok(*engine, mesh_edit("lonely", make_box(Vec3(2.0f))));
+    RebuildReport r = commit_ok(*engine);
+    EXPECT_THAT(ids(r.rebuilt), ElementsAre("lonely"));
+    EXPECT_EQ(r.rebuilt[0].reason, BuildReason::Added);
+    EXPECT_EQ(r.blas_refits, 0u);
+    EXPECT_EQ(r.tlas_action, TlasAction::None);
+
+    apply_ok(*engine, mesh_edit("used", make_box(Vec3(2.0f))), instance_edit("u0", "used", {0, -3, 0}));
+    r = commit_ok(*engine);
+    EXPECT_THAT(ids(r.rebuilt), ElementsAre("used"));
+    EXPECT_EQ(r.tlas_action, TlasAction::Update);
+}
+
+TEST_F(LeastWork, MarkDirtyOnAMeshDoesWhatWasAskedToThatMeshOnly) {
+    apply_ok(*engine, MarkDirty{std::string("crate"), DirtyAction::Refit});
+    RebuildReport r = commit_ok(*engine);
+    EXPECT_THAT(ids(r.refit), ElementsAre("crate"));
+    EXPECT_EQ(r.refit[0].reason, BuildReason::RefitRequested);
+    EXPECT_EQ(r.blas_rebuilds, 0u);
+    EXPECT_EQ(r.tlas_action, TlasAction::Update);
+
+    apply_ok(*engine, MarkDirty{std::string("crate"), DirtyAction::Rebuild});
+    r = commit_ok(*engine);
+    EXPECT_THAT(ids(r.rebuilt), ElementsAre("crate"));
+    EXPECT_EQ(r.rebuilt[0].reason, BuildReason::RebuildRequested);
+    EXPECT_EQ(r.blas_refits, 0u);
+    EXPECT_EQ(r.tlas_action, TlasAction::Update);
+
+    apply_ok(*engine, MarkDirty{std::string("spare"), DirtyAction::Rebuild});
+    r = commit_ok(*engine);
+    EXPECT_THAT(ids(r.rebuilt), ElementsAre("spare"));
+    EXPECT_EQ(r.tlas_action, TlasAction::None);
+}
+
+TEST_F(LeastWork, MarkDirtyOnTheTlasRebuildsTheTlasOnly) {
+    apply_ok(*engine, MarkDirty{std::nullopt, DirtyAction::Rebuild});
+    const RebuildReport r = commit_ok(*engine);
+    EXPECT_EQ(r.tlas_action, TlasAction::Rebuild);
+    EXPECT_EQ(r.tlas_instances, 4u);
+    EXPECT_EQ(r.blas_rebuilds, 0u);
+    EXPECT_EQ(r.blas_refits, 0u);
+}
+
+TEST_F(LeastWork, PlanPredictsTheCommitExactly) {
+    UpdateMeshPositions move;
+    move.mesh = "ball";
+    move.positions = {Vec3(0.0f, 1.01f, 0.0f)};
+    apply_ok(*engine, move, SetTransform{"c0", Affine::translation({1, 3, 0})},
+             mesh_edit("new", make_box(Vec3(1.0f))));
+    const RebuildReport plan = engine->plan();
+    const RebuildReport done = commit_ok(*engine);
+    EXPECT_TRUE(plan.planned);
+    EXPECT_FALSE(done.planned);
+    EXPECT_EQ(plan.tlas_action, done.tlas_action);
+    EXPECT_EQ(ids(plan.rebuilt), ids(done.rebuilt));
+    EXPECT_EQ(ids(plan.refit), ids(done.refit));
+    EXPECT_EQ(plan.primitives_built, done.primitives_built);
+    EXPECT_EQ(plan.primitives_refit, done.primitives_refit);
+    // Planning changes nothing: after the commit the plan is empty again.
+    EXPECT_TRUE(engine->plan().no_accel_work());
+}
+
+TEST_F(LeastWork, AddingAndRemovingWithinOneCommitWindowCostsNothing) {
+    apply_ok(*engine, mesh_edit("ghost", make_box(Vec3(1.0f))), instance_edit("g0", "ghost"));
+    apply_ok(*engine, RemoveInstance{"g0"}, RemoveMesh{"ghost"});
+    const RebuildReport r = commit_ok(*engine);
+    EXPECT_TRUE(r.no_accel_work());
+}
+
+TEST_F(LeastWork, RemovingTheLastInstanceAndTheMeshReleasesItsBlas) {
+    apply_ok(*engine, RemoveInstance{"c0"}, RemoveMesh{"crate"});
+    const RebuildReport r = commit_ok(*engine);
+    EXPECT_EQ(r.tlas_action, TlasAction::Update);
+    EXPECT_EQ(r.blas_rebuilds, 0u);
+    EXPECT_THAT(r.released, ElementsAre("crate"));
+    EXPECT_EQ(r.tlas_instances, 3u);
+}
+
+TEST_F(LeastWork, CountersAccumulateAcrossCommits) {
+    const EngineCounters before = engine->counters();
+    apply_ok(*engine, MarkDirty{std::string("ball"), DirtyAction::Rebuild});
+    commit_ok(*engine);
+    commit_ok(*engine);
+    const EngineCounters after = engine->counters();
+    EXPECT_EQ(after.commits - before.commits, 2u);
+    EXPECT_EQ(after.noop_commits - before.noop_commits, 1u);
+    EXPECT_EQ(after.blas_rebuilds - before.blas_rebuilds, 1u);
+    EXPECT_EQ(after.tlas_updates - before.tlas_updates, 1u);
+}
+
+TEST_F(LeastWork, MemoryIsReportedAndShrinksWhenMeshesGo) {
+    const RebuildReport before = commit_ok(*engine);
+    EXPECT_GT(before.memory_blas_bytes, 0);
+    EXPECT_GT(before.memory_tlas_bytes, 0);
+    apply_ok(*engine, RemoveInstance{"b0"}, RemoveInstance{"b1"}, RemoveInstance{"b2"},
+             RemoveMesh{"ball"});
+    const RebuildReport after = commit_ok(*engine);
+    EXPECT_LT(after.memory_blas_bytes, before.memory_blas_bytes);
+}
+
+}  // namespace
+}  // namespace strata

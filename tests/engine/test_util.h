@@ -1,0 +1,62 @@
+#pragma once
+// Small builders shared by the engine tests.
+
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "engine/engine.h"
+#include "engine/scene/shapes.h"
+
+namespace strata::test {
+
+inline AddMesh mesh_edit(const std::string& id, MeshData data, BuildOptions build = {}) {
+    AddMesh e;
+    e.id = id;
+    e.positions = std::move(data.positions);
+    e.triangles = std::move(data.triangles);
+    e.build = build;
+    return e;
+}
+
+inline AddInstance instance_edit(const std::string& id, const std::string& mesh, Vec3 at = Vec3(0.0f)) {
+    AddInstance e;
+    e.id = id;
+    e.mesh = mesh;
+    e.transform = Affine::translation(at);
+    return e;
+}
+
+inline std::unique_ptr<Engine> make_engine() {
+    auto engine = Engine::create();
+    EXPECT_TRUE(engine.ok()) << (engine.ok() ? "" : engine.error().describe());
+    return std::move(engine.value());
+}
+
+/// Applies a batch that must succeed.
+template <class... Edits>
+uint64_t apply_ok(Engine& engine, Edits&&... edits) {
+    EditBatch batch;
+    (batch.edits.emplace_back(std::forward<Edits>(edits)), ...);
+    auto r = engine.apply(std::move(batch));
+    EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().describe());
+    return r.ok() ? r.value().version : 0;
+}
+
+inline RebuildReport commit_ok(Engine& engine) {
+    auto r = engine.commit();
+    EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().describe());
+    return r.ok() ? r.value() : RebuildReport{};
+}
+
+inline std::vector<std::string> ids(const std::vector<MeshBuildEntry>& entries) {
+    std::vector<std::string> out;
+    for (const auto& e : entries) out.push_back(e.mesh);
+    return out;
+}
+
+}  // namespace strata::test
