@@ -69,7 +69,9 @@ public:
         std::lock_guard launch_lock(m_launch_mutex);
         auto report = commit_locked();
         if (!report) return report.error();
-        return f(m_frame, m_accel->tlas(), report.value());
+        auto result = f(m_frame, m_accel->tlas(), report.value());
+        if (Status s = m_accel->device_status("tracing"); !s) return s.error();
+        return result;
     }
 
     /// Runs `f(const Scene&)` under the scene's read lock.

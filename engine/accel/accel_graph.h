@@ -50,6 +50,8 @@ public:
     void set_refit_policy(const RefitPolicy& p) { m_config.refit_policy = p; }
 
     int64_t memory_bytes(MemoryCategory c) const { return m_device->bytes(c); }
+    /// Any Embree error raised since the last check (for example while tracing), as a Status.
+    Status device_status(const char* what) { return m_device->status(what); }
 
 private:
     AccelGraph(const AccelConfig& config, std::unique_ptr<EmbreeDevice> device);

@@ -39,6 +39,8 @@ class EmbreeTlas final : public TlasStrategy {
 public:
     EmbreeTlas(EmbreeDevice& device, BuildPreference prefer) : m_device(device), m_prefer(prefer) {
         create_scene();
+        // An empty committed scene is traceable; launches may come before any instance exists.
+        rtcCommitScene(m_scene);
     }
     ~EmbreeTlas() override {
         release_all();

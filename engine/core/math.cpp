@@ -113,19 +113,22 @@ std::array<float, 16> Affine::to_rows16() const {
 
 const char* transform_problem(const Affine& t) {
     if (!t.is_finite()) return "transform has a NaN or infinite element";
-    // Compare |det| with the product of the column lengths (Hadamard's bound): the ratio is 1 for
-    // an orthogonal basis and 0 for a singular one, whatever the overall scale.
-    double col_product = 1.0;
+    double lengths[3];
     for (int c = 0; c < 3; ++c) {
         const double x = t.at(0, c), y = t.at(1, c), z = t.at(2, c);
-        const double len = std::sqrt(x * x + y * y + z * z);
-        if (len < 1e-12) return "transform is singular (a basis vector has zero length)";
-        col_product *= len;
+        lengths[c] = std::sqrt(x * x + y * y + z * z);
+        if (lengths[c] < MIN_AXIS_SCALE) return "transform is singular (an axis is scaled to zero)";
+        if (lengths[c] > MAX_AXIS_SCALE) return "transform scales an axis beyond 1e6";
     }
+    const double shortest = std::min({lengths[0], lengths[1], lengths[2]});
+    const double longest = std::max({lengths[0], lengths[1], lengths[2]});
+    if (shortest < MAX_ANISOTROPY_INV * longest)
+        return "transform is degenerate (axis scales differ by more than 1e6)";
+    // |det| against the product of the axis lengths (Hadamard's bound): 1 for an orthogonal
+    // basis, 0 when the axes are coplanar, whatever the overall scale.
     const double det = t.determinant();
-    if (std::abs(det) < 1e-6 * col_product) return "transform is singular or degenerate";
-    // Scales outside this range lose too much float precision in object space to trace reliably.
-    if (col_product > 1e18 || col_product < 1e-18) return "transform scale is out of range";
+    if (std::abs(det) < 1e-6 * lengths[0] * lengths[1] * lengths[2])
+        return "transform is singular or degenerate (its axes are nearly coplanar)";
     return nullptr;
 }
 

@@ -76,8 +76,13 @@ struct Affine {
     friend bool operator==(const Affine&, const Affine&) = default;
 };
 
-/// Why a transform cannot be used, or nullptr when it can: non-finite values, a singular or
-/// badly conditioned linear part (|det| tiny against the scale of its columns).
+/// Limits on instance transforms: float precision in object space suffers beyond these.
+constexpr double MIN_AXIS_SCALE = 1e-6;
+constexpr double MAX_AXIS_SCALE = 1e6;
+constexpr double MAX_ANISOTROPY_INV = 1e-6;  ///< shortest axis / longest axis must exceed this
+
+/// Why a transform cannot be used, or nullptr when it can: non-finite values, an axis scaled
+/// outside [1e-6, 1e6], axis scales differing by more than 1e6, or nearly coplanar axes.
 const char* transform_problem(const Affine& t);
 
 }  // namespace strata

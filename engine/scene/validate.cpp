@@ -96,12 +96,16 @@ Status unknown(const char* kind, const std::string& id, const char* field) {
     return fail(ErrorCode::UnknownId, std::string("unknown ") + kind + " '" + id + "'", field);
 }
 
-Status check_positions(const std::vector<Vec3>& positions, const char* field) {
+/// `first_vertex` is the mesh vertex the array starts at (for messages); the field path indexes
+/// the flat number array of the request.
+Status check_positions(const std::vector<Vec3>& positions, const char* field,
+                       uint64_t first_vertex = 0) {
     for (std::size_t i = 0; i < positions.size(); ++i) {
-        if (!is_finite(positions[i]))
-            return fail(ErrorCode::NotFinite,
-                        "position " + std::to_string(i) + " has a NaN or infinite coordinate",
-                        std::string(field) + "/" + std::to_string(i * 3));
+        if (is_finite(positions[i])) continue;
+        const int k = std::isfinite(positions[i].x) ? (std::isfinite(positions[i].y) ? 2 : 1) : 0;
+        return fail(ErrorCode::NotFinite,
+                    "vertex " + std::to_string(first_vertex + i) + " has a NaN or infinite " + "xyz"[k] + " coordinate",
+                    std::string(field) + "/" + std::to_string(i * 3 + k));
     }
     return {};
 }
@@ -167,7 +171,7 @@ public:
                             ") are outside mesh '" + e.mesh + "' which has " +
                             std::to_string(m->vertex_count) + " vertices",
                         e.offset ? "offset" : "positions");
-        return check_positions(e.positions, "positions");
+        return check_positions(e.positions, "positions", e.offset);
     }
 
     Status check(const ReplaceMeshTopology& e) {
