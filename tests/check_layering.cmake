@@ -1,0 +1,23 @@
+# Layering check (run by CTest): the engine includes no HTTP or JSON header, and only the files
+# of the acceleration layer include Embree. Usage: cmake -DROOT=<repo> -P check_layering.cmake
+cmake_minimum_required(VERSION 3.25)
+set(EMBREE_ALLOWED
+    engine/accel/embree_device.cpp
+    engine/accel/blas_store.cpp
+    engine/accel/embree_tlas.cpp)
+file(GLOB_RECURSE ENGINE_FILES RELATIVE "${ROOT}" "${ROOT}/engine/*.h" "${ROOT}/engine/*.cpp")
+set(problems "")
+foreach(f IN LISTS ENGINE_FILES)
+    file(READ "${ROOT}/${f}" text)
+    if(text MATCHES "#include[ \t]*[<\"](httplib\\.h|nlohmann/)")
+        string(APPEND problems "  ${f} includes an HTTP or JSON header\n")
+    endif()
+    if(text MATCHES "#include[ \t]*[<\"]embree3/" AND NOT f IN_LIST EMBREE_ALLOWED)
+        string(APPEND problems "  ${f} includes Embree outside the acceleration layer\n")
+    endif()
+endforeach()
+if(problems)
+    message(FATAL_ERROR "layering violations:\n${problems}")
+endif()
+list(LENGTH ENGINE_FILES n)
+message(STATUS "layering ok: ${n} engine files checked")
