@@ -85,18 +85,18 @@ public:
         rtcIntersect1(m_scene, &ctx, reinterpret_cast<RTCRayHit*>(&ray));
     }
 
-    void intersect16(const int* valid, RayHit16& rays, bool coherent) const override {
+    void intersect16(const ValidMask16& valid, RayHit16& rays, bool coherent) const override {
         RTCIntersectContext ctx;
         rtcInitIntersectContext(&ctx);
         ctx.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
-        rtcIntersect16(valid, m_scene, &ctx, reinterpret_cast<RTCRayHit16*>(&rays));
+        rtcIntersect16(valid.lanes, m_scene, &ctx, reinterpret_cast<RTCRayHit16*>(&rays));
     }
 
-    void occluded16(const int* valid, Ray16& rays) const override {
+    void occluded16(const ValidMask16& valid, Ray16& rays) const override {
         RTCIntersectContext ctx;
         rtcInitIntersectContext(&ctx);
         ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
-        rtcOccluded16(valid, m_scene, &ctx, reinterpret_cast<RTCRay16*>(&rays));
+        rtcOccluded16(valid.lanes, m_scene, &ctx, reinterpret_cast<RTCRay16*>(&rays));
     }
 
 private:

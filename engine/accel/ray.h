@@ -33,6 +33,12 @@ struct alignas(64) RayHit16 {
     uint32_t prim_id[16], geom_id[16], inst_id[16];
 };
 
+/// Active lanes of a 16-ray packet: -1 active, 0 inactive. Embree loads it with aligned vector
+/// loads, so it carries the packet's 64-byte alignment.
+struct alignas(64) ValidMask16 {
+    int lanes[16];
+};
+
 /// Sixteen shadow rays: a miss leaves tfar unchanged, a hit sets it to -inf.
 struct alignas(64) Ray16 {
     float org_x[16], org_y[16], org_z[16], tnear[16];

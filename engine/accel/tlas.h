@@ -47,10 +47,10 @@ public:
 
     /// Closest hit for one ray (inst_id = instance slot).
     virtual void intersect1(RayHit1& ray, bool coherent) const = 0;
-    /// Closest hits for a packet; `valid[i]` is -1 for active lanes, 0 for inactive ones.
-    virtual void intersect16(const int* valid, RayHit16& rays, bool coherent) const = 0;
+    /// Closest hits for the active lanes of a packet.
+    virtual void intersect16(const ValidMask16& valid, RayHit16& rays, bool coherent) const = 0;
     /// Any hit for a packet of shadow rays: tfar becomes -inf on a hit.
-    virtual void occluded16(const int* valid, Ray16& rays) const = 0;
+    virtual void occluded16(const ValidMask16& valid, Ray16& rays) const = 0;
 };
 
 /// The Embree top-level scene over instance geometries attached by slot id.

@@ -47,14 +47,14 @@ void render_primary(const TlasStrategy& tlas, const FrameState& frame,
         tbb::blocked_range2d<uint32_t>(0, settings.height, TILE, 0, settings.width, TILE),
         [&](const tbb::blocked_range2d<uint32_t>& tile) {
             RayHit16 packet;
-            int valid[16];
+            ValidMask16 valid;
             for (uint32_t y0 = tile.rows().begin(); y0 < tile.rows().end(); y0 += PACKET) {
                 for (uint32_t x0 = tile.cols().begin(); x0 < tile.cols().end(); x0 += PACKET) {
                     // Step: fill the packet; lanes outside the image are inactive.
                     for (uint32_t i = 0; i < 16; ++i) {
                         const uint32_t x = x0 + i % PACKET, y = y0 + i / PACKET;
                         const bool inside = x < tile.cols().end() && y < tile.rows().end();
-                        valid[i] = inside ? -1 : 0;
+                        valid.lanes[i] = inside ? -1 : 0;
                         const Vec3 d = rays.direction(float(x) + 0.5f, float(y) + 0.5f);
                         packet.org_x[i] = eye.x;
                         packet.org_y[i] = eye.y;
@@ -76,7 +76,7 @@ void render_primary(const TlasStrategy& tlas, const FrameState& frame,
 
                     // Step: write hit buffers and shade.
                     for (uint32_t i = 0; i < 16; ++i) {
-                        if (!valid[i]) continue;
+                        if (!valid.lanes[i]) continue;
                         const std::size_t p =
                             std::size_t(y0 + i / PACKET) * settings.width + x0 + i % PACKET;
                         const uint32_t inst = packet.inst_id[i];
