@@ -37,11 +37,20 @@ missing=()
 for p in "${pkgs[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
+
+export DEBIAN_FRONTEND=noninteractive
+# Refresh the package lists first. With everything already installed a failed refresh (no
+# network) is only a warning, so the script stays usable offline.
+if ! $sudo apt-get update -qq; then
+    if [ "${#missing[@]}" -gt 0 ]; then
+        echo "install-deps: apt-get update failed and packages are missing: ${missing[*]}" >&2
+        exit 1
+    fi
+    echo "install-deps: apt-get update failed; all packages are present, continuing" >&2
+fi
 if [ "${#missing[@]}" -gt 0 ]; then
     echo "install-deps: installing ${missing[*]}"
-    export DEBIAN_FRONTEND=noninteractive
-    $sudo apt-get update
-    $sudo apt-get install -y --no-install-recommends "${missing[@]}"
+    $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 else
     echo "install-deps: all ${#pkgs[@]} packages present"
 fi

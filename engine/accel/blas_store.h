@@ -6,10 +6,10 @@
 // Build options map onto Embree as follows (Embree honours a per-geometry quality only in a
 // scene of quality LOW, and only REFIT-quality geometry is refit on a vertex-only change):
 //
-//   allow_refit  prefer       scene quality  geometry quality  builder
-//   true         either       LOW            REFIT             SAH, then refit in place
-//   false        fast_trace   HIGH           HIGH              SAH with spatial splits
-//   false        fast_build   LOW            LOW               Morton
+//   allow_refit  prefer       scene quality, flags  geometry quality  builder
+//   true         either       LOW, DYNAMIC          REFIT             SAH, then refit in place
+//   false        fast_trace   HIGH                  HIGH              SAH with spatial splits
+//   false        fast_build   LOW, DYNAMIC          LOW               Morton
 
 #include <cstdint>
 #include <string>

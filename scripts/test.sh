@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Installs what is missing, builds Strata and runs every test. This is README command (2) and
+# exactly what CI runs (.ci/run).
+#
+# Steps:
+#   1. scripts/install-deps.sh              Debian packages (idempotent)
+#   2. build/ (RelWithDebInfo)               full build, then every CTest test
+#   3. build-asan/ (ASan + UBSan)            engine tests under the sanitizers
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+step() { printf '\n==> %s\n' "$*"; }
+
+step "installing dependencies"
+scripts/install-deps.sh
+
+step "building (build/)"
+scripts/build.sh build -DCMAKE_BUILD_TYPE=RelWithDebInfo
+
+step "running the test suite"
+ctest --test-dir build --output-on-failure --timeout 600
+
+step "engine tests under AddressSanitizer and UndefinedBehaviorSanitizer (build-asan/)"
+STRATA_TARGETS=strata_engine_tests scripts/build.sh build-asan \
+    -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSTRATA_SANITIZE=ON -DSTRATA_BUILD_BENCHMARKS=OFF
+ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+    build-asan/tests/engine/strata_engine_tests
+
+step "all tests passed"

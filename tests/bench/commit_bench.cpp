@@ -1,0 +1,151 @@
+// Cost of a commit by kind of edit (Google Benchmark; never run by CTest). Each benchmark edits,
+// then times only the commit that follows, so the numbers are the acceleration-structure work
+// the least-work rules leave.
+//
+//   build/tests/bench/strata_commit_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+
+#include <cmath>
+#include <string>
+
+#include <benchmark/benchmark.h>
+
+#include "engine/engine.h"
+#include "engine/scene/shapes.h"
+
+namespace strata {
+namespace {
+
+std::unique_ptr<Engine> make_engine() { return std::move(Engine::create().value()); }
+
+AddMesh mesh_edit(const std::string& id, MeshData data, BuildOptions build = {}) {
+    AddMesh e;
+    e.id = id;
+    e.positions = std::move(data.positions);
+    e.triangles = std::move(data.triangles);
+    e.build = build;
+    return e;
+}
+
+Affine grid_transform(int64_t i, int64_t n, float jitter) {
+    const auto side = int64_t(std::ceil(std::sqrt(double(n))));
+    return Affine::translation({float(i % side) * 2.0f + jitter, 0.0f, float(i / side) * 2.0f});
+}
+
+/// A field of `n` instances of one small sphere, committed.
+std::unique_ptr<Engine> instance_field(int64_t n) {
+    auto engine = make_engine();
+    EditBatch b;
+    b.edits.emplace_back(mesh_edit("pebble", make_sphere(0.5f, 12)));
+    for (int64_t i = 0; i < n; ++i) {
+        AddInstance inst;
+        inst.id = "i" + std::to_string(i);
+        inst.mesh = "pebble";
+        inst.transform = grid_transform(i, n, 0.0f);
+        b.edits.emplace_back(std::move(inst));
+    }
+    (void)engine->apply(std::move(b));
+    (void)engine->commit();
+    return engine;
+}
+
+void commit_timed(benchmark::State& state, Engine& engine) {
+    auto report = engine.commit();
+    if (!report) state.SkipWithError(report.error().describe().c_str());
+    benchmark::DoNotOptimize(report);
+}
+
+void BM_NothingChanged(benchmark::State& state) {
+    auto engine = instance_field(state.range(0));
+    for (auto _ : state) commit_timed(state, *engine);
+}
+BENCHMARK(BM_NothingChanged)->Arg(10000)->Unit(benchmark::kMicrosecond);
+
+void BM_CameraOnly(benchmark::State& state) {
+    auto engine = instance_field(state.range(0));
+    int frame = 0;
+    for (auto _ : state) {
+        state.PauseTiming();
+        SetCamera c;
+        c.eye = Vec3(float(++frame % 7), 5.0f, 20.0f);
+        (void)engine->apply(EditBatch{{c}});
+        state.ResumeTiming();
+        commit_timed(state, *engine);
+    }
+}
+BENCHMARK(BM_CameraOnly)->Arg(10000)->Unit(benchmark::kMicrosecond);
+
+void BM_MoveOneInstance(benchmark::State& state) {
+    const int64_t n = state.range(0);
+    auto engine = instance_field(n);
+    int64_t frame = 0;
+    for (auto _ : state) {
+        state.PauseTiming();
+        const int64_t i = (frame * 7919) % n;
+        (void)engine->apply(EditBatch{{SetTransform{"i" + std::to_string(i),
+                                                    grid_transform(i, n, float(++frame % 3) * 0.1f)}}});
+        state.ResumeTiming();
+        commit_timed(state, *engine);
+    }
+    state.counters["instances"] = double(n);
+}
+BENCHMARK(BM_MoveOneInstance)->Arg(1000)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
+
+void BM_TlasRebuild(benchmark::State& state) {
+    auto engine = instance_field(state.range(0));
+    for (auto _ : state) {
+        state.PauseTiming();
+        (void)engine->apply(EditBatch{{MarkDirty{std::nullopt, DirtyAction::Rebuild}}});
+        state.ResumeTiming();
+        commit_timed(state, *engine);
+    }
+}
+BENCHMARK(BM_TlasRebuild)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
+
+/// One instanced mesh of about 1M triangles whose vertices wobble each frame.
+void deform_big_mesh(benchmark::State& state, BuildOptions options, bool force_rebuild) {
+    auto engine = make_engine();
+    MeshData sphere = make_sphere(1.0f, 1000);
+    const std::vector<Vec3> base = sphere.positions;
+    EditBatch b;
+    b.edits.emplace_back(mesh_edit("big", std::move(sphere), options));
+    AddInstance inst;
+    inst.id = "big";
+    inst.mesh = "big";
+    b.edits.emplace_back(inst);
+    (void)engine->apply(std::move(b));
+    (void)engine->commit();
+    int frame = 0;
+    for (auto _ : state) {
+        state.PauseTiming();
+        UpdateMeshPositions u;
+        u.mesh = "big";
+        u.positions = base;
+        const float phase = 0.1f * float(++frame);
+        for (Vec3& p : u.positions) p *= 1.0f + 0.01f * std::sin(7.0f * p.x + phase);
+        EditBatch edits;
+        edits.edits.emplace_back(std::move(u));
+        if (force_rebuild) edits.edits.emplace_back(MarkDirty{std::string("big"), DirtyAction::Rebuild});
+        (void)engine->apply(std::move(edits));
+        state.ResumeTiming();
+        commit_timed(state, *engine);
+    }
+    state.counters["triangles"] = double(sphere_triangle_count(1000));
+}
+
+void BM_Deform1MTriangles_Refit(benchmark::State& state) { deform_big_mesh(state, {}, false); }
+void BM_Deform1MTriangles_RebuildRefitQuality(benchmark::State& state) { deform_big_mesh(state, {}, true); }
+void BM_Deform1MTriangles_RebuildFastTrace(benchmark::State& state) {
+    deform_big_mesh(state, {BuildPreference::FastTrace, false}, false);
+}
+void BM_Deform1MTriangles_RebuildFastBuild(benchmark::State& state) {
+    deform_big_mesh(state, {BuildPreference::FastBuild, false}, false);
+}
+BENCHMARK(BM_Deform1MTriangles_Refit)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Deform1MTriangles_RebuildRefitQuality)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Deform1MTriangles_RebuildFastTrace)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Deform1MTriangles_RebuildFastBuild)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace strata
+
+BENCHMARK_MAIN();
