@@ -29,6 +29,13 @@ static_assert(offsetof(RayHit16, inst_id) == offsetof(RTCRayHit16, hit.instID));
 static_assert(sizeof(Ray16) == sizeof(RTCRay16));
 static_assert(offsetof(Ray16, flags) == offsetof(RTCRay16, flags));
 
+RTCIntersectContext make_context(bool coherent) {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+    return ctx;
+}
+
 struct TlasInstance {
     RTCGeometry geometry = nullptr;
     RTCScene blas = nullptr;
@@ -79,23 +86,17 @@ public:
     }
 
     void intersect1(RayHit1& ray, bool coherent) const override {
-        RTCIntersectContext ctx;
-        rtcInitIntersectContext(&ctx);
-        ctx.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+        RTCIntersectContext ctx = make_context(coherent);
         rtcIntersect1(m_scene, &ctx, reinterpret_cast<RTCRayHit*>(&ray));
     }
 
     void intersect16(const ValidMask16& valid, RayHit16& rays, bool coherent) const override {
-        RTCIntersectContext ctx;
-        rtcInitIntersectContext(&ctx);
-        ctx.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+        RTCIntersectContext ctx = make_context(coherent);
         rtcIntersect16(valid.lanes, m_scene, &ctx, reinterpret_cast<RTCRayHit16*>(&rays));
     }
 
     void occluded16(const ValidMask16& valid, Ray16& rays) const override {
-        RTCIntersectContext ctx;
-        rtcInitIntersectContext(&ctx);
-        ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+        RTCIntersectContext ctx = make_context(false);
         rtcOccluded16(valid.lanes, m_scene, &ctx, reinterpret_cast<RTCRay16*>(&rays));
     }
 

@@ -29,8 +29,10 @@ bool parse_u32(const char* s, uint32_t& out) {
     return true;
 }
 
+constexpr const char* USAGE = "usage: strata-demo [--out DIR] [--width W] [--height H]\n";
+
 int usage(const char* why) {
-    std::fprintf(stderr, "strata-demo: %s\nusage: strata-demo [--out DIR] [--width W] [--height H]\n", why);
+    std::fprintf(stderr, "strata-demo: %s\n%s", why, USAGE);
     return 2;
 }
 
@@ -57,7 +59,8 @@ int main(int argc, char** argv) {
         } else if (!std::strcmp(argv[i], "--height") && has_value) {
             if (!parse_u32(argv[++i], opt.height)) return usage("bad --height");
         } else if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
-            return usage("help") == 2 ? 0 : 0;
+            std::fputs(USAGE, stdout);
+            return 0;
         } else {
             return usage((std::string("unknown argument ") + argv[i]).c_str());
         }

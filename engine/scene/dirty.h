@@ -16,8 +16,6 @@ enum MeshBits : uint32_t {
     MeshTopology = 1u << 2,          ///< triangles (and maybe vertex count) replaced
     MeshRefitRequested = 1u << 3,    ///< mark_dirty {mesh, refit}
     MeshRebuildRequested = 1u << 4,  ///< mark_dirty {mesh, rebuild}
-    MeshMaterial = 1u << 5,          ///< default material changed (shading only)
-    MeshRemoved = 1u << 6,
 };
 
 enum InstanceBits : uint32_t {
@@ -27,7 +25,6 @@ enum InstanceBits : uint32_t {
     InstanceMask = 1u << 3,
     InstanceMaterial = 1u << 4,  ///< shading only
     InstanceUserId = 1u << 5,    ///< shading only
-    InstanceRemoved = 1u << 6,
 };
 
 enum MaterialBits : uint32_t {
@@ -37,7 +34,7 @@ enum MaterialBits : uint32_t {
 
 /// Instance bits that change what the TLAS holds; the others only change shading.
 constexpr uint32_t INSTANCE_TLAS_BITS =
-    InstanceAdded | InstanceTransform | InstanceVisibility | InstanceMask | InstanceRemoved;
+    InstanceAdded | InstanceTransform | InstanceVisibility | InstanceMask;
 
 enum SceneBits : uint32_t {
     Camera = 1u << 0,
