@@ -1,13 +1,31 @@
 #include "protocol/scene_json.h"
 
+#include <charconv>
+
 namespace strata::protocol {
 
 namespace {
 
+/// The double with the shortest decimal form that reads back as `f`, so that 0.45f prints as
+/// 0.45 and not 0.44999998807907104.
+double shortest(float f) {
+    char buf[32];
+    const auto r = std::to_chars(buf, buf + sizeof buf, f);
+    double d = f;
+    std::from_chars(buf, r.ptr, d);
+    return d;
+}
+
+Json floats_to_json(const float* v, std::size_t n) {
+    Json out = Json::array();
+    for (std::size_t i = 0; i < n; ++i) out.push_back(shortest(v[i]));
+    return out;
+}
+
 Json material_fields(const Material& m) {
     return {{"base_color", vec3_to_json(m.base_color)},
-            {"roughness", m.roughness},
-            {"metallic", m.metallic},
+            {"roughness", shortest(m.roughness)},
+            {"metallic", shortest(m.metallic)},
             {"emission", vec3_to_json(m.emission)}};
 }
 
@@ -19,20 +37,20 @@ Json material_ref(const Scene& s, MaterialHandle h) {
 
 }  // namespace
 
-Json vec3_to_json(const Vec3& v) { return Json::array({v.x, v.y, v.z}); }
+Json vec3_to_json(const Vec3& v) { return floats_to_json(&v.x, 3); }
 
 Json camera_to_json(const Camera& c) {
     return {{"eye", vec3_to_json(c.eye)},
             {"target", vec3_to_json(c.target)},
             {"up", vec3_to_json(c.up)},
-            {"fov_y_deg", c.fov_y_deg}};
+            {"fov_y_deg", shortest(c.fov_y_deg)}};
 }
 
 Json lighting_to_json(const Lighting& l) {
     return {{"sun_direction", vec3_to_json(l.sun_direction)},
             {"sun_color", vec3_to_json(l.sun_color)},
             {"sky_color", vec3_to_json(l.sky_color)},
-            {"sky_intensity", l.sky_intensity}};
+            {"sky_intensity", shortest(l.sky_intensity)}};
 }
 
 Json bounds_to_json(const Bounds3& b) {
@@ -83,7 +101,7 @@ std::optional<Json> instance_to_json(const Scene& s, std::string_view id) {
                 {"mesh", mesh.id},
                 {"material", material_ref(s, i.material)},
                 {"resolved_material", material_fields(resolved)},
-                {"transform", i.transform.to_rows16()},
+                {"transform", floats_to_json(i.transform.to_rows16().data(), 16)},
                 {"visible", i.visible},
                 {"mask", i.mask},
                 {"user_id", i.user_id},
