@@ -35,7 +35,8 @@ std::optional<std::string> decode_base64(std::string_view text, std::size_t* bad
     std::size_t o = 0;
     // Step: full quads, the hot loop (validity is OR-ed and checked once per quad).
     for (std::size_t i = 0; i < full; i += 4) {
-        const uint8_t a = TABLE[in[i]], b = TABLE[in[i + 1]], c = TABLE[in[i + 2]], d = TABLE[in[i + 3]];
+        const uint8_t a = TABLE[in[i]], b = TABLE[in[i + 1]], c = TABLE[in[i + 2]],
+                      d = TABLE[in[i + 3]];
         if ((a | b | c | d) & 0xC0) {
             for (std::size_t k = i;; ++k) {
                 if (TABLE[in[k]] == INVALID) return bad(k);

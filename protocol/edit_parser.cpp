@@ -10,7 +10,8 @@ namespace {
 using detail::parse_add_mesh;
 using detail::parse_update_mesh;
 
-Material read_material_fields(FieldReader& r, const Json& v, const std::string& ptr, UpdateMaterial* update) {
+Material read_material_fields(FieldReader& r, const Json& v, const std::string& ptr,
+                              UpdateMaterial* update) {
     Material m;
     auto vec = [&](const char* key, Vec3& out, std::optional<Vec3>* changed) {
         if (const Json* f = FieldReader::member(v, key)) {
@@ -51,31 +52,42 @@ uint32_t read_u32(FieldReader& r, const Json& v, const std::string& ptr) {
     return static_cast<uint32_t>(r.integer(v, ptr, 0, UINT32_MAX));
 }
 
+/// The members add_instance and update_instance share (plain values in one, optionals in the
+/// other).
+template <class E>
+void read_instance_fields(FieldReader& r, const Json& v, const std::string& ptr, E& e) {
+    if (const Json* f = FieldReader::member(v, "transform"))
+        e.transform = parse_transform(r, *f, child(ptr, "transform"));
+    if (const Json* f = FieldReader::member(v, "visible"))
+        e.visible = r.boolean(*f, child(ptr, "visible"));
+    if (const Json* f = FieldReader::member(v, "mask"))
+        e.mask = read_u32(r, *f, child(ptr, "mask"));
+    if (const Json* f = FieldReader::member(v, "user_id"))
+        e.user_id = read_u32(r, *f, child(ptr, "user_id"));
+}
+
 Edit parse_add_instance(FieldReader& r, const Json& v, const std::string& ptr) {
-    r.expect_object(v, ptr, {"op", "id", "mesh", "material", "transform", "visible", "mask", "user_id"});
+    r.expect_object(v, ptr,
+                    {"op", "id", "mesh", "material", "transform", "visible", "mask", "user_id"});
     AddInstance e;
     e.id = r.id(r.required(v, ptr, "id"), child(ptr, "id"));
     e.mesh = r.id(r.required(v, ptr, "mesh"), child(ptr, "mesh"));
-    if (const Json* f = FieldReader::member(v, "material")) e.material = r.id(*f, child(ptr, "material"));
-    if (const Json* f = FieldReader::member(v, "transform")) e.transform = parse_transform(r, *f, child(ptr, "transform"));
-    if (const Json* f = FieldReader::member(v, "visible")) e.visible = r.boolean(*f, child(ptr, "visible"));
-    if (const Json* f = FieldReader::member(v, "mask")) e.mask = read_u32(r, *f, child(ptr, "mask"));
-    if (const Json* f = FieldReader::member(v, "user_id")) e.user_id = read_u32(r, *f, child(ptr, "user_id"));
+    if (const Json* f = FieldReader::member(v, "material"))
+        e.material = r.id(*f, child(ptr, "material"));
+    read_instance_fields(r, v, ptr, e);
     return e;
 }
 
 Edit parse_update_instance(FieldReader& r, const Json& v, const std::string& ptr) {
-    r.expect_object(v, ptr, {"op", "instance", "material", "transform", "visible", "mask", "user_id"});
+    r.expect_object(v, ptr,
+                    {"op", "instance", "material", "transform", "visible", "mask", "user_id"});
     UpdateInstance e;
     e.instance = r.id(r.required(v, ptr, "instance"), child(ptr, "instance"));
     if (const Json* f = FieldReader::member(v, "material")) {
         // null: back to the mesh's default material.
         e.material = f->is_null() ? std::optional<std::string>() : r.id(*f, child(ptr, "material"));
     }
-    if (const Json* f = FieldReader::member(v, "transform")) e.transform = parse_transform(r, *f, child(ptr, "transform"));
-    if (const Json* f = FieldReader::member(v, "visible")) e.visible = r.boolean(*f, child(ptr, "visible"));
-    if (const Json* f = FieldReader::member(v, "mask")) e.mask = read_u32(r, *f, child(ptr, "mask"));
-    if (const Json* f = FieldReader::member(v, "user_id")) e.user_id = read_u32(r, *f, child(ptr, "user_id"));
+    read_instance_fields(r, v, ptr, e);
     return e;
 }
 
@@ -98,9 +110,10 @@ Edit parse_mark_dirty(FieldReader& r, const Json& v, const std::string& ptr) {
     } else if (!(target.is_string() && target.get_ref<const std::string&>() == "tlas")) {
         r.schema_error(tp, "expected \"tlas\" or {\"mesh\": id}");
     }
-    e.action = r.choice(r.required(v, ptr, "action"), child(ptr, "action"), {"refit", "rebuild"}) == 0
-                   ? DirtyAction::Refit
-                   : DirtyAction::Rebuild;
+    e.action =
+        r.choice(r.required(v, ptr, "action"), child(ptr, "action"), {"refit", "rebuild"}) == 0
+            ? DirtyAction::Refit
+            : DirtyAction::Rebuild;
     return e;
 }
 
@@ -108,19 +121,25 @@ Edit parse_set_camera(FieldReader& r, const Json& v, const std::string& ptr) {
     r.expect_object(v, ptr, {"op", "eye", "target", "up", "fov_y_deg"});
     SetCamera e;
     if (const Json* f = FieldReader::member(v, "eye")) e.eye = r.vec3(*f, child(ptr, "eye"));
-    if (const Json* f = FieldReader::member(v, "target")) e.target = r.vec3(*f, child(ptr, "target"));
+    if (const Json* f = FieldReader::member(v, "target"))
+        e.target = r.vec3(*f, child(ptr, "target"));
     if (const Json* f = FieldReader::member(v, "up")) e.up = r.vec3(*f, child(ptr, "up"));
-    if (const Json* f = FieldReader::member(v, "fov_y_deg")) e.fov_y_deg = r.number(*f, child(ptr, "fov_y_deg"));
+    if (const Json* f = FieldReader::member(v, "fov_y_deg"))
+        e.fov_y_deg = r.number(*f, child(ptr, "fov_y_deg"));
     return e;
 }
 
 Edit parse_set_lighting(FieldReader& r, const Json& v, const std::string& ptr) {
     r.expect_object(v, ptr, {"op", "sun_direction", "sun_color", "sky_color", "sky_intensity"});
     SetLighting e;
-    if (const Json* f = FieldReader::member(v, "sun_direction")) e.sun_direction = r.vec3(*f, child(ptr, "sun_direction"));
-    if (const Json* f = FieldReader::member(v, "sun_color")) e.sun_color = r.vec3(*f, child(ptr, "sun_color"));
-    if (const Json* f = FieldReader::member(v, "sky_color")) e.sky_color = r.vec3(*f, child(ptr, "sky_color"));
-    if (const Json* f = FieldReader::member(v, "sky_intensity")) e.sky_intensity = r.number(*f, child(ptr, "sky_intensity"));
+    if (const Json* f = FieldReader::member(v, "sun_direction"))
+        e.sun_direction = r.vec3(*f, child(ptr, "sun_direction"));
+    if (const Json* f = FieldReader::member(v, "sun_color"))
+        e.sun_color = r.vec3(*f, child(ptr, "sun_color"));
+    if (const Json* f = FieldReader::member(v, "sky_color"))
+        e.sky_color = r.vec3(*f, child(ptr, "sky_color"));
+    if (const Json* f = FieldReader::member(v, "sky_intensity"))
+        e.sky_intensity = r.number(*f, child(ptr, "sky_intensity"));
     return e;
 }
 
@@ -176,9 +195,10 @@ Edit parse_edit(FieldReader& r, const Json& v, const std::string& ptr, EditSourc
     }
     std::string list;
     for (const OpEntry& e : OPS) list += (list.empty() ? "" : ", ") + std::string(e.name);
-    r.schema_error(child(ptr, "op"), "unknown op" +
-                                         (op.is_string() ? " '" + op.get<std::string>() + "'" : std::string()) +
-                                         " (ops: " + list + ")");
+    r.schema_error(child(ptr, "op"),
+                   "unknown op" +
+                       (op.is_string() ? " '" + op.get<std::string>() + "'" : std::string()) +
+                       " (ops: " + list + ")");
 }
 
 /// Parses the whole batch; throws the first schema error, returns the first value error.
@@ -191,7 +211,8 @@ std::optional<RequestError> parse_into(const Json& body, ParsedBatch& out) {
     out.sources.resize(edits.size());
     for (std::size_t i = 0; i < edits.size(); ++i) {
         r.set_edit_index(i);
-        out.batch.edits.push_back(parse_edit(r, edits[i], "/edits/" + std::to_string(i), out.sources[i]));
+        out.batch.edits.push_back(
+            parse_edit(r, edits[i], "/edits/" + std::to_string(i), out.sources[i]));
     }
     return r.value_error();
 }

@@ -12,12 +12,17 @@ namespace strata::protocol {
 
 namespace {
 
-bool is_digit(char c) { return c >= '0' && c <= '9'; }
+bool is_digit(char c) {
+    return c >= '0' && c <= '9';
+}
 
 class Reader {
 public:
     Reader(std::string_view text, const JsonLimits& limits)
-        : m_begin(text.data()), m_p(text.data()), m_end(text.data() + text.size()), m_limits(limits) {}
+        : m_begin(text.data()),
+          m_p(text.data()),
+          m_end(text.data() + text.size()),
+          m_limits(limits) {}
 
     std::optional<Json> document() {
         Json root;
@@ -40,9 +45,10 @@ private:
         if (!m_error) {
             RequestError e;
             e.kind = kind;
-            e.message = kind == RequestErrorKind::Syntax
-                            ? "malformed JSON at byte " + std::to_string(m_p - m_begin) + ": " + what
-                            : what;
+            e.message =
+                kind == RequestErrorKind::Syntax
+                    ? "malformed JSON at byte " + std::to_string(m_p - m_begin) + ": " + what
+                    : what;
             m_error = std::move(e);
         }
         return false;
@@ -64,17 +70,22 @@ private:
     bool value(Json& out) {
         if (m_p == m_end) return fail("unexpected end of input");
         switch (*m_p) {
-            case '{': return object(out);
-            case '[': return array(out);
+            case '{':
+                return object(out);
+            case '[':
+                return array(out);
             case '"': {
                 std::string s;
                 if (!string(s)) return false;
                 out = std::move(s);
                 return true;
             }
-            case 't': return literal("true", Json(true), out);
-            case 'f': return literal("false", Json(false), out);
-            case 'n': return literal("null", Json(nullptr), out);
+            case 't':
+                return literal("true", Json(true), out);
+            case 'f':
+                return literal("false", Json(false), out);
+            case 'n':
+                return literal("null", Json(nullptr), out);
             default: {
                 double unused;
                 return number(out, unused);
@@ -92,8 +103,9 @@ private:
 
     bool enter() {
         if (++m_depth > m_limits.max_depth)
-            return fail("JSON nesting is deeper than the limit of " + std::to_string(m_limits.max_depth),
-                        RequestErrorKind::TooDeep);
+            return fail(
+                "JSON nesting is deeper than the limit of " + std::to_string(m_limits.max_depth),
+                RequestErrorKind::TooDeep);
         return true;
     }
 
@@ -134,6 +146,7 @@ private:
         Json::array_t items;
         std::vector<double> packed;
         bool packing = false;
+        bool all_numbers = true;  // every element so far is a number
         std::size_t count = 0;
         skip_ws();
         if (m_p != m_end && *m_p == ']') {
@@ -165,7 +178,8 @@ private:
                 items.emplace_back();
                 double d;
                 if (!(numeric ? number(items.back(), d) : value(items.back()))) return false;
-                if (numeric && items.size() == PACK_THRESHOLD && count == PACK_THRESHOLD) {
+                all_numbers = all_numbers && numeric;
+                if (all_numbers && items.size() == PACK_THRESHOLD) {
                     packed.reserve(PACK_THRESHOLD * 16);
                     for (const Json& e : items) packed.push_back(e.get<double>());
                     items.clear();
@@ -215,7 +229,8 @@ private:
             integral = false;
             ++q;
             if (q != m_end && (*q == '+' || *q == '-')) ++q;
-            if (q == m_end || !is_digit(*q)) return fail("invalid number: no digit in the exponent");
+            if (q == m_end || !is_digit(*q))
+                return fail("invalid number: no digit in the exponent");
             while (q != m_end && is_digit(*q)) ++q;
         }
         m_p = q;
@@ -299,16 +314,34 @@ private:
         if (m_p == m_end) return fail("unterminated escape");
         const char c = *m_p++;
         switch (c) {
-            case '"': out += '"'; return true;
-            case '\\': out += '\\'; return true;
-            case '/': out += '/'; return true;
-            case 'b': out += '\b'; return true;
-            case 'f': out += '\f'; return true;
-            case 'n': out += '\n'; return true;
-            case 'r': out += '\r'; return true;
-            case 't': out += '\t'; return true;
-            case 'u': break;
-            default: return fail("invalid escape");
+            case '"':
+                out += '"';
+                return true;
+            case '\\':
+                out += '\\';
+                return true;
+            case '/':
+                out += '/';
+                return true;
+            case 'b':
+                out += '\b';
+                return true;
+            case 'f':
+                out += '\f';
+                return true;
+            case 'n':
+                out += '\n';
+                return true;
+            case 'r':
+                out += '\r';
+                return true;
+            case 't':
+                out += '\t';
+                return true;
+            case 'u':
+                break;
+            default:
+                return fail("invalid escape");
         }
         uint32_t cp = 0;
         if (!hex4(cp)) return false;
@@ -395,7 +428,9 @@ bool is_packed_numbers(const Json& v) {
            v.get_binary().subtype() == PACKED_NUMBERS_SUBTYPE;
 }
 
-std::size_t packed_size(const Json& v) { return v.get_binary().size() / sizeof(double); }
+std::size_t packed_size(const Json& v) {
+    return v.get_binary().size() / sizeof(double);
+}
 
 double packed_value(const Json& v, std::size_t i) {
     double d;

@@ -22,8 +22,8 @@ using Json = nlohmann::json;
 
 /// Limits applied while parsing untrusted JSON.
 struct JsonLimits {
-    std::size_t max_depth = 64;                   ///< nested arrays and objects
-    std::size_t max_array_elements = 1u << 26;    ///< elements in any one array
+    std::size_t max_depth = 64;                 ///< nested arrays and objects
+    std::size_t max_array_elements = 1u << 26;  ///< elements in any one array
 };
 
 /// Arrays of at least this many numbers are packed.

@@ -15,15 +15,22 @@ namespace {
 const char* type_name(const Json& v) {
     if (is_packed_numbers(v)) return "array";
     switch (v.type()) {
-        case Json::value_t::null: return "null";
-        case Json::value_t::boolean: return "boolean";
-        case Json::value_t::string: return "string";
-        case Json::value_t::array: return "array";
-        case Json::value_t::object: return "object";
+        case Json::value_t::null:
+            return "null";
+        case Json::value_t::boolean:
+            return "boolean";
+        case Json::value_t::string:
+            return "string";
+        case Json::value_t::array:
+            return "array";
+        case Json::value_t::object:
+            return "object";
         case Json::value_t::number_integer:
         case Json::value_t::number_unsigned:
-        case Json::value_t::number_float: return "number";
-        default: return "value";
+        case Json::value_t::number_float:
+            return "number";
+        default:
+            return "value";
     }
 }
 
@@ -80,8 +87,7 @@ void FieldReader::schema_error(const std::string& ptr, std::string message) cons
 
 void FieldReader::expect_object(const Json& v, const std::string& ptr,
                                 std::initializer_list<std::string_view> allowed) const {
-    if (!v.is_object())
-        schema_error(ptr, std::string("expected an object, got ") + type_name(v));
+    if (!v.is_object()) schema_error(ptr, std::string("expected an object, got ") + type_name(v));
     for (const auto& [key, value] : v.items()) {
         bool known = false;
         for (std::string_view a : allowed) known |= a == key;
@@ -98,13 +104,15 @@ const Json* FieldReader::member(const Json& obj, std::string_view key) {
     return it == obj.end() ? nullptr : &*it;
 }
 
-const Json& FieldReader::required(const Json& obj, const std::string& ptr, std::string_view key) const {
+const Json& FieldReader::required(const Json& obj, const std::string& ptr,
+                                  std::string_view key) const {
     if (const Json* m = member(obj, key)) return *m;
     schema_error(child(ptr, key), "missing required member '" + std::string(key) + "'");
 }
 
 std::string FieldReader::id(const Json& v, const std::string& ptr) const {
-    if (!v.is_string()) schema_error(ptr, std::string("expected an id string, got ") + type_name(v));
+    if (!v.is_string())
+        schema_error(ptr, std::string("expected an id string, got ") + type_name(v));
     const auto& s = v.get_ref<const std::string&>();
     if (s.empty()) schema_error(ptr, "id must not be empty");
     if (utf8_length(s) > MAX_ID_LENGTH)
@@ -125,7 +133,8 @@ std::size_t FieldReader::choice(const Json& v, const std::string& ptr,
 }
 
 bool FieldReader::boolean(const Json& v, const std::string& ptr) const {
-    if (!v.is_boolean()) schema_error(ptr, std::string("expected true or false, got ") + type_name(v));
+    if (!v.is_boolean())
+        schema_error(ptr, std::string("expected true or false, got ") + type_name(v));
     return v.get<bool>();
 }
 
@@ -144,7 +153,8 @@ float FieldReader::positive_number(const Json& v, const std::string& ptr) {
     return number(v, ptr);
 }
 
-uint64_t FieldReader::integer(const Json& v, const std::string& ptr, uint64_t lo, uint64_t hi) const {
+uint64_t FieldReader::integer(const Json& v, const std::string& ptr, uint64_t lo,
+                              uint64_t hi) const {
     const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
     if (v.is_number_unsigned() || v.is_number_integer()) {
         if (v.is_number_integer() && v.get<int64_t>() < 0)
@@ -206,20 +216,13 @@ std::vector<float> FieldReader::floats(const Json& v, const std::string& ptr) {
 }
 
 std::vector<Vec3> FieldReader::positions(const Json& v, const std::string& ptr) {
-    const std::size_t n = array_size(v, ptr, "a flat array of numbers");
-    std::vector<Vec3> out(n / 3);
-    float* dst = reinterpret_cast<float*>(out.data());
-    const std::size_t whole = out.size() * 3;
-    for (std::size_t i = 0; i < n; ++i) {
-        const double d = array_number(v, i, ptr);
-        if (!fits_float(d))
-            record_value_error(child(ptr, i), "coordinate is not finite as a 32-bit float",
-                               ErrorCode::NotFinite);
-        if (i < whole) dst[i] = static_cast<float>(d);
-    }
-    if (n % 3 != 0)
-        record_value_error(ptr, "positions has " + std::to_string(n) +
+    const std::vector<float> flat = floats(v, ptr);
+    if (flat.size() % 3 != 0)
+        record_value_error(ptr, "positions has " + std::to_string(flat.size()) +
                                     " numbers, not a multiple of 3 (x y z per vertex)");
+    std::vector<Vec3> out(flat.size() / 3);
+    for (std::size_t i = 0; i < out.size(); ++i)
+        out[i] = {flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]};
     return out;
 }
 
@@ -241,7 +244,8 @@ std::vector<Triangle> FieldReader::indices(const Json& v, const std::string& ptr
 }
 
 std::string FieldReader::base64_bytes(const Json& v, const std::string& ptr, std::size_t unit) {
-    if (!v.is_string()) schema_error(ptr, std::string("expected a base64 string, got ") + type_name(v));
+    if (!v.is_string())
+        schema_error(ptr, std::string("expected a base64 string, got ") + type_name(v));
     std::size_t bad_at = 0;
     auto bytes = decode_base64(v.get_ref<const std::string&>(), &bad_at);
     if (!bytes) {
@@ -263,7 +267,8 @@ std::vector<Vec3> FieldReader::positions_b64(const Json& v, const std::string& p
     for (std::size_t i = 0; i < out.size(); ++i) {
         for (int k = 0; k < 3; ++k) out[i][k] = load_le<float>(bytes.data() + i * 12 + k * 4);
         if (!is_finite(out[i]))
-            record_value_error(ptr, "vertex " + std::to_string(i) + " has a NaN or infinite coordinate",
+            record_value_error(ptr,
+                               "vertex " + std::to_string(i) + " has a NaN or infinite coordinate",
                                ErrorCode::NotFinite);
     }
     return out;

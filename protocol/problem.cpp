@@ -34,18 +34,29 @@ static_assert(std::size(TYPES) == std::size_t(ProblemType::Internal) + 1);
 
 ProblemType type_of(ErrorCode code) {
     switch (code) {
-        case ErrorCode::InvalidArgument: return ProblemType::InvalidValue;
-        case ErrorCode::NotFinite: return ProblemType::NotFinite;
-        case ErrorCode::UnknownId: return ProblemType::UnknownId;
-        case ErrorCode::DuplicateId: return ProblemType::DuplicateId;
-        case ErrorCode::OutOfRange: return ProblemType::OutOfRange;
-        case ErrorCode::DegenerateTransform: return ProblemType::DegenerateTransform;
-        case ErrorCode::InUse: return ProblemType::InUse;
-        case ErrorCode::EmptyMesh: return ProblemType::EmptyMesh;
-        case ErrorCode::TooLarge: return ProblemType::TooLarge;
-        case ErrorCode::VersionMismatch: return ProblemType::VersionMismatch;
+        case ErrorCode::InvalidArgument:
+            return ProblemType::InvalidValue;
+        case ErrorCode::NotFinite:
+            return ProblemType::NotFinite;
+        case ErrorCode::UnknownId:
+            return ProblemType::UnknownId;
+        case ErrorCode::DuplicateId:
+            return ProblemType::DuplicateId;
+        case ErrorCode::OutOfRange:
+            return ProblemType::OutOfRange;
+        case ErrorCode::DegenerateTransform:
+            return ProblemType::DegenerateTransform;
+        case ErrorCode::InUse:
+            return ProblemType::InUse;
+        case ErrorCode::EmptyMesh:
+            return ProblemType::EmptyMesh;
+        case ErrorCode::TooLarge:
+            return ProblemType::TooLarge;
+        case ErrorCode::VersionMismatch:
+            return ProblemType::VersionMismatch;
         case ErrorCode::StaleHandle:
-        case ErrorCode::Internal: return ProblemType::Internal;
+        case ErrorCode::Internal:
+            return ProblemType::Internal;
     }
     return ProblemType::Internal;
 }
@@ -67,8 +78,12 @@ std::string wire_field(const std::string& field, const EditSource* src) {
 std::string problem_type_uri(ProblemType t) {
     return std::string("https://strata.dev/problems/") + TYPES[int(t)].slug;
 }
-const char* problem_title(ProblemType t) { return TYPES[int(t)].title; }
-int problem_status(ProblemType t) { return TYPES[int(t)].status; }
+const char* problem_title(ProblemType t) {
+    return TYPES[int(t)].title;
+}
+int problem_status(ProblemType t) {
+    return TYPES[int(t)].status;
+}
 
 Problem make_problem(ProblemType type, std::string detail) {
     Problem p;
@@ -81,15 +96,26 @@ Problem make_problem(ProblemType type, std::string detail) {
 Problem problem_from(const RequestError& e) {
     ProblemType type = ProblemType::InvalidRequest;
     switch (e.kind) {
-        case RequestErrorKind::Syntax: type = ProblemType::MalformedJson; break;
-        case RequestErrorKind::TooDeep: type = ProblemType::NestingTooDeep; break;
-        case RequestErrorKind::TooLarge: type = ProblemType::TooLarge; break;
-        case RequestErrorKind::Schema: type = ProblemType::InvalidRequest; break;
-        case RequestErrorKind::Value: type = type_of(e.code); break;
+        case RequestErrorKind::Syntax:
+            type = ProblemType::MalformedJson;
+            break;
+        case RequestErrorKind::TooDeep:
+            type = ProblemType::NestingTooDeep;
+            break;
+        case RequestErrorKind::TooLarge:
+            type = ProblemType::TooLarge;
+            break;
+        case RequestErrorKind::Schema:
+            type = ProblemType::InvalidRequest;
+            break;
+        case RequestErrorKind::Value:
+            type = type_of(e.code);
+            break;
     }
     Problem p = make_problem(type, e.message);
     p.edit_index = e.edit_index;
-    if (e.kind == RequestErrorKind::Schema || e.kind == RequestErrorKind::Value) p.pointer = e.pointer;
+    if (e.kind == RequestErrorKind::Schema || e.kind == RequestErrorKind::Value)
+        p.pointer = e.pointer;
     if (!e.pointer.empty() && p.pointer) p.detail = e.pointer + ": " + e.message;
     return p;
 }

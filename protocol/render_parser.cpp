@@ -10,8 +10,9 @@ namespace strata::protocol {
 namespace {
 
 RenderSpec read_render(FieldReader& r, const Json& v) {
-    r.expect_object(v, "", {"width", "height", "format", "spp", "aovs", "compression", "accumulate",
-                            "exposure", "camera"});
+    r.expect_object(v, "",
+                    {"width", "height", "format", "spp", "aovs", "compression", "accumulate",
+                     "exposure", "camera"});
     RenderSpec spec;
     RenderRequest& q = spec.request;
     auto u32 = [&](const char* key, uint32_t& out, uint64_t hi) {
@@ -22,16 +23,19 @@ RenderSpec read_render(FieldReader& r, const Json& v) {
     u32("height", q.height, MAX_RENDER_SIDE);
     u32("spp", q.spp, MAX_RENDER_SPP);
     if (const Json* f = FieldReader::member(v, "format"))
-        q.format = *parse_image_format(r.choice(*f, "/format", {"png", "exr"}) == 0 ? "png" : "exr");
+        q.format =
+            *parse_image_format(r.choice(*f, "/format", {"png", "exr"}) == 0 ? "png" : "exr");
     if (const Json* f = FieldReader::member(v, "compression")) {
         static constexpr std::string_view NAMES[] = {"none", "zip", "piz"};
-        q.compression = *parse_exr_compression(NAMES[r.choice(*f, "/compression", {"none", "zip", "piz"})]);
+        q.compression =
+            *parse_exr_compression(NAMES[r.choice(*f, "/compression", {"none", "zip", "piz"})]);
     }
     if (const Json* f = FieldReader::member(v, "aovs")) {
         if (!f->is_array()) r.schema_error("/aovs", "expected an array of AOV names");
         for (std::size_t i = 0; i < f->size(); ++i) {
             const Json& a = (*f)[i];
-            const auto aov = a.is_string() ? parse_aov(a.get_ref<const std::string&>()) : std::nullopt;
+            const auto aov =
+                a.is_string() ? parse_aov(a.get_ref<const std::string&>()) : std::nullopt;
             if (!aov)
                 r.schema_error("/aovs/" + std::to_string(i),
                                "expected an AOV name: color, albedo, normal, depth, position, "
@@ -39,15 +43,18 @@ RenderSpec read_render(FieldReader& r, const Json& v) {
             q.aovs.push_back(*aov);
         }
     }
-    if (const Json* f = FieldReader::member(v, "accumulate")) q.accumulate = r.boolean(*f, "/accumulate");
+    if (const Json* f = FieldReader::member(v, "accumulate"))
+        q.accumulate = r.boolean(*f, "/accumulate");
     if (const Json* f = FieldReader::member(v, "exposure")) q.exposure = r.number(*f, "/exposure");
     if (const Json* f = FieldReader::member(v, "camera")) {
         r.expect_object(*f, "/camera", {"eye", "target", "up", "fov_y_deg"});
         SetCamera c;
         if (const Json* m = FieldReader::member(*f, "eye")) c.eye = r.vec3(*m, "/camera/eye");
-        if (const Json* m = FieldReader::member(*f, "target")) c.target = r.vec3(*m, "/camera/target");
+        if (const Json* m = FieldReader::member(*f, "target"))
+            c.target = r.vec3(*m, "/camera/target");
         if (const Json* m = FieldReader::member(*f, "up")) c.up = r.vec3(*m, "/camera/up");
-        if (const Json* m = FieldReader::member(*f, "fov_y_deg")) c.fov_y_deg = r.number(*m, "/camera/fov_y_deg");
+        if (const Json* m = FieldReader::member(*f, "fov_y_deg"))
+            c.fov_y_deg = r.number(*m, "/camera/fov_y_deg");
         spec.camera = c;
     }
     return spec;

@@ -7,7 +7,9 @@ namespace {
 Json entries_to_json(const std::vector<MeshBuildEntry>& entries, bool planned) {
     Json out = Json::array();
     for (const MeshBuildEntry& e : entries) {
-        Json j = {{"mesh", e.mesh}, {"reason", build_reason_name(e.reason)}, {"primitives", e.primitives}};
+        Json j = {{"mesh", e.mesh},
+                  {"reason", build_reason_name(e.reason)},
+                  {"primitives", e.primitives}};
         if (!e.detail.empty()) j["detail"] = e.detail;
         if (!planned) j["ms"] = e.ms;
         out.push_back(std::move(j));
@@ -42,20 +44,13 @@ Json report_to_json(const RebuildReport& r) {
 }
 
 Json counters_to_json(const EngineCounters& c) {
-    return {{"batches_applied", c.batches_applied},
-            {"batches_rejected", c.batches_rejected},
-            {"edits_applied", c.edits_applied},
-            {"commits", c.commits},
-            {"noop_commits", c.noop_commits},
-            {"blas_rebuilds", c.blas_rebuilds},
-            {"blas_refits", c.blas_refits},
-            {"tlas_updates", c.tlas_updates},
-            {"tlas_rebuilds", c.tlas_rebuilds},
-            {"primitives_built", c.primitives_built},
-            {"primitives_refit", c.primitives_refit},
-            {"renders", c.renders},
-            {"rays_traced", c.rays_traced},
-            {"commit_seconds", c.commit_seconds},
+    return {{"batches_applied", c.batches_applied},   {"batches_rejected", c.batches_rejected},
+            {"edits_applied", c.edits_applied},       {"commits", c.commits},
+            {"noop_commits", c.noop_commits},         {"blas_rebuilds", c.blas_rebuilds},
+            {"blas_refits", c.blas_refits},           {"tlas_updates", c.tlas_updates},
+            {"tlas_rebuilds", c.tlas_rebuilds},       {"primitives_built", c.primitives_built},
+            {"primitives_refit", c.primitives_refit}, {"renders", c.renders},
+            {"rays_traced", c.rays_traced},           {"commit_seconds", c.commit_seconds},
             {"render_seconds", c.render_seconds}};
 }
 

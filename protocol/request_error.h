@@ -34,8 +34,8 @@ struct RequestError {
 template <class T>
 class Parsed {
 public:
-    Parsed(T value) : m_v(std::move(value)) {}              // NOLINT: implicit by design
-    Parsed(RequestError error) : m_v(std::move(error)) {}   // NOLINT: implicit by design
+    Parsed(T value) : m_v(std::move(value)) {}             // NOLINT: implicit by design
+    Parsed(RequestError error) : m_v(std::move(error)) {}  // NOLINT: implicit by design
 
     bool ok() const { return m_v.index() == 0; }
     explicit operator bool() const { return ok(); }

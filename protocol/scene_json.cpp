@@ -37,7 +37,9 @@ Json material_ref(const Scene& s, MaterialHandle h) {
 
 }  // namespace
 
-Json vec3_to_json(const Vec3& v) { return floats_to_json(&v.x, 3); }
+Json vec3_to_json(const Vec3& v) {
+    return floats_to_json(&v.x, 3);
+}
 
 Json camera_to_json(const Camera& c) {
     return {{"eye", vec3_to_json(c.eye)},
@@ -78,14 +80,16 @@ std::optional<Json> mesh_to_json(const Scene& s, std::string_view id) {
     const MeshRecord& m = *r.value();
     Bounds3 bounds;
     for (const Vec3& p : m.positions) bounds.extend(p);
-    return Json{{"id", m.id},
-                {"version", s.version()},
-                {"vertices", m.positions.size()},
-                {"triangles", m.triangles.size()},
-                {"instances", m.users.size()},
-                {"material", material_ref(s, m.material)},
-                {"build", {{"prefer", build_preference_name(m.build.prefer)}, {"allow_refit", m.build.allow_refit}}},
-                {"bounds", bounds_to_json(bounds)}};
+    return Json{
+        {"id", m.id},
+        {"version", s.version()},
+        {"vertices", m.positions.size()},
+        {"triangles", m.triangles.size()},
+        {"instances", m.users.size()},
+        {"material", material_ref(s, m.material)},
+        {"build",
+         {{"prefer", build_preference_name(m.build.prefer)}, {"allow_refit", m.build.allow_refit}}},
+        {"bounds", bounds_to_json(bounds)}};
 }
 
 std::optional<Json> instance_to_json(const Scene& s, std::string_view id) {

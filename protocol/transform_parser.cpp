@@ -15,8 +15,9 @@ Affine parse_matrix(FieldReader& r, const Json& v, const std::string& ptr) {
         static constexpr float LAST_ROW[4] = {0.0f, 0.0f, 0.0f, 1.0f};
         for (std::size_t k = 0; k < 4; ++k) {
             if (m[12 + k] != LAST_ROW[k])
-                r.record_value_error(child(ptr, 12 + k),
-                                     "the last row of a 4x4 transform must be 0 0 0 1 (affine only)");
+                r.record_value_error(
+                    child(ptr, 12 + k),
+                    "the last row of a 4x4 transform must be 0 0 0 1 (affine only)");
         }
     }
     return a;
@@ -30,7 +31,8 @@ Affine parse_trs(FieldReader& r, const Json& v, const std::string& ptr) {
         r.schema_error(child(ptr, "quaternion"), "give rotate_deg or quaternion, not both");
 
     Vec3 translate(0.0f);
-    if (const Json* t = FieldReader::member(v, "translate")) translate = r.vec3(*t, child(ptr, "translate"));
+    if (const Json* t = FieldReader::member(v, "translate"))
+        translate = r.vec3(*t, child(ptr, "translate"));
     Affine rotation;
     if (rotate) rotation = Affine::rotation_euler_deg(r.vec3(*rotate, child(ptr, "rotate_deg")));
     if (quaternion) {
@@ -52,8 +54,9 @@ Affine parse_trs(FieldReader& r, const Json& v, const std::string& ptr) {
 Affine parse_transform(FieldReader& r, const Json& v, const std::string& ptr) {
     if (v.is_object()) return parse_trs(r, v, ptr);
     if (v.is_array() || is_packed_numbers(v)) return parse_matrix(r, v, ptr);
-    r.schema_error(ptr, "expected a transform: an array of 12 or 16 numbers or an object with "
-                        "translate, rotate_deg or quaternion, and scale");
+    r.schema_error(ptr,
+                   "expected a transform: an array of 12 or 16 numbers or an object with "
+                   "translate, rotate_deg or quaternion, and scale");
 }
 
 }  // namespace strata::protocol

@@ -21,7 +21,8 @@ Result<std::string> read_token_file(const std::string& path) {
     for (unsigned char c : token) {
         if (c < 0x21 || c > 0x7E)
             return make_error(ErrorCode::InvalidArgument,
-                              "token file '" + path + "' holds whitespace or non-ASCII characters inside the token");
+                              "token file '" + path +
+                                  "' holds whitespace or non-ASCII characters inside the token");
     }
     return token;
 }

@@ -14,9 +14,13 @@ void send_problem(httplib::Response& res, const protocol::Problem& problem) {
     res.set_content(protocol::problem_to_json(problem).dump(), "application/problem+json");
 }
 
-std::string etag(uint64_t version) { return "\"" + std::to_string(version) + "\""; }
+std::string etag(uint64_t version) {
+    return "\"" + std::to_string(version) + "\"";
+}
 
-void set_etag(httplib::Response& res, uint64_t version) { res.set_header("ETag", etag(version)); }
+void set_etag(httplib::Response& res, uint64_t version) {
+    res.set_header("ETag", etag(version));
+}
 
 std::optional<IfMatch> parse_if_match(const httplib::Request& req, protocol::Problem& problem) {
     if (!req.has_header("If-Match")) return IfMatch{};
@@ -25,11 +29,13 @@ std::optional<IfMatch> parse_if_match(const httplib::Request& req, protocol::Pro
     while (!v.empty() && (v.front() == ' ' || v.front() == '\t')) v.erase(0, 1);
     if (v == "*") return IfMatch{};
     auto bad = [&](const std::string& why) -> std::optional<IfMatch> {
-        problem = protocol::make_problem(protocol::ProblemType::InvalidRequest,
-                                         "If-Match: " + why + " (expected an entity tag such as \"12\")");
+        problem =
+            protocol::make_problem(protocol::ProblemType::InvalidRequest,
+                                   "If-Match: " + why + " (expected an entity tag such as \"12\")");
         return std::nullopt;
     };
-    if (v.find(',') != std::string::npos) return bad("lists of several entity tags are not supported");
+    if (v.find(',') != std::string::npos)
+        return bad("lists of several entity tags are not supported");
     if (v.rfind("W/", 0) == 0) {
         // A weak tag never matches under the strong comparison If-Match requires.
         return IfMatch{UINT64_MAX};

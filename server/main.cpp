@@ -39,11 +39,13 @@ int serve(server::CommandLine& cl) {
         return 1;
     }
     signals.start([&http](int signo) {
-        spdlog::info("{} received: finishing in-flight requests", signo == SIGINT ? "SIGINT" : "SIGTERM");
+        spdlog::info("{} received: finishing in-flight requests",
+                     signo == SIGINT ? "SIGINT" : "SIGTERM");
         http.stop();
     });
-    spdlog::info("strata-server listening on http://{}:{} ({} threads{})", cl.config.host, port.value(),
-                 cl.config.threads, cl.config.token.empty() ? "" : ", bearer token required");
+    spdlog::info("strata-server listening on http://{}:{} ({} threads{})", cl.config.host,
+                 port.value(), cl.config.threads,
+                 cl.config.token.empty() ? "" : ", bearer token required");
     http.listen();
     spdlog::info("stopped");
     return 0;

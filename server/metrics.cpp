@@ -55,7 +55,8 @@ void Histogram::write(std::string& out, const char* name, const char* help) cons
     uint64_t cumulative = 0;
     for (std::size_t i = 0; i < BOUNDS.size(); ++i) {
         cumulative += buckets[i];
-        out += std::string(name) + "_bucket{le=\"" + number(BOUNDS[i]) + "\"} " + std::to_string(cumulative) + '\n';
+        out += std::string(name) + "_bucket{le=\"" + number(BOUNDS[i]) + "\"} " +
+               std::to_string(cumulative) + '\n';
     }
     out += std::string(name) + "_bucket{le=\"+Inf\"} " + std::to_string(count) + '\n';
     out += std::string(name) + "_sum " + number(sum) + '\n';
@@ -64,7 +65,8 @@ void Histogram::write(std::string& out, const char* name, const char* help) cons
 
 void ServerMetrics::count_response(int status) {
     const int cls = status / 100;
-    if (cls >= 1 && cls <= 5) m_responses[std::size_t(cls - 1)].fetch_add(1, std::memory_order_relaxed);
+    if (cls >= 1 && cls <= 5)
+        m_responses[std::size_t(cls - 1)].fetch_add(1, std::memory_order_relaxed);
 }
 
 std::string ServerMetrics::prometheus_text(const Engine& engine) const {
@@ -78,10 +80,12 @@ std::string ServerMetrics::prometheus_text(const Engine& engine) const {
     };
     const Counter counters[] = {
         {"strata_batches_applied_total", "Edit batches applied.", c.batches_applied},
-        {"strata_batches_rejected_total", "Edit batches refused (invalid or version mismatch).", c.batches_rejected},
+        {"strata_batches_rejected_total", "Edit batches refused (invalid or version mismatch).",
+         c.batches_rejected},
         {"strata_edits_applied_total", "Edits applied.", c.edits_applied},
         {"strata_commits_total", "Commits run (explicit and before renders).", c.commits},
-        {"strata_noop_commits_total", "Commits that found no acceleration-structure work.", c.noop_commits},
+        {"strata_noop_commits_total", "Commits that found no acceleration-structure work.",
+         c.noop_commits},
         {"strata_blas_rebuilds_total", "BLAS builds.", c.blas_rebuilds},
         {"strata_blas_refits_total", "BLAS refits.", c.blas_refits},
         {"strata_tlas_updates_total", "TLAS updates.", c.tlas_updates},
@@ -99,17 +103,26 @@ std::string ServerMetrics::prometheus_text(const Engine& engine) const {
                std::to_string(m_responses[i].load(std::memory_order_relaxed)) + '\n';
     }
 
-    const auto [version, counts] = engine.read([](const Scene& s) { return std::pair(s.version(), s.counts()); });
-    metric(out, "strata_scene_version", "gauge", "Scene version (applied batches).", double(version));
+    const auto [version, counts] =
+        engine.read([](const Scene& s) { return std::pair(s.version(), s.counts()); });
+    metric(out, "strata_scene_version", "gauge", "Scene version (applied batches).",
+           double(version));
     metric(out, "strata_scene_meshes", "gauge", "Meshes in the scene.", double(counts.meshes));
-    metric(out, "strata_scene_instances", "gauge", "Instances in the scene.", double(counts.instances));
-    metric(out, "strata_scene_triangles", "gauge", "Triangles over meshes, each counted once.", double(counts.triangles));
-    header(out, "strata_accel_memory_bytes", "gauge", "Bytes Embree holds for acceleration structures.");
-    out += "strata_accel_memory_bytes{level=\"blas\"} " + std::to_string(engine.memory_bytes(MemoryCategory::Blas)) + '\n';
-    out += "strata_accel_memory_bytes{level=\"tlas\"} " + std::to_string(engine.memory_bytes(MemoryCategory::Tlas)) + '\n';
+    metric(out, "strata_scene_instances", "gauge", "Instances in the scene.",
+           double(counts.instances));
+    metric(out, "strata_scene_triangles", "gauge", "Triangles over meshes, each counted once.",
+           double(counts.triangles));
+    header(out, "strata_accel_memory_bytes", "gauge",
+           "Bytes Embree holds for acceleration structures.");
+    out += "strata_accel_memory_bytes{level=\"blas\"} " +
+           std::to_string(engine.memory_bytes(MemoryCategory::Blas)) + '\n';
+    out += "strata_accel_memory_bytes{level=\"tlas\"} " +
+           std::to_string(engine.memory_bytes(MemoryCategory::Tlas)) + '\n';
 
-    commit_seconds.write(out, "strata_commit_duration_seconds", "Wall time of commits (explicit and before renders).");
-    render_seconds.write(out, "strata_render_duration_seconds", "Wall time of renders, commit and encoding included.");
+    commit_seconds.write(out, "strata_commit_duration_seconds",
+                         "Wall time of commits (explicit and before renders).");
+    render_seconds.write(out, "strata_render_duration_seconds",
+                         "Wall time of renders, commit and encoding included.");
     return out;
 }
 

@@ -16,8 +16,8 @@ namespace strata::server {
 /// A Prometheus histogram with fixed buckets (seconds), cheap enough to observe on every request.
 class Histogram {
 public:
-    static constexpr std::array<double, 14> BOUNDS = {0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025, 0.05,
-                                                      0.1,    0.25,  0.5,    1.0,   2.5,  5.0,  10.0};
+    static constexpr std::array<double, 14> BOUNDS = {
+        0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0, 2.5, 5.0, 10.0};
 
     void observe(double seconds);
     /// Appends `# HELP`, `# TYPE` and the bucket, sum and count lines.

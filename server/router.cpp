@@ -16,12 +16,14 @@ void Router::get(const std::string& pattern, Handler handler) {
 void Router::post(const std::string& pattern, BodyHandler handler) {
     m_methods[pattern].insert("POST");
     const std::size_t max = m_max_body;
-    m_http.Post(pattern, [handler = std::move(handler), max](const httplib::Request& req, httplib::Response& res,
-                                                           const httplib::ContentReader& reader) {
+    m_http.Post(pattern, [handler = std::move(handler), max](const httplib::Request& req,
+                                                             httplib::Response& res,
+                                                             const httplib::ContentReader& reader) {
         std::string body;
         if (req.has_header("Content-Length")) {
             // Reserve up front; the pre-routing handler already refused lengths over the cap.
-            body.reserve(std::min<std::size_t>(std::strtoull(req.get_header_value("Content-Length").c_str(), nullptr, 10), max));
+            body.reserve(std::min<std::size_t>(
+                std::strtoull(req.get_header_value("Content-Length").c_str(), nullptr, 10), max));
         }
         bool too_large = false;
         const bool ok = reader([&](const char* data, std::size_t n) {
@@ -35,9 +37,10 @@ void Router::post(const std::string& pattern, BodyHandler handler) {
         if (!ok) {
             res.set_header("Connection", "close");
             if (too_large || res.status == 413) {
-                send_problem(res, protocol::make_problem(ProblemType::TooLarge,
-                                                         "request body is larger than the limit of " +
-                                                             std::to_string(max) + " bytes"));
+                send_problem(res,
+                             protocol::make_problem(ProblemType::TooLarge,
+                                                    "request body is larger than the limit of " +
+                                                        std::to_string(max) + " bytes"));
             } else {
                 send_problem(res, protocol::make_problem(ProblemType::InvalidRequest,
                                                          "could not read the request body"));

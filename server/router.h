@@ -15,9 +15,11 @@ class Router {
 public:
     using Handler = std::function<void(const httplib::Request&, httplib::Response&)>;
     /// A POST handler gets the whole body, already read and within the size cap.
-    using BodyHandler = std::function<void(const httplib::Request&, httplib::Response&, std::string&& body)>;
+    using BodyHandler =
+        std::function<void(const httplib::Request&, httplib::Response&, std::string&& body)>;
 
-    Router(httplib::Server& http, std::size_t max_body_bytes) : m_http(http), m_max_body(max_body_bytes) {}
+    Router(httplib::Server& http, std::size_t max_body_bytes)
+        : m_http(http), m_max_body(max_body_bytes) {}
 
     /// GET (and HEAD) on `pattern`, an httplib regex.
     void get(const std::string& pattern, Handler handler);

@@ -19,7 +19,8 @@ void record_commit(ServerContext& ctx, const RebuildReport& report, const char* 
 
 namespace {
 
-void post_edits(ServerContext& ctx, const httplib::Request& req, httplib::Response& res, std::string&& body) {
+void post_edits(ServerContext& ctx, const httplib::Request& req, httplib::Response& res,
+                std::string&& body) {
     protocol::Problem problem;
     const auto if_match = parse_if_match(req, problem);
     if (!if_match) return send_problem(res, problem);
@@ -40,7 +41,8 @@ void post_edits(ServerContext& ctx, const httplib::Request& req, httplib::Respon
         return send_problem(res, protocol::problem_from_batch_error(e, batch.sources));
     }
     set_etag(res, applied.value().version);
-    send_json(res, 200, {{"version", applied.value().version}, {"applied", applied.value().applied}});
+    send_json(res, 200,
+              {{"version", applied.value().version}, {"applied", applied.value().applied}});
 }
 
 void post_commit(ServerContext& ctx, httplib::Response& res) {
@@ -63,13 +65,14 @@ void get_plan(ServerContext& ctx, httplib::Response& res) {
 }  // namespace
 
 void add_edit_routes(Router& router, ServerContext& ctx) {
-    router.post("/v1/edits", [&ctx](const httplib::Request& req, httplib::Response& res, std::string&& body) {
-        post_edits(ctx, req, res, std::move(body));
-    });
-    router.post("/v1/commit", [&ctx](const httplib::Request&, httplib::Response& res, std::string&&) {
-        post_commit(ctx, res);
-    });
-    router.get("/v1/plan", [&ctx](const httplib::Request&, httplib::Response& res) { get_plan(ctx, res); });
+    router.post("/v1/edits",
+                [&ctx](const httplib::Request& req, httplib::Response& res, std::string&& body) {
+                    post_edits(ctx, req, res, std::move(body));
+                });
+    router.post("/v1/commit", [&ctx](const httplib::Request&, httplib::Response& res,
+                                     std::string&&) { post_commit(ctx, res); });
+    router.get("/v1/plan",
+               [&ctx](const httplib::Request&, httplib::Response& res) { get_plan(ctx, res); });
 }
 
 }  // namespace strata::server

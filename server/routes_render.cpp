@@ -19,8 +19,9 @@ void render(ServerContext& ctx, const protocol::RenderSpec& spec, httplib::Respo
     const uint64_t pixels = uint64_t(q0.width) * q0.height;
     if (pixels > ctx.config.max_pixels) {
         protocol::Problem p = protocol::make_problem(
-            ProblemType::TooLarge, std::to_string(q0.width) + "x" + std::to_string(q0.height) + " is " +
-                                       std::to_string(pixels) + " pixels; this server renders at most " +
+            ProblemType::TooLarge, std::to_string(q0.width) + "x" + std::to_string(q0.height) +
+                                       " is " + std::to_string(pixels) +
+                                       " pixels; this server renders at most " +
                                        std::to_string(ctx.config.max_pixels) + " (--max-pixels)");
         p.pointer = "/width";
         return send_problem(res, p);
@@ -41,21 +42,23 @@ void render(ServerContext& ctx, const protocol::RenderSpec& spec, httplib::Respo
     res.set_header("X-Strata-Rebuild", frame.report.summary());
     res.set_header("Cache-Control", "no-store");
     res.status = 200;
-    res.set_content(reinterpret_cast<const char*>(frame.bytes.data()), frame.bytes.size(), frame.content_type.c_str());
+    res.set_content(reinterpret_cast<const char*>(frame.bytes.data()), frame.bytes.size(),
+                    frame.content_type.c_str());
 }
 
 }  // namespace
 
 void add_render_routes(Router& router, ServerContext& ctx) {
-    router.post("/v1/render", [&ctx](const httplib::Request&, httplib::Response& res, std::string&& body) {
-        // An empty body means every default, like GET without a query.
-        auto doc = body.empty() ? protocol::Parsed<protocol::Json>(protocol::Json::object())
-                                : protocol::parse_json(body, ctx.json_limits);
-        if (!doc) return send_problem(res, protocol::problem_from(doc.error()));
-        auto spec = protocol::parse_render_body(doc.value());
-        if (!spec) return send_problem(res, protocol::problem_from(spec.error()));
-        render(ctx, spec.value(), res);
-    });
+    router.post(
+        "/v1/render", [&ctx](const httplib::Request&, httplib::Response& res, std::string&& body) {
+            // An empty body means every default, like GET without a query.
+            auto doc = body.empty() ? protocol::Parsed<protocol::Json>(protocol::Json::object())
+                                    : protocol::parse_json(body, ctx.json_limits);
+            if (!doc) return send_problem(res, protocol::problem_from(doc.error()));
+            auto spec = protocol::parse_render_body(doc.value());
+            if (!spec) return send_problem(res, protocol::problem_from(spec.error()));
+            render(ctx, spec.value(), res);
+        });
     router.get("/v1/render", [&ctx](const httplib::Request& req, httplib::Response& res) {
         auto spec = protocol::parse_render_query(req.params);
         if (!spec) return send_problem(res, protocol::problem_from(spec.error()));

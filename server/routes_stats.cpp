@@ -14,7 +14,8 @@ void add_stats_routes(Router& router, ServerContext& ctx) {
         const uint64_t version = ctx.engine.read([](const Scene& s) { return s.version(); });
         protocol::Json doc = {{"version", version},
                               {"counters", protocol::counters_to_json(counters)},
-                              {"last_report", counters.commits ? protocol::report_to_json(last) : protocol::Json(nullptr)},
+                              {"last_report", counters.commits ? protocol::report_to_json(last)
+                                                               : protocol::Json(nullptr)},
                               {"memory_bytes",
                                {{"blas", ctx.engine.memory_bytes(MemoryCategory::Blas)},
                                 {"tlas", ctx.engine.memory_bytes(MemoryCategory::Tlas)}}}};
@@ -23,7 +24,8 @@ void add_stats_routes(Router& router, ServerContext& ctx) {
     });
     router.get("/metrics", [&ctx](const httplib::Request&, httplib::Response& res) {
         res.status = 200;
-        res.set_content(ctx.metrics.prometheus_text(ctx.engine), "text/plain; version=0.0.4; charset=utf-8");
+        res.set_content(ctx.metrics.prometheus_text(ctx.engine),
+                        "text/plain; version=0.0.4; charset=utf-8");
     });
 }
 

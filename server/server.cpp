@@ -22,7 +22,9 @@ using Clock = std::chrono::steady_clock;
 /// one request at a time from start to access-log line).
 thread_local Clock::time_point t_request_start{};
 
-bool is_health_path(const std::string& path) { return path == "/livez" || path == "/readyz"; }
+bool is_health_path(const std::string& path) {
+    return path == "/livez" || path == "/readyz";
+}
 
 }  // namespace
 
@@ -39,7 +41,9 @@ Server::Server(ServerConfig config, Engine& engine)
     install_routes();
 }
 
-Server::~Server() { stop(); }
+Server::~Server() {
+    stop();
+}
 
 void Server::install_hooks() {
     m_http->set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
@@ -49,21 +53,24 @@ void Server::install_hooks() {
             !bearer_token_matches(req.get_header_value("Authorization"), m_config.token)) {
             res.set_header("WWW-Authenticate", "Bearer realm=\"strata\"");
             res.set_header("Connection", "close");  // the body, if any, is never read
-            send_problem(res, protocol::make_problem(ProblemType::Unauthorized,
-                                                     req.has_header("Authorization")
-                                                         ? "the bearer token is not valid"
-                                                         : "this server requires Authorization: Bearer <token>"));
+            send_problem(res, protocol::make_problem(
+                                  ProblemType::Unauthorized,
+                                  req.has_header("Authorization")
+                                      ? "the bearer token is not valid"
+                                      : "this server requires Authorization: Bearer <token>"));
             return R::Handled;
         }
         if (req.has_header("Content-Length") &&
-            std::strtoull(req.get_header_value("Content-Length").c_str(), nullptr, 10) > m_config.max_body_bytes) {
+            std::strtoull(req.get_header_value("Content-Length").c_str(), nullptr, 10) >
+                m_config.max_body_bytes) {
             // Refuse before reading: httplib would otherwise read and discard the whole body.
             res.set_header("Connection", "close");
-            send_problem(res, protocol::make_problem(ProblemType::TooLarge,
-                                                     "request body of " + req.get_header_value("Content-Length") +
-                                                         " bytes is larger than the limit of " +
-                                                         std::to_string(m_config.max_body_bytes) +
-                                                         " bytes (--max-body-mb)"));
+            send_problem(
+                res, protocol::make_problem(
+                         ProblemType::TooLarge,
+                         "request body of " + req.get_header_value("Content-Length") +
+                             " bytes is larger than the limit of " +
+                             std::to_string(m_config.max_body_bytes) + " bytes (--max-body-mb)"));
             return R::Handled;
         }
         return R::Unhandled;
@@ -71,51 +78,58 @@ void Server::install_hooks() {
 
     // Responses that leave httplib without a body of ours: unknown routes (404), bodies over the
     // cap on routes without a content reader (413), malformed request lines (400).
-    m_http->set_error_handler(httplib::Server::HandlerWithResponse([](const httplib::Request& req,
-                                                                     httplib::Response& res) {
-        using R = httplib::Server::HandlerResponse;
-        if (!res.body.empty()) return R::Unhandled;
-        ProblemType type = ProblemType::Internal;
-        std::string detail;
-        switch (res.status) {
-            case 404: type = ProblemType::NotFound, detail = "no route for " + req.method + " " + req.path; break;
-            case 413: type = ProblemType::TooLarge, detail = "request body is larger than the limit"; break;
-            case 400: type = ProblemType::InvalidRequest, detail = "malformed HTTP request"; break;
-            default:
-                if (res.status < 500) type = ProblemType::InvalidRequest;
-                detail = "HTTP " + std::to_string(res.status);
-        }
-        protocol::Problem p = protocol::make_problem(type, detail);
-        p.status = res.status;
-        send_problem(res, p);
-        return R::Handled;
-    }));
+    m_http->set_error_handler(httplib::Server::HandlerWithResponse(
+        [](const httplib::Request& req, httplib::Response& res) {
+            using R = httplib::Server::HandlerResponse;
+            if (!res.body.empty()) return R::Unhandled;
+            protocol::Problem p;
+            if (res.status == 404) {
+                p = protocol::make_problem(ProblemType::NotFound,
+                                           "no route for " + req.method + " " + req.path);
+            } else if (res.status == 413) {
+                p = protocol::make_problem(ProblemType::TooLarge,
+                                           "request body is larger than the limit");
+            } else {
+                p = protocol::make_problem(
+                    res.status < 500 ? ProblemType::InvalidRequest : ProblemType::Internal,
+                    "malformed or unsupported HTTP request (status " + std::to_string(res.status) +
+                        ")");
+            }
+            p.status = res.status;
+            send_problem(res, p);
+            return R::Handled;
+        }));
 
-    m_http->set_exception_handler([](const httplib::Request& req, httplib::Response& res, std::exception_ptr ep) {
-        std::string what = "unknown exception";
-        try {
-            std::rethrow_exception(ep);
-        } catch (const std::exception& e) {
-            what = e.what();
-        } catch (...) {
-        }
-        spdlog::error("{} {}: unhandled exception: {}", req.method, req.path, what);
-        send_problem(res, protocol::make_problem(ProblemType::Internal, "internal error while handling the request"));
-    });
+    m_http->set_exception_handler(
+        [](const httplib::Request& req, httplib::Response& res, std::exception_ptr ep) {
+            std::string what = "unknown exception";
+            try {
+                std::rethrow_exception(ep);
+            } catch (const std::exception& e) {
+                what = e.what();
+            } catch (...) {
+            }
+            spdlog::error("{} {}: unhandled exception: {}", req.method, req.path, what);
+            send_problem(res, protocol::make_problem(ProblemType::Internal,
+                                                     "internal error while handling the request"));
+        });
 
     m_http->set_logger([this](const httplib::Request& req, const httplib::Response& res) {
         m_metrics.count_response(res.status);
-        const double ms = t_request_start == Clock::time_point{}
-                              ? 0.0
-                              : std::chrono::duration<double, std::milli>(Clock::now() - t_request_start).count();
+        const double ms =
+            t_request_start == Clock::time_point{}
+                ? 0.0
+                : std::chrono::duration<double, std::milli>(Clock::now() - t_request_start).count();
         t_request_start = {};
-        spdlog::info("{} {} {} {}B {:.2f}ms", req.method, req.path, res.status, res.body.size(), ms);
+        spdlog::info("{} {} {} {}B {:.2f}ms", req.method, req.path, res.status, res.body.size(),
+                     ms);
     });
 }
 
 void Server::install_routes() {
-    auto ctx = std::make_shared<ServerContext>(ServerContext{
-        m_engine, m_config, m_metrics, protocol::JsonLimits{m_config.max_json_depth, m_config.max_array_elements}});
+    auto ctx = std::make_shared<ServerContext>(
+        ServerContext{m_engine, m_config, m_metrics,
+                      protocol::JsonLimits{m_config.max_json_depth, m_config.max_array_elements}});
     m_context = ctx;  // outlives m_http, whose handlers refer to it
     Router router(*m_http, m_config.max_body_bytes);
     add_edit_routes(router, *ctx);
@@ -127,17 +141,20 @@ void Server::install_routes() {
     });
     router.get("/readyz", [this](const httplib::Request&, httplib::Response& res) {
         if (ready()) return send_json(res, 200, {{"status", "ready"}});
-        send_problem(res, protocol::make_problem(ProblemType::Unavailable, "the server is shutting down"));
+        send_problem(
+            res, protocol::make_problem(ProblemType::Unavailable, "the server is shutting down"));
     });
     router.finish();
 }
 
 Result<int> Server::bind() {
-    const int port = m_config.port == 0 ? m_http->bind_to_any_port(m_config.host)
-                                        : (m_http->bind_to_port(m_config.host, m_config.port) ? m_config.port : -1);
+    const int port =
+        m_config.port == 0
+            ? m_http->bind_to_any_port(m_config.host)
+            : (m_http->bind_to_port(m_config.host, m_config.port) ? m_config.port : -1);
     if (port < 0)
-        return make_error(ErrorCode::InvalidArgument,
-                          "cannot listen on " + m_config.host + ":" + std::to_string(m_config.port));
+        return make_error(ErrorCode::InvalidArgument, "cannot listen on " + m_config.host + ":" +
+                                                          std::to_string(m_config.port));
     m_port = port;
     return port;
 }
@@ -156,6 +173,8 @@ void Server::stop() {
     m_http->stop();
 }
 
-bool Server::ready() const { return m_http->is_running() && !m_stop_requested; }
+bool Server::ready() const {
+    return m_http->is_running() && !m_stop_requested;
+}
 
 }  // namespace strata::server

@@ -1,7 +1,8 @@
 // Large-array throughput of the edit protocol: a 1M-vertex update_mesh as a plain JSON array and
 // as base64, parsed alone and parsed, validated and applied. Run by hand (never by CTest):
 //
-//   build/tests/bench/strata_protocol_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+//   build/tests/bench/strata_protocol_bench --benchmark_repetitions=5
+//   --benchmark_report_aggregates_only=true
 
 #include <cstdio>
 #include <cstring>
@@ -21,7 +22,9 @@ namespace {
 constexpr uint32_t VERTICES = 1'000'000;
 
 /// A plane with about VERTICES vertices (1000 x 999 quads -> 1001 * 1000 vertices).
-MeshData big_plane() { return make_plane(Vec3(10.0f), 1000, 999); }
+MeshData big_plane() {
+    return make_plane(Vec3(10.0f), 1000, 999);
+}
 
 std::string positions_json(const std::vector<Vec3>& positions) {
     std::string out = R"({"edits":[{"op":"update_mesh","mesh":"big","positions":[)";
@@ -39,7 +42,8 @@ std::string positions_json(const std::vector<Vec3>& positions) {
 }
 
 std::string positions_b64_json(const std::vector<Vec3>& positions) {
-    const std::string_view bytes(reinterpret_cast<const char*>(positions.data()), positions.size() * 12);
+    const std::string_view bytes(reinterpret_cast<const char*>(positions.data()),
+                                 positions.size() * 12);
     return R"({"edits":[{"op":"update_mesh","mesh":"big","positions_b64":")" +
            protocol::encode_base64(bytes) + "\"}]}";
 }
@@ -69,7 +73,8 @@ void parse_and_apply(benchmark::State& state, const std::string& text) {
     auto engine = std::move(Engine::create().value());
     MeshData plane = big_plane();
     EditBatch add;
-    add.edits.emplace_back(AddMesh{"big", std::move(plane.positions), std::move(plane.triangles), {}, {}});
+    add.edits.emplace_back(
+        AddMesh{"big", std::move(plane.positions), std::move(plane.triangles), {}, {}});
     if (!engine->apply(std::move(add)).ok()) state.SkipWithError("add_mesh failed");
     for (auto _ : state) {
         auto parsed = protocol::parse_edit_batch(text, {});

@@ -22,17 +22,52 @@ RequestError parse_fails(std::string_view text, const JsonLimits& limits = {}) {
 TEST(JsonDocument, ReadsEveryKindOfValueLikeNlohmann) {
     const char* texts[] = {
         R"({"a": [1, -2, 3.5, 1e3, -0, 0.25E-2], "b": {"c": null, "d": true, "e": false}, "s": "x\"\\\/\b\f\n\r\t\u00e9\ud83d\ude00"})",
-        "  [ ]  ", "{}", "0", "-1", "18446744073709551615", "-9223372036854775808", "\"\"", "[[[]]]",
-        "12345678901234567890123", "1.5e308", "\"h\xC3\xA9llo\"",
+        "  [ ]  ",
+        "{}",
+        "0",
+        "-1",
+        "18446744073709551615",
+        "-9223372036854775808",
+        "\"\"",
+        "[[[]]]",
+        "12345678901234567890123",
+        "1.5e308",
+        "\"h\xC3\xA9llo\"",
     };
     for (const char* t : texts) EXPECT_EQ(parse_ok(t), Json::parse(t)) << t;
 }
 
 TEST(JsonDocument, RefusesWhatStrictJsonRefuses) {
-    const char* texts[] = {"", " ", "{", "[1,]", "{\"a\":1,}", "01", "1.", ".5", "+1", "1e", "-", "NaN",
-                           "Infinity", "tru", "nul", "'a'", "{a:1}", "[1 2]", "\"\\x\"", "\"\\ud800\"",
-                           "\"\\udc00\"", "\"a\nb\"", "\"\xC0\xAF\"", "\"\xED\xA0\x80\"", "\"\xF5\x80\x80\x80\"",
-                           "\"\xE2\x82\"", "[1] x", "// c\n1", "{\"a\" 1}", "\"unterminated"};
+    const char* texts[] = {"",
+                           " ",
+                           "{",
+                           "[1,]",
+                           "{\"a\":1,}",
+                           "01",
+                           "1.",
+                           ".5",
+                           "+1",
+                           "1e",
+                           "-",
+                           "NaN",
+                           "Infinity",
+                           "tru",
+                           "nul",
+                           "'a'",
+                           "{a:1}",
+                           "[1 2]",
+                           "\"\\x\"",
+                           "\"\\ud800\"",
+                           "\"\\udc00\"",
+                           "\"a\nb\"",
+                           "\"\xC0\xAF\"",
+                           "\"\xED\xA0\x80\"",
+                           "\"\xF5\x80\x80\x80\"",
+                           "\"\xE2\x82\"",
+                           "[1] x",
+                           "// c\n1",
+                           "{\"a\" 1}",
+                           "\"unterminated"};
     for (const char* t : texts) {
         EXPECT_EQ(parse_fails(t).kind, RequestErrorKind::Syntax) << t;
         EXPECT_FALSE(Json::accept(t)) << t;
@@ -75,13 +110,15 @@ TEST(JsonDocument, EnforcesTheArrayLimitOnPackedAndPlainArrays) {
 
 TEST(JsonDocument, PacksLongNumericArraysAndKeepsShortOnesAsNodes) {
     std::string text = "{\"short\": [1, 2.5], \"long\": [";
-    for (std::size_t i = 0; i < PACK_THRESHOLD * 3; ++i) text += (i ? "," : "") + std::to_string(i) + ".5";
+    for (std::size_t i = 0; i < PACK_THRESHOLD * 3; ++i)
+        text += (i ? "," : "") + std::to_string(i) + ".5";
     text += "]}";
     const Json j = parse_ok(text);
     EXPECT_TRUE(j["short"].is_array());
     ASSERT_TRUE(is_packed_numbers(j["long"]));
     ASSERT_EQ(packed_size(j["long"]), PACK_THRESHOLD * 3);
-    for (std::size_t i = 0; i < PACK_THRESHOLD * 3; ++i) EXPECT_EQ(packed_value(j["long"], i), double(i) + 0.5);
+    for (std::size_t i = 0; i < PACK_THRESHOLD * 3; ++i)
+        EXPECT_EQ(packed_value(j["long"], i), double(i) + 0.5);
 }
 
 TEST(JsonDocument, UnpacksALongArrayThatTurnsOutMixed) {
@@ -94,6 +131,17 @@ TEST(JsonDocument, UnpacksALongArrayThatTurnsOutMixed) {
     EXPECT_EQ(j[5].get<double>(), 5.0);
     EXPECT_EQ(j[PACK_THRESHOLD * 2], "x");
     EXPECT_EQ(j.back()["a"], 1);
+}
+
+TEST(JsonDocument, NeverPacksAnArrayThatStartedWithANonNumber) {
+    // Found by the fuzzer: an object first, then PACK_THRESHOLD numbers.
+    std::string text = "[{\"g\": 50}";
+    for (std::size_t i = 0; i < PACK_THRESHOLD * 2; ++i) text += "," + std::to_string(i) + ".5";
+    text += "]";
+    const Json j = parse_ok(text);
+    ASSERT_TRUE(j.is_array());
+    EXPECT_EQ(j.size(), PACK_THRESHOLD * 2 + 1);
+    EXPECT_EQ(j, Json::parse(text));
 }
 
 }  // namespace

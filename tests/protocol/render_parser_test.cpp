@@ -7,7 +7,8 @@ namespace strata::protocol {
 namespace {
 
 TEST(RenderParser, ReadsEveryOptionOfTheBody) {
-    auto r = parse_render_body(Json::parse(R"({"width": 320, "height": 200, "format": "exr", "spp": 16,
+    auto r =
+        parse_render_body(Json::parse(R"({"width": 320, "height": 200, "format": "exr", "spp": 16,
         "aovs": ["albedo", "depth"], "compression": "piz", "accumulate": true, "exposure": -1.5,
         "camera": {"eye": [0, 1, 5], "fov_y_deg": 30}})"));
     ASSERT_TRUE(r.ok()) << r.error().message;
@@ -35,8 +36,9 @@ TEST(RenderParser, AnEmptyBodyMeansTheDefaults) {
 
 TEST(RenderParser, TheQueryStringCarriesTheSameOptions) {
     const std::multimap<std::string, std::string> params = {
-        {"width", "64"}, {"height", "48"}, {"format", "png"}, {"spp", "4"}, {"aovs", "normal,depth"},
-        {"accumulate", "false"}, {"exposure", "0.5"}, {"eye", "1,2,3"}, {"fov_y_deg", "60"}, {"compression", "zip"}};
+        {"width", "64"},          {"height", "48"},        {"format", "png"},   {"spp", "4"},
+        {"aovs", "normal,depth"}, {"accumulate", "false"}, {"exposure", "0.5"}, {"eye", "1,2,3"},
+        {"fov_y_deg", "60"},      {"compression", "zip"}};
     auto r = parse_render_query(params);
     ASSERT_TRUE(r.ok()) << r.error().message;
     EXPECT_EQ(r.value().request.width, 64u);
@@ -50,7 +52,8 @@ TEST(RenderParser, TheQueryStringCarriesTheSameOptions) {
 TEST(RenderParser, ErrorsPointAtTheMemberOrParameter) {
     EXPECT_EQ(parse_render_body(Json::parse(R"({"width": 0})")).error().pointer, "/width");
     EXPECT_EQ(parse_render_body(Json::parse(R"({"format": "jpg"})")).error().pointer, "/format");
-    EXPECT_EQ(parse_render_body(Json::parse(R"({"aovs": ["color", "beauty"]})")).error().pointer, "/aovs/1");
+    EXPECT_EQ(parse_render_body(Json::parse(R"({"aovs": ["color", "beauty"]})")).error().pointer,
+              "/aovs/1");
     EXPECT_EQ(parse_render_body(Json::parse(R"({"widht": 10})")).error().pointer, "/widht");
     EXPECT_EQ(parse_render_query({{"width", "wide"}}).error().pointer, "/width");
     EXPECT_EQ(parse_render_query({{"size", "10"}}).error().pointer, "/size");

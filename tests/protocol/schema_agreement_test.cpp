@@ -34,7 +34,8 @@ TEST(SchemaAgreement, ParserGivesTheTableVerdicts) {
         EXPECT_EQ(!problem.has_value(), c["valid"].get<bool>())
             << name << (problem ? ": " + problem->message : std::string());
         if (problem && c.contains("pointer")) {
-            EXPECT_EQ(problem->pointer, c["pointer"].get<std::string>()) << name << ": " << problem->message;
+            EXPECT_EQ(problem->pointer, c["pointer"].get<std::string>())
+                << name << ": " << problem->message;
         }
     }
 }

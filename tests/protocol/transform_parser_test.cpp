@@ -36,8 +36,9 @@ TEST(TransformParser, SixteenNumbersWithAProjectiveRowAreAValueError) {
 TEST(TransformParser, ObjectFormComposesTranslateRotateScale) {
     expect_near(parse(R"({"translate": [1,2,3], "rotate_deg": [0,90,0], "scale": 2})"),
                 Affine::trs({1, 2, 3}, Affine::rotation_euler_deg({0, 90, 0}), Vec3(2.0f)));
-    expect_near(parse(R"({"quaternion": [0,0,0.7071068,0.7071068], "scale": [1,2,3]})"),
-                Affine::trs({}, Affine::rotation_quaternion({0, 0, 0.7071068f, 0.7071068f}), {1, 2, 3}));
+    expect_near(
+        parse(R"({"quaternion": [0,0,0.7071068,0.7071068], "scale": [1,2,3]})"),
+        Affine::trs({}, Affine::rotation_quaternion({0, 0, 0.7071068f, 0.7071068f}), {1, 2, 3}));
     EXPECT_EQ(parse("{}"), Affine::identity());
 }
 

@@ -59,8 +59,9 @@ protected:
 };
 
 TEST_F(Auth, EveryEndpointButHealthNeedsTheToken) {
-    for (const char* path : {"/v1/scene", "/v1/plan", "/v1/stats", "/metrics", "/v1/render?width=8&height=8",
-                             "/v1/scene/meshes/x", "/no-such-route"}) {
+    for (const char* path :
+         {"/v1/scene", "/v1/plan", "/v1/stats", "/metrics", "/v1/render?width=8&height=8",
+          "/v1/scene/meshes/x", "/no-such-route"}) {
         const Reply r = srv.get(path);
         expect_problem(r, 401, "unauthorized");
         EXPECT_THAT(r.header("WWW-Authenticate"), ::testing::StartsWith("Bearer")) << path;
@@ -88,15 +89,18 @@ TEST(Limits, BodiesOverTheCapAre413) {
     // A body without Content-Length (chunked) is cut off at the cap too.
     auto client = srv.client();
     std::size_t sent = 0;
-    auto r = client.Post("/v1/edits", [&](size_t, httplib::DataSink& sink) {
-        if (sent < 4096) {
-            sink.write(big.data() + sent, 512);
-            sent += 512;
-        } else {
-            sink.done();
-        }
-        return true;
-    }, "application/json");
+    auto r = client.Post(
+        "/v1/edits",
+        [&](size_t, httplib::DataSink& sink) {
+            if (sent < 4096) {
+                sink.write(big.data() + sent, 512);
+                sent += 512;
+            } else {
+                sink.done();
+            }
+            return true;
+        },
+        "application/json");
     ASSERT_TRUE(r);
     EXPECT_EQ(r->status, 413);
     EXPECT_EQ(srv.edits({triangle_mesh("a")}).status, 200);
@@ -107,11 +111,14 @@ TEST(Limits, JsonDepthAndArrayLengthAreCapped) {
     c.max_json_depth = 8;
     c.max_array_elements = 100;
     TestServer srv(c);
-    expect_problem(srv.post("/v1/edits", std::string(R"({"edits": [[[[[[[[[]]]]]]]]]})")), 400, "nesting-too-deep");
+    expect_problem(srv.post("/v1/edits", std::string(R"({"edits": [[[[[[[[[]]]]]]]]]})")), 400,
+                   "nesting-too-deep");
     Json positions = Json::array();
     for (int i = 0; i < 300; ++i) positions.push_back(0);
-    expect_problem(srv.edits({{{"op", "add_mesh"}, {"id", "m"}, {"positions", positions}, {"indices", {0, 1, 2}}}}),
-                   413, "too-large");
+    expect_problem(
+        srv.edits(
+            {{{"op", "add_mesh"}, {"id", "m"}, {"positions", positions}, {"indices", {0, 1, 2}}}}),
+        413, "too-large");
 }
 
 }  // namespace

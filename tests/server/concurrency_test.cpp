@@ -26,8 +26,10 @@ Json fingerprint(const Scene& s) {
         j["meshes"][m.id] = {{"positions", p}, {"triangles", t}};
     });
     s.instances().for_each([&](InstanceHandle, const InstanceRecord& i) {
-        j["instances"][i.id] = {{"mesh", s.mesh(i.mesh).value()->id}, {"transform", i.transform.m},
-                                {"visible", i.visible}, {"mask", i.mask}};
+        j["instances"][i.id] = {{"mesh", s.mesh(i.mesh).value()->id},
+                                {"transform", i.transform.m},
+                                {"visible", i.visible},
+                                {"mask", i.mask}};
     });
     s.materials().for_each([&](MaterialHandle, const MaterialRecord& m) {
         j["materials"][m.id] = {m.material.roughness, m.material.metallic};
@@ -36,7 +38,8 @@ Json fingerprint(const Scene& s) {
     return j;
 }
 
-/// A random batch for client `c`: mostly its own objects, sometimes a shared one, sometimes invalid.
+/// A random batch for client `c`: mostly its own objects, sometimes a shared one, sometimes
+/// invalid.
 Json random_batch(std::mt19937& rng, int c, int step) {
     const std::string me = "c" + std::to_string(c);
     auto pick = [&](int n) { return int(rng() % uint32_t(n)); };
@@ -44,21 +47,32 @@ Json random_batch(std::mt19937& rng, int c, int step) {
     const int kind = pick(8);
     const std::string inst = me + "-i" + std::to_string(pick(3));
     if (kind == 0) {
-        edits.push_back({{"op", "add_instance"}, {"id", me + "-x" + std::to_string(step)}, {"mesh", "shared"},
+        edits.push_back({{"op", "add_instance"},
+                         {"id", me + "-x" + std::to_string(step)},
+                         {"mesh", "shared"},
                          {"transform", {{"translate", {pick(10), pick(5), pick(10)}}}}});
     } else if (kind == 1) {
-        edits.push_back({{"op", "update_mesh"}, {"mesh", "shared"}, {"positions", {0, pick(3) * 0.1, 0}}, {"offset", pick(8)}});
+        edits.push_back({{"op", "update_mesh"},
+                         {"mesh", "shared"},
+                         {"positions", {0, pick(3) * 0.1, 0}},
+                         {"offset", pick(8)}});
     } else if (kind == 2) {
-        edits.push_back({{"op", "update_material"}, {"material", "m"}, {"roughness", pick(10) / 10.0}});
+        edits.push_back(
+            {{"op", "update_material"}, {"material", "m"}, {"roughness", pick(10) / 10.0}});
     } else if (kind == 3) {
         // Invalid at index 1: nothing of this batch may land.
-        edits.push_back({{"op", "set_transform"}, {"instance", inst}, {"transform", {{"translate", {1, 1, 1}}}}});
+        edits.push_back({{"op", "set_transform"},
+                         {"instance", inst},
+                         {"transform", {{"translate", {1, 1, 1}}}}});
         edits.push_back({{"op", "remove_mesh"}, {"mesh", "no-such-mesh"}});
     } else if (kind == 4) {
         edits.push_back({{"op", "set_camera"}, {"eye", {pick(5), 3, 10}}});
     } else {
-        edits.push_back({{"op", "set_transform"}, {"instance", inst},
-                         {"transform", {{"translate", {pick(20) - 10, 0, pick(20) - 10}}, {"rotate_deg", {0, pick(360), 0}}}}});
+        edits.push_back({{"op", "set_transform"},
+                         {"instance", inst},
+                         {"transform",
+                          {{"translate", {pick(20) - 10, 0, pick(20) - 10}},
+                           {"rotate_deg", {0, pick(360), 0}}}}});
         edits.push_back({{"op", "update_instance"}, {"instance", inst}, {"visible", pick(4) != 0}});
     }
     return {{"edits", edits}};
@@ -70,7 +84,9 @@ TEST(Concurrency, EightClientsEditingAndRenderingMatchASequentialReplay) {
                   {{"op", "add_mesh"}, {"id", "shared"}, {"shape", {{"type", "box"}}}}};
     for (int c = 0; c < 8; ++c) {
         for (int i = 0; i < 3; ++i)
-            setup.push_back({{"op", "add_instance"}, {"id", "c" + std::to_string(c) + "-i" + std::to_string(i)}, {"mesh", "shared"}});
+            setup.push_back({{"op", "add_instance"},
+                             {"id", "c" + std::to_string(c) + "-i" + std::to_string(i)},
+                             {"mesh", "shared"}});
     }
     const Json setup_batch = {{"edits", setup}};
     ASSERT_EQ(srv.post("/v1/edits", setup_batch).status, 200);
@@ -88,7 +104,8 @@ TEST(Concurrency, EightClientsEditingAndRenderingMatchASequentialReplay) {
             auto client = srv.client();
             for (int step = 0; std::chrono::steady_clock::now() < deadline; ++step) {
                 if (rng() % 4 == 0) {
-                    auto r = client.Post("/v1/render", Json{{"width", 32}, {"height", 24}}.dump(), "application/json");
+                    auto r = client.Post("/v1/render", Json{{"width", 32}, {"height", 24}}.dump(),
+                                         "application/json");
                     if (!r || r->status != 200 || r->get_header_value("ETag").empty()) ++unexpected;
                     ++renders;
                     continue;

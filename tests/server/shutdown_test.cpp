@@ -50,7 +50,8 @@ pid_t spawn_server(const std::vector<std::string>& args) {
 int wait_exit(pid_t pid, int seconds) {
     for (int i = 0; i < seconds * 100; ++i) {
         int status = 0;
-        if (waitpid(pid, &status, WNOHANG) == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+        if (waitpid(pid, &status, WNOHANG) == pid)
+            return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
     kill(pid, SIGKILL);
@@ -87,9 +88,13 @@ void finishes_in_flight_work_on(int signo) {
     EXPECT_FALSE(c.Get("/livez"));
 }
 
-TEST(Shutdown, SigtermFinishesInFlightRequestsAndExitsZero) { finishes_in_flight_work_on(SIGTERM); }
+TEST(Shutdown, SigtermFinishesInFlightRequestsAndExitsZero) {
+    finishes_in_flight_work_on(SIGTERM);
+}
 
-TEST(Shutdown, SigintFinishesInFlightRequestsAndExitsZero) { finishes_in_flight_work_on(SIGINT); }
+TEST(Shutdown, SigintFinishesInFlightRequestsAndExitsZero) {
+    finishes_in_flight_work_on(SIGINT);
+}
 
 TEST(Shutdown, AnIdleServerStopsAtOnce) {
     const int port = free_port();
@@ -100,7 +105,9 @@ TEST(Shutdown, AnIdleServerStopsAtOnce) {
 }
 
 TEST(CommandLine, RefusesANonLoopbackHostWithoutAToken) {
-    EXPECT_EQ(wait_exit(spawn_server({"--host", "0.0.0.0", "--port", std::to_string(free_port())}), 10), 2);
+    EXPECT_EQ(
+        wait_exit(spawn_server({"--host", "0.0.0.0", "--port", std::to_string(free_port())}), 10),
+        2);
 }
 
 TEST(CommandLine, RefusesUnknownFlagsAndAnswersHelp) {

@@ -1,4 +1,5 @@
-// /v1/commit, /v1/plan, /v1/scene, /v1/stats, /metrics, /livez, /readyz and the 404 and 405 answers.
+// /v1/commit, /v1/plan, /v1/scene, /v1/stats, /metrics, /livez, /readyz and the 404 and 405
+// answers.
 
 #include <chrono>
 #include <sstream>
@@ -17,8 +18,8 @@ protected:
 };
 
 void expect_report_shape(const Json& r, bool planned) {
-    for (const char* k : {"version", "tlas", "blas_rebuilds", "blas_refits", "rebuilt", "refit", "primitives_built",
-                          "primitives_refit", "memory_bytes"})
+    for (const char* k : {"version", "tlas", "blas_rebuilds", "blas_refits", "rebuilt", "refit",
+                          "primitives_built", "primitives_refit", "memory_bytes"})
         EXPECT_TRUE(r.contains(k)) << k << " in " << r.dump();
     EXPECT_TRUE(r["tlas"].contains("action"));
     EXPECT_TRUE(r["tlas"].contains("instances"));
@@ -45,9 +46,14 @@ TEST_F(Status, PlanShowsTheNextCommitAndCommitDoesIt) {
     EXPECT_EQ(c["tlas"]["instances"], 18);
     EXPECT_EQ(c["rebuilt"].size(), 5u);
     EXPECT_GT(c["memory_bytes"]["blas"].get<int64_t>(), 0);
-    for (std::size_t i = 0; i < 5; ++i) EXPECT_EQ(c["rebuilt"][i]["mesh"], plan.json()["rebuilt"][i]["mesh"]);
+    for (std::size_t i = 0; i < 5; ++i)
+        EXPECT_EQ(c["rebuilt"][i]["mesh"], plan.json()["rebuilt"][i]["mesh"]);
 
-    ASSERT_EQ(srv.edits({{{"op", "set_transform"}, {"instance", "crate-a"}, {"transform", {{"translate", {1, 0.5, 1}}}}}}).status, 200);
+    ASSERT_EQ(srv.edits({{{"op", "set_transform"},
+                          {"instance", "crate-a"},
+                          {"transform", {{"translate", {1, 0.5, 1}}}}}})
+                  .status,
+              200);
     EXPECT_EQ(srv.get("/v1/plan").json()["tlas"]["action"], "update");
     const Json second = srv.post("/v1/commit", std::string()).json();
     EXPECT_EQ(second["blas_rebuilds"], 0);
@@ -94,22 +100,27 @@ TEST_F(Status, MetricsArePrometheusText) {
     Reply r;
     for (int i = 0; i < 100; ++i) {
         r = srv.get("/metrics");
-        if (r.body.find("strata_http_responses_total{code=\"4xx\"} 1\n") != std::string::npos) break;
+        if (r.body.find("strata_http_responses_total{code=\"4xx\"} 1\n") != std::string::npos)
+            break;
         std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
     ASSERT_EQ(r.status, 200);
     EXPECT_THAT(r.header("Content-Type"), ::testing::StartsWith("text/plain; version=0.0.4"));
-    EXPECT_THAT(r.body, ::testing::HasSubstr("# TYPE strata_commits_total counter\nstrata_commits_total 1\n"));
+    EXPECT_THAT(r.body, ::testing::HasSubstr(
+                            "# TYPE strata_commits_total counter\nstrata_commits_total 1\n"));
     EXPECT_THAT(r.body, ::testing::HasSubstr("strata_renders_total 1\n"));
     EXPECT_THAT(r.body, ::testing::HasSubstr("# TYPE strata_commit_duration_seconds histogram"));
     EXPECT_THAT(r.body, ::testing::HasSubstr("strata_render_duration_seconds_count 1\n"));
-    EXPECT_THAT(r.body, ::testing::HasSubstr("strata_render_duration_seconds_bucket{le=\"+Inf\"} 1\n"));
+    EXPECT_THAT(r.body,
+                ::testing::HasSubstr("strata_render_duration_seconds_bucket{le=\"+Inf\"} 1\n"));
     EXPECT_THAT(r.body, ::testing::HasSubstr("strata_http_responses_total{code=\"4xx\"} 1\n"));
     // Every sample line is "name{labels} value" or "name value".
     std::istringstream lines(r.body);
     for (std::string line; std::getline(lines, line);) {
         if (line.empty() || line[0] == '#') continue;
-        EXPECT_THAT(line, ::testing::MatchesRegex("strata_[a-z_]+(\\{[a-z]+=\"[^\"]+\"\\})? [-+0-9.e]+")) << line;
+        EXPECT_THAT(line,
+                    ::testing::MatchesRegex("strata_[a-z_]+(\\{[a-z]+=\"[^\"]+\"\\})? [-+0-9.e]+"))
+            << line;
     }
 }
 

@@ -69,7 +69,8 @@ public:
         auto c = client();
         return to_reply(c.Get(path.c_str(), h));
     }
-    Reply post(const std::string& path, const std::string& body, const httplib::Headers& h = {}) const {
+    Reply post(const std::string& path, const std::string& body,
+               const httplib::Headers& h = {}) const {
         auto c = client();
         return to_reply(c.Post(path.c_str(), h, body, "application/json"));
     }
@@ -102,7 +103,10 @@ private:
 
 /// A one-triangle mesh edit.
 inline Json triangle_mesh(const std::string& id) {
-    return {{"op", "add_mesh"}, {"id", id}, {"positions", {0, 0, 0, 1, 0, 0, 0, 1, 0}}, {"indices", {0, 1, 2}}};
+    return {{"op", "add_mesh"},
+            {"id", id},
+            {"positions", {0, 0, 0, 1, 0, 0, 0, 1, 0}},
+            {"indices", {0, 1, 2}}};
 }
 
 /// Asserts a problem document with `status` and, when given, `type` slug and `pointer`.
