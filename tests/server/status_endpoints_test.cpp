@@ -1,6 +1,11 @@
 // /v1/commit, /v1/plan, /v1/scene, /v1/stats, /metrics, /livez, /readyz and the 404 and 405
 // answers.
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <chrono>
 #include <sstream>
 #include <thread>
@@ -59,6 +64,42 @@ TEST_F(Status, PlanShowsTheNextCommitAndCommitDoesIt) {
     EXPECT_EQ(second["blas_rebuilds"], 0);
     EXPECT_EQ(second["tlas"]["action"], "update");
     EXPECT_EQ(srv.get("/v1/plan").json()["tlas"]["action"], "none");
+}
+
+/// Sends raw HTTP and returns the status line, for requests httplib's client would not send.
+std::string raw_request(int port, const std::string& request) {
+    std::string reply;
+    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_port = htons(uint16_t(port));
+    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if (::connect(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr) == 0) {
+        (void)::send(fd, request.data(), request.size(), 0);
+        char buf[4096];
+        const ssize_t n = ::recv(fd, buf, sizeof buf, 0);
+        if (n > 0) reply.assign(buf, std::size_t(n));
+    }
+    ::close(fd);
+    return reply.substr(0, reply.find("\r\n"));
+}
+
+TEST_F(Status, APostWithoutContentLengthHasNoBodyAndDoesNotStall) {
+    // What `curl -X POST` sends: no Content-Length, no Transfer-Encoding.
+    const auto start = std::chrono::steady_clock::now();
+    EXPECT_EQ(raw_request(srv.port(), "POST /v1/commit HTTP/1.1\r\nHost: x\r\n\r\n"),
+              "HTTP/1.1 200 OK");
+    EXPECT_EQ(raw_request(srv.port(), "POST /v1/render HTTP/1.1\r\nHost: x\r\n\r\n"),
+              "HTTP/1.1 200 OK");
+    EXPECT_EQ(raw_request(srv.port(), "POST /v1/scene HTTP/1.1\r\nHost: x\r\n\r\n"),
+              "HTTP/1.1 405 Method Not Allowed");
+    EXPECT_EQ(raw_request(srv.port(), "POST /nowhere HTTP/1.1\r\nHost: x\r\n\r\n"),
+              "HTTP/1.1 404 Not Found");
+    EXPECT_EQ(raw_request(srv.port(), "DELETE /nowhere HTTP/1.1\r\nHost: x\r\n\r\n"),
+              "HTTP/1.1 404 Not Found");
+    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
+    // An edit batch still needs its body.
+    expect_problem(to_reply(srv.client().Post("/v1/edits")), 400, "malformed-json");
 }
 
 TEST_F(Status, SceneShowsCountsBoundsAndCamera) {
