@@ -13,10 +13,16 @@ Result<std::unique_ptr<Engine>> Engine::create(const EngineConfig& config) {
     return std::unique_ptr<Engine>(new Engine(std::move(accel.value())));
 }
 
-Result<ApplyResult> Engine::apply(EditBatch&& batch) {
+Result<ApplyResult> Engine::apply(EditBatch&& batch) { return apply(std::move(batch), std::nullopt); }
+
+Result<ApplyResult> Engine::apply(EditBatch&& batch, std::optional<uint64_t> expected_version) {
     const std::size_t count = batch.edits.size();
-    Result<uint64_t> version = [&] {
+    Result<uint64_t> version = [&]() -> Result<uint64_t> {
         std::unique_lock lock(m_scene_mutex);
+        if (expected_version && *expected_version != m_scene.version())
+            return make_error(ErrorCode::VersionMismatch,
+                              "the scene is at version " + std::to_string(m_scene.version()) +
+                                  ", not " + std::to_string(*expected_version));
         return m_scene.apply(std::move(batch));
     }();
     std::lock_guard stats(m_stats_mutex);

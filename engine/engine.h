@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <shared_mutex>
 #include <utility>
 
@@ -47,6 +48,11 @@ public:
 
     /// Validates and applies a batch atomically; the version moves by one on success.
     Result<ApplyResult> apply(EditBatch&& batch);
+
+    /// As apply(), but only when the scene is at `expected_version` (when given): the check and
+    /// the apply happen under one lock, so no other batch can land in between. A mismatch is a
+    /// VersionMismatch error and leaves the scene untouched.
+    Result<ApplyResult> apply(EditBatch&& batch, std::optional<uint64_t> expected_version);
 
     /// Brings the acceleration graph in line with the scene, doing the least work.
     Result<RebuildReport> commit();

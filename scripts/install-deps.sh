@@ -16,7 +16,7 @@ case "${1:-}" in
 esac
 
 runtime_pkgs=(
-    libembree3-3 libtbb12 libopenexr-3-1-30 libpng16-16 libspdlog1.10 ca-certificates
+    libembree3-3 libtbb12 libopenexr-3-1-30 libpng16-16 libspdlog1.10 libcpp-httplib0.11 ca-certificates
 )
 build_pkgs=(
     build-essential cmake ninja-build pkg-config git ca-certificates

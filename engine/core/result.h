@@ -20,6 +20,7 @@ enum class ErrorCode {
     EmptyMesh,          ///< a mesh without vertices or triangles
     StaleHandle,        ///< a handle whose object was removed
     TooLarge,           ///< a request exceeds a configured limit
+    VersionMismatch,    ///< a conditional apply found the scene at another version
     Internal,           ///< a failure inside Embree or the engine itself
 };
 

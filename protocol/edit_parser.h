@@ -1,0 +1,48 @@
+#pragma once
+// JSON edit batches -> engine EditBatch. `{"edits": [{"op": "add_mesh", ...}, ...]}`; the ops and
+// their members are documented in protocol/README.md and protocol/edit-batch.schema.json.
+//
+// Two stages in one pass: structural checks (exactly what the JSON Schema says: types, required
+// and unknown members, enums, ranges) throw at the first problem; value checks (numbers that do
+// not fit a float, arrays whose length is not a multiple of 3, ...) are reported only when the
+// structure is sound. Checks against the scene (unknown ids, ...) are the engine's, at apply.
+
+#include <optional>
+#include <string_view>
+#include <vector>
+
+#include "engine/scene/edits.h"
+#include "protocol/json_document.h"
+
+namespace strata::protocol {
+
+/// Which wire members an edit's arrays came from, to point engine errors at the right member.
+struct EditSource {
+    bool positions_b64 = false;
+    bool indices_b64 = false;
+    bool shape = false;
+};
+
+/// A parsed batch and, parallel to its edits, where their arrays came from.
+struct ParsedBatch {
+    EditBatch batch;
+    std::vector<EditSource> sources;
+};
+
+/// Largest `segments` of a sphere shape and `subdivisions` of a plane shape.
+constexpr uint32_t MAX_SPHERE_SEGMENTS = 2048;
+constexpr uint32_t MAX_PLANE_SUBDIVISIONS = 1024;
+
+/// Parses a batch document.
+Parsed<ParsedBatch> parse_edit_batch(const Json& body);
+/// Parses a batch from request text.
+Parsed<ParsedBatch> parse_edit_batch(std::string_view text, const JsonLimits& limits);
+
+/// The structural stage alone: the first schema error, or nullopt when the document matches the
+/// JSON Schema. Value errors are ignored.
+std::optional<RequestError> check_edit_batch_structure(const Json& body);
+
+/// Wire names of every op, in schema order.
+const std::vector<std::string_view>& edit_op_names();
+
+}  // namespace strata::protocol

@@ -1,0 +1,286 @@
+#include "protocol/json_fields.h"
+
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <utility>
+
+#include "protocol/base64.h"
+
+namespace strata::protocol {
+
+namespace {
+
+const char* type_name(const Json& v) {
+    if (is_packed_numbers(v)) return "array";
+    switch (v.type()) {
+        case Json::value_t::null:
+            return "null";
+        case Json::value_t::boolean:
+            return "boolean";
+        case Json::value_t::string:
+            return "string";
+        case Json::value_t::array:
+            return "array";
+        case Json::value_t::object:
+            return "object";
+        case Json::value_t::number_integer:
+        case Json::value_t::number_unsigned:
+        case Json::value_t::number_float:
+            return "number";
+        default:
+            return "value";
+    }
+}
+
+std::size_t utf8_length(std::string_view s) {
+    std::size_t n = 0;
+    for (unsigned char c : s) n += (c & 0xC0) != 0x80;
+    return n;
+}
+
+bool fits_float(double d) {
+    return std::isfinite(d) && std::abs(d) <= double(std::numeric_limits<float>::max());
+}
+
+template <class T>
+T load_le(const char* p) {
+    T v;
+    std::memcpy(&v, p, sizeof v);
+    if constexpr (std::endian::native == std::endian::big) {
+        auto* b = reinterpret_cast<unsigned char*>(&v);
+        for (std::size_t i = 0; i < sizeof v / 2; ++i) std::swap(b[i], b[sizeof v - 1 - i]);
+    }
+    return v;
+}
+
+}  // namespace
+
+std::string child(const std::string& ptr, std::string_view key) {
+    return ptr + "/" + escape_pointer_token(key);
+}
+
+std::string child(const std::string& ptr, std::size_t index) {
+    return ptr + "/" + std::to_string(index);
+}
+
+void FieldReader::record_value_error(std::string pointer, std::string message, ErrorCode code) {
+    if (m_value_error) return;
+    RequestError e;
+    e.kind = RequestErrorKind::Value;
+    e.code = code;
+    e.message = std::move(message);
+    e.pointer = std::move(pointer);
+    e.edit_index = m_edit_index;
+    m_value_error = std::move(e);
+}
+
+void FieldReader::schema_error(const std::string& ptr, std::string message) const {
+    RequestError e;
+    e.kind = RequestErrorKind::Schema;
+    e.message = std::move(message);
+    e.pointer = ptr;
+    e.edit_index = m_edit_index;
+    throw RequestFailure(std::move(e));
+}
+
+void FieldReader::expect_object(const Json& v, const std::string& ptr,
+                                std::initializer_list<std::string_view> allowed) const {
+    if (!v.is_object()) schema_error(ptr, std::string("expected an object, got ") + type_name(v));
+    for (const auto& [key, value] : v.items()) {
+        bool known = false;
+        for (std::string_view a : allowed) known |= a == key;
+        if (!known) {
+            std::string list;
+            for (std::string_view a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+            schema_error(child(ptr, key), "unknown member '" + key + "' (allowed: " + list + ")");
+        }
+    }
+}
+
+const Json* FieldReader::member(const Json& obj, std::string_view key) {
+    const auto it = obj.find(key);
+    return it == obj.end() ? nullptr : &*it;
+}
+
+const Json& FieldReader::required(const Json& obj, const std::string& ptr,
+                                  std::string_view key) const {
+    if (const Json* m = member(obj, key)) return *m;
+    schema_error(child(ptr, key), "missing required member '" + std::string(key) + "'");
+}
+
+std::string FieldReader::id(const Json& v, const std::string& ptr) const {
+    if (!v.is_string())
+        schema_error(ptr, std::string("expected an id string, got ") + type_name(v));
+    const auto& s = v.get_ref<const std::string&>();
+    if (s.empty()) schema_error(ptr, "id must not be empty");
+    if (utf8_length(s) > MAX_ID_LENGTH)
+        schema_error(ptr, "id is longer than " + std::to_string(MAX_ID_LENGTH) + " characters");
+    return s;
+}
+
+std::size_t FieldReader::choice(const Json& v, const std::string& ptr,
+                                std::initializer_list<std::string_view> choices) const {
+    std::string list;
+    std::size_t i = 0;
+    for (std::string_view c : choices) {
+        if (v.is_string() && v.get_ref<const std::string&>() == c) return i;
+        list += (i++ ? ", " : "") + ("\"" + std::string(c) + "\"");
+    }
+    schema_error(ptr, "expected one of " + list + ", got " +
+                          (v.is_string() ? "\"" + v.get<std::string>() + "\"" : type_name(v)));
+}
+
+bool FieldReader::boolean(const Json& v, const std::string& ptr) const {
+    if (!v.is_boolean())
+        schema_error(ptr, std::string("expected true or false, got ") + type_name(v));
+    return v.get<bool>();
+}
+
+float FieldReader::number(const Json& v, const std::string& ptr) {
+    if (!v.is_number()) schema_error(ptr, std::string("expected a number, got ") + type_name(v));
+    const double d = v.get<double>();
+    if (!fits_float(d)) {
+        record_value_error(ptr, "number is not finite as a 32-bit float", ErrorCode::NotFinite);
+        return 0.0f;
+    }
+    return static_cast<float>(d);
+}
+
+float FieldReader::positive_number(const Json& v, const std::string& ptr) {
+    if (v.is_number() && !(v.get<double>() > 0.0)) schema_error(ptr, "expected a number > 0");
+    return number(v, ptr);
+}
+
+uint64_t FieldReader::integer(const Json& v, const std::string& ptr, uint64_t lo,
+                              uint64_t hi) const {
+    const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+    if (v.is_number_unsigned() || v.is_number_integer()) {
+        if (v.is_number_integer() && v.get<int64_t>() < 0)
+            schema_error(ptr, "expected an integer in " + range);
+        const uint64_t u = v.get<uint64_t>();
+        if (u < lo || u > hi) schema_error(ptr, "expected an integer in " + range);
+        return u;
+    }
+    if (v.is_number_float()) {
+        const double d = v.get<double>();
+        if (std::floor(d) != d) schema_error(ptr, "expected an integer, got a fraction");
+        if (d < double(lo) || d > double(hi)) schema_error(ptr, "expected an integer in " + range);
+        return static_cast<uint64_t>(d);
+    }
+    schema_error(ptr, std::string("expected an integer, got ") + type_name(v));
+}
+
+std::size_t FieldReader::array_size(const Json& v, const std::string& ptr, const char* what) const {
+    if (is_packed_numbers(v)) return packed_size(v);
+    if (!v.is_array()) schema_error(ptr, std::string("expected ") + what + ", got " + type_name(v));
+    return v.size();
+}
+
+double FieldReader::array_number(const Json& v, std::size_t i, const std::string& ptr) const {
+    if (is_packed_numbers(v)) return packed_value(v, i);
+    const Json& e = v[i];
+    if (!e.is_number())
+        schema_error(child(ptr, i), std::string("expected a number, got ") + type_name(e));
+    return e.get<double>();
+}
+
+Vec3 FieldReader::vec3(const Json& v, const std::string& ptr) {
+    if (array_size(v, ptr, "an array of 3 numbers") != 3)
+        schema_error(ptr, "expected an array of exactly 3 numbers");
+    Vec3 out;
+    for (int k = 0; k < 3; ++k) out[k] = number(v[k], child(ptr, std::size_t(k)));
+    return out;
+}
+
+Vec4 FieldReader::vec4(const Json& v, const std::string& ptr) {
+    if (array_size(v, ptr, "an array of 4 numbers") != 4)
+        schema_error(ptr, "expected an array of exactly 4 numbers");
+    Vec4 out;
+    for (int k = 0; k < 4; ++k) out[k] = number(v[k], child(ptr, std::size_t(k)));
+    return out;
+}
+
+std::vector<float> FieldReader::floats(const Json& v, const std::string& ptr) {
+    const std::size_t n = array_size(v, ptr, "an array of numbers");
+    std::vector<float> out(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const double d = array_number(v, i, ptr);
+        if (!fits_float(d))
+            record_value_error(child(ptr, i), "number is not finite as a 32-bit float",
+                               ErrorCode::NotFinite);
+        out[i] = static_cast<float>(d);
+    }
+    return out;
+}
+
+std::vector<Vec3> FieldReader::positions(const Json& v, const std::string& ptr) {
+    const std::vector<float> flat = floats(v, ptr);
+    if (flat.size() % 3 != 0)
+        record_value_error(ptr, "positions has " + std::to_string(flat.size()) +
+                                    " numbers, not a multiple of 3 (x y z per vertex)");
+    std::vector<Vec3> out(flat.size() / 3);
+    for (std::size_t i = 0; i < out.size(); ++i)
+        out[i] = {flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]};
+    return out;
+}
+
+std::vector<Triangle> FieldReader::indices(const Json& v, const std::string& ptr) {
+    const std::size_t n = array_size(v, ptr, "a flat array of integers");
+    std::vector<Triangle> out(n / 3);
+    uint32_t* dst = reinterpret_cast<uint32_t*>(out.data());
+    const std::size_t whole = out.size() * 3;
+    for (std::size_t i = 0; i < n; ++i) {
+        const double d = array_number(v, i, ptr);
+        if (!(d >= 0.0 && d <= 4294967295.0) || std::floor(d) != d)
+            schema_error(child(ptr, i), "expected an integer in [0, 4294967295]");
+        if (i < whole) dst[i] = static_cast<uint32_t>(d);
+    }
+    if (n % 3 != 0)
+        record_value_error(ptr, "indices has " + std::to_string(n) +
+                                    " numbers, not a multiple of 3 (one triple per triangle)");
+    return out;
+}
+
+std::string FieldReader::base64_bytes(const Json& v, const std::string& ptr, std::size_t unit) {
+    if (!v.is_string())
+        schema_error(ptr, std::string("expected a base64 string, got ") + type_name(v));
+    std::size_t bad_at = 0;
+    auto bytes = decode_base64(v.get_ref<const std::string&>(), &bad_at);
+    if (!bytes) {
+        if (bad_at == v.get_ref<const std::string&>().size())
+            schema_error(ptr, "base64 length is not a multiple of 4");
+        schema_error(ptr, "invalid base64 character at offset " + std::to_string(bad_at));
+    }
+    if (bytes->size() % unit != 0) {
+        record_value_error(ptr, "decoded " + std::to_string(bytes->size()) +
+                                    " bytes, not a multiple of " + std::to_string(unit));
+        bytes->resize(bytes->size() / unit * unit);
+    }
+    return std::move(*bytes);
+}
+
+std::vector<Vec3> FieldReader::positions_b64(const Json& v, const std::string& ptr) {
+    const std::string bytes = base64_bytes(v, ptr, 12);
+    std::vector<Vec3> out(bytes.size() / 12);
+    for (std::size_t i = 0; i < out.size(); ++i) {
+        for (int k = 0; k < 3; ++k) out[i][k] = load_le<float>(bytes.data() + i * 12 + k * 4);
+        if (!is_finite(out[i]))
+            record_value_error(ptr,
+                               "vertex " + std::to_string(i) + " has a NaN or infinite coordinate",
+                               ErrorCode::NotFinite);
+    }
+    return out;
+}
+
+std::vector<Triangle> FieldReader::indices_b64(const Json& v, const std::string& ptr) {
+    const std::string bytes = base64_bytes(v, ptr, 12);
+    std::vector<Triangle> out(bytes.size() / 12);
+    for (std::size_t i = 0; i < out.size(); ++i) {
+        for (int k = 0; k < 3; ++k) out[i][k] = load_le<uint32_t>(bytes.data() + i * 12 + k * 4);
+    }
+    return out;
+}
+
+}  // namespace strata::protocol

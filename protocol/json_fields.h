@@ -1,0 +1,87 @@
+#pragma once
+// Typed reads of request fields with exact JSON pointers in every error. Schema errors (wrong
+// type, missing or unknown member, out-of-schema range) are thrown as RequestFailure and stop the
+// parse; value errors (well-formed but unusable, such as a number that overflows a float) are
+// recorded, the first one kept, and the parse goes on, so a schema error anywhere in a request
+// always wins. That keeps the parser's structural verdict equal to the JSON Schema's.
+
+#include <cstdint>
+#include <initializer_list>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "engine/scene/types.h"
+#include "protocol/json_document.h"
+
+namespace strata::protocol {
+
+/// Longest id, in Unicode code points (the schema's maxLength).
+constexpr std::size_t MAX_ID_LENGTH = 256;
+
+class FieldReader {
+public:
+    /// Edit index copied into the errors raised from now on (NO_INDEX outside a batch).
+    void set_edit_index(std::size_t i) { m_edit_index = i; }
+    std::size_t edit_index() const { return m_edit_index; }
+
+    /// The first value error recorded, if any.
+    const std::optional<RequestError>& value_error() const { return m_value_error; }
+    /// Records a value error unless one is already recorded.
+    void record_value_error(std::string pointer, std::string message,
+                            ErrorCode code = ErrorCode::InvalidArgument);
+
+    /// Requires an object with no members beyond `allowed`.
+    void expect_object(const Json& v, const std::string& ptr,
+                       std::initializer_list<std::string_view> allowed) const;
+    /// The member, or nullptr when absent.
+    static const Json* member(const Json& obj, std::string_view key);
+    /// The member; a schema error when absent.
+    const Json& required(const Json& obj, const std::string& ptr, std::string_view key) const;
+
+    /// A non-empty string of at most MAX_ID_LENGTH code points.
+    std::string id(const Json& v, const std::string& ptr) const;
+    /// One of `choices`; returns its position.
+    std::size_t choice(const Json& v, const std::string& ptr,
+                       std::initializer_list<std::string_view> choices) const;
+    bool boolean(const Json& v, const std::string& ptr) const;
+    /// Any JSON number, as a float; a value error when it does not fit a finite float.
+    float number(const Json& v, const std::string& ptr);
+    /// A number > 0 (schema), finite as a float (value).
+    float positive_number(const Json& v, const std::string& ptr);
+    /// An integer (3.0 counts, as in JSON Schema) in [lo, hi].
+    uint64_t integer(const Json& v, const std::string& ptr, uint64_t lo, uint64_t hi) const;
+    /// An array of exactly N numbers.
+    Vec3 vec3(const Json& v, const std::string& ptr);
+    Vec4 vec4(const Json& v, const std::string& ptr);
+    /// Array of numbers (any length, packed or not), each a finite float.
+    std::vector<float> floats(const Json& v, const std::string& ptr);
+    /// Flat array of numbers, 3 per vertex.
+    std::vector<Vec3> positions(const Json& v, const std::string& ptr);
+    /// Flat array of non-negative 32-bit integers, 3 per triangle.
+    std::vector<Triangle> indices(const Json& v, const std::string& ptr);
+    /// Base64 little-endian float32 triples.
+    std::vector<Vec3> positions_b64(const Json& v, const std::string& ptr);
+    /// Base64 little-endian uint32 triples.
+    std::vector<Triangle> indices_b64(const Json& v, const std::string& ptr);
+
+    [[noreturn]] void schema_error(const std::string& ptr, std::string message) const;
+
+private:
+    /// Element count of a JSON or packed array (schema error when `v` is neither).
+    std::size_t array_size(const Json& v, const std::string& ptr, const char* what) const;
+    /// Element `i` of a JSON or packed array as a double (schema error for a non-number).
+    double array_number(const Json& v, std::size_t i, const std::string& ptr) const;
+    std::string base64_bytes(const Json& v, const std::string& ptr, std::size_t unit);
+
+    std::size_t m_edit_index = Error::NO_INDEX;
+    std::optional<RequestError> m_value_error;
+};
+
+/// "ptr/key" with the key escaped as a JSON pointer token.
+std::string child(const std::string& ptr, std::string_view key);
+/// "ptr/index".
+std::string child(const std::string& ptr, std::size_t index);
+
+}  // namespace strata::protocol

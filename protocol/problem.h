@@ -1,0 +1,67 @@
+#pragma once
+// Problem details (RFC 9457) for every error the protocol can name. A Problem carries its HTTP
+// status as the `status` member the RFC defines; nothing here depends on an HTTP library.
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/core/result.h"
+#include "protocol/edit_parser.h"
+#include "protocol/json_document.h"
+
+namespace strata::protocol {
+
+/// Every problem type Strata answers with; each has a stable URI, a title and a status.
+enum class ProblemType : uint8_t {
+    MalformedJson,        ///< 400 the body is not JSON
+    InvalidRequest,       ///< 400 the body does not match the schema (or a query is malformed)
+    NestingTooDeep,       ///< 400 JSON nesting beyond the limit
+    TooLarge,             ///< 413 body, array, mesh or frame beyond a limit
+    InvalidValue,         ///< 422 a value is outside its allowed range
+    NotFinite,            ///< 422 a number is NaN, infinite or overflows a float
+    UnknownId,            ///< 422 an edit names an object that does not exist
+    DuplicateId,          ///< 422 an edit creates an object whose id is taken
+    OutOfRange,           ///< 422 an index or vertex range is outside the mesh
+    DegenerateTransform,  ///< 422 a singular or badly conditioned transform
+    InUse,                ///< 422 the object is still referenced
+    EmptyMesh,            ///< 422 a mesh without vertices or triangles
+    VersionMismatch,      ///< 412 If-Match names another version
+    NotFound,             ///< 404 no such route or object
+    MethodNotAllowed,     ///< 405 the route exists for other methods
+    Unauthorized,         ///< 401 missing or wrong bearer token
+    Unavailable,          ///< 503 the server is shutting down
+    Internal,             ///< 500 a bug or an Embree failure
+};
+
+/// One problem document.
+struct Problem {
+    ProblemType type = ProblemType::Internal;
+    int status = 500;
+    std::string detail;
+    std::size_t edit_index = Error::NO_INDEX;
+    std::optional<std::string> pointer;  ///< JSON pointer into the request, when one applies
+};
+
+/// "https://strata.dev/problems/<slug>".
+std::string problem_type_uri(ProblemType t);
+/// Short human-readable summary of the type ("Unknown id").
+const char* problem_title(ProblemType t);
+/// The HTTP status that goes with the type.
+int problem_status(ProblemType t);
+
+/// A problem of `type` with its default status.
+Problem make_problem(ProblemType type, std::string detail);
+/// A parser error.
+Problem problem_from(const RequestError& e);
+/// An engine error for an edit batch: `edit_index` and `field` become `/edits/<i>/<field>`,
+/// renamed to the wire member the edit used (positions_b64, shape, ...).
+Problem problem_from_batch_error(const Error& e, const std::vector<EditSource>& sources);
+/// An engine error for a request whose fields sit at the root of the body (render).
+Problem problem_from(const Error& e);
+
+/// The problem as an application/problem+json document.
+Json problem_to_json(const Problem& p);
+
+}  // namespace strata::protocol

@@ -1,0 +1,140 @@
+#include "protocol/render_parser.h"
+
+#include <cerrno>
+#include <cstdlib>
+
+#include "protocol/json_fields.h"
+
+namespace strata::protocol {
+
+namespace {
+
+RenderSpec read_render(FieldReader& r, const Json& v) {
+    r.expect_object(v, "",
+                    {"width", "height", "format", "spp", "aovs", "compression", "accumulate",
+                     "exposure", "camera"});
+    RenderSpec spec;
+    RenderRequest& q = spec.request;
+    auto u32 = [&](const char* key, uint32_t& out, uint64_t hi) {
+        if (const Json* f = FieldReader::member(v, key))
+            out = static_cast<uint32_t>(r.integer(*f, child("", key), 1, hi));
+    };
+    u32("width", q.width, MAX_RENDER_SIDE);
+    u32("height", q.height, MAX_RENDER_SIDE);
+    u32("spp", q.spp, MAX_RENDER_SPP);
+    if (const Json* f = FieldReader::member(v, "format"))
+        q.format =
+            *parse_image_format(r.choice(*f, "/format", {"png", "exr"}) == 0 ? "png" : "exr");
+    if (const Json* f = FieldReader::member(v, "compression")) {
+        static constexpr std::string_view NAMES[] = {"none", "zip", "piz"};
+        q.compression =
+            *parse_exr_compression(NAMES[r.choice(*f, "/compression", {"none", "zip", "piz"})]);
+    }
+    if (const Json* f = FieldReader::member(v, "aovs")) {
+        if (!f->is_array()) r.schema_error("/aovs", "expected an array of AOV names");
+        for (std::size_t i = 0; i < f->size(); ++i) {
+            const Json& a = (*f)[i];
+            const auto aov =
+                a.is_string() ? parse_aov(a.get_ref<const std::string&>()) : std::nullopt;
+            if (!aov)
+                r.schema_error("/aovs/" + std::to_string(i),
+                               "expected an AOV name: color, albedo, normal, depth, position, "
+                               "instance_id, primitive_id or mesh_id");
+            q.aovs.push_back(*aov);
+        }
+    }
+    if (const Json* f = FieldReader::member(v, "accumulate"))
+        q.accumulate = r.boolean(*f, "/accumulate");
+    if (const Json* f = FieldReader::member(v, "exposure")) q.exposure = r.number(*f, "/exposure");
+    if (const Json* f = FieldReader::member(v, "camera")) {
+        r.expect_object(*f, "/camera", {"eye", "target", "up", "fov_y_deg"});
+        SetCamera c;
+        if (const Json* m = FieldReader::member(*f, "eye")) c.eye = r.vec3(*m, "/camera/eye");
+        if (const Json* m = FieldReader::member(*f, "target"))
+            c.target = r.vec3(*m, "/camera/target");
+        if (const Json* m = FieldReader::member(*f, "up")) c.up = r.vec3(*m, "/camera/up");
+        if (const Json* m = FieldReader::member(*f, "fov_y_deg"))
+            c.fov_y_deg = r.number(*m, "/camera/fov_y_deg");
+        spec.camera = c;
+    }
+    return spec;
+}
+
+/// A query value as the JSON it stands for: a number, a boolean or (failing both) a string, so
+/// the body reader reports type errors for queries too.
+Json scalar_from_text(const std::string& text) {
+    if (text == "true") return true;
+    if (text == "false") return false;
+    if (!text.empty()) {
+        errno = 0;
+        char* end = nullptr;
+        const double d = std::strtod(text.c_str(), &end);
+        if (*end == '\0' && errno != ERANGE) {
+            if (d >= 0 && d == double(uint64_t(d)) && d < 1.8e19) return uint64_t(d);
+            return d;
+        }
+    }
+    return text;
+}
+
+Json list_from_text(const std::string& text, bool numbers) {
+    Json out = Json::array();
+    std::size_t start = 0;
+    while (start <= text.size()) {
+        const std::size_t comma = std::min(text.find(',', start), text.size());
+        const std::string item = text.substr(start, comma - start);
+        out.push_back(numbers ? scalar_from_text(item) : Json(item));
+        start = comma + 1;
+    }
+    return out;
+}
+
+}  // namespace
+
+Parsed<RenderSpec> parse_render_body(const Json& body) {
+    FieldReader r;
+    try {
+        RenderSpec spec = read_render(r, body);
+        if (r.value_error()) return *r.value_error();
+        return spec;
+    } catch (const RequestFailure& f) {
+        return f.error();
+    }
+}
+
+Parsed<RenderSpec> parse_render_query(const std::multimap<std::string, std::string>& params) {
+    Json body = Json::object();
+    for (const auto& [key, text] : params) {
+        const bool camera = key == "eye" || key == "target" || key == "up" || key == "fov_y_deg";
+        Json& slot = camera ? body["camera"][key] : body[key];
+        if (!slot.is_null()) {
+            RequestError e;
+            e.message = "query parameter '" + key + "' is given more than once";
+            e.pointer = camera ? "/camera/" + key : "/" + escape_pointer_token(key);
+            return e;
+        }
+        if (key == "aovs") {
+            slot = text.empty() ? Json::array() : list_from_text(text, false);
+        } else if (key == "eye" || key == "target" || key == "up") {
+            slot = list_from_text(text, true);
+        } else {
+            slot = scalar_from_text(text);
+        }
+    }
+    return parse_render_body(body);
+}
+
+RenderRequest resolve_render_request(const RenderSpec& spec, const Camera& scene_camera) {
+    RenderRequest q = spec.request;
+    if (spec.camera) {
+        Camera c = scene_camera;
+        if (spec.camera->eye) c.eye = *spec.camera->eye;
+        if (spec.camera->target) c.target = *spec.camera->target;
+        if (spec.camera->up) c.up = *spec.camera->up;
+        if (spec.camera->fov_y_deg) c.fov_y_deg = *spec.camera->fov_y_deg;
+        q.camera = c;
+    }
+    return q;
+}
+
+}  // namespace strata::protocol

@@ -1,0 +1,57 @@
+#include "protocol/report_json.h"
+
+namespace strata::protocol {
+
+namespace {
+
+Json entries_to_json(const std::vector<MeshBuildEntry>& entries, bool planned) {
+    Json out = Json::array();
+    for (const MeshBuildEntry& e : entries) {
+        Json j = {{"mesh", e.mesh},
+                  {"reason", build_reason_name(e.reason)},
+                  {"primitives", e.primitives}};
+        if (!e.detail.empty()) j["detail"] = e.detail;
+        if (!planned) j["ms"] = e.ms;
+        out.push_back(std::move(j));
+    }
+    return out;
+}
+
+}  // namespace
+
+Json report_to_json(const RebuildReport& r) {
+    Json tlas = {{"action", tlas_action_name(r.tlas_action)}, {"instances", r.tlas_instances}};
+    if (!r.planned) tlas["ms"] = r.phases.tlas_ms;
+    Json j = {{"version", r.version},
+              {"planned", r.planned},
+              {"tlas", std::move(tlas)},
+              {"blas_rebuilds", r.blas_rebuilds},
+              {"blas_refits", r.blas_refits},
+              {"rebuilt", entries_to_json(r.rebuilt, r.planned)},
+              {"refit", entries_to_json(r.refit, r.planned)},
+              {"released", r.released},
+              {"primitives_built", r.primitives_built},
+              {"primitives_refit", r.primitives_refit},
+              {"memory_bytes", {{"blas", r.memory_blas_bytes}, {"tlas", r.memory_tlas_bytes}}}};
+    if (!r.planned) {
+        j["ms"] = r.phases.total_ms;
+        j["phases"] = {{"plan_ms", r.phases.plan_ms},
+                       {"blas_ms", r.phases.blas_ms},
+                       {"tlas_ms", r.phases.tlas_ms},
+                       {"sync_ms", r.phases.sync_ms}};
+    }
+    return j;
+}
+
+Json counters_to_json(const EngineCounters& c) {
+    return {{"batches_applied", c.batches_applied},   {"batches_rejected", c.batches_rejected},
+            {"edits_applied", c.edits_applied},       {"commits", c.commits},
+            {"noop_commits", c.noop_commits},         {"blas_rebuilds", c.blas_rebuilds},
+            {"blas_refits", c.blas_refits},           {"tlas_updates", c.tlas_updates},
+            {"tlas_rebuilds", c.tlas_rebuilds},       {"primitives_built", c.primitives_built},
+            {"primitives_refit", c.primitives_refit}, {"renders", c.renders},
+            {"rays_traced", c.rays_traced},           {"commit_seconds", c.commit_seconds},
+            {"render_seconds", c.render_seconds}};
+}
+
+}  // namespace strata::protocol

@@ -1,0 +1,72 @@
+#pragma once
+// Why a request could not be turned into engine structs. The parser stages map onto HTTP status
+// classes in the server (Syntax/Schema/TooDeep: 400, Value: 422, TooLarge: 413), but this header
+// knows nothing of HTTP.
+
+#include <cstddef>
+#include <exception>
+#include <string>
+#include <utility>
+#include <variant>
+
+#include "engine/core/result.h"
+
+namespace strata::protocol {
+
+enum class RequestErrorKind : uint8_t {
+    Syntax,    ///< the body is not JSON (or has a duplicate key)
+    TooDeep,   ///< JSON nesting deeper than the configured limit
+    TooLarge,  ///< an array or the whole request exceeds a configured limit
+    Schema,    ///< JSON that does not match the protocol schema: type, missing or unknown field
+    Value,     ///< matches the schema but a value cannot be used (not finite, bad length, ...)
+};
+
+/// One request error with the place it refers to.
+struct RequestError {
+    RequestErrorKind kind = RequestErrorKind::Schema;
+    ErrorCode code = ErrorCode::InvalidArgument;  ///< the engine's vocabulary, for Value errors
+    std::string message;
+    std::string pointer;  ///< JSON pointer into the request body; "" is the whole body
+    std::size_t edit_index = Error::NO_INDEX;
+};
+
+/// Either a parsed value or a RequestError (the protocol's counterpart of Result).
+template <class T>
+class Parsed {
+public:
+    Parsed(T value) : m_v(std::move(value)) {}             // NOLINT: implicit by design
+    Parsed(RequestError error) : m_v(std::move(error)) {}  // NOLINT: implicit by design
+
+    bool ok() const { return m_v.index() == 0; }
+    explicit operator bool() const { return ok(); }
+    T& value() & { return std::get<0>(m_v); }
+    const T& value() const& { return std::get<0>(m_v); }
+    T&& value() && { return std::get<0>(std::move(m_v)); }
+    const RequestError& error() const { return std::get<1>(m_v); }
+
+private:
+    std::variant<T, RequestError> m_v;
+};
+
+/// Thrown inside the parsers only, so that deeply nested readers stay short; every public parse
+/// function catches it and returns the RequestError as a value.
+class RequestFailure : public std::exception {
+public:
+    explicit RequestFailure(RequestError e) : m_error(std::move(e)) {}
+    const char* what() const noexcept override { return m_error.message.c_str(); }
+    const RequestError& error() const { return m_error; }
+
+private:
+    RequestError m_error;
+};
+
+/// Throws a Schema error at `pointer`.
+[[noreturn]] void fail_schema(std::string pointer, std::string message);
+/// Throws a Value error at `pointer`.
+[[noreturn]] void fail_value(std::string pointer, std::string message,
+                             ErrorCode code = ErrorCode::InvalidArgument);
+
+/// Escapes one JSON pointer reference token ('~' -> "~0", '/' -> "~1").
+std::string escape_pointer_token(std::string_view token);
+
+}  // namespace strata::protocol

@@ -1,0 +1,124 @@
+#include "protocol/scene_json.h"
+
+#include <charconv>
+
+namespace strata::protocol {
+
+namespace {
+
+/// The double with the shortest decimal form that reads back as `f`, so that 0.45f prints as
+/// 0.45 and not 0.44999998807907104.
+double shortest(float f) {
+    char buf[32];
+    const auto r = std::to_chars(buf, buf + sizeof buf, f);
+    double d = f;
+    std::from_chars(buf, r.ptr, d);
+    return d;
+}
+
+Json floats_to_json(const float* v, std::size_t n) {
+    Json out = Json::array();
+    for (std::size_t i = 0; i < n; ++i) out.push_back(shortest(v[i]));
+    return out;
+}
+
+Json material_fields(const Material& m) {
+    return {{"base_color", vec3_to_json(m.base_color)},
+            {"roughness", shortest(m.roughness)},
+            {"metallic", shortest(m.metallic)},
+            {"emission", vec3_to_json(m.emission)}};
+}
+
+/// The id of a material handle, or null for the default.
+Json material_ref(const Scene& s, MaterialHandle h) {
+    const auto m = s.material(h);
+    return m ? Json(m.value()->id) : Json(nullptr);
+}
+
+}  // namespace
+
+Json vec3_to_json(const Vec3& v) {
+    return floats_to_json(&v.x, 3);
+}
+
+Json camera_to_json(const Camera& c) {
+    return {{"eye", vec3_to_json(c.eye)},
+            {"target", vec3_to_json(c.target)},
+            {"up", vec3_to_json(c.up)},
+            {"fov_y_deg", shortest(c.fov_y_deg)}};
+}
+
+Json lighting_to_json(const Lighting& l) {
+    return {{"sun_direction", vec3_to_json(l.sun_direction)},
+            {"sun_color", vec3_to_json(l.sun_color)},
+            {"sky_color", vec3_to_json(l.sky_color)},
+            {"sky_intensity", shortest(l.sky_intensity)}};
+}
+
+Json bounds_to_json(const Bounds3& b) {
+    if (b.empty()) return nullptr;
+    return {{"min", vec3_to_json(b.lower)}, {"max", vec3_to_json(b.upper)}};
+}
+
+Json scene_summary_to_json(const Scene& s) {
+    const SceneCounts c = s.counts();
+    return {{"version", s.version()},
+            {"counts",
+             {{"meshes", c.meshes},
+              {"instances", c.instances},
+              {"materials", c.materials},
+              {"triangles", c.triangles},
+              {"instanced_triangles", c.instanced_triangles}}},
+            {"bounds", bounds_to_json(s.world_bounds())},
+            {"camera", camera_to_json(s.camera())},
+            {"lighting", lighting_to_json(s.lighting())}};
+}
+
+std::optional<Json> mesh_to_json(const Scene& s, std::string_view id) {
+    const auto r = s.mesh(s.find_mesh(id));
+    if (!r) return std::nullopt;
+    const MeshRecord& m = *r.value();
+    Bounds3 bounds;
+    for (const Vec3& p : m.positions) bounds.extend(p);
+    return Json{
+        {"id", m.id},
+        {"version", s.version()},
+        {"vertices", m.positions.size()},
+        {"triangles", m.triangles.size()},
+        {"instances", m.users.size()},
+        {"material", material_ref(s, m.material)},
+        {"build",
+         {{"prefer", build_preference_name(m.build.prefer)}, {"allow_refit", m.build.allow_refit}}},
+        {"bounds", bounds_to_json(bounds)}};
+}
+
+std::optional<Json> instance_to_json(const Scene& s, std::string_view id) {
+    const auto r = s.instance(s.find_instance(id));
+    if (!r) return std::nullopt;
+    const InstanceRecord& i = *r.value();
+    const MeshRecord& mesh = *s.mesh(i.mesh).value();
+    Bounds3 local;
+    for (const Vec3& p : mesh.positions) local.extend(p);
+    const Material resolved = s.resolved_material(i);
+    return Json{{"id", i.id},
+                {"version", s.version()},
+                {"mesh", mesh.id},
+                {"material", material_ref(s, i.material)},
+                {"resolved_material", material_fields(resolved)},
+                {"transform", floats_to_json(i.transform.to_rows16().data(), 16)},
+                {"visible", i.visible},
+                {"mask", i.mask},
+                {"user_id", i.user_id},
+                {"bounds", bounds_to_json(i.transform.transform_bounds(local))}};
+}
+
+std::optional<Json> material_to_json(const Scene& s, std::string_view id) {
+    const auto r = s.material(s.find_material(id));
+    if (!r) return std::nullopt;
+    Json j = material_fields(r.value()->material);
+    j["id"] = r.value()->id;
+    j["version"] = s.version();
+    return j;
+}
+
+}  // namespace strata::protocol

@@ -1,0 +1,27 @@
+#pragma once
+// Scene state as JSON for GET /v1/scene and GET /v1/scene/{meshes,instances,materials}/{id}.
+// Call these under the engine's read lock (Engine::read) so one document shows one version.
+
+#include <optional>
+#include <string_view>
+
+#include "engine/scene/scene.h"
+#include "protocol/json_document.h"
+
+namespace strata::protocol {
+
+Json vec3_to_json(const Vec3& v);
+Json camera_to_json(const Camera& c);
+Json lighting_to_json(const Lighting& l);
+/// {"min": [3], "max": [3]}, or null for an empty box.
+Json bounds_to_json(const Bounds3& b);
+
+/// Version, counts, world bounds, camera and lighting.
+Json scene_summary_to_json(const Scene& s);
+
+/// One object's state, or nullopt when no object has that id.
+std::optional<Json> mesh_to_json(const Scene& s, std::string_view id);
+std::optional<Json> instance_to_json(const Scene& s, std::string_view id);
+std::optional<Json> material_to_json(const Scene& s, std::string_view id);
+
+}  // namespace strata::protocol

@@ -1,0 +1,60 @@
+#include "server/auth.h"
+
+#include <arpa/inet.h>
+
+#include <fstream>
+#include <sstream>
+
+namespace strata::server {
+
+Result<std::string> read_token_file(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return make_error(ErrorCode::InvalidArgument, "cannot read token file '" + path + "'");
+    std::ostringstream text;
+    text << in.rdbuf();
+    std::string token = text.str();
+    const auto first = token.find_first_not_of(" \t\r\n");
+    if (first == std::string::npos)
+        return make_error(ErrorCode::InvalidArgument, "token file '" + path + "' is empty");
+    const auto last = token.find_last_not_of(" \t\r\n");
+    token = token.substr(first, last - first + 1);
+    for (unsigned char c : token) {
+        if (c < 0x21 || c > 0x7E)
+            return make_error(ErrorCode::InvalidArgument,
+                              "token file '" + path +
+                                  "' holds whitespace or non-ASCII characters inside the token");
+    }
+    return token;
+}
+
+bool bearer_token_matches(std::string_view authorization, std::string_view token) {
+    constexpr std::string_view SCHEME = "bearer ";
+    if (authorization.size() < SCHEME.size()) return false;
+    for (std::size_t i = 0; i < SCHEME.size(); ++i) {
+        const char c = authorization[i];
+        if ((c >= 'A' && c <= 'Z' ? char(c + 32) : c) != SCHEME[i]) return false;
+    }
+    std::string_view given = authorization.substr(SCHEME.size());
+    while (!given.empty() && given.front() == ' ') given.remove_prefix(1);
+    while (!given.empty() && given.back() == ' ') given.remove_suffix(1);
+    // Constant time in the token's content: every byte of the longer string is looked at.
+    const std::size_t n = std::max(given.size(), token.size());
+    unsigned diff = given.size() == token.size() ? 0u : 1u;
+    for (std::size_t i = 0; i < n; ++i) {
+        const unsigned char a = i < given.size() ? static_cast<unsigned char>(given[i]) : 0;
+        const unsigned char b = i < token.size() ? static_cast<unsigned char>(token[i]) : 0;
+        diff |= unsigned(a ^ b);
+    }
+    return diff == 0 && !token.empty();
+}
+
+bool is_loopback_host(const std::string& host) {
+    if (host == "localhost") return true;
+    in_addr v4{};
+    if (inet_pton(AF_INET, host.c_str(), &v4) == 1) return (ntohl(v4.s_addr) >> 24) == 127;
+    in6_addr v6{};
+    if (inet_pton(AF_INET6, host.c_str(), &v6) == 1) return IN6_IS_ADDR_LOOPBACK(&v6);
+    return false;
+}
+
+}  // namespace strata::server

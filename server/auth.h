@@ -1,0 +1,21 @@
+#pragma once
+// Bearer-token authentication: the token file, the header check and the loopback rule.
+
+#include <string>
+#include <string_view>
+
+#include "engine/core/result.h"
+
+namespace strata::server {
+
+/// Reads a token file: surrounding whitespace trimmed; an empty or unreadable file is an error.
+Result<std::string> read_token_file(const std::string& path);
+
+/// True when `authorization` is "Bearer <token>" (scheme case-insensitive) with the right token.
+/// The token comparison takes the same time wherever the first difference is.
+bool bearer_token_matches(std::string_view authorization, std::string_view token);
+
+/// True for addresses that only this machine can reach: 127.0.0.0/8, ::1 and "localhost".
+bool is_loopback_host(const std::string& host);
+
+}  // namespace strata::server

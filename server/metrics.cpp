@@ -1,0 +1,129 @@
+#include "server/metrics.h"
+
+#include <cstdio>
+
+namespace strata::server {
+
+namespace {
+
+void header(std::string& out, const char* name, const char* type, const char* help) {
+    out += "# HELP ";
+    out += name;
+    out += ' ';
+    out += help;
+    out += "\n# TYPE ";
+    out += name;
+    out += ' ';
+    out += type;
+    out += '\n';
+}
+
+std::string number(double v) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return buf;
+}
+
+void metric(std::string& out, const char* name, const char* type, const char* help, double v) {
+    header(out, name, type, help);
+    out += name;
+    out += ' ' + number(v) + '\n';
+}
+
+}  // namespace
+
+void Histogram::observe(double seconds) {
+    std::size_t i = 0;
+    while (i < BOUNDS.size() && seconds > BOUNDS[i]) ++i;
+    std::lock_guard lock(m_mutex);
+    ++m_buckets[i];
+    m_sum += seconds;
+    ++m_count;
+}
+
+void Histogram::write(std::string& out, const char* name, const char* help) const {
+    std::array<uint64_t, BOUNDS.size() + 1> buckets;
+    double sum;
+    uint64_t count;
+    {
+        std::lock_guard lock(m_mutex);
+        buckets = m_buckets;
+        sum = m_sum;
+        count = m_count;
+    }
+    header(out, name, "histogram", help);
+    uint64_t cumulative = 0;
+    for (std::size_t i = 0; i < BOUNDS.size(); ++i) {
+        cumulative += buckets[i];
+        out += std::string(name) + "_bucket{le=\"" + number(BOUNDS[i]) + "\"} " +
+               std::to_string(cumulative) + '\n';
+    }
+    out += std::string(name) + "_bucket{le=\"+Inf\"} " + std::to_string(count) + '\n';
+    out += std::string(name) + "_sum " + number(sum) + '\n';
+    out += std::string(name) + "_count " + std::to_string(count) + '\n';
+}
+
+void ServerMetrics::count_response(int status) {
+    const int cls = status / 100;
+    if (cls >= 1 && cls <= 5)
+        m_responses[std::size_t(cls - 1)].fetch_add(1, std::memory_order_relaxed);
+}
+
+std::string ServerMetrics::prometheus_text(const Engine& engine) const {
+    const EngineCounters c = engine.counters();
+    std::string out;
+    out.reserve(8192);
+    struct Counter {
+        const char* name;
+        const char* help;
+        uint64_t value;
+    };
+    const Counter counters[] = {
+        {"strata_batches_applied_total", "Edit batches applied.", c.batches_applied},
+        {"strata_batches_rejected_total", "Edit batches refused (invalid or version mismatch).",
+         c.batches_rejected},
+        {"strata_edits_applied_total", "Edits applied.", c.edits_applied},
+        {"strata_commits_total", "Commits run (explicit and before renders).", c.commits},
+        {"strata_noop_commits_total", "Commits that found no acceleration-structure work.",
+         c.noop_commits},
+        {"strata_blas_rebuilds_total", "BLAS builds.", c.blas_rebuilds},
+        {"strata_blas_refits_total", "BLAS refits.", c.blas_refits},
+        {"strata_tlas_updates_total", "TLAS updates.", c.tlas_updates},
+        {"strata_tlas_rebuilds_total", "TLAS rebuilds.", c.tlas_rebuilds},
+        {"strata_primitives_built_total", "Triangles built into BLASes.", c.primitives_built},
+        {"strata_primitives_refit_total", "Triangles refit in BLASes.", c.primitives_refit},
+        {"strata_renders_total", "Frames rendered.", c.renders},
+        {"strata_rays_traced_total", "Primary rays traced.", c.rays_traced},
+    };
+    for (const Counter& k : counters) metric(out, k.name, "counter", k.help, double(k.value));
+
+    header(out, "strata_http_responses_total", "counter", "HTTP responses by status class.");
+    for (std::size_t i = 0; i < m_responses.size(); ++i) {
+        out += "strata_http_responses_total{code=\"" + std::to_string(i + 1) + "xx\"} " +
+               std::to_string(m_responses[i].load(std::memory_order_relaxed)) + '\n';
+    }
+
+    const auto [version, counts] =
+        engine.read([](const Scene& s) { return std::pair(s.version(), s.counts()); });
+    metric(out, "strata_scene_version", "gauge", "Scene version (applied batches).",
+           double(version));
+    metric(out, "strata_scene_meshes", "gauge", "Meshes in the scene.", double(counts.meshes));
+    metric(out, "strata_scene_instances", "gauge", "Instances in the scene.",
+           double(counts.instances));
+    metric(out, "strata_scene_triangles", "gauge", "Triangles over meshes, each counted once.",
+           double(counts.triangles));
+    header(out, "strata_accel_memory_bytes", "gauge",
+           "Bytes Embree holds for acceleration structures.");
+    out += "strata_accel_memory_bytes{level=\"blas\"} " +
+           std::to_string(engine.memory_bytes(MemoryCategory::Blas)) + '\n';
+    out += "strata_accel_memory_bytes{level=\"tlas\"} " +
+           std::to_string(engine.memory_bytes(MemoryCategory::Tlas)) + '\n';
+
+    commit_seconds.write(out, "strata_commit_duration_seconds",
+                         "Wall time of commits (explicit and before renders).");
+    render_seconds.write(out, "strata_render_duration_seconds",
+                         "Wall time of renders, commit and encoding included.");
+    return out;
+}
+
+}  // namespace strata::server

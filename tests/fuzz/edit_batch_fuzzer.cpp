@@ -1,0 +1,117 @@
+// libFuzzer target for the edit batch parser (and the JSON reader under it).
+//
+// Checks, besides "no crash, no sanitizer report":
+//   - the JSON reader accepts exactly what nlohmann accepts (but for duplicate keys, which it
+//     refuses on purpose, inputs over its limits, NUL bytes, where nlohmann stops reading, and
+//     numbers that overflow, which it keeps as infinity), and reads the same values;
+//   - the structural stage alone and the full parse agree;
+//   - a parsed batch goes through the engine's validation, and any error maps to a problem.
+// Build and run: scripts/run-fuzz.sh.
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <string_view>
+
+#include "engine/scene/scene.h"
+#include "protocol/edit_parser.h"
+#include "protocol/problem.h"
+
+namespace {
+
+using strata::protocol::Json;
+
+/// True when a number overflowed to infinity: this reader keeps it (so that the protocol can
+/// answer 422 not-finite with its pointer) where nlohmann refuses the document.
+bool has_infinity(const Json& j) {
+    if (strata::protocol::is_packed_numbers(j)) {
+        for (std::size_t i = 0; i < strata::protocol::packed_size(j); ++i) {
+            if (!std::isfinite(strata::protocol::packed_value(j, i))) return true;
+        }
+        return false;
+    }
+    if (j.is_number_float()) return !std::isfinite(j.get<double>());
+    if (j.is_structured()) {
+        for (const Json& e : j) {
+            if (has_infinity(e)) return true;
+        }
+    }
+    return false;
+}
+
+bool has_packed(const Json& j) {
+    if (strata::protocol::is_packed_numbers(j)) return true;
+    if (j.is_structured()) {
+        for (const Json& e : j) {
+            if (has_packed(e)) return true;
+        }
+    }
+    return false;
+}
+
+/// Aborts (a crash libFuzzer reports) with the line of the broken expectation.
+#define FUZZ_CHECK(expr)                                                                \
+    do {                                                                                \
+        if (!(expr)) {                                                                  \
+            std::fprintf(stderr, "fuzz check failed: %s (line %d)\n", #expr, __LINE__); \
+            std::abort();                                                               \
+        }                                                                               \
+    } while (false)
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+    using namespace strata::protocol;
+    const std::string_view text(reinterpret_cast<const char*>(data), size);
+    JsonLimits limits;
+    limits.max_depth = 32;
+    limits.max_array_elements = 1 << 16;
+
+    // Step: the JSON reader against nlohmann.
+    auto doc = parse_json(text, limits);
+    // nlohmann stops reading at a NUL byte (for C strings) and would accept "1\0garbage"; the
+    // comparison only holds for inputs without one.
+    const bool comparable = text.find('\0') == std::string_view::npos;
+    const bool nlohmann_accepts = comparable && Json::accept(text);
+    if (!comparable) {
+        // Our reader must refuse a NUL outside strings and accept none inside them either.
+        FUZZ_CHECK(!doc.ok());
+    } else if (doc.ok()) {
+        if (has_infinity(doc.value())) {
+            FUZZ_CHECK(!nlohmann_accepts);
+        } else {
+            FUZZ_CHECK(nlohmann_accepts);
+            if (!has_packed(doc.value())) FUZZ_CHECK(doc.value() == Json::parse(text));
+        }
+    } else if (doc.error().kind == RequestErrorKind::Syntax &&
+               doc.error().message.find("duplicate key") == std::string::npos) {
+        FUZZ_CHECK(!nlohmann_accepts);
+    }
+    if (!doc.ok()) {
+        (void)problem_to_json(problem_from(doc.error()));
+        return 0;
+    }
+
+    // Step: structural stage and full parse agree.
+    const auto structure = check_edit_batch_structure(doc.value());
+    auto batch = parse_edit_batch(doc.value());
+    if (structure) {
+        FUZZ_CHECK(!batch.ok() && batch.error().kind == RequestErrorKind::Schema);
+        FUZZ_CHECK(batch.error().pointer == structure->pointer);
+    } else if (!batch.ok()) {
+        FUZZ_CHECK(batch.error().kind == RequestErrorKind::Value);
+    }
+    if (!batch.ok()) {
+        (void)problem_to_json(problem_from(batch.error()));
+        return 0;
+    }
+
+    // Step: engine validation of what the parser produced.
+    static const strata::Scene scene;
+    if (strata::Status s = scene.validate(batch.value().batch); !s) {
+        (void)problem_to_json(problem_from_batch_error(s.error(), batch.value().sources));
+    }
+    return 0;
+}

@@ -1,0 +1,224 @@
+// JSON edit ops -> engine edit structs, and where errors point.
+
+#include <cstring>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "engine/scene/shapes.h"
+#include "protocol/base64.h"
+#include "protocol/edit_parser.h"
+#include "protocol/problem.h"
+
+namespace strata::protocol {
+namespace {
+
+ParsedBatch parse_ok(const std::string& text) {
+    auto r = parse_edit_batch(text, {});
+    EXPECT_TRUE(r.ok()) << text << ": " << (r.ok() ? "" : r.error().message);
+    return r.ok() ? std::move(r.value()) : ParsedBatch{};
+}
+
+template <class T>
+T one(const std::string& edit) {
+    ParsedBatch b = parse_ok("{\"edits\": [" + edit + "]}");
+    EXPECT_EQ(b.batch.edits.size(), 1u);
+    EXPECT_TRUE(std::holds_alternative<T>(b.batch.edits.at(0))) << edit;
+    return std::get<T>(b.batch.edits.at(0));
+}
+
+RequestError fails(const std::string& edits) {
+    auto r = parse_edit_batch("{\"edits\": [" + edits + "]}", {});
+    EXPECT_FALSE(r.ok()) << edits;
+    return r.ok() ? RequestError{} : r.error();
+}
+
+std::string b64(const void* data, std::size_t n) {
+    return encode_base64(std::string_view(static_cast<const char*>(data), n));
+}
+
+TEST(EditParser, AddMeshReadsFlatArraysBuildOptionsAndMaterial) {
+    const auto e =
+        one<AddMesh>(R"({"op": "add_mesh", "id": "tri", "positions": [0,0,0, 1,0,0, 0,1,0],
+        "indices": [0,1,2], "build": {"prefer": "fast_build", "allow_refit": false}, "material": "red"})");
+    EXPECT_EQ(e.id, "tri");
+    EXPECT_THAT(e.positions, ::testing::ElementsAre(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)));
+    EXPECT_THAT(e.triangles, ::testing::ElementsAre(Triangle(0, 1, 2)));
+    EXPECT_EQ(e.build.prefer, BuildPreference::FastBuild);
+    EXPECT_FALSE(e.build.allow_refit);
+    EXPECT_EQ(e.material, "red");
+}
+
+TEST(EditParser, AddMeshReadsLittleEndianBase64Arrays) {
+    const float p[9] = {0, 0, 0, 1.5f, 0, 0, 0, -2, 0};
+    const uint32_t i[3] = {2, 1, 0};
+    const auto e =
+        one<AddMesh>(R"({"op": "add_mesh", "id": "b", "positions_b64": ")" + b64(p, sizeof p) +
+                     R"(", "indices_b64": ")" + b64(i, sizeof i) + "\"}");
+    EXPECT_THAT(e.positions,
+                ::testing::ElementsAre(Vec3(0, 0, 0), Vec3(1.5f, 0, 0), Vec3(0, -2, 0)));
+    EXPECT_THAT(e.triangles, ::testing::ElementsAre(Triangle(2, 1, 0)));
+}
+
+TEST(EditParser, LargeArraysArriveWhole) {
+    std::string positions, indices;
+    for (int v = 0; v < 3000; ++v) positions += (v ? "," : "") + std::to_string(v) + ".25";
+    for (int t = 0; t < 999; ++t)
+        indices += (t ? "," : "") + std::to_string(t) + "," + std::to_string(t + 1) + ",0";
+    const auto e = one<AddMesh>(R"({"op": "add_mesh", "id": "big", "positions": [)" + positions +
+                                R"(], "indices": [)" + indices + "]}");
+    ASSERT_EQ(e.positions.size(), 1000u);
+    EXPECT_EQ(e.positions[999], Vec3(2997.25f, 2998.25f, 2999.25f));
+    ASSERT_EQ(e.triangles.size(), 999u);
+    EXPECT_EQ(e.triangles[998], Triangle(998, 999, 0));
+}
+
+TEST(EditParser, ShapesUseTheEngineGeneratorsWithDefaults) {
+    EXPECT_EQ(
+        one<AddMesh>(R"({"op":"add_mesh","id":"s","shape":{"type":"sphere"}})").triangles.size(),
+        sphere_triangle_count(32));
+    EXPECT_EQ(one<AddMesh>(R"({"op":"add_mesh","id":"b","shape":{"type":"box","size":[1,2,3]}})")
+                  .positions[7],
+              Vec3(0.5f, 1.0f, 1.5f));
+    const auto plane = one<AddMesh>(
+        R"({"op":"add_mesh","id":"p","shape":{"type":"plane","size":[4,2],"subdivisions":[4,2]}})");
+    EXPECT_EQ(plane.positions.size(), 15u);
+    EXPECT_EQ(plane.triangles.size(), 16u);
+    EXPECT_EQ(plane.positions.back(), Vec3(2.0f, 0.0f, 1.0f));
+}
+
+TEST(EditParser, UpdateMeshIsAPositionsUpdateOrATopologyChange) {
+    const auto move = one<UpdateMeshPositions>(
+        R"({"op":"update_mesh","mesh":"m","positions":[1,2,3],"offset":7})");
+    EXPECT_EQ(move.mesh, "m");
+    EXPECT_EQ(move.offset, 7u);
+    EXPECT_THAT(move.positions, ::testing::ElementsAre(Vec3(1, 2, 3)));
+    const auto topo =
+        one<ReplaceMeshTopology>(R"({"op":"update_mesh","mesh":"m","indices":[0,2,1]})");
+    EXPECT_FALSE(topo.positions.has_value());
+    EXPECT_THAT(topo.triangles, ::testing::ElementsAre(Triangle(0, 2, 1)));
+    const auto both = one<ReplaceMeshTopology>(
+        R"({"op":"update_mesh","mesh":"m","positions":[0,0,0],"indices":[0,0,0]})");
+    ASSERT_TRUE(both.positions.has_value());
+    EXPECT_EQ(both.positions->size(), 1u);
+}
+
+TEST(EditParser, InstanceOpsReadEveryField) {
+    const auto add = one<AddInstance>(R"({"op":"add_instance","id":"i","mesh":"m","material":"red",
+        "transform":{"translate":[1,2,3]},"visible":false,"mask":4294967295,"user_id":9})");
+    EXPECT_EQ(add.mesh, "m");
+    EXPECT_EQ(add.material, "red");
+    EXPECT_EQ(add.transform, Affine::translation({1, 2, 3}));
+    EXPECT_FALSE(add.visible);
+    EXPECT_EQ(add.mask, 0xFFFFFFFFu);
+    EXPECT_EQ(add.user_id, 9u);
+    const auto upd =
+        one<UpdateInstance>(R"({"op":"update_instance","instance":"i","material":null,"mask":3})");
+    ASSERT_TRUE(upd.material.has_value());
+    EXPECT_FALSE(upd.material->has_value());
+    EXPECT_EQ(upd.mask, 3u);
+    EXPECT_FALSE(upd.transform.has_value());
+    EXPECT_FALSE(upd.visible.has_value());
+    EXPECT_EQ(one<SetTransform>(
+                  R"({"op":"set_transform","instance":"i","transform":[1,0,0,4,0,1,0,0,0,0,1,0]})")
+                  .transform,
+              Affine::translation({4, 0, 0}));
+    EXPECT_EQ(one<RemoveInstance>(R"({"op":"remove_instance","instance":"i"})").instance, "i");
+}
+
+TEST(EditParser, MaterialCameraLightingAndSceneOps) {
+    const auto mat =
+        one<AddMaterial>(R"({"op":"add_material","id":"m","base_color":[1,0,0],"metallic":1})");
+    EXPECT_EQ(mat.material.base_color, Vec3(1, 0, 0));
+    EXPECT_EQ(mat.material.metallic, 1.0f);
+    EXPECT_EQ(mat.material.roughness, Material{}.roughness);
+    const auto upd =
+        one<UpdateMaterial>(R"({"op":"update_material","material":"m","roughness":0.25})");
+    EXPECT_EQ(upd.roughness, 0.25f);
+    EXPECT_FALSE(upd.base_color.has_value());
+    const auto cam = one<SetCamera>(R"({"op":"set_camera","eye":[0,1,2],"fov_y_deg":30})");
+    EXPECT_EQ(cam.eye, Vec3(0, 1, 2));
+    EXPECT_EQ(cam.fov_y_deg, 30.0f);
+    EXPECT_FALSE(cam.target.has_value());
+    EXPECT_EQ(one<SetLighting>(R"({"op":"set_lighting","sky_intensity":2})").sky_intensity, 2.0f);
+    const auto tlas = one<MarkDirty>(R"({"op":"mark_dirty","target":"tlas","action":"refit"})");
+    EXPECT_FALSE(tlas.mesh.has_value());
+    EXPECT_EQ(tlas.action, DirtyAction::Refit);
+    EXPECT_EQ(
+        one<MarkDirty>(R"({"op":"mark_dirty","target":{"mesh":"m"},"action":"rebuild"})").mesh,
+        "m");
+    one<Clear>(R"({"op":"clear"})");
+    one<RemoveMesh>(R"({"op":"remove_mesh","mesh":"m"})");
+}
+
+TEST(EditParser, EveryOpHasAParserAndAnEngineStruct) {
+    EXPECT_THAT(edit_op_names(),
+                ::testing::ElementsAre("add_mesh", "update_mesh", "remove_mesh", "add_material",
+                                       "update_material", "add_instance", "update_instance",
+                                       "set_transform", "remove_instance", "mark_dirty",
+                                       "set_camera", "set_lighting", "clear"));
+}
+
+TEST(EditParser, NumbersBeyondFloatRangeAreNotFiniteWithTheirPointer) {
+    const RequestError e =
+        fails(R"({"op":"clear"}, {"op":"update_mesh","mesh":"m","positions":[0,1e999,0]})");
+    EXPECT_EQ(e.kind, RequestErrorKind::Value);
+    EXPECT_EQ(e.code, ErrorCode::NotFinite);
+    EXPECT_EQ(e.edit_index, 1u);
+    EXPECT_EQ(e.pointer, "/edits/1/positions/1");
+    EXPECT_EQ(fails(R"({"op":"set_camera","fov_y_deg":1e39})").pointer, "/edits/0/fov_y_deg");
+}
+
+TEST(EditParser, Base64PositionsWithNaNAreNotFinite) {
+    const float p[3] = {0, std::nanf(""), 0};
+    const RequestError e =
+        fails(R"({"op":"update_mesh","mesh":"m","positions_b64":")" + b64(p, sizeof p) + "\"}");
+    EXPECT_EQ(e.code, ErrorCode::NotFinite);
+    EXPECT_EQ(e.pointer, "/edits/0/positions_b64");
+}
+
+TEST(EditParser, ASchemaErrorAnywhereWinsOverAnEarlierValueError) {
+    const RequestError e =
+        fails(R"({"op":"update_mesh","mesh":"m","positions":[1e999,0,0]}, {"op":"nope"})");
+    EXPECT_EQ(e.kind, RequestErrorKind::Schema);
+    EXPECT_EQ(e.pointer, "/edits/1/op");
+    EXPECT_EQ(e.edit_index, 1u);
+}
+
+TEST(EditParser, UnknownMembersNameTheMemberAndWhatIsAllowed) {
+    const RequestError e = fails(R"({"op":"set_transform","instance":"i","transfrom":[]})");
+    EXPECT_EQ(e.pointer, "/edits/0/transfrom");
+    EXPECT_THAT(e.message, ::testing::HasSubstr("unknown member 'transfrom'"));
+    EXPECT_THAT(e.message, ::testing::HasSubstr("transform"));
+}
+
+TEST(EditParser, EngineErrorsPointAtTheWireMemberTheEditUsed) {
+    const float p[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    ParsedBatch b =
+        parse_ok(R"({"edits": [{"op":"clear"}, {"op":"add_mesh","id":"x","positions_b64":")" +
+                 b64(p, sizeof p) + R"(","indices":[0,1,5]}]})");
+    Error e = make_error(ErrorCode::OutOfRange, "triangle 0 uses vertex 5", "indices/2");
+    e.edit_index = 1;
+    Problem problem = problem_from_batch_error(e, b.sources);
+    EXPECT_EQ(problem.status, 422);
+    EXPECT_EQ(problem.pointer, "/edits/1/indices/2");
+    EXPECT_EQ(problem.edit_index, 1u);
+    e.field = "positions/3";
+    EXPECT_EQ(problem_from_batch_error(e, b.sources).pointer, "/edits/1/positions_b64");
+    EXPECT_EQ(problem_type_uri(problem.type), "https://strata.dev/problems/out-of-range");
+}
+
+TEST(EditParser, ProblemDocumentsCarryTheRfc9457MembersAndOurs) {
+    const Json j =
+        problem_to_json(problem_from(fails(R"({"op":"add_material","id":"m","roughness":"x"})")));
+    EXPECT_EQ(j["type"], "https://strata.dev/problems/invalid-request");
+    EXPECT_EQ(j["title"], "Invalid request");
+    EXPECT_EQ(j["status"], 400);
+    EXPECT_THAT(j["detail"].get<std::string>(),
+                ::testing::HasSubstr("expected a number, got string"));
+    EXPECT_EQ(j["edit_index"], 0);
+    EXPECT_EQ(j["pointer"], "/edits/0/roughness");
+}
+
+}  // namespace
+}  // namespace strata::protocol

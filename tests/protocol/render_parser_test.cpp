@@ -1,0 +1,79 @@
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "protocol/render_parser.h"
+
+namespace strata::protocol {
+namespace {
+
+TEST(RenderParser, ReadsEveryOptionOfTheBody) {
+    auto r =
+        parse_render_body(Json::parse(R"({"width": 320, "height": 200, "format": "exr", "spp": 16,
+        "aovs": ["albedo", "depth"], "compression": "piz", "accumulate": true, "exposure": -1.5,
+        "camera": {"eye": [0, 1, 5], "fov_y_deg": 30}})"));
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    const RenderRequest& q = r.value().request;
+    EXPECT_EQ(q.width, 320u);
+    EXPECT_EQ(q.height, 200u);
+    EXPECT_EQ(q.format, ImageFormat::Exr);
+    EXPECT_EQ(q.spp, 16u);
+    EXPECT_THAT(q.aovs, ::testing::ElementsAre(Aov::Albedo, Aov::Depth));
+    EXPECT_EQ(q.compression, ExrCompression::Piz);
+    EXPECT_TRUE(q.accumulate);
+    EXPECT_EQ(q.exposure, -1.5f);
+    ASSERT_TRUE(r.value().camera.has_value());
+    EXPECT_EQ(r.value().camera->eye, Vec3(0, 1, 5));
+    EXPECT_FALSE(r.value().camera->target.has_value());
+}
+
+TEST(RenderParser, AnEmptyBodyMeansTheDefaults) {
+    auto r = parse_render_body(Json::object());
+    ASSERT_TRUE(r.ok());
+    EXPECT_EQ(r.value().request.width, RenderRequest{}.width);
+    EXPECT_EQ(r.value().request.format, ImageFormat::Png);
+    EXPECT_FALSE(r.value().camera.has_value());
+}
+
+TEST(RenderParser, TheQueryStringCarriesTheSameOptions) {
+    const std::multimap<std::string, std::string> params = {
+        {"width", "64"},          {"height", "48"},        {"format", "png"},   {"spp", "4"},
+        {"aovs", "normal,depth"}, {"accumulate", "false"}, {"exposure", "0.5"}, {"eye", "1,2,3"},
+        {"fov_y_deg", "60"},      {"compression", "zip"}};
+    auto r = parse_render_query(params);
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    EXPECT_EQ(r.value().request.width, 64u);
+    EXPECT_EQ(r.value().request.spp, 4u);
+    EXPECT_THAT(r.value().request.aovs, ::testing::ElementsAre(Aov::Normal, Aov::Depth));
+    EXPECT_EQ(r.value().request.exposure, 0.5f);
+    EXPECT_EQ(r.value().camera->eye, Vec3(1, 2, 3));
+    EXPECT_EQ(r.value().camera->fov_y_deg, 60.0f);
+}
+
+TEST(RenderParser, ErrorsPointAtTheMemberOrParameter) {
+    EXPECT_EQ(parse_render_body(Json::parse(R"({"width": 0})")).error().pointer, "/width");
+    EXPECT_EQ(parse_render_body(Json::parse(R"({"format": "jpg"})")).error().pointer, "/format");
+    EXPECT_EQ(parse_render_body(Json::parse(R"({"aovs": ["color", "beauty"]})")).error().pointer,
+              "/aovs/1");
+    EXPECT_EQ(parse_render_body(Json::parse(R"({"widht": 10})")).error().pointer, "/widht");
+    EXPECT_EQ(parse_render_query({{"width", "wide"}}).error().pointer, "/width");
+    EXPECT_EQ(parse_render_query({{"size", "10"}}).error().pointer, "/size");
+    EXPECT_EQ(parse_render_query({{"width", "10"}, {"width", "20"}}).error().pointer, "/width");
+    EXPECT_EQ(parse_render_query({{"eye", "1,2"}}).error().pointer, "/camera/eye");
+}
+
+TEST(RenderParser, ACameraOverrideIsCompletedFromTheSceneCamera) {
+    RenderSpec spec;
+    spec.camera = SetCamera{};
+    spec.camera->eye = Vec3(9, 9, 9);
+    Camera scene;
+    scene.fov_y_deg = 20.0f;
+    const RenderRequest q = resolve_render_request(spec, scene);
+    ASSERT_TRUE(q.camera.has_value());
+    EXPECT_EQ(q.camera->eye, Vec3(9, 9, 9));
+    EXPECT_EQ(q.camera->fov_y_deg, 20.0f);
+    EXPECT_EQ(q.camera->target, scene.target);
+    EXPECT_FALSE(resolve_render_request(RenderSpec{}, scene).camera.has_value());
+}
+
+}  // namespace
+}  // namespace strata::protocol
