@@ -1,9 +1,8 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds Strata and runs the demo: it builds the demo scene, plays a
-# short edit sequence, prints each launch's rebuild report and writes PNG frames to frames/.
-# This is README command (1).
+# Installs what is missing, builds Strata and starts strata-server with the demo scene on
+# 127.0.0.1:7070 (README command 1). Extra arguments go to strata-server, e.g. --port 8080.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh
-STRATA_TARGETS=strata-demo scripts/build.sh build -DCMAKE_BUILD_TYPE=RelWithDebInfo
-exec build/engine/strata-demo --out frames "$@"
+STRATA_TARGETS=strata-server scripts/build.sh build -DCMAKE_BUILD_TYPE=RelWithDebInfo
+exec build/server/strata-server --demo --host 127.0.0.1 --port 7070 "$@"

@@ -6,6 +6,7 @@
 #   1. scripts/install-deps.sh              Debian packages (idempotent)
 #   2. build/ (RelWithDebInfo)               full build, then every CTest test
 #   3. build-asan/ (ASan + UBSan)            engine tests under the sanitizers
+#   4. build-fuzz/ (clang, libFuzzer)        the edit-batch parser fuzzer, bounded run
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -25,5 +26,8 @@ STRATA_TARGETS=strata_engine_tests scripts/build.sh build-asan \
     -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSTRATA_SANITIZE=ON -DSTRATA_BUILD_BENCHMARKS=OFF
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     build-asan/tests/engine/strata_engine_tests
+
+step "fuzzing the edit-batch parser (build-fuzz/)"
+scripts/run-fuzz.sh
 
 step "all tests passed"
