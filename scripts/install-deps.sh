@@ -19,7 +19,7 @@ runtime_pkgs=(
     libembree3-3 libtbb12 libopenexr-3-1-30 libpng16-16 libspdlog1.10 libcpp-httplib0.11 ca-certificates
 )
 build_pkgs=(
-    build-essential cmake ninja-build pkg-config git ca-certificates
+    build-essential cmake ninja-build pkg-config git ca-certificates curl
     libembree-dev libglm-dev libopenexr-dev nlohmann-json3-dev libcpp-httplib-dev libtbb-dev
     libgtest-dev libgmock-dev libbenchmark-dev libpng-dev
     libtinygltf-dev libtinyobjloader-dev libcli11-dev libspdlog-dev
