@@ -33,25 +33,19 @@ def session_blocks(readme):
 
 
 def split_commands(block):
-    """Yields (command, documented output lines) pairs; a command may span lines."""
-    commands, current, expected = [], [], []
+    """Returns [command, documented output lines] pairs; a command may span lines (an open quote
+    or a trailing backslash), and the comment lines after it are its documented output."""
+    commands, current = [], []
     for line in block.splitlines():
-        if line.startswith("#"):
-            expected.append(line[1:].strip())
+        if line.startswith("#") and not current:
+            if commands:
+                commands[-1][1].append(line[1:].strip())
             continue
-        if expected and current:
-            commands.append(("\n".join(current), expected))
-            current, expected = [], []
-        elif expected:
-            expected = []
         current.append(line)
         if not line.endswith("\\") and _balanced("\n".join(current)):
-            commands.append(("\n".join(current), []))
+            commands.append(["\n".join(current), []])
             current = []
-    if current:
-        commands.append(("\n".join(current), expected))
-    elif expected and commands:
-        commands[-1] = (commands[-1][0], commands[-1][1] + expected)
+    assert not current, f"unterminated command: {current}"
     return commands
 
 
