@@ -139,12 +139,12 @@ void TableObserver::on_start(const Script& script, std::size_t total) {
 
 void TableObserver::on_step(const StepRecord& record) {
     ++m_done;
-    if (m_options.rows) {
-        clear_progress();
-        m_out << row(record) << '\n';
-        m_out.flush();
-    }
-    draw_progress(!m_options.rows);
+    if (!m_options.rows) return draw_progress(false);
+    // The bar sits below the rows: take it away, print the row, put it back.
+    clear_progress();
+    m_out << row(record) << '\n';
+    m_out.flush();
+    draw_progress(true);
 }
 
 void TableObserver::on_finish(const PlayResult& result) {

@@ -1,6 +1,7 @@
 #include "clients/cli/script_runner.h"
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <fstream>
 

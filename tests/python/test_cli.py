@@ -4,6 +4,7 @@ failed expectation, problem details instead of raw JSON, frames, tokens, and the
 import json
 import os
 import subprocess
+import sys
 import tempfile
 import unittest
 
@@ -167,14 +168,53 @@ class ServerCommandsTest(unittest.TestCase):
 
 
 class ReadmeSnippetsTest(unittest.TestCase):
-    """The commands of clients/README-snippets.md, as written there."""
+    """The examples of clients/README-snippets.md, as written there (with the test server's URL
+    for 127.0.0.1:7070)."""
 
-    def test_the_cli_snippet_plays(self):
+    def setUp(self):
+        with open(os.path.join(SOURCE, "clients/README-snippets.md")) as f:
+            self.text = f.read()
+        self.server = ServerProcess(SERVER, ["--demo"])  # the server from README command (1)
+
+    def tearDown(self):
+        self.server.stop()
+
+    def block(self, language):
+        start = self.text.index("```" + language + "\n") + len(language) + 4
+        return self.text[start:self.text.index("```", start)]
+
+    def last_block(self):
+        end = self.text.rindex("```")
+        return self.text[self.text.rindex("```\n", 0, end) + 4:end]
+
+    def test_the_cli_snippet_plays_embedded_and_on_the_server(self):
+        commands = [line.split("#")[0].split() for line in self.block("sh").splitlines()]
+        self.assertEqual(commands[0][:2], ["build/clients/cli/strata", "play"])
         with tempfile.TemporaryDirectory() as d:
-            code, out, err = strata("play", "--embedded", "--max-repeat", "2",
-                                    os.path.join(SOURCE, "clients/examples/orbit.jsonl"), cwd=d)
-            self.assertEqual(code, 0, out + err)
-            self.assertTrue(os.path.exists(os.path.join(d, "frames/orbit/frame_001.png")))
+            for args in commands:
+                args = [os.path.join(SOURCE, a) if a.endswith(".jsonl") else a for a in args[1:]]
+                code, out, err = strata(*args, env={"STRATA_SERVER": self.server.url}, cwd=d)
+                self.assertEqual(code, 0, out + err)
+                self.assertIn("PASS  98 steps, 291 expectations met, 48 frames written", out)
+            self.assertTrue(os.path.exists(os.path.join(d, "frames/flag/frame_047.png")))
+
+    def test_the_python_snippet_prints_what_it_says(self):
+        code = self.block("python").replace("http://127.0.0.1:7070", self.server.url)
+        with tempfile.TemporaryDirectory() as d:
+            p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                               cwd=d, timeout=120)
+            self.assertEqual(p.returncode, 0, p.stderr)
+            with open(os.path.join(d, "orb.png"), "rb") as f:
+                self.assertEqual(f.read(4), b"\x89PNG")
+        lines = p.stdout.splitlines()
+        expected = self.last_block().strip().splitlines()
+        self.assertEqual(len(lines), len(expected), p.stdout)
+        # The first render's counts depend on the demo scene and its time varies: its shape must
+        # match; the other lines exactly.
+        pattern = r"v2 tlas=update\(\d+\) rebuilds=\d+ refits=0 prims=\d+ ms=[0-9.]+"
+        self.assertRegex(expected[0], pattern)
+        self.assertRegex(lines[0], pattern)
+        self.assertEqual(lines[1:], expected[1:])
 
 
 if __name__ == "__main__":
