@@ -30,11 +30,11 @@ ApiResponse render(Engine& engine, const RenderSpec& spec, const ApiLimits& limi
     const RenderRequest& q0 = spec.request;
     const uint64_t pixels = uint64_t(q0.width) * q0.height;
     if (pixels > limits.max_pixels) {
-        Problem p = make_problem(ProblemType::TooLarge,
-                                 std::to_string(q0.width) + "x" + std::to_string(q0.height) +
-                                     " is " + std::to_string(pixels) +
-                                     " pixels; this server renders at most " +
-                                     std::to_string(limits.max_pixels) + " (--max-pixels)");
+        Problem p =
+            make_problem(ProblemType::TooLarge,
+                         std::to_string(q0.width) + "x" + std::to_string(q0.height) + " is " +
+                             std::to_string(pixels) + " pixels; this server renders at most " +
+                             std::to_string(limits.max_pixels) + " (--max-pixels)");
         p.pointer = "/width";
         return problem_response(p);
     }
@@ -192,13 +192,12 @@ ApiResponse get_stats(const Engine& engine) {
     const EngineCounters counters = engine.counters();
     const RebuildReport last = engine.last_report();
     const uint64_t version = scene_version(engine);
-    const Json doc = {
-        {"version", version},
-        {"counters", counters_to_json(counters)},
-        {"last_report", counters.commits ? report_to_json(last) : Json(nullptr)},
-        {"memory_bytes",
-         {{"blas", engine.memory_bytes(MemoryCategory::Blas)},
-          {"tlas", engine.memory_bytes(MemoryCategory::Tlas)}}}};
+    const Json doc = {{"version", version},
+                      {"counters", counters_to_json(counters)},
+                      {"last_report", counters.commits ? report_to_json(last) : Json(nullptr)},
+                      {"memory_bytes",
+                       {{"blas", engine.memory_bytes(MemoryCategory::Blas)},
+                        {"tlas", engine.memory_bytes(MemoryCategory::Tlas)}}}};
     return with_etag(json_response(200, doc), version);
 }
 

@@ -131,11 +131,11 @@ void Server::install_hooks() {
 }
 
 void Server::install_routes() {
-    auto ctx = std::make_shared<ServerContext>(
-        ServerContext{m_engine, m_config, m_metrics,
-                      protocol::ApiLimits{
-                          protocol::JsonLimits{m_config.max_json_depth, m_config.max_array_elements},
-                          m_config.max_pixels}});
+    auto ctx = std::make_shared<ServerContext>(ServerContext{
+        m_engine, m_config, m_metrics,
+        protocol::ApiLimits{
+            protocol::JsonLimits{m_config.max_json_depth, m_config.max_array_elements},
+            m_config.max_pixels}});
     m_context = ctx;  // outlives m_http, whose handlers refer to it
     Router router(*m_http, m_config.max_body_bytes);
     add_api_routes(router, *ctx);

@@ -43,6 +43,15 @@ std::optional<Json> answer(const Console& c, const Transport& t, const char* wha
     return doc;
 }
 
+/// Prints a report answer (commit or plan); returns the exit code.
+int print_report(const Console& c, const Transport& t, const char* what, const Reply& reply) {
+    int code = OK;
+    const auto doc = answer(c, t, what, reply, code);
+    if (!doc) return code;
+    c.out << (c.json ? doc->dump() : format_report(*doc)) << '\n';
+    return OK;
+}
+
 bool ends_with(const std::string& s, const std::string& tail) {
     return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
 }
@@ -175,19 +184,11 @@ int run_render(Transport& t, const Console& c, const RenderArgs& args) {
 }
 
 int run_commit(Transport& t, const Console& c) {
-    int code = OK;
-    const auto doc = answer(c, t, "commit", t.commit(), code);
-    if (!doc) return code;
-    c.out << (c.json ? doc->dump() : format_report(*doc)) << '\n';
-    return OK;
+    return print_report(c, t, "commit", t.commit());
 }
 
 int run_plan(Transport& t, const Console& c) {
-    int code = OK;
-    const auto doc = answer(c, t, "plan", t.plan(), code);
-    if (!doc) return code;
-    c.out << (c.json ? doc->dump() : format_report(*doc)) << '\n';
-    return OK;
+    return print_report(c, t, "plan", t.plan());
 }
 
 int run_stats(Transport& t, const Console& c) {
@@ -201,8 +202,7 @@ int run_stats(Transport& t, const Console& c) {
     c.out << "version " << doc->value("version", uint64_t(0)) << "\n";
     if (doc->contains("memory_bytes"))
         c.out << "memory  blas " << (*doc)["memory_bytes"].value("blas", int64_t(0))
-              << " bytes, tlas " << (*doc)["memory_bytes"].value("tlas", int64_t(0))
-              << " bytes\n";
+              << " bytes, tlas " << (*doc)["memory_bytes"].value("tlas", int64_t(0)) << " bytes\n";
     c.out << "counters\n";
     const Json counters = doc->value("counters", Json::object());
     for (const auto& [name, value] : counters.items()) {

@@ -39,10 +39,9 @@ EmbeddedTransport::EmbeddedTransport(std::unique_ptr<Engine> engine)
 EmbeddedTransport::~EmbeddedTransport() = default;
 
 Reply EmbeddedTransport::edits(std::string body, const std::optional<std::string>& if_match) {
-    return to_reply(protocol::post_edits(*m_engine, std::move(body),
-                                         if_match ? std::optional<std::string_view>(*if_match)
-                                                  : std::nullopt,
-                                         LIMITS));
+    return to_reply(protocol::post_edits(
+        *m_engine, std::move(body),
+        if_match ? std::optional<std::string_view>(*if_match) : std::nullopt, LIMITS));
 }
 
 Reply EmbeddedTransport::commit() {

@@ -67,8 +67,8 @@ int play_script(const PlayArgs& a, const HttpOptions& http, bool json) {
         TableOptions table;
         table.rows = !a.quiet;
         table.progress = !a.no_progress && isatty(STDERR_FILENO);
-        observer = std::make_unique<TableObserver>(std::cout, std::cerr, transport->describe(),
-                                                   table);
+        observer =
+            std::make_unique<TableObserver>(std::cout, std::cerr, transport->describe(), table);
     }
     return exit_code(play(script.value(), *transport, options, *observer).verdict);
 }
@@ -81,8 +81,9 @@ CLI::Option* add_vec3(CLI::App* app, const char* name, std::vector<double>& v, c
 }  // namespace
 
 int main(int argc, char** argv) {
-    CLI::App app{"strata: play scripts against Strata and talk to a strata-server "
-                 "(see clients/cli/README.md)"};
+    CLI::App app{
+        "strata: play scripts against Strata and talk to a strata-server "
+        "(see clients/cli/README.md)"};
     app.require_subcommand(1);
     app.fallthrough();
     HttpOptions http;
@@ -100,15 +101,15 @@ int main(int argc, char** argv) {
     PlayArgs play;
     CLI::App* play_cmd = app.add_subcommand(
         "play", "Play a script (JSON Lines, protocol/scripts.md) and check its expectations");
-    play_cmd->add_option("script", play.script, "Script file, or - for standard input")
-        ->required();
+    play_cmd->add_option("script", play.script, "Script file, or - for standard input")->required();
     play_cmd->add_flag("--embedded", play.embedded,
                        "Play against an in-process engine instead of a server");
     play_cmd->add_flag("--demo", play.demo, "With --embedded: start from the demo scene");
     play_cmd->add_flag("--budgets", play.budgets,
                        "Also check the budgets (max_ms, max_primitives_built)");
-    play_cmd->add_option("--max-repeat", play.max_repeat,
-                         "Play at most N iterations of each repeat step (quick checks)")
+    play_cmd
+        ->add_option("--max-repeat", play.max_repeat,
+                     "Play at most N iterations of each repeat step (quick checks)")
         ->check(CLI::PositiveNumber);
     play_cmd->add_option("--out-dir", play.out_dir,
                          "Directory for the frames of relative \"out\" paths (default: .)");

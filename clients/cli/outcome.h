@@ -38,4 +38,17 @@ private:
     std::variant<T, Failure> m_v;
 };
 
+/// Thrown inside the recursive readers of scripts only (templates, steps), so that nested code
+/// stays short; every public function catches it and returns the Failure as a value.
+struct ScriptFailure {
+    std::string message;
+};
+
+/// The value of `o`, or a thrown ScriptFailure with its message.
+template <class T>
+T value_or_throw(Outcome<T>&& o) {
+    if (!o) throw ScriptFailure{o.error().message};
+    return std::move(o).value();
+}
+
 }  // namespace strata::cli

@@ -63,7 +63,8 @@ std::string row(const StepRecord& r) {
     }
     if (r.step->kind == StepKind::Render)
         note = r.out.empty() ? human_bytes(r.bytes) + " (not saved)" : r.out;
-    if (r.checks) note += std::string(note.empty() ? "" : "  ") + "ok (" + std::to_string(r.checks) + ")";
+    if (r.checks)
+        note += std::string(note.empty() ? "" : "  ") + "ok (" + std::to_string(r.checks) + ")";
     if (!r.step->label.empty()) note += (note.empty() ? "" : "  ") + r.step->label;
     line += "  " + note;
     while (!line.empty() && line.back() == ' ') line.pop_back();
@@ -130,8 +131,7 @@ void TableObserver::on_start(const Script& script, std::size_t total) {
     m_bar = m_options.progress && total >= PROGRESS_MIN_STEPS;
     if (m_options.rows) {
         m_out << "playing " << script.name << " on " << m_where << " (" << total
-              << (total == 1 ? " step)\n" : " steps)\n")
-              << HEADER << '\n';
+              << (total == 1 ? " step)\n" : " steps)\n") << HEADER << '\n';
         m_out.flush();
     }
     draw_progress(true);
@@ -203,8 +203,8 @@ void TableObserver::draw_progress(bool force) {
     m_last_draw = now;
     constexpr std::size_t WIDTH = 30;
     const std::size_t filled = m_total ? WIDTH * m_done / m_total : 0;
-    m_err << "\r[" << std::string(filled, '#') << std::string(WIDTH - filled, '.') << "] "
-          << m_done << "/" << m_total << " steps";
+    m_err << "\r[" << std::string(filled, '#') << std::string(WIDTH - filled, '.') << "] " << m_done
+          << "/" << m_total << " steps";
     m_err.flush();
     m_bar_drawn = true;
 }
@@ -238,12 +238,9 @@ void JsonObserver::on_step(const StepRecord& r) {
 }
 
 void JsonObserver::on_finish(const PlayResult& result) {
-    Json j = {{"result", verdict_name(result.verdict)},
-              {"steps", result.steps_played},
-              {"frames", result.frames_written},
-              {"checks", result.checks_passed},
-              {"budgets_skipped", result.budgets_skipped},
-              {"ms", result.wall_ms}};
+    Json j = {{"result", verdict_name(result.verdict)},    {"steps", result.steps_played},
+              {"frames", result.frames_written},           {"checks", result.checks_passed},
+              {"budgets_skipped", result.budgets_skipped}, {"ms", result.wall_ms}};
     if (result.verdict != Verdict::Passed) j["failure"] = failure_json(result);
     m_out << j.dump() << '\n';
     m_out.flush();

@@ -36,8 +36,8 @@ private:
     std::string m_script;
     std::size_t m_total = 0;
     std::size_t m_done = 0;
-    bool m_bar = false;          ///< the bar is enabled for this play
-    bool m_bar_drawn = false;    ///< the bar is on screen now
+    bool m_bar = false;        ///< the bar is enabled for this play
+    bool m_bar_drawn = false;  ///< the bar is on screen now
     std::chrono::steady_clock::time_point m_last_draw{};
 };
 

@@ -33,11 +33,11 @@ struct Step {
     std::string label;
     /// Edits: the edits array; Render: the request body.
     std::optional<JsonTemplate> body;
-    std::optional<StringTemplate> out;     ///< Render: where to save the frame
-    std::optional<Expectation> expect;     ///< Commit, Plan, Render
-    std::optional<CountTemplate> count;    ///< Repeat
-    std::string var;                       ///< Repeat: the iteration variable
-    std::vector<Step> steps;               ///< Repeat: its steps
+    std::optional<StringTemplate> out;   ///< Render: where to save the frame
+    std::optional<Expectation> expect;   ///< Commit, Plan, Render
+    std::optional<CountTemplate> count;  ///< Repeat
+    std::string var;                     ///< Repeat: the iteration variable
+    std::vector<Step> steps;             ///< Repeat: its steps
 };
 
 /// A loaded script.

@@ -167,8 +167,8 @@ std::optional<double> number_at(const Json& report, const char* parent, const ch
 
 Outcome<Expectation> Expectation::compile(const Json& v, const std::vector<std::string>& names,
                                           bool has_time) {
-    std::vector<std::string> allowed = {"tlas", "rebuilt", "refit", "released", "max_ms",
-                                        "max_primitives_built"};
+    std::vector<std::string> allowed = {"tlas",     "rebuilt", "refit",
+                                        "released", "max_ms",  "max_primitives_built"};
     for (const CountSource& c : COUNT_FIELDS) allowed.push_back(c.name);
     if (auto bad = check_members(v, "\"expect\"", allowed)) return *bad;
     Expectation e;
@@ -181,8 +181,8 @@ Outcome<Expectation> Expectation::compile(const Json& v, const std::vector<std::
     if (v.contains("tlas")) {
         const Json& t = v["tlas"];
         if (!t.is_string() || !contains(TLAS_ACTIONS, t.get<std::string>()))
-            return Failure{"expect.tlas: expected one of " + quoted_list(TLAS_ACTIONS) +
-                           ", got " + t.dump()};
+            return Failure{"expect.tlas: expected one of " + quoted_list(TLAS_ACTIONS) + ", got " +
+                           t.dump()};
         e.m_tlas = t.get<std::string>();
     }
     for (const char* field : {"rebuilt", "refit", "released"}) {

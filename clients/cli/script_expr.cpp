@@ -51,7 +51,7 @@ struct ParseError {
 struct Expression::Node {
     Op op = Op::Number;
     double number = 0.0;
-    std::string name;                 ///< Var
+    std::string name;                    ///< Var
     const Function* function = nullptr;  ///< Call
     std::vector<std::unique_ptr<Node>> args;
 };
@@ -97,7 +97,8 @@ private:
     }
     void expect(char c) {
         if (!accept(c)) {
-            if (m_pos >= m_text.size()) fail(std::string("expected '") + c + "' but the text ended");
+            if (m_pos >= m_text.size())
+                fail(std::string("expected '") + c + "' but the text ended");
             fail(std::string("expected '") + c + "'");
         }
     }

@@ -10,99 +10,94 @@ namespace strata::cli {
 
 namespace {
 
-struct StepError {
-    std::string message;
-};
-
-template <class T>
-T take(Outcome<T>&& o) {
-    if (!o) throw StepError{o.error().message};
-    return std::move(o).value();
-}
-
 constexpr const char* KIND_KEYS[] = {"edits", "commit", "plan", "render", "repeat"};
 
 Step compile_step(const Json& v, std::size_t line, std::vector<std::string>& names);
 
 void compile_expect(Step& s, const Json& v, const std::vector<std::string>& names) {
     if (!v.contains("expect")) return;
-    s.expect = take(Expectation::compile(v["expect"], names, s.kind != StepKind::Plan));
+    s.expect = value_or_throw(Expectation::compile(v["expect"], names, s.kind != StepKind::Plan));
 }
 
 void require_empty_object(const Json& v, const char* key) {
     if (!v[key].is_object() || !v[key].empty())
-        throw StepError{std::string("\"") + key + "\" takes no options: write \"" + key +
-                        "\": {}"};
+        throw ScriptFailure{std::string("\"") + key + "\" takes no options: write \"" + key +
+                            "\": {}"};
 }
 
 Step compile_step(const Json& v, std::size_t line, std::vector<std::string>& names) {
-    if (!v.is_object()) throw StepError{"a step is a JSON object, not " + std::string(v.type_name())};
+    if (!v.is_object())
+        throw ScriptFailure{"a step is a JSON object, not " + std::string(v.type_name())};
     Step s;
     s.line = line;
     const char* kind = nullptr;
     for (std::size_t i = 0; i < std::size(KIND_KEYS); ++i) {
         if (!v.contains(KIND_KEYS[i])) continue;
         if (kind)
-            throw StepError{std::string("a step is one of edits, commit, plan, render or repeat; "
-                                        "this one has both \"") +
-                            kind + "\" and \"" + KIND_KEYS[i] + "\""};
+            throw ScriptFailure{
+                std::string("a step is one of edits, commit, plan, render or repeat; "
+                            "this one has both \"") +
+                kind + "\" and \"" + KIND_KEYS[i] + "\""};
         kind = KIND_KEYS[i];
         s.kind = StepKind(i);
     }
     if (!kind) {
         std::string keys;
         for (const auto& [key, value] : v.items()) keys += (keys.empty() ? "" : ", ") + key;
-        throw StepError{"unknown step (members: " + (keys.empty() ? "none" : keys) +
-                        "); a step has one of \"edits\", \"commit\", \"plan\", \"render\" or "
-                        "\"repeat\""};
+        throw ScriptFailure{"unknown step (members: " + (keys.empty() ? "none" : keys) +
+                            "); a step has one of \"edits\", \"commit\", \"plan\", \"render\" or "
+                            "\"repeat\""};
     }
     if (v.contains("label")) {
-        if (!v["label"].is_string()) throw StepError{"\"label\" must be a string"};
+        if (!v["label"].is_string()) throw ScriptFailure{"\"label\" must be a string"};
         s.label = v["label"].get<std::string>();
     }
     switch (s.kind) {
         case StepKind::Edits:
             if (auto bad = check_members(v, "an edits step", {"edits", "label"}))
-                throw StepError{bad->message};
+                throw ScriptFailure{bad->message};
             if (!v["edits"].is_array())
-                throw StepError{"\"edits\" must be an array of edit ops (protocol/README.md)"};
-            s.body = take(JsonTemplate::compile(v["edits"], names));
+                throw ScriptFailure{"\"edits\" must be an array of edit ops (protocol/README.md)"};
+            s.body = value_or_throw(JsonTemplate::compile(v["edits"], names));
             break;
         case StepKind::Commit:
         case StepKind::Plan:
-            if (auto bad = check_members(v, std::string("a ") + kind + " step",
-                                         {kind, "expect", "label"}))
-                throw StepError{bad->message};
+            if (auto bad =
+                    check_members(v, std::string("a ") + kind + " step", {kind, "expect", "label"}))
+                throw ScriptFailure{bad->message};
             require_empty_object(v, kind);
             compile_expect(s, v, names);
             break;
         case StepKind::Render:
             if (auto bad = check_members(v, "a render step", {"render", "out", "expect", "label"}))
-                throw StepError{bad->message};
+                throw ScriptFailure{bad->message};
             if (!v["render"].is_object())
-                throw StepError{"\"render\" must be a render request object (protocol/README.md)"};
-            s.body = take(JsonTemplate::compile(v["render"], names));
+                throw ScriptFailure{
+                    "\"render\" must be a render request object (protocol/README.md)"};
+            s.body = value_or_throw(JsonTemplate::compile(v["render"], names));
             if (v.contains("out")) {
                 if (!v["out"].is_string() || v["out"].get<std::string>().empty())
-                    throw StepError{"\"out\" must be a file name"};
-                s.out = take(StringTemplate::compile(v["out"].get<std::string>(), names));
+                    throw ScriptFailure{"\"out\" must be a file name"};
+                s.out = value_or_throw(StringTemplate::compile(v["out"].get<std::string>(), names));
             }
             compile_expect(s, v, names);
             break;
         case StepKind::Repeat: {
             if (auto bad = check_members(v, "a repeat step", {"repeat", "var", "steps", "label"}))
-                throw StepError{bad->message};
-            s.count = take(CountTemplate::compile(v["repeat"], names));
+                throw ScriptFailure{bad->message};
+            s.count = value_or_throw(CountTemplate::compile(v["repeat"], names));
             s.var = "n";
             if (v.contains("var")) {
                 if (!v["var"].is_string() || !is_variable_name(v["var"].get<std::string>()))
-                    throw StepError{"\"var\" must be a name such as \"i\" (letters, digits, _)"};
+                    throw ScriptFailure{
+                        "\"var\" must be a name such as \"i\" (letters, digits, _)"};
                 s.var = v["var"].get<std::string>();
             }
             if (!v.contains("steps") || !v["steps"].is_array() || v["steps"].empty())
-                throw StepError{"a repeat needs \"steps\": a non-empty array of steps"};
+                throw ScriptFailure{"a repeat needs \"steps\": a non-empty array of steps"};
             names.push_back(s.var);
-            for (const Json& inner : v["steps"]) s.steps.push_back(compile_step(inner, line, names));
+            for (const Json& inner : v["steps"])
+                s.steps.push_back(compile_step(inner, line, names));
             names.pop_back();
             break;
         }
@@ -161,7 +156,7 @@ Outcome<Script> load_script(std::istream& in, const std::string& name) {
         try {
             std::vector<std::string> names;
             script.steps.push_back(compile_step(json.value(), line, names));
-        } catch (const StepError& e) {
+        } catch (const ScriptFailure& e) {
             return Failure{e.message, line};
         }
     }

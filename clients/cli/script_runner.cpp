@@ -143,8 +143,9 @@ private:
         const Json stats = answer_json(r, m_transport.stats());
         if (!stats.contains("last_report") || !stats["last_report"].is_object() ||
             stats["last_report"].value("version", uint64_t(0)) != r.version)
-            fail_request(r, {}, "cannot read the report of the render's commit: another client "
-                                "committed in between");
+            fail_request(r, {},
+                         "cannot read the report of the render's commit: another client "
+                         "committed in between");
         r.report = stats["last_report"];
     }
 

@@ -15,23 +15,23 @@ namespace strata::cli {
 
 /// How to play.
 struct PlayOptions {
-    bool budgets = false;                 ///< check max_ms and max_primitives_built too
-    std::optional<uint64_t> max_repeat;   ///< play at most this many iterations of each repeat step
-    std::filesystem::path out_dir;        ///< relative "out" paths resolve here (empty: cwd)
+    bool budgets = false;                ///< check max_ms and max_primitives_built too
+    std::optional<uint64_t> max_repeat;  ///< play at most this many iterations of each repeat step
+    std::filesystem::path out_dir;       ///< relative "out" paths resolve here (empty: cwd)
 };
 
 /// What one played step did.
 struct StepRecord {
-    std::size_t index = 0;        ///< 1-based position among the steps played
+    std::size_t index = 0;  ///< 1-based position among the steps played
     const Step* step = nullptr;
-    std::string vars;             ///< the iteration variables, "n=3, i=0" ("" outside repeats)
-    uint64_t version = 0;         ///< the scene version after (edits) or of (others) the step
-    std::size_t applied = 0;      ///< edits: edits applied
-    std::optional<Json> report;   ///< commit, plan and render: the rebuild report
-    std::string out;              ///< render: the file written ("" when not saved)
-    std::size_t bytes = 0;        ///< render: image size
-    std::size_t checks = 0;       ///< expectation fields checked
-    double wall_ms = 0.0;         ///< the step's round trip(s), as the client saw them
+    std::string vars;            ///< the iteration variables, "n=3, i=0" ("" outside repeats)
+    uint64_t version = 0;        ///< the scene version after (edits) or of (others) the step
+    std::size_t applied = 0;     ///< edits: edits applied
+    std::optional<Json> report;  ///< commit, plan and render: the rebuild report
+    std::string out;             ///< render: the file written ("" when not saved)
+    std::size_t bytes = 0;       ///< render: image size
+    std::size_t checks = 0;      ///< expectation fields checked
+    double wall_ms = 0.0;        ///< the step's round trip(s), as the client saw them
 };
 
 /// How a play ended.

@@ -7,18 +7,6 @@ namespace strata::cli {
 
 namespace {
 
-/// Thrown inside the recursive compile and instantiate walks only; the public functions return
-/// it as a Failure.
-struct TemplateError {
-    std::string message;
-};
-
-template <class T>
-T take(Outcome<T>&& o) {
-    if (!o) throw TemplateError{o.error().message};
-    return std::move(o).value();
-}
-
 /// A whole number as the JSON integer it stands for, anything else as a double.
 Json number_json(double v) {
     if (v == std::floor(v) && std::fabs(v) < 9007199254740992.0) {
@@ -150,12 +138,12 @@ Outcome<uint64_t> CountTemplate::evaluate(const Bindings& vars) const {
 struct JsonTemplate::Node {
     enum class Kind : uint8_t { Literal, String, Object, Array, Splice };
     Kind kind = Kind::Literal;
-    Json literal;                    ///< Literal: the value as written
-    StringTemplate text;             ///< String
-    std::vector<std::string> keys;   ///< Object: member names, parallel to children
-    std::vector<Node> children;      ///< Object members, Array elements, Splice items
+    Json literal;                        ///< Literal: the value as written
+    StringTemplate text;                 ///< String
+    std::vector<std::string> keys;       ///< Object: member names, parallel to children
+    std::vector<Node> children;          ///< Object members, Array elements, Splice items
     std::optional<CountTemplate> count;  ///< Splice
-    std::string var;                 ///< Splice: the iteration variable
+    std::string var;                     ///< Splice: the iteration variable
 };
 
 namespace {
@@ -186,19 +174,19 @@ std::vector<Node> compile_elements(const Json& array, std::vector<std::string>& 
 
 Node compile_splice(const Json& v, std::vector<std::string>& names) {
     if (auto bad = check_members(v, "an inline repeat", {"repeat", "var", "items"}))
-        throw TemplateError{bad->message};
+        throw ScriptFailure{bad->message};
     Node n;
     n.kind = Node::Kind::Splice;
-    n.count = take(CountTemplate::compile(v["repeat"], names));
+    n.count = value_or_throw(CountTemplate::compile(v["repeat"], names));
     n.var = "n";
     if (v.contains("var")) {
-        if (!v["var"].is_string()) throw TemplateError{"\"var\" must be a name"};
+        if (!v["var"].is_string()) throw ScriptFailure{"\"var\" must be a name"};
         n.var = v["var"].get<std::string>();
         if (!is_variable_name(n.var))
-            throw TemplateError{"\"var\": '" + n.var + "' is not a usable name"};
+            throw ScriptFailure{"\"var\": '" + n.var + "' is not a usable name"};
     }
     if (!v.contains("items") || !v["items"].is_array())
-        throw TemplateError{"an inline repeat needs \"items\": an array spliced COUNT times"};
+        throw ScriptFailure{"an inline repeat needs \"items\": an array spliced COUNT times"};
     names.push_back(n.var);
     n.children = compile_elements(v["items"], names);
     names.pop_back();
@@ -208,7 +196,7 @@ Node compile_splice(const Json& v, std::vector<std::string>& names) {
 Node compile_node(const Json& v, std::vector<std::string>& names) {
     Node n;
     if (v.is_string()) {
-        n.text = take(StringTemplate::compile(v.get<std::string>(), names));
+        n.text = value_or_throw(StringTemplate::compile(v.get<std::string>(), names));
         if (!n.text.is_literal()) n.kind = Node::Kind::String;
     } else if (v.is_object()) {
         for (const auto& [key, member] : v.items()) {
@@ -238,7 +226,7 @@ void append_elements(const std::vector<Node>& nodes, Bindings& vars, Json& array
             array.push_back(std::move(item));
             continue;
         }
-        const uint64_t count = take(c.count->evaluate(vars));
+        const uint64_t count = value_or_throw(c.count->evaluate(vars));
         for (uint64_t i = 0; i < count; ++i) {
             vars.push(c.var, double(i));
             append_elements(c.children, vars, array);
@@ -253,7 +241,7 @@ void instantiate_into(const Node& n, Bindings& vars, Json& out) {
             out = n.literal;
             return;
         case Node::Kind::String:
-            out = take(n.text.instantiate(vars));
+            out = value_or_throw(n.text.instantiate(vars));
             return;
         case Node::Kind::Object:
             out = Json::object();
@@ -265,7 +253,7 @@ void instantiate_into(const Node& n, Bindings& vars, Json& out) {
             append_elements(n.children, vars, out);
             return;
         case Node::Kind::Splice:
-            throw TemplateError{"an inline repeat must be an element of an array"};
+            throw ScriptFailure{"an inline repeat must be an element of an array"};
     }
 }
 
@@ -277,7 +265,7 @@ Outcome<JsonTemplate> JsonTemplate::compile(const Json& v, const std::vector<std
         JsonTemplate t;
         t.m_root = std::make_shared<const Node>(compile_node(v, scope));
         return t;
-    } catch (const TemplateError& e) {
+    } catch (const ScriptFailure& e) {
         return Failure{e.message};
     }
 }
@@ -287,7 +275,7 @@ Outcome<Json> JsonTemplate::instantiate(Bindings& vars) const {
         Json out;
         instantiate_into(*m_root, vars, out);
         return out;
-    } catch (const TemplateError& e) {
+    } catch (const ScriptFailure& e) {
         return Failure{e.message};
     }
 }

@@ -28,7 +28,8 @@ std::string Reply::header(std::string_view name) const {
 
 std::optional<uint64_t> etag_version(const Reply& reply) {
     std::string tag = reply.header("ETag");
-    if (tag.size() >= 2 && tag.front() == '"' && tag.back() == '"') tag = tag.substr(1, tag.size() - 2);
+    if (tag.size() >= 2 && tag.front() == '"' && tag.back() == '"')
+        tag = tag.substr(1, tag.size() - 2);
     uint64_t v = 0;
     const auto [end, ec] = std::from_chars(tag.data(), tag.data() + tag.size(), v);
     if (tag.empty() || ec != std::errc() || end != tag.data() + tag.size()) return std::nullopt;
@@ -38,8 +39,8 @@ std::optional<uint64_t> etag_version(const Reply& reply) {
 std::string describe_failure(const Reply& reply) {
     if (reply.status == 0) return reply.error.empty() ? "no answer" : reply.error;
     const auto doc = nlohmann::json::parse(reply.body, nullptr, false);
-    const bool problem = reply.content_type.rfind("application/problem+json", 0) == 0 &&
-                         doc.is_object();
+    const bool problem =
+        reply.content_type.rfind("application/problem+json", 0) == 0 && doc.is_object();
     if (!problem) {
         std::string body = reply.body.substr(0, 200);
         for (char& c : body)
@@ -54,7 +55,8 @@ std::string describe_failure(const Reply& reply) {
     if (doc.contains("edit_index") && doc["edit_index"].is_number())
         out += "\n  edit index: " + doc["edit_index"].dump();
     if (doc.contains("pointer"))
-        out += "\n  pointer:    " + (text("pointer").empty() ? "(the whole body)" : text("pointer"));
+        out +=
+            "\n  pointer:    " + (text("pointer").empty() ? "(the whole body)" : text("pointer"));
     if (!text("type").empty()) out += "\n  type:       " + text("type");
     return out;
 }

@@ -14,8 +14,8 @@ namespace strata::cli {
 
 /// One answer from Strata, or why there was none.
 struct Reply {
-    int status = 0;         ///< HTTP status; 0: no answer (see `error`)
-    std::string error;      ///< why there was no answer (connection refused, timeout, ...)
+    int status = 0;     ///< HTTP status; 0: no answer (see `error`)
+    std::string error;  ///< why there was no answer (connection refused, timeout, ...)
     std::string content_type;
     std::string body;
     std::vector<std::pair<std::string, std::string>> headers;

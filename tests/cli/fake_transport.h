@@ -36,9 +36,7 @@ public:
         r.headers = {{"ETag", "\"" + std::to_string(version) + "\""}};
         return r;
     }
-    Reply stats() override {
-        return json(200, {{"version", version}, {"last_report", last}});
-    }
+    Reply stats() override { return json(200, {{"version", version}, {"last_report", last}}); }
     Reply scene() override { return json(200, {{"version", version}}); }
     std::string describe() const override { return "the fake"; }
 

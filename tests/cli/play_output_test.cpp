@@ -45,11 +45,11 @@ const char* FAILING =
     R"({"repeat": 4, "steps": [{"commit": {}, "label": "frame", "expect": {"tlas": "update", "rebuilt": ["ball"]}}]})";
 
 TEST(PlayOutput, TheTableHasOneRowPerStepAndTheVerdict) {
-    const Printed p = play_printed(
-        R"({"edits": [{"op": "clear"}]})"
-        "\n"
-        R"({"repeat": 2, "steps": [{"commit": {}, "expect": {"tlas": "update"}}]})",
-        false);
+    const Printed p =
+        play_printed(R"({"edits": [{"op": "clear"}]})"
+                     "\n"
+                     R"({"repeat": 2, "steps": [{"commit": {}, "expect": {"tlas": "update"}}]})",
+                     false);
     std::istringstream lines(p.out);
     std::string line;
     std::getline(lines, line);
@@ -73,7 +73,8 @@ TEST(PlayOutput, AFailureIsADiffNamingTheStepLineAndIteration) {
     const Printed p = play_printed(FAILING, false);
     EXPECT_EQ(p.result.verdict, Verdict::ExpectationFailed);
     const std::string& o = p.out;
-    EXPECT_NE(o.find("FAIL  demo.jsonl: step 2 (line 2, n=0) commit \"frame\"\n"), std::string::npos)
+    EXPECT_NE(o.find("FAIL  demo.jsonl: step 2 (line 2, n=0) commit \"frame\"\n"),
+              std::string::npos)
         << o;
     EXPECT_NE(o.find("  field    expected  actual\n"), std::string::npos) << o;
     EXPECT_NE(o.find("  rebuilt  [ball]    []      missing: ball\n"), std::string::npos) << o;

@@ -21,17 +21,18 @@ std::string error_of(const std::string& text) {
 }
 
 TEST(ScriptLoader, ReadsEveryStepKindAndSkipsComments) {
-    auto s = load("# a comment\n"
-                  "\n"
-                  "   # an indented comment\n"
-                  R"({"edits": [{"op": "clear"}], "label": "start"})"
-                  "\n"
-                  R"({"commit": {}, "expect": {"tlas": "none"}})"
-                  "\r\n"
-                  R"({"plan": {}})"
-                  "\n"
-                  R"({"repeat": 2, "var": "f", "steps": [{"render": {}, "out": "f{f}.png"}, {"commit": {}}]})"
-                  "\n");
+    auto s = load(
+        "# a comment\n"
+        "\n"
+        "   # an indented comment\n"
+        R"({"edits": [{"op": "clear"}], "label": "start"})"
+        "\n"
+        R"({"commit": {}, "expect": {"tlas": "none"}})"
+        "\r\n"
+        R"({"plan": {}})"
+        "\n"
+        R"({"repeat": 2, "var": "f", "steps": [{"render": {}, "out": "f{f}.png"}, {"commit": {}}]})"
+        "\n");
     ASSERT_TRUE(s.ok()) << s.error().describe();
     const Script& script = s.value();
     ASSERT_EQ(script.steps.size(), 4u);
@@ -73,13 +74,11 @@ TEST(ScriptLoader, UnknownMembersOfAStepAreRefused) {
               std::string::npos);
     EXPECT_NE(error_of(R"({"edits": [], "expect": {}})").find("unknown member \"expect\""),
               std::string::npos);
-    EXPECT_NE(error_of(R"({"commit": {"now": true}})").find("takes no options"),
-              std::string::npos);
+    EXPECT_NE(error_of(R"({"commit": {"now": true}})").find("takes no options"), std::string::npos);
     EXPECT_NE(error_of(R"({"edits": {}})").find("must be an array"), std::string::npos);
     EXPECT_NE(error_of(R"({"render": []})").find("must be a render request object"),
               std::string::npos);
-    EXPECT_NE(error_of(R"({"repeat": 2, "steps": []})").find("non-empty array"),
-              std::string::npos);
+    EXPECT_NE(error_of(R"({"repeat": 2, "steps": []})").find("non-empty array"), std::string::npos);
     EXPECT_NE(error_of(R"({"repeat": 2, "var": "2x", "steps": [{"commit": {}}]})")
                   .find("\"var\" must be a name"),
               std::string::npos);
@@ -115,10 +114,12 @@ TEST(ScriptLoader, ABadExpectationFieldIsRefused) {
 }
 
 TEST(ScriptLoader, ABadExpressionIsRefusedWithItsLine) {
-    EXPECT_NE(error_of("{\"commit\": {}}\n\n"
-                       R"({"repeat": 3, "steps": [{"edits": [{"op": "set_camera", "eye": ["{n *}", 0, 1]}]}]})")
-                  .find("line 3: bad expression 'n *'"),
-              std::string::npos);
+    EXPECT_NE(
+        error_of(
+            "{\"commit\": {}}\n\n"
+            R"({"repeat": 3, "steps": [{"edits": [{"op": "set_camera", "eye": ["{n *}", 0, 1]}]}]})")
+            .find("line 3: bad expression 'n *'"),
+        std::string::npos);
     EXPECT_NE(error_of(R"({"edits": [{"op": "remove_instance", "instance": "i{n}"}]})")
                   .find("no repeat encloses this step"),
               std::string::npos);

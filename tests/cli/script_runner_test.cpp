@@ -36,9 +36,10 @@ Script load(const std::string& text) {
 class ScriptRunner : public ::testing::Test {
 protected:
     void SetUp() override {
-        dir = std::filesystem::temp_directory_path() /
-              ("strata-runner-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-               "-" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        dir =
+            std::filesystem::temp_directory_path() /
+            ("strata-runner-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+             "-" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
         std::filesystem::remove_all(dir);
         options.out_dir = dir;
     }
@@ -152,8 +153,8 @@ TEST_F(ScriptRunner, ARefusedRequestStopsThePlayWithStratasAnswer) {
 }
 
 TEST_F(ScriptRunner, AnExpressionThatFailsWhilePlayingIsAScriptErrorNamingTheIteration) {
-    const PlayResult r =
-        run(R"({"repeat": 3, "steps": [{"edits": [{"op": "set_camera", "fov_y_deg": "{60 / (n - 1)}"}]}]})");
+    const PlayResult r = run(
+        R"({"repeat": 3, "steps": [{"edits": [{"op": "set_camera", "fov_y_deg": "{60 / (n - 1)}"}]}]})");
     EXPECT_EQ(r.verdict, Verdict::ScriptError);
     EXPECT_EQ(exit_code(r.verdict), 2);
     EXPECT_EQ(r.steps_played, 1u);

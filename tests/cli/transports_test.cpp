@@ -82,20 +82,23 @@ TEST_F(Transports, EveryEndpointAnswersTheSameInProcessAsOverHttp) {
                        std::nullopt);
     });
     same("malformed", [](Transport& t) { return t.edits("{\"edits\": [", std::nullopt); });
-    same("version mismatch", [](Transport& t) {
-        return t.edits(R"({"edits": []})", std::string("\"41\""));
-    });
-    same("bad If-Match", [](Transport& t) { return t.edits(R"({"edits": []})", std::string("1, 2")); });
+    same("version mismatch",
+         [](Transport& t) { return t.edits(R"({"edits": []})", std::string("\"41\"")); });
+    same("bad If-Match",
+         [](Transport& t) { return t.edits(R"({"edits": []})", std::string("1, 2")); });
     same("conditional", [](Transport& t) {
-        return t.edits(R"({"edits": [{"op": "set_transform", "instance": "b0", "transform": {"translate": [0, 1, 0]}}]})",
-                       std::string("\"1\""));
+        return t.edits(
+            R"({"edits": [{"op": "set_transform", "instance": "b0", "transform": {"translate": [0, 1, 0]}}]})",
+            std::string("\"1\""));
     });
     same("render", [](Transport& t) { return t.render(R"({"width": 48, "height": 32})"); });
     same("render with a camera", [](Transport& t) {
         return t.render(R"({"width": 16, "height": 16, "camera": {"eye": [0, 5, 0.1]}})");
     });
-    same("render exr", [](Transport& t) { return t.render(R"({"width": 8, "height": 8, "format": "exr"})"); });
-    same("render too large", [](Transport& t) { return t.render(R"({"width": 65536, "height": 65536})"); });
+    same("render exr",
+         [](Transport& t) { return t.render(R"({"width": 8, "height": 8, "format": "exr"})"); });
+    same("render too large",
+         [](Transport& t) { return t.render(R"({"width": 65536, "height": 65536})"); });
     same("render schema", [](Transport& t) { return t.render(R"({"widht": 3})"); });
     same("stats", [](Transport& t) { return t.stats(); });
     same("scene", [](Transport& t) { return t.scene(); });
