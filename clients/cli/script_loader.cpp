@@ -12,8 +12,6 @@ namespace {
 
 constexpr const char* KIND_KEYS[] = {"edits", "commit", "plan", "render", "repeat"};
 
-Step compile_step(const Json& v, std::size_t line, std::vector<std::string>& names);
-
 void compile_expect(Step& s, const Json& v, const std::vector<std::string>& names) {
     if (!v.contains("expect")) return;
     s.expect = value_or_throw(Expectation::compile(v["expect"], names, s.kind != StepKind::Plan));
