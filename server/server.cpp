@@ -37,6 +37,10 @@ Server::Server(ServerConfig config, Engine& engine)
     m_http->set_write_timeout(m_config.write_timeout_s, 0);
     m_http->set_keep_alive_timeout(m_config.keep_alive_timeout_s);
     m_http->set_keep_alive_max_count(1000);
+    // httplib writes a response's headers and body separately: with Nagle's algorithm, every
+    // request after the first on a keep-alive connection would wait ~40 ms for the client's
+    // delayed ACK.
+    m_http->set_tcp_nodelay(true);
     install_hooks();
     install_routes();
 }
@@ -127,15 +131,14 @@ void Server::install_hooks() {
 }
 
 void Server::install_routes() {
-    auto ctx = std::make_shared<ServerContext>(
-        ServerContext{m_engine, m_config, m_metrics,
-                      protocol::JsonLimits{m_config.max_json_depth, m_config.max_array_elements}});
+    auto ctx = std::make_shared<ServerContext>(ServerContext{
+        m_engine, m_config, m_metrics,
+        protocol::ApiLimits{
+            protocol::JsonLimits{m_config.max_json_depth, m_config.max_array_elements},
+            m_config.max_pixels}});
     m_context = ctx;  // outlives m_http, whose handlers refer to it
     Router router(*m_http, m_config.max_body_bytes);
-    add_edit_routes(router, *ctx);
-    add_render_routes(router, *ctx);
-    add_scene_routes(router, *ctx);
-    add_stats_routes(router, *ctx);
+    add_api_routes(router, *ctx);
     router.get("/livez", [](const httplib::Request&, httplib::Response& res) {
         send_json(res, 200, {{"status", "ok"}});
     });

@@ -1,5 +1,7 @@
 # Layering check (run by CTest): the engine includes no HTTP or JSON header, and only the files
-# of the acceleration layer include Embree. Usage: cmake -DROOT=<repo> -P check_layering.cmake
+# of the acceleration layer include Embree; clients/ speaks HTTP only, except the embedded
+# transport of `strata play --embedded`, the one file that may include the engine and the
+# protocol layer. Usage: cmake -DROOT=<repo> -P check_layering.cmake
 cmake_minimum_required(VERSION 3.25)
 set(EMBREE_ALLOWED
     engine/accel/embree_device.cpp
@@ -16,8 +18,18 @@ foreach(f IN LISTS ENGINE_FILES)
         string(APPEND problems "  ${f} includes Embree outside the acceleration layer\n")
     endif()
 endforeach()
+set(EMBEDDED_ALLOWED
+    clients/cli/embedded_transport.cpp)
+file(GLOB_RECURSE CLIENT_FILES RELATIVE "${ROOT}" "${ROOT}/clients/*.h" "${ROOT}/clients/*.cpp")
+foreach(f IN LISTS CLIENT_FILES)
+    file(READ "${ROOT}/${f}" text)
+    if(text MATCHES "#include[ \t]*[<\"](engine|protocol|server)/" AND NOT f IN_LIST EMBEDDED_ALLOWED)
+        string(APPEND problems "  ${f} includes the engine, protocol or server layer\n")
+    endif()
+endforeach()
 if(problems)
     message(FATAL_ERROR "layering violations:\n${problems}")
 endif()
 list(LENGTH ENGINE_FILES n)
-message(STATUS "layering ok: ${n} engine files checked")
+list(LENGTH CLIENT_FILES m)
+message(STATUS "layering ok: ${n} engine files and ${m} client files checked")

@@ -1,0 +1,227 @@
+#include "clients/cli/commands.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <iterator>
+
+namespace strata::cli {
+
+namespace {
+
+constexpr int OK = 0;
+constexpr int BAD_INPUT = 2;
+constexpr int REFUSED = 3;
+
+std::string fixed(double v) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.3f", v);
+    return buf;
+}
+
+/// Prints why a request failed; returns the exit code for it.
+int refused(const Console& c, const Transport& t, const char* what, const Reply& reply) {
+    c.err << "strata: " << what << " failed on " << t.describe() << ": " << describe_failure(reply)
+          << '\n';
+    return REFUSED;
+}
+
+/// The JSON of a 2xx answer, or nullopt having printed why not.
+std::optional<Json> answer(const Console& c, const Transport& t, const char* what,
+                           const Reply& reply, int& code) {
+    if (!reply.ok()) {
+        code = refused(c, t, what, reply);
+        return std::nullopt;
+    }
+    Json doc = Json::parse(reply.body, nullptr, false);
+    if (doc.is_discarded()) {
+        c.err << "strata: " << what << ": the answer from " << t.describe() << " is not JSON\n";
+        code = REFUSED;
+        return std::nullopt;
+    }
+    return doc;
+}
+
+/// Prints a report answer (commit or plan); returns the exit code.
+int print_report(const Console& c, const Transport& t, const char* what, const Reply& reply) {
+    int code = OK;
+    const auto doc = answer(c, t, what, reply, code);
+    if (!doc) return code;
+    c.out << (c.json ? doc->dump() : format_report(*doc)) << '\n';
+    return OK;
+}
+
+bool ends_with(const std::string& s, const std::string& tail) {
+    return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+void entries(std::string& out, const Json& list, const char* what) {
+    if (!list.is_array()) return;
+    for (const Json& e : list) {
+        if (e.is_string()) {
+            out += "\n  " + std::string(what) + "  " + e.get<std::string>();
+            continue;
+        }
+        out += "\n  " + std::string(what) + "  " + e.value("mesh", std::string("?")) + "  " +
+               e.value("reason", std::string()) + "  " +
+               std::to_string(e.value("primitives", uint64_t(0))) + " prims";
+        if (e.contains("ms")) out += "  " + fixed(e["ms"].get<double>()) + " ms";
+        if (e.contains("detail")) out += "  (" + e["detail"].get<std::string>() + ")";
+    }
+}
+
+}  // namespace
+
+std::string format_report(const Json& r) {
+    const Json tlas = r.value("tlas", Json::object());
+    std::string out = std::string(r.value("planned", false) ? "plan for v" : "commit v") +
+                      std::to_string(r.value("version", uint64_t(0))) + ": tlas " +
+                      tlas.value("action", std::string("?")) + " (" +
+                      std::to_string(tlas.value("instances", uint64_t(0))) + " instances), " +
+                      std::to_string(r.value("blas_rebuilds", 0)) + " rebuilds, " +
+                      std::to_string(r.value("blas_refits", 0)) + " refits, " +
+                      std::to_string(r.value("primitives_built", uint64_t(0))) +
+                      " primitives built, " +
+                      std::to_string(r.value("primitives_refit", uint64_t(0))) + " refit";
+    if (r.contains("ms")) out += ", " + fixed(r["ms"].get<double>()) + " ms";
+    entries(out, r.value("rebuilt", Json::array()), "rebuilt ");
+    entries(out, r.value("refit", Json::array()), "refit   ");
+    entries(out, r.value("released", Json::array()), "released");
+    return out;
+}
+
+int run_edit(Transport& t, const Console& c, const std::string& file,
+             const std::optional<std::string>& if_match) {
+    std::string text;
+    if (file == "-") {
+        text.assign(std::istreambuf_iterator<char>(std::cin), {});
+    } else {
+        std::ifstream in(file, std::ios::binary);
+        if (!in) {
+            c.err << "strata: cannot open '" << file << "'\n";
+            return BAD_INPUT;
+        }
+        text.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    // A bare array of edits is wrapped; anything else goes to the server as it is, so that the
+    // server's own validation answers (with pointers into the file).
+    const std::size_t first = text.find_first_not_of(" \t\r\n");
+    if (first != std::string::npos && text[first] == '[') text = "{\"edits\": " + text + "}";
+    int code = OK;
+    const auto doc = answer(c, t, "edit", t.edits(std::move(text), if_match), code);
+    if (!doc) return code;
+    if (c.json) {
+        c.out << doc->dump() << '\n';
+    } else {
+        c.out << "v" << doc->value("version", uint64_t(0)) << ": "
+              << doc->value("applied", uint64_t(0)) << " edits applied\n";
+    }
+    return OK;
+}
+
+std::optional<std::string> render_body(const RenderArgs& a, std::string& error) {
+    Json body = Json::object();
+    if (a.width) body["width"] = *a.width;
+    if (a.height) body["height"] = *a.height;
+    if (a.spp) body["spp"] = *a.spp;
+    const std::string by_name = ends_with(a.out, ".exr")   ? "exr"
+                                : ends_with(a.out, ".png") ? "png"
+                                                           : "";
+    if (a.format && !by_name.empty() && *a.format != by_name) {
+        error = "--format " + *a.format + " does not match the file name '" + a.out + "'";
+        return std::nullopt;
+    }
+    if (a.format) {
+        body["format"] = *a.format;
+    } else if (!by_name.empty()) {
+        body["format"] = by_name;
+    }
+    if (a.compression) body["compression"] = *a.compression;
+    if (!a.aovs.empty()) body["aovs"] = a.aovs;
+    if (a.exposure) body["exposure"] = *a.exposure;
+    if (a.accumulate) body["accumulate"] = true;
+    Json camera = Json::object();
+    if (!a.eye.empty()) camera["eye"] = a.eye;
+    if (!a.target.empty()) camera["target"] = a.target;
+    if (!a.up.empty()) camera["up"] = a.up;
+    if (a.fov_y_deg) camera["fov_y_deg"] = *a.fov_y_deg;
+    if (!camera.empty()) body["camera"] = camera;
+    return body.dump();
+}
+
+int run_render(Transport& t, const Console& c, const RenderArgs& args) {
+    std::string error;
+    const auto body = render_body(args, error);
+    if (!body) {
+        c.err << "strata: " << error << '\n';
+        return BAD_INPUT;
+    }
+    const Reply reply = t.render(*body);
+    if (!reply.ok()) return refused(c, t, "render", reply);
+    std::ofstream file(args.out, std::ios::binary | std::ios::trunc);
+    file.write(reply.body.data(), std::streamsize(reply.body.size()));
+    file.close();
+    if (!file) {
+        c.err << "strata: cannot write '" << args.out << "'\n";
+        return REFUSED;
+    }
+    const uint64_t version = etag_version(reply).value_or(0);
+    if (c.json) {
+        c.out << Json{{"out", args.out},
+                      {"bytes", reply.body.size()},
+                      {"content_type", reply.content_type},
+                      {"version", version},
+                      {"rebuild", reply.header("X-Strata-Rebuild")}}
+                     .dump()
+              << '\n';
+    } else {
+        c.out << "wrote " << args.out << " (" << reply.body.size() << " bytes, "
+              << reply.content_type << ", v" << version << ")\n"
+              << "commit: " << reply.header("X-Strata-Rebuild") << '\n';
+    }
+    return OK;
+}
+
+int run_commit(Transport& t, const Console& c) {
+    return print_report(c, t, "commit", t.commit());
+}
+
+int run_plan(Transport& t, const Console& c) {
+    return print_report(c, t, "plan", t.plan());
+}
+
+int run_stats(Transport& t, const Console& c) {
+    int code = OK;
+    const auto doc = answer(c, t, "stats", t.stats(), code);
+    if (!doc) return code;
+    if (c.json) {
+        c.out << doc->dump() << '\n';
+        return OK;
+    }
+    c.out << "version " << doc->value("version", uint64_t(0)) << "\n";
+    if (doc->contains("memory_bytes"))
+        c.out << "memory  blas " << (*doc)["memory_bytes"].value("blas", int64_t(0))
+              << " bytes, tlas " << (*doc)["memory_bytes"].value("tlas", int64_t(0)) << " bytes\n";
+    c.out << "counters\n";
+    const Json counters = doc->value("counters", Json::object());
+    for (const auto& [name, value] : counters.items()) {
+        std::string key = name;
+        key.resize(std::max<std::size_t>(key.size(), 18), ' ');
+        c.out << "  " << key << " "
+              << (value.is_number_float() ? fixed(value.get<double>()) : value.dump()) << '\n';
+    }
+    const Json last = doc->value("last_report", Json());
+    c.out << "last " << (last.is_object() ? format_report(last) : "commit: none yet") << '\n';
+    return OK;
+}
+
+int run_scene(Transport& t, const Console& c) {
+    int code = OK;
+    const auto doc = answer(c, t, "scene", t.scene(), code);
+    if (!doc) return code;
+    c.out << (c.json ? doc->dump() : doc->dump(2)) << '\n';
+    return OK;
+}
+
+}  // namespace strata::cli

@@ -1,0 +1,55 @@
+#pragma once
+// The one-shot subcommands of `strata`: edit, render, commit, plan, stats and scene. Each sends
+// one request, prints the answer for people (or as JSON with --json) and returns the exit code:
+// 0 done, 2 bad input, 3 Strata refused the request or could not be reached.
+
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "clients/cli/json.h"
+#include "clients/cli/transport.h"
+
+namespace strata::cli {
+
+/// Where output goes.
+struct Console {
+    std::ostream& out;
+    std::ostream& err;
+    bool json = false;  ///< print answers as JSON, for scripts
+};
+
+/// `strata edit FILE|-`: the file holds {"edits": [...]} or just the array.
+int run_edit(Transport& t, const Console& c, const std::string& file,
+             const std::optional<std::string>& if_match);
+
+/// Everything `strata render` can ask for; unset members are left to the server's defaults.
+struct RenderArgs {
+    std::string out;  ///< where to save the image; its extension picks the format
+    std::optional<uint32_t> width, height, spp;
+    std::optional<std::string> format, compression;
+    std::vector<std::string> aovs;
+    std::optional<double> exposure;
+    bool accumulate = false;
+    std::vector<double> eye, target, up;  ///< camera override: 3 numbers each, or empty
+    std::optional<double> fov_y_deg;
+};
+/// The POST /v1/render body for `args` (format from the file name unless given); nullopt and a
+/// message when the arguments contradict each other.
+std::optional<std::string> render_body(const RenderArgs& args, std::string& error);
+/// `strata render -o FILE ...`.
+int run_render(Transport& t, const Console& c, const RenderArgs& args);
+
+/// `strata commit` and `strata plan`.
+int run_commit(Transport& t, const Console& c);
+int run_plan(Transport& t, const Console& c);
+/// `strata stats` and `strata scene`.
+int run_stats(Transport& t, const Console& c);
+int run_scene(Transport& t, const Console& c);
+
+/// A rebuild report for people: a summary line, then one line per rebuilt, refit or released
+/// mesh.
+std::string format_report(const Json& report);
+
+}  // namespace strata::cli

@@ -1,0 +1,67 @@
+#include "clients/cli/embedded_transport.h"
+
+#include "engine/engine.h"
+#include "engine/scene/demo_scene.h"
+#include "protocol/api.h"
+
+namespace strata::cli {
+
+namespace {
+
+/// The server's default limits (strata-server without flags).
+const protocol::ApiLimits LIMITS{};
+
+Reply to_reply(protocol::ApiResponse&& r) {
+    Reply out;
+    out.status = r.status;
+    out.content_type = std::move(r.content_type);
+    out.body = std::move(r.body);
+    out.headers = std::move(r.headers);
+    out.headers.emplace_back("Content-Type", out.content_type);
+    return out;
+}
+
+}  // namespace
+
+Outcome<std::unique_ptr<EmbeddedTransport>> EmbeddedTransport::create(bool demo) {
+    auto engine = Engine::create();
+    if (!engine) return Failure{"cannot start the engine: " + engine.error().describe()};
+    if (demo) {
+        auto applied = engine.value()->apply(make_demo_scene());
+        if (!applied) return Failure{"demo scene rejected: " + applied.error().describe()};
+    }
+    return std::unique_ptr<EmbeddedTransport>(new EmbeddedTransport(std::move(engine.value())));
+}
+
+EmbeddedTransport::EmbeddedTransport(std::unique_ptr<Engine> engine)
+    : m_engine(std::move(engine)) {}
+
+EmbeddedTransport::~EmbeddedTransport() = default;
+
+Reply EmbeddedTransport::edits(std::string body, const std::optional<std::string>& if_match) {
+    return to_reply(protocol::post_edits(
+        *m_engine, std::move(body),
+        if_match ? std::optional<std::string_view>(*if_match) : std::nullopt, LIMITS));
+}
+
+Reply EmbeddedTransport::commit() {
+    return to_reply(protocol::post_commit(*m_engine));
+}
+
+Reply EmbeddedTransport::plan() {
+    return to_reply(protocol::get_plan(*m_engine));
+}
+
+Reply EmbeddedTransport::render(const std::string& body) {
+    return to_reply(protocol::post_render(*m_engine, body, LIMITS));
+}
+
+Reply EmbeddedTransport::stats() {
+    return to_reply(protocol::get_stats(*m_engine));
+}
+
+Reply EmbeddedTransport::scene() {
+    return to_reply(protocol::get_scene(*m_engine));
+}
+
+}  // namespace strata::cli

@@ -1,0 +1,121 @@
+#include "clients/cli/http_transport.h"
+
+#include <cctype>
+
+#include <httplib.h>
+
+namespace strata::cli {
+
+namespace {
+
+std::string describe_error(httplib::Error e) {
+    switch (e) {
+        case httplib::Error::Connection:
+            return "could not connect";
+        case httplib::Error::ConnectionTimeout:
+            return "timed out connecting";
+        case httplib::Error::Read:
+            return "the connection failed or timed out while reading the answer";
+        case httplib::Error::Write:
+            return "the connection failed while sending the request";
+        case httplib::Error::SSLConnection:
+        case httplib::Error::SSLLoadingCerts:
+        case httplib::Error::SSLServerVerification:
+            return "TLS failed (" + httplib::to_string(e) + ")";
+        default:
+            return "request failed (" + httplib::to_string(e) + ")";
+    }
+}
+
+/// Accepts http://host[:port][/] and https://host[:port][/]; the base URL without the slash.
+Outcome<std::string> check_url(const std::string& url) {
+    const std::size_t scheme_end = url.find("://");
+    const std::string scheme = scheme_end == std::string::npos ? "" : url.substr(0, scheme_end);
+    if (scheme != "http" && scheme != "https")
+        return Failure{"server URL '" + url + "' must start with http:// or https://"};
+    std::string rest = url.substr(scheme_end + 3);
+    if (!rest.empty() && rest.back() == '/') rest.pop_back();
+    if (rest.empty()) return Failure{"server URL '" + url + "' has no host"};
+    if (rest.find_first_of("/?#@") != std::string::npos)
+        return Failure{"server URL '" + url + "' must be scheme://host[:port], without a path"};
+    const std::size_t colon = rest.rfind(':');
+    if (colon != std::string::npos && rest.find(']') == std::string::npos) {
+        const std::string port = rest.substr(colon + 1);
+        bool digits = !port.empty() && port.size() <= 5;
+        for (char c : port) digits = digits && std::isdigit(static_cast<unsigned char>(c));
+        if (!digits) return Failure{"server URL '" + url + "' has a malformed port"};
+    }
+    return scheme + "://" + rest;
+}
+
+Reply to_reply(const httplib::Result& r, const std::string& url) {
+    Reply out;
+    if (!r) {
+        out.error = describe_error(r.error()) + " (" + url + ")";
+        return out;
+    }
+    out.status = r->status;
+    out.body = r->body;
+    out.content_type = r->get_header_value("Content-Type");
+    for (const auto& [name, value] : r->headers) out.headers.emplace_back(name, value);
+    return out;
+}
+
+}  // namespace
+
+Outcome<std::unique_ptr<HttpTransport>> HttpTransport::create(const HttpOptions& options) {
+    auto url = check_url(options.url);
+    if (!url) return url.error();
+    auto client = std::make_unique<httplib::Client>(url.value());
+    if (!client->is_valid()) return Failure{"cannot use server URL '" + options.url + "'"};
+    client->set_keep_alive(true);
+    // Headers and body go out in separate writes: without TCP_NODELAY, Nagle's algorithm and the
+    // server's delayed ACK add ~40 ms to every request with a body.
+    client->set_tcp_nodelay(true);
+    client->set_connection_timeout(options.timeout_s, 0);
+    client->set_read_timeout(options.timeout_s, 0);
+    client->set_write_timeout(options.timeout_s, 0);
+    if (!options.token.empty()) client->set_bearer_token_auth(options.token);
+    return std::unique_ptr<HttpTransport>(new HttpTransport(url.value(), std::move(client)));
+}
+
+HttpTransport::HttpTransport(std::string url, std::unique_ptr<httplib::Client> client)
+    : m_url(std::move(url)), m_client(std::move(client)) {}
+
+HttpTransport::~HttpTransport() = default;
+
+Reply HttpTransport::get(const char* path) {
+    return to_reply(m_client->Get(path), m_url);
+}
+
+Reply HttpTransport::post(const char* path, const std::string& body, const std::string& if_match) {
+    httplib::Headers headers;
+    if (!if_match.empty()) headers.emplace("If-Match", if_match);
+    return to_reply(m_client->Post(path, headers, body, "application/json"), m_url);
+}
+
+Reply HttpTransport::edits(std::string body, const std::optional<std::string>& if_match) {
+    return post("/v1/edits", body, if_match.value_or(""));
+}
+
+Reply HttpTransport::commit() {
+    return post("/v1/commit", "", "");
+}
+
+Reply HttpTransport::plan() {
+    return get("/v1/plan");
+}
+
+Reply HttpTransport::render(const std::string& body) {
+    return post("/v1/render", body, "");
+}
+
+Reply HttpTransport::stats() {
+    return get("/v1/stats");
+}
+
+Reply HttpTransport::scene() {
+    return get("/v1/scene");
+}
+
+}  // namespace strata::cli

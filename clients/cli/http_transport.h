@@ -1,0 +1,46 @@
+#pragma once
+// The protocol over HTTP with cpp-httplib: one keep-alive connection, bearer token, timeouts.
+
+#include <memory>
+#include <string>
+
+#include "clients/cli/outcome.h"
+#include "clients/cli/transport.h"
+
+namespace httplib {
+class Client;
+}
+
+namespace strata::cli {
+
+/// Connection settings.
+struct HttpOptions {
+    std::string url = "http://127.0.0.1:7070";  ///< scheme://host[:port], no path
+    std::string token;                          ///< bearer token; empty: none
+    int timeout_s = 300;                        ///< connect, read and write timeout
+};
+
+class HttpTransport final : public Transport {
+public:
+    /// Checks the URL; connects lazily, on the first request.
+    static Outcome<std::unique_ptr<HttpTransport>> create(const HttpOptions& options);
+    ~HttpTransport() override;
+
+    Reply edits(std::string body, const std::optional<std::string>& if_match) override;
+    Reply commit() override;
+    Reply plan() override;
+    Reply render(const std::string& body) override;
+    Reply stats() override;
+    Reply scene() override;
+    std::string describe() const override { return m_url; }
+
+private:
+    HttpTransport(std::string url, std::unique_ptr<httplib::Client> client);
+    Reply get(const char* path);
+    Reply post(const char* path, const std::string& body, const std::string& if_match);
+
+    std::string m_url;
+    std::unique_ptr<httplib::Client> m_client;
+};
+
+}  // namespace strata::cli

@@ -1,0 +1,178 @@
+// strata: the command-line client. `strata --help` and clients/cli/README.md list the commands.
+//
+// Exit codes: 0 success; 1 a script expectation failed; 2 bad usage, script or input file;
+// 3 Strata refused a request or could not be reached.
+
+#include <unistd.h>
+
+#include <iostream>
+#include <memory>
+
+#include <CLI/CLI.hpp>
+
+#include "clients/cli/commands.h"
+#include "clients/cli/embedded_transport.h"
+#include "clients/cli/http_transport.h"
+#include "clients/cli/play_output.h"
+#include "clients/cli/script_runner.h"
+
+namespace {
+
+using namespace strata::cli;
+
+constexpr int USAGE = 2;
+constexpr int UNREACHABLE = 3;
+
+struct PlayArgs {
+    std::string script;
+    bool embedded = false;
+    bool demo = false;
+    bool budgets = false;
+    bool quiet = false;
+    bool no_progress = false;
+    uint64_t max_repeat = 0;
+    std::string out_dir;
+};
+
+int play_script(const PlayArgs& a, const HttpOptions& http, bool json) {
+    auto script = load_script_file(a.script);
+    if (!script) {
+        std::cerr << "strata: " << a.script << ": " << script.error().describe() << '\n';
+        return USAGE;
+    }
+    std::unique_ptr<Transport> transport;
+    if (a.embedded) {
+        auto t = EmbeddedTransport::create(a.demo);
+        if (!t) {
+            std::cerr << "strata: " << t.error().message << '\n';
+            return UNREACHABLE;
+        }
+        transport = std::move(t.value());
+    } else {
+        auto t = HttpTransport::create(http);
+        if (!t) {
+            std::cerr << "strata: " << t.error().message << '\n';
+            return USAGE;
+        }
+        transport = std::move(t.value());
+    }
+    PlayOptions options;
+    options.budgets = a.budgets;
+    if (a.max_repeat) options.max_repeat = a.max_repeat;
+    options.out_dir = a.out_dir;
+    std::unique_ptr<PlayObserver> observer;
+    if (json) {
+        observer = std::make_unique<JsonObserver>(std::cout);
+    } else {
+        TableOptions table;
+        table.rows = !a.quiet;
+        table.progress = !a.no_progress && isatty(STDERR_FILENO);
+        observer =
+            std::make_unique<TableObserver>(std::cout, std::cerr, transport->describe(), table);
+    }
+    return exit_code(play(script.value(), *transport, options, *observer).verdict);
+}
+
+/// A "x,y,z" option as three numbers.
+CLI::Option* add_vec3(CLI::App* app, const char* name, std::vector<double>& v, const char* help) {
+    return app->add_option(name, v, help)->delimiter(',')->expected(3);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    CLI::App app{
+        "strata: play scripts against Strata and talk to a strata-server "
+        "(see clients/cli/README.md)"};
+    app.require_subcommand(1);
+    app.fallthrough();
+    HttpOptions http;
+    bool json = false;
+    app.add_option("--server", http.url, "Server URL, scheme://host[:port]")
+        ->envname("STRATA_SERVER")
+        ->capture_default_str();
+    app.add_option("--token", http.token, "Bearer token for a server started with --token-file")
+        ->envname("STRATA_TOKEN");
+    app.add_option("--timeout", http.timeout_s, "Seconds to wait for the server")
+        ->check(CLI::Range(1, 86400))
+        ->capture_default_str();
+    app.add_flag("--json", json, "Print answers as JSON (one object per line for play)");
+
+    PlayArgs play;
+    CLI::App* play_cmd = app.add_subcommand(
+        "play", "Play a script (JSON Lines, protocol/scripts.md) and check its expectations");
+    play_cmd->add_option("script", play.script, "Script file, or - for standard input")->required();
+    play_cmd->add_flag("--embedded", play.embedded,
+                       "Play against an in-process engine instead of a server");
+    play_cmd->add_flag("--demo", play.demo, "With --embedded: start from the demo scene");
+    play_cmd->add_flag("--budgets", play.budgets,
+                       "Also check the budgets (max_ms, max_primitives_built)");
+    play_cmd
+        ->add_option("--max-repeat", play.max_repeat,
+                     "Play at most N iterations of each repeat step (quick checks)")
+        ->check(CLI::PositiveNumber);
+    play_cmd->add_option("--out-dir", play.out_dir,
+                         "Directory for the frames of relative \"out\" paths (default: .)");
+    play_cmd->add_flag("-q,--quiet", play.quiet, "No per-step table, only the verdict");
+    play_cmd->add_flag("--no-progress", play.no_progress, "No progress bar");
+
+    std::string edit_file;
+    std::string if_match;
+    CLI::App* edit_cmd = app.add_subcommand("edit", "Apply a batch of edits from a file");
+    edit_cmd->add_option("file", edit_file, "JSON file: {\"edits\": [...]} or [...]; - for stdin")
+        ->required();
+    edit_cmd->add_option("--if-match", if_match, "Apply only at this scene version");
+
+    RenderArgs render;
+    CLI::App* render_cmd = app.add_subcommand("render", "Render a frame and save it");
+    render_cmd->add_option("-o,--out", render.out, "Output file (.png or .exr)")->required();
+    render_cmd->add_option("--width", render.width, "Width in pixels");
+    render_cmd->add_option("--height", render.height, "Height in pixels");
+    render_cmd->add_option("--spp", render.spp, "Samples per pixel");
+    render_cmd->add_option("--format", render.format, "png or exr (default: from --out)")
+        ->check(CLI::IsMember({"png", "exr"}));
+    render_cmd->add_option("--aovs", render.aovs, "EXR layers, comma-separated (depth,normal,...)")
+        ->delimiter(',');
+    render_cmd->add_option("--compression", render.compression, "EXR compression: none, zip, piz");
+    render_cmd->add_option("--exposure", render.exposure, "Exposure in EV stops");
+    render_cmd->add_flag("--accumulate", render.accumulate,
+                         "Accumulate samples while the scene does not change");
+    add_vec3(render_cmd, "--eye", render.eye, "Camera override: eye position x,y,z");
+    add_vec3(render_cmd, "--target", render.target, "Camera override: target x,y,z");
+    add_vec3(render_cmd, "--up", render.up, "Camera override: up vector x,y,z");
+    render_cmd->add_option("--fov", render.fov_y_deg, "Camera override: vertical field of view");
+
+    CLI::App* commit_cmd = app.add_subcommand("commit", "Run a commit and print its report");
+    CLI::App* plan_cmd = app.add_subcommand("plan", "Print what the next commit would do");
+    CLI::App* stats_cmd = app.add_subcommand("stats", "Print counters and the last report");
+    CLI::App* scene_cmd = app.add_subcommand("scene", "Print the scene summary");
+
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        // --help and --version exit 0; every usage error exits 2, whatever CLI11 numbers it.
+        return app.exit(e) == 0 ? 0 : USAGE;
+    }
+    if (!play.embedded && play.demo) {
+        std::cerr << "strata: --demo only applies with --embedded\n";
+        return USAGE;
+    }
+    if (play_cmd->parsed()) return play_script(play, http, json);
+
+    auto transport = HttpTransport::create(http);
+    if (!transport) {
+        std::cerr << "strata: " << transport.error().message << '\n';
+        return USAGE;
+    }
+    Transport& t = *transport.value();
+    const Console console{std::cout, std::cerr, json};
+    if (edit_cmd->parsed())
+        return run_edit(t, console, edit_file,
+                        if_match.empty() ? std::nullopt : std::optional(if_match));
+    if (render_cmd->parsed()) return run_render(t, console, render);
+    if (commit_cmd->parsed()) return run_commit(t, console);
+    if (plan_cmd->parsed()) return run_plan(t, console);
+    if (stats_cmd->parsed()) return run_stats(t, console);
+    if (scene_cmd->parsed()) return run_scene(t, console);
+    return USAGE;
+}

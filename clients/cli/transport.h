@@ -1,0 +1,58 @@
+#pragma once
+// How the command-line client reaches Strata: over HTTP (HttpTransport), or in-process
+// (EmbeddedTransport, `strata play --embedded`). Both answer with the server's own statuses,
+// documents and headers, so everything above this interface is the same for both.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace strata::cli {
+
+/// One answer from Strata, or why there was none.
+struct Reply {
+    int status = 0;     ///< HTTP status; 0: no answer (see `error`)
+    std::string error;  ///< why there was no answer (connection refused, timeout, ...)
+    std::string content_type;
+    std::string body;
+    std::vector<std::pair<std::string, std::string>> headers;
+
+    /// A header's value, matched case-insensitively ("" when absent).
+    std::string header(std::string_view name) const;
+    /// True for a 2xx answer.
+    bool ok() const { return status >= 200 && status < 300; }
+};
+
+/// The scene version an answer's ETag names ("N" or N), if it has one.
+std::optional<uint64_t> etag_version(const Reply& reply);
+
+/// A failed answer for people: a problem document as its status, title, detail, edit index,
+/// pointer and type, one per line; any other answer as its status and the start of its body; no
+/// answer as why. Never raw JSON.
+std::string describe_failure(const Reply& reply);
+
+/// The protocol's endpoints, whatever carries them (protocol/README.md).
+class Transport {
+public:
+    virtual ~Transport() = default;
+
+    /// POST /v1/edits with `body` ({"edits": [...]}), conditional on `if_match` when given.
+    virtual Reply edits(std::string body, const std::optional<std::string>& if_match) = 0;
+    /// POST /v1/commit.
+    virtual Reply commit() = 0;
+    /// GET /v1/plan.
+    virtual Reply plan() = 0;
+    /// POST /v1/render with a JSON request body.
+    virtual Reply render(const std::string& body) = 0;
+    /// GET /v1/stats.
+    virtual Reply stats() = 0;
+    /// GET /v1/scene.
+    virtual Reply scene() = 0;
+    /// Where requests go, for messages: "http://127.0.0.1:7070" or "the embedded engine".
+    virtual std::string describe() const = 0;
+};
+
+}  // namespace strata::cli

@@ -1,0 +1,229 @@
+"""The HTTP client: one keep-alive connection, JSON in and out, problem documents as exceptions."""
+
+import http.client
+import json
+import urllib.parse
+from typing import Any, Dict, Iterable, Optional, Union
+
+from strata_client.png import decode_png
+
+
+class ProblemError(Exception):
+    """A request Strata refused, carrying its problem document (RFC 9457, protocol/README.md).
+
+    Attributes: status (HTTP status), title, detail, edit_index (the offending edit's position
+    in the batch, or None), pointer (a JSON pointer into the request, or None), type (the
+    problem type URI), etag (the ETag header, e.g. the current version after a 412), body (the
+    whole document as a dict, or the raw text for answers that are not problem documents).
+    """
+
+    def __init__(self, status: int, title: str, detail: str = "", edit_index: Optional[int] = None,
+                 pointer: Optional[str] = None, type: str = "", etag: Optional[str] = None,
+                 body: Any = None):
+        self.status = status
+        self.title = title
+        self.detail = detail
+        self.edit_index = edit_index
+        self.pointer = pointer
+        self.type = type
+        self.etag = etag
+        self.body = body
+        super().__init__(str(self))
+
+    def __str__(self) -> str:
+        text = f"{self.status} {self.title}"
+        if self.detail:
+            text += f": {self.detail}"
+        return text
+
+
+class RenderInfo:
+    """What the last render answered besides the image: the version the frame shows, the
+    one-line summary of its commit (X-Strata-Rebuild) and the content type."""
+
+    def __init__(self, version: Optional[int], rebuild: str, content_type: str):
+        self.version = version
+        self.rebuild = rebuild
+        self.content_type = content_type
+
+    def __repr__(self) -> str:
+        return f"RenderInfo(version={self.version!r}, rebuild={self.rebuild!r})"
+
+
+def _etag_version(tag: Optional[str]) -> Optional[int]:
+    if not tag:
+        return None
+    tag = tag.strip()
+    if len(tag) >= 2 and tag[0] == '"' and tag[-1] == '"':
+        tag = tag[1:-1]
+    return int(tag) if tag.isdigit() else None
+
+
+class Client:
+    """A connection to strata-server.
+
+    `url` is scheme://host[:port] (http or https); `token` the bearer token of a server started
+    with --token-file. One HTTP/1.1 connection is kept alive across requests and reopened when
+    the server has closed it (an idle keep-alive connection, a restart). Usable as a context
+    manager; close() releases the connection. Not thread-safe: use one Client per thread.
+    """
+
+    def __init__(self, url: str = "http://127.0.0.1:7070", token: Optional[str] = None,
+                 timeout: float = 300.0):
+        parts = urllib.parse.urlsplit(url)
+        if parts.scheme not in ("http", "https") or not parts.hostname:
+            raise ValueError(f"server URL {url!r} must be http://host[:port] or https://host[:port]")
+        if parts.path not in ("", "/") or parts.query or parts.fragment:
+            raise ValueError(f"server URL {url!r} must not have a path")
+        self.url = f"{parts.scheme}://{parts.netloc}"
+        self._https = parts.scheme == "https"
+        self._host = parts.hostname
+        self._port = parts.port
+        self._token = token
+        self._timeout = timeout
+        self._conn: Optional[http.client.HTTPConnection] = None
+        self.last_render: Optional[RenderInfo] = None
+
+    # -- connection -----------------------------------------------------------------------------
+
+    def __enter__(self) -> "Client":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Closes the connection (a later request opens a new one)."""
+        if self._conn is not None:
+            self._conn.close()
+            self._conn = None
+
+    def _connection(self) -> http.client.HTTPConnection:
+        if self._conn is None:
+            cls = http.client.HTTPSConnection if self._https else http.client.HTTPConnection
+            self._conn = cls(self._host, self._port, timeout=self._timeout)
+        return self._conn
+
+    def _request(self, method: str, path: str, body: Optional[bytes] = None,
+                 headers: Optional[Dict[str, str]] = None):
+        """Sends one request; returns (status, headers, body bytes).
+
+        A connection the server closed while idle is reopened and the request sent again once:
+        that failure happens before the server reads the request, so nothing is applied twice.
+        """
+        send_headers = {"Accept": "application/json"}
+        if body is not None:
+            send_headers["Content-Type"] = "application/json"
+        if self._token:
+            send_headers["Authorization"] = f"Bearer {self._token}"
+        send_headers.update(headers or {})
+        for attempt in (0, 1):
+            reused = self._conn is not None
+            conn = self._connection()
+            try:
+                conn.request(method, path, body=body, headers=send_headers)
+                response = conn.getresponse()
+                data = response.read()
+            except (http.client.RemoteDisconnected, BrokenPipeError, ConnectionResetError,
+                    http.client.CannotSendRequest):
+                self.close()
+                if reused and attempt == 0:
+                    continue
+                raise
+            except (OSError, http.client.HTTPException):
+                self.close()
+                raise
+            if response.getheader("Connection", "").lower() == "close":
+                self.close()
+            return response.status, response, data
+        raise AssertionError("unreachable")
+
+    def _json(self, method: str, path: str, body: Any = None,
+              headers: Optional[Dict[str, str]] = None) -> Dict[str, Any]:
+        payload = None if body is None else json.dumps(body).encode("utf-8")
+        status, response, data = self._request(method, path, payload, headers)
+        if not 200 <= status < 300:
+            raise self._problem(status, response, data)
+        return json.loads(data)
+
+    @staticmethod
+    def _problem(status: int, response, data: bytes) -> ProblemError:
+        etag = response.getheader("ETag")
+        try:
+            doc = json.loads(data)
+        except ValueError:
+            doc = None
+        if isinstance(doc, dict) and "title" in doc:
+            return ProblemError(doc.get("status", status), doc.get("title", ""),
+                                doc.get("detail", ""), doc.get("edit_index"), doc.get("pointer"),
+                                doc.get("type", ""), etag, doc)
+        text = data[:200].decode("utf-8", "replace")
+        return ProblemError(status, f"HTTP {status}", text, etag=etag, body=text)
+
+    # -- endpoints ------------------------------------------------------------------------------
+
+    def edit(self, edits: Iterable[Dict[str, Any]], if_match: Union[int, str, None] = None) -> int:
+        """Applies a batch (POST /v1/edits); returns the new scene version.
+
+        `if_match`: apply only at this version (an int, or an entity tag such as '"7"' or '*');
+        otherwise ProblemError with status 412 and the current version in `etag`.
+        """
+        headers = {}
+        if if_match is not None:
+            headers["If-Match"] = f'"{if_match}"' if isinstance(if_match, int) else if_match
+        return self._json("POST", "/v1/edits", {"edits": list(edits)}, headers)["version"]
+
+    def commit(self) -> Dict[str, Any]:
+        """Runs a commit (POST /v1/commit); returns its rebuild report."""
+        status, response, data = self._request("POST", "/v1/commit", b"")
+        if not 200 <= status < 300:
+            raise self._problem(status, response, data)
+        return json.loads(data)
+
+    def plan(self) -> Dict[str, Any]:
+        """What the next commit would do (GET /v1/plan), as a report with "planned": true."""
+        return self._json("GET", "/v1/plan")
+
+    def render(self, width: int = 640, height: int = 360, fmt: str = "png", **opts: Any) -> bytes:
+        """Renders a frame (POST /v1/render); returns the encoded image.
+
+        Every other request member passes through `opts`: spp, aovs, compression, accumulate,
+        exposure, camera={"eye": [...], "target": [...], "up": [...], "fov_y_deg": ...}.
+        `last_render` then holds the version the frame shows and its commit's summary.
+        """
+        body = {"width": width, "height": height, "format": fmt}
+        body.update(opts)
+        status, response, data = self._request("POST", "/v1/render",
+                                               json.dumps(body).encode("utf-8"))
+        if not 200 <= status < 300:
+            raise self._problem(status, response, data)
+        self.last_render = RenderInfo(_etag_version(response.getheader("ETag")),
+                                      response.getheader("X-Strata-Rebuild", ""),
+                                      response.getheader("Content-Type", ""))
+        return data
+
+    def render_array(self, width: int = 640, height: int = 360, **opts: Any):
+        """Renders a PNG frame and returns it as a numpy array of shape (height, width, channels),
+        dtype uint8. numpy is imported here, only when this is called. EXR is not decoded here:
+        use render(fmt="exr") and an EXR reader."""
+        fmt = opts.pop("fmt", "png")
+        if fmt != "png":
+            raise NotImplementedError("render_array decodes PNG only; use render(fmt='exr') "
+                                      "and an EXR reader such as OpenEXR")
+        import numpy as np  # lazily: the rest of the client needs only the standard library
+
+        w, h, channels, pixels = decode_png(self.render(width, height, "png", **opts))
+        return np.frombuffer(pixels, dtype=np.uint8).reshape(h, w, channels)
+
+    def stats(self) -> Dict[str, Any]:
+        """Counters, the last report and memory (GET /v1/stats)."""
+        return self._json("GET", "/v1/stats")
+
+    def scene(self, kind: Optional[str] = None, id: Optional[str] = None) -> Dict[str, Any]:
+        """The scene summary (GET /v1/scene), or one object's state with kind "meshes",
+        "instances" or "materials" and its id (GET /v1/scene/{kind}/{id})."""
+        if kind is None:
+            return self._json("GET", "/v1/scene")
+        if kind not in ("meshes", "instances", "materials") or not id:
+            raise ValueError("scene(kind, id): kind is 'meshes', 'instances' or 'materials'")
+        return self._json("GET", f"/v1/scene/{kind}/{urllib.parse.quote(id, safe='')}")

@@ -1,0 +1,204 @@
+#include "protocol/api.h"
+
+#include <charconv>
+
+#include "protocol/edit_parser.h"
+#include "protocol/render_parser.h"
+#include "protocol/report_json.h"
+#include "protocol/scene_json.h"
+
+namespace strata::protocol {
+
+namespace {
+
+uint64_t scene_version(const Engine& engine) {
+    return engine.read([](const Scene& s) { return s.version(); });
+}
+
+ApiResponse with_etag(ApiResponse r, uint64_t version) {
+    r.headers.emplace_back("ETag", etag(version));
+    return r;
+}
+
+std::string_view trim(std::string_view v) {
+    while (!v.empty() && (v.back() == ' ' || v.back() == '\t')) v.remove_suffix(1);
+    while (!v.empty() && (v.front() == ' ' || v.front() == '\t')) v.remove_prefix(1);
+    return v;
+}
+
+ApiResponse render(Engine& engine, const RenderSpec& spec, const ApiLimits& limits) {
+    const RenderRequest& q0 = spec.request;
+    const uint64_t pixels = uint64_t(q0.width) * q0.height;
+    if (pixels > limits.max_pixels) {
+        Problem p =
+            make_problem(ProblemType::TooLarge,
+                         std::to_string(q0.width) + "x" + std::to_string(q0.height) + " is " +
+                             std::to_string(pixels) + " pixels; this server renders at most " +
+                             std::to_string(limits.max_pixels) + " (--max-pixels)");
+        p.pointer = "/width";
+        return problem_response(p);
+    }
+    RenderRequest request = spec.request;
+    if (spec.camera) {
+        // Fields the override leaves out come from the scene camera as it is now.
+        const Camera scene_camera = engine.read([](const Scene& s) { return s.camera(); });
+        request = resolve_render_request(spec, scene_camera);
+    }
+    auto image = engine.render(request);
+    if (!image) return problem_response(problem_from(image.error()));
+    RenderedImage& frame = image.value();
+    ApiResponse r;
+    r.status = 200;
+    r.content_type = frame.content_type;
+    r.body.assign(reinterpret_cast<const char*>(frame.bytes.data()), frame.bytes.size());
+    r.headers = {{"ETag", etag(frame.version)},
+                 {"X-Strata-Rebuild", frame.report.summary()},
+                 {"Cache-Control", "no-store"}};
+    r.commit = std::move(frame.report);
+    return r;
+}
+
+}  // namespace
+
+std::string_view ApiResponse::header(std::string_view name) const {
+    for (const auto& [key, value] : headers)
+        if (key == name) return value;
+    return {};
+}
+
+ApiResponse json_response(int status, const Json& body) {
+    ApiResponse r;
+    r.status = status;
+    r.content_type = "application/json";
+    r.body = body.dump();
+    return r;
+}
+
+ApiResponse problem_response(const Problem& problem) {
+    ApiResponse r;
+    r.status = problem.status;
+    r.content_type = "application/problem+json";
+    r.body = problem_to_json(problem).dump();
+    return r;
+}
+
+std::string etag(uint64_t version) {
+    return "\"" + std::to_string(version) + "\"";
+}
+
+std::optional<IfMatch> parse_if_match(std::string_view value, Problem& problem) {
+    std::string_view v = trim(value);
+    if (v == "*") return IfMatch{};
+    auto bad = [&](const std::string& why) -> std::optional<IfMatch> {
+        problem = make_problem(ProblemType::InvalidRequest,
+                               "If-Match: " + why + " (expected an entity tag such as \"12\")");
+        return std::nullopt;
+    };
+    if (v.find(',') != std::string_view::npos)
+        return bad("lists of several entity tags are not supported");
+    if (v.substr(0, 2) == "W/") {
+        // A weak tag never matches under the strong comparison If-Match requires.
+        return IfMatch{UINT64_MAX};
+    }
+    if (v.size() >= 2 && v.front() == '"' && v.back() == '"') v = v.substr(1, v.size() - 2);
+    uint64_t n = 0;
+    const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), n);
+    if (v.empty() || ec != std::errc() || end != v.data() + v.size())
+        return bad("'" + std::string(value) + "' is not a Strata entity tag");
+    return IfMatch{n};
+}
+
+ApiResponse post_edits(Engine& engine, std::string body, std::optional<std::string_view> if_match,
+                       const ApiLimits& limits) {
+    Problem problem;
+    const auto condition = if_match ? parse_if_match(*if_match, problem) : IfMatch{};
+    if (!condition) return problem_response(problem);
+
+    auto parsed = parse_edit_batch(body, limits.json);
+    body = {};  // the DOM and the batch hold what is needed; free the text early
+    if (!parsed) return problem_response(problem_from(parsed.error()));
+    ParsedBatch& batch = parsed.value();
+
+    auto applied = engine.apply(std::move(batch.batch), condition->version);
+    if (!applied) {
+        const Error& e = applied.error();
+        if (e.code == ErrorCode::VersionMismatch) {
+            // The current version, ready for a read-modify-write retry.
+            return with_etag(problem_response(make_problem(ProblemType::VersionMismatch,
+                                                           "If-Match: " + e.message)),
+                             scene_version(engine));
+        }
+        return problem_response(problem_from_batch_error(e, batch.sources));
+    }
+    const ApplyResult& done = applied.value();
+    return with_etag(json_response(200, {{"version", done.version}, {"applied", done.applied}}),
+                     done.version);
+}
+
+ApiResponse post_commit(Engine& engine) {
+    auto report = engine.commit();
+    if (!report) return problem_response(problem_from(report.error()));
+    ApiResponse r =
+        with_etag(json_response(200, report_to_json(report.value())), report.value().version);
+    r.commit = std::move(report.value());
+    return r;
+}
+
+ApiResponse get_plan(const Engine& engine) {
+    RebuildReport plan = engine.plan();
+    // A plan's memory is what the acceleration structures hold now, before the commit.
+    plan.memory_blas_bytes = engine.memory_bytes(MemoryCategory::Blas);
+    plan.memory_tlas_bytes = engine.memory_bytes(MemoryCategory::Tlas);
+    return with_etag(json_response(200, report_to_json(plan)), plan.version);
+}
+
+ApiResponse post_render(Engine& engine, std::string_view body, const ApiLimits& limits) {
+    // An empty body means every default, like GET without a query.
+    auto doc = body.empty() ? Parsed<Json>(Json::object()) : parse_json(body, limits.json);
+    if (!doc) return problem_response(problem_from(doc.error()));
+    auto spec = parse_render_body(doc.value());
+    if (!spec) return problem_response(problem_from(spec.error()));
+    return render(engine, spec.value(), limits);
+}
+
+ApiResponse get_render(Engine& engine, const std::multimap<std::string, std::string>& query,
+                       const ApiLimits& limits) {
+    auto spec = parse_render_query(query);
+    if (!spec) return problem_response(problem_from(spec.error()));
+    return render(engine, spec.value(), limits);
+}
+
+ApiResponse get_scene(const Engine& engine) {
+    const Json doc = engine.read([](const Scene& s) { return scene_summary_to_json(s); });
+    return with_etag(json_response(200, doc), doc["version"].get<uint64_t>());
+}
+
+ApiResponse get_scene_object(const Engine& engine, SceneObject kind, std::string_view id) {
+    using ToJson = std::optional<Json> (*)(const Scene&, std::string_view);
+    static constexpr ToJson TO_JSON[] = {mesh_to_json, instance_to_json, material_to_json};
+    static constexpr const char* NAMES[] = {"mesh", "instance", "material"};
+    // One read lock: the document and its version belong together.
+    auto [doc, version] = engine.read(
+        [&](const Scene& s) { return std::pair(TO_JSON[int(kind)](s, id), s.version()); });
+    if (!doc)
+        return with_etag(problem_response(make_problem(ProblemType::NotFound,
+                                                       std::string("no ") + NAMES[int(kind)] +
+                                                           " with id '" + std::string(id) + "'")),
+                         version);
+    return with_etag(json_response(200, *doc), version);
+}
+
+ApiResponse get_stats(const Engine& engine) {
+    const EngineCounters counters = engine.counters();
+    const RebuildReport last = engine.last_report();
+    const uint64_t version = scene_version(engine);
+    const Json doc = {{"version", version},
+                      {"counters", counters_to_json(counters)},
+                      {"last_report", counters.commits ? report_to_json(last) : Json(nullptr)},
+                      {"memory_bytes",
+                       {{"blas", engine.memory_bytes(MemoryCategory::Blas)},
+                        {"tlas", engine.memory_bytes(MemoryCategory::Tlas)}}}};
+    return with_etag(json_response(200, doc), version);
+}
+
+}  // namespace strata::protocol

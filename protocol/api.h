@@ -1,0 +1,80 @@
+#pragma once
+// The transport-independent half of every /v1 endpoint: a request's body, query or id in; status,
+// body, content type and headers out. strata-server's routes are thin httplib adapters over these
+// functions and `strata play --embedded` calls them in-process, so both answer the same reports,
+// problem documents and headers, validated the same way. Nothing here includes an HTTP library;
+// statuses and header names are plain data.
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "engine/engine.h"
+#include "protocol/json_document.h"
+#include "protocol/problem.h"
+
+namespace strata::protocol {
+
+/// Limits applied to requests (strata-server's flags; the defaults are the flags' defaults).
+struct ApiLimits {
+    JsonLimits json;
+    uint64_t max_pixels = 16ull << 20;  ///< width * height of one render (--max-pixels)
+};
+
+/// One endpoint's answer, ready for any transport.
+struct ApiResponse {
+    int status = 200;
+    std::string content_type;  ///< application/json, application/problem+json, image/png, ...
+    std::string body;          ///< JSON text or image bytes
+    std::vector<std::pair<std::string, std::string>> headers;  ///< ETag, X-Strata-Rebuild, ...
+    /// The commit this request ran (commit and render), for the caller's logs and metrics.
+    std::optional<RebuildReport> commit;
+
+    /// The value of header `name` (exact spelling), or "" when absent.
+    std::string_view header(std::string_view name) const;
+};
+
+/// A JSON answer.
+ApiResponse json_response(int status, const Json& body);
+/// An application/problem+json answer with the problem's status.
+ApiResponse problem_response(const Problem& problem);
+
+/// The entity tag of a scene version: "N" with the quotes.
+std::string etag(uint64_t version);
+
+/// What If-Match asks for: no constraint (absent or "*"), or one version.
+struct IfMatch {
+    std::optional<uint64_t> version;
+};
+/// Parses an If-Match value: `"N"`, `*`, or a bare N for curl users. Weak tags (W/"N") never
+/// match (RFC 9110 uses strong comparison); a list of several tags is refused.
+std::optional<IfMatch> parse_if_match(std::string_view value, Problem& problem);
+
+/// POST /v1/edits. `if_match` is the If-Match header when the request has one. The body is
+/// consumed (freed once parsed).
+ApiResponse post_edits(Engine& engine, std::string body, std::optional<std::string_view> if_match,
+                       const ApiLimits& limits);
+/// POST /v1/commit.
+ApiResponse post_commit(Engine& engine);
+/// GET /v1/plan.
+ApiResponse get_plan(const Engine& engine);
+/// POST /v1/render: an empty body means every default.
+ApiResponse post_render(Engine& engine, std::string_view body, const ApiLimits& limits);
+/// GET /v1/render with its query parameters.
+ApiResponse get_render(Engine& engine, const std::multimap<std::string, std::string>& query,
+                       const ApiLimits& limits);
+/// GET /v1/scene.
+ApiResponse get_scene(const Engine& engine);
+
+/// The object kinds of GET /v1/scene/{meshes,instances,materials}/{id}.
+enum class SceneObject : uint8_t { Mesh, Instance, Material };
+/// GET /v1/scene/{meshes,instances,materials}/{id}.
+ApiResponse get_scene_object(const Engine& engine, SceneObject kind, std::string_view id);
+/// GET /v1/stats.
+ApiResponse get_stats(const Engine& engine);
+
+}  // namespace strata::protocol

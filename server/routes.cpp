@@ -1,0 +1,83 @@
+// Every /v1 route and /metrics: thin httplib adapters over protocol/api.h, which does the work
+// for the server and for `strata play --embedded` alike. What stays here is HTTP: reading the
+// request, writing the response, and the server's own logs and metrics.
+
+#include <spdlog/spdlog.h>
+
+#include "engine/core/timer.h"
+#include "protocol/api.h"
+#include "server/context.h"
+#include "server/http_util.h"
+#include "server/router.h"
+
+namespace strata::server {
+
+namespace {
+
+/// Sends an API answer; logs and measures the commit it ran, if any.
+void respond(ServerContext& ctx, httplib::Response& res, protocol::ApiResponse&& answer,
+             const char* cause) {
+    if (answer.commit) {
+        ctx.metrics.commit_seconds.observe(answer.commit->phases.total_ms / 1000.0);
+        spdlog::info("commit ({}) {}", cause, answer.commit->summary());
+    }
+    send(res, answer);
+}
+
+/// Renders with `render`, observing the duration of successful renders (commit, tracing and
+/// encoding).
+template <class Render>
+void respond_render(ServerContext& ctx, httplib::Response& res, Render&& render) {
+    Stopwatch clock;
+    protocol::ApiResponse answer = render();
+    if (answer.status == 200) ctx.metrics.render_seconds.observe(clock.ms() / 1000.0);
+    respond(ctx, res, std::move(answer), "render");
+}
+
+void add_scene_object_route(Router& router, ServerContext& ctx, const char* collection,
+                            protocol::SceneObject kind) {
+    router.get(std::string("/v1/scene/") + collection + "/([^/]+)",
+               [&ctx, kind](const httplib::Request& req, httplib::Response& res) {
+                   send(res, protocol::get_scene_object(ctx.engine, kind, req.matches[1].str()));
+               });
+}
+
+}  // namespace
+
+void add_api_routes(Router& router, ServerContext& ctx) {
+    using Req = httplib::Request;
+    using Res = httplib::Response;
+    router.post("/v1/edits", [&ctx](const Req& req, Res& res, std::string&& body) {
+        const std::optional<std::string> if_match =
+            req.has_header("If-Match") ? std::optional(req.get_header_value("If-Match"))
+                                       : std::nullopt;
+        send(res, protocol::post_edits(ctx.engine, std::move(body), if_match, ctx.api_limits));
+    });
+    router.post("/v1/commit", [&ctx](const Req&, Res& res, std::string&&) {
+        respond(ctx, res, protocol::post_commit(ctx.engine), "commit");
+    });
+    router.get("/v1/plan",
+               [&ctx](const Req&, Res& res) { send(res, protocol::get_plan(ctx.engine)); });
+    router.post("/v1/render", [&ctx](const Req&, Res& res, std::string&& body) {
+        respond_render(ctx, res,
+                       [&] { return protocol::post_render(ctx.engine, body, ctx.api_limits); });
+    });
+    router.get("/v1/render", [&ctx](const Req& req, Res& res) {
+        respond_render(
+            ctx, res, [&] { return protocol::get_render(ctx.engine, req.params, ctx.api_limits); });
+    });
+    router.get("/v1/scene",
+               [&ctx](const Req&, Res& res) { send(res, protocol::get_scene(ctx.engine)); });
+    add_scene_object_route(router, ctx, "meshes", protocol::SceneObject::Mesh);
+    add_scene_object_route(router, ctx, "instances", protocol::SceneObject::Instance);
+    add_scene_object_route(router, ctx, "materials", protocol::SceneObject::Material);
+    router.get("/v1/stats",
+               [&ctx](const Req&, Res& res) { send(res, protocol::get_stats(ctx.engine)); });
+    router.get("/metrics", [&ctx](const Req&, Res& res) {
+        res.status = 200;
+        res.set_content(ctx.metrics.prometheus_text(ctx.engine),
+                        "text/plain; version=0.0.4; charset=utf-8");
+    });
+}
+
+}  // namespace strata::server

@@ -1,0 +1,160 @@
+// The one-shot subcommands against a real server: what they print, what they write, their exit
+// codes, and problem details shown as fields, never as raw JSON.
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "clients/cli/commands.h"
+#include "clients/cli/http_transport.h"
+#include "tests/server/test_server.h"
+
+namespace strata::cli {
+namespace {
+
+using server::test::TestServer;
+
+class Commands : public ::testing::Test {
+protected:
+    void SetUp() override {
+        auto t = HttpTransport::create({"http://127.0.0.1:" + std::to_string(srv.port()), "", 60});
+        ASSERT_TRUE(t.ok());
+        transport = std::move(t.value());
+        file = std::filesystem::temp_directory_path() /
+               ("strata-commands-" +
+                std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    }
+    void TearDown() override { std::filesystem::remove(file); }
+
+    Console console(bool json = false) { return Console{out, err, json}; }
+    void write(const std::string& text) { std::ofstream(file) << text; }
+
+    TestServer srv;
+    std::unique_ptr<HttpTransport> transport;
+    std::ostringstream out, err;
+    std::filesystem::path file;
+};
+
+TEST_F(Commands, EditAppliesAFileAndPrintsTheVersion) {
+    write(R"([{"op": "add_mesh", "id": "ball", "shape": {"type": "sphere", "segments": 8}},
+              {"op": "add_instance", "id": "b0", "mesh": "ball"}])");
+    EXPECT_EQ(run_edit(*transport, console(), file.string(), std::nullopt), 0);
+    EXPECT_EQ(out.str(), "v1: 2 edits applied\n");
+    write(R"({"edits": [{"op": "set_camera", "eye": [1, 2, 3]}]})");
+    EXPECT_EQ(run_edit(*transport, console(true), file.string(), std::string("1")), 0);
+    EXPECT_EQ(Json::parse(out.str().substr(out.str().find('\n') + 1)),
+              (Json{{"version", 2}, {"applied", 1}}));
+}
+
+TEST_F(Commands, ARefusedEditShowsTheProblemFieldsAndExitsWithThree) {
+    write(R"([{"op": "add_instance", "id": "x", "mesh": "rock"}])");
+    EXPECT_EQ(run_edit(*transport, console(), file.string(), std::nullopt), 3);
+    const std::string e = err.str();
+    EXPECT_NE(e.find("edit failed on http://127.0.0.1:"), std::string::npos) << e;
+    EXPECT_NE(e.find("422 Unknown id"), std::string::npos) << e;
+    EXPECT_NE(e.find("detail:     edit 0 (/edits/0/mesh): unknown mesh 'rock'"), std::string::npos)
+        << e;
+    EXPECT_NE(e.find("edit index: 0"), std::string::npos) << e;
+    EXPECT_NE(e.find("pointer:    /edits/0/mesh"), std::string::npos) << e;
+    EXPECT_NE(e.find("type:       https://strata.dev/problems/unknown-id"), std::string::npos);
+    EXPECT_EQ(e.find("{\""), std::string::npos) << "raw JSON in: " << e;
+}
+
+TEST_F(Commands, AVersionMismatchIsA412Problem) {
+    write("[]");
+    EXPECT_EQ(run_edit(*transport, console(), file.string(), std::string("\"9\"")), 3);
+    EXPECT_NE(err.str().find("412 Scene version mismatch"), std::string::npos) << err.str();
+}
+
+TEST_F(Commands, AMissingFileIsBadInput) {
+    EXPECT_EQ(run_edit(*transport, console(), "/nonexistent/edits.json", std::nullopt), 2);
+    EXPECT_NE(err.str().find("cannot open"), std::string::npos);
+}
+
+TEST_F(Commands, CommitAndPlanPrintReportsForPeopleOrAsJson) {
+    write(R"([{"op": "add_mesh", "id": "ball", "shape": {"type": "sphere", "segments": 8}},
+              {"op": "add_instance", "id": "b0", "mesh": "ball"}])");
+    ASSERT_EQ(run_edit(*transport, console(), file.string(), std::nullopt), 0);
+    out.str("");
+    EXPECT_EQ(run_plan(*transport, console()), 0);
+    EXPECT_EQ(out.str().rfind("plan for v1: tlas update (1 instances), 1 rebuilds, 0 refits, 48 "
+                              "primitives built, 0 refit\n  rebuilt   ball  added  48 prims",
+                              0),
+              0u)
+        << out.str();
+    out.str("");
+    EXPECT_EQ(run_commit(*transport, console()), 0);
+    EXPECT_EQ(out.str().rfind("commit v1: tlas update (1 instances), 1 rebuilds", 0), 0u)
+        << out.str();
+    out.str("");
+    EXPECT_EQ(run_commit(*transport, console(true)), 0);
+    const Json report = Json::parse(out.str());
+    EXPECT_EQ(report["tlas"]["action"], "none");
+    EXPECT_EQ(report["version"], 1);
+}
+
+TEST_F(Commands, StatsAndScenePrintTheServersState) {
+    EXPECT_EQ(run_stats(*transport, console()), 0);
+    EXPECT_NE(out.str().find("version 0\n"), std::string::npos);
+    EXPECT_NE(out.str().find("last commit: none yet"), std::string::npos);
+    EXPECT_NE(out.str().find("  batches_applied    0\n"), std::string::npos) << out.str();
+    out.str("");
+    EXPECT_EQ(run_scene(*transport, console(true)), 0);
+    EXPECT_EQ(Json::parse(out.str())["version"], 0);
+}
+
+TEST_F(Commands, RenderWritesTheImageAndSaysWhatItsCommitDid) {
+    RenderArgs args;
+    args.out = file.string() + ".png";
+    args.width = 40;
+    args.height = 20;
+    args.eye = {0, 2, 6};
+    EXPECT_EQ(run_render(*transport, console(), args), 0) << err.str();
+    std::ifstream png(args.out, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(png)), {});
+    EXPECT_EQ(bytes.substr(1, 3), "PNG");
+    EXPECT_NE(out.str().find("wrote " + args.out), std::string::npos);
+    EXPECT_NE(out.str().find("commit: v0 tlas=none(0)"), std::string::npos) << out.str();
+    std::filesystem::remove(args.out);
+}
+
+TEST_F(Commands, ARenderTheServerCannotMakeIsAProblem) {
+    RenderArgs args;
+    args.out = file.string() + ".png";
+    args.width = 65536;
+    args.height = 65536;
+    EXPECT_EQ(run_render(*transport, console(), args), 3);
+    EXPECT_NE(err.str().find("413 Content too large"), std::string::npos) << err.str();
+    EXPECT_NE(err.str().find("pointer:    /width"), std::string::npos) << err.str();
+    EXPECT_FALSE(std::filesystem::exists(args.out));
+}
+
+TEST(RenderBody, PassesEveryOptionAndTakesTheFormatFromTheFileName) {
+    RenderArgs a;
+    a.out = "frame.exr";
+    a.width = 320;
+    a.spp = 16;
+    a.aovs = {"depth", "normal"};
+    a.compression = "piz";
+    a.exposure = -1;
+    a.accumulate = true;
+    a.eye = {1, 2, 3};
+    a.fov_y_deg = 30;
+    std::string error;
+    const auto body = render_body(a, error);
+    ASSERT_TRUE(body.has_value()) << error;
+    EXPECT_EQ(Json::parse(*body), Json::parse(R"({"width": 320, "spp": 16, "format": "exr",
+        "aovs": ["depth", "normal"], "compression": "piz", "exposure": -1, "accumulate": true,
+        "camera": {"eye": [1, 2, 3], "fov_y_deg": 30}})"));
+    a.format = "png";
+    EXPECT_FALSE(render_body(a, error).has_value());
+    EXPECT_NE(error.find("does not match"), std::string::npos);
+    RenderArgs plain;
+    plain.out = "frame.bin";
+    EXPECT_EQ(Json::parse(*render_body(plain, error)), Json::object());
+}
+
+}  // namespace
+}  // namespace strata::cli

@@ -1,0 +1,90 @@
+#pragma once
+// A Transport that records requests and answers like a tiny, predictable server: every batch
+// moves the version by one; commits report the TLAS action queued for them ("none" by default).
+
+#include <deque>
+#include <string>
+#include <vector>
+
+#include "clients/cli/json.h"
+#include "clients/cli/transport.h"
+
+namespace strata::cli::test {
+
+class FakeTransport final : public Transport {
+public:
+    Reply edits(std::string body, const std::optional<std::string>&) override {
+        const Json doc = Json::parse(body);
+        edit_bodies.push_back(doc);
+        if (!refusal.body.empty()) return refusal;
+        ++version;
+        return json(200, {{"version", version}, {"applied", doc["edits"].size()}});
+    }
+    Reply commit() override {
+        ++commits;
+        last = next_report(false);
+        return json(200, last);
+    }
+    Reply plan() override { return json(200, next_report(true)); }
+    Reply render(const std::string& body) override {
+        render_bodies.push_back(Json::parse(body));
+        last = next_report(false);
+        Reply r;
+        r.status = 200;
+        r.content_type = "image/png";
+        r.body = "frame at v" + std::to_string(version);
+        r.headers = {{"ETag", "\"" + std::to_string(version) + "\""}};
+        return r;
+    }
+    Reply stats() override { return json(200, {{"version", version}, {"last_report", last}}); }
+    Reply scene() override { return json(200, {{"version", version}}); }
+    std::string describe() const override { return "the fake"; }
+
+    /// A 422 problem answer for every later edit batch.
+    void refuse_edits() {
+        refusal.status = 422;
+        refusal.content_type = "application/problem+json";
+        refusal.body = R"({"type": "https://strata.dev/problems/unknown-id", "title": "Unknown id",
+            "status": 422, "detail": "edit 0 (/edits/0/mesh): unknown mesh 'rock'",
+            "edit_index": 0, "pointer": "/edits/0/mesh"})";
+    }
+
+    uint64_t version = 0;
+    int commits = 0;
+    std::deque<std::string> tlas_actions;  ///< actions of the next reports, in order
+    std::vector<Json> edit_bodies;
+    std::vector<Json> render_bodies;
+    Json last;
+    Reply refusal;
+
+private:
+    Json next_report(bool planned) {
+        std::string action = "none";
+        if (!tlas_actions.empty()) {
+            action = tlas_actions.front();
+            tlas_actions.pop_front();
+        }
+        Json r = {{"version", version},
+                  {"planned", planned},
+                  {"tlas", {{"action", action}, {"instances", 1}}},
+                  {"blas_rebuilds", 0},
+                  {"blas_refits", 0},
+                  {"rebuilt", Json::array()},
+                  {"refit", Json::array()},
+                  {"released", Json::array()},
+                  {"primitives_built", 0},
+                  {"primitives_refit", 0}};
+        if (!planned) r["ms"] = 0.5;
+        return r;
+    }
+    static Reply json(int status, const Json& body) {
+        Reply r;
+        r.status = status;
+        r.content_type = "application/json";
+        r.body = body.dump();
+        r.headers = {{"Content-Type", r.content_type}};
+        return r;
+    }
+};
+
+}  // namespace strata::cli::test

@@ -1,0 +1,196 @@
+// Playing scripts against a recording transport: repeats and substitutions, frames, the first
+// failure stops the play with its step, line and iteration, and the limits of --max-repeat.
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "clients/cli/script_runner.h"
+#include "tests/cli/fake_transport.h"
+
+namespace strata::cli {
+namespace {
+
+using test::FakeTransport;
+
+/// Counts what the runner tells its observer.
+class CountingObserver final : public PlayObserver {
+public:
+    void on_start(const Script&, std::size_t n) override { total = n; }
+    void on_step(const StepRecord& r) override { records.push_back(r); }
+    void on_finish(const PlayResult&) override { ++finished; }
+    std::size_t total = 0;
+    std::vector<StepRecord> records;
+    int finished = 0;
+};
+
+Script load(const std::string& text) {
+    std::istringstream in(text);
+    auto s = load_script(in, "test.jsonl");
+    EXPECT_TRUE(s.ok()) << (s.ok() ? "" : s.error().describe());
+    return s.ok() ? std::move(s.value()) : Script{};
+}
+
+class ScriptRunner : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir =
+            std::filesystem::temp_directory_path() /
+            ("strata-runner-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+             "-" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        std::filesystem::remove_all(dir);
+        options.out_dir = dir;
+    }
+    void TearDown() override { std::filesystem::remove_all(dir); }
+
+    PlayResult run(const std::string& text) {
+        script = load(text);
+        return play(script, fake, options, observer);
+    }
+
+    std::filesystem::path dir;
+    PlayOptions options;
+    FakeTransport fake;
+    CountingObserver observer;
+    Script script;
+};
+
+TEST_F(ScriptRunner, RepeatsExpandAndSubstituteTheIterationNumber) {
+    const PlayResult r = run(
+        R"({"repeat": 3, "steps": [{"edits": [{"op": "set_camera", "eye": ["{n}", 0, "{10 - n}"]}]}, {"commit": {}}]})");
+    EXPECT_EQ(r.verdict, Verdict::Passed);
+    EXPECT_EQ(r.steps_played, 6u);
+    EXPECT_EQ(observer.total, 6u);
+    EXPECT_EQ(observer.finished, 1);
+    ASSERT_EQ(fake.edit_bodies.size(), 3u);
+    for (int n = 0; n < 3; ++n)
+        EXPECT_EQ(fake.edit_bodies[n]["edits"][0]["eye"], (Json{n, 0, 10 - n}));
+    EXPECT_EQ(fake.commits, 3);
+    EXPECT_EQ(observer.records[2].vars, "n=1");
+    EXPECT_EQ(observer.records[2].applied, 1u);
+    EXPECT_EQ(observer.records[3].version, 2u);
+}
+
+TEST_F(ScriptRunner, NestedRepeatsSeeBothVariables) {
+    run(R"({"repeat": 2, "var": "a", "steps": [{"repeat": 2, "var": "b", "steps": [{"edits": [{"op": "remove_instance", "instance": "i{a}{b}"}]}]}]})");
+    ASSERT_EQ(fake.edit_bodies.size(), 4u);
+    EXPECT_EQ(fake.edit_bodies[3]["edits"][0]["instance"], "i11");
+    EXPECT_EQ(observer.records[1].vars, "a=0, b=1");
+}
+
+TEST_F(ScriptRunner, FramesAreWrittenWhereOutSaysAndTheFormatFollowsTheName) {
+    const PlayResult r = run(
+        R"({"repeat": 2, "steps": [{"edits": []}, {"render": {"width": 8, "height": 4}, "out": "a/b/f{n:3}.png"}]})"
+        "\n"
+        R"({"render": {}, "out": "deep.exr"})"
+        "\n"
+        R"({"render": {}})");
+    ASSERT_EQ(r.verdict, Verdict::Passed) << r.message;
+    EXPECT_EQ(r.frames_written, 3u);
+    std::ifstream f1(dir / "a/b/f001.png");
+    std::string content((std::istreambuf_iterator<char>(f1)), {});
+    EXPECT_EQ(content, "frame at v2");
+    EXPECT_TRUE(std::filesystem::exists(dir / "a/b/f000.png"));
+    EXPECT_TRUE(std::filesystem::exists(dir / "deep.exr"));
+    ASSERT_EQ(fake.render_bodies.size(), 4u);
+    EXPECT_EQ(fake.render_bodies[0], (Json{{"width", 8}, {"height", 4}, {"format", "png"}}));
+    EXPECT_EQ(fake.render_bodies[2], (Json{{"format", "exr"}}));
+    EXPECT_EQ(fake.render_bodies[3], Json::object());  // not saved: nothing inferred
+    EXPECT_EQ(observer.records[3].out, (dir / "a/b/f001.png").string());
+    EXPECT_EQ(observer.records[3].bytes, content.size());
+    EXPECT_EQ(observer.records[3].version, 2u);
+    EXPECT_TRUE(observer.records[3].report.has_value());
+}
+
+TEST_F(ScriptRunner, AFormatThatContradictsTheFileNameIsAScriptError) {
+    const PlayResult r = run(R"({"render": {"format": "exr"}, "out": "f.png"})");
+    EXPECT_EQ(r.verdict, Verdict::ScriptError);
+    EXPECT_NE(r.message.find("asks for format \"exr\""), std::string::npos);
+    EXPECT_TRUE(fake.render_bodies.empty());
+}
+
+TEST_F(ScriptRunner, TheFirstFailedExpectationStopsThePlay) {
+    fake.tlas_actions = {"update", "update", "none", "update"};
+    const PlayResult r = run(
+        R"({"commit": {}, "expect": {"tlas": "update"}})"
+        "\n"
+        R"({"repeat": 5, "steps": [{"commit": {}, "label": "moved", "expect": {"tlas": "update", "blas_rebuilds": 0}}]})");
+    EXPECT_EQ(r.verdict, Verdict::ExpectationFailed);
+    EXPECT_EQ(exit_code(r.verdict), 1);
+    EXPECT_EQ(fake.commits, 3);  // the failing one, and none after it
+    ASSERT_TRUE(r.failed.has_value());
+    EXPECT_EQ(r.failed->index, 3u);
+    EXPECT_EQ(r.failed->step->line, 2u);
+    EXPECT_EQ(r.failed->step->label, "moved");
+    EXPECT_EQ(r.failed->vars, "n=1");
+    ASSERT_EQ(r.mismatches.size(), 1u);
+    EXPECT_EQ(r.mismatches[0].field, "tlas");
+    EXPECT_EQ(r.mismatches[0].actual, "none");
+    EXPECT_EQ(r.checks_passed, 3u);
+    EXPECT_EQ(observer.records.size(), 2u);  // the failed step is not reported as played
+}
+
+TEST_F(ScriptRunner, ARefusedRequestStopsThePlayWithStratasAnswer) {
+    fake.refuse_edits();
+    const PlayResult r = run(R"({"commit": {}})"
+                             "\n"
+                             R"({"edits": [{"op": "remove_mesh", "mesh": "rock"}]})"
+                             "\n"
+                             R"({"commit": {}})");
+    EXPECT_EQ(r.verdict, Verdict::RequestFailed);
+    EXPECT_EQ(exit_code(r.verdict), 3);
+    EXPECT_EQ(fake.commits, 1);
+    ASSERT_TRUE(r.reply.has_value());
+    EXPECT_EQ(r.reply->status, 422);
+    EXPECT_EQ(r.failed->step->line, 2u);
+    const std::string text = describe_failure(*r.reply);
+    EXPECT_NE(text.find("422 Unknown id"), std::string::npos);
+    EXPECT_NE(text.find("edit index: 0"), std::string::npos);
+    EXPECT_NE(text.find("pointer:    /edits/0/mesh"), std::string::npos);
+    EXPECT_EQ(text.find('{'), std::string::npos) << "not raw JSON: " << text;
+}
+
+TEST_F(ScriptRunner, AnExpressionThatFailsWhilePlayingIsAScriptErrorNamingTheIteration) {
+    const PlayResult r = run(
+        R"({"repeat": 3, "steps": [{"edits": [{"op": "set_camera", "fov_y_deg": "{60 / (n - 1)}"}]}]})");
+    EXPECT_EQ(r.verdict, Verdict::ScriptError);
+    EXPECT_EQ(exit_code(r.verdict), 2);
+    EXPECT_EQ(r.steps_played, 1u);
+    EXPECT_EQ(r.failed->vars, "n=1");
+    EXPECT_NE(r.message.find("division by zero"), std::string::npos);
+}
+
+TEST_F(ScriptRunner, MaxRepeatCapsEveryRepeatStep) {
+    options.max_repeat = 2;
+    const std::string text =
+        R"({"repeat": 100, "steps": [{"repeat": 50, "var": "i", "steps": [{"commit": {}}]}]})";
+    EXPECT_EQ(count_steps(load(text), options), 4u);
+    const PlayResult r = run(text);
+    EXPECT_EQ(r.steps_played, 4u);
+    options.max_repeat.reset();
+    EXPECT_EQ(count_steps(load(text), options), 5000u);
+}
+
+TEST_F(ScriptRunner, InlineRepeatsInsideEditsAreNotCappedByMaxRepeat) {
+    options.max_repeat = 1;
+    run(R"({"edits": [{"repeat": 5, "var": "i", "items": [{"op": "remove_instance", "instance": "i{i}"}]}]})");
+    ASSERT_EQ(fake.edit_bodies.size(), 1u);
+    EXPECT_EQ(fake.edit_bodies[0]["edits"].size(), 5u);
+}
+
+TEST_F(ScriptRunner, BudgetsAreCountedAsSkippedOutsideTheBudgetsProfile) {
+    const std::string text = R"({"commit": {}, "expect": {"tlas": "none", "max_ms": 0.1}})";
+    PlayResult r = run(text);
+    EXPECT_EQ(r.verdict, Verdict::Passed);
+    EXPECT_EQ(r.budgets_skipped, 1u);
+    EXPECT_EQ(r.checks_passed, 1u);
+    options.budgets = true;
+    r = run(text);  // the fake's commits take 0.5 ms
+    EXPECT_EQ(r.verdict, Verdict::ExpectationFailed);
+    EXPECT_EQ(r.mismatches.at(0).field, "max_ms");
+}
+
+}  // namespace
+}  // namespace strata::cli

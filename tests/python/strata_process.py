@@ -1,0 +1,71 @@
+"""Starts a real strata-server on a free loopback port for tests, and stops it.
+
+    with ServerProcess(binary) as server:
+        ... server.url ...
+
+The server is started with --port 0 and its log is read until it says which port it got, so
+there is no race for a port. Standard library only.
+"""
+
+import os
+import re
+import signal
+import subprocess
+import tempfile
+import time
+from typing import List, Optional
+
+_LISTENING = re.compile(r"listening on (http://[0-9.]+:([0-9]+))")
+
+
+class ServerProcess:
+    """A strata-server child process. `args` are extra flags (e.g. ["--demo"])."""
+
+    def __init__(self, binary: str, args: Optional[List[str]] = None, timeout: float = 30.0):
+        self._log = tempfile.NamedTemporaryFile(prefix="strata-server-", suffix=".log",
+                                                delete=False)
+        self.log_path = self._log.name
+        self.process = subprocess.Popen(
+            [binary, "--host", "127.0.0.1", "--port", "0", "--log-level", "info"] + (args or []),
+            stdout=self._log, stderr=subprocess.STDOUT)
+        self.url = self._wait_for_port(timeout)
+        self.port = int(self.url.rsplit(":", 1)[1])
+
+    def _wait_for_port(self, timeout: float) -> str:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            with open(self.log_path, encoding="utf-8", errors="replace") as log:
+                match = _LISTENING.search(log.read())
+            if match:
+                return match.group(1)
+            if self.process.poll() is not None:
+                raise RuntimeError(f"strata-server exited with {self.process.returncode}:\n"
+                                   + self.log())
+            time.sleep(0.02)
+        self.stop()
+        raise RuntimeError("strata-server did not start listening:\n" + self.log())
+
+    def log(self) -> str:
+        """Everything the server has logged so far."""
+        with open(self.log_path, encoding="utf-8", errors="replace") as log:
+            return log.read()
+
+    def stop(self) -> int:
+        """Stops the server (SIGTERM: a graceful shutdown) and returns its exit code."""
+        if self.process.poll() is None:
+            self.process.send_signal(signal.SIGTERM)
+            try:
+                self.process.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
+        self._log.close()
+        if os.path.exists(self.log_path):
+            os.unlink(self.log_path)
+        return self.process.returncode
+
+    def __enter__(self) -> "ServerProcess":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.stop()

@@ -1,0 +1,221 @@
+"""The strata command line as a user runs it: exit codes, the per-step table, the diff of a
+failed expectation, problem details instead of raw JSON, frames, tokens, and the README snippets."""
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import unittest
+
+from strata_process import ServerProcess
+
+SERVER = os.environ.get("STRATA_SERVER_BINARY", "build/server/strata-server")
+STRATA = os.environ.get("STRATA_CLI_BINARY", "build/clients/cli/strata")
+SOURCE = os.environ.get("STRATA_SOURCE_DIR", ".")
+
+SETUP = ('{"edits": [{"op": "clear"}, {"op": "add_mesh", "id": "ball", "shape": {"type": '
+         '"sphere", "segments": 16}}, {"op": "add_instance", "id": "b0", "mesh": "ball"}]}\n')
+
+
+def strata(*args, env=None, stdin=None, cwd=None):
+    """Runs strata; returns (exit code, stdout, stderr)."""
+    full_env = dict(os.environ)
+    full_env.pop("STRATA_TOKEN", None)
+    full_env.update(env or {})
+    p = subprocess.run([STRATA, *args], capture_output=True, text=True, env=full_env,
+                       input=stdin, cwd=cwd, timeout=120)
+    return p.returncode, p.stdout, p.stderr
+
+
+class PlayTest(unittest.TestCase):
+    def setUp(self):
+        self.dir = tempfile.TemporaryDirectory()
+
+    def tearDown(self):
+        self.dir.cleanup()
+
+    def script(self, text):
+        path = os.path.join(self.dir.name, "script.jsonl")
+        with open(path, "w") as f:
+            f.write(text)
+        return path
+
+    def test_a_passing_script_prints_a_table_writes_frames_and_exits_0(self):
+        path = self.script(
+            SETUP
+            + '{"commit": {}, "expect": {"tlas": "update", "rebuilt": {"ball": "added"}}}\n'
+            + '{"repeat": 3, "steps": [{"edits": [{"op": "set_camera", "eye": ["{n}", 1, 5]}]},'
+            + ' {"render": {"width": 16, "height": 8}, "out": "frames/f{n:2}.png",'
+            + ' "expect": {"tlas": "none", "blas_rebuilds": 0}}]}\n')
+        code, out, err = strata("play", "--embedded", path, cwd=self.dir.name)
+        self.assertEqual(code, 0, out + err)
+        self.assertIn("playing", out)
+        self.assertIn(" step  line  kind", out)
+        self.assertIn("frames/f02.png", out)
+        self.assertIn("PASS  8 steps, 8 expectations met, 3 frames written", out)
+        for n in range(3):
+            with open(os.path.join(self.dir.name, "frames", f"f{n:02}.png"), "rb") as f:
+                self.assertEqual(f.read(8), b"\x89PNG\r\n\x1a\n")
+
+    def test_a_failed_expectation_prints_a_diff_and_exits_1(self):
+        path = self.script(
+            SETUP
+            + '{"commit": {}}\n'
+            + '{"repeat": 2, "steps": [{"edits": [{"op": "mark_dirty", "target": {"mesh": "ball"},'
+            + ' "action": "rebuild"}]}, {"commit": {}, "label": "asked",'
+            + ' "expect": {"rebuilt": {"ball": "topology_changed"}, "blas_rebuilds": 0}}]}\n'
+            + '{"commit": {}}\n')
+        code, out, err = strata("play", "--embedded", path)
+        self.assertEqual(code, 1, out + err)
+        self.assertIn('FAIL  ' + path + ': step 4 (line 3, n=0) commit "asked"', out)
+        self.assertIn("blas_rebuilds  0", out)
+        self.assertIn("ball was rebuild_requested", out)
+        code, out, _ = strata("--json", "play", "--embedded", path)
+        self.assertEqual(code, 1)
+        verdict = json.loads(out.strip().splitlines()[-1])
+        self.assertEqual(verdict["result"], "fail")
+        self.assertEqual(verdict["failure"]["line"], 3)
+
+    def test_a_bad_script_names_its_line_and_exits_2(self):
+        for text, message in (
+                (SETUP + '{"commit": {}, "expect": {"blas_rebuild": 0}}\n',
+                 'line 2: unknown member "blas_rebuild" in "expect"'),
+                (SETUP + '{"comit": {}}\n', "line 2: unknown step"),
+                ('{"edits": [\n', "line 1: not JSON"),
+                ('# comment\n{"repeat": 2, "steps": [{"edits": [{"op": "clear", "x": "{n +}"}]}]}\n',
+                 "line 2: bad expression 'n +'")):
+            code, out, err = strata("play", "--embedded", self.script(text))
+            self.assertEqual(code, 2, text + out + err)
+            self.assertIn(message, err)
+            self.assertEqual(out, "")
+        code, _, err = strata("play", "--embedded", "/nonexistent.jsonl")
+        self.assertEqual(code, 2)
+        self.assertIn("cannot open script", err)
+
+    def test_a_refused_step_shows_the_problem_and_exits_3(self):
+        path = self.script('{"edits": [{"op": "add_instance", "id": "x", "mesh": "rock"}]}\n')
+        code, out, err = strata("play", "--embedded", path)
+        self.assertEqual(code, 3, out + err)
+        self.assertIn("step 1 (line 1) edits: request failed: 422 Unknown id", err)
+        self.assertIn("pointer:    /edits/0/mesh", err)
+        self.assertNotIn('{"', err)
+
+    def test_a_script_plays_from_standard_input(self):
+        code, out, err = strata("play", "--embedded", "-q", "-", stdin=SETUP + '{"commit": {}}\n')
+        self.assertEqual(code, 0, err)
+        self.assertIn("PASS  2 steps", out)
+
+
+class ServerCommandsTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.token_file = tempfile.NamedTemporaryFile("w", suffix=".token", delete=False)
+        cls.token_file.write("t0ken")
+        cls.token_file.close()
+        cls.server = ServerProcess(SERVER, ["--token-file", cls.token_file.name])
+        cls.env = {"STRATA_SERVER": cls.server.url, "STRATA_TOKEN": "t0ken"}
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.server.stop()
+        os.unlink(cls.token_file.name)
+
+    def test_every_subcommand_talks_to_the_server(self):
+        code, out, err = strata("edit", "-", env=self.env, stdin=SETUP)
+        self.assertEqual(code, 0, err)
+        self.assertRegex(out, r"^v\d+: 3 edits applied\n$")
+        code, out, _ = strata("plan", env=self.env)
+        self.assertEqual(code, 0)
+        self.assertIn("rebuilt   ball  added  224 prims", out)
+        code, out, _ = strata("--json", "commit", env=self.env)
+        self.assertEqual(code, 0)
+        self.assertEqual(json.loads(out)["tlas"]["action"], "update")
+        with tempfile.TemporaryDirectory() as d:
+            png = os.path.join(d, "out.png")
+            code, out, err = strata("render", "-o", png, "--width", "32", "--height", "16",
+                                    "--eye", "0,2,6", "--fov", "50", env=self.env)
+            self.assertEqual(code, 0, err)
+            self.assertIn("wrote " + png, out)
+            with open(png, "rb") as f:
+                self.assertEqual(f.read(4), b"\x89PNG")
+        code, out, _ = strata("stats", env=self.env)
+        self.assertEqual(code, 0)
+        self.assertIn("counters", out)
+        code, out, _ = strata("--json", "scene", env=self.env)
+        self.assertEqual(json.loads(out)["counts"]["instances"], 1)
+        code, out, err = strata("--server", self.server.url, "--token", "t0ken", "play", "-q",
+                                os.path.join(SOURCE, "tests/regression/noop_commit.jsonl"),
+                                env={"STRATA_TOKEN": "wrong"})
+        self.assertEqual(code, 0, out + err)
+
+    def test_a_missing_token_is_a_401_problem(self):
+        code, _, err = strata("stats", env={"STRATA_SERVER": self.server.url})
+        self.assertEqual(code, 3)
+        self.assertIn("401 Unauthorized", err)
+        self.assertIn("detail:     this server requires Authorization: Bearer <token>", err)
+
+    def test_an_unreachable_server_exits_3_saying_so(self):
+        code, _, err = strata("--server", "http://127.0.0.1:1", "commit")
+        self.assertEqual(code, 3)
+        self.assertIn("could not connect (http://127.0.0.1:1)", err)
+
+    def test_usage_errors_exit_2(self):
+        self.assertEqual(strata("--server", "localhost:7070", "stats")[0], 2)
+        self.assertEqual(strata("render")[0], 2)  # -o is required
+        self.assertEqual(strata("play", "--demo", "x.jsonl")[0], 2)
+        self.assertEqual(strata()[0], 2)
+
+
+class ReadmeSnippetsTest(unittest.TestCase):
+    """The examples of clients/README-snippets.md, as written there (with the test server's URL
+    for 127.0.0.1:7070)."""
+
+    def setUp(self):
+        with open(os.path.join(SOURCE, "clients/README-snippets.md")) as f:
+            self.text = f.read()
+        self.server = ServerProcess(SERVER, ["--demo"])  # the server from README command (1)
+
+    def tearDown(self):
+        self.server.stop()
+
+    def block(self, language):
+        start = self.text.index("```" + language + "\n") + len(language) + 4
+        return self.text[start:self.text.index("```", start)]
+
+    def last_block(self):
+        end = self.text.rindex("```")
+        return self.text[self.text.rindex("```\n", 0, end) + 4:end]
+
+    def test_the_cli_snippet_plays_embedded_and_on_the_server(self):
+        commands = [line.split("#")[0].split() for line in self.block("sh").splitlines()]
+        self.assertEqual(commands[0][:2], ["build/clients/cli/strata", "play"])
+        with tempfile.TemporaryDirectory() as d:
+            for args in commands:
+                args = [os.path.join(SOURCE, a) if a.endswith(".jsonl") else a for a in args[1:]]
+                code, out, err = strata(*args, env={"STRATA_SERVER": self.server.url}, cwd=d)
+                self.assertEqual(code, 0, out + err)
+                self.assertIn("PASS  98 steps, 291 expectations met, 48 frames written", out)
+            self.assertTrue(os.path.exists(os.path.join(d, "frames/flag/frame_047.png")))
+
+    def test_the_python_snippet_prints_what_it_says(self):
+        code = self.block("python").replace("http://127.0.0.1:7070", self.server.url)
+        with tempfile.TemporaryDirectory() as d:
+            p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                               cwd=d, timeout=120)
+            self.assertEqual(p.returncode, 0, p.stderr)
+            with open(os.path.join(d, "orb.png"), "rb") as f:
+                self.assertEqual(f.read(4), b"\x89PNG")
+        lines = p.stdout.splitlines()
+        expected = self.last_block().strip().splitlines()
+        self.assertEqual(len(lines), len(expected), p.stdout)
+        # The first render's counts depend on the demo scene and its time varies: its shape must
+        # match; the other lines exactly.
+        pattern = r"v2 tlas=update\(\d+\) rebuilds=\d+ refits=0 prims=\d+ ms=[0-9.]+"
+        self.assertRegex(expected[0], pattern)
+        self.assertRegex(lines[0], pattern)
+        self.assertEqual(lines[1:], expected[1:])
+
+
+if __name__ == "__main__":
+    unittest.main()

@@ -1,0 +1,187 @@
+"""The Python client against a real strata-server: every method, problem documents as
+ProblemError, If-Match, keep-alive and reconnection, bearer tokens, and numpy frames."""
+
+import os
+import socket
+import tempfile
+import unittest
+
+from strata_client import Client, ProblemError
+from strata_process import ServerProcess
+
+SERVER = os.environ.get("STRATA_SERVER_BINARY", "build/server/strata-server")
+
+SCENE = [
+    {"op": "add_mesh", "id": "ball", "shape": {"type": "sphere", "segments": 16}},
+    {"op": "add_material", "id": "red", "base_color": [0.9, 0.1, 0.1]},
+    {"op": "add_instance", "id": "b0", "mesh": "ball", "material": "red"},
+    {"op": "set_camera", "eye": [0, 0.5, 4], "target": [0, 0, 0]},
+]
+
+
+class ClientTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.server = ServerProcess(SERVER)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.server.stop()
+
+    def setUp(self):
+        self.client = Client(self.server.url)
+        self.client.edit([{"op": "clear"}])
+        self.version = self.client.edit(SCENE)
+
+    def tearDown(self):
+        self.client.close()
+
+    def test_edit_returns_the_new_version_and_commit_the_report(self):
+        report = self.client.commit()
+        self.assertEqual(report["version"], self.version)
+        self.assertEqual(report["tlas"]["action"], "update")
+        self.assertEqual([e["mesh"] for e in report["rebuilt"]], ["ball"])
+        self.assertEqual(report["primitives_built"], 224)
+        moved = self.client.edit([{"op": "set_transform", "instance": "b0",
+                                   "transform": {"translate": [0, 1, 0]}}])
+        self.assertEqual(moved, self.version + 1)
+        plan = self.client.plan()
+        self.assertTrue(plan["planned"])
+        self.assertEqual(plan["tlas"]["action"], "update")
+        self.assertEqual(plan["rebuilt"], [])
+        self.assertEqual(self.client.commit()["blas_rebuilds"], 0)
+
+    def test_an_invalid_edit_raises_a_problem_with_its_index_and_pointer(self):
+        with self.assertRaises(ProblemError) as caught:
+            self.client.edit([{"op": "set_camera", "fov_y_deg": 30},
+                              {"op": "remove_instance", "instance": "nope"}])
+        p = caught.exception
+        self.assertEqual(p.status, 422)
+        self.assertEqual(p.title, "Unknown id")
+        self.assertEqual(p.edit_index, 1)
+        self.assertEqual(p.pointer, "/edits/1/instance")
+        self.assertEqual(p.type, "https://strata.dev/problems/unknown-id")
+        self.assertIn("unknown instance 'nope'", p.detail)
+        self.assertIn("422 Unknown id: edit 1", str(p))
+        # Atomic: the valid first edit was not applied either.
+        self.assertEqual(self.client.scene()["version"], self.version)
+
+    def test_a_schema_error_is_a_400_problem(self):
+        with self.assertRaises(ProblemError) as caught:
+            self.client.edit([{"op": "add_mesh", "id": "m", "postions": []}])
+        self.assertEqual(caught.exception.status, 400)
+        self.assertEqual(caught.exception.pointer, "/edits/0/postions")
+        self.assertEqual(caught.exception.edit_index, 0)
+
+    def test_if_match_applies_only_at_that_version(self):
+        v = self.client.edit([], if_match=self.version)
+        self.assertEqual(v, self.version + 1)
+        with self.assertRaises(ProblemError) as caught:
+            self.client.edit([], if_match=self.version)
+        self.assertEqual(caught.exception.status, 412)
+        self.assertEqual(caught.exception.etag, f'"{self.version + 1}"')
+        self.assertEqual(self.client.edit([], if_match="*"), self.version + 2)
+
+    def test_render_returns_the_image_and_what_its_commit_did(self):
+        png = self.client.render(64, 32)
+        self.assertTrue(png.startswith(b"\x89PNG\r\n\x1a\n"))
+        info = self.client.last_render
+        self.assertEqual(info.version, self.version)
+        self.assertEqual(info.content_type, "image/png")
+        self.assertTrue(info.rebuild.startswith(f"v{self.version} tlas=update(1) rebuilds=1"),
+                        info.rebuild)
+        self.client.render(16, 16, camera={"eye": [0, 5, 0.1]}, exposure=1)
+        self.assertTrue(self.client.last_render.rebuild.startswith(
+            f"v{self.version} tlas=none(1) rebuilds=0 refits=0"))
+
+    def test_render_problems_carry_their_pointer(self):
+        with self.assertRaises(ProblemError) as caught:
+            self.client.render(65536, 65536)
+        self.assertEqual(caught.exception.status, 413)
+        self.assertEqual(caught.exception.pointer, "/width")
+        with self.assertRaises(ProblemError) as caught:
+            self.client.render(8, 8, widht=3)
+        self.assertEqual(caught.exception.status, 400)
+
+    def test_render_array_is_a_numpy_image_of_the_frame(self):
+        import numpy as np
+        frame = self.client.render_array(48, 32)
+        self.assertEqual(frame.shape, (32, 48, 3))
+        self.assertEqual(frame.dtype, np.uint8)
+        # The red ball sits in the middle of a sky-coloured frame.
+        centre, corner = frame[16, 24].astype(int), frame[0, 0].astype(int)
+        self.assertGreater(centre[0], centre[2])
+        self.assertGreater(corner[2], corner[0])
+        with self.assertRaises(NotImplementedError):
+            self.client.render_array(8, 8, fmt="exr")
+
+    def test_stats_and_scene(self):
+        self.client.commit()
+        stats = self.client.stats()
+        self.assertEqual(stats["version"], self.version)
+        self.assertEqual(stats["last_report"]["version"], self.version)
+        self.assertGreater(stats["counters"]["commits"], 0)
+        scene = self.client.scene()
+        self.assertEqual(scene["counts"]["instances"], 1)
+        self.assertEqual(self.client.scene("instances", "b0")["material"], "red")
+        self.assertEqual(self.client.scene("meshes", "ball")["triangles"], 224)
+        with self.assertRaises(ProblemError) as caught:
+            self.client.scene("materials", "nope/../x")
+        self.assertEqual(caught.exception.status, 404)
+        with self.assertRaises(ValueError):
+            self.client.scene("lights", "sun")
+
+    def test_one_connection_is_kept_alive_across_requests(self):
+        self.client.stats()
+        sock = self.client._conn.sock
+        for _ in range(5):
+            self.client.plan()
+            self.client.commit()
+        self.assertIs(self.client._conn.sock, sock)
+
+    def test_a_dropped_connection_is_reopened(self):
+        self.client.stats()
+        self.client._conn.sock.shutdown(socket.SHUT_RDWR)  # as if the server had closed it
+        self.assertEqual(self.client.stats()["version"], self.version)
+        # Edits are safe to resend: the server never saw the first attempt.
+        self.client._conn.sock.shutdown(socket.SHUT_RDWR)
+        self.assertEqual(self.client.edit([]), self.version + 1)
+        self.assertEqual(self.client.edit([]), self.version + 2)
+
+    def test_a_context_manager_closes_the_connection(self):
+        with Client(self.server.url) as c:
+            c.stats()
+            self.assertIsNotNone(c._conn)
+        self.assertIsNone(c._conn)
+
+    def test_bad_urls_are_refused(self):
+        for url in ("localhost:7070", "ftp://host", "http://host/v1", "http://"):
+            with self.assertRaises(ValueError):
+                Client(url)
+
+    def test_an_unreachable_server_raises_a_connection_error(self):
+        with socket.socket() as s:
+            s.bind(("127.0.0.1", 0))
+            port = s.getsockname()[1]
+        with self.assertRaises(ConnectionError):
+            Client(f"http://127.0.0.1:{port}", timeout=5).stats()
+
+
+class TokenTest(unittest.TestCase):
+    def test_the_bearer_token_is_sent(self):
+        with tempfile.NamedTemporaryFile("w", suffix=".token", delete=False) as f:
+            f.write("s3cret\n")
+        try:
+            with ServerProcess(SERVER, ["--token-file", f.name]) as server:
+                with self.assertRaises(ProblemError) as caught:
+                    Client(server.url).stats()
+                self.assertEqual(caught.exception.status, 401)
+                self.assertEqual(caught.exception.title, "Unauthorized")
+                with Client(server.url, token="s3cret") as c:
+                    self.assertEqual(c.stats()["version"], 0)
+        finally:
+            os.unlink(f.name)
+
+
+if __name__ == "__main__":
+    unittest.main()
