@@ -106,7 +106,7 @@ int main(int argc, char** argv) {
                        "Play against an in-process engine instead of a server");
     play_cmd->add_flag("--demo", play.demo, "With --embedded: start from the demo scene");
     play_cmd->add_flag("--budgets", play.budgets,
-                       "Also check the budgets (max_ms, max_primitives_built)");
+                       "Also check the time budget max_ms (max_primitives_built is always checked)");
     play_cmd
         ->add_option("--max-repeat", play.max_repeat,
                      "Play at most N iterations of each repeat step (quick checks)")

@@ -206,12 +206,10 @@ Outcome<Expectation> Expectation::compile(const Json& v, const std::vector<std::
 }
 
 std::size_t Expectation::count_checks() const {
-    return m_counts.size() + m_meshes.size() + (m_tlas ? 1 : 0);
+    return m_counts.size() + m_meshes.size() + (m_tlas ? 1 : 0) + (m_max_primitives_built ? 1 : 0);
 }
 
-std::size_t Expectation::count_budgets() const {
-    return (m_max_ms ? 1 : 0) + (m_max_primitives_built ? 1 : 0);
-}
+std::size_t Expectation::count_budgets() const { return m_max_ms ? 1 : 0; }
 
 Outcome<std::vector<Mismatch>> Expectation::check(const Json& report, const Bindings& vars,
                                                   bool budgets) const {
@@ -270,8 +268,9 @@ Outcome<std::vector<Mismatch>> Expectation::check(const Json& report, const Bind
                        describe_meshes(actual, f.expect.with_reasons), note});
     }
 
-    // Step 4: budgets, only in the budgets profile.
-    if (budgets) {
+    // Step 4: budgets. A primitive count is deterministic and always checked; wall time only
+    // in the budgets profile.
+    {
         auto budget = [&](const std::optional<Expression>& limit, const char* field,
                           const char* member) -> std::optional<Failure> {
             if (!limit) return std::nullopt;
@@ -286,7 +285,9 @@ Outcome<std::vector<Mismatch>> Expectation::check(const Json& report, const Bind
             }
             return std::nullopt;
         };
-        if (auto e = budget(m_max_ms, "max_ms", "ms")) return *e;
+        if (budgets) {
+            if (auto e = budget(m_max_ms, "max_ms", "ms")) return *e;
+        }
         if (auto e = budget(m_max_primitives_built, "max_primitives_built", "primitives_built"))
             return *e;
     }

@@ -8,8 +8,8 @@
 //   meshes    rebuilt, refit, released: the exact set of mesh ids, as an array (["a", "b"]) or,
 //             for rebuilt and refit, as an object that also pins each reason
 //             ({"a": "topology_changed"})
-//   budgets   max_ms (the commit's wall time) and max_primitives_built: checked only with
-//             --budgets, so that the counts stay exact and CI never depends on timing
+//   budgets   max_primitives_built (deterministic, always checked) and max_ms (the commit's
+//             wall time: checked only with --budgets, so CI never depends on timing)
 //
 // Numbers and ids may use `{expr}` substitutions (script_template.h).
 

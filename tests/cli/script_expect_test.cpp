@@ -102,10 +102,14 @@ TEST(ScriptExpect, TheTlasActionMustMatch) {
     EXPECT_EQ(m[0].actual, "update");
 }
 
-TEST(ScriptExpect, BudgetsAreCheckedOnlyInTheBudgetsProfile) {
+TEST(ScriptExpect, TheTimeBudgetIsCheckedOnlyInTheBudgetsProfile) {
     const Json expect = {{"max_ms", 10}, {"max_primitives_built", 50}};
-    EXPECT_TRUE(check(expect, false).empty());
-    const auto m = check(expect, true);
+    // The primitive budget is a count: checked in every profile.
+    auto m = check(expect, false);
+    ASSERT_EQ(m.size(), 1u);
+    EXPECT_EQ(m[0].field, "max_primitives_built");
+    EXPECT_EQ(m[0].note, "over budget");
+    m = check(expect, true);
     ASSERT_EQ(m.size(), 2u);
     EXPECT_EQ(m[0].field, "max_ms");
     EXPECT_EQ(m[0].expected, "<= 10");
@@ -113,9 +117,10 @@ TEST(ScriptExpect, BudgetsAreCheckedOnlyInTheBudgetsProfile) {
     EXPECT_EQ(m[0].note, "over budget");
     EXPECT_EQ(m[1].field, "max_primitives_built");
     EXPECT_TRUE(check({{"max_ms", 13}, {"max_primitives_built", 100}}, true).empty());
+    EXPECT_TRUE(check({{"max_ms", 1}, {"max_primitives_built", 100}}, false).empty());
     const Expectation e = compile(expect);
-    EXPECT_EQ(e.count_budgets(), 2u);
-    EXPECT_EQ(e.count_checks(), 0u);
+    EXPECT_EQ(e.count_budgets(), 1u);
+    EXPECT_EQ(e.count_checks(), 1u);
 }
 
 TEST(ScriptExpect, AMemberMissingFromTheReportIsAMismatch) {
