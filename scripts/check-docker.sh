@@ -15,10 +15,12 @@
 #               runtime stage's RUN does; `cmake --install` puts BUILD_DIR's binaries at the
 #               prefix, as its COPY --from=build does; ldd must resolve every library.
 #   4. run      strata-server started the way the image starts it: PID 1 of its own PID
-#               namespace, as USER, in WORKDIR, with exactly the ENV. Without a token it must
-#               refuse to start; with a mounted token file or STRATA_TOKEN it must turn healthy
-#               (HEALTHCHECK's command), answer 401 without the token and 200 with it, render,
-#               and exit 0 on SIGTERM; with STRATA_INSECURE=1 it must serve without a token.
+#               namespace, as USER, in WORKDIR, with exactly the ENV, on a read-only root with a
+#               writable VOLUME. Without a token it must refuse to start; with a mounted token
+#               file and with STRATA_TOKEN it must turn healthy (HEALTHCHECK's command), answer
+#               401 without the token and 200 with it, render, exit 0 on SIGTERM and never log
+#               the token; with STRATA_INSECURE=1 it must serve without a token, and exit 0 on
+#               SIGINT.
 #
 # Needs root (mmdebstrap, chroot, namespaces) and Debian's package mirror. Mounts exist only in
 # private mount namespaces, so nothing stays mounted whatever happens; the root is deleted on exit
@@ -50,11 +52,16 @@ remove_root() {
     rm -rf "$root"
 }
 
-# Cleanup: the server processes of a scenario that did not finish, then the root.
+# Cleanup: the processes of a scenario that did not finish (the unshare process, and its child
+# whatever it has exec'd into by now), then the root.
 pids=()
 cleanup() {
-    local pid
-    for pid in "${pids[@]}"; do kill -KILL "$pid" 2>/dev/null || true; done
+    local pid children
+    for pid in "${pids[@]}"; do
+        children=()
+        read -r -a children 2>/dev/null <"/proc/$pid/task/$pid/children" || true
+        kill -KILL "${children[@]}" "$pid" 2>/dev/null || true
+    done
     for pid in "${pids[@]}"; do wait "$pid" 2>/dev/null || true; done
     if [ "${STRATA_KEEP_ROOT:-0}" != 1 ]; then remove_root || true; fi
 }
@@ -265,11 +272,12 @@ expect "exit status without a token" 2 "$exit_status" no-token.log
 grep -q "without a token" "$logs/no-token.log" || fail "no reason given for refusing to start"
 
 for source in file env; do
-    echo "scenario: token from $( [ $source = file ] && echo "a mounted file (STRATA_TOKEN_FILE)" || echo STRATA_TOKEN)"
     log="token-$source.log"
     if [ $source = file ]; then
+        echo "scenario: token in a mounted file (STRATA_TOKEN_FILE), demo scene"
         start_server "$log" STRATA_TOKEN_FILE=/run/secrets/strata_token STRATA_DEMO=1
     else
+        echo "scenario: token in STRATA_TOKEN, demo scene"
         start_server "$log" "STRATA_TOKEN=$token" STRATA_DEMO=1
     fi
     [ -n "$server_pid" ] || fail "the server did not start (see $logs/$log)"

@@ -54,13 +54,15 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
     app.add_flag("--demo", c.demo, "Start with the demo scene");
     app.add_option("--log-level", cl.log_level, "trace, debug, info, warn, error, critical or off")
         ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
-    // Every option above can also come from the environment (containers are configured that
-    // way); the command line wins. The two below are per-invocation, so they have no variable.
+    // Every option above can also come from the environment, --x-y from STRATA_X_Y (containers
+    // are configured that way); the command line wins. --help and --healthcheck are about one
+    // invocation, so they have no variable.
     for (CLI::Option* opt : app.get_options()) {
-        if (opt->get_lnames().empty()) continue;
+        if (opt->get_lnames().empty() || opt->get_lnames().front() == "help") continue;
         std::string name = "STRATA_" + opt->get_lnames().front();
-        for (char& ch : name) ch = ch == '-' ? '_' : char(std::toupper((unsigned char)ch));
-        if (name != "STRATA_HELP") opt->envname(name);
+        for (char& ch : name)
+            ch = ch == '-' ? '_' : char(std::toupper(static_cast<unsigned char>(ch)));
+        opt->envname(name);
     }
     app.add_flag("--healthcheck", cl.healthcheck,
                  "Start no server: GET /readyz on --host (a wildcard address means 127.0.0.1 or "
