@@ -74,7 +74,8 @@ lint() { node docker/lint/node_modules/dockerfile-utils/bin/dockerfile-utils lin
 mkdir -p "$logs"
 # The linter must see a problem where there is one, or a clean result proves nothing.
 printf 'FROM debian:12-slim\nMAINTAINER nobody\n' >"$logs/canary.Dockerfile"
-[ "$(lint --json "$logs/canary.Dockerfile")" != "[]" ] || fail "the linter flags nothing in a bad file"
+[ "$(lint --json "$logs/canary.Dockerfile")" != "[]" ] ||
+    fail "the linter flags nothing in a bad file"
 if [ "$(lint --json docker/Dockerfile)" != "[]" ]; then
     lint docker/Dockerfile || true
     fail "docker/Dockerfile has lint warnings or errors (above)"
@@ -148,17 +149,20 @@ fi
 # Each library's package (merged /usr: dpkg may know the path with or without /usr).
 packages="$(awk '$2 == "=>" { print $3 }' <<<"$libs" | while read -r lib; do
     real="$(chroot "$root" readlink -f "$lib")"
-    chroot "$root" dpkg -S "$real" 2>/dev/null || chroot "$root" dpkg -S "${real#/usr}" 2>/dev/null ||
-        echo "?: $real"
+    chroot "$root" dpkg -S "$real" 2>/dev/null ||
+        chroot "$root" dpkg -S "${real#/usr}" 2>/dev/null || echo "?: $real"
 done | cut -d: -f1 | sort -u | tr '\n' ' ')"
 echo "strata-server's libraries all resolve; they come from: $packages"
-[ "$(stat -c %u:%g "$root$RT_VOLUME")" = "$RT_UID:$RT_GID" ] || fail "$RT_VOLUME is not owned by $RT_USER"
-chroot --userspec="$RT_USER" "$root" test -w "$RT_VOLUME" || fail "$RT_VOLUME is not writable by $RT_USER"
+[ "$(stat -c %u:%g "$root$RT_VOLUME")" = "$RT_UID:$RT_GID" ] ||
+    fail "$RT_VOLUME is not owned by $RT_USER"
+chroot --userspec="$RT_USER" "$root" test -w "$RT_VOLUME" ||
+    fail "$RT_VOLUME is not writable by $RT_USER"
 [ "$(chroot "$root" id -u strata)" = "$RT_UID" ] || fail "user strata is not uid $RT_UID"
 
 # ---- 4. run ----
 step "strata-server as the image runs it"
-port="$(/usr/bin/python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')"
+port="$(/usr/bin/python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0))
+print(s.getsockname()[1])')"
 token="$(head -c 24 /dev/urandom | od -An -tx1 | tr -d ' \n')"
 mkdir -p "$root/run/secrets"
 printf '%s\n' "$token" >"$root/run/secrets/strata_token"
@@ -239,7 +243,8 @@ http_status() {
         echo 0
         return
     fi
-    printf 'GET %s HTTP/1.1\r\nHost: 127.0.0.1\r\n%sConnection: close\r\n\r\n' "$path" "$auth" >&"$fd"
+    printf 'GET %s HTTP/1.1\r\nHost: 127.0.0.1\r\n%sConnection: close\r\n\r\n' "$path" "$auth" \
+        >&"$fd"
     IFS=' ' read -r -t 10 _ line _ <&"$fd" || line=0
     exec {fd}<&-
     echo "${line:-0}"
@@ -281,8 +286,9 @@ for source in file env; do
         start_server "$log" "STRATA_TOKEN=$token" STRATA_DEMO=1
     fi
     [ -n "$server_pid" ] || fail "the server did not start (see $logs/$log)"
-    expect "pid inside the namespace" 1 "$(awk '/^NSpid:/ { print $NF }' "/proc/$server_pid/status")" "$log"
-    expect "uid" "$RT_UID" "$(awk '/^Uid:/ { print $2 }' "/proc/$server_pid/status")" "$log"
+    status_file="/proc/$server_pid/status"
+    expect "pid inside the namespace" 1 "$(awk '/^NSpid:/ { print $NF }' "$status_file")" "$log"
+    expect "uid" "$RT_UID" "$(awk '/^Uid:/ { print $2 }' "$status_file")" "$log"
     wait_healthy || fail "HEALTHCHECK never passed (see $logs/$log, $logs/healthcheck.log)"
     echo "  ok: HEALTHCHECK ${RT_HEALTHCHECK[*]} exits 0"
     expect "GET /readyz without a token" 200 "$(http_status /readyz)" "$log"

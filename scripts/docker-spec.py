@@ -78,13 +78,14 @@ def read_stage(path, problems):
         elif keyword == "ENTRYPOINT":
             spec["entrypoint"] = exec_form(rest, "ENTRYPOINT", problems)
         elif keyword == "HEALTHCHECK":
-            words = rest.split(" ")
-            while words and words[0].startswith("--"):
-                words.pop(0)
-            if not words or words[0] != "CMD":
+            command = rest
+            while command.startswith("--"):  # --interval=10s and the like
+                command = command.split(None, 1)[1] if " " in command else ""
+            head, _, args = command.partition(" ")
+            if head != "CMD":
                 problems.append(f"HEALTHCHECK needs CMD: {rest}")
             else:
-                spec["healthcheck"] = exec_form(" ".join(words[1:]), "HEALTHCHECK CMD", problems)
+                spec["healthcheck"] = exec_form(args.strip(), "HEALTHCHECK CMD", problems)
         elif keyword == "COPY" and rest.startswith("--from=build "):
             src, dst = rest.split()[1:3]
             if src.rstrip("/") != dst.rstrip("/"):

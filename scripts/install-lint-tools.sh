@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the offline Dockerfile linter that scripts/check-docker.sh runs: npm's
-# dockerfile-utils, exactly as pinned in docker/lint/package-lock.json, into docker/lint/node_modules
-# (gitignored; never a global install). Node.js and npm come from Debian's nodejs and npm packages
+# dockerfile-utils, exactly as pinned in docker/lint/package-lock.json, into
+# docker/lint/node_modules (gitignored; never a global install). Node.js and npm come from Debian's nodejs and npm packages
 # when npm is missing. Idempotent; installing Debian packages needs root (or sudo).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -16,7 +16,8 @@ if ! command -v npm >/dev/null; then
 fi
 
 lint=docker/lint
-wanted="$(node -p "require('./$lint/package-lock.json').packages['node_modules/dockerfile-utils'].version")"
+wanted="$(node -p "require('./$lint/package-lock.json')
+                    .packages['node_modules/dockerfile-utils'].version")"
 installed="$(node -p "try { require('./$lint/node_modules/dockerfile-utils/package.json').version }
                       catch (e) { '' }")"
 if [ "$installed" = "$wanted" ]; then
