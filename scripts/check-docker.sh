@@ -15,8 +15,8 @@
 #               runtime stage's RUN does; `cmake --install` puts BUILD_DIR's binaries at the
 #               prefix, as its COPY --from=build does; ldd must resolve every library.
 #   4. run      strata-server started the way the image starts it: PID 1 of its own PID
-#               namespace, as USER, in WORKDIR, with exactly the ENV, on a read-only root with a
-#               writable VOLUME. Without a token it must refuse to start; with a mounted token
+#               namespace, as USER (no capabilities), in WORKDIR, with exactly the ENV, on a
+#               read-only root with a writable VOLUME. Without a token it must refuse to start; with a mounted token
 #               file and with STRATA_TOKEN it must turn healthy (HEALTHCHECK's command), answer
 #               401 without the token and 200 with it, render, exit 0 on SIGTERM and never log
 #               the token; with STRATA_INSECURE=1 it must serve without a token, and exit 0 on
@@ -289,6 +289,7 @@ for source in file env; do
     status_file="/proc/$server_pid/status"
     expect "pid inside the namespace" 1 "$(awk '/^NSpid:/ { print $NF }' "$status_file")" "$log"
     expect "uid" "$RT_UID" "$(awk '/^Uid:/ { print $2 }' "$status_file")" "$log"
+    expect "capabilities" 0000000000000000 "$(awk '/^CapEff:/ { print $2 }' "$status_file")" "$log"
     wait_healthy || fail "HEALTHCHECK never passed (see $logs/$log, $logs/healthcheck.log)"
     echo "  ok: HEALTHCHECK ${RT_HEALTHCHECK[*]} exits 0"
     expect "GET /readyz without a token" 200 "$(http_status /readyz)" "$log"
