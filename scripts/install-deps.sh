@@ -4,7 +4,8 @@
 #   scripts/install-deps.sh           build + test dependencies (default)
 #   scripts/install-deps.sh --runtime only the shared libraries strata-server needs at run time
 #
-# README, .ci/run and docker/Dockerfile all call this one script.
+# README, .ci/run and docker/Dockerfile all call this one script (the runtime mode through
+# docker/setup-runtime.sh). The Dockerfile linter is npm's: scripts/install-lint-tools.sh.
 set -euo pipefail
 
 mode=build
@@ -15,8 +16,11 @@ case "${1:-}" in
     *) echo "install-deps.sh: unknown option '$1' (use --build or --runtime)" >&2; exit 2 ;;
 esac
 
+# What strata-server's ELF NEEDED entries resolve to (readelf -d; libc6 is always there), and
+# OpenEXR for the renderer. scripts/check-docker.sh fails if ldd finds a library missing.
 runtime_pkgs=(
-    libembree3-3 libtbb12 libopenexr-3-1-30 libpng16-16 libspdlog1.10 libcpp-httplib0.11 ca-certificates
+    libembree3-3 libtbb12 libopenexr-3-1-30 libpng16-16 libspdlog1.10 libfmt9 libcpp-httplib0.11
+    libstdc++6 libgcc-s1
 )
 build_pkgs=(
     build-essential cmake ninja-build pkg-config git ca-certificates curl
@@ -24,7 +28,7 @@ build_pkgs=(
     libgtest-dev libgmock-dev libbenchmark-dev libpng-dev
     libtinygltf-dev libtinyobjloader-dev libcli11-dev libspdlog-dev
     clang libclang-rt-14-dev
-    python3 python3-jsonschema python3-numpy
+    python3 python3-jsonschema python3-numpy python3-yaml
     assimp-testmodels mmdebstrap
 )
 

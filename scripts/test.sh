@@ -7,6 +7,8 @@
 #   2. build/ (RelWithDebInfo)               full build, then every CTest test
 #   3. build-asan/ (ASan + UBSan)            engine tests under the sanitizers
 #   4. build-fuzz/ (clang, libFuzzer)        the edit-batch parser fuzzer, bounded run
+#   5. build-docker/ (mmdebstrap, chroot)    docker/: lint, and the image's runtime stage run in a
+#                                            fresh Debian 12 root (scripts/check-docker.sh)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -29,5 +31,8 @@ ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:ha
 
 step "fuzzing the edit-batch parser (build-fuzz/)"
 scripts/run-fuzz.sh
+
+step "docker image checks: lint, runtime stage in a Debian 12 root (build-docker/)"
+scripts/check-docker.sh build
 
 step "all tests passed"

@@ -8,7 +8,11 @@
 
 namespace strata::server {
 
-/// Reads a token file: surrounding whitespace trimmed; an empty or unreadable file is an error.
+/// Checks a token's text: surrounding whitespace is trimmed; an empty token, or one with
+/// whitespace or non-ASCII inside, is an error naming `source` (never the token).
+Result<std::string> parse_token(std::string_view text, const std::string& source);
+
+/// Reads a token file with parse_token; an unreadable file is an error too.
 Result<std::string> read_token_file(const std::string& path);
 
 /// True when `authorization` is "Bearer <token>" (scheme case-insensitive) with the right token.

@@ -8,20 +8,28 @@
 
 namespace strata::server {
 
-/// What the command line asks for.
+/// The environment variable that may hold the bearer token itself (a token file is given with
+/// --token-file or STRATA_TOKEN_FILE; every flag --x-y has a variable STRATA_X_Y).
+inline constexpr const char* TOKEN_ENV = "STRATA_TOKEN";
+
+/// What the command line and the environment ask for.
 struct CommandLine {
     ServerConfig config;
     std::string token_file;
+    std::string token_source;  ///< where the token came from, for the log (never the token)
     std::string log_level = "info";
     bool insecure = false;
+    bool healthcheck = false;  ///< probe a running server instead of starting one
 };
 
-/// Parses argv. Returns the exit code instead when the program should stop now (--help: 0,
-/// a usage error: 2), having printed what to print.
+/// Parses argv, falling back to STRATA_* environment variables for options not on it. Returns
+/// the exit code instead when the program should stop now (--help: 0, a usage error: 2), having
+/// printed what to print.
 std::variant<CommandLine, int> parse_command_line(int argc, char** argv);
 
-/// Reads the token file and enforces the loopback rule: a non-loopback --host needs a token
-/// unless --insecure is given. Returns the error message, or "" when the server may start.
+/// Reads the token (a token file, or STRATA_TOKEN; both at once is an error) and enforces the
+/// loopback rule: a non-loopback --host needs a token unless --insecure is given. Returns the
+/// error message, or "" when the server may start.
 std::string finish_config(CommandLine& cl);
 
 }  // namespace strata::server

@@ -7,6 +7,7 @@
 
 #include "engine/scene/demo_scene.h"
 #include "server/cli.h"
+#include "server/healthcheck.h"
 #include "server/server.h"
 #include "server/shutdown.h"
 
@@ -43,9 +44,10 @@ int serve(server::CommandLine& cl) {
                      signo == SIGINT ? "SIGINT" : "SIGTERM");
         http.stop();
     });
-    spdlog::info("strata-server listening on http://{}:{} ({} threads{})", cl.config.host,
+    spdlog::info("strata-server listening on http://{}:{} ({} threads, {})", cl.config.host,
                  port.value(), cl.config.threads,
-                 cl.config.token.empty() ? "" : ", bearer token required");
+                 cl.config.token.empty() ? "no authentication"
+                                         : "bearer token required, from " + cl.token_source);
     http.listen();
     spdlog::info("stopped");
     return 0;
@@ -57,6 +59,7 @@ int main(int argc, char** argv) {
     auto parsed = server::parse_command_line(argc, argv);
     if (auto* code = std::get_if<int>(&parsed)) return *code;
     auto& cl = std::get<server::CommandLine>(parsed);
+    if (cl.healthcheck) return server::run_healthcheck(cl.config.host, cl.config.port);
 
     spdlog::set_default_logger(spdlog::stderr_color_mt("strata"));
     spdlog::set_level(spdlog::level::from_str(cl.log_level));

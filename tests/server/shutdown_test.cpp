@@ -1,72 +1,20 @@
 // The strata-server program itself: SIGTERM and SIGINT finish in-flight requests and exit 0, and
 // the command-line refusals exit non-zero.
 
-#include <netinet/in.h>
 #include <signal.h>
-#include <spawn.h>
-#include <sys/socket.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <future>
 #include <string>
 #include <thread>
-#include <vector>
 
 #include <gtest/gtest.h>
 #include <httplib.h>
 
-extern char** environ;
+#include "tests/server/process_util.h"
 
 namespace strata::server::test {
 namespace {
-
-int free_port() {
-    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in addr{};
-    addr.sin_family = AF_INET;
-    addr.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    ::bind(fd, reinterpret_cast<sockaddr*>(&addr), sizeof addr);
-    socklen_t len = sizeof addr;
-    ::getsockname(fd, reinterpret_cast<sockaddr*>(&addr), &len);
-    ::close(fd);
-    return ntohs(addr.sin_port);
-}
-
-/// Runs strata-server with `args`; returns its pid.
-pid_t spawn_server(const std::vector<std::string>& args) {
-    std::vector<std::string> all = {STRATA_SERVER_BINARY, "--log-level", "warn"};
-    all.insert(all.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (auto& a : all) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    pid_t pid = 0;
-    EXPECT_EQ(posix_spawn(&pid, STRATA_SERVER_BINARY, nullptr, nullptr, argv.data(), environ), 0);
-    return pid;
-}
-
-/// Waits for the process to exit; returns its exit status, or -1 after `seconds`.
-int wait_exit(pid_t pid, int seconds) {
-    for (int i = 0; i < seconds * 100; ++i) {
-        int status = 0;
-        if (waitpid(pid, &status, WNOHANG) == pid)
-            return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-        std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    kill(pid, SIGKILL);
-    waitpid(pid, nullptr, 0);
-    return -1;
-}
-
-bool wait_live(int port) {
-    httplib::Client c("127.0.0.1", port);
-    for (int i = 0; i < 500; ++i) {
-        if (auto r = c.Get("/livez"); r && r->status == 200) return true;
-        std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    return false;
-}
 
 void finishes_in_flight_work_on(int signo) {
     const int port = free_port();

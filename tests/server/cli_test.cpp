@@ -1,0 +1,152 @@
+// The command line and its STRATA_* environment variables: precedence, tokens, the loopback rule.
+
+#include "server/cli.h"
+
+#include <cstdlib>
+#include <fstream>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace strata::server::test {
+namespace {
+
+/// Sets environment variables for one test and restores the previous values afterwards.
+class ScopedEnv {
+public:
+    ScopedEnv(std::initializer_list<std::pair<const char*, const char*>> vars) {
+        for (const auto& [name, value] : vars) {
+            const char* old = std::getenv(name);
+            m_saved.emplace_back(name, old ? std::optional<std::string>(old) : std::nullopt);
+            if (value) {
+                setenv(name, value, 1);
+            } else {
+                unsetenv(name);
+            }
+        }
+    }
+    ~ScopedEnv() {
+        for (const auto& [name, old] : m_saved) {
+            if (old) {
+                setenv(name.c_str(), old->c_str(), 1);
+            } else {
+                unsetenv(name.c_str());
+            }
+        }
+    }
+    ScopedEnv(const ScopedEnv&) = delete;
+    ScopedEnv& operator=(const ScopedEnv&) = delete;
+
+private:
+    std::vector<std::pair<std::string, std::optional<std::string>>> m_saved;
+};
+
+/// Every variable the server reads, unset, so that the caller's environment cannot leak in.
+ScopedEnv clean_env() {
+    return ScopedEnv{{"STRATA_HOST", nullptr},       {"STRATA_PORT", nullptr},
+                     {"STRATA_DATA", nullptr},       {"STRATA_TOKEN", nullptr},
+                     {"STRATA_TOKEN_FILE", nullptr}, {"STRATA_INSECURE", nullptr},
+                     {"STRATA_LOG_LEVEL", nullptr}};
+}
+
+/// Parses `args` (after the program name); fails the test on a usage error.
+CommandLine parse(std::vector<std::string> args) {
+    args.insert(args.begin(), "strata-server");
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    auto parsed = parse_command_line(int(argv.size()), argv.data());
+    EXPECT_TRUE(std::holds_alternative<CommandLine>(parsed));
+    return std::holds_alternative<CommandLine>(parsed) ? std::get<CommandLine>(parsed)
+                                                       : CommandLine{};
+}
+
+std::string write_token_file(const std::string& content) {
+    const std::string path = ::testing::TempDir() + "strata-cli-token";
+    std::ofstream(path) << content;
+    return path;
+}
+
+TEST(CommandLine, OptionsFallBackToStrataEnvironmentVariables) {
+    auto base = clean_env();
+    ScopedEnv env{{"STRATA_HOST", "0.0.0.0"},
+                  {"STRATA_PORT", "8081"},
+                  {"STRATA_DATA", "/data"},
+                  {"STRATA_INSECURE", "1"},
+                  {"STRATA_LOG_LEVEL", "warn"}};
+    CommandLine cl = parse({});
+    EXPECT_EQ(cl.config.host, "0.0.0.0");
+    EXPECT_EQ(cl.config.port, 8081);
+    EXPECT_EQ(cl.config.data_dir, "/data");
+    EXPECT_TRUE(cl.insecure);
+    EXPECT_EQ(cl.log_level, "warn");
+    EXPECT_EQ(finish_config(cl), "");
+}
+
+TEST(CommandLine, TheCommandLineWinsOverTheEnvironment) {
+    auto base = clean_env();
+    ScopedEnv env{{"STRATA_PORT", "8081"}, {"STRATA_HOST", "0.0.0.0"}};
+    CommandLine cl = parse({"--port", "9090", "--host", "127.0.0.1"});
+    EXPECT_EQ(cl.config.port, 9090);
+    EXPECT_EQ(cl.config.host, "127.0.0.1");
+}
+
+TEST(CommandLine, ANonLoopbackHostNeedsATokenOrInsecure) {
+    auto base = clean_env();
+    ScopedEnv env{{"STRATA_HOST", "0.0.0.0"}, {"STRATA_INSECURE", "0"}};
+    CommandLine cl = parse({});
+    EXPECT_FALSE(cl.insecure);
+    const std::string problem = finish_config(cl);
+    EXPECT_NE(problem.find("STRATA_TOKEN"), std::string::npos) << problem;
+    EXPECT_NE(problem.find("STRATA_INSECURE=1"), std::string::npos) << problem;
+}
+
+TEST(CommandLine, TheTokenCanComeFromStrataToken) {
+    auto base = clean_env();
+    ScopedEnv env{{"STRATA_HOST", "0.0.0.0"}, {"STRATA_TOKEN", "  s3cret\n"}};
+    CommandLine cl = parse({});
+    EXPECT_EQ(finish_config(cl), "");
+    EXPECT_EQ(cl.config.token, "s3cret");
+    EXPECT_EQ(cl.token_source, "STRATA_TOKEN");
+}
+
+TEST(CommandLine, TheTokenFileCanComeFromStrataTokenFile) {
+    auto base = clean_env();
+    const std::string path = write_token_file("fr0m-file\n");
+    ScopedEnv env{{"STRATA_HOST", "0.0.0.0"}, {"STRATA_TOKEN_FILE", path.c_str()}};
+    CommandLine cl = parse({});
+    EXPECT_EQ(finish_config(cl), "");
+    EXPECT_EQ(cl.config.token, "fr0m-file");
+    EXPECT_EQ(cl.token_source, "token file '" + path + "'");
+}
+
+TEST(CommandLine, ATokenFileAndStrataTokenTogetherAreRefused) {
+    auto base = clean_env();
+    const std::string path = write_token_file("fr0m-file\n");
+    ScopedEnv env{{"STRATA_TOKEN", "fr0m-env"}};
+    CommandLine cl = parse({"--token-file", path});
+    const std::string problem = finish_config(cl);
+    EXPECT_NE(problem.find("one way only"), std::string::npos) << problem;
+    EXPECT_EQ(cl.config.token, "");
+}
+
+TEST(CommandLine, ABadTokenIsRefusedWithoutRepeatingIt) {
+    auto base = clean_env();
+    ScopedEnv env{{"STRATA_TOKEN", "half secret"}};
+    CommandLine cl = parse({});
+    const std::string problem = finish_config(cl);
+    EXPECT_NE(problem.find("STRATA_TOKEN holds whitespace"), std::string::npos) << problem;
+    EXPECT_EQ(problem.find("secret"), std::string::npos) << problem;
+}
+
+TEST(CommandLine, HealthcheckIsAFlagWithNoVariable) {
+    auto base = clean_env();
+    ScopedEnv env{{"STRATA_HEALTHCHECK", "1"}};
+    EXPECT_FALSE(parse({}).healthcheck);
+    EXPECT_TRUE(parse({"--healthcheck"}).healthcheck);
+}
+
+}  // namespace
+}  // namespace strata::server::test
