@@ -22,6 +22,11 @@ bool has_body(const httplib::Request& req) {
 using BodyMethod = httplib::Server& (httplib::Server::*)(const std::string&,
                                                          httplib::Server::HandlerWithContentReader);
 
+/// Bytes of an over-limit body read and thrown away before answering 413, so that a client still
+/// sending (a chunked upload has no Content-Length to refuse up front) gets to read the answer
+/// instead of a reset connection. Beyond this the server stops reading and closes.
+constexpr std::size_t DRAIN_LIMIT = std::size_t(8) << 20;
+
 /// Answers without reading the body: then the connection cannot be reused.
 void refuse_unread(const httplib::Request& req, httplib::Response& res,
                    const protocol::Problem& p) {
@@ -50,15 +55,20 @@ void Router::post(const std::string& pattern, BodyHandler handler) {
                 std::strtoull(req.get_header_value("Content-Length").c_str(), nullptr, 10), max));
         }
         bool too_large = false;
+        std::size_t drained = 0;
         const bool ok = reader([&](const char* data, std::size_t n) {
-            if (body.size() + n > max) {
-                too_large = true;
-                return false;
+            if (!too_large && body.size() + n <= max) {
+                body.append(data, n);
+                return true;
             }
-            body.append(data, n);
-            return true;
+            if (!too_large) {
+                too_large = true;
+                body = std::string();  // free what was kept; the rest is only counted
+            }
+            drained += n;
+            return drained <= DRAIN_LIMIT;
         });
-        if (!ok) {
+        if (!ok || too_large) {
             res.set_header("Connection", "close");
             if (too_large || res.status == 413) {
                 send_problem(res,
