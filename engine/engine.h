@@ -21,6 +21,7 @@
 #include "engine/render/frame_state.h"
 #include "engine/render/primary.h"
 #include "engine/render/render_request.h"
+#include "engine/render/renderer.h"
 
 namespace strata {
 
@@ -54,8 +55,12 @@ public:
     /// What commit() would do now, without doing it.
     RebuildReport plan() const;
 
-    /// Commits, renders and encodes one frame.
+    /// Commits, renders and encodes one frame (PNG or EXR, see frame_encode.h). Encoding runs
+    /// after the launch, so it does not hold up other launches.
     Result<RenderedImage> render(const RenderRequest& request);
+
+    /// Commits and renders one frame's linear buffers: what render() encodes.
+    Result<RenderedFrame> render_frame(const RenderRequest& request);
 
     /// Commits, then traces one primary ray per pixel.
     Result<PrimaryFrame> render_primary(const PrimarySettings& settings);
@@ -101,6 +106,7 @@ private:
     Scene m_scene;
     std::unique_ptr<AccelGraph> m_accel;
     FrameState m_frame;
+    Renderer m_renderer;  ///< guarded by the launch mutex (it holds the accumulation state)
 
     mutable std::mutex m_stats_mutex;
     EngineCounters m_counters;

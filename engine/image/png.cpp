@@ -1,7 +1,6 @@
 #include "engine/image/png.h"
 
 #include <algorithm>
-#include <cmath>
 #include <cstring>
 
 #include <png.h>
@@ -32,12 +31,6 @@ void read_bytes(png_structp png, png_bytep out, png_size_t length) {
     if (state->offset + length > state->size) png_error(png, "truncated PNG");
     std::memcpy(out, state->data + state->offset, length);
     state->offset += length;
-}
-
-uint8_t encode_srgb(float v) {
-    v = std::clamp(v, 0.0f, 1.0f);
-    const float s = v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
-    return static_cast<uint8_t>(s * 255.0f + 0.5f);
 }
 
 }  // namespace
@@ -75,14 +68,6 @@ Result<std::vector<uint8_t>> encode_png(const uint8_t* pixels, uint32_t width, u
     png_write_end(png, nullptr);
     png_destroy_write_struct(&png, &info);
     return out;
-}
-
-void linear_to_srgb8(const Vec3* linear, std::size_t count, float exposure, uint8_t* rgb_out) {
-    for (std::size_t i = 0; i < count; ++i) {
-        rgb_out[3 * i + 0] = encode_srgb(linear[i].x * exposure);
-        rgb_out[3 * i + 1] = encode_srgb(linear[i].y * exposure);
-        rgb_out[3 * i + 2] = encode_srgb(linear[i].z * exposure);
-    }
 }
 
 Result<DecodedImage> decode_png(const uint8_t* data, std::size_t size) {

@@ -1,6 +1,8 @@
 #pragma once
-// Launch: one primary ray per pixel, traced in 4x4 packets over TBB tiles, producing per-pixel
-// hit buffers and a simply shaded image (albedo * (sun N.L + sky) + emission).
+// The hit-buffer launch: one pixel-centre primary ray per pixel, traced in 4x4 packets over the
+// fixed TBB tile grid, producing per-pixel hits and an unshadowed preview shade
+// (albedo * (sun N.L + sky) + emission). Frames for clients come from renderer.h; this path is
+// what the differential tests compare and what the primary-ray benchmark measures.
 
 #include <cstdint>
 #include <optional>

@@ -1,0 +1,167 @@
+#include "engine/image/exr.h"
+
+#include <algorithm>
+#include <cstring>
+#include <exception>
+#include <limits>
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfIO.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <Iex.h>
+
+namespace strata {
+
+namespace {
+
+/// Appends to (and seeks within) a byte vector: OpenEXR seeks back to fill in its offset table.
+class VectorOStream final : public Imf::OStream {
+public:
+    explicit VectorOStream(std::vector<uint8_t>& out) : Imf::OStream("<memory>"), m_out(out) {}
+
+    void write(const char c[], int n) override {
+        const std::size_t end = m_pos + std::size_t(n);
+        if (end > m_out.size()) m_out.resize(end);
+        std::memcpy(m_out.data() + m_pos, c, std::size_t(n));
+        m_pos = end;
+    }
+    uint64_t tellp() override { return m_pos; }
+    void seekp(uint64_t pos) override { m_pos = std::size_t(pos); }
+
+private:
+    std::vector<uint8_t>& m_out;
+    std::size_t m_pos = 0;
+};
+
+/// Reads from a caller-owned buffer.
+class MemoryIStream final : public Imf::IStream {
+public:
+    MemoryIStream(const uint8_t* data, std::size_t size)
+        : Imf::IStream("<memory>"), m_data(data), m_size(size) {}
+
+    bool read(char c[], int n) override {
+        if (n < 0 || m_pos + std::size_t(n) > m_size)
+            throw Iex::InputExc("unexpected end of EXR data");
+        std::memcpy(c, m_data + m_pos, std::size_t(n));
+        m_pos += std::size_t(n);
+        return m_pos < m_size;
+    }
+    uint64_t tellg() override { return m_pos; }
+    void seekg(uint64_t pos) override { m_pos = std::size_t(std::min<uint64_t>(pos, m_size)); }
+
+private:
+    const uint8_t* m_data;
+    std::size_t m_size;
+    std::size_t m_pos = 0;
+};
+
+Imf::PixelType imf_type(ExrPixel p) {
+    switch (p) {
+        case ExrPixel::Uint: return Imf::UINT;
+        case ExrPixel::Half: return Imf::HALF;
+        case ExrPixel::Float: return Imf::FLOAT;
+    }
+    return Imf::HALF;
+}
+
+Imf::Compression imf_compression(ExrCompression c) {
+    switch (c) {
+        case ExrCompression::None: return Imf::NO_COMPRESSION;
+        case ExrCompression::Zip: return Imf::ZIP_COMPRESSION;
+        case ExrCompression::Piz: return Imf::PIZ_COMPRESSION;
+    }
+    return Imf::ZIP_COMPRESSION;
+}
+
+}  // namespace
+
+const DecodedExrChannel* DecodedExr::find(const std::string& name) const {
+    for (const DecodedExrChannel& c : channels) {
+        if (c.name == name) return &c;
+    }
+    return nullptr;
+}
+
+Result<std::vector<uint8_t>> encode_exr(uint32_t width, uint32_t height,
+                                        const std::vector<ExrChannel>& channels,
+                                        ExrCompression compression) {
+    if (width == 0 || height == 0 || width > uint32_t(std::numeric_limits<int>::max()) ||
+        height > uint32_t(std::numeric_limits<int>::max()))
+        return make_error(ErrorCode::InvalidArgument, "EXR needs a non-empty image");
+    for (const ExrChannel& c : channels) {
+        const bool has_data = c.type == ExrPixel::Uint ? c.u32 != nullptr : c.f32 != nullptr;
+        if (!has_data || c.name.empty())
+            return make_error(ErrorCode::InvalidArgument,
+                              "EXR channel '" + c.name + "' has no name or no data");
+    }
+    std::vector<uint8_t> out;
+    try {
+        Imf::Header header(static_cast<int>(width), static_cast<int>(height));
+        header.compression() = imf_compression(compression);
+        Imf::FrameBuffer frame;
+        for (const ExrChannel& c : channels) {
+            header.channels().insert(c.name, Imf::Channel(imf_type(c.type)));
+            // Half channels are written from floats: OpenEXR converts while it writes.
+            const bool integer = c.type == ExrPixel::Uint;
+            const std::size_t elem = integer ? sizeof(uint32_t) : sizeof(float);
+            const char* base = integer ? reinterpret_cast<const char*>(c.u32)
+                                       : reinterpret_cast<const char*>(c.f32);
+            frame.insert(c.name, Imf::Slice(integer ? Imf::UINT : Imf::FLOAT, const_cast<char*>(base),
+                                            elem * c.stride, elem * c.stride * width));
+        }
+        out.reserve(std::size_t(width) * height * 4 + 4096);
+        VectorOStream stream(out);
+        Imf::OutputFile file(stream, header);
+        file.setFrameBuffer(frame);
+        file.writePixels(int(height));
+    } catch (const std::exception& e) {
+        return make_error(ErrorCode::Internal, std::string("OpenEXR failed to encode: ") + e.what());
+    }
+    return out;
+}
+
+Result<DecodedExr> decode_exr(const uint8_t* data, std::size_t size) {
+    DecodedExr image;
+    try {
+        MemoryIStream stream(data, size);
+        Imf::InputFile file(stream);
+        const Imf::Header& header = file.header();
+        const Imath::Box2i window = header.dataWindow();
+        image.width = uint32_t(window.max.x - window.min.x + 1);
+        image.height = uint32_t(window.max.y - window.min.y + 1);
+        switch (header.compression()) {
+            case Imf::NO_COMPRESSION: image.compression = ExrCompression::None; break;
+            case Imf::ZIP_COMPRESSION: image.compression = ExrCompression::Zip; break;
+            case Imf::PIZ_COMPRESSION: image.compression = ExrCompression::Piz; break;
+            default: break;
+        }
+        const std::size_t n = std::size_t(image.width) * image.height;
+        for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
+            DecodedExrChannel& c = image.channels.emplace_back();
+            c.name = it.name();
+            c.type = it.channel().type == Imf::UINT    ? ExrPixel::Uint
+                     : it.channel().type == Imf::FLOAT ? ExrPixel::Float
+                                                       : ExrPixel::Half;
+        }
+        Imf::FrameBuffer frame;
+        for (DecodedExrChannel& c : image.channels) {
+            if (c.type == ExrPixel::Uint) {
+                c.u32.resize(n);
+                frame.insert(c.name, Imf::Slice::Make(Imf::UINT, c.u32.data(), window));
+            } else {
+                c.f32.resize(n);
+                frame.insert(c.name, Imf::Slice::Make(Imf::FLOAT, c.f32.data(), window));
+            }
+        }
+        file.setFrameBuffer(frame);
+        file.readPixels(window.min.y, window.max.y);
+    } catch (const std::exception& e) {
+        return make_error(ErrorCode::InvalidArgument, std::string("not a readable EXR: ") + e.what());
+    }
+    return image;
+}
+
+}  // namespace strata
