@@ -12,6 +12,9 @@
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <Iex.h>
+#include <Imath/half.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 namespace strata {
 
@@ -76,6 +79,16 @@ Imf::Compression imf_compression(ExrCompression c) {
     return Imf::ZIP_COMPRESSION;
 }
 
+/// `count` floats (every `stride`-th of `src`) as halves, rounded to nearest even.
+std::vector<half> to_half(const float* src, std::size_t stride, std::size_t count) {
+    std::vector<half> out(count);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1u << 15),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t i = r.begin(); i != r.end(); ++i) out[i] = half(src[i * stride]);
+                      });
+    return out;
+}
+
 }  // namespace
 
 const DecodedExrChannel* DecodedExr::find(const std::string& name) const {
@@ -93,24 +106,38 @@ Result<std::vector<uint8_t>> encode_exr(uint32_t width, uint32_t height,
         return make_error(ErrorCode::InvalidArgument, "EXR needs a non-empty image");
     for (const ExrChannel& c : channels) {
         const bool has_data = c.type == ExrPixel::Uint ? c.u32 != nullptr : c.f32 != nullptr;
-        if (!has_data || c.name.empty())
+        if (!has_data || c.name.empty() || (c.stride == 0 && c.type != ExrPixel::Half))
             return make_error(ErrorCode::InvalidArgument,
-                              "EXR channel '" + c.name + "' has no name or no data");
+                              "EXR channel '" + c.name + "' has no name, no data or a bad stride");
     }
     std::vector<uint8_t> out;
     try {
         Imf::Header header(static_cast<int>(width), static_cast<int>(height));
         header.compression() = imf_compression(compression);
         Imf::FrameBuffer frame;
+        // OpenEXR writes only from slices of the file's own type: half channels are converted
+        // here first (in parallel), float and uint channels are read in place.
+        std::vector<std::vector<half>> halves;
+        halves.reserve(channels.size());
         for (const ExrChannel& c : channels) {
             header.channels().insert(c.name, Imf::Channel(imf_type(c.type)));
-            // Half channels are written from floats: OpenEXR converts while it writes.
-            const bool integer = c.type == ExrPixel::Uint;
-            const std::size_t elem = integer ? sizeof(uint32_t) : sizeof(float);
-            const char* base = integer ? reinterpret_cast<const char*>(c.u32)
-                                       : reinterpret_cast<const char*>(c.f32);
-            frame.insert(c.name, Imf::Slice(integer ? Imf::UINT : Imf::FLOAT, const_cast<char*>(base),
-                                            elem * c.stride, elem * c.stride * width));
+            const char* base = nullptr;
+            std::size_t elem = 0, stride = c.stride;
+            if (c.type == ExrPixel::Half) {
+                // Zero strides are not supported on output: a constant is expanded too.
+                halves.push_back(to_half(c.f32, c.stride, std::size_t(width) * height));
+                base = reinterpret_cast<const char*>(halves.back().data());
+                elem = sizeof(half);
+                stride = 1;
+            } else if (c.type == ExrPixel::Float) {
+                base = reinterpret_cast<const char*>(c.f32);
+                elem = sizeof(float);
+            } else {
+                base = reinterpret_cast<const char*>(c.u32);
+                elem = sizeof(uint32_t);
+            }
+            frame.insert(c.name, Imf::Slice(imf_type(c.type), const_cast<char*>(base), elem * stride,
+                                            elem * stride * width));
         }
         out.reserve(std::size_t(width) * height * 4 + 4096);
         VectorOStream stream(out);

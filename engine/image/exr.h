@@ -21,7 +21,8 @@ enum class ExrCompression : uint8_t { None, Zip, Piz };
 enum class ExrPixel : uint8_t { Uint, Half, Float };
 
 /// One channel to write. HALF and FLOAT channels read floats from `f32`, UINT channels read
-/// `u32`; pixel (x, y) is element (y * width + x) * stride. Stride 0 repeats one value.
+/// `u32`; pixel (x, y) is element (y * width + x) * stride. Stride 0 repeats one value (HALF
+/// channels only).
 struct ExrChannel {
     std::string name;
     ExrPixel type = ExrPixel::Half;

@@ -3,8 +3,9 @@
 //
 //   1. exposure: linear RGB is multiplied by 2^exposure (exposure in EV stops, 0 = unchanged);
 //   2. tone mapping: the ACES filmic curve as fitted by Stephen Hill (ACES input matrix, RRT+ODT
-//      rational fit, output matrix), clamped to [0, 1]. Linear 0.18 maps to about 0.18 before
-//      step 3; highlights roll off smoothly instead of clipping;
+//      rational fit, output matrix), clamped to [0, 1]. As in the ACES reference, scene mid grey
+//      0.18 maps to about 0.105 display-linear (sRGB code 91) and 1.0 to about 0.62 (code 206);
+//      highlights roll off smoothly and saturate towards white instead of clipping per channel;
 //   3. encoding: the sRGB transfer function, rounded to the nearest 8-bit code (exactly: a table
 //      lookup corrected against the code boundaries, no pow per pixel).
 
