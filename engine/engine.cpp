@@ -76,17 +76,23 @@ RebuildReport Engine::plan() const {
 }
 
 Result<PrimaryFrame> Engine::render_primary(const PrimarySettings& settings) {
+    PrimaryFrame out;
+    if (Status s = render_primary(settings, out); !s) return s.error();
+    return out;
+}
+
+Status Engine::render_primary(const PrimarySettings& settings, PrimaryFrame& out) {
     Stopwatch clock;
-    auto frame = launch([&](const FrameState& state, const TlasStrategy& tlas,
-                            const RebuildReport& report) {
-        PrimaryFrame out;
+    auto launched = launch([&](const FrameState& state, const TlasStrategy& tlas,
+                               const RebuildReport& report) {
         strata::render_primary(tlas, state, settings, out.hits);
         out.report = report;
         out.version = state.version;
-        return out;
+        return true;
     });
-    if (frame) add_rays(frame.value().hits.pixel_count(), clock.ms() / 1000.0);
-    return frame;
+    if (!launched) return launched.error();
+    add_rays(out.hits.pixel_count(), clock.ms() / 1000.0);
+    return {};
 }
 
 Result<RenderedFrame> Engine::render_frame(const RenderRequest& request) {

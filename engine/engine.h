@@ -64,6 +64,9 @@ public:
 
     /// Commits, then traces one primary ray per pixel.
     Result<PrimaryFrame> render_primary(const PrimarySettings& settings);
+    /// The same into `out`, whose buffers are reused when they already have the frame's size
+    /// (no allocation, no page faults: for callers that trace many frames).
+    Status render_primary(const PrimarySettings& settings, PrimaryFrame& out);
 
     /// Runs `f(const FrameState&, const TlasStrategy&, const RebuildReport&)` after a commit, with
     /// launches serialised: the hook the renderer uses to trace one consistent version.

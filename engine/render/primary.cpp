@@ -20,28 +20,53 @@ void HitBuffers::resize(uint32_t w, uint32_t h) {
     color.assign(n, Vec3(0.0f));
 }
 
+void HitBuffers::reserve_frame(uint32_t w, uint32_t h) {
+    const std::size_t n = std::size_t(w) * h;
+    if (distance.size() != n || instance.size() != n || primitive.size() != n ||
+        normal.size() != n || color.size() != n) {
+        resize(w, h);
+    }
+    width = w;
+    height = h;
+}
+
 void render_primary(const TlasStrategy& tlas, const FrameState& frame,
                     const PrimarySettings& settings, HitBuffers& out) {
-    out.resize(settings.width, settings.height);
+    // Every pixel is written below, so buffers of the right size are reused as they are.
+    out.reserve_frame(settings.width, settings.height);
     if (settings.width == 0 || settings.height == 0) return;
     const CameraRays rays(settings.camera.value_or(frame.camera), settings.width, settings.height);
     const Lighting& light = frame.lighting;
     const Vec3 background = light.sky_color * light.sky_intensity;
     const Vec3 sun = glm::normalize(light.sun_direction);
-    const Vec3 eye = rays.eye();
+
+    float* const distance = out.distance.data();
+    uint32_t* const instance = out.instance.data();
+    uint32_t* const primitive = out.primitive.data();
+    Vec3* const normal = out.normal.data();
+    Vec3* const color = out.color.data();
+    const InstanceShade* const shades = frame.instances.data();
+    const Material* const materials = frame.materials.data();
 
     parallel_for_tiles(settings.width, settings.height, [&](const TileRect& tile) {
-        alignas(64) RayHit16 packet;
+        // The output rows of a tile are short pieces of five large arrays, too scattered for the
+        // hardware prefetcher: ask for their cache lines now, while the rays are traced, instead
+        // of stalling on each first store (a few percent at 720p).
+        for (uint32_t y = tile.y0; y < tile.y1; ++y) {
+            const std::size_t row = std::size_t(y) * settings.width;
+            prefetch_for_write(distance + row + tile.x0, distance + row + tile.x1);
+            prefetch_for_write(instance + row + tile.x0, instance + row + tile.x1);
+            prefetch_for_write(primitive + row + tile.x0, primitive + row + tile.x1);
+            prefetch_for_write(normal + row + tile.x0, normal + row + tile.x1);
+            prefetch_for_write(color + row + tile.x0, color + row + tile.x1);
+        }
+        CameraPacket camera(rays, settings.ray_mask);
         int valid[PACKET_LANES];
         for (uint32_t y0 = tile.y0; y0 < tile.y1; y0 += PACKET_SIZE) {
             for (uint32_t x0 = tile.x0; x0 < tile.x1; x0 += PACKET_SIZE) {
-                // Step: fill the packet with pixel-centre rays; lanes outside the image are off.
+                // Step: pixel-centre rays; lanes outside the image are off.
                 packet_lanes(tile, x0, y0, valid);
-                for (uint32_t i = 0; i < PACKET_LANES; ++i) {
-                    const float x = float(x0 + i % PACKET_SIZE) + 0.5f;
-                    const float y = float(y0 + i / PACKET_SIZE) + 0.5f;
-                    set_lane(packet, i, eye, rays.direction(x, y), 0.0f, settings.ray_mask);
-                }
+                RayHit16& packet = camera.aim_centres(x0, y0);
                 tlas.intersect16(valid, packet, true);
 
                 // Step: write hit buffers and a simple preview shade.
@@ -51,22 +76,26 @@ void render_primary(const TlasStrategy& tlas, const FrameState& frame,
                         std::size_t(y0 + i / PACKET_SIZE) * settings.width + x0 + i % PACKET_SIZE;
                     const uint32_t inst = packet.inst_id[i];
                     if (inst == INVALID_ID) {
-                        out.color[p] = background;
+                        distance[p] = std::numeric_limits<float>::infinity();
+                        instance[p] = INVALID_ID;
+                        primitive[p] = INVALID_ID;
+                        normal[p] = Vec3(0.0f);
+                        color[p] = background;
                         continue;
                     }
-                    const InstanceShade& shade = frame.instances[inst];
+                    const InstanceShade& shade = shades[inst];
                     Vec3 n = glm::normalize(shade.normal_matrix *
                                             Vec3(packet.ng_x[i], packet.ng_y[i], packet.ng_z[i]));
                     const Vec3 dir(packet.dir_x[i], packet.dir_y[i], packet.dir_z[i]);
                     if (glm::dot(n, dir) > 0.0f) n = -n;
-                    const Material& m = frame.materials[shade.material];
-                    out.distance[p] = packet.tfar[i];
-                    out.instance[p] = inst;
-                    out.primitive[p] = packet.prim_id[i];
-                    out.normal[p] = n;
-                    out.color[p] = m.base_color * (light.sun_color * std::max(0.0f, glm::dot(n, sun)) +
-                                                   background) +
-                                   m.emission;
+                    const Material& m = materials[shade.material];
+                    distance[p] = packet.tfar[i];
+                    instance[p] = inst;
+                    primitive[p] = packet.prim_id[i];
+                    normal[p] = n;
+                    color[p] = m.base_color * (light.sun_color * std::max(0.0f, glm::dot(n, sun)) +
+                                               background) +
+                               m.emission;
                 }
             }
         }

@@ -31,11 +31,14 @@ struct HitBuffers {
     std::vector<Vec3> normal;         ///< world-space unit geometric normal, facing the camera
     std::vector<Vec3> color;          ///< linear RGB
 
+    /// Sizes every buffer for w x h and fills it with the miss values.
     void resize(uint32_t w, uint32_t h);
+    /// Sizes every buffer for w x h, keeping the contents when the size is already right.
+    void reserve_frame(uint32_t w, uint32_t h);
     std::size_t pixel_count() const { return std::size_t(width) * height; }
 };
 
-/// Traces the primary rays of one frame.
+/// Traces the primary rays of one frame into `out` (reusing its buffers when they fit).
 void render_primary(const TlasStrategy& tlas, const FrameState& frame,
                     const PrimarySettings& settings, HitBuffers& out);
 

@@ -47,6 +47,7 @@ public:
 
     void render_tile(const TileRect& tile) const {
         PixelSums local[TILE_SIZE * TILE_SIZE];
+        CameraPacket camera(m_rays);
         uint64_t rays = 0;
         for (uint32_t y0 = tile.y0; y0 < tile.y1; y0 += PACKET_SIZE) {
             for (uint32_t x0 = tile.x0; x0 < tile.x1; x0 += PACKET_SIZE) {
@@ -65,8 +66,8 @@ public:
                     }
                 }
                 for (uint32_t s = 0; s < m_samples.count; ++s)
-                    rays += trace_sample(x0, y0, valid, m_samples.first + s, sums);
-                if (m_out.aovs.needs_centre_ray()) rays += trace_centre(x0, y0, valid);
+                    rays += trace_sample(camera, x0, y0, valid, m_samples.first + s, sums);
+                if (m_out.aovs.needs_centre_ray()) rays += trace_centre(camera, x0, y0, valid);
                 resolve(x0, y0, valid, sums);
             }
         }
@@ -94,30 +95,30 @@ private:
     }
 
     /// Traces sample `index` of the packet's pixels and adds it to their sums; returns the rays.
-    uint64_t trace_sample(uint32_t x0, uint32_t y0, const int* valid, uint32_t index,
-                          PixelSums* const* sums) const {
-        const Vec3 eye = m_rays.eye();
+    uint64_t trace_sample(CameraPacket& camera, uint32_t x0, uint32_t y0, const int* valid,
+                          uint32_t index, PixelSums* const* sums) const {
         const Vec3& sun = m_sky.sun_direction();
         uint64_t rays = 0;
 
         // Step: camera rays, jittered by the pixel's own sequence.
-        alignas(64) RayHit16 primary;
+        float px[PACKET_LANES], py[PACKET_LANES];
         float bounce_u[PACKET_LANES][3];
         for (uint32_t i = 0; i < PACKET_LANES; ++i) {
             const uint32_t x = x0 + i % PACKET_SIZE, y = y0 + i / PACKET_SIZE;
-            Vec3 dir(0.0f, 0.0f, 1.0f);
-            if (valid[i]) {
-                const PixelSampler sampler(x, y);
-                const auto u = sampler.get4(index, 0);
-                bounce_u[i][0] = u[2];
-                bounce_u[i][1] = u[3];
-                bounce_u[i][2] = sampler.get1(index, DIM_LOBE);
-                dir = m_rays.direction(float(x) + u[0], float(y) + u[1]);
-                ++rays;
-            }
-            set_lane(primary, i, eye, dir);
+            px[i] = float(x) + 0.5f;
+            py[i] = float(y) + 0.5f;
+            if (!valid[i]) continue;
+            const PixelSampler sampler(x, y);
+            const auto u = sampler.get4(index, 0);
+            px[i] = float(x) + u[0];
+            py[i] = float(y) + u[1];
+            bounce_u[i][0] = u[2];
+            bounce_u[i][1] = u[3];
+            bounce_u[i][2] = sampler.get1(index, DIM_LOBE);
+            ++rays;
         }
-        m_tlas.intersect16(valid, primary, true);
+        const RayHit16& primary = camera.aim(px, py);
+        m_tlas.intersect16(valid, camera.packet(), true);
 
         // Step: shade first hits; queue sun shadow rays and bounce rays.
         Vec3 radiance[PACKET_LANES];
@@ -221,15 +222,11 @@ private:
     }
 
     /// Traces the unjittered pixel-centre rays and writes depth, position and ids.
-    uint64_t trace_centre(uint32_t x0, uint32_t y0, const int* valid) const {
-        alignas(64) RayHit16 packet;
+    uint64_t trace_centre(CameraPacket& camera, uint32_t x0, uint32_t y0, const int* valid) const {
         const Vec3 eye = m_rays.eye();
         uint64_t rays = 0;
-        for (uint32_t i = 0; i < PACKET_LANES; ++i) {
-            const float x = float(x0 + i % PACKET_SIZE) + 0.5f, y = float(y0 + i / PACKET_SIZE) + 0.5f;
-            set_lane(packet, i, eye, valid[i] ? m_rays.direction(x, y) : Vec3(0.0f, 0.0f, 1.0f));
-            rays += valid[i] != 0;
-        }
+        for (uint32_t i = 0; i < PACKET_LANES; ++i) rays += valid[i] != 0;
+        RayHit16& packet = camera.aim_centres(x0, y0);
         m_tlas.intersect16(valid, packet, true);
         const AovSet aovs = m_out.aovs;
         for (uint32_t i = 0; i < PACKET_LANES; ++i) {

@@ -15,6 +15,7 @@
 
 #include "engine/accel/ray.h"
 #include "engine/core/math.h"
+#include "engine/render/camera_rays.h"
 
 namespace strata {
 
@@ -58,6 +59,53 @@ inline uint32_t packet_lanes(const TileRect& tile, uint32_t x0, uint32_t y0, int
     return active;
 }
 
+/// A packet of camera rays from one eye. Fields Embree never writes (origin, tnear, time, mask,
+/// id, flags) are set once; aiming a packet writes only directions and resets the hit.
+class CameraPacket {
+public:
+    CameraPacket(const CameraRays& rays, uint32_t mask = 0xFFFFFFFFu) : m_rays(rays) {
+        const Vec3 eye = rays.eye();
+        for (uint32_t i = 0; i < PACKET_LANES; ++i) {
+            m_packet.org_x[i] = eye.x;
+            m_packet.org_y[i] = eye.y;
+            m_packet.org_z[i] = eye.z;
+            m_packet.tnear[i] = 0.0f;
+            m_packet.time[i] = 0.0f;
+            m_packet.mask[i] = mask;
+            m_packet.id[i] = i;
+            m_packet.flags[i] = 0;
+        }
+    }
+
+    /// Aims lane i through image position (x[i], y[i]) and clears the hit of every lane.
+    RayHit16& aim(const float* x, const float* y) {
+        m_rays.directions(x, y, PACKET_LANES, m_packet.dir_x, m_packet.dir_y, m_packet.dir_z);
+        for (uint32_t i = 0; i < PACKET_LANES; ++i) {
+            m_packet.tfar[i] = std::numeric_limits<float>::infinity();
+            m_packet.geom_id[i] = INVALID_ID;
+            m_packet.inst_id[i] = INVALID_ID;
+            m_packet.prim_id[i] = INVALID_ID;
+        }
+        return m_packet;
+    }
+
+    /// Aims the packet through the centres of the 4x4 pixels at (x0, y0).
+    RayHit16& aim_centres(uint32_t x0, uint32_t y0) {
+        float x[PACKET_LANES], y[PACKET_LANES];
+        for (uint32_t i = 0; i < PACKET_LANES; ++i) {
+            x[i] = float(x0 + i % PACKET_SIZE) + 0.5f;
+            y[i] = float(y0 + i / PACKET_SIZE) + 0.5f;
+        }
+        return aim(x, y);
+    }
+
+    RayHit16& packet() { return m_packet; }
+
+private:
+    const CameraRays& m_rays;
+    alignas(64) RayHit16 m_packet;
+};
+
 /// Sets lane i of a closest-hit packet to the ray org + t * dir, t in [tnear, inf).
 inline void set_lane(RayHit16& p, uint32_t i, const Vec3& org, const Vec3& dir, float tnear = 0.0f,
                      uint32_t mask = 0xFFFFFFFFu) {
@@ -93,6 +141,14 @@ inline void set_lane(Ray16& p, uint32_t i, const Vec3& org, const Vec3& dir,
     p.mask[i] = mask;
     p.id[i] = i;
     p.flags[i] = 0;
+}
+
+/// Prefetches the cache lines of [begin, end) for writing.
+template <class T>
+inline void prefetch_for_write(const T* begin, const T* end) {
+    const char* p = reinterpret_cast<const char*>(begin);
+    const char* e = reinterpret_cast<const char*>(end);
+    for (p -= reinterpret_cast<uintptr_t>(p) % 64; p < e; p += 64) __builtin_prefetch(p, 1, 3);
 }
 
 /// Origin for rays leaving a surface point p (reached at distance t from a ray starting at
