@@ -4,6 +4,8 @@
 #include <cstring>
 #include <exception>
 #include <limits>
+#include <mutex>
+#include <thread>
 
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
@@ -11,6 +13,7 @@
 #include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfThreading.h>
 #include <Iex.h>
 #include <Imath/half.h>
 #include <tbb/blocked_range.h>
@@ -19,6 +22,10 @@
 namespace strata {
 
 namespace {
+
+/// zlib level of ZIP compression: 1 is about twice as fast as OpenEXR's default 4 and only a few
+/// percent larger on rendered frames (tests/bench/NOTES.md).
+constexpr int ZIP_LEVEL = 1;
 
 /// Appends to (and seeks within) a byte vector: OpenEXR seeks back to fill in its offset table.
 class VectorOStream final : public Imf::OStream {
@@ -79,6 +86,16 @@ Imf::Compression imf_compression(ExrCompression c) {
     return Imf::ZIP_COMPRESSION;
 }
 
+/// Once per process: OpenEXR compresses line blocks on its own thread pool (the file's bytes do
+/// not depend on the thread count).
+void init_exr_threads() {
+    static std::once_flag once;
+    std::call_once(once, [] {
+        const unsigned n = std::thread::hardware_concurrency();
+        Imf::setGlobalThreadCount(int(std::clamp(n, 1u, 16u)));
+    });
+}
+
 /// `count` floats (every `stride`-th of `src`) as halves, rounded to nearest even.
 std::vector<half> to_half(const float* src, std::size_t stride, std::size_t count) {
     std::vector<half> out(count);
@@ -112,8 +129,10 @@ Result<std::vector<uint8_t>> encode_exr(uint32_t width, uint32_t height,
     }
     std::vector<uint8_t> out;
     try {
+        init_exr_threads();
         Imf::Header header(static_cast<int>(width), static_cast<int>(height));
         header.compression() = imf_compression(compression);
+        header.zipCompressionLevel() = ZIP_LEVEL;
         Imf::FrameBuffer frame;
         // OpenEXR writes only from slices of the file's own type: half channels are converted
         // here first (in parallel), float and uint channels are read in place.

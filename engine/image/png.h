@@ -9,9 +9,10 @@
 namespace strata {
 
 /// Encodes 8-bit pixels (`channels` = 3 for RGB or 4 for RGBA, row-major from the top) as PNG.
-/// `zlib_level` 0..9: low levels with the cheap "sub" filter keep a 1080p frame in tens of ms.
+/// Speed over size: the "sub" filter and zlib's run-length strategy at `zlib_level` (0..9) keep
+/// a 1080p frame in tens of milliseconds (tests/bench/NOTES.md).
 Result<std::vector<uint8_t>> encode_png(const uint8_t* pixels, uint32_t width, uint32_t height,
-                                        int channels, int zlib_level = 2);
+                                        int channels, int zlib_level = 1);
 
 /// Decodes a PNG (for tests and tools): RGB or RGBA 8-bit.
 struct DecodedImage {

@@ -19,10 +19,12 @@
 // "pixel-centre ray" AOVs come from one unjittered ray through the pixel centre, so they name a
 // single surface and are exact (a plane at distance d gives depth d at the centre of the image).
 //
-// Ids: `instance_id` is the instance's slot in the scene's flat instance table. It is stable for
-// the instance's whole life (moving, hiding or re-materialling it keeps it) and is the same
-// number the TLAS reports as a hit's instance; a slot freed by a removal is reused by a later
-// addition. `mesh_id` is likewise the mesh's slot. The scene API reports both as `index`.
+// Ids: `instance_id` is the instance's slot in the scene's flat instance table (the `index` of its
+// handle: Scene::find_instance(id).index). It is stable for the instance's whole life (moving,
+// hiding, re-masking or re-materialling it keeps it) and is the number the TLAS reports as a
+// hit's instance; a slot freed by a removal is reused by a later addition. `mesh_id` is likewise
+// the mesh's slot (Scene::find_mesh(id).index). Neither is the instance's `user_id`, which
+// clients choose freely and need not be unique.
 
 #include <cstdint>
 #include <vector>
