@@ -65,8 +65,11 @@ public:
                         *sums[i] = PixelSums{};
                     }
                 }
+                PixelSampler samplers[PACKET_LANES];
+                for (uint32_t i = 0; i < PACKET_LANES; ++i)
+                    samplers[i] = PixelSampler(x0 + i % PACKET_SIZE, y0 + i / PACKET_SIZE);
                 for (uint32_t s = 0; s < m_samples.count; ++s)
-                    rays += trace_sample(camera, x0, y0, valid, m_samples.first + s, sums);
+                    rays += trace_sample(camera, samplers, x0, y0, valid, m_samples.first + s, sums);
                 if (m_out.aovs.needs_centre_ray()) rays += trace_centre(camera, x0, y0, valid);
                 resolve(x0, y0, valid, sums);
             }
@@ -95,8 +98,9 @@ private:
     }
 
     /// Traces sample `index` of the packet's pixels and adds it to their sums; returns the rays.
-    uint64_t trace_sample(CameraPacket& camera, uint32_t x0, uint32_t y0, const int* valid,
-                          uint32_t index, PixelSums* const* sums) const {
+    uint64_t trace_sample(CameraPacket& camera, const PixelSampler* samplers, uint32_t x0,
+                          uint32_t y0, const int* valid, uint32_t index,
+                          PixelSums* const* sums) const {
         const Vec3& sun = m_sky.sun_direction();
         uint64_t rays = 0;
 
@@ -108,7 +112,7 @@ private:
             px[i] = float(x) + 0.5f;
             py[i] = float(y) + 0.5f;
             if (!valid[i]) continue;
-            const PixelSampler sampler(x, y);
+            const PixelSampler& sampler = samplers[i];
             const auto u = sampler.get4(index, 0);
             px[i] = float(x) + u[0];
             py[i] = float(y) + u[1];

@@ -107,36 +107,51 @@ class PixelSampler {
 public:
     /// Dimensions one group holds.
     static constexpr uint32_t GROUP = 4;
-
-    constexpr PixelSampler(uint32_t x, uint32_t y)
-        : m_seed(hash_combine(hash_combine(0x5eed5eedu, x), y)) {}
-
+    /// Groups whose seeds are computed once, up front (the renderer uses two).
+    static constexpr uint32_t CACHED_GROUPS = 2;
     /// Sample indices must be below this.
     static constexpr uint32_t MAX_SAMPLES = 1u << 16;
 
+    constexpr PixelSampler() = default;
+    constexpr PixelSampler(uint32_t x, uint32_t y)
+        : m_seed(hash_combine(hash_combine(0x5eed5eedu, x), y)) {
+        for (uint32_t g = 0; g < CACHED_GROUPS; ++g) m_groups[g] = seeds(g);
+    }
+
     /// The 4-D point of sample `index` in dimension group `group`, each coordinate in [0, 1).
     constexpr std::array<float, 4> get4(uint32_t index, uint32_t group) const {
-        using namespace sampler_detail;
-        const uint32_t seed = hash_combine(m_seed, group);
-        const uint32_t shuffled = shuffle(index, seed);
+        const GroupSeeds g = group < CACHED_GROUPS ? m_groups[group] : seeds(group);
+        const uint32_t shuffled = shuffle(index, g.index);
         std::array<float, 4> out{};
-        for (uint32_t d = 0; d < 4; ++d) {
-            const uint32_t bits = owen_scramble(sobol16(shuffled, d), hash_combine(seed, d + 1));
-            out[d] = to_unit(bits);
-        }
+        for (uint32_t d = 0; d < 4; ++d) out[d] = coordinate(shuffled, d, g);
         return out;
     }
 
     /// Coordinate `dim` of sample `index` (dimension d is coordinate d % 4 of group d / 4).
     constexpr float get1(uint32_t index, uint32_t dim) const {
-        using namespace sampler_detail;
-        const uint32_t seed = hash_combine(m_seed, dim / GROUP);
-        const uint32_t shuffled = shuffle(index, seed);
-        return to_unit(
-            owen_scramble(sobol16(shuffled, dim % GROUP), hash_combine(seed, dim % GROUP + 1)));
+        const uint32_t group = dim / GROUP;
+        const GroupSeeds g = group < CACHED_GROUPS ? m_groups[group] : seeds(group);
+        return coordinate(shuffle(index, g.index), dim % GROUP, g);
     }
 
 private:
+    struct GroupSeeds {
+        uint32_t index = 0;
+        uint32_t dim[GROUP] = {};
+    };
+
+    constexpr GroupSeeds seeds(uint32_t group) const {
+        GroupSeeds g;
+        g.index = hash_combine(m_seed, group);
+        for (uint32_t d = 0; d < GROUP; ++d) g.dim[d] = hash_combine(g.index, d + 1);
+        return g;
+    }
+
+    static constexpr float coordinate(uint32_t shuffled, uint32_t d, const GroupSeeds& g) {
+        using namespace sampler_detail;
+        return to_unit(owen_scramble(sobol16(shuffled, d), g.dim[d]));
+    }
+
     /// Owen-scrambles the index: the first 2^m samples stay one aligned block of 2^m Sobol points
     /// (so they stay stratified), in a per-pixel order. Scrambling flips a bit according to the
     /// bits above it, so for indices below 2^16 the upper half is one constant; dropping it XORs
@@ -147,7 +162,8 @@ private:
 
     static constexpr float to_unit(uint32_t bits) { return float(bits >> 8) * 0x1p-24f; }
 
-    uint32_t m_seed;
+    uint32_t m_seed = 0;
+    GroupSeeds m_groups[CACHED_GROUPS] = {};
 };
 
 }  // namespace strata
