@@ -9,8 +9,8 @@ namespace strata {
 
 namespace {
 
-constexpr uint32_t FLAG_NX = 24;
-constexpr uint32_t FLAG_NZ = 16;
+constexpr uint32_t FLAG_NX = 48;
+constexpr uint32_t FLAG_NZ = 32;
 constexpr uint32_t RING_COUNT = 12;
 constexpr float RING_RADIUS = 4.0f;
 
@@ -71,8 +71,8 @@ EditBatch make_demo_scene() {
     e.emplace_back(material("flag", {0.85f, 0.15f, 0.2f}, 0.7f, 0.0f));
 
     e.emplace_back(mesh("ground", make_plane(Vec3(400.0f, 0.0f, 400.0f), 8, 8), "ground"));
-    e.emplace_back(mesh("ball", make_sphere(1.5f, 96), "chrome"));
-    e.emplace_back(mesh("pebble", make_sphere(0.5f, 32), "clay"));
+    e.emplace_back(mesh("ball", make_sphere(1.5f, 160), "chrome"));
+    e.emplace_back(mesh("pebble", make_sphere(0.5f, 72), "clay"));
     e.emplace_back(mesh("crate", make_box(Vec3(1.0f)), "teal"));
     MeshData flag = make_plane(Vec3(3.0f, 1.0f, 2.0f), FLAG_NX, FLAG_NZ);
     flag.positions = demo_flag_positions(0.0f);
@@ -149,7 +149,7 @@ EditBatch make_demo_step(uint32_t step) {
             break;
         }
         case 6: {  // the ball gets finer: one BLAS rebuild (topology)
-            MeshData finer = make_sphere(1.5f, 160);
+            MeshData finer = make_sphere(1.5f, 256);
             ReplaceMeshTopology topo;
             topo.mesh = "ball";
             topo.positions = std::move(finer.positions);
