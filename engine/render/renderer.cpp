@@ -97,11 +97,45 @@ private:
         return s;
     }
 
+    /// Shadow rays toward the sun from up to one surface per lane.
+    struct SunQueue {
+        alignas(64) Ray16 rays;
+        int valid[PACKET_LANES] = {};
+        bool any = false;
+    };
+
+    /// Queues lane i's shadow ray when `hit` faces the sun.
+    void queue_sun(SunQueue& q, uint32_t i, const SurfaceHit& hit) const {
+        if (!m_sky.has_sun() || glm::dot(hit.normal, m_sky.sun_direction()) <= 0.0f) return;
+        set_lane(q.rays, i, hit.origin, m_sky.sun_direction());
+        q.valid[i] = -1;
+        q.any = true;
+    }
+
+    /// Traces the queued shadow rays and adds the sun, seen through the BRDF of each unoccluded
+    /// surface (its roughness raised to min_roughness[i]) from the ray in `from` that reached it,
+    /// to radiance[i]. Returns the rays traced.
+    uint64_t add_sun(SunQueue& q, const RayHit16& from, const SurfaceHit* hits,
+                     const float* min_roughness, Vec3* radiance) const {
+        if (!q.any) return 0;
+        m_tlas.occluded16(q.valid, q.rays);
+        uint64_t rays = 0;
+        for (uint32_t i = 0; i < PACKET_LANES; ++i) {
+            if (!q.valid[i]) continue;
+            ++rays;
+            if (q.rays.tfar[i] == -std::numeric_limits<float>::infinity()) continue;
+            const Vec3 v(-from.dir_x[i], -from.dir_y[i], -from.dir_z[i]);
+            const Bsdf bsdf(m_frame.materials[hits[i].material], min_roughness[i]);
+            radiance[i] += bsdf.eval_cos(hits[i].normal, v, m_sky.sun_direction()) *
+                           m_sky.sun_irradiance();
+        }
+        return rays;
+    }
+
     /// Traces sample `index` of the packet's pixels and adds it to their sums; returns the rays.
     uint64_t trace_sample(CameraPacket& camera, const PixelSampler* samplers, uint32_t x0,
                           uint32_t y0, const int* valid, uint32_t index,
                           PixelSums* const* sums) const {
-        const Vec3& sun = m_sky.sun_direction();
         uint64_t rays = 0;
 
         // Step: camera rays, jittered by the pixel's own sequence.
@@ -128,11 +162,11 @@ private:
         Vec3 radiance[PACKET_LANES];
         Vec3 weight[PACKET_LANES];
         SurfaceHit first[PACKET_LANES];
-        alignas(64) Ray16 shadow;
+        float first_roughness[PACKET_LANES] = {};
         alignas(64) RayHit16 bounce;
-        int shadow_valid[PACKET_LANES] = {};
         int bounce_valid[PACKET_LANES] = {};
-        bool any_shadow = false, any_bounce = false;
+        bool any_bounce = false;
+        SunQueue sun;
         for (uint32_t i = 0; i < PACKET_LANES; ++i) {
             if (!valid[i]) continue;
             const Vec3 dir(primary.dir_x[i], primary.dir_y[i], primary.dir_z[i]);
@@ -144,13 +178,10 @@ private:
             const SurfaceHit& hit = first[i] = surface(primary, i);
             const Material& m = m_frame.materials[hit.material];
             radiance[i] = m.emission;
+            first_roughness[i] = m.roughness;
             sums[i]->albedo += m.base_color;
             sums[i]->normal += hit.normal;
-            if (m_sky.has_sun() && glm::dot(hit.normal, sun) > 0.0f) {
-                set_lane(shadow, i, hit.origin, sun);
-                shadow_valid[i] = -1;
-                any_shadow = true;
-            }
+            queue_sun(sun, i, hit);
             const BsdfSample b =
                 Bsdf(m).sample(hit.normal, -dir, bounce_u[i][0], bounce_u[i][1], bounce_u[i][2]);
             if (b.valid) {
@@ -162,25 +193,16 @@ private:
         }
 
         // Step: the sun at first hits.
-        if (any_shadow) {
-            m_tlas.occluded16(shadow_valid, shadow);
-            for (uint32_t i = 0; i < PACKET_LANES; ++i) {
-                if (!shadow_valid[i]) continue;
-                ++rays;
-                if (shadow.tfar[i] == -std::numeric_limits<float>::infinity()) continue;
-                const Vec3 v(-primary.dir_x[i], -primary.dir_y[i], -primary.dir_z[i]);
-                radiance[i] += Bsdf(m_frame.materials[first[i].material]).eval_cos(first[i].normal, v, sun) *
-                               m_sky.sun_irradiance();
-            }
-        }
+        const float no_regularisation[PACKET_LANES] = {};
+        rays += add_sun(sun, primary, first, no_regularisation, radiance);
 
         // Step: one bounce, ended by the sky or by direct light at the second surface.
         if (any_bounce) {
             m_tlas.intersect16(bounce_valid, bounce, false);
             Vec3 incoming[PACKET_LANES];
             SurfaceHit second[PACKET_LANES];
-            int shadow2_valid[PACKET_LANES] = {};
-            bool any_shadow2 = false;
+            float min_roughness[PACKET_LANES];
+            SunQueue sun2;
             for (uint32_t i = 0; i < PACKET_LANES; ++i) {
                 if (!bounce_valid[i]) continue;
                 ++rays;
@@ -192,26 +214,10 @@ private:
                 const SurfaceHit& hit = second[i] = surface(bounce, i);
                 const Material& m = m_frame.materials[hit.material];
                 incoming[i] = m.emission + m.base_color * m_sky.radiance(hit.normal);
-                if (m_sky.has_sun() && glm::dot(hit.normal, sun) > 0.0f) {
-                    set_lane(shadow, i, hit.origin, sun);
-                    shadow2_valid[i] = -1;
-                    any_shadow2 = true;
-                }
+                min_roughness[i] = std::max(MIN_SECONDARY_ROUGHNESS, first_roughness[i]);
+                queue_sun(sun2, i, hit);
             }
-            if (any_shadow2) {
-                m_tlas.occluded16(shadow2_valid, shadow);
-                for (uint32_t i = 0; i < PACKET_LANES; ++i) {
-                    if (!shadow2_valid[i]) continue;
-                    ++rays;
-                    if (shadow.tfar[i] == -std::numeric_limits<float>::infinity()) continue;
-                    const Vec3 v(-bounce.dir_x[i], -bounce.dir_y[i], -bounce.dir_z[i]);
-                    const float min_roughness = std::max(
-                        MIN_SECONDARY_ROUGHNESS, m_frame.materials[first[i].material].roughness);
-                    incoming[i] += Bsdf(m_frame.materials[second[i].material], min_roughness)
-                                       .eval_cos(second[i].normal, v, sun) *
-                                   m_sky.sun_irradiance();
-                }
-            }
+            rays += add_sun(sun2, bounce, second, min_roughness, incoming);
             for (uint32_t i = 0; i < PACKET_LANES; ++i) {
                 if (bounce_valid[i])
                     radiance[i] += clamp_max_component(weight[i] * incoming[i], INDIRECT_CLAMP);

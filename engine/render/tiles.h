@@ -106,9 +106,9 @@ private:
     alignas(64) RayHit16 m_packet;
 };
 
-/// Sets lane i of a closest-hit packet to the ray org + t * dir, t in [tnear, inf).
-inline void set_lane(RayHit16& p, uint32_t i, const Vec3& org, const Vec3& dir, float tnear = 0.0f,
-                     uint32_t mask = 0xFFFFFFFFu) {
+/// Sets the ray fields shared by closest-hit and shadow packets.
+template <class Packet>
+void set_ray(Packet& p, uint32_t i, const Vec3& org, const Vec3& dir, float tnear, uint32_t mask) {
     p.org_x[i] = org.x;
     p.org_y[i] = org.y;
     p.org_z[i] = org.z;
@@ -121,6 +121,12 @@ inline void set_lane(RayHit16& p, uint32_t i, const Vec3& org, const Vec3& dir, 
     p.mask[i] = mask;
     p.id[i] = i;
     p.flags[i] = 0;
+}
+
+/// Sets lane i of a closest-hit packet to the ray org + t * dir, t in [tnear, inf).
+inline void set_lane(RayHit16& p, uint32_t i, const Vec3& org, const Vec3& dir, float tnear = 0.0f,
+                     uint32_t mask = 0xFFFFFFFFu) {
+    set_ray(p, i, org, dir, tnear, mask);
     p.geom_id[i] = INVALID_ID;
     p.inst_id[i] = INVALID_ID;
     p.prim_id[i] = INVALID_ID;
@@ -129,18 +135,7 @@ inline void set_lane(RayHit16& p, uint32_t i, const Vec3& org, const Vec3& dir, 
 /// Sets lane i of a shadow packet to the ray org + t * dir, t in [0, inf).
 inline void set_lane(Ray16& p, uint32_t i, const Vec3& org, const Vec3& dir,
                      uint32_t mask = 0xFFFFFFFFu) {
-    p.org_x[i] = org.x;
-    p.org_y[i] = org.y;
-    p.org_z[i] = org.z;
-    p.tnear[i] = 0.0f;
-    p.dir_x[i] = dir.x;
-    p.dir_y[i] = dir.y;
-    p.dir_z[i] = dir.z;
-    p.time[i] = 0.0f;
-    p.tfar[i] = std::numeric_limits<float>::infinity();
-    p.mask[i] = mask;
-    p.id[i] = i;
-    p.flags[i] = 0;
+    set_ray(p, i, org, dir, 0.0f, mask);
 }
 
 /// Prefetches the cache lines of [begin, end) for writing.

@@ -173,7 +173,12 @@ const Fixture& fixture(int which) {
     return *fixtures[which];
 }
 
-const char* scene_name(int which) { return which == 0 ? "mesh_1m" : "instances_10k"; }
+/// The fixture a benchmark's first argument names, with its name as the benchmark's label.
+const Fixture& fixture_of(benchmark::State& state) {
+    const int which = int(state.range(0));
+    state.SetLabel(which == 0 ? "mesh_1m" : "instances_10k");
+    return fixture(which);
+}
 
 /// The plain loops' output: what a minimal caller keeps of a hit.
 struct PlainHit {
@@ -191,13 +196,17 @@ void report(benchmark::State& state, double rays_per_iteration) {
                                                    benchmark::Counter::kIsIterationInvariantRate);
 }
 
-/// Engine::render_primary into a reused frame: the engine's primary-ray path.
-void BM_EnginePrimary(benchmark::State& state) {
-    const Fixture& f = fixture(int(state.range(0)));
-    state.SetLabel(scene_name(int(state.range(0))));
+PrimarySettings primary_settings() {
     PrimarySettings settings;
     settings.width = WIDTH;
     settings.height = HEIGHT;
+    return settings;
+}
+
+/// Engine::render_primary into a reused frame: the engine's primary-ray path.
+void BM_EnginePrimary(benchmark::State& state) {
+    const Fixture& f = fixture_of(state);
+    const PrimarySettings settings = primary_settings();
     PrimaryFrame frame;
     for (auto _ : state) {
         STRATA_CHECK(f.engine->render_primary(settings, frame).ok());
@@ -209,11 +218,8 @@ void BM_EnginePrimary(benchmark::State& state) {
 /// The by-value Engine::render_primary: adds allocating (and page-faulting) 33 MB of hit buffers
 /// per frame.
 void BM_EnginePrimaryNewBuffers(benchmark::State& state) {
-    const Fixture& f = fixture(int(state.range(0)));
-    state.SetLabel(scene_name(int(state.range(0))));
-    PrimarySettings settings;
-    settings.width = WIDTH;
-    settings.height = HEIGHT;
+    const Fixture& f = fixture_of(state);
+    const PrimarySettings settings = primary_settings();
     for (auto _ : state) {
         auto frame = f.engine->render_primary(settings);
         benchmark::DoNotOptimize(frame.value().hits.distance.data());
@@ -222,8 +228,7 @@ void BM_EnginePrimaryNewBuffers(benchmark::State& state) {
 }
 
 void BM_PlainIntersect1(benchmark::State& state) {
-    const Fixture& f = fixture(int(state.range(0)));
-    state.SetLabel(scene_name(int(state.range(0))));
+    const Fixture& f = fixture_of(state);
     const CameraRays rays(f.desc.camera, WIDTH, HEIGHT);
     std::vector<PlainHit> out(std::size_t(WIDTH) * HEIGHT);
     RTCScene scene = f.plain->scene();
@@ -252,31 +257,39 @@ void BM_PlainIntersect1(benchmark::State& state) {
     report(state, double(WIDTH) * HEIGHT);
 }
 
+/// One frame of pixel-centre packets over the tile grid, each traced by `trace(valid, packet)`;
+/// keeps what a minimal caller keeps of each hit.
+template <class Trace>
+void trace_frame16(const CameraRays& rays, std::vector<PlainHit>& out, Trace&& trace) {
+    parallel_for_tiles(WIDTH, HEIGHT, [&](const TileRect& tile) {
+        CameraPacket camera(rays);
+        int valid[PACKET_LANES];
+        for (uint32_t y0 = tile.y0; y0 < tile.y1; y0 += PACKET_SIZE) {
+            for (uint32_t x0 = tile.x0; x0 < tile.x1; x0 += PACKET_SIZE) {
+                packet_lanes(tile, x0, y0, valid);
+                RayHit16& packet = camera.aim_centres(x0, y0);
+                trace(valid, packet);
+                for (uint32_t i = 0; i < PACKET_LANES; ++i) {
+                    if (!valid[i]) continue;
+                    out[std::size_t(y0 + i / PACKET_SIZE) * WIDTH + x0 + i % PACKET_SIZE] = {
+                        packet.tfar[i], packet.inst_id[i], packet.prim_id[i]};
+                }
+            }
+        }
+    });
+}
+
 void BM_PlainIntersect16(benchmark::State& state) {
-    const Fixture& f = fixture(int(state.range(0)));
-    state.SetLabel(scene_name(int(state.range(0))));
+    const Fixture& f = fixture_of(state);
     const CameraRays rays(f.desc.camera, WIDTH, HEIGHT);
     std::vector<PlainHit> out(std::size_t(WIDTH) * HEIGHT);
     RTCScene scene = f.plain->scene();
     for (auto _ : state) {
-        parallel_for_tiles(WIDTH, HEIGHT, [&](const TileRect& tile) {
+        trace_frame16(rays, out, [&](const int* valid, RayHit16& packet) {
             RTCIntersectContext ctx;
             rtcInitIntersectContext(&ctx);
             ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-            CameraPacket camera(rays);
-            int valid[PACKET_LANES];
-            for (uint32_t y0 = tile.y0; y0 < tile.y1; y0 += PACKET_SIZE) {
-                for (uint32_t x0 = tile.x0; x0 < tile.x1; x0 += PACKET_SIZE) {
-                    packet_lanes(tile, x0, y0, valid);
-                    RayHit16& packet = camera.aim_centres(x0, y0);
-                    rtcIntersect16(valid, scene, &ctx, reinterpret_cast<RTCRayHit16*>(&packet));
-                    for (uint32_t i = 0; i < PACKET_LANES; ++i) {
-                        if (!valid[i]) continue;
-                        out[std::size_t(y0 + i / PACKET_SIZE) * WIDTH + x0 + i % PACKET_SIZE] = {
-                            packet.tfar[i], packet.inst_id[i], packet.prim_id[i]};
-                    }
-                }
-            }
+            rtcIntersect16(valid, scene, &ctx, reinterpret_cast<RTCRayHit16*>(&packet));
         });
         benchmark::DoNotOptimize(out.data());
     }
@@ -286,28 +299,14 @@ void BM_PlainIntersect16(benchmark::State& state) {
 /// The plain rtcIntersect16 loop, but tracing through the engine's TlasStrategy inside a launch:
 /// separates the cost of the engine's acceleration structures from that of its hit buffers.
 void BM_EngineTlas16(benchmark::State& state) {
-    const Fixture& f = fixture(int(state.range(0)));
-    state.SetLabel(scene_name(int(state.range(0))));
+    const Fixture& f = fixture_of(state);
     const CameraRays rays(f.desc.camera, WIDTH, HEIGHT);
     std::vector<PlainHit> out(std::size_t(WIDTH) * HEIGHT);
     for (auto _ : state) {
         auto launched = f.engine->launch([&](const FrameState&, const TlasStrategy& tlas,
                                              const RebuildReport&) {
-            parallel_for_tiles(WIDTH, HEIGHT, [&](const TileRect& tile) {
-                CameraPacket camera(rays);
-                int valid[PACKET_LANES];
-                for (uint32_t y0 = tile.y0; y0 < tile.y1; y0 += PACKET_SIZE) {
-                    for (uint32_t x0 = tile.x0; x0 < tile.x1; x0 += PACKET_SIZE) {
-                        packet_lanes(tile, x0, y0, valid);
-                        RayHit16& packet = camera.aim_centres(x0, y0);
-                        tlas.intersect16(valid, packet, true);
-                        for (uint32_t i = 0; i < PACKET_LANES; ++i) {
-                            if (!valid[i]) continue;
-                            out[std::size_t(y0 + i / PACKET_SIZE) * WIDTH + x0 + i % PACKET_SIZE] = {
-                                packet.tfar[i], packet.inst_id[i], packet.prim_id[i]};
-                        }
-                    }
-                }
+            trace_frame16(rays, out, [&](const int* valid, RayHit16& packet) {
+                tlas.intersect16(valid, packet, true);
             });
             return true;
         });
@@ -319,8 +318,7 @@ void BM_EngineTlas16(benchmark::State& state) {
 
 /// Full frames (sun shadows, one bounce) at 1280x720, 1 spp: rays of every kind per second.
 void BM_EngineRender(benchmark::State& state) {
-    const Fixture& f = fixture(int(state.range(0)));
-    state.SetLabel(scene_name(int(state.range(0))));
+    const Fixture& f = fixture_of(state);
     RenderRequest r;
     r.width = WIDTH;
     r.height = HEIGHT;
