@@ -7,6 +7,8 @@
 #include <mutex>
 #include <thread>
 
+#include <Iex.h>
+#include <Imath/half.h>
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
@@ -14,8 +16,6 @@
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfThreading.h>
-#include <Iex.h>
-#include <Imath/half.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -70,18 +70,24 @@ private:
 
 Imf::PixelType imf_type(ExrPixel p) {
     switch (p) {
-        case ExrPixel::Uint: return Imf::UINT;
-        case ExrPixel::Half: return Imf::HALF;
-        case ExrPixel::Float: return Imf::FLOAT;
+        case ExrPixel::Uint:
+            return Imf::UINT;
+        case ExrPixel::Half:
+            return Imf::HALF;
+        case ExrPixel::Float:
+            return Imf::FLOAT;
     }
     return Imf::HALF;
 }
 
 Imf::Compression imf_compression(ExrCompression c) {
     switch (c) {
-        case ExrCompression::None: return Imf::NO_COMPRESSION;
-        case ExrCompression::Zip: return Imf::ZIP_COMPRESSION;
-        case ExrCompression::Piz: return Imf::PIZ_COMPRESSION;
+        case ExrCompression::None:
+            return Imf::NO_COMPRESSION;
+        case ExrCompression::Zip:
+            return Imf::ZIP_COMPRESSION;
+        case ExrCompression::Piz:
+            return Imf::PIZ_COMPRESSION;
     }
     return Imf::ZIP_COMPRESSION;
 }
@@ -101,7 +107,8 @@ std::vector<half> to_half(const float* src, std::size_t stride, std::size_t coun
     std::vector<half> out(count);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1u << 15),
                       [&](const tbb::blocked_range<std::size_t>& r) {
-                          for (std::size_t i = r.begin(); i != r.end(); ++i) out[i] = half(src[i * stride]);
+                          for (std::size_t i = r.begin(); i != r.end(); ++i)
+                              out[i] = half(src[i * stride]);
                       });
     return out;
 }
@@ -155,8 +162,8 @@ Result<std::vector<uint8_t>> encode_exr(uint32_t width, uint32_t height,
                 base = reinterpret_cast<const char*>(c.u32);
                 elem = sizeof(uint32_t);
             }
-            frame.insert(c.name, Imf::Slice(imf_type(c.type), const_cast<char*>(base), elem * stride,
-                                            elem * stride * width));
+            frame.insert(c.name, Imf::Slice(imf_type(c.type), const_cast<char*>(base),
+                                            elem * stride, elem * stride * width));
         }
         out.reserve(std::size_t(width) * height * 4 + 4096);
         VectorOStream stream(out);
@@ -164,7 +171,8 @@ Result<std::vector<uint8_t>> encode_exr(uint32_t width, uint32_t height,
         file.setFrameBuffer(frame);
         file.writePixels(int(height));
     } catch (const std::exception& e) {
-        return make_error(ErrorCode::Internal, std::string("OpenEXR failed to encode: ") + e.what());
+        return make_error(ErrorCode::Internal,
+                          std::string("OpenEXR failed to encode: ") + e.what());
     }
     return out;
 }
@@ -179,10 +187,17 @@ Result<DecodedExr> decode_exr(const uint8_t* data, std::size_t size) {
         image.width = uint32_t(window.max.x - window.min.x + 1);
         image.height = uint32_t(window.max.y - window.min.y + 1);
         switch (header.compression()) {
-            case Imf::NO_COMPRESSION: image.compression = ExrCompression::None; break;
-            case Imf::ZIP_COMPRESSION: image.compression = ExrCompression::Zip; break;
-            case Imf::PIZ_COMPRESSION: image.compression = ExrCompression::Piz; break;
-            default: break;
+            case Imf::NO_COMPRESSION:
+                image.compression = ExrCompression::None;
+                break;
+            case Imf::ZIP_COMPRESSION:
+                image.compression = ExrCompression::Zip;
+                break;
+            case Imf::PIZ_COMPRESSION:
+                image.compression = ExrCompression::Piz;
+                break;
+            default:
+                break;
         }
         const std::size_t n = std::size_t(image.width) * image.height;
         for (auto it = header.channels().begin(); it != header.channels().end(); ++it) {
@@ -205,7 +220,8 @@ Result<DecodedExr> decode_exr(const uint8_t* data, std::size_t size) {
         file.setFrameBuffer(frame);
         file.readPixels(window.min.y, window.max.y);
     } catch (const std::exception& e) {
-        return make_error(ErrorCode::InvalidArgument, std::string("not a readable EXR: ") + e.what());
+        return make_error(ErrorCode::InvalidArgument,
+                          std::string("not a readable EXR: ") + e.what());
     }
     return image;
 }

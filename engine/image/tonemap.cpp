@@ -31,8 +31,8 @@ struct SrgbTables {
         boundary[255] = std::numeric_limits<float>::infinity();
         for (int i = 0; i < SRGB_BINS; ++i) {
             const float v = float(i) / float(SRGB_BINS - 1);
-            code[i] = static_cast<uint8_t>(
-                std::upper_bound(boundary.begin(), boundary.end(), v) - boundary.begin());
+            code[i] = static_cast<uint8_t>(std::upper_bound(boundary.begin(), boundary.end(), v) -
+                                           boundary.begin());
         }
     }
 };
@@ -70,7 +70,9 @@ Vec3 aces_fitted(const Vec3& c) {
     return glm::clamp(o, Vec3(0.0f), Vec3(1.0f));
 }
 
-uint8_t linear_to_srgb8(float v) { return encode(srgb_tables(), v); }
+uint8_t linear_to_srgb8(float v) {
+    return encode(srgb_tables(), v);
+}
 
 void tonemap_to_srgb8(const Vec3* linear, std::size_t count, float exposure_ev, uint8_t* rgb_out) {
     const float scale = std::exp2(exposure_ev);

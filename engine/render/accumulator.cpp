@@ -14,7 +14,9 @@ SampleRange Accumulator::begin(const AccumulationKey& key, uint32_t spp) {
     return {m_samples, std::min(spp, MAX_ACCUMULATED_SAMPLES - m_samples)};
 }
 
-void Accumulator::finish(const SampleRange& range) { m_samples = range.first + range.count; }
+void Accumulator::finish(const SampleRange& range) {
+    m_samples = range.first + range.count;
+}
 
 void Accumulator::reset() {
     m_key.reset();

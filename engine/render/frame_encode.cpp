@@ -37,7 +37,8 @@ std::vector<ExrChannel> exr_channels(const FrameBuffers& f) {
     channels.push_back(ExrChannel{"A", ExrPixel::Half, &ONE, nullptr, 0});
     if (f.aovs.has(Aov::Albedo)) add_vec3(channels, f.albedo, "albedo", RGB, ExrPixel::Half);
     if (f.aovs.has(Aov::Normal)) add_vec3(channels, f.normal, "N", XYZ, ExrPixel::Half);
-    if (f.aovs.has(Aov::Depth)) channels.push_back(ExrChannel{"Z", ExrPixel::Float, f.depth.data(), nullptr, 1});
+    if (f.aovs.has(Aov::Depth))
+        channels.push_back(ExrChannel{"Z", ExrPixel::Float, f.depth.data(), nullptr, 1});
     if (f.aovs.has(Aov::Position)) add_vec3(channels, f.position, "P", XYZ, ExrPixel::Float);
     if (f.aovs.has(Aov::InstanceId)) add_uint(channels, f.instance_id, Aov::InstanceId);
     if (f.aovs.has(Aov::PrimitiveId)) add_uint(channels, f.primitive_id, Aov::PrimitiveId);

@@ -69,7 +69,8 @@ public:
                 for (uint32_t i = 0; i < PACKET_LANES; ++i)
                     samplers[i] = PixelSampler(x0 + i % PACKET_SIZE, y0 + i / PACKET_SIZE);
                 for (uint32_t s = 0; s < m_samples.count; ++s)
-                    rays += trace_sample(camera, samplers, x0, y0, valid, m_samples.first + s, sums);
+                    rays +=
+                        trace_sample(camera, samplers, x0, y0, valid, m_samples.first + s, sums);
                 if (m_out.aovs.needs_centre_ray()) rays += trace_centre(camera, x0, y0, valid);
                 resolve(x0, y0, valid, sums);
             }
@@ -126,8 +127,8 @@ private:
             if (q.rays.tfar[i] == -std::numeric_limits<float>::infinity()) continue;
             const Vec3 v(-from.dir_x[i], -from.dir_y[i], -from.dir_z[i]);
             const Bsdf bsdf(m_frame.materials[hits[i].material], min_roughness[i]);
-            radiance[i] += bsdf.eval_cos(hits[i].normal, v, m_sky.sun_direction()) *
-                           m_sky.sun_irradiance();
+            radiance[i] +=
+                bsdf.eval_cos(hits[i].normal, v, m_sky.sun_direction()) * m_sky.sun_irradiance();
         }
         return rays;
     }
@@ -241,18 +242,22 @@ private:
         const AovSet aovs = m_out.aovs;
         for (uint32_t i = 0; i < PACKET_LANES; ++i) {
             if (!valid[i]) continue;
-            const std::size_t p = std::size_t(y0 + i / PACKET_SIZE) * m_out.width + x0 + i % PACKET_SIZE;
+            const std::size_t p =
+                std::size_t(y0 + i / PACKET_SIZE) * m_out.width + x0 + i % PACKET_SIZE;
             const uint32_t inst = packet.inst_id[i];
             const bool hit = inst != INVALID_ID;
             const float t = hit ? packet.tfar[i] : std::numeric_limits<float>::infinity();
             if (aovs.has(Aov::Depth)) m_out.depth[p] = t;
             if (aovs.has(Aov::Position)) {
                 m_out.position[p] =
-                    hit ? eye + t * Vec3(packet.dir_x[i], packet.dir_y[i], packet.dir_z[i]) : Vec3(0.0f);
+                    hit ? eye + t * Vec3(packet.dir_x[i], packet.dir_y[i], packet.dir_z[i])
+                        : Vec3(0.0f);
             }
             if (aovs.has(Aov::InstanceId)) m_out.instance_id[p] = hit ? inst : MISS_ID;
-            if (aovs.has(Aov::PrimitiveId)) m_out.primitive_id[p] = hit ? packet.prim_id[i] : MISS_ID;
-            if (aovs.has(Aov::MeshId)) m_out.mesh_id[p] = hit ? m_frame.instances[inst].mesh_slot : MISS_ID;
+            if (aovs.has(Aov::PrimitiveId))
+                m_out.primitive_id[p] = hit ? packet.prim_id[i] : MISS_ID;
+            if (aovs.has(Aov::MeshId))
+                m_out.mesh_id[p] = hit ? m_frame.instances[inst].mesh_slot : MISS_ID;
         }
         return rays;
     }
@@ -262,7 +267,8 @@ private:
         const AovSet aovs = m_out.aovs;
         for (uint32_t i = 0; i < PACKET_LANES; ++i) {
             if (!valid[i]) continue;
-            const std::size_t p = std::size_t(y0 + i / PACKET_SIZE) * m_out.width + x0 + i % PACKET_SIZE;
+            const std::size_t p =
+                std::size_t(y0 + i / PACKET_SIZE) * m_out.width + x0 + i % PACKET_SIZE;
             m_out.color[p] = sums[i]->color * m_inv_total;
             if (aovs.has(Aov::Albedo)) m_out.albedo[p] = sums[i]->albedo * m_inv_total;
             if (aovs.has(Aov::Normal)) m_out.normal[p] = sums[i]->normal * m_inv_total;

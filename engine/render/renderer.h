@@ -37,12 +37,12 @@ constexpr float MIN_SECONDARY_ROUGHNESS = 0.5f;
 /// A frame's linear buffers and how they were made.
 struct RenderedFrame {
     FrameBuffers buffers;
-    uint64_t version = 0;       ///< scene version the frame shows
-    RebuildReport report;       ///< the commit the launch ran
-    uint32_t samples = 0;       ///< samples per pixel in the frame (the total when accumulating)
-    uint32_t samples_added = 0; ///< samples per pixel this launch traced
-    uint64_t rays = 0;          ///< rays traced (camera, shadow, bounce)
-    double render_ms = 0.0;     ///< tracing and shading
+    uint64_t version = 0;        ///< scene version the frame shows
+    RebuildReport report;        ///< the commit the launch ran
+    uint32_t samples = 0;        ///< samples per pixel in the frame (the total when accumulating)
+    uint32_t samples_added = 0;  ///< samples per pixel this launch traced
+    uint64_t rays = 0;           ///< rays traced (camera, shadow, bounce)
+    double render_ms = 0.0;      ///< tracing and shading
 };
 
 class Renderer {

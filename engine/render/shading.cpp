@@ -32,7 +32,9 @@ float schlick_weight(float cos_theta) {
     return m2 * m2 * m;
 }
 
-float luminance(const Vec3& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+float luminance(const Vec3& c) {
+    return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z;
+}
 
 /// GGX normal distribution for cos(n, h).
 float ggx_d(float n_dot_h, float alpha) {
@@ -60,7 +62,8 @@ float smith_g1(float n_dot_v, float alpha) {
 Vec3 sample_vndf(const Vec3& v, float alpha, float u0, float u1) {
     const Vec3 vh = glm::normalize(Vec3(alpha * v.x, alpha * v.y, v.z));
     const float len2 = vh.x * vh.x + vh.y * vh.y;
-    const Vec3 t1 = len2 > 0.0f ? Vec3(-vh.y, vh.x, 0.0f) / std::sqrt(len2) : Vec3(1.0f, 0.0f, 0.0f);
+    const Vec3 t1 =
+        len2 > 0.0f ? Vec3(-vh.y, vh.x, 0.0f) / std::sqrt(len2) : Vec3(1.0f, 0.0f, 0.0f);
     const Vec3 t2 = glm::cross(vh, t1);
     const float r = std::sqrt(u0);
     const float phi = 2.0f * PI * u1;

@@ -4,7 +4,8 @@
 // BRDF: the glTF 2.0 metallic-roughness model. Lambert diffuse for the dielectric part plus a
 // GGX microfacet specular lobe with height-correlated Smith visibility and Schlick Fresnel:
 //   F0 = mix(0.04, base_color, metallic), alpha = roughness^2 (at least MIN_ALPHA),
-//   f  = (1 - metallic) * (1 - F_schlick(0.04, v.h)) * base_color / pi + D * Vis * F_schlick(F0, v.h).
+//   f  = (1 - metallic) * (1 - F_schlick(0.04, v.h)) * base_color / pi
+//        + D * Vis * F_schlick(F0, v.h).
 //
 // Light units: a white Lambertian surface facing the sun reflects radiance `sun_color` (the sun's
 // irradiance is pi * sun_color), and under a uniform sky of radiance L it reflects L. So

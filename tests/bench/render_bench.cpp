@@ -64,7 +64,8 @@ SceneDesc instances_10k() {
     d.meshes.push_back(make_sphere(0.45f, 16));
     for (int z = 0; z < 100; ++z) {
         for (int x = 0; x < 100; ++x)
-            d.instances.push_back({0, Affine::translation({float(x) - 49.5f, 0.0f, float(z) - 49.5f})});
+            d.instances.push_back(
+                {0, Affine::translation({float(x) - 49.5f, 0.0f, float(z) - 49.5f})});
     }
     d.camera.eye = Vec3(0.0f, 25.0f, 60.0f);
     d.camera.target = Vec3(0.0f, 0.0f, 5.0f);
@@ -112,11 +113,13 @@ public:
             rtcSetSceneBuildQuality(s, RTC_BUILD_QUALITY_HIGH);
             RTCGeometry g = rtcNewGeometry(m_device, RTC_GEOMETRY_TYPE_TRIANGLE);
             rtcSetGeometryBuildQuality(g, RTC_BUILD_QUALITY_HIGH);
-            auto* v = static_cast<Vec3*>(rtcSetNewGeometryBuffer(
-                g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, sizeof(Vec3), mesh.positions.size()));
+            auto* v = static_cast<Vec3*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                                 RTC_FORMAT_FLOAT3, sizeof(Vec3),
+                                                                 mesh.positions.size()));
             std::copy(mesh.positions.begin(), mesh.positions.end(), v);
-            auto* t = static_cast<Triangle*>(rtcSetNewGeometryBuffer(
-                g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, sizeof(Triangle), mesh.triangles.size()));
+            auto* t = static_cast<Triangle*>(
+                rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                        sizeof(Triangle), mesh.triangles.size()));
             std::copy(mesh.triangles.begin(), mesh.triangles.end(), t);
             rtcCommitGeometry(g);
             rtcAttachGeometryByID(s, g, 0);
@@ -130,7 +133,8 @@ public:
         for (std::size_t i = 0; i < d.instances.size(); ++i) {
             RTCGeometry g = rtcNewGeometry(m_device, RTC_GEOMETRY_TYPE_INSTANCE);
             rtcSetGeometryInstancedScene(g, m_blas[d.instances[i].mesh]);
-            rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, d.instances[i].transform.m.data());
+            rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR,
+                                    d.instances[i].transform.m.data());
             rtcCommitGeometry(g);
             rtcAttachGeometryByID(m_top, g, unsigned(i));
             rtcReleaseGeometry(g);
@@ -189,7 +193,9 @@ struct PlainHit {
 
 /// The fastest repetition: contention from other processes only ever adds time, so on a busy
 /// machine the minimum is the steadiest estimate (reported next to the median).
-double min_of(const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); }
+double min_of(const std::vector<double>& v) {
+    return *std::min_element(v.begin(), v.end());
+}
 
 void report(benchmark::State& state, double rays_per_iteration) {
     state.counters["Mrays/s"] = benchmark::Counter(rays_per_iteration * 1e-6,
@@ -303,13 +309,13 @@ void BM_EngineTlas16(benchmark::State& state) {
     const CameraRays rays(f.desc.camera, WIDTH, HEIGHT);
     std::vector<PlainHit> out(std::size_t(WIDTH) * HEIGHT);
     for (auto _ : state) {
-        auto launched = f.engine->launch([&](const FrameState&, const TlasStrategy& tlas,
-                                             const RebuildReport&) {
-            trace_frame16(rays, out, [&](const int* valid, RayHit16& packet) {
-                tlas.intersect16(valid, packet, true);
+        auto launched = f.engine->launch(
+            [&](const FrameState&, const TlasStrategy& tlas, const RebuildReport&) {
+                trace_frame16(rays, out, [&](const int* valid, RayHit16& packet) {
+                    tlas.intersect16(valid, packet, true);
+                });
+                return true;
             });
-            return true;
-        });
         STRATA_CHECK(launched.ok());
         benchmark::DoNotOptimize(out.data());
     }
@@ -329,16 +335,46 @@ void BM_EngineRender(benchmark::State& state) {
         benchmark::DoNotOptimize(frame.value().buffers.color.data());
     }
     report(state, rays);
-    state.counters["Msamples/s"] =
-        benchmark::Counter(double(WIDTH) * HEIGHT * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
+    state.counters["Msamples/s"] = benchmark::Counter(
+        double(WIDTH) * HEIGHT * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
 }
 
-BENCHMARK(BM_EnginePrimary)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->ComputeStatistics("min", min_of);
-BENCHMARK(BM_EnginePrimaryNewBuffers)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->ComputeStatistics("min", min_of);
-BENCHMARK(BM_PlainIntersect1)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->ComputeStatistics("min", min_of);
-BENCHMARK(BM_PlainIntersect16)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->ComputeStatistics("min", min_of);
-BENCHMARK(BM_EngineTlas16)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->ComputeStatistics("min", min_of);
-BENCHMARK(BM_EngineRender)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->ComputeStatistics("min", min_of);
+BENCHMARK(BM_EnginePrimary)
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->ComputeStatistics("min", min_of);
+BENCHMARK(BM_EnginePrimaryNewBuffers)
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->ComputeStatistics("min", min_of);
+BENCHMARK(BM_PlainIntersect1)
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->ComputeStatistics("min", min_of);
+BENCHMARK(BM_PlainIntersect16)
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->ComputeStatistics("min", min_of);
+BENCHMARK(BM_EngineTlas16)
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->ComputeStatistics("min", min_of);
+BENCHMARK(BM_EngineRender)
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->ComputeStatistics("min", min_of);
 
 /// A 1920x1080 frame of the demo scene (4 spp, every AOV), rendered once for the encoders.
 const FrameBuffers& demo_1080p() {
@@ -350,8 +386,8 @@ const FrameBuffers& demo_1080p() {
         r.height = 1080;
         r.spp = 4;
         r.format = ImageFormat::Exr;
-        r.aovs = {Aov::Albedo, Aov::Normal, Aov::Depth, Aov::Position, Aov::InstanceId,
-                  Aov::PrimitiveId, Aov::MeshId};
+        r.aovs = {Aov::Albedo,     Aov::Normal,      Aov::Depth, Aov::Position,
+                  Aov::InstanceId, Aov::PrimitiveId, Aov::MeshId};
         return std::move(engine->render_frame(r).value().buffers);
     }();
     return frame;
@@ -401,9 +437,18 @@ void BM_ExrFrame1080p(benchmark::State& state) {
     state.counters["MB"] = double(bytes) / 1e6;
 }
 
-BENCHMARK(BM_ToneMap1080p)->Unit(benchmark::kMillisecond)->UseRealTime()->ComputeStatistics("min", min_of);
-BENCHMARK(BM_PngEncode1080p)->Unit(benchmark::kMillisecond)->UseRealTime()->ComputeStatistics("min", min_of);
-BENCHMARK(BM_PngFrame1080p)->Unit(benchmark::kMillisecond)->UseRealTime()->ComputeStatistics("min", min_of);
+BENCHMARK(BM_ToneMap1080p)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->ComputeStatistics("min", min_of);
+BENCHMARK(BM_PngEncode1080p)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->ComputeStatistics("min", min_of);
+BENCHMARK(BM_PngFrame1080p)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->ComputeStatistics("min", min_of);
 BENCHMARK(BM_ExrFrame1080p)
     ->ArgsProduct({{0, 1, 2}, {0, 1}})
     ->Unit(benchmark::kMillisecond)
@@ -417,11 +462,10 @@ BENCHMARK(BM_ExrFrame1080p)
 int main(int argc, char** argv) {
     std::unique_ptr<tbb::global_control> threads;
     if (const char* n = std::getenv("STRATA_BENCH_THREADS"))
-        threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                        std::size_t(std::max(1, std::atoi(n))));
-    benchmark::AddCustomContext(
-        "tbb_threads", std::to_string(tbb::global_control::active_value(
-                           tbb::global_control::max_allowed_parallelism)));
+        threads = std::make_unique<tbb::global_control>(
+            tbb::global_control::max_allowed_parallelism, std::size_t(std::max(1, std::atoi(n))));
+    benchmark::AddCustomContext("tbb_threads", std::to_string(tbb::global_control::active_value(
+                                                   tbb::global_control::max_allowed_parallelism)));
     benchmark::Initialize(&argc, argv);
     if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
     benchmark::RunSpecifiedBenchmarks();

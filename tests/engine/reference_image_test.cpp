@@ -3,7 +3,7 @@
 // (on one machine they never do, see render_determinism_test).
 //
 // Regenerate after an intended change of the renderer or of the demo scene, then look at it:
-//   STRATA_UPDATE_REFERENCE=1 build/tests/engine/strata_engine_tests --gtest_filter='ReferenceImage.*'
+//   STRATA_UPDATE_REFERENCE=1 ctest --test-dir build -R ReferenceImage
 // On a mismatch the test writes the frame it got to demo_reference_actual.png in its working
 // directory (build/tests/engine under ctest).
 

@@ -17,7 +17,7 @@ using test::render_frame_ok;
 using test::render_ok;
 using test::request;
 
-const std::vector<Aov> ALL_AOVS = {Aov::Albedo, Aov::Normal, Aov::Depth, Aov::Position,
+const std::vector<Aov> ALL_AOVS = {Aov::Albedo,     Aov::Normal,      Aov::Depth, Aov::Position,
                                    Aov::InstanceId, Aov::PrimitiveId, Aov::MeshId};
 
 class RenderDeterminism : public ::testing::Test {

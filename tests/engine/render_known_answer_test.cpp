@@ -22,8 +22,8 @@ using test::project;
 using test::render_frame_ok;
 using test::request;
 
-const std::vector<Aov> GEOMETRY_AOVS = {Aov::Depth, Aov::Position, Aov::InstanceId,
-                                        Aov::PrimitiveId, Aov::MeshId, Aov::Normal};
+const std::vector<Aov> GEOMETRY_AOVS = {Aov::Depth,       Aov::Position, Aov::InstanceId,
+                                        Aov::PrimitiveId, Aov::MeshId,   Aov::Normal};
 
 /// A large plane facing the camera from distance d (the plane is y = 0, the camera looks down).
 std::unique_ptr<Engine> plane_at(float d) {
@@ -57,10 +57,12 @@ INSTANTIATE_TEST_SUITE_P(Distances, PlaneDepth, ::testing::Values(0.5f, 3.0f, 7.
 
 TEST(RenderKnownAnswer, PixelsThatHitNothingHaveTheDocumentedValues) {
     auto engine = test::make_engine();
-    apply_ok(*engine, mesh_edit("box", make_box(Vec3(1.0f))), instance_edit("box", "box", {0, 0, 50}));
-    const RenderedFrame f = render_frame_ok(
-        *engine, request(16, 16, 1, {Aov::Albedo, Aov::Normal, Aov::Depth, Aov::Position,
-                                     Aov::InstanceId, Aov::PrimitiveId, Aov::MeshId}));
+    apply_ok(*engine, mesh_edit("box", make_box(Vec3(1.0f))),
+             instance_edit("box", "box", {0, 0, 50}));
+    const RenderedFrame f =
+        render_frame_ok(*engine, request(16, 16, 1,
+                                         {Aov::Albedo, Aov::Normal, Aov::Depth, Aov::Position,
+                                          Aov::InstanceId, Aov::PrimitiveId, Aov::MeshId}));
     const SkyModel sky{Lighting{}};
     for (std::size_t i = 0; i < f.buffers.pixel_count(); ++i) {
         ASSERT_EQ(f.buffers.depth[i], std::numeric_limits<float>::infinity());
@@ -116,12 +118,14 @@ protected:
         return engine->read([&](const Scene& s) { return s.find_mesh(mesh).index; });
     }
     RenderedFrame render() const {
-        return render_frame_ok(*engine, request(W, H, 1, {Aov::InstanceId, Aov::MeshId, Aov::PrimitiveId}));
+        return render_frame_ok(*engine,
+                               request(W, H, 1, {Aov::InstanceId, Aov::MeshId, Aov::PrimitiveId}));
     }
     std::size_t at(const Vec3& p) const { return test::pixel_index(W, project(cam, W, H, p)); }
 
     static constexpr uint32_t W = 160, H = 90;
-    static constexpr Vec3 LEFT{-4.0f, 0.0f, 0.0f}, MIDDLE{0.0f, 0.0f, 0.0f}, RIGHT{4.0f, 0.0f, 0.0f};
+    static constexpr Vec3 LEFT{-4.0f, 0.0f, 0.0f}, MIDDLE{0.0f, 0.0f, 0.0f},
+        RIGHT{4.0f, 0.0f, 0.0f};
     std::unique_ptr<Engine> engine;
     Camera cam;
 };
@@ -141,7 +145,8 @@ TEST_F(SeparatedInstances, InstanceIdNamesTheInstanceUnderEachPixel) {
         EXPECT_NE(b.primitive_id[p], MISS_ID) << e.instance;
     }
     // Between the instances, and above them, nothing is hit.
-    for (const Vec3 gap : {Vec3(-2.0f, 0.0f, 0.0f), Vec3(2.0f, 0.0f, 0.0f), Vec3(0.0f, 2.5f, 0.0f)}) {
+    for (const Vec3 gap :
+         {Vec3(-2.0f, 0.0f, 0.0f), Vec3(2.0f, 0.0f, 0.0f), Vec3(0.0f, 2.5f, 0.0f)}) {
         EXPECT_EQ(b.instance_id[at(gap)], MISS_ID);
         EXPECT_EQ(b.mesh_id[at(gap)], MISS_ID);
         EXPECT_EQ(b.primitive_id[at(gap)], MISS_ID);
@@ -189,7 +194,8 @@ TEST_F(SeparatedInstances, MovedInstanceIdsMoveWithIt) {
             }
             ++footprint;
             const int ty = int(y) + dy;
-            if (ty >= 0 && ty < int(H) && after.buffers.instance_id[std::size_t(ty) * W + x] == middle)
+            if (ty >= 0 && ty < int(H) &&
+                after.buffers.instance_id[std::size_t(ty) * W + x] == middle)
                 ++shifted;
         }
     }

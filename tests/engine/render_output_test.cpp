@@ -23,9 +23,8 @@ using test::render_frame_ok;
 using test::render_ok;
 using test::request;
 
-const std::vector<Aov> ALL_AOVS = {Aov::Color,      Aov::Albedo,     Aov::Normal,
-                                   Aov::Depth,      Aov::Position,   Aov::InstanceId,
-                                   Aov::PrimitiveId, Aov::MeshId};
+const std::vector<Aov> ALL_AOVS = {Aov::Color,    Aov::Albedo,     Aov::Normal,      Aov::Depth,
+                                   Aov::Position, Aov::InstanceId, Aov::PrimitiveId, Aov::MeshId};
 
 std::set<std::string> names(const DecodedExr& exr) {
     std::set<std::string> out;
@@ -51,15 +50,18 @@ TEST_P(RenderOutput, ExrCarriesEveryAovWithOpenExrNames) {
     ASSERT_EQ(exr.height, 39u);
     EXPECT_EQ(exr.compression, GetParam());
     const std::set<std::string> expected = {
-        "R", "G", "B", "A", "albedo.R", "albedo.G", "albedo.B", "N.X", "N.Y", "N.Z", "Z",
-        "P.X", "P.Y", "P.Z", "instance_id", "primitive_id", "mesh_id"};
+        "R",   "G", "B",   "A",   "albedo.R", "albedo.G",    "albedo.B",     "N.X",    "N.Y",
+        "N.Z", "Z", "P.X", "P.Y", "P.Z",      "instance_id", "primitive_id", "mesh_id"};
     EXPECT_EQ(names(exr), expected);
 
     const std::size_t n = 67u * 39u;
     for (const DecodedExrChannel& c : exr.channels) {
         const bool is_id = c.name.find("_id") != std::string::npos;
         const bool is_float = c.name == "Z" || c.name.starts_with("P.");
-        EXPECT_EQ(c.type, is_id ? ExrPixel::Uint : is_float ? ExrPixel::Float : ExrPixel::Half) << c.name;
+        EXPECT_EQ(c.type, is_id      ? ExrPixel::Uint
+                          : is_float ? ExrPixel::Float
+                                     : ExrPixel::Half)
+            << c.name;
         EXPECT_EQ(is_id ? c.u32.size() : c.f32.size(), n) << c.name;
     }
 
@@ -107,7 +109,8 @@ TEST(RenderOutputBasics, CompressionShrinksTheFile) {
 
 TEST(RenderOutputBasics, PngDecodesToTheRequestedSize) {
     auto engine = test::engine_with(make_demo_scene());
-    const RenderedImage image = render_ok(*engine, request(123, 45, 1, {Aov::Color}, ImageFormat::Png));
+    const RenderedImage image =
+        render_ok(*engine, request(123, 45, 1, {Aov::Color}, ImageFormat::Png));
     EXPECT_EQ(image.content_type, "image/png");
     auto decoded = decode_png(image.bytes.data(), image.bytes.size());
     ASSERT_TRUE(decoded.ok()) << decoded.error().describe();
@@ -125,7 +128,8 @@ TEST(RenderOutputBasics, PngIsTheToneMappedBeauty) {
     auto decoded = decode_png(image.bytes.data(), image.bytes.size());
     ASSERT_TRUE(decoded.ok());
     std::vector<uint8_t> expected(frame.buffers.pixel_count() * 3);
-    tonemap_to_srgb8(frame.buffers.color.data(), frame.buffers.pixel_count(), -0.5f, expected.data());
+    tonemap_to_srgb8(frame.buffers.color.data(), frame.buffers.pixel_count(), -0.5f,
+                     expected.data());
     EXPECT_EQ(decoded.value().pixels, expected);
 
     // Exposure is in stops: +1 EV equals doubling the linear image.

@@ -34,7 +34,8 @@ TEST(PixelSampler, FirstPowerOfTwoSamplesAreStratifiedInEveryDimension) {
             for (uint32_t dim = 0; dim < 8; ++dim) {
                 std::set<uint32_t> strata;
                 for (uint32_t i = 0; i < n; ++i) strata.insert(uint32_t(s.get1(i, dim) * float(n)));
-                ASSERT_EQ(strata.size(), n) << "pixel " << px << ", dimension " << dim << ", 2^" << m;
+                ASSERT_EQ(strata.size(), n)
+                    << "pixel " << px << ", dimension " << dim << ", 2^" << m;
             }
         }
     }
@@ -52,7 +53,8 @@ TEST(PixelSampler, PixelJitterFormsNets) {
                 std::set<std::pair<uint32_t, uint32_t>> cells;
                 for (uint32_t i = 0; i < n; ++i) {
                     const auto u = s.get4(i, 0);
-                    cells.insert({uint32_t(u[0] * float(1u << a)), uint32_t(u[1] * float(1u << (m - a)))});
+                    cells.insert(
+                        {uint32_t(u[0] * float(1u << a)), uint32_t(u[1] * float(1u << (m - a)))});
                 }
                 ASSERT_EQ(cells.size(), n) << "2^" << m << " samples, a = " << a;
             }
