@@ -165,7 +165,11 @@ Result<std::vector<uint8_t>> encode_exr(uint32_t width, uint32_t height,
             frame.insert(c.name, Imf::Slice(imf_type(c.type), const_cast<char*>(base),
                                             elem * stride, elem * stride * width));
         }
-        out.reserve(std::size_t(width) * height * 4 + 4096);
+        // Room for the uncompressed pixels, so the vector never grows by copying (pages that
+        // compression leaves unused are never touched).
+        std::size_t raw = 0;
+        for (const ExrChannel& c : channels) raw += c.type == ExrPixel::Half ? 2 : 4;
+        out.reserve(raw * width * height + 8 * std::size_t(height) + 65536);
         VectorOStream stream(out);
         Imf::OutputFile file(stream, header);
         file.setFrameBuffer(frame);

@@ -49,7 +49,8 @@ Result<std::vector<uint8_t>> encode_png(const uint8_t* pixels, uint32_t width, u
         return make_error(ErrorCode::Internal, "libpng could not be initialised");
     }
     std::vector<uint8_t> out;
-    out.reserve(std::size_t(width) * height * channels / 2 + 1024);
+    // Room for incompressible pixels, so the vector never grows by copying.
+    out.reserve(std::size_t(width) * height * channels + height + 65536);
     WriteState state{&out};
     // libpng reports errors by longjmp; nothing with a destructor lives between here and the end.
     if (setjmp(png_jmpbuf(png))) {

@@ -29,8 +29,8 @@ std::optional<ImageFormat> parse_image_format(std::string_view s);
 std::optional<ExrCompression> parse_exr_compression(std::string_view s);
 std::optional<Aov> parse_aov(std::string_view s);
 
-/// One frame to render. Field meanings (see renderer.h, aov_buffers.h, frame_encode.h,
-/// accumulator.h and tonemap.h for the details):
+/// One frame to render. renderer.h, aov_buffers.h, frame_encode.h, accumulator.h and tonemap.h
+/// give the details of each field's effect.
 struct RenderRequest {
     uint32_t width = 640;
     uint32_t height = 360;

@@ -4,12 +4,15 @@
 // packets, hit buffers) against plain Embree loops (rtcIntersect1 and rtcIntersect16) over an
 // equivalent Embree scene built here: the same meshes with the same build qualities the engine's
 // BlasStore and EmbreeTlas choose, the same instance transforms, the same rays (CameraRays over
-// the same fixed tile grid) and the same coherent context flag.
+// the same fixed tile grid) and the same coherent context flag. BM_PrimaryRatio times them frame
+// by frame in rotation and reports the engine's relative speed: the headline number, steady even
+// on a busy machine. Full frames (BM_EngineRender) and the encoders are measured too.
 //
 //   strata_render_bench --benchmark_repetitions=15 --benchmark_enable_random_interleaving=true
 //       --benchmark_report_aggregates_only=true [STRATA_BENCH_THREADS=N in the environment]
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <cstdlib>
 #include <memory>
@@ -202,67 +205,6 @@ void report(benchmark::State& state, double rays_per_iteration) {
                                                    benchmark::Counter::kIsIterationInvariantRate);
 }
 
-PrimarySettings primary_settings() {
-    PrimarySettings settings;
-    settings.width = WIDTH;
-    settings.height = HEIGHT;
-    return settings;
-}
-
-/// Engine::render_primary into a reused frame: the engine's primary-ray path.
-void BM_EnginePrimary(benchmark::State& state) {
-    const Fixture& f = fixture_of(state);
-    const PrimarySettings settings = primary_settings();
-    PrimaryFrame frame;
-    for (auto _ : state) {
-        STRATA_CHECK(f.engine->render_primary(settings, frame).ok());
-        benchmark::DoNotOptimize(frame.hits.distance.data());
-    }
-    report(state, double(WIDTH) * HEIGHT);
-}
-
-/// The by-value Engine::render_primary: adds allocating (and page-faulting) 33 MB of hit buffers
-/// per frame.
-void BM_EnginePrimaryNewBuffers(benchmark::State& state) {
-    const Fixture& f = fixture_of(state);
-    const PrimarySettings settings = primary_settings();
-    for (auto _ : state) {
-        auto frame = f.engine->render_primary(settings);
-        benchmark::DoNotOptimize(frame.value().hits.distance.data());
-    }
-    report(state, double(WIDTH) * HEIGHT);
-}
-
-void BM_PlainIntersect1(benchmark::State& state) {
-    const Fixture& f = fixture_of(state);
-    const CameraRays rays(f.desc.camera, WIDTH, HEIGHT);
-    std::vector<PlainHit> out(std::size_t(WIDTH) * HEIGHT);
-    RTCScene scene = f.plain->scene();
-    for (auto _ : state) {
-        parallel_for_tiles(WIDTH, HEIGHT, [&](const TileRect& tile) {
-            RTCIntersectContext ctx;
-            rtcInitIntersectContext(&ctx);
-            ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-            for (uint32_t y = tile.y0; y < tile.y1; ++y) {
-                for (uint32_t x = tile.x0; x < tile.x1; ++x) {
-                    RayHit1 r;
-                    const Vec3 d = rays.direction(float(x) + 0.5f, float(y) + 0.5f);
-                    const Vec3 e = rays.eye();
-                    r.org_x = e.x, r.org_y = e.y, r.org_z = e.z, r.tnear = 0.0f;
-                    r.dir_x = d.x, r.dir_y = d.y, r.dir_z = d.z, r.time = 0.0f;
-                    r.tfar = std::numeric_limits<float>::infinity();
-                    r.mask = 0xFFFFFFFFu, r.id = 0, r.flags = 0;
-                    r.geom_id = r.inst_id = r.prim_id = INVALID_ID;
-                    rtcIntersect1(scene, &ctx, reinterpret_cast<RTCRayHit*>(&r));
-                    out[std::size_t(y) * WIDTH + x] = {r.tfar, r.inst_id, r.prim_id};
-                }
-            }
-        });
-        benchmark::DoNotOptimize(out.data());
-    }
-    report(state, double(WIDTH) * HEIGHT);
-}
-
 /// One frame of pixel-centre packets over the tile grid, each traced by `trace(valid, packet)`;
 /// keeps what a minimal caller keeps of each hit.
 template <class Trace>
@@ -285,41 +227,143 @@ void trace_frame16(const CameraRays& rays, std::vector<PlainHit>& out, Trace&& t
     });
 }
 
-void BM_PlainIntersect16(benchmark::State& state) {
-    const Fixture& f = fixture_of(state);
-    const CameraRays rays(f.desc.camera, WIDTH, HEIGHT);
-    std::vector<PlainHit> out(std::size_t(WIDTH) * HEIGHT);
-    RTCScene scene = f.plain->scene();
-    for (auto _ : state) {
-        trace_frame16(rays, out, [&](const int* valid, RayHit16& packet) {
-            RTCIntersectContext ctx;
-            rtcInitIntersectContext(&ctx);
-            ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-            rtcIntersect16(valid, scene, &ctx, reinterpret_cast<RTCRayHit16*>(&packet));
-        });
-        benchmark::DoNotOptimize(out.data());
+/// The frame loops measured, each writing into buffers the caller keeps across frames.
+class FrameLoops {
+public:
+    explicit FrameLoops(const Fixture& f)
+        : m_fixture(f), m_rays(f.desc.camera, WIDTH, HEIGHT), m_out(std::size_t(WIDTH) * HEIGHT) {
+        m_settings.width = WIDTH;
+        m_settings.height = HEIGHT;
     }
-    report(state, double(WIDTH) * HEIGHT);
-}
 
-/// The plain rtcIntersect16 loop, but tracing through the engine's TlasStrategy inside a launch:
-/// separates the cost of the engine's acceleration structures from that of its hit buffers.
-void BM_EngineTlas16(benchmark::State& state) {
-    const Fixture& f = fixture_of(state);
-    const CameraRays rays(f.desc.camera, WIDTH, HEIGHT);
-    std::vector<PlainHit> out(std::size_t(WIDTH) * HEIGHT);
-    for (auto _ : state) {
-        auto launched = f.engine->launch(
+    /// Engine::render_primary into a reused frame: the engine's primary-ray path.
+    void engine_primary() {
+        STRATA_CHECK(m_fixture.engine->render_primary(m_settings, m_frame).ok());
+        benchmark::DoNotOptimize(m_frame.hits.distance.data());
+    }
+
+    /// The by-value Engine::render_primary: adds allocating (and page-faulting) 33 MB of hit
+    /// buffers per frame.
+    void engine_primary_new_buffers() {
+        auto frame = m_fixture.engine->render_primary(m_settings);
+        benchmark::DoNotOptimize(frame.value().hits.distance.data());
+    }
+
+    /// The plain rtcIntersect16 loop, but tracing through the engine's TlasStrategy inside a
+    /// launch: separates the engine's acceleration structures from its hit buffers.
+    void engine_tlas16() {
+        auto launched = m_fixture.engine->launch(
             [&](const FrameState&, const TlasStrategy& tlas, const RebuildReport&) {
-                trace_frame16(rays, out, [&](const int* valid, RayHit16& packet) {
+                trace_frame16(m_rays, m_out, [&](const int* valid, RayHit16& packet) {
                     tlas.intersect16(valid, packet, true);
                 });
                 return true;
             });
         STRATA_CHECK(launched.ok());
-        benchmark::DoNotOptimize(out.data());
+        benchmark::DoNotOptimize(m_out.data());
     }
+
+    void plain_intersect16() {
+        RTCScene scene = m_fixture.plain->scene();
+        trace_frame16(m_rays, m_out, [&](const int* valid, RayHit16& packet) {
+            RTCIntersectContext ctx;
+            rtcInitIntersectContext(&ctx);
+            ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+            rtcIntersect16(valid, scene, &ctx, reinterpret_cast<RTCRayHit16*>(&packet));
+        });
+        benchmark::DoNotOptimize(m_out.data());
+    }
+
+    void plain_intersect1() {
+        RTCScene scene = m_fixture.plain->scene();
+        parallel_for_tiles(WIDTH, HEIGHT, [&](const TileRect& tile) {
+            RTCIntersectContext ctx;
+            rtcInitIntersectContext(&ctx);
+            ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+            const Vec3 e = m_rays.eye();
+            for (uint32_t y = tile.y0; y < tile.y1; ++y) {
+                for (uint32_t x = tile.x0; x < tile.x1; ++x) {
+                    RayHit1 r;
+                    const Vec3 d = m_rays.direction(float(x) + 0.5f, float(y) + 0.5f);
+                    r.org_x = e.x, r.org_y = e.y, r.org_z = e.z, r.tnear = 0.0f;
+                    r.dir_x = d.x, r.dir_y = d.y, r.dir_z = d.z, r.time = 0.0f;
+                    r.tfar = std::numeric_limits<float>::infinity();
+                    r.mask = 0xFFFFFFFFu, r.id = 0, r.flags = 0;
+                    r.geom_id = r.inst_id = r.prim_id = INVALID_ID;
+                    rtcIntersect1(scene, &ctx, reinterpret_cast<RTCRayHit*>(&r));
+                    m_out[std::size_t(y) * WIDTH + x] = {r.tfar, r.inst_id, r.prim_id};
+                }
+            }
+        });
+        benchmark::DoNotOptimize(m_out.data());
+    }
+
+private:
+    const Fixture& m_fixture;
+    const CameraRays m_rays;
+    PrimarySettings m_settings;
+    PrimaryFrame m_frame;
+    std::vector<PlainHit> m_out;
+};
+
+/// A benchmark of one frame loop over one fixture.
+template <void (FrameLoops::*LOOP)()>
+void BM_Frame(benchmark::State& state) {
+    FrameLoops loops(fixture_of(state));
+    for (auto _ : state) (loops.*LOOP)();
     report(state, double(WIDTH) * HEIGHT);
+}
+
+void BM_EnginePrimary(benchmark::State& s) {
+    BM_Frame<&FrameLoops::engine_primary>(s);
+}
+void BM_EnginePrimaryNewBuffers(benchmark::State& s) {
+    BM_Frame<&FrameLoops::engine_primary_new_buffers>(s);
+}
+void BM_EngineTlas16(benchmark::State& s) {
+    BM_Frame<&FrameLoops::engine_tlas16>(s);
+}
+void BM_PlainIntersect16(benchmark::State& s) {
+    BM_Frame<&FrameLoops::plain_intersect16>(s);
+}
+void BM_PlainIntersect1(benchmark::State& s) {
+    BM_Frame<&FrameLoops::plain_intersect1>(s);
+}
+
+/// The engine against the plain loops, frame after frame in rotating order: each iteration times
+/// one frame of each loop, and the counters are medians over iterations of the engine's speed
+/// relative to a plain loop (above 1: the engine is faster). Frames next to each other see the
+/// same load, so on a shared machine these ratios are far steadier than ratios of separately
+/// timed benchmarks.
+void BM_PrimaryRatio(benchmark::State& state) {
+    FrameLoops loops(fixture_of(state));
+    using Loop = void (FrameLoops::*)();
+    enum { PLAIN16, PLAIN1, PRIMARY, TLAS16, LOOPS };
+    const Loop loop[LOOPS] = {&FrameLoops::plain_intersect16, &FrameLoops::plain_intersect1,
+                              &FrameLoops::engine_primary, &FrameLoops::engine_tlas16};
+    std::vector<double> ratios[3];  // primary vs plain16, primary vs plain1, tlas16 vs plain16
+    uint32_t rotation = 0;
+    for (auto _ : state) {
+        double ms[LOOPS];
+        for (uint32_t k = 0; k < LOOPS; ++k) {
+            const uint32_t which = (k + rotation) % LOOPS;
+            const auto t0 = std::chrono::steady_clock::now();
+            (loops.*loop[which])();
+            const auto t1 = std::chrono::steady_clock::now();
+            ms[which] = std::chrono::duration<double, std::milli>(t1 - t0).count();
+        }
+        ++rotation;
+        ratios[0].push_back(ms[PLAIN16] / ms[PRIMARY]);
+        ratios[1].push_back(ms[PLAIN1] / ms[PRIMARY]);
+        ratios[2].push_back(ms[PLAIN16] / ms[TLAS16]);
+    }
+    auto median = [](std::vector<double> v) {
+        std::sort(v.begin(), v.end());
+        return v.empty() ? 0.0 : v[v.size() / 2];
+    };
+    state.counters["primary_vs_16"] = median(ratios[0]);
+    state.counters["primary_vs_1"] = median(ratios[1]);
+    state.counters["tlas16_vs_16"] = median(ratios[2]);
 }
 
 /// Full frames (sun shadows, one bounce) at 1280x720, 1 spp: rays of every kind per second.
@@ -363,6 +407,12 @@ BENCHMARK(BM_PlainIntersect16)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->ComputeStatistics("min", min_of);
+BENCHMARK(BM_PrimaryRatio)
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(40)
+    ->UseRealTime();
 BENCHMARK(BM_EngineTlas16)
     ->Arg(0)
     ->Arg(1)
