@@ -19,7 +19,7 @@ struct Options {
     std::string out = "frames";
     uint32_t width = 640;
     uint32_t height = 360;
-    uint32_t spp = 16;
+    uint32_t spp = 8;
     float exposure = 0.0f;
     bool exr = false;
 };

@@ -298,6 +298,13 @@ public:
         benchmark::DoNotOptimize(m_out.data());
     }
 
+    /// Fraction of the last plain or TLAS frame's rays that hit something.
+    double hit_fraction() const {
+        const auto hits = std::count_if(m_out.begin(), m_out.end(),
+                                        [](const PlainHit& h) { return h.inst != INVALID_ID; });
+        return double(hits) / double(m_out.size());
+    }
+
 private:
     const Fixture& m_fixture;
     const CameraRays m_rays;
@@ -364,6 +371,7 @@ void BM_PrimaryRatio(benchmark::State& state) {
     state.counters["primary_vs_16"] = median(ratios[0]);
     state.counters["primary_vs_1"] = median(ratios[1]);
     state.counters["tlas16_vs_16"] = median(ratios[2]);
+    state.counters["hit_fraction"] = loops.hit_fraction();
 }
 
 /// Full frames (sun shadows, one bounce) at 1280x720, 1 spp: rays of every kind per second.
