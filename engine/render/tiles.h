@@ -36,14 +36,14 @@ template <class F>
 void parallel_for_tiles(uint32_t width, uint32_t height, F&& f) {
     const uint32_t cols = (width + TILE_SIZE - 1) / TILE_SIZE;
     const uint32_t rows = (height + TILE_SIZE - 1) / TILE_SIZE;
-    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, cols * rows), [&](const tbb::blocked_range<
-                                                                        uint32_t>& range) {
+    auto run = [&](const tbb::blocked_range<uint32_t>& range) {
         for (uint32_t t = range.begin(); t != range.end(); ++t) {
             const uint32_t x0 = (t % cols) * TILE_SIZE;
             const uint32_t y0 = (t / cols) * TILE_SIZE;
             f(TileRect{x0, y0, std::min(x0 + TILE_SIZE, width), std::min(y0 + TILE_SIZE, height)});
         }
-    });
+    };
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, cols * rows), run);
 }
 
 /// Marks the lanes of the packet at (x0, y0) that fall inside the tile; returns how many do.
