@@ -1,9 +1,7 @@
 #include "engine/engine.h"
 
-#include <cmath>
-
 #include "engine/core/timer.h"
-#include "engine/image/png.h"
+#include "engine/render/frame_encode.h"
 
 namespace strata {
 
@@ -84,41 +82,53 @@ RebuildReport Engine::plan() const {
 }
 
 Result<PrimaryFrame> Engine::render_primary(const PrimarySettings& settings) {
+    PrimaryFrame out;
+    if (Status s = render_primary(settings, out); !s) return s.error();
+    return out;
+}
+
+Status Engine::render_primary(const PrimarySettings& settings, PrimaryFrame& out) {
     Stopwatch clock;
-    auto frame = launch([&](const FrameState& state, const TlasStrategy& tlas,
-                            const RebuildReport& report) {
-        PrimaryFrame out;
+    auto launched = launch([&](const FrameState& state, const TlasStrategy& tlas,
+                               const RebuildReport& report) {
         strata::render_primary(tlas, state, settings, out.hits);
         out.report = report;
         out.version = state.version;
-        return out;
+        return true;
     });
-    if (frame) add_rays(frame.value().hits.pixel_count(), clock.ms() / 1000.0);
-    return frame;
+    if (!launched) return launched.error();
+    add_rays(out.hits.pixel_count(), clock.ms() / 1000.0);
+    return {};
+}
+
+Result<RenderedFrame> Engine::render_frame(const RenderRequest& request) {
+    if (Status s = check_render_request(request); !s) return s.error();
+    auto frame = launch([&](const FrameState& state, const TlasStrategy& tlas,
+                            const RebuildReport& report) -> Result<RenderedFrame> {
+        auto rendered = m_renderer.render(tlas, state, request);
+        if (rendered) rendered.value().report = report;
+        return rendered;
+    });
+    if (!frame) return frame.error();
+    if (!frame.value()) return frame.value().error();
+    add_rays(frame.value().value().rays, frame.value().value().render_ms / 1000.0);
+    return std::move(frame.value().value());
 }
 
 Result<RenderedImage> Engine::render(const RenderRequest& request) {
-    if (Status s = check_render_request(request); !s) return s.error();
-    if (request.format != ImageFormat::Png)
-        return make_error(ErrorCode::InvalidArgument, "only PNG output is available", "format");
-    PrimarySettings settings;
-    settings.width = request.width;
-    settings.height = request.height;
-    settings.camera = request.camera;
-    auto frame = render_primary(settings);
+    auto frame = render_frame(request);
     if (!frame) return frame.error();
     Stopwatch encode_clock;
-    const HitBuffers& hits = frame.value().hits;
-    std::vector<uint8_t> rgb(hits.pixel_count() * 3);
-    linear_to_srgb8(hits.color.data(), hits.pixel_count(), std::exp2(request.exposure), rgb.data());
-    auto png = encode_png(rgb.data(), hits.width, hits.height, 3);
-    if (!png) return png.error();
+    auto encoded = encode_frame(frame.value().buffers, request);
+    if (!encoded) return encoded.error();
     RenderedImage image;
-    image.bytes = std::move(png.value());
-    image.content_type = "image/png";
+    image.bytes = std::move(encoded.value().bytes);
+    image.content_type = std::move(encoded.value().content_type);
     image.version = frame.value().version;
     image.report = std::move(frame.value().report);
-    image.samples = 1;
+    image.samples = frame.value().samples;
+    image.rays = frame.value().rays;
+    image.render_ms = frame.value().render_ms;
     image.encode_ms = encode_clock.ms();
     return image;
 }

@@ -22,6 +22,7 @@
 #include "engine/render/frame_state.h"
 #include "engine/render/primary.h"
 #include "engine/render/render_request.h"
+#include "engine/render/renderer.h"
 
 namespace strata {
 
@@ -60,11 +61,18 @@ public:
     /// What commit() would do now, without doing it.
     RebuildReport plan() const;
 
-    /// Commits, renders and encodes one frame.
+    /// Commits, renders and encodes one frame (PNG or EXR, see frame_encode.h). Encoding runs
+    /// after the launch, so it does not hold up other launches.
     Result<RenderedImage> render(const RenderRequest& request);
+
+    /// Commits and renders one frame's linear buffers: what render() encodes.
+    Result<RenderedFrame> render_frame(const RenderRequest& request);
 
     /// Commits, then traces one primary ray per pixel.
     Result<PrimaryFrame> render_primary(const PrimarySettings& settings);
+    /// The same into `out`, whose buffers are reused when they already have the frame's size
+    /// (no allocation, no page faults: for callers that trace many frames).
+    Status render_primary(const PrimarySettings& settings, PrimaryFrame& out);
 
     /// Runs `f(const FrameState&, const TlasStrategy&, const RebuildReport&)` after a commit, with
     /// launches serialised: the hook the renderer uses to trace one consistent version.
@@ -109,6 +117,7 @@ private:
     Scene m_scene;
     std::unique_ptr<AccelGraph> m_accel;
     FrameState m_frame;
+    Renderer m_renderer;  ///< guarded by the launch mutex (it holds the accumulation state)
 
     mutable std::mutex m_stats_mutex;
     EngineCounters m_counters;

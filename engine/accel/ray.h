@@ -3,6 +3,7 @@
 // identical to Embree's RTCRayHit and RTCRayHit16 (checked by static_asserts in the one file that
 // includes Embree), so tracing passes them through without copying.
 
+#include <cstddef>
 #include <cstdint>
 
 namespace strata {
@@ -37,6 +38,9 @@ struct alignas(64) RayHit16 {
 /// loads, so it carries the packet's 64-byte alignment.
 struct alignas(64) ValidMask16 {
     int lanes[16];
+
+    int& operator[](std::size_t i) { return lanes[i]; }
+    int operator[](std::size_t i) const { return lanes[i]; }
 };
 
 /// Sixteen shadow rays: a miss leaves tfar unchanged, a hit sets it to -inf.

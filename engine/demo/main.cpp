@@ -1,7 +1,7 @@
 // strata-demo: builds the demo scene, plays the demo edit sequence, prints each launch's rebuild
 // report and writes one PNG frame per launch.
 //
-//   strata-demo [--out DIR] [--width W] [--height H]
+//   strata-demo [--out DIR] [--width W] [--height H] [--spp N] [--exposure EV] [--exr]
 
 #include <cstdio>
 #include <cstdlib>
@@ -19,6 +19,9 @@ struct Options {
     std::string out = "frames";
     uint32_t width = 640;
     uint32_t height = 360;
+    uint32_t spp = 8;
+    float exposure = 0.0f;
+    bool exr = false;
 };
 
 bool parse_u32(const char* s, uint32_t& out) {
@@ -29,7 +32,8 @@ bool parse_u32(const char* s, uint32_t& out) {
     return true;
 }
 
-constexpr const char* USAGE = "usage: strata-demo [--out DIR] [--width W] [--height H]\n";
+constexpr const char* USAGE =
+    "usage: strata-demo [--out DIR] [--width W] [--height H] [--spp N] [--exposure EV] [--exr]\n";
 
 int usage(const char* why) {
     std::fprintf(stderr, "strata-demo: %s\n%s", why, USAGE);
@@ -58,6 +62,14 @@ int main(int argc, char** argv) {
             if (!parse_u32(argv[++i], opt.width)) return usage("bad --width");
         } else if (!std::strcmp(argv[i], "--height") && has_value) {
             if (!parse_u32(argv[++i], opt.height)) return usage("bad --height");
+        } else if (!std::strcmp(argv[i], "--spp") && has_value) {
+            if (!parse_u32(argv[++i], opt.spp)) return usage("bad --spp");
+        } else if (!std::strcmp(argv[i], "--exposure") && has_value) {
+            char* end = nullptr;
+            opt.exposure = std::strtof(argv[++i], &end);
+            if (*end) return usage("bad --exposure");
+        } else if (!std::strcmp(argv[i], "--exr")) {
+            opt.exr = true;
         } else if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
             std::fputs(USAGE, stdout);
             return 0;
@@ -77,6 +89,14 @@ int main(int argc, char** argv) {
     strata::RenderRequest request;
     request.width = opt.width;
     request.height = opt.height;
+    request.spp = opt.spp;
+    request.exposure = opt.exposure;
+    if (opt.exr) {
+        request.format = strata::ImageFormat::Exr;
+        request.aovs = {strata::Aov::Albedo, strata::Aov::Normal, strata::Aov::Depth,
+                        strata::Aov::Position, strata::Aov::InstanceId, strata::Aov::PrimitiveId,
+                        strata::Aov::MeshId};
+    }
 
     auto render = [&](uint32_t frame, const char* what) -> bool {
         auto image = engine.value()->render(request);
@@ -85,8 +105,10 @@ int main(int argc, char** argv) {
             return false;
         }
         print_report(what, image.value().report);
+        std::printf("%36s %u spp, %.1f ms render, %.1f ms encode, %zu bytes\n", "", image.value().samples,
+                    image.value().render_ms, image.value().encode_ms, image.value().bytes.size());
         char name[64];
-        std::snprintf(name, sizeof name, "frame-%02u.png", frame);
+        std::snprintf(name, sizeof name, "frame-%02u.%s", frame, opt.exr ? "exr" : "png");
         const std::filesystem::path path = std::filesystem::path(opt.out) / name;
         std::ofstream f(path, std::ios::binary);
         f.write(reinterpret_cast<const char*>(image.value().bytes.data()),

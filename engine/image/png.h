@@ -1,21 +1,18 @@
 #pragma once
-// PNG encoding in memory with libpng, and the linear-to-sRGB conversion for 8-bit frames.
+// PNG encoding and decoding in memory with libpng (tone mapping lives in tonemap.h).
 
 #include <cstdint>
 #include <vector>
 
-#include "engine/core/math.h"
 #include "engine/core/result.h"
 
 namespace strata {
 
 /// Encodes 8-bit pixels (`channels` = 3 for RGB or 4 for RGBA, row-major from the top) as PNG.
-/// `zlib_level` 0..9: low levels with the cheap "sub" filter keep a 1080p frame in tens of ms.
+/// Speed over size: the "sub" filter and zlib's run-length strategy at `zlib_level` (0..9) keep
+/// a 1080p frame in tens of milliseconds (tests/bench/NOTES.md).
 Result<std::vector<uint8_t>> encode_png(const uint8_t* pixels, uint32_t width, uint32_t height,
-                                        int channels, int zlib_level = 2);
-
-/// Linear RGB to 8-bit sRGB, clamped; `exposure` scales before conversion.
-void linear_to_srgb8(const Vec3* linear, std::size_t count, float exposure, uint8_t* rgb_out);
+                                        int channels, int zlib_level = 1);
 
 /// Decodes a PNG (for tests and tools): RGB or RGBA 8-bit.
 struct DecodedImage {

@@ -33,6 +33,22 @@ public:
         return glm::normalize(m_origin_offset + x * m_right + y * m_up);
     }
 
+    /// direction(x[i], y[i]) for n lanes into structure-of-arrays outputs: the same arithmetic in
+    /// the same order (so the same bits), in a loop the compiler vectorises.
+    void directions(const float* x, const float* y, uint32_t n, float* dx, float* dy,
+                    float* dz) const {
+        const Vec3 o = m_origin_offset, r = m_right, u = m_up;  // locals: no aliasing with outputs
+        for (uint32_t i = 0; i < n; ++i) {
+            const float vx = (o.x + x[i] * r.x) + y[i] * u.x;
+            const float vy = (o.y + x[i] * r.y) + y[i] * u.y;
+            const float vz = (o.z + x[i] * r.z) + y[i] * u.z;
+            const float inv = 1.0f / std::sqrt((vx * vx + vy * vy) + vz * vz);
+            dx[i] = vx * inv;
+            dy[i] = vy * inv;
+            dz[i] = vz * inv;
+        }
+    }
+
 private:
     Vec3 m_eye;
     Vec3 m_right;

@@ -1,28 +1,13 @@
 #include "engine/render/primary.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
-#include <tbb/blocked_range2d.h>
-#include <tbb/parallel_for.h>
-
 #include "engine/render/camera_rays.h"
+#include "engine/render/tiles.h"
 
 namespace strata {
-
-namespace {
-
-constexpr uint32_t TILE = 16;   // pixels per tile side, one TBB task
-constexpr uint32_t PACKET = 4;  // 4x4 pixels per 16-ray packet
-
-Vec3 shade(const FrameState& frame, const InstanceShade& inst, const Vec3& n) {
-    const Material& m = frame.materials[inst.material];
-    const Lighting& l = frame.lighting;
-    const float n_dot_l = std::max(0.0f, glm::dot(n, glm::normalize(l.sun_direction)));
-    return m.base_color * (l.sun_color * n_dot_l + l.sky_color * l.sky_intensity) + m.emission;
-}
-
-}  // namespace
 
 void HitBuffers::resize(uint32_t w, uint32_t h) {
     width = w;
@@ -35,70 +20,86 @@ void HitBuffers::resize(uint32_t w, uint32_t h) {
     color.assign(n, Vec3(0.0f));
 }
 
+void HitBuffers::reserve_frame(uint32_t w, uint32_t h) {
+    const std::size_t n = std::size_t(w) * h;
+    if (distance.size() != n || instance.size() != n || primitive.size() != n ||
+        normal.size() != n || color.size() != n) {
+        resize(w, h);
+    }
+    width = w;
+    height = h;
+}
+
 void render_primary(const TlasStrategy& tlas, const FrameState& frame,
                     const PrimarySettings& settings, HitBuffers& out) {
-    out.resize(settings.width, settings.height);
+    // Every pixel is written below, so buffers of the right size are reused as they are.
+    out.reserve_frame(settings.width, settings.height);
     if (settings.width == 0 || settings.height == 0) return;
     const CameraRays rays(settings.camera.value_or(frame.camera), settings.width, settings.height);
-    const Vec3 background = frame.lighting.sky_color * frame.lighting.sky_intensity;
-    const Vec3 eye = rays.eye();
+    const Lighting& light = frame.lighting;
+    const Vec3 background = light.sky_color * light.sky_intensity;
+    const Vec3 sun = glm::normalize(light.sun_direction);
 
-    tbb::parallel_for(
-        tbb::blocked_range2d<uint32_t>(0, settings.height, TILE, 0, settings.width, TILE),
-        [&](const tbb::blocked_range2d<uint32_t>& tile) {
-            RayHit16 packet;
-            ValidMask16 valid;
-            for (uint32_t y0 = tile.rows().begin(); y0 < tile.rows().end(); y0 += PACKET) {
-                for (uint32_t x0 = tile.cols().begin(); x0 < tile.cols().end(); x0 += PACKET) {
-                    // Step: fill the packet; lanes outside the image are inactive.
-                    for (uint32_t i = 0; i < 16; ++i) {
-                        const uint32_t x = x0 + i % PACKET, y = y0 + i / PACKET;
-                        const bool inside = x < tile.cols().end() && y < tile.rows().end();
-                        valid.lanes[i] = inside ? -1 : 0;
-                        const Vec3 d = rays.direction(float(x) + 0.5f, float(y) + 0.5f);
-                        packet.org_x[i] = eye.x;
-                        packet.org_y[i] = eye.y;
-                        packet.org_z[i] = eye.z;
-                        packet.tnear[i] = 0.0f;
-                        packet.dir_x[i] = d.x;
-                        packet.dir_y[i] = d.y;
-                        packet.dir_z[i] = d.z;
-                        packet.time[i] = 0.0f;
-                        packet.tfar[i] = std::numeric_limits<float>::infinity();
-                        packet.mask[i] = settings.ray_mask;
-                        packet.id[i] = i;
-                        packet.flags[i] = 0;
-                        packet.geom_id[i] = INVALID_ID;
-                        packet.inst_id[i] = INVALID_ID;
-                        packet.prim_id[i] = INVALID_ID;
-                    }
-                    tlas.intersect16(valid, packet, true);
+    float* const distance = out.distance.data();
+    uint32_t* const instance = out.instance.data();
+    uint32_t* const primitive = out.primitive.data();
+    Vec3* const normal = out.normal.data();
+    Vec3* const color = out.color.data();
+    const InstanceShade* const shades = frame.instances.data();
+    const Material* const materials = frame.materials.data();
 
-                    // Step: write hit buffers and shade.
-                    for (uint32_t i = 0; i < 16; ++i) {
-                        if (!valid.lanes[i]) continue;
-                        const std::size_t p =
-                            std::size_t(y0 + i / PACKET) * settings.width + x0 + i % PACKET;
-                        const uint32_t inst = packet.inst_id[i];
-                        if (inst == INVALID_ID) {
-                            out.color[p] = background;
-                            continue;
-                        }
-                        const InstanceShade& shade_info = frame.instances[inst];
-                        Vec3 n = shade_info.normal_matrix *
-                                 Vec3(packet.ng_x[i], packet.ng_y[i], packet.ng_z[i]);
-                        n = glm::normalize(n);
-                        const Vec3 dir(packet.dir_x[i], packet.dir_y[i], packet.dir_z[i]);
-                        if (glm::dot(n, dir) > 0.0f) n = -n;
-                        out.distance[p] = packet.tfar[i];
-                        out.instance[p] = inst;
-                        out.primitive[p] = packet.prim_id[i];
-                        out.normal[p] = n;
-                        out.color[p] = shade(frame, shade_info, n);
+    parallel_for_tiles(settings.width, settings.height, [&](const TileRect& tile) {
+        // The output rows of a tile are short pieces of five large arrays, too scattered for the
+        // hardware prefetcher: ask for their cache lines now, while the rays are traced, instead
+        // of stalling on each first store (a few percent at 720p).
+        for (uint32_t y = tile.y0; y < tile.y1; ++y) {
+            const std::size_t row = std::size_t(y) * settings.width;
+            prefetch_for_write(distance + row + tile.x0, distance + row + tile.x1);
+            prefetch_for_write(instance + row + tile.x0, instance + row + tile.x1);
+            prefetch_for_write(primitive + row + tile.x0, primitive + row + tile.x1);
+            prefetch_for_write(normal + row + tile.x0, normal + row + tile.x1);
+            prefetch_for_write(color + row + tile.x0, color + row + tile.x1);
+        }
+        CameraPacket camera(rays, settings.ray_mask);
+        ValidMask16 valid;
+        for (uint32_t y0 = tile.y0; y0 < tile.y1; y0 += PACKET_SIZE) {
+            for (uint32_t x0 = tile.x0; x0 < tile.x1; x0 += PACKET_SIZE) {
+                // Step: pixel-centre rays; lanes outside the image are off.
+                packet_lanes(tile, x0, y0, valid);
+                RayHit16& packet = camera.aim_centres(x0, y0);
+                tlas.intersect16(valid, packet, true);
+
+                // Step: write hit buffers and a simple preview shade.
+                for (uint32_t i = 0; i < PACKET_LANES; ++i) {
+                    if (!valid[i]) continue;
+                    const std::size_t p =
+                        std::size_t(y0 + i / PACKET_SIZE) * settings.width + x0 + i % PACKET_SIZE;
+                    const uint32_t inst = packet.inst_id[i];
+                    if (inst == INVALID_ID) {
+                        distance[p] = std::numeric_limits<float>::infinity();
+                        instance[p] = INVALID_ID;
+                        primitive[p] = INVALID_ID;
+                        normal[p] = Vec3(0.0f);
+                        color[p] = background;
+                        continue;
                     }
+                    const InstanceShade& shade = shades[inst];
+                    Vec3 n = glm::normalize(shade.normal_matrix *
+                                            Vec3(packet.ng_x[i], packet.ng_y[i], packet.ng_z[i]));
+                    const Vec3 dir(packet.dir_x[i], packet.dir_y[i], packet.dir_z[i]);
+                    if (glm::dot(n, dir) > 0.0f) n = -n;
+                    const Material& m = materials[shade.material];
+                    distance[p] = packet.tfar[i];
+                    instance[p] = inst;
+                    primitive[p] = packet.prim_id[i];
+                    normal[p] = n;
+                    color[p] = m.base_color * (light.sun_color * std::max(0.0f, glm::dot(n, sun)) +
+                                               background) +
+                               m.emission;
                 }
             }
-        });
+        }
+    });
 }
 
 }  // namespace strata

@@ -1,6 +1,8 @@
 #pragma once
-// Launch: one primary ray per pixel, traced in 4x4 packets over TBB tiles, producing per-pixel
-// hit buffers and a simply shaded image (albedo * (sun N.L + sky) + emission).
+// The hit-buffer launch: one pixel-centre primary ray per pixel, traced in 4x4 packets over the
+// fixed TBB tile grid, producing per-pixel hits and an unshadowed preview shade
+// (albedo * (sun N.L + sky) + emission). Frames for clients come from renderer.h; this path is
+// what the differential tests compare and what the primary-ray benchmark measures.
 
 #include <cstdint>
 #include <optional>
@@ -29,11 +31,14 @@ struct HitBuffers {
     std::vector<Vec3> normal;         ///< world-space unit geometric normal, facing the camera
     std::vector<Vec3> color;          ///< linear RGB
 
+    /// Sizes every buffer for w x h and fills it with the miss values.
     void resize(uint32_t w, uint32_t h);
+    /// Sizes every buffer for w x h, keeping the contents when the size is already right.
+    void reserve_frame(uint32_t w, uint32_t h);
     std::size_t pixel_count() const { return std::size_t(width) * height; }
 };
 
-/// Traces the primary rays of one frame.
+/// Traces the primary rays of one frame into `out` (reusing its buffers when they fit).
 void render_primary(const TlasStrategy& tlas, const FrameState& frame,
                     const PrimarySettings& settings, HitBuffers& out);
 

@@ -53,6 +53,11 @@ Status check_render_request(const RenderRequest& r) {
             return make_error(ErrorCode::InvalidArgument,
                               std::string("AOV '") + aov_name(r.aovs[i]) + "' is listed twice",
                               "aovs/" + std::to_string(i));
+        if (r.format == ImageFormat::Png && r.aovs[i] != Aov::Color)
+            return make_error(ErrorCode::InvalidArgument,
+                              std::string("AOV '") + aov_name(r.aovs[i]) +
+                                  "' needs format exr; a PNG carries only the color image",
+                              "aovs/" + std::to_string(i));
     }
     if (r.camera) {
         if (Status s = check_camera(*r.camera); !s) {

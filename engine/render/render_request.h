@@ -10,12 +10,12 @@
 
 #include "engine/accel/report.h"
 #include "engine/core/result.h"
+#include "engine/image/exr.h"
 #include "engine/scene/types.h"
 
 namespace strata {
 
 enum class ImageFormat : uint8_t { Png, Exr };
-enum class ExrCompression : uint8_t { None, Zip, Piz };
 
 /// Arbitrary output variables a frame can carry besides the beauty image.
 enum class Aov : uint8_t { Color, Albedo, Normal, Depth, Position, InstanceId, PrimitiveId, MeshId };
@@ -29,23 +29,31 @@ std::optional<ImageFormat> parse_image_format(std::string_view s);
 std::optional<ExrCompression> parse_exr_compression(std::string_view s);
 std::optional<Aov> parse_aov(std::string_view s);
 
+/// One frame to render. renderer.h, aov_buffers.h, frame_encode.h, accumulator.h and tonemap.h
+/// give the details of each field's effect.
 struct RenderRequest {
     uint32_t width = 640;
     uint32_t height = 360;
     ImageFormat format = ImageFormat::Png;
+    /// Samples per pixel this launch traces (each pixel has its own fixed sample sequence).
     uint32_t spp = 1;
-    std::vector<Aov> aovs;  ///< extra layers (EXR); the beauty image is always included
-    ExrCompression compression = ExrCompression::Zip;
+    /// Extra layers (EXR only; "color" is the beauty image, always included, so it may be listed
+    /// with PNG too).
+    std::vector<Aov> aovs;
+    ExrCompression compression = ExrCompression::Zip;  ///< EXR only
+    /// Add spp samples to the previous accumulating launch of the same scene version, camera and
+    /// size instead of starting over.
     bool accumulate = false;
-    float exposure = 0.0f;  ///< EV stops applied before tone mapping (PNG only)
-    std::optional<Camera> camera;
+    float exposure = 0.0f;  ///< EV stops applied before tone mapping (PNG only; EXR is linear)
+    std::optional<Camera> camera;  ///< overrides the scene camera for this frame
 };
 
 /// Largest frame the engine renders in one launch (the server may set a lower cap).
 constexpr uint64_t MAX_RENDER_PIXELS = 64ull * 1024 * 1024;
 constexpr uint32_t MAX_RENDER_SPP = 4096;
 
-/// Checks a request (sizes, spp, camera override, duplicate AOVs); the error names the field.
+/// Checks a request (sizes, spp, exposure, camera override, duplicate AOVs, AOVs other than color
+/// with PNG); the error names the field.
 Status check_render_request(const RenderRequest& r);
 
 /// An encoded frame with the report of the commit the launch ran.
@@ -54,7 +62,8 @@ struct RenderedImage {
     std::string content_type;  ///< "image/png" or "image/x-exr"
     uint64_t version = 0;      ///< scene version the frame shows
     RebuildReport report;
-    uint32_t samples = 0;      ///< samples per pixel in the frame (more when accumulating)
+    uint32_t samples = 0;      ///< samples per pixel in the frame (the total when accumulating)
+    uint64_t rays = 0;         ///< rays the launch traced (camera, shadow and bounce rays)
     double render_ms = 0.0;    ///< tracing and shading
     double encode_ms = 0.0;
 };

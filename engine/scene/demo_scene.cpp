@@ -9,8 +9,8 @@ namespace strata {
 
 namespace {
 
-constexpr uint32_t FLAG_NX = 24;
-constexpr uint32_t FLAG_NZ = 16;
+constexpr uint32_t FLAG_NX = 48;
+constexpr uint32_t FLAG_NZ = 32;
 constexpr uint32_t RING_COUNT = 12;
 constexpr float RING_RADIUS = 4.0f;
 
@@ -62,17 +62,17 @@ std::vector<Vec3> demo_flag_positions(float t) {
 EditBatch make_demo_scene() {
     EditBatch b;
     auto& e = b.edits;
-    e.emplace_back(material("ground", {0.55f, 0.55f, 0.5f}, 0.9f, 0.0f));
+    e.emplace_back(material("ground", {0.32f, 0.3f, 0.28f}, 0.9f, 0.0f));
     e.emplace_back(material("chrome", {0.9f, 0.9f, 0.92f}, 0.15f, 1.0f));
     e.emplace_back(material("clay", {0.8f, 0.35f, 0.2f}, 0.6f, 0.0f));
     e.emplace_back(material("teal", {0.1f, 0.55f, 0.55f}, 0.4f, 0.0f));
     e.emplace_back(material("gold", {1.0f, 0.77f, 0.34f}, 0.3f, 1.0f));
-    e.emplace_back(material("lamp", {1.0f, 1.0f, 1.0f}, 1.0f, 0.0f, {4.0f, 3.6f, 3.0f}));
+    e.emplace_back(material("lamp", {1.0f, 1.0f, 1.0f}, 1.0f, 0.0f, {3.0f, 2.6f, 2.0f}));
     e.emplace_back(material("flag", {0.85f, 0.15f, 0.2f}, 0.7f, 0.0f));
 
-    e.emplace_back(mesh("ground", make_plane(Vec3(30.0f, 0.0f, 30.0f), 8, 8), "ground"));
-    e.emplace_back(mesh("ball", make_sphere(1.5f, 96), "chrome"));
-    e.emplace_back(mesh("pebble", make_sphere(0.5f, 32), "clay"));
+    e.emplace_back(mesh("ground", make_plane(Vec3(400.0f, 0.0f, 400.0f), 8, 8), "ground"));
+    e.emplace_back(mesh("ball", make_sphere(1.5f, 160), "chrome"));
+    e.emplace_back(mesh("pebble", make_sphere(0.5f, 72), "clay"));
     e.emplace_back(mesh("crate", make_box(Vec3(1.0f)), "teal"));
     MeshData flag = make_plane(Vec3(3.0f, 1.0f, 2.0f), FLAG_NX, FLAG_NZ);
     flag.positions = demo_flag_positions(0.0f);
@@ -100,6 +100,13 @@ EditBatch make_demo_scene() {
     cam.up = Vec3(0.0f, 1.0f, 0.0f);
     cam.fov_y_deg = 45.0f;
     e.emplace_back(cam);
+
+    SetLighting light;
+    light.sun_direction = Vec3(0.55f, 0.6f, 0.4f);
+    light.sun_color = Vec3(2.2f, 2.0f, 1.75f);
+    light.sky_color = Vec3(0.32f, 0.52f, 0.95f);
+    light.sky_intensity = 0.9f;
+    e.emplace_back(light);
     return b;
 }
 
@@ -142,7 +149,7 @@ EditBatch make_demo_step(uint32_t step) {
             break;
         }
         case 6: {  // the ball gets finer: one BLAS rebuild (topology)
-            MeshData finer = make_sphere(1.5f, 160);
+            MeshData finer = make_sphere(1.5f, 256);
             ReplaceMeshTopology topo;
             topo.mesh = "ball";
             topo.positions = std::move(finer.positions);

@@ -1,0 +1,71 @@
+#include "engine/render/frame_encode.h"
+
+#include <new>
+
+#include "engine/image/exr.h"
+#include "engine/image/png.h"
+#include "engine/image/tonemap.h"
+
+namespace strata {
+
+namespace {
+
+static_assert(sizeof(Vec3) == 3 * sizeof(float), "Vec3 buffers are read as packed floats");
+
+const float ONE = 1.0f;
+
+void add_vec3(std::vector<ExrChannel>& out, const std::vector<Vec3>& buffer, const char* layer,
+              const char* const (&suffixes)[3], ExrPixel type) {
+    const float* base = &buffer.data()->x;
+    for (int k = 0; k < 3; ++k) {
+        const std::string name = layer[0] ? std::string(layer) + "." + suffixes[k] : suffixes[k];
+        out.push_back(ExrChannel{name, type, base + k, nullptr, 3});
+    }
+}
+
+void add_uint(std::vector<ExrChannel>& out, const std::vector<uint32_t>& buffer, Aov aov) {
+    out.push_back(ExrChannel{aov_name(aov), ExrPixel::Uint, nullptr, buffer.data(), 1});
+}
+
+}  // namespace
+
+std::vector<ExrChannel> exr_channels(const FrameBuffers& f) {
+    static const char* const RGB[3] = {"R", "G", "B"};
+    static const char* const XYZ[3] = {"X", "Y", "Z"};
+    std::vector<ExrChannel> channels;
+    add_vec3(channels, f.color, "", RGB, ExrPixel::Half);
+    channels.push_back(ExrChannel{"A", ExrPixel::Half, &ONE, nullptr, 0});
+    if (f.aovs.has(Aov::Albedo)) add_vec3(channels, f.albedo, "albedo", RGB, ExrPixel::Half);
+    if (f.aovs.has(Aov::Normal)) add_vec3(channels, f.normal, "N", XYZ, ExrPixel::Half);
+    if (f.aovs.has(Aov::Depth))
+        channels.push_back(ExrChannel{"Z", ExrPixel::Float, f.depth.data(), nullptr, 1});
+    if (f.aovs.has(Aov::Position)) add_vec3(channels, f.position, "P", XYZ, ExrPixel::Float);
+    if (f.aovs.has(Aov::InstanceId)) add_uint(channels, f.instance_id, Aov::InstanceId);
+    if (f.aovs.has(Aov::PrimitiveId)) add_uint(channels, f.primitive_id, Aov::PrimitiveId);
+    if (f.aovs.has(Aov::MeshId)) add_uint(channels, f.mesh_id, Aov::MeshId);
+    return channels;
+}
+
+Result<EncodedFrame> encode_frame(const FrameBuffers& frame, const RenderRequest& request) {
+    EncodedFrame out;
+    if (request.format == ImageFormat::Exr) {
+        auto exr = encode_exr(frame.width, frame.height, exr_channels(frame), request.compression);
+        if (!exr) return exr.error();
+        out.bytes = std::move(exr.value());
+        out.content_type = "image/x-exr";
+        return out;
+    }
+    try {
+        std::vector<uint8_t> rgb(frame.pixel_count() * 3);
+        tonemap_to_srgb8(frame.color.data(), frame.pixel_count(), request.exposure, rgb.data());
+        auto png = encode_png(rgb.data(), frame.width, frame.height, 3);
+        if (!png) return png.error();
+        out.bytes = std::move(png.value());
+    } catch (const std::bad_alloc&) {
+        return make_error(ErrorCode::TooLarge, "not enough memory to encode the frame", "width");
+    }
+    out.content_type = "image/png";
+    return out;
+}
+
+}  // namespace strata

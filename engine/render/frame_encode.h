@@ -1,0 +1,39 @@
+#pragma once
+// Turns a rendered frame into the bytes a client asked for.
+//
+// PNG: the beauty image through exposure, ACES tone mapping and the sRGB curve (tonemap.h) as
+// 8-bit RGB; AOVs cannot be carried (check_render_request refuses them).
+//
+// EXR: linear, no exposure. Channels, with OpenEXR's layer naming:
+//   beauty        R, G, B (half), A (half, 1: the sky is part of the image)
+//   albedo        albedo.R, albedo.G, albedo.B (half)
+//   normal        N.X, N.Y, N.Z (half)
+//   depth         Z (float; +inf where nothing was hit)
+//   position      P.X, P.Y, P.Z (float)
+//   instance_id   instance_id (uint; 0xFFFFFFFF where nothing was hit)
+//   primitive_id  primitive_id (uint)
+//   mesh_id       mesh_id (uint)
+// Compression as requested (default zip).
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "engine/core/result.h"
+#include "engine/render/aov_buffers.h"
+#include "engine/render/render_request.h"
+
+namespace strata {
+
+struct EncodedFrame {
+    std::vector<uint8_t> bytes;
+    std::string content_type;  ///< "image/png" or "image/x-exr"
+};
+
+/// Encodes `frame` in `request`'s format with its exposure, AOVs and compression.
+Result<EncodedFrame> encode_frame(const FrameBuffers& frame, const RenderRequest& request);
+
+/// The EXR channels of `frame`: beauty and every AOV the frame carries.
+std::vector<ExrChannel> exr_channels(const FrameBuffers& frame);
+
+}  // namespace strata

@@ -1,0 +1,328 @@
+#include "engine/render/renderer.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <new>
+
+#include "engine/core/timer.h"
+#include "engine/render/camera_rays.h"
+#include "engine/render/sampler.h"
+#include "engine/render/shading.h"
+#include "engine/render/tiles.h"
+
+namespace strata {
+
+namespace {
+
+// Sample dimensions: group 0 is the pixel jitter and the bounce direction, dimension 4 (group 1)
+// picks the BRDF lobe.
+constexpr uint32_t DIM_LOBE = 4;
+
+static_assert(MAX_ACCUMULATED_SAMPLES <= PixelSampler::MAX_SAMPLES &&
+              MAX_RENDER_SPP <= PixelSampler::MAX_SAMPLES);
+
+/// A surface a ray reached, prepared for shading.
+struct SurfaceHit {
+    Vec3 position;
+    Vec3 normal;  ///< unit, facing the incoming ray
+    Vec3 origin;  ///< where rays leaving the surface start
+    uint32_t material;
+};
+
+/// Everything one launch's tiles share.
+class FrameKernel {
+public:
+    FrameKernel(const TlasStrategy& tlas, const FrameState& frame, const Camera& camera,
+                FrameBuffers& out, SampleRange samples, uint32_t total_samples, PixelSums* accum)
+        : m_tlas(tlas),
+          m_frame(frame),
+          m_rays(camera, out.width, out.height),
+          m_sky(frame.lighting),
+          m_out(out),
+          m_samples(samples),
+          m_inv_total(total_samples > 0 ? 1.0f / float(total_samples) : 0.0f),
+          m_accum(accum) {}
+
+    void render_tile(const TileRect& tile) const {
+        PixelSums local[TILE_SIZE * TILE_SIZE];
+        CameraPacket camera(m_rays);
+        uint64_t rays = 0;
+        for (uint32_t y0 = tile.y0; y0 < tile.y1; y0 += PACKET_SIZE) {
+            for (uint32_t x0 = tile.x0; x0 < tile.x1; x0 += PACKET_SIZE) {
+                ValidMask16 valid;
+                packet_lanes(tile, x0, y0, valid);
+                PixelSums* sums[PACKET_LANES];
+                for (uint32_t i = 0; i < PACKET_LANES; ++i) {
+                    const uint32_t x = x0 + i % PACKET_SIZE, y = y0 + i / PACKET_SIZE;
+                    if (!valid[i]) {
+                        sums[i] = nullptr;
+                    } else if (m_accum) {
+                        sums[i] = &m_accum[std::size_t(y) * m_out.width + x];
+                    } else {
+                        sums[i] = &local[(y - tile.y0) * TILE_SIZE + (x - tile.x0)];
+                        *sums[i] = PixelSums{};
+                    }
+                }
+                PixelSampler samplers[PACKET_LANES];
+                for (uint32_t i = 0; i < PACKET_LANES; ++i)
+                    samplers[i] = PixelSampler(x0 + i % PACKET_SIZE, y0 + i / PACKET_SIZE);
+                for (uint32_t s = 0; s < m_samples.count; ++s)
+                    rays +=
+                        trace_sample(camera, samplers, x0, y0, valid, m_samples.first + s, sums);
+                if (m_out.aovs.needs_centre_ray()) rays += trace_centre(camera, x0, y0, valid);
+                resolve(x0, y0, valid, sums);
+            }
+        }
+        m_ray_count.fetch_add(rays, std::memory_order_relaxed);
+    }
+
+    uint64_t rays() const { return m_ray_count.load(); }
+
+private:
+    /// Shading data of the surface lane i of `hits` reached.
+    SurfaceHit surface(const RayHit16& hits, uint32_t i) const {
+        const InstanceShade& inst = m_frame.instances[hits.inst_id[i]];
+        const Vec3 dir(hits.dir_x[i], hits.dir_y[i], hits.dir_z[i]);
+        const Vec3 org(hits.org_x[i], hits.org_y[i], hits.org_z[i]);
+        Vec3 n = inst.normal_matrix * Vec3(hits.ng_x[i], hits.ng_y[i], hits.ng_z[i]);
+        const float len2 = glm::dot(n, n);
+        n = len2 > 0.0f ? n / std::sqrt(len2) : -dir;
+        if (glm::dot(n, dir) > 0.0f) n = -n;
+        SurfaceHit s;
+        s.position = org + hits.tfar[i] * dir;
+        s.normal = n;
+        s.origin = offset_origin(s.position, n, org, hits.tfar[i]);
+        s.material = inst.material;
+        return s;
+    }
+
+    /// Shadow rays toward the sun from up to one surface per lane.
+    struct SunQueue {
+        alignas(64) Ray16 rays;
+        ValidMask16 valid = {};
+        bool any = false;
+    };
+
+    /// Queues lane i's shadow ray when `hit` faces the sun.
+    void queue_sun(SunQueue& q, uint32_t i, const SurfaceHit& hit) const {
+        if (!m_sky.has_sun() || glm::dot(hit.normal, m_sky.sun_direction()) <= 0.0f) return;
+        set_lane(q.rays, i, hit.origin, m_sky.sun_direction());
+        q.valid[i] = -1;
+        q.any = true;
+    }
+
+    /// Traces the queued shadow rays and adds the sun, seen through the BRDF of each unoccluded
+    /// surface (its roughness raised to min_roughness[i]) from the ray in `from` that reached it,
+    /// to radiance[i]. Returns the rays traced.
+    uint64_t add_sun(SunQueue& q, const RayHit16& from, const SurfaceHit* hits,
+                     const float* min_roughness, Vec3* radiance) const {
+        if (!q.any) return 0;
+        m_tlas.occluded16(q.valid, q.rays);
+        uint64_t rays = 0;
+        for (uint32_t i = 0; i < PACKET_LANES; ++i) {
+            if (!q.valid[i]) continue;
+            ++rays;
+            if (q.rays.tfar[i] == -std::numeric_limits<float>::infinity()) continue;
+            const Vec3 v(-from.dir_x[i], -from.dir_y[i], -from.dir_z[i]);
+            const Bsdf bsdf(m_frame.materials[hits[i].material], min_roughness[i]);
+            radiance[i] +=
+                bsdf.eval_cos(hits[i].normal, v, m_sky.sun_direction()) * m_sky.sun_irradiance();
+        }
+        return rays;
+    }
+
+    /// Traces sample `index` of the packet's pixels and adds it to their sums; returns the rays.
+    uint64_t trace_sample(CameraPacket& camera, const PixelSampler* samplers, uint32_t x0,
+                          uint32_t y0, const ValidMask16& valid, uint32_t index,
+                          PixelSums* const* sums) const {
+        uint64_t rays = 0;
+
+        // Step: camera rays, jittered by the pixel's own sequence.
+        float px[PACKET_LANES], py[PACKET_LANES];
+        float bounce_u[PACKET_LANES][3];
+        for (uint32_t i = 0; i < PACKET_LANES; ++i) {
+            const uint32_t x = x0 + i % PACKET_SIZE, y = y0 + i / PACKET_SIZE;
+            px[i] = float(x) + 0.5f;
+            py[i] = float(y) + 0.5f;
+            if (!valid[i]) continue;
+            const PixelSampler& sampler = samplers[i];
+            const auto u = sampler.get4(index, 0);
+            px[i] = float(x) + u[0];
+            py[i] = float(y) + u[1];
+            bounce_u[i][0] = u[2];
+            bounce_u[i][1] = u[3];
+            bounce_u[i][2] = sampler.get1(index, DIM_LOBE);
+            ++rays;
+        }
+        const RayHit16& primary = camera.aim(px, py);
+        m_tlas.intersect16(valid, camera.packet(), true);
+
+        // Step: shade first hits; queue sun shadow rays and bounce rays.
+        Vec3 radiance[PACKET_LANES];
+        Vec3 weight[PACKET_LANES];
+        SurfaceHit first[PACKET_LANES];
+        float first_roughness[PACKET_LANES] = {};
+        alignas(64) RayHit16 bounce;
+        ValidMask16 bounce_valid = {};
+        bool any_bounce = false;
+        SunQueue sun;
+        for (uint32_t i = 0; i < PACKET_LANES; ++i) {
+            if (!valid[i]) continue;
+            const Vec3 dir(primary.dir_x[i], primary.dir_y[i], primary.dir_z[i]);
+            if (primary.inst_id[i] == INVALID_ID) {
+                radiance[i] = m_sky.radiance(dir);
+                sums[i]->color += radiance[i];
+                continue;
+            }
+            const SurfaceHit& hit = first[i] = surface(primary, i);
+            const Material& m = m_frame.materials[hit.material];
+            radiance[i] = m.emission;
+            first_roughness[i] = m.roughness;
+            sums[i]->albedo += m.base_color;
+            sums[i]->normal += hit.normal;
+            queue_sun(sun, i, hit);
+            const BsdfSample b =
+                Bsdf(m).sample(hit.normal, -dir, bounce_u[i][0], bounce_u[i][1], bounce_u[i][2]);
+            if (b.valid) {
+                set_lane(bounce, i, hit.origin, b.dir);
+                weight[i] = b.weight;
+                bounce_valid[i] = -1;
+                any_bounce = true;
+            }
+        }
+
+        // Step: the sun at first hits.
+        const float no_regularisation[PACKET_LANES] = {};
+        rays += add_sun(sun, primary, first, no_regularisation, radiance);
+
+        // Step: one bounce, ended by the sky or by direct light at the second surface.
+        if (any_bounce) {
+            m_tlas.intersect16(bounce_valid, bounce, false);
+            Vec3 incoming[PACKET_LANES];
+            SurfaceHit second[PACKET_LANES];
+            float min_roughness[PACKET_LANES];
+            SunQueue sun2;
+            for (uint32_t i = 0; i < PACKET_LANES; ++i) {
+                if (!bounce_valid[i]) continue;
+                ++rays;
+                const Vec3 dir(bounce.dir_x[i], bounce.dir_y[i], bounce.dir_z[i]);
+                if (bounce.inst_id[i] == INVALID_ID) {
+                    incoming[i] = m_sky.radiance(dir);
+                    continue;
+                }
+                const SurfaceHit& hit = second[i] = surface(bounce, i);
+                const Material& m = m_frame.materials[hit.material];
+                incoming[i] = m.emission + m.base_color * m_sky.radiance(hit.normal);
+                min_roughness[i] = std::max(MIN_SECONDARY_ROUGHNESS, first_roughness[i]);
+                queue_sun(sun2, i, hit);
+            }
+            rays += add_sun(sun2, bounce, second, min_roughness, incoming);
+            for (uint32_t i = 0; i < PACKET_LANES; ++i) {
+                if (bounce_valid[i])
+                    radiance[i] += clamp_max_component(weight[i] * incoming[i], INDIRECT_CLAMP);
+            }
+        }
+
+        // Step: add the sample's radiance of every hit lane (misses were added above).
+        for (uint32_t i = 0; i < PACKET_LANES; ++i) {
+            if (valid[i] && primary.inst_id[i] != INVALID_ID) sums[i]->color += radiance[i];
+        }
+        return rays;
+    }
+
+    /// Traces the unjittered pixel-centre rays and writes depth, position and ids.
+    uint64_t trace_centre(CameraPacket& camera, uint32_t x0, uint32_t y0, const ValidMask16& valid) const {
+        const Vec3 eye = m_rays.eye();
+        uint64_t rays = 0;
+        for (uint32_t i = 0; i < PACKET_LANES; ++i) rays += valid[i] != 0;
+        RayHit16& packet = camera.aim_centres(x0, y0);
+        m_tlas.intersect16(valid, packet, true);
+        const AovSet aovs = m_out.aovs;
+        for (uint32_t i = 0; i < PACKET_LANES; ++i) {
+            if (!valid[i]) continue;
+            const std::size_t p =
+                std::size_t(y0 + i / PACKET_SIZE) * m_out.width + x0 + i % PACKET_SIZE;
+            const uint32_t inst = packet.inst_id[i];
+            const bool hit = inst != INVALID_ID;
+            const float t = hit ? packet.tfar[i] : std::numeric_limits<float>::infinity();
+            if (aovs.has(Aov::Depth)) m_out.depth[p] = t;
+            if (aovs.has(Aov::Position)) {
+                m_out.position[p] =
+                    hit ? eye + t * Vec3(packet.dir_x[i], packet.dir_y[i], packet.dir_z[i])
+                        : Vec3(0.0f);
+            }
+            if (aovs.has(Aov::InstanceId)) m_out.instance_id[p] = hit ? inst : MISS_ID;
+            if (aovs.has(Aov::PrimitiveId))
+                m_out.primitive_id[p] = hit ? packet.prim_id[i] : MISS_ID;
+            if (aovs.has(Aov::MeshId))
+                m_out.mesh_id[p] = hit ? m_frame.instances[inst].mesh_slot : MISS_ID;
+        }
+        return rays;
+    }
+
+    /// Writes the averages of the packet's sums to the output buffers.
+    void resolve(uint32_t x0, uint32_t y0, const ValidMask16& valid, PixelSums* const* sums) const {
+        const AovSet aovs = m_out.aovs;
+        for (uint32_t i = 0; i < PACKET_LANES; ++i) {
+            if (!valid[i]) continue;
+            const std::size_t p =
+                std::size_t(y0 + i / PACKET_SIZE) * m_out.width + x0 + i % PACKET_SIZE;
+            m_out.color[p] = sums[i]->color * m_inv_total;
+            if (aovs.has(Aov::Albedo)) m_out.albedo[p] = sums[i]->albedo * m_inv_total;
+            if (aovs.has(Aov::Normal)) m_out.normal[p] = sums[i]->normal * m_inv_total;
+        }
+    }
+
+    const TlasStrategy& m_tlas;
+    const FrameState& m_frame;
+    const CameraRays m_rays;
+    const SkyModel m_sky;
+    FrameBuffers& m_out;
+    const SampleRange m_samples;
+    const float m_inv_total;
+    PixelSums* const m_accum;
+    mutable std::atomic<uint64_t> m_ray_count{0};
+};
+
+}  // namespace
+
+Result<RenderedFrame> Renderer::render(const TlasStrategy& tlas, const FrameState& frame,
+                                       const RenderRequest& request) {
+    Stopwatch clock;
+    RenderedFrame out;
+    out.version = frame.version;
+    const Camera camera = request.camera.value_or(frame.camera);
+    try {
+        out.buffers.allocate(request.width, request.height, AovSet(request.aovs));
+        SampleRange samples{0, request.spp};
+        PixelSums* accum = nullptr;
+        if (request.accumulate) {
+            if (uint64_t(request.width) * request.height > MAX_ACCUMULATE_PIXELS)
+                return make_error(ErrorCode::TooLarge,
+                                  "accumulation is limited to " +
+                                      std::to_string(MAX_ACCUMULATE_PIXELS) + " pixels",
+                                  "accumulate");
+            samples = m_accumulator.begin({frame.version, camera, request.width, request.height},
+                                          request.spp);
+            accum = m_accumulator.sums();
+        }
+        const uint32_t total = samples.first + samples.count;
+        FrameKernel kernel(tlas, frame, camera, out.buffers, samples, total, accum);
+        parallel_for_tiles(request.width, request.height,
+                           [&](const TileRect& tile) { kernel.render_tile(tile); });
+        if (request.accumulate) m_accumulator.finish(samples);
+        out.samples = total;
+        out.samples_added = samples.count;
+        out.rays = kernel.rays();
+    } catch (const std::bad_alloc&) {
+        m_accumulator.reset();
+        return make_error(ErrorCode::TooLarge, "not enough memory for a frame of this size",
+                          "width");
+    }
+    out.render_ms = clock.ms();
+    return out;
+}
+
+}  // namespace strata

@@ -1,0 +1,208 @@
+// Known answers for the geometry AOVs: depth of a plane, coverage of a sphere, which instance and
+// mesh each pixel shows, and ids that follow a moved instance.
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include <gtest/gtest.h>
+
+#include "engine/render/shading.h"
+#include "tests/engine/render_test_util.h"
+
+namespace strata {
+namespace {
+
+using test::apply_ok;
+using test::camera_edit;
+using test::instance_edit;
+using test::mesh_edit;
+using test::project;
+using test::render_frame_ok;
+using test::request;
+
+const std::vector<Aov> GEOMETRY_AOVS = {Aov::Depth,       Aov::Position, Aov::InstanceId,
+                                        Aov::PrimitiveId, Aov::MeshId,   Aov::Normal};
+
+/// A large plane facing the camera from distance d (the plane is y = 0, the camera looks down).
+std::unique_ptr<Engine> plane_at(float d) {
+    auto engine = test::make_engine();
+    Camera cam;
+    cam.eye = Vec3(0.0f, d, 0.0f);
+    cam.target = Vec3(0.0f);
+    cam.up = Vec3(0.0f, 0.0f, -1.0f);
+    cam.fov_y_deg = 50.0f;
+    apply_ok(*engine, mesh_edit("plane", make_plane(Vec3(1000.0f, 0.0f, 1000.0f), 4, 4)),
+             instance_edit("plane", "plane"), camera_edit(cam));
+    return engine;
+}
+
+class PlaneDepth : public ::testing::TestWithParam<float> {};
+
+TEST_P(PlaneDepth, CentrePixelDepthIsTheDistance) {
+    const float d = GetParam();
+    auto engine = plane_at(d);
+    // An odd size puts the centre pixel's ray exactly on the optical axis.
+    const RenderedFrame f = render_frame_ok(*engine, request(33, 21, 2, GEOMETRY_AOVS));
+    const std::size_t centre = std::size_t(10) * 33 + 16;
+    EXPECT_NEAR(f.buffers.depth[centre], d, d * 2e-6f);
+    EXPECT_NEAR(f.buffers.position[centre].y, 0.0f, d * 2e-6f);
+    EXPECT_NEAR(f.buffers.normal[centre].y, 1.0f, 1e-6f);
+    // Off-centre pixels are farther: depth is along the ray, not the view axis.
+    EXPECT_GT(f.buffers.depth[0], d * 1.1f);
+}
+
+INSTANTIATE_TEST_SUITE_P(Distances, PlaneDepth, ::testing::Values(0.5f, 3.0f, 7.25f, 120.0f));
+
+TEST(RenderKnownAnswer, PixelsThatHitNothingHaveTheDocumentedValues) {
+    auto engine = test::make_engine();
+    apply_ok(*engine, mesh_edit("box", make_box(Vec3(1.0f))),
+             instance_edit("box", "box", {0, 0, 50}));
+    const RenderedFrame f =
+        render_frame_ok(*engine, request(16, 16, 1,
+                                         {Aov::Albedo, Aov::Normal, Aov::Depth, Aov::Position,
+                                          Aov::InstanceId, Aov::PrimitiveId, Aov::MeshId}));
+    const SkyModel sky{Lighting{}};
+    for (std::size_t i = 0; i < f.buffers.pixel_count(); ++i) {
+        ASSERT_EQ(f.buffers.depth[i], std::numeric_limits<float>::infinity());
+        ASSERT_EQ(f.buffers.instance_id[i], MISS_ID);
+        ASSERT_EQ(f.buffers.primitive_id[i], MISS_ID);
+        ASSERT_EQ(f.buffers.mesh_id[i], MISS_ID);
+        ASSERT_EQ(f.buffers.position[i], Vec3(0.0f));
+        ASSERT_EQ(f.buffers.albedo[i], Vec3(0.0f));
+        ASSERT_EQ(f.buffers.normal[i], Vec3(0.0f));
+        // The background is the sky; the default camera looks slightly down, below the horizon.
+        ASSERT_GT(f.buffers.color[i].z, 0.0f);
+    }
+}
+
+TEST(RenderKnownAnswer, SphereSilhouetteCoversTheProjectedDisc) {
+    auto engine = test::make_engine();
+    const float radius = 1.0f, distance = 5.0f, fov = 40.0f;
+    Camera cam;
+    cam.eye = Vec3(0.0f, 0.0f, distance);
+    cam.target = Vec3(0.0f);
+    cam.fov_y_deg = fov;
+    apply_ok(*engine, mesh_edit("sphere", make_sphere(radius, 512)),
+             instance_edit("sphere", "sphere"), camera_edit(cam));
+    const uint32_t w = 241, h = 201;
+    const RenderedFrame f = render_frame_ok(*engine, request(w, h, 1, {Aov::InstanceId}));
+    std::size_t covered = 0;
+    for (uint32_t id : f.buffers.instance_id) covered += id != MISS_ID;
+    // The silhouette is the cone of half-angle asin(r / D): a circle of radius tan of that on
+    // the image plane at unit distance, where h / 2 pixels span tan(fov / 2).
+    const double half_angle = std::asin(double(radius) / double(distance));
+    const double r_px = std::tan(half_angle) / std::tan(glm::radians(double(fov)) / 2) * (h / 2.0);
+    const double expected = std::numbers::pi * r_px * r_px;
+    EXPECT_NEAR(double(covered), expected, expected * 0.005) << "radius " << r_px << " px";
+}
+
+/// Three boxes in a row (two meshes) in front of a camera, nothing behind them.
+class SeparatedInstances : public ::testing::Test {
+protected:
+    void SetUp() override {
+        engine = test::make_engine();
+        cam.eye = Vec3(0.0f, 0.0f, 12.0f);
+        cam.target = Vec3(0.0f);
+        apply_ok(*engine, mesh_edit("cube", make_box(Vec3(1.5f))),
+                 mesh_edit("ball", make_sphere(0.8f, 48)), instance_edit("left", "cube", LEFT),
+                 instance_edit("middle", "ball", MIDDLE), instance_edit("right", "cube", RIGHT),
+                 camera_edit(cam));
+    }
+
+    uint32_t slot(const char* instance) const {
+        return engine->read([&](const Scene& s) { return s.find_instance(instance).index; });
+    }
+    uint32_t mesh_slot(const char* mesh) const {
+        return engine->read([&](const Scene& s) { return s.find_mesh(mesh).index; });
+    }
+    RenderedFrame render() const {
+        return render_frame_ok(*engine,
+                               request(W, H, 1, {Aov::InstanceId, Aov::MeshId, Aov::PrimitiveId}));
+    }
+    std::size_t at(const Vec3& p) const { return test::pixel_index(W, project(cam, W, H, p)); }
+
+    static constexpr uint32_t W = 160, H = 90;
+    static constexpr Vec3 LEFT{-4.0f, 0.0f, 0.0f}, MIDDLE{0.0f, 0.0f, 0.0f},
+        RIGHT{4.0f, 0.0f, 0.0f};
+    std::unique_ptr<Engine> engine;
+    Camera cam;
+};
+
+TEST_F(SeparatedInstances, InstanceIdNamesTheInstanceUnderEachPixel) {
+    const RenderedFrame f = render();
+    const FrameBuffers& b = f.buffers;
+    const struct {
+        const char* instance;
+        const char* mesh;
+        Vec3 at;
+    } expected[] = {{"left", "cube", LEFT}, {"middle", "ball", MIDDLE}, {"right", "cube", RIGHT}};
+    for (const auto& e : expected) {
+        const std::size_t p = at(e.at);
+        EXPECT_EQ(b.instance_id[p], slot(e.instance)) << e.instance;
+        EXPECT_EQ(b.mesh_id[p], mesh_slot(e.mesh)) << e.instance;
+        EXPECT_NE(b.primitive_id[p], MISS_ID) << e.instance;
+    }
+    // Between the instances, and above them, nothing is hit.
+    for (const Vec3 gap :
+         {Vec3(-2.0f, 0.0f, 0.0f), Vec3(2.0f, 0.0f, 0.0f), Vec3(0.0f, 2.5f, 0.0f)}) {
+        EXPECT_EQ(b.instance_id[at(gap)], MISS_ID);
+        EXPECT_EQ(b.mesh_id[at(gap)], MISS_ID);
+        EXPECT_EQ(b.primitive_id[at(gap)], MISS_ID);
+    }
+    // Every pixel names one of the three instances or nothing, and its mesh matches.
+    std::size_t counts[3] = {};
+    const uint32_t slots[3] = {slot("left"), slot("middle"), slot("right")};
+    for (std::size_t i = 0; i < b.pixel_count(); ++i) {
+        if (b.instance_id[i] == MISS_ID) continue;
+        const auto k = std::find(slots, slots + 3, b.instance_id[i]) - slots;
+        ASSERT_LT(k, 3) << "pixel " << i << " names unknown instance " << b.instance_id[i];
+        ++counts[k];
+        EXPECT_EQ(b.mesh_id[i], mesh_slot(k == 1 ? "ball" : "cube"));
+        EXPECT_LT(b.primitive_id[i], k == 1 ? make_sphere(0.8f, 48).triangles.size() : 12u);
+    }
+    EXPECT_GT(counts[0], 100u);
+    // The cubes are mirror images (up to rounding of the ray directions along their edges).
+    EXPECT_NEAR(double(counts[0]), double(counts[2]), 0.02 * double(counts[0]));
+    EXPECT_GT(counts[1], 100u);
+}
+
+TEST_F(SeparatedInstances, MovedInstanceIdsMoveWithIt) {
+    const uint32_t middle = slot("middle");
+    const RenderedFrame before = render();
+    const Vec3 moved(0.0f, 2.0f, 0.0f);
+    apply_ok(*engine, SetTransform{"middle", Affine::translation(moved)});
+    const RenderedFrame after = render();
+
+    EXPECT_EQ(before.buffers.instance_id[at(MIDDLE)], middle);
+    EXPECT_EQ(after.buffers.instance_id[at(MIDDLE)], MISS_ID);
+    EXPECT_EQ(after.buffers.instance_id[at(moved)], middle);
+    EXPECT_EQ(after.version, before.version + 1);
+
+    // The whole footprint shifts by the projected offset; the other instances stay put.
+    const int dy = int(std::lround(project(cam, W, H, moved).y - project(cam, W, H, MIDDLE).y));
+    std::size_t footprint = 0, shifted = 0;
+    for (uint32_t y = 0; y < H; ++y) {
+        for (uint32_t x = 0; x < W; ++x) {
+            const std::size_t p = std::size_t(y) * W + x;
+            if (before.buffers.instance_id[p] != middle) {
+                if (before.buffers.instance_id[p] != MISS_ID) {
+                    EXPECT_EQ(after.buffers.instance_id[p], before.buffers.instance_id[p]);
+                }
+                continue;
+            }
+            ++footprint;
+            const int ty = int(y) + dy;
+            if (ty >= 0 && ty < int(H) &&
+                after.buffers.instance_id[std::size_t(ty) * W + x] == middle)
+                ++shifted;
+        }
+    }
+    ASSERT_GT(footprint, 100u);
+    // Perspective changes the footprint a little off-axis; nearly all of it lands shifted.
+    EXPECT_GT(double(shifted), 0.95 * double(footprint));
+}
+
+}  // namespace
+}  // namespace strata
