@@ -53,6 +53,7 @@ ApiResponse render(Engine& engine, const RenderSpec& spec, const ApiLimits& limi
     r.body.assign(reinterpret_cast<const char*>(frame.bytes.data()), frame.bytes.size());
     r.headers = {{"ETag", etag(frame.version)},
                  {"X-Strata-Rebuild", frame.report.summary()},
+                 {"X-Strata-Samples", std::to_string(frame.samples)},
                  {"Cache-Control", "no-store"}};
     r.commit = std::move(frame.report);
     return r;

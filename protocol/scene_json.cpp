@@ -82,6 +82,7 @@ std::optional<Json> mesh_to_json(const Scene& s, std::string_view id) {
     for (const Vec3& p : m.positions) bounds.extend(p);
     return Json{
         {"id", m.id},
+        {"index", s.find_mesh(id).index},
         {"version", s.version()},
         {"vertices", m.positions.size()},
         {"triangles", m.triangles.size()},
@@ -101,6 +102,7 @@ std::optional<Json> instance_to_json(const Scene& s, std::string_view id) {
     for (const Vec3& p : mesh.positions) local.extend(p);
     const Material resolved = s.resolved_material(i);
     return Json{{"id", i.id},
+                {"index", s.find_instance(id).index},
                 {"version", s.version()},
                 {"mesh", mesh.id},
                 {"material", material_ref(s, i.material)},

@@ -13,8 +13,8 @@ Result<std::unique_ptr<AccelGraph>> AccelGraph::create(const AccelConfig& config
 AccelGraph::AccelGraph(const AccelConfig& config, std::unique_ptr<EmbreeDevice> device)
     : m_config(config),
       m_device(std::move(device)),
-      m_blas(*m_device),
-      m_tlas(make_embree_tlas(*m_device, config.tlas_prefer)) {}
+      m_blas(*m_device, config.watertight),
+      m_tlas(make_embree_tlas(*m_device, config.tlas_prefer, config.watertight)) {}
 
 AccelGraph::~AccelGraph() {
     // Instances hold references to BLASes: drop the TLAS first.

@@ -40,7 +40,8 @@ struct BlasRecord {
 
 class BlasStore {
 public:
-    explicit BlasStore(EmbreeDevice& device) : m_device(device) {}
+    /// `watertight` adds Embree's robust flag to every BLAS (see AccelConfig::watertight).
+    BlasStore(EmbreeDevice& device, bool watertight) : m_device(device), m_watertight(watertight) {}
     ~BlasStore();
     BlasStore(const BlasStore&) = delete;
     BlasStore& operator=(const BlasStore&) = delete;
@@ -65,6 +66,7 @@ private:
     void release_slot(uint32_t slot);
 
     EmbreeDevice& m_device;
+    bool m_watertight;
     std::vector<BlasRecord> m_records;  ///< indexed by mesh slot
     uint64_t m_primitives = 0;
 };

@@ -44,7 +44,8 @@ struct TlasInstance {
 
 class EmbreeTlas final : public TlasStrategy {
 public:
-    EmbreeTlas(EmbreeDevice& device, BuildPreference prefer) : m_device(device), m_prefer(prefer) {
+    EmbreeTlas(EmbreeDevice& device, BuildPreference prefer, bool watertight)
+        : m_device(device), m_prefer(prefer), m_watertight(watertight) {
         create_scene();
         // An empty committed scene is traceable; launches may come before any instance exists.
         rtcCommitScene(m_scene);
@@ -105,7 +106,8 @@ private:
         m_scene = rtcNewScene(m_device.get());
         rtcSetSceneBuildQuality(m_scene, m_prefer == BuildPreference::FastTrace ? RTC_BUILD_QUALITY_MEDIUM
                                                                                 : RTC_BUILD_QUALITY_LOW);
-        rtcSetSceneFlags(m_scene, RTC_SCENE_FLAG_DYNAMIC);
+        rtcSetSceneFlags(m_scene, RTCSceneFlags(RTC_SCENE_FLAG_DYNAMIC |
+                                                 (m_watertight ? RTC_SCENE_FLAG_ROBUST : 0)));
     }
 
     void release_slot(uint32_t slot) {
@@ -157,6 +159,7 @@ private:
 
     EmbreeDevice& m_device;
     BuildPreference m_prefer;
+    bool m_watertight;
     RTCScene m_scene = nullptr;
     std::vector<TlasInstance> m_instances;  ///< indexed by instance slot
     uint64_t m_count = 0;
@@ -164,8 +167,9 @@ private:
 
 }  // namespace
 
-std::unique_ptr<TlasStrategy> make_embree_tlas(EmbreeDevice& device, BuildPreference prefer) {
-    return std::make_unique<EmbreeTlas>(device, prefer);
+std::unique_ptr<TlasStrategy> make_embree_tlas(EmbreeDevice& device, BuildPreference prefer,
+                                               bool watertight) {
+    return std::make_unique<EmbreeTlas>(device, prefer, watertight);
 }
 
 }  // namespace strata

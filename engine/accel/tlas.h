@@ -54,6 +54,7 @@ public:
 };
 
 /// The Embree top-level scene over instance geometries attached by slot id.
-std::unique_ptr<TlasStrategy> make_embree_tlas(EmbreeDevice& device, BuildPreference prefer);
+std::unique_ptr<TlasStrategy> make_embree_tlas(EmbreeDevice& device, BuildPreference prefer,
+                                               bool watertight);
 
 }  // namespace strata

@@ -105,8 +105,9 @@ std::unique_ptr<Engine> make_engine(const SceneDesc& d) {
 }
 
 /// The same scene in plain Embree: BLAS scenes with BlasStore's qualities for BUILD (HIGH scene
-/// and geometry quality), a top-level scene with EmbreeTlas's settings (MEDIUM, DYNAMIC) holding
-/// one instance geometry per instance, attached by index.
+/// and geometry quality, ROBUST as the engine's default watertight mode), a top-level scene with
+/// EmbreeTlas's settings (MEDIUM, DYNAMIC, ROBUST) holding one instance geometry per instance,
+/// attached by index.
 class PlainScene {
 public:
     explicit PlainScene(const SceneDesc& d) {
@@ -114,6 +115,7 @@ public:
         for (const MeshData& mesh : d.meshes) {
             RTCScene s = rtcNewScene(m_device);
             rtcSetSceneBuildQuality(s, RTC_BUILD_QUALITY_HIGH);
+            rtcSetSceneFlags(s, RTC_SCENE_FLAG_ROBUST);
             RTCGeometry g = rtcNewGeometry(m_device, RTC_GEOMETRY_TYPE_TRIANGLE);
             rtcSetGeometryBuildQuality(g, RTC_BUILD_QUALITY_HIGH);
             auto* v = static_cast<Vec3*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0,
@@ -132,7 +134,7 @@ public:
         }
         m_top = rtcNewScene(m_device);
         rtcSetSceneBuildQuality(m_top, RTC_BUILD_QUALITY_MEDIUM);
-        rtcSetSceneFlags(m_top, RTC_SCENE_FLAG_DYNAMIC);
+        rtcSetSceneFlags(m_top, RTCSceneFlags(RTC_SCENE_FLAG_DYNAMIC | RTC_SCENE_FLAG_ROBUST));
         for (std::size_t i = 0; i < d.instances.size(); ++i) {
             RTCGeometry g = rtcNewGeometry(m_device, RTC_GEOMETRY_TYPE_INSTANCE);
             rtcSetGeometryInstancedScene(g, m_blas[d.instances[i].mesh]);

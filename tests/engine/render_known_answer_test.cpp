@@ -206,3 +206,45 @@ TEST_F(SeparatedInstances, MovedInstanceIdsMoveWithIt) {
 
 }  // namespace
 }  // namespace strata
+
+namespace strata {
+namespace {
+
+/// Centre-pixel hit of a camera looking (almost) straight down at the pole of a UV sphere, where
+/// a fan of `segments` triangles meets in one vertex: the centre ray passes through that vertex.
+struct PoleHit {
+    uint32_t instance;
+    float distance;
+};
+
+PoleHit look_down_at_pole(bool watertight, uint32_t segments, float radius) {
+    EngineConfig config;
+    config.accel.watertight = watertight;
+    auto engine = std::move(Engine::create(config).value());
+    SetCamera down;
+    down.eye = Vec3(0.0f, 12.0f, 0.01f);
+    down.target = Vec3(0.0f);
+    EXPECT_TRUE(engine->apply(EditBatch{{test::mesh_edit("ball", make_sphere(radius, segments)),
+                                          test::instance_edit("ball", "ball", {0, radius, 0}), down}})
+                    .ok());
+    PrimarySettings s;
+    s.width = 9;
+    s.height = 9;
+    const HitBuffers hits = std::move(engine->render_primary(s).value().hits);
+    const std::size_t centre = 4 * 9 + 4;
+    return {hits.instance[centre], hits.distance[centre]};
+}
+
+TEST(RenderKnownAnswer, ARayThroughAVertexSharedByManyTrianglesHitsTheSurface) {
+    // Embree's default (non-watertight) triangle test lets this very ray through the pole in each
+    // of these meshes on the development machine; watertight mode must never.
+    for (const auto& [segments, radius] : {std::pair{64u, 1.0f}, {96u, 1.0f}, {192u, 1.0f}, {192u, 1.5f}}) {
+        const PoleHit hit = look_down_at_pole(true, segments, radius);
+        ASSERT_NE(hit.instance, INVALID_ID)
+            << "the ray slipped between the pole's triangles (" << segments << " segments)";
+        EXPECT_NEAR(hit.distance, 12.0f - 2.0f * radius, 1e-4f);
+    }
+}
+
+}  // namespace
+}  // namespace strata

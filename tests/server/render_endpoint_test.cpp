@@ -2,6 +2,7 @@
 
 #include <gmock/gmock.h>
 
+#include "engine/image/exr.h"
 #include "tests/server/test_server.h"
 
 namespace strata::server::test {
@@ -84,15 +85,84 @@ TEST_F(Render, FramesOverThePixelCapAre413) {
                    "too-large", "/width");
 }
 
-TEST_F(Render, ExrAnswersEitherAnImageOrACleanProblem) {
-    // The EXR encoder arrives with the renderer issue; until then the engine refuses the format.
-    const Reply r = srv.post(
-        "/v1/render", Json{{"width", 16}, {"height", 16}, {"format", "exr"}, {"aovs", {"depth"}}});
-    if (r.status == 200) {
-        EXPECT_EQ(r.header("Content-Type"), "image/x-exr");
-    } else {
-        expect_problem(r, 422, "invalid-value", "/format");
+DecodedExr decode(const Reply& r) {
+    auto exr = decode_exr(reinterpret_cast<const uint8_t*>(r.body.data()), r.body.size());
+    EXPECT_TRUE(exr.ok()) << (exr.ok() ? "" : exr.error().describe());
+    return exr.ok() ? std::move(exr.value()) : DecodedExr{};
+}
+
+TEST_F(Render, ExrFromThePostCarriesEveryRequestedAovWithOpenExrNames) {
+    const Reply r = srv.post("/v1/render", Json{{"width", 40},
+                                                {"height", 24},
+                                                {"format", "exr"},
+                                                {"compression", "piz"},
+                                                {"aovs", {"albedo", "normal", "depth", "position",
+                                                          "instance_id", "primitive_id", "mesh_id"}}});
+    ASSERT_EQ(r.status, 200) << r.body;
+    EXPECT_EQ(r.header("Content-Type"), "image/x-exr");
+    EXPECT_EQ(r.header("X-Strata-Samples"), "1");
+    const DecodedExr exr = decode(r);
+    EXPECT_EQ(exr.width, 40u);
+    EXPECT_EQ(exr.height, 24u);
+    EXPECT_EQ(exr.compression, ExrCompression::Piz);
+    const std::vector<std::pair<std::string, ExrPixel>> expected = {
+        {"A", ExrPixel::Half},        {"B", ExrPixel::Half},        {"G", ExrPixel::Half},
+        {"N.X", ExrPixel::Half},      {"N.Y", ExrPixel::Half},      {"N.Z", ExrPixel::Half},
+        {"P.X", ExrPixel::Float},     {"P.Y", ExrPixel::Float},     {"P.Z", ExrPixel::Float},
+        {"R", ExrPixel::Half},        {"Z", ExrPixel::Float},       {"albedo.B", ExrPixel::Half},
+        {"albedo.G", ExrPixel::Half}, {"albedo.R", ExrPixel::Half}, {"instance_id", ExrPixel::Uint},
+        {"mesh_id", ExrPixel::Uint},  {"primitive_id", ExrPixel::Uint}};
+    ASSERT_EQ(exr.channels.size(), expected.size());
+    for (const auto& [name, type] : expected) {
+        const DecodedExrChannel* c = exr.find(name);
+        ASSERT_NE(c, nullptr) << name;
+        EXPECT_EQ(c->type, type) << name;
+        const std::size_t n = type == ExrPixel::Uint ? c->u32.size() : c->f32.size();
+        EXPECT_EQ(n, 40u * 24u) << name;
     }
+}
+
+TEST_F(Render, ExrFromTheGetFormUsesTheQueryOptions) {
+    const Reply r = srv.get("/v1/render?width=32&height=16&format=exr&aovs=depth,instance_id"
+                            "&compression=none&spp=2");
+    ASSERT_EQ(r.status, 200) << r.body;
+    EXPECT_EQ(r.header("X-Strata-Samples"), "2");
+    const DecodedExr exr = decode(r);
+    EXPECT_EQ(exr.compression, ExrCompression::None);
+    std::vector<std::string> names;
+    for (const auto& c : exr.channels) names.push_back(c.name);
+    EXPECT_EQ(names, (std::vector<std::string>{"A", "B", "G", "R", "Z", "instance_id"}));
+}
+
+TEST_F(Render, TheInstanceIdAovNamesTheIndexTheSceneApiReports) {
+    // Look straight down at the big ball: the centre pixel shows it.
+    const Reply r = srv.post("/v1/render", Json{{"width", 9},
+                                                {"height", 9},
+                                                {"format", "exr"},
+                                                {"aovs", {"instance_id", "mesh_id"}},
+                                                {"camera", {{"eye", {0, 12, 0.01}}, {"target", {0, 0, 0}}}}});
+    ASSERT_EQ(r.status, 200) << r.body;
+    const DecodedExr exr = decode(r);
+    const Json ball = srv.get("/v1/scene/instances/ball").json();
+    const Json ball_mesh = srv.get("/v1/scene/meshes/ball").json();
+    ASSERT_TRUE(ball.contains("index") && ball_mesh.contains("index"));
+    const std::size_t centre = 4 * 9 + 4;
+    EXPECT_EQ(exr.find("instance_id")->u32.at(centre), ball["index"].get<uint32_t>());
+    EXPECT_EQ(exr.find("mesh_id")->u32.at(centre), ball_mesh["index"].get<uint32_t>());
+}
+
+TEST_F(Render, AccumulatedFramesReportTheirGrowingSampleCount) {
+    const Json body = {{"width", 16}, {"height", 16}, {"spp", 2}, {"accumulate", true}};
+    EXPECT_EQ(srv.post("/v1/render", body).header("X-Strata-Samples"), "2");
+    EXPECT_EQ(srv.post("/v1/render", body).header("X-Strata-Samples"), "4");
+    // Any edit restarts the accumulation.
+    ASSERT_EQ(srv.edits({{{"op", "set_lighting"}, {"sky_intensity", 0.3}}}).status, 200);
+    EXPECT_EQ(srv.post("/v1/render", body).header("X-Strata-Samples"), "2");
+}
+
+TEST_F(Render, AovsOtherThanColorNeedExr) {
+    expect_problem(srv.post("/v1/render", Json{{"format", "png"}, {"aovs", {"depth"}}}), 422,
+                   "invalid-value", "/aovs/0");
 }
 
 }  // namespace
