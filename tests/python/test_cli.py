@@ -168,12 +168,14 @@ class ServerCommandsTest(unittest.TestCase):
 
 
 class ReadmeSnippetsTest(unittest.TestCase):
-    """The examples of clients/README-snippets.md, as written there (with the test server's URL
-    for 127.0.0.1:7070)."""
+    """The client examples of the top-level README.md, as written there (with the test server's
+    URL for 127.0.0.1:7070)."""
 
     def setUp(self):
-        with open(os.path.join(SOURCE, "clients/README-snippets.md")) as f:
-            self.text = f.read()
+        with open(os.path.join(SOURCE, "README.md")) as f:
+            text = f.read()
+        start = text.index("### Scripts and the `strata` command line")
+        self.text = text[start:text.index("### Without a server", start)]
         self.server = ServerProcess(SERVER, ["--demo"])  # the server from README command (1)
 
     def tearDown(self):
