@@ -128,10 +128,7 @@ RenderRequest resolve_render_request(const RenderSpec& spec, const Camera& scene
     RenderRequest q = spec.request;
     if (spec.camera) {
         Camera c = scene_camera;
-        if (spec.camera->eye) c.eye = *spec.camera->eye;
-        if (spec.camera->target) c.target = *spec.camera->target;
-        if (spec.camera->up) c.up = *spec.camera->up;
-        if (spec.camera->fov_y_deg) c.fov_y_deg = *spec.camera->fov_y_deg;
+        apply_to(c, *spec.camera);
         q.camera = c;
     }
     return q;

@@ -112,6 +112,11 @@ using Edit = std::variant<AddMesh, UpdateMeshPositions, ReplaceMeshTopology, Rem
                           AddMaterial, UpdateMaterial, AddInstance, UpdateInstance, SetTransform,
                           RemoveInstance, MarkDirty, SetCamera, SetLighting, Clear>;
 
+/// Copies the fields an edit sets onto a full value; unset fields keep theirs.
+void apply_to(Camera& c, const SetCamera& e);
+void apply_to(Lighting& l, const SetLighting& e);
+void apply_to(Material& m, const UpdateMaterial& e);
+
 /// The wire name of an edit's kind ("add_mesh", "set_transform", ...).
 const char* edit_name(const Edit& e);
 

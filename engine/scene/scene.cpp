@@ -28,6 +28,27 @@ const char* edit_name(const Edit& e) {
     return NAMES[e.index()];
 }
 
+void apply_to(Camera& c, const SetCamera& e) {
+    if (e.eye) c.eye = *e.eye;
+    if (e.target) c.target = *e.target;
+    if (e.up) c.up = *e.up;
+    if (e.fov_y_deg) c.fov_y_deg = *e.fov_y_deg;
+}
+
+void apply_to(Lighting& l, const SetLighting& e) {
+    if (e.sun_direction) l.sun_direction = *e.sun_direction;
+    if (e.sun_color) l.sun_color = *e.sun_color;
+    if (e.sky_color) l.sky_color = *e.sky_color;
+    if (e.sky_intensity) l.sky_intensity = *e.sky_intensity;
+}
+
+void apply_to(Material& m, const UpdateMaterial& e) {
+    if (e.base_color) m.base_color = *e.base_color;
+    if (e.roughness) m.roughness = *e.roughness;
+    if (e.metallic) m.metallic = *e.metallic;
+    if (e.emission) m.emission = *e.emission;
+}
+
 MeshHandle Scene::find_mesh(std::string_view id) const {
     return lookup<decltype(m_mesh_ids), MeshHandle>(m_mesh_ids, id);
 }
@@ -161,11 +182,7 @@ void Scene::apply_edit(AddMaterial&& e) {
 
 void Scene::apply_edit(UpdateMaterial&& e) {
     const MaterialHandle h = find_material(e.material);
-    Material& m = m_materials.at(h).material;
-    if (e.base_color) m.base_color = *e.base_color;
-    if (e.roughness) m.roughness = *e.roughness;
-    if (e.metallic) m.metallic = *e.metallic;
-    if (e.emission) m.emission = *e.emission;
+    apply_to(m_materials.at(h).material, e);
     mark_material(h, dirty::MaterialParams);
 }
 
@@ -249,18 +266,12 @@ void Scene::apply_edit(MarkDirty&& e) {
 }
 
 void Scene::apply_edit(SetCamera&& e) {
-    if (e.eye) m_camera.eye = *e.eye;
-    if (e.target) m_camera.target = *e.target;
-    if (e.up) m_camera.up = *e.up;
-    if (e.fov_y_deg) m_camera.fov_y_deg = *e.fov_y_deg;
+    apply_to(m_camera, e);
     m_changes.scene_bits |= dirty::Camera;
 }
 
 void Scene::apply_edit(SetLighting&& e) {
-    if (e.sun_direction) m_lighting.sun_direction = *e.sun_direction;
-    if (e.sun_color) m_lighting.sun_color = *e.sun_color;
-    if (e.sky_color) m_lighting.sky_color = *e.sky_color;
-    if (e.sky_intensity) m_lighting.sky_intensity = *e.sky_intensity;
+    apply_to(m_lighting, e);
     m_changes.scene_bits |= dirty::Lighting;
 }
 

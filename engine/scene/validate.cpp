@@ -212,10 +212,7 @@ public:
     Status check(const UpdateMaterial& e) {
         auto m = m_overlay.material_value(e.material);
         if (!m) return unknown("material", e.material, "material");
-        if (e.base_color) m->base_color = *e.base_color;
-        if (e.roughness) m->roughness = *e.roughness;
-        if (e.metallic) m->metallic = *e.metallic;
-        if (e.emission) m->emission = *e.emission;
+        apply_to(*m, e);
         if (Status s = check_material(*m); !s) return s;
         m_overlay.set_material(e.material, m);
         return {};
@@ -267,21 +264,13 @@ public:
     }
 
     Status check(const SetCamera& e) {
-        Camera& c = m_overlay.camera();
-        if (e.eye) c.eye = *e.eye;
-        if (e.target) c.target = *e.target;
-        if (e.up) c.up = *e.up;
-        if (e.fov_y_deg) c.fov_y_deg = *e.fov_y_deg;
-        return check_camera(c);
+        apply_to(m_overlay.camera(), e);
+        return check_camera(m_overlay.camera());
     }
 
     Status check(const SetLighting& e) {
-        Lighting& l = m_overlay.lighting();
-        if (e.sun_direction) l.sun_direction = *e.sun_direction;
-        if (e.sun_color) l.sun_color = *e.sun_color;
-        if (e.sky_color) l.sky_color = *e.sky_color;
-        if (e.sky_intensity) l.sky_intensity = *e.sky_intensity;
-        return check_lighting(l);
+        apply_to(m_overlay.lighting(), e);
+        return check_lighting(m_overlay.lighting());
     }
 
     Status check(const Clear&) {
