@@ -1,4 +1,6 @@
 #pragma once
+
+#include <exception>
 // Small helpers shared by the route files: JSON, problem and API responses.
 
 #include <httplib.h>
@@ -14,5 +16,9 @@ void send_json(httplib::Response& res, int status, const protocol::Json& body);
 void send_problem(httplib::Response& res, const protocol::Problem& problem);
 /// Sends an API answer: its status, headers, body and content type.
 void send(httplib::Response& res, const protocol::ApiResponse& answer);
+/// The server's exception handler: logs what escaped a handler and answers a 500 problem
+/// (without internals) instead of letting the exception take the process down.
+void answer_unhandled_exception(const httplib::Request& req, httplib::Response& res,
+                                std::exception_ptr error);
 
 }  // namespace strata::server

@@ -104,19 +104,7 @@ void Server::install_hooks() {
             return R::Handled;
         }));
 
-    m_http->set_exception_handler(
-        [](const httplib::Request& req, httplib::Response& res, std::exception_ptr ep) {
-            std::string what = "unknown exception";
-            try {
-                std::rethrow_exception(ep);
-            } catch (const std::exception& e) {
-                what = e.what();
-            } catch (...) {
-            }
-            spdlog::error("{} {}: unhandled exception: {}", req.method, req.path, what);
-            send_problem(res, protocol::make_problem(ProblemType::Internal,
-                                                     "internal error while handling the request"));
-        });
+    m_http->set_exception_handler(answer_unhandled_exception);
 
     m_http->set_logger([this](const httplib::Request& req, const httplib::Response& res) {
         m_metrics.count_response(res.status);
