@@ -26,8 +26,8 @@ std::string_view trim(std::string_view v) {
     return v;
 }
 
-ApiResponse render(Engine& engine, const RenderSpec& spec, const ApiLimits& limits) {
-    const RenderRequest& q0 = spec.request;
+ApiResponse render(Engine& engine, const RenderRequest& request, const ApiLimits& limits) {
+    const RenderRequest& q0 = request;
     const uint64_t pixels = uint64_t(q0.width) * q0.height;
     if (pixels > limits.max_pixels) {
         Problem p =
@@ -38,12 +38,7 @@ ApiResponse render(Engine& engine, const RenderSpec& spec, const ApiLimits& limi
         p.pointer = "/width";
         return problem_response(p);
     }
-    RenderRequest request = spec.request;
-    if (spec.camera) {
-        // Fields the override leaves out come from the scene camera as it is now.
-        const Camera scene_camera = engine.read([](const Scene& s) { return s.camera(); });
-        request = resolve_render_request(spec, scene_camera);
-    }
+    // A camera override's missing fields come from the camera of the version the launch renders.
     auto image = engine.render(request);
     if (!image) return problem_response(problem_from(image.error()));
     RenderedImage& frame = image.value();

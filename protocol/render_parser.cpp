@@ -9,12 +9,11 @@ namespace strata::protocol {
 
 namespace {
 
-RenderSpec read_render(FieldReader& r, const Json& v) {
+RenderRequest read_render(FieldReader& r, const Json& v) {
     r.expect_object(v, "",
                     {"width", "height", "format", "spp", "aovs", "compression", "accumulate",
                      "exposure", "camera"});
-    RenderSpec spec;
-    RenderRequest& q = spec.request;
+    RenderRequest q;
     auto u32 = [&](const char* key, uint32_t& out, uint64_t hi) {
         if (const Json* f = FieldReader::member(v, key))
             out = static_cast<uint32_t>(r.integer(*f, child("", key), 1, hi));
@@ -55,9 +54,9 @@ RenderSpec read_render(FieldReader& r, const Json& v) {
         if (const Json* m = FieldReader::member(*f, "up")) c.up = r.vec3(*m, "/camera/up");
         if (const Json* m = FieldReader::member(*f, "fov_y_deg"))
             c.fov_y_deg = r.number(*m, "/camera/fov_y_deg");
-        spec.camera = c;
+        q.camera = c;
     }
-    return spec;
+    return q;
 }
 
 /// A query value as the JSON it stands for: a number, a boolean or (failing both) a string, so
@@ -91,18 +90,18 @@ Json list_from_text(const std::string& text, bool numbers) {
 
 }  // namespace
 
-Parsed<RenderSpec> parse_render_body(const Json& body) {
+Parsed<RenderRequest> parse_render_body(const Json& body) {
     FieldReader r;
     try {
-        RenderSpec spec = read_render(r, body);
+        RenderRequest q = read_render(r, body);
         if (r.value_error()) return *r.value_error();
-        return spec;
+        return q;
     } catch (const RequestFailure& f) {
         return f.error();
     }
 }
 
-Parsed<RenderSpec> parse_render_query(const std::multimap<std::string, std::string>& params) {
+Parsed<RenderRequest> parse_render_query(const std::multimap<std::string, std::string>& params) {
     Json body = Json::object();
     for (const auto& [key, text] : params) {
         const bool camera = key == "eye" || key == "target" || key == "up" || key == "fov_y_deg";
@@ -122,16 +121,6 @@ Parsed<RenderSpec> parse_render_query(const std::multimap<std::string, std::stri
         }
     }
     return parse_render_body(body);
-}
-
-RenderRequest resolve_render_request(const RenderSpec& spec, const Camera& scene_camera) {
-    RenderRequest q = spec.request;
-    if (spec.camera) {
-        Camera c = scene_camera;
-        apply_to(c, *spec.camera);
-        q.camera = c;
-    }
-    return q;
 }
 
 }  // namespace strata::protocol

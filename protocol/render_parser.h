@@ -1,7 +1,7 @@
 #pragma once
 // Render requests: the POST /v1/render body and the GET /v1/render query string, both into the
-// engine's RenderRequest. A camera override may name only some fields; the rest come from the
-// scene camera when the request is resolved.
+// engine's RenderRequest. A camera override may name only some fields; the engine completes it
+// from the scene camera of the version the launch renders.
 
 #include <map>
 #include <optional>
@@ -16,21 +16,13 @@ namespace strata::protocol {
 /// Largest width or height (the schema bound; the server also caps width * height).
 constexpr uint32_t MAX_RENDER_SIDE = 65536;
 
-/// A parsed render request with the fields of its camera override, if any.
-struct RenderSpec {
-    RenderRequest request;
-    std::optional<SetCamera> camera;
-};
 
 /// `{"width", "height", "format", "spp", "aovs", "compression", "accumulate", "exposure",
 /// "camera": {"eye", "target", "up", "fov_y_deg"}}`, every member optional.
-Parsed<RenderSpec> parse_render_body(const Json& body);
+Parsed<RenderRequest> parse_render_body(const Json& body);
 
 /// The same members as query parameters: numbers and booleans as text, `aovs` and vectors as
 /// comma-separated lists, and the camera override as `eye`, `target`, `up`, `fov_y_deg`.
-Parsed<RenderSpec> parse_render_query(const std::multimap<std::string, std::string>& params);
-
-/// The request with its camera override completed from `scene_camera`.
-RenderRequest resolve_render_request(const RenderSpec& spec, const Camera& scene_camera);
+Parsed<RenderRequest> parse_render_query(const std::multimap<std::string, std::string>& params);
 
 }  // namespace strata::protocol

@@ -60,13 +60,30 @@ Status check_render_request(const RenderRequest& r) {
                               "aovs/" + std::to_string(i));
     }
     if (r.camera) {
-        if (Status s = check_camera(*r.camera); !s) {
-            Error e = s.error();
-            e.field = "camera/" + e.field;
-            return e;
+        // What can be judged without the scene camera: the override's own numbers.
+        const SetCamera& c = *r.camera;
+        for (const auto& [name, v] : {std::pair{"eye", c.eye}, {"target", c.target}, {"up", c.up}}) {
+            if (v && !is_finite(*v))
+                return make_error(ErrorCode::NotFinite, std::string(name) + " has a NaN or infinite value",
+                                  std::string("camera/") + name);
         }
+        if (c.fov_y_deg && !(*c.fov_y_deg > 0.0f && *c.fov_y_deg < 180.0f))
+            return make_error(ErrorCode::InvalidArgument, "fov_y_deg must be in (0, 180)",
+                              "camera/fov_y_deg");
     }
     return {};
+}
+
+Result<Camera> resolve_camera(const std::optional<SetCamera>& override_fields, const Camera& scene) {
+    Camera c = scene;
+    if (!override_fields) return c;
+    apply_to(c, *override_fields);
+    if (Status s = check_camera(c); !s) {
+        Error e = s.error();
+        e.field = "camera/" + e.field;
+        return e;
+    }
+    return c;
 }
 
 }  // namespace strata

@@ -11,6 +11,7 @@
 #include "engine/accel/report.h"
 #include "engine/core/result.h"
 #include "engine/image/exr.h"
+#include "engine/scene/edits.h"
 #include "engine/scene/types.h"
 
 namespace strata {
@@ -45,8 +46,14 @@ struct RenderRequest {
     /// size instead of starting over.
     bool accumulate = false;
     float exposure = 0.0f;  ///< EV stops applied before tone mapping (PNG only; EXR is linear)
-    std::optional<Camera> camera;  ///< overrides the scene camera for this frame
+    /// Overrides the scene camera for this frame. Fields it leaves out come from the scene
+    /// camera of the version the launch renders, so the frame never mixes two versions.
+    std::optional<SetCamera> camera;
 };
+
+/// The camera a launch renders: the scene camera with the request's override applied, checked
+/// (an error names the field as "camera/<field>").
+Result<Camera> resolve_camera(const std::optional<SetCamera>& override_fields, const Camera& scene);
 
 /// Largest frame the engine renders in one launch (the server may set a lower cap).
 constexpr uint64_t MAX_RENDER_PIXELS = 64ull * 1024 * 1024;

@@ -293,7 +293,9 @@ Result<RenderedFrame> Renderer::render(const TlasStrategy& tlas, const FrameStat
     Stopwatch clock;
     RenderedFrame out;
     out.version = frame.version;
-    const Camera camera = request.camera.value_or(frame.camera);
+    const auto resolved = resolve_camera(request.camera, frame.camera);
+    if (!resolved) return resolved.error();
+    const Camera camera = resolved.value();
     try {
         out.buffers.allocate(request.width, request.height, AovSet(request.aovs));
         SampleRange samples{0, request.spp};

@@ -137,7 +137,7 @@ TEST_F(RenderDeterminism, AnyEditOrCameraChangeRestartsAccumulation) {
 
     // A camera override restarts; going back to the scene camera restarts again.
     RenderRequest moved = exr(2, true);
-    Camera cam;
+    SetCamera cam;
     cam.eye = Vec3(3.0f, 4.0f, 9.0f);
     moved.camera = cam;
     EXPECT_EQ(render_ok(*engine, moved).samples, 2u);
@@ -168,6 +168,48 @@ TEST_F(RenderDeterminism, AccumulationStopsAtItsCap) {
     const RenderedFrame capped = render_frame_ok(*engine, r);
     EXPECT_EQ(capped.samples, MAX_ACCUMULATED_SAMPLES);
     EXPECT_EQ(capped.samples_added, 0u);
+}
+
+}  // namespace
+}  // namespace strata
+
+namespace strata {
+namespace {
+
+TEST(RenderCameraOverride, MissingFieldsComeFromTheCameraOfTheRenderedVersion) {
+    auto engine = test::make_engine();
+    ASSERT_TRUE(engine->apply(EditBatch{{test::mesh_edit("ball", make_sphere(1.0f, 32)),
+                                          test::instance_edit("ball", "ball")}})
+                    .ok());
+    RenderRequest request;
+    request.width = 16;
+    request.height = 16;
+    request.format = ImageFormat::Exr;
+    request.camera = SetCamera{};
+    request.camera->fov_y_deg = 30.0f;  // eye and target come from the scene
+    const auto before = engine->render(request);
+    ASSERT_TRUE(before.ok());
+
+    // The same override after the scene camera moved renders from the new eye: it is completed
+    // inside the launch, from the committed camera, not from whatever the caller saw earlier.
+    SetCamera moved;
+    moved.eye = Vec3(0.0f, 0.0f, 5.0f);
+    ASSERT_TRUE(engine->apply(EditBatch{{moved}}).ok());
+    RenderRequest explicit_camera = request;
+    explicit_camera.camera->eye = Vec3(0.0f, 0.0f, 5.0f);
+    explicit_camera.camera->target = Vec3(0.0f);
+    const auto after = engine->render(request);
+    const auto expected = engine->render(explicit_camera);
+    ASSERT_TRUE(after.ok() && expected.ok());
+    EXPECT_NE(after.value().bytes, before.value().bytes);
+    EXPECT_EQ(after.value().bytes, expected.value().bytes);
+
+    // An override that only makes sense against the scene camera is checked there.
+    request.camera = SetCamera{};
+    request.camera->target = Vec3(0.0f, 0.0f, 5.0f);  // the scene eye: eye == target
+    const auto bad = engine->render(request);
+    ASSERT_FALSE(bad.ok());
+    EXPECT_EQ(bad.error().field, "camera/target");
 }
 
 }  // namespace
