@@ -16,12 +16,8 @@ constexpr float RING_RADIUS = 4.0f;
 
 AddMesh mesh(const std::string& id, MeshData data, const std::string& material,
              BuildOptions build = {}) {
-    AddMesh e;
-    e.id = id;
-    e.positions = std::move(data.positions);
-    e.triangles = std::move(data.triangles);
+    AddMesh e = add_mesh_edit(id, std::move(data), build);
     e.material = material;
-    e.build = build;
     return e;
 }
 

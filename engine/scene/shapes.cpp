@@ -6,6 +6,15 @@
 
 namespace strata {
 
+AddMesh add_mesh_edit(std::string id, MeshData data, BuildOptions build) {
+    AddMesh e;
+    e.id = std::move(id);
+    e.positions = std::move(data.positions);
+    e.triangles = std::move(data.triangles);
+    e.build = build;
+    return e;
+}
+
 uint64_t sphere_triangle_count(uint32_t segments) {
     segments = std::max(segments, 3u);
     const uint64_t rings = std::max(segments / 2, 2u);

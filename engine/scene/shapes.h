@@ -2,8 +2,10 @@
 // Procedural meshes for demos, tests and benchmarks.
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
+#include "engine/scene/edits.h"
 #include "engine/scene/types.h"
 
 namespace strata {
@@ -24,6 +26,9 @@ MeshData make_box(const Vec3& size);
 /// Grid in the XZ plane centred at the origin, facing +Y: (nx + 1) * (nz + 1) vertices and
 /// 2 * nx * nz triangles.
 MeshData make_plane(const Vec3& size, uint32_t nx, uint32_t nz);
+
+/// An add_mesh edit that moves `data` into the scene under `id`.
+AddMesh add_mesh_edit(std::string id, MeshData data, BuildOptions build = {});
 
 /// Triangle count make_sphere(.., segments) produces.
 uint64_t sphere_triangle_count(uint32_t segments);

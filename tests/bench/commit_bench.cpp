@@ -17,15 +17,6 @@ namespace {
 
 std::unique_ptr<Engine> make_engine() { return std::move(Engine::create().value()); }
 
-AddMesh mesh_edit(const std::string& id, MeshData data, BuildOptions build = {}) {
-    AddMesh e;
-    e.id = id;
-    e.positions = std::move(data.positions);
-    e.triangles = std::move(data.triangles);
-    e.build = build;
-    return e;
-}
-
 Affine grid_transform(int64_t i, int64_t n, float jitter) {
     const auto side = int64_t(std::ceil(std::sqrt(double(n))));
     return Affine::translation({float(i % side) * 2.0f + jitter, 0.0f, float(i / side) * 2.0f});
@@ -35,7 +26,7 @@ Affine grid_transform(int64_t i, int64_t n, float jitter) {
 std::unique_ptr<Engine> instance_field(int64_t n) {
     auto engine = make_engine();
     EditBatch b;
-    b.edits.emplace_back(mesh_edit("pebble", make_sphere(0.5f, 12)));
+    b.edits.emplace_back(add_mesh_edit("pebble", make_sphere(0.5f, 12)));
     for (int64_t i = 0; i < n; ++i) {
         AddInstance inst;
         inst.id = "i" + std::to_string(i);
@@ -107,7 +98,7 @@ void deform_big_mesh(benchmark::State& state, BuildOptions options, bool force_r
     MeshData sphere = make_sphere(1.0f, 1000);
     const std::vector<Vec3> base = sphere.positions;
     EditBatch b;
-    b.edits.emplace_back(mesh_edit("big", std::move(sphere), options));
+    b.edits.emplace_back(add_mesh_edit("big", std::move(sphere), options));
     AddInstance inst;
     inst.id = "big";
     inst.mesh = "big";

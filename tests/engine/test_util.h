@@ -15,12 +15,7 @@
 namespace strata::test {
 
 inline AddMesh mesh_edit(const std::string& id, MeshData data, BuildOptions build = {}) {
-    AddMesh e;
-    e.id = id;
-    e.positions = std::move(data.positions);
-    e.triangles = std::move(data.triangles);
-    e.build = build;
-    return e;
+    return add_mesh_edit(id, std::move(data), build);
 }
 
 inline AddInstance instance_edit(const std::string& id, const std::string& mesh, Vec3 at = Vec3(0.0f)) {
