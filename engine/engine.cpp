@@ -7,26 +7,28 @@ namespace strata {
 
 Result<std::unique_ptr<Engine>> Engine::create(const EngineConfig& config) {
     auto accel = AccelGraph::create(config.accel);
-    if (!accel) return accel.error();
+    if (!accel) return Unexpected(accel.error());
     return std::unique_ptr<Engine>(new Engine(std::move(accel.value())));
 }
 
-Result<ApplyResult> Engine::apply(EditBatch&& batch) { return apply(std::move(batch), std::nullopt); }
+Result<ApplyResult> Engine::apply(EditBatch&& batch) {
+    return apply(std::move(batch), std::nullopt);
+}
 
 Result<ApplyResult> Engine::apply(EditBatch&& batch, std::optional<uint64_t> expected_version) {
     const std::size_t count = batch.edits.size();
     Result<uint64_t> version = [&]() -> Result<uint64_t> {
         std::unique_lock lock(m_scene_mutex);
         if (expected_version && *expected_version != m_scene.version())
-            return make_error(ErrorCode::VersionMismatch,
-                              "the scene is at version " + std::to_string(m_scene.version()) +
-                                  ", not " + std::to_string(*expected_version));
+            return failure(ErrorCode::VersionMismatch,
+                           "the scene is at version " + std::to_string(m_scene.version()) +
+                               ", not " + std::to_string(*expected_version));
         return m_scene.apply(std::move(batch));
     }();
     std::lock_guard stats(m_stats_mutex);
     if (!version) {
         ++m_counters.batches_rejected;
-        return version.error();
+        return Unexpected(version.error());
     }
     ++m_counters.batches_applied;
     m_counters.edits_applied += count;
@@ -50,7 +52,7 @@ Result<RebuildReport> Engine::commit_locked() {
         report.memory_tlas_bytes = m_accel->memory_bytes(MemoryCategory::Tlas);
     } else {
         auto executed = m_accel->execute(m_scene, m_accel->plan(m_scene));
-        if (!executed) return executed.error();
+        if (!executed) return Unexpected(executed.error());
         report = std::move(executed.value());
         Stopwatch sync_clock;
         m_frame.sync(m_scene);
@@ -81,56 +83,44 @@ RebuildReport Engine::plan() const {
     return m_accel->plan(m_scene).report;
 }
 
-Result<PrimaryFrame> Engine::render_primary(const PrimarySettings& settings) {
-    PrimaryFrame out;
-    if (Status s = render_primary(settings, out); !s) return s.error();
+Result<Frame> Engine::render_primary(const PrimarySettings& settings) {
+    Frame out;
+    if (Status s = render_primary(settings, out); !s) return Unexpected(s.error());
     return out;
 }
 
-Status Engine::render_primary(const PrimarySettings& settings, PrimaryFrame& out) {
+Status Engine::render_primary(const PrimarySettings& settings, Frame& out) {
     Stopwatch clock;
-    auto launched = launch([&](const FrameState& state, const TlasStrategy& tlas,
-                               const RebuildReport& report) {
-        strata::render_primary(tlas, state, settings, out.hits);
-        out.report = report;
-        out.version = state.version;
-        return true;
-    });
-    if (!launched) return launched.error();
-    add_rays(out.hits.pixel_count(), clock.ms() / 1000.0);
+    auto launched =
+        launch([&](const FrameState& state, const TlasStrategy& tlas, const RebuildReport& report) {
+            strata::render_primary(tlas, state, settings, out.buffers);
+            out.info = FrameInfo{state.version, report, 1, 1, out.buffers.pixel_count(), 0.0};
+            return true;
+        });
+    if (!launched) return Unexpected(launched.error());
+    out.info.render_ms = clock.ms();
+    add_rays(out.info.rays, out.info.render_ms / 1000.0);
     return {};
 }
 
-Result<RenderedFrame> Engine::render_frame(const RenderRequest& request) {
-    if (Status s = check_render_request(request); !s) return s.error();
+Result<Frame> Engine::render_frame(const RenderRequest& request) {
+    if (Status s = check_render_request(request); !s) return Unexpected(s.error());
     auto frame = launch([&](const FrameState& state, const TlasStrategy& tlas,
-                            const RebuildReport& report) -> Result<RenderedFrame> {
+                            const RebuildReport& report) -> Result<Frame> {
         auto rendered = m_renderer.render(tlas, state, request);
-        if (rendered) rendered.value().report = report;
+        if (rendered) rendered->info.report = report;
         return rendered;
     });
-    if (!frame) return frame.error();
-    if (!frame.value()) return frame.value().error();
-    add_rays(frame.value().value().rays, frame.value().value().render_ms / 1000.0);
-    return std::move(frame.value().value());
+    if (frame) add_rays(frame->info.rays, frame->info.render_ms / 1000.0);
+    return frame;
 }
 
-Result<RenderedImage> Engine::render(const RenderRequest& request) {
+Result<EncodedFrame> Engine::render(const RenderRequest& request) {
     auto frame = render_frame(request);
-    if (!frame) return frame.error();
-    Stopwatch encode_clock;
-    auto encoded = encode_frame(frame.value().buffers, request);
-    if (!encoded) return encoded.error();
-    RenderedImage image;
-    image.bytes = std::move(encoded.value().bytes);
-    image.content_type = std::move(encoded.value().content_type);
-    image.version = frame.value().version;
-    image.report = std::move(frame.value().report);
-    image.samples = frame.value().samples;
-    image.rays = frame.value().rays;
-    image.render_ms = frame.value().render_ms;
-    image.encode_ms = encode_clock.ms();
-    return image;
+    if (!frame) return Unexpected(frame.error());
+    auto encoded = encode_frame(frame->buffers, request);
+    if (encoded) encoded->info = std::move(frame->info);
+    return encoded;
 }
 
 void Engine::add_rays(uint64_t rays, double seconds) {

@@ -19,6 +19,8 @@
 #include <utility>
 
 #include "engine/accel/accel_graph.h"
+#include "engine/counters.h"
+#include "engine/render/frame.h"
 #include "engine/render/frame_state.h"
 #include "engine/render/primary.h"
 #include "engine/render/render_request.h"
@@ -34,13 +36,6 @@ struct EngineConfig {
 struct ApplyResult {
     uint64_t version = 0;
     std::size_t applied = 0;
-};
-
-/// A rendered frame's primary hits with the report of the commit the launch ran.
-struct PrimaryFrame {
-    HitBuffers hits;
-    RebuildReport report;
-    uint64_t version = 0;
 };
 
 class Engine {
@@ -63,28 +58,32 @@ public:
 
     /// Commits, renders and encodes one frame (PNG or EXR, see frame_encode.h). Encoding runs
     /// after the launch, so it does not hold up other launches.
-    Result<RenderedImage> render(const RenderRequest& request);
+    Result<EncodedFrame> render(const RenderRequest& request);
 
     /// Commits and renders one frame's linear buffers: what render() encodes.
-    Result<RenderedFrame> render_frame(const RenderRequest& request);
+    Result<Frame> render_frame(const RenderRequest& request);
 
-    /// Commits, then traces one primary ray per pixel.
-    Result<PrimaryFrame> render_primary(const PrimarySettings& settings);
-    /// The same into `out`, whose buffers are reused when they already have the frame's size
-    /// (no allocation, no page faults: for callers that trace many frames).
-    Status render_primary(const PrimarySettings& settings, PrimaryFrame& out);
+    /// Commits, then traces one primary ray per pixel (primary.h) into `out`, whose buffers are
+    /// reused when they already have the frame's size (no allocation, no page faults: for callers
+    /// that trace many frames).
+    Status render_primary(const PrimarySettings& settings, Frame& out);
+    /// The same into a new Frame.
+    Result<Frame> render_primary(const PrimarySettings& settings);
 
     /// Runs `f(const FrameState&, const TlasStrategy&, const RebuildReport&)` after a commit, with
-    /// launches serialised: the hook the renderer uses to trace one consistent version.
+    /// launches serialised: the hook the renderer uses to trace one consistent version. When `f`
+    /// itself returns a Result, that Result is the answer (a commit error and `f`'s error come
+    /// back the same way, never nested).
     template <class F>
-    auto launch(F&& f) -> Result<decltype(f(std::declval<const FrameState&>(),
-                                            std::declval<const TlasStrategy&>(),
-                                            std::declval<const RebuildReport&>()))> {
+    auto launch(F&& f) {
+        using R = decltype(f(std::declval<const FrameState&>(), std::declval<const TlasStrategy&>(),
+                             std::declval<const RebuildReport&>()));
+        using Out = std::conditional_t<is_expected_v<R>, R, Result<R>>;
         std::lock_guard launch_lock(m_launch_mutex);
         auto report = commit_locked();
-        if (!report) return report.error();
-        auto result = f(m_frame, m_accel->tlas(), report.value());
-        if (Status s = m_accel->device_status("tracing"); !s) return s.error();
+        if (!report) return Out(Unexpected(std::move(report).error()));
+        Out result = f(m_frame, m_accel->tlas(), report.value());
+        if (Status s = m_accel->device_status("tracing"); !s) return Out(Unexpected(s.error()));
         return result;
     }
 

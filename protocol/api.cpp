@@ -41,16 +41,16 @@ ApiResponse render(Engine& engine, const RenderRequest& request, const ApiLimits
     // A camera override's missing fields come from the camera of the version the launch renders.
     auto image = engine.render(request);
     if (!image) return problem_response(problem_from(image.error()));
-    RenderedImage& frame = image.value();
+    EncodedFrame& frame = image.value();
     ApiResponse r;
     r.status = 200;
-    r.content_type = frame.content_type;
-    r.body.assign(reinterpret_cast<const char*>(frame.bytes.data()), frame.bytes.size());
-    r.headers = {{"ETag", etag(frame.version)},
-                 {"X-Strata-Rebuild", frame.report.summary()},
-                 {"X-Strata-Samples", std::to_string(frame.samples)},
+    r.content_type = std::move(frame.content_type);
+    r.body = std::move(frame.bytes);
+    r.headers = {{"ETag", etag(frame.info.version)},
+                 {"X-Strata-Rebuild", frame.info.report.summary()},
+                 {"X-Strata-Samples", std::to_string(frame.info.samples)},
                  {"Cache-Control", "no-store"}};
-    r.commit = std::move(frame.report);
+    r.commit = std::move(frame.info.report);
     return r;
 }
 

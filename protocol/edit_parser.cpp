@@ -231,16 +231,16 @@ const std::vector<std::string_view>& edit_op_names() {
 Parsed<ParsedBatch> parse_edit_batch(const Json& body) {
     ParsedBatch out;
     try {
-        if (auto value_error = parse_into(body, out)) return std::move(*value_error);
+        if (auto value_error = parse_into(body, out)) return Unexpected(std::move(*value_error));
     } catch (const RequestFailure& f) {
-        return f.error();
+        return Unexpected(f.error());
     }
     return out;
 }
 
 Parsed<ParsedBatch> parse_edit_batch(std::string_view text, const JsonLimits& limits) {
     auto doc = parse_json(text, limits);
-    if (!doc) return doc.error();
+    if (!doc) return Unexpected(doc.error());
     return parse_edit_batch(doc.value());
 }
 

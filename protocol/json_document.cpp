@@ -420,7 +420,7 @@ private:
 Parsed<Json> parse_json(std::string_view text, const JsonLimits& limits) {
     Reader reader(text, limits);
     if (auto root = reader.document()) return std::move(*root);
-    return reader.take_error();
+    return Unexpected(reader.take_error());
 }
 
 bool is_packed_numbers(const Json& v) {

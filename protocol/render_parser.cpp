@@ -94,10 +94,10 @@ Parsed<RenderRequest> parse_render_body(const Json& body) {
     FieldReader r;
     try {
         RenderRequest q = read_render(r, body);
-        if (r.value_error()) return *r.value_error();
+        if (r.value_error()) return Unexpected(*r.value_error());
         return q;
     } catch (const RequestFailure& f) {
-        return f.error();
+        return Unexpected(f.error());
     }
 }
 
@@ -110,7 +110,7 @@ Parsed<RenderRequest> parse_render_query(const std::multimap<std::string, std::s
             RequestError e;
             e.message = "query parameter '" + key + "' is given more than once";
             e.pointer = camera ? "/camera/" + key : "/" + escape_pointer_token(key);
-            return e;
+            return Unexpected(e);
         }
         if (key == "aovs") {
             slot = text.empty() ? Json::array() : list_from_text(text, false);

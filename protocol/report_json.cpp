@@ -44,14 +44,15 @@ Json report_to_json(const RebuildReport& r) {
 }
 
 Json counters_to_json(const EngineCounters& c) {
-    return {{"batches_applied", c.batches_applied},   {"batches_rejected", c.batches_rejected},
-            {"edits_applied", c.edits_applied},       {"commits", c.commits},
-            {"noop_commits", c.noop_commits},         {"blas_rebuilds", c.blas_rebuilds},
-            {"blas_refits", c.blas_refits},           {"tlas_updates", c.tlas_updates},
-            {"tlas_rebuilds", c.tlas_rebuilds},       {"primitives_built", c.primitives_built},
-            {"primitives_refit", c.primitives_refit}, {"renders", c.renders},
-            {"rays_traced", c.rays_traced},           {"commit_seconds", c.commit_seconds},
-            {"render_seconds", c.render_seconds}};
+    Json j = Json::object();
+    for (const CounterSpec& spec : ENGINE_COUNTERS) {
+        if (spec.unit == CounterUnit::Count) {
+            j[std::string(spec.name)] = c.*spec.count;
+        } else {
+            j[std::string(spec.name)] = spec.value(c);
+        }
+    }
+    return j;
 }
 
 }  // namespace strata::protocol

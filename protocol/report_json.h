@@ -2,6 +2,7 @@
 // Engine results as JSON: rebuild reports (commit, plan, stats) and cumulative counters.
 
 #include "engine/accel/report.h"
+#include "engine/counters.h"
 #include "protocol/json_document.h"
 
 namespace strata::protocol {

@@ -7,7 +7,6 @@
 #include <exception>
 #include <string>
 #include <utility>
-#include <variant>
 
 #include "engine/core/result.h"
 
@@ -30,23 +29,9 @@ struct RequestError {
     std::size_t edit_index = Error::NO_INDEX;
 };
 
-/// Either a parsed value or a RequestError (the protocol's counterpart of Result).
+/// Either a parsed value or a RequestError.
 template <class T>
-class Parsed {
-public:
-    Parsed(T value) : m_v(std::move(value)) {}             // NOLINT: implicit by design
-    Parsed(RequestError error) : m_v(std::move(error)) {}  // NOLINT: implicit by design
-
-    bool ok() const { return m_v.index() == 0; }
-    explicit operator bool() const { return ok(); }
-    T& value() & { return std::get<0>(m_v); }
-    const T& value() const& { return std::get<0>(m_v); }
-    T&& value() && { return std::get<0>(std::move(m_v)); }
-    const RequestError& error() const { return std::get<1>(m_v); }
-
-private:
-    std::variant<T, RequestError> m_v;
-};
+using Parsed = Expected<T, RequestError>;
 
 /// Thrown inside the parsers only, so that deeply nested readers stay short; every public parse
 /// function catches it and returns the RequestError as a value.

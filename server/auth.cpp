@@ -10,21 +10,20 @@ namespace strata::server {
 Result<std::string> parse_token(std::string_view text, const std::string& source) {
     const auto first = text.find_first_not_of(" \t\r\n");
     if (first == std::string_view::npos)
-        return make_error(ErrorCode::InvalidArgument, source + " is empty");
+        return failure(ErrorCode::InvalidArgument, source + " is empty");
     const auto last = text.find_last_not_of(" \t\r\n");
     std::string token(text.substr(first, last - first + 1));
     for (unsigned char c : token) {
         if (c < 0x21 || c > 0x7E)
-            return make_error(
-                ErrorCode::InvalidArgument,
-                source + " holds whitespace or non-ASCII characters inside the token");
+            return failure(ErrorCode::InvalidArgument,
+                           source + " holds whitespace or non-ASCII characters inside the token");
     }
     return token;
 }
 
 Result<std::string> read_token_file(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
-    if (!in) return make_error(ErrorCode::InvalidArgument, "cannot read token file '" + path + "'");
+    if (!in) return failure(ErrorCode::InvalidArgument, "cannot read token file '" + path + "'");
     std::ostringstream text;
     text << in.rdbuf();
     return parse_token(text.str(), "token file '" + path + "'");

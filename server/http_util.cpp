@@ -12,10 +12,12 @@ void send_problem(httplib::Response& res, const protocol::Problem& problem) {
     send(res, protocol::problem_response(problem));
 }
 
-void send(httplib::Response& res, const protocol::ApiResponse& answer) {
+void send(httplib::Response& res, protocol::ApiResponse&& answer) {
     res.status = answer.status;
     for (const auto& [name, value] : answer.headers) res.set_header(name, value);
-    res.set_content(answer.body, answer.content_type);
+    // What Response::set_content does, without copying the body.
+    res.body = std::move(answer.body);
+    res.set_header("Content-Type", answer.content_type);
 }
 
 void answer_unhandled_exception(const httplib::Request& req, httplib::Response& res,

@@ -73,29 +73,10 @@ std::string ServerMetrics::prometheus_text(const Engine& engine) const {
     const EngineCounters c = engine.counters();
     std::string out;
     out.reserve(8192);
-    struct Counter {
-        const char* name;
-        const char* help;
-        uint64_t value;
-    };
-    const Counter counters[] = {
-        {"strata_batches_applied_total", "Edit batches applied.", c.batches_applied},
-        {"strata_batches_rejected_total", "Edit batches refused (invalid or version mismatch).",
-         c.batches_rejected},
-        {"strata_edits_applied_total", "Edits applied.", c.edits_applied},
-        {"strata_commits_total", "Commits run (explicit and before renders).", c.commits},
-        {"strata_noop_commits_total", "Commits that found no acceleration-structure work.",
-         c.noop_commits},
-        {"strata_blas_rebuilds_total", "BLAS builds.", c.blas_rebuilds},
-        {"strata_blas_refits_total", "BLAS refits.", c.blas_refits},
-        {"strata_tlas_updates_total", "TLAS updates.", c.tlas_updates},
-        {"strata_tlas_rebuilds_total", "TLAS rebuilds.", c.tlas_rebuilds},
-        {"strata_primitives_built_total", "Triangles built into BLASes.", c.primitives_built},
-        {"strata_primitives_refit_total", "Triangles refit in BLASes.", c.primitives_refit},
-        {"strata_renders_total", "Frames rendered.", c.renders},
-        {"strata_rays_traced_total", "Primary rays traced.", c.rays_traced},
-    };
-    for (const Counter& k : counters) metric(out, k.name, "counter", k.help, double(k.value));
+    for (const CounterSpec& spec : ENGINE_COUNTERS) {
+        const std::string name = "strata_" + std::string(spec.name) + "_total";
+        metric(out, name.c_str(), "counter", std::string(spec.help).c_str(), spec.value(c));
+    }
 
     header(out, "strata_http_responses_total", "counter", "HTTP responses by status class.");
     for (std::size_t i = 0; i < m_responses.size(); ++i) {

@@ -21,7 +21,7 @@ void respond(ServerContext& ctx, httplib::Response& res, protocol::ApiResponse&&
         ctx.metrics.commit_seconds.observe(answer.commit->phases.total_ms / 1000.0);
         spdlog::info("commit ({}) {}", cause, answer.commit->summary());
     }
-    send(res, answer);
+    send(res, std::move(answer));
 }
 
 /// Renders with `render`, observing the duration of successful renders (commit, tracing and

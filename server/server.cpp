@@ -144,8 +144,8 @@ Result<int> Server::bind() {
             ? m_http->bind_to_any_port(m_config.host)
             : (m_http->bind_to_port(m_config.host, m_config.port) ? m_config.port : -1);
     if (port < 0)
-        return make_error(ErrorCode::InvalidArgument, "cannot listen on " + m_config.host + ":" +
-                                                          std::to_string(m_config.port));
+        return failure(ErrorCode::InvalidArgument,
+                       "cannot listen on " + m_config.host + ":" + std::to_string(m_config.port));
     m_port = port;
     return port;
 }

@@ -1,7 +1,7 @@
 # Layering check (run by CTest): the engine includes no HTTP or JSON header, and only the files
 # of the acceleration layer include Embree; clients/ speaks HTTP only, except the embedded
 # transport of `strata play --embedded`, the one file that may include the engine and the
-# protocol layer. Usage: cmake -DROOT=<repo> -P check_layering.cmake
+# protocol layer (every client file may include the shared header-only vocabulary below). Usage: cmake -DROOT=<repo> -P check_layering.cmake
 cmake_minimum_required(VERSION 3.25)
 set(EMBREE_ALLOWED
     engine/accel/embree_device.cpp
@@ -20,12 +20,22 @@ foreach(f IN LISTS ENGINE_FILES)
 endforeach()
 set(EMBEDDED_ALLOWED
     clients/cli/embedded_transport.cpp)
+# Header-only vocabulary with no engine behaviour, shared by every layer: the one value-or-error
+# type (and the invariant check it uses).
+set(SHARED_HEADERS engine/core/expected.h engine/core/check.h)
 file(GLOB_RECURSE CLIENT_FILES RELATIVE "${ROOT}" "${ROOT}/clients/*.h" "${ROOT}/clients/*.cpp")
 foreach(f IN LISTS CLIENT_FILES)
     file(READ "${ROOT}/${f}" text)
-    if(text MATCHES "#include[ \t]*[<\"](engine|protocol|server)/" AND NOT f IN_LIST EMBEDDED_ALLOWED)
-        string(APPEND problems "  ${f} includes the engine, protocol or server layer\n")
+    if(f IN_LIST EMBEDDED_ALLOWED)
+        continue()
     endif()
+    string(REGEX MATCHALL "#include[ \t]*[<\"](engine|protocol|server)/[^>\"]*" includes "${text}")
+    foreach(inc IN LISTS includes)
+        string(REGEX REPLACE "^#include[ \t]*[<\"]" "" header "${inc}")
+        if(NOT header IN_LIST SHARED_HEADERS)
+            string(APPEND problems "  ${f} includes ${header} (engine, protocol or server layer)\n")
+        endif()
+    endforeach()
 endforeach()
 if(problems)
     message(FATAL_ERROR "layering violations:\n${problems}")

@@ -25,10 +25,12 @@ Reply to_reply(protocol::ApiResponse&& r) {
 
 Outcome<std::unique_ptr<EmbeddedTransport>> EmbeddedTransport::create(bool demo) {
     auto engine = Engine::create();
-    if (!engine) return Failure{"cannot start the engine: " + engine.error().describe()};
+    if (!engine)
+        return Unexpected(Failure{"cannot start the engine: " + engine.error().describe()});
     if (demo) {
         auto applied = engine.value()->apply(make_demo_scene());
-        if (!applied) return Failure{"demo scene rejected: " + applied.error().describe()};
+        if (!applied)
+            return Unexpected(Failure{"demo scene rejected: " + applied.error().describe()});
     }
     return std::unique_ptr<EmbeddedTransport>(new EmbeddedTransport(std::move(engine.value())));
 }

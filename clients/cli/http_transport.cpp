@@ -32,18 +32,19 @@ Outcome<std::string> check_url(const std::string& url) {
     const std::size_t scheme_end = url.find("://");
     const std::string scheme = scheme_end == std::string::npos ? "" : url.substr(0, scheme_end);
     if (scheme != "http" && scheme != "https")
-        return Failure{"server URL '" + url + "' must start with http:// or https://"};
+        return Unexpected(Failure{"server URL '" + url + "' must start with http:// or https://"});
     std::string rest = url.substr(scheme_end + 3);
     if (!rest.empty() && rest.back() == '/') rest.pop_back();
-    if (rest.empty()) return Failure{"server URL '" + url + "' has no host"};
+    if (rest.empty()) return Unexpected(Failure{"server URL '" + url + "' has no host"});
     if (rest.find_first_of("/?#@") != std::string::npos)
-        return Failure{"server URL '" + url + "' must be scheme://host[:port], without a path"};
+        return Unexpected(
+            Failure{"server URL '" + url + "' must be scheme://host[:port], without a path"});
     const std::size_t colon = rest.rfind(':');
     if (colon != std::string::npos && rest.find(']') == std::string::npos) {
         const std::string port = rest.substr(colon + 1);
         bool digits = !port.empty() && port.size() <= 5;
         for (char c : port) digits = digits && std::isdigit(static_cast<unsigned char>(c));
-        if (!digits) return Failure{"server URL '" + url + "' has a malformed port"};
+        if (!digits) return Unexpected(Failure{"server URL '" + url + "' has a malformed port"});
     }
     return scheme + "://" + rest;
 }
@@ -65,9 +66,10 @@ Reply to_reply(const httplib::Result& r, const std::string& url) {
 
 Outcome<std::unique_ptr<HttpTransport>> HttpTransport::create(const HttpOptions& options) {
     auto url = check_url(options.url);
-    if (!url) return url.error();
+    if (!url) return Unexpected(url.error());
     auto client = std::make_unique<httplib::Client>(url.value());
-    if (!client->is_valid()) return Failure{"cannot use server URL '" + options.url + "'"};
+    if (!client->is_valid())
+        return Unexpected(Failure{"cannot use server URL '" + options.url + "'"});
     client->set_keep_alive(true);
     // Headers and body go out in separate writes: without TCP_NODELAY, Nagle's algorithm and the
     // server's delayed ACK add ~40 ms to every request with a body.

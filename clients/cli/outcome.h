@@ -5,9 +5,13 @@
 #include <cstddef>
 #include <string>
 #include <utility>
-#include <variant>
+
+#include "engine/core/expected.h"
 
 namespace strata::cli {
+
+using strata::Expected;
+using strata::Unexpected;
 
 /// What went wrong. `line` is the 1-based script line the failure belongs to (0: none).
 struct Failure {
@@ -22,21 +26,7 @@ struct Failure {
 
 /// Either a value or a Failure.
 template <class T>
-class Outcome {
-public:
-    Outcome(T value) : m_v(std::move(value)) {}        // NOLINT: implicit by design
-    Outcome(Failure error) : m_v(std::move(error)) {}  // NOLINT: implicit by design
-
-    bool ok() const { return m_v.index() == 0; }
-    explicit operator bool() const { return ok(); }
-    T& value() & { return std::get<0>(m_v); }
-    const T& value() const& { return std::get<0>(m_v); }
-    T&& value() && { return std::get<0>(std::move(m_v)); }
-    const Failure& error() const { return std::get<1>(m_v); }
-
-private:
-    std::variant<T, Failure> m_v;
-};
+using Outcome = Expected<T, Failure>;
 
 /// Thrown inside the recursive readers of scripts only (templates, steps), so that nested code
 /// stays short; every public function catches it and returns the Failure as a value.

@@ -43,11 +43,11 @@ Outcome<Expression> compile_number(const Json& v, const std::string& field,
     if (v.is_number()) return Expression::constant(v.get<double>());
     if (v.is_string()) {
         auto t = StringTemplate::compile(v.get<std::string>(), names);
-        if (!t) return Failure{"expect." + field + ": " + t.error().message};
+        if (!t) return Unexpected(Failure{"expect." + field + ": " + t.error().message});
         if (t.value().is_number()) return t.value().expression();
     }
-    return Failure{"expect." + field + ": expected a number or one \"{expression}\", got " +
-                   v.dump()};
+    return Unexpected(Failure{"expect." + field +
+                              ": expected a number or one \"{expression}\", got " + v.dump()});
 }
 
 Outcome<CountExpectation> compile_count(const Json& v, const std::string& field,
@@ -55,16 +55,17 @@ Outcome<CountExpectation> compile_count(const Json& v, const std::string& field,
     CountExpectation c;
     if (!v.is_object()) {
         auto e = compile_number(v, field, names);
-        if (!e) return e.error();
+        if (!e) return Unexpected(e.error());
         c.exact = std::move(e.value());
         return c;
     }
-    if (auto bad = check_members(v, "expect." + field, {"min", "max"})) return *bad;
-    if (v.empty()) return Failure{"expect." + field + ": give \"min\", \"max\" or both"};
+    if (auto bad = check_members(v, "expect." + field, {"min", "max"})) return Unexpected(*bad);
+    if (v.empty())
+        return Unexpected(Failure{"expect." + field + ": give \"min\", \"max\" or both"});
     for (const char* bound : {"min", "max"}) {
         if (!v.contains(bound)) continue;
         auto e = compile_number(v[bound], field + "." + bound, names);
-        if (!e) return e.error();
+        if (!e) return Unexpected(e.error());
         (std::string(bound) == "min" ? c.min : c.max) = std::move(e.value());
     }
     return c;
@@ -82,8 +83,9 @@ Outcome<MeshSetExpectation> compile_meshes(const Json& v, const std::string& fie
     if (v.is_array()) {
         for (const Json& id : v) {
             if (!id.is_string())
-                return Failure{"expect." + field + ": mesh ids are strings, got " + id.dump()};
-            if (auto bad = add_id(id.get<std::string>())) return *bad;
+                return Unexpected(
+                    Failure{"expect." + field + ": mesh ids are strings, got " + id.dump()});
+            if (auto bad = add_id(id.get<std::string>())) return Unexpected(*bad);
         }
         return m;
     }
@@ -91,14 +93,14 @@ Outcome<MeshSetExpectation> compile_meshes(const Json& v, const std::string& fie
                                               : field == "refit" ? &REFIT_REASONS
                                                                  : nullptr;
     if (!v.is_object() || !reasons)
-        return Failure{"expect." + field + ": expected an array of mesh ids" +
-                       std::string(reasons ? " or an object {mesh id: reason}" : "")};
+        return Unexpected(Failure{"expect." + field + ": expected an array of mesh ids" +
+                                  std::string(reasons ? " or an object {mesh id: reason}" : "")});
     m.with_reasons = true;
     for (const auto& [id, reason] : v.items()) {
         if (!reason.is_string() || !contains(*reasons, reason.get<std::string>()))
-            return Failure{"expect." + field + "." + id + ": expected one of " +
-                           quoted_list(*reasons) + ", got " + reason.dump()};
-        if (auto bad = add_id(id)) return *bad;
+            return Unexpected(Failure{"expect." + field + "." + id + ": expected one of " +
+                                      quoted_list(*reasons) + ", got " + reason.dump()});
+        if (auto bad = add_id(id)) return Unexpected(*bad);
         m.reasons.push_back(reason.get<std::string>());
     }
     return m;
@@ -170,36 +172,36 @@ Outcome<Expectation> Expectation::compile(const Json& v, const std::vector<std::
     std::vector<std::string> allowed = {"tlas",     "rebuilt", "refit",
                                         "released", "max_ms",  "max_primitives_built"};
     for (const CountSource& c : COUNT_FIELDS) allowed.push_back(c.name);
-    if (auto bad = check_members(v, "\"expect\"", allowed)) return *bad;
+    if (auto bad = check_members(v, "\"expect\"", allowed)) return Unexpected(*bad);
     Expectation e;
     for (const CountSource& c : COUNT_FIELDS) {
         if (!v.contains(c.name)) continue;
         auto count = compile_count(v[c.name], c.name, names);
-        if (!count) return count.error();
+        if (!count) return Unexpected(count.error());
         e.m_counts.push_back({c.name, std::move(count.value())});
     }
     if (v.contains("tlas")) {
         const Json& t = v["tlas"];
         if (!t.is_string() || !contains(TLAS_ACTIONS, t.get<std::string>()))
-            return Failure{"expect.tlas: expected one of " + quoted_list(TLAS_ACTIONS) + ", got " +
-                           t.dump()};
+            return Unexpected(Failure{"expect.tlas: expected one of " + quoted_list(TLAS_ACTIONS) +
+                                      ", got " + t.dump()});
         e.m_tlas = t.get<std::string>();
     }
     for (const char* field : {"rebuilt", "refit", "released"}) {
         if (!v.contains(field)) continue;
         auto m = compile_meshes(v[field], field, names);
-        if (!m) return m.error();
+        if (!m) return Unexpected(m.error());
         e.m_meshes.push_back({field, std::move(m.value())});
     }
     if (v.contains("max_ms")) {
-        if (!has_time) return Failure{"expect.max_ms: a plan takes no time to check"};
+        if (!has_time) return Unexpected(Failure{"expect.max_ms: a plan takes no time to check"});
         auto x = compile_number(v["max_ms"], "max_ms", names);
-        if (!x) return x.error();
+        if (!x) return Unexpected(x.error());
         e.m_max_ms = std::move(x.value());
     }
     if (v.contains("max_primitives_built")) {
         auto x = compile_number(v["max_primitives_built"], "max_primitives_built", names);
-        if (!x) return x.error();
+        if (!x) return Unexpected(x.error());
         e.m_max_primitives_built = std::move(x.value());
     }
     return e;
@@ -209,7 +211,9 @@ std::size_t Expectation::count_checks() const {
     return m_counts.size() + m_meshes.size() + (m_tlas ? 1 : 0) + (m_max_primitives_built ? 1 : 0);
 }
 
-std::size_t Expectation::count_budgets() const { return m_max_ms ? 1 : 0; }
+std::size_t Expectation::count_budgets() const {
+    return m_max_ms ? 1 : 0;
+}
 
 Outcome<std::vector<Mismatch>> Expectation::check(const Json& report, const Bindings& vars,
                                                   bool budgets) const {
@@ -222,7 +226,7 @@ Outcome<std::vector<Mismatch>> Expectation::check(const Json& report, const Bind
         for (const CountSource& c : COUNT_FIELDS) src = f.name == c.name ? &c : src;
         std::optional<double> lo, hi;
         const std::string expected = describe_count(f.expect, vars, lo, hi, error);
-        if (error) return *error;
+        if (error) return Unexpected(*error);
         const std::optional<double> actual = number_at(report, src->parent, src->member);
         if (!actual) {
             out.push_back({f.name, expected, "(absent)", "the report has no such member"});
@@ -244,7 +248,7 @@ Outcome<std::vector<Mismatch>> Expectation::check(const Json& report, const Bind
         std::map<std::string, std::string> expected;
         for (std::size_t i = 0; i < f.expect.ids.size(); ++i) {
             auto id = f.expect.ids[i].render(vars);
-            if (!id) return id.error();
+            if (!id) return Unexpected(id.error());
             expected[id.value()] = f.expect.with_reasons ? f.expect.reasons[i] : "";
         }
         const auto actual = report_meshes(report, f.name, f.expect.with_reasons);
@@ -286,10 +290,10 @@ Outcome<std::vector<Mismatch>> Expectation::check(const Json& report, const Bind
             return std::nullopt;
         };
         if (budgets) {
-            if (auto e = budget(m_max_ms, "max_ms", "ms")) return *e;
+            if (auto e = budget(m_max_ms, "max_ms", "ms")) return Unexpected(*e);
         }
         if (auto e = budget(m_max_primitives_built, "max_primitives_built", "primitives_built"))
-            return *e;
+            return Unexpected(*e);
     }
     return out;
 }

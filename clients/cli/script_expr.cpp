@@ -303,7 +303,7 @@ Outcome<Expression> Expression::compile(std::string_view text,
         e.m_text = std::string(text);
         return e;
     } catch (const ParseError& err) {
-        return Failure{"bad expression '" + std::string(text) + "': " + err.message};
+        return Unexpected(Failure{"bad expression '" + std::string(text) + "': " + err.message});
     }
 }
 
@@ -319,12 +319,14 @@ Outcome<double> Expression::evaluate(const Bindings& vars) const {
     try {
         const double v = eval(*m_root, vars);
         if (!std::isfinite(v))
-            return Failure{"expression '" + m_text + "' is not finite (" +
-                           (vars.empty() ? std::string("no bindings") : vars.describe()) + ")"};
+            return Unexpected(
+                Failure{"expression '" + m_text + "' is not finite (" +
+                        (vars.empty() ? std::string("no bindings") : vars.describe()) + ")"});
         return v;
     } catch (const EvalError& err) {
-        return Failure{"expression '" + m_text + "': " + err.message + " (" +
-                       (vars.empty() ? std::string("no bindings") : vars.describe()) + ")"};
+        return Unexpected(Failure{"expression '" + m_text + "': " + err.message + " (" +
+                                  (vars.empty() ? std::string("no bindings") : vars.describe()) +
+                                  ")"});
     }
 }
 

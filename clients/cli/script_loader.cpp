@@ -132,10 +132,10 @@ Outcome<Json> parse_json_strict(const std::string& text) {
     try {
         Json j = Json::parse(text, on_event);
         if (!duplicate.empty())
-            return Failure{"member \"" + duplicate + "\" appears twice in one object"};
+            return Unexpected(Failure{"member \"" + duplicate + "\" appears twice in one object"});
         return j;
     } catch (const Json::exception& e) {
-        return Failure{"not JSON: " + json_message(e.what())};
+        return Unexpected(Failure{"not JSON: " + json_message(e.what())});
     }
 }
 
@@ -150,23 +150,23 @@ Outcome<Script> load_script(std::istream& in, const std::string& name) {
         const std::size_t first = text.find_first_not_of(" \t");
         if (first == std::string::npos || text[first] == '#') continue;
         auto json = parse_json_strict(text);
-        if (!json) return Failure{json.error().message, line};
+        if (!json) return Unexpected(Failure{json.error().message, line});
         try {
             std::vector<std::string> names;
             script.steps.push_back(compile_step(json.value(), line, names));
         } catch (const ScriptFailure& e) {
-            return Failure{e.message, line};
+            return Unexpected(Failure{e.message, line});
         }
     }
-    if (in.bad()) return Failure{"cannot read " + name};
-    if (script.steps.empty()) return Failure{name + " has no steps"};
+    if (in.bad()) return Unexpected(Failure{"cannot read " + name});
+    if (script.steps.empty()) return Unexpected(Failure{name + " has no steps"});
     return script;
 }
 
 Outcome<Script> load_script_file(const std::string& path) {
     if (path == "-") return load_script(std::cin, "-");
     std::ifstream in(path);
-    if (!in) return Failure{"cannot open script '" + path + "'"};
+    if (!in) return Unexpected(Failure{"cannot open script '" + path + "'"});
     return load_script(in, path);
 }
 

@@ -35,14 +35,15 @@ Outcome<StringTemplate> StringTemplate::compile(const std::string& text,
             ++i;
             continue;
         }
-        if (c == '}') return Failure{"unmatched '}' in \"" + text + "\" (write }} for a brace)"};
+        if (c == '}')
+            return Unexpected(Failure{"unmatched '}' in \"" + text + "\" (write }} for a brace)"});
         if (c != '{') {
             literal += c;
             continue;
         }
         const std::size_t close = text.find('}', i + 1);
         if (close == std::string::npos)
-            return Failure{"unclosed '{' in \"" + text + "\" (write {{ for a brace)"};
+            return Unexpected(Failure{"unclosed '{' in \"" + text + "\" (write {{ for a brace)"});
         std::string_view inner = std::string_view(text).substr(i + 1, close - i - 1);
         // "{expr:4}": the value zero-padded to 4 characters (frame numbers that sort).
         std::size_t width = 0;
@@ -52,12 +53,12 @@ Outcome<StringTemplate> StringTemplate::compile(const std::string& text,
                 std::from_chars(digits.data(), digits.data() + digits.size(), width);
             if (digits.empty() || ec != std::errc() || end != digits.data() + digits.size() ||
                 width > 32)
-                return Failure{"bad width '" + std::string(digits) + "' in \"" + text +
-                               "\" (write {expr:4} to zero-pad to 4 characters)"};
+                return Unexpected(Failure{"bad width '" + std::string(digits) + "' in \"" + text +
+                                          "\" (write {expr:4} to zero-pad to 4 characters)"});
             inner = inner.substr(0, colon);
         }
         auto expr = Expression::compile(inner, names_in_scope);
-        if (!expr) return Failure{expr.error().message + " in \"" + text + "\""};
+        if (!expr) return Unexpected(Failure{expr.error().message + " in \"" + text + "\""});
         flush();
         t.m_parts.push_back({{}, std::move(expr.value()), true, width});
         i = close;
@@ -75,7 +76,7 @@ Outcome<std::string> StringTemplate::render(const Bindings& vars) const {
             continue;
         }
         auto v = p.expr.evaluate(vars);
-        if (!v) return v.error();
+        if (!v) return Unexpected(v.error());
         std::string number = format_number(v.value());
         if (number.size() < p.width) {
             // Zeros go after a sign: -7 padded to 4 is -007.
@@ -90,11 +91,11 @@ Outcome<std::string> StringTemplate::render(const Bindings& vars) const {
 Outcome<Json> StringTemplate::instantiate(const Bindings& vars) const {
     if (m_whole) {
         auto v = m_parts.front().expr.evaluate(vars);
-        if (!v) return v.error();
+        if (!v) return Unexpected(v.error());
         return number_json(v.value());
     }
     auto s = render(vars);
-    if (!s) return s.error();
+    if (!s) return Unexpected(s.error());
     return Json(std::move(s.value()));
 }
 
@@ -107,29 +108,29 @@ Outcome<CountTemplate> CountTemplate::compile(const Json& v,
         c.m_expr = Expression::constant(v.get<double>());
     } else if (v.is_string()) {
         auto t = StringTemplate::compile(v.get<std::string>(), names);
-        if (!t) return t.error();
+        if (!t) return Unexpected(t.error());
         if (!t.value().is_number())
-            return Failure{"a repeat count must be a number or one \"{expression}\""};
+            return Unexpected(Failure{"a repeat count must be a number or one \"{expression}\""});
         c.m_expr = t.value().expression();
     } else {
-        return Failure{"a repeat count must be a number or one \"{expression}\", not " +
-                       std::string(v.type_name())};
+        return Unexpected(Failure{"a repeat count must be a number or one \"{expression}\", not " +
+                                  std::string(v.type_name())});
     }
     if (v.is_number()) {
         // Constant counts are checked when the script loads.
         auto n = c.evaluate(Bindings{});
-        if (!n) return n.error();
+        if (!n) return Unexpected(n.error());
     }
     return c;
 }
 
 Outcome<uint64_t> CountTemplate::evaluate(const Bindings& vars) const {
     auto v = m_expr.evaluate(vars);
-    if (!v) return v.error();
+    if (!v) return Unexpected(v.error());
     const double d = v.value();
     if (d < 0 || d != std::floor(d) || d > MAX_REPEAT_COUNT)
-        return Failure{"a repeat count must be a whole number from 0 to " +
-                       format_number(MAX_REPEAT_COUNT) + ", not " + format_number(d)};
+        return Unexpected(Failure{"a repeat count must be a whole number from 0 to " +
+                                  format_number(MAX_REPEAT_COUNT) + ", not " + format_number(d)});
     return static_cast<uint64_t>(d);
 }
 
@@ -266,7 +267,7 @@ Outcome<JsonTemplate> JsonTemplate::compile(const Json& v, const std::vector<std
         t.m_root = std::make_shared<const Node>(compile_node(v, scope));
         return t;
     } catch (const ScriptFailure& e) {
-        return Failure{e.message};
+        return Unexpected(Failure{e.message});
     }
 }
 
@@ -276,7 +277,7 @@ Outcome<Json> JsonTemplate::instantiate(Bindings& vars) const {
         instantiate_into(*m_root, vars, out);
         return out;
     } catch (const ScriptFailure& e) {
-        return Failure{e.message};
+        return Unexpected(Failure{e.message});
     }
 }
 

@@ -6,7 +6,7 @@ namespace strata {
 
 Result<std::unique_ptr<AccelGraph>> AccelGraph::create(const AccelConfig& config) {
     auto device = EmbreeDevice::create(config.embree_config);
-    if (!device) return device.error();
+    if (!device) return Unexpected(device.error());
     return std::unique_ptr<AccelGraph>(new AccelGraph(config, std::move(device.value())));
 }
 
@@ -58,10 +58,11 @@ CommitPlan AccelGraph::plan(const Scene& scene) const {
             entry.reason = BuildReason::RebuildRequested;
         } else {
             metrics = measure_mesh(mesh);
-            const BuildReason asked = (mesh.dirty & dirty::MeshPoints) ? BuildReason::PositionsChanged
-                                                                       : BuildReason::RefitRequested;
-            RefitDecision d = decide_refit(m_config.refit_policy, mesh.build, built->baseline,
-                                           *metrics, asked);
+            const BuildReason asked = (mesh.dirty & dirty::MeshPoints)
+                                          ? BuildReason::PositionsChanged
+                                          : BuildReason::RefitRequested;
+            RefitDecision d =
+                decide_refit(m_config.refit_policy, mesh.build, built->baseline, *metrics, asked);
             rebuild = d.rebuild;
             entry.reason = d.reason;
             entry.detail = std::move(d.detail);
@@ -120,13 +121,14 @@ Result<RebuildReport> AccelGraph::execute(const Scene& scene, CommitPlan&& plan)
             const MeshRecord& mesh = *scene.mesh(plan.rebuild[i]).value();
             const MeshMetrics metrics =
                 plan.rebuild_metrics[i] ? *plan.rebuild_metrics[i] : measure_mesh(mesh);
-            if (Status s = m_blas.build(plan.rebuild[i], mesh, metrics); !s) return s.error();
+            if (Status s = m_blas.build(plan.rebuild[i], mesh, metrics); !s)
+                return Unexpected(s.error());
             report.rebuilt[i].ms = clock.ms();
         }
         for (std::size_t i = 0; i < plan.refit.size(); ++i) {
             Stopwatch clock;
             if (Status s = m_blas.refit(plan.refit[i], *scene.mesh(plan.refit[i]).value()); !s)
-                return s.error();
+                return Unexpected(s.error());
             report.refit[i].ms = clock.ms();
         }
     }
@@ -135,9 +137,9 @@ Result<RebuildReport> AccelGraph::execute(const Scene& scene, CommitPlan&& plan)
     // Step: TLAS work.
     Stopwatch tlas_clock;
     if (report.tlas_action == TlasAction::Rebuild) {
-        if (Status s = m_tlas->rebuild(scene, m_blas); !s) return s.error();
+        if (Status s = m_tlas->rebuild(scene, m_blas); !s) return Unexpected(s.error());
     } else if (report.tlas_action == TlasAction::Update) {
-        if (Status s = m_tlas->update(scene, m_blas, plan.tlas); !s) return s.error();
+        if (Status s = m_tlas->update(scene, m_blas, plan.tlas); !s) return Unexpected(s.error());
     }
     report.phases.tlas_ms = tlas_clock.ms();
     report.tlas_instances = m_tlas->instance_count();

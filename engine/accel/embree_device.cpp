@@ -9,16 +9,16 @@ Result<std::unique_ptr<EmbreeDevice>> EmbreeDevice::create(const std::string& co
     d->m_device = rtcNewDevice(config.empty() ? nullptr : config.c_str());
     if (!d->m_device) {
         const RTCError code = rtcGetDeviceError(nullptr);
-        return make_error(ErrorCode::Internal,
-                          "cannot create the Embree device (error " + std::to_string(int(code)) + ")");
+        return failure(ErrorCode::Internal,
+                       "cannot create the Embree device (error " + std::to_string(int(code)) + ")");
     }
     rtcSetDeviceErrorFunction(
         d->m_device,
         [](void* self, RTCError code, const char* msg) { on_error(self, int(code), msg); },
         d.get());
     rtcSetDeviceMemoryMonitorFunction(
-        d->m_device, [](void* self, ssize_t bytes, bool post) { return on_memory(self, bytes, post); },
-        d.get());
+        d->m_device,
+        [](void* self, ssize_t bytes, bool post) { return on_memory(self, bytes, post); }, d.get());
     return d;
 }
 
@@ -30,9 +30,9 @@ void EmbreeDevice::on_error(void* self, int code, const char* message) {
     auto* d = static_cast<EmbreeDevice*>(self);
     std::lock_guard lock(d->m_error_mutex);
     if (!d->m_error) {
-        d->m_error = make_error(ErrorCode::Internal, std::string("Embree error ") +
-                                                         std::to_string(code) + ": " +
-                                                         (message ? message : "(no message)"));
+        d->m_error =
+            make_error(ErrorCode::Internal, std::string("Embree error ") + std::to_string(code) +
+                                                ": " + (message ? message : "(no message)"));
     }
 }
 
@@ -55,7 +55,7 @@ std::optional<Error> EmbreeDevice::take_error() {
 Status EmbreeDevice::status(const char* what) {
     if (auto e = take_error()) {
         e->message = std::string(what) + ": " + e->message;
-        return *e;
+        return Unexpected(*e);
     }
     return {};
 }

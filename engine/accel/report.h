@@ -1,5 +1,5 @@
 #pragma once
-// What a commit did (or, for a plan, would do), and the cumulative counters since start.
+// What a commit did (or, for a plan, would do). Cumulative counters are in engine/counters.h.
 
 #include <cstdint>
 #include <string>
@@ -36,10 +36,10 @@ struct MeshBuildEntry {
 
 /// Phase wall times of one commit, in milliseconds.
 struct CommitPhases {
-    double plan_ms = 0.0;   ///< dirty-list walk and refit-policy metrics
-    double blas_ms = 0.0;   ///< all BLAS builds, refits and releases
-    double tlas_ms = 0.0;   ///< the TLAS update or rebuild
-    double sync_ms = 0.0;   ///< copying shading data (materials, camera, lights) for launches
+    double plan_ms = 0.0;  ///< dirty-list walk and refit-policy metrics
+    double blas_ms = 0.0;  ///< all BLAS builds, refits and releases
+    double tlas_ms = 0.0;  ///< the TLAS update or rebuild
+    double sync_ms = 0.0;  ///< copying shading data (materials, camera, lights) for launches
     double total_ms = 0.0;
 };
 
@@ -62,29 +62,11 @@ struct RebuildReport {
 
     /// True when the commit did no acceleration-structure work at all.
     bool no_accel_work() const {
-        return tlas_action == TlasAction::None && rebuilt.empty() && refit.empty() && released.empty();
+        return tlas_action == TlasAction::None && rebuilt.empty() && refit.empty() &&
+               released.empty();
     }
     /// One line: "v12 tlas=update(3) rebuilds=1 refits=0 prims=4096 ms=1.25".
     std::string summary() const;
-};
-
-/// Counters since the engine started.
-struct EngineCounters {
-    uint64_t batches_applied = 0;
-    uint64_t batches_rejected = 0;
-    uint64_t edits_applied = 0;
-    uint64_t commits = 0;
-    uint64_t noop_commits = 0;  ///< commits that found nothing to do
-    uint64_t blas_rebuilds = 0;
-    uint64_t blas_refits = 0;
-    uint64_t tlas_updates = 0;
-    uint64_t tlas_rebuilds = 0;
-    uint64_t primitives_built = 0;
-    uint64_t primitives_refit = 0;
-    uint64_t renders = 0;
-    uint64_t rays_traced = 0;
-    double commit_seconds = 0.0;
-    double render_seconds = 0.0;
 };
 
 }  // namespace strata

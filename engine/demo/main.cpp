@@ -43,11 +43,11 @@ int usage(const char* why) {
 void print_report(const char* what, const strata::RebuildReport& r) {
     std::printf("%-34s %s\n", what, r.summary().c_str());
     for (const auto& e : r.rebuilt)
-        std::printf("%36s rebuilt %-8s %-18s %s\n", "", e.mesh.c_str(), strata::build_reason_name(e.reason),
-                    e.detail.c_str());
+        std::printf("%36s rebuilt %-8s %-18s %s\n", "", e.mesh.c_str(),
+                    strata::build_reason_name(e.reason), e.detail.c_str());
     for (const auto& e : r.refit)
-        std::printf("%36s refit   %-8s %-18s %s\n", "", e.mesh.c_str(), strata::build_reason_name(e.reason),
-                    e.detail.c_str());
+        std::printf("%36s refit   %-8s %-18s %s\n", "", e.mesh.c_str(),
+                    strata::build_reason_name(e.reason), e.detail.c_str());
 }
 
 }  // namespace
@@ -93,7 +93,7 @@ int main(int argc, char** argv) {
     request.exposure = opt.exposure;
     if (opt.exr) {
         request.format = strata::ImageFormat::Exr;
-        request.aovs = {strata::Aov::Albedo, strata::Aov::Normal, strata::Aov::Depth,
+        request.aovs = {strata::Aov::Albedo,   strata::Aov::Normal,     strata::Aov::Depth,
                         strata::Aov::Position, strata::Aov::InstanceId, strata::Aov::PrimitiveId,
                         strata::Aov::MeshId};
     }
@@ -101,12 +101,14 @@ int main(int argc, char** argv) {
     auto render = [&](uint32_t frame, const char* what) -> bool {
         auto image = engine.value()->render(request);
         if (!image) {
-            std::fprintf(stderr, "strata-demo: render failed: %s\n", image.error().describe().c_str());
+            std::fprintf(stderr, "strata-demo: render failed: %s\n",
+                         image.error().describe().c_str());
             return false;
         }
-        print_report(what, image.value().report);
-        std::printf("%36s %u spp, %.1f ms render, %.1f ms encode, %zu bytes\n", "", image.value().samples,
-                    image.value().render_ms, image.value().encode_ms, image.value().bytes.size());
+        print_report(what, image->info.report);
+        std::printf("%36s %u spp, %.1f ms render, %.1f ms encode, %zu bytes\n", "",
+                    image->info.samples, image->info.render_ms, image->encode_ms,
+                    image->bytes.size());
         char name[64];
         std::snprintf(name, sizeof name, "frame-%02u.%s", frame, opt.exr ? "exr" : "png");
         const std::filesystem::path path = std::filesystem::path(opt.out) / name;
@@ -117,7 +119,7 @@ int main(int argc, char** argv) {
     };
 
     static const char* STEP_NAMES[strata::DEMO_STEPS] = {
-        "camera moved",        "one instance moved", "ring of 12 moved",  "flag deformed",
+        "camera moved",        "one instance moved", "ring of 12 moved",    "flag deformed",
         "flag deformed again", "material + light",   "ball re-tessellated", "hide + add mesh"};
     if (auto v = engine.value()->apply(strata::make_demo_scene()); !v) {
         std::fprintf(stderr, "strata-demo: %s\n", v.error().describe().c_str());

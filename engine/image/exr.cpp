@@ -27,10 +27,10 @@ namespace {
 /// percent larger on rendered frames (tests/bench/NOTES.md).
 constexpr int ZIP_LEVEL = 1;
 
-/// Appends to (and seeks within) a byte vector: OpenEXR seeks back to fill in its offset table.
-class VectorOStream final : public Imf::OStream {
+/// Appends to (and seeks within) a byte string: OpenEXR seeks back to fill in its offset table.
+class StringOStream final : public Imf::OStream {
 public:
-    explicit VectorOStream(std::vector<uint8_t>& out) : Imf::OStream("<memory>"), m_out(out) {}
+    explicit StringOStream(std::string& out) : Imf::OStream("<memory>"), m_out(out) {}
 
     void write(const char c[], int n) override {
         const std::size_t end = m_pos + std::size_t(n);
@@ -42,7 +42,7 @@ public:
     void seekp(uint64_t pos) override { m_pos = std::size_t(pos); }
 
 private:
-    std::vector<uint8_t>& m_out;
+    std::string& m_out;
     std::size_t m_pos = 0;
 };
 
@@ -122,19 +122,19 @@ const DecodedExrChannel* DecodedExr::find(const std::string& name) const {
     return nullptr;
 }
 
-Result<std::vector<uint8_t>> encode_exr(uint32_t width, uint32_t height,
-                                        const std::vector<ExrChannel>& channels,
-                                        ExrCompression compression) {
+Result<std::string> encode_exr(uint32_t width, uint32_t height,
+                               const std::vector<ExrChannel>& channels,
+                               ExrCompression compression) {
     if (width == 0 || height == 0 || width > uint32_t(std::numeric_limits<int>::max()) ||
         height > uint32_t(std::numeric_limits<int>::max()))
-        return make_error(ErrorCode::InvalidArgument, "EXR needs a non-empty image");
+        return failure(ErrorCode::InvalidArgument, "EXR needs a non-empty image");
     for (const ExrChannel& c : channels) {
         const bool has_data = c.type == ExrPixel::Uint ? c.u32 != nullptr : c.f32 != nullptr;
         if (!has_data || c.name.empty() || (c.stride == 0 && c.type != ExrPixel::Half))
-            return make_error(ErrorCode::InvalidArgument,
-                              "EXR channel '" + c.name + "' has no name, no data or a bad stride");
+            return failure(ErrorCode::InvalidArgument,
+                           "EXR channel '" + c.name + "' has no name, no data or a bad stride");
     }
-    std::vector<uint8_t> out;
+    std::string out;
     try {
         init_exr_threads();
         Imf::Header header(static_cast<int>(width), static_cast<int>(height));
@@ -170,13 +170,12 @@ Result<std::vector<uint8_t>> encode_exr(uint32_t width, uint32_t height,
         std::size_t raw = 0;
         for (const ExrChannel& c : channels) raw += c.type == ExrPixel::Half ? 2 : 4;
         out.reserve(raw * width * height + 8 * std::size_t(height) + 65536);
-        VectorOStream stream(out);
+        StringOStream stream(out);
         Imf::OutputFile file(stream, header);
         file.setFrameBuffer(frame);
         file.writePixels(int(height));
     } catch (const std::exception& e) {
-        return make_error(ErrorCode::Internal,
-                          std::string("OpenEXR failed to encode: ") + e.what());
+        return failure(ErrorCode::Internal, std::string("OpenEXR failed to encode: ") + e.what());
     }
     return out;
 }
@@ -224,8 +223,7 @@ Result<DecodedExr> decode_exr(const uint8_t* data, std::size_t size) {
         file.setFrameBuffer(frame);
         file.readPixels(window.min.y, window.max.y);
     } catch (const std::exception& e) {
-        return make_error(ErrorCode::InvalidArgument,
-                          std::string("not a readable EXR: ") + e.what());
+        return failure(ErrorCode::InvalidArgument, std::string("not a readable EXR: ") + e.what());
     }
     return image;
 }

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "engine/core/result.h"
@@ -35,9 +36,8 @@ struct ExrChannel {
 };
 
 /// Encodes a width x height image with `channels` (OpenEXR sorts them by name in the file).
-Result<std::vector<uint8_t>> encode_exr(uint32_t width, uint32_t height,
-                                        const std::vector<ExrChannel>& channels,
-                                        ExrCompression compression);
+Result<std::string> encode_exr(uint32_t width, uint32_t height,
+                               const std::vector<ExrChannel>& channels, ExrCompression compression);
 
 /// One decoded channel: floats for HALF and FLOAT channels, integers for UINT ones.
 struct DecodedExrChannel {
@@ -61,5 +61,9 @@ struct DecodedExr {
 /// Reads every channel of an in-memory scanline or tiled EXR with OpenEXR (an error for malformed
 /// data).
 Result<DecodedExr> decode_exr(const uint8_t* data, std::size_t size);
+/// The same over encoded bytes held in a string (what encode_exr returns).
+inline Result<DecodedExr> decode_exr(std::string_view bytes) {
+    return decode_exr(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size());
+}
 
 }  // namespace strata

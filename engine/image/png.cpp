@@ -11,12 +11,12 @@ namespace strata {
 namespace {
 
 struct WriteState {
-    std::vector<uint8_t>* out;
+    std::string* out;
 };
 
 void write_bytes(png_structp png, png_bytep data, png_size_t length) {
     auto* state = static_cast<WriteState*>(png_get_io_ptr(png));
-    state->out->insert(state->out->end(), data, data + length);
+    state->out->append(reinterpret_cast<const char*>(data), length);
 }
 
 void flush_nothing(png_structp) {}
@@ -36,30 +36,31 @@ void read_bytes(png_structp png, png_bytep out, png_size_t length) {
 
 }  // namespace
 
-Result<std::vector<uint8_t>> encode_png(const uint8_t* pixels, uint32_t width, uint32_t height,
-                                        int channels, int zlib_level) {
+Result<std::string> encode_png(const uint8_t* pixels, uint32_t width, uint32_t height, int channels,
+                               int zlib_level) {
     if (channels != 3 && channels != 4)
-        return make_error(ErrorCode::InvalidArgument, "PNG needs 3 or 4 channels");
+        return failure(ErrorCode::InvalidArgument, "PNG needs 3 or 4 channels");
     if (width == 0 || height == 0)
-        return make_error(ErrorCode::InvalidArgument, "PNG needs a non-empty image");
+        return failure(ErrorCode::InvalidArgument, "PNG needs a non-empty image");
     png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
     png_infop info = png ? png_create_info_struct(png) : nullptr;
     if (!png || !info) {
         png_destroy_write_struct(&png, &info);
-        return make_error(ErrorCode::Internal, "libpng could not be initialised");
+        return failure(ErrorCode::Internal, "libpng could not be initialised");
     }
-    std::vector<uint8_t> out;
-    // Room for incompressible pixels, so the vector never grows by copying.
+    std::string out;
+    // Room for incompressible pixels, so the string never grows by copying.
     out.reserve(std::size_t(width) * height * channels + height + 65536);
     WriteState state{&out};
     // libpng reports errors by longjmp; nothing with a destructor lives between here and the end.
     if (setjmp(png_jmpbuf(png))) {
         png_destroy_write_struct(&png, &info);
-        return make_error(ErrorCode::Internal, "libpng failed to encode the frame");
+        return failure(ErrorCode::Internal, "libpng failed to encode the frame");
     }
     png_set_write_fn(png, &state, write_bytes, flush_nothing);
-    png_set_IHDR(png, info, width, height, 8, channels == 4 ? PNG_COLOR_TYPE_RGBA : PNG_COLOR_TYPE_RGB,
-                 PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+    png_set_IHDR(png, info, width, height, 8,
+                 channels == 4 ? PNG_COLOR_TYPE_RGBA : PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+                 PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
     png_set_compression_level(png, std::clamp(zlib_level, 0, 9));
     // Run-length matching only: as small as level 1's full matcher on rendered frames (SUB
     // filtered), and a quarter faster. One large zlib buffer means few IDAT chunks.
@@ -78,19 +79,19 @@ Result<std::vector<uint8_t>> encode_png(const uint8_t* pixels, uint32_t width, u
 
 Result<DecodedImage> decode_png(const uint8_t* data, std::size_t size) {
     if (size < 8 || png_sig_cmp(data, 0, 8) != 0)
-        return make_error(ErrorCode::InvalidArgument, "not a PNG file");
+        return failure(ErrorCode::InvalidArgument, "not a PNG file");
     png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
     png_infop info = png ? png_create_info_struct(png) : nullptr;
     if (!png || !info) {
         png_destroy_read_struct(&png, &info, nullptr);
-        return make_error(ErrorCode::Internal, "libpng could not be initialised");
+        return failure(ErrorCode::Internal, "libpng could not be initialised");
     }
     ReadState state{data, size, 0};
     DecodedImage* image = new DecodedImage();  // owned below; survives a longjmp
     if (setjmp(png_jmpbuf(png))) {
         png_destroy_read_struct(&png, &info, nullptr);
         delete image;
-        return make_error(ErrorCode::InvalidArgument, "corrupt PNG data");
+        return failure(ErrorCode::InvalidArgument, "corrupt PNG data");
     }
     png_set_read_fn(png, &state, read_bytes);
     png_read_info(png, info);
@@ -103,7 +104,8 @@ Result<DecodedImage> decode_png(const uint8_t* data, std::size_t size) {
     image->channels = png_get_channels(png, info);
     const std::size_t stride = png_get_rowbytes(png, info);
     image->pixels.resize(stride * image->height);
-    for (uint32_t y = 0; y < image->height; ++y) png_read_row(png, image->pixels.data() + y * stride, nullptr);
+    for (uint32_t y = 0; y < image->height; ++y)
+        png_read_row(png, image->pixels.data() + y * stride, nullptr);
     png_read_end(png, nullptr);
     png_destroy_read_struct(&png, &info, nullptr);
     DecodedImage result = std::move(*image);

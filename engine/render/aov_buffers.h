@@ -47,6 +47,7 @@ public:
     }
     void add(Aov a) { m_bits |= 1u << unsigned(a); }
     bool has(Aov a) const { return (m_bits >> unsigned(a)) & 1u; }
+    friend bool operator==(const AovSet&, const AovSet&) = default;
     /// True when any AOV that comes from the pixel-centre ray is present.
     bool needs_centre_ray() const {
         return has(Aov::Depth) || has(Aov::Position) || has(Aov::InstanceId) ||
@@ -87,6 +88,14 @@ struct FrameBuffers {
         if (set.has(Aov::InstanceId)) instance_id.resize(n);
         if (set.has(Aov::PrimitiveId)) primitive_id.resize(n);
         if (set.has(Aov::MeshId)) mesh_id.resize(n);
+    }
+
+    /// As allocate(), but keeps the buffers (and their contents) when they already have this
+    /// size and set: for callers that write every pixel of many frames.
+    void reserve_frame(uint32_t w, uint32_t h, AovSet set) {
+        if (w == width && h == height && set == aovs && color.size() == pixel_count()) return;
+        *this = FrameBuffers{};
+        allocate(w, h, set);
     }
 };
 

@@ -16,22 +16,18 @@
 // Compression as requested (default zip).
 
 #include <cstdint>
-#include <string>
 #include <vector>
 
 #include "engine/core/result.h"
 #include "engine/render/aov_buffers.h"
+#include "engine/render/frame.h"
 #include "engine/render/render_request.h"
 
 namespace strata {
 
-struct EncodedFrame {
-    std::vector<uint8_t> bytes;
-    std::string content_type;  ///< "image/png" or "image/x-exr"
-};
-
-/// Encodes `frame` in `request`'s format with its exposure, AOVs and compression.
-Result<EncodedFrame> encode_frame(const FrameBuffers& frame, const RenderRequest& request);
+/// Encodes `buffers` in `request`'s format with its exposure, AOVs and compression; the result
+/// carries the encoding time (its `info` is the caller's to fill in).
+Result<EncodedFrame> encode_frame(const FrameBuffers& buffers, const RenderRequest& request);
 
 /// The EXR channels of `frame`: beauty and every AOV the frame carries.
 std::vector<ExrChannel> exr_channels(const FrameBuffers& frame);

@@ -9,40 +9,25 @@
 
 namespace strata {
 
-void HitBuffers::resize(uint32_t w, uint32_t h) {
-    width = w;
-    height = h;
-    const std::size_t n = std::size_t(w) * h;
-    distance.assign(n, std::numeric_limits<float>::infinity());
-    instance.assign(n, INVALID_ID);
-    primitive.assign(n, INVALID_ID);
-    normal.assign(n, Vec3(0.0f));
-    color.assign(n, Vec3(0.0f));
-}
-
-void HitBuffers::reserve_frame(uint32_t w, uint32_t h) {
-    const std::size_t n = std::size_t(w) * h;
-    if (distance.size() != n || instance.size() != n || primitive.size() != n ||
-        normal.size() != n || color.size() != n) {
-        resize(w, h);
-    }
-    width = w;
-    height = h;
+AovSet primary_aovs() {
+    AovSet set;
+    for (Aov a : {Aov::Depth, Aov::InstanceId, Aov::PrimitiveId, Aov::Normal}) set.add(a);
+    return set;
 }
 
 void render_primary(const TlasStrategy& tlas, const FrameState& frame,
-                    const PrimarySettings& settings, HitBuffers& out) {
+                    const PrimarySettings& settings, FrameBuffers& out) {
     // Every pixel is written below, so buffers of the right size are reused as they are.
-    out.reserve_frame(settings.width, settings.height);
+    out.reserve_frame(settings.width, settings.height, primary_aovs());
     if (settings.width == 0 || settings.height == 0) return;
     const CameraRays rays(settings.camera.value_or(frame.camera), settings.width, settings.height);
     const Lighting& light = frame.lighting;
     const Vec3 background = light.sky_color * light.sky_intensity;
     const Vec3 sun = glm::normalize(light.sun_direction);
 
-    float* const distance = out.distance.data();
-    uint32_t* const instance = out.instance.data();
-    uint32_t* const primitive = out.primitive.data();
+    float* const distance = out.depth.data();
+    uint32_t* const instance = out.instance_id.data();
+    uint32_t* const primitive = out.primitive_id.data();
     Vec3* const normal = out.normal.data();
     Vec3* const color = out.color.data();
     const InstanceShade* const shades = frame.instances.data();

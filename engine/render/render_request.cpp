@@ -22,66 +22,77 @@ std::optional<E> parse_name(const char* const (&names)[N], std::string_view s) {
 
 }  // namespace
 
-const char* image_format_name(ImageFormat f) { return FORMAT_NAMES[int(f)]; }
-const char* exr_compression_name(ExrCompression c) { return COMPRESSION_NAMES[int(c)]; }
-const char* aov_name(Aov a) { return AOV_NAMES[int(a)]; }
+const char* image_format_name(ImageFormat f) {
+    return FORMAT_NAMES[int(f)];
+}
+const char* exr_compression_name(ExrCompression c) {
+    return COMPRESSION_NAMES[int(c)];
+}
+const char* aov_name(Aov a) {
+    return AOV_NAMES[int(a)];
+}
 std::optional<ImageFormat> parse_image_format(std::string_view s) {
     return parse_name<ImageFormat>(FORMAT_NAMES, s);
 }
 std::optional<ExrCompression> parse_exr_compression(std::string_view s) {
     return parse_name<ExrCompression>(COMPRESSION_NAMES, s);
 }
-std::optional<Aov> parse_aov(std::string_view s) { return parse_name<Aov>(AOV_NAMES, s); }
+std::optional<Aov> parse_aov(std::string_view s) {
+    return parse_name<Aov>(AOV_NAMES, s);
+}
 
 Status check_render_request(const RenderRequest& r) {
     if (r.width == 0 || r.height == 0)
-        return make_error(ErrorCode::InvalidArgument, "width and height must be at least 1",
-                          r.width == 0 ? "width" : "height");
+        return failure(ErrorCode::InvalidArgument, "width and height must be at least 1",
+                       r.width == 0 ? "width" : "height");
     if (uint64_t(r.width) * r.height > MAX_RENDER_PIXELS)
-        return make_error(ErrorCode::TooLarge,
-                          "frame has " + std::to_string(uint64_t(r.width) * r.height) +
-                              " pixels; the limit is " + std::to_string(MAX_RENDER_PIXELS),
-                          "width");
+        return failure(ErrorCode::TooLarge,
+                       "frame has " + std::to_string(uint64_t(r.width) * r.height) +
+                           " pixels; the limit is " + std::to_string(MAX_RENDER_PIXELS),
+                       "width");
     if (r.spp == 0 || r.spp > MAX_RENDER_SPP)
-        return make_error(ErrorCode::InvalidArgument,
-                          "spp must be in [1, " + std::to_string(MAX_RENDER_SPP) + "]", "spp");
+        return failure(ErrorCode::InvalidArgument,
+                       "spp must be in [1, " + std::to_string(MAX_RENDER_SPP) + "]", "spp");
     if (!std::isfinite(r.exposure) || std::abs(r.exposure) > 64.0f)
-        return make_error(ErrorCode::InvalidArgument, "exposure must be a finite number of stops in [-64, 64]",
-                          "exposure");
+        return failure(ErrorCode::InvalidArgument,
+                       "exposure must be a finite number of stops in [-64, 64]", "exposure");
     for (std::size_t i = 0; i < r.aovs.size(); ++i) {
         if (std::count(r.aovs.begin(), r.aovs.end(), r.aovs[i]) > 1)
-            return make_error(ErrorCode::InvalidArgument,
-                              std::string("AOV '") + aov_name(r.aovs[i]) + "' is listed twice",
-                              "aovs/" + std::to_string(i));
+            return failure(ErrorCode::InvalidArgument,
+                           std::string("AOV '") + aov_name(r.aovs[i]) + "' is listed twice",
+                           "aovs/" + std::to_string(i));
         if (r.format == ImageFormat::Png && r.aovs[i] != Aov::Color)
-            return make_error(ErrorCode::InvalidArgument,
-                              std::string("AOV '") + aov_name(r.aovs[i]) +
-                                  "' needs format exr; a PNG carries only the color image",
-                              "aovs/" + std::to_string(i));
+            return failure(ErrorCode::InvalidArgument,
+                           std::string("AOV '") + aov_name(r.aovs[i]) +
+                               "' needs format exr; a PNG carries only the color image",
+                           "aovs/" + std::to_string(i));
     }
     if (r.camera) {
         // What can be judged without the scene camera: the override's own numbers.
         const SetCamera& c = *r.camera;
-        for (const auto& [name, v] : {std::pair{"eye", c.eye}, {"target", c.target}, {"up", c.up}}) {
+        for (const auto& [name, v] :
+             {std::pair{"eye", c.eye}, {"target", c.target}, {"up", c.up}}) {
             if (v && !is_finite(*v))
-                return make_error(ErrorCode::NotFinite, std::string(name) + " has a NaN or infinite value",
-                                  std::string("camera/") + name);
+                return failure(ErrorCode::NotFinite,
+                               std::string(name) + " has a NaN or infinite value",
+                               std::string("camera/") + name);
         }
         if (c.fov_y_deg && !(*c.fov_y_deg > 0.0f && *c.fov_y_deg < 180.0f))
-            return make_error(ErrorCode::InvalidArgument, "fov_y_deg must be in (0, 180)",
-                              "camera/fov_y_deg");
+            return failure(ErrorCode::InvalidArgument, "fov_y_deg must be in (0, 180)",
+                           "camera/fov_y_deg");
     }
     return {};
 }
 
-Result<Camera> resolve_camera(const std::optional<SetCamera>& override_fields, const Camera& scene) {
+Result<Camera> resolve_camera(const std::optional<SetCamera>& override_fields,
+                              const Camera& scene) {
     Camera c = scene;
     if (!override_fields) return c;
     apply_to(c, *override_fields);
     if (Status s = check_camera(c); !s) {
         Error e = s.error();
         e.field = "camera/" + e.field;
-        return e;
+        return Unexpected(e);
     }
     return c;
 }

@@ -8,7 +8,6 @@
 #include <string_view>
 #include <vector>
 
-#include "engine/accel/report.h"
 #include "engine/core/result.h"
 #include "engine/image/exr.h"
 #include "engine/scene/edits.h"
@@ -19,7 +18,16 @@ namespace strata {
 enum class ImageFormat : uint8_t { Png, Exr };
 
 /// Arbitrary output variables a frame can carry besides the beauty image.
-enum class Aov : uint8_t { Color, Albedo, Normal, Depth, Position, InstanceId, PrimitiveId, MeshId };
+enum class Aov : uint8_t {
+    Color,
+    Albedo,
+    Normal,
+    Depth,
+    Position,
+    InstanceId,
+    PrimitiveId,
+    MeshId
+};
 
 /// Wire names: "png"/"exr", "none"/"zip"/"piz", "color", "albedo", "normal", "depth", "position",
 /// "instance_id", "primitive_id", "mesh_id".
@@ -62,17 +70,5 @@ constexpr uint32_t MAX_RENDER_SPP = 4096;
 /// Checks a request (sizes, spp, exposure, camera override, duplicate AOVs, AOVs other than color
 /// with PNG); the error names the field.
 Status check_render_request(const RenderRequest& r);
-
-/// An encoded frame with the report of the commit the launch ran.
-struct RenderedImage {
-    std::vector<uint8_t> bytes;
-    std::string content_type;  ///< "image/png" or "image/x-exr"
-    uint64_t version = 0;      ///< scene version the frame shows
-    RebuildReport report;
-    uint32_t samples = 0;      ///< samples per pixel in the frame (the total when accumulating)
-    uint64_t rays = 0;         ///< rays the launch traced (camera, shadow and bounce rays)
-    double render_ms = 0.0;    ///< tracing and shading
-    double encode_ms = 0.0;
-};
 
 }  // namespace strata

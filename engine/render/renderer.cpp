@@ -233,7 +233,8 @@ private:
     }
 
     /// Traces the unjittered pixel-centre rays and writes depth, position and ids.
-    uint64_t trace_centre(CameraPacket& camera, uint32_t x0, uint32_t y0, const ValidMask16& valid) const {
+    uint64_t trace_centre(CameraPacket& camera, uint32_t x0, uint32_t y0,
+                          const ValidMask16& valid) const {
         const Vec3 eye = m_rays.eye();
         uint64_t rays = 0;
         for (uint32_t i = 0; i < PACKET_LANES; ++i) rays += valid[i] != 0;
@@ -288,13 +289,13 @@ private:
 
 }  // namespace
 
-Result<RenderedFrame> Renderer::render(const TlasStrategy& tlas, const FrameState& frame,
-                                       const RenderRequest& request) {
+Result<Frame> Renderer::render(const TlasStrategy& tlas, const FrameState& frame,
+                               const RenderRequest& request) {
     Stopwatch clock;
-    RenderedFrame out;
-    out.version = frame.version;
+    Frame out;
+    out.info.version = frame.version;
     const auto resolved = resolve_camera(request.camera, frame.camera);
-    if (!resolved) return resolved.error();
+    if (!resolved) return Unexpected(resolved.error());
     const Camera camera = resolved.value();
     try {
         out.buffers.allocate(request.width, request.height, AovSet(request.aovs));
@@ -302,10 +303,10 @@ Result<RenderedFrame> Renderer::render(const TlasStrategy& tlas, const FrameStat
         PixelSums* accum = nullptr;
         if (request.accumulate) {
             if (uint64_t(request.width) * request.height > MAX_ACCUMULATE_PIXELS)
-                return make_error(ErrorCode::TooLarge,
-                                  "accumulation is limited to " +
-                                      std::to_string(MAX_ACCUMULATE_PIXELS) + " pixels",
-                                  "accumulate");
+                return failure(ErrorCode::TooLarge,
+                               "accumulation is limited to " +
+                                   std::to_string(MAX_ACCUMULATE_PIXELS) + " pixels",
+                               "accumulate");
             samples = m_accumulator.begin({frame.version, camera, request.width, request.height},
                                           request.spp);
             accum = m_accumulator.sums();
@@ -315,15 +316,14 @@ Result<RenderedFrame> Renderer::render(const TlasStrategy& tlas, const FrameStat
         parallel_for_tiles(request.width, request.height,
                            [&](const TileRect& tile) { kernel.render_tile(tile); });
         if (request.accumulate) m_accumulator.finish(samples);
-        out.samples = total;
-        out.samples_added = samples.count;
-        out.rays = kernel.rays();
+        out.info.samples = total;
+        out.info.samples_added = samples.count;
+        out.info.rays = kernel.rays();
     } catch (const std::bad_alloc&) {
         m_accumulator.reset();
-        return make_error(ErrorCode::TooLarge, "not enough memory for a frame of this size",
-                          "width");
+        return failure(ErrorCode::TooLarge, "not enough memory for a frame of this size", "width");
     }
-    out.render_ms = clock.ms();
+    out.info.render_ms = clock.ms();
     return out;
 }
 

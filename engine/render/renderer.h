@@ -19,11 +19,10 @@
 
 #include <cstdint>
 
-#include "engine/accel/report.h"
 #include "engine/accel/tlas.h"
 #include "engine/core/result.h"
 #include "engine/render/accumulator.h"
-#include "engine/render/aov_buffers.h"
+#include "engine/render/frame.h"
 #include "engine/render/frame_state.h"
 #include "engine/render/render_request.h"
 
@@ -34,23 +33,12 @@ constexpr float INDIRECT_CLAMP = 8.0f;
 /// Least roughness the second surface of a path shades the sun with.
 constexpr float MIN_SECONDARY_ROUGHNESS = 0.5f;
 
-/// A frame's linear buffers and how they were made.
-struct RenderedFrame {
-    FrameBuffers buffers;
-    uint64_t version = 0;        ///< scene version the frame shows
-    RebuildReport report;        ///< the commit the launch ran
-    uint32_t samples = 0;        ///< samples per pixel in the frame (the total when accumulating)
-    uint32_t samples_added = 0;  ///< samples per pixel this launch traced
-    uint64_t rays = 0;           ///< rays traced (camera, shadow, bounce)
-    double render_ms = 0.0;      ///< tracing and shading
-};
-
 class Renderer {
 public:
     /// Renders `request` (already checked) from `frame` through `tlas`. Not thread-safe: the
     /// engine serialises launches. Errors: a frame too large to accumulate or to allocate.
-    Result<RenderedFrame> render(const TlasStrategy& tlas, const FrameState& frame,
-                                 const RenderRequest& request);
+    Result<Frame> render(const TlasStrategy& tlas, const FrameState& frame,
+                         const RenderRequest& request);
 
 private:
     Accumulator m_accumulator;

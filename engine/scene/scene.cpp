@@ -21,9 +21,9 @@ Error stale(const char* kind) {
 
 const char* edit_name(const Edit& e) {
     static constexpr const char* NAMES[] = {
-        "add_mesh",       "update_mesh",   "update_mesh",    "remove_mesh",     "add_material",
+        "add_mesh",        "update_mesh",  "update_mesh",     "remove_mesh",   "add_material",
         "update_material", "add_instance", "update_instance", "set_transform", "remove_instance",
-        "mark_dirty",     "set_camera",    "set_lighting",   "clear"};
+        "mark_dirty",      "set_camera",   "set_lighting",    "clear"};
     static_assert(std::size(NAMES) == std::variant_size_v<Edit>);
     return NAMES[e.index()];
 }
@@ -61,15 +61,15 @@ MaterialHandle Scene::find_material(std::string_view id) const {
 
 Result<const MeshRecord*> Scene::mesh(MeshHandle h) const {
     if (const MeshRecord* r = m_meshes.get(h)) return r;
-    return stale("mesh");
+    return Unexpected(stale("mesh"));
 }
 Result<const InstanceRecord*> Scene::instance(InstanceHandle h) const {
     if (const InstanceRecord* r = m_instances.get(h)) return r;
-    return stale("instance");
+    return Unexpected(stale("instance"));
 }
 Result<const MaterialRecord*> Scene::material(MaterialHandle h) const {
     if (const MaterialRecord* r = m_materials.get(h)) return r;
-    return stale("material");
+    return Unexpected(stale("material"));
 }
 
 Material Scene::resolved_material(const InstanceRecord& inst) const {
@@ -81,7 +81,7 @@ Material Scene::resolved_material(const InstanceRecord& inst) const {
 }
 
 Result<uint64_t> Scene::apply(EditBatch&& batch) {
-    if (Status s = validate(batch); !s) return s.error();
+    if (Status s = validate(batch); !s) return Unexpected(s.error());
     for (Edit& e : batch.edits) apply_one(std::move(e));
     return ++m_version;
 }
@@ -170,7 +170,9 @@ void Scene::remove_mesh(MeshHandle h) {
     m_meshes.erase(h);
 }
 
-void Scene::apply_edit(RemoveMesh&& e) { remove_mesh(find_mesh(e.mesh)); }
+void Scene::apply_edit(RemoveMesh&& e) {
+    remove_mesh(find_mesh(e.mesh));
+}
 
 // Step: material edits -------------------------------------------------------------------------
 
@@ -251,7 +253,9 @@ void Scene::remove_instance(InstanceHandle h) {
     m_instances.erase(h);
 }
 
-void Scene::apply_edit(RemoveInstance&& e) { remove_instance(find_instance(e.instance)); }
+void Scene::apply_edit(RemoveInstance&& e) {
+    remove_instance(find_instance(e.instance));
+}
 
 // Step: scene-wide edits -----------------------------------------------------------------------
 

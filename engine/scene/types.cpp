@@ -11,15 +11,18 @@ const char* build_preference_name(BuildPreference p) {
 namespace {
 
 Status bad(ErrorCode code, const char* field, const char* message) {
-    return make_error(code, message, field);
+    return failure(code, message, field);
 }
 
-bool in_unit_range(float v) { return v >= 0.0f && v <= 1.0f; }
+bool in_unit_range(float v) {
+    return v >= 0.0f && v <= 1.0f;
+}
 
 }  // namespace
 
 Status check_camera(const Camera& c) {
-    if (!is_finite(c.eye)) return bad(ErrorCode::NotFinite, "eye", "eye has a NaN or infinite value");
+    if (!is_finite(c.eye))
+        return bad(ErrorCode::NotFinite, "eye", "eye has a NaN or infinite value");
     if (!is_finite(c.target))
         return bad(ErrorCode::NotFinite, "target", "target has a NaN or infinite value");
     if (!is_finite(c.up)) return bad(ErrorCode::NotFinite, "up", "up has a NaN or infinite value");
@@ -63,10 +66,12 @@ Status check_lighting(const Lighting& l) {
 
 Status check_material(const Material& m) {
     if (!is_finite(m.base_color))
-        return bad(ErrorCode::NotFinite, "base_color", "base_color has a NaN or infinite component");
+        return bad(ErrorCode::NotFinite, "base_color",
+                   "base_color has a NaN or infinite component");
     if (!in_unit_range(m.base_color.x) || !in_unit_range(m.base_color.y) ||
         !in_unit_range(m.base_color.z))
-        return bad(ErrorCode::InvalidArgument, "base_color", "base_color components must be in [0, 1]");
+        return bad(ErrorCode::InvalidArgument, "base_color",
+                   "base_color components must be in [0, 1]");
     if (!std::isfinite(m.roughness))
         return bad(ErrorCode::NotFinite, "roughness", "roughness is NaN or infinite");
     if (!in_unit_range(m.roughness))

@@ -30,7 +30,8 @@ public:
         if (m_cleared) return std::nullopt;
         const auto r = m_scene.mesh(m_scene.find_mesh(id));
         if (!r) return std::nullopt;
-        return MeshShadow{static_cast<uint32_t>(r.value()->positions.size()), r.value()->users.size()};
+        return MeshShadow{static_cast<uint32_t>(r.value()->positions.size()),
+                          r.value()->users.size()};
     }
     /// The mesh id an instance refers to, if the instance exists.
     std::optional<std::string> instance(const std::string& id) const {
@@ -83,12 +84,15 @@ private:
 };
 
 Status fail(ErrorCode code, std::string message, std::string field = {}) {
-    return make_error(code, std::move(message), std::move(field));
+    return failure(code, std::move(message), std::move(field));
 }
 
 Status check_new_id(const std::string& id, bool taken, const char* kind) {
-    if (id.empty()) return fail(ErrorCode::InvalidArgument, std::string(kind) + " id is empty", "id");
-    if (taken) return fail(ErrorCode::DuplicateId, std::string(kind) + " '" + id + "' already exists", "id");
+    if (id.empty())
+        return fail(ErrorCode::InvalidArgument, std::string(kind) + " id is empty", "id");
+    if (taken)
+        return fail(ErrorCode::DuplicateId, std::string(kind) + " '" + id + "' already exists",
+                    "id");
     return {};
 }
 
@@ -104,7 +108,8 @@ Status check_positions(const std::vector<Vec3>& positions, const char* field,
         if (is_finite(positions[i])) continue;
         const int k = std::isfinite(positions[i].x) ? (std::isfinite(positions[i].y) ? 2 : 1) : 0;
         return fail(ErrorCode::NotFinite,
-                    "vertex " + std::to_string(first_vertex + i) + " has a NaN or infinite " + "xyz"[k] + " coordinate",
+                    "vertex " + std::to_string(first_vertex + i) + " has a NaN or infinite " +
+                        "xyz"[k] + " coordinate",
                     std::string(field) + "/" + std::to_string(i * 3 + k));
     }
     return {};
@@ -148,9 +153,10 @@ public:
     Status check(const AddMesh& e) {
         if (Status s = check_new_id(e.id, m_overlay.mesh(e.id).has_value(), "mesh"); !s) return s;
         if (e.positions.empty() || e.triangles.empty())
-            return fail(ErrorCode::EmptyMesh, "mesh '" + e.id + "' has no " +
-                                                  (e.positions.empty() ? "vertices" : "triangles"),
-                        e.positions.empty() ? "positions" : "indices");
+            return fail(
+                ErrorCode::EmptyMesh,
+                "mesh '" + e.id + "' has no " + (e.positions.empty() ? "vertices" : "triangles"),
+                e.positions.empty() ? "positions" : "indices");
         if (e.positions.size() > MAX_MESH_ELEMENTS)
             return fail(ErrorCode::TooLarge, "too many vertices", "positions");
         if (Status s = check_positions(e.positions, "positions"); !s) return s;
@@ -163,7 +169,8 @@ public:
     Status check(const UpdateMeshPositions& e) {
         const auto m = m_overlay.mesh(e.mesh);
         if (!m) return unknown("mesh", e.mesh, "mesh");
-        if (e.positions.empty()) return fail(ErrorCode::InvalidArgument, "no positions given", "positions");
+        if (e.positions.empty())
+            return fail(ErrorCode::InvalidArgument, "no positions given", "positions");
         const uint64_t end = uint64_t(e.offset) + e.positions.size();
         if (end > m->vertex_count)
             return fail(ErrorCode::OutOfRange,
@@ -177,9 +184,11 @@ public:
     Status check(const ReplaceMeshTopology& e) {
         auto m = m_overlay.mesh(e.mesh);
         if (!m) return unknown("mesh", e.mesh, "mesh");
-        if (e.triangles.empty()) return fail(ErrorCode::EmptyMesh, "mesh has no triangles", "indices");
+        if (e.triangles.empty())
+            return fail(ErrorCode::EmptyMesh, "mesh has no triangles", "indices");
         if (e.positions) {
-            if (e.positions->empty()) return fail(ErrorCode::EmptyMesh, "mesh has no vertices", "positions");
+            if (e.positions->empty())
+                return fail(ErrorCode::EmptyMesh, "mesh has no vertices", "positions");
             if (e.positions->size() > MAX_MESH_ELEMENTS)
                 return fail(ErrorCode::TooLarge, "too many vertices", "positions");
             if (Status s = check_positions(*e.positions, "positions"); !s) return s;
@@ -291,7 +300,7 @@ Status Scene::validate(const EditBatch& batch) const {
         if (!s) {
             Error e = s.error();
             e.edit_index = i;
-            return e;
+            return Unexpected(e);
         }
     }
     return {};

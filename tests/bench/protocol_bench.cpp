@@ -75,7 +75,7 @@ void parse_and_apply(benchmark::State& state, const std::string& text) {
     EditBatch add;
     add.edits.emplace_back(
         AddMesh{"big", std::move(plane.positions), std::move(plane.triangles), {}, {}});
-    if (!engine->apply(std::move(add)).ok()) state.SkipWithError("add_mesh failed");
+    if (!engine->apply(std::move(add)).has_value()) state.SkipWithError("add_mesh failed");
     for (auto _ : state) {
         auto parsed = protocol::parse_edit_batch(text, {});
         if (!parsed) {

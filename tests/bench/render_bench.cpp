@@ -99,8 +99,8 @@ std::unique_ptr<Engine> make_engine(const SceneDesc& d) {
     c.up = d.camera.up;
     c.fov_y_deg = d.camera.fov_y_deg;
     b.edits.emplace_back(c);
-    STRATA_CHECK(engine->apply(std::move(b)).ok());
-    STRATA_CHECK(engine->commit().ok());
+    STRATA_CHECK(engine->apply(std::move(b)).has_value());
+    STRATA_CHECK(engine->commit().has_value());
     return engine;
 }
 
@@ -240,15 +240,15 @@ public:
 
     /// Engine::render_primary into a reused frame: the engine's primary-ray path.
     void engine_primary() {
-        STRATA_CHECK(m_fixture.engine->render_primary(m_settings, m_frame).ok());
-        benchmark::DoNotOptimize(m_frame.hits.distance.data());
+        STRATA_CHECK(m_fixture.engine->render_primary(m_settings, m_frame).has_value());
+        benchmark::DoNotOptimize(m_frame.buffers.depth.data());
     }
 
     /// The by-value Engine::render_primary: adds allocating (and page-faulting) 33 MB of hit
     /// buffers per frame.
     void engine_primary_new_buffers() {
         auto frame = m_fixture.engine->render_primary(m_settings);
-        benchmark::DoNotOptimize(frame.value().hits.distance.data());
+        benchmark::DoNotOptimize(frame.value().buffers.depth.data());
     }
 
     /// The plain rtcIntersect16 loop, but tracing through the engine's TlasStrategy inside a
@@ -261,7 +261,7 @@ public:
                 });
                 return true;
             });
-        STRATA_CHECK(launched.ok());
+        STRATA_CHECK(launched.has_value());
         benchmark::DoNotOptimize(m_out.data());
     }
 
@@ -311,7 +311,7 @@ private:
     const Fixture& m_fixture;
     const CameraRays m_rays;
     PrimarySettings m_settings;
-    PrimaryFrame m_frame;
+    Frame m_frame;
     std::vector<PlainHit> m_out;
 };
 
@@ -385,7 +385,7 @@ void BM_EngineRender(benchmark::State& state) {
     double rays = 0.0;
     for (auto _ : state) {
         auto frame = f.engine->render_frame(r);
-        rays = double(frame.value().rays);
+        rays = double(frame.value().info.rays);
         benchmark::DoNotOptimize(frame.value().buffers.color.data());
     }
     report(state, rays);
@@ -440,7 +440,7 @@ BENCHMARK(BM_EngineRender)
 const FrameBuffers& demo_1080p() {
     static const FrameBuffers frame = [] {
         auto engine = std::move(Engine::create().value());
-        STRATA_CHECK(engine->apply(make_demo_scene()).ok());
+        STRATA_CHECK(engine->apply(make_demo_scene()).has_value());
         RenderRequest r;
         r.width = 1920;
         r.height = 1080;

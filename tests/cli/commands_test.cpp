@@ -20,7 +20,7 @@ class Commands : public ::testing::Test {
 protected:
     void SetUp() override {
         auto t = HttpTransport::create({"http://127.0.0.1:" + std::to_string(srv.port()), "", 60});
-        ASSERT_TRUE(t.ok());
+        ASSERT_TRUE(t.has_value());
         transport = std::move(t.value());
         file = std::filesystem::temp_directory_path() /
                ("strata-commands-" +

@@ -22,7 +22,7 @@ Printed play_printed(const std::string& text, bool json, TableOptions table = {f
     table.rows = true;
     std::istringstream in(text);
     auto script = load_script(in, "demo.jsonl");
-    EXPECT_TRUE(script.ok()) << (script.ok() ? "" : script.error().describe());
+    EXPECT_TRUE(script.has_value()) << (script.has_value() ? "" : script.error().describe());
     FakeTransport fake;
     fake.tlas_actions = {"update", "update", "update", "none"};
     std::ostringstream out, err;

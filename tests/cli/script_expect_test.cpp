@@ -23,16 +23,17 @@ Json report() {
 
 Expectation compile(const Json& expect, bool has_time = true) {
     auto e = Expectation::compile(expect, {"n"}, has_time);
-    EXPECT_TRUE(e.ok()) << (e.ok() ? "" : e.error().message);
-    return e.ok() ? std::move(e.value()) : Expectation::compile(Json::object(), {}, true).value();
+    EXPECT_TRUE(e.has_value()) << (e.has_value() ? "" : e.error().message);
+    return e.has_value() ? std::move(e.value())
+                         : Expectation::compile(Json::object(), {}, true).value();
 }
 
 std::vector<Mismatch> check(const Json& expect, bool budgets = false, double n = 0) {
     Bindings vars;
     vars.push("n", n);
     auto m = compile(expect).check(report(), vars, budgets);
-    EXPECT_TRUE(m.ok()) << (m.ok() ? "" : m.error().message);
-    return m.ok() ? m.value() : std::vector<Mismatch>{};
+    EXPECT_TRUE(m.has_value()) << (m.has_value() ? "" : m.error().message);
+    return m.has_value() ? m.value() : std::vector<Mismatch>{};
 }
 
 TEST(ScriptExpect, AMatchingReportHasNoMismatches) {
@@ -135,7 +136,7 @@ TEST(ScriptExpect, AnExpressionThatCannotBeEvaluatedIsAnError) {
     Bindings vars;
     vars.push("n", 0);
     auto m = e.check(report(), vars, false);
-    ASSERT_FALSE(m.ok());
+    ASSERT_FALSE(m.has_value());
     EXPECT_NE(m.error().message.find("division by zero"), std::string::npos);
 }
 

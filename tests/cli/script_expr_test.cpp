@@ -12,19 +12,19 @@ namespace {
 /// Evaluates `text` with n bound to `n` (and i to 10); the test fails on an error.
 double eval(const std::string& text, double n = 3) {
     auto e = Expression::compile(text, {"n", "i"});
-    EXPECT_TRUE(e.ok()) << text << ": " << (e.ok() ? "" : e.error().message);
+    EXPECT_TRUE(e.has_value()) << text << ": " << (e.has_value() ? "" : e.error().message);
     if (!e) return std::nan("");
     Bindings vars;
     vars.push("i", 10);
     vars.push("n", n);
     auto v = e.value().evaluate(vars);
-    EXPECT_TRUE(v.ok()) << text << ": " << (v.ok() ? "" : v.error().message);
-    return v.ok() ? v.value() : std::nan("");
+    EXPECT_TRUE(v.has_value()) << text << ": " << (v.has_value() ? "" : v.error().message);
+    return v.has_value() ? v.value() : std::nan("");
 }
 
 std::string compile_error(const std::string& text) {
     auto e = Expression::compile(text, {"n"});
-    return e.ok() ? "" : e.error().message;
+    return e.has_value() ? "" : e.error().message;
 }
 
 std::string eval_error(const std::string& text, double n) {
@@ -33,7 +33,7 @@ std::string eval_error(const std::string& text, double n) {
     Bindings vars;
     vars.push("n", n);
     auto v = e.value().evaluate(vars);
-    return v.ok() ? "" : v.error().message;
+    return v.has_value() ? "" : v.error().message;
 }
 
 TEST(ScriptExpr, FollowsTheUsualPrecedence) {
@@ -72,7 +72,7 @@ TEST(ScriptExpr, HasTheDocumentedFunctionsAndConstants) {
 
 TEST(ScriptExpr, InnerBindingsHideOuterOnes) {
     auto e = Expression::compile("n * 100 + i", {"n", "i"});
-    ASSERT_TRUE(e.ok());
+    ASSERT_TRUE(e.has_value());
     Bindings vars;
     vars.push("n", 1);
     vars.push("i", 2);
@@ -99,7 +99,7 @@ TEST(ScriptExpr, RefusesUnknownNamesAndFunctionsWhenCompiled) {
     EXPECT_NE(compile_error("min(n)").find("min() takes 2 arguments, not 1"), std::string::npos);
     EXPECT_NE(compile_error("sin(n, 2)").find("takes 1 argument, not 2"), std::string::npos);
     auto outside = Expression::compile("n", {});
-    ASSERT_FALSE(outside.ok());
+    ASSERT_FALSE(outside.has_value());
     EXPECT_NE(outside.error().message.find("no repeat encloses this step"), std::string::npos);
 }
 

@@ -17,7 +17,7 @@ Outcome<Script> load(const std::string& text) {
 /// The failure of loading `text`: "line N: message".
 std::string error_of(const std::string& text) {
     auto s = load(text);
-    return s.ok() ? "(loaded)" : s.error().describe();
+    return s.has_value() ? "(loaded)" : s.error().describe();
 }
 
 TEST(ScriptLoader, ReadsEveryStepKindAndSkipsComments) {
@@ -33,7 +33,7 @@ TEST(ScriptLoader, ReadsEveryStepKindAndSkipsComments) {
         "\n"
         R"({"repeat": 2, "var": "f", "steps": [{"render": {}, "out": "f{f}.png"}, {"commit": {}}]})"
         "\n");
-    ASSERT_TRUE(s.ok()) << s.error().describe();
+    ASSERT_TRUE(s.has_value()) << s.error().describe();
     const Script& script = s.value();
     ASSERT_EQ(script.steps.size(), 4u);
     EXPECT_EQ(script.steps[0].kind, StepKind::Edits);
@@ -133,7 +133,7 @@ TEST(ScriptLoader, AnEmptyScriptIsRefused) {
 
 TEST(ScriptLoader, AMissingFileIsRefused) {
     auto s = load_script_file("/nonexistent/script.jsonl");
-    ASSERT_FALSE(s.ok());
+    ASSERT_FALSE(s.has_value());
     EXPECT_NE(s.error().message.find("cannot open script"), std::string::npos);
 }
 

@@ -29,8 +29,8 @@ public:
 Script load(const std::string& text) {
     std::istringstream in(text);
     auto s = load_script(in, "test.jsonl");
-    EXPECT_TRUE(s.ok()) << (s.ok() ? "" : s.error().describe());
-    return s.ok() ? std::move(s.value()) : Script{};
+    EXPECT_TRUE(s.has_value()) << (s.has_value() ? "" : s.error().describe());
+    return s.has_value() ? std::move(s.value()) : Script{};
 }
 
 class ScriptRunner : public ::testing::Test {

@@ -10,18 +10,18 @@ namespace {
 
 Json instantiate(const Json& tmpl, double n, std::vector<std::string> names = {"n"}) {
     auto t = JsonTemplate::compile(tmpl, names);
-    EXPECT_TRUE(t.ok()) << (t.ok() ? "" : t.error().message);
+    EXPECT_TRUE(t.has_value()) << (t.has_value() ? "" : t.error().message);
     if (!t) return nullptr;
     Bindings vars;
     vars.push("n", n);
     auto j = t.value().instantiate(vars);
-    EXPECT_TRUE(j.ok()) << (j.ok() ? "" : j.error().message);
-    return j.ok() ? j.value() : Json();
+    EXPECT_TRUE(j.has_value()) << (j.has_value() ? "" : j.error().message);
+    return j.has_value() ? j.value() : Json();
 }
 
 std::string compile_error(const Json& tmpl, std::vector<std::string> names = {"n"}) {
     auto t = JsonTemplate::compile(tmpl, names);
-    return t.ok() ? "" : t.error().message;
+    return t.has_value() ? "" : t.error().message;
 }
 
 TEST(ScriptTemplate, SubstitutesInsideAnyString) {
@@ -105,11 +105,11 @@ TEST(ScriptTemplate, RefusesBadTemplatesWhenCompiled) {
 
 TEST(ScriptTemplate, EvaluationErrorsAreReportedNotThrown) {
     auto t = JsonTemplate::compile({{"x", "{1 / n}"}}, {"n"});
-    ASSERT_TRUE(t.ok());
+    ASSERT_TRUE(t.has_value());
     Bindings vars;
     vars.push("n", 0);
     auto j = t.value().instantiate(vars);
-    ASSERT_FALSE(j.ok());
+    ASSERT_FALSE(j.has_value());
     EXPECT_NE(j.error().message.find("division by zero"), std::string::npos);
 }
 

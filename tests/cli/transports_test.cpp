@@ -46,10 +46,10 @@ class Transports : public ::testing::Test {
 protected:
     void SetUp() override {
         auto h = HttpTransport::create({"http://127.0.0.1:" + std::to_string(srv.port()), "", 60});
-        ASSERT_TRUE(h.ok()) << h.error().message;
+        ASSERT_TRUE(h.has_value()) << h.error().message;
         http = std::move(h.value());
         auto e = EmbeddedTransport::create(false);
-        ASSERT_TRUE(e.ok()) << e.error().message;
+        ASSERT_TRUE(e.has_value()) << e.error().message;
         embedded = std::move(e.value());
     }
 
@@ -122,7 +122,7 @@ TEST_F(Transports, ARenderSaysWhatItsCommitDidInTheSameHeader) {
 Verdict play_text(Transport& t, const std::string& text) {
     std::istringstream in(text);
     auto script = load_script(in, "t.jsonl");
-    EXPECT_TRUE(script.ok());
+    EXPECT_TRUE(script.has_value());
     struct Quiet final : PlayObserver {
         void on_start(const Script&, std::size_t) override {}
         void on_step(const StepRecord&) override {}
@@ -149,15 +149,15 @@ TEST(HttpTransport, RefusesUrlsItCannotUse) {
     for (const char* url : {"localhost:7070", "ftp://host", "http://", "http://host/v1",
                             "http://host:port", "http://host:123456"}) {
         auto t = HttpTransport::create({url, "", 1});
-        EXPECT_FALSE(t.ok()) << url;
+        EXPECT_FALSE(t.has_value()) << url;
     }
-    EXPECT_TRUE(HttpTransport::create({"http://127.0.0.1:7070/", "", 1}).ok());
-    EXPECT_TRUE(HttpTransport::create({"https://strata.example:8443", "", 1}).ok());
+    EXPECT_TRUE(HttpTransport::create({"http://127.0.0.1:7070/", "", 1}).has_value());
+    EXPECT_TRUE(HttpTransport::create({"https://strata.example:8443", "", 1}).has_value());
 }
 
 TEST(HttpTransport, AnUnreachableServerIsAnAnswerWithoutStatusThatSaysWhy) {
     auto t = HttpTransport::create({"http://127.0.0.1:1", "", 2});
-    ASSERT_TRUE(t.ok());
+    ASSERT_TRUE(t.has_value());
     const Reply r = t.value()->commit();
     EXPECT_EQ(r.status, 0);
     EXPECT_NE(describe_failure(r).find("could not connect (http://127.0.0.1:1)"), std::string::npos)

@@ -21,7 +21,7 @@ EditBatch one_material(const std::string& id) {
 TEST(ConditionalApply, AppliesWhenTheVersionMatches) {
     auto engine = test::make_engine();
     auto r = engine->apply(one_material("a"), uint64_t{0});
-    ASSERT_TRUE(r.ok()) << r.error().describe();
+    ASSERT_TRUE(r.has_value()) << r.error().describe();
     EXPECT_EQ(r.value().version, 1u);
     EXPECT_EQ(r.value().applied, 1u);
 }
@@ -30,7 +30,7 @@ TEST(ConditionalApply, RefusesAnotherVersionAndChangesNothing) {
     auto engine = test::make_engine();
     test::apply_ok(*engine, AddMaterial{"a", {}});
     auto r = engine->apply(one_material("b"), uint64_t{0});
-    ASSERT_FALSE(r.ok());
+    ASSERT_FALSE(r.has_value());
     EXPECT_EQ(r.error().code, ErrorCode::VersionMismatch);
     EXPECT_EQ(engine->read([](const Scene& s) { return s.version(); }), 1u);
     EXPECT_TRUE(engine->read([](const Scene& s) { return s.find_material("b").is_null(); }));
@@ -39,7 +39,7 @@ TEST(ConditionalApply, RefusesAnotherVersionAndChangesNothing) {
 TEST(ConditionalApply, WithoutAnExpectedVersionAlwaysApplies) {
     auto engine = test::make_engine();
     test::apply_ok(*engine, AddMaterial{"a", {}});
-    EXPECT_TRUE(engine->apply(one_material("b"), std::nullopt).ok());
+    EXPECT_TRUE(engine->apply(one_material("b"), std::nullopt).has_value());
 }
 
 TEST(ConditionalApply, OnlyOneOfManyRacingWritersWithTheSameVersionWins) {
@@ -48,7 +48,8 @@ TEST(ConditionalApply, OnlyOneOfManyRacingWritersWithTheSameVersionWins) {
     std::vector<std::thread> writers;
     for (int t = 0; t < 8; ++t) {
         writers.emplace_back([&, t] {
-            if (engine->apply(one_material("m" + std::to_string(t)), uint64_t{0}).ok()) ++wins;
+            if (engine->apply(one_material("m" + std::to_string(t)), uint64_t{0}).has_value())
+                ++wins;
         });
     }
     for (auto& w : writers) w.join();

@@ -32,15 +32,15 @@ constexpr double MAX_MEAN_DIFFERENCE = 1.0;
 const std::filesystem::path REFERENCE =
     std::filesystem::path(STRATA_TEST_DATA_DIR) / "demo_reference.png";
 
-void write_file(const std::filesystem::path& path, const std::vector<uint8_t>& bytes) {
+void write_file(const std::filesystem::path& path, const std::string& bytes) {
     std::ofstream f(path, std::ios::binary);
-    f.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+    f.write(bytes.data(), std::streamsize(bytes.size()));
     ASSERT_TRUE(f.good()) << "cannot write " << path;
 }
 
 TEST(ReferenceImage, DemoSceneMatchesTheStoredFrame) {
     auto engine = test::engine_with(make_demo_scene());
-    const RenderedImage image =
+    const EncodedFrame image =
         test::render_ok(*engine, test::request(WIDTH, HEIGHT, SPP, {}, ImageFormat::Png));
     ASSERT_FALSE(image.bytes.empty());
 
@@ -54,9 +54,9 @@ TEST(ReferenceImage, DemoSceneMatchesTheStoredFrame) {
     ASSERT_TRUE(f.good()) << "missing " << REFERENCE << "; see the top of this file";
     const std::vector<uint8_t> stored{std::istreambuf_iterator<char>(f), {}};
     auto expected = decode_png(stored.data(), stored.size());
-    auto actual = decode_png(image.bytes.data(), image.bytes.size());
-    ASSERT_TRUE(expected.ok()) << expected.error().describe();
-    ASSERT_TRUE(actual.ok());
+    auto actual = decode_png(image.bytes);
+    ASSERT_TRUE(expected.has_value()) << expected.error().describe();
+    ASSERT_TRUE(actual.has_value());
     ASSERT_EQ(expected.value().width, WIDTH);
     ASSERT_EQ(expected.value().height, HEIGHT);
     ASSERT_EQ(expected.value().channels, actual.value().channels);

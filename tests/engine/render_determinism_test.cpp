@@ -35,8 +35,8 @@ protected:
 };
 
 TEST_F(RenderDeterminism, SameInputsGiveIdenticalBytes) {
-    const RenderedImage a = render_ok(*engine, exr(4));
-    const RenderedImage b = render_ok(*engine, exr(4));
+    const EncodedFrame a = render_ok(*engine, exr(4));
+    const EncodedFrame b = render_ok(*engine, exr(4));
     ASSERT_FALSE(a.bytes.empty());
     EXPECT_EQ(a.bytes, b.bytes);
 
@@ -60,11 +60,11 @@ TEST_F(RenderDeterminism, SameInputsGiveIdenticalBytes) {
 TEST_F(RenderDeterminism, ThreadCountDoesNotChangeTheBytes) {
     auto render_in = [&](int threads) {
         tbb::task_arena arena(threads);
-        RenderedImage image;
+        EncodedFrame image;
         arena.execute([&] { image = render_ok(*engine, exr(3)); });
         return image.bytes;
     };
-    const std::vector<uint8_t> one = render_in(1);
+    const std::string one = render_in(1);
     ASSERT_FALSE(one.empty());
     EXPECT_EQ(render_in(2), one);
     EXPECT_EQ(render_in(5), one);
@@ -76,21 +76,21 @@ TEST_F(RenderDeterminism, MoreSamplesChangeTheImage) {
 }
 
 TEST_F(RenderDeterminism, AccumulatingKPlusKEqualsOneLaunchOf2K) {
-    const RenderedImage single = render_ok(*engine, exr(6));
-    EXPECT_EQ(single.samples, 6u);
+    const EncodedFrame single = render_ok(*engine, exr(6));
+    EXPECT_EQ(single.info.samples, 6u);
 
-    const RenderedImage first = render_ok(*engine, exr(3, true));
-    EXPECT_EQ(first.samples, 3u);
+    const EncodedFrame first = render_ok(*engine, exr(3, true));
+    EXPECT_EQ(first.info.samples, 3u);
     EXPECT_EQ(first.bytes, render_ok(*engine, exr(3)).bytes) << "a restart is a plain render";
-    const RenderedImage second = render_ok(*engine, exr(3, true));
-    EXPECT_EQ(second.samples, 6u);
+    const EncodedFrame second = render_ok(*engine, exr(3, true));
+    EXPECT_EQ(second.info.samples, 6u);
     EXPECT_EQ(second.bytes, single.bytes);
 
     // Uneven steps give the same total too.
-    const RenderedImage third = render_ok(*engine, exr(1, true));
-    const RenderedImage fourth = render_ok(*engine, exr(2, true));
-    EXPECT_EQ(third.samples, 7u);
-    EXPECT_EQ(fourth.samples, 9u);
+    const EncodedFrame third = render_ok(*engine, exr(1, true));
+    const EncodedFrame fourth = render_ok(*engine, exr(2, true));
+    EXPECT_EQ(third.info.samples, 7u);
+    EXPECT_EQ(fourth.info.samples, 9u);
     EXPECT_EQ(fourth.bytes, render_ok(*engine, exr(9)).bytes);
 }
 
@@ -103,8 +103,8 @@ TEST_F(RenderDeterminism, AccumulationConverges) {
     std::vector<std::vector<Vec3>> images;  // 1, 2, 4, ..., 64 samples
     for (uint32_t total = 1, step = 1; total <= 64; step = total, total *= 2) {
         r.spp = step;
-        const RenderedFrame f = render_frame_ok(*engine, r);
-        ASSERT_EQ(f.samples, total);
+        const Frame f = render_frame_ok(*engine, r);
+        ASSERT_EQ(f.info.samples, total);
         images.push_back(f.buffers.color);
         for (Vec3& c : images.back()) c = aces_fitted(c);
     }
@@ -118,41 +118,41 @@ TEST_F(RenderDeterminism, AccumulationConverges) {
 }
 
 TEST_F(RenderDeterminism, AnyEditOrCameraChangeRestartsAccumulation) {
-    EXPECT_EQ(render_ok(*engine, exr(2, true)).samples, 2u);
-    EXPECT_EQ(render_ok(*engine, exr(2, true)).samples, 4u);
+    EXPECT_EQ(render_ok(*engine, exr(2, true)).info.samples, 2u);
+    EXPECT_EQ(render_ok(*engine, exr(2, true)).info.samples, 4u);
 
     // Post-processing options and plain renders in between do not restart it.
     RenderRequest png = request(96, 54, 2, {}, ImageFormat::Png);
     png.accumulate = true;
     png.exposure = 1.5f;
-    EXPECT_EQ(render_ok(*engine, png).samples, 6u);
-    EXPECT_EQ(render_ok(*engine, exr(1)).samples, 1u);
-    EXPECT_EQ(render_ok(*engine, exr(2, true)).samples, 8u);
+    EXPECT_EQ(render_ok(*engine, png).info.samples, 6u);
+    EXPECT_EQ(render_ok(*engine, exr(1)).info.samples, 1u);
+    EXPECT_EQ(render_ok(*engine, exr(2, true)).info.samples, 8u);
 
     // A lighting edit bumps the version: restart.
     SetLighting light;
     light.sky_intensity = 0.3f;
     apply_ok(*engine, light);
-    EXPECT_EQ(render_ok(*engine, exr(2, true)).samples, 2u);
+    EXPECT_EQ(render_ok(*engine, exr(2, true)).info.samples, 2u);
 
     // A camera override restarts; going back to the scene camera restarts again.
     RenderRequest moved = exr(2, true);
     SetCamera cam;
     cam.eye = Vec3(3.0f, 4.0f, 9.0f);
     moved.camera = cam;
-    EXPECT_EQ(render_ok(*engine, moved).samples, 2u);
-    EXPECT_EQ(render_ok(*engine, moved).samples, 4u);
-    EXPECT_EQ(render_ok(*engine, exr(2, true)).samples, 2u);
+    EXPECT_EQ(render_ok(*engine, moved).info.samples, 2u);
+    EXPECT_EQ(render_ok(*engine, moved).info.samples, 4u);
+    EXPECT_EQ(render_ok(*engine, exr(2, true)).info.samples, 2u);
 
     // A new size restarts.
     RenderRequest bigger = exr(2, true);
     bigger.width = 100;
-    EXPECT_EQ(render_ok(*engine, bigger).samples, 2u);
+    EXPECT_EQ(render_ok(*engine, bigger).info.samples, 2u);
 
     // An instance edit restarts, and the result matches a fresh render of the new scene.
     apply_ok(*engine, SetTransform{"crate-a", Affine::translation({-1.0f, 0.5f, 3.0f})});
-    const RenderedImage restarted = render_ok(*engine, exr(2, true));
-    EXPECT_EQ(restarted.samples, 2u);
+    const EncodedFrame restarted = render_ok(*engine, exr(2, true));
+    EXPECT_EQ(restarted.info.samples, 2u);
     EXPECT_EQ(restarted.bytes, render_ok(*engine, exr(2)).bytes);
 }
 
@@ -161,13 +161,13 @@ TEST_F(RenderDeterminism, AccumulationStopsAtItsCap) {
     r.accumulate = true;
     uint32_t samples = 0;
     while (samples < MAX_ACCUMULATED_SAMPLES) {
-        const RenderedFrame f = render_frame_ok(*engine, r);
-        ASSERT_GT(f.samples, samples);
-        samples = f.samples;
+        const Frame f = render_frame_ok(*engine, r);
+        ASSERT_GT(f.info.samples, samples);
+        samples = f.info.samples;
     }
-    const RenderedFrame capped = render_frame_ok(*engine, r);
-    EXPECT_EQ(capped.samples, MAX_ACCUMULATED_SAMPLES);
-    EXPECT_EQ(capped.samples_added, 0u);
+    const Frame capped = render_frame_ok(*engine, r);
+    EXPECT_EQ(capped.info.samples, MAX_ACCUMULATED_SAMPLES);
+    EXPECT_EQ(capped.info.samples_added, 0u);
 }
 
 }  // namespace
@@ -178,9 +178,10 @@ namespace {
 
 TEST(RenderCameraOverride, MissingFieldsComeFromTheCameraOfTheRenderedVersion) {
     auto engine = test::make_engine();
-    ASSERT_TRUE(engine->apply(EditBatch{{test::mesh_edit("ball", make_sphere(1.0f, 32)),
-                                          test::instance_edit("ball", "ball")}})
-                    .ok());
+    ASSERT_TRUE(engine
+                    ->apply(EditBatch{{test::mesh_edit("ball", make_sphere(1.0f, 32)),
+                                       test::instance_edit("ball", "ball")}})
+                    .has_value());
     RenderRequest request;
     request.width = 16;
     request.height = 16;
@@ -188,19 +189,19 @@ TEST(RenderCameraOverride, MissingFieldsComeFromTheCameraOfTheRenderedVersion) {
     request.camera = SetCamera{};
     request.camera->fov_y_deg = 30.0f;  // eye and target come from the scene
     const auto before = engine->render(request);
-    ASSERT_TRUE(before.ok());
+    ASSERT_TRUE(before.has_value());
 
     // The same override after the scene camera moved renders from the new eye: it is completed
     // inside the launch, from the committed camera, not from whatever the caller saw earlier.
     SetCamera moved;
     moved.eye = Vec3(0.0f, 0.0f, 5.0f);
-    ASSERT_TRUE(engine->apply(EditBatch{{moved}}).ok());
+    ASSERT_TRUE(engine->apply(EditBatch{{moved}}).has_value());
     RenderRequest explicit_camera = request;
     explicit_camera.camera->eye = Vec3(0.0f, 0.0f, 5.0f);
     explicit_camera.camera->target = Vec3(0.0f);
     const auto after = engine->render(request);
     const auto expected = engine->render(explicit_camera);
-    ASSERT_TRUE(after.ok() && expected.ok());
+    ASSERT_TRUE(after.has_value() && expected.has_value());
     EXPECT_NE(after.value().bytes, before.value().bytes);
     EXPECT_EQ(after.value().bytes, expected.value().bytes);
 
@@ -208,7 +209,7 @@ TEST(RenderCameraOverride, MissingFieldsComeFromTheCameraOfTheRenderedVersion) {
     request.camera = SetCamera{};
     request.camera->target = Vec3(0.0f, 0.0f, 5.0f);  // the scene eye: eye == target
     const auto bad = engine->render(request);
-    ASSERT_FALSE(bad.ok());
+    ASSERT_FALSE(bad.has_value());
     EXPECT_EQ(bad.error().field, "camera/target");
 }
 

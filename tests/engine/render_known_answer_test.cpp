@@ -44,7 +44,7 @@ TEST_P(PlaneDepth, CentrePixelDepthIsTheDistance) {
     const float d = GetParam();
     auto engine = plane_at(d);
     // An odd size puts the centre pixel's ray exactly on the optical axis.
-    const RenderedFrame f = render_frame_ok(*engine, request(33, 21, 2, GEOMETRY_AOVS));
+    const Frame f = render_frame_ok(*engine, request(33, 21, 2, GEOMETRY_AOVS));
     const std::size_t centre = std::size_t(10) * 33 + 16;
     EXPECT_NEAR(f.buffers.depth[centre], d, d * 2e-6f);
     EXPECT_NEAR(f.buffers.position[centre].y, 0.0f, d * 2e-6f);
@@ -59,7 +59,7 @@ TEST(RenderKnownAnswer, PixelsThatHitNothingHaveTheDocumentedValues) {
     auto engine = test::make_engine();
     apply_ok(*engine, mesh_edit("box", make_box(Vec3(1.0f))),
              instance_edit("box", "box", {0, 0, 50}));
-    const RenderedFrame f =
+    const Frame f =
         render_frame_ok(*engine, request(16, 16, 1,
                                          {Aov::Albedo, Aov::Normal, Aov::Depth, Aov::Position,
                                           Aov::InstanceId, Aov::PrimitiveId, Aov::MeshId}));
@@ -87,7 +87,7 @@ TEST(RenderKnownAnswer, SphereSilhouetteCoversTheProjectedDisc) {
     apply_ok(*engine, mesh_edit("sphere", make_sphere(radius, 512)),
              instance_edit("sphere", "sphere"), camera_edit(cam));
     const uint32_t w = 241, h = 201;
-    const RenderedFrame f = render_frame_ok(*engine, request(w, h, 1, {Aov::InstanceId}));
+    const Frame f = render_frame_ok(*engine, request(w, h, 1, {Aov::InstanceId}));
     std::size_t covered = 0;
     for (uint32_t id : f.buffers.instance_id) covered += id != MISS_ID;
     // The silhouette is the cone of half-angle asin(r / D): a circle of radius tan of that on
@@ -117,7 +117,7 @@ protected:
     uint32_t mesh_slot(const char* mesh) const {
         return engine->read([&](const Scene& s) { return s.find_mesh(mesh).index; });
     }
-    RenderedFrame render() const {
+    Frame render() const {
         return render_frame_ok(*engine,
                                request(W, H, 1, {Aov::InstanceId, Aov::MeshId, Aov::PrimitiveId}));
     }
@@ -131,7 +131,7 @@ protected:
 };
 
 TEST_F(SeparatedInstances, InstanceIdNamesTheInstanceUnderEachPixel) {
-    const RenderedFrame f = render();
+    const Frame f = render();
     const FrameBuffers& b = f.buffers;
     const struct {
         const char* instance;
@@ -170,15 +170,15 @@ TEST_F(SeparatedInstances, InstanceIdNamesTheInstanceUnderEachPixel) {
 
 TEST_F(SeparatedInstances, MovedInstanceIdsMoveWithIt) {
     const uint32_t middle = slot("middle");
-    const RenderedFrame before = render();
+    const Frame before = render();
     const Vec3 moved(0.0f, 2.0f, 0.0f);
     apply_ok(*engine, SetTransform{"middle", Affine::translation(moved)});
-    const RenderedFrame after = render();
+    const Frame after = render();
 
     EXPECT_EQ(before.buffers.instance_id[at(MIDDLE)], middle);
     EXPECT_EQ(after.buffers.instance_id[at(MIDDLE)], MISS_ID);
     EXPECT_EQ(after.buffers.instance_id[at(moved)], middle);
-    EXPECT_EQ(after.version, before.version + 1);
+    EXPECT_EQ(after.info.version, before.info.version + 1);
 
     // The whole footprint shifts by the projected offset; the other instances stay put.
     const int dy = int(std::lround(project(cam, W, H, moved).y - project(cam, W, H, MIDDLE).y));
@@ -224,21 +224,23 @@ PoleHit look_down_at_pole(bool watertight, uint32_t segments, float radius) {
     SetCamera down;
     down.eye = Vec3(0.0f, 12.0f, 0.01f);
     down.target = Vec3(0.0f);
-    EXPECT_TRUE(engine->apply(EditBatch{{test::mesh_edit("ball", make_sphere(radius, segments)),
-                                          test::instance_edit("ball", "ball", {0, radius, 0}), down}})
-                    .ok());
+    EXPECT_TRUE(engine
+                    ->apply(EditBatch{{test::mesh_edit("ball", make_sphere(radius, segments)),
+                                       test::instance_edit("ball", "ball", {0, radius, 0}), down}})
+                    .has_value());
     PrimarySettings s;
     s.width = 9;
     s.height = 9;
-    const HitBuffers hits = std::move(engine->render_primary(s).value().hits);
+    const FrameBuffers hits = std::move(engine->render_primary(s).value().buffers);
     const std::size_t centre = 4 * 9 + 4;
-    return {hits.instance[centre], hits.distance[centre]};
+    return {hits.instance_id[centre], hits.depth[centre]};
 }
 
 TEST(RenderKnownAnswer, ARayThroughAVertexSharedByManyTrianglesHitsTheSurface) {
     // Embree's default (non-watertight) triangle test lets this very ray through the pole in each
     // of these meshes on the development machine; watertight mode must never.
-    for (const auto& [segments, radius] : {std::pair{64u, 1.0f}, {96u, 1.0f}, {192u, 1.0f}, {192u, 1.5f}}) {
+    for (const auto& [segments, radius] :
+         {std::pair{64u, 1.0f}, {96u, 1.0f}, {192u, 1.0f}, {192u, 1.5f}}) {
         const PoleHit hit = look_down_at_pole(true, segments, radius);
         ASSERT_NE(hit.instance, INVALID_ID)
             << "the ray slipped between the pole's triangles (" << segments << " segments)";

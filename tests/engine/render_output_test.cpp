@@ -41,9 +41,9 @@ protected:
 TEST_P(RenderOutput, ExrCarriesEveryAovWithOpenExrNames) {
     RenderRequest r = request(67, 39, 2, ALL_AOVS);
     r.compression = GetParam();
-    const RenderedImage image = render_ok(*engine, r);
+    const EncodedFrame image = render_ok(*engine, r);
     EXPECT_EQ(image.content_type, "image/x-exr");
-    const RenderedFrame frame = render_frame_ok(*engine, r);  // same inputs: same pixels
+    const Frame frame = render_frame_ok(*engine, r);  // same inputs: same pixels
     const DecodedExr exr = decode_exr_ok(image.bytes);
 
     ASSERT_EQ(exr.width, 67u);
@@ -109,11 +109,11 @@ TEST(RenderOutputBasics, CompressionShrinksTheFile) {
 
 TEST(RenderOutputBasics, PngDecodesToTheRequestedSize) {
     auto engine = test::engine_with(make_demo_scene());
-    const RenderedImage image =
+    const EncodedFrame image =
         render_ok(*engine, request(123, 45, 1, {Aov::Color}, ImageFormat::Png));
     EXPECT_EQ(image.content_type, "image/png");
-    auto decoded = decode_png(image.bytes.data(), image.bytes.size());
-    ASSERT_TRUE(decoded.ok()) << decoded.error().describe();
+    auto decoded = decode_png(image.bytes);
+    ASSERT_TRUE(decoded.has_value()) << decoded.error().describe();
     EXPECT_EQ(decoded.value().width, 123u);
     EXPECT_EQ(decoded.value().height, 45u);
     EXPECT_EQ(decoded.value().channels, 3);
@@ -123,10 +123,10 @@ TEST(RenderOutputBasics, PngIsTheToneMappedBeauty) {
     auto engine = test::engine_with(make_demo_scene());
     RenderRequest r = request(40, 24, 2, {}, ImageFormat::Png);
     r.exposure = -0.5f;
-    const RenderedFrame frame = render_frame_ok(*engine, r);
-    const RenderedImage image = render_ok(*engine, r);
-    auto decoded = decode_png(image.bytes.data(), image.bytes.size());
-    ASSERT_TRUE(decoded.ok());
+    const Frame frame = render_frame_ok(*engine, r);
+    const EncodedFrame image = render_ok(*engine, r);
+    auto decoded = decode_png(image.bytes);
+    ASSERT_TRUE(decoded.has_value());
     std::vector<uint8_t> expected(frame.buffers.pixel_count() * 3);
     tonemap_to_srgb8(frame.buffers.color.data(), frame.buffers.pixel_count(), -0.5f,
                      expected.data());
@@ -146,19 +146,19 @@ TEST(RenderOutputBasics, PngIsTheToneMappedBeauty) {
 TEST(RenderOutputBasics, AovsOtherThanColorNeedExr) {
     auto engine = test::engine_with(make_demo_scene());
     auto r = engine->render(request(8, 8, 1, {Aov::Color, Aov::Depth}, ImageFormat::Png));
-    ASSERT_FALSE(r.ok());
+    ASSERT_FALSE(r.has_value());
     EXPECT_EQ(r.error().code, ErrorCode::InvalidArgument);
     EXPECT_EQ(r.error().field, "aovs/1");
-    EXPECT_TRUE(engine->render(request(8, 8, 1, {Aov::Color}, ImageFormat::Png)).ok());
+    EXPECT_TRUE(engine->render(request(8, 8, 1, {Aov::Color}, ImageFormat::Png)).has_value());
 }
 
 TEST(RenderOutputBasics, DecodeRefusesGarbage) {
     const std::vector<uint8_t> junk = {'v', '/', '1', 1, 2, 3, 4, 5, 6, 7, 8, 9};
-    EXPECT_FALSE(decode_exr(junk.data(), junk.size()).ok());
+    EXPECT_FALSE(decode_exr(junk.data(), junk.size()).has_value());
     auto engine = test::engine_with(make_demo_scene());
-    std::vector<uint8_t> truncated = render_ok(*engine, request(16, 16, 1)).bytes;
+    std::string truncated = render_ok(*engine, request(16, 16, 1)).bytes;
     truncated.resize(truncated.size() / 2);
-    EXPECT_FALSE(decode_exr(truncated.data(), truncated.size()).ok());
+    EXPECT_FALSE(decode_exr(truncated).has_value());
 }
 
 TEST(ToneMap, Srgb8MatchesTheTransferFunctionExactly) {

@@ -26,22 +26,22 @@ inline RenderRequest request(uint32_t w, uint32_t h, uint32_t spp = 1, std::vect
     return r;
 }
 
-inline RenderedFrame render_frame_ok(Engine& engine, const RenderRequest& r) {
+inline Frame render_frame_ok(Engine& engine, const RenderRequest& r) {
     auto f = engine.render_frame(r);
-    EXPECT_TRUE(f.ok()) << (f.ok() ? "" : f.error().describe());
-    return f.ok() ? std::move(f.value()) : RenderedFrame{};
+    EXPECT_TRUE(f.has_value()) << (f.has_value() ? "" : f.error().describe());
+    return f.has_value() ? std::move(f.value()) : Frame{};
 }
 
-inline RenderedImage render_ok(Engine& engine, const RenderRequest& r) {
+inline EncodedFrame render_ok(Engine& engine, const RenderRequest& r) {
     auto f = engine.render(r);
-    EXPECT_TRUE(f.ok()) << (f.ok() ? "" : f.error().describe());
-    return f.ok() ? std::move(f.value()) : RenderedImage{};
+    EXPECT_TRUE(f.has_value()) << (f.has_value() ? "" : f.error().describe());
+    return f.has_value() ? std::move(f.value()) : EncodedFrame{};
 }
 
-inline DecodedExr decode_exr_ok(const std::vector<uint8_t>& bytes) {
-    auto d = decode_exr(bytes.data(), bytes.size());
-    EXPECT_TRUE(d.ok()) << (d.ok() ? "" : d.error().describe());
-    return d.ok() ? std::move(d.value()) : DecodedExr{};
+inline DecodedExr decode_exr_ok(const std::string& bytes) {
+    auto d = decode_exr(bytes);
+    EXPECT_TRUE(d.has_value()) << (d.has_value() ? "" : d.error().describe());
+    return d.has_value() ? std::move(d.value()) : DecodedExr{};
 }
 
 /// The continuous image position (pixels, (0, 0) the top-left corner) where world point `p`
@@ -78,7 +78,7 @@ inline double rms_difference(const std::vector<Vec3>& a, const std::vector<Vec3>
 inline std::unique_ptr<Engine> engine_with(EditBatch batch) {
     auto engine = make_engine();
     auto r = engine->apply(std::move(batch));
-    EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().describe());
+    EXPECT_TRUE(r.has_value()) << (r.has_value() ? "" : r.error().describe());
     return engine;
 }
 

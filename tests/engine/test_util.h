@@ -18,7 +18,8 @@ inline AddMesh mesh_edit(const std::string& id, MeshData data, BuildOptions buil
     return add_mesh_edit(id, std::move(data), build);
 }
 
-inline AddInstance instance_edit(const std::string& id, const std::string& mesh, Vec3 at = Vec3(0.0f)) {
+inline AddInstance instance_edit(const std::string& id, const std::string& mesh,
+                                 Vec3 at = Vec3(0.0f)) {
     AddInstance e;
     e.id = id;
     e.mesh = mesh;
@@ -28,7 +29,7 @@ inline AddInstance instance_edit(const std::string& id, const std::string& mesh,
 
 inline std::unique_ptr<Engine> make_engine() {
     auto engine = Engine::create();
-    EXPECT_TRUE(engine.ok()) << (engine.ok() ? "" : engine.error().describe());
+    EXPECT_TRUE(engine.has_value()) << (engine.has_value() ? "" : engine.error().describe());
     return std::move(engine.value());
 }
 
@@ -38,14 +39,14 @@ uint64_t apply_ok(Engine& engine, Edits&&... edits) {
     EditBatch batch;
     (batch.edits.emplace_back(std::forward<Edits>(edits)), ...);
     auto r = engine.apply(std::move(batch));
-    EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().describe());
-    return r.ok() ? r.value().version : 0;
+    EXPECT_TRUE(r.has_value()) << (r.has_value() ? "" : r.error().describe());
+    return r.has_value() ? r.value().version : 0;
 }
 
 inline RebuildReport commit_ok(Engine& engine) {
     auto r = engine.commit();
-    EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.error().describe());
-    return r.ok() ? r.value() : RebuildReport{};
+    EXPECT_TRUE(r.has_value()) << (r.has_value() ? "" : r.error().describe());
+    return r.has_value() ? r.value() : RebuildReport{};
 }
 
 inline std::vector<std::string> ids(const std::vector<MeshBuildEntry>& entries) {

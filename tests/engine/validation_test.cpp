@@ -25,7 +25,9 @@ struct InvalidCase {
     const char* field;  ///< expected Error::field ("" when none)
 };
 
-AddMesh tiny_mesh(const std::string& id) { return mesh_edit(id, make_box(Vec3(1.0f))); }
+AddMesh tiny_mesh(const std::string& id) {
+    return mesh_edit(id, make_box(Vec3(1.0f)));
+}
 
 UpdateMeshPositions positions(const std::string& mesh, uint32_t offset, std::vector<Vec3> p) {
     return UpdateMeshPositions{mesh, offset, std::move(p)};
@@ -119,37 +121,70 @@ std::vector<InvalidCase> invalid_cases() {
         {"MeshWithoutVertices", {no_vertices}, ErrorCode::EmptyMesh, "positions"},
         {"MeshWithEmptyId", {no_id}, ErrorCode::InvalidArgument, "id"},
         {"DuplicateMeshId", {tiny_mesh("box")}, ErrorCode::DuplicateId, "id"},
-        {"DuplicateMeshIdWithinBatch", {tiny_mesh("m2"), tiny_mesh("m2")}, ErrorCode::DuplicateId, "id"},
+        {"DuplicateMeshIdWithinBatch",
+         {tiny_mesh("m2"), tiny_mesh("m2")},
+         ErrorCode::DuplicateId,
+         "id"},
         {"MeshWithUnknownMaterial", {unknown_material}, ErrorCode::UnknownId, "material"},
         {"UpdateUnknownMesh", {positions("nope", 0, {{0, 0, 0}})}, ErrorCode::UnknownId, "mesh"},
-        {"UpdateRangePastTheEnd", {positions("box", 7, {{0, 0, 0}, {1, 1, 1}})}, ErrorCode::OutOfRange, "offset"},
-        {"UpdateMoreVerticesThanTheMeshHas", {positions("box", 0, std::vector<Vec3>(9))}, ErrorCode::OutOfRange, "positions"},
-        {"UpdateWithNaN", {positions("box", 2, {{0, NaN, 0}})}, ErrorCode::NotFinite, "positions/1"},
+        {"UpdateRangePastTheEnd",
+         {positions("box", 7, {{0, 0, 0}, {1, 1, 1}})},
+         ErrorCode::OutOfRange,
+         "offset"},
+        {"UpdateMoreVerticesThanTheMeshHas",
+         {positions("box", 0, std::vector<Vec3>(9))},
+         ErrorCode::OutOfRange,
+         "positions"},
+        {"UpdateWithNaN",
+         {positions("box", 2, {{0, NaN, 0}})},
+         ErrorCode::NotFinite,
+         "positions/1"},
         {"UpdateWithNothing", {positions("box", 0, {})}, ErrorCode::InvalidArgument, "positions"},
         {"TopologyIndexOutOfRange", {topo_out}, ErrorCode::OutOfRange, "indices/2"},
         {"TopologyWithoutTriangles", {topo_empty}, ErrorCode::EmptyMesh, "indices"},
         {"TopologyWithTooFewNewVertices", {topo_shrunk}, ErrorCode::OutOfRange, "indices/5"},
         {"RemoveUnknownMesh", {RemoveMesh{"nope"}}, ErrorCode::UnknownId, "mesh"},
         {"RemoveMeshStillInstanced", {RemoveMesh{"box"}}, ErrorCode::InUse, "mesh"},
-        {"RemoveMeshAfterAddingAnInstanceInTheBatch", {RemoveInstance{"i0"}, instance_edit("i5", "box"), RemoveMesh{"box"}}, ErrorCode::InUse, "mesh"},
+        {"RemoveMeshAfterAddingAnInstanceInTheBatch",
+         {RemoveInstance{"i0"}, instance_edit("i5", "box"), RemoveMesh{"box"}},
+         ErrorCode::InUse,
+         "mesh"},
         {"InstanceOfUnknownMesh", {unknown_mesh}, ErrorCode::UnknownId, "mesh"},
-        {"InstanceOfMeshRemovedEarlierInBatch", {RemoveInstance{"i0"}, RemoveMesh{"box"}, instance_edit("i9", "box")}, ErrorCode::UnknownId, "mesh"},
+        {"InstanceOfMeshRemovedEarlierInBatch",
+         {RemoveInstance{"i0"}, RemoveMesh{"box"}, instance_edit("i9", "box")},
+         ErrorCode::UnknownId,
+         "mesh"},
         {"DuplicateInstanceId", {duplicate_instance}, ErrorCode::DuplicateId, "id"},
         {"SingularTransform", {singular}, ErrorCode::DegenerateTransform, "transform"},
         {"FlattenedTransform", {flat}, ErrorCode::DegenerateTransform, "transform"},
         {"NaNTransform", {nan_transform}, ErrorCode::NotFinite, "transform"},
         {"InstanceWithUnknownMaterial", {bad_material}, ErrorCode::UnknownId, "material"},
         {"UpdateUnknownInstance", {update_unknown}, ErrorCode::UnknownId, "instance"},
-        {"UpdateInstanceToSingular", {update_singular}, ErrorCode::DegenerateTransform, "transform"},
-        {"SetTransformOfUnknownInstance", {SetTransform{"nope", Affine::identity()}}, ErrorCode::UnknownId, "instance"},
-        {"SetTransformOfRemovedInstance", {RemoveInstance{"i0"}, SetTransform{"i0", Affine::identity()}}, ErrorCode::UnknownId, "instance"},
+        {"UpdateInstanceToSingular",
+         {update_singular},
+         ErrorCode::DegenerateTransform,
+         "transform"},
+        {"SetTransformOfUnknownInstance",
+         {SetTransform{"nope", Affine::identity()}},
+         ErrorCode::UnknownId,
+         "instance"},
+        {"SetTransformOfRemovedInstance",
+         {RemoveInstance{"i0"}, SetTransform{"i0", Affine::identity()}},
+         ErrorCode::UnknownId,
+         "instance"},
         {"RemoveUnknownInstance", {RemoveInstance{"nope"}}, ErrorCode::UnknownId, "instance"},
         {"DuplicateMaterial", {AddMaterial{"paint", {}}}, ErrorCode::DuplicateId, "id"},
-        {"MaterialWithNegativeColor", {AddMaterial{"neg", negative}}, ErrorCode::InvalidArgument, "base_color"},
+        {"MaterialWithNegativeColor",
+         {AddMaterial{"neg", negative}},
+         ErrorCode::InvalidArgument,
+         "base_color"},
         {"MaterialRoughnessOutOfRange", {mat_range}, ErrorCode::InvalidArgument, "roughness"},
         {"MaterialEmissionNaN", {mat_nan}, ErrorCode::NotFinite, "emission"},
         {"UpdateUnknownMaterial", {mat_unknown}, ErrorCode::UnknownId, "material"},
-        {"MarkDirtyUnknownMesh", {MarkDirty{std::string("nope"), DirtyAction::Refit}}, ErrorCode::UnknownId, "target/mesh"},
+        {"MarkDirtyUnknownMesh",
+         {MarkDirty{std::string("nope"), DirtyAction::Refit}},
+         ErrorCode::UnknownId,
+         "target/mesh"},
         {"CameraWithNaN", {cam_nan}, ErrorCode::NotFinite, "eye"},
         {"CameraFovOutOfRange", {cam_fov}, ErrorCode::InvalidArgument, "fov_y_deg"},
         {"CameraEyeOnTarget", {cam_same}, ErrorCode::InvalidArgument, "target"},
@@ -157,7 +192,10 @@ std::vector<InvalidCase> invalid_cases() {
         {"SunDirectionZero", {light_dir}, ErrorCode::InvalidArgument, "sun_direction"},
         {"SkyIntensityInfinite", {light_inf}, ErrorCode::NotFinite, "sky_intensity"},
         {"SunColorNegative", {light_negative}, ErrorCode::InvalidArgument, "sun_color"},
-        {"AnythingAfterClearIsGone", {Clear{}, SetTransform{"i0", Affine::identity()}}, ErrorCode::UnknownId, "instance"},
+        {"AnythingAfterClearIsGone",
+         {Clear{}, SetTransform{"i0", Affine::identity()}},
+         ErrorCode::UnknownId,
+         "instance"},
     };
 }
 
@@ -178,15 +216,17 @@ TEST_P(InvalidEdit, IsRejectedWithItsErrorAndChangesNothing) {
     const std::size_t bad_index = batch.edits.size() - 1;
 
     auto r = engine->apply(std::move(batch));
-    ASSERT_FALSE(r.ok());
+    ASSERT_FALSE(r.has_value());
     EXPECT_EQ(r.error().code, GetParam().code) << r.error().describe();
     EXPECT_EQ(r.error().edit_index, bad_index) << r.error().describe();
     EXPECT_EQ(r.error().field, GetParam().field) << r.error().describe();
     EXPECT_FALSE(r.error().message.empty());
 
-    const auto [version_after, unchanged_tracker, no_extra, after] = engine->read([](const Scene& s) {
-        return std::tuple(s.version(), s.changes().empty(), s.find_mesh("extra").is_null(), s.to_batch());
-    });
+    const auto [version_after, unchanged_tracker, no_extra, after] =
+        engine->read([](const Scene& s) {
+            return std::tuple(s.version(), s.changes().empty(), s.find_mesh("extra").is_null(),
+                              s.to_batch());
+        });
     EXPECT_EQ(version_after, version);
     EXPECT_TRUE(unchanged_tracker);
     EXPECT_TRUE(no_extra);
@@ -206,10 +246,10 @@ TEST(Validation, EditsSeeEarlierEditsOfTheSameBatch) {
     grow.mesh = "m";
     grow.positions = make_plane(Vec3(1.0f), 4, 4).positions;  // 25 vertices
     grow.triangles = make_plane(Vec3(1.0f), 4, 4).triangles;
-    const uint64_t v = apply_ok(*engine, AddMaterial{"red", {}}, tiny_mesh("m"), instance_edit("a", "m"),
-                                RemoveInstance{"a"}, RemoveMesh{"m"}, mesh_edit("m", big),
-                                instance_edit("a", "m"), grow,
-                                positions("m", 20, std::vector<Vec3>(5, Vec3(0.5f))));
+    const uint64_t v =
+        apply_ok(*engine, AddMaterial{"red", {}}, tiny_mesh("m"), instance_edit("a", "m"),
+                 RemoveInstance{"a"}, RemoveMesh{"m"}, mesh_edit("m", big), instance_edit("a", "m"),
+                 grow, positions("m", 20, std::vector<Vec3>(5, Vec3(0.5f))));
     EXPECT_EQ(v, 1u);
     engine->read([](const Scene& s) {
         EXPECT_EQ(s.meshes().size(), 1u);
@@ -223,7 +263,7 @@ TEST(Validation, EachAppliedBatchIncrementsTheVersionByOne) {
     auto engine = test::make_engine();
     EXPECT_EQ(apply_ok(*engine, tiny_mesh("a"), tiny_mesh("b")), 1u);
     EXPECT_EQ(apply_ok(*engine, SetCamera{}), 2u);
-    EXPECT_FALSE(engine->apply(EditBatch{{RemoveMesh{"zz"}}}).ok());
+    EXPECT_FALSE(engine->apply(EditBatch{{RemoveMesh{"zz"}}}).has_value());
     EXPECT_EQ(apply_ok(*engine, Clear{}), 3u);
     test::commit_ok(*engine);
     EXPECT_EQ(engine->read([](const Scene& s) { return s.version(); }), 3u);
@@ -232,21 +272,20 @@ TEST(Validation, EachAppliedBatchIncrementsTheVersionByOne) {
 TEST(Handles, AStaleHandleIsRefused) {
     auto engine = test::make_engine();
     apply_ok(*engine, tiny_mesh("m"), instance_edit("a", "m"));
-    const auto [mesh, inst] = engine->read([](const Scene& s) {
-        return std::pair(s.find_mesh("m"), s.find_instance("a"));
-    });
+    const auto [mesh, inst] = engine->read(
+        [](const Scene& s) { return std::pair(s.find_mesh("m"), s.find_instance("a")); });
     apply_ok(*engine, RemoveInstance{"a"}, instance_edit("b", "m"));
     engine->read([&](const Scene& s) {
         const InstanceHandle b = s.find_instance("b");
         EXPECT_EQ(b.index, inst.index) << "the slot is reused";
         EXPECT_NE(b.generation, inst.generation);
         auto stale = s.instance(inst);
-        EXPECT_FALSE(stale.ok());
+        EXPECT_FALSE(stale.has_value());
         EXPECT_EQ(stale.error().code, ErrorCode::StaleHandle);
-        EXPECT_TRUE(s.instance(b).ok());
-        EXPECT_TRUE(s.mesh(mesh).ok());
-        EXPECT_FALSE(s.mesh(MeshHandle{}).ok());
-        EXPECT_FALSE(s.mesh(MeshHandle{mesh.index, mesh.generation + 1}).ok());
+        EXPECT_TRUE(s.instance(b).has_value());
+        EXPECT_TRUE(s.mesh(mesh).has_value());
+        EXPECT_FALSE(s.mesh(MeshHandle{}).has_value());
+        EXPECT_FALSE(s.mesh(MeshHandle{mesh.index, mesh.generation + 1}).has_value());
         return 0;
     });
 }

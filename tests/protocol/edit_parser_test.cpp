@@ -15,8 +15,8 @@ namespace {
 
 ParsedBatch parse_ok(const std::string& text) {
     auto r = parse_edit_batch(text, {});
-    EXPECT_TRUE(r.ok()) << text << ": " << (r.ok() ? "" : r.error().message);
-    return r.ok() ? std::move(r.value()) : ParsedBatch{};
+    EXPECT_TRUE(r.has_value()) << text << ": " << (r.has_value() ? "" : r.error().message);
+    return r.has_value() ? std::move(r.value()) : ParsedBatch{};
 }
 
 template <class T>
@@ -29,8 +29,8 @@ T one(const std::string& edit) {
 
 RequestError fails(const std::string& edits) {
     auto r = parse_edit_batch("{\"edits\": [" + edits + "]}", {});
-    EXPECT_FALSE(r.ok()) << edits;
-    return r.ok() ? RequestError{} : r.error();
+    EXPECT_FALSE(r.has_value()) << edits;
+    return r.has_value() ? RequestError{} : r.error();
 }
 
 std::string b64(const void* data, std::size_t n) {

@@ -9,14 +9,14 @@ namespace {
 
 Json parse_ok(std::string_view text, const JsonLimits& limits = {}) {
     auto r = parse_json(text, limits);
-    EXPECT_TRUE(r.ok()) << text << ": " << (r.ok() ? "" : r.error().message);
-    return r.ok() ? r.value() : Json();
+    EXPECT_TRUE(r.has_value()) << text << ": " << (r.has_value() ? "" : r.error().message);
+    return r.has_value() ? r.value() : Json();
 }
 
 RequestError parse_fails(std::string_view text, const JsonLimits& limits = {}) {
     auto r = parse_json(text, limits);
-    EXPECT_FALSE(r.ok()) << text;
-    return r.ok() ? RequestError{} : r.error();
+    EXPECT_FALSE(r.has_value()) << text;
+    return r.has_value() ? RequestError{} : r.error();
 }
 
 TEST(JsonDocument, ReadsEveryKindOfValueLikeNlohmann) {

@@ -11,7 +11,7 @@ TEST(RenderParser, ReadsEveryOptionOfTheBody) {
         parse_render_body(Json::parse(R"({"width": 320, "height": 200, "format": "exr", "spp": 16,
         "aovs": ["albedo", "depth"], "compression": "piz", "accumulate": true, "exposure": -1.5,
         "camera": {"eye": [0, 1, 5], "fov_y_deg": 30}})"));
-    ASSERT_TRUE(r.ok()) << r.error().message;
+    ASSERT_TRUE(r.has_value()) << r.error().message;
     const RenderRequest& q = r.value();
     EXPECT_EQ(q.width, 320u);
     EXPECT_EQ(q.height, 200u);
@@ -28,7 +28,7 @@ TEST(RenderParser, ReadsEveryOptionOfTheBody) {
 
 TEST(RenderParser, AnEmptyBodyMeansTheDefaults) {
     auto r = parse_render_body(Json::object());
-    ASSERT_TRUE(r.ok());
+    ASSERT_TRUE(r.has_value());
     EXPECT_EQ(r.value().width, RenderRequest{}.width);
     EXPECT_EQ(r.value().format, ImageFormat::Png);
     EXPECT_FALSE(r.value().camera.has_value());
@@ -40,7 +40,7 @@ TEST(RenderParser, TheQueryStringCarriesTheSameOptions) {
         {"aovs", "normal,depth"}, {"accumulate", "false"}, {"exposure", "0.5"}, {"eye", "1,2,3"},
         {"fov_y_deg", "60"},      {"compression", "zip"}};
     auto r = parse_render_query(params);
-    ASSERT_TRUE(r.ok()) << r.error().message;
+    ASSERT_TRUE(r.has_value()) << r.error().message;
     EXPECT_EQ(r.value().width, 64u);
     EXPECT_EQ(r.value().spp, 4u);
     EXPECT_THAT(r.value().aovs, ::testing::ElementsAre(Aov::Normal, Aov::Depth));
@@ -64,7 +64,7 @@ TEST(RenderParser, ErrorsPointAtTheMemberOrParameter) {
 TEST(RenderParser, ACameraOverrideKeepsOnlyTheFieldsItNames) {
     // The engine completes the rest from the camera of the version it renders.
     const auto r = parse_render_body(Json::parse(R"({"camera": {"fov_y_deg": 20}})"));
-    ASSERT_TRUE(r.ok());
+    ASSERT_TRUE(r.has_value());
     ASSERT_TRUE(r.value().camera.has_value());
     EXPECT_EQ(r.value().camera->fov_y_deg, 20.0f);
     EXPECT_FALSE(r.value().camera->eye.has_value());

@@ -17,8 +17,8 @@ Json load_table() {
     std::stringstream text;
     text << in.rdbuf();
     auto doc = parse_json(text.str());
-    EXPECT_TRUE(doc.ok());
-    return doc.ok() ? doc.value() : Json();
+    EXPECT_TRUE(doc.has_value());
+    return doc.has_value() ? doc.value() : Json();
 }
 
 TEST(SchemaAgreement, ParserGivesTheTableVerdicts) {
@@ -29,7 +29,7 @@ TEST(SchemaAgreement, ParserGivesTheTableVerdicts) {
         const std::string name = c["name"].get<std::string>();
         // Re-parse through the text form so the batch goes through the same reader as requests.
         auto body = parse_json(c["batch"].dump());
-        ASSERT_TRUE(body.ok()) << name;
+        ASSERT_TRUE(body.has_value()) << name;
         const auto problem = check_edit_batch_structure(body.value());
         EXPECT_EQ(!problem.has_value(), c["valid"].get<bool>())
             << name << (problem ? ": " + problem->message : std::string());
@@ -44,7 +44,7 @@ TEST(SchemaAgreement, StructurallyValidCasesWithANoteFailWithAValueError) {
     for (const Json& c : load_table()["cases"]) {
         if (!c.contains("note")) continue;
         auto parsed = parse_edit_batch(c["batch"].dump(), {});
-        ASSERT_FALSE(parsed.ok()) << c["name"];
+        ASSERT_FALSE(parsed.has_value()) << c["name"];
         EXPECT_EQ(parsed.error().kind, RequestErrorKind::Value) << c["name"];
     }
 }

@@ -27,8 +27,8 @@ TEST(TokenFile, IsTrimmedAndMustNotBeEmpty) {
     std::ofstream(path) << "  abc123\n";
     EXPECT_EQ(read_token_file(path).value(), "abc123");
     std::ofstream(path) << " \n\t";
-    EXPECT_FALSE(read_token_file(path).ok());
-    EXPECT_FALSE(read_token_file(path + "-missing").ok());
+    EXPECT_FALSE(read_token_file(path).has_value());
+    EXPECT_FALSE(read_token_file(path + "-missing").has_value());
     std::remove(path.c_str());
 }
 

@@ -87,8 +87,8 @@ TEST_F(Render, FramesOverThePixelCapAre413) {
 
 DecodedExr decode(const Reply& r) {
     auto exr = decode_exr(reinterpret_cast<const uint8_t*>(r.body.data()), r.body.size());
-    EXPECT_TRUE(exr.ok()) << (exr.ok() ? "" : exr.error().describe());
-    return exr.ok() ? std::move(exr.value()) : DecodedExr{};
+    EXPECT_TRUE(exr.has_value()) << (exr.has_value() ? "" : exr.error().describe());
+    return exr.has_value() ? std::move(exr.value()) : DecodedExr{};
 }
 
 TEST_F(Render, ExrFromThePostCarriesEveryRequestedAovWithOpenExrNames) {
@@ -96,8 +96,9 @@ TEST_F(Render, ExrFromThePostCarriesEveryRequestedAovWithOpenExrNames) {
                                                 {"height", 24},
                                                 {"format", "exr"},
                                                 {"compression", "piz"},
-                                                {"aovs", {"albedo", "normal", "depth", "position",
-                                                          "instance_id", "primitive_id", "mesh_id"}}});
+                                                {"aovs",
+                                                 {"albedo", "normal", "depth", "position",
+                                                  "instance_id", "primitive_id", "mesh_id"}}});
     ASSERT_EQ(r.status, 200) << r.body;
     EXPECT_EQ(r.header("Content-Type"), "image/x-exr");
     EXPECT_EQ(r.header("X-Strata-Samples"), "1");
@@ -106,12 +107,15 @@ TEST_F(Render, ExrFromThePostCarriesEveryRequestedAovWithOpenExrNames) {
     EXPECT_EQ(exr.height, 24u);
     EXPECT_EQ(exr.compression, ExrCompression::Piz);
     const std::vector<std::pair<std::string, ExrPixel>> expected = {
-        {"A", ExrPixel::Half},        {"B", ExrPixel::Half},        {"G", ExrPixel::Half},
-        {"N.X", ExrPixel::Half},      {"N.Y", ExrPixel::Half},      {"N.Z", ExrPixel::Half},
-        {"P.X", ExrPixel::Float},     {"P.Y", ExrPixel::Float},     {"P.Z", ExrPixel::Float},
-        {"R", ExrPixel::Half},        {"Z", ExrPixel::Float},       {"albedo.B", ExrPixel::Half},
-        {"albedo.G", ExrPixel::Half}, {"albedo.R", ExrPixel::Half}, {"instance_id", ExrPixel::Uint},
-        {"mesh_id", ExrPixel::Uint},  {"primitive_id", ExrPixel::Uint}};
+        {"A", ExrPixel::Half},           {"B", ExrPixel::Half},
+        {"G", ExrPixel::Half},           {"N.X", ExrPixel::Half},
+        {"N.Y", ExrPixel::Half},         {"N.Z", ExrPixel::Half},
+        {"P.X", ExrPixel::Float},        {"P.Y", ExrPixel::Float},
+        {"P.Z", ExrPixel::Float},        {"R", ExrPixel::Half},
+        {"Z", ExrPixel::Float},          {"albedo.B", ExrPixel::Half},
+        {"albedo.G", ExrPixel::Half},    {"albedo.R", ExrPixel::Half},
+        {"instance_id", ExrPixel::Uint}, {"mesh_id", ExrPixel::Uint},
+        {"primitive_id", ExrPixel::Uint}};
     ASSERT_EQ(exr.channels.size(), expected.size());
     for (const auto& [name, type] : expected) {
         const DecodedExrChannel* c = exr.find(name);
@@ -123,8 +127,9 @@ TEST_F(Render, ExrFromThePostCarriesEveryRequestedAovWithOpenExrNames) {
 }
 
 TEST_F(Render, ExrFromTheGetFormUsesTheQueryOptions) {
-    const Reply r = srv.get("/v1/render?width=32&height=16&format=exr&aovs=depth,instance_id"
-                            "&compression=none&spp=2");
+    const Reply r = srv.get(
+        "/v1/render?width=32&height=16&format=exr&aovs=depth,instance_id"
+        "&compression=none&spp=2");
     ASSERT_EQ(r.status, 200) << r.body;
     EXPECT_EQ(r.header("X-Strata-Samples"), "2");
     const DecodedExr exr = decode(r);
@@ -136,11 +141,12 @@ TEST_F(Render, ExrFromTheGetFormUsesTheQueryOptions) {
 
 TEST_F(Render, TheInstanceIdAovNamesTheIndexTheSceneApiReports) {
     // Look straight down at the big ball: the centre pixel shows it.
-    const Reply r = srv.post("/v1/render", Json{{"width", 9},
-                                                {"height", 9},
-                                                {"format", "exr"},
-                                                {"aovs", {"instance_id", "mesh_id"}},
-                                                {"camera", {{"eye", {0, 12, 0.01}}, {"target", {0, 0, 0}}}}});
+    const Reply r =
+        srv.post("/v1/render", Json{{"width", 9},
+                                    {"height", 9},
+                                    {"format", "exr"},
+                                    {"aovs", {"instance_id", "mesh_id"}},
+                                    {"camera", {{"eye", {0, 12, 0.01}}, {"target", {0, 0, 0}}}}});
     ASSERT_EQ(r.status, 200) << r.body;
     const DecodedExr exr = decode(r);
     const Json ball = srv.get("/v1/scene/instances/ball").json();

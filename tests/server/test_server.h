@@ -41,17 +41,17 @@ public:
     explicit TestServer(ServerConfig config = {}, bool demo = false) {
         spdlog::set_level(spdlog::level::warn);
         auto engine = Engine::create();
-        EXPECT_TRUE(engine.ok());
+        EXPECT_TRUE(engine.has_value());
         m_engine = std::move(engine.value());
         if (demo) {
-            EXPECT_TRUE(m_engine->apply(make_demo_scene()).ok());
+            EXPECT_TRUE(m_engine->apply(make_demo_scene()).has_value());
         }
         config.host = "127.0.0.1";
         config.port = 0;
         m_server = std::make_unique<Server>(config, *m_engine);
         auto port = m_server->bind();
-        EXPECT_TRUE(port.ok());
-        m_port = port.ok() ? port.value() : 0;
+        EXPECT_TRUE(port.has_value());
+        m_port = port.has_value() ? port.value() : 0;
         m_thread = std::thread([this] { m_server->listen(); });
     }
     ~TestServer() {

@@ -1,0 +1,39 @@
+#pragma once
+// The two frame types: a linear Frame (the buffers a launch wrote) and an EncodedFrame (the
+// bytes a client receives). Both carry FrameInfo: the version the frame shows and the report of
+// the commit its launch ran, so a caller never has to ask for that report separately.
+
+#include <cstdint>
+#include <string>
+
+#include "engine/accel/report.h"
+#include "engine/render/aov_buffers.h"
+
+namespace strata {
+
+/// How a frame was made.
+struct FrameInfo {
+    uint64_t version = 0;        ///< scene version the frame shows
+    RebuildReport report;        ///< the commit the launch ran
+    uint32_t samples = 0;        ///< samples per pixel in the frame (the total when accumulating)
+    uint32_t samples_added = 0;  ///< samples per pixel this launch traced
+    uint64_t rays = 0;           ///< rays traced (camera, shadow and bounce rays)
+    double render_ms = 0.0;      ///< tracing and shading
+};
+
+/// A frame's linear buffers.
+struct Frame {
+    FrameBuffers buffers;
+    FrameInfo info;
+};
+
+/// A frame encoded for a client. The bytes are a std::string so that they move, uncopied, into
+/// the HTTP response body.
+struct EncodedFrame {
+    std::string bytes;
+    std::string content_type;  ///< "image/png" or "image/x-exr"
+    FrameInfo info;
+    double encode_ms = 0.0;
+};
+
+}  // namespace strata
