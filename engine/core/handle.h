@@ -38,8 +38,10 @@ class SlotArray {
 public:
     using HandleT = Handle<Tag>;
 
-    /// Stores `value` and returns its handle.
-    HandleT insert(T value) {
+    /// Stores `value` and returns its handle. `reused_slot`, when given, says whether a free
+    /// slot was reused (what undo_insert needs to know).
+    HandleT insert(T value, bool* reused_slot = nullptr) {
+        if (reused_slot) *reused_slot = !m_free.empty();
         uint32_t index;
         if (!m_free.empty()) {
             index = m_free.back();
@@ -59,7 +61,8 @@ public:
 
     /// True when `h` names a live object (not erased, not from an older generation).
     bool contains(HandleT h) const {
-        return h.index < m_items.size() && m_alive[h.index] && m_generations[h.index] == h.generation;
+        return h.index < m_items.size() && m_alive[h.index] &&
+               m_generations[h.index] == h.generation;
     }
 
     /// The object, or nullptr for a stale or null handle.
@@ -85,6 +88,43 @@ public:
         m_free.push_back(h.index);
         --m_size;
         return true;
+    }
+
+    /// Takes back the most recent insert(), which returned `h`: the slot goes back exactly as it
+    /// was (same generation, same place in the free list), so later inserts hand out the same
+    /// handles as if the insert had never happened. Undo steps must run in reverse order.
+    void undo_insert(HandleT h, bool reused_slot) {
+        STRATA_CHECK(contains(h));
+        --m_size;
+        if (reused_slot) {
+            m_items[h.index] = T{};
+            m_alive[h.index] = 0;
+            m_free.push_back(h.index);
+            return;
+        }
+        STRATA_CHECK(h.index + 1 == m_items.size());
+        m_items.pop_back();
+        m_generations.pop_back();
+        m_alive.pop_back();
+    }
+
+    /// Takes the object out before erase()-ing it: what undo_erase needs to put it back.
+    T take(HandleT h) {
+        STRATA_CHECK(contains(h));
+        T value = std::move(m_items[h.index]);
+        erase(h);
+        return value;
+    }
+
+    /// Takes back the most recent erase() of `h` (its generation and the free list are restored).
+    void undo_erase(HandleT h, T value) {
+        STRATA_CHECK(h.index < m_items.size() && !m_alive[h.index] && !m_free.empty() &&
+                     m_free.back() == h.index && m_generations[h.index] == h.generation + 1);
+        m_free.pop_back();
+        --m_generations[h.index];
+        m_alive[h.index] = 1;
+        m_items[h.index] = std::move(value);
+        ++m_size;
     }
 
     /// Erases everything; every outstanding handle becomes stale.

@@ -72,8 +72,8 @@ EditBatch make_demo_scene() {
     e.emplace_back(mesh("crate", make_box(Vec3(1.0f)), "teal"));
     MeshData flag = make_plane(Vec3(3.0f, 1.0f, 2.0f), FLAG_NX, FLAG_NZ);
     flag.positions = demo_flag_positions(0.0f);
-    e.emplace_back(mesh("flag", std::move(flag), "flag",
-                        BuildOptions{BuildPreference::FastBuild, true}));
+    e.emplace_back(
+        mesh("flag", std::move(flag), "flag", BuildOptions{BuildPreference::FastBuild, true}));
 
     e.emplace_back(instance("ground", "ground", Affine::identity()));
     e.emplace_back(instance("ball", "ball", Affine::translation({0.0f, 1.5f, 0.0f})));
@@ -81,10 +81,12 @@ EditBatch make_demo_scene() {
         e.emplace_back(instance("pebble-" + std::to_string(i), "pebble", ring_transform(i, 0.0f),
                                 i % 3 == 0 ? std::optional<std::string>("gold") : std::nullopt));
     }
-    e.emplace_back(instance("crate-a", "crate",
-                            Affine::trs({-2.6f, 0.5f, 2.2f}, Affine::rotation_euler_deg({0, 30, 0}), Vec3(1.0f))));
-    e.emplace_back(instance("crate-b", "crate",
-                            Affine::trs({2.8f, 0.75f, 1.8f}, Affine::rotation_euler_deg({0, -20, 0}), Vec3(1.5f))));
+    e.emplace_back(instance(
+        "crate-a", "crate",
+        Affine::trs({-2.6f, 0.5f, 2.2f}, Affine::rotation_euler_deg({0, 30, 0}), Vec3(1.0f))));
+    e.emplace_back(instance(
+        "crate-b", "crate",
+        Affine::trs({2.8f, 0.75f, 1.8f}, Affine::rotation_euler_deg({0, -20, 0}), Vec3(1.5f))));
     e.emplace_back(instance("lamp", "crate",
                             Affine::trs({0.0f, 4.5f, -3.0f}, Affine::identity(), Vec3(0.6f)),
                             std::string("lamp")));
@@ -118,9 +120,9 @@ EditBatch make_demo_step(uint32_t step) {
             break;
         }
         case 1:  // one instance moves: one TLAS update
-            e.emplace_back(SetTransform{"crate-a", Affine::trs({-2.2f, 0.5f, 2.6f},
-                                                               Affine::rotation_euler_deg({0, 55, 0}),
-                                                               Vec3(1.0f))});
+            e.emplace_back(SetTransform{
+                "crate-a", Affine::trs({-2.2f, 0.5f, 2.6f}, Affine::rotation_euler_deg({0, 55, 0}),
+                                       Vec3(1.0f))});
             break;
         case 2:  // the whole ring moves: still one TLAS update
             for (uint32_t i = 0; i < RING_COUNT; ++i)

@@ -1,7 +1,8 @@
 #include "engine/scene/scene.h"
 
 #include <algorithm>
-#include <type_traits>
+
+#include "engine/scene/undo_log.h"
 
 namespace strata {
 
@@ -18,15 +19,6 @@ Error stale(const char* kind) {
 }
 
 }  // namespace
-
-const char* edit_name(const Edit& e) {
-    static constexpr const char* NAMES[] = {
-        "add_mesh",        "update_mesh",  "update_mesh",     "remove_mesh",   "add_material",
-        "update_material", "add_instance", "update_instance", "set_transform", "remove_instance",
-        "mark_dirty",      "set_camera",   "set_lighting",    "clear"};
-    static_assert(std::size(NAMES) == std::variant_size_v<Edit>);
-    return NAMES[e.index()];
-}
 
 void apply_to(Camera& c, const SetCamera& e) {
     if (e.eye) c.eye = *e.eye;
@@ -81,19 +73,31 @@ Material Scene::resolved_material(const InstanceRecord& inst) const {
 }
 
 Result<uint64_t> Scene::apply(EditBatch&& batch) {
-    if (Status s = validate(batch); !s) return Unexpected(s.error());
-    for (Edit& e : batch.edits) apply_one(std::move(e));
+    UndoLog undo;
+    undo.camera = m_camera;
+    undo.lighting = m_lighting;
+    undo.scene_bits = m_changes.scene_bits;
+    undo.changed_meshes = m_changes.meshes.size();
+    undo.changed_instances = m_changes.instances.size();
+    undo.changed_materials = m_changes.materials.size();
+    for (std::size_t i = 0; i < batch.edits.size(); ++i) {
+        Status s = std::visit([&](auto&& e) { return apply_edit(std::move(e), undo); },
+                              std::move(batch.edits[i]));
+        if (!s) {
+            roll_back(undo);
+            Error e = std::move(s).error();
+            e.edit_index = i;
+            return Unexpected(std::move(e));
+        }
+    }
     return ++m_version;
-}
-
-void Scene::apply_one(Edit&& edit) {
-    std::visit([this](auto&& e) { apply_edit(std::move(e)); }, std::move(edit));
 }
 
 // Step: change tracking helpers ---------------------------------------------------------------
 
-void Scene::mark_mesh(MeshHandle h, uint32_t bits) {
+void Scene::mark_mesh(MeshHandle h, uint32_t bits, UndoLog& undo) {
     MeshRecord& r = m_meshes.at(h);
+    undo.records.emplace_back(undo::MeshDirty{h, r.dirty, r.dirty_begin, r.dirty_end});
     if (r.dirty == 0) m_changes.meshes.push_back(h);
     r.dirty |= bits;
 }
@@ -111,6 +115,12 @@ void Scene::mark_material(MaterialHandle h, uint32_t bits) {
     m_changes.scene_bits |= dirty::Materials;
 }
 
+void Scene::save_instance(InstanceHandle h, UndoLog& undo) const {
+    const InstanceRecord& r = m_instances.at(h);
+    undo.records.emplace_back(
+        undo::InstanceState{h, r.material, r.transform, r.visible, r.mask, r.user_id, r.dirty});
+}
+
 void Scene::clear_changes() {
     for (MeshHandle h : m_changes.meshes) {
         if (MeshRecord* r = m_meshes.get(h)) {
@@ -126,174 +136,6 @@ void Scene::clear_changes() {
         if (MaterialRecord* r = m_materials.get(h)) r->dirty = 0;
     }
     m_changes.reset();
-}
-
-// Step: mesh edits -----------------------------------------------------------------------------
-
-void Scene::apply_edit(AddMesh&& e) {
-    MeshRecord r;
-    r.id = e.id;
-    r.positions = std::move(e.positions);
-    r.triangles = std::move(e.triangles);
-    r.build = e.build;
-    if (e.material) r.material = find_material(*e.material);
-    const MeshHandle h = m_meshes.insert(std::move(r));
-    m_mesh_ids[e.id] = h;
-    mark_mesh(h, dirty::MeshAdded);
-}
-
-void Scene::apply_edit(UpdateMeshPositions&& e) {
-    const MeshHandle h = find_mesh(e.mesh);
-    MeshRecord& r = m_meshes.at(h);
-    std::copy(e.positions.begin(), e.positions.end(), r.positions.begin() + e.offset);
-    const uint32_t end = e.offset + static_cast<uint32_t>(e.positions.size());
-    mark_mesh(h, dirty::MeshPoints);
-    r.dirty_begin = std::min(r.dirty_begin, e.offset);
-    r.dirty_end = std::max(r.dirty_end, end);
-}
-
-void Scene::apply_edit(ReplaceMeshTopology&& e) {
-    const MeshHandle h = find_mesh(e.mesh);
-    MeshRecord& r = m_meshes.at(h);
-    if (e.positions) r.positions = std::move(*e.positions);
-    r.triangles = std::move(e.triangles);
-    mark_mesh(h, dirty::MeshTopology);
-    r.dirty_begin = 0;
-    r.dirty_end = static_cast<uint32_t>(r.positions.size());
-}
-
-void Scene::remove_mesh(MeshHandle h) {
-    MeshRecord& r = m_meshes.at(h);
-    STRATA_CHECK(r.users.empty());
-    if (r.dirty == 0) m_changes.meshes.push_back(h);
-    m_mesh_ids.erase(r.id);
-    m_meshes.erase(h);
-}
-
-void Scene::apply_edit(RemoveMesh&& e) {
-    remove_mesh(find_mesh(e.mesh));
-}
-
-// Step: material edits -------------------------------------------------------------------------
-
-void Scene::apply_edit(AddMaterial&& e) {
-    const MaterialHandle h = m_materials.insert(MaterialRecord{e.id, e.material, 0});
-    m_material_ids[e.id] = h;
-    mark_material(h, dirty::MaterialAdded);
-}
-
-void Scene::apply_edit(UpdateMaterial&& e) {
-    const MaterialHandle h = find_material(e.material);
-    apply_to(m_materials.at(h).material, e);
-    mark_material(h, dirty::MaterialParams);
-}
-
-// Step: instance edits -------------------------------------------------------------------------
-
-void Scene::apply_edit(AddInstance&& e) {
-    InstanceRecord r;
-    r.id = e.id;
-    r.mesh = find_mesh(e.mesh);
-    if (e.material) r.material = find_material(*e.material);
-    r.transform = e.transform;
-    r.visible = e.visible;
-    r.mask = e.mask;
-    r.user_id = e.user_id;
-    MeshRecord& mesh = m_meshes.at(r.mesh);
-    r.user_slot = static_cast<uint32_t>(mesh.users.size());
-    const InstanceHandle h = m_instances.insert(std::move(r));
-    mesh.users.push_back(h);
-    m_instance_ids[e.id] = h;
-    mark_instance(h, dirty::InstanceAdded);
-}
-
-void Scene::apply_edit(UpdateInstance&& e) {
-    const InstanceHandle h = find_instance(e.instance);
-    InstanceRecord& r = m_instances.at(h);
-    uint32_t bits = 0;
-    if (e.material) {
-        r.material = *e.material ? find_material(**e.material) : MaterialHandle{};
-        bits |= dirty::InstanceMaterial;
-    }
-    if (e.transform) {
-        r.transform = *e.transform;
-        bits |= dirty::InstanceTransform;
-    }
-    if (e.visible) {
-        r.visible = *e.visible;
-        bits |= dirty::InstanceVisibility;
-    }
-    if (e.mask) {
-        r.mask = *e.mask;
-        bits |= dirty::InstanceMask;
-    }
-    if (e.user_id) {
-        r.user_id = *e.user_id;
-        bits |= dirty::InstanceUserId;
-    }
-    if (bits) mark_instance(h, bits);
-}
-
-void Scene::apply_edit(SetTransform&& e) {
-    const InstanceHandle h = find_instance(e.instance);
-    m_instances.at(h).transform = e.transform;
-    mark_instance(h, dirty::InstanceTransform);
-}
-
-void Scene::remove_instance(InstanceHandle h) {
-    InstanceRecord& r = m_instances.at(h);
-    MeshRecord& mesh = m_meshes.at(r.mesh);
-    // Swap-remove from the mesh's user list, fixing the moved instance's back index.
-    const InstanceHandle last = mesh.users.back();
-    mesh.users[r.user_slot] = last;
-    m_instances.at(last).user_slot = r.user_slot;
-    mesh.users.pop_back();
-    if (r.dirty == 0) m_changes.instances.push_back(h);
-    m_instance_ids.erase(r.id);
-    m_instances.erase(h);
-}
-
-void Scene::apply_edit(RemoveInstance&& e) {
-    remove_instance(find_instance(e.instance));
-}
-
-// Step: scene-wide edits -----------------------------------------------------------------------
-
-void Scene::apply_edit(MarkDirty&& e) {
-    if (e.mesh) {
-        mark_mesh(find_mesh(*e.mesh), e.action == DirtyAction::Refit ? dirty::MeshRefitRequested
-                                                                     : dirty::MeshRebuildRequested);
-    } else {
-        m_changes.scene_bits |= e.action == DirtyAction::Refit ? dirty::TlasUpdateRequested
-                                                               : dirty::TlasRebuildRequested;
-    }
-}
-
-void Scene::apply_edit(SetCamera&& e) {
-    apply_to(m_camera, e);
-    m_changes.scene_bits |= dirty::Camera;
-}
-
-void Scene::apply_edit(SetLighting&& e) {
-    apply_to(m_lighting, e);
-    m_changes.scene_bits |= dirty::Lighting;
-}
-
-void Scene::apply_edit(Clear&&) {
-    std::vector<InstanceHandle> instances;
-    m_instances.for_each([&](InstanceHandle h, const InstanceRecord&) { instances.push_back(h); });
-    for (InstanceHandle h : instances) remove_instance(h);
-    std::vector<MeshHandle> meshes;
-    m_meshes.for_each([&](MeshHandle h, const MeshRecord&) { meshes.push_back(h); });
-    for (MeshHandle h : meshes) remove_mesh(h);
-    m_materials.for_each([&](MaterialHandle h, MaterialRecord& r) {
-        if (r.dirty == 0) m_changes.materials.push_back(h);
-    });
-    m_materials.clear();
-    m_material_ids.clear();
-    m_camera = Camera{};
-    m_lighting = Lighting{};
-    m_changes.scene_bits |= dirty::Camera | dirty::Lighting | dirty::Materials;
 }
 
 // Step: queries --------------------------------------------------------------------------------

@@ -21,10 +21,10 @@ struct MeshRecord {
     std::vector<Vec3> positions;
     std::vector<Triangle> triangles;
     BuildOptions build;
-    MaterialHandle material;              ///< default for its instances; null: built-in default
-    std::vector<InstanceHandle> users;    ///< instances that reference this mesh
-    uint32_t dirty = 0;                   ///< dirty::MeshBits since the last commit
-    uint32_t dirty_begin = UINT32_MAX;    ///< vertices [dirty_begin, dirty_end) have new positions
+    MaterialHandle material;            ///< default for its instances; null: built-in default
+    std::vector<InstanceHandle> users;  ///< instances that reference this mesh
+    uint32_t dirty = 0;                 ///< dirty::MeshBits since the last commit
+    uint32_t dirty_begin = UINT32_MAX;  ///< vertices [dirty_begin, dirty_end) have new positions
     uint32_t dirty_end = 0;
 };
 
@@ -55,14 +55,15 @@ struct SceneCounts {
     uint64_t instanced_triangles = 0;  ///< over visible instances
 };
 
+struct UndoLog;
+
 class Scene {
 public:
-    /// Checks every edit of `batch` against the scene as the earlier edits of the batch would
-    /// leave it. The first problem comes back with its edit index; nothing is changed.
-    Status validate(const EditBatch& batch) const;
-
-    /// Validates, then applies every edit and increments the version by one. On error the scene
-    /// is untouched. Large arrays are moved out of the batch.
+    /// Applies every edit of `batch` in order, each checked against the scene as the earlier
+    /// edits of the batch left it (one rule per op, in scene_rules.cpp), and increments the
+    /// version by one. The first refused edit comes back as an Error with its index, and the
+    /// edits before it are undone: the scene is then exactly as before the call, slots and
+    /// handles included. Large arrays are moved out of the batch.
     Result<uint64_t> apply(EditBatch&& batch);
 
     /// Incremented once per applied batch.
@@ -99,27 +100,34 @@ public:
     void clear_changes();
 
 private:
-    void apply_one(Edit&& edit);
-    void apply_edit(AddMesh&& e);
-    void apply_edit(UpdateMeshPositions&& e);
-    void apply_edit(ReplaceMeshTopology&& e);
-    void apply_edit(RemoveMesh&& e);
-    void apply_edit(AddMaterial&& e);
-    void apply_edit(UpdateMaterial&& e);
-    void apply_edit(AddInstance&& e);
-    void apply_edit(UpdateInstance&& e);
-    void apply_edit(SetTransform&& e);
-    void apply_edit(RemoveInstance&& e);
-    void apply_edit(MarkDirty&& e);
-    void apply_edit(SetCamera&& e);
-    void apply_edit(SetLighting&& e);
-    void apply_edit(Clear&& e);
+    // One rule per op: check the edit against the scene as it is now, then change the scene,
+    // recording in `undo` what the change overwrote (scene_rules.cpp).
+    Status apply_edit(AddMesh&& e, UndoLog& undo);
+    Status apply_edit(UpdateMeshPositions&& e, UndoLog& undo);
+    Status apply_edit(ReplaceMeshTopology&& e, UndoLog& undo);
+    Status apply_edit(RemoveMesh&& e, UndoLog& undo);
+    Status apply_edit(AddMaterial&& e, UndoLog& undo);
+    Status apply_edit(UpdateMaterial&& e, UndoLog& undo);
+    Status apply_edit(AddInstance&& e, UndoLog& undo);
+    Status apply_edit(UpdateInstance&& e, UndoLog& undo);
+    Status apply_edit(SetTransform&& e, UndoLog& undo);
+    Status apply_edit(RemoveInstance&& e, UndoLog& undo);
+    Status apply_edit(MarkDirty&& e, UndoLog& undo);
+    Status apply_edit(SetCamera&& e, UndoLog& undo);
+    Status apply_edit(SetLighting&& e, UndoLog& undo);
+    Status apply_edit(Clear&& e, UndoLog& undo);
 
-    void mark_mesh(MeshHandle h, uint32_t bits);
+    /// Plays `undo` backwards (scene_undo.cpp).
+    void roll_back(UndoLog& undo);
+
+    /// Dirty-bit helpers. The `undo` forms first record the object's dirty state.
+    void mark_mesh(MeshHandle h, uint32_t bits, UndoLog& undo);
     void mark_instance(InstanceHandle h, uint32_t bits);
     void mark_material(MaterialHandle h, uint32_t bits);
-    void remove_instance(InstanceHandle h);
-    void remove_mesh(MeshHandle h);
+    void save_instance(InstanceHandle h, UndoLog& undo) const;
+    void remove_instance(InstanceHandle h, UndoLog& undo);
+    void remove_mesh(MeshHandle h, UndoLog& undo);
+    void remove_material(MaterialHandle h, UndoLog& undo);
 
     SlotArray<MeshRecord, MeshTag> m_meshes;
     SlotArray<InstanceRecord, InstanceTag> m_instances;

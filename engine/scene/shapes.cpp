@@ -41,9 +41,12 @@ MeshData make_sphere(float radius, uint32_t segments) {
     const uint32_t south = static_cast<uint32_t>(m.positions.size());
     m.positions.push_back({0.0f, -radius, 0.0f});
 
-    auto ring_vertex = [&](uint32_t r, uint32_t s) { return 1 + (r - 1) * segments + s % segments; };
+    auto ring_vertex = [&](uint32_t r, uint32_t s) {
+        return 1 + (r - 1) * segments + s % segments;
+    };
     m.triangles.reserve(sphere_triangle_count(segments));
-    for (uint32_t s = 0; s < segments; ++s) m.triangles.push_back({0, ring_vertex(1, s + 1), ring_vertex(1, s)});
+    for (uint32_t s = 0; s < segments; ++s)
+        m.triangles.push_back({0, ring_vertex(1, s + 1), ring_vertex(1, s)});
     for (uint32_t r = 1; r + 1 < rings; ++r) {
         for (uint32_t s = 0; s < segments; ++s) {
             const uint32_t a = ring_vertex(r, s), b = ring_vertex(r, s + 1);
@@ -75,7 +78,8 @@ MeshData make_plane(const Vec3& size, uint32_t nx, uint32_t nz) {
     m.positions.reserve(std::size_t(nx + 1) * (nz + 1));
     for (uint32_t z = 0; z <= nz; ++z) {
         for (uint32_t x = 0; x <= nx; ++x) {
-            m.positions.push_back({(float(x) / nx - 0.5f) * size.x, 0.0f, (float(z) / nz - 0.5f) * size.z});
+            m.positions.push_back(
+                {(float(x) / nx - 0.5f) * size.x, 0.0f, (float(z) / nz - 0.5f) * size.z});
         }
     }
     m.triangles.reserve(std::size_t(nx) * nz * 2);

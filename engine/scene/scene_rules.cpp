@@ -1,0 +1,389 @@
+// The rules of every edit op, each in one place: check the edit against the scene as the earlier
+// edits of its batch left it, then change the scene, recording what the change overwrote in the
+// batch's undo log (undo_log.h). Scene::apply undoes the whole batch when a rule refuses an edit,
+// so a rule never has to think about the edits after it. Editing only records changes (dirty
+// bits and change lists); no acceleration structure is touched here.
+
+#include <cmath>
+#include <string>
+
+#include "engine/scene/scene.h"
+#include "engine/scene/undo_log.h"
+
+namespace strata {
+
+namespace {
+
+/// Largest mesh the engine accepts; beyond this Embree's 32-bit primitive ids run out of room.
+constexpr std::size_t MAX_MESH_ELEMENTS = std::size_t(1) << 28;
+
+Status check_new_id(const std::string& id, bool taken, const char* kind) {
+    if (id.empty())
+        return failure(ErrorCode::InvalidArgument, std::string(kind) + " id is empty", "id");
+    if (taken)
+        return failure(ErrorCode::DuplicateId, std::string(kind) + " '" + id + "' already exists",
+                       "id");
+    return {};
+}
+
+Status unknown(const char* kind, const std::string& id, const char* field) {
+    return failure(ErrorCode::UnknownId, std::string("unknown ") + kind + " '" + id + "'", field);
+}
+
+/// `first_vertex` is the mesh vertex the array starts at (for messages); the field path indexes
+/// the flat number array of the request.
+Status check_positions(const std::vector<Vec3>& positions, const char* field,
+                       uint64_t first_vertex = 0) {
+    for (std::size_t i = 0; i < positions.size(); ++i) {
+        if (is_finite(positions[i])) continue;
+        const int k = std::isfinite(positions[i].x) ? (std::isfinite(positions[i].y) ? 2 : 1) : 0;
+        return failure(ErrorCode::NotFinite,
+                       "vertex " + std::to_string(first_vertex + i) + " has a NaN or infinite " +
+                           "xyz"[k] + " coordinate",
+                       std::string(field) + "/" + std::to_string(i * 3 + k));
+    }
+    return {};
+}
+
+/// A whole vertex array: not empty, not too large, every coordinate finite.
+Status check_vertex_array(const std::vector<Vec3>& positions) {
+    if (positions.size() > MAX_MESH_ELEMENTS)
+        return failure(ErrorCode::TooLarge, "too many vertices", "positions");
+    return check_positions(positions, "positions");
+}
+
+Status check_triangles(const std::vector<Triangle>& tris, std::size_t vertex_count,
+                       const char* field) {
+    if (tris.size() > MAX_MESH_ELEMENTS)
+        return failure(ErrorCode::TooLarge,
+                       "too many triangles (" + std::to_string(tris.size()) + ")", field);
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+        for (int k = 0; k < 3; ++k) {
+            if (tris[t][k] >= vertex_count)
+                return failure(ErrorCode::OutOfRange,
+                               "triangle " + std::to_string(t) + " uses vertex " +
+                                   std::to_string(tris[t][k]) + " but the mesh has " +
+                                   std::to_string(vertex_count) + " vertices",
+                               std::string(field) + "/" + std::to_string(t * 3 + k));
+        }
+    }
+    return {};
+}
+
+Status check_transform(const Affine& t, const char* field) {
+    if (const char* why = transform_problem(t)) {
+        const bool finite = t.is_finite();
+        return failure(finite ? ErrorCode::DegenerateTransform : ErrorCode::NotFinite, why, field);
+    }
+    return {};
+}
+
+}  // namespace
+
+// Step: mesh ops ---------------------------------------------------------------------------------
+
+Status Scene::apply_edit(AddMesh&& e, UndoLog& undo) {
+    if (Status s = check_new_id(e.id, !find_mesh(e.id).is_null(), "mesh"); !s) return s;
+    if (e.positions.empty() || e.triangles.empty())
+        return failure(
+            ErrorCode::EmptyMesh,
+            "mesh '" + e.id + "' has no " + (e.positions.empty() ? "vertices" : "triangles"),
+            e.positions.empty() ? "positions" : "indices");
+    if (Status s = check_vertex_array(e.positions); !s) return s;
+    if (Status s = check_triangles(e.triangles, e.positions.size(), "indices"); !s) return s;
+    MaterialHandle material;
+    if (e.material) {
+        material = find_material(*e.material);
+        if (material.is_null()) return unknown("material", *e.material, "material");
+    }
+
+    MeshRecord r;
+    r.id = e.id;
+    r.positions = std::move(e.positions);
+    r.triangles = std::move(e.triangles);
+    r.build = e.build;
+    r.material = material;
+    bool reused = false;
+    const MeshHandle h = m_meshes.insert(std::move(r), &reused);
+    undo.records.emplace_back(undo::Inserted<MeshHandle>{h, reused});
+    m_mesh_ids.emplace(std::move(e.id), h);
+    MeshRecord& mesh = m_meshes.at(h);
+    m_changes.meshes.push_back(h);
+    mesh.dirty = dirty::MeshAdded;
+    return {};
+}
+
+Status Scene::apply_edit(UpdateMeshPositions&& e, UndoLog& undo) {
+    const MeshHandle h = find_mesh(e.mesh);
+    if (h.is_null()) return unknown("mesh", e.mesh, "mesh");
+    MeshRecord& r = m_meshes.at(h);
+    if (e.positions.empty())
+        return failure(ErrorCode::InvalidArgument, "no positions given", "positions");
+    const uint64_t end = uint64_t(e.offset) + e.positions.size();
+    if (end > r.positions.size())
+        return failure(ErrorCode::OutOfRange,
+                       "vertices [" + std::to_string(e.offset) + ", " + std::to_string(end) +
+                           ") are outside mesh '" + e.mesh + "' which has " +
+                           std::to_string(r.positions.size()) + " vertices",
+                       e.offset ? "offset" : "positions");
+    if (Status s = check_positions(e.positions, "positions", e.offset); !s) return s;
+
+    mark_mesh(h, dirty::MeshPoints, undo);
+    if (e.positions.size() == r.positions.size()) {
+        // Every vertex: swap the arrays, so the undo record holds the old ones without a copy.
+        r.positions.swap(e.positions);
+        undo.records.emplace_back(undo::MeshPositions{h, 0, std::move(e.positions)});
+    } else {
+        const auto first = r.positions.begin() + e.offset;
+        undo.records.emplace_back(undo::MeshPositions{
+            h, e.offset, std::vector<Vec3>(first, first + std::ptrdiff_t(e.positions.size()))});
+        std::copy(e.positions.begin(), e.positions.end(), first);
+    }
+    r.dirty_begin = std::min(r.dirty_begin, e.offset);
+    r.dirty_end = std::max(r.dirty_end, static_cast<uint32_t>(end));
+    return {};
+}
+
+Status Scene::apply_edit(ReplaceMeshTopology&& e, UndoLog& undo) {
+    const MeshHandle h = find_mesh(e.mesh);
+    if (h.is_null()) return unknown("mesh", e.mesh, "mesh");
+    MeshRecord& r = m_meshes.at(h);
+    if (e.triangles.empty())
+        return failure(ErrorCode::EmptyMesh, "mesh has no triangles", "indices");
+    std::size_t vertex_count = r.positions.size();
+    if (e.positions) {
+        if (e.positions->empty())
+            return failure(ErrorCode::EmptyMesh, "mesh has no vertices", "positions");
+        if (Status s = check_vertex_array(*e.positions); !s) return s;
+        vertex_count = e.positions->size();
+    }
+    if (Status s = check_triangles(e.triangles, vertex_count, "indices"); !s) return s;
+
+    mark_mesh(h, dirty::MeshTopology, undo);
+    undo::MeshTopology old{h, std::nullopt, std::move(r.triangles)};
+    if (e.positions) {
+        old.positions = std::move(r.positions);
+        r.positions = std::move(*e.positions);
+    }
+    r.triangles = std::move(e.triangles);
+    undo.records.emplace_back(std::move(old));
+    r.dirty_begin = 0;
+    r.dirty_end = static_cast<uint32_t>(r.positions.size());
+    return {};
+}
+
+Status Scene::apply_edit(RemoveMesh&& e, UndoLog& undo) {
+    const MeshHandle h = find_mesh(e.mesh);
+    if (h.is_null()) return unknown("mesh", e.mesh, "mesh");
+    if (const std::size_t users = m_meshes.at(h).users.size(); users > 0)
+        return failure(
+            ErrorCode::InUse,
+            "mesh '" + e.mesh + "' is still used by " + std::to_string(users) + " instance(s)",
+            "mesh");
+    remove_mesh(h, undo);
+    return {};
+}
+
+void Scene::remove_mesh(MeshHandle h, UndoLog& undo) {
+    MeshRecord& r = m_meshes.at(h);
+    STRATA_CHECK(r.users.empty());
+    // Listed by its now stale handle, so the commit releases its BLAS.
+    if (r.dirty == 0) m_changes.meshes.push_back(h);
+    m_mesh_ids.erase(r.id);
+    undo.records.emplace_back(undo::Removed<MeshHandle, MeshRecord>{h, m_meshes.take(h)});
+}
+
+// Step: material ops -----------------------------------------------------------------------------
+
+Status Scene::apply_edit(AddMaterial&& e, UndoLog& undo) {
+    if (Status s = check_new_id(e.id, !find_material(e.id).is_null(), "material"); !s) return s;
+    if (Status s = check_material(e.material); !s) return s;
+
+    bool reused = false;
+    const MaterialHandle h = m_materials.insert(MaterialRecord{e.id, e.material, 0}, &reused);
+    undo.records.emplace_back(undo::Inserted<MaterialHandle>{h, reused});
+    m_material_ids.emplace(std::move(e.id), h);
+    mark_material(h, dirty::MaterialAdded);
+    return {};
+}
+
+Status Scene::apply_edit(UpdateMaterial&& e, UndoLog& undo) {
+    const MaterialHandle h = find_material(e.material);
+    if (h.is_null()) return unknown("material", e.material, "material");
+    MaterialRecord& r = m_materials.at(h);
+    Material updated = r.material;
+    apply_to(updated, e);
+    if (Status s = check_material(updated); !s) return s;
+
+    undo.records.emplace_back(undo::MaterialState{h, r.material, r.dirty});
+    r.material = updated;
+    mark_material(h, dirty::MaterialParams);
+    return {};
+}
+
+void Scene::remove_material(MaterialHandle h, UndoLog& undo) {
+    MaterialRecord& r = m_materials.at(h);
+    if (r.dirty == 0) m_changes.materials.push_back(h);
+    m_material_ids.erase(r.id);
+    undo.records.emplace_back(
+        undo::Removed<MaterialHandle, MaterialRecord>{h, m_materials.take(h)});
+}
+
+// Step: instance ops -----------------------------------------------------------------------------
+
+Status Scene::apply_edit(AddInstance&& e, UndoLog& undo) {
+    if (Status s = check_new_id(e.id, !find_instance(e.id).is_null(), "instance"); !s) return s;
+    const MeshHandle mesh_handle = find_mesh(e.mesh);
+    if (mesh_handle.is_null()) return unknown("mesh", e.mesh, "mesh");
+    MaterialHandle material;
+    if (e.material) {
+        material = find_material(*e.material);
+        if (material.is_null()) return unknown("material", *e.material, "material");
+    }
+    if (Status s = check_transform(e.transform, "transform"); !s) return s;
+
+    MeshRecord& mesh = m_meshes.at(mesh_handle);
+    InstanceRecord r;
+    r.id = e.id;
+    r.mesh = mesh_handle;
+    r.material = material;
+    r.transform = e.transform;
+    r.visible = e.visible;
+    r.mask = e.mask;
+    r.user_id = e.user_id;
+    r.user_slot = static_cast<uint32_t>(mesh.users.size());
+    bool reused = false;
+    const InstanceHandle h = m_instances.insert(std::move(r), &reused);
+    undo.records.emplace_back(undo::Inserted<InstanceHandle>{h, reused});
+    mesh.users.push_back(h);
+    m_instance_ids.emplace(std::move(e.id), h);
+    mark_instance(h, dirty::InstanceAdded);
+    return {};
+}
+
+Status Scene::apply_edit(UpdateInstance&& e, UndoLog& undo) {
+    const InstanceHandle h = find_instance(e.instance);
+    if (h.is_null()) return unknown("instance", e.instance, "instance");
+    MaterialHandle material;
+    if (e.material && *e.material) {
+        material = find_material(**e.material);
+        if (material.is_null()) return unknown("material", **e.material, "material");
+    }
+    if (e.transform) {
+        if (Status s = check_transform(*e.transform, "transform"); !s) return s;
+    }
+
+    save_instance(h, undo);
+    InstanceRecord& r = m_instances.at(h);
+    uint32_t bits = 0;
+    if (e.material) {
+        r.material = material;
+        bits |= dirty::InstanceMaterial;
+    }
+    if (e.transform) {
+        r.transform = *e.transform;
+        bits |= dirty::InstanceTransform;
+    }
+    if (e.visible) {
+        r.visible = *e.visible;
+        bits |= dirty::InstanceVisibility;
+    }
+    if (e.mask) {
+        r.mask = *e.mask;
+        bits |= dirty::InstanceMask;
+    }
+    if (e.user_id) {
+        r.user_id = *e.user_id;
+        bits |= dirty::InstanceUserId;
+    }
+    if (bits) mark_instance(h, bits);
+    return {};
+}
+
+Status Scene::apply_edit(SetTransform&& e, UndoLog& undo) {
+    const InstanceHandle h = find_instance(e.instance);
+    if (h.is_null()) return unknown("instance", e.instance, "instance");
+    if (Status s = check_transform(e.transform, "transform"); !s) return s;
+
+    save_instance(h, undo);
+    m_instances.at(h).transform = e.transform;
+    mark_instance(h, dirty::InstanceTransform);
+    return {};
+}
+
+Status Scene::apply_edit(RemoveInstance&& e, UndoLog& undo) {
+    const InstanceHandle h = find_instance(e.instance);
+    if (h.is_null()) return unknown("instance", e.instance, "instance");
+    remove_instance(h, undo);
+    return {};
+}
+
+void Scene::remove_instance(InstanceHandle h, UndoLog& undo) {
+    InstanceRecord& r = m_instances.at(h);
+    MeshRecord& mesh = m_meshes.at(r.mesh);
+    // Swap-remove from the mesh's user list, fixing the moved instance's back index.
+    const InstanceHandle last = mesh.users.back();
+    mesh.users[r.user_slot] = last;
+    m_instances.at(last).user_slot = r.user_slot;
+    mesh.users.pop_back();
+    // Listed by its now stale handle, so the commit takes it out of the TLAS.
+    if (r.dirty == 0) m_changes.instances.push_back(h);
+    m_instance_ids.erase(r.id);
+    undo.records.emplace_back(
+        undo::Removed<InstanceHandle, InstanceRecord>{h, m_instances.take(h)});
+}
+
+// Step: scene-wide ops ---------------------------------------------------------------------------
+
+Status Scene::apply_edit(MarkDirty&& e, UndoLog& undo) {
+    if (!e.mesh) {
+        m_changes.scene_bits |= e.action == DirtyAction::Refit ? dirty::TlasUpdateRequested
+                                                               : dirty::TlasRebuildRequested;
+        return {};
+    }
+    const MeshHandle h = find_mesh(*e.mesh);
+    if (h.is_null()) return unknown("mesh", *e.mesh, "target/mesh");
+    mark_mesh(
+        h, e.action == DirtyAction::Refit ? dirty::MeshRefitRequested : dirty::MeshRebuildRequested,
+        undo);
+    return {};
+}
+
+// Camera and lighting are saved whole at the start of each batch (UndoLog::camera, ::lighting).
+Status Scene::apply_edit(SetCamera&& e, UndoLog&) {
+    Camera updated = m_camera;
+    apply_to(updated, e);
+    if (Status s = check_camera(updated); !s) return s;
+    m_camera = updated;
+    m_changes.scene_bits |= dirty::Camera;
+    return {};
+}
+
+Status Scene::apply_edit(SetLighting&& e, UndoLog&) {
+    Lighting updated = m_lighting;
+    apply_to(updated, e);
+    if (Status s = check_lighting(updated); !s) return s;
+    m_lighting = updated;
+    m_changes.scene_bits |= dirty::Lighting;
+    return {};
+}
+
+Status Scene::apply_edit(Clear&&, UndoLog& undo) {
+    // Instances first: a mesh can only go once nothing uses it.
+    std::vector<InstanceHandle> instances;
+    instances.reserve(m_instances.size());
+    m_instances.for_each([&](InstanceHandle h, const InstanceRecord&) { instances.push_back(h); });
+    for (InstanceHandle h : instances) remove_instance(h, undo);
+    std::vector<MeshHandle> meshes;
+    m_meshes.for_each([&](MeshHandle h, const MeshRecord&) { meshes.push_back(h); });
+    for (MeshHandle h : meshes) remove_mesh(h, undo);
+    std::vector<MaterialHandle> materials;
+    m_materials.for_each([&](MaterialHandle h, const MaterialRecord&) { materials.push_back(h); });
+    for (MaterialHandle h : materials) remove_material(h, undo);
+    m_camera = Camera{};
+    m_lighting = Lighting{};
+    m_changes.scene_bits |= dirty::Camera | dirty::Lighting | dirty::Materials;
+    return {};
+}
+
+}  // namespace strata

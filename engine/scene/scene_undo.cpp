@@ -1,0 +1,120 @@
+// Undoing a refused batch: the undo log (undo_log.h) played backwards. Each step reverses one
+// change of scene_rules.cpp exactly, in reverse order, so slot arrays hand back the same slots
+// and generations and every record, id, dirty bit and change list is as before the batch.
+
+#include "engine/scene/scene.h"
+#include "engine/scene/undo_log.h"
+
+namespace strata {
+
+namespace {
+
+/// Reverses one undo record on the scene's storage. A friend-free helper: Scene passes in the
+/// pieces it owns.
+struct Reverser {
+    SlotArray<MeshRecord, MeshTag>& meshes;
+    SlotArray<InstanceRecord, InstanceTag>& instances;
+    SlotArray<MaterialRecord, MaterialTag>& materials;
+    std::unordered_map<std::string, MeshHandle>& mesh_ids;
+    std::unordered_map<std::string, InstanceHandle>& instance_ids;
+    std::unordered_map<std::string, MaterialHandle>& material_ids;
+
+    void operator()(undo::Inserted<MeshHandle>& r) {
+        mesh_ids.erase(meshes.at(r.handle).id);
+        meshes.undo_insert(r.handle, r.reused_slot);
+    }
+
+    void operator()(undo::Inserted<InstanceHandle>& r) {
+        const InstanceRecord& inst = instances.at(r.handle);
+        MeshRecord& mesh = meshes.at(inst.mesh);
+        STRATA_CHECK(!mesh.users.empty() && mesh.users.back() == r.handle);
+        mesh.users.pop_back();
+        instance_ids.erase(inst.id);
+        instances.undo_insert(r.handle, r.reused_slot);
+    }
+
+    void operator()(undo::Inserted<MaterialHandle>& r) {
+        material_ids.erase(materials.at(r.handle).id);
+        materials.undo_insert(r.handle, r.reused_slot);
+    }
+
+    void operator()(undo::Removed<MeshHandle, MeshRecord>& r) {
+        mesh_ids.emplace(r.record.id, r.handle);
+        meshes.undo_erase(r.handle, std::move(r.record));
+    }
+
+    void operator()(undo::Removed<InstanceHandle, InstanceRecord>& r) {
+        // Reverse the swap-remove from the mesh's user list.
+        MeshRecord& mesh = meshes.at(r.record.mesh);
+        const uint32_t slot = r.record.user_slot;
+        if (slot == mesh.users.size()) {
+            mesh.users.push_back(r.handle);
+        } else {
+            const InstanceHandle moved = mesh.users[slot];
+            instances.at(moved).user_slot = static_cast<uint32_t>(mesh.users.size());
+            mesh.users.push_back(moved);
+            mesh.users[slot] = r.handle;
+        }
+        instance_ids.emplace(r.record.id, r.handle);
+        instances.undo_erase(r.handle, std::move(r.record));
+    }
+
+    void operator()(undo::Removed<MaterialHandle, MaterialRecord>& r) {
+        material_ids.emplace(r.record.id, r.handle);
+        materials.undo_erase(r.handle, std::move(r.record));
+    }
+
+    void operator()(undo::MeshDirty& r) {
+        MeshRecord& mesh = meshes.at(r.handle);
+        mesh.dirty = r.dirty;
+        mesh.dirty_begin = r.dirty_begin;
+        mesh.dirty_end = r.dirty_end;
+    }
+
+    void operator()(undo::MeshPositions& r) {
+        MeshRecord& mesh = meshes.at(r.handle);
+        if (r.offset == 0 && r.positions.size() == mesh.positions.size()) {
+            mesh.positions.swap(r.positions);
+        } else {
+            std::copy(r.positions.begin(), r.positions.end(), mesh.positions.begin() + r.offset);
+        }
+    }
+
+    void operator()(undo::MeshTopology& r) {
+        MeshRecord& mesh = meshes.at(r.handle);
+        if (r.positions) mesh.positions = std::move(*r.positions);
+        mesh.triangles = std::move(r.triangles);
+    }
+
+    void operator()(undo::InstanceState& r) {
+        InstanceRecord& inst = instances.at(r.handle);
+        inst.material = r.material;
+        inst.transform = r.transform;
+        inst.visible = r.visible;
+        inst.mask = r.mask;
+        inst.user_id = r.user_id;
+        inst.dirty = r.dirty;
+    }
+
+    void operator()(undo::MaterialState& r) {
+        MaterialRecord& m = materials.at(r.handle);
+        m.material = r.material;
+        m.dirty = r.dirty;
+    }
+};
+
+}  // namespace
+
+void Scene::roll_back(UndoLog& undo) {
+    Reverser reverse{m_meshes,   m_instances,    m_materials,
+                     m_mesh_ids, m_instance_ids, m_material_ids};
+    for (auto it = undo.records.rbegin(); it != undo.records.rend(); ++it) std::visit(reverse, *it);
+    m_camera = undo.camera;
+    m_lighting = undo.lighting;
+    m_changes.scene_bits = undo.scene_bits;
+    m_changes.meshes.resize(undo.changed_meshes);
+    m_changes.instances.resize(undo.changed_instances);
+    m_changes.materials.resize(undo.changed_materials);
+}
+
+}  // namespace strata

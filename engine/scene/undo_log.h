@@ -1,0 +1,96 @@
+#pragma once
+// The undo log of one batch. Scene::apply runs each edit's rule (check, then change) directly on
+// the scene, recording here what each change overwrote; when an edit is refused, the log is
+// played backwards and the scene is exactly as before the batch: records, ids, slots and their
+// generations, dirty bits and change lists. A record holds what its change destroyed, moved out
+// rather than copied where it can be (a removed mesh's arrays, a replaced topology), so undoing a
+// batch costs about what applying it did.
+
+#include <cstdint>
+#include <optional>
+#include <variant>
+#include <vector>
+
+#include "engine/scene/scene.h"
+
+namespace strata {
+
+namespace undo {
+
+/// An object the batch created: undoing frees its slot and its id.
+template <class H>
+struct Inserted {
+    H handle;
+    bool reused_slot = false;
+};
+
+/// An object the batch removed, with everything it held.
+template <class H, class Record>
+struct Removed {
+    H handle;
+    Record record;
+};
+
+/// A mesh's dirty state before the batch touched it.
+struct MeshDirty {
+    MeshHandle handle;
+    uint32_t dirty = 0;
+    uint32_t dirty_begin = 0;
+    uint32_t dirty_end = 0;
+};
+
+/// Vertex positions an update overwrote: `positions` held vertices [offset, offset + size).
+struct MeshPositions {
+    MeshHandle handle;
+    uint32_t offset = 0;
+    std::vector<Vec3> positions;
+};
+
+/// The arrays a topology change replaced (positions only when they were replaced too).
+struct MeshTopology {
+    MeshHandle handle;
+    std::optional<std::vector<Vec3>> positions;
+    std::vector<Triangle> triangles;
+};
+
+/// An instance's editable state before an edit changed it.
+struct InstanceState {
+    InstanceHandle handle;
+    MaterialHandle material;
+    Affine transform;
+    bool visible = true;
+    uint32_t mask = 0;
+    uint32_t user_id = 0;
+    uint32_t dirty = 0;
+};
+
+/// A material's values before an edit changed them.
+struct MaterialState {
+    MaterialHandle handle;
+    Material material;
+    uint32_t dirty = 0;
+};
+
+}  // namespace undo
+
+using UndoRecord =
+    std::variant<undo::Inserted<MeshHandle>, undo::Inserted<InstanceHandle>,
+                 undo::Inserted<MaterialHandle>, undo::Removed<MeshHandle, MeshRecord>,
+                 undo::Removed<InstanceHandle, InstanceRecord>,
+                 undo::Removed<MaterialHandle, MaterialRecord>, undo::MeshDirty,
+                 undo::MeshPositions, undo::MeshTopology, undo::InstanceState, undo::MaterialState>;
+
+/// Everything needed to take one batch back.
+struct UndoLog {
+    std::vector<UndoRecord> records;
+    // Scene-wide state at the start of the batch. Change lists only grow during a batch, so
+    // their lengths are enough to restore them.
+    Camera camera;
+    Lighting lighting;
+    uint32_t scene_bits = 0;
+    std::size_t changed_meshes = 0;
+    std::size_t changed_instances = 0;
+    std::size_t changed_materials = 0;
+};
+
+}  // namespace strata
