@@ -26,6 +26,28 @@ std::string_view trim(std::string_view v) {
     return v;
 }
 
+/// Largest X-Strata-Report value: proxies and clients commonly refuse header lines over 64 KiB.
+constexpr std::size_t MAX_REPORT_HEADER = 60 * 1024;
+
+/// The report of a render's commit as one header value (compact JSON). A report too long for a
+/// header keeps its counts but lists only the first entries of `rebuilt`, `refit` and
+/// `released`, and says so with `"entries_truncated": true`.
+std::string report_header(const RebuildReport& report) {
+    std::string text = report_to_json(report).dump();
+    std::size_t keep = std::max({report.rebuilt.size(), report.refit.size(), report.released.size()});
+    while (text.size() > MAX_REPORT_HEADER && keep > 0) {
+        keep /= 2;
+        RebuildReport shorter = report;
+        shorter.rebuilt.resize(std::min(keep, shorter.rebuilt.size()));
+        shorter.refit.resize(std::min(keep, shorter.refit.size()));
+        shorter.released.resize(std::min(keep, shorter.released.size()));
+        Json j = report_to_json(shorter);
+        j["entries_truncated"] = true;
+        text = j.dump();
+    }
+    return text;
+}
+
 ApiResponse render(Engine& engine, const RenderRequest& request, const ApiLimits& limits) {
     const RenderRequest& q0 = request;
     const uint64_t pixels = uint64_t(q0.width) * q0.height;
@@ -48,6 +70,7 @@ ApiResponse render(Engine& engine, const RenderRequest& request, const ApiLimits
     r.body = std::move(frame.bytes);
     r.headers = {{"ETag", etag(frame.info.version)},
                  {"X-Strata-Rebuild", frame.info.report.summary()},
+                 {"X-Strata-Report", report_header(frame.info.report)},
                  {"X-Strata-Samples", std::to_string(frame.info.samples)},
                  {"Cache-Control", "no-store"}};
     r.commit = std::move(frame.info.report);

@@ -58,6 +58,8 @@ public:
     /// Number of fields checked whatever the profile, and of budgets (checked with --budgets).
     std::size_t count_checks() const;
     std::size_t count_budgets() const;
+    /// True when it checks a list of meshes (rebuilt, refit, released).
+    bool names_meshes() const { return !m_meshes.empty(); }
 
 private:
     struct CountField {

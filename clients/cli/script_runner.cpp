@@ -138,15 +138,18 @@ private:
         r.bytes = reply.body.size();
         r.version = etag_version(reply).value_or(0);
         if (s.out) write_frame(r, path, reply.body);
-        // The render's own commit is the engine's last report (exact while this script is the
-        // only client committing).
-        const Json stats = answer_json(r, m_transport.stats());
-        if (!stats.contains("last_report") || !stats["last_report"].is_object() ||
-            stats["last_report"].value("version", uint64_t(0)) != r.version)
+        // The report of the render's own commit comes with the frame.
+        const std::string header = reply.header("X-Strata-Report");
+        if (header.empty()) fail_request(r, reply, "the render answer has no X-Strata-Report");
+        try {
+            r.report = Json::parse(header);
+        } catch (const Json::exception& e) {
+            fail_request(r, reply, std::string("X-Strata-Report is not JSON: ") + e.what());
+        }
+        if (r.report->value("entries_truncated", false) && s.expect && s.expect->names_meshes())
             fail_request(r, {},
-                         "cannot read the report of the render's commit: another client "
-                         "committed in between");
-        r.report = stats["last_report"];
+                         "the render's report is too long for its header (entries truncated); "
+                         "expect mesh lists on a commit step instead");
     }
 
     void write_frame(StepRecord& r, const std::filesystem::path& path, const std::string& bytes) {

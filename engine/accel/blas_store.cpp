@@ -91,7 +91,6 @@ RTCSceneTy* BlasStore::scene(uint32_t slot) const {
 void BlasStore::release_slot(uint32_t slot) {
     BlasRecord& r = m_records[slot];
     if (!r.scene) return;
-    m_primitives -= r.triangle_count;
     rtcReleaseGeometry(r.geometry);
     rtcReleaseScene(r.scene);
     r = BlasRecord{};
@@ -149,8 +148,6 @@ Status BlasStore::build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics&
     rtcCommitGeometry(r.geometry);
     rtcCommitScene(r.scene);
 
-    m_primitives += triangle_count;
-    m_primitives -= r.triangle_count;
     r.vertex_count = vertex_count;
     r.triangle_count = triangle_count;
     r.baseline = BuildBaseline{metrics, 0};

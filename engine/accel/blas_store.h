@@ -59,16 +59,12 @@ public:
     /// Frees the BLAS in the slot of `h` if it belongs to `h`; returns whether it did.
     bool release(MeshHandle h);
 
-    /// Triangles over all BLASes.
-    uint64_t primitive_count() const { return m_primitives; }
-
 private:
     void release_slot(uint32_t slot);
 
     EmbreeDevice& m_device;
     bool m_watertight;
     std::vector<BlasRecord> m_records;  ///< indexed by mesh slot
-    uint64_t m_primitives = 0;
 };
 
 /// Bounds and triangle-box areas of a mesh's current positions (parallel over large meshes).

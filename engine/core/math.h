@@ -37,7 +37,6 @@ struct Bounds3 {
         const Vec3 e = extent();
         return 2.0f * (e.x * e.y + e.y * e.z + e.z * e.x);
     }
-    float diagonal() const { return glm::length(extent()); }
 };
 
 /// Row-major 3x4 affine transform: rows are (r00 r01 r02 tx), (r10 r11 r12 ty), (r20 r21 r22 tz).

@@ -33,10 +33,14 @@ public:
         r.status = 200;
         r.content_type = "image/png";
         r.body = "frame at v" + std::to_string(version);
-        r.headers = {{"ETag", "\"" + std::to_string(version) + "\""}};
+        r.headers = {{"ETag", "\"" + std::to_string(version) + "\""},
+                     {"X-Strata-Report", last.dump()}};
         return r;
     }
-    Reply stats() override { return json(200, {{"version", version}, {"last_report", last}}); }
+    Reply stats() override {
+        ++stats_calls;
+        return json(200, {{"version", version}, {"last_report", last}});
+    }
     Reply scene() override { return json(200, {{"version", version}}); }
     std::string describe() const override { return "the fake"; }
 
@@ -51,6 +55,7 @@ public:
 
     uint64_t version = 0;
     int commits = 0;
+    int stats_calls = 0;
     std::deque<std::string> tlas_actions;  ///< actions of the next reports, in order
     std::vector<Json> edit_bodies;
     std::vector<Json> render_bodies;

@@ -80,6 +80,37 @@ TEST_F(ScriptRunner, NestedRepeatsSeeBothVariables) {
     EXPECT_EQ(observer.records[1].vars, "a=0, b=1");
 }
 
+TEST_F(ScriptRunner, RenderExpectationsReadTheReportThatCameWithTheFrame) {
+    // Another client's commit between the render and any later request must not matter: the
+    // runner never asks /v1/stats, it reads the report the render answered with.
+    fake.tlas_actions = {"update"};
+    const PlayResult r = run(R"({"render": {}, "expect": {"tlas": "update"}})");
+    ASSERT_EQ(r.verdict, Verdict::Passed) << r.message;
+    EXPECT_EQ(fake.stats_calls, 0);
+}
+
+TEST_F(ScriptRunner, ARenderAnswerWithoutItsReportIsARequestFailure) {
+    struct NoReport final : public Transport {
+        Reply edits(std::string, const std::optional<std::string>&) override { return {}; }
+        Reply commit() override { return {}; }
+        Reply plan() override { return {}; }
+        Reply render(const std::string&) override {
+            Reply r;
+            r.status = 200;
+            r.content_type = "image/png";
+            r.body = "frame";
+            return r;
+        }
+        Reply stats() override { return {}; }
+        Reply scene() override { return {}; }
+        std::string describe() const override { return "no report"; }
+    } transport;
+    script = load(R"({"render": {}})");
+    const PlayResult r = play(script, transport, options, observer);
+    EXPECT_EQ(r.verdict, Verdict::RequestFailed);
+    EXPECT_NE(r.message.find("X-Strata-Report"), std::string::npos) << r.message;
+}
+
 TEST_F(ScriptRunner, FramesAreWrittenWhereOutSaysAndTheFormatFollowsTheName) {
     const PlayResult r = run(
         R"({"repeat": 2, "steps": [{"edits": []}, {"render": {"width": 8, "height": 4}, "out": "a/b/f{n:3}.png"}]})"

@@ -90,6 +90,10 @@ class ClientTest(unittest.TestCase):
         self.assertEqual(info.content_type, "image/png")
         self.assertTrue(info.rebuild.startswith(f"v{self.version} tlas=update(1) rebuilds=1"),
                         info.rebuild)
+        self.assertEqual(info.report["version"], self.version)
+        self.assertEqual(info.report["blas_rebuilds"], 1)
+        self.assertEqual(info.report["tlas"]["action"], "update")
+        self.assertEqual(len(info.report["rebuilt"]), 1)
         self.client.render(16, 16, camera={"eye": [0, 5, 0.1]}, exposure=1)
         self.assertTrue(self.client.last_render.rebuild.startswith(
             f"v{self.version} tlas=none(1) rebuilds=0 refits=0"))

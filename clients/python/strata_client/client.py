@@ -39,12 +39,15 @@ class ProblemError(Exception):
 
 class RenderInfo:
     """What the last render answered besides the image: the version the frame shows, the
-    one-line summary of its commit (X-Strata-Rebuild) and the content type."""
+    one-line summary of its commit (X-Strata-Rebuild), that commit's full rebuild report
+    (X-Strata-Report, a dict; None if absent) and the content type."""
 
-    def __init__(self, version: Optional[int], rebuild: str, content_type: str):
+    def __init__(self, version: Optional[int], rebuild: str, content_type: str,
+                 report: Optional[Dict[str, Any]] = None):
         self.version = version
         self.rebuild = rebuild
         self.content_type = content_type
+        self.report = report
 
     def __repr__(self) -> str:
         return f"RenderInfo(version={self.version!r}, rebuild={self.rebuild!r})"
@@ -197,9 +200,11 @@ class Client:
                                                json.dumps(body).encode("utf-8"))
         if not 200 <= status < 300:
             raise self._problem(status, response, data)
+        report_text = response.getheader("X-Strata-Report")
         self.last_render = RenderInfo(_etag_version(response.getheader("ETag")),
                                       response.getheader("X-Strata-Rebuild", ""),
-                                      response.getheader("Content-Type", ""))
+                                      response.getheader("Content-Type", ""),
+                                      json.loads(report_text) if report_text else None)
         return data
 
     def render_array(self, width: int = 640, height: int = 360, **opts: Any):
