@@ -1,13 +1,13 @@
 #pragma once
-// JSON edit batches -> engine EditBatch. `{"edits": [{"op": "add_mesh", ...}, ...]}`; the ops and
-// their members are documented in protocol/README.md and protocol/edit-batch.schema.json.
+// JSON edit batches -> engine EditBatch. `{"edits": [{"op": "add_mesh", ...}, ...]}`; the ops are
+// listed in edit_ops.h (each op's parser and schema live in protocol/ops/), documented in
+// protocol/README.md and described by protocol/edit-batch.schema.json, generated from that list.
 //
 // Two stages in one pass: structural checks (exactly what the JSON Schema says: types, required
 // and unknown members, enums, ranges) throw at the first problem; value checks (numbers that do
 // not fit a float, arrays whose length is not a multiple of 3, ...) are reported only when the
 // structure is sound. Checks against the scene (unknown ids, ...) are the engine's, at apply.
 
-#include <optional>
 #include <string_view>
 #include <vector>
 
@@ -37,12 +37,5 @@ constexpr uint32_t MAX_PLANE_SUBDIVISIONS = 1024;
 Parsed<ParsedBatch> parse_edit_batch(const Json& body);
 /// Parses a batch from request text.
 Parsed<ParsedBatch> parse_edit_batch(std::string_view text, const JsonLimits& limits);
-
-/// The structural stage alone: the first schema error, or nullopt when the document matches the
-/// JSON Schema. Value errors are ignored.
-std::optional<RequestError> check_edit_batch_structure(const Json& body);
-
-/// Wire names of every op, in schema order.
-const std::vector<std::string_view>& edit_op_names();
 
 }  // namespace strata::protocol

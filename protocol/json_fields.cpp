@@ -85,8 +85,16 @@ void FieldReader::schema_error(const std::string& ptr, std::string message) cons
     throw RequestFailure(std::move(e));
 }
 
-void FieldReader::expect_object(const Json& v, const std::string& ptr,
-                                std::initializer_list<std::string_view> allowed) const {
+bool MemberRule::allows(std::string_view key) const {
+    for (const std::string& a : allowed) {
+        if (a == key) return true;
+    }
+    return false;
+}
+
+template <class Names>
+void FieldReader::expect_known_members(const Json& v, const std::string& ptr,
+                                       const Names& allowed) const {
     if (!v.is_object()) schema_error(ptr, std::string("expected an object, got ") + type_name(v));
     for (const auto& [key, value] : v.items()) {
         bool known = false;
@@ -97,6 +105,17 @@ void FieldReader::expect_object(const Json& v, const std::string& ptr,
             schema_error(child(ptr, key), "unknown member '" + key + "' (allowed: " + list + ")");
         }
     }
+}
+
+void FieldReader::expect_object(const Json& v, const std::string& ptr,
+                                std::initializer_list<std::string_view> allowed) const {
+    expect_known_members(v, ptr, allowed);
+}
+
+void FieldReader::expect_object(const Json& v, const std::string& ptr,
+                                const MemberRule& rule) const {
+    expect_known_members(v, ptr, rule.allowed);
+    for (const std::string& key : rule.required) required(v, ptr, key);
 }
 
 const Json* FieldReader::member(const Json& obj, std::string_view key) {

@@ -20,6 +20,16 @@ namespace strata::protocol {
 /// Longest id, in Unicode code points (the schema's maxLength).
 constexpr std::size_t MAX_ID_LENGTH = 256;
 
+/// The members an object may have and those it must have, in schema order (read from a JSON
+/// Schema object's `properties` and `required`: see edit_schema.h).
+struct MemberRule {
+    std::vector<std::string> allowed;
+    std::vector<std::string> required;
+
+    /// True when `key` is one of `allowed`.
+    bool allows(std::string_view key) const;
+};
+
 class FieldReader {
 public:
     /// Edit index copied into the errors raised from now on (NO_INDEX outside a batch).
@@ -35,6 +45,9 @@ public:
     /// Requires an object with no members beyond `allowed`.
     void expect_object(const Json& v, const std::string& ptr,
                        std::initializer_list<std::string_view> allowed) const;
+    /// Requires an object with no members beyond `rule.allowed` and every one of
+    /// `rule.required` (the first missing one, in the rule's order, is the error).
+    void expect_object(const Json& v, const std::string& ptr, const MemberRule& rule) const;
     /// The member, or nullptr when absent.
     static const Json* member(const Json& obj, std::string_view key);
     /// The member; a schema error when absent.
@@ -69,6 +82,8 @@ public:
     [[noreturn]] void schema_error(const std::string& ptr, std::string message) const;
 
 private:
+    template <class Names>
+    void expect_known_members(const Json& v, const std::string& ptr, const Names& allowed) const;
     /// Element count of a JSON or packed array (schema error when `v` is neither).
     std::size_t array_size(const Json& v, const std::string& ptr, const char* what) const;
     /// Element `i` of a JSON or packed array as a double (schema error for a non-number).

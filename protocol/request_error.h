@@ -45,12 +45,6 @@ private:
     RequestError m_error;
 };
 
-/// Throws a Schema error at `pointer`.
-[[noreturn]] void fail_schema(std::string pointer, std::string message);
-/// Throws a Value error at `pointer`.
-[[noreturn]] void fail_value(std::string pointer, std::string message,
-                             ErrorCode code = ErrorCode::InvalidArgument);
-
 /// Escapes one JSON pointer reference token ('~' -> "~0", '/' -> "~1").
 std::string escape_pointer_token(std::string_view token);
 

@@ -1,5 +1,7 @@
 #include "protocol/transform_parser.h"
 
+#include "protocol/edit_schema.h"
+
 namespace strata::protocol {
 
 namespace {
@@ -24,7 +26,8 @@ Affine parse_matrix(FieldReader& r, const Json& v, const std::string& ptr) {
 }
 
 Affine parse_trs(FieldReader& r, const Json& v, const std::string& ptr) {
-    r.expect_object(v, ptr, {"translate", "rotate_deg", "quaternion", "scale"});
+    static const MemberRule TRS = schema_members("/$defs/transform/oneOf/2");
+    r.expect_object(v, ptr, TRS);
     const Json* rotate = FieldReader::member(v, "rotate_deg");
     const Json* quaternion = FieldReader::member(v, "quaternion");
     if (rotate && quaternion)

@@ -1,5 +1,6 @@
-// Large-array throughput of the edit protocol: a 1M-vertex update_mesh as a plain JSON array and
-// as base64, parsed alone and parsed, validated and applied. Run by hand (never by CTest):
+// Throughput of the edit protocol: a 1M-vertex update_mesh as a plain JSON array and as base64,
+// parsed alone and parsed, validated and applied; and a batch of 100k small edits of every
+// kind, where per-op dispatch and member checks dominate. Run by hand (never by CTest):
 //
 //   build/tests/bench/strata_protocol_bench --benchmark_repetitions=5
 //   --benchmark_report_aggregates_only=true
@@ -107,6 +108,44 @@ void BM_UpdateMesh1M_Base64_ParseApply(benchmark::State& state) {
     static const std::string text = positions_b64_json(moved_positions());
     parse_and_apply(state, text);
 }
+/// 100k small edits cycling through the instance, material, camera and dirty ops.
+std::string small_edits_json() {
+    std::string out = R"({"edits":[)";
+    for (int i = 0; i < 100'000; ++i) {
+        const std::string n = std::to_string(i);
+        const std::string k = std::to_string(i % 7);
+        out += i ? "," : "";
+        switch (i % 6) {
+            case 0:
+                out += R"({"op":"set_transform","instance":"i)" + n +
+                       R"(","transform":{"translate":[)" + k + R"(,0,1],"scale":2}})";
+                break;
+            case 1:
+                out += R"({"op":"update_instance","instance":"i)" + n +
+                       R"(","visible":true,"mask":)" + k + R"(,"user_id":3})";
+                break;
+            case 2:
+                out += R"({"op":"update_material","material":"m)" + n +
+                       R"(","roughness":0.5,"base_color":[)" + k + ",0,0]}";
+                break;
+            case 3:
+                out += R"({"op":"add_instance","id":"i)" + n +
+                       R"(","mesh":"m","material":"red","mask":)" + k + "}";
+                break;
+            case 4:
+                out += R"({"op":"set_camera","eye":[)" + k + ",1," + n + R"(],"fov_y_deg":40})";
+                break;
+            default:
+                out += R"({"op":"mark_dirty","target":{"mesh":"m)" + n + R"("},"action":"refit"})";
+        }
+    }
+    return out + "]}";
+}
+
+void BM_SmallEdits100k_Parse(benchmark::State& state) {
+    static const std::string text = small_edits_json();
+    parse_only(state, text);
+}
 /// Baseline: nlohmann's own DOM parse of the same text, without conversion to engine structs.
 void BM_UpdateMesh1M_JsonArray_NlohmannDom(benchmark::State& state) {
     static const std::string text = positions_json(moved_positions());
@@ -119,6 +158,7 @@ BENCHMARK(BM_UpdateMesh1M_JsonArray_Parse)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_UpdateMesh1M_Base64_Parse)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_UpdateMesh1M_JsonArray_ParseApply)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_UpdateMesh1M_Base64_ParseApply)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SmallEdits100k_Parse)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace strata

@@ -1,16 +1,25 @@
 // The C++ parser's structural stage against tests/protocol/batches.json, the table the JSON Schema
 // is checked against by schema_agreement_test.py: same verdicts, and the pointer of each invalid
-// batch's first problem.
+// batch's first problem; and the kinds of Edit each op's parser produces.
 
 #include <fstream>
 #include <sstream>
 
 #include <gtest/gtest.h>
 
+#include "protocol/edit_ops.h"
 #include "protocol/edit_parser.h"
 
 namespace strata::protocol {
 namespace {
+
+/// The structural verdict alone (what the JSON Schema decides): the parser's schema error, or
+/// nullopt when the batch has none (a value error may remain).
+std::optional<RequestError> check_edit_batch_structure(const Json& body) {
+    auto parsed = parse_edit_batch(body);
+    if (parsed.has_value() || parsed.error().kind != RequestErrorKind::Schema) return std::nullopt;
+    return parsed.error();
+}
 
 Json load_table() {
     std::ifstream in(STRATA_SOURCE_DIR "/tests/protocol/batches.json");
@@ -41,12 +50,32 @@ TEST(SchemaAgreement, ParserGivesTheTableVerdicts) {
 }
 
 TEST(SchemaAgreement, StructurallyValidCasesWithANoteFailWithAValueError) {
-    for (const Json& c : load_table()["cases"]) {
+    const Json table = load_table();  // the loop below must not outlive it
+    for (const Json& c : table["cases"]) {
         if (!c.contains("note")) continue;
         auto parsed = parse_edit_batch(c["batch"].dump(), {});
         ASSERT_FALSE(parsed.has_value()) << c["name"];
         EXPECT_EQ(parsed.error().kind, RequestErrorKind::Value) << c["name"];
     }
+}
+
+TEST(SchemaAgreement, ParsedEditsAreOfKindsTheirOpDeclaresAndCoverEveryEditAlternative) {
+    EditKinds seen = 0;
+    const Json table = load_table();
+    for (const Json& c : table["cases"]) {
+        auto parsed = parse_edit_batch(c["batch"].dump(), {});
+        if (!parsed.has_value()) continue;
+        const Json& edits = c["batch"]["edits"];
+        for (std::size_t i = 0; i < edits.size(); ++i) {
+            const EditOp* op = find_edit_op(edits[i]["op"].get<std::string>());
+            ASSERT_NE(op, nullptr) << c["name"];
+            const EditKinds kind = edit_kind(parsed.value().batch.edits.at(i));
+            EXPECT_TRUE(op->produces & kind) << c["name"] << ", edit " << i;
+            seen |= kind;
+        }
+    }
+    EXPECT_EQ(seen, (EditKinds{1} << std::variant_size_v<Edit>)-1)
+        << "some Edit alternative comes from no valid batch of the table";
 }
 
 }  // namespace

@@ -1,0 +1,20 @@
+#pragma once
+// The op families, one file each; edit_ops.cpp joins them into the one op list (internal to the
+// protocol).
+
+#include <span>
+
+#include "protocol/edit_ops.h"
+
+namespace strata::protocol::ops {
+
+/// add_mesh, update_mesh, remove_mesh (mesh_ops.cpp).
+std::span<const EditOp> mesh_ops();
+/// add_material, update_material (material_ops.cpp).
+std::span<const EditOp> material_ops();
+/// add_instance, update_instance, set_transform, remove_instance (instance_ops.cpp).
+std::span<const EditOp> instance_ops();
+/// mark_dirty, set_camera, set_lighting, clear (scene_ops.cpp).
+std::span<const EditOp> scene_ops();
+
+}  // namespace strata::protocol::ops

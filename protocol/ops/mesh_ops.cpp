@@ -1,0 +1,243 @@
+// Mesh ops: add_mesh, update_mesh, remove_mesh. Arrays come flat or base64; a mesh may also be a
+// procedural shape, with build options.
+
+#include "engine/scene/shapes.h"
+#include "protocol/edit_schema.h"
+#include "protocol/ops/families.h"
+
+namespace strata::protocol::ops {
+
+namespace {
+
+/// A flat array member or its base64 twin (at most one of them); nullopt when neither is given.
+template <class T>
+std::optional<std::vector<T>> read_array(
+    OpFields& f, std::string_view flat_key, std::string_view b64_key,
+    std::vector<T> (FieldReader::*read_flat)(const Json&, const std::string&),
+    std::vector<T> (FieldReader::*read_b64)(const Json&, const std::string&),
+    bool EditSource::*from_b64) {
+    FieldReader& r = f.reader();
+    const Json* flat = f.get(flat_key);
+    const Json* b64 = f.get(b64_key);
+    if (flat && b64)
+        r.schema_error(f.pointer(b64_key), "give " + std::string(flat_key) + " or " +
+                                               std::string(b64_key) + ", not both");
+    if (flat) return (r.*read_flat)(*flat, f.pointer(flat_key));
+    if (!b64) return std::nullopt;
+    f.source().*from_b64 = true;
+    return (r.*read_b64)(*b64, f.pointer(b64_key));
+}
+
+std::optional<std::vector<Vec3>> read_positions(OpFields& f) {
+    return read_array(f, "positions", "positions_b64", &FieldReader::positions,
+                      &FieldReader::positions_b64, &EditSource::positions_b64);
+}
+
+std::optional<std::vector<Triangle>> read_indices(OpFields& f) {
+    return read_array(f, "indices", "indices_b64", &FieldReader::indices, &FieldReader::indices_b64,
+                      &EditSource::indices_b64);
+}
+
+/// `[n, n]` of integers in [1, hi].
+std::pair<uint32_t, uint32_t> read_pair(FieldReader& r, const Json& v, const std::string& ptr,
+                                        uint32_t hi) {
+    if (!v.is_array() || v.size() != 2) r.schema_error(ptr, "expected an array of 2 integers");
+    return {static_cast<uint32_t>(r.integer(v[0], child(ptr, std::size_t(0)), 1, hi)),
+            static_cast<uint32_t>(r.integer(v[1], child(ptr, std::size_t(1)), 1, hi))};
+}
+
+/// `size`: a number or an array of `n` numbers, each > 0.
+Vec3 read_size(FieldReader& r, const Json& v, const std::string& ptr, int n) {
+    if (v.is_number()) return Vec3(r.positive_number(v, ptr));
+    if (!v.is_array() || v.size() != std::size_t(n))
+        r.schema_error(ptr,
+                       "expected a number or an array of " + std::to_string(n) + " numbers > 0");
+    Vec3 out(1.0f);
+    for (int k = 0; k < n; ++k) out[k] = r.positive_number(v[k], child(ptr, std::size_t(k)));
+    return out;
+}
+
+MeshData read_shape(FieldReader& r, const Json& v, const std::string& ptr) {
+    // In the order of the `oneOf` of $defs/shape.
+    static const MemberRule SHAPES[] = {schema_members("/$defs/shape/oneOf/0"),
+                                        schema_members("/$defs/shape/oneOf/1"),
+                                        schema_members("/$defs/shape/oneOf/2")};
+    if (!v.is_object()) r.schema_error(ptr, "expected a shape object with a \"type\"");
+    const std::size_t type =
+        r.choice(r.required(v, ptr, "type"), child(ptr, "type"), {"sphere", "box", "plane"});
+    r.expect_object(v, ptr, SHAPES[type]);
+    const Json* size = FieldReader::member(v, "size");
+    switch (type) {
+        case 0: {
+            const Json* radius = FieldReader::member(v, "radius");
+            const Json* segments = FieldReader::member(v, "segments");
+            const float rad = radius ? r.positive_number(*radius, child(ptr, "radius")) : 1.0f;
+            const auto seg =
+                segments ? r.integer(*segments, child(ptr, "segments"), 3, MAX_SPHERE_SEGMENTS)
+                         : 32;
+            return make_sphere(rad, static_cast<uint32_t>(seg));
+        }
+        case 1:
+            return make_box(size ? read_size(r, *size, child(ptr, "size"), 3) : Vec3(1.0f));
+        default: {
+            const Json* subdivisions = FieldReader::member(v, "subdivisions");
+            const Vec3 s = size ? read_size(r, *size, child(ptr, "size"), 2) : Vec3(1.0f);
+            const auto [nx, nz] = subdivisions
+                                      ? read_pair(r, *subdivisions, child(ptr, "subdivisions"),
+                                                  MAX_PLANE_SUBDIVISIONS)
+                                      : std::pair<uint32_t, uint32_t>{1, 1};
+            // A plane's size is [x, z]; make_plane takes a Vec3 and ignores y.
+            return make_plane(Vec3(s.x, 0.0f, s.y), nx, nz);
+        }
+    }
+}
+
+BuildOptions read_build(FieldReader& r, const Json& v, const std::string& ptr) {
+    static const MemberRule BUILD = schema_members("/$defs/build");
+    r.expect_object(v, ptr, BUILD);
+    BuildOptions b;
+    if (const Json* p = FieldReader::member(v, "prefer"))
+        b.prefer = r.choice(*p, child(ptr, "prefer"), {"fast_trace", "fast_build"}) == 0
+                       ? BuildPreference::FastTrace
+                       : BuildPreference::FastBuild;
+    if (const Json* a = FieldReader::member(v, "allow_refit"))
+        b.allow_refit = r.boolean(*a, child(ptr, "allow_refit"));
+    return b;
+}
+
+Edit parse_add_mesh(OpFields& f) {
+    FieldReader& r = f.reader();
+    AddMesh e;
+    e.id = f.id("id");
+    if (const Json* shape = f.get("shape")) {
+        for (const char* other : {"positions", "positions_b64", "indices", "indices_b64"}) {
+            if (f.get(other))
+                r.schema_error(f.pointer(other),
+                               std::string("give shape or ") + other + ", not both");
+        }
+        f.source().shape = true;
+        MeshData data = read_shape(r, *shape, f.pointer("shape"));
+        e.positions = std::move(data.positions);
+        e.triangles = std::move(data.triangles);
+    } else {
+        auto positions = read_positions(f);
+        if (!positions)
+            r.schema_error(f.pointer("positions"),
+                           "add_mesh needs positions, positions_b64 or shape");
+        auto indices = read_indices(f);
+        if (!indices)
+            r.schema_error(f.pointer("indices"),
+                           "add_mesh needs indices or indices_b64 with positions");
+        e.positions = std::move(*positions);
+        e.triangles = std::move(*indices);
+    }
+    if (const Json* b = f.get("build")) e.build = read_build(r, *b, f.pointer("build"));
+    f.read("material", e.material);
+    return e;
+}
+
+Edit parse_update_mesh(OpFields& f) {
+    FieldReader& r = f.reader();
+    std::string mesh = f.id("mesh");
+    auto positions = read_positions(f);
+    auto indices = read_indices(f);
+    if (indices) {
+        // A topology change: new triangles and optionally a whole new vertex array.
+        if (f.get("offset"))
+            r.schema_error(f.pointer("offset"),
+                           "offset applies to a positions update, not to a topology change");
+        ReplaceMeshTopology e;
+        e.mesh = std::move(mesh);
+        e.positions = std::move(positions);
+        e.triangles = std::move(*indices);
+        return e;
+    }
+    if (!positions)
+        r.schema_error(f.pointer("positions"),
+                       "update_mesh needs positions or positions_b64 (or indices)");
+    UpdateMeshPositions e;
+    e.mesh = std::move(mesh);
+    e.positions = std::move(*positions);
+    f.read("offset", e.offset);
+    return e;
+}
+
+Edit parse_remove_mesh(OpFields& f) {
+    return RemoveMesh{f.id("mesh")};
+}
+
+constexpr EditOp OPS[] = {
+    {"add_mesh", "A new mesh from flat arrays, base64 arrays or a procedural shape.",
+     R"json({
+  "type": "object",
+  "properties": {
+    "id": {"$ref": "#/$defs/id"},
+    "positions": {"$ref": "#/$defs/positions"},
+    "positions_b64": {"$ref": "#/$defs/base64"},
+    "indices": {"$ref": "#/$defs/indices"},
+    "indices_b64": {"$ref": "#/$defs/base64"},
+    "shape": {"$ref": "#/$defs/shape"},
+    "build": {"$ref": "#/$defs/build"},
+    "material": {"$ref": "#/$defs/id"}
+  },
+  "required": ["id"],
+  "additionalProperties": false,
+  "oneOf": [
+    {
+      "required": ["shape"],
+      "not": {"anyOf": [{"required": ["positions"]}, {"required": ["positions_b64"]},
+                        {"required": ["indices"]}, {"required": ["indices_b64"]}]}
+    },
+    {
+      "not": {"required": ["shape"]},
+      "allOf": [
+        {"oneOf": [{"required": ["positions"]}, {"required": ["positions_b64"]}]},
+        {"oneOf": [{"required": ["indices"]}, {"required": ["indices_b64"]}]}
+      ]
+    }
+  ]
+})json",
+     parse_add_mesh, edit_kinds<AddMesh>()},
+    {"update_mesh",
+     "New positions for a vertex range (offset in vertices), or with indices a topology change.",
+     R"json({
+  "type": "object",
+  "properties": {
+    "mesh": {"$ref": "#/$defs/id"},
+    "positions": {"$ref": "#/$defs/positions"},
+    "positions_b64": {"$ref": "#/$defs/base64"},
+    "indices": {"$ref": "#/$defs/indices"},
+    "indices_b64": {"$ref": "#/$defs/base64"},
+    "offset": {"$ref": "#/$defs/u32"}
+  },
+  "required": ["mesh"],
+  "additionalProperties": false,
+  "not": {
+    "anyOf": [
+      {"required": ["positions", "positions_b64"]},
+      {"required": ["indices", "indices_b64"]},
+      {"required": ["indices", "offset"]},
+      {"required": ["indices_b64", "offset"]}
+    ]
+  },
+  "anyOf": [{"required": ["positions"]}, {"required": ["positions_b64"]},
+            {"required": ["indices"]}, {"required": ["indices_b64"]}]
+})json",
+     parse_update_mesh, edit_kinds<UpdateMeshPositions, ReplaceMeshTopology>()},
+    {"remove_mesh", "Removes a mesh that no instance uses.",
+     R"json({
+  "type": "object",
+  "properties": {"mesh": {"$ref": "#/$defs/id"}},
+  "required": ["mesh"],
+  "additionalProperties": false
+})json",
+     parse_remove_mesh, edit_kinds<RemoveMesh>()},
+};
+
+}  // namespace
+
+std::span<const EditOp> mesh_ops() {
+    return OPS;
+}
+
+}  // namespace strata::protocol::ops

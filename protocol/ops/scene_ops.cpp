@@ -1,0 +1,110 @@
+// Scene-wide ops: mark_dirty, set_camera, set_lighting, clear.
+
+#include "protocol/edit_schema.h"
+#include "protocol/ops/families.h"
+
+namespace strata::protocol::ops {
+
+namespace {
+
+Edit parse_mark_dirty(OpFields& f) {
+    static const MemberRule MESH_TARGET =
+        schema_members("/$defs/mark_dirty/properties/target/oneOf/1");
+    FieldReader& r = f.reader();
+    MarkDirty e;
+    const Json& target = f.at("target");
+    const std::string tp = f.pointer("target");
+    if (target.is_object()) {
+        r.expect_object(target, tp, MESH_TARGET);
+        e.mesh = r.id(r.required(target, tp, "mesh"), child(tp, "mesh"));
+    } else if (!(target.is_string() && target.get_ref<const std::string&>() == "tlas")) {
+        r.schema_error(tp, "expected \"tlas\" or {\"mesh\": id}");
+    }
+    e.action = r.choice(f.at("action"), f.pointer("action"), {"refit", "rebuild"}) == 0
+                   ? DirtyAction::Refit
+                   : DirtyAction::Rebuild;
+    return e;
+}
+
+Edit parse_set_camera(OpFields& f) {
+    SetCamera e;
+    f.read("eye", e.eye);
+    f.read("target", e.target);
+    f.read("up", e.up);
+    f.read("fov_y_deg", e.fov_y_deg);
+    return e;
+}
+
+Edit parse_set_lighting(OpFields& f) {
+    SetLighting e;
+    f.read("sun_direction", e.sun_direction);
+    f.read("sun_color", e.sun_color);
+    f.read("sky_color", e.sky_color);
+    f.read("sky_intensity", e.sky_intensity);
+    return e;
+}
+
+Edit parse_clear(OpFields&) {
+    return Clear{};
+}
+
+constexpr EditOp OPS[] = {
+    {"mark_dirty",
+     "Asks the next commit to refit or rebuild one mesh's BLAS, or to update or rebuild the TLAS.",
+     R"json({
+  "type": "object",
+  "properties": {
+    "target": {
+      "oneOf": [
+        {"const": "tlas"},
+        {
+          "type": "object",
+          "properties": {"mesh": {"$ref": "#/$defs/id"}},
+          "required": ["mesh"],
+          "additionalProperties": false
+        }
+      ]
+    },
+    "action": {"enum": ["refit", "rebuild"]}
+  },
+  "required": ["target", "action"],
+  "additionalProperties": false
+})json",
+     parse_mark_dirty, edit_kinds<MarkDirty>()},
+    {"set_camera", "Changes some of the camera's eye, target, up and vertical field of view.",
+     R"json({
+  "type": "object",
+  "properties": {
+    "eye": {"$ref": "#/$defs/vec3"},
+    "target": {"$ref": "#/$defs/vec3"},
+    "up": {"$ref": "#/$defs/vec3"},
+    "fov_y_deg": {"type": "number"}
+  },
+  "additionalProperties": false
+})json",
+     parse_set_camera, edit_kinds<SetCamera>()},
+    {"set_lighting",
+     "Changes some of the sun's direction and colour and the sky's colour and intensity.",
+     R"json({
+  "type": "object",
+  "properties": {
+    "sun_direction": {"$ref": "#/$defs/vec3"},
+    "sun_color": {"$ref": "#/$defs/vec3"},
+    "sky_color": {"$ref": "#/$defs/vec3"},
+    "sky_intensity": {"type": "number"}
+  },
+  "additionalProperties": false
+})json",
+     parse_set_lighting, edit_kinds<SetLighting>()},
+    {"clear", "Removes every mesh, instance and material and resets camera and lighting.",
+     R"json({"type": "object", "additionalProperties": false})json", parse_clear,
+     edit_kinds<Clear>()},
+};
+
+}  // namespace
+
+std::span<const EditOp> scene_ops() {
+    return OPS;
+}
+
+}  // namespace strata::protocol::ops

@@ -1,0 +1,183 @@
+// The written protocol against the tables it describes: protocol/edit-batch.schema.json is what
+// the op table generates, and protocol/README.md's ops index and counters table are generated
+// from the op table and ENGINE_COUNTERS between marker comments; every op has a `### ` section
+// whose examples parse as that op.
+//
+// After a change to an op or a counter, regenerate both files, then read the diff:
+//   STRATA_UPDATE_DOCS=1 ctest --test-dir build -R ProtocolDocs
+
+#include <cctype>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "engine/counters.h"
+#include "protocol/edit_ops.h"
+#include "protocol/edit_schema.h"
+
+namespace strata::protocol {
+namespace {
+
+const std::string SCHEMA_PATH = STRATA_SOURCE_DIR "/protocol/edit-batch.schema.json";
+const std::string README_PATH = STRATA_SOURCE_DIR "/protocol/README.md";
+
+std::string read_text(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    EXPECT_TRUE(in.good()) << "cannot read " << path;
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+bool updating() {
+    const char* update = std::getenv("STRATA_UPDATE_DOCS");
+    return update && std::string(update) == "1";
+}
+
+void write_text(const std::string& path, const std::string& text) {
+    std::ofstream out(path, std::ios::binary);
+    out << text;
+    ASSERT_TRUE(out.good()) << "cannot write " << path;
+}
+
+/// GitHub's anchor of a heading: lower case, spaces to '-', other punctuation dropped.
+std::string anchor(std::string_view heading) {
+    std::string out;
+    for (char c : heading) {
+        if (c == ' ') {
+            out += '-';
+        } else if (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-') {
+            out += char(std::tolower(static_cast<unsigned char>(c)));
+        }
+    }
+    return out;
+}
+
+/// True when `text` names `word` as a whole word (ops are snake_case words).
+bool names(std::string_view text, std::string_view word) {
+    auto is_word = [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; };
+    for (std::size_t at = text.find(word); at != std::string_view::npos;
+         at = text.find(word, at + 1)) {
+        const std::size_t end = at + word.size();
+        if ((at == 0 || !is_word(text[at - 1])) && (end == text.size() || !is_word(text[end])))
+            return true;
+    }
+    return false;
+}
+
+/// One `### ` section of the README's "## Edit ops" part.
+struct OpSection {
+    std::string heading;
+    std::vector<std::string> examples;  ///< the `{"op": ...}` lines of its ```json blocks
+};
+
+std::vector<OpSection> op_sections(const std::string& readme) {
+    std::vector<OpSection> sections;
+    std::istringstream in(readme);
+    bool in_ops = false, in_json = false;
+    for (std::string line; std::getline(in, line);) {
+        if (line.starts_with("## ")) in_ops = line == "## Edit ops";
+        if (!in_ops) continue;
+        if (line.starts_with("### ")) sections.push_back({line.substr(4), {}});
+        if (line.starts_with("```")) in_json = !in_json && line == "```json";
+        if (in_json && line.starts_with("{\"op\"") && !sections.empty())
+            sections.back().examples.push_back(line);
+    }
+    return sections;
+}
+
+const OpSection* section_of(const std::vector<OpSection>& sections, std::string_view op) {
+    for (const OpSection& s : sections) {
+        if (names(s.heading, op)) return &s;
+    }
+    return nullptr;
+}
+
+std::string ops_index(const std::vector<OpSection>& sections) {
+    std::string out = "| op | what it does |\n|---|---|\n";
+    for (const EditOp& op : edit_ops()) {
+        const OpSection* s = section_of(sections, op.name);
+        const std::string link = s ? "#" + anchor(s->heading) : "#edit-ops";
+        out += "| [`" + std::string(op.name) + "`](" + link + ") | " + std::string(op.doc) + " |\n";
+    }
+    return out;
+}
+
+std::string counters_table() {
+    std::string out =
+        "| `counters` member | Prometheus counter | unit | counts |\n|---|---|---|---|\n";
+    for (const CounterSpec& c : ENGINE_COUNTERS) {
+        out += "| `" + std::string(c.name) + "` | `strata_" + std::string(c.name) + "_total` | " +
+               (c.unit == CounterUnit::Seconds ? "seconds" : "count") + " | " +
+               std::string(c.help) + " |\n";
+    }
+    return out;
+}
+
+/// `text` with the lines between `<!-- BEGIN GENERATED name: ... -->` and
+/// `<!-- END GENERATED name -->` replaced by `content`; nullopt when a marker is missing.
+std::optional<std::string> with_region(const std::string& text, const std::string& name,
+                                       const std::string& content) {
+    const std::size_t begin = text.find("<!-- BEGIN GENERATED " + name + ":");
+    const std::size_t end = text.find("<!-- END GENERATED " + name + " -->");
+    if (begin == std::string::npos || end == std::string::npos || end < begin) return std::nullopt;
+    const std::size_t body = text.find('\n', begin);
+    if (body == std::string::npos || body > end) return std::nullopt;
+    return text.substr(0, body + 1) + content + text.substr(end);
+}
+
+TEST(ProtocolDocs, CommittedSchemaIsTheOneTheOpTableGenerates) {
+    const std::string generated = edit_batch_schema_text();
+    if (updating()) {
+        write_text(SCHEMA_PATH, generated);
+        GTEST_SKIP() << "rewrote " << SCHEMA_PATH;
+    }
+    EXPECT_TRUE(read_text(SCHEMA_PATH) == generated)
+        << SCHEMA_PATH << " is not what the op table generates; see the top of this file";
+}
+
+TEST(ProtocolDocs, ReadmeOpsIndexAndCountersTableAreGeneratedFromTheirTables) {
+    const std::string readme = read_text(README_PATH);
+    auto updated = with_region(readme, "edit-ops", ops_index(op_sections(readme)));
+    ASSERT_TRUE(updated) << "README lacks the edit-ops markers";
+    updated = with_region(*updated, "counters", counters_table());
+    ASSERT_TRUE(updated) << "README lacks the counters markers";
+    if (updating()) {
+        if (*updated != readme) write_text(README_PATH, *updated);
+        GTEST_SKIP() << "rewrote the generated parts of " << README_PATH;
+    }
+    EXPECT_TRUE(*updated == readme)
+        << README_PATH << ": a generated table is stale; see the top of this file";
+}
+
+TEST(ProtocolDocs, EveryOpHasAReadmeSectionWhoseExamplesParseAsThatOp) {
+    const std::vector<OpSection> sections = op_sections(read_text(README_PATH));
+    std::map<std::string, int> examples;
+    for (const OpSection& section : sections) {
+        for (const std::string& line : section.examples) {
+            auto parsed = parse_edit_batch("{\"edits\": [" + line + "]}", {});
+            ASSERT_TRUE(parsed.has_value()) << line << ": " << parsed.error().message;
+            const std::string name = parse_json(line).value()["op"].get<std::string>();
+            EXPECT_TRUE(names(section.heading, name)) << line << " is under " << section.heading;
+            const EditOp* op = find_edit_op(name);
+            ASSERT_NE(op, nullptr);
+            EXPECT_TRUE(op->produces & edit_kind(parsed.value().batch.edits.at(0))) << line;
+            ++examples[name];
+        }
+    }
+    for (const EditOp& op : edit_ops()) {
+        EXPECT_NE(section_of(sections, op.name), nullptr)
+            << "no ### section under ## Edit ops names " << op.name;
+        EXPECT_GT(examples[std::string(op.name)], 0) << "no ```json example of " << op.name;
+    }
+}
+
+}  // namespace
+}  // namespace strata::protocol
