@@ -1,5 +1,6 @@
 #include "engine/engine.h"
 
+#include "engine/core/memory_trim.h"
 #include "engine/core/timer.h"
 #include "engine/render/frame_encode.h"
 
@@ -8,8 +9,24 @@ namespace strata {
 Result<std::unique_ptr<Engine>> Engine::create(const EngineConfig& config) {
     auto accel = AccelGraph::create(config.accel);
     if (!accel) return Unexpected(accel.error());
-    return std::unique_ptr<Engine>(new Engine(std::move(accel.value())));
+    auto engine = std::unique_ptr<Engine>(new Engine(std::move(accel.value())));
+    engine->m_scene.set_budget(config.budget);
+    return engine;
 }
+
+namespace {
+
+/// Whether applying the batch frees mesh arrays (then the heap is worth trimming).
+bool releases_mesh_data(const EditBatch& batch) {
+    for (const Edit& e : batch.edits) {
+        if (std::holds_alternative<RemoveMesh>(e) || std::holds_alternative<Clear>(e) ||
+            std::holds_alternative<ReplaceMeshTopology>(e))
+            return true;
+    }
+    return false;
+}
+
+}  // namespace
 
 Result<ApplyResult> Engine::apply(EditBatch&& batch) {
     return apply(std::move(batch), std::nullopt);
@@ -17,6 +34,7 @@ Result<ApplyResult> Engine::apply(EditBatch&& batch) {
 
 Result<ApplyResult> Engine::apply(EditBatch&& batch, std::optional<uint64_t> expected_version) {
     const std::size_t count = batch.edits.size();
+    const bool frees_meshes = releases_mesh_data(batch);
     Result<uint64_t> version = [&]() -> Result<uint64_t> {
         std::unique_lock lock(m_scene_mutex);
         if (expected_version && *expected_version != m_scene.version())
@@ -25,13 +43,16 @@ Result<ApplyResult> Engine::apply(EditBatch&& batch, std::optional<uint64_t> exp
                                ", not " + std::to_string(*expected_version));
         return m_scene.apply(std::move(batch));
     }();
-    std::lock_guard stats(m_stats_mutex);
-    if (!version) {
-        ++m_counters.batches_rejected;
-        return Unexpected(version.error());
+    {
+        std::lock_guard stats(m_stats_mutex);
+        if (!version) {
+            ++m_counters.batches_rejected;
+            return Unexpected(version.error());
+        }
+        ++m_counters.batches_applied;
+        m_counters.edits_applied += count;
     }
-    ++m_counters.batches_applied;
-    m_counters.edits_applied += count;
+    if (frees_meshes) release_free_memory();
     return ApplyResult{version.value(), count};
 }
 
@@ -44,6 +65,7 @@ Result<RebuildReport> Engine::commit_locked() {
     Stopwatch clock;
     std::unique_lock lock(m_scene_mutex);
     RebuildReport report;
+    int64_t freed = 0;  // acceleration-structure bytes the commit released
     if (m_scene.changes().empty()) {
         // Nothing changed: no planning, no Embree call.
         report.version = m_scene.version();
@@ -51,6 +73,8 @@ Result<RebuildReport> Engine::commit_locked() {
         report.memory_blas_bytes = m_accel->memory_bytes(MemoryCategory::Blas);
         report.memory_tlas_bytes = m_accel->memory_bytes(MemoryCategory::Tlas);
     } else {
+        const int64_t held_before = m_accel->memory_bytes(MemoryCategory::Blas) +
+                                    m_accel->memory_bytes(MemoryCategory::Tlas);
         auto executed = m_accel->execute(m_scene, m_accel->plan(m_scene));
         if (!executed) return Unexpected(executed.error());
         report = std::move(executed.value());
@@ -58,8 +82,10 @@ Result<RebuildReport> Engine::commit_locked() {
         m_frame.sync(m_scene);
         report.phases.sync_ms = sync_clock.ms();
         m_scene.clear_changes();
+        freed = held_before - report.memory_blas_bytes - report.memory_tlas_bytes;
     }
     lock.unlock();
+    if (freed >= int64_t(TRIM_THRESHOLD_BYTES)) release_free_memory();
     report.phases.total_ms = clock.ms();
 
     std::lock_guard stats(m_stats_mutex);

@@ -30,6 +30,7 @@ namespace strata {
 
 struct EngineConfig {
     AccelConfig accel;
+    SceneBudget budget;  ///< checked when a batch is applied (a TooLarge error beyond)
 };
 
 /// Result of an applied batch.

@@ -1,10 +1,12 @@
 #include "protocol/api.h"
 
 #include <charconv>
+#include <chrono>
 
 #include "protocol/edit_parser.h"
 #include "protocol/render_parser.h"
 #include "protocol/report_json.h"
+#include "protocol/safe_text.h"
 #include "protocol/scene_json.h"
 
 namespace strata::protocol {
@@ -48,7 +50,8 @@ std::string report_header(const RebuildReport& report) {
     return text;
 }
 
-ApiResponse render(Engine& engine, const RenderRequest& request, const ApiLimits& limits) {
+ApiResponse render(Engine& engine, RenderRequest request, const ApiLimits& limits,
+                   CancelToken* cancel) {
     const RenderRequest& q0 = request;
     const uint64_t pixels = uint64_t(q0.width) * q0.height;
     if (pixels > limits.max_pixels) {
@@ -60,8 +63,21 @@ ApiResponse render(Engine& engine, const RenderRequest& request, const ApiLimits
         p.pointer = "/width";
         return problem_response(p);
     }
+    CancelToken own;
+    CancelToken& token = cancel ? *cancel : own;
+    if (limits.render_timeout_s > 0)
+        token.set_deadline(CancelToken::Clock::now() +
+                           std::chrono::seconds(limits.render_timeout_s));
+    request.cancel = &token;
     // A camera override's missing fields come from the camera of the version the launch renders.
     auto image = engine.render(request);
+    if (!image && image.error().code == ErrorCode::Cancelled &&
+        token.reason() == CancelReason::Deadline)
+        return problem_response(make_problem(
+            ProblemType::DeadlineExceeded,
+            "the render did not finish within " + std::to_string(limits.render_timeout_s) +
+                " s (--render-timeout) and was stopped; ask for fewer pixels or samples, or "
+                "accumulate several shorter renders"));
     if (!image) return problem_response(problem_from(image.error()));
     EncodedFrame& frame = image.value();
     ApiResponse r;
@@ -89,7 +105,7 @@ ApiResponse json_response(int status, const Json& body) {
     ApiResponse r;
     r.status = status;
     r.content_type = "application/json";
-    r.body = body.dump();
+    r.body = dump_json(body);
     return r;
 }
 
@@ -97,7 +113,7 @@ ApiResponse problem_response(const Problem& problem) {
     ApiResponse r;
     r.status = problem.status;
     r.content_type = "application/problem+json";
-    r.body = problem_to_json(problem).dump();
+    r.body = dump_json(problem_to_json(problem));
     return r;
 }
 
@@ -171,20 +187,21 @@ ApiResponse get_plan(const Engine& engine) {
     return with_etag(json_response(200, report_to_json(plan)), plan.version);
 }
 
-ApiResponse post_render(Engine& engine, std::string_view body, const ApiLimits& limits) {
+ApiResponse post_render(Engine& engine, std::string_view body, const ApiLimits& limits,
+                        CancelToken* cancel) {
     // An empty body means every default, like GET without a query.
     auto doc = body.empty() ? Parsed<Json>(Json::object()) : parse_json(body, limits.json);
     if (!doc) return problem_response(problem_from(doc.error()));
     auto spec = parse_render_body(doc.value());
     if (!spec) return problem_response(problem_from(spec.error()));
-    return render(engine, spec.value(), limits);
+    return render(engine, spec.value(), limits, cancel);
 }
 
 ApiResponse get_render(Engine& engine, const std::multimap<std::string, std::string>& query,
-                       const ApiLimits& limits) {
+                       const ApiLimits& limits, CancelToken* cancel) {
     auto spec = parse_render_query(query);
     if (!spec) return problem_response(problem_from(spec.error()));
-    return render(engine, spec.value(), limits);
+    return render(engine, spec.value(), limits, cancel);
 }
 
 ApiResponse get_scene(const Engine& engine) {

@@ -23,6 +23,7 @@ namespace strata::protocol {
 struct ApiLimits {
     JsonLimits json;
     uint64_t max_pixels = 16ull << 20;  ///< width * height of one render (--max-pixels)
+    int render_timeout_s = 0;  ///< a render running longer stops (--render-timeout); 0: none
 };
 
 /// One endpoint's answer, ready for any transport.
@@ -62,11 +63,13 @@ ApiResponse post_edits(Engine& engine, std::string body, std::optional<std::stri
 ApiResponse post_commit(Engine& engine);
 /// GET /v1/plan.
 ApiResponse get_plan(const Engine& engine);
-/// POST /v1/render: an empty body means every default.
-ApiResponse post_render(Engine& engine, std::string_view body, const ApiLimits& limits);
+/// POST /v1/render: an empty body means every default. `cancel`, when given, stops the render
+/// early (the client left, the server shuts down); the render's deadline is set on it.
+ApiResponse post_render(Engine& engine, std::string_view body, const ApiLimits& limits,
+                        CancelToken* cancel = nullptr);
 /// GET /v1/render with its query parameters.
 ApiResponse get_render(Engine& engine, const std::multimap<std::string, std::string>& query,
-                       const ApiLimits& limits);
+                       const ApiLimits& limits, CancelToken* cancel = nullptr);
 /// GET /v1/scene.
 ApiResponse get_scene(const Engine& engine);
 

@@ -40,6 +40,18 @@ std::size_t utf8_length(std::string_view s) {
     return n;
 }
 
+/// C0 controls, DEL and C1 controls (U+0080 to U+009F, encoded C2 80 to C2 9F): ids end up in
+/// URLs, logs and terminals, where these only cause trouble.
+bool has_control_character(std::string_view s) {
+    for (std::size_t i = 0; i < s.size(); ++i) {
+        const auto c = static_cast<unsigned char>(s[i]);
+        if (c < 0x20 || c == 0x7F) return true;
+        if (c == 0xC2 && i + 1 < s.size() && static_cast<unsigned char>(s[i + 1]) <= 0x9F)
+            return true;
+    }
+    return false;
+}
+
 bool fits_float(double d) {
     return std::isfinite(d) && std::abs(d) <= double(std::numeric_limits<float>::max());
 }
@@ -136,7 +148,20 @@ std::string FieldReader::id(const Json& v, const std::string& ptr) const {
     if (s.empty()) schema_error(ptr, "id must not be empty");
     if (utf8_length(s) > MAX_ID_LENGTH)
         schema_error(ptr, "id is longer than " + std::to_string(MAX_ID_LENGTH) + " characters");
+    if (has_control_character(s))
+        schema_error(ptr, "id holds a control character (U+0000 to U+001F, U+007F to U+009F)");
     return s;
+}
+
+bool FieldReader::reserve_shape_triangles(uint64_t triangles, const std::string& ptr) {
+    m_shape_triangles += triangles;
+    if (m_shape_triangles <= MAX_SHAPE_TRIANGLES_PER_BATCH) return true;
+    record_value_error(ptr,
+                       "the batch's shapes would generate " + std::to_string(m_shape_triangles) +
+                           " triangles; at most " + std::to_string(MAX_SHAPE_TRIANGLES_PER_BATCH) +
+                           " per batch",
+                       ErrorCode::TooLarge);
+    return false;
 }
 
 std::size_t FieldReader::choice(const Json& v, const std::string& ptr,

@@ -30,6 +30,10 @@ struct MemberRule {
     bool allows(std::string_view key) const;
 };
 
+/// Most triangles the procedural shapes of one batch may generate: a shape is a few bytes of
+/// JSON for up to millions of triangles, generated while parsing, before any budget is checked.
+constexpr uint64_t MAX_SHAPE_TRIANGLES_PER_BATCH = uint64_t(1) << 24;
+
 class FieldReader {
 public:
     /// Edit index copied into the errors raised from now on (NO_INDEX outside a batch).
@@ -81,6 +85,11 @@ public:
 
     [[noreturn]] void schema_error(const std::string& ptr, std::string message) const;
 
+    /// Counts `triangles` a procedural shape at `ptr` is about to generate. Returns false, having
+    /// recorded a TooLarge value error, when the batch's shapes would exceed
+    /// MAX_SHAPE_TRIANGLES_PER_BATCH: then generate nothing.
+    bool reserve_shape_triangles(uint64_t triangles, const std::string& ptr);
+
 private:
     template <class Names>
     void expect_known_members(const Json& v, const std::string& ptr, const Names& allowed) const;
@@ -92,6 +101,7 @@ private:
 
     std::size_t m_edit_index = Error::NO_INDEX;
     std::optional<RequestError> m_value_error;
+    uint64_t m_shape_triangles = 0;
 };
 
 /// "ptr/key" with the key escaped as a JSON pointer token.

@@ -28,6 +28,15 @@ constexpr TypeInfo TYPES[] = {
     {"method-not-allowed", "Method not allowed", 405},
     {"unauthorized", "Unauthorized", 401},
     {"unavailable", "Service unavailable", 503},
+    {"deadline-exceeded", "Deadline exceeded", 503},
+    {"request-timeout", "Request timeout", 408},
+    {"uri-too-long", "URI too long", 414},
+    {"unsupported-encoding", "Unsupported content encoding", 415},
+    {"expectation-failed", "Expectation failed", 417},
+    {"too-many-connections", "Too many connections", 429},
+    {"headers-too-large", "Request header fields too large", 431},
+    {"not-implemented", "Not implemented", 501},
+    {"http-version-not-supported", "HTTP version not supported", 505},
     {"internal", "Internal server error", 500},
 };
 static_assert(std::size(TYPES) == std::size_t(ProblemType::Internal) + 1);
@@ -54,6 +63,8 @@ ProblemType type_of(ErrorCode code) {
             return ProblemType::TooLarge;
         case ErrorCode::VersionMismatch:
             return ProblemType::VersionMismatch;
+        case ErrorCode::Cancelled:
+            return ProblemType::Unavailable;
         case ErrorCode::StaleHandle:
         case ErrorCode::Internal:
             return ProblemType::Internal;

@@ -32,6 +32,15 @@ enum class ProblemType : uint8_t {
     MethodNotAllowed,     ///< 405 the route exists for other methods
     Unauthorized,         ///< 401 missing or wrong bearer token
     Unavailable,          ///< 503 the server is shutting down
+    DeadlineExceeded,     ///< 503 a render ran past --render-timeout and was stopped
+    RequestTimeout,       ///< 408 the request did not arrive in time (headers or body)
+    UriTooLong,           ///< 414 the request target is longer than the limit
+    UnsupportedEncoding,  ///< 415 a Content-Encoding the server does not decode
+    ExpectationFailed,    ///< 417 an Expect other than 100-continue
+    TooManyConnections,   ///< 429 this client already holds its share of connections
+    HeadersTooLarge,      ///< 431 too many header fields, or too many bytes of them
+    NotImplemented,       ///< 501 an HTTP method the server does not know
+    HttpVersion,          ///< 505 an HTTP version other than 1.0 and 1.1
     Internal,             ///< 500 a bug or an Embree failure
 };
 

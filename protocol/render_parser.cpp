@@ -69,7 +69,8 @@ Json scalar_from_text(const std::string& text) {
         char* end = nullptr;
         const double d = std::strtod(text.c_str(), &end);
         if (*end == '\0' && errno != ERANGE) {
-            if (d >= 0 && d == double(uint64_t(d)) && d < 1.8e19) return uint64_t(d);
+            // Range first: converting a double beyond uint64_t is undefined behaviour.
+            if (d >= 0 && d < 1.8e19 && d == double(uint64_t(d))) return uint64_t(d);
             return d;
         }
     }
@@ -105,6 +106,16 @@ Parsed<RenderRequest> parse_render_query(const std::multimap<std::string, std::s
     Json body = Json::object();
     for (const auto& [key, text] : params) {
         const bool camera = key == "eye" || key == "target" || key == "up" || key == "fov_y_deg";
+        if (key == "camera") {
+            // The override's members are parameters of their own; "camera" itself would have to
+            // be an object (and used to make the members' slots throw).
+            RequestError e;
+            e.message =
+                "query parameter 'camera' is not supported: give eye, target, up and "
+                "fov_y_deg as parameters of their own";
+            e.pointer = "/camera";
+            return Unexpected(std::move(e));
+        }
         Json& slot = camera ? body["camera"][key] : body[key];
         if (!slot.is_null()) {
             RequestError e;

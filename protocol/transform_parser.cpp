@@ -1,10 +1,24 @@
 #include "protocol/transform_parser.h"
 
+#include <cmath>
+#include <cstdio>
+#include <string>
+
 #include "protocol/edit_schema.h"
 
 namespace strata::protocol {
 
 namespace {
+
+/// Quaternions are normalised, but only lengths within these bounds are taken for a rotation.
+constexpr double MIN_QUATERNION_LENGTH = 1e-6;
+constexpr double MAX_QUATERNION_LENGTH = 1e6;
+
+std::string short_number(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.3g", v);
+    return buf;
+}
 
 Affine parse_matrix(FieldReader& r, const Json& v, const std::string& ptr) {
     const std::vector<float> m = r.floats(v, ptr);
@@ -40,8 +54,17 @@ Affine parse_trs(FieldReader& r, const Json& v, const std::string& ptr) {
     if (rotate) rotation = Affine::rotation_euler_deg(r.vec3(*rotate, child(ptr, "rotate_deg")));
     if (quaternion) {
         const Vec4 q = r.vec4(*quaternion, child(ptr, "quaternion"));
-        if (!(glm::dot(q, q) > 0.0f))
+        // In double: a float squared length overflows at ~1.8e19 (and used to normalise to the
+        // identity). A rotation is a unit quaternion; lengths far from 1 are a client bug.
+        const glm::dvec4 qd(q);
+        const double len = std::sqrt(glm::dot(qd, qd));
+        if (!(len > 0.0))
             r.record_value_error(child(ptr, "quaternion"), "quaternion has zero length");
+        else if (len < MIN_QUATERNION_LENGTH || len > MAX_QUATERNION_LENGTH)
+            r.record_value_error(
+                child(ptr, "quaternion"),
+                "quaternion length " + short_number(len) +
+                    " is outside [1e-6, 1e6]; send a unit quaternion (x, y, z, w)");
         rotation = Affine::rotation_quaternion(q);
     }
     Vec3 scale(1.0f);

@@ -1,10 +1,16 @@
 #!/usr/bin/env bash
-# Builds the edit batch fuzzer with clang++ (libFuzzer + AddressSanitizer + UBSan) in its own
-# build folder and runs it for a bounded number of iterations from the committed seed corpus.
+# Builds the libFuzzer targets with clang++ (libFuzzer + AddressSanitizer + UBSan) in their own
+# build folder and runs each for a bounded number of iterations from its committed seed corpus:
 #
-#   scripts/run-fuzz.sh [RUNS]        default RUNS=100000; CI calls it without arguments
+#   edit_batch_fuzzer     JSON edit batches: the JSON reader, the batch parser, engine validation
+#   http_request_fuzzer   raw HTTP/1.1 bytes: the front end's request reader (request line,
+#                         headers, framing, target, query, body), then the routes, protocol/api.h
+#                         and the engine
 #
-# New inputs the fuzzer finds go to a scratch copy of the corpus, never into the repository.
+#   scripts/run-fuzz.sh [RUNS]        default RUNS=100000; CI calls it without arguments. The HTTP
+#                                     fuzzer gets RUNS/4: each of its inputs runs through the engine.
+#
+# New inputs the fuzzers find go to scratch copies of the corpora, never into the repository.
 set -euo pipefail
 
 runs="${1:-100000}"
@@ -14,14 +20,19 @@ build="$root/build-fuzz"
 cmake -S "$root" -B "$build" -G Ninja \
     -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DSTRATA_FUZZ=ON -DSTRATA_BUILD_BENCHMARKS=OFF
-ninja -C "$build" -j "${STRATA_BUILD_JOBS:-2}" edit_batch_fuzzer
+ninja -C "$build" -j "${STRATA_BUILD_JOBS:-2}" edit_batch_fuzzer http_request_fuzzer
 
 scratch="$(mktemp -d)"
 trap 'rm -rf "$scratch"' EXIT
-cp -r "$root/tests/fuzz/corpus" "$scratch/corpus"
-# A crashing input is kept in build-fuzz/artifacts/ (reproduce: edit_batch_fuzzer FILE).
+# A crashing input is kept in build-fuzz/artifacts/ (reproduce: <fuzzer> FILE).
 mkdir -p "$build/artifacts"
-"$build/tests/fuzz/edit_batch_fuzzer" -runs="$runs" -max_len=65536 -timeout=10 -rss_limit_mb=2048 \
-    -dict="$root/tests/fuzz/json.dict" -artifact_prefix="$build/artifacts/" ${STRATA_FUZZ_ARGS:-} \
-    "$scratch/corpus"
-echo "fuzz: $runs runs, no crash"
+
+run() {  # fuzzer corpus dictionary runs
+    cp -r "$root/tests/fuzz/$2" "$scratch/$2"
+    "$build/tests/fuzz/$1" -runs="$4" -max_len=65536 -timeout=10 -rss_limit_mb=2048 \
+        -dict="$root/tests/fuzz/$3" -artifact_prefix="$build/artifacts/$1-" ${STRATA_FUZZ_ARGS:-} \
+        "$scratch/$2"
+    echo "fuzz: $1, $4 runs, no crash"
+}
+run edit_batch_fuzzer corpus json.dict "$runs"
+run http_request_fuzzer http_corpus http.dict "$((runs / 4))"

@@ -1,9 +1,9 @@
 #include "server/auth.h"
 
 #include <arpa/inet.h>
+#include <sys/stat.h>
 
 #include <fstream>
-#include <sstream>
 
 namespace strata::server {
 
@@ -22,11 +22,22 @@ Result<std::string> parse_token(std::string_view text, const std::string& source
 }
 
 Result<std::string> read_token_file(const std::string& path) {
+    const std::string source = "token file '" + path + "'";
+    // A regular file only: a FIFO could block start-up forever, /dev/zero never ends.
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode))
+        return failure(ErrorCode::InvalidArgument,
+                       "cannot read " + source + ": not a readable regular file");
     std::ifstream in(path, std::ios::binary);
-    if (!in) return failure(ErrorCode::InvalidArgument, "cannot read token file '" + path + "'");
-    std::ostringstream text;
-    text << in.rdbuf();
-    return parse_token(text.str(), "token file '" + path + "'");
+    if (!in) return failure(ErrorCode::InvalidArgument, "cannot read " + source);
+    std::string text(MAX_TOKEN_FILE_BYTES + 1, '\0');
+    in.read(text.data(), std::streamsize(text.size()));
+    text.resize(std::size_t(in.gcount()));
+    if (text.size() > MAX_TOKEN_FILE_BYTES)
+        return failure(ErrorCode::InvalidArgument, source + " is larger than " +
+                                                          std::to_string(MAX_TOKEN_FILE_BYTES) +
+                                                          " bytes; it should hold the token alone");
+    return parse_token(text, source);
 }
 
 bool bearer_token_matches(std::string_view authorization, std::string_view token) {

@@ -12,7 +12,11 @@ namespace strata::server {
 /// whitespace or non-ASCII inside, is an error naming `source` (never the token).
 Result<std::string> parse_token(std::string_view text, const std::string& source);
 
-/// Reads a token file with parse_token; an unreadable file is an error too.
+/// Largest token file read; a bigger one is refused (it cannot be a token).
+inline constexpr std::size_t MAX_TOKEN_FILE_BYTES = 4096;
+
+/// Reads a token file with parse_token; an unreadable file, one that is not a regular file, and
+/// one larger than MAX_TOKEN_FILE_BYTES are errors too.
 Result<std::string> read_token_file(const std::string& path);
 
 /// True when `authorization` is "Bearer <token>" (scheme case-insensitive) with the right token.

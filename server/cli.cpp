@@ -2,11 +2,13 @@
 
 #include <cctype>
 #include <cstdlib>
+#include <string_view>
 #include <thread>
 
 #include <CLI/CLI.hpp>
 
 #include "server/auth.h"
+#include "server/listener.h"
 
 namespace strata::server {
 
@@ -15,6 +17,7 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
     ServerConfig& c = cl.config;
     c.threads = std::max(8u, std::thread::hardware_concurrency());
     std::size_t max_body_mb = c.max_body_bytes >> 20;
+    std::size_t max_buffered_mb = c.max_buffered_bytes >> 20;
 
     CLI::App app{
         "strata-server: a dynamic ray-tracing scene server (JSON over HTTP; see "
@@ -24,10 +27,9 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
                    "Address to listen on; a non-loopback one needs a token (--token-file or "
                    "STRATA_TOKEN) or --insecure");
     app.add_option("--port", c.port, "TCP port (0: any free port)")->check(CLI::Range(0, 65535));
-    app.add_option(
-           "--threads", c.threads,
-           "HTTP worker threads, i.e. connections served at once (rendering uses every core "
-           "through TBB regardless)")
+    app.add_option("--threads", c.threads,
+                   "HTTP worker threads, i.e. requests handled at once (rendering uses every core "
+                   "through TBB regardless)")
         ->check(CLI::Range(1, 1024));
     app.add_option("--data", c.data_dir,
                    "Data directory (reserved for durability; unused for now)");
@@ -42,10 +44,58 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
     app.add_option("--max-array-elements", c.max_array_elements,
                    "Most elements in one JSON array (413 beyond)")
         ->check(CLI::Range(std::size_t(16), std::size_t(1) << 30));
-    app.add_option("--read-timeout", c.read_timeout_s, "Seconds to wait for request data")
+    app.add_option("--header-timeout", c.header_timeout_s,
+                   "Seconds a client has to send a request's line and headers, from its first "
+                   "byte (408 beyond)")
         ->check(CLI::Range(1, 3600));
-    app.add_option("--write-timeout", c.write_timeout_s, "Seconds to wait while sending a response")
+    app.add_option("--read-timeout", c.read_timeout_s,
+                   "Seconds a client has to send a whole request, body included, from its first "
+                   "byte (408 beyond)")
         ->check(CLI::Range(1, 3600));
+    app.add_option("--write-timeout", c.write_timeout_s,
+                   "Seconds a client has to take a whole response before it is dropped")
+        ->check(CLI::Range(1, 3600));
+    app.add_option("--keep-alive-timeout", c.keep_alive_timeout_s,
+                   "Seconds an idle connection stays open between requests")
+        ->check(CLI::Range(1, 3600));
+    app.add_option("--max-keep-alive-requests", c.max_keep_alive_requests,
+                   "Requests served on one connection before it is closed")
+        ->check(CLI::Range(std::size_t(1), std::size_t(1) << 30));
+    app.add_option("--max-header-bytes", c.max_header_bytes,
+                   "Largest request line and headers together, in bytes (431 beyond)")
+        ->check(CLI::Range(std::size_t(1024), std::size_t(1) << 20));
+    app.add_option("--max-headers", c.max_headers, "Most header fields in a request (431 beyond)")
+        ->check(CLI::Range(std::size_t(8), std::size_t(10000)));
+    app.add_option("--max-uri-bytes", c.max_uri_bytes,
+                   "Longest request target, in bytes (414 beyond)")
+        ->check(CLI::Range(std::size_t(256), MAX_URI_BYTES));
+    app.add_option("--max-connections", c.max_connections,
+                   "Most client connections open at once (beyond it, and beyond the per-client "
+                   "limit, a few more connections are served /livez and /readyz only)")
+        ->check(CLI::Range(std::size_t(1), std::size_t(1) << 20));
+    app.add_option("--max-connections-per-client", c.max_connections_per_client,
+                   "Most connections open at once from one client IP address (behind a reverse "
+                   "proxy, every client is the proxy)")
+        ->check(CLI::Range(std::size_t(1), std::size_t(1) << 20));
+    app.add_option("--max-buffered-mb", max_buffered_mb,
+                   "Most unfinished request data held in memory over all connections, in MiB "
+                   "(503 beyond)")
+        ->check(CLI::Range(1, 1 << 20));
+    app.add_option("--listen-backlog", c.listen_backlog,
+                   "Connections the kernel queues before the server accepts them")
+        ->check(CLI::Range(1, 1 << 16));
+    app.add_option("--render-timeout", c.render_timeout_s,
+                   "Seconds a render may run before it is stopped (503 deadline-exceeded)")
+        ->check(CLI::Range(1, 86400));
+    app.add_option("--shutdown-grace", c.shutdown_grace_s,
+                   "Seconds in-flight requests get after SIGTERM before renders are stopped")
+        ->check(CLI::Range(0, 3600));
+    app.add_option("--max-scene-triangles", c.max_scene_triangles,
+                   "Most triangles over the scene's meshes (an edit batch beyond it: 413)")
+        ->check(CLI::Range(uint64_t(1), uint64_t(1) << 32));
+    app.add_option("--max-scene-vertices", c.max_scene_vertices,
+                   "Most vertices over the scene's meshes (an edit batch beyond it: 413)")
+        ->check(CLI::Range(uint64_t(1), uint64_t(1) << 32));
     app.add_option("--token-file", cl.token_file,
                    "File holding a bearer token; then every endpoint but /livez and /readyz needs "
                    "'Authorization: Bearer <token>'. Or give the token itself in STRATA_TOKEN")
@@ -73,12 +123,14 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
         return app.exit(e);
     }
     c.max_body_bytes = max_body_mb << 20;
+    c.max_buffered_bytes = max_buffered_mb << 20;
     return cl;
 }
 
 std::string finish_config(CommandLine& cl) {
     const char* env_token = std::getenv(TOKEN_ENV);
-    const bool has_env_token = env_token != nullptr && *env_token != '\0';
+    // Set but empty is a mistake (an unset secret in a compose file), never "no token".
+    const bool has_env_token = env_token != nullptr;
     if (!cl.token_file.empty()) {
         if (has_env_token)
             return std::string("both a token file (--token-file or STRATA_TOKEN_FILE) and ") +
@@ -88,12 +140,21 @@ std::string finish_config(CommandLine& cl) {
         cl.config.token = std::move(token.value());
         cl.token_source = "token file '" + cl.token_file + "'";
     } else if (has_env_token) {
+        if (std::string_view(env_token).find_first_not_of(" \t\r\n") == std::string_view::npos)
+            return std::string(TOKEN_ENV) +
+                   " is set but empty: give the token, or unset the variable to serve without "
+                   "one (loopback only)";
         auto token = parse_token(env_token, TOKEN_ENV);
         if (!token) return token.error().message;
         cl.config.token = std::move(token.value());
         cl.token_source = TOKEN_ENV;
     }
-    if (cl.config.token.empty() && !cl.insecure && !is_loopback_host(cl.config.host))
+    // Resolved first: an unknown name is an error of its own, not "non-loopback".
+    auto addresses = resolve_host(cl.config.host);
+    if (!addresses) return addresses.error().message;
+    bool loopback = !addresses.value().empty();
+    for (const std::string& a : addresses.value()) loopback = loopback && is_loopback_host(a);
+    if (cl.config.token.empty() && !cl.insecure && !loopback)
         return "refusing to listen on non-loopback address '" + cl.config.host +
                "' without a token: give --token-file, STRATA_TOKEN_FILE or STRATA_TOKEN (or "
                "--insecure, STRATA_INSECURE=1, to allow it)";

@@ -8,17 +8,20 @@
 
 namespace strata::server {
 
+struct FrontEndCounters;
+
 struct ServerContext {
     Engine& engine;
     const ServerConfig& config;
     ServerMetrics& metrics;
     protocol::ApiLimits api_limits;
+    const FrontEndCounters* front_end = nullptr;  ///< connection counters for /metrics
 };
 
 class Router;
 
-/// Every /v1 endpoint (over protocol/api.h) and GET /metrics; liveness and readiness live in
-/// server.cpp.
+/// Every /v1 endpoint (over protocol/api.h) and GET /metrics; liveness and readiness are
+/// answered by the front end (request_reader.cpp).
 void add_api_routes(Router& router, ServerContext& ctx);
 
 }  // namespace strata::server

@@ -1,13 +1,15 @@
 // strata-server: the engine behind JSON over HTTP. Flags: strata-server --help.
 
+#include <sys/resource.h>
+
 #include <csignal>
 
-#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include "engine/scene/demo_scene.h"
 #include "server/cli.h"
 #include "server/healthcheck.h"
+#include "server/log_sink.h"
 #include "server/server.h"
 #include "server/shutdown.h"
 
@@ -15,11 +17,36 @@ namespace {
 
 using namespace strata;
 
+/// Raises the soft limit on open files to the hard one: each connection holds a descriptor.
+/// Returns the limit in force.
+rlim_t raise_file_limit() {
+    rlimit lim{};
+    if (getrlimit(RLIMIT_NOFILE, &lim) != 0) return 1024;
+    if (lim.rlim_cur < lim.rlim_max) {
+        lim.rlim_cur = lim.rlim_max;
+        setrlimit(RLIMIT_NOFILE, &lim);
+        getrlimit(RLIMIT_NOFILE, &lim);
+    }
+    return lim.rlim_cur;
+}
+
 /// Serves until SIGTERM or SIGINT; returns the process exit code.
 int serve(server::CommandLine& cl) {
     server::ShutdownSignals signals;  // before any thread starts, so that all inherit the mask
+    // Writes to a connection the client closed fail with EPIPE instead of killing the process.
+    std::signal(SIGPIPE, SIG_IGN);
+    const rlim_t files = raise_file_limit();
+    if (files != RLIM_INFINITY && files < cl.config.max_connections + 64) {
+        spdlog::warn(
+            "only {} open files allowed (ulimit -n): lowering --max-connections from {} "
+            "to {}",
+            files, cl.config.max_connections, files > 128 ? files - 64 : 64);
+        cl.config.max_connections = files > 128 ? std::size_t(files - 64) : 64;
+    }
 
-    auto engine = Engine::create();
+    EngineConfig engine_config;
+    engine_config.budget = {cl.config.max_scene_triangles, cl.config.max_scene_vertices};
+    auto engine = Engine::create(engine_config);
     if (!engine) {
         spdlog::critical("cannot start the engine: {}", engine.error().describe());
         return 1;
@@ -39,9 +66,11 @@ int serve(server::CommandLine& cl) {
         spdlog::critical("{}", port.error().message);
         return 1;
     }
-    signals.start([&http](int signo) {
-        spdlog::info("{} received: finishing in-flight requests",
-                     signo == SIGINT ? "SIGINT" : "SIGTERM");
+    signals.start([&http, &cl](int signo) {
+        spdlog::info(
+            "{} received: finishing in-flight requests (renders still running after {} "
+            "s are stopped; a second signal exits at once)",
+            signo == SIGINT ? "SIGINT" : "SIGTERM", cl.config.shutdown_grace_s);
         http.stop();
     });
     spdlog::info("strata-server listening on http://{}:{} ({} threads, {})", cl.config.host,
@@ -61,7 +90,7 @@ int main(int argc, char** argv) {
     auto& cl = std::get<server::CommandLine>(parsed);
     if (cl.healthcheck) return server::run_healthcheck(cl.config.host, cl.config.port);
 
-    spdlog::set_default_logger(spdlog::stderr_color_mt("strata"));
+    spdlog::set_default_logger(server::make_safe_logger("strata"));
     spdlog::set_level(spdlog::level::from_str(cl.log_level));
     spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ %v");
 

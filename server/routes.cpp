@@ -7,7 +7,10 @@
 #include "engine/core/timer.h"
 #include "protocol/api.h"
 #include "server/context.h"
+#include "server/front_end_counters.h"
 #include "server/http_util.h"
+#include "server/request_target.h"
+#include "server/route_table.h"
 #include "server/router.h"
 
 namespace strata::server {
@@ -36,10 +39,19 @@ void respond_render(ServerContext& ctx, httplib::Response& res, Render&& render)
 
 void add_scene_object_route(Router& router, ServerContext& ctx, const char* collection,
                             protocol::SceneObject kind) {
+    // The path keeps reserved characters percent-encoded (request_target.h): an id holding '/'
+    // arrives as one segment, decoded here.
     router.get(std::string("/v1/scene/") + collection + "/([^/]+)",
                [&ctx, kind](const httplib::Request& req, httplib::Response& res) {
-                   send(res, protocol::get_scene_object(ctx.engine, kind, req.matches[1].str()));
+                   send(res, protocol::get_scene_object(ctx.engine, kind,
+                                                        decode_path_segment(req.matches[1].str())));
                });
+}
+
+/// The cancel token of the request this worker handles (null outside the server's front end).
+CancelToken* request_cancel() {
+    const RequestContext* context = current_request();
+    return context ? context->cancel : nullptr;
 }
 
 }  // namespace
@@ -59,12 +71,22 @@ void add_api_routes(Router& router, ServerContext& ctx) {
     router.get("/v1/plan",
                [&ctx](const Req&, Res& res) { send(res, protocol::get_plan(ctx.engine)); });
     router.post("/v1/render", [&ctx](const Req&, Res& res, std::string&& body) {
-        respond_render(ctx, res,
-                       [&] { return protocol::post_render(ctx.engine, body, ctx.api_limits); });
+        respond_render(ctx, res, [&] {
+            return protocol::post_render(ctx.engine, body, ctx.api_limits, request_cancel());
+        });
     });
     router.get("/v1/render", [&ctx](const Req& req, Res& res) {
-        respond_render(
-            ctx, res, [&] { return protocol::get_render(ctx.engine, req.params, ctx.api_limits); });
+        if (req.method == "HEAD") {
+            // Its headers (ETag, size, rebuild summary) exist only once the frame is rendered.
+            res.set_header("Allow", "GET, POST");
+            return send_problem(
+                res, protocol::make_problem(protocol::ProblemType::MethodNotAllowed,
+                                            "HEAD /v1/render would have to render the frame to "
+                                            "know its headers; use GET or POST"));
+        }
+        respond_render(ctx, res, [&] {
+            return protocol::get_render(ctx.engine, req.params, ctx.api_limits, request_cancel());
+        });
     });
     router.get("/v1/scene",
                [&ctx](const Req&, Res& res) { send(res, protocol::get_scene(ctx.engine)); });
@@ -75,8 +97,9 @@ void add_api_routes(Router& router, ServerContext& ctx) {
                [&ctx](const Req&, Res& res) { send(res, protocol::get_stats(ctx.engine)); });
     router.get("/metrics", [&ctx](const Req&, Res& res) {
         res.status = 200;
-        res.set_content(ctx.metrics.prometheus_text(ctx.engine),
-                        "text/plain; version=0.0.4; charset=utf-8");
+        std::string text = ctx.metrics.prometheus_text(ctx.engine);
+        if (ctx.front_end) ctx.front_end->write_prometheus(text);
+        res.set_content(text, "text/plain; version=0.0.4; charset=utf-8");
     });
 }
 

@@ -1,28 +1,29 @@
 #pragma once
-// The HTTP server: cpp-httplib with Strata's routes, authentication, limits, access log and
-// metrics around one Engine.
+// The HTTP server: Strata's front end (reactor.h) owns the sockets; complete, checked requests
+// run on a worker pool through the Application (httplib's router with Strata's routes, access
+// log and metrics) around one Engine.
 //
-// Concurrency model. httplib runs each connection on a worker of a fixed thread pool (--threads).
-// Handlers share nothing but the Engine, which is thread-safe (see engine/engine.h): edits take
-// the scene lock briefly and never wait for tracing; commits and renders are serialised by the
-// engine's launch mutex, and each render traces exactly the version its own commit produced,
-// which is the version its ETag names. If-Match is checked under the same scene lock as the
-// apply. Rendering itself is parallel inside TBB, whatever --threads says.
+// Concurrency model. One reactor thread reads and writes every connection; --threads workers
+// run handlers, never waiting on a client. Handlers share nothing but the Engine, which is
+// thread-safe (see engine/engine.h): edits take the scene lock briefly and never wait for
+// tracing; commits and renders are serialised by the engine's launch mutex, and each render
+// traces exactly the version its own commit produced, which is the version its ETag names.
+// If-Match is checked under the same scene lock as the apply. Rendering itself is parallel
+// inside TBB, whatever --threads says.
 
 #include <atomic>
 #include <memory>
 
 #include "engine/engine.h"
+#include "server/listener.h"
 #include "server/metrics.h"
 #include "server/server_config.h"
 
-namespace httplib {
-class Server;
-}
-
 namespace strata::server {
 
-struct ServerContext;
+class Application;
+class Reactor;
+class WorkerPool;
 
 class Server {
 public:
@@ -31,11 +32,13 @@ public:
     Server(const Server&) = delete;
     Server& operator=(const Server&) = delete;
 
-    /// Binds the listening socket; returns the port (useful with port 0) or an error.
+    /// Binds the listening socket; returns the port (useful with port 0) or an error naming the
+    /// address and the cause.
     Result<int> bind();
-    /// Serves until stop(); returns once in-flight requests have finished.
+    /// Serves until stop() and the drain that follows; returns once in-flight requests have
+    /// finished (or were cancelled after --shutdown-grace).
     void listen();
-    /// Makes listen() return. Thread-safe; idempotent; callable before listen() starts.
+    /// Starts the graceful shutdown. Thread-safe; idempotent; callable before listen() starts.
     void stop();
 
     /// True while serving and not shutting down (GET /readyz).
@@ -44,17 +47,15 @@ public:
     ServerMetrics& metrics() { return m_metrics; }
 
 private:
-    void install_hooks();
-    void install_routes();
-
     ServerConfig m_config;
     Engine& m_engine;
     ServerMetrics m_metrics;
-    std::shared_ptr<ServerContext> m_context;  ///< declared before m_http: handlers refer to it
-    std::unique_ptr<httplib::Server> m_http;
+    std::unique_ptr<Reactor> m_reactor;
+    std::unique_ptr<Application> m_app;
+    std::unique_ptr<WorkerPool> m_workers;  ///< after m_reactor: workers call into it until joined
+    Listener m_listener;
     int m_port = -1;
     std::atomic<bool> m_listening{false};
-    std::atomic<bool> m_stop_requested{false};
 };
 
 }  // namespace strata::server

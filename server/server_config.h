@@ -16,9 +16,27 @@ struct ServerConfig {
     uint64_t max_pixels = 16ull << 20;  ///< width * height of one render
     std::size_t max_json_depth = 64;
     std::size_t max_array_elements = 1u << 26;
-    int read_timeout_s = 30;
-    int write_timeout_s = 30;
-    int keep_alive_timeout_s = 5;
+
+    // The front end (reactor.h): every limit on what one client can hold.
+    int header_timeout_s = 10;     ///< request line and headers, from the request's first byte
+    int read_timeout_s = 30;       ///< the whole request, body included, from its first byte
+    int write_timeout_s = 30;      ///< the whole response
+    int keep_alive_timeout_s = 5;  ///< idle time between requests on a connection
+    std::size_t max_keep_alive_requests = 1000;      ///< requests on one connection
+    std::size_t max_header_bytes = 32 * 1024;        ///< request line and headers (431)
+    std::size_t max_headers = 100;                   ///< header fields (431)
+    std::size_t max_uri_bytes = 8000;                ///< request target (414)
+    std::size_t max_connections = 1024;              ///< open connections in all
+    std::size_t max_connections_per_client = 128;    ///< per client IP address
+    std::size_t max_buffered_bytes = 1024ull << 20;  ///< unfinished request data in memory
+    int listen_backlog = 1024;
+    int render_timeout_s = 60;  ///< a render running longer is stopped (503)
+    int shutdown_grace_s = 3;   ///< SIGTERM: in-flight requests get this long, then renders stop
+
+    // The scene budget (engine/scene/budget.h), checked when a batch is validated.
+    uint64_t max_scene_triangles = 1ull << 24;
+    uint64_t max_scene_vertices = 1ull << 24;
+
     std::string token;  ///< bearer token; empty: no authentication
     bool demo = false;  ///< start with the demo scene
 };

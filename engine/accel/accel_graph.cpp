@@ -150,6 +150,7 @@ Result<RebuildReport> AccelGraph::execute(const Scene& scene, CommitPlan&& plan)
     {
         MemoryScope memory(*m_device, MemoryCategory::Blas);
         for (MeshHandle h : plan.release) m_blas.release(h);
+        m_blas.release_retired();
     }
     report.phases.blas_ms += blas_clock.ms();
 

@@ -75,6 +75,7 @@ MeshMetrics measure_mesh(const MeshRecord& mesh) {
 }
 
 BlasStore::~BlasStore() {
+    release_retired();
     for (uint32_t slot = 0; slot < m_records.size(); ++slot) release_slot(slot);
 }
 
@@ -96,6 +97,21 @@ void BlasStore::release_slot(uint32_t slot) {
     r = BlasRecord{};
 }
 
+void BlasStore::retire_slot(uint32_t slot) {
+    BlasRecord& r = m_records[slot];
+    if (!r.scene) return;
+    m_retired.push_back(std::move(r));
+    r = BlasRecord{};
+}
+
+void BlasStore::release_retired() {
+    for (BlasRecord& r : m_retired) {
+        rtcReleaseGeometry(r.geometry);
+        rtcReleaseScene(r.scene);
+    }
+    m_retired.clear();
+}
+
 bool BlasStore::release(MeshHandle h) {
     if (!find(h)) return false;
     release_slot(h.index);
@@ -105,7 +121,8 @@ bool BlasStore::release(MeshHandle h) {
 Status BlasStore::build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics& metrics) {
     if (h.index >= m_records.size()) m_records.resize(h.index + 1);
     BlasRecord& r = m_records[h.index];
-    if (r.scene && (r.generation != h.generation || !(r.options == mesh.build))) release_slot(h.index);
+    if (r.scene && (r.generation != h.generation || !(r.options == mesh.build)))
+        retire_slot(h.index);
 
     const auto vertex_count = static_cast<uint32_t>(mesh.positions.size());
     const auto triangle_count = static_cast<uint32_t>(mesh.triangles.size());

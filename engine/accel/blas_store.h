@@ -58,13 +58,20 @@ public:
     Status refit(MeshHandle h, const MeshRecord& mesh);
     /// Frees the BLAS in the slot of `h` if it belongs to `h`; returns whether it did.
     bool release(MeshHandle h);
+    /// Frees the BLASes build() replaced in a slot (a new mesh in a removed mesh's slot, new
+    /// build options). They are kept until now because TLAS instances may still reference them:
+    /// Embree would free them when the TLAS lets go, in the TLAS's memory phase, and the memory
+    /// report would go negative there. Call after the TLAS work, as the commit does.
+    void release_retired();
 
 private:
     void release_slot(uint32_t slot);
+    void retire_slot(uint32_t slot);
 
     EmbreeDevice& m_device;
     bool m_watertight;
     std::vector<BlasRecord> m_records;  ///< indexed by mesh slot
+    std::vector<BlasRecord> m_retired;  ///< replaced by build(), freed by release_retired()
 };
 
 /// Bounds and triangle-box areas of a mesh's current positions (parallel over large meshes).

@@ -36,6 +36,19 @@ RTCIntersectContext make_context(bool coherent) {
     return ctx;
 }
 
+/// Marks the lanes `valid` leaves out as inactive the way Embree's ray-stream path reads a packet:
+/// tnear > tfar. Without a native 16-wide kernel (no AVX-512) rtcIntersect16 and rtcOccluded16
+/// run through that path, which treats every lane with tnear <= tfar as live whatever the mask
+/// says, so a stale unused lane would be traced (and Debian's Embree asserts on its values).
+template <class Packet>
+void deactivate_unused_lanes(const ValidMask16& valid, Packet& rays) {
+    for (uint32_t i = 0; i < 16; ++i) {
+        if (valid.lanes[i]) continue;
+        rays.tnear[i] = 1.0f;
+        rays.tfar[i] = 0.0f;
+    }
+}
+
 struct TlasInstance {
     RTCGeometry geometry = nullptr;
     RTCScene blas = nullptr;
@@ -93,11 +106,13 @@ public:
 
     void intersect16(const ValidMask16& valid, RayHit16& rays, bool coherent) const override {
         RTCIntersectContext ctx = make_context(coherent);
+        deactivate_unused_lanes(valid, rays);
         rtcIntersect16(valid.lanes, m_scene, &ctx, reinterpret_cast<RTCRayHit16*>(&rays));
     }
 
     void occluded16(const ValidMask16& valid, Ray16& rays) const override {
         RTCIntersectContext ctx = make_context(false);
+        deactivate_unused_lanes(valid, rays);
         rtcOccluded16(valid.lanes, m_scene, &ctx, reinterpret_cast<RTCRay16*>(&rays));
     }
 

@@ -33,8 +33,11 @@ Affine Affine::rotation_euler_deg(const Vec3& deg) {
 }
 
 Affine Affine::rotation_quaternion(const Vec4& q_in) {
-    const float len = std::sqrt(glm::dot(q_in, q_in));
-    const Vec4 q = len > 0.0f ? q_in / len : Vec4(0, 0, 0, 1);
+    // In double: the squared length of a float quaternion overflows a float beyond ~1.8e19 and
+    // underflows below ~1e-19, and either would silently normalise to a wrong rotation.
+    const glm::dvec4 qd(q_in);
+    const double len = std::sqrt(glm::dot(qd, qd));
+    const Vec4 q = len > 0.0 && std::isfinite(len) ? Vec4(qd / len) : Vec4(0, 0, 0, 1);
     const float x = q.x, y = q.y, z = q.z, w = q.w;
     Affine a;
     a.m = {1 - 2 * (y * y + z * z), 2 * (x * y - z * w),     2 * (x * z + y * w),     0,
@@ -113,6 +116,10 @@ std::array<float, 16> Affine::to_rows16() const {
 
 const char* transform_problem(const Affine& t) {
     if (!t.is_finite()) return "transform has a NaN or infinite element";
+    for (int r = 0; r < 3; ++r) {
+        if (std::abs(double(t.at(r, 3))) > MAX_COORDINATE)
+            return "transform translates beyond 1e15 (rays there would be refused)";
+    }
     double lengths[3];
     for (int c = 0; c < 3; ++c) {
         const double x = t.at(0, c), y = t.at(1, c), z = t.at(2, c);
@@ -129,6 +136,8 @@ const char* transform_problem(const Affine& t) {
     const double det = t.determinant();
     if (std::abs(det) < 1e-6 * lengths[0] * lengths[1] * lengths[2])
         return "transform is singular or degenerate (its axes are nearly coplanar)";
+    // What the renderer computes from it (normals, object-space rays) must be finite too.
+    if (!t.inverse().is_finite()) return "transform has no finite inverse";
     return nullptr;
 }
 

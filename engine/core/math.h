@@ -75,13 +75,19 @@ struct Affine {
     friend bool operator==(const Affine&, const Affine&) = default;
 };
 
+/// Largest coordinate a camera position or a translation may have. Embree refuses rays whose
+/// components exceed about 1.8e18 (its FLT_LARGE; a debug-enabled Embree asserts), and a float
+/// at 1e15 already has a spacing of 0.125: nothing useful lies beyond.
+constexpr double MAX_COORDINATE = 1e15;
+
 /// Limits on instance transforms: float precision in object space suffers beyond these.
 constexpr double MIN_AXIS_SCALE = 1e-6;
 constexpr double MAX_AXIS_SCALE = 1e6;
 constexpr double MAX_ANISOTROPY_INV = 1e-6;  ///< shortest axis / longest axis must exceed this
 
-/// Why a transform cannot be used, or nullptr when it can: non-finite values, an axis scaled
-/// outside [1e-6, 1e6], axis scales differing by more than 1e6, or nearly coplanar axes.
+/// Why a transform cannot be used, or nullptr when it can: non-finite values, a translation
+/// beyond MAX_COORDINATE, an axis scaled outside [1e-6, 1e6], axis scales differing by more than
+/// 1e6, nearly coplanar axes, or an inverse that does not come out finite.
 const char* transform_problem(const Affine& t);
 
 }  // namespace strata

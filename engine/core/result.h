@@ -22,6 +22,7 @@ enum class ErrorCode {
     StaleHandle,          ///< a handle whose object was removed
     TooLarge,             ///< a request exceeds a configured limit
     VersionMismatch,      ///< a conditional apply found the scene at another version
+    Cancelled,            ///< a launch stopped early (CancelToken: deadline, client gone, shutdown)
     Internal,             ///< a failure inside Embree or the engine itself
 };
 

@@ -8,6 +8,7 @@
 #include <string_view>
 #include <vector>
 
+#include "engine/core/cancel.h"
 #include "engine/core/result.h"
 #include "engine/image/exr.h"
 #include "engine/scene/edits.h"
@@ -57,6 +58,9 @@ struct RenderRequest {
     /// Overrides the scene camera for this frame. Fields it leaves out come from the scene
     /// camera of the version the launch renders, so the frame never mixes two versions.
     std::optional<SetCamera> camera;
+    /// Not part of what a client asks: the caller's stop flag (deadline, client gone, shutdown),
+    /// polled between packets. A cancelled launch returns ErrorCode::Cancelled.
+    const CancelToken* cancel = nullptr;
 };
 
 /// The camera a launch renders: the scene camera with the request's override applied, checked

@@ -20,6 +20,14 @@ namespace {
 // picks the BRDF lobe.
 constexpr uint32_t DIM_LOBE = 4;
 
+/// Samples of one packet between two polls of the cancel token.
+constexpr uint32_t CANCEL_POLL_SAMPLES = 16;
+
+Unexpected<Error> cancelled_error(const CancelToken& token) {
+    return failure(ErrorCode::Cancelled, std::string("the render stopped early: ") +
+                                                cancel_reason_text(token.reason()));
+}
+
 static_assert(MAX_ACCUMULATED_SAMPLES <= PixelSampler::MAX_SAMPLES &&
               MAX_RENDER_SPP <= PixelSampler::MAX_SAMPLES);
 
@@ -35,7 +43,8 @@ struct SurfaceHit {
 class FrameKernel {
 public:
     FrameKernel(const TlasStrategy& tlas, const FrameState& frame, const Camera& camera,
-                FrameBuffers& out, SampleRange samples, uint32_t total_samples, PixelSums* accum)
+                FrameBuffers& out, SampleRange samples, uint32_t total_samples, PixelSums* accum,
+                const CancelToken* cancel)
         : m_tlas(tlas),
           m_frame(frame),
           m_rays(camera, out.width, out.height),
@@ -43,7 +52,8 @@ public:
           m_out(out),
           m_samples(samples),
           m_inv_total(total_samples > 0 ? 1.0f / float(total_samples) : 0.0f),
-          m_accum(accum) {}
+          m_accum(accum),
+          m_cancel(cancel) {}
 
     void render_tile(const TileRect& tile) const {
         PixelSums local[TILE_SIZE * TILE_SIZE];
@@ -51,6 +61,8 @@ public:
         uint64_t rays = 0;
         for (uint32_t y0 = tile.y0; y0 < tile.y1; y0 += PACKET_SIZE) {
             for (uint32_t x0 = tile.x0; x0 < tile.x1; x0 += PACKET_SIZE) {
+                // A cancelled launch leaves the rest of the frame unwritten; render() discards it.
+                if (should_stop(m_cancel)) return;
                 ValidMask16 valid;
                 packet_lanes(tile, x0, y0, valid);
                 PixelSums* sums[PACKET_LANES];
@@ -68,9 +80,13 @@ public:
                 PixelSampler samplers[PACKET_LANES];
                 for (uint32_t i = 0; i < PACKET_LANES; ++i)
                     samplers[i] = PixelSampler(x0 + i % PACKET_SIZE, y0 + i / PACKET_SIZE);
-                for (uint32_t s = 0; s < m_samples.count; ++s)
+                for (uint32_t s = 0; s < m_samples.count; ++s) {
+                    // At thousands of samples a packet takes long enough to poll inside it too.
+                    if (s % CANCEL_POLL_SAMPLES == CANCEL_POLL_SAMPLES - 1 && should_stop(m_cancel))
+                        return;
                     rays +=
                         trace_sample(camera, samplers, x0, y0, valid, m_samples.first + s, sums);
+                }
                 if (m_out.aovs.needs_centre_ray()) rays += trace_centre(camera, x0, y0, valid);
                 resolve(x0, y0, valid, sums);
             }
@@ -108,6 +124,7 @@ private:
     /// Queues lane i's shadow ray when `hit` faces the sun.
     void queue_sun(SunQueue& q, uint32_t i, const SurfaceHit& hit) const {
         if (!m_sky.has_sun() || glm::dot(hit.normal, m_sky.sun_direction()) <= 0.0f) return;
+        if (!ray_origin_ok(hit.origin)) return;
         set_lane(q.rays, i, hit.origin, m_sky.sun_direction());
         q.valid[i] = -1;
         q.any = true;
@@ -185,7 +202,7 @@ private:
             queue_sun(sun, i, hit);
             const BsdfSample b =
                 Bsdf(m).sample(hit.normal, -dir, bounce_u[i][0], bounce_u[i][1], bounce_u[i][2]);
-            if (b.valid) {
+            if (b.valid && ray_origin_ok(hit.origin)) {
                 set_lane(bounce, i, hit.origin, b.dir);
                 weight[i] = b.weight;
                 bounce_valid[i] = -1;
@@ -284,6 +301,7 @@ private:
     const SampleRange m_samples;
     const float m_inv_total;
     PixelSums* const m_accum;
+    const CancelToken* const m_cancel;
     mutable std::atomic<uint64_t> m_ray_count{0};
 };
 
@@ -297,6 +315,7 @@ Result<Frame> Renderer::render(const TlasStrategy& tlas, const FrameState& frame
     const auto resolved = resolve_camera(request.camera, frame.camera);
     if (!resolved) return Unexpected(resolved.error());
     const Camera camera = resolved.value();
+    if (should_stop(request.cancel)) return cancelled_error(*request.cancel);
     try {
         out.buffers.allocate(request.width, request.height, AovSet(request.aovs));
         SampleRange samples{0, request.spp};
@@ -312,9 +331,14 @@ Result<Frame> Renderer::render(const TlasStrategy& tlas, const FrameState& frame
             accum = m_accumulator.sums();
         }
         const uint32_t total = samples.first + samples.count;
-        FrameKernel kernel(tlas, frame, camera, out.buffers, samples, total, accum);
+        FrameKernel kernel(tlas, frame, camera, out.buffers, samples, total, accum, request.cancel);
         parallel_for_tiles(request.width, request.height,
                            [&](const TileRect& tile) { kernel.render_tile(tile); });
+        if (should_stop(request.cancel)) {
+            // Some pixels hold fewer samples than the others: the sums cannot be continued.
+            if (request.accumulate) m_accumulator.reset();
+            return cancelled_error(*request.cancel);
+        }
         if (request.accumulate) m_accumulator.finish(samples);
         out.info.samples = total;
         out.info.samples_added = samples.count;

@@ -7,6 +7,7 @@
 // was scheduled.
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 
@@ -143,6 +144,17 @@ inline void prefetch_for_write(const T* begin, const T* end) {
     const char* p = reinterpret_cast<const char*>(begin);
     const char* e = reinterpret_cast<const char*>(end);
     for (p -= reinterpret_cast<uintptr_t>(p) % 64; p < e; p += 64) __builtin_prefetch(p, 1, 3);
+}
+
+/// Largest ray coordinate Embree accepts (its FLT_LARGE); it asserts on rays beyond it.
+constexpr float MAX_RAY_COORDINATE = 1.8e18f;
+
+/// True when rays may start at `o`: finite and within MAX_RAY_COORDINATE. Scene validation keeps
+/// cameras and translations far inside; this catches what arithmetic can still produce (a hit
+/// on geometry at the edge of Embree's range, pushed off its surface).
+inline bool ray_origin_ok(const Vec3& o) {
+    return std::abs(o.x) <= MAX_RAY_COORDINATE && std::abs(o.y) <= MAX_RAY_COORDINATE &&
+           std::abs(o.z) <= MAX_RAY_COORDINATE;
 }
 
 /// Origin for rays leaving a surface point p (reached at distance t from a ray starting at

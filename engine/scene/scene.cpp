@@ -80,6 +80,10 @@ Result<uint64_t> Scene::apply(EditBatch&& batch) {
     undo.changed_meshes = m_changes.meshes.size();
     undo.changed_instances = m_changes.instances.size();
     undo.changed_materials = m_changes.materials.size();
+    undo.totals = m_totals;
+    // The budget applies to where the batch leaves the scene; the error names the edit after
+    // which it stayed over, to point the client at what to split or shrink.
+    std::size_t over_from = over_budget(m_totals, m_budget) ? 0 : Error::NO_INDEX;
     for (std::size_t i = 0; i < batch.edits.size(); ++i) {
         Status s = std::visit([&](auto&& e) { return apply_edit(std::move(e), undo); },
                               std::move(batch.edits[i]));
@@ -89,6 +93,17 @@ Result<uint64_t> Scene::apply(EditBatch&& batch) {
             e.edit_index = i;
             return Unexpected(std::move(e));
         }
+        if (!over_budget(m_totals, m_budget)) {
+            over_from = Error::NO_INDEX;
+        } else if (over_from == Error::NO_INDEX) {
+            over_from = i;
+        }
+    }
+    if (over_from != Error::NO_INDEX && m_totals.grew_from(undo.totals)) {
+        Error e = make_error(ErrorCode::TooLarge, budget_message(m_totals, m_budget));
+        e.edit_index = over_from;
+        roll_back(undo);
+        return Unexpected(std::move(e));
     }
     return ++m_version;
 }

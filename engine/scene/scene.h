@@ -11,6 +11,7 @@
 
 #include "engine/core/handle.h"
 #include "engine/core/result.h"
+#include "engine/scene/budget.h"
 #include "engine/scene/dirty.h"
 #include "engine/scene/edits.h"
 
@@ -65,6 +66,11 @@ public:
     /// edits before it are undone: the scene is then exactly as before the call, slots and
     /// handles included. Large arrays are moved out of the batch.
     Result<uint64_t> apply(EditBatch&& batch);
+
+    /// The budget every later batch must leave the scene within (TooLarge beyond it).
+    void set_budget(const SceneBudget& budget) { m_budget = budget; }
+    /// What the meshes hold now.
+    const MeshTotals& mesh_totals() const { return m_totals; }
 
     /// Incremented once per applied batch.
     uint64_t version() const { return m_version; }
@@ -139,6 +145,8 @@ private:
     Lighting m_lighting;
     ChangeTracker m_changes;
     uint64_t m_version = 0;
+    SceneBudget m_budget;
+    MeshTotals m_totals;
 };
 
 }  // namespace strata

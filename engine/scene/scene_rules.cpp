@@ -97,6 +97,8 @@ Status Scene::apply_edit(AddMesh&& e, UndoLog& undo) {
         if (material.is_null()) return unknown("material", *e.material, "material");
     }
 
+    m_totals.vertices += e.positions.size();
+    m_totals.triangles += e.triangles.size();
     MeshRecord r;
     r.id = e.id;
     r.positions = std::move(e.positions);
@@ -160,6 +162,8 @@ Status Scene::apply_edit(ReplaceMeshTopology&& e, UndoLog& undo) {
     if (Status s = check_triangles(e.triangles, vertex_count, "indices"); !s) return s;
 
     mark_mesh(h, dirty::MeshTopology, undo);
+    m_totals.vertices = m_totals.vertices - r.positions.size() + vertex_count;
+    m_totals.triangles = m_totals.triangles - r.triangles.size() + e.triangles.size();
     undo::MeshTopology old{h, std::nullopt, std::move(r.triangles)};
     if (e.positions) {
         old.positions = std::move(r.positions);
@@ -189,6 +193,8 @@ void Scene::remove_mesh(MeshHandle h, UndoLog& undo) {
     STRATA_CHECK(r.users.empty());
     // Listed by its now stale handle, so the commit releases its BLAS.
     if (r.dirty == 0) m_changes.meshes.push_back(h);
+    m_totals.vertices -= r.positions.size();
+    m_totals.triangles -= r.triangles.size();
     m_mesh_ids.erase(r.id);
     undo.records.emplace_back(undo::Removed<MeshHandle, MeshRecord>{h, m_meshes.take(h)});
 }

@@ -112,6 +112,7 @@ void Scene::roll_back(UndoLog& undo) {
     m_camera = undo.camera;
     m_lighting = undo.lighting;
     m_changes.scene_bits = undo.scene_bits;
+    m_totals = undo.totals;
     m_changes.meshes.resize(undo.changed_meshes);
     m_changes.instances.resize(undo.changed_instances);
     m_changes.materials.resize(undo.changed_materials);

@@ -18,6 +18,12 @@ bool in_unit_range(float v) {
     return v >= 0.0f && v <= 1.0f;
 }
 
+/// True when every component's magnitude is at most `limit` (NaN is not).
+bool within(const Vec3& v, double limit) {
+    return std::abs(double(v.x)) <= limit && std::abs(double(v.y)) <= limit &&
+           std::abs(double(v.z)) <= limit;
+}
+
 }  // namespace
 
 Status check_camera(const Camera& c) {
@@ -30,14 +36,31 @@ Status check_camera(const Camera& c) {
         return bad(ErrorCode::NotFinite, "fov_y_deg", "fov_y_deg is NaN or infinite");
     if (!(c.fov_y_deg > 0.0f && c.fov_y_deg < 180.0f))
         return bad(ErrorCode::InvalidArgument, "fov_y_deg", "fov_y_deg must be in (0, 180)");
-    const Vec3 view = c.target - c.eye;
-    const float view_len = glm::length(view);
-    if (!(view_len > 1e-12f))
+    // Validate what is computed from the numbers, not only the numbers: finite values can still
+    // overflow (eye and target at -3e38 and 3e38 give an infinite view vector) or put the
+    // rays' origin where Embree refuses rays. Hence a range, then the basis in double.
+    if (!within(c.eye, MAX_COORDINATE))
+        return bad(ErrorCode::InvalidArgument, "eye", "eye is farther than 1e15 from the origin");
+    if (!within(c.target, MAX_COORDINATE))
+        return bad(ErrorCode::InvalidArgument, "target",
+                   "target is farther than 1e15 from the origin");
+    const glm::dvec3 view = glm::dvec3(c.target) - glm::dvec3(c.eye);
+    const double view_len = glm::length(view);
+    if (!(view_len > 1e-12))
         return bad(ErrorCode::InvalidArgument, "target", "eye and target coincide");
-    const float up_len = glm::length(c.up);
-    if (!(up_len > 1e-12f)) return bad(ErrorCode::InvalidArgument, "up", "up has zero length");
-    if (glm::length(glm::cross(view / view_len, c.up / up_len)) < 1e-4f)
+    const glm::dvec3 up(c.up);
+    const double up_len = glm::length(up);
+    if (!(up_len > 1e-12) || !std::isfinite(up_len))
+        return bad(ErrorCode::InvalidArgument, "up", "up has zero or overflowing length");
+    const glm::dvec3 side = glm::cross(view / view_len, up / up_len);
+    if (!(glm::length(side) >= 1e-4))
         return bad(ErrorCode::InvalidArgument, "up", "up is parallel to the viewing direction");
+    // The basis the camera rays are built from, in the precision they use.
+    const Vec3 forward(view / view_len);
+    const Vec3 right(side / glm::length(side));
+    if (!is_finite(forward) || !is_finite(right) || !(glm::length(forward) > 0.5f))
+        return bad(ErrorCode::InvalidArgument, "target",
+                   "the viewing direction cannot be represented");
     return {};
 }
 

@@ -88,6 +88,7 @@ struct UndoLog {
     Camera camera;
     Lighting lighting;
     uint32_t scene_bits = 0;
+    MeshTotals totals;
     std::size_t changed_meshes = 0;
     std::size_t changed_instances = 0;
     std::size_t changed_materials = 0;

@@ -75,6 +75,7 @@ MeshData read_shape(FieldReader& r, const Json& v, const std::string& ptr) {
             const auto seg =
                 segments ? r.integer(*segments, child(ptr, "segments"), 3, MAX_SPHERE_SEGMENTS)
                          : 32;
+            if (!r.reserve_shape_triangles(sphere_triangle_count(uint32_t(seg)), ptr)) return {};
             return make_sphere(rad, static_cast<uint32_t>(seg));
         }
         case 1:
@@ -86,6 +87,7 @@ MeshData read_shape(FieldReader& r, const Json& v, const std::string& ptr) {
                                       ? read_pair(r, *subdivisions, child(ptr, "subdivisions"),
                                                   MAX_PLANE_SUBDIVISIONS)
                                       : std::pair<uint32_t, uint32_t>{1, 1};
+            if (!r.reserve_shape_triangles(2ull * nx * nz, ptr)) return {};
             // A plane's size is [x, z]; make_plane takes a Vec3 and ignores y.
             return make_plane(Vec3(s.x, 0.0f, s.y), nx, nz);
         }

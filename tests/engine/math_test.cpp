@@ -60,6 +60,27 @@ TEST(Affine, TransformProblemsAreDetected) {
     EXPECT_NE(transform_problem(nan), nullptr);
 }
 
+TEST(Affine, HugeOrTinyQuaternionsNormaliseToTheirRotation) {
+    // In float, the squared length of a quaternion overflows beyond ~1.8e19 and used to
+    // normalise to the identity; the rotation of (1, 1, 1, 1) is 120 degrees about (1, 1, 1).
+    const Affine unit = Affine::rotation_quaternion(Vec4(0.5f));
+    for (float scale : {1e19f, 3e30f, 1e-25f}) {
+        const Affine r = Affine::rotation_quaternion(Vec4(scale));
+        for (int i = 0; i < 12; ++i) EXPECT_NEAR(r.m[i], unit.m[i], 1e-6f) << scale;
+    }
+    expect_near(unit.transform_vector({1, 0, 0}), {0, 1, 0});
+}
+
+TEST(Affine, TranslationsBeyondTheRayRangeAndTransformsWithoutFiniteInverseAreProblems) {
+    EXPECT_EQ(transform_problem(Affine::translation({1e14f, -1e14f, 0})), nullptr);
+    EXPECT_NE(transform_problem(Affine::translation({0, 1e19f, 0})), nullptr);
+    EXPECT_NE(transform_problem(Affine::translation({-3e38f, 0, 0})), nullptr);
+    // Axes of 1e6 at a 1e-6 angle pass the scale checks one by one, not the inverse.
+    Affine sheared = Affine::scaling(Vec3(1e6f));
+    sheared.m[1] = 1e6f * (1.0f - 1e-7f);
+    EXPECT_NE(transform_problem(sheared), nullptr);
+}
+
 TEST(Bounds, TransformedBoxContainsTheTransformedCorners) {
     Bounds3 b;
     b.extend({-1, -1, -1});

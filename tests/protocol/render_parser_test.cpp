@@ -61,6 +61,17 @@ TEST(RenderParser, ErrorsPointAtTheMemberOrParameter) {
     EXPECT_EQ(parse_render_query({{"eye", "1,2"}}).error().pointer, "/camera/eye");
 }
 
+TEST(RenderParser, QueriesTheFuzzerFoundAreRefusedCleanly) {
+    // "camera" as a parameter made the eye's slot index into a string (a type_error, so a 500).
+    auto camera = parse_render_query({{"camera", "exr"}, {"eye", "1,1,0"}});
+    ASSERT_FALSE(camera.has_value());
+    EXPECT_EQ(camera.error().pointer, "/camera");
+    // A number beyond uint64_t was converted to it first (undefined behaviour), then compared.
+    auto big = parse_render_query({{"width", "4.44e62"}});
+    ASSERT_FALSE(big.has_value());
+    EXPECT_EQ(big.error().pointer, "/width");
+}
+
 TEST(RenderParser, ACameraOverrideKeepsOnlyTheFieldsItNames) {
     // The engine completes the rest from the camera of the version it renders.
     const auto r = parse_render_body(Json::parse(R"({"camera": {"fov_y_deg": 20}})"));

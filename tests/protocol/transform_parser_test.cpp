@@ -50,6 +50,20 @@ TEST(TransformParser, OverflowingNumbersAreNotFiniteAtTheirPointer) {
     EXPECT_EQ(r.value_error()->pointer, "/t/translate/1");
 }
 
+TEST(TransformParser, AQuaternionFarFromUnitLengthIsAValueError) {
+    for (const char* q :
+         {R"([1e19, 1e19, 1e19, 1e19])", R"([1e-30, 0, 0, 1e-30])", R"([3e38, 3e38, 0, 0])"}) {
+        FieldReader r;
+        parse_transform(r, Json::parse(std::string(R"({"quaternion": )") + q + "}"), "/t");
+        ASSERT_TRUE(r.value_error().has_value()) << q;
+        EXPECT_EQ(r.value_error()->pointer, "/t/quaternion") << q;
+        EXPECT_NE(r.value_error()->message.find("unit quaternion"), std::string::npos) << q;
+    }
+    FieldReader ok;
+    parse_transform(ok, Json::parse(R"({"quaternion": [0, 0, 2, 2]})"), "/t");
+    EXPECT_FALSE(ok.value_error().has_value());
+}
+
 TEST(TransformParser, AZeroQuaternionIsAValueError) {
     FieldReader r;
     parse_transform(r, Json::parse(R"({"quaternion": [0,0,0,0]})"), "/t");

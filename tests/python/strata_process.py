@@ -13,7 +13,7 @@ import signal
 import subprocess
 import tempfile
 import time
-from typing import List, Optional
+from typing import Dict, List, Optional
 
 _LISTENING = re.compile(r"listening on (http://[0-9.]+:([0-9]+))")
 
@@ -21,13 +21,17 @@ _LISTENING = re.compile(r"listening on (http://[0-9.]+:([0-9]+))")
 class ServerProcess:
     """A strata-server child process. `args` are extra flags (e.g. ["--demo"])."""
 
-    def __init__(self, binary: str, args: Optional[List[str]] = None, timeout: float = 30.0):
+    def __init__(self, binary: str, args: Optional[List[str]] = None, timeout: float = 30.0,
+                 env: Optional[Dict[str, str]] = None):
+        """`env`: variables added to this process's environment (STRATA_TOKEN is not inherited)."""
         self._log = tempfile.NamedTemporaryFile(prefix="strata-server-", suffix=".log",
                                                 delete=False)
         self.log_path = self._log.name
+        full_env = {k: v for k, v in os.environ.items() if k != "STRATA_TOKEN"}
+        full_env.update(env or {})
         self.process = subprocess.Popen(
             [binary, "--host", "127.0.0.1", "--port", "0", "--log-level", "info"] + (args or []),
-            stdout=self._log, stderr=subprocess.STDOUT)
+            stdout=self._log, stderr=subprocess.STDOUT, env=full_env)
         self.url = self._wait_for_port(timeout)
         self.port = int(self.url.rsplit(":", 1)[1])
 

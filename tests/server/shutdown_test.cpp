@@ -18,7 +18,10 @@ namespace {
 
 void finishes_in_flight_work_on(int signo) {
     const int port = free_port();
-    const pid_t pid = spawn_server({"--demo", "--port", std::to_string(port)});
+    // A grace long enough for the render below on a loaded machine (past it, renders stop: see
+    // tests/server/test_adversarial.py).
+    const pid_t pid =
+        spawn_server({"--demo", "--port", std::to_string(port), "--shutdown-grace", "120"});
     ASSERT_TRUE(wait_live(port));
     // A large frame, so that the signal lands while it renders.
     auto slow = std::async(std::launch::async, [port] {

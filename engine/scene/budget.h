@@ -1,0 +1,36 @@
+#pragma once
+// The scene budget: how many triangles and vertices the scene's meshes may hold in all. One small
+// edit can ask for a lot (a sphere shape of 4M triangles is ~130 bytes of JSON and ~500 MB of BLAS
+// at commit), so a batch that leaves the scene past its budget is refused when it is applied,
+// before anything is built. Scene::apply keeps the totals as its rules change meshes.
+
+#include <cstdint>
+#include <string>
+
+namespace strata {
+
+/// Totals a scene may hold, over its meshes (instances share their mesh's BLAS and cost none).
+struct SceneBudget {
+    uint64_t max_triangles = uint64_t(1) << 24;
+    uint64_t max_vertices = uint64_t(1) << 24;
+};
+
+/// What the scene's meshes hold, each mesh counted once.
+struct MeshTotals {
+    uint64_t vertices = 0;
+    uint64_t triangles = 0;
+
+    bool grew_from(const MeshTotals& before) const {
+        return vertices > before.vertices || triangles > before.triangles;
+    }
+};
+
+/// True when `totals` exceed `budget`.
+inline bool over_budget(const MeshTotals& totals, const SceneBudget& budget) {
+    return totals.triangles > budget.max_triangles || totals.vertices > budget.max_vertices;
+}
+
+/// "the scene would hold N triangles, over its budget of M (max_scene_triangles)".
+std::string budget_message(const MeshTotals& totals, const SceneBudget& budget);
+
+}  // namespace strata

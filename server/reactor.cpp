@@ -1,0 +1,488 @@
+#include "server/reactor.h"
+
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <sys/epoll.h>
+#include <sys/eventfd.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
+#include <spdlog/spdlog.h>
+
+#include "protocol/problem.h"
+#include "server/direct_response.h"
+#include "server/metrics.h"
+
+namespace strata::server {
+
+namespace {
+
+constexpr uint64_t LISTEN_KEY = 0;
+constexpr uint64_t WAKE_KEY = 1;
+/// Connections beyond every limit still get this many slots, for health checks only.
+constexpr std::size_t HEALTH_RESERVE = 16;
+/// Deadline of a connection that is over a limit (it may only ask for /livez or /readyz).
+constexpr std::chrono::seconds RESTRICTED_TIMEOUT{2};
+/// How long a closing connection's unread input is discarded, and how much of it at most.
+constexpr std::chrono::seconds LINGER_TIME{2};
+constexpr std::size_t LINGER_BYTES = std::size_t(8) << 20;
+/// Precision of every deadline.
+constexpr std::chrono::milliseconds TICK{20};
+/// How long accept() pauses when the process is out of file descriptors.
+constexpr std::chrono::milliseconds ACCEPT_PAUSE{100};
+
+Peer peer_of(int fd, const sockaddr_storage& addr) {
+    Peer p;
+    auto name = [](const sockaddr_storage& a, std::string& ip, int& port) {
+        char buf[INET6_ADDRSTRLEN] = {};
+        if (a.ss_family == AF_INET) {
+            const auto& v4 = reinterpret_cast<const sockaddr_in&>(a);
+            inet_ntop(AF_INET, &v4.sin_addr, buf, sizeof buf);
+            port = ntohs(v4.sin_port);
+        } else if (a.ss_family == AF_INET6) {
+            const auto& v6 = reinterpret_cast<const sockaddr_in6&>(a);
+            inet_ntop(AF_INET6, &v6.sin6_addr, buf, sizeof buf);
+            port = ntohs(v6.sin6_port);
+        }
+        ip = buf;
+        // An IPv4 client of a dual-stack socket is the same client as over IPv4.
+        if (ip.rfind("::ffff:", 0) == 0 && ip.find('.') != std::string::npos) ip.erase(0, 7);
+    };
+    name(addr, p.ip, p.port);
+    sockaddr_storage local{};
+    socklen_t len = sizeof local;
+    if (getsockname(fd, reinterpret_cast<sockaddr*>(&local), &len) == 0)
+        name(local, p.local_ip, p.local_port);
+    return p;
+}
+
+double ms_since(std::chrono::steady_clock::time_point t,
+                std::chrono::steady_clock::time_point now) {
+    return std::chrono::duration<double, std::milli>(now - t).count();
+}
+
+}  // namespace
+
+struct Reactor::Connection {
+    enum class Phase : uint8_t { Idle, Reading, Busy, Writing, Lingering };
+
+    Connection(uint64_t id_, int fd_, Peer peer_, const ReaderConfig& config)
+        : id(id_), fd(fd_), peer(std::move(peer_)), reader(config) {}
+
+    uint64_t id;
+    int fd;
+    Peer peer;
+    bool restricted = false;
+    Phase phase = Phase::Idle;
+    RequestReader reader;
+    Clock::time_point deadline{};         ///< Idle, Writing, Lingering; Reading: headers
+    Clock::time_point idle_deadline{};    ///< an Idle connection's (blank lines: no later)
+    Clock::time_point read_deadline{};    ///< Reading: the whole request
+    Clock::time_point started{};          ///< first byte of the current request
+    std::shared_ptr<CancelToken> cancel;  ///< Busy
+    bool keep_alive = true;               ///< for the request a worker has
+    bool peer_gone = false;
+    std::string out;
+    std::size_t out_pos = 0;
+    bool close_after = false;
+    std::size_t served = 0;
+    std::size_t in_flight = 0;  ///< bytes of the request a worker has
+    std::size_t accounted = 0;  ///< what this connection adds to Reactor::m_buffered
+    std::size_t discarded = 0;  ///< Lingering
+};
+
+Reactor::Reactor(const ServerConfig& config, ServerMetrics& metrics, Dispatch dispatch)
+    : m_config(config), m_metrics(metrics), m_dispatch(std::move(dispatch)), m_scratch(64 * 1024) {
+    m_reader_config.limits.max_head_bytes = config.max_header_bytes;
+    m_reader_config.limits.max_headers = config.max_headers;
+    m_reader_config.limits.max_target_bytes = config.max_uri_bytes;
+    m_reader_config.limits.max_body_bytes = config.max_body_bytes;
+    m_reader_config.token = config.token;
+    m_wake = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+}
+
+Reactor::~Reactor() {
+    for (auto& [id, c] : m_connections) ::close(c->fd);
+    if (m_wake >= 0) ::close(m_wake);
+    if (m_epoll >= 0) ::close(m_epoll);
+}
+
+void Reactor::drain() {
+    m_drain_requested = true;
+    const uint64_t one = 1;
+    [[maybe_unused]] const ssize_t n = ::write(m_wake, &one, sizeof one);
+}
+
+void Reactor::complete(uint64_t conn, std::string response, bool close) {
+    {
+        std::lock_guard lock(m_done_mutex);
+        m_done.push_back({conn, std::move(response), close});
+    }
+    const uint64_t one = 1;
+    [[maybe_unused]] const ssize_t n = ::write(m_wake, &one, sizeof one);
+}
+
+void Reactor::watch(const Connection& c, uint32_t events) {
+    epoll_event ev{};
+    ev.events = events;
+    ev.data.u64 = c.id;
+    epoll_ctl(m_epoll, EPOLL_CTL_MOD, c.fd, &ev);
+}
+
+void Reactor::run(int listen_fd) {
+    m_listen = listen_fd;
+    fcntl(m_listen, F_SETFL, fcntl(m_listen, F_GETFL) | O_NONBLOCK);
+    m_epoll = epoll_create1(EPOLL_CLOEXEC);
+    for (const auto& [fd, key] : {std::pair(m_listen, LISTEN_KEY), std::pair(m_wake, WAKE_KEY)}) {
+        epoll_event ev{};
+        ev.events = EPOLLIN;
+        ev.data.u64 = key;
+        epoll_ctl(m_epoll, EPOLL_CTL_ADD, fd, &ev);
+    }
+    std::vector<epoll_event> events(256);
+    for (;;) {
+        const int n = epoll_wait(m_epoll, events.data(), int(events.size()), int(TICK.count()));
+        const Clock::time_point now = Clock::now();
+        for (int i = 0; i < n; ++i) {
+            const uint64_t key = events[i].data.u64;
+            if (key == LISTEN_KEY) {
+                accept_ready(now);
+            } else if (key == WAKE_KEY) {
+                uint64_t count = 0;
+                [[maybe_unused]] const ssize_t r = ::read(m_wake, &count, sizeof count);
+            } else if (auto it = m_connections.find(key); it != m_connections.end()) {
+                on_event(*it->second, events[i].events, now);
+            }
+        }
+        take_completions(now);
+        if (m_drain_requested && !m_draining) begin_drain(now);
+        if (now - m_last_sweep >= TICK) sweep(now);
+        if (m_draining && drain_finished(now)) break;
+    }
+    std::vector<uint64_t> ids;
+    for (const auto& [id, c] : m_connections) ids.push_back(id);
+    for (uint64_t id : ids) close(id);
+}
+
+void Reactor::accept_ready(Clock::time_point now) {
+    for (;;) {
+        sockaddr_storage addr{};
+        socklen_t len = sizeof addr;
+        const int fd = accept4(m_listen, reinterpret_cast<sockaddr*>(&addr), &len,
+                               SOCK_NONBLOCK | SOCK_CLOEXEC);
+        if (fd < 0) {
+            if (errno == EINTR || errno == ECONNABORTED) continue;
+            if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
+                // Out of descriptors: stop polling the listener for a moment instead of spinning.
+                spdlog::warn("accept: {}; pausing new connections", std::strerror(errno));
+                epoll_ctl(m_epoll, EPOLL_CTL_DEL, m_listen, nullptr);
+                m_accept_paused = true;
+                m_accept_resume = now + ACCEPT_PAUSE;
+            }
+            return;
+        }
+        Peer peer = peer_of(fd, addr);
+        const auto held = m_per_client.find(peer.ip);
+        const bool over =
+            m_open_normal >= m_config.max_connections ||
+            (held != m_per_client.end() && held->second >= m_config.max_connections_per_client);
+        if (over && m_open_restricted >= HEALTH_RESERVE) {
+            ++m_counters.refused;
+            ::close(fd);
+            continue;
+        }
+        const int one = 1;
+        setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+        const uint64_t id = m_next_id++;
+        auto c = std::make_unique<Connection>(id, fd, std::move(peer), m_reader_config);
+        c->restricted = over;
+        if (over) {
+            ++m_open_restricted;
+            ++m_counters.restricted;
+            c->deadline = now + RESTRICTED_TIMEOUT;
+        } else {
+            ++m_open_normal;
+            ++m_per_client[c->peer.ip];
+            c->deadline = now + std::chrono::seconds(m_config.header_timeout_s);
+        }
+        c->idle_deadline = c->deadline;
+        epoll_event ev{};
+        ev.events = EPOLLIN | EPOLLRDHUP;
+        ev.data.u64 = id;
+        epoll_ctl(m_epoll, EPOLL_CTL_ADD, fd, &ev);
+        ++m_counters.accepted;
+        ++m_counters.open;
+        m_connections.emplace(id, std::move(c));
+    }
+}
+
+void Reactor::on_event(Connection& c, uint32_t events, Clock::time_point now) {
+    using Phase = Connection::Phase;
+    switch (c.phase) {
+        case Phase::Idle:
+        case Phase::Reading:
+            read_from(c, now);
+            return;
+        case Phase::Busy:
+            // Watched with EPOLLONESHOT for this alone: the client hung up, so whatever its
+            // request still computes is wasted.
+            if (events & (EPOLLRDHUP | EPOLLHUP | EPOLLERR)) {
+                c.peer_gone = true;
+                ++m_counters.client_gone;
+                if (c.cancel) c.cancel->cancel(CancelReason::ClientGone);
+            }
+            return;
+        case Phase::Writing:
+            if (events & (EPOLLERR | EPOLLHUP)) return close(c.id);
+            write_to(c, now);
+            return;
+        case Phase::Lingering: {
+            const ssize_t n = ::recv(c.fd, m_scratch.data(), m_scratch.size(), 0);
+            if (n < 0 && (errno == EAGAIN || errno == EINTR)) return;
+            c.discarded += n > 0 ? std::size_t(n) : 0;
+            if (n <= 0 || c.discarded > LINGER_BYTES) close(c.id);
+            return;
+        }
+    }
+}
+
+void Reactor::read_from(Connection& c, Clock::time_point now) {
+    const ssize_t n = ::recv(c.fd, m_scratch.data(), m_scratch.size(), 0);
+    if (n < 0 && (errno == EAGAIN || errno == EINTR)) return;
+    if (n <= 0) return close(c.id);  // the client left (or reset); there is nobody to answer
+    if (m_buffered + std::size_t(n) > m_config.max_buffered_bytes) {
+        DirectAnswer a;
+        a.status = 503;
+        a.bytes = problem_bytes(
+            protocol::make_problem(protocol::ProblemType::Unavailable,
+                                   "the server holds too much unfinished request data from other "
+                                   "clients (--max-buffered-mb); retry later"),
+            true);
+        return answer(c, a, now);
+    }
+    if (c.phase == Connection::Phase::Idle) set_reading(c, now);
+    c.reader.append(m_scratch.data(), std::size_t(n));
+    advance(c, now);
+}
+
+void Reactor::set_reading(Connection& c, Clock::time_point now) {
+    c.phase = Connection::Phase::Reading;
+    c.started = now;
+    c.deadline =
+        now + (c.restricted ? RESTRICTED_TIMEOUT : std::chrono::seconds(m_config.header_timeout_s));
+    c.read_deadline = now + std::chrono::seconds(m_config.read_timeout_s);
+}
+
+void Reactor::advance(Connection& c, Clock::time_point now) {
+    for (;;) {
+        ReaderStep step = c.reader.next({m_draining, c.restricted});
+        account(c);
+        switch (step.kind) {
+            case ReaderStep::Kind::NeedMore:
+                if (c.phase == Connection::Phase::Reading && !c.reader.mid_request()) {
+                    // Only blank lines came (the reader drops them): still idle, no later.
+                    c.phase = Connection::Phase::Idle;
+                    c.deadline = c.idle_deadline;
+                }
+                return;
+            case ReaderStep::Kind::Continue: {
+                static constexpr std::string_view CONTINUE = "HTTP/1.1 100 Continue\r\n\r\n";
+                // 25 bytes on a socket whose send buffer is empty (nothing else is in flight).
+                if (::send(c.fd, CONTINUE.data(), CONTINUE.size(), MSG_NOSIGNAL | MSG_DONTWAIT) !=
+                    ssize_t(CONTINUE.size()))
+                    return close(c.id);
+                continue;
+            }
+            case ReaderStep::Kind::Answer:
+                return answer(c, step.answer, now);
+            case ReaderStep::Kind::Request:
+                return dispatch(c, std::move(step.request), now);
+        }
+    }
+}
+
+void Reactor::answer(Connection& c, const DirectAnswer& a, Clock::time_point now) {
+    m_metrics.count_response(a.status);
+    spdlog::info("{} {} {} {}B {:.2f}ms", a.method, a.path, a.status, a.bytes.size(),
+                 c.phase == Connection::Phase::Reading ? ms_since(c.started, now) : 0.0);
+    const bool keep =
+        !a.close && !m_draining && !c.restricted && c.served + 1 < m_config.max_keep_alive_requests;
+    start_write(c, a.bytes, !keep, now);
+}
+
+void Reactor::dispatch(Connection& c, PreparedRequest&& request, Clock::time_point now) {
+    c.phase = Connection::Phase::Busy;
+    c.cancel = std::make_shared<CancelToken>();
+    c.keep_alive =
+        request.keep_alive && !m_draining && c.served + 1 < m_config.max_keep_alive_requests;
+    c.in_flight = request.wire_bytes.size();
+    account(c);
+    watch(c, EPOLLRDHUP | EPOLLONESHOT);
+    m_dispatch(c.id, std::move(request), c.cancel, c.peer, !c.keep_alive, now);
+}
+
+void Reactor::take_completions(Clock::time_point now) {
+    std::vector<Completion> done;
+    {
+        std::lock_guard lock(m_done_mutex);
+        done.swap(m_done);
+    }
+    for (Completion& d : done) {
+        auto it = m_connections.find(d.conn);
+        if (it == m_connections.end()) continue;  // closed at the drain's hard deadline
+        Connection& c = *it->second;
+        c.cancel.reset();
+        c.in_flight = 0;
+        account(c);
+        const bool close = d.close || !c.keep_alive || m_draining || c.peer_gone;
+        start_write(c, std::move(d.response), close, now);
+    }
+}
+
+void Reactor::start_write(Connection& c, std::string bytes, bool close, Clock::time_point now) {
+    c.phase = Connection::Phase::Writing;
+    c.out = std::move(bytes);
+    c.out_pos = 0;
+    c.close_after = close;
+    c.deadline = now + std::chrono::seconds(m_config.write_timeout_s);
+    write_to(c, now);
+}
+
+void Reactor::write_to(Connection& c, Clock::time_point now) {
+    while (c.out_pos < c.out.size()) {
+        const ssize_t n = ::send(c.fd, c.out.data() + c.out_pos, c.out.size() - c.out_pos,
+                                 MSG_NOSIGNAL | MSG_DONTWAIT);
+        if (n > 0) {
+            c.out_pos += std::size_t(n);
+        } else if (n < 0 && errno == EINTR) {
+            continue;
+        } else if (n < 0 && errno == EAGAIN) {
+            watch(c, EPOLLOUT);
+            return;
+        } else {
+            return close(c.id);
+        }
+    }
+    finish_response(c, now);
+}
+
+void Reactor::finish_response(Connection& c, Clock::time_point now) {
+    c.out = std::string();
+    ++c.served;
+    if (c.close_after) return linger(c, now);
+    c.phase = Connection::Phase::Idle;
+    c.idle_deadline = c.deadline = now + std::chrono::seconds(m_config.keep_alive_timeout_s);
+    if (c.reader.mid_request()) set_reading(c, now);  // pipelined: its bytes are already here
+    watch(c, EPOLLIN | EPOLLRDHUP);
+    advance(c, now);
+}
+
+void Reactor::linger(Connection& c, Clock::time_point now) {
+    // Closing with unread input would reset the connection, and the client could lose the answer
+    // before reading it: shut the write side, then read and discard until it closes too.
+    ::shutdown(c.fd, SHUT_WR);
+    c.phase = Connection::Phase::Lingering;
+    c.deadline = now + LINGER_TIME;
+    c.reader.discard();
+    account(c);
+    watch(c, EPOLLIN | EPOLLRDHUP);
+}
+
+void Reactor::account(Connection& c) {
+    const std::size_t held = c.reader.buffered_bytes() + c.in_flight;
+    m_buffered = m_buffered + held - c.accounted;
+    c.accounted = held;
+}
+
+void Reactor::close(uint64_t id) {
+    auto it = m_connections.find(id);
+    if (it == m_connections.end()) return;
+    Connection& c = *it->second;
+    if (c.cancel) c.cancel->cancel(CancelReason::ClientGone);
+    epoll_ctl(m_epoll, EPOLL_CTL_DEL, c.fd, nullptr);
+    ::close(c.fd);
+    m_buffered -= c.accounted;
+    if (c.restricted) {
+        --m_open_restricted;
+    } else {
+        --m_open_normal;
+        if (--m_per_client[c.peer.ip] == 0) m_per_client.erase(c.peer.ip);
+    }
+    --m_counters.open;
+    m_connections.erase(it);
+}
+
+void Reactor::sweep(Clock::time_point now) {
+    using Phase = Connection::Phase;
+    m_last_sweep = now;
+    if (m_accept_paused && now >= m_accept_resume) {
+        epoll_event ev{};
+        ev.events = EPOLLIN;
+        ev.data.u64 = LISTEN_KEY;
+        epoll_ctl(m_epoll, EPOLL_CTL_ADD, m_listen, &ev);
+        m_accept_paused = false;
+    }
+    std::vector<uint64_t> expired;
+    for (auto& [id, c] : m_connections) {
+        if (c->phase == Phase::Busy) {
+            if (m_draining && now >= m_grace_deadline && c->cancel)
+                c->cancel->cancel(CancelReason::Shutdown);
+            continue;
+        }
+        const bool late =
+            c->phase == Phase::Reading
+                ? now >= c->read_deadline || (!c->reader.reading_body() && now >= c->deadline)
+                : now >= c->deadline;
+        if (late) expired.push_back(id);
+    }
+    for (uint64_t id : expired) {
+        Connection& c = *m_connections.at(id);
+        if (c.phase != Phase::Reading) {
+            if (c.phase == Phase::Writing) ++m_counters.timeouts;
+            close(id);
+            continue;
+        }
+        ++m_counters.timeouts;
+        const bool body = c.reader.reading_body();
+        DirectAnswer a;
+        a.status = 408;
+        protocol::Problem p = protocol::make_problem(
+            protocol::ProblemType::RequestTimeout,
+            body ? "the request body did not arrive within " +
+                       std::to_string(m_config.read_timeout_s) + " s (--read-timeout)"
+                 : "the request headers did not arrive within " +
+                       std::to_string(c.restricted ? RESTRICTED_TIMEOUT.count()
+                                                   : m_config.header_timeout_s) +
+                       " s (--header-timeout)");
+        a.bytes = problem_bytes(p, true);
+        answer(c, a, now);
+    }
+}
+
+void Reactor::begin_drain(Clock::time_point now) {
+    m_draining = true;
+    m_grace_deadline = now + std::chrono::seconds(m_config.shutdown_grace_s);
+    m_hard_deadline = m_grace_deadline + std::chrono::seconds(1);
+    std::vector<uint64_t> idle;
+    for (const auto& [id, c] : m_connections) {
+        if (c->phase == Connection::Phase::Idle || c->phase == Connection::Phase::Reading)
+            idle.push_back(id);
+    }
+    for (uint64_t id : idle) close(id);
+}
+
+bool Reactor::drain_finished(Clock::time_point now) const {
+    if (now >= m_hard_deadline) return true;
+    for (const auto& [id, c] : m_connections) {
+        if (c->phase == Connection::Phase::Busy || c->phase == Connection::Phase::Writing)
+            return false;
+    }
+    return true;
+}
+
+}  // namespace strata::server

@@ -1,0 +1,120 @@
+#pragma once
+// The front end: one epoll thread that owns every socket. It accepts connections (within a total
+// and a per-client-address limit), reads each request with RequestReader under total deadlines
+// (headers, whole request), answers refusals and the health endpoints itself, hands complete
+// requests to the worker pool, and writes their answers without blocking. A worker is therefore
+// busy only while a handler runs: slow, idle or hostile clients cost a file descriptor and their
+// buffered bytes (also capped), never a thread.
+//
+// Connection life: Idle (between requests) -> Reading -> Busy (a worker has the request; the
+// socket is watched only for the client leaving, which cancels a render) -> Writing -> Idle, or
+// Lingering (write side shut, unread input discarded briefly so that the client reads the answer
+// instead of a reset) -> closed. Requests pipelined on one connection are served in order.
+//
+// Shutdown (drain()): idle and half-read connections close at once; the listening socket stays
+// open so that /readyz answers 503 (and /livez 200) while in-flight requests finish; after
+// --shutdown-grace their renders are cancelled; run() returns once nothing is in flight, or a
+// second later at the latest.
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "engine/core/cancel.h"
+#include "server/front_end_counters.h"
+#include "server/request_reader.h"
+#include "server/route_table.h"
+#include "server/server_config.h"
+
+namespace strata::server {
+
+class ServerMetrics;
+
+class Reactor {
+public:
+    /// Hands a request to a worker; the worker calls complete(conn, ...) with the answer.
+    using Dispatch = std::function<void(uint64_t conn, PreparedRequest&& request,
+                                        std::shared_ptr<CancelToken> cancel, Peer peer, bool close,
+                                        std::chrono::steady_clock::time_point received)>;
+
+    Reactor(const ServerConfig& config, ServerMetrics& metrics, Dispatch dispatch);
+    ~Reactor();
+    Reactor(const Reactor&) = delete;
+    Reactor& operator=(const Reactor&) = delete;
+
+    /// Serves connections on the listening socket `listen_fd` until a drain has finished.
+    void run(int listen_fd);
+    /// Starts the graceful drain. Thread-safe, idempotent, callable before run().
+    void drain();
+    /// True once drain() was called.
+    bool draining() const { return m_drain_requested.load(); }
+    /// A worker's answer for connection `conn`; `close`: close after writing it. Thread-safe.
+    void complete(uint64_t conn, std::string response, bool close);
+
+    const FrontEndCounters& counters() const { return m_counters; }
+
+private:
+    struct Connection;
+    using Clock = std::chrono::steady_clock;
+
+    void accept_ready(Clock::time_point now);
+    void on_event(Connection& c, uint32_t events, Clock::time_point now);
+    void read_from(Connection& c, Clock::time_point now);
+    void advance(Connection& c, Clock::time_point now);
+    void dispatch(Connection& c, PreparedRequest&& request, Clock::time_point now);
+    void take_completions(Clock::time_point now);
+    void answer(Connection& c, const DirectAnswer& a, Clock::time_point now);
+    void start_write(Connection& c, std::string bytes, bool close, Clock::time_point now);
+    void write_to(Connection& c, Clock::time_point now);
+    void finish_response(Connection& c, Clock::time_point now);
+    void linger(Connection& c, Clock::time_point now);
+    void set_reading(Connection& c, Clock::time_point now);
+    void account(Connection& c);
+    void close(uint64_t id);
+    void sweep(Clock::time_point now);
+    void begin_drain(Clock::time_point now);
+    bool drain_finished(Clock::time_point now) const;
+    void watch(const Connection& c, uint32_t events);
+
+    const ServerConfig& m_config;
+    ReaderConfig m_reader_config;
+    ServerMetrics& m_metrics;
+    Dispatch m_dispatch;
+    FrontEndCounters m_counters;
+
+    int m_epoll = -1;
+    int m_wake = -1;  ///< eventfd: completions and drain requests
+    int m_listen = -1;
+    bool m_accept_paused = false;
+    Clock::time_point m_accept_resume{};
+
+    std::unordered_map<uint64_t, std::unique_ptr<Connection>> m_connections;
+    std::unordered_map<std::string, std::size_t> m_per_client;  ///< open, unrestricted
+    std::size_t m_open_normal = 0;
+    std::size_t m_open_restricted = 0;
+    std::size_t m_buffered = 0;  ///< request bytes held over all connections
+    uint64_t m_next_id = 2;      ///< 0 and 1 are the listening socket and the eventfd
+    std::vector<char> m_scratch;
+
+    std::atomic<bool> m_drain_requested{false};
+    bool m_draining = false;
+    Clock::time_point m_grace_deadline{};
+    Clock::time_point m_hard_deadline{};
+    Clock::time_point m_last_sweep{};
+
+    struct Completion {
+        uint64_t conn;
+        std::string response;
+        bool close;
+    };
+    std::mutex m_done_mutex;
+    std::vector<Completion> m_done;
+};
+
+}  // namespace strata::server

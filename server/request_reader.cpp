@@ -1,0 +1,255 @@
+#include "server/request_reader.h"
+
+#include <algorithm>
+
+#include "protocol/api.h"
+#include "server/auth.h"
+#include "server/direct_response.h"
+
+namespace strata::server {
+
+namespace {
+
+using protocol::ProblemType;
+
+/// Fields the front end consumes and never passes on. Framing and connection management are
+/// decided here, once (httplib would otherwise apply its own, laxer reading of them); Range is
+/// dropped because every answer is generated content (RFC 9110 lets a server ignore it), so a
+/// request cannot multiply a frame into thousands of multipart ranges; the REMOTE_ and LOCAL_
+/// names are what httplib stores the socket addresses under, so a client must not supply them.
+constexpr std::string_view DROPPED_FIELDS[] = {
+    "content-length",   "transfer-encoding", "expect",      "range",      "if-range",
+    "connection",       "keep-alive",        "te",          "trailer",    "upgrade",
+    "proxy-connection", "remote_addr",       "remote_port", "local_addr", "local_port",
+};
+
+bool is_dropped(std::string_view name) {
+    return std::any_of(std::begin(DROPPED_FIELDS), std::end(DROPPED_FIELDS),
+                       [&](std::string_view d) { return iequals(name, d); });
+}
+
+bool has_body_semantics(std::string_view method) {
+    return method == "POST" || method == "PUT" || method == "PATCH" || method == "DELETE";
+}
+
+ProblemType problem_type_for(int status) {
+    switch (status) {
+        case 401:
+            return ProblemType::Unauthorized;
+        case 408:
+            return ProblemType::RequestTimeout;
+        case 413:
+            return ProblemType::TooLarge;
+        case 414:
+            return ProblemType::UriTooLong;
+        case 415:
+            return ProblemType::UnsupportedEncoding;
+        case 417:
+            return ProblemType::ExpectationFailed;
+        case 429:
+            return ProblemType::TooManyConnections;
+        case 431:
+            return ProblemType::HeadersTooLarge;
+        case 501:
+            return ProblemType::NotImplemented;
+        case 503:
+            return ProblemType::Unavailable;
+        case 505:
+            return ProblemType::HttpVersion;
+        default:
+            return ProblemType::InvalidRequest;
+    }
+}
+
+}  // namespace
+
+bool is_health_path(std::string_view path) {
+    return path == "/livez" || path == "/readyz";
+}
+
+ReaderStep RequestReader::next(const ReaderSituation& situation) {
+    return m_phase == Phase::Head ? on_head(situation) : on_body();
+}
+
+ReaderStep RequestReader::answer(int status, const std::string& detail, bool close) {
+    protocol::Problem p = protocol::make_problem(problem_type_for(status), detail);
+    p.status = status;
+    protocol::ApiResponse r = protocol::problem_response(p);
+    if (status == 401) r.headers.emplace_back("WWW-Authenticate", "Bearer realm=\"strata\"");
+    ReaderStep step;
+    step.kind = ReaderStep::Kind::Answer;
+    step.answer.status = status;
+    if (!m_head.method.empty()) {
+        step.answer.method = m_head.method;
+        step.answer.path = m_target.path.empty() ? m_head.target : m_target.path;
+    }
+    step.answer.close = close;
+    // A HEAD answer has the headers of the body it leaves out: a body would be read as the next
+    // response.
+    step.answer.bytes = response_bytes(r, close, m_head.method == "HEAD");
+    return step;
+}
+
+ReaderStep RequestReader::on_head(const ReaderSituation& situation) {
+    const HttpLimits& limits = m_config.limits;
+    // Empty lines between requests (some clients end a body with an extra CRLF) are no request:
+    // dropped here, they neither count as one in progress nor start its deadline.
+    while (m_pos < m_in.size()) {
+        const std::size_t n = m_in[m_pos] == '\n' ? 1 : m_in.compare(m_pos, 2, "\r\n") == 0 ? 2 : 0;
+        if (n == 0) break;
+        m_pos += n;
+        m_scanned -= std::min(m_scanned, n);
+    }
+    const std::string_view buffered = std::string_view(m_in).substr(m_pos);
+    const std::size_t end = find_head_end(buffered, m_scanned);
+    if (end == std::string_view::npos) {
+        m_scanned = buffered.size();
+        if (buffered.size() <= limits.max_head_bytes) return {};
+        if (buffered.find('\n') == std::string_view::npos &&
+            buffered.size() > limits.max_target_bytes)
+            return answer(414, "the request line is longer than the limit of " +
+                                   std::to_string(limits.max_target_bytes) +
+                                   " bytes for its target (--max-uri-bytes)");
+        return answer(431, "the request head is larger than " +
+                               std::to_string(limits.max_head_bytes) +
+                               " bytes (--max-header-bytes)");
+    }
+    m_scanned = 0;
+    m_head = RequestHead{};
+    m_target = RequestTarget{};
+    auto parsed = parse_request_head(buffered.substr(0, end), limits);
+    m_pos += end;
+    if (auto* e = std::get_if<HttpError>(&parsed)) return answer(e->status, e->detail);
+    m_head = std::move(std::get<RequestHead>(parsed));
+    auto target = parse_request_target(m_head.target);
+    if (auto* e = std::get_if<HttpError>(&target)) return answer(e->status, e->detail);
+    m_target = std::move(std::get<RequestTarget>(target));
+
+    // Step: health checks, answered here so that they never wait for a worker, whatever the
+    // load, the connection limits or the shutdown state.
+    const bool body = m_head.framing != BodyFraming::None;
+    if (is_health_path(m_target.path) && (m_head.method == "GET" || m_head.method == "HEAD")) {
+        const bool ready = m_target.path == "/livez" || !situation.draining;
+        protocol::ApiResponse r =
+            ready ? protocol::json_response(
+                        200, {{"status", m_target.path == "/livez" ? "ok" : "ready"}})
+                  : protocol::problem_response(protocol::make_problem(
+                        ProblemType::Unavailable, "the server is shutting down"));
+        ReaderStep step;
+        step.kind = ReaderStep::Kind::Answer;
+        step.answer = {r.status, m_head.method, m_target.path, {}, body || !m_head.keep_alive};
+        step.answer.bytes = response_bytes(r, step.answer.close, m_head.method == "HEAD");
+        return step;
+    }
+
+    // Step: refusals that need no body. The body is left unread: the connection closes.
+    if (situation.draining) return answer(503, "the server is shutting down");
+    if (situation.restricted)
+        return answer(429,
+                      "this client holds too many connections already "
+                      "(--max-connections-per-client, --max-connections); only /livez and "
+                      "/readyz are answered on this one");
+    if (!m_config.token.empty() && !is_health_path(m_target.path)) {
+        const std::string* auth = m_head.header("Authorization");
+        if (!auth || !bearer_token_matches(*auth, m_config.token))
+            return answer(401, auth ? "the bearer token is not valid"
+                                    : "this server requires Authorization: Bearer <token>");
+    }
+    if (const std::string* coding = m_head.header("Content-Encoding");
+        coding && !iequals(*coding, "identity"))
+        return answer(415, "Content-Encoding '" + coding->substr(0, 32) +
+                               "' is not accepted: send the body uncompressed");
+    if (m_head.framing == BodyFraming::Length && m_head.content_length > limits.max_body_bytes)
+        return answer(413, "the request body of " + std::to_string(m_head.content_length) +
+                               " bytes is larger than the limit of " +
+                               std::to_string(limits.max_body_bytes) + " bytes (--max-body-mb)");
+    if (!body) return finish_request();
+
+    // Step: the body, read here in full before a worker sees the request.
+    m_phase = Phase::Body;
+    m_body.clear();
+    m_body_left = m_head.content_length;
+    m_chunked = ChunkedDecoder(limits.max_body_bytes);
+    if (m_head.expect_continue && m_pos == m_in.size()) {
+        ReaderStep step;
+        step.kind = ReaderStep::Kind::Continue;
+        return step;
+    }
+    return on_body();
+}
+
+ReaderStep RequestReader::on_body() {
+    const std::string_view buffered = std::string_view(m_in).substr(m_pos);
+    if (m_head.framing == BodyFraming::Length) {
+        const std::size_t n = std::size_t(std::min<uint64_t>(m_body_left, buffered.size()));
+        m_body.append(buffered.substr(0, n));
+        m_pos += n;
+        m_body_left -= n;
+        compact();
+        if (m_body_left > 0) return {};
+    } else {
+        m_pos += m_chunked.feed(buffered, m_body);
+        compact();
+        if (const HttpError* e = m_chunked.error()) return answer(e->status, e->detail);
+        if (!m_chunked.done()) return {};
+    }
+    return finish_request();
+}
+
+ReaderStep RequestReader::finish_request() {
+    // httplib refuses request lines over 8 KiB, and normalising may lengthen the target (a
+    // decoded '+' in the query is re-encoded as %20).
+    constexpr std::size_t MAX_WIRE_TARGET = 8150;
+    const std::string target = httplib_target(m_target);
+    if (target.size() > MAX_WIRE_TARGET)
+        return answer(414, "the request target is too long once normalised (" +
+                               std::to_string(target.size()) + " bytes; the limit is " +
+                               std::to_string(MAX_WIRE_TARGET) + ")");
+    ReaderStep step;
+    step.kind = ReaderStep::Kind::Request;
+    PreparedRequest& r = step.request;
+    r.method = m_head.method;
+    r.path = m_target.path;
+    r.keep_alive = m_head.keep_alive;
+    r.heavy = r.path == "/v1/render" || r.path == "/v1/commit";
+    // What httplib reads: a canonical HTTP/1.1 request with a Content-Length body. httplib
+    // percent-decodes header values (a quirk of 0.11), so '%' is escaped for it to undo.
+    std::string& w = r.wire_bytes;
+    const bool with_body = has_body_semantics(r.method) && !m_body.empty();
+    w.reserve(1024 + (with_body ? m_body.size() : 0));
+    w += r.method + " " + target + " HTTP/1.1\r\n";
+    for (const HeaderField& f : m_head.headers) {
+        if (is_dropped(f.name)) continue;
+        w += f.name;
+        w += ": ";
+        for (char c : f.value) w += c == '%' ? std::string_view("%25") : std::string_view(&c, 1);
+        w += "\r\n";
+    }
+    if (with_body) w += "Content-Length: " + std::to_string(m_body.size()) + "\r\n";
+    w += "\r\n";
+    if (with_body) w += m_body;
+    m_body = std::string();
+    m_phase = Phase::Head;
+    compact();
+    return step;
+}
+
+void RequestReader::discard() {
+    m_in = std::string();
+    m_body = std::string();
+    m_pos = m_scanned = 0;
+    m_phase = Phase::Head;
+}
+
+void RequestReader::compact() {
+    if (m_pos == m_in.size()) {
+        m_in.clear();
+        m_pos = 0;
+        if (m_in.capacity() > (64u << 10)) m_in.shrink_to_fit();
+    } else if (m_pos > (64u << 10) && m_pos * 2 > m_in.size()) {
+        m_in.erase(0, m_pos);
+        m_pos = 0;
+    }
+}
+
+}  // namespace strata::server

@@ -1,0 +1,104 @@
+#pragma once
+// One connection's request reader: bytes from the socket in; out, one step at a time, either a
+// complete request checked and ready for a worker, or an answer the front end writes itself
+// (a refusal, or /livez and /readyz). Everything that needs no engine happens here, before a
+// worker is involved: HTTP parsing, authentication, body limits, Expect: 100-continue, Content-
+// Encoding, and the health endpoints. No sockets, so tests and the fuzzer drive it directly.
+
+#include <cstddef>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "server/http_parser.h"
+#include "server/request_target.h"
+
+namespace strata::server {
+
+/// The rules a reader applies beyond the HTTP grammar.
+struct ReaderConfig {
+    HttpLimits limits;
+    std::string token;  ///< bearer token every path but /livez and /readyz needs; empty: none
+};
+
+/// What the front end knows when the reader decides.
+struct ReaderSituation {
+    bool draining = false;    ///< shutting down: only health checks are answered
+    bool restricted = false;  ///< the connection is over a connection limit: health checks only
+};
+
+/// A complete request for a worker.
+struct PreparedRequest {
+    std::string method;
+    std::string path;        ///< normalised (see RequestTarget::path)
+    std::string wire_bytes;  ///< the request as httplib reads it (see request_reader.cpp)
+    bool keep_alive = true;
+    bool heavy = false;  ///< renders and commits, which may take seconds
+};
+
+/// An answer written without a worker.
+struct DirectAnswer {
+    int status = 0;
+    std::string method = "-";  ///< for the access log; "-" when the request line was unreadable
+    std::string path = "-";
+    std::string bytes;  ///< the whole response
+    bool close = true;
+};
+
+/// What to do next.
+struct ReaderStep {
+    enum class Kind : uint8_t {
+        NeedMore,  ///< read more bytes
+        Continue,  ///< write "100 Continue", then call next() again
+        Request,   ///< hand `request` to a worker; call next() again after its answer
+        Answer,    ///< write `answer` (then close when it says so)
+    };
+    Kind kind = Kind::NeedMore;
+    PreparedRequest request;
+    DirectAnswer answer;
+};
+
+/// The paths the front end answers itself, open without a token.
+bool is_health_path(std::string_view path);
+
+class RequestReader {
+public:
+    explicit RequestReader(const ReaderConfig& config) : m_config(config) {}
+
+    /// Appends bytes read from the socket.
+    void append(const char* data, std::size_t n) { m_in.append(data, n); }
+
+    /// Advances over the buffered bytes. After an Answer that closes, call it no more.
+    ReaderStep next(const ReaderSituation& situation);
+
+    /// True while part of a request has arrived (then a timeout is answered with 408).
+    bool mid_request() const { return m_phase == Phase::Body || m_in.size() > m_pos; }
+    /// True while the head has arrived and the body is being read.
+    bool reading_body() const { return m_phase == Phase::Body; }
+    /// Request bytes held in memory (buffered input and the body read so far).
+    std::size_t buffered_bytes() const { return m_in.size() + m_body.size(); }
+    /// Frees every buffer (the connection is closing; nothing more will be read).
+    void discard();
+
+private:
+    enum class Phase : uint8_t { Head, Body };
+
+    ReaderStep on_head(const ReaderSituation& situation);
+    ReaderStep on_body();
+    ReaderStep answer(int status, const std::string& detail, bool close = true);
+    ReaderStep finish_request();
+    void compact();
+
+    const ReaderConfig& m_config;
+    Phase m_phase = Phase::Head;
+    std::string m_in;           ///< bytes read and not consumed yet, from m_pos on
+    std::size_t m_pos = 0;      ///< start of the unconsumed bytes in m_in
+    std::size_t m_scanned = 0;  ///< how far find_head_end has looked
+    RequestHead m_head;
+    RequestTarget m_target;
+    std::string m_body;
+    uint64_t m_body_left = 0;  ///< with BodyFraming::Length
+    ChunkedDecoder m_chunked{0};
+};
+
+}  // namespace strata::server

@@ -1,0 +1,88 @@
+// Protocol defences against hostile input: text that is not UTF-8 or holds control characters,
+// and small requests that would generate huge data.
+
+#include <chrono>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "protocol/api.h"
+#include "protocol/edit_parser.h"
+#include "protocol/safe_text.h"
+
+namespace strata::protocol {
+namespace {
+
+TEST(Utf8, WellFormedTextIsValidAndEveryMalformedClassIsNot) {
+    EXPECT_TRUE(is_valid_utf8(""));
+    EXPECT_TRUE(is_valid_utf8("plain /World/Looks"));
+    EXPECT_TRUE(is_valid_utf8("\xC3\xA9t\xC3\xA9 \xE2\x82\xAC \xF0\x9F\x8C\x8D"));
+    for (const char* bad : {"\xFF", "\xC3", "\xC3\x28", "\xC0\xAF", "\xE0\x80\xAF", "\xED\xA0\x80",
+                            "\xF4\x90\x80\x80", "\xF0\x9F\x8C", "\x80", "ok\xFE"}) {
+        EXPECT_FALSE(is_valid_utf8(bad)) << bad;
+    }
+    EXPECT_EQ(to_valid_utf8("a\xFF"
+                            "b\xC3"),
+              "a\xEF\xBF\xBD"
+              "b\xEF\xBF\xBD");
+    EXPECT_EQ(to_valid_utf8("\xC3\xA9"), "\xC3\xA9");
+}
+
+TEST(LogText, ControlCharactersAndBadBytesAreEscapedSoNoRecordCanBeForged) {
+    EXPECT_EQ(escape_for_log("GET /a\r\n2026-01-01 info forged"),
+              "GET /a\\x0d\\x0a2026-01-01 info forged");
+    EXPECT_EQ(escape_for_log("tab\there\x7F"), "tab\\x09here\\x7f");
+    EXPECT_EQ(escape_for_log("bad \xFF byte"), "bad \\xff byte");
+    EXPECT_EQ(escape_for_log("C1 \xC2\x85 and LS \xE2\x80\xA8"),
+              "C1 \\xc2\\x85 and LS \\xe2\\x80\\xa8");
+    // A literal backslash is doubled, so "\x0a" in the input cannot pass for an escaped LF.
+    EXPECT_EQ(escape_for_log("a\\x0ab"), "a\\\\x0ab");
+    EXPECT_EQ(escape_for_log("caf\xC3\xA9"), "caf\xC3\xA9");
+}
+
+TEST(JsonAnswers, InvalidUtf8InAProblemIsReplacedNotThrown) {
+    // nlohmann's dump() throws type_error 316 on invalid UTF-8: every answer goes through
+    // dump_json, which replaces the bad bytes instead.
+    const Problem p = make_problem(ProblemType::NotFound, "no mesh with id '\xFF\xFE'");
+    ApiResponse r;
+    ASSERT_NO_THROW(r = problem_response(p));
+    EXPECT_EQ(r.status, 404);
+    EXPECT_TRUE(is_valid_utf8(r.body));
+    EXPECT_THAT(r.body, ::testing::HasSubstr("\xEF\xBF\xBD"));
+    EXPECT_TRUE(Json::accept(r.body));
+}
+
+TEST(Ids, ControlCharactersAreRefusedAtTheirPointer) {
+    for (const char* id :
+         {R"("a\nb")", R"("\u0000")", R"("tab\there")", R"("del\u007f")", R"("c1\u0085")"}) {
+        auto r = parse_edit_batch(
+            std::string(R"({"edits": [{"op": "add_material", "id": )") + id + "}]}", {});
+        ASSERT_FALSE(r.has_value()) << id;
+        EXPECT_EQ(r.error().pointer, "/edits/0/id") << id;
+        EXPECT_THAT(r.error().message, ::testing::HasSubstr("control character")) << id;
+    }
+    EXPECT_TRUE(parse_edit_batch(
+                    R"({"edits": [{"op": "add_material", "id": "/World/Looks/caf\u00e9"}]})", {})
+                    .has_value());
+}
+
+TEST(Shapes, TheShapesOfOneBatchGenerateABoundedNumberOfTriangles) {
+    // Each sphere is 4M triangles from ~60 bytes; eight of them used to be generated (~800 MB)
+    // before anything could refuse the batch.
+    std::string edits;
+    for (int i = 0; i < 8; ++i) {
+        edits += std::string(i ? "," : "") + R"({"op": "add_mesh", "id": "s)" + std::to_string(i) +
+                 R"(", "shape": {"type": "sphere", "segments": 2048}})";
+    }
+    const auto start = std::chrono::steady_clock::now();
+    auto r = parse_edit_batch(R"({"edits": [)" + edits + "]}", {});
+    ASSERT_FALSE(r.has_value());
+    EXPECT_EQ(r.error().code, ErrorCode::TooLarge);
+    EXPECT_EQ(r.error().pointer, "/edits/4/shape");
+    EXPECT_EQ(problem_from(r.error()).status, 413);
+    // Four spheres were generated, not eight (a correctness bound, not a benchmark).
+    EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(30));
+}
+
+}  // namespace
+}  // namespace strata::protocol

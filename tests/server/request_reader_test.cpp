@@ -1,0 +1,176 @@
+// One connection's reader, without sockets: which requests reach a worker, in what form, and
+// which are answered (or refused) before any worker is involved.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "server/request_reader.h"
+
+namespace strata::server {
+namespace {
+
+using Kind = ReaderStep::Kind;
+using ::testing::HasSubstr;
+using ::testing::Not;
+using ::testing::StartsWith;
+
+struct Reader {
+    explicit Reader(ReaderConfig c = {}) : config(std::move(c)), reader(config) {}
+    ReaderStep feed(const std::string& bytes, ReaderSituation s = {}) {
+        reader.append(bytes.data(), bytes.size());
+        return reader.next(s);
+    }
+    ReaderConfig config;
+    RequestReader reader;
+};
+
+TEST(RequestReader, PipelinedRequestsComeOutOneByOneInOrder) {
+    Reader r;
+    const ReaderStep first = r.feed(
+        "POST /v1/edits HTTP/1.1\r\nHost: a\r\nContent-Length: 2\r\n\r\n{}"
+        "GET /v1/scene HTTP/1.1\r\nHost: a\r\n\r\n");
+    ASSERT_EQ(first.kind, Kind::Request);
+    EXPECT_EQ(first.request.method, "POST");
+    EXPECT_THAT(first.request.wire_bytes, HasSubstr("Content-Length: 2\r\n\r\n{}"));
+    EXPECT_TRUE(r.reader.mid_request());
+    const ReaderStep second = r.reader.next({});
+    ASSERT_EQ(second.kind, Kind::Request);
+    EXPECT_EQ(second.request.path, "/v1/scene");
+    EXPECT_EQ(r.reader.next({}).kind, Kind::NeedMore);
+    EXPECT_FALSE(r.reader.mid_request());
+}
+
+TEST(RequestReader, ABodyTricklingInIsCollectedBeforeAWorkerSeesIt) {
+    Reader r;
+    EXPECT_EQ(
+        r.feed("POST /v1/edits HTTP/1.1\r\nHost: a\r\nTransfer-Encoding: chunked\r\n\r\n3\r\n{\"e")
+            .kind,
+        Kind::NeedMore);
+    EXPECT_TRUE(r.reader.reading_body());
+    EXPECT_EQ(r.feed("\r\n").kind, Kind::NeedMore);
+    const ReaderStep done = r.feed("1\r\n}\r\n0\r\n\r\n");
+    ASSERT_EQ(done.kind, Kind::Request);
+    EXPECT_THAT(done.request.wire_bytes, HasSubstr("Content-Length: 4\r\n\r\n{\"e}"));
+    EXPECT_THAT(done.request.wire_bytes, Not(HasSubstr("Transfer-Encoding")));
+}
+
+TEST(RequestReader, FramingRangeAndAddressFieldsNeverReachHttplib) {
+    Reader r;
+    const ReaderStep s = r.feed(
+        "GET /v1/render?width=8 HTTP/1.1\r\nHost: a\r\nRange: bytes=0-0,1-1\r\nREMOTE_ADDR: "
+        "10.0.0.1\r\n"
+        "If-Match: \"%41\"\r\nConnection: keep-alive\r\n\r\n");
+    ASSERT_EQ(s.kind, Kind::Request);
+    EXPECT_THAT(s.request.wire_bytes, Not(HasSubstr("Range")));
+    EXPECT_THAT(s.request.wire_bytes, Not(HasSubstr("REMOTE_ADDR")));
+    EXPECT_THAT(s.request.wire_bytes, Not(HasSubstr("Connection")));
+    // httplib percent-decodes header values: '%' is escaped so that it reads "%41", not "A".
+    EXPECT_THAT(s.request.wire_bytes, HasSubstr("If-Match: \"%2541\""));
+    EXPECT_TRUE(s.request.heavy);
+}
+
+TEST(RequestReader, HealthChecksAreAnsweredHereEvenWhenDrainingOrRestricted) {
+    Reader r;
+    ReaderStep live = r.feed("GET /livez HTTP/1.1\r\nHost: a\r\n\r\n", {true, true});
+    ASSERT_EQ(live.kind, Kind::Answer);
+    EXPECT_EQ(live.answer.status, 200);
+    ReaderStep ready = r.feed("GET /readyz HTTP/1.1\r\nHost: a\r\n\r\n", {true, false});
+    ASSERT_EQ(ready.kind, Kind::Answer);
+    EXPECT_EQ(ready.answer.status, 503);
+    EXPECT_FALSE(ready.answer.close);
+    ReaderStep head = r.feed("HEAD /readyz HTTP/1.1\r\nHost: a\r\n\r\n");
+    EXPECT_THAT(head.answer.bytes, HasSubstr("Content-Length: 18\r\n"));
+    EXPECT_THAT(head.answer.bytes, Not(HasSubstr("ready")));
+}
+
+TEST(RequestReader, RefusalsComeBeforeTheBodyIsRead) {
+    ReaderConfig c;
+    c.token = "t0ken";
+    c.limits.max_body_bytes = 100;
+    {
+        Reader r(c);
+        const ReaderStep s =
+            r.feed("POST /v1/edits HTTP/1.1\r\nHost: a\r\nContent-Length: 5\r\n\r\n");
+        EXPECT_EQ(s.answer.status, 401);
+        EXPECT_TRUE(s.answer.close);
+        EXPECT_THAT(s.answer.bytes, HasSubstr("WWW-Authenticate: Bearer"));
+    }
+    const std::string auth = "Authorization: Bearer t0ken\r\n";
+    {
+        // Over the cap with Expect: 100-continue: 413 and no 100 first.
+        Reader r(c);
+        const ReaderStep s = r.feed("POST /v1/edits HTTP/1.1\r\nHost: a\r\n" + auth +
+                                    "Content-Length: 101\r\nExpect: 100-continue\r\n\r\n");
+        EXPECT_EQ(s.kind, Kind::Answer);
+        EXPECT_EQ(s.answer.status, 413);
+    }
+    {
+        Reader r(c);
+        EXPECT_EQ(r.feed("POST /v1/edits HTTP/1.1\r\nHost: a\r\n" + auth +
+                         "Content-Length: 2\r\nExpect: 100-continue\r\n\r\n")
+                      .kind,
+                  Kind::Continue);
+        EXPECT_EQ(r.feed("{}").kind, Kind::Request);
+    }
+    {
+        Reader r(c);
+        EXPECT_EQ(r.feed("POST /v1/edits HTTP/1.1\r\nHost: a\r\n" + auth +
+                         "Content-Encoding: gzip\r\nContent-Length: 2\r\n\r\n{}")
+                      .answer.status,
+                  415);
+    }
+    {
+        Reader r(c);
+        const ReaderStep s =
+            r.feed("POST /v1/edits HTTP/1.1\r\nHost: a\r\n" + auth +
+                   "Transfer-Encoding: chunked\r\n\r\n65\r\n" + std::string(101, 'x'));
+        EXPECT_EQ(s.answer.status, 413);
+    }
+    {
+        Reader r(c);
+        EXPECT_EQ(r.feed("GET /v1/scene HTTP/1.1\r\nHost: a\r\n" + auth + "\r\n", {true, false})
+                      .answer.status,
+                  503);
+        Reader restricted(c);
+        EXPECT_EQ(
+            restricted.feed("GET /v1/scene HTTP/1.1\r\nHost: a\r\n" + auth + "\r\n", {false, true})
+                .answer.status,
+            429);
+    }
+}
+
+TEST(RequestReader, AnOversizedHeadIsRefusedWithoutWaitingForItsEnd) {
+    ReaderConfig c;
+    c.limits.max_head_bytes = 1024;
+    Reader r(c);
+    ReaderStep s = r.feed("GET / HTTP/1.1\r\nHost: a\r\n");
+    for (int i = 0; i < 100 && s.kind == Kind::NeedMore; ++i)
+        s = r.feed("X-Filler: 0123456789\r\n");
+    EXPECT_EQ(s.kind, Kind::Answer);
+    EXPECT_EQ(s.answer.status, 431);
+    Reader line(c);
+    EXPECT_EQ(line.feed("GET /" + std::string(9000, 'a')).answer.status, 414);
+}
+
+TEST(RequestReader, ARefusedHeadRequestGetsNoBody) {
+    // Found by the HTTP fuzzer: a body after a HEAD answer is read as the next response.
+    Reader r;
+    const ReaderStep s = r.feed("HEAD /%zz HTTP/1.1\r\nHost: a\r\n\r\n");
+    ASSERT_EQ(s.kind, Kind::Answer);
+    EXPECT_EQ(s.answer.status, 400);
+    EXPECT_THAT(s.answer.bytes, ::testing::EndsWith("\r\n\r\n"));
+    EXPECT_THAT(s.answer.bytes, Not(HasSubstr("percent-escape")));
+}
+
+TEST(RequestReader, EveryAnswerIsAProblemDocumentWithItsStatusLine) {
+    Reader r;
+    const ReaderStep s = r.feed("GET /%zz HTTP/1.1\r\nHost: a\r\n\r\n");
+    ASSERT_EQ(s.kind, Kind::Answer);
+    EXPECT_THAT(s.answer.bytes, StartsWith("HTTP/1.1 400 Bad Request\r\n"));
+    EXPECT_THAT(s.answer.bytes, HasSubstr("Content-Type: application/problem+json\r\n"));
+    EXPECT_THAT(s.answer.bytes, HasSubstr("Connection: close\r\n"));
+    EXPECT_THAT(s.answer.bytes, HasSubstr("percent-escape"));
+}
+
+}  // namespace
+}  // namespace strata::server
