@@ -28,6 +28,7 @@ struct EngineCounters {
     uint64_t primitives_refit = 0;
     uint64_t renders = 0;
     uint64_t rays_traced = 0;
+    uint64_t picks = 0;
     double commit_seconds = 0.0;
     double render_seconds = 0.0;
 };
@@ -71,8 +72,10 @@ inline constexpr CounterSpec ENGINE_COUNTERS[] = {
      &EngineCounters::primitives_refit},
     {"renders", "Launches that traced rays (frames rendered).", CounterUnit::Count,
      &EngineCounters::renders},
-    {"rays_traced", "Rays traced by launches: camera, shadow and bounce rays.", CounterUnit::Count,
+    {"rays_traced", "Rays traced by launches and picks: camera, shadow and bounce rays.", CounterUnit::Count,
      &EngineCounters::rays_traced},
+    {"picks", "Picks answered (each traces one ray per pixel asked about).", CounterUnit::Count,
+     &EngineCounters::picks},
     {"commit_seconds", "Wall time spent in commits.", CounterUnit::Seconds, nullptr,
      &EngineCounters::commit_seconds},
     {"render_seconds", "Wall time spent tracing and shading in launches.", CounterUnit::Seconds,

@@ -61,7 +61,7 @@ Result<RebuildReport> Engine::commit() {
     return commit_locked();
 }
 
-Result<RebuildReport> Engine::commit_locked() {
+Result<RebuildReport> Engine::commit_locked(std::unique_lock<std::shared_mutex>* keep_scene_lock) {
     Stopwatch clock;
     std::unique_lock lock(m_scene_mutex);
     RebuildReport report;
@@ -84,8 +84,12 @@ Result<RebuildReport> Engine::commit_locked() {
         m_scene.clear_changes();
         freed = held_before - report.memory_blas_bytes - report.memory_tlas_bytes;
     }
-    lock.unlock();
-    if (freed >= int64_t(TRIM_THRESHOLD_BYTES)) release_free_memory();
+    if (keep_scene_lock) {
+        *keep_scene_lock = std::move(lock);
+    } else {
+        lock.unlock();
+        if (freed >= int64_t(TRIM_THRESHOLD_BYTES)) release_free_memory();
+    }
     report.phases.total_ms = clock.ms();
 
     std::lock_guard stats(m_stats_mutex);
@@ -147,6 +151,27 @@ Result<EncodedFrame> Engine::render(const RenderRequest& request) {
     auto encoded = encode_frame(frame->buffers, request);
     if (encoded) encoded->info = std::move(frame->info);
     return encoded;
+}
+
+Result<PickResult> Engine::pick(const PickRequest& request) {
+    if (Status s = check_pick_request(request); !s) return Unexpected(s.error());
+    std::lock_guard launch_lock(m_launch_mutex);
+    // The scene stays locked from the commit to the end of the pick, so the ids the hits are
+    // named with are those of the version the rays saw (edits wait for a few rays).
+    std::unique_lock<std::shared_mutex> scene_lock;
+    auto report = commit_locked(&scene_lock);
+    if (!report) return Unexpected(report.error());
+    const auto camera = resolve_camera(request.camera, m_frame.camera);
+    if (!camera) return Unexpected(camera.error());
+    PickResult result;
+    result.version = m_frame.version;
+    result.hits = pick_pixels(m_accel->tlas(), m_frame, m_scene, camera.value(), request);
+    if (Status s = m_accel->device_status("picking"); !s) return Unexpected(s.error());
+    scene_lock.unlock();
+    std::lock_guard stats(m_stats_mutex);
+    ++m_counters.picks;
+    m_counters.rays_traced += request.pixels.size();
+    return result;
 }
 
 void Engine::add_rays(uint64_t rays, double seconds) {

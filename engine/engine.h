@@ -22,6 +22,7 @@
 #include "engine/counters.h"
 #include "engine/render/frame.h"
 #include "engine/render/frame_state.h"
+#include "engine/render/pick.h"
 #include "engine/render/primary.h"
 #include "engine/render/render_request.h"
 #include "engine/render/renderer.h"
@@ -71,6 +72,9 @@ public:
     /// The same into a new Frame.
     Result<Frame> render_primary(const PrimarySettings& settings);
 
+    /// Commits, then traces one ray through each pixel of `request` (pick.h).
+    Result<PickResult> pick(const PickRequest& request);
+
     /// Runs `f(const FrameState&, const TlasStrategy&, const RebuildReport&)` after a commit, with
     /// launches serialised: the hook the renderer uses to trace one consistent version. When `f`
     /// itself returns a Result, that Result is the answer (a commit error and `f`'s error come
@@ -110,7 +114,11 @@ public:
 
 private:
     explicit Engine(std::unique_ptr<AccelGraph> accel) : m_accel(std::move(accel)) {}
-    Result<RebuildReport> commit_locked();
+    /// The commit, with the launch mutex held. With `keep_scene_lock`, the scene's exclusive
+    /// lock is handed to the caller instead of released (the caller then reads the scene at
+    /// exactly the committed version).
+    Result<RebuildReport> commit_locked(std::unique_lock<std::shared_mutex>* keep_scene_lock =
+                                            nullptr);
 
     mutable std::mutex m_launch_mutex;
     mutable std::shared_mutex m_scene_mutex;

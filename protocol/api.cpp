@@ -17,11 +17,6 @@ uint64_t scene_version(const Engine& engine) {
     return engine.read([](const Scene& s) { return s.version(); });
 }
 
-ApiResponse with_etag(ApiResponse r, uint64_t version) {
-    r.headers.emplace_back("ETag", etag(version));
-    return r;
-}
-
 std::string_view trim(std::string_view v) {
     while (!v.empty() && (v.back() == ' ' || v.back() == '\t')) v.remove_suffix(1);
     while (!v.empty() && (v.front() == ' ' || v.front() == '\t')) v.remove_prefix(1);
@@ -99,6 +94,11 @@ std::string_view ApiResponse::header(std::string_view name) const {
     for (const auto& [key, value] : headers)
         if (key == name) return value;
     return {};
+}
+
+ApiResponse with_etag(ApiResponse r, uint64_t version) {
+    r.headers.emplace_back("ETag", etag(version));
+    return r;
 }
 
 ApiResponse json_response(int status, const Json& body) {

@@ -46,6 +46,8 @@ ApiResponse problem_response(const Problem& problem);
 
 /// The entity tag of a scene version: "N" with the quotes.
 std::string etag(uint64_t version);
+/// `r` with the ETag of `version`.
+ApiResponse with_etag(ApiResponse r, uint64_t version);
 
 /// What If-Match asks for: no constraint (absent or "*"), or one version.
 struct IfMatch {
@@ -77,6 +79,15 @@ ApiResponse get_scene(const Engine& engine);
 enum class SceneObject : uint8_t { Mesh, Instance, Material };
 /// GET /v1/scene/{meshes,instances,materials}/{id}.
 ApiResponse get_scene_object(const Engine& engine, SceneObject kind, std::string_view id);
+/// GET /v1/scene/{meshes,instances,materials}: one page of the collection (scene_list.cpp).
+ApiResponse get_scene_list(const Engine& engine, SceneObject kind,
+                           const std::multimap<std::string, std::string>& query);
+
+/// GET /v1/pick: what lies under one pixel (pick_api.cpp).
+ApiResponse get_pick(Engine& engine, const std::multimap<std::string, std::string>& query);
+/// POST /v1/pick: what lies under each of a list of pixels.
+ApiResponse post_pick(Engine& engine, std::string_view body, const ApiLimits& limits);
+
 /// GET /v1/stats.
 ApiResponse get_stats(const Engine& engine);
 

@@ -22,7 +22,8 @@ constexpr std::string_view ENVELOPE = R"json({
 /// The definitions ops share. The limits here are MAX_ID_LENGTH, MAX_SPHERE_SEGMENTS and
 /// MAX_PLANE_SUBDIVISIONS (tests/protocol/edit_ops_test.cpp holds them equal).
 constexpr std::string_view SHARED_DEFS = R"json({
-  "id": {"type": "string", "minLength": 1, "maxLength": 256},
+  "id": {"type": "string", "minLength": 1, "maxLength": 256,
+         "pattern": "^[^\\u0000-\\u001F\\u007F-\\u009F]*$"},
   "u32": {"type": "integer", "minimum": 0, "maximum": 4294967295},
   "vec3": {"type": "array", "items": {"type": "number"}, "minItems": 3, "maxItems": 3},
   "vec4": {"type": "array", "items": {"type": "number"}, "minItems": 4, "maxItems": 4},

@@ -7,6 +7,17 @@
 
 namespace strata::protocol {
 
+SetCamera read_camera_override(FieldReader& r, const Json& v) {
+    r.expect_object(v, "/camera", {"eye", "target", "up", "fov_y_deg"});
+    SetCamera c;
+    if (const Json* m = FieldReader::member(v, "eye")) c.eye = r.vec3(*m, "/camera/eye");
+    if (const Json* m = FieldReader::member(v, "target")) c.target = r.vec3(*m, "/camera/target");
+    if (const Json* m = FieldReader::member(v, "up")) c.up = r.vec3(*m, "/camera/up");
+    if (const Json* m = FieldReader::member(v, "fov_y_deg"))
+        c.fov_y_deg = r.number(*m, "/camera/fov_y_deg");
+    return c;
+}
+
 namespace {
 
 RenderRequest read_render(FieldReader& r, const Json& v) {
@@ -45,17 +56,7 @@ RenderRequest read_render(FieldReader& r, const Json& v) {
     if (const Json* f = FieldReader::member(v, "accumulate"))
         q.accumulate = r.boolean(*f, "/accumulate");
     if (const Json* f = FieldReader::member(v, "exposure")) q.exposure = r.number(*f, "/exposure");
-    if (const Json* f = FieldReader::member(v, "camera")) {
-        r.expect_object(*f, "/camera", {"eye", "target", "up", "fov_y_deg"});
-        SetCamera c;
-        if (const Json* m = FieldReader::member(*f, "eye")) c.eye = r.vec3(*m, "/camera/eye");
-        if (const Json* m = FieldReader::member(*f, "target"))
-            c.target = r.vec3(*m, "/camera/target");
-        if (const Json* m = FieldReader::member(*f, "up")) c.up = r.vec3(*m, "/camera/up");
-        if (const Json* m = FieldReader::member(*f, "fov_y_deg"))
-            c.fov_y_deg = r.number(*m, "/camera/fov_y_deg");
-        q.camera = c;
-    }
+    if (const Json* f = FieldReader::member(v, "camera")) q.camera = read_camera_override(r, *f);
     return q;
 }
 
@@ -102,7 +103,7 @@ Parsed<RenderRequest> parse_render_body(const Json& body) {
     }
 }
 
-Parsed<RenderRequest> parse_render_query(const std::multimap<std::string, std::string>& params) {
+Parsed<Json> query_to_body(const std::multimap<std::string, std::string>& params) {
     Json body = Json::object();
     for (const auto& [key, text] : params) {
         const bool camera = key == "eye" || key == "target" || key == "up" || key == "fov_y_deg";
@@ -121,7 +122,7 @@ Parsed<RenderRequest> parse_render_query(const std::multimap<std::string, std::s
             RequestError e;
             e.message = "query parameter '" + key + "' is given more than once";
             e.pointer = camera ? "/camera/" + key : "/" + escape_pointer_token(key);
-            return Unexpected(e);
+            return Unexpected(std::move(e));
         }
         if (key == "aovs") {
             slot = text.empty() ? Json::array() : list_from_text(text, false);
@@ -131,7 +132,13 @@ Parsed<RenderRequest> parse_render_query(const std::multimap<std::string, std::s
             slot = scalar_from_text(text);
         }
     }
-    return parse_render_body(body);
+    return body;
+}
+
+Parsed<RenderRequest> parse_render_query(const std::multimap<std::string, std::string>& params) {
+    auto body = query_to_body(params);
+    if (!body) return Unexpected(std::move(body).error());
+    return parse_render_body(body.value());
 }
 
 }  // namespace strata::protocol

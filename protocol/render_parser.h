@@ -10,12 +10,23 @@
 #include "engine/render/render_request.h"
 #include "engine/scene/edits.h"
 #include "protocol/json_document.h"
+#include "protocol/request_error.h"
 
 namespace strata::protocol {
 
 /// Largest width or height (the schema bound; the server also caps width * height).
 constexpr uint32_t MAX_RENDER_SIDE = 65536;
 
+
+class FieldReader;
+
+/// A camera override `{"eye", "target", "up", "fov_y_deg"}` (every member optional) at /camera.
+SetCamera read_camera_override(FieldReader& r, const Json& v);
+
+/// Query parameters as the JSON body they stand for: numbers and booleans as text, `aovs` and
+/// vectors as comma-separated lists, `eye`, `target`, `up` and `fov_y_deg` into a "camera"
+/// object. A parameter given twice, or "camera" itself, is an error.
+Parsed<Json> query_to_body(const std::multimap<std::string, std::string>& params);
 
 /// `{"width", "height", "format", "spp", "aovs", "compression", "accumulate", "exposure",
 /// "camera": {"eye", "target", "up", "fov_y_deg"}}`, every member optional.

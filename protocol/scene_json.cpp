@@ -37,6 +37,10 @@ Json material_ref(const Scene& s, MaterialHandle h) {
 
 }  // namespace
 
+Json float_to_json(float f) {
+    return shortest(f);
+}
+
 Json vec3_to_json(const Vec3& v) {
     return floats_to_json(&v.x, 3);
 }
@@ -74,15 +78,16 @@ Json scene_summary_to_json(const Scene& s) {
             {"lighting", lighting_to_json(s.lighting())}};
 }
 
-std::optional<Json> mesh_to_json(const Scene& s, std::string_view id) {
-    const auto r = s.mesh(s.find_mesh(id));
-    if (!r) return std::nullopt;
-    const MeshRecord& m = *r.value();
+Bounds3 mesh_bounds(const MeshRecord& m) {
     Bounds3 bounds;
     for (const Vec3& p : m.positions) bounds.extend(p);
+    return bounds;
+}
+
+Json mesh_json(const Scene& s, MeshHandle h, const MeshRecord& m) {
     return Json{
         {"id", m.id},
-        {"index", s.find_mesh(id).index},
+        {"index", h.index},
         {"version", s.version()},
         {"vertices", m.positions.size()},
         {"triangles", m.triangles.size()},
@@ -90,37 +95,49 @@ std::optional<Json> mesh_to_json(const Scene& s, std::string_view id) {
         {"material", material_ref(s, m.material)},
         {"build",
          {{"prefer", build_preference_name(m.build.prefer)}, {"allow_refit", m.build.allow_refit}}},
-        {"bounds", bounds_to_json(bounds)}};
+        {"bounds", bounds_to_json(mesh_bounds(m))}};
 }
 
-std::optional<Json> instance_to_json(const Scene& s, std::string_view id) {
-    const auto r = s.instance(s.find_instance(id));
-    if (!r) return std::nullopt;
-    const InstanceRecord& i = *r.value();
-    const MeshRecord& mesh = *s.mesh(i.mesh).value();
-    Bounds3 local;
-    for (const Vec3& p : mesh.positions) local.extend(p);
-    const Material resolved = s.resolved_material(i);
+Json instance_json(const Scene& s, InstanceHandle h, const InstanceRecord& i,
+                   const Bounds3& mesh_local_bounds) {
     return Json{{"id", i.id},
-                {"index", s.find_instance(id).index},
+                {"index", h.index},
                 {"version", s.version()},
-                {"mesh", mesh.id},
+                {"mesh", s.mesh(i.mesh).value()->id},
                 {"material", material_ref(s, i.material)},
-                {"resolved_material", material_fields(resolved)},
+                {"resolved_material", material_fields(s.resolved_material(i))},
                 {"transform", floats_to_json(i.transform.to_rows16().data(), 16)},
                 {"visible", i.visible},
                 {"mask", i.mask},
                 {"user_id", i.user_id},
-                {"bounds", bounds_to_json(i.transform.transform_bounds(local))}};
+                {"bounds", bounds_to_json(i.transform.transform_bounds(mesh_local_bounds))}};
+}
+
+Json material_json(const Scene& s, const MaterialRecord& m) {
+    Json j = material_fields(m.material);
+    j["id"] = m.id;
+    j["version"] = s.version();
+    return j;
+}
+
+std::optional<Json> mesh_to_json(const Scene& s, std::string_view id) {
+    const MeshHandle h = s.find_mesh(id);
+    const auto r = s.mesh(h);
+    if (!r) return std::nullopt;
+    return mesh_json(s, h, *r.value());
+}
+
+std::optional<Json> instance_to_json(const Scene& s, std::string_view id) {
+    const InstanceHandle h = s.find_instance(id);
+    const auto r = s.instance(h);
+    if (!r) return std::nullopt;
+    return instance_json(s, h, *r.value(), mesh_bounds(*s.mesh(r.value()->mesh).value()));
 }
 
 std::optional<Json> material_to_json(const Scene& s, std::string_view id) {
     const auto r = s.material(s.find_material(id));
     if (!r) return std::nullopt;
-    Json j = material_fields(r.value()->material);
-    j["id"] = r.value()->id;
-    j["version"] = s.version();
-    return j;
+    return material_json(s, *r.value());
 }
 
 }  // namespace strata::protocol

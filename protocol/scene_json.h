@@ -10,6 +10,8 @@
 
 namespace strata::protocol {
 
+/// The shortest decimal that reads back as `f` (0.45f prints as 0.45).
+Json float_to_json(float f);
 Json vec3_to_json(const Vec3& v);
 Json camera_to_json(const Camera& c);
 Json lighting_to_json(const Lighting& l);
@@ -18,6 +20,16 @@ Json bounds_to_json(const Bounds3& b);
 
 /// Version, counts, world bounds, camera and lighting.
 Json scene_summary_to_json(const Scene& s);
+
+/// Object-space bounds of a mesh's vertices (O(vertices)).
+Bounds3 mesh_bounds(const MeshRecord& m);
+
+/// One live object's document (GET by id, and each item of a listing). An instance's world
+/// bounds come from its mesh's object-space bounds, which a listing computes once per mesh.
+Json mesh_json(const Scene& s, MeshHandle h, const MeshRecord& m);
+Json instance_json(const Scene& s, InstanceHandle h, const InstanceRecord& i,
+                   const Bounds3& mesh_local_bounds);
+Json material_json(const Scene& s, const MaterialRecord& m);
 
 /// One object's state, or nullopt when no object has that id.
 std::optional<Json> mesh_to_json(const Scene& s, std::string_view id);

@@ -39,6 +39,10 @@ void respond_render(ServerContext& ctx, httplib::Response& res, Render&& render)
 
 void add_scene_object_route(Router& router, ServerContext& ctx, const char* collection,
                             protocol::SceneObject kind) {
+    router.get(std::string("/v1/scene/") + collection,
+               [&ctx, kind](const httplib::Request& req, httplib::Response& res) {
+                   send(res, protocol::get_scene_list(ctx.engine, kind, req.params));
+               });
     // The path keeps reserved characters percent-encoded (request_target.h): an id holding '/'
     // arrives as one segment, decoded here.
     router.get(std::string("/v1/scene/") + collection + "/([^/]+)",
@@ -93,6 +97,12 @@ void add_api_routes(Router& router, ServerContext& ctx) {
     add_scene_object_route(router, ctx, "meshes", protocol::SceneObject::Mesh);
     add_scene_object_route(router, ctx, "instances", protocol::SceneObject::Instance);
     add_scene_object_route(router, ctx, "materials", protocol::SceneObject::Material);
+    router.get("/v1/pick", [&ctx](const Req& req, Res& res) {
+        send(res, protocol::get_pick(ctx.engine, req.params));
+    });
+    router.post("/v1/pick", [&ctx](const Req&, Res& res, std::string&& body) {
+        send(res, protocol::post_pick(ctx.engine, body, ctx.api_limits));
+    });
     router.get("/v1/stats",
                [&ctx](const Req&, Res& res) { send(res, protocol::get_stats(ctx.engine)); });
     router.get("/metrics", [&ctx](const Req&, Res& res) {

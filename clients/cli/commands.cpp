@@ -27,26 +27,10 @@ int refused(const Console& c, const Transport& t, const char* what, const Reply&
     return REFUSED;
 }
 
-/// The JSON of a 2xx answer, or nullopt having printed why not.
-std::optional<Json> answer(const Console& c, const Transport& t, const char* what,
-                           const Reply& reply, int& code) {
-    if (!reply.ok()) {
-        code = refused(c, t, what, reply);
-        return std::nullopt;
-    }
-    Json doc = Json::parse(reply.body, nullptr, false);
-    if (doc.is_discarded()) {
-        c.err << "strata: " << what << ": the answer from " << t.describe() << " is not JSON\n";
-        code = REFUSED;
-        return std::nullopt;
-    }
-    return doc;
-}
-
 /// Prints a report answer (commit or plan); returns the exit code.
 int print_report(const Console& c, const Transport& t, const char* what, const Reply& reply) {
     int code = OK;
-    const auto doc = answer(c, t, what, reply, code);
+    const auto doc = json_answer(c, t, what, reply, code);
     if (!doc) return code;
     c.out << (c.json ? doc->dump() : format_report(*doc)) << '\n';
     return OK;
@@ -72,6 +56,21 @@ void entries(std::string& out, const Json& list, const char* what) {
 }
 
 }  // namespace
+
+std::optional<Json> json_answer(const Console& c, const Transport& t, const std::string& what,
+                                const Reply& reply, int& code) {
+    if (!reply.ok()) {
+        code = refused(c, t, what.c_str(), reply);
+        return std::nullopt;
+    }
+    Json doc = Json::parse(reply.body, nullptr, false);
+    if (doc.is_discarded()) {
+        c.err << "strata: " << what << ": the answer from " << t.describe() << " is not JSON\n";
+        code = REFUSED;
+        return std::nullopt;
+    }
+    return doc;
+}
 
 std::string format_report(const Json& r) {
     const Json tlas = r.value("tlas", Json::object());
@@ -109,7 +108,7 @@ int run_edit(Transport& t, const Console& c, const std::string& file,
     const std::size_t first = text.find_first_not_of(" \t\r\n");
     if (first != std::string::npos && text[first] == '[') text = "{\"edits\": " + text + "}";
     int code = OK;
-    const auto doc = answer(c, t, "edit", t.edits(std::move(text), if_match), code);
+    const auto doc = json_answer(c, t, "edit", t.edits(std::move(text), if_match), code);
     if (!doc) return code;
     if (c.json) {
         c.out << doc->dump() << '\n';
@@ -193,7 +192,7 @@ int run_plan(Transport& t, const Console& c) {
 
 int run_stats(Transport& t, const Console& c) {
     int code = OK;
-    const auto doc = answer(c, t, "stats", t.stats(), code);
+    const auto doc = json_answer(c, t, "stats", t.stats(), code);
     if (!doc) return code;
     if (c.json) {
         c.out << doc->dump() << '\n';
@@ -218,7 +217,7 @@ int run_stats(Transport& t, const Console& c) {
 
 int run_scene(Transport& t, const Console& c) {
     int code = OK;
-    const auto doc = answer(c, t, "scene", t.scene(), code);
+    const auto doc = json_answer(c, t, "scene", t.scene(), code);
     if (!doc) return code;
     c.out << (c.json ? doc->dump() : doc->dump(2)) << '\n';
     return OK;

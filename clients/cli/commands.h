@@ -3,6 +3,7 @@
 // one request, prints the answer for people (or as JSON with --json) and returns the exit code:
 // 0 done, 2 bad input, 3 Strata refused the request or could not be reached.
 
+#include <cstdint>
 #include <iosfwd>
 #include <optional>
 #include <string>
@@ -19,6 +20,10 @@ struct Console {
     std::ostream& err;
     bool json = false;  ///< print answers as JSON, for scripts
 };
+
+/// The JSON of a 2xx answer, or nullopt having printed why not (and set `code` to the exit code).
+std::optional<Json> json_answer(const Console& c, const Transport& t, const std::string& what,
+                                const Reply& reply, int& code);
 
 /// `strata edit FILE|-`: the file holds {"edits": [...]} or just the array.
 int run_edit(Transport& t, const Console& c, const std::string& file,
@@ -47,6 +52,29 @@ int run_plan(Transport& t, const Console& c);
 /// `strata stats` and `strata scene`.
 int run_stats(Transport& t, const Console& c);
 int run_scene(Transport& t, const Console& c);
+
+/// The collections `strata scene list` can walk: meshes, instances, materials.
+const std::vector<std::string>& scene_collections();
+
+struct SceneListArgs {
+    std::string collection;
+    uint32_t page_size = 1000;               ///< items per request
+    std::optional<uint64_t> max_items;       ///< stop after this many
+    std::optional<std::string> mesh;         ///< instances of this mesh only
+    std::optional<bool> visible;             ///< only visible (true) or hidden (false) instances
+};
+/// `strata scene list COLLECTION`: every page, following cursors; one line per object (one JSON
+/// document per line with --json).
+int run_scene_list(Transport& t, const Console& c, const SceneListArgs& args);
+/// `strata scene get KIND ID`: KIND is mesh, instance or material.
+int run_scene_get(Transport& t, const Console& c, const std::string& kind, const std::string& id);
+
+struct PickArgs {
+    uint32_t x = 0, y = 0;
+    uint32_t width = 0, height = 0;
+};
+/// `strata pick X Y --width W --height H`: what lies under that pixel of a W x H frame.
+int run_pick(Transport& t, const Console& c, const PickArgs& args);
 
 /// A rebuild report for people: a summary line, then one line per rebuilt, refit or released
 /// mesh.

@@ -66,4 +66,38 @@ Reply EmbeddedTransport::scene() {
     return to_reply(protocol::get_scene(*m_engine));
 }
 
+namespace {
+
+/// The listing kind of a collection name, as the server's routes spell them.
+std::optional<protocol::SceneObject> collection_kind(const std::string& collection) {
+    if (collection == "meshes") return protocol::SceneObject::Mesh;
+    if (collection == "instances") return protocol::SceneObject::Instance;
+    if (collection == "materials") return protocol::SceneObject::Material;
+    return std::nullopt;
+}
+
+Reply no_route(const std::string& collection) {
+    return to_reply(protocol::problem_response(protocol::make_problem(
+        protocol::ProblemType::NotFound, "no route for GET /v1/scene/" + collection)));
+}
+
+}  // namespace
+
+Reply EmbeddedTransport::scene_list(const std::string& collection,
+                                    const std::multimap<std::string, std::string>& query) {
+    const auto kind = collection_kind(collection);
+    if (!kind) return no_route(collection);
+    return to_reply(protocol::get_scene_list(*m_engine, *kind, query));
+}
+
+Reply EmbeddedTransport::scene_object(const std::string& collection, const std::string& id) {
+    const auto kind = collection_kind(collection);
+    if (!kind) return no_route(collection);
+    return to_reply(protocol::get_scene_object(*m_engine, *kind, id));
+}
+
+Reply EmbeddedTransport::pick(const std::string& body) {
+    return to_reply(protocol::post_pick(*m_engine, body, LIMITS));
+}
+
 }  // namespace strata::cli

@@ -120,4 +120,23 @@ Reply HttpTransport::scene() {
     return get("/v1/scene");
 }
 
+Reply HttpTransport::scene_list(const std::string& collection,
+                                const std::multimap<std::string, std::string>& query) {
+    std::string path = "/v1/scene/" + percent_encode(collection);
+    char sep = '?';
+    for (const auto& [key, value] : query) {
+        path += sep + percent_encode(key) + "=" + percent_encode(value);
+        sep = '&';
+    }
+    return get(path.c_str());
+}
+
+Reply HttpTransport::scene_object(const std::string& collection, const std::string& id) {
+    return get(("/v1/scene/" + percent_encode(collection) + "/" + percent_encode(id)).c_str());
+}
+
+Reply HttpTransport::pick(const std::string& body) {
+    return post("/v1/pick", body, "");
+}
+
 }  // namespace strata::cli

@@ -32,6 +32,10 @@ public:
     Reply render(const std::string& body) override;
     Reply stats() override;
     Reply scene() override;
+    Reply scene_list(const std::string& collection,
+                     const std::multimap<std::string, std::string>& query) override;
+    Reply scene_object(const std::string& collection, const std::string& id) override;
+    Reply pick(const std::string& body) override;
     std::string describe() const override { return m_url; }
 
 private:

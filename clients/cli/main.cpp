@@ -146,6 +146,31 @@ int main(int argc, char** argv) {
     CLI::App* plan_cmd = app.add_subcommand("plan", "Print what the next commit would do");
     CLI::App* stats_cmd = app.add_subcommand("stats", "Print counters and the last report");
     CLI::App* scene_cmd = app.add_subcommand("scene", "Print the scene summary");
+    scene_cmd->require_subcommand(0, 1);
+    SceneListArgs list;
+    CLI::App* list_cmd =
+        scene_cmd->add_subcommand("list", "List meshes, instances or materials, one per line");
+    list_cmd->add_option("collection", list.collection, "meshes, instances or materials")
+        ->required()
+        ->check(CLI::IsMember(scene_collections()));
+    list_cmd->add_option("--page-size", list.page_size, "Objects per request (1 to 10000)")
+        ->check(CLI::Range(1, 10000));
+    list_cmd->add_option("--max", list.max_items, "Stop after this many objects");
+    list_cmd->add_option("--mesh", list.mesh, "Instances: only those of this mesh");
+    list_cmd->add_option("--visible", list.visible, "Instances: only visible (true) or hidden");
+    std::string get_kind, get_id;
+    CLI::App* get_cmd = scene_cmd->add_subcommand("get", "Print one object's document");
+    get_cmd->add_option("kind", get_kind, "mesh, instance or material")
+        ->required()
+        ->check(CLI::IsMember({"mesh", "instance", "material"}));
+    get_cmd->add_option("id", get_id, "The object's id")->required();
+    PickArgs pick;
+    CLI::App* pick_cmd = app.add_subcommand("pick", "Print what lies under one pixel");
+    pick_cmd->add_option("x", pick.x, "Column, 0 at the left")->required();
+    pick_cmd->add_option("y", pick.y, "Row, 0 at the top")->required();
+    pick_cmd->add_option("--width", pick.width, "Width of the frame the pixel belongs to")
+        ->required();
+    pick_cmd->add_option("--height", pick.height, "Height of that frame")->required();
 
     try {
         app.parse(argc, argv);
@@ -173,6 +198,9 @@ int main(int argc, char** argv) {
     if (commit_cmd->parsed()) return run_commit(t, console);
     if (plan_cmd->parsed()) return run_plan(t, console);
     if (stats_cmd->parsed()) return run_stats(t, console);
+    if (list_cmd->parsed()) return run_scene_list(t, console, list);
+    if (get_cmd->parsed()) return run_scene_get(t, console, get_kind, get_id);
     if (scene_cmd->parsed()) return run_scene(t, console);
+    if (pick_cmd->parsed()) return run_pick(t, console, pick);
     return USAGE;
 }

@@ -4,6 +4,7 @@
 // documents and headers, so everything above this interface is the same for both.
 
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -29,6 +30,10 @@ struct Reply {
 /// The scene version an answer's ETag names ("N" or N), if it has one.
 std::optional<uint64_t> etag_version(const Reply& reply);
 
+/// `text` with every byte but RFC 3986's unreserved characters percent-encoded: a path segment
+/// or query value that arrives as written.
+std::string percent_encode(std::string_view text);
+
 /// A failed answer for people: a problem document as its status, title, detail, edit index,
 /// pointer and type, one per line; any other answer as its status and the start of its body; no
 /// answer as why. Never raw JSON.
@@ -51,6 +56,13 @@ public:
     virtual Reply stats() = 0;
     /// GET /v1/scene.
     virtual Reply scene() = 0;
+    /// GET /v1/scene/{collection} (meshes, instances or materials): one page of the listing.
+    virtual Reply scene_list(const std::string& collection,
+                             const std::multimap<std::string, std::string>& query) = 0;
+    /// GET /v1/scene/{collection}/{id}.
+    virtual Reply scene_object(const std::string& collection, const std::string& id) = 0;
+    /// POST /v1/pick with a JSON request body.
+    virtual Reply pick(const std::string& body) = 0;
     /// Where requests go, for messages: "http://127.0.0.1:7070" or "the embedded engine".
     virtual std::string describe() const = 0;
 };

@@ -42,6 +42,11 @@ public:
         return json(200, {{"version", version}, {"last_report", last}});
     }
     Reply scene() override { return json(200, {{"version", version}}); }
+    Reply scene_list(const std::string&, const std::multimap<std::string, std::string>&) override {
+        return {};
+    }
+    Reply scene_object(const std::string&, const std::string&) override { return {}; }
+    Reply pick(const std::string&) override { return {}; }
     std::string describe() const override { return "the fake"; }
 
     /// A 422 problem answer for every later edit batch.

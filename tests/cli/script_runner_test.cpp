@@ -103,6 +103,12 @@ TEST_F(ScriptRunner, ARenderAnswerWithoutItsReportIsARequestFailure) {
         }
         Reply stats() override { return {}; }
         Reply scene() override { return {}; }
+        Reply scene_list(const std::string&,
+                         const std::multimap<std::string, std::string>&) override {
+            return {};
+        }
+        Reply scene_object(const std::string&, const std::string&) override { return {}; }
+        Reply pick(const std::string&) override { return {}; }
         std::string describe() const override { return "no report"; }
     } transport;
     script = load(R"({"render": {}})");

@@ -102,6 +102,20 @@ TEST_F(Transports, EveryEndpointAnswersTheSameInProcessAsOverHttp) {
     same("render schema", [](Transport& t) { return t.render(R"({"widht": 3})"); });
     same("stats", [](Transport& t) { return t.stats(); });
     same("scene", [](Transport& t) { return t.scene(); });
+    same("list", [](Transport& t) { return t.scene_list("instances", {{"limit", "5"}}); });
+    same("list filtered",
+         [](Transport& t) { return t.scene_list("instances", {{"mesh", "ball"}}); });
+    same("list bad cursor",
+         [](Transport& t) { return t.scene_list("meshes", {{"cursor", "instances-0"}}); });
+    same("list unknown collection", [](Transport& t) { return t.scene_list("groups", {}); });
+    same("object with a slash", [](Transport& t) { return t.scene_object("instances", "a/b"); });
+    same("object", [](Transport& t) { return t.scene_object("materials", "red"); });
+    same("pick", [](Transport& t) {
+        return t.pick(R"({"width": 48, "height": 32, "pixels": [[24, 16], [0, 0]]})");
+    });
+    same("pick outside", [](Transport& t) {
+        return t.pick(R"({"width": 48, "height": 32, "pixels": [[48, 16]]})");
+    });
 }
 
 TEST_F(Transports, ARenderSaysWhatItsCommitDidInTheSameHeader) {

@@ -149,6 +149,44 @@ class ServerCommandsTest(unittest.TestCase):
                                 env={"STRATA_TOKEN": "wrong"})
         self.assertEqual(code, 0, out + err)
 
+    def test_scene_list_get_and_pick_read_the_scene_object_by_object(self):
+        edits = [{"op": "clear"},
+                 {"op": "add_mesh", "id": "ball", "shape": {"type": "sphere", "segments": 16}},
+                 {"op": "set_camera", "eye": [0, 0, 5], "target": [0, 0, 0]}]
+        edits += [{"op": "add_instance", "id": f"/World/b{i}", "mesh": "ball",
+                   "visible": i != 3, "transform": {"translate": [3 * i, 0, 0]}}
+                  for i in range(7)]
+        code, _, err = strata("edit", "-", env=self.env, stdin=json.dumps({"edits": edits}))
+        self.assertEqual(code, 0, err)
+        code, out, err = strata("scene", "list", "instances", "--page-size", "2", env=self.env)
+        self.assertEqual(code, 0, err)
+        self.assertEqual([line.split()[0] for line in out.splitlines()],
+                         [f"/World/b{i}" for i in range(7)])
+        self.assertIn("/World/b3  mesh=ball  hidden", out)
+        self.assertRegex(err, r"7 instances at version \d+")
+        code, out, _ = strata("--json", "scene", "list", "instances", "--visible", "false",
+                              env=self.env)
+        self.assertEqual([json.loads(line)["id"] for line in out.splitlines()], ["/World/b3"])
+        code, out, _ = strata("scene", "list", "instances", "--max", "3", env=self.env)
+        self.assertEqual(len(out.splitlines()), 3)
+        code, out, _ = strata("--json", "scene", "get", "instance", "/World/b2", env=self.env)
+        self.assertEqual(code, 0)
+        self.assertEqual(json.loads(out)["transform"][3], 6)
+        code, _, err = strata("scene", "get", "instance", "nope", env=self.env)
+        self.assertEqual(code, 3)
+        self.assertIn("no instance with id 'nope'", err)
+        code, out, err = strata("pick", "32", "32", "--width", "64", "--height", "64",
+                                env=self.env)
+        self.assertEqual(code, 0, err)
+        self.assertRegex(out, r"^instance /World/b0  mesh ball  primitive \d+  distance 4")
+        code, out, _ = strata("pick", "0", "0", "--width", "64", "--height", "64", env=self.env)
+        self.assertIn("nothing at (0, 0)", out)
+        code, _, err = strata("pick", "64", "0", "--width", "64", "--height", "64", env=self.env)
+        self.assertEqual(code, 3)
+        self.assertIn("/pixels/0", err)
+        code, _, _ = strata("scene", "list", "groups", env=self.env)
+        self.assertEqual(code, 2)
+
     def test_a_missing_token_is_a_401_problem(self):
         code, _, err = strata("stats", env={"STRATA_SERVER": self.server.url})
         self.assertEqual(code, 3)

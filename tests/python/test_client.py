@@ -135,6 +135,37 @@ class ClientTest(unittest.TestCase):
         with self.assertRaises(ValueError):
             self.client.scene("lights", "sun")
 
+    def test_instances_follows_cursors_through_every_page(self):
+        self.client.edit([{"op": "add_instance", "id": f"/World/b{i}", "mesh": "ball",
+                           "visible": i % 3 != 0} for i in range(25)])
+        listed = list(self.client.instances(page_size=4))
+        self.assertEqual(len(listed), 26)
+        self.assertEqual(len({item["id"] for item in listed}), 26)
+        self.assertEqual(listed[0], self.client.scene("instances", listed[0]["id"]))
+        hidden = [item["id"] for item in self.client.instances(page_size=3, visible=False)]
+        self.assertEqual(sorted(hidden), sorted(f"/World/b{i}" for i in range(0, 25, 3)))
+        self.assertEqual(len(list(self.client.instances(mesh="ball"))), 26)
+        with self.assertRaises(ProblemError) as caught:
+            list(self.client.instances(mesh="nope"))
+        self.assertEqual(caught.exception.status, 404)
+        self.assertEqual([m["id"] for m in self.client.meshes()], ["ball"])
+        self.assertEqual([m["id"] for m in self.client.materials(page_size=1)], ["red"])
+
+    def test_pick_names_the_instance_under_a_pixel(self):
+        hit = self.client.pick(32, 32, 64, 64)
+        self.assertIsNotNone(hit)
+        self.assertEqual(hit["instance"], "b0")
+        self.assertEqual(hit["mesh"], "ball")
+        self.assertAlmostEqual(hit["distance"], 3.03, delta=0.1)
+        self.assertIsNone(self.client.pick(0, 0, 64, 64))
+        hits = self.client.pick_many([(32, 32), (0, 0)], 64, 64,
+                                     camera={"target": [0, 0, 20]})
+        self.assertEqual(hits, [None, None])
+        with self.assertRaises(ProblemError) as caught:
+            self.client.pick(64, 0, 64, 64)
+        self.assertEqual(caught.exception.status, 422)
+        self.assertEqual(caught.exception.pointer, "/pixels/0")
+
     def test_one_connection_is_kept_alive_across_requests(self):
         self.client.stats()
         sock = self.client._conn.sock

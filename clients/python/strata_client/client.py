@@ -3,7 +3,7 @@
 import http.client
 import json
 import urllib.parse
-from typing import Any, Dict, Iterable, Optional, Union
+from typing import Any, Dict, Iterable, Iterator, List, Optional, Tuple, Union
 
 from strata_client.png import decode_png
 
@@ -232,3 +232,45 @@ class Client:
         if kind not in ("meshes", "instances", "materials") or not id:
             raise ValueError("scene(kind, id): kind is 'meshes', 'instances' or 'materials'")
         return self._json("GET", f"/v1/scene/{kind}/{urllib.parse.quote(id, safe='')}")
+
+    def _list(self, collection: str, page_size: int, **filters: Any) -> Iterator[Dict[str, Any]]:
+        query = {"limit": str(page_size)}
+        for key, value in filters.items():
+            if value is not None:
+                query[key] = ("true" if value else "false") if isinstance(value, bool) else value
+        while True:
+            page = self._json("GET", f"/v1/scene/{collection}?{urllib.parse.urlencode(query)}")
+            yield from page["items"]
+            if page.get("next_cursor") is None:
+                return
+            query["cursor"] = page["next_cursor"]
+
+    def instances(self, page_size: int = 1000, mesh: Optional[str] = None,
+                  visible: Optional[bool] = None) -> Iterator[Dict[str, Any]]:
+        """Every instance (GET /v1/scene/instances, following cursors page by page), optionally
+        only those of one mesh or only (in)visible ones. Each item is the document
+        scene("instances", id) returns."""
+        return self._list("instances", page_size, mesh=mesh, visible=visible)
+
+    def meshes(self, page_size: int = 1000) -> Iterator[Dict[str, Any]]:
+        """Every mesh (GET /v1/scene/meshes, following cursors)."""
+        return self._list("meshes", page_size)
+
+    def materials(self, page_size: int = 1000) -> Iterator[Dict[str, Any]]:
+        """Every material (GET /v1/scene/materials, following cursors)."""
+        return self._list("materials", page_size)
+
+    def pick(self, x: int, y: int, width: int, height: int,
+             camera: Optional[Dict[str, Any]] = None) -> Optional[Dict[str, Any]]:
+        """What lies under pixel (x, y) of a width x height frame (POST /v1/pick): a dict with
+        instance, mesh, primitive, distance, position, normal and user_id, or None."""
+        return self.pick_many([(x, y)], width, height, camera)[0]
+
+    def pick_many(self, pixels: Iterable[Tuple[int, int]], width: int, height: int,
+                  camera: Optional[Dict[str, Any]] = None) -> List[Optional[Dict[str, Any]]]:
+        """pick() for many pixels at once (at most 10000), one ray each, all at one version."""
+        body: Dict[str, Any] = {"width": width, "height": height,
+                                "pixels": [[int(px), int(py)] for px, py in pixels]}
+        if camera is not None:
+            body["camera"] = camera
+        return self._json("POST", "/v1/pick", body)["hits"]

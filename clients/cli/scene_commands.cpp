@@ -1,0 +1,110 @@
+// `strata scene list`, `strata scene get` and `strata pick`: reading the scene object by object,
+// and asking what lies under a pixel.
+
+#include "clients/cli/commands.h"
+
+#include <ostream>
+
+namespace strata::cli {
+
+namespace {
+
+constexpr int OK = 0;
+constexpr int BAD_INPUT = 2;
+
+/// One line per listed object for people: its id, then what tells it apart.
+std::string item_line(const std::string& collection, const Json& item) {
+    std::string line = item.value("id", std::string("?"));
+    if (collection == "instances") {
+        line += "  mesh=" + item.value("mesh", std::string("?"));
+        if (item.contains("material") && item["material"].is_string())
+            line += "  material=" + item["material"].get<std::string>();
+        if (!item.value("visible", true)) line += "  hidden";
+    } else if (collection == "meshes") {
+        line += "  vertices=" + std::to_string(item.value("vertices", uint64_t(0))) +
+                "  triangles=" + std::to_string(item.value("triangles", uint64_t(0))) +
+                "  instances=" + std::to_string(item.value("instances", uint64_t(0)));
+    }
+    return line;
+}
+
+}  // namespace
+
+const std::vector<std::string>& scene_collections() {
+    static const std::vector<std::string> names = {"meshes", "instances", "materials"};
+    return names;
+}
+
+int run_scene_list(Transport& t, const Console& c, const SceneListArgs& args) {
+    std::multimap<std::string, std::string> query;
+    query.emplace("limit", std::to_string(args.page_size));
+    if (args.mesh) query.emplace("mesh", *args.mesh);
+    if (args.visible) query.emplace("visible", *args.visible ? "true" : "false");
+    const std::string what = "listing " + args.collection;
+    uint64_t printed = 0;
+    std::optional<uint64_t> first_version;
+    while (true) {
+        int code = OK;
+        const auto page = json_answer(c, t, what, t.scene_list(args.collection, query), code);
+        if (!page) return code;
+        const uint64_t version = page->value("version", uint64_t(0));
+        if (!first_version) first_version = version;
+        const Json items = page->value("items", Json::array());
+        for (const Json& item : items) {
+            if (args.max_items && printed == *args.max_items) return OK;
+            c.out << (c.json ? item.dump() : item_line(args.collection, item)) << '\n';
+            ++printed;
+        }
+        const Json next = page->value("next_cursor", Json(nullptr));
+        if (!next.is_string()) break;
+        query.erase("cursor");
+        query.emplace("cursor", next.get<std::string>());
+    }
+    if (!c.json)
+        c.err << printed << " " << args.collection << " at version " << *first_version << '\n';
+    return OK;
+}
+
+int run_scene_get(Transport& t, const Console& c, const std::string& kind, const std::string& id) {
+    static const std::pair<const char*, const char*> KINDS[] = {
+        {"mesh", "meshes"}, {"instance", "instances"}, {"material", "materials"}};
+    for (const auto& [singular, collection] : KINDS) {
+        if (kind != singular) continue;
+        int code = OK;
+        const auto doc = json_answer(c, t, "getting " + kind + " '" + id + "'",
+                                     t.scene_object(collection, id), code);
+        if (!doc) return code;
+        c.out << (c.json ? doc->dump() : doc->dump(2)) << '\n';
+        return OK;
+    }
+    c.err << "strata: unknown object kind '" << kind << "': mesh, instance or material\n";
+    return BAD_INPUT;
+}
+
+int run_pick(Transport& t, const Console& c, const PickArgs& args) {
+    Json body = {{"width", args.width},
+                 {"height", args.height},
+                 {"pixels", Json::array({Json::array({args.x, args.y})})}};
+    int code = OK;
+    const auto doc = json_answer(c, t, "pick", t.pick(body.dump()), code);
+    if (!doc) return code;
+    if (c.json) {
+        c.out << doc->dump() << '\n';
+        return OK;
+    }
+    const Json hits = doc->value("hits", Json::array());
+    const Json hit = hits.empty() ? Json(nullptr) : hits[0];
+    if (!hit.is_object()) {
+        c.out << "nothing at (" << args.x << ", " << args.y << ") at version "
+              << doc->value("version", uint64_t(0)) << '\n';
+        return OK;
+    }
+    c.out << "instance " << hit.value("instance", std::string("?")) << "  mesh "
+          << hit.value("mesh", std::string("?")) << "  primitive "
+          << hit.value("primitive", uint64_t(0)) << "  distance " << hit.value("distance", 0.0)
+          << "  user_id " << hit.value("user_id", uint64_t(0)) << "  at version "
+          << doc->value("version", uint64_t(0)) << '\n';
+    return OK;
+}
+
+}  // namespace strata::cli

@@ -1,0 +1,171 @@
+// GET /v1/scene/{meshes,instances,materials}: paginated listings.
+//
+// Pages walk the collection in slot order, which never changes while an object exists: an object
+// that exists for the whole walk appears exactly once, and objects added or removed during the
+// walk may or may not appear. The cursor names the slot the next page starts at; it is opaque
+// to clients (and checked: a cursor of another collection, or a made-up one, is refused).
+
+#include <charconv>
+#include <unordered_map>
+
+#include "protocol/api.h"
+#include "protocol/scene_json.h"
+
+namespace strata::protocol {
+
+namespace {
+
+constexpr uint32_t DEFAULT_PAGE = 100;
+constexpr uint32_t MAX_PAGE = 10000;
+
+constexpr const char* COLLECTIONS[] = {"meshes", "instances", "materials"};
+
+struct ListQuery {
+    uint32_t limit = DEFAULT_PAGE;
+    uint32_t first_slot = 0;
+    std::optional<std::string> mesh;  ///< instances: only those of this mesh
+    std::optional<bool> visible;      ///< instances: only (in)visible ones
+};
+
+Problem bad_query(const std::string& parameter, std::string message) {
+    Problem p = make_problem(ProblemType::InvalidRequest, std::move(message));
+    p.pointer = "/" + parameter;
+    return p;
+}
+
+std::string encode_cursor(SceneObject kind, uint32_t slot) {
+    char hex[16];
+    const auto end = std::to_chars(hex, hex + sizeof hex, slot, 16).ptr;
+    return std::string(COLLECTIONS[int(kind)]) + "-" + std::string(hex, end);
+}
+
+std::optional<uint32_t> decode_cursor(SceneObject kind, std::string_view cursor) {
+    const std::string_view prefix = COLLECTIONS[int(kind)];
+    if (cursor.size() <= prefix.size() + 1 || cursor.substr(0, prefix.size()) != prefix ||
+        cursor[prefix.size()] != '-')
+        return std::nullopt;
+    const std::string_view hex = cursor.substr(prefix.size() + 1);
+    uint32_t slot = 0;
+    const auto [end, ec] = std::from_chars(hex.data(), hex.data() + hex.size(), slot, 16);
+    if (ec != std::errc() || end != hex.data() + hex.size()) return std::nullopt;
+    return slot;
+}
+
+std::optional<ListQuery> parse_list_query(SceneObject kind,
+                                          const std::multimap<std::string, std::string>& query,
+                                          Problem& problem) {
+    ListQuery q;
+    const bool instances = kind == SceneObject::Instance;
+    for (const auto& [key, text] : query) {
+        if (query.count(key) > 1) {
+            problem = bad_query(key, "query parameter '" + key + "' is given more than once");
+            return std::nullopt;
+        }
+        if (key == "limit") {
+            uint32_t n = 0;
+            const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), n);
+            if (ec != std::errc() || end != text.data() + text.size() || n < 1 || n > MAX_PAGE) {
+                problem = bad_query(
+                    key, "limit must be an integer from 1 to " + std::to_string(MAX_PAGE));
+                return std::nullopt;
+            }
+            q.limit = n;
+        } else if (key == "cursor") {
+            const auto slot = decode_cursor(kind, text);
+            if (!slot) {
+                problem = bad_query(key, std::string("cursor is not one a page of ") +
+                                             COLLECTIONS[int(kind)] + " gave out");
+                return std::nullopt;
+            }
+            q.first_slot = *slot;
+        } else if (instances && key == "mesh") {
+            q.mesh = text;
+        } else if (instances && key == "visible") {
+            if (text != "true" && text != "false") {
+                problem = bad_query(key, "visible must be true or false");
+                return std::nullopt;
+            }
+            q.visible = text == "true";
+        } else {
+            problem = bad_query(
+                key, "unknown query parameter '" + key + "': " + COLLECTIONS[int(kind)] + " take " +
+                         (instances ? "limit, cursor, mesh and visible" : "limit and cursor"));
+            return std::nullopt;
+        }
+    }
+    return q;
+}
+
+/// One page of `objects` from q.first_slot: up to q.limit documents of the objects `keep`
+/// accepts, and the cursor of the next accepted object, or null when there is none.
+template <class Objects, class Keep, class ToJson>
+Json page(SceneObject kind, const Objects& objects, const ListQuery& q, Keep&& keep,
+          ToJson&& to_json) {
+    Json items = Json::array();
+    Json next = nullptr;
+    for (uint32_t slot = q.first_slot; slot < objects.slot_count(); ++slot) {
+        if (!objects.alive_at(slot) || !keep(objects.at_slot(slot))) continue;
+        if (items.size() == q.limit) {
+            next = encode_cursor(kind, slot);
+            break;
+        }
+        items.push_back(to_json(objects.handle_at(slot), objects.at_slot(slot)));
+    }
+    return Json{{"items", std::move(items)}, {"next_cursor", std::move(next)}};
+}
+
+}  // namespace
+
+ApiResponse get_scene_list(const Engine& engine, SceneObject kind,
+                           const std::multimap<std::string, std::string>& query) {
+    Problem problem;
+    const auto q = parse_list_query(kind, query, problem);
+    if (!q) return problem_response(problem);
+    // One read lock: every item and the page's version belong together.
+    auto [doc, version] = engine.read([&](const Scene& s) -> std::pair<Json, uint64_t> {
+        switch (kind) {
+            case SceneObject::Mesh:
+                return {page(
+                            kind, s.meshes(), *q, [](const MeshRecord&) { return true; },
+                            [&](MeshHandle h, const MeshRecord& m) { return mesh_json(s, h, m); }),
+                        s.version()};
+            case SceneObject::Material:
+                return {page(
+                            kind, s.materials(), *q, [](const MaterialRecord&) { return true; },
+                            [&](MaterialHandle, const MaterialRecord& m) {
+                                return material_json(s, m);
+                            }),
+                        s.version()};
+            case SceneObject::Instance:
+                break;
+        }
+        MeshHandle mesh;
+        if (q->mesh) {
+            mesh = s.find_mesh(*q->mesh);
+            if (!s.mesh(mesh)) return {nullptr, s.version()};
+        }
+        // Object-space bounds once per mesh, not once per instance.
+        std::unordered_map<uint32_t, Bounds3> bounds;
+        return {page(
+                    kind, s.instances(), *q,
+                    [&](const InstanceRecord& i) {
+                        return (!q->mesh || i.mesh == mesh) &&
+                               (!q->visible || i.visible == *q->visible);
+                    },
+                    [&](InstanceHandle h, const InstanceRecord& i) {
+                        auto [it, fresh] = bounds.try_emplace(i.mesh.index);
+                        if (fresh) it->second = mesh_bounds(*s.mesh(i.mesh).value());
+                        return instance_json(s, h, i, it->second);
+                    }),
+                s.version()};
+    });
+    if (doc.is_null()) {
+        Problem p = make_problem(ProblemType::NotFound, "no mesh with id '" + *q->mesh + "'");
+        p.pointer = "/mesh";
+        return with_etag(problem_response(p), version);
+    }
+    doc["version"] = version;
+    return with_etag(json_response(200, doc), version);
+}
+
+}  // namespace strata::protocol
