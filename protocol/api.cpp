@@ -17,6 +17,14 @@ uint64_t scene_version(const Engine& engine) {
     return engine.read([](const Scene& s) { return s.version(); });
 }
 
+/// The body of every JSON answer, problems included: one line of JSON and a newline, so that a
+/// shell prompt after `curl` starts on a line of its own and JSON Lines tools read it as is.
+std::string json_body(const Json& j) {
+    std::string text = dump_json(j);
+    text += '\n';
+    return text;
+}
+
 std::string_view trim(std::string_view v) {
     while (!v.empty() && (v.back() == ' ' || v.back() == '\t')) v.remove_suffix(1);
     while (!v.empty() && (v.front() == ' ' || v.front() == '\t')) v.remove_prefix(1);
@@ -105,7 +113,7 @@ ApiResponse json_response(int status, const Json& body) {
     ApiResponse r;
     r.status = status;
     r.content_type = "application/json";
-    r.body = dump_json(body);
+    r.body = json_body(body);
     return r;
 }
 
@@ -113,7 +121,7 @@ ApiResponse problem_response(const Problem& problem) {
     ApiResponse r;
     r.status = problem.status;
     r.content_type = "application/problem+json";
-    r.body = dump_json(problem_to_json(problem));
+    r.body = json_body(problem_to_json(problem));
     return r;
 }
 

@@ -39,9 +39,9 @@ struct ApiResponse {
     std::string_view header(std::string_view name) const;
 };
 
-/// A JSON answer.
+/// A JSON answer; like every JSON body Strata sends, it ends with a newline.
 ApiResponse json_response(int status, const Json& body);
-/// An application/problem+json answer with the problem's status.
+/// An application/problem+json answer with the problem's status (ends with a newline too).
 ApiResponse problem_response(const Problem& problem);
 
 /// The entity tag of a scene version: "N" with the quotes.

@@ -230,20 +230,23 @@ double FieldReader::array_number(const Json& v, std::size_t i, const std::string
     return e.get<double>();
 }
 
-Vec3 FieldReader::vec3(const Json& v, const std::string& ptr) {
-    if (array_size(v, ptr, "an array of 3 numbers") != 3)
-        schema_error(ptr, "expected an array of exactly 3 numbers");
-    Vec3 out;
-    for (int k = 0; k < 3; ++k) out[k] = number(v[k], child(ptr, std::size_t(k)));
+template <class Vec>
+Vec FieldReader::fixed_numbers(const Json& v, const std::string& ptr) {
+    constexpr int N = Vec::length();
+    static const std::string what = "an array of " + std::to_string(N) + " numbers";
+    if (array_size(v, ptr, what.c_str()) != std::size_t(N))
+        schema_error(ptr, "expected an array of exactly " + std::to_string(N) + " numbers");
+    Vec out;
+    for (int k = 0; k < N; ++k) out[k] = number(v[k], child(ptr, std::size_t(k)));
     return out;
 }
 
+Vec3 FieldReader::vec3(const Json& v, const std::string& ptr) {
+    return fixed_numbers<Vec3>(v, ptr);
+}
+
 Vec4 FieldReader::vec4(const Json& v, const std::string& ptr) {
-    if (array_size(v, ptr, "an array of 4 numbers") != 4)
-        schema_error(ptr, "expected an array of exactly 4 numbers");
-    Vec4 out;
-    for (int k = 0; k < 4; ++k) out[k] = number(v[k], child(ptr, std::size_t(k)));
-    return out;
+    return fixed_numbers<Vec4>(v, ptr);
 }
 
 std::vector<float> FieldReader::floats(const Json& v, const std::string& ptr) {

@@ -97,6 +97,9 @@ private:
     std::size_t array_size(const Json& v, const std::string& ptr, const char* what) const;
     /// Element `i` of a JSON or packed array as a double (schema error for a non-number).
     double array_number(const Json& v, std::size_t i, const std::string& ptr) const;
+    /// An array of exactly Vec::length() numbers (vec3, vec4).
+    template <class Vec>
+    Vec fixed_numbers(const Json& v, const std::string& ptr);
     std::string base64_bytes(const Json& v, const std::string& ptr, std::size_t unit);
 
     std::size_t m_edit_index = Error::NO_INDEX;

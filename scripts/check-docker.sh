@@ -196,7 +196,9 @@ start_server() {
         # The server once the chain unshare -> bash -> chroot -> env has exec'd into it.
         server_pid="$(cat "/proc/$ns_pid/task/$ns_pid/children" 2>/dev/null || true)"
         server_pid="${server_pid%% *}"
-        if [ -n "$server_pid" ] && [ "$(readlink "/proc/$server_pid/exe" 2>/dev/null)" = \
+        # Same file, not same path text: run inside a chroot, /proc/PID/exe names the path as
+        # seen from the real root, which is not "$root..." here.
+        if [ -n "$server_pid" ] && [ "/proc/$server_pid/exe" -ef \
             "$root$RT_PREFIX/bin/strata-server" ]; then
             pids+=("$server_pid")
             return 0

@@ -30,6 +30,7 @@ build_pkgs=(
     clang libclang-rt-14-dev
     python3 python3-jsonschema python3-numpy python3-yaml
     assimp-testmodels mmdebstrap
+    mount  # scripts/check-docker.sh mounts inside its root; minimal Debian roots lack it
 )
 
 if [ "$mode" = runtime ]; then pkgs=("${runtime_pkgs[@]}"); else pkgs=("${build_pkgs[@]}"); fi

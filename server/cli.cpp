@@ -9,6 +9,7 @@
 
 #include "server/auth.h"
 #include "server/listener.h"
+#include "strata/version.h"
 
 namespace strata::server {
 
@@ -105,8 +106,8 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
     app.add_option("--log-level", cl.log_level, "trace, debug, info, warn, error, critical or off")
         ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
     // Every option above can also come from the environment, --x-y from STRATA_X_Y (containers
-    // are configured that way); the command line wins. --help and --healthcheck are about one
-    // invocation, so they have no variable.
+    // are configured that way); the command line wins. --help, --version and --healthcheck are
+    // about one invocation, so they have no variable.
     for (CLI::Option* opt : app.get_options()) {
         if (opt->get_lnames().empty() || opt->get_lnames().front() == "help") continue;
         std::string name = "STRATA_" + opt->get_lnames().front();
@@ -114,6 +115,8 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
             ch = ch == '-' ? '_' : char(std::toupper(static_cast<unsigned char>(ch)));
         opt->envname(name);
     }
+    app.set_version_flag("--version", std::string("strata-server ") + VERSION,
+                         "Print the version and exit");
     app.add_flag("--healthcheck", cl.healthcheck,
                  "Start no server: GET /readyz on --host (a wildcard address means 127.0.0.1 or "
                  "::1) and --port, exit 0 on 200 and 1 otherwise");

@@ -15,6 +15,7 @@
 #include "clients/cli/http_transport.h"
 #include "clients/cli/play_output.h"
 #include "clients/cli/script_runner.h"
+#include "strata/version.h"
 
 namespace {
 
@@ -97,6 +98,8 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(1, 86400))
         ->capture_default_str();
     app.add_flag("--json", json, "Print answers as JSON (one object per line for play)");
+    app.set_version_flag("--version", std::string("strata ") + strata::VERSION,
+                         "Print the version and exit");
 
     PlayArgs play;
     CLI::App* play_cmd = app.add_subcommand(

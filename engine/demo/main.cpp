@@ -2,6 +2,7 @@
 // report and writes one PNG frame per launch.
 //
 //   strata-demo [--out DIR] [--width W] [--height H] [--spp N] [--exposure EV] [--exr]
+//   strata-demo --version
 
 #include <cstdio>
 #include <cstdlib>
@@ -12,6 +13,7 @@
 
 #include "engine/engine.h"
 #include "engine/scene/demo_scene.h"
+#include "strata/version.h"
 
 namespace {
 
@@ -33,7 +35,8 @@ bool parse_u32(const char* s, uint32_t& out) {
 }
 
 constexpr const char* USAGE =
-    "usage: strata-demo [--out DIR] [--width W] [--height H] [--spp N] [--exposure EV] [--exr]\n";
+    "usage: strata-demo [--out DIR] [--width W] [--height H] [--spp N] [--exposure EV] [--exr]\n"
+    "       strata-demo --version\n";
 
 int usage(const char* why) {
     std::fprintf(stderr, "strata-demo: %s\n%s", why, USAGE);
@@ -70,6 +73,9 @@ int main(int argc, char** argv) {
             if (*end) return usage("bad --exposure");
         } else if (!std::strcmp(argv[i], "--exr")) {
             opt.exr = true;
+        } else if (!std::strcmp(argv[i], "--version")) {
+            std::printf("strata-demo %s\n", strata::VERSION);
+            return 0;
         } else if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
             std::fputs(USAGE, stdout);
             return 0;

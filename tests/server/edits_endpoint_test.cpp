@@ -22,6 +22,26 @@ TEST_F(Edits, ABatchAnswersTheNewVersionAndTheCountWithAnETag) {
     EXPECT_EQ(r.header("Content-Type"), "application/json");
 }
 
+TEST_F(Edits, AnswersAndProblemsAreOneLineOfJsonEndingWithANewline) {
+    // What curl prints then ends its line, and JSON Lines tools read the body as one record.
+    const Reply ok = srv.edits({triangle_mesh("tri")});
+    const Reply refused = srv.edits({{{"op", "remove_mesh"}, {"mesh", "nothing"}}});
+    const Reply malformed = srv.post("/v1/edits", std::string("{\"edits\": ["));
+    const Reply commit = srv.post("/v1/commit", std::string());
+    const Reply stats = srv.get("/v1/stats");
+    const Reply missing = srv.get("/v1/no-such-route");
+    for (const Reply* r : {&ok, &refused, &malformed, &commit, &stats, &missing}) {
+        ASSERT_FALSE(r->body.empty());
+        EXPECT_EQ(r->body.back(), '\n') << r->body;
+        EXPECT_EQ(r->body.find('\n'), r->body.size() - 1) << r->body;
+        EXPECT_NO_THROW((void)Json::parse(r->body)) << r->body;
+    }
+    EXPECT_EQ(ok.body, "{\"applied\":1,\"version\":1}\n");
+    EXPECT_EQ(refused.status, 422);
+    EXPECT_EQ(malformed.status, 400);
+    EXPECT_EQ(missing.status, 404);
+}
+
 TEST_F(Edits, EveryOpLandsInTheScene) {
     const float moved[3] = {0.0f, 0.0f, 2.0f};
     const Json ops = Json::array({
