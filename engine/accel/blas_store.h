@@ -40,8 +40,11 @@ struct BlasRecord {
 
 class BlasStore {
 public:
-    /// `watertight` adds Embree's robust flag to every BLAS (see AccelConfig::watertight).
-    BlasStore(EmbreeDevice& device, bool watertight) : m_device(device), m_watertight(watertight) {}
+    /// `watertight` adds Embree's robust flag to every BLAS (see AccelConfig::watertight);
+    /// `context_filter` lets an intersect context's filter see their hits (the incremental TLAS
+    /// skips stale instance copies that way).
+    BlasStore(EmbreeDevice& device, bool watertight, bool context_filter = false)
+        : m_device(device), m_watertight(watertight), m_context_filter(context_filter) {}
     ~BlasStore();
     BlasStore(const BlasStore&) = delete;
     BlasStore& operator=(const BlasStore&) = delete;
@@ -70,6 +73,7 @@ private:
 
     EmbreeDevice& m_device;
     bool m_watertight;
+    bool m_context_filter;
     std::vector<BlasRecord> m_records;  ///< indexed by mesh slot
     std::vector<BlasRecord> m_retired;  ///< replaced by build(), freed by release_retired()
 };
