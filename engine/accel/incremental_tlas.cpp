@@ -25,6 +25,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <thread>
 #include <vector>
 
 #include "engine/accel/blas_store.h"
@@ -90,6 +91,7 @@ public:
 
     ~IncrementalTlas() override {
         m_merge.reset();
+        join_retired();
         release_everything();
         rtcReleaseScene(m_static);
         rtcReleaseScene(m_dynamic);
@@ -188,6 +190,7 @@ public:
 
     void wait_for_background() override {
         if (m_merge) m_merge->join();
+        join_retired();
     }
 
     void intersect1(RayHit1& ray, bool coherent) const override {
@@ -512,14 +515,17 @@ private:
         const uint64_t serial = m_merge->serial();
 
         // Step: the new table. Geometries of unedited instances are shared with the old table
-        // (one reference between them); the ones the merge replaced or dropped are released.
+        // (one reference between them); the ones the merge replaced or dropped go with the old
+        // scene. Releasing that scene drops a reference per instance and frees its BVH: O(all
+        // instances), so a thread of its own does it, off the commit.
+        std::vector<RTCGeometry> replaced;
         for (const MergeEntry& e : m_merge->entries()) {
             RTCGeometry old = static_geometry(e.slot);
             RTCGeometry now = geoms[e.slot];
             m_static_count += uint64_t(now != nullptr) - uint64_t(old != nullptr);
-            if (old && old != now) rtcReleaseGeometry(old);
+            if (old && old != now) replaced.push_back(old);
         }
-        rtcReleaseScene(m_static);
+        retire(m_static, std::move(replaced), std::move(m_static_geoms));
         m_static = scene;
         m_static_geoms = std::move(geoms);
         m_static_serial = serial;
@@ -542,6 +548,21 @@ private:
         m_report.merge_swapped = true;
         m_report.merge_build_ms = m_merge->build_ms();
         m_merge.reset();
+    }
+
+    /// Releases a replaced static tier on a thread of its own (joined before the next one).
+    void retire(RTCScene scene, std::vector<RTCGeometry> geoms, std::vector<RTCGeometry> table) {
+        join_retired();
+        m_retiring = std::thread([scene, geoms = std::move(geoms), table = std::move(table)] {
+            TlasMemoryScope memory;
+            for (RTCGeometry g : geoms) rtcReleaseGeometry(g);
+            rtcReleaseScene(scene);
+            (void)table;  // freed here too
+        });
+    }
+
+    void join_retired() {
+        if (m_retiring.joinable()) m_retiring.join();
     }
 
     void release_everything() {
@@ -581,6 +602,7 @@ private:
     bool m_dyn_dirty = false;
 
     std::unique_ptr<TlasMerge> m_merge;
+    std::thread m_retiring;  ///< releasing the static tier a merge replaced
     TlasTiers m_report;  ///< this commit's flags
 };
 
