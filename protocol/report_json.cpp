@@ -25,9 +25,9 @@ Json report_to_json(const RebuildReport& r) {
                  {"strategy", r.tlas.strategy}};
     if (!r.planned) {
         tlas["ms"] = r.phases.tlas_ms;
-        tlas["tiers"] = {{"static", r.tlas.static_instances},
-                         {"dynamic", r.tlas.dynamic_instances},
-                         {"stale", r.tlas.stale_copies}};
+        tlas["static_instances"] = r.tlas.static_instances;
+        tlas["dynamic_instances"] = r.tlas.dynamic_instances;
+        tlas["stale_copies"] = r.tlas.stale_copies;
         if (r.tlas.static_rebuild[0] != '\0') tlas["static_rebuild"] = r.tlas.static_rebuild;
         Json merge = {{"swapped", r.tlas.merge_swapped}, {"running", r.tlas.merge_running}};
         if (r.tlas.merge_swapped) merge["build_ms"] = r.tlas.merge_build_ms;

@@ -36,6 +36,7 @@ struct BlasRecord {
     uint32_t triangle_count = 0;
     BuildOptions options;
     BuildBaseline baseline;  ///< drift reference for the refit policy
+    int64_t bytes = 0;       ///< Embree memory its builds and refits allocated
 };
 
 class BlasStore {
@@ -68,7 +69,8 @@ public:
     void release_retired();
 
 private:
-    void release_slot(uint32_t slot);
+    void release_slot(uint32_t slot, bool account = true);
+    void release_record(BlasRecord& r, bool account);
     void retire_slot(uint32_t slot);
 
     EmbreeDevice& m_device;

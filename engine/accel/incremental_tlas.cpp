@@ -21,6 +21,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -91,7 +92,7 @@ public:
 
     ~IncrementalTlas() override {
         m_merge.reset();
-        join_retired();
+        reap_retired(true);
         release_everything();
         rtcReleaseScene(m_static);
         rtcReleaseScene(m_dynamic);
@@ -190,7 +191,7 @@ public:
 
     void wait_for_background() override {
         if (m_merge) m_merge->join();
-        join_retired();
+        reap_retired(true);
     }
 
     void intersect1(RayHit1& ray, bool coherent) const override {
@@ -550,19 +551,33 @@ private:
         m_merge.reset();
     }
 
-    /// Releases a replaced static tier on a thread of its own (joined before the next one).
+    /// Releases a replaced static tier on a thread of its own. The commit never waits for one:
+    /// finished ones are joined at the next swap, the rest when the TLAS goes or a test waits.
     void retire(RTCScene scene, std::vector<RTCGeometry> geoms, std::vector<RTCGeometry> table) {
-        join_retired();
-        m_retiring = std::thread([scene, geoms = std::move(geoms), table = std::move(table)] {
-            TlasMemoryScope memory;
-            for (RTCGeometry g : geoms) rtcReleaseGeometry(g);
-            rtcReleaseScene(scene);
+        reap_retired(false);
+        auto done = std::make_shared<std::atomic<bool>>(false);
+        std::thread t([scene, done, geoms = std::move(geoms), table = std::move(table)] {
+            {
+                TlasMemoryScope memory;
+                for (RTCGeometry g : geoms) rtcReleaseGeometry(g);
+                rtcReleaseScene(scene);
+            }
+            done->store(true, std::memory_order_release);
             (void)table;  // freed here too
         });
+        m_retiring.push_back({std::move(t), std::move(done)});
     }
 
-    void join_retired() {
-        if (m_retiring.joinable()) m_retiring.join();
+    /// Joins the release threads that finished (all of them with `all`).
+    void reap_retired(bool all) {
+        for (auto it = m_retiring.begin(); it != m_retiring.end();) {
+            if (all || it->done->load(std::memory_order_acquire)) {
+                it->thread.join();
+                it = m_retiring.erase(it);
+            } else {
+                ++it;
+            }
+        }
     }
 
     void release_everything() {
@@ -602,7 +617,11 @@ private:
     bool m_dyn_dirty = false;
 
     std::unique_ptr<TlasMerge> m_merge;
-    std::thread m_retiring;  ///< releasing the static tier a merge replaced
+    struct Retiring {
+        std::thread thread;
+        std::shared_ptr<std::atomic<bool>> done;
+    };
+    std::vector<Retiring> m_retiring;  ///< releasing static tiers that merges replaced
     TlasTiers m_report;  ///< this commit's flags
 };
 

@@ -38,14 +38,7 @@ TlasMerge::TlasMerge(EmbreeDevice& device, TlasSceneSetup setup,
     : m_device(device), m_setup(setup), m_entries(std::move(entries)), m_serial(serial) {
     m_thread = std::thread([this, &static_geoms] {
         EmbreeDevice::set_thread_category(int(MemoryCategory::Tlas));
-        {
-            // Low priority: the arena gets worker threads only when launches and commits
-            // (normal priority) leave some idle.
-            tbb::task_arena arena(tbb::task_arena::automatic, 1, tbb::task_arena::priority::low);
-            arena.initialize();
-            TlasMemoryObserver observer(arena);
-            arena.execute([&] { run(static_geoms); });
-        }
+        run(static_geoms);
         EmbreeDevice::set_thread_category(-1);
         m_done.store(true, std::memory_order_release);
     });
@@ -94,7 +87,14 @@ void TlasMerge::run(const std::vector<RTCGeometryTy*>& static_geoms) {
         if ((slot & 4095) == 0 && m_cancel.load(std::memory_order_relaxed)) break;
         if (m_geoms[slot]) rtcAttachGeometryByID(scene, m_geoms[slot], slot);
     }
-    if (!m_cancel.load(std::memory_order_relaxed)) rtcCommitScene(scene);
+    if (!m_cancel.load(std::memory_order_relaxed)) {
+        // Low priority: the arena gets worker threads only when launches and commits (normal
+        // priority) leave some idle. Only the build runs inside it.
+        tbb::task_arena arena(tbb::task_arena::automatic, 1, tbb::task_arena::priority::low);
+        arena.initialize();
+        TlasMemoryObserver observer(arena);
+        arena.execute([&] { rtcCommitScene(scene); });
+    }
     rtcSetSceneProgressMonitorFunction(scene, nullptr, nullptr);
     // A cancelled build leaves the scene unusable; any other failure reports through the device.
     if (m_cancel.load(std::memory_order_relaxed)) {

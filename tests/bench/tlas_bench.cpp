@@ -1,6 +1,7 @@
 // TLAS strategies against plain Embree (issue 10's table), in one run. Never run by CTest.
 //
-//   build/tests/bench/strata_tlas_bench [--reps N] [--max-instances N] [--rows move,batch,...]
+//   build/tests/bench/strata_tlas_bench [--reps N] [--max-instances N] [--verbose 1]
+//       [--rows move,batch,addremove,trace,memory]
 //
 // Scene: n instances of one ~200-triangle sphere (make_sphere(0.45, 16): 224 triangles) on a
 // square grid, 2 TBB threads (STRATA_BENCH_THREADS overrides). Engine side: an Engine with the
@@ -211,11 +212,21 @@ struct CommitCost {
     double total_ms = 0.0;
 };
 
+bool g_verbose = false;
+
 CommitCost commit(Engine& e) {
     auto r = e.commit();
     if (!r) {
         std::fprintf(stderr, "commit: %s\n", r.error().describe().c_str());
         std::exit(1);
+    }
+    if (g_verbose) {
+        std::printf("  commit tlas %.3f ms: static %llu dynamic %llu stale %llu swapped %d "
+                    "(built in %.1f ms) running %d static_rebuild '%s'\n",
+                    r->phases.tlas_ms, static_cast<unsigned long long>(r->tlas.static_instances),
+                    static_cast<unsigned long long>(r->tlas.dynamic_instances),
+                    static_cast<unsigned long long>(r->tlas.stale_copies), r->tlas.merge_swapped,
+                    r->tlas.merge_build_ms, r->tlas.merge_running, r->tlas.static_rebuild);
     }
     return {r->phases.tlas_ms, r->phases.total_ms};
 }
@@ -498,6 +509,7 @@ int main(int argc, char** argv) {
         if (flag == "--reps") o.reps = std::max(1, std::atoi(argv[i + 1]));
         if (flag == "--max-instances") o.max_instances = std::atoll(argv[i + 1]);
         if (flag == "--rows") o.rows = argv[i + 1];
+        if (flag == "--verbose") g_verbose = std::atoi(argv[i + 1]) != 0;
     }
     const char* env = std::getenv("STRATA_BENCH_THREADS");
     const int threads = env ? std::max(1, std::atoi(env)) : 2;
@@ -511,7 +523,9 @@ int main(int argc, char** argv) {
                 std::string(12, '-').c_str(), std::string(12, '-').c_str(),
                 std::string(12, '-').c_str(), std::string(11, '-').c_str(),
                 std::string(16, '-').c_str());
-    auto wants = [&](const char* row) { return o.rows.find(row) != std::string::npos; };
+    auto wants = [&](const std::string& row) {
+        return ("," + o.rows + ",").find("," + row + ",") != std::string::npos;
+    };
     if (wants("move")) move_rows(o, mesh);
     if (wants("batch")) batch_row(o, mesh);
     if (wants("addremove")) add_remove_rows(o, mesh);

@@ -151,6 +151,32 @@ TEST(IncrementalTlas, ARequestedRebuildEmptiesTheDynamicTier) {
     EXPECT_EQ(r.tlas.static_instances, 2000u);
 }
 
+TEST(IncrementalTlas, ARemovedMeshLeavesTheBlasMemoryEvenWhileStaleCopiesReferenceIt) {
+    auto engine = engine_with(incremental(0.10, false));
+    EditBatch b;
+    b.edits.emplace_back(test::mesh_edit("rock", make_box({0.5f, 0.5f, 0.5f})));
+    b.edits.emplace_back(test::mesh_edit("ball", make_sphere(0.5f, 64)));
+    for (int i = 0; i < 2000; ++i)
+        b.edits.emplace_back(test::instance_edit("r" + std::to_string(i), "rock", {float(i), 0, 0}));
+    b.edits.emplace_back(test::instance_edit("ball-1", "ball", {0, 2, 0}));
+    ASSERT_TRUE(engine->apply(std::move(b)).has_value());
+    const RebuildReport before = test::commit_ok(*engine);
+
+    // The ball's instance leaves a stale static copy that still references the ball's BLAS.
+    test::apply_ok(*engine, RemoveInstance{"ball-1"}, RemoveMesh{"ball"});
+    const RebuildReport removed = test::commit_ok(*engine);
+    EXPECT_EQ(removed.tlas.stale_copies, 1u);
+    EXPECT_LT(removed.memory_blas_bytes, before.memory_blas_bytes / 2);
+
+    // Folding the tiers frees the copy and, with it, the BLAS: the TLAS bytes go back down.
+    test::apply_ok(*engine, MarkDirty{std::nullopt, DirtyAction::Rebuild});
+    const RebuildReport rebuilt = test::commit_ok(*engine);
+    EXPECT_EQ(rebuilt.tlas.stale_copies, 0u);
+    EXPECT_EQ(rebuilt.memory_blas_bytes, removed.memory_blas_bytes);
+    EXPECT_LE(rebuilt.memory_tlas_bytes, before.memory_tlas_bytes);
+    EXPECT_GT(rebuilt.memory_tlas_bytes, 0);
+}
+
 TEST(IncrementalTlas, TheEmbreeStrategyStaysSelectable) {
     EngineConfig c;
     c.accel.tlas = TlasKind::Embree;
