@@ -143,9 +143,9 @@ Status BlasStore::build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics&
         const SceneSetup setup = setup_for(mesh.build);
         r.scene = rtcNewScene(device);
         rtcSetSceneBuildQuality(r.scene, setup.scene_quality);
-        rtcSetSceneFlags(r.scene,
-                         RTCSceneFlags(setup.flags | (m_watertight ? RTC_SCENE_FLAG_ROBUST : 0) |
-                                       (m_context_filter ? RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION : 0)));
+        const int robust = m_watertight ? RTC_SCENE_FLAG_ROBUST : 0;
+        const int filter = m_context_filter ? RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION : 0;
+        rtcSetSceneFlags(r.scene, RTCSceneFlags(setup.flags | robust | filter));
         r.geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
         rtcSetGeometryBuildQuality(r.geometry, setup.geometry_quality);
         rtcAttachGeometryByID(r.scene, r.geometry, 0);

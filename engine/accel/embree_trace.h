@@ -27,7 +27,8 @@ static_assert(offsetof(Ray16, flags) == offsetof(RTCRay16, flags));
 inline RTCIntersectContext make_context(bool coherent) {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    ctx.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+    ctx.flags =
+        coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
     return ctx;
 }
 

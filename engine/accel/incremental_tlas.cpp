@@ -78,9 +78,9 @@ public:
                     const TlasPolicy& policy)
         : m_device(device), m_policy(policy) {
         const int robust = watertight ? RTC_SCENE_FLAG_ROBUST : 0;
-        m_static_setup = {prefer == BuildPreference::FastTrace ? RTC_BUILD_QUALITY_MEDIUM
-                                                                : RTC_BUILD_QUALITY_LOW,
-                          RTC_SCENE_FLAG_DYNAMIC | robust};
+        m_static_setup = {
+            prefer == BuildPreference::FastTrace ? RTC_BUILD_QUALITY_MEDIUM : RTC_BUILD_QUALITY_LOW,
+            RTC_SCENE_FLAG_DYNAMIC | robust};
         // The dynamic tier is rebuilt at every update and stays small: build speed first.
         m_dynamic_setup = {RTC_BUILD_QUALITY_LOW, RTC_SCENE_FLAG_DYNAMIC | robust};
         m_static = new_scene(m_static_setup);
@@ -257,9 +257,8 @@ public:
         ValidMask16 open;
         bool any = false;
         for (uint32_t i = 0; i < 16; ++i) {
-            open.lanes[i] = valid.lanes[i] && rays.tfar[i] != -std::numeric_limits<float>::infinity()
-                                ? -1
-                                : 0;
+            open.lanes[i] =
+                valid.lanes[i] && rays.tfar[i] != -std::numeric_limits<float>::infinity() ? -1 : 0;
             any |= open.lanes[i] != 0;
         }
         if (!any) return;
@@ -622,7 +621,7 @@ private:
         std::shared_ptr<std::atomic<bool>> done;
     };
     std::vector<Retiring> m_retiring;  ///< releasing static tiers that merges replaced
-    TlasTiers m_report;  ///< this commit's flags
+    TlasTiers m_report;                ///< this commit's flags
 };
 
 }  // namespace

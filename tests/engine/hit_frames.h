@@ -22,7 +22,7 @@ struct HitFrame {
 };
 
 inline HitFrame render(Engine& engine, uint32_t ray_mask, RebuildReport* report = nullptr,
-                uint32_t width = 64, uint32_t height = 48) {
+                       uint32_t width = 64, uint32_t height = 48) {
     PrimarySettings settings;
     settings.width = width;
     settings.height = height;
@@ -57,10 +57,10 @@ inline std::string compare(const HitFrame& incremental, const HitFrame& scratch)
         if (same_hit && same_distance) continue;
         if (reported++ < 5) {
             out << "  pixel (" << p % incremental.hits.width << ", " << p / incremental.hits.width
-                << "): incremental "
-                << incremental.instance_ids[p] << "/" << incremental.hits.primitive_id[p] << " at "
-                << a << ", from scratch " << scratch.instance_ids[p] << "/"
-                << scratch.hits.primitive_id[p] << " at " << b << "\n";
+                << "): incremental " << incremental.instance_ids[p] << "/"
+                << incremental.hits.primitive_id[p] << " at " << a << ", from scratch "
+                << scratch.instance_ids[p] << "/" << scratch.hits.primitive_id[p] << " at " << b
+                << "\n";
         }
     }
     if (reported > 5) out << "  ... " << reported - 5 << " more pixels\n";

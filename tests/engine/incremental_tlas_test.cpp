@@ -30,7 +30,9 @@ std::unique_ptr<Engine> engine_with(const EngineConfig& config) {
     return std::move(engine.value());
 }
 
-std::string rebuild_reason(const RebuildReport& r) { return r.tlas.static_rebuild; }
+std::string rebuild_reason(const RebuildReport& r) {
+    return r.tlas.static_rebuild;
+}
 
 TEST(IncrementalTlas, TheFirstBuildPutsEveryInstanceInTheStaticTier) {
     test::ManyInstances gen(1);
@@ -157,7 +159,8 @@ TEST(IncrementalTlas, ARemovedMeshLeavesTheBlasMemoryEvenWhileStaleCopiesReferen
     b.edits.emplace_back(test::mesh_edit("rock", make_box({0.5f, 0.5f, 0.5f})));
     b.edits.emplace_back(test::mesh_edit("ball", make_sphere(0.5f, 64)));
     for (int i = 0; i < 2000; ++i)
-        b.edits.emplace_back(test::instance_edit("r" + std::to_string(i), "rock", {float(i), 0, 0}));
+        b.edits.emplace_back(
+            test::instance_edit("r" + std::to_string(i), "rock", {float(i), 0, 0}));
     b.edits.emplace_back(test::instance_edit("ball-1", "ball", {0, 2, 0}));
     ASSERT_TRUE(engine->apply(std::move(b)).has_value());
     const RebuildReport before = test::commit_ok(*engine);

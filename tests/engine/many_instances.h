@@ -34,7 +34,9 @@ private:
     };
     Affine placement(int cell);
     Affine random_placement() { return placement(integer(0, m_cells - 1)); }
-    float uniform(float lo, float hi) { return std::uniform_real_distribution<float>(lo, hi)(m_rng); }
+    float uniform(float lo, float hi) {
+        return std::uniform_real_distribution<float>(lo, hi)(m_rng);
+    }
     int integer(int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(m_rng); }
     bool chance(double p) { return std::bernoulli_distribution(p)(m_rng); }
 
