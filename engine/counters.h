@@ -24,6 +24,9 @@ struct EngineCounters {
     uint64_t blas_refits = 0;
     uint64_t tlas_updates = 0;
     uint64_t tlas_rebuilds = 0;
+    uint64_t tlas_static_rebuilds = 0;
+    uint64_t tlas_merges = 0;
+    uint64_t tlas_merges_cancelled = 0;
     uint64_t primitives_built = 0;
     uint64_t primitives_refit = 0;
     uint64_t renders = 0;
@@ -31,6 +34,7 @@ struct EngineCounters {
     uint64_t picks = 0;
     double commit_seconds = 0.0;
     double render_seconds = 0.0;
+    double tlas_merge_seconds = 0.0;
 };
 
 /// What a counter counts, for writers that name or scale by it.
@@ -66,6 +70,16 @@ inline constexpr CounterSpec ENGINE_COUNTERS[] = {
     {"blas_refits", "BLAS refits.", CounterUnit::Count, &EngineCounters::blas_refits},
     {"tlas_updates", "TLAS updates.", CounterUnit::Count, &EngineCounters::tlas_updates},
     {"tlas_rebuilds", "TLAS full rebuilds.", CounterUnit::Count, &EngineCounters::tlas_rebuilds},
+    {"tlas_static_rebuilds",
+     "Commits in which the incremental TLAS rebuilt its static tier itself (small scene, "
+     "dynamic tier over its limit, first build, or asked for).",
+     CounterUnit::Count, &EngineCounters::tlas_static_rebuilds},
+    {"tlas_merges", "Background TLAS merges swapped in at a commit.", CounterUnit::Count,
+     &EngineCounters::tlas_merges},
+    {"tlas_merges_cancelled",
+     "Background TLAS merges abandoned (a BLAS they read changed, or a commit rebuilt the static "
+     "tier first).",
+     CounterUnit::Count, &EngineCounters::tlas_merges_cancelled},
     {"primitives_built", "Triangles built into BLASes.", CounterUnit::Count,
      &EngineCounters::primitives_built},
     {"primitives_refit", "Triangles refit in BLASes.", CounterUnit::Count,
@@ -80,6 +94,8 @@ inline constexpr CounterSpec ENGINE_COUNTERS[] = {
      &EngineCounters::commit_seconds},
     {"render_seconds", "Wall time spent tracing and shading in launches.", CounterUnit::Seconds,
      nullptr, &EngineCounters::render_seconds},
+    {"tlas_merge_seconds", "Background build time of the TLAS merges swapped in (wall).",
+     CounterUnit::Seconds, nullptr, &EngineCounters::tlas_merge_seconds},
 };
 
 // Every field is 8 bytes; a field without a row (or a row too many) changes one side only.

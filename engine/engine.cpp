@@ -70,6 +70,8 @@ Result<RebuildReport> Engine::commit_locked(std::unique_lock<std::shared_mutex>*
         // Nothing changed: no planning, no Embree call.
         report.version = m_scene.version();
         report.tlas_instances = m_accel->tlas().instance_count();
+        // No scene change, but a background TLAS merge that finished is swapped in now.
+        m_accel->maintain(report);
         report.memory_blas_bytes = m_accel->memory_bytes(MemoryCategory::Blas);
         report.memory_tlas_bytes = m_accel->memory_bytes(MemoryCategory::Tlas);
     } else {
@@ -102,6 +104,10 @@ Result<RebuildReport> Engine::commit_locked(std::unique_lock<std::shared_mutex>*
     c.tlas_rebuilds += report.tlas_action == TlasAction::Rebuild;
     c.primitives_built += report.primitives_built;
     c.primitives_refit += report.primitives_refit;
+    c.tlas_static_rebuilds += report.tlas.static_rebuild[0] != '\0';
+    c.tlas_merges += report.tlas.merge_swapped;
+    c.tlas_merge_seconds += report.tlas.merge_swapped ? report.tlas.merge_build_ms / 1000.0 : 0.0;
+    c.tlas_merges_cancelled += report.tlas.merge_cancelled;
     c.commit_seconds += report.phases.total_ms / 1000.0;
     m_last_report = report;
     return report;
@@ -172,6 +178,11 @@ Result<PickResult> Engine::pick(const PickRequest& request) {
     ++m_counters.picks;
     m_counters.rays_traced += request.pixels.size();
     return result;
+}
+
+void Engine::wait_for_background() {
+    std::lock_guard launch_lock(m_launch_mutex);
+    m_accel->wait_for_background();
 }
 
 void Engine::add_rays(uint64_t rays, double seconds) {

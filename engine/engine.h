@@ -109,6 +109,10 @@ public:
     void set_refit_policy(const RefitPolicy& p);
     RefitPolicy refit_policy() const;
 
+    /// Waits until background acceleration work (a TLAS merge) has finished building; the next
+    /// commit swaps it in. For tests and benchmarks that need a known state.
+    void wait_for_background();
+
     /// Counts rays a launch traced (called by renderers).
     void add_rays(uint64_t rays, double seconds);
 

@@ -20,8 +20,20 @@ Json entries_to_json(const std::vector<MeshBuildEntry>& entries, bool planned) {
 }  // namespace
 
 Json report_to_json(const RebuildReport& r) {
-    Json tlas = {{"action", tlas_action_name(r.tlas_action)}, {"instances", r.tlas_instances}};
-    if (!r.planned) tlas["ms"] = r.phases.tlas_ms;
+    Json tlas = {{"action", tlas_action_name(r.tlas_action)},
+                 {"instances", r.tlas_instances},
+                 {"strategy", r.tlas.strategy}};
+    if (!r.planned) {
+        tlas["ms"] = r.phases.tlas_ms;
+        tlas["static_instances"] = r.tlas.static_instances;
+        tlas["dynamic_instances"] = r.tlas.dynamic_instances;
+        tlas["stale_copies"] = r.tlas.stale_copies;
+        if (r.tlas.static_rebuild[0] != '\0') tlas["static_rebuild"] = r.tlas.static_rebuild;
+        Json merge = {{"swapped", r.tlas.merge_swapped}, {"running", r.tlas.merge_running}};
+        if (r.tlas.merge_swapped) merge["build_ms"] = r.tlas.merge_build_ms;
+        if (r.tlas.merge_cancelled) merge["cancelled"] = true;
+        tlas["merge"] = std::move(merge);
+    }
     Json j = {{"version", r.version},
               {"planned", r.planned},
               {"tlas", std::move(tlas)},

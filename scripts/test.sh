@@ -6,8 +6,10 @@
 #   1. scripts/install-deps.sh              Debian packages (idempotent)
 #   2. build/ (RelWithDebInfo)               full build, then every CTest test
 #   3. build-asan/ (ASan + UBSan)            engine tests under the sanitizers
-#   4. build-fuzz/ (clang, libFuzzer)        the edit-batch parser fuzzer, bounded run
-#   5. build-docker/ (mmdebstrap, chroot)    docker/: lint, and the image's runtime stage run in a
+#   4. build-tsan/ (ThreadSanitizer)         the engine tests that run background TLAS merges beside
+#                                            commits, launches and edits
+#   5. build-fuzz/ (clang, libFuzzer)        the edit-batch parser fuzzer, bounded run
+#   6. build-docker/ (mmdebstrap, chroot)    docker/: lint, and the image's runtime stage run in a
 #                                            fresh Debian 12 root (scripts/check-docker.sh)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -28,6 +30,13 @@ STRATA_TARGETS=strata_engine_tests scripts/build.sh build-asan \
     -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSTRATA_SANITIZE=ON -DSTRATA_BUILD_BENCHMARKS=OFF
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     build-asan/tests/engine/strata_engine_tests
+
+step "engine concurrency tests under ThreadSanitizer (build-tsan/)"
+STRATA_TARGETS=strata_engine_tests scripts/build.sh build-tsan \
+    -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSTRATA_TSAN=ON -DSTRATA_BUILD_BENCHMARKS=OFF
+TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/tests/engine/tsan.supp" \
+    timeout 900 build-tsan/tests/engine/strata_engine_tests \
+    --gtest_filter='IncrementalTlas.*:Differential.ThousandsOfInstances*'
 
 step "fuzzing the edit-batch parser (build-fuzz/)"
 scripts/run-fuzz.sh

@@ -103,6 +103,21 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
         ->check(CLI::ExistingFile);
     app.add_flag("--insecure", cl.insecure, "Allow a non-loopback --host without a token");
     app.add_flag("--demo", c.demo, "Start with the demo scene");
+    app.add_option("--tlas", c.tlas,
+                   "TLAS strategy: incremental (a commit costs what its instance edits touch) or "
+                   "embree (Embree rebuilds its whole instance BVH on any change; the reference)")
+        ->check(CLI::IsMember({"incremental", "embree"}));
+    app.add_option("--tlas-max-dynamic-fraction", c.tlas_max_dynamic_fraction,
+                   "Incremental TLAS: a commit rebuilds the static tier itself when more than this "
+                   "fraction of the instances would be in the dynamic tier")
+        ->check(CLI::Range(0.0, 1.0));
+    app.add_option("--tlas-min-instances", c.tlas_min_instances,
+                   "Incremental TLAS: scenes with fewer instances keep no dynamic tier (a full "
+                   "build is that cheap)")
+        ->check(CLI::Range(uint32_t(0), uint32_t(1) << 30));
+    app.add_option("--tlas-background-merge", c.tlas_background_merge,
+                   "Incremental TLAS: rebuild the static tier with the edits in the background "
+                   "and swap it in at a later commit (true or false)");
     app.add_option("--log-level", cl.log_level, "trace, debug, info, warn, error, critical or off")
         ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
     // Every option above can also come from the environment, --x-y from STRATA_X_Y (containers

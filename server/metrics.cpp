@@ -100,6 +100,22 @@ std::string ServerMetrics::prometheus_text(const Engine& engine) const {
     out += "strata_accel_memory_bytes{level=\"tlas\"} " +
            std::to_string(engine.memory_bytes(MemoryCategory::Tlas)) + '\n';
 
+    // The incremental TLAS's tiers as the last commit left them.
+    const TlasTiers tiers = engine.last_report().tlas;
+    header(out, "strata_tlas_instances", "gauge",
+           "Instances in each tier of the TLAS after the last commit (incremental strategy: "
+           "static and dynamic; embree: all in static).");
+    out += "strata_tlas_instances{tier=\"static\"} " + std::to_string(tiers.static_instances) +
+           '\n';
+    out += "strata_tlas_instances{tier=\"dynamic\"} " +
+           std::to_string(tiers.dynamic_instances) + '\n';
+    metric(out, "strata_tlas_stale_copies", "gauge",
+           "Static-tier copies of instances edited since the static build (skipped by rays).",
+           double(tiers.stale_copies));
+    metric(out, "strata_tlas_merge_running", "gauge",
+           "1 while a background TLAS merge was building after the last commit.",
+           tiers.merge_running ? 1.0 : 0.0);
+
     commit_seconds.write(out, "strata_commit_duration_seconds",
                          "Wall time of commits (explicit and before renders).");
     render_seconds.write(out, "strata_render_duration_seconds",

@@ -37,6 +37,12 @@ struct ServerConfig {
     uint64_t max_scene_triangles = 1ull << 24;
     uint64_t max_scene_vertices = 1ull << 24;
 
+    // The TLAS strategy (engine/accel/tlas.h) and the incremental strategy's policy.
+    std::string tlas = "incremental";  ///< "incremental" or "embree"
+    double tlas_max_dynamic_fraction = 0.10;
+    uint32_t tlas_min_instances = 1024;
+    bool tlas_background_merge = true;
+
     std::string token;  ///< bearer token; empty: no authentication
     bool demo = false;  ///< start with the demo scene
 };

@@ -6,7 +6,10 @@ cmake_minimum_required(VERSION 3.25)
 set(EMBREE_ALLOWED
     engine/accel/embree_device.cpp
     engine/accel/blas_store.cpp
-    engine/accel/embree_tlas.cpp)
+    engine/accel/embree_tlas.cpp
+    engine/accel/embree_trace.h
+    engine/accel/incremental_tlas.cpp
+    engine/accel/tlas_merge.cpp)
 file(GLOB_RECURSE ENGINE_FILES RELATIVE "${ROOT}" "${ROOT}/engine/*.h" "${ROOT}/engine/*.cpp")
 set(problems "")
 foreach(f IN LISTS ENGINE_FILES)

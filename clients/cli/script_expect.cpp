@@ -16,6 +16,9 @@ struct CountSource {
 constexpr CountSource COUNT_FIELDS[] = {
     {"version", nullptr, "version"},
     {"tlas_instances", "tlas", "instances"},
+    {"tlas_static_instances", "tlas", "static_instances"},
+    {"tlas_dynamic_instances", "tlas", "dynamic_instances"},
+    {"tlas_stale_copies", "tlas", "stale_copies"},
     {"blas_rebuilds", nullptr, "blas_rebuilds"},
     {"blas_refits", nullptr, "blas_refits"},
     {"primitives_built", nullptr, "primitives_built"},

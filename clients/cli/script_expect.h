@@ -2,7 +2,8 @@
 // A step's "expect": what its rebuild report must say, compiled when the script loads and checked
 // against the report JSON each time the step plays (so it means the same over HTTP and embedded).
 //
-//   counts    version, tlas_instances, blas_rebuilds, blas_refits, primitives_built,
+//   counts    version, tlas_instances, tlas_static_instances, tlas_dynamic_instances,
+//             tlas_stale_copies, blas_rebuilds, blas_refits, primitives_built,
 //             primitives_refit: a number (exact) or {"min": a, "max": b} (either bound optional)
 //   tlas      the TLAS action: "none", "update" or "rebuild"
 //   meshes    rebuilt, refit, released: the exact set of mesh ids, as an array (["a", "b"]) or,

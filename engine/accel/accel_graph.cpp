@@ -1,5 +1,7 @@
 #include "engine/accel/accel_graph.h"
 
+#include <algorithm>
+
 #include "engine/core/timer.h"
 
 namespace strata {
@@ -13,8 +15,11 @@ Result<std::unique_ptr<AccelGraph>> AccelGraph::create(const AccelConfig& config
 AccelGraph::AccelGraph(const AccelConfig& config, std::unique_ptr<EmbreeDevice> device)
     : m_config(config),
       m_device(std::move(device)),
-      m_blas(*m_device, config.watertight),
-      m_tlas(make_embree_tlas(*m_device, config.tlas_prefer, config.watertight)) {}
+      m_blas(*m_device, config.watertight, config.tlas == TlasKind::Incremental),
+      m_tlas(config.tlas == TlasKind::Incremental
+                 ? make_incremental_tlas(*m_device, config.tlas_prefer, config.watertight,
+                                         config.tlas_policy)
+                 : make_embree_tlas(*m_device, config.tlas_prefer, config.watertight)) {}
 
 AccelGraph::~AccelGraph() {
     // Instances hold references to BLASes: drop the TLAS first.
@@ -103,6 +108,7 @@ CommitPlan AccelGraph::plan(const Scene& scene) const {
         report.tlas_action = TlasAction::Update;
     }
     report.tlas_instances = scene.instances().size();
+    report.tlas.strategy = m_tlas->name();
     report.phases.plan_ms = clock.ms();
     return plan;
 }
@@ -113,7 +119,16 @@ Result<RebuildReport> AccelGraph::execute(const Scene& scene, CommitPlan&& plan)
     report.planned = false;
 
     // Step: BLAS builds and refits, one mesh at a time (each Embree build is parallel inside).
+    // Background TLAS work that reads BLASes stops first if any existing BLAS is about to change.
     Stopwatch blas_clock;
+    const bool existing_blas_changes =
+        !plan.refit.empty() || !plan.release.empty() ||
+        std::any_of(report.rebuilt.begin(), report.rebuilt.end(),
+                    [](const MeshBuildEntry& e) { return e.reason != BuildReason::Added; });
+    if (existing_blas_changes) {
+        MemoryScope memory(*m_device, MemoryCategory::Tlas);
+        m_tlas->before_blas_changes();
+    }
     {
         MemoryScope memory(*m_device, MemoryCategory::Blas);
         for (std::size_t i = 0; i < plan.rebuild.size(); ++i) {
@@ -143,6 +158,7 @@ Result<RebuildReport> AccelGraph::execute(const Scene& scene, CommitPlan&& plan)
     }
     report.phases.tlas_ms = tlas_clock.ms();
     report.tlas_instances = m_tlas->instance_count();
+    report.tlas = m_tlas->tiers_report();
 
     // Step: BLAS releases, after the TLAS has dropped the instances that still referenced them
     // (Embree frees a BLAS only with its last reference).
@@ -158,6 +174,19 @@ Result<RebuildReport> AccelGraph::execute(const Scene& scene, CommitPlan&& plan)
     report.memory_tlas_bytes = m_device->bytes(MemoryCategory::Tlas);
     report.phases.total_ms = report.phases.plan_ms + total.ms();
     return report;
+}
+
+}  // namespace strata
+
+namespace strata {
+
+void AccelGraph::maintain(RebuildReport& report) {
+    Stopwatch clock;
+    {
+        MemoryScope memory(*m_device, MemoryCategory::Tlas);
+        if (m_tlas->maintain()) report.phases.tlas_ms = clock.ms();
+    }
+    report.tlas = m_tlas->tiers_report();
 }
 
 }  // namespace strata

@@ -20,6 +20,8 @@ namespace strata {
 
 struct AccelConfig {
     RefitPolicy refit_policy;
+    TlasKind tlas = TlasKind::Incremental;
+    TlasPolicy tlas_policy;  ///< for TlasKind::Incremental
     BuildPreference tlas_prefer = BuildPreference::FastTrace;
     /// Watertight ray/triangle tests (Embree's robust mode): a ray through a vertex or edge
     /// shared by several triangles never slips between them. Costs about 12% of trace speed
@@ -47,6 +49,11 @@ public:
     CommitPlan plan(const Scene& scene) const;
     /// Carries out `plan`, made against the same scene state. Fills in times and memory.
     Result<RebuildReport> execute(const Scene& scene, CommitPlan&& plan);
+    /// A commit with no scene changes: lets the TLAS swap in finished background work. Fills
+    /// `report.tlas` (and the TLAS time when it did something).
+    void maintain(RebuildReport& report);
+    /// Waits for the TLAS's background work (tests and benchmarks).
+    void wait_for_background() { m_tlas->wait_for_background(); }
 
     const TlasStrategy& tlas() const { return *m_tlas; }
     const BlasStore& blas() const { return m_blas; }

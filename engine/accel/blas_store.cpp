@@ -75,8 +75,9 @@ MeshMetrics measure_mesh(const MeshRecord& mesh) {
 }
 
 BlasStore::~BlasStore() {
-    release_retired();
-    for (uint32_t slot = 0; slot < m_records.size(); ++slot) release_slot(slot);
+    for (BlasRecord& r : m_retired) release_record(r, false);
+    m_retired.clear();
+    for (uint32_t slot = 0; slot < m_records.size(); ++slot) release_slot(slot, false);
 }
 
 const BlasRecord* BlasStore::find(MeshHandle h) const {
@@ -89,12 +90,23 @@ RTCSceneTy* BlasStore::scene(uint32_t slot) const {
     return slot < m_records.size() ? m_records[slot].scene : nullptr;
 }
 
-void BlasStore::release_slot(uint32_t slot) {
-    BlasRecord& r = m_records[slot];
-    if (!r.scene) return;
+void BlasStore::release_record(BlasRecord& r, bool account) {
+    const int64_t before = m_device.bytes(MemoryCategory::Blas);
     rtcReleaseGeometry(r.geometry);
     rtcReleaseScene(r.scene);
+    // A TLAS copy that still references the BLAS (a stale static-tier copy of a removed instance)
+    // keeps Embree from freeing it now; it is freed with that copy, in the TLAS's memory phase,
+    // so its bytes are the TLAS's from here on.
+    const int64_t freed = before - m_device.bytes(MemoryCategory::Blas);
+    if (account && r.bytes > freed)
+        m_device.transfer(MemoryCategory::Blas, MemoryCategory::Tlas, r.bytes - freed);
     r = BlasRecord{};
+}
+
+void BlasStore::release_slot(uint32_t slot, bool account) {
+    BlasRecord& r = m_records[slot];
+    if (!r.scene) return;
+    release_record(r, account);
 }
 
 void BlasStore::retire_slot(uint32_t slot) {
@@ -105,10 +117,7 @@ void BlasStore::retire_slot(uint32_t slot) {
 }
 
 void BlasStore::release_retired() {
-    for (BlasRecord& r : m_retired) {
-        rtcReleaseGeometry(r.geometry);
-        rtcReleaseScene(r.scene);
-    }
+    for (BlasRecord& r : m_retired) release_record(r, true);
     m_retired.clear();
 }
 
@@ -127,13 +136,16 @@ Status BlasStore::build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics&
     const auto vertex_count = static_cast<uint32_t>(mesh.positions.size());
     const auto triangle_count = static_cast<uint32_t>(mesh.triangles.size());
     RTCDevice device = m_device.get();
+    const int64_t bytes_before = m_device.bytes(MemoryCategory::Blas);
 
     // Step: create the scene and geometry the first time this mesh is built.
     if (!r.scene) {
         const SceneSetup setup = setup_for(mesh.build);
         r.scene = rtcNewScene(device);
         rtcSetSceneBuildQuality(r.scene, setup.scene_quality);
-        rtcSetSceneFlags(r.scene, RTCSceneFlags(setup.flags | (m_watertight ? RTC_SCENE_FLAG_ROBUST : 0)));
+        const int robust = m_watertight ? RTC_SCENE_FLAG_ROBUST : 0;
+        const int filter = m_context_filter ? RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION : 0;
+        rtcSetSceneFlags(r.scene, RTCSceneFlags(setup.flags | robust | filter));
         r.geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
         rtcSetGeometryBuildQuality(r.geometry, setup.geometry_quality);
         rtcAttachGeometryByID(r.scene, r.geometry, 0);
@@ -168,6 +180,7 @@ Status BlasStore::build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics&
     r.vertex_count = vertex_count;
     r.triangle_count = triangle_count;
     r.baseline = BuildBaseline{metrics, 0};
+    r.bytes += m_device.bytes(MemoryCategory::Blas) - bytes_before;
     if (Status s = m_device.status("building BLAS"); !s) {
         release_slot(h.index);
         return s;
@@ -179,6 +192,7 @@ Status BlasStore::refit(MeshHandle h, const MeshRecord& mesh) {
     BlasRecord* r = h.index < m_records.size() ? &m_records[h.index] : nullptr;
     STRATA_CHECK(r && r->scene && r->generation == h.generation);
     STRATA_CHECK(r->vertex_count == mesh.positions.size());
+    const int64_t bytes_before = m_device.bytes(MemoryCategory::Blas);
     const uint32_t begin = std::min(mesh.dirty_begin, r->vertex_count);
     const uint32_t end = std::min(mesh.dirty_end, r->vertex_count);
     if (begin < end) copy_vertices(r->geometry, mesh.positions, begin, end);
@@ -186,6 +200,7 @@ Status BlasStore::refit(MeshHandle h, const MeshRecord& mesh) {
     rtcCommitGeometry(r->geometry);
     rtcCommitScene(r->scene);
     ++r->baseline.refits_since_build;
+    r->bytes += m_device.bytes(MemoryCategory::Blas) - bytes_before;
     return m_device.status("refitting BLAS");
 }
 

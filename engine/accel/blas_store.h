@@ -36,12 +36,16 @@ struct BlasRecord {
     uint32_t triangle_count = 0;
     BuildOptions options;
     BuildBaseline baseline;  ///< drift reference for the refit policy
+    int64_t bytes = 0;       ///< Embree memory its builds and refits allocated
 };
 
 class BlasStore {
 public:
-    /// `watertight` adds Embree's robust flag to every BLAS (see AccelConfig::watertight).
-    BlasStore(EmbreeDevice& device, bool watertight) : m_device(device), m_watertight(watertight) {}
+    /// `watertight` adds Embree's robust flag to every BLAS (see AccelConfig::watertight);
+    /// `context_filter` lets an intersect context's filter see their hits (the incremental TLAS
+    /// skips stale instance copies that way).
+    BlasStore(EmbreeDevice& device, bool watertight, bool context_filter = false)
+        : m_device(device), m_watertight(watertight), m_context_filter(context_filter) {}
     ~BlasStore();
     BlasStore(const BlasStore&) = delete;
     BlasStore& operator=(const BlasStore&) = delete;
@@ -65,11 +69,13 @@ public:
     void release_retired();
 
 private:
-    void release_slot(uint32_t slot);
+    void release_slot(uint32_t slot, bool account = true);
+    void release_record(BlasRecord& r, bool account);
     void retire_slot(uint32_t slot);
 
     EmbreeDevice& m_device;
     bool m_watertight;
+    bool m_context_filter;
     std::vector<BlasRecord> m_records;  ///< indexed by mesh slot
     std::vector<BlasRecord> m_retired;  ///< replaced by build(), freed by release_retired()
 };

@@ -4,6 +4,12 @@
 
 namespace strata {
 
+namespace {
+thread_local int t_category = -1;  ///< set_thread_category's override, -1 none
+}  // namespace
+
+void EmbreeDevice::set_thread_category(int c) { t_category = c; }
+
 Result<std::unique_ptr<EmbreeDevice>> EmbreeDevice::create(const std::string& config) {
     std::unique_ptr<EmbreeDevice> d(new EmbreeDevice());
     d->m_device = rtcNewDevice(config.empty() ? nullptr : config.c_str());
@@ -28,6 +34,7 @@ EmbreeDevice::~EmbreeDevice() {
 
 void EmbreeDevice::on_error(void* self, int code, const char* message) {
     auto* d = static_cast<EmbreeDevice*>(self);
+    if (code == RTC_ERROR_CANCELLED) return;
     std::lock_guard lock(d->m_error_mutex);
     if (!d->m_error) {
         d->m_error =
@@ -40,7 +47,7 @@ bool EmbreeDevice::on_memory(void* self, long bytes, bool /*post*/) {
     auto* d = static_cast<EmbreeDevice*>(self);
     // Embree's documented usage: accumulate every call's signed byte count (allocations positive,
     // frees and undone allocations negative), whether it comes before or after the event.
-    const int c = d->m_category.load(std::memory_order_relaxed);
+    const int c = t_category >= 0 ? t_category : d->m_category.load(std::memory_order_relaxed);
     d->m_bytes[c].fetch_add(bytes, std::memory_order_relaxed);
     return true;
 }

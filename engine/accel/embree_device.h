@@ -31,10 +31,20 @@ public:
     /// Attributes Embree allocations from now on to `c` (commits are serialised, so one global
     /// category is exact).
     void set_category(MemoryCategory c) { m_category.store(int(c), std::memory_order_relaxed); }
+    /// Attributes Embree allocations made on the calling thread to `c` whatever the device's
+    /// category is (background TLAS builds run beside commits); -1 ends the override.
+    static void set_thread_category(int c);
+    /// Moves `bytes` from category `from` to `to`: memory that is freed later under `to` (a BLAS
+    /// the store let go of while a TLAS copy still references it).
+    void transfer(MemoryCategory from, MemoryCategory to, int64_t bytes) {
+        m_bytes[int(from)].fetch_sub(bytes, std::memory_order_relaxed);
+        m_bytes[int(to)].fetch_add(bytes, std::memory_order_relaxed);
+    }
     /// Bytes Embree currently holds for category `c`.
     int64_t bytes(MemoryCategory c) const { return m_bytes[int(c)].load(std::memory_order_relaxed); }
 
-    /// The first Embree error since the last call, if any (and clears it).
+    /// The first Embree error since the last call, if any (and clears it). A build cancelled on
+    /// purpose (a progress monitor returning false) is not an error and is not kept.
     std::optional<Error> take_error();
     /// take_error() as a Status whose message starts with `what`.
     Status status(const char* what);

@@ -3,13 +3,11 @@
 // only the listed instances' geometries, but Embree then rebuilds its whole top-level BVH
 // (O(instances)); that cost is what a partitioned strategy would remove.
 
-#include <cstddef>
 #include <vector>
-
-#include <embree3/rtcore.h>
 
 #include "engine/accel/blas_store.h"
 #include "engine/accel/embree_device.h"
+#include "engine/accel/embree_trace.h"
 #include "engine/accel/tlas.h"
 #include "engine/scene/scene.h"
 
@@ -17,37 +15,8 @@ namespace strata {
 
 namespace {
 
-// Ray layouts are passed to Embree without copying.
-static_assert(sizeof(RayHit1) == sizeof(RTCRayHit));
-static_assert(offsetof(RayHit1, tfar) == offsetof(RTCRayHit, ray.tfar));
-static_assert(offsetof(RayHit1, ng_x) == offsetof(RTCRayHit, hit.Ng_x));
-static_assert(offsetof(RayHit1, inst_id) == offsetof(RTCRayHit, hit.instID));
-static_assert(sizeof(RayHit16) == sizeof(RTCRayHit16));
-static_assert(offsetof(RayHit16, tfar) == offsetof(RTCRayHit16, ray.tfar));
-static_assert(offsetof(RayHit16, ng_x) == offsetof(RTCRayHit16, hit.Ng_x));
-static_assert(offsetof(RayHit16, inst_id) == offsetof(RTCRayHit16, hit.instID));
-static_assert(sizeof(Ray16) == sizeof(RTCRay16));
-static_assert(offsetof(Ray16, flags) == offsetof(RTCRay16, flags));
-
-RTCIntersectContext make_context(bool coherent) {
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    ctx.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
-    return ctx;
-}
-
-/// Marks the lanes `valid` leaves out as inactive the way Embree's ray-stream path reads a packet:
-/// tnear > tfar. Without a native 16-wide kernel (no AVX-512) rtcIntersect16 and rtcOccluded16
-/// run through that path, which treats every lane with tnear <= tfar as live whatever the mask
-/// says, so a stale unused lane would be traced (and Debian's Embree asserts on its values).
-template <class Packet>
-void deactivate_unused_lanes(const ValidMask16& valid, Packet& rays) {
-    for (uint32_t i = 0; i < 16; ++i) {
-        if (valid.lanes[i]) continue;
-        rays.tnear[i] = 1.0f;
-        rays.tfar[i] = 0.0f;
-    }
-}
+using embree_trace::deactivate_unused_lanes;
+using embree_trace::make_context;
 
 struct TlasInstance {
     RTCGeometry geometry = nullptr;
@@ -76,6 +45,13 @@ public:
     }
 
     uint64_t instance_count() const override { return m_count; }
+
+    TlasTiers tiers_report() override {
+        TlasTiers t;
+        t.strategy = "embree";
+        t.static_instances = m_count;
+        return t;
+    }
 
     Status update(const Scene& scene, const BlasStore& blas, const TlasDelta& delta) override {
         MemoryScope memory(m_device, MemoryCategory::Tlas);

@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "engine/accel/tlas.h"
+
 namespace strata {
 
 enum class TlasAction : uint8_t { None, Update, Rebuild };
@@ -49,6 +51,7 @@ struct RebuildReport {
     bool planned = false;
     TlasAction tlas_action = TlasAction::None;
     uint64_t tlas_instances = 0;  ///< instances the TLAS holds after the commit
+    TlasTiers tlas;               ///< the strategy's tiers after the commit
     std::vector<MeshBuildEntry> rebuilt;
     std::vector<MeshBuildEntry> refit;
     std::vector<std::string> released;  ///< meshes whose BLAS was freed (removed meshes)
@@ -63,7 +66,7 @@ struct RebuildReport {
     /// True when the commit did no acceleration-structure work at all.
     bool no_accel_work() const {
         return tlas_action == TlasAction::None && rebuilt.empty() && refit.empty() &&
-               released.empty();
+               released.empty() && !tlas.merge_swapped;
     }
     /// One line: "v12 tlas=update(3) rebuilds=1 refits=0 prims=4096 ms=1.25".
     std::string summary() const;

@@ -1,11 +1,17 @@
 #pragma once
 // The top level, behind an interface so its strategy can be replaced. The commit tells a strategy
 // which instances changed (TlasDelta) and asks for an update, or for a full rebuild; launches
-// trace through it. EmbreeTlas keeps one Embree instance geometry per instance slot; a
-// partitioned strategy can later rebuild only the parts that changed.
+// trace through it. Two strategies:
+//   - embree: one Embree instance scene over every instance; any change rebuilds its whole BVH
+//     (O(instances) per commit). Kept as the reference.
+//   - incremental (default): a static tier rebuilt rarely (in the background) and a small dynamic
+//     tier that holds what changed since, so a commit costs O(changed instances); see
+//     incremental_tlas.cpp.
 
 #include <cstdint>
 #include <memory>
+#include <optional>
+#include <string_view>
 #include <vector>
 
 #include "engine/accel/ray.h"
@@ -29,6 +35,43 @@ struct TlasDelta {
     bool empty() const { return changed.empty() && blas_changed.empty(); }
 };
 
+/// Which TLAS strategy an engine uses.
+enum class TlasKind : uint8_t { Incremental, Embree };
+
+/// Wire and command-line name of a strategy: "incremental" or "embree".
+const char* tlas_kind_name(TlasKind k);
+/// The strategy named `name`, if any.
+std::optional<TlasKind> parse_tlas_kind(std::string_view name);
+
+/// When the incremental strategy gives up on its dynamic tier and rebuilds the static one in the
+/// commit itself (see protocol/README.md, "What an instance edit costs").
+struct TlasPolicy {
+    /// Scenes with fewer instances than this keep no dynamic tier: every update rebuilds the
+    /// whole instance BVH, which takes well under a millisecond at this size and traces fastest.
+    uint32_t min_instances = 1024;
+    /// The commit rebuilds the static tier when the dynamic tier would hold more than this
+    /// fraction of the instances (each commit rebuilds the dynamic tier, so it must stay small).
+    double max_dynamic_fraction = 0.10;
+    /// Rebuild the static tier with the edits applied in the background and swap it in at the
+    /// next commit after it finishes. Off: the dynamic tier drains only through the fallback.
+    bool background_merge = true;
+};
+
+/// What the TLAS looks like after a commit, for the rebuild report.
+struct TlasTiers {
+    const char* strategy = "embree";
+    uint64_t static_instances = 0;   ///< in the static tier (embree: every visible instance)
+    uint64_t dynamic_instances = 0;  ///< in the dynamic tier (edited since the static build)
+    uint64_t stale_copies = 0;       ///< static-tier copies of edited instances, skipped by rays
+    /// Why this commit rebuilt the static tier itself: "" (it did not), "requested",
+    /// "small_scene", "dynamic_tier_full" or "first_build".
+    const char* static_rebuild = "";
+    bool merge_swapped = false;    ///< a background merge was swapped in at this commit
+    double merge_build_ms = 0.0;   ///< its background build time (wall)
+    bool merge_cancelled = false;  ///< a running merge was abandoned at this commit
+    bool merge_running = false;    ///< a merge is building in the background after the commit
+};
+
 class TlasStrategy {
 public:
     virtual ~TlasStrategy() = default;
@@ -44,6 +87,16 @@ public:
     virtual Status update(const Scene& scene, const BlasStore& blas, const TlasDelta& delta) = 0;
     /// Discards the TLAS and builds it again from every instance of the scene.
     virtual Status rebuild(const Scene& scene, const BlasStore& blas) = 0;
+    /// Called by a commit before it rebuilds or refits BLASes that instances may reference, so
+    /// no background work reads them while they change.
+    virtual void before_blas_changes() {}
+    /// Called by a commit that has no TLAS work: a strategy may finish background work here
+    /// (commits and launches are serialised, so no launch is tracing). Returns whether it did.
+    virtual bool maintain() { return false; }
+    /// The tiers as they are now; `tiers_report()` also clears the per-commit flags.
+    virtual TlasTiers tiers_report() { return {}; }
+    /// Waits for background work to finish (tests and benchmarks).
+    virtual void wait_for_background() {}
 
     /// Closest hit for one ray (inst_id = instance slot).
     virtual void intersect1(RayHit1& ray, bool coherent) const = 0;
@@ -56,5 +109,10 @@ public:
 /// The Embree top-level scene over instance geometries attached by slot id.
 std::unique_ptr<TlasStrategy> make_embree_tlas(EmbreeDevice& device, BuildPreference prefer,
                                                bool watertight);
+
+/// The two-tier incremental TLAS (incremental_tlas.cpp). The BLASes it traces must be built with
+/// Embree's context-filter flag (BlasStore does when told `context_filter`).
+std::unique_ptr<TlasStrategy> make_incremental_tlas(EmbreeDevice& device, BuildPreference prefer,
+                                                    bool watertight, const TlasPolicy& policy);
 
 }  // namespace strata

@@ -47,6 +47,35 @@ TEST(ReportJson, HasEveryContractMember) {
     EXPECT_EQ(j["ms"], 2.0);
 }
 
+TEST(ReportJson, TheTlasMemberShowsTheIncrementalTiersAndTheMerge) {
+    RebuildReport r = sample(false);
+    r.tlas.strategy = "incremental";
+    r.tlas.static_instances = 1000;
+    r.tlas.dynamic_instances = 3;
+    r.tlas.stale_copies = 2;
+    r.tlas.merge_swapped = true;
+    r.tlas.merge_build_ms = 42.5;
+    r.tlas.merge_running = false;
+    Json j = report_to_json(r)["tlas"];
+    EXPECT_EQ(j["strategy"], "incremental");
+    EXPECT_EQ(j["static_instances"], 1000);
+    EXPECT_EQ(j["dynamic_instances"], 3);
+    EXPECT_EQ(j["stale_copies"], 2);
+    EXPECT_EQ(j["merge"]["swapped"], true);
+    EXPECT_EQ(j["merge"]["build_ms"], 42.5);
+    EXPECT_EQ(j["merge"]["running"], false);
+    EXPECT_FALSE(j["merge"].contains("cancelled"));
+    EXPECT_FALSE(j.contains("static_rebuild"));
+
+    r.tlas.merge_swapped = false;
+    r.tlas.merge_cancelled = true;
+    r.tlas.static_rebuild = "dynamic_tier_full";
+    j = report_to_json(r)["tlas"];
+    EXPECT_EQ(j["static_rebuild"], "dynamic_tier_full");
+    EXPECT_FALSE(j["merge"].contains("build_ms"));
+    EXPECT_EQ(j["merge"]["cancelled"], true);
+}
+
 TEST(ReportJson, APlanHasTheSameShapeWithoutTimes) {
     const Json plan = report_to_json(sample(true));
     const Json done = report_to_json(sample(false));

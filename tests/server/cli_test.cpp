@@ -49,7 +49,7 @@ ScopedEnv clean_env() {
     return ScopedEnv{{"STRATA_HOST", nullptr},       {"STRATA_PORT", nullptr},
                      {"STRATA_DATA", nullptr},       {"STRATA_TOKEN", nullptr},
                      {"STRATA_TOKEN_FILE", nullptr}, {"STRATA_INSECURE", nullptr},
-                     {"STRATA_LOG_LEVEL", nullptr}};
+                     {"STRATA_LOG_LEVEL", nullptr}, {"STRATA_TLAS", nullptr}};
 }
 
 /// Parses `args` (after the program name); fails the test on a usage error.
@@ -83,6 +83,26 @@ TEST(CommandLine, OptionsFallBackToStrataEnvironmentVariables) {
     EXPECT_TRUE(cl.insecure);
     EXPECT_EQ(cl.log_level, "warn");
     EXPECT_EQ(finish_config(cl), "");
+}
+
+TEST(CommandLine, TheTlasStrategyIsIncrementalUnlessToldOtherwise) {
+    auto base = clean_env();
+    EXPECT_EQ(parse({}).config.tlas, "incremental");
+    EXPECT_EQ(parse({"--tlas", "embree"}).config.tlas, "embree");
+    {
+        ScopedEnv env{{"STRATA_TLAS", "embree"}};
+        EXPECT_EQ(parse({}).config.tlas, "embree");
+    }
+    CommandLine cl = parse({"--tlas-max-dynamic-fraction", "0.2", "--tlas-min-instances", "10",
+                            "--tlas-background-merge", "false"});
+    EXPECT_DOUBLE_EQ(cl.config.tlas_max_dynamic_fraction, 0.2);
+    EXPECT_EQ(cl.config.tlas_min_instances, 10u);
+    EXPECT_FALSE(cl.config.tlas_background_merge);
+
+    std::vector<std::string> args = {"strata-server", "--tlas", "partitioned"};
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    EXPECT_TRUE(std::holds_alternative<int>(parse_command_line(int(argv.size()), argv.data())));
 }
 
 TEST(CommandLine, TheCommandLineWinsOverTheEnvironment) {

@@ -1,0 +1,634 @@
+// The incremental TLAS: what a commit costs grows with the instances it changes, not with the
+// instances the scene holds.
+//
+//   static tier   an Embree instance scene over (almost) every visible instance, attached by slot.
+//                 It is rebuilt rarely: in the background by a merge, or in the commit itself
+//                 under the fallback policy (TlasPolicy).
+//   dynamic tier  a small Embree instance scene over the instances added or edited since the
+//                 static tier was built, attached by dense index (m_dyn maps it to the slot).
+//                 Every update rebuilds it, at a cost proportional to its size.
+//   stale copies  an instance edited since the static build still sits in the static tier at its
+//                 old place. Rays skip it through an intersection-context filter that reads a
+//                 per-slot byte; the filter is installed only while stale copies exist.
+//
+// A ray traces the static tier, then the dynamic one with tfar already clamped to the first hit;
+// shadow rays likewise (a ray occluded by the static tier skips the dynamic one). Hits report
+// the instance slot whichever tier they came from.
+//
+// A background merge (tlas_merge.h) builds the next static tier with the edits applied; the first
+// commit after it finishes swaps it in, and the instances whose last edit it covers leave the
+// dynamic tier. Commits and launches are serialised, so a launch traces exactly one version.
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <thread>
+#include <vector>
+
+#include "engine/accel/blas_store.h"
+#include "engine/accel/embree_device.h"
+#include "engine/accel/embree_trace.h"
+#include "engine/accel/tlas.h"
+#include "engine/accel/tlas_merge.h"
+#include "engine/scene/scene.h"
+
+namespace strata {
+
+namespace {
+
+using embree_trace::deactivate_unused_lanes;
+using embree_trace::make_context;
+
+/// The intersect context the static tier is traced with: Embree hands it back to the filter.
+struct StaleContext {
+    RTCIntersectContext ctx;
+    const uint8_t* stale;  ///< by slot: 1 when the static tier's copy is out of date
+};
+
+/// Rejects hits on stale static-tier copies (the instance lives on in the dynamic tier, or not).
+void skip_stale(const RTCFilterFunctionNArguments* args) {
+    const auto* context = reinterpret_cast<const StaleContext*>(args->context);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] == 0) continue;
+        if (context->stale[RTCHitN_instID(args->hit, args->N, i, 0)]) args->valid[i] = 0;
+    }
+}
+
+/// Sets the calling thread's memory category to the TLAS for a scope: background merges are
+/// released from the commit thread, whatever phase it is in.
+struct TlasMemoryScope {
+    TlasMemoryScope() { EmbreeDevice::set_thread_category(int(MemoryCategory::Tlas)); }
+    ~TlasMemoryScope() { EmbreeDevice::set_thread_category(-1); }
+};
+
+/// The hit fields of one ray (ng .. inst_id are contiguous in RayHit1).
+struct SavedHit1 {
+    float ng[3], u, v;
+    uint32_t prim_id, geom_id, inst_id;
+};
+static_assert(sizeof(SavedHit1) == offsetof(RayHit1, inst_id) + 4 - offsetof(RayHit1, ng_x));
+
+class IncrementalTlas final : public TlasStrategy {
+public:
+    IncrementalTlas(EmbreeDevice& device, BuildPreference prefer, bool watertight,
+                    const TlasPolicy& policy)
+        : m_device(device), m_policy(policy) {
+        const int robust = watertight ? RTC_SCENE_FLAG_ROBUST : 0;
+        m_static_setup = {
+            prefer == BuildPreference::FastTrace ? RTC_BUILD_QUALITY_MEDIUM : RTC_BUILD_QUALITY_LOW,
+            RTC_SCENE_FLAG_DYNAMIC | robust};
+        // The dynamic tier is rebuilt at every update and stays small: build speed first.
+        m_dynamic_setup = {RTC_BUILD_QUALITY_LOW, RTC_SCENE_FLAG_DYNAMIC | robust};
+        m_static = new_scene(m_static_setup);
+        m_dynamic = new_scene(m_dynamic_setup);
+        // Empty committed scenes are traceable; launches may come before any instance exists.
+        rtcCommitScene(m_static);
+        rtcCommitScene(m_dynamic);
+    }
+
+    ~IncrementalTlas() override {
+        m_merge.reset();
+        reap_retired(true);
+        release_everything();
+        rtcReleaseScene(m_static);
+        rtcReleaseScene(m_dynamic);
+    }
+
+    const char* name() const override { return "incremental"; }
+
+    bool holds(InstanceHandle h) const override {
+        return h.index < m_slots.size() && m_slots[h.index].held &&
+               m_slots[h.index].generation == h.generation;
+    }
+
+    uint64_t instance_count() const override { return m_held; }
+
+    Status update(const Scene& scene, const BlasStore& blas, const TlasDelta& delta) override {
+        MemoryScope memory(m_device, MemoryCategory::Tlas);
+        ++m_serial;
+        // Step: choose the path. The dynamic tier must stay a small fraction of the scene (every
+        // update rebuilds it); small scenes keep none, since a full build there is cheap.
+        const double instances = double(scene.instances().size());
+        const double dynamic_after =
+            double(m_dyn.size() + delta.changed.size() + delta.blas_changed.size());
+        const char* sync_reason = nullptr;
+        if (instances < double(m_policy.min_instances)) {
+            sync_reason = "small_scene";
+        } else if (dynamic_after > m_policy.max_dynamic_fraction * instances) {
+            sync_reason = m_static_count == 0 ? "first_build" : "dynamic_tier_full";
+        }
+
+        if (sync_reason) {
+            // Step (fallback): fold both tiers into the static one, apply the edits to it in
+            // place, and rebuild it now, like the embree strategy does.
+            absorb_dynamic_tier();
+            for (InstanceHandle h : delta.changed) edit_static(scene, blas, h);
+            for (InstanceHandle h : delta.blas_changed) {
+                if (holds(h)) edit_static(scene, blas, h);
+            }
+            rtcCommitScene(m_static);
+            rtcCommitScene(m_dynamic);
+            m_static_serial = m_serial;
+            m_report.static_rebuild = sync_reason;
+            return m_device.status("rebuilding the static TLAS tier");
+        }
+
+        // Step: edits go to the dynamic tier; their static copies become stale.
+        for (InstanceHandle h : delta.changed) edit_dynamic(scene, blas, h);
+        for (InstanceHandle h : delta.blas_changed) {
+            // The static copy's bounds came from the old BLAS: treat it as an edit.
+            if (holds(h)) edit_dynamic(scene, blas, h);
+        }
+        swap_finished_merge();
+        finish_commit();
+        return m_device.status("updating the TLAS");
+    }
+
+    Status rebuild(const Scene& scene, const BlasStore& blas) override {
+        MemoryScope memory(m_device, MemoryCategory::Tlas);
+        ++m_serial;
+        cancel_merge();
+        release_everything();
+        rtcReleaseScene(m_static);
+        m_static = new_scene(m_static_setup);
+        scene.instances().for_each(
+            [&](InstanceHandle h, const InstanceRecord&) { edit_static(scene, blas, h); });
+        rtcCommitScene(m_static);
+        rtcCommitScene(m_dynamic);
+        m_static_serial = m_serial;
+        m_report.static_rebuild = "requested";
+        return m_device.status("rebuilding the TLAS");
+    }
+
+    void before_blas_changes() override {
+        // A running merge reads BLAS bounds; a finished one no longer reads anything.
+        if (m_merge && !m_merge->done()) cancel_merge();
+    }
+
+    bool maintain() override {
+        if (m_merge && !m_merge->done()) return false;
+        // A finished merge is swapped in; with none running, one starts if edits wait for it
+        // (a merge cancelled by a BLAS change is restarted here).
+        swap_finished_merge();
+        finish_commit();
+        return m_report.merge_swapped;
+    }
+
+    TlasTiers tiers_report() override {
+        TlasTiers t = m_report;
+        t.strategy = "incremental";
+        t.static_instances = m_static_count;
+        t.dynamic_instances = m_dyn.size();
+        t.stale_copies = m_stale_count;
+        t.merge_running = m_merge && !m_merge->done();
+        m_report = TlasTiers{};
+        return t;
+    }
+
+    void wait_for_background() override {
+        if (m_merge) m_merge->join();
+        reap_retired(true);
+    }
+
+    void intersect1(RayHit1& ray, bool coherent) const override {
+        StaleContext context{make_context(coherent), m_stale.data()};
+        if (m_stale_count) context.ctx.filter = skip_stale;
+        rtcIntersect1(m_static, &context.ctx, reinterpret_cast<RTCRayHit*>(&ray));
+        if (m_dyn.empty()) return;
+
+        SavedHit1 saved;
+        std::memcpy(&saved, &ray.ng_x, sizeof saved);
+        ray.inst_id = INVALID_ID;
+        RTCIntersectContext ctx = make_context(coherent);
+        rtcIntersect1(m_dynamic, &ctx, reinterpret_cast<RTCRayHit*>(&ray));
+        if (ray.inst_id == INVALID_ID) {
+            std::memcpy(&ray.ng_x, &saved, sizeof saved);
+        } else {
+            ray.inst_id = m_dyn[ray.inst_id].slot;
+        }
+    }
+
+    void intersect16(const ValidMask16& valid, RayHit16& rays, bool coherent) const override {
+        deactivate_unused_lanes(valid, rays);
+        StaleContext context{make_context(coherent), m_stale.data()};
+        if (m_stale_count) context.ctx.filter = skip_stale;
+        rtcIntersect16(valid.lanes, m_static, &context.ctx, reinterpret_cast<RTCRayHit16*>(&rays));
+        if (m_dyn.empty()) return;
+
+        // Lanes the dynamic tier leaves alone keep their static hit (or miss).
+        RayHit16 saved;
+        constexpr std::size_t HIT_BEGIN = offsetof(RayHit16, ng_x);
+        constexpr std::size_t HIT_BYTES = sizeof(RayHit16) - HIT_BEGIN;
+        std::memcpy(reinterpret_cast<char*>(&saved) + HIT_BEGIN,
+                    reinterpret_cast<const char*>(&rays) + HIT_BEGIN, HIT_BYTES);
+        for (uint32_t i = 0; i < 16; ++i) rays.inst_id[i] = INVALID_ID;
+        RTCIntersectContext ctx = make_context(coherent);
+        rtcIntersect16(valid.lanes, m_dynamic, &ctx, reinterpret_cast<RTCRayHit16*>(&rays));
+        for (uint32_t i = 0; i < 16; ++i) {
+            if (!valid.lanes[i]) {
+                rays.inst_id[i] = saved.inst_id[i];
+            } else if (rays.inst_id[i] != INVALID_ID) {
+                rays.inst_id[i] = m_dyn[rays.inst_id[i]].slot;
+            } else {
+                rays.ng_x[i] = saved.ng_x[i];
+                rays.ng_y[i] = saved.ng_y[i];
+                rays.ng_z[i] = saved.ng_z[i];
+                rays.u[i] = saved.u[i];
+                rays.v[i] = saved.v[i];
+                rays.prim_id[i] = saved.prim_id[i];
+                rays.geom_id[i] = saved.geom_id[i];
+                rays.inst_id[i] = saved.inst_id[i];
+            }
+        }
+    }
+
+    void occluded16(const ValidMask16& valid, Ray16& rays) const override {
+        deactivate_unused_lanes(valid, rays);
+        StaleContext context{make_context(false), m_stale.data()};
+        if (m_stale_count) context.ctx.filter = skip_stale;
+        rtcOccluded16(valid.lanes, m_static, &context.ctx, reinterpret_cast<RTCRay16*>(&rays));
+        if (m_dyn.empty()) return;
+
+        // Occluded lanes have tfar = -inf, so Embree's stream path already reads them as done.
+        ValidMask16 open;
+        bool any = false;
+        for (uint32_t i = 0; i < 16; ++i) {
+            open.lanes[i] =
+                valid.lanes[i] && rays.tfar[i] != -std::numeric_limits<float>::infinity() ? -1 : 0;
+            any |= open.lanes[i] != 0;
+        }
+        if (!any) return;
+        RTCIntersectContext ctx = make_context(false);
+        rtcOccluded16(open.lanes, m_dynamic, &ctx, reinterpret_cast<RTCRay16*>(&rays));
+    }
+
+private:
+    /// What the TLAS knows of one instance slot.
+    struct Slot {
+        uint32_t generation = 0;  ///< of the instance held
+        bool held = false;
+        bool touched = false;  ///< listed in m_touched
+        int32_t dyn = -1;      ///< index in the dynamic tier, -1 none
+        uint64_t edited = 0;   ///< commit serial of the last edit
+    };
+
+    /// One instance of the dynamic tier, with the state a merge copies.
+    struct DynEntry {
+        RTCGeometry geometry = nullptr;
+        uint32_t slot = 0;
+        RTCScene blas = nullptr;
+        std::array<float, 12> transform{};
+        uint32_t mask = 0;
+    };
+
+    RTCScene new_scene(const TlasSceneSetup& setup) {
+        RTCScene s = rtcNewScene(m_device.get());
+        rtcSetSceneBuildQuality(s, RTCBuildQuality(setup.quality));
+        rtcSetSceneFlags(s, RTCSceneFlags(setup.flags));
+        return s;
+    }
+
+    void grow(uint32_t slot) {
+        if (slot < m_slots.size()) return;
+        m_slots.resize(slot + 1);
+        m_stale.resize(slot + 1, 0);
+    }
+
+    RTCGeometry static_geometry(uint32_t slot) const {
+        return slot < m_static_geoms.size() ? m_static_geoms[slot] : nullptr;
+    }
+
+    void set_stale(uint32_t slot, bool stale) {
+        if (bool(m_stale[slot]) == stale) return;
+        m_stale[slot] = stale;
+        if (stale) {
+            ++m_stale_count;
+        } else {
+            --m_stale_count;
+        }
+    }
+
+    /// Records an edit of `slot` since the static build: its static copy (if any) is stale.
+    void touch(uint32_t slot) {
+        Slot& s = m_slots[slot];
+        s.edited = m_serial;
+        if (!s.touched) {
+            s.touched = true;
+            m_touched.push_back(slot);
+        }
+        set_stale(slot, static_geometry(slot) != nullptr);
+    }
+
+    void hold(uint32_t slot, uint32_t generation) {
+        Slot& s = m_slots[slot];
+        if (!s.held) ++m_held;
+        s.held = true;
+        s.generation = generation;
+    }
+
+    void drop(uint32_t slot) {
+        Slot& s = m_slots[slot];
+        if (s.held) --m_held;
+        s.held = false;
+    }
+
+    /// Brings the dynamic tier in line with the scene for `h` (the update path).
+    void edit_dynamic(const Scene& scene, const BlasStore& blas, InstanceHandle h) {
+        grow(h.index);
+        Slot& s = m_slots[h.index];
+        const auto inst = scene.instance(h);
+        if (!inst) {
+            if (!(s.held && s.generation == h.generation)) return;
+            touch(h.index);
+            remove_dynamic(h.index);
+            drop(h.index);
+            return;
+        }
+        const InstanceRecord& r = *inst.value();
+        touch(h.index);
+        hold(h.index, h.generation);
+        if (r.visible) {
+            put_dynamic(h.index, r, blas);
+        } else {
+            remove_dynamic(h.index);
+        }
+    }
+
+    void put_dynamic(uint32_t slot, const InstanceRecord& r, const BlasStore& blas) {
+        RTCScene blas_scene = blas.scene(r.mesh.index);
+        STRATA_CHECK(blas_scene != nullptr);
+        Slot& s = m_slots[slot];
+        if (s.dyn < 0) {
+            DynEntry e;
+            e.geometry = rtcNewGeometry(m_device.get(), RTC_GEOMETRY_TYPE_INSTANCE);
+            e.slot = slot;
+            s.dyn = int32_t(m_dyn.size());
+            rtcAttachGeometryByID(m_dynamic, e.geometry, uint32_t(s.dyn));
+            m_dyn.push_back(e);
+        }
+        DynEntry& e = m_dyn[std::size_t(s.dyn)];
+        if (e.blas != blas_scene) {
+            rtcSetGeometryInstancedScene(e.geometry, blas_scene);
+            e.blas = blas_scene;
+        }
+        e.transform = r.transform.m;
+        e.mask = r.mask;
+        rtcSetGeometryTransform(e.geometry, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, e.transform.data());
+        rtcSetGeometryMask(e.geometry, e.mask);
+        rtcCommitGeometry(e.geometry);
+        m_dyn_dirty = true;
+    }
+
+    /// Takes `slot` out of the dynamic tier; the last entry moves into its index.
+    void remove_dynamic(uint32_t slot) {
+        Slot& s = m_slots[slot];
+        if (s.dyn < 0) return;
+        const auto id = uint32_t(s.dyn);
+        const auto last = uint32_t(m_dyn.size() - 1);
+        rtcDetachGeometry(m_dynamic, id);
+        rtcReleaseGeometry(m_dyn[id].geometry);
+        if (id != last) {
+            rtcDetachGeometry(m_dynamic, last);
+            rtcAttachGeometryByID(m_dynamic, m_dyn[last].geometry, id);
+            m_dyn[id] = m_dyn[last];
+            m_slots[m_dyn[id].slot].dyn = int32_t(id);
+        }
+        m_dyn.pop_back();
+        s.dyn = -1;
+        m_dyn_dirty = true;
+    }
+
+    void attach_static(uint32_t slot, RTCGeometry g) {
+        if (slot >= m_static_geoms.size()) m_static_geoms.resize(slot + 1, nullptr);
+        STRATA_CHECK(m_static_geoms[slot] == nullptr);
+        m_static_geoms[slot] = g;
+        rtcAttachGeometryByID(m_static, g, slot);
+        ++m_static_count;
+    }
+
+    void release_static(uint32_t slot) {
+        RTCGeometry g = static_geometry(slot);
+        if (!g) return;
+        rtcDetachGeometry(m_static, slot);
+        rtcReleaseGeometry(g);
+        m_static_geoms[slot] = nullptr;
+        --m_static_count;
+    }
+
+    /// Moves the dynamic tier into the static one and drops the stale copies, leaving every
+    /// static geometry current; the caller commits. No merge may read the table meanwhile.
+    void absorb_dynamic_tier() {
+        cancel_merge();
+        for (uint32_t slot : m_touched) {
+            if (m_stale[slot]) release_static(slot);
+            set_stale(slot, false);
+            m_slots[slot].touched = false;
+        }
+        m_touched.clear();
+        for (uint32_t id = 0; id < m_dyn.size(); ++id) {
+            rtcDetachGeometry(m_dynamic, id);
+            attach_static(m_dyn[id].slot, m_dyn[id].geometry);  // our reference moves over
+            m_slots[m_dyn[id].slot].dyn = -1;
+        }
+        m_dyn.clear();
+        m_dyn_dirty = false;
+    }
+
+    /// Brings the static tier in line with the scene for `h`, editing geometries in place (the
+    /// fallback and rebuild paths: no merge is running and the caller commits the static tier).
+    void edit_static(const Scene& scene, const BlasStore& blas, InstanceHandle h) {
+        grow(h.index);
+        Slot& s = m_slots[h.index];
+        const auto inst = scene.instance(h);
+        if (s.held && (!inst || s.generation != h.generation)) {
+            if (!inst && s.generation != h.generation) return;  // an older handle: nothing to do
+            release_static(h.index);
+            drop(h.index);
+        }
+        if (!inst) return;
+        const InstanceRecord& r = *inst.value();
+        hold(h.index, h.generation);
+        s.edited = m_serial;
+        if (!r.visible) {
+            release_static(h.index);
+            return;
+        }
+        RTCScene blas_scene = blas.scene(r.mesh.index);
+        STRATA_CHECK(blas_scene != nullptr);
+        RTCGeometry g = static_geometry(h.index);
+        if (!g) {
+            g = rtcNewGeometry(m_device.get(), RTC_GEOMETRY_TYPE_INSTANCE);
+            attach_static(h.index, g);
+        }
+        rtcSetGeometryInstancedScene(g, blas_scene);
+        rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, r.transform.m.data());
+        rtcSetGeometryMask(g, r.mask);
+        rtcCommitGeometry(g);
+    }
+
+    /// Commits the dynamic tier if it changed and starts a merge if there is work for one.
+    void finish_commit() {
+        if (m_dyn_dirty) rtcCommitScene(m_dynamic);
+        m_dyn_dirty = false;
+        if (!m_policy.background_merge || m_merge || m_touched.empty()) return;
+        std::vector<MergeEntry> entries;
+        entries.reserve(m_touched.size());
+        for (uint32_t slot : m_touched) {
+            MergeEntry e;
+            e.slot = slot;
+            const Slot& s = m_slots[slot];
+            if (s.dyn >= 0) {
+                const DynEntry& d = m_dyn[std::size_t(s.dyn)];
+                e.blas = d.blas;
+                e.transform = d.transform;
+                e.mask = d.mask;
+            }
+            entries.push_back(e);
+        }
+        m_merge = std::make_unique<TlasMerge>(m_device, m_static_setup, m_static_geoms,
+                                              std::move(entries), m_serial);
+    }
+
+    void cancel_merge() {
+        if (!m_merge) return;
+        TlasMemoryScope memory;
+        if (!m_merge->done()) m_report.merge_cancelled = true;
+        m_merge.reset();
+    }
+
+    /// Swaps in a finished merge: its static tier replaces the current one, and the instances
+    /// not edited since the merge started leave the dynamic tier.
+    void swap_finished_merge() {
+        if (!m_merge || !m_merge->done()) return;
+        TlasMemoryScope memory;
+        m_merge->join();
+        if (!m_merge->succeeded()) {
+            m_merge.reset();
+            return;
+        }
+        std::vector<RTCGeometry> geoms;
+        RTCScene scene = m_merge->take_scene(geoms);
+        const uint64_t serial = m_merge->serial();
+
+        // Step: the new table. Geometries of unedited instances are shared with the old table
+        // (one reference between them); the ones the merge replaced or dropped go with the old
+        // scene. Releasing that scene drops a reference per instance and frees its BVH: O(all
+        // instances), so a thread of its own does it, off the commit.
+        std::vector<RTCGeometry> replaced;
+        for (const MergeEntry& e : m_merge->entries()) {
+            RTCGeometry old = static_geometry(e.slot);
+            RTCGeometry now = geoms[e.slot];
+            m_static_count += uint64_t(now != nullptr) - uint64_t(old != nullptr);
+            if (old && old != now) replaced.push_back(old);
+        }
+        retire(m_static, std::move(replaced), std::move(m_static_geoms));
+        m_static = scene;
+        m_static_geoms = std::move(geoms);
+        m_static_serial = serial;
+        if (m_static_geoms.size() > m_slots.size()) grow(uint32_t(m_static_geoms.size() - 1));
+
+        // Step: instances the new static tier covers leave the dynamic tier.
+        for (const MergeEntry& e : m_merge->entries()) {
+            Slot& s = m_slots[e.slot];
+            if (s.edited <= serial) {
+                remove_dynamic(e.slot);
+                set_stale(e.slot, false);
+                s.touched = false;
+            } else {
+                set_stale(e.slot, static_geometry(e.slot) != nullptr);
+            }
+        }
+        m_touched.erase(std::remove_if(m_touched.begin(), m_touched.end(),
+                                       [&](uint32_t slot) { return !m_slots[slot].touched; }),
+                        m_touched.end());
+        m_report.merge_swapped = true;
+        m_report.merge_build_ms = m_merge->build_ms();
+        m_merge.reset();
+    }
+
+    /// Releases a replaced static tier on a thread of its own. The commit never waits for one:
+    /// finished ones are joined at the next swap, the rest when the TLAS goes or a test waits.
+    void retire(RTCScene scene, std::vector<RTCGeometry> geoms, std::vector<RTCGeometry> table) {
+        reap_retired(false);
+        auto done = std::make_shared<std::atomic<bool>>(false);
+        std::thread t([scene, done, geoms = std::move(geoms), table = std::move(table)] {
+            {
+                TlasMemoryScope memory;
+                for (RTCGeometry g : geoms) rtcReleaseGeometry(g);
+                rtcReleaseScene(scene);
+            }
+            done->store(true, std::memory_order_release);
+            (void)table;  // freed here too
+        });
+        m_retiring.push_back({std::move(t), std::move(done)});
+    }
+
+    /// Joins the release threads that finished (all of them with `all`).
+    void reap_retired(bool all) {
+        for (auto it = m_retiring.begin(); it != m_retiring.end();) {
+            if (all || it->done->load(std::memory_order_acquire)) {
+                it->thread.join();
+                it = m_retiring.erase(it);
+            } else {
+                ++it;
+            }
+        }
+    }
+
+    void release_everything() {
+        for (uint32_t id = 0; id < m_dyn.size(); ++id) {
+            rtcDetachGeometry(m_dynamic, id);
+            rtcReleaseGeometry(m_dyn[id].geometry);
+        }
+        m_dyn.clear();
+        for (uint32_t slot = 0; slot < m_static_geoms.size(); ++slot) release_static(slot);
+        m_static_geoms.clear();
+        m_slots.clear();
+        m_stale.clear();
+        m_touched.clear();
+        m_held = m_static_count = m_stale_count = 0;
+        m_dyn_dirty = true;
+    }
+
+    EmbreeDevice& m_device;
+    TlasPolicy m_policy;
+    TlasSceneSetup m_static_setup;
+    TlasSceneSetup m_dynamic_setup;
+
+    std::vector<Slot> m_slots;  ///< by instance slot
+    uint64_t m_held = 0;
+    uint64_t m_serial = 0;  ///< commits that changed the TLAS
+
+    RTCScene m_static = nullptr;
+    std::vector<RTCGeometry> m_static_geoms;  ///< by slot; read by a running merge
+    uint64_t m_static_count = 0;
+    uint64_t m_static_serial = 0;  ///< the edits the static tier covers
+    std::vector<uint8_t> m_stale;  ///< by slot; read by skip_stale
+    uint64_t m_stale_count = 0;
+    std::vector<uint32_t> m_touched;  ///< slots edited since the static build
+
+    RTCScene m_dynamic = nullptr;
+    std::vector<DynEntry> m_dyn;  ///< by dynamic-tier geometry id
+    bool m_dyn_dirty = false;
+
+    std::unique_ptr<TlasMerge> m_merge;
+    struct Retiring {
+        std::thread thread;
+        std::shared_ptr<std::atomic<bool>> done;
+    };
+    std::vector<Retiring> m_retiring;  ///< releasing static tiers that merges replaced
+    TlasTiers m_report;                ///< this commit's flags
+};
+
+}  // namespace
+
+std::unique_ptr<TlasStrategy> make_incremental_tlas(EmbreeDevice& device, BuildPreference prefer,
+                                                    bool watertight, const TlasPolicy& policy) {
+    return std::make_unique<IncrementalTlas>(device, prefer, watertight, policy);
+}
+
+}  // namespace strata

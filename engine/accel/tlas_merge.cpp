@@ -1,0 +1,125 @@
+#include "engine/accel/tlas_merge.h"
+
+#include <algorithm>
+
+#include <embree3/rtcore.h>
+#include <tbb/task_arena.h>
+#include <tbb/task_scheduler_observer.h>
+
+#include "engine/core/timer.h"
+
+namespace strata {
+
+namespace {
+
+/// Attributes every Embree allocation made by a thread working in the merge's arena to the TLAS,
+/// whatever phase the commit running beside it is in.
+class TlasMemoryObserver final : public tbb::task_scheduler_observer {
+public:
+    explicit TlasMemoryObserver(tbb::task_arena& arena) : tbb::task_scheduler_observer(arena) {
+        observe(true);
+    }
+    ~TlasMemoryObserver() override { observe(false); }
+    void on_scheduler_entry(bool) override {
+        EmbreeDevice::set_thread_category(int(MemoryCategory::Tlas));
+    }
+    void on_scheduler_exit(bool) override { EmbreeDevice::set_thread_category(-1); }
+};
+
+bool keep_going(void* cancel, double) {
+    return !static_cast<const std::atomic<bool>*>(cancel)->load(std::memory_order_relaxed);
+}
+
+}  // namespace
+
+TlasMerge::TlasMerge(EmbreeDevice& device, TlasSceneSetup setup,
+                     const std::vector<RTCGeometryTy*>& static_geoms,
+                     std::vector<MergeEntry> entries, uint64_t serial)
+    : m_device(device), m_setup(setup), m_entries(std::move(entries)), m_serial(serial) {
+    m_thread = std::thread([this, &static_geoms] {
+        EmbreeDevice::set_thread_category(int(MemoryCategory::Tlas));
+        run(static_geoms);
+        EmbreeDevice::set_thread_category(-1);
+        m_done.store(true, std::memory_order_release);
+    });
+}
+
+TlasMerge::~TlasMerge() {
+    cancel();
+    join();
+    discard();
+}
+
+void TlasMerge::join() {
+    if (m_thread.joinable()) m_thread.join();
+}
+
+void TlasMerge::run(const std::vector<RTCGeometryTy*>& static_geoms) {
+    Stopwatch clock;
+    RTCDevice device = m_device.get();
+
+    // Step: the new geometry table, with new geometries for the edited instances.
+    m_geoms = static_geoms;
+    uint32_t max_slot = 0;
+    for (const MergeEntry& e : m_entries) max_slot = std::max(max_slot, e.slot);
+    if (!m_entries.empty() && max_slot >= m_geoms.size()) m_geoms.resize(max_slot + 1, nullptr);
+    m_created.reserve(m_entries.size());
+    for (const MergeEntry& e : m_entries) {
+        if (!e.blas) {
+            m_geoms[e.slot] = nullptr;
+            continue;
+        }
+        RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
+        rtcSetGeometryInstancedScene(g, e.blas);
+        rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, e.transform.data());
+        rtcSetGeometryMask(g, e.mask);
+        rtcCommitGeometry(g);
+        m_created.push_back(g);
+        m_geoms[e.slot] = g;
+    }
+
+    // Step: attach by slot (a hit's instID is the slot) and build, cancellable throughout.
+    RTCScene scene = rtcNewScene(device);
+    rtcSetSceneBuildQuality(scene, RTCBuildQuality(m_setup.quality));
+    rtcSetSceneFlags(scene, RTCSceneFlags(m_setup.flags));
+    rtcSetSceneProgressMonitorFunction(scene, keep_going, &m_cancel);
+    for (uint32_t slot = 0; slot < m_geoms.size(); ++slot) {
+        if ((slot & 4095) == 0 && m_cancel.load(std::memory_order_relaxed)) break;
+        if (m_geoms[slot]) rtcAttachGeometryByID(scene, m_geoms[slot], slot);
+    }
+    if (!m_cancel.load(std::memory_order_relaxed)) {
+        // Low priority: the arena gets worker threads only when launches and commits (normal
+        // priority) leave some idle. Only the build runs inside it.
+        tbb::task_arena arena(tbb::task_arena::automatic, 1, tbb::task_arena::priority::low);
+        arena.initialize();
+        TlasMemoryObserver observer(arena);
+        arena.execute([&] { rtcCommitScene(scene); });
+    }
+    rtcSetSceneProgressMonitorFunction(scene, nullptr, nullptr);
+    // A cancelled build leaves the scene unusable; any other failure reports through the device.
+    if (m_cancel.load(std::memory_order_relaxed)) {
+        rtcReleaseScene(scene);
+    } else {
+        m_scene = scene;
+    }
+    m_build_ms = clock.ms();
+}
+
+RTCSceneTy* TlasMerge::take_scene(std::vector<RTCGeometryTy*>& geoms) {
+    RTCSceneTy* scene = m_scene;
+    m_scene = nullptr;
+    geoms = std::move(m_geoms);
+    m_geoms.clear();
+    m_created.clear();  // now owned through `geoms`
+    return scene;
+}
+
+void TlasMerge::discard() {
+    if (m_scene) rtcReleaseScene(m_scene);
+    m_scene = nullptr;
+    for (RTCGeometry g : m_created) rtcReleaseGeometry(g);
+    m_created.clear();
+    m_geoms.clear();
+}
+
+}  // namespace strata

@@ -1,0 +1,85 @@
+#pragma once
+// A background build of the incremental TLAS's next static tier: the current static tier's
+// instance geometries with the edits since its build applied (moved and re-added instances get
+// new geometries, removed and hidden ones are left out), built into a new Embree instance scene
+// on a thread of its own in a low-priority TBB arena, so it never holds up edits, commits or
+// launches. The commit that finds it finished swaps it in (incremental_tlas.cpp).
+//
+// What it reads while it runs is never written meanwhile: the static tier's geometry table and
+// geometries only change when a merge is swapped in or after it was cancelled and joined, and
+// BLASes are only rebuilt or refit after TlasStrategy::before_blas_changes cancelled it.
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <thread>
+#include <vector>
+
+#include "engine/accel/embree_device.h"
+
+struct RTCSceneTy;
+struct RTCGeometryTy;
+
+namespace strata {
+
+/// How a TLAS instance scene is built (shared by both tiers and the merge).
+struct TlasSceneSetup {
+    int quality = 0;  ///< RTCBuildQuality
+    int flags = 0;    ///< RTCSceneFlags
+};
+
+/// One instance as the merge must build it.
+struct MergeEntry {
+    uint32_t slot = 0;
+    RTCSceneTy* blas = nullptr;  ///< nullptr: the instance is gone or hidden, leave it out
+    std::array<float, 12> transform{};
+    uint32_t mask = 0;
+};
+
+class TlasMerge {
+public:
+    /// Starts building. `static_geoms` (by slot) must stay unchanged until join() returns.
+    TlasMerge(EmbreeDevice& device, TlasSceneSetup setup,
+              const std::vector<RTCGeometryTy*>& static_geoms, std::vector<MergeEntry> entries,
+              uint64_t serial);
+    /// Cancels, joins and releases whatever was built and not taken.
+    ~TlasMerge();
+    TlasMerge(const TlasMerge&) = delete;
+    TlasMerge& operator=(const TlasMerge&) = delete;
+
+    /// True once the build has ended (finished, failed or cancelled); join() will not wait.
+    bool done() const { return m_done.load(std::memory_order_acquire); }
+    /// Asks the build to stop as soon as it can (Embree's progress monitor checks it).
+    void cancel() { m_cancel.store(true, std::memory_order_relaxed); }
+    /// Waits for the build to end.
+    void join();
+
+    /// After join(): whether a complete scene was built.
+    bool succeeded() const { return m_scene != nullptr; }
+    /// The commit serial whose edits the build covers.
+    uint64_t serial() const { return m_serial; }
+    const std::vector<MergeEntry>& entries() const { return m_entries; }
+    double build_ms() const { return m_build_ms; }
+    /// Takes the built scene and its geometry table (one reference per geometry: those shared
+    /// with the old table carry no new reference, so the caller releases the ones it replaces).
+    RTCSceneTy* take_scene(std::vector<RTCGeometryTy*>& geoms);
+
+private:
+    void run(const std::vector<RTCGeometryTy*>& static_geoms);
+    void discard();
+
+    EmbreeDevice& m_device;
+    TlasSceneSetup m_setup;
+    std::vector<MergeEntry> m_entries;
+    uint64_t m_serial;
+    std::atomic<bool> m_cancel{false};
+    std::atomic<bool> m_done{false};
+    RTCSceneTy* m_scene = nullptr;
+    std::vector<RTCGeometryTy*> m_geoms;    ///< by slot: the new static tier
+    std::vector<RTCGeometryTy*> m_created;  ///< geometries the merge created (ours to release)
+    double m_build_ms = 0.0;
+    std::thread m_thread;
+};
+
+}  // namespace strata

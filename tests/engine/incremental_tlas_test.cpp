@@ -1,0 +1,256 @@
+// The incremental TLAS's tiers as the rebuild report shows them, its fallback policy, the merge
+// swap, and a render that runs while a merge builds and edits keep landing.
+
+#include <atomic>
+#include <chrono>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "tests/engine/hit_frames.h"
+#include "tests/engine/many_instances.h"
+#include "tests/engine/test_util.h"
+
+namespace strata {
+namespace {
+
+EngineConfig incremental(double max_dynamic_fraction = 0.10, bool merges = true,
+                         uint32_t min_instances = 1024) {
+    EngineConfig c;
+    c.accel.tlas = TlasKind::Incremental;
+    c.accel.tlas_policy.max_dynamic_fraction = max_dynamic_fraction;
+    c.accel.tlas_policy.background_merge = merges;
+    c.accel.tlas_policy.min_instances = min_instances;
+    return c;
+}
+
+std::unique_ptr<Engine> engine_with(const EngineConfig& config) {
+    auto engine = Engine::create(config);
+    EXPECT_TRUE(engine.has_value());
+    return std::move(engine.value());
+}
+
+std::string rebuild_reason(const RebuildReport& r) {
+    return r.tlas.static_rebuild;
+}
+
+TEST(IncrementalTlas, TheFirstBuildPutsEveryInstanceInTheStaticTier) {
+    test::ManyInstances gen(1);
+    auto engine = engine_with(incremental());
+    ASSERT_TRUE(engine->apply(gen.initial_batch(2000)).has_value());
+    const RebuildReport r = test::commit_ok(*engine);
+    EXPECT_STREQ(r.tlas.strategy, "incremental");
+    EXPECT_EQ(rebuild_reason(r), "first_build");
+    EXPECT_EQ(r.tlas.static_instances, 2000u);
+    EXPECT_EQ(r.tlas.dynamic_instances, 0u);
+    EXPECT_EQ(r.tlas.stale_copies, 0u);
+    EXPECT_FALSE(r.tlas.merge_running);
+}
+
+TEST(IncrementalTlas, AMoveGoesToTheDynamicTierAndLeavesAStaleCopy) {
+    test::ManyInstances gen(2);
+    auto engine = engine_with(incremental(0.10, false));
+    ASSERT_TRUE(engine->apply(gen.initial_batch(2000)).has_value());
+    test::commit_ok(*engine);
+    ASSERT_TRUE(engine->apply(gen.moves(1)).has_value());
+    const RebuildReport r = test::commit_ok(*engine);
+    EXPECT_EQ(r.tlas_action, TlasAction::Update);
+    EXPECT_EQ(rebuild_reason(r), "");
+    EXPECT_EQ(r.tlas.static_instances, 2000u);
+    EXPECT_EQ(r.tlas.dynamic_instances, 1u);
+    EXPECT_EQ(r.tlas.stale_copies, 1u);
+    EXPECT_EQ(r.tlas_instances, 2000u);
+}
+
+TEST(IncrementalTlas, AFinishedMergeIsSwappedInByTheNextCommitEvenWithoutEdits) {
+    test::ManyInstances gen(3);
+    auto engine = engine_with(incremental());
+    ASSERT_TRUE(engine->apply(gen.initial_batch(2000)).has_value());
+    test::commit_ok(*engine);
+    ASSERT_TRUE(engine->apply(gen.moves(5)).has_value());
+    const RebuildReport moved = test::commit_ok(*engine);
+    EXPECT_TRUE(moved.tlas.merge_running);
+    EXPECT_GE(moved.tlas.dynamic_instances, 1u);
+
+    engine->wait_for_background();
+    const RebuildReport swapped = test::commit_ok(*engine);  // no scene change
+    EXPECT_TRUE(swapped.tlas.merge_swapped);
+    EXPECT_GT(swapped.tlas.merge_build_ms, 0.0);
+    EXPECT_EQ(swapped.tlas.dynamic_instances, 0u);
+    EXPECT_EQ(swapped.tlas.stale_copies, 0u);
+    EXPECT_EQ(swapped.tlas.static_instances, 2000u);
+    EXPECT_FALSE(swapped.no_accel_work());
+
+    const RebuildReport idle = test::commit_ok(*engine);
+    EXPECT_FALSE(idle.tlas.merge_swapped);
+    EXPECT_TRUE(idle.no_accel_work());
+    const EngineCounters c = engine->counters();
+    EXPECT_EQ(c.tlas_merges, 1u);
+    EXPECT_GT(c.tlas_merge_seconds, 0.0);
+}
+
+TEST(IncrementalTlas, EditsMadeWhileAMergeBuildsStayInTheDynamicTierAfterTheSwap) {
+    test::ManyInstances gen(4);
+    auto engine = engine_with(incremental());
+    ASSERT_TRUE(engine->apply(gen.initial_batch(2000)).has_value());
+    test::commit_ok(*engine);
+    // "i7" is moved before the merge starts and again while it builds.
+    test::apply_ok(*engine, SetTransform{"i7", Affine::translation({0, 1, 0})});
+    ASSERT_TRUE(test::commit_ok(*engine).tlas.merge_running);
+    test::apply_ok(*engine, SetTransform{"i7", Affine::translation({0, 2, 0})},
+                   SetTransform{"i8", Affine::translation({0, 3, 0})});
+    engine->wait_for_background();
+    const RebuildReport r = test::commit_ok(*engine);
+    EXPECT_TRUE(r.tlas.merge_swapped);
+    EXPECT_EQ(r.tlas.dynamic_instances, 2u);  // i7 (again) and i8
+    EXPECT_EQ(r.tlas.stale_copies, 2u);
+    engine->wait_for_background();
+    const RebuildReport later = test::commit_ok(*engine);
+    EXPECT_TRUE(later.tlas.merge_swapped);
+    EXPECT_EQ(later.tlas.dynamic_instances, 0u);
+}
+
+TEST(IncrementalTlas, SmallScenesRebuildTheWholeTlasAtEachUpdate) {
+    test::ManyInstances gen(5);
+    auto engine = engine_with(incremental());
+    ASSERT_TRUE(engine->apply(gen.initial_batch(100)).has_value());
+    test::commit_ok(*engine);
+    ASSERT_TRUE(engine->apply(gen.moves(1)).has_value());
+    const RebuildReport r = test::commit_ok(*engine);
+    EXPECT_EQ(rebuild_reason(r), "small_scene");
+    EXPECT_EQ(r.tlas.dynamic_instances, 0u);
+    EXPECT_EQ(r.tlas.stale_copies, 0u);
+    EXPECT_FALSE(r.tlas.merge_running);
+}
+
+TEST(IncrementalTlas, ADynamicTierOverItsLimitIsFoldedIntoTheStaticTier) {
+    test::ManyInstances gen(6);
+    auto engine = engine_with(incremental(0.05, false));
+    ASSERT_TRUE(engine->apply(gen.initial_batch(2000)).has_value());
+    test::commit_ok(*engine);
+    ASSERT_TRUE(engine->apply(gen.moves(60)).has_value());
+    EXPECT_EQ(rebuild_reason(test::commit_ok(*engine)), "");
+    ASSERT_TRUE(engine->apply(gen.moves(60)).has_value());
+    const RebuildReport r = test::commit_ok(*engine);
+    EXPECT_EQ(rebuild_reason(r), "dynamic_tier_full");
+    EXPECT_EQ(r.tlas.dynamic_instances, 0u);
+    EXPECT_EQ(r.tlas.stale_copies, 0u);
+    EXPECT_EQ(engine->counters().tlas_static_rebuilds, 2u);  // the first build and this one
+}
+
+TEST(IncrementalTlas, ARequestedRebuildEmptiesTheDynamicTier) {
+    test::ManyInstances gen(7);
+    auto engine = engine_with(incremental(0.10, false));
+    ASSERT_TRUE(engine->apply(gen.initial_batch(2000)).has_value());
+    test::commit_ok(*engine);
+    ASSERT_TRUE(engine->apply(gen.moves(10)).has_value());
+    test::commit_ok(*engine);
+    test::apply_ok(*engine, MarkDirty{std::nullopt, DirtyAction::Rebuild});
+    const RebuildReport r = test::commit_ok(*engine);
+    EXPECT_EQ(r.tlas_action, TlasAction::Rebuild);
+    EXPECT_EQ(rebuild_reason(r), "requested");
+    EXPECT_EQ(r.tlas.dynamic_instances, 0u);
+    EXPECT_EQ(r.tlas.static_instances, 2000u);
+}
+
+TEST(IncrementalTlas, ARemovedMeshLeavesTheBlasMemoryEvenWhileStaleCopiesReferenceIt) {
+    auto engine = engine_with(incremental(0.10, false));
+    EditBatch b;
+    b.edits.emplace_back(test::mesh_edit("rock", make_box({0.5f, 0.5f, 0.5f})));
+    b.edits.emplace_back(test::mesh_edit("ball", make_sphere(0.5f, 64)));
+    for (int i = 0; i < 2000; ++i)
+        b.edits.emplace_back(
+            test::instance_edit("r" + std::to_string(i), "rock", {float(i), 0, 0}));
+    b.edits.emplace_back(test::instance_edit("ball-1", "ball", {0, 2, 0}));
+    ASSERT_TRUE(engine->apply(std::move(b)).has_value());
+    const RebuildReport before = test::commit_ok(*engine);
+
+    // The ball's instance leaves a stale static copy that still references the ball's BLAS.
+    test::apply_ok(*engine, RemoveInstance{"ball-1"}, RemoveMesh{"ball"});
+    const RebuildReport removed = test::commit_ok(*engine);
+    EXPECT_EQ(removed.tlas.stale_copies, 1u);
+    EXPECT_LT(removed.memory_blas_bytes, before.memory_blas_bytes / 2);
+
+    // Folding the tiers frees the copy and, with it, the BLAS: the TLAS bytes go back down.
+    test::apply_ok(*engine, MarkDirty{std::nullopt, DirtyAction::Rebuild});
+    const RebuildReport rebuilt = test::commit_ok(*engine);
+    EXPECT_EQ(rebuilt.tlas.stale_copies, 0u);
+    EXPECT_EQ(rebuilt.memory_blas_bytes, removed.memory_blas_bytes);
+    EXPECT_LE(rebuilt.memory_tlas_bytes, before.memory_tlas_bytes);
+    EXPECT_GT(rebuilt.memory_tlas_bytes, 0);
+}
+
+TEST(IncrementalTlas, TheEmbreeStrategyStaysSelectable) {
+    EngineConfig c;
+    c.accel.tlas = TlasKind::Embree;
+    test::ManyInstances gen(8);
+    auto engine = engine_with(c);
+    ASSERT_TRUE(engine->apply(gen.initial_batch(2000)).has_value());
+    const RebuildReport r = test::commit_ok(*engine);
+    EXPECT_STREQ(r.tlas.strategy, "embree");
+    EXPECT_EQ(r.tlas.static_instances, 2000u);
+    EXPECT_EQ(parse_tlas_kind("embree"), TlasKind::Embree);
+    EXPECT_EQ(parse_tlas_kind("incremental"), TlasKind::Incremental);
+    EXPECT_FALSE(parse_tlas_kind("partitioned").has_value());
+}
+
+// A launch commits, then traces while holding only the launch mutex: edits keep landing and a
+// merge may finish meanwhile, but it is swapped in only by a later commit. Every frame must
+// show exactly the version its commit reported: the same hits as a fresh build of that version.
+TEST(IncrementalTlas, ARenderDuringAMergeTracesExactlyOneVersion) {
+    constexpr int INSTANCES = 12000;
+    constexpr int BATCHES = 400;
+    test::ManyInstances gen(9);
+    const EditBatch initial = gen.initial_batch(INSTANCES);
+    std::vector<EditBatch> batches;
+    for (int i = 0; i < BATCHES; ++i) batches.push_back(gen.moves(3));
+
+    auto engine = engine_with(incremental(0.25));
+    ASSERT_TRUE(engine->apply(EditBatch(initial)).has_value());
+    test::commit_ok(*engine);
+    const uint64_t base = engine->read([](const Scene& s) { return s.version(); });
+
+    std::atomic<int> next{0};
+    std::atomic<bool> stop{false};
+    std::thread editor([&] {
+        // Edits land while launches trace; each batch moves the version by one.
+        while (!stop.load() && next.load() < BATCHES) {
+            EditBatch b = batches[std::size_t(next.load())];
+            if (!engine->apply(std::move(b)).has_value()) break;
+            next.fetch_add(1);
+            std::this_thread::sleep_for(std::chrono::microseconds(300));
+        }
+    });
+
+    int frames = 0, during_merge = 0;
+    std::vector<std::pair<uint64_t, test::HitFrame>> shown;
+    while (frames < 10) {
+        RebuildReport report;
+        test::HitFrame f = test::render(*engine, 0xFFFFFFFFu, &report, 192, 128);
+        during_merge += report.tlas.merge_running;
+        shown.emplace_back(report.version, std::move(f));
+        ++frames;
+    }
+    stop.store(true);
+    editor.join();
+
+    for (auto& [version, frame] : shown) {
+        ASSERT_GE(version, base);
+        const uint64_t applied = version - base;
+        ASSERT_LE(applied, uint64_t(BATCHES));
+        EngineConfig reference;
+        reference.accel.tlas = TlasKind::Embree;
+        auto scratch = engine_with(reference);
+        ASSERT_TRUE(scratch->apply(EditBatch(initial)).has_value());
+        for (uint64_t i = 0; i < applied; ++i)
+            ASSERT_TRUE(scratch->apply(EditBatch(batches[i])).has_value());
+        const test::HitFrame fresh = test::render(*scratch, 0xFFFFFFFFu, nullptr, 192, 128);
+        const std::string diff = test::compare(frame, fresh);
+        EXPECT_TRUE(diff.empty()) << "frame of version " << version << " differs:\n" << diff;
+    }
+    EXPECT_GE(frames, 2);
+    EXPECT_GE(during_merge, 1);
+}
+
+}  // namespace
+}  // namespace strata
