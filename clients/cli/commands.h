@@ -48,6 +48,12 @@ int run_plan(Transport& t, const Console& c);
 int run_stats(Transport& t, const Console& c);
 int run_scene(Transport& t, const Console& c);
 
+/// `strata snapshot save FILE`: the server's scene into a snapshot file (- for stdout); the file
+/// is written whole or not at all (a temporary file renamed).
+int run_snapshot_save(Transport& t, const Console& c, const std::string& file);
+/// `strata snapshot load FILE`: replaces the server's scene with the file's (- for stdin).
+int run_snapshot_load(Transport& t, const Console& c, const std::string& file);
+
 /// A rebuild report for people: a summary line, then one line per rebuilt, refit or released
 /// mesh.
 std::string format_report(const Json& report);

@@ -66,4 +66,12 @@ Reply EmbeddedTransport::scene() {
     return to_reply(protocol::get_scene(*m_engine));
 }
 
+Reply EmbeddedTransport::get_snapshot() {
+    return to_reply(protocol::get_snapshot(*m_engine));
+}
+
+Reply EmbeddedTransport::put_snapshot(std::string bytes) {
+    return to_reply(protocol::post_snapshot(*m_engine, std::move(bytes), std::nullopt));
+}
+
 }  // namespace strata::cli

@@ -29,6 +29,8 @@ public:
     Reply render(const std::string& body) override;
     Reply stats() override;
     Reply scene() override;
+    Reply get_snapshot() override;
+    Reply put_snapshot(std::string bytes) override;
     std::string describe() const override { return "the embedded engine"; }
 
 private:

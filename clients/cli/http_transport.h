@@ -32,12 +32,15 @@ public:
     Reply render(const std::string& body) override;
     Reply stats() override;
     Reply scene() override;
+    Reply get_snapshot() override;
+    Reply put_snapshot(std::string bytes) override;
     std::string describe() const override { return m_url; }
 
 private:
     HttpTransport(std::string url, std::unique_ptr<httplib::Client> client);
     Reply get(const char* path);
-    Reply post(const char* path, const std::string& body, const std::string& if_match);
+    Reply post(const char* path, const std::string& body, const std::string& if_match,
+               const char* content_type = "application/json");
 
     std::string m_url;
     std::unique_ptr<httplib::Client> m_client;

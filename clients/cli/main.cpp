@@ -147,6 +147,17 @@ int main(int argc, char** argv) {
     CLI::App* stats_cmd = app.add_subcommand("stats", "Print counters and the last report");
     CLI::App* scene_cmd = app.add_subcommand("scene", "Print the scene summary");
 
+    std::string snapshot_file;
+    CLI::App* snapshot_cmd =
+        app.add_subcommand("snapshot", "Save the server's scene to a file, or load one into it");
+    snapshot_cmd->require_subcommand(1);
+    CLI::App* snapshot_save = snapshot_cmd->add_subcommand(
+        "save", "Save the whole scene (GET /v1/scene/snapshot) to FILE (- for stdout)");
+    snapshot_save->add_option("file", snapshot_file, "Snapshot file to write")->required();
+    CLI::App* snapshot_load = snapshot_cmd->add_subcommand(
+        "load", "Replace the server's scene with FILE's (POST /v1/scene/snapshot; - for stdin)");
+    snapshot_load->add_option("file", snapshot_file, "Snapshot file to read")->required();
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -174,5 +185,7 @@ int main(int argc, char** argv) {
     if (plan_cmd->parsed()) return run_plan(t, console);
     if (stats_cmd->parsed()) return run_stats(t, console);
     if (scene_cmd->parsed()) return run_scene(t, console);
+    if (snapshot_save->parsed()) return run_snapshot_save(t, console, snapshot_file);
+    if (snapshot_load->parsed()) return run_snapshot_load(t, console, snapshot_file);
     return USAGE;
 }

@@ -51,6 +51,10 @@ public:
     virtual Reply stats() = 0;
     /// GET /v1/scene.
     virtual Reply scene() = 0;
+    /// GET /v1/scene/snapshot: the scene as a snapshot file.
+    virtual Reply get_snapshot() = 0;
+    /// POST /v1/scene/snapshot: replaces the scene with a snapshot file's.
+    virtual Reply put_snapshot(std::string bytes) = 0;
     /// Where requests go, for messages: "http://127.0.0.1:7070" or "the embedded engine".
     virtual std::string describe() const = 0;
 };

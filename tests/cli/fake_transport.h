@@ -42,7 +42,13 @@ public:
         return json(200, {{"version", version}, {"last_report", last}});
     }
     Reply scene() override { return json(200, {{"version", version}}); }
+    Reply get_snapshot() override { return {200, "", "application/vnd.strata.snapshot", "SNAP", {}}; }
+    Reply put_snapshot(std::string bytes) override {
+        snapshot_posted = std::move(bytes);
+        return json(200, {{"version", ++version}, {"applied", 1}});
+    }
     std::string describe() const override { return "the fake"; }
+    std::string snapshot_posted;
 
     /// A 422 problem answer for every later edit batch.
     void refuse_edits() {
