@@ -88,7 +88,7 @@ TEST(Durability, ARestartBringsBackTheSameVersionIdsAndHits) {
         Server s = start(options_for(dir));
         apply_random(*s.engine, edits, 40, true);
         // Something surely in view, whatever the random batches left (a clear, a camera).
-        version = test::apply_ok(*s.engine, test::mesh_edit("backdrop", make_box(Vec3(2.0f))),
+        version = test::apply_ok(*s.engine, test::mesh_edit("backdrop", make_box(Vec3(6.0f))),
                                  test::instance_edit("backdrop-1", "backdrop"),
                                  SetCamera{Vec3(1, 3, 12), Vec3(0), Vec3(0, 1, 0), 50.0f});
         // A refused batch changes nothing and is not journaled.
