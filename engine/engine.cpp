@@ -2,6 +2,7 @@
 
 #include "engine/core/memory_trim.h"
 #include "engine/core/timer.h"
+#include "engine/durable/journal.h"
 #include "engine/render/frame_encode.h"
 
 namespace strata {
@@ -35,14 +36,29 @@ Result<ApplyResult> Engine::apply(EditBatch&& batch) {
 Result<ApplyResult> Engine::apply(EditBatch&& batch, std::optional<uint64_t> expected_version) {
     const std::size_t count = batch.edits.size();
     const bool frees_meshes = releases_mesh_data(batch);
+    // The record is encoded before the apply moves the arrays out, and outside the lock.
+    std::optional<durable::PendingRecord> record;
+    if (m_journal) record = durable::prepare_record(batch);
+    uint64_t journal_position = 0;
     Result<uint64_t> version = [&]() -> Result<uint64_t> {
         std::unique_lock lock(m_scene_mutex);
         if (expected_version && *expected_version != m_scene.version())
             return failure(ErrorCode::VersionMismatch,
                            "the scene is at version " + std::to_string(m_scene.version()) +
                                ", not " + std::to_string(*expected_version));
-        return m_scene.apply(std::move(batch));
+        if (!m_journal) return m_scene.apply(std::move(batch));
+        return m_scene.apply(std::move(batch), [&](uint64_t next) -> Status {
+            auto position = m_journal->append(*record, next);
+            if (!position) return Unexpected(position.error());
+            journal_position = position.value();
+            return {};
+        });
     }();
+    // Group commit: the fsync happens here, outside the scene lock.
+    if (version && m_journal) {
+        if (Status s = m_journal->wait_durable(journal_position); !s)
+            version = Unexpected(s.error());
+    }
     {
         std::lock_guard stats(m_stats_mutex);
         if (!version) {
@@ -54,6 +70,16 @@ Result<ApplyResult> Engine::apply(EditBatch&& batch, std::optional<uint64_t> exp
     }
     if (frees_meshes) release_free_memory();
     return ApplyResult{version.value(), count};
+}
+
+Status Engine::restore(EditBatch&& scene, uint64_t version) {
+    std::unique_lock lock(m_scene_mutex);
+    if (m_scene.version() != 0)
+        return failure(ErrorCode::Internal, "restore needs an empty engine");
+    auto applied = m_scene.apply(std::move(scene));
+    if (!applied) return Unexpected(applied.error());
+    m_scene.restore_version(version);
+    return {};
 }
 
 Result<RebuildReport> Engine::commit() {

@@ -29,6 +29,10 @@
 
 namespace strata {
 
+namespace durable {
+class Journal;
+}
+
 struct EngineConfig {
     AccelConfig accel;
     SceneBudget budget;  ///< checked when a batch is applied (a TooLarge error beyond)
@@ -51,6 +55,17 @@ public:
     /// the apply happen under one lock, so no other batch can land in between. A mismatch is a
     /// VersionMismatch error and leaves the scene untouched.
     Result<ApplyResult> apply(EditBatch&& batch, std::optional<uint64_t> expected_version);
+
+    /// From now on every applied batch is written to `journal` (engine/durable/journal.h) under
+    /// the scene lock before apply() returns, and apply() waits until it is as durable as the
+    /// journal's fsync mode promises. A batch the journal cannot store is not applied (a Storage
+    /// error). Call before serving; the journal must outlive the engine's use of it.
+    void set_journal(durable::Journal* journal) { m_journal = journal; }
+    durable::Journal* journal() const { return m_journal; }
+
+    /// Recovery: loads a whole-scene batch into this empty engine and sets the version it had
+    /// (a snapshot's). Not journaled.
+    Status restore(EditBatch&& scene, uint64_t version);
 
     /// Brings the acceleration graph in line with the scene, doing the least work.
     Result<RebuildReport> commit();
@@ -128,6 +143,7 @@ private:
     mutable std::shared_mutex m_scene_mutex;
     Scene m_scene;
     std::unique_ptr<AccelGraph> m_accel;
+    durable::Journal* m_journal = nullptr;
     FrameState m_frame;
     Renderer m_renderer;  ///< guarded by the launch mutex (it holds the accumulation state)
 

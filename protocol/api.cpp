@@ -3,6 +3,7 @@
 #include <charconv>
 #include <chrono>
 
+#include "protocol/durable_json.h"
 #include "protocol/edit_parser.h"
 #include "protocol/render_parser.h"
 #include "protocol/report_json.h"
@@ -232,7 +233,7 @@ ApiResponse get_scene_object(const Engine& engine, SceneObject kind, std::string
     return with_etag(json_response(200, *doc), version);
 }
 
-ApiResponse get_stats(const Engine& engine) {
+ApiResponse get_stats(const Engine& engine, const durable::DurableStats* durable) {
     const EngineCounters counters = engine.counters();
     const RebuildReport last = engine.last_report();
     const uint64_t version = scene_version(engine);
@@ -242,7 +243,9 @@ ApiResponse get_stats(const Engine& engine) {
                       {"memory_bytes",
                        {{"blas", engine.memory_bytes(MemoryCategory::Blas)},
                         {"tlas", engine.memory_bytes(MemoryCategory::Tlas)}}}};
-    return with_etag(json_response(200, doc), version);
+    Json out = doc;
+    out["durability"] = durable ? durable_stats_to_json(*durable) : Json(nullptr);
+    return with_etag(json_response(200, out), version);
 }
 
 }  // namespace strata::protocol

@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "engine/durable/durable_stats.h"
 #include "engine/engine.h"
 #include "protocol/json_document.h"
 #include "protocol/problem.h"
@@ -88,7 +89,18 @@ ApiResponse get_pick(Engine& engine, const std::multimap<std::string, std::strin
 /// POST /v1/pick: what lies under each of a list of pixels.
 ApiResponse post_pick(Engine& engine, std::string_view body, const ApiLimits& limits);
 
-/// GET /v1/stats.
-ApiResponse get_stats(const Engine& engine);
+/// GET /v1/stats; `durable`, when the server has a data directory, adds its "durability" member.
+ApiResponse get_stats(const Engine& engine, const durable::DurableStats* durable = nullptr);
+
+/// The content type of snapshot files (GET and POST /v1/scene/snapshot).
+inline constexpr const char* SNAPSHOT_CONTENT_TYPE = "application/vnd.strata.snapshot";
+/// GET /v1/scene/snapshot: the whole scene as a snapshot file (engine/durable/journal_format.h),
+/// taken under one read lock; its ETag is the version it holds.
+ApiResponse get_snapshot(const Engine& engine);
+/// POST /v1/scene/snapshot: replaces the scene with the snapshot's, atomically, as one batch
+/// (a Clear, then the snapshot's edits): a new version, journaled like any batch. The snapshot's
+/// own version is not reused. `if_match` as for post_edits.
+ApiResponse post_snapshot(Engine& engine, std::string body,
+                          std::optional<std::string_view> if_match);
 
 }  // namespace strata::protocol

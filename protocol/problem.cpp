@@ -64,6 +64,7 @@ ProblemType type_of(ErrorCode code) {
         case ErrorCode::VersionMismatch:
             return ProblemType::VersionMismatch;
         case ErrorCode::Cancelled:
+        case ErrorCode::Storage:  // the journal could not take the batch: nothing was applied
             return ProblemType::Unavailable;
         case ErrorCode::StaleHandle:
         case ErrorCode::Internal:

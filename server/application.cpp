@@ -21,8 +21,13 @@ double ms_since(std::chrono::steady_clock::time_point t) {
 }  // namespace
 
 Application::Application(const ServerConfig& config, Engine& engine, ServerMetrics& metrics,
-                         const FrontEndCounters* front_end, std::function<bool()> ready)
-    : m_config(config), m_engine(engine), m_metrics(metrics), m_ready(std::move(ready)) {
+                         const FrontEndCounters* front_end, std::function<bool()> ready,
+                         durable::DurableStore* store)
+    : m_config(config),
+      m_engine(engine),
+      m_metrics(metrics),
+      m_ready(std::move(ready)),
+      m_store(store) {
     m_routes.set_payload_max_length(m_config.max_body_bytes);
     m_routes.set_keep_alive_timeout(m_config.keep_alive_timeout_s);
     m_routes.set_keep_alive_max_count(m_config.max_keep_alive_requests);
@@ -75,7 +80,7 @@ void Application::install_routes(const FrontEndCounters* front_end) {
         protocol::ApiLimits{
             protocol::JsonLimits{m_config.max_json_depth, m_config.max_array_elements},
             m_config.max_pixels, m_config.render_timeout_s},
-        front_end});
+        front_end, m_store});
     Router router(m_routes, m_config.max_body_bytes);
     add_api_routes(router, *m_context);
     // The front end answers /livez and /readyz itself; these routes make them known to the
@@ -85,8 +90,8 @@ void Application::install_routes(const FrontEndCounters* front_end) {
     });
     router.get("/readyz", [this](const httplib::Request&, httplib::Response& res) {
         if (m_ready()) return send_json(res, 200, {{"status", "ready"}});
-        send_problem(
-            res, protocol::make_problem(ProblemType::Unavailable, "the server is shutting down"));
+        send_problem(res, protocol::make_problem(ProblemType::Unavailable,
+                                                 "the server is starting or shutting down"));
     });
     router.finish();
 }

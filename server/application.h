@@ -13,6 +13,10 @@
 #include "server/route_table.h"
 #include "server/server_config.h"
 
+namespace strata::durable {
+class DurableStore;
+}
+
 namespace strata::server {
 
 struct FrontEndCounters;
@@ -23,7 +27,8 @@ public:
     /// `ready` answers whether the server takes requests (GET /readyz); `front_end`, when given,
     /// adds the connection counters to /metrics. All must outlive the application.
     Application(const ServerConfig& config, Engine& engine, ServerMetrics& metrics,
-                const FrontEndCounters* front_end, std::function<bool()> ready);
+                const FrontEndCounters* front_end, std::function<bool()> ready,
+                durable::DurableStore* store = nullptr);
     ~Application();
     Application(const Application&) = delete;
     Application& operator=(const Application&) = delete;
@@ -43,6 +48,7 @@ private:
     Engine& m_engine;
     ServerMetrics& m_metrics;
     std::function<bool()> m_ready;
+    durable::DurableStore* m_store;
     std::unique_ptr<ServerContext> m_context;  ///< declared before m_routes: handlers refer to it
     RouteTable m_routes;
 };

@@ -33,7 +33,27 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
                    "through TBB regardless)")
         ->check(CLI::Range(1, 1024));
     app.add_option("--data", c.data_dir,
-                   "Data directory (reserved for durability; unused for now)");
+                   "Data directory: every acknowledged edit batch is journaled there and the scene "
+                   "is snapshotted in the background; a restart recovers it. Created if missing; "
+                   "one server per directory (a lock file). Empty: the scene lives in memory "
+                   "only");
+    app.add_option("--fsync", c.fsync,
+                   "When the journal reaches the disk: 'always' before each answer (concurrent "
+                   "batches share an fsync), 'batch' at most every --fsync-interval-ms (a crash "
+                   "of the machine may lose that much acknowledged work), 'off' when the OS "
+                   "decides (a process crash loses nothing, a power cut may)")
+        ->check(CLI::IsMember({"always", "batch", "off"}));
+    app.add_option("--fsync-interval-ms", c.fsync_interval_ms,
+                   "With --fsync batch: the longest an acknowledged batch waits for its fsync")
+        ->check(CLI::Range(1, 60000));
+    app.add_option("--snapshot-threshold-kb", c.snapshot_threshold_kb,
+                   "Journal growth, in KiB, after which a snapshot is written in the background "
+                   "and the journal before it removed")
+        ->check(CLI::Range(uint64_t(1), uint64_t(1) << 30));
+    app.add_flag("--recover-truncate", c.recover_truncate,
+                 "At start, if the journal or a snapshot is damaged before its end, keep what "
+                 "precedes the damage, set the rest aside (*.damaged) and start, instead of "
+                 "refusing to");
     app.add_option("--max-body-mb", max_body_mb, "Largest request body, in MiB (413 beyond)")
         ->check(CLI::Range(1, 4096));
     app.add_option("--max-pixels", c.max_pixels,

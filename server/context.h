@@ -6,6 +6,10 @@
 #include "server/metrics.h"
 #include "server/server_config.h"
 
+namespace strata::durable {
+class DurableStore;
+}
+
 namespace strata::server {
 
 struct FrontEndCounters;
@@ -16,6 +20,7 @@ struct ServerContext {
     ServerMetrics& metrics;
     protocol::ApiLimits api_limits;
     const FrontEndCounters* front_end = nullptr;  ///< connection counters for /metrics
+    durable::DurableStore* store = nullptr;       ///< the data directory; null without --data
 };
 
 class Router;

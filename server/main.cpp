@@ -3,9 +3,12 @@
 #include <sys/resource.h>
 
 #include <csignal>
+#include <thread>
 
 #include <spdlog/spdlog.h>
 
+#include "engine/core/timer.h"
+#include "engine/durable/durable_store.h"
 #include "engine/scene/demo_scene.h"
 #include "server/cli.h"
 #include "server/healthcheck.h"
@@ -30,11 +33,51 @@ rlim_t raise_file_limit() {
     return lim.rlim_cur;
 }
 
+durable::FsyncMode fsync_mode(const std::string& name) {
+    if (name == "batch") return durable::FsyncMode::Batch;
+    if (name == "off") return durable::FsyncMode::Off;
+    return durable::FsyncMode::Always;
+}
+
+/// Locks and recovers --data into `engine`; null (and a logged reason) when it cannot.
+std::unique_ptr<durable::DurableStore> open_data_dir(const server::ServerConfig& c,
+                                                     Engine& engine, bool& failed) {
+    failed = false;
+    if (c.data_dir.empty()) {
+        spdlog::warn("no --data directory: the scene lives in memory only and is lost on exit");
+        return nullptr;
+    }
+    durable::StoreOptions o;
+    o.dir = c.data_dir;
+    o.journal.mode = fsync_mode(c.fsync);
+    o.journal.fsync_interval_ms = c.fsync_interval_ms;
+    o.recovery.truncate_damage = c.recover_truncate;
+    o.snapshot_threshold_bytes = c.snapshot_threshold_kb << 10;
+    Stopwatch clock;
+    auto store = durable::DurableStore::open(o, engine);
+    if (!store) {
+        spdlog::critical("cannot use the data directory: {}", store.error().message);
+        failed = true;
+        return nullptr;
+    }
+    const durable::RecoveryResult& r = store.value()->recovery();
+    for (const std::string& note : r.notes) spdlog::warn("recovery: {}", note);
+    spdlog::info(
+        "data directory {}: recovered version {} ({}, {} journal records replayed) in {:.1f} ms; "
+        "fsync {}",
+        c.data_dir, r.version,
+        r.loaded_snapshot ? "snapshot " + std::to_string(r.snapshot_version) : "no snapshot",
+        r.records_replayed, clock.ms(), c.fsync);
+    return std::move(store.value());
+}
+
 /// Serves until SIGTERM or SIGINT; returns the process exit code.
 int serve(server::CommandLine& cl) {
     server::ShutdownSignals signals;  // before any thread starts, so that all inherit the mask
     // Writes to a connection the client closed fail with EPIPE instead of killing the process.
     std::signal(SIGPIPE, SIG_IGN);
+    // A file size limit (ulimit -f) makes journal writes fail with EFBIG instead of killing us.
+    std::signal(SIGXFSZ, SIG_IGN);
     const rlim_t files = raise_file_limit();
     if (files != RLIM_INFINITY && files < cl.config.max_connections + 64) {
         spdlog::warn(
@@ -55,7 +98,13 @@ int serve(server::CommandLine& cl) {
         spdlog::critical("cannot start the engine: {}", engine.error().describe());
         return 1;
     }
-    if (cl.config.demo) {
+    bool data_failed = false;
+    auto store = open_data_dir(cl.config, *engine.value(), data_failed);
+    if (data_failed) return 1;
+    const uint64_t recovered = engine.value()->read([](const Scene& s) { return s.version(); });
+    if (cl.config.demo && recovered != 0) {
+        spdlog::info("--demo ignored: the data directory holds a scene (version {})", recovered);
+    } else if (cl.config.demo) {
         auto applied = engine.value()->apply(make_demo_scene());
         if (!applied) {
             spdlog::critical("demo scene rejected: {}", applied.error().describe());
@@ -64,12 +113,24 @@ int serve(server::CommandLine& cl) {
         spdlog::info("demo scene loaded (version {})", applied.value().version);
     }
 
-    server::Server http(cl.config, *engine.value());
+    server::Server http(cl.config, *engine.value(), store.get());
     auto port = http.bind();
     if (!port) {
         spdlog::critical("{}", port.error().message);
         return 1;
     }
+    // /readyz answers 503 until the recovered scene's acceleration structures are built;
+    // requests that arrive meanwhile wait for the build (the engine's launch lock).
+    http.set_starting(true);
+    std::thread rebuild([&] {
+        Stopwatch clock;
+        auto built = engine.value()->commit();
+        if (!built) spdlog::error("building the recovered scene failed: {}",
+                                  built.error().describe());
+        if (store) store->set_rebuild_seconds(clock.ms() / 1000.0);
+        if (recovered != 0) spdlog::info("recovered scene built in {:.1f} ms", clock.ms());
+        http.set_starting(false);
+    });
     signals.start([&http, &cl](int signo) {
         spdlog::info(
             "{} received: finishing in-flight requests (renders still running after {} "
@@ -82,6 +143,8 @@ int serve(server::CommandLine& cl) {
                  cl.config.token.empty() ? "no authentication"
                                          : "bearer token required, from " + cl.token_source);
     http.listen();
+    rebuild.join();
+    store.reset();  // the journal's last fsync, before the engine goes
     spdlog::info("stopped");
     return 0;
 }

@@ -123,4 +123,34 @@ std::string ServerMetrics::prometheus_text(const Engine& engine) const {
     return out;
 }
 
+void write_durable_metrics(std::string& out, const durable::DurableStats& stats) {
+    using durable::DurableUnit;
+    for (const durable::DurableCounterSpec& spec : durable::DURABLE_COUNTERS) {
+        std::string name = "strata_durable_" + std::string(spec.name);
+        double value = spec.value(stats);
+        if (spec.unit == DurableUnit::Milliseconds) {
+            // Prometheus wants base units.
+            name.replace(name.size() - 3, 3, "_seconds");
+            value /= 1000.0;
+        }
+        if (spec.cumulative) name += "_total";
+        metric(out, name.c_str(), spec.cumulative ? "counter" : "gauge",
+               std::string(spec.help).c_str(), value);
+    }
+    metric(out, "strata_durable_failed", "gauge",
+           "1 when an fsync failed and the journal refuses batches.", stats.failed ? 1.0 : 0.0);
+    const char* name = "strata_durable_fsync_duration_seconds";
+    header(out, name, "histogram", "Wall time of journal fsyncs.");
+    uint64_t cumulative = 0;
+    for (std::size_t i = 0; i < stats.fsync_buckets.size(); ++i) {
+        cumulative += stats.fsync_buckets[i];
+        const std::string le =
+            i < durable::FSYNC_BOUNDS.size() ? number(durable::FSYNC_BOUNDS[i]) : "+Inf";
+        out += std::string(name) + "_bucket{le=\"" + le + "\"} " + std::to_string(cumulative) +
+               '\n';
+    }
+    out += std::string(name) + "_sum " + number(stats.fsync_seconds) + '\n';
+    out += std::string(name) + "_count " + std::to_string(cumulative) + '\n';
+}
+
 }  // namespace strata::server

@@ -9,6 +9,7 @@
 #include <mutex>
 #include <string>
 
+#include "engine/durable/durable_stats.h"
 #include "engine/engine.h"
 
 namespace strata::server {
@@ -44,5 +45,8 @@ public:
 private:
     std::array<std::atomic<uint64_t>, 5> m_responses{};
 };
+
+/// Appends the data directory's numbers (strata_durable_*) and the fsync latency histogram.
+void write_durable_metrics(std::string& out, const durable::DurableStats& stats);
 
 }  // namespace strata::server

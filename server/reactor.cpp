@@ -280,7 +280,7 @@ void Reactor::set_reading(Connection& c, Clock::time_point now) {
 
 void Reactor::advance(Connection& c, Clock::time_point now) {
     for (;;) {
-        ReaderStep step = c.reader.next({m_draining, c.restricted});
+        ReaderStep step = c.reader.next({m_draining, c.restricted, m_starting.load()});
         account(c);
         switch (step.kind) {
             case ReaderStep::Kind::NeedMore:

@@ -54,6 +54,9 @@ public:
     void drain();
     /// True once drain() was called.
     bool draining() const { return m_drain_requested.load(); }
+    /// While true, /readyz answers 503 "starting" (requests are still served). Thread-safe.
+    void set_starting(bool starting) { m_starting.store(starting); }
+    bool starting() const { return m_starting.load(); }
     /// A worker's answer for connection `conn`; `close`: close after writing it. Thread-safe.
     void complete(uint64_t conn, std::string response, bool close);
 
@@ -103,6 +106,7 @@ private:
     std::vector<char> m_scratch;
 
     std::atomic<bool> m_drain_requested{false};
+    std::atomic<bool> m_starting{false};
     bool m_draining = false;
     Clock::time_point m_grace_deadline{};
     Clock::time_point m_hard_deadline{};

@@ -129,12 +129,16 @@ ReaderStep RequestReader::on_head(const ReaderSituation& situation) {
     // load, the connection limits or the shutdown state.
     const bool body = m_head.framing != BodyFraming::None;
     if (is_health_path(m_target.path) && (m_head.method == "GET" || m_head.method == "HEAD")) {
-        const bool ready = m_target.path == "/livez" || !situation.draining;
+        const bool ready =
+            m_target.path == "/livez" || (!situation.draining && !situation.starting);
         protocol::ApiResponse r =
             ready ? protocol::json_response(
                         200, {{"status", m_target.path == "/livez" ? "ok" : "ready"}})
                   : protocol::problem_response(protocol::make_problem(
-                        ProblemType::Unavailable, "the server is shutting down"));
+                        ProblemType::Unavailable,
+                        situation.draining ? "the server is shutting down"
+                                           : "the server is starting: the recovered scene's "
+                                             "acceleration structures are being built"));
         ReaderStep step;
         step.kind = ReaderStep::Kind::Answer;
         step.answer = {r.status, m_head.method, m_target.path, {}, body || !m_head.keep_alive};

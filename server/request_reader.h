@@ -25,6 +25,7 @@ struct ReaderConfig {
 struct ReaderSituation {
     bool draining = false;    ///< shutting down: only health checks are answered
     bool restricted = false;  ///< the connection is over a connection limit: health checks only
+    bool starting = false;    ///< acceleration structures not built yet: /readyz answers 503
 };
 
 /// A complete request for a worker.

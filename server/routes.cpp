@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include "engine/core/timer.h"
+#include "engine/durable/durable_store.h"
 #include "protocol/api.h"
 #include "server/context.h"
 #include "server/front_end_counters.h"
@@ -103,12 +104,24 @@ void add_api_routes(Router& router, ServerContext& ctx) {
     router.post("/v1/pick", [&ctx](const Req&, Res& res, std::string&& body) {
         send(res, protocol::post_pick(ctx.engine, body, ctx.api_limits));
     });
-    router.get("/v1/stats",
-               [&ctx](const Req&, Res& res) { send(res, protocol::get_stats(ctx.engine)); });
+    router.get("/v1/scene/snapshot",
+               [&ctx](const Req&, Res& res) { send(res, protocol::get_snapshot(ctx.engine)); });
+    router.post("/v1/scene/snapshot", [&ctx](const Req& req, Res& res, std::string&& body) {
+        const std::optional<std::string> if_match =
+            req.has_header("If-Match") ? std::optional(req.get_header_value("If-Match"))
+                                       : std::nullopt;
+        send(res, protocol::post_snapshot(ctx.engine, std::move(body), if_match));
+    });
+    router.get("/v1/stats", [&ctx](const Req&, Res& res) {
+        if (!ctx.store) return send(res, protocol::get_stats(ctx.engine));
+        const durable::DurableStats durable = ctx.store->stats();
+        send(res, protocol::get_stats(ctx.engine, &durable));
+    });
     router.get("/metrics", [&ctx](const Req&, Res& res) {
         res.status = 200;
         std::string text = ctx.metrics.prometheus_text(ctx.engine);
         if (ctx.front_end) ctx.front_end->write_prometheus(text);
+        if (ctx.store) write_durable_metrics(text, ctx.store->stats());
         res.set_content(text, "text/plain; version=0.0.4; charset=utf-8");
     });
 }

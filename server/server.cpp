@@ -8,7 +8,7 @@
 
 namespace strata::server {
 
-Server::Server(ServerConfig config, Engine& engine)
+Server::Server(ServerConfig config, Engine& engine, durable::DurableStore* store)
     : m_config(std::move(config)), m_engine(engine) {
     m_reactor = std::make_unique<Reactor>(
         m_config, m_metrics,
@@ -27,7 +27,7 @@ Server::Server(ServerConfig config, Engine& engine)
             });
         });
     m_app = std::make_unique<Application>(m_config, m_engine, m_metrics, &m_reactor->counters(),
-                                          [this] { return ready(); });
+                                          [this] { return ready(); }, store);
     m_workers = std::make_unique<WorkerPool>(m_config.threads);
 }
 
@@ -58,7 +58,11 @@ void Server::stop() {
 }
 
 bool Server::ready() const {
-    return m_listening && !m_reactor->draining();
+    return m_listening && !m_reactor->draining() && !m_reactor->starting();
+}
+
+void Server::set_starting(bool starting) {
+    m_reactor->set_starting(starting);
 }
 
 }  // namespace strata::server

@@ -19,6 +19,10 @@
 #include "server/metrics.h"
 #include "server/server_config.h"
 
+namespace strata::durable {
+class DurableStore;
+}
+
 namespace strata::server {
 
 class Application;
@@ -27,7 +31,8 @@ class WorkerPool;
 
 class Server {
 public:
-    Server(ServerConfig config, Engine& engine);
+    /// `store`, when given, is the data directory (GET /v1/stats, /metrics, snapshots).
+    Server(ServerConfig config, Engine& engine, durable::DurableStore* store = nullptr);
     ~Server();
     Server(const Server&) = delete;
     Server& operator=(const Server&) = delete;
@@ -41,8 +46,10 @@ public:
     /// Starts the graceful shutdown. Thread-safe; idempotent; callable before listen() starts.
     void stop();
 
-    /// True while serving and not shutting down (GET /readyz).
+    /// True while serving, not starting and not shutting down (GET /readyz).
     bool ready() const;
+    /// While true, /readyz answers 503: the recovered scene is still being built. Thread-safe.
+    void set_starting(bool starting);
     int port() const { return m_port; }
     ServerMetrics& metrics() { return m_metrics; }
 

@@ -11,7 +11,13 @@ struct ServerConfig {
     std::string host = "127.0.0.1";
     int port = 7070;          ///< 0: any free port (tests)
     std::size_t threads = 8;  ///< HTTP worker threads (rendering uses TBB's own pool)
-    std::string data_dir;     ///< reserved for durability; unused for now
+    std::string data_dir;     ///< journal and snapshots (engine/durable); empty: memory only
+
+    // Durability (engine/durable/durable_store.h), with --data only.
+    std::string fsync = "always";       ///< always | batch | off
+    int fsync_interval_ms = 100;        ///< batch: longest a written batch waits for its fsync
+    uint64_t snapshot_threshold_kb = 64 * 1024;  ///< journal growth that triggers a snapshot
+    bool recover_truncate = false;      ///< start past damage, setting the rest aside
     std::size_t max_body_bytes = 256ull << 20;
     uint64_t max_pixels = 16ull << 20;  ///< width * height of one render
     std::size_t max_json_depth = 64;

@@ -223,4 +223,63 @@ int run_scene(Transport& t, const Console& c) {
     return OK;
 }
 
+int run_snapshot_save(Transport& t, const Console& c, const std::string& file) {
+    const Reply reply = t.get_snapshot();
+    if (!reply.ok()) return refused(c, t, "snapshot save", reply);
+    if (file == "-") {
+        c.out.write(reply.body.data(), std::streamsize(reply.body.size()));
+        return OK;
+    }
+    const std::string tmp = file + ".tmp";
+    {
+        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+        out.write(reply.body.data(), std::streamsize(reply.body.size()));
+        if (!out.flush()) {
+            c.err << "strata: cannot write '" << tmp << "'\n";
+            std::remove(tmp.c_str());
+            return BAD_INPUT;
+        }
+    }
+    if (std::rename(tmp.c_str(), file.c_str()) != 0) {
+        c.err << "strata: cannot rename '" << tmp << "' to '" << file << "'\n";
+        std::remove(tmp.c_str());
+        return BAD_INPUT;
+    }
+    const auto version = etag_version(reply);
+    if (c.json) {
+        c.out << Json{{"file", file}, {"bytes", reply.body.size()},
+                      {"version", version ? Json(*version) : Json(nullptr)}}
+                     .dump()
+              << '\n';
+    } else {
+        c.out << "saved version " << (version ? std::to_string(*version) : "?") << " to " << file
+              << " (" << reply.body.size() << " bytes)\n";
+    }
+    return OK;
+}
+
+int run_snapshot_load(Transport& t, const Console& c, const std::string& file) {
+    std::string bytes;
+    if (file == "-") {
+        bytes.assign(std::istreambuf_iterator<char>(std::cin), {});
+    } else {
+        std::ifstream in(file, std::ios::binary);
+        if (!in) {
+            c.err << "strata: cannot open '" << file << "'\n";
+            return BAD_INPUT;
+        }
+        bytes.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    int code = OK;
+    const auto doc = answer(c, t, "snapshot load", t.put_snapshot(std::move(bytes)), code);
+    if (!doc) return code;
+    if (c.json) {
+        c.out << doc->dump() << '\n';
+    } else {
+        c.out << "loaded " << file << ": the scene is now version " << doc->value("version", 0)
+              << '\n';
+    }
+    return OK;
+}
+
 }  // namespace strata::cli

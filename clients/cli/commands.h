@@ -75,6 +75,11 @@ struct PickArgs {
 };
 /// `strata pick X Y --width W --height H`: what lies under that pixel of a W x H frame.
 int run_pick(Transport& t, const Console& c, const PickArgs& args);
+/// `strata snapshot save FILE`: the server's scene into a snapshot file (- for stdout); the file
+/// is written whole or not at all (a temporary file renamed).
+int run_snapshot_save(Transport& t, const Console& c, const std::string& file);
+/// `strata snapshot load FILE`: replaces the server's scene with the file's (- for stdin).
+int run_snapshot_load(Transport& t, const Console& c, const std::string& file);
 
 /// A rebuild report for people: a summary line, then one line per rebuilt, refit or released
 /// mesh.

@@ -100,4 +100,12 @@ Reply EmbeddedTransport::pick(const std::string& body) {
     return to_reply(protocol::post_pick(*m_engine, body, LIMITS));
 }
 
+Reply EmbeddedTransport::get_snapshot() {
+    return to_reply(protocol::get_snapshot(*m_engine));
+}
+
+Reply EmbeddedTransport::put_snapshot(std::string bytes) {
+    return to_reply(protocol::post_snapshot(*m_engine, std::move(bytes), std::nullopt));
+}
+
 }  // namespace strata::cli

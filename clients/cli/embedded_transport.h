@@ -33,6 +33,8 @@ public:
                      const std::multimap<std::string, std::string>& query) override;
     Reply scene_object(const std::string& collection, const std::string& id) override;
     Reply pick(const std::string& body) override;
+    Reply get_snapshot() override;
+    Reply put_snapshot(std::string bytes) override;
     std::string describe() const override { return "the embedded engine"; }
 
 private:

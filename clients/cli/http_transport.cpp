@@ -90,10 +90,11 @@ Reply HttpTransport::get(const char* path) {
     return to_reply(m_client->Get(path), m_url);
 }
 
-Reply HttpTransport::post(const char* path, const std::string& body, const std::string& if_match) {
+Reply HttpTransport::post(const char* path, const std::string& body, const std::string& if_match,
+                          const char* content_type) {
     httplib::Headers headers;
     if (!if_match.empty()) headers.emplace("If-Match", if_match);
-    return to_reply(m_client->Post(path, headers, body, "application/json"), m_url);
+    return to_reply(m_client->Post(path, headers, body, content_type), m_url);
 }
 
 Reply HttpTransport::edits(std::string body, const std::optional<std::string>& if_match) {
@@ -137,6 +138,14 @@ Reply HttpTransport::scene_object(const std::string& collection, const std::stri
 
 Reply HttpTransport::pick(const std::string& body) {
     return post("/v1/pick", body, "");
+}
+
+Reply HttpTransport::get_snapshot() {
+    return get("/v1/scene/snapshot");
+}
+
+Reply HttpTransport::put_snapshot(std::string bytes) {
+    return post("/v1/scene/snapshot", bytes, "", "application/vnd.strata.snapshot");
 }
 
 }  // namespace strata::cli

@@ -36,12 +36,15 @@ public:
                      const std::multimap<std::string, std::string>& query) override;
     Reply scene_object(const std::string& collection, const std::string& id) override;
     Reply pick(const std::string& body) override;
+    Reply get_snapshot() override;
+    Reply put_snapshot(std::string bytes) override;
     std::string describe() const override { return m_url; }
 
 private:
     HttpTransport(std::string url, std::unique_ptr<httplib::Client> client);
     Reply get(const char* path);
-    Reply post(const char* path, const std::string& body, const std::string& if_match);
+    Reply post(const char* path, const std::string& body, const std::string& if_match,
+               const char* content_type = "application/json");
 
     std::string m_url;
     std::unique_ptr<httplib::Client> m_client;

@@ -175,6 +175,17 @@ int main(int argc, char** argv) {
         ->required();
     pick_cmd->add_option("--height", pick.height, "Height of that frame")->required();
 
+    std::string snapshot_file;
+    CLI::App* snapshot_cmd =
+        app.add_subcommand("snapshot", "Save the server's scene to a file, or load one into it");
+    snapshot_cmd->require_subcommand(1);
+    CLI::App* snapshot_save = snapshot_cmd->add_subcommand(
+        "save", "Save the whole scene (GET /v1/scene/snapshot) to FILE (- for stdout)");
+    snapshot_save->add_option("file", snapshot_file, "Snapshot file to write")->required();
+    CLI::App* snapshot_load = snapshot_cmd->add_subcommand(
+        "load", "Replace the server's scene with FILE's (POST /v1/scene/snapshot; - for stdin)");
+    snapshot_load->add_option("file", snapshot_file, "Snapshot file to read")->required();
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -205,5 +216,7 @@ int main(int argc, char** argv) {
     if (get_cmd->parsed()) return run_scene_get(t, console, get_kind, get_id);
     if (scene_cmd->parsed()) return run_scene(t, console);
     if (pick_cmd->parsed()) return run_pick(t, console, pick);
+    if (snapshot_save->parsed()) return run_snapshot_save(t, console, snapshot_file);
+    if (snapshot_load->parsed()) return run_snapshot_load(t, console, snapshot_file);
     return USAGE;
 }

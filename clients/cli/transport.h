@@ -63,6 +63,10 @@ public:
     virtual Reply scene_object(const std::string& collection, const std::string& id) = 0;
     /// POST /v1/pick with a JSON request body.
     virtual Reply pick(const std::string& body) = 0;
+    /// GET /v1/scene/snapshot: the scene as a snapshot file.
+    virtual Reply get_snapshot() = 0;
+    /// POST /v1/scene/snapshot: replaces the scene with a snapshot file's.
+    virtual Reply put_snapshot(std::string bytes) = 0;
     /// Where requests go, for messages: "http://127.0.0.1:7070" or "the embedded engine".
     virtual std::string describe() const = 0;
 };

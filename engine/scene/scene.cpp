@@ -72,7 +72,8 @@ Material Scene::resolved_material(const InstanceRecord& inst) const {
     return Material{};
 }
 
-Result<uint64_t> Scene::apply(EditBatch&& batch) {
+Result<uint64_t> Scene::apply(EditBatch&& batch,
+                             const std::function<Status(uint64_t)>& before_done) {
     UndoLog undo;
     undo.camera = m_camera;
     undo.lighting = m_lighting;
@@ -104,6 +105,12 @@ Result<uint64_t> Scene::apply(EditBatch&& batch) {
         e.edit_index = over_from;
         roll_back(undo);
         return Unexpected(std::move(e));
+    }
+    if (before_done) {
+        if (Status s = before_done(m_version + 1); !s) {
+            roll_back(undo);
+            return Unexpected(std::move(s).error());
+        }
     }
     return ++m_version;
 }

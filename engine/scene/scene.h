@@ -4,6 +4,7 @@
 // the acceleration layer reads them at commit time.
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <unordered_map>
@@ -65,7 +66,14 @@ public:
     /// version by one. The first refused edit comes back as an Error with its index, and the
     /// edits before it are undone: the scene is then exactly as before the call, slots and
     /// handles included. Large arrays are moved out of the batch.
-    Result<uint64_t> apply(EditBatch&& batch);
+    ///
+    /// `before_done`, when given, runs once every edit passed, with the version the batch is
+    /// about to produce (the journal writes its record there); its error undoes the batch too.
+    Result<uint64_t> apply(EditBatch&& batch,
+                           const std::function<Status(uint64_t)>& before_done = nullptr);
+
+    /// Recovery only: the version a restored snapshot had (the scene must be freshly loaded).
+    void restore_version(uint64_t version) { m_version = version; }
 
     /// The budget every later batch must leave the scene within (TooLarge beyond it).
     void set_budget(const SceneBudget& budget) { m_budget = budget; }

@@ -47,7 +47,13 @@ public:
     }
     Reply scene_object(const std::string&, const std::string&) override { return {}; }
     Reply pick(const std::string&) override { return {}; }
+    Reply get_snapshot() override { return {200, "", "application/vnd.strata.snapshot", "SNAP", {}}; }
+    Reply put_snapshot(std::string bytes) override {
+        snapshot_posted = std::move(bytes);
+        return json(200, {{"version", ++version}, {"applied", 1}});
+    }
     std::string describe() const override { return "the fake"; }
+    std::string snapshot_posted;
 
     /// A 422 problem answer for every later edit batch.
     void refuse_edits() {

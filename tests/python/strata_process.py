@@ -13,7 +13,7 @@ import signal
 import subprocess
 import tempfile
 import time
-from typing import Dict, List, Optional
+from typing import Callable, Dict, List, Optional
 
 _LISTENING = re.compile(r"listening on (http://[0-9.]+:([0-9]+))")
 
@@ -22,8 +22,10 @@ class ServerProcess:
     """A strata-server child process. `args` are extra flags (e.g. ["--demo"])."""
 
     def __init__(self, binary: str, args: Optional[List[str]] = None, timeout: float = 30.0,
-                 env: Optional[Dict[str, str]] = None):
-        """`env`: variables added to this process's environment (STRATA_TOKEN is not inherited)."""
+                 env: Optional[Dict[str, str]] = None,
+                 preexec_fn: Optional[Callable[[], None]] = None):
+        """`env`: variables added to this process's environment (STRATA_TOKEN is not inherited).
+        `preexec_fn` runs in the child before exec (resource limits, another user)."""
         self._log = tempfile.NamedTemporaryFile(prefix="strata-server-", suffix=".log",
                                                 delete=False)
         self.log_path = self._log.name
@@ -31,7 +33,7 @@ class ServerProcess:
         full_env.update(env or {})
         self.process = subprocess.Popen(
             [binary, "--host", "127.0.0.1", "--port", "0", "--log-level", "info"] + (args or []),
-            stdout=self._log, stderr=subprocess.STDOUT, env=full_env)
+            stdout=self._log, stderr=subprocess.STDOUT, env=full_env, preexec_fn=preexec_fn)
         self.url = self._wait_for_port(timeout)
         self.port = int(self.url.rsplit(":", 1)[1])
 
@@ -53,6 +55,12 @@ class ServerProcess:
         """Everything the server has logged so far."""
         with open(self.log_path, encoding="utf-8", errors="replace") as log:
             return log.read()
+
+    def kill(self) -> None:
+        """SIGKILL, no grace: what a crash, an OOM kill or `kill -9` does."""
+        if self.process.poll() is None:
+            self.process.kill()
+        self.process.wait()
 
     def stop(self) -> int:
         """Stops the server (SIGTERM: a graceful shutdown) and returns its exit code."""

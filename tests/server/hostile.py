@@ -21,8 +21,9 @@ class Server(ServerProcess):
     """strata-server on a free loopback port (tests/python/strata_process.py), with what the
     adversarial suites need besides: memory, signals, and requests that return problems."""
 
-    def __init__(self, args: Optional[List[str]] = None, env: Optional[Dict[str, str]] = None):
-        super().__init__(SERVER, args, env=env)
+    def __init__(self, args: Optional[List[str]] = None, env: Optional[Dict[str, str]] = None,
+                 preexec_fn=None):
+        super().__init__(SERVER, args, env=env, preexec_fn=preexec_fn)
         self.pid = self.process.pid
 
     def alive(self) -> bool:

@@ -84,6 +84,19 @@ TEST(RequestReader, HealthChecksAreAnsweredHereEvenWhenDrainingOrRestricted) {
     EXPECT_THAT(head.answer.bytes, Not(HasSubstr("ready")));
 }
 
+TEST(RequestReader, ReadyzIsUnavailableWhileTheRecoveredSceneIsBuilt) {
+    Reader r;
+    ReaderStep ready = r.feed("GET /readyz HTTP/1.1\r\nHost: a\r\n\r\n", {false, false, true});
+    ASSERT_EQ(ready.kind, Kind::Answer);
+    EXPECT_EQ(ready.answer.status, 503);
+    EXPECT_THAT(ready.answer.bytes, HasSubstr("starting"));
+    ReaderStep live = r.feed("GET /livez HTTP/1.1\r\nHost: a\r\n\r\n", {false, false, true});
+    EXPECT_EQ(live.answer.status, 200);
+    // Other requests are served meanwhile (they wait for the build in the engine).
+    ReaderStep scene = r.feed("GET /v1/scene HTTP/1.1\r\nHost: a\r\n\r\n", {false, false, true});
+    EXPECT_EQ(scene.kind, Kind::Request);
+}
+
 TEST(RequestReader, RefusalsComeBeforeTheBodyIsRead) {
     ReaderConfig c;
     c.token = "t0ken";

@@ -1,0 +1,170 @@
+#pragma once
+// Little-endian binary writing and bounds-checked reading for the journal and snapshot codecs.
+// Both sides are called the same way, `io(field, ...)`, so one function per edit kind describes
+// its layout for encoding and decoding alike (edit_codec.cpp). Arrays of Vec3 and triangles are
+// copied as raw buffers: the host is little-endian, and a static_assert keeps it that way.
+
+#include <bit>
+#include <cstdint>
+#include <cstring>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <vector>
+
+#include "engine/scene/edits.h"
+
+namespace strata::durable {
+
+static_assert(std::endian::native == std::endian::little,
+              "the journal stores raw little-endian buffers");
+
+/// Appends fields to a byte string.
+class ByteWriter {
+public:
+    explicit ByteWriter(std::string& out) : m_out(out) {}
+
+    template <class... T>
+    void operator()(const T&... values) {
+        (put(values), ...);
+    }
+
+    void raw(const void* data, std::size_t size) {
+        m_out.append(static_cast<const char*>(data), size);
+    }
+
+private:
+    template <class T>
+    void put(const T& v) {
+        if constexpr (std::is_enum_v<T>) {
+            put(static_cast<uint8_t>(v));
+        } else if constexpr (std::is_same_v<T, bool>) {
+            put(uint8_t(v ? 1 : 0));
+        } else if constexpr (std::is_arithmetic_v<T>) {
+            raw(&v, sizeof v);
+        } else if constexpr (std::is_same_v<T, std::string>) {
+            put(uint32_t(v.size()));
+            raw(v.data(), v.size());
+        } else if constexpr (std::is_same_v<T, Vec3> || std::is_same_v<T, Triangle>) {
+            raw(&v, sizeof v);
+        } else if constexpr (std::is_same_v<T, Affine>) {
+            raw(v.m.data(), sizeof(float) * v.m.size());
+        } else if constexpr (std::is_same_v<T, BuildOptions>) {
+            (*this)(v.prefer, v.allow_refit);
+        } else if constexpr (std::is_same_v<T, Material>) {
+            (*this)(v.base_color, v.roughness, v.metallic, v.emission);
+        } else {
+            put_other(v);
+        }
+    }
+    template <class T>
+    void put_other(const std::vector<T>& v) {
+        static_assert(std::is_same_v<T, Vec3> || std::is_same_v<T, Triangle>);
+        put(uint64_t(v.size()));
+        raw(v.data(), v.size() * sizeof(T));
+    }
+    template <class T>
+    void put_other(const std::optional<T>& v) {
+        put(v.has_value());
+        if (v) put(*v);
+    }
+
+    std::string& m_out;
+};
+
+/// Reads fields back; the first failure (short input, bad enum, bad flag) sticks and every later
+/// read is a no-op, so callers check ok() once at the end.
+class ByteReader {
+public:
+    explicit ByteReader(std::string_view in) : m_in(in) {}
+
+    template <class... T>
+    void operator()(T&... values) {
+        (get(values), ...);
+    }
+
+    bool ok() const { return m_error.empty(); }
+    const std::string& error() const { return m_error; }
+    std::size_t offset() const { return m_pos; }
+    std::size_t remaining() const { return m_in.size() - m_pos; }
+    void fail(std::string why) {
+        if (m_error.empty()) m_error = std::move(why) + " at byte " + std::to_string(m_pos);
+    }
+
+    bool raw(void* out, std::size_t size) {
+        if (!ok()) return false;
+        if (size > remaining()) {
+            fail("truncated: " + std::to_string(size) + " bytes wanted, " +
+                 std::to_string(remaining()) + " left");
+            return false;
+        }
+        if (size) std::memcpy(out, m_in.data() + m_pos, size);
+        m_pos += size;
+        return true;
+    }
+
+private:
+    template <class T>
+    void get(T& v) {
+        if constexpr (std::is_enum_v<T>) {
+            uint8_t b = 0;
+            get(b);
+            if (b > 1) return fail("enum value " + std::to_string(b) + " out of range");
+            v = static_cast<T>(b);
+        } else if constexpr (std::is_same_v<T, bool>) {
+            uint8_t b = 0;
+            get(b);
+            if (b > 1) return fail("flag byte " + std::to_string(b) + " is neither 0 nor 1");
+            v = b == 1;
+        } else if constexpr (std::is_arithmetic_v<T>) {
+            raw(&v, sizeof v);
+        } else if constexpr (std::is_same_v<T, std::string>) {
+            uint32_t n = 0;
+            get(n);
+            if (!ok()) return;
+            if (n > remaining()) return fail("string of " + std::to_string(n) + " bytes");
+            v.assign(m_in.data() + m_pos, n);
+            m_pos += n;
+        } else if constexpr (std::is_same_v<T, Vec3> || std::is_same_v<T, Triangle>) {
+            raw(&v, sizeof v);
+        } else if constexpr (std::is_same_v<T, Affine>) {
+            raw(v.m.data(), sizeof(float) * v.m.size());
+        } else if constexpr (std::is_same_v<T, BuildOptions>) {
+            (*this)(v.prefer, v.allow_refit);
+        } else if constexpr (std::is_same_v<T, Material>) {
+            (*this)(v.base_color, v.roughness, v.metallic, v.emission);
+        } else {
+            get_other(v);
+        }
+    }
+    template <class T>
+    void get_other(std::vector<T>& v) {
+        uint64_t n = 0;
+        get(n);
+        if (!ok()) return;
+        // Checked before allocating: a corrupt count must not ask for terabytes.
+        if (n > remaining() / sizeof(T))
+            return fail("array of " + std::to_string(n) + " elements");
+        v.resize(n);
+        raw(v.data(), n * sizeof(T));
+    }
+    template <class T>
+    void get_other(std::optional<T>& v) {
+        bool present = false;
+        get(present);
+        if (!ok()) return;
+        if (!present) {
+            v.reset();
+            return;
+        }
+        v.emplace();
+        get(*v);
+    }
+
+    std::string_view m_in;
+    std::size_t m_pos = 0;
+    std::string m_error;
+};
+
+}  // namespace strata::durable

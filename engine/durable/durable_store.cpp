@@ -1,0 +1,187 @@
+#include "engine/durable/durable_store.h"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <filesystem>
+
+#include "engine/core/timer.h"
+#include "engine/durable/file_io.h"
+#include "engine/engine.h"
+
+namespace strata::durable {
+
+namespace {
+
+/// Takes `dir/LOCK` with flock: released by the kernel when the process dies, even by SIGKILL.
+Result<int> lock_directory(const std::string& dir) {
+    const std::string path = join_path(dir, "LOCK");
+    const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd < 0)
+        return failure(ErrorCode::Storage,
+                       errno_message("cannot create the lock file " + path +
+                                     " (the data directory must be writable)"));
+    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+        const int err = errno;
+        char holder[32] = {};
+        const ssize_t n = ::pread(fd, holder, sizeof holder - 1, 0);
+        ::close(fd);
+        if (err == EWOULDBLOCK)
+            return failure(ErrorCode::Storage,
+                           "the data directory " + dir + " is in use by another strata-server" +
+                               (n > 0 ? " (pid " + std::string(holder, std::size_t(n)) + ")"
+                                      : std::string()) +
+                               "; two servers cannot share one --data");
+        errno = err;
+        return failure(ErrorCode::Storage, errno_message("cannot lock " + path));
+    }
+    const std::string pid = std::to_string(::getpid());
+    if (::ftruncate(fd, 0) == 0) (void)::pwrite(fd, pid.data(), pid.size(), 0);
+    return fd;
+}
+
+uint64_t unix_ms_now() {
+    return uint64_t(std::chrono::duration_cast<std::chrono::milliseconds>(
+                        std::chrono::system_clock::now().time_since_epoch())
+                        .count());
+}
+
+}  // namespace
+
+DurableStore::DurableStore(const StoreOptions& options, Engine& engine)
+    : m_options(options), m_engine(engine) {}
+
+Result<std::unique_ptr<DurableStore>> DurableStore::open(const StoreOptions& options,
+                                                         Engine& engine) {
+    std::unique_ptr<DurableStore> store(new DurableStore(options, engine));
+    const std::string& dir = options.dir;
+    // Step: the directory and its lock.
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec)
+        return failure(ErrorCode::Storage,
+                       "cannot create the data directory " + dir + ": " + ec.message());
+    auto fd = lock_directory(dir);
+    if (!fd) return Unexpected(fd.error());
+    store->m_lock_fd = fd.value();
+
+    // Step: the scene as the directory left it.
+    Stopwatch clock;
+    auto recovered = recover(dir, engine, options.recovery);
+    if (!recovered) return Unexpected(recovered.error());
+    store->m_recovery = std::move(recovered.value());
+    store->m_stats.recovery_seconds = clock.ms() / 1000.0;
+    store->m_stats.recovered_version = store->m_recovery.version;
+    store->m_stats.recovered_records = store->m_recovery.records_replayed;
+    store->m_stats.torn_records_truncated = store->m_recovery.torn_truncated;
+    store->m_stats.directory = dir;
+
+    // Step: the journal, from here on.
+    auto journal = Journal::open(dir, store->m_recovery.version, options.journal,
+                                 store->m_recovery.segments);
+    if (!journal) return Unexpected(journal.error());
+    store->m_journal = std::move(journal.value());
+    engine.set_journal(store->m_journal.get());
+    store->m_thread = std::thread([s = store.get()] { s->snapshot_loop(); });
+    return store;
+}
+
+DurableStore::~DurableStore() {
+    {
+        std::lock_guard lock(m_loop_mutex);
+        m_stop = true;
+    }
+    m_loop_cv.notify_all();
+    if (m_thread.joinable()) m_thread.join();
+    if (m_journal) {
+        m_engine.set_journal(nullptr);
+        (void)m_journal->flush();
+        m_journal.reset();
+    }
+    if (m_lock_fd >= 0) ::close(m_lock_fd);
+}
+
+void DurableStore::snapshot_loop() {
+    std::unique_lock lock(m_loop_mutex);
+    while (!m_stop) {
+        m_loop_cv.wait_for(lock, std::chrono::milliseconds(20), [&] { return m_stop; });
+        if (m_stop) break;
+        if (m_journal->bytes_since_rotation() < m_options.snapshot_threshold_bytes) continue;
+        lock.unlock();
+        (void)write_snapshot();
+        lock.lock();
+    }
+}
+
+Status DurableStore::snapshot_now() {
+    return write_snapshot();
+}
+
+Status DurableStore::write_snapshot() {
+    std::lock_guard one_at_a_time(m_snapshot_mutex);
+    Stopwatch clock;
+    // Step: a consistent copy and the journal's cut, in one critical section.
+    EditBatch scene;
+    uint64_t version = 0;
+    double lock_ms = 0.0;
+    Status rotated = m_engine.read([&](const Scene& s) {
+        Stopwatch held;
+        scene = s.to_batch();
+        version = s.version();
+        Status r = m_journal->rotate(version);
+        lock_ms = held.ms();
+        return r;
+    });
+    auto fail = [&](const Error& e) -> Status {
+        std::lock_guard stats(m_stats_mutex);
+        ++m_stats.snapshot_failures;
+        return Unexpected(e);
+    };
+    if (!rotated) return fail(rotated.error());
+
+    // Step: written outside the lock, atomically.
+    std::string bytes = encode_snapshot(scene, version);
+    scene = {};
+    if (Status s = write_file_atomically(m_options.dir, snapshot_name(version), bytes); !s)
+        return fail(s.error());
+
+    // Step: what the snapshot replaces.
+    m_journal->drop_segments_before(version);
+    if (auto names = list_files(m_options.dir)) {
+        for (const std::string& name : names.value()) {
+            uint64_t v = 0;
+            if (parse_snapshot_name(name, v) && v < version)
+                ::unlink(join_path(m_options.dir, name).c_str());
+        }
+        (void)sync_directory(m_options.dir);
+    }
+    std::lock_guard stats(m_stats_mutex);
+    ++m_stats.snapshots_written;
+    m_stats.last_snapshot_version = version;
+    m_stats.last_snapshot_bytes = bytes.size();
+    m_stats.last_snapshot_unix_ms = unix_ms_now();
+    m_stats.last_snapshot_seconds = clock.ms() / 1000.0;
+    m_stats.last_snapshot_lock_ms = lock_ms;
+    return {};
+}
+
+void DurableStore::set_rebuild_seconds(double seconds) {
+    std::lock_guard stats(m_stats_mutex);
+    m_stats.rebuild_seconds = seconds;
+}
+
+DurableStats DurableStore::stats() const {
+    DurableStats s;
+    {
+        std::lock_guard stats(m_stats_mutex);
+        s = m_stats;
+    }
+    m_journal->add_stats(s);
+    return s;
+}
+
+}  // namespace strata::durable

@@ -1,0 +1,78 @@
+#pragma once
+// A data directory made live: the lock file, recovery at start, the journal attached to the
+// engine, and the background snapshots that keep the journal short.
+//
+// Snapshots. When the journal has grown by `snapshot_threshold_bytes` since the last snapshot, a
+// background thread takes a consistent copy of the scene under the scene's shared lock (edits wait
+// for the copy, renders do not) and starts a new journal segment at that version in the same
+// critical section; it writes the snapshot outside the lock (temp file, fsync, rename, fsync the
+// directory) and only then removes the segments and snapshots it replaces.
+
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "engine/durable/durable_stats.h"
+#include "engine/durable/journal.h"
+#include "engine/durable/recovery.h"
+
+namespace strata {
+class Engine;
+}
+
+namespace strata::durable {
+
+struct StoreOptions {
+    std::string dir;
+    JournalOptions journal;
+    RecoveryOptions recovery;
+    uint64_t snapshot_threshold_bytes = 64ull << 20;
+};
+
+class DurableStore {
+public:
+    /// Creates `dir` if missing, locks it (a second server on the same directory is refused),
+    /// recovers its scene into `engine` (which must be empty) and attaches the journal. Errors
+    /// name the file and the cause.
+    static Result<std::unique_ptr<DurableStore>> open(const StoreOptions& options, Engine& engine);
+    /// Stops the snapshot thread, detaches the journal and fsyncs it.
+    ~DurableStore();
+    DurableStore(const DurableStore&) = delete;
+    DurableStore& operator=(const DurableStore&) = delete;
+
+    const RecoveryResult& recovery() const { return m_recovery; }
+    const std::string& directory() const { return m_options.dir; }
+
+    /// Writes a snapshot now (the background thread does this by itself past the threshold).
+    Status snapshot_now();
+
+    /// Records how long the acceleration structures took to build after recovery.
+    void set_rebuild_seconds(double seconds);
+
+    /// Every number for GET /v1/stats and /metrics.
+    DurableStats stats() const;
+
+private:
+    DurableStore(const StoreOptions& options, Engine& engine);
+    void snapshot_loop();
+    Status write_snapshot();
+
+    StoreOptions m_options;
+    Engine& m_engine;
+    int m_lock_fd = -1;
+    RecoveryResult m_recovery;
+    std::unique_ptr<Journal> m_journal;
+
+    std::mutex m_snapshot_mutex;  ///< one snapshot at a time (background or snapshot_now)
+    mutable std::mutex m_stats_mutex;
+    DurableStats m_stats;  ///< the store's own fields (snapshots, recovery)
+
+    std::mutex m_loop_mutex;
+    std::condition_variable m_loop_cv;
+    bool m_stop = false;
+    std::thread m_thread;
+};
+
+}  // namespace strata::durable

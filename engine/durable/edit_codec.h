@@ -1,0 +1,21 @@
+#pragma once
+// The binary form of an edit batch, shared by journal records and snapshots: a u32 edit count,
+// then per edit a one-byte kind tag and its fields (byte_io.h). Bulk vertex and index arrays are
+// raw little-endian buffers. The layout of each kind is written once, in edit_codec.cpp.
+
+#include <string>
+#include <string_view>
+
+#include "engine/core/result.h"
+#include "engine/scene/edits.h"
+
+namespace strata::durable {
+
+/// Appends the batch's binary form to `out`.
+void encode_batch(const EditBatch& batch, std::string& out);
+
+/// Reads a whole batch back; the input must hold exactly one. An error (InvalidArgument) names
+/// the edit and the byte offset where decoding failed.
+Result<EditBatch> decode_batch(std::string_view bytes);
+
+}  // namespace strata::durable

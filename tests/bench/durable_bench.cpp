@@ -1,0 +1,273 @@
+// Durability benchmarks (a plain program; never run by CTest; results in NOTES.md):
+//
+//   edits   8 HTTP clients (keep-alive httplib clients, one thread each) post small batches (one
+//           set_transform) to an in-process strata-server for a few seconds, with a data
+//           directory in each --fsync mode and without one; batches/s, fsyncs, batches/fsync.
+//   restart a scene is written through a DurableStore, then reopened: time to recover (load and
+//           replay) and to build its acceleration structures; from the journal alone and from a
+//           snapshot. Scenes: 1M instances of one small mesh, and 10 meshes of 1M triangles.
+//
+//   build/tests/bench/strata_durable_bench [edits|restart|all] [runs]   (default: all 3)
+//   STRATA_BENCH_DIR picks where the data directories go (default: $TMPDIR).
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <httplib.h>
+#include <spdlog/spdlog.h>
+
+#include "engine/core/timer.h"
+#include "engine/durable/durable_store.h"
+#include "engine/engine.h"
+#include "engine/scene/shapes.h"
+#include "server/server.h"
+
+namespace strata {
+namespace {
+
+std::string temp_dir() {
+    const char* base = std::getenv("STRATA_BENCH_DIR");
+    std::string pattern = std::string(base ? base : std::filesystem::temp_directory_path().c_str()) +
+                          "/strata-bench-XXXXXX";
+    if (!::mkdtemp(pattern.data())) std::abort();
+    return pattern;
+}
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+std::unique_ptr<Engine> engine() {
+    EngineConfig c;
+    c.budget = {uint64_t(1) << 26, uint64_t(1) << 26};
+    auto e = Engine::create(c);
+    if (!e) std::abort();
+    return std::move(e.value());
+}
+
+// Step: edits per second ----------------------------------------------------------------------
+
+struct EditsResult {
+    double batches_per_s = 0;
+    uint64_t fsyncs = 0;
+    uint64_t batches = 0;
+    uint64_t max_group = 0;
+};
+
+EditsResult run_edits(const char* mode, double seconds, int clients) {
+    auto eng = engine();
+    std::string dir;
+    std::unique_ptr<durable::DurableStore> store;
+    if (std::string(mode) != "memory") {
+        dir = temp_dir();
+        durable::StoreOptions o;
+        o.dir = dir;
+        o.journal.mode = std::string(mode) == "always" ? durable::FsyncMode::Always
+                         : std::string(mode) == "batch" ? durable::FsyncMode::Batch
+                                                        : durable::FsyncMode::Off;
+        auto s = durable::DurableStore::open(o, *eng);
+        if (!s) {
+            std::fprintf(stderr, "%s\n", s.error().message.c_str());
+            std::abort();
+        }
+        store = std::move(s.value());
+    }
+    EditBatch setup;
+    setup.edits.emplace_back(add_mesh_edit("box", make_box(Vec3(0.5f))));
+    for (int c = 0; c < clients; ++c) {
+        AddInstance i;
+        i.id = "i" + std::to_string(c);
+        i.mesh = "box";
+        setup.edits.emplace_back(i);
+    }
+    if (!eng->apply(std::move(setup))) std::abort();
+
+    server::ServerConfig config;
+    config.port = 0;
+    config.threads = std::size_t(clients);
+    server::Server http(config, *eng, store.get());
+    auto port = http.bind();
+    if (!port) std::abort();
+    std::thread serving([&] { http.listen(); });
+
+    std::atomic<bool> stop{false};
+    std::atomic<uint64_t> done{0};
+    const durable::DurableStats before = store ? store->stats() : durable::DurableStats{};
+    std::vector<std::thread> threads;
+    Stopwatch clock;
+    for (int c = 0; c < clients; ++c) {
+        threads.emplace_back([&, c] {
+            httplib::Client client("127.0.0.1", port.value());
+            client.set_keep_alive(true);
+            uint64_t n = 0;
+            while (!stop.load()) {
+                const std::string body =
+                    R"({"edits":[{"op":"set_transform","instance":"i)" + std::to_string(c) +
+                    R"(","transform":{"translate":[)" + std::to_string(n++ % 100) + ",0,0]}}]}";
+                auto r = client.Post("/v1/edits", body, "application/json");
+                if (!r || r->status != 200) std::abort();
+                done.fetch_add(1);
+            }
+        });
+    }
+    std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
+    stop = true;
+    for (auto& t : threads) t.join();
+    const double elapsed = clock.ms() / 1000.0;
+    EditsResult out;
+    out.batches = done.load();
+    out.batches_per_s = double(out.batches) / elapsed;
+    if (store) {
+        const durable::DurableStats after = store->stats();
+        out.fsyncs = after.fsyncs - before.fsyncs;
+        out.max_group = after.batches_per_fsync_max;
+    }
+    http.stop();
+    serving.join();
+    store.reset();
+    if (!dir.empty()) std::filesystem::remove_all(dir);
+    return out;
+}
+
+void bench_edits(int runs) {
+    constexpr int CLIENTS = 8;
+    std::printf("edits: %d clients, one set_transform per batch, 3 s per run, %d runs, median\n",
+                CLIENTS, runs);
+    const char* modes[] = {"always", "batch", "off", "memory"};
+    std::vector<std::vector<EditsResult>> results(4);
+    // Interleaved, so that the modes see the same machine load.
+    for (int r = 0; r < runs; ++r)
+        for (int m = 0; m < 4; ++m) results[m].push_back(run_edits(modes[m], 3.0, CLIENTS));
+    for (int m = 0; m < 4; ++m) {
+        std::vector<double> rate, per_fsync;
+        uint64_t max_group = 0;
+        for (const auto& e : results[m]) {
+            rate.push_back(e.batches_per_s);
+            if (e.fsyncs) per_fsync.push_back(double(e.batches) / double(e.fsyncs));
+            max_group = std::max(max_group, e.max_group);
+        }
+        std::printf("  %-7s %8.0f batches/s", modes[m], median(rate));
+        if (!per_fsync.empty())
+            std::printf("   %.2f batches per fsync (largest group %llu)", median(per_fsync),
+                        static_cast<unsigned long long>(max_group));
+        std::printf("\n");
+    }
+}
+
+// Step: restart time --------------------------------------------------------------------------
+
+struct RestartResult {
+    double recover_s = 0;
+    double build_s = 0;
+    uint64_t disk_bytes = 0;
+};
+
+/// Writes `batches` through a store in `dir` (snapshot at the end when asked), closes it.
+void write_scene(const std::string& dir, std::vector<EditBatch> batches, bool snapshot) {
+    auto eng = engine();
+    durable::StoreOptions o;
+    o.dir = dir;
+    o.journal.mode = durable::FsyncMode::Off;  // the write side is not what is measured
+    o.snapshot_threshold_bytes = UINT64_MAX;
+    auto store = durable::DurableStore::open(o, *eng);
+    if (!store) std::abort();
+    for (auto& b : batches)
+        if (!eng->apply(std::move(b))) std::abort();
+    if (snapshot && !store.value()->snapshot_now()) std::abort();
+}
+
+RestartResult restart(const std::string& dir) {
+    auto eng = engine();
+    durable::StoreOptions o;
+    o.dir = dir;
+    RestartResult out;
+    Stopwatch clock;
+    auto store = durable::DurableStore::open(o, *eng);
+    if (!store) std::abort();
+    out.recover_s = clock.ms() / 1000.0;
+    Stopwatch build;
+    if (!eng->commit()) std::abort();
+    out.build_s = build.ms() / 1000.0;
+    for (const auto& e : std::filesystem::directory_iterator(dir))
+        if (e.is_regular_file()) out.disk_bytes += e.file_size();
+    return out;
+}
+
+std::vector<EditBatch> million_instances() {
+    std::vector<EditBatch> batches(1);
+    batches[0].edits.emplace_back(add_mesh_edit("pebble", make_sphere(0.4f, 8)));
+    constexpr int N = 1000000, PER_BATCH = 10000;
+    for (int i = 0; i < N; ++i) {
+        if (i % PER_BATCH == 0) batches.emplace_back();
+        AddInstance e;
+        e.id = "instance-" + std::to_string(i);
+        e.mesh = "pebble";
+        e.transform = Affine::translation({float(i % 1000), 0.0f, float(i / 1000)});
+        batches.back().edits.emplace_back(std::move(e));
+    }
+    return batches;
+}
+
+std::vector<EditBatch> ten_million_triangles() {
+    std::vector<EditBatch> batches;
+    for (int m = 0; m < 10; ++m) {
+        EditBatch b;
+        b.edits.emplace_back(add_mesh_edit("mesh-" + std::to_string(m), make_sphere(1.0f, 1000)));
+        AddInstance e;
+        e.id = "instance-" + std::to_string(m);
+        e.mesh = "mesh-" + std::to_string(m);
+        e.transform = Affine::translation({float(m) * 2.5f, 0.0f, 0.0f});
+        b.edits.emplace_back(std::move(e));
+        batches.push_back(std::move(b));
+    }
+    return batches;
+}
+
+void bench_restart(int runs) {
+    std::printf("restart: recover (lock, load, replay) and build, %d runs each, median\n", runs);
+    struct Case {
+        const char* name;
+        std::vector<EditBatch> (*make)();
+    } cases[] = {{"1M instances", million_instances}, {"10M triangles", ten_million_triangles}};
+    for (const Case& c : cases) {
+        for (bool snapshot : {false, true}) {
+            const std::string dir = temp_dir();
+            write_scene(dir, c.make(), snapshot);
+            std::vector<double> recover, build;
+            uint64_t bytes = 0;
+            for (int r = 0; r < runs; ++r) {
+                const RestartResult res = restart(dir);
+                recover.push_back(res.recover_s);
+                build.push_back(res.build_s);
+                bytes = res.disk_bytes;
+            }
+            std::printf("  %-14s from %-8s %7.2f s recover + %6.2f s build   (%.0f MB on disk)\n",
+                        c.name, snapshot ? "snapshot" : "journal", median(recover), median(build),
+                        double(bytes) / 1e6);
+            std::filesystem::remove_all(dir);
+        }
+    }
+}
+
+}  // namespace
+}  // namespace strata
+
+int main(int argc, char** argv) {
+    spdlog::set_level(spdlog::level::warn);
+    const std::string what = argc > 1 ? argv[1] : "all";
+    const int runs = argc > 2 ? std::max(1, std::atoi(argv[2])) : 3;
+    std::printf("machine: %u hardware threads\n", std::thread::hardware_concurrency());
+    if (what == "edits" || what == "all") strata::bench_edits(runs);
+    if (what == "restart" || what == "all") strata::bench_restart(runs);
+    return 0;
+}

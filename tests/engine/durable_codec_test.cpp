@@ -1,0 +1,181 @@
+// The journal's binary codec: CRC-32C known answers, edit batches that round-trip exactly, and
+// damaged bytes that come back as errors, never as a crash or a huge allocation.
+
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "engine/durable/crc32c.h"
+#include "engine/durable/edit_codec.h"
+#include "engine/durable/journal_format.h"
+#include "tests/engine/random_edits.h"
+
+namespace strata {
+namespace {
+
+using durable::crc32c;
+
+std::string encoded(const EditBatch& b) {
+    std::string out;
+    durable::encode_batch(b, out);
+    return out;
+}
+
+EditBatch every_kind() {
+    EditBatch b;
+    AddMesh m;
+    m.id = "tri";
+    m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    m.triangles = {{0, 1, 2}};
+    m.build = {BuildPreference::FastBuild, false};
+    m.material = "red";
+    b.edits.emplace_back(AddMaterial{"red", Material{{1, 0, 0}, 0.25f, 0.5f, {0, 0, 0}}});
+    b.edits.emplace_back(std::move(m));
+    b.edits.emplace_back(UpdateMeshPositions{"tri", 1, {{2, 0, 0}}});
+    b.edits.emplace_back(ReplaceMeshTopology{"tri", std::nullopt, {{0, 2, 1}}});
+    b.edits.emplace_back(UpdateMaterial{"red", Vec3(0.5f), std::nullopt, 0.1f, std::nullopt});
+    AddInstance i;
+    i.id = "a";
+    i.mesh = "tri";
+    i.transform = Affine::translation({1, 2, 3});
+    i.visible = false;
+    i.mask = 6;
+    i.user_id = 77;
+    b.edits.emplace_back(i);
+    UpdateInstance u;
+    u.instance = "a";
+    u.material = std::optional<std::string>();  // back to the mesh's material
+    u.visible = true;
+    b.edits.emplace_back(u);
+    b.edits.emplace_back(SetTransform{"a", Affine::scaling({2, 2, 2})});
+    b.edits.emplace_back(MarkDirty{std::nullopt, DirtyAction::Refit});
+    b.edits.emplace_back(SetCamera{Vec3(1), std::nullopt, std::nullopt, 30.0f});
+    b.edits.emplace_back(SetLighting{std::nullopt, Vec3(2), std::nullopt, 0.5f});
+    b.edits.emplace_back(RemoveInstance{"a"});
+    b.edits.emplace_back(RemoveMesh{"tri"});
+    b.edits.emplace_back(Clear{});
+    return b;
+}
+
+TEST(Crc32c, MatchesTheCastagnoliCheckValue) {
+    EXPECT_EQ(crc32c("123456789", 9), 0xE3069283u);
+    EXPECT_EQ(crc32c("", 0), 0u);
+}
+
+TEST(Crc32c, ExtendingInPiecesEqualsOnePass) {
+    std::string data;
+    for (int i = 0; i < 1000; ++i) data.push_back(char(i * 31));
+    for (std::size_t cut : {0u, 1u, 7u, 8u, 9u, 500u, 999u})
+        EXPECT_EQ(crc32c(data.data() + cut, data.size() - cut, crc32c(data.data(), cut)),
+                  crc32c(data.data(), data.size()))
+            << cut;
+}
+
+TEST(EditCodec, EveryEditKindRoundTripsByteForByte) {
+    const EditBatch b = every_kind();
+    const std::string bytes = encoded(b);
+    auto back = durable::decode_batch(bytes);
+    ASSERT_TRUE(back.has_value()) << back.error().describe();
+    ASSERT_EQ(back->edits.size(), b.edits.size());
+    for (std::size_t i = 0; i < b.edits.size(); ++i)
+        EXPECT_EQ(back->edits[i].index(), b.edits[i].index()) << i;
+    EXPECT_EQ(encoded(back.value()), bytes);
+    const auto& inst = std::get<AddInstance>(back->edits[5]);
+    EXPECT_EQ(inst.mask, 6u);
+    EXPECT_EQ(inst.user_id, 77u);
+    EXPECT_FALSE(inst.visible);
+    EXPECT_EQ(inst.transform.m, Affine::translation({1, 2, 3}).m);
+    const auto& upd = std::get<UpdateInstance>(back->edits[6]);
+    ASSERT_TRUE(upd.material.has_value());
+    EXPECT_FALSE(upd.material->has_value());
+}
+
+TEST(EditCodec, RandomBatchesRoundTrip) {
+    test::RandomEdits edits(1234);
+    for (int i = 0; i < 200; ++i) {
+        const EditBatch b = i == 0 ? edits.initial_batch(4, 20) : edits.next_batch(8);
+        const std::string bytes = encoded(b);
+        auto back = durable::decode_batch(bytes);
+        ASSERT_TRUE(back.has_value()) << back.error().describe();
+        EXPECT_EQ(encoded(back.value()), bytes) << "batch " << i;
+    }
+}
+
+TEST(EditCodec, MeshArraysAreRawLittleEndianBuffers) {
+    EditBatch b;
+    b.edits.emplace_back(UpdateMeshPositions{"m", 0, {{1.0f, 2.0f, 3.0f}}});
+    const std::string bytes = encoded(b);
+    // count, tag, id length, id, offset, element count, then three floats as they are in memory.
+    const float want[3] = {1.0f, 2.0f, 3.0f};
+    ASSERT_EQ(bytes.size(), 4u + 1 + 4 + 1 + 4 + 8 + 12);
+    EXPECT_EQ(bytes.substr(bytes.size() - 12), std::string(reinterpret_cast<const char*>(want), 12));
+}
+
+TEST(EditCodec, EveryTruncationIsAnErrorNotACrash) {
+    const std::string bytes = encoded(every_kind());
+    for (std::size_t n = 0; n < bytes.size(); ++n) {
+        auto back = durable::decode_batch(std::string_view(bytes).substr(0, n));
+        ASSERT_FALSE(back.has_value()) << "prefix of " << n << " bytes decoded";
+        EXPECT_EQ(back.error().code, ErrorCode::InvalidArgument);
+    }
+}
+
+TEST(EditCodec, AHugeCorruptCountIsRefusedBeforeAllocating) {
+    std::string bytes = encoded(every_kind());
+    bytes[0] = bytes[1] = bytes[2] = bytes[3] = char(0xFF);
+    auto back = durable::decode_batch(bytes);
+    ASSERT_FALSE(back.has_value());
+    EXPECT_NE(back.error().message.find("edit count"), std::string::npos) << back.error().message;
+}
+
+TEST(EditCodec, AnUnknownKindIsNamed) {
+    std::string bytes = encoded(every_kind());
+    bytes[4] = char(99);
+    auto back = durable::decode_batch(bytes);
+    ASSERT_FALSE(back.has_value());
+    EXPECT_NE(back.error().message.find("unknown edit kind 99"), std::string::npos)
+        << back.error().message;
+}
+
+TEST(JournalFormat, ATornRecordAtTheEndIsToldFromDamageInTheMiddle) {
+    std::string file = durable::segment_header(0);
+    std::vector<std::size_t> starts;
+    for (uint64_t v = 1; v <= 3; ++v) {
+        auto r = durable::prepare_record(every_kind());
+        durable::stamp_record(r, v);
+        starts.push_back(file.size());
+        file += r.bytes;
+    }
+    auto clean = durable::scan_segment(file);
+    EXPECT_EQ(clean.tail, durable::SegmentScan::Tail::Clean);
+    EXPECT_EQ(clean.records.size(), 3u);
+
+    auto torn = durable::scan_segment(std::string_view(file).substr(0, file.size() - 5));
+    EXPECT_EQ(torn.tail, durable::SegmentScan::Tail::Torn);
+    EXPECT_EQ(torn.records.size(), 2u);
+    EXPECT_EQ(torn.valid_end, starts[2]);
+
+    std::string flipped = file;
+    flipped[starts[1] + 40] ^= 0x10;
+    auto corrupt = durable::scan_segment(flipped);
+    EXPECT_EQ(corrupt.tail, durable::SegmentScan::Tail::Corrupt);
+    EXPECT_EQ(corrupt.records.size(), 1u);
+    EXPECT_NE(corrupt.problem.find("offset " + std::to_string(starts[1])), std::string::npos)
+        << corrupt.problem;
+}
+
+TEST(SnapshotFormat, RoundTripsAndRefusesDamage) {
+    const std::string bytes = durable::encode_snapshot(every_kind(), 42);
+    auto back = durable::decode_snapshot(bytes);
+    ASSERT_TRUE(back.has_value()) << back.error().describe();
+    EXPECT_EQ(back->version, 42u);
+    EXPECT_EQ(encoded(back->scene), encoded(every_kind()));
+    std::string damaged = bytes;
+    damaged[bytes.size() / 2] ^= 1;
+    EXPECT_FALSE(durable::decode_snapshot(damaged).has_value());
+    EXPECT_FALSE(durable::decode_snapshot(bytes.substr(0, bytes.size() - 1)).has_value());
+    EXPECT_FALSE(durable::decode_snapshot("hello").has_value());
+}
+
+}  // namespace
+}  // namespace strata

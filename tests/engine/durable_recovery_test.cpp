@@ -1,0 +1,294 @@
+// Durability at the engine level: a DurableStore over a temporary directory, real files, real
+// fsyncs. After a restart the scene has the same version, the same ids and the same hits; torn
+// and damaged journals give the documented outcome and a message naming file and offset.
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "engine/durable/durable_store.h"
+#include "engine/durable/file_io.h"
+#include "engine/durable/journal_format.h"
+#include "tests/engine/durable_test_util.h"
+#include "tests/engine/random_edits.h"
+#include "tests/engine/test_util.h"
+
+namespace strata {
+namespace {
+
+using durable::DurableStore;
+using test::TempDir;
+
+durable::StoreOptions options_for(const TempDir& dir,
+                                  durable::FsyncMode mode = durable::FsyncMode::Always) {
+    durable::StoreOptions o;
+    o.dir = dir.path();
+    o.journal.mode = mode;
+    o.snapshot_threshold_bytes = UINT64_MAX;  // snapshots only when a test asks
+    return o;
+}
+
+/// An engine and its store; the store goes first (it detaches the journal from the engine).
+struct Server {
+    std::unique_ptr<Engine> engine;
+    std::unique_ptr<DurableStore> store;
+
+    Server() = default;
+    Server(Server&&) = default;
+    ~Server() { stop(); }
+    void stop() {
+        store.reset();
+        engine.reset();
+    }
+};
+
+Server start(const durable::StoreOptions& o) {
+    Server s;
+    s.engine = test::make_engine();
+    auto store = DurableStore::open(o, *s.engine);
+    EXPECT_TRUE(store.has_value()) << (store ? "" : store.error().describe());
+    if (store) s.store = std::move(store.value());
+    return s;
+}
+
+/// Applies `n` random batches (the generator's model stays in step); returns the last version.
+uint64_t apply_random(Engine& engine, test::RandomEdits& edits, int n, bool initial) {
+    uint64_t v = 0;
+    for (int i = 0; i < n; ++i) {
+        auto r = engine.apply(initial && i == 0 ? edits.initial_batch(4, 30) : edits.next_batch(6));
+        EXPECT_TRUE(r.has_value()) << r.error().describe();
+        if (r) v = r->version;
+    }
+    return v;
+}
+
+std::string only_segment(const TempDir& dir) {
+    std::string found;
+    for (const auto& e : std::filesystem::directory_iterator(dir.path())) {
+        uint64_t base = 0;
+        if (durable::parse_segment_name(e.path().filename().string(), base)) {
+            EXPECT_TRUE(found.empty()) << "more than one segment";
+            found = e.path().string();
+        }
+    }
+    return found;
+}
+
+TEST(Durability, ARestartBringsBackTheSameVersionIdsAndHits) {
+    TempDir dir;
+    test::RandomEdits edits(7);
+    test::Hits before;
+    uint64_t version = 0;
+    {
+        Server s = start(options_for(dir));
+        apply_random(*s.engine, edits, 40, true);
+        // Something surely in view, whatever the random batches left (a clear, a camera).
+        version = test::apply_ok(*s.engine, test::mesh_edit("backdrop", make_box(Vec3(6.0f))),
+                                 test::instance_edit("backdrop-1", "backdrop"),
+                                 SetCamera{Vec3(1, 3, 12), Vec3(0), Vec3(0, 1, 0), 50.0f});
+        // A refused batch changes nothing and is not journaled.
+        EditBatch bad;
+        bad.edits.emplace_back(RemoveMesh{"no-such-mesh"});
+        ASSERT_FALSE(s.engine->apply(std::move(bad)).has_value());
+        before = test::hits(*s.engine);
+    }
+    Server s = start(options_for(dir));
+    EXPECT_EQ(s.store->recovery().records_replayed, version);
+    EXPECT_EQ(test::version_of(*s.engine), version);
+    const test::Hits after = test::hits(*s.engine);
+    EXPECT_TRUE(after == before);
+    std::size_t hit = 0;
+    for (const auto& id : after.instance) hit += !id.empty();
+    EXPECT_GT(hit, after.instance.size() / 20) << "the frame should show geometry";
+}
+
+TEST(Durability, ASnapshotPlusTheJournalAfterItRestoresTheScene) {
+    TempDir dir;
+    test::RandomEdits edits(11);
+    test::Hits before;
+    uint64_t version = 0;
+    std::string scene_before;
+    {
+        Server s = start(options_for(dir));
+        apply_random(*s.engine, edits, 20, true);
+        ASSERT_TRUE(s.store->snapshot_now().has_value());
+        version = apply_random(*s.engine, edits, 15, false);
+        before = test::hits(*s.engine);
+        const auto stats = s.store->stats();
+        EXPECT_EQ(stats.snapshots_written, 1u);
+        EXPECT_EQ(stats.last_snapshot_version, 20u);
+        EXPECT_GT(stats.last_snapshot_bytes, 0u);
+    }
+    // The segment before the snapshot was dropped: one snapshot, one segment.
+    int snapshots = 0, segments = 0;
+    for (const auto& e : std::filesystem::directory_iterator(dir.path())) {
+        uint64_t n;
+        snapshots += durable::parse_snapshot_name(e.path().filename().string(), n);
+        segments += durable::parse_segment_name(e.path().filename().string(), n);
+    }
+    EXPECT_EQ(snapshots, 1);
+    EXPECT_EQ(segments, 1);
+    Server s = start(options_for(dir));
+    EXPECT_TRUE(s.store->recovery().loaded_snapshot);
+    EXPECT_EQ(s.store->recovery().snapshot_version, 20u);
+    EXPECT_EQ(s.store->recovery().records_replayed, 15u);
+    EXPECT_EQ(test::version_of(*s.engine), version);
+    EXPECT_TRUE(test::hits(*s.engine) == before);
+}
+
+TEST(Durability, ATornLastRecordIsCutOffAndReported) {
+    TempDir dir;
+    test::RandomEdits edits(3);
+    {
+        Server s = start(options_for(dir));
+        apply_random(*s.engine, edits, 10, true);
+    }
+    const std::string segment = only_segment(dir);
+    const auto size = std::filesystem::file_size(segment);
+    std::filesystem::resize_file(segment, size - 3);
+    Server s = start(options_for(dir));
+    EXPECT_EQ(test::version_of(*s.engine), 9u);
+    EXPECT_EQ(s.store->recovery().torn_truncated, 1u);
+    bool noted = false;
+    for (const auto& n : s.store->recovery().notes) noted |= n.find("torn last record") != std::string::npos;
+    EXPECT_TRUE(noted);
+    // The journal goes on after the cut: the next batch is version 10 and survives a restart.
+    test::apply_ok(*s.engine, SetCamera{Vec3(0, 1, 9), std::nullopt, std::nullopt, std::nullopt});
+    s.stop();
+    Server again = start(options_for(dir));
+    EXPECT_EQ(test::version_of(*again.engine), 10u);
+}
+
+TEST(Durability, AFlippedByteInTheMiddleRefusesToStartNamingFileAndOffset) {
+    TempDir dir;
+    test::RandomEdits edits(5);
+    {
+        Server s = start(options_for(dir));
+        apply_random(*s.engine, edits, 10, true);
+    }
+    const std::string segment = only_segment(dir);
+    auto bytes = durable::read_whole_file(segment).value();
+    const auto scan = durable::scan_segment(bytes);
+    ASSERT_EQ(scan.records.size(), 10u);
+    const uint64_t at = scan.records[4].offset;
+    bytes[at + 20] ^= 0x40;
+    std::ofstream(segment, std::ios::binary | std::ios::trunc) << bytes;
+
+    auto engine = test::make_engine();
+    auto refused = DurableStore::open(options_for(dir), *engine);
+    ASSERT_FALSE(refused.has_value());
+    const std::string msg = refused.error().message;
+    EXPECT_NE(msg.find(segment), std::string::npos) << msg;
+    EXPECT_NE(msg.find("offset " + std::to_string(at)), std::string::npos) << msg;
+    EXPECT_NE(msg.find("--recover-truncate"), std::string::npos) << msg;
+
+    auto o = options_for(dir);
+    o.recovery.truncate_damage = true;
+    Server s = start(o);
+    EXPECT_EQ(test::version_of(*s.engine), 4u);
+}
+
+TEST(Durability, AnEmptyJournalFileStartsAnEmptyScene) {
+    TempDir dir;
+    std::ofstream(dir.file(durable::segment_name(0)));  // zero bytes
+    Server s = start(options_for(dir));
+    ASSERT_TRUE(s.store);
+    EXPECT_EQ(test::version_of(*s.engine), 0u);
+    test::apply_ok(*s.engine, SetCamera{Vec3(0, 1, 9), std::nullopt, std::nullopt, std::nullopt});
+    s.stop();
+    EXPECT_EQ(test::version_of(*start(options_for(dir)).engine), 1u);
+}
+
+TEST(Durability, ASnapshotWithoutAJournalIsLoadedAlone) {
+    TempDir dir;
+    test::RandomEdits edits(9);
+    auto engine = test::make_engine();
+    apply_random(*engine, edits, 5, true);
+    const test::Hits before = test::hits(*engine);
+    const EditBatch scene = engine->read([](const Scene& s) { return s.to_batch(); });
+    ASSERT_TRUE(durable::write_file_atomically(dir.path(), durable::snapshot_name(5),
+                                               durable::encode_snapshot(scene, 5))
+                    .has_value());
+    Server s = start(options_for(dir));
+    EXPECT_EQ(test::version_of(*s.engine), 5u);
+    EXPECT_TRUE(test::hits(*s.engine) == before);
+}
+
+TEST(Durability, ADamagedSnapshotRefusesToStart) {
+    TempDir dir;
+    std::ofstream(dir.file(durable::snapshot_name(3)), std::ios::binary) << "STRATAS1 not really";
+    auto engine = test::make_engine();
+    auto refused = DurableStore::open(options_for(dir), *engine);
+    ASSERT_FALSE(refused.has_value());
+    EXPECT_NE(refused.error().message.find(durable::snapshot_name(3)), std::string::npos)
+        << refused.error().message;
+}
+
+TEST(Durability, TwoStoresCannotShareADirectory) {
+    TempDir dir;
+    Server first = start(options_for(dir));
+    auto engine = test::make_engine();
+    auto second = DurableStore::open(options_for(dir), *engine);
+    ASSERT_FALSE(second.has_value());
+    EXPECT_NE(second.error().message.find("in use by another strata-server"), std::string::npos)
+        << second.error().message;
+}
+
+TEST(Durability, AMissingDirectoryIsCreated) {
+    TempDir dir;
+    auto o = options_for(dir);
+    o.dir = dir.path() + "/a/b";
+    Server s = start(o);
+    ASSERT_TRUE(s.store);
+    EXPECT_TRUE(std::filesystem::is_directory(o.dir));
+}
+
+TEST(Durability, ConcurrentBatchesShareFsyncs) {
+    TempDir dir;
+    Server s = start(options_for(dir));
+    test::apply_ok(*s.engine, test::mesh_edit("box", make_box(Vec3(1))));
+    constexpr int THREADS = 8, PER_THREAD = 40;
+    std::vector<std::thread> threads;
+    for (int t = 0; t < THREADS; ++t) {
+        threads.emplace_back([&, t] {
+            for (int i = 0; i < PER_THREAD; ++i)
+                test::apply_ok(*s.engine, test::instance_edit("i" + std::to_string(t) + "-" +
+                                                                  std::to_string(i),
+                                                              "box"));
+        });
+    }
+    for (auto& t : threads) t.join();
+    const auto stats = s.store->stats();
+    EXPECT_EQ(stats.journal_records, 1u + THREADS * PER_THREAD);
+    // Every batch waited for an fsync; most shared one with others.
+    EXPECT_LT(stats.fsyncs, stats.journal_records);
+    EXPECT_GT(stats.batches_per_fsync_max, 1u);
+    uint64_t observed = 0;
+    for (uint64_t b : stats.fsync_buckets) observed += b;
+    EXPECT_GT(observed, 0u);
+    s.stop();
+    EXPECT_EQ(test::version_of(*start(options_for(dir)).engine), 1u + THREADS * PER_THREAD);
+}
+
+TEST(Durability, EveryFsyncModeKeepsWhatAGracefulStopWrote) {
+    for (auto mode : {durable::FsyncMode::Always, durable::FsyncMode::Batch,
+                      durable::FsyncMode::Off}) {
+        TempDir dir;
+        test::RandomEdits edits(21);
+        uint64_t version = 0;
+        {
+            Server s = start(options_for(dir, mode));
+            version = apply_random(*s.engine, edits, 12, true);
+        }
+        EXPECT_EQ(test::version_of(*start(options_for(dir, mode)).engine), version)
+            << durable::fsync_mode_name(mode);
+    }
+}
+
+}  // namespace
+}  // namespace strata

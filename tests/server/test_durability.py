@@ -1,0 +1,270 @@
+"""Durability at the process level: real strata-server processes on data directories that are
+torn, damaged, empty, missing, read-only, full or already in use. Each case has a documented
+outcome (protocol/README.md, "Durability") and a clear message; none crashes the server.
+Snapshot export and import through HTTP and the strata CLI are here too.
+"""
+
+import glob
+import json
+import os
+import resource
+import shutil
+import subprocess
+import tempfile
+import time
+import unittest
+import urllib.request
+
+import durable_scene
+from hostile import SERVER, Server
+
+CLI = os.environ.get("STRATA_CLI_BINARY", "build/clients/cli/strata")
+HEADER = 32  # segment header bytes
+
+
+def run_server(args, timeout=30.0):
+    """Runs a server that is expected to refuse to start: (exit code, log)."""
+    p = subprocess.run([SERVER, "--host", "127.0.0.1", "--port", "0"] + args,
+                       capture_output=True, text=True, timeout=timeout)
+    return p.returncode, p.stdout + p.stderr
+
+
+def stream(server, first, count):
+    for n in range(first, first + count):
+        status, answer = server.json("POST", "/v1/edits", durable_scene.batch(n))
+        assert status == 200, (status, answer)
+    return first + count
+
+
+def segments(data):
+    return sorted(glob.glob(os.path.join(data, "journal-*.log")))
+
+
+def record_offsets(path):
+    """Start offsets of the records in a segment (the format of engine/durable/journal_format.h)."""
+    with open(path, "rb") as f:
+        raw = f.read()
+    offsets, pos = [], HEADER
+    while pos + 16 <= len(raw):
+        length = int.from_bytes(raw[pos:pos + 4], "little")
+        offsets.append(pos)
+        pos += 16 + length
+    return offsets
+
+
+class DataDirectory(unittest.TestCase):
+    def setUp(self):
+        self.data = tempfile.mkdtemp(prefix="strata-durable-")
+        self.addCleanup(shutil.rmtree, self.data, True)
+
+    def server(self, *extra, **kw):
+        s = Server(["--data", self.data] + list(extra), **kw)
+        self.addCleanup(s.stop)
+        return s
+
+    def fill(self, count):
+        s = self.server()
+        stream(s, 0, count)
+        s.stop()
+
+    def test_a_restart_brings_back_the_same_scene(self):
+        s = self.server()
+        stream(s, 0, 12)
+        before = s.json("GET", "/v1/scene")[1]
+        s.kill()
+        s = self.server()
+        self.assertEqual(s.json("GET", "/v1/scene")[1], before)
+        self.assertEqual(durable_scene.check(s, 12), "")
+        stats = s.json("GET", "/v1/stats")[1]["durability"]
+        self.assertEqual(stats["recovered_version"], 12)
+        self.assertEqual(stats["fsync"], "always")
+        self.assertGreaterEqual(stats["recovery_seconds"], 0)
+        metrics = s.call("GET", "/metrics")[2].decode()
+        self.assertIn("strata_durable_journal_bytes ", metrics)
+        self.assertIn("strata_durable_fsync_duration_seconds_bucket", metrics)
+
+    def test_a_torn_last_record_is_truncated_and_logged(self):
+        self.fill(6)
+        seg = segments(self.data)[-1]
+        os.truncate(seg, os.path.getsize(seg) - 7)
+        s = self.server()
+        self.assertEqual(s.version(), 5)
+        self.assertEqual(durable_scene.check(s, 5), "")
+        self.assertIn("torn last record", s.log())
+        self.assertEqual(s.json("GET", "/v1/stats")[1]["durability"]["torn_records_truncated"], 1)
+
+    def test_a_flipped_byte_in_the_middle_refuses_to_start_naming_file_and_offset(self):
+        self.fill(6)
+        seg = segments(self.data)[-1]
+        at = record_offsets(seg)[2]
+        with open(seg, "r+b") as f:
+            f.seek(at + 20)
+            b = f.read(1)
+            f.seek(at + 20)
+            f.write(bytes([b[0] ^ 0x20]))
+        code, log = run_server(["--data", self.data])
+        self.assertEqual(code, 1, log)
+        self.assertIn(seg, log)
+        self.assertIn(f"offset {at}", log)
+        self.assertIn("--recover-truncate", log)
+        s = self.server("--recover-truncate")
+        self.assertEqual(s.version(), 2)
+        self.assertEqual(durable_scene.check(s, 2), "")
+        self.assertIn("truncated", s.log())
+
+    def test_an_empty_journal_starts_an_empty_scene(self):
+        open(os.path.join(self.data, "journal-%020d.log" % 0), "wb").close()
+        s = self.server()
+        self.assertEqual(s.version(), 0)
+        stream(s, 0, 2)
+        s.kill()
+        self.assertEqual(self.server().version(), 2)
+
+    def test_a_snapshot_without_a_journal_is_loaded(self):
+        source = Server([])
+        self.addCleanup(source.stop)
+        stream(source, 0, 9)
+        status, headers, snap = source.call("GET", "/v1/scene/snapshot")
+        self.assertEqual(status, 200)
+        self.assertEqual(headers["ETag"], '"9"')
+        with open(os.path.join(self.data, "snapshot-%020d.snap" % 9), "wb") as f:
+            f.write(snap)
+        s = self.server()
+        self.assertEqual(s.version(), 9)
+        self.assertEqual(durable_scene.check(s, 9), "")
+
+    def test_a_missing_directory_is_created(self):
+        nested = os.path.join(self.data, "a", "b")
+        s = Server(["--data", nested])
+        self.addCleanup(s.stop)
+        stream(s, 0, 1)
+        self.assertTrue(segments(nested))
+
+    def test_a_read_only_directory_refuses_to_start_with_a_clear_message(self):
+        os.chmod(self.data, 0o555)
+        self.addCleanup(os.chmod, self.data, 0o755)
+        drop = None
+        if os.geteuid() == 0:  # root writes anywhere: run the server as nobody
+            def drop():
+                os.setgid(65534)
+                os.setuid(65534)
+        p = subprocess.run([SERVER, "--port", "0", "--data", self.data], capture_output=True,
+                           text=True, timeout=30, preexec_fn=drop)
+        log = p.stdout + p.stderr
+        self.assertEqual(p.returncode, 1, log)
+        self.assertIn("cannot create the lock file", log)
+        self.assertIn("Permission denied", log)
+
+    def test_a_full_disk_refuses_the_batch_and_keeps_the_server_alive(self):
+        limit = 256 * 1024
+
+        def small_files():
+            resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+        s = self.server(preexec_fn=small_files)
+        n, refused = 0, None
+        while n < 200:
+            status, answer = s.json("POST", "/v1/edits", durable_scene.batch(n))
+            if status != 200:
+                refused = (status, answer)
+                break
+            n += 1
+        self.assertIsNotNone(refused, "the journal should have hit the file size limit")
+        self.assertEqual(refused[0], 503, refused)
+        self.assertIn("File too large", refused[1]["detail"])
+        self.assertTrue(s.alive())
+        self.assertEqual(s.version(), n, "a refused batch changes nothing")
+        self.assertEqual(durable_scene.check(s, n), "")
+        s.kill()
+        s = self.server()
+        self.assertEqual(s.version(), n)
+        self.assertEqual(durable_scene.check(s, n), "")
+
+    def test_two_servers_cannot_share_a_directory(self):
+        self.server()
+        code, log = run_server(["--data", self.data])
+        self.assertEqual(code, 1, log)
+        self.assertIn("in use by another strata-server", log)
+
+    def test_snapshots_replace_the_journal_and_survive_restarts(self):
+        s = self.server("--snapshot-threshold-kb", "16")
+        stream(s, 0, 40)
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline:
+            if s.json("GET", "/v1/stats")[1]["durability"]["snapshots_written"] > 0:
+                break
+            time.sleep(0.05)
+        stats = s.json("GET", "/v1/stats")[1]["durability"]
+        self.assertGreater(stats["snapshots_written"], 0)
+        self.assertGreater(stats["last_snapshot_bytes"], 0)
+        self.assertGreater(stats["last_snapshot_unix_ms"], 0)
+        s.kill()
+        self.assertTrue(glob.glob(os.path.join(self.data, "snapshot-*.snap")))
+        s = self.server()
+        self.assertEqual(durable_scene.check(s, 40), "")
+        self.assertIn("loaded snapshot", s.log())
+
+    def test_readyz_answers_503_until_the_recovered_scene_is_built(self):
+        s = self.server()
+        status, _ = s.json("POST", "/v1/edits", {"edits": [
+            {"op": "add_mesh", "id": "big", "shape": {"type": "sphere", "segments": 1400}},
+            {"op": "add_instance", "id": "b", "mesh": "big"}]})
+        self.assertEqual(status, 200)
+        s.kill()
+        s = self.server()
+        first = s.call("GET", "/readyz")
+        self.assertEqual(first[0], 503, "the build of 2M triangles should still be running")
+        self.assertIn(b"starting", first[2])
+        self.assertEqual(s.call("GET", "/livez")[0], 200)
+        deadline = time.monotonic() + 60
+        while s.call("GET", "/readyz")[0] != 200:
+            self.assertLess(time.monotonic(), deadline)
+            time.sleep(0.05)
+        self.assertGreater(s.json("GET", "/v1/stats")[1]["durability"]["rebuild_seconds"], 0)
+
+
+class SnapshotExport(unittest.TestCase):
+    def test_a_scene_moves_between_servers_through_http_and_the_cli(self):
+        a, b = Server([]), Server([])
+        self.addCleanup(a.stop)
+        self.addCleanup(b.stop)
+        stream(a, 0, 11)
+        stream(b, 0, 3)
+        path = os.path.join(tempfile.mkdtemp(prefix="strata-snap-"), "scene.strata")
+        self.addCleanup(shutil.rmtree, os.path.dirname(path), True)
+        save = subprocess.run([CLI, "--server", a.url, "snapshot", "save", path],
+                              capture_output=True, text=True)
+        self.assertEqual(save.returncode, 0, save.stderr)
+        self.assertIn("saved version 11", save.stdout)
+        load = subprocess.run([CLI, "--server", b.url, "snapshot", "load", path],
+                              capture_output=True, text=True)
+        self.assertEqual(load.returncode, 0, load.stderr)
+        self.assertEqual(b.version(), 4, "loading is one new version")
+        scene_a, scene_b = a.json("GET", "/v1/scene")[1], b.json("GET", "/v1/scene")[1]
+        scene_a.pop("version"), scene_b.pop("version")
+        self.assertEqual(scene_a, scene_b)
+        self.assertEqual(durable_scene.check(a, 11), "")
+        # The same hits: identical frames.
+        frame = {"width": 64, "height": 48, "spp": 1}
+        self.assertEqual(a.call("POST", "/v1/render", frame)[2], b.call("POST", "/v1/render",
+                                                                           frame)[2])
+
+    def test_a_damaged_snapshot_is_refused_and_changes_nothing(self):
+        s = Server([])
+        self.addCleanup(s.stop)
+        stream(s, 0, 3)
+        snap = s.call("GET", "/v1/scene/snapshot")[2]
+        bad = bytearray(snap)
+        bad[len(bad) // 2] ^= 1
+        status, _, body = s.call("POST", "/v1/scene/snapshot", bytes(bad),
+                                 {"Content-Type": "application/vnd.strata.snapshot"})
+        self.assertEqual(status, 400, body)
+        self.assertIn(b"checksum", body)
+        self.assertEqual(s.version(), 3)
+        status, _, body = s.call("POST", "/v1/scene/snapshot", snap, {"If-Match": '"2"'})
+        self.assertEqual(status, 412, body)
+        self.assertEqual(s.version(), 3)
+
+
+if __name__ == "__main__":
+    unittest.main()
