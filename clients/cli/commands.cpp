@@ -271,7 +271,7 @@ int run_snapshot_load(Transport& t, const Console& c, const std::string& file) {
         bytes.assign(std::istreambuf_iterator<char>(in), {});
     }
     int code = OK;
-    const auto doc = answer(c, t, "snapshot load", t.put_snapshot(std::move(bytes)), code);
+    const auto doc = json_answer(c, t, "snapshot load", t.put_snapshot(std::move(bytes)), code);
     if (!doc) return code;
     if (c.json) {
         c.out << doc->dump() << '\n';

@@ -22,7 +22,7 @@ static_assert(TAG_IS<0, AddMesh> && TAG_IS<1, UpdateMeshPositions> &&
               std::variant_size_v<Edit> == 14,
               "journal kind tags are the Edit variant's indices: append new kinds at the end");
 
-/// Kind names for messages (the wire names; edit_name() lives in the protocol layer).
+/// Kind names for messages (the wire names, as the protocol's op table spells them).
 constexpr const char* KIND_NAMES[] = {
     "add_mesh",     "update_mesh_positions", "replace_mesh_topology", "remove_mesh",
     "add_material", "update_material",       "add_instance",          "update_instance",

@@ -14,9 +14,7 @@ void FrameState::refresh_instance(const Scene& scene, uint32_t slot) {
     if (!scene.materials().contains(material)) material = scene.meshes().get(r.mesh)->material;
     shade.material = scene.materials().contains(material) ? material.index + 1 : DEFAULT_MATERIAL;
     shade.mesh_slot = r.mesh.index;
-    shade.user_id = r.user_id;
     shade.normal_matrix = r.transform.normal_matrix();
-    shade.live = true;
 }
 
 void FrameState::sync(const Scene& scene) {

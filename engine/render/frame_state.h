@@ -18,8 +18,6 @@ constexpr uint32_t DEFAULT_MATERIAL = 0;
 struct InstanceShade {
     uint32_t material = DEFAULT_MATERIAL;  ///< index into FrameState::materials
     uint32_t mesh_slot = 0;
-    uint32_t user_id = 0;
-    bool live = false;
     glm::mat3 normal_matrix{1.0f};  ///< object-to-world for normals
 };
 

@@ -117,9 +117,6 @@ void apply_to(Camera& c, const SetCamera& e);
 void apply_to(Lighting& l, const SetLighting& e);
 void apply_to(Material& m, const UpdateMaterial& e);
 
-/// The wire name of an edit's kind ("add_mesh", "set_transform", ...).
-const char* edit_name(const Edit& e);
-
 /// Edits applied atomically: all or none.
 struct EditBatch {
     std::vector<Edit> edits;

@@ -109,6 +109,8 @@ TEST_F(ScriptRunner, ARenderAnswerWithoutItsReportIsARequestFailure) {
         }
         Reply scene_object(const std::string&, const std::string&) override { return {}; }
         Reply pick(const std::string&) override { return {}; }
+        Reply get_snapshot() override { return {}; }
+        Reply put_snapshot(std::string) override { return {}; }
         std::string describe() const override { return "no report"; }
     } transport;
     script = load(R"({"render": {}})");

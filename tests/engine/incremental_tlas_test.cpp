@@ -176,7 +176,9 @@ TEST(IncrementalTlas, ARemovedMeshLeavesTheBlasMemoryEvenWhileStaleCopiesReferen
     const RebuildReport rebuilt = test::commit_ok(*engine);
     EXPECT_EQ(rebuilt.tlas.stale_copies, 0u);
     EXPECT_EQ(rebuilt.memory_blas_bytes, removed.memory_blas_bytes);
-    EXPECT_LE(rebuilt.memory_tlas_bytes, before.memory_tlas_bytes);
+    // (Not compared with `before`: Embree's per-thread build blocks vary with the threads a
+    // build happens to get, by more than the instance removed.)
+    EXPECT_LT(rebuilt.memory_tlas_bytes, removed.memory_tlas_bytes);
     EXPECT_GT(rebuilt.memory_tlas_bytes, 0);
 }
 
