@@ -42,9 +42,9 @@ struct SegmentInfo {
 
 class Journal {
 public:
-    /// Opens the journal in `dir` for records after `version`: appends to `last` when given (a
-    /// segment recovery found valid up to its end), else creates `journal-<version>.log`.
-    /// `older` are the other segments on disk, oldest first (dropped after snapshots).
+    /// Opens the journal in `dir` for records after `version`. `segments` are the segments
+    /// recovery left on disk, oldest first: the newest (valid up to its end) is appended to; with
+    /// none, `journal-<version>.log` is created. Older ones are dropped after snapshots.
     static Result<std::unique_ptr<Journal>> open(const std::string& dir, uint64_t version,
                                                  const JournalOptions& options,
                                                  std::vector<SegmentInfo> segments);

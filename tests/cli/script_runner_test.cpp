@@ -103,6 +103,8 @@ TEST_F(ScriptRunner, ARenderAnswerWithoutItsReportIsARequestFailure) {
         }
         Reply stats() override { return {}; }
         Reply scene() override { return {}; }
+        Reply get_snapshot() override { return {}; }
+        Reply put_snapshot(std::string) override { return {}; }
         std::string describe() const override { return "no report"; }
     } transport;
     script = load(R"({"render": {}})");
