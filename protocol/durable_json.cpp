@@ -17,9 +17,8 @@ Json durable_stats_to_json(const durable::DurableStats& s) {
     }
     Json buckets = Json::array();
     for (std::size_t i = 0; i < s.fsync_buckets.size(); ++i) {
-        buckets.push_back({{"le", i < durable::FSYNC_BOUNDS.size()
-                                      ? Json(durable::FSYNC_BOUNDS[i])
-                                      : Json("+Inf")},
+        buckets.push_back({{"le", i < durable::FSYNC_BOUNDS.size() ? Json(durable::FSYNC_BOUNDS[i])
+                                                                   : Json("+Inf")},
                            {"count", s.fsync_buckets[i]}});
     }
     j["fsync_latency_seconds"] = std::move(buckets);

@@ -43,9 +43,8 @@ ApiResponse post_snapshot(Engine& engine, std::string body,
         if (e.code == ErrorCode::VersionMismatch) {
             ApiResponse r = problem_response(
                 make_problem(ProblemType::VersionMismatch, "If-Match: " + e.message));
-            r.headers.emplace_back("ETag", etag(engine.read([](const Scene& s) {
-                return s.version();
-            })));
+            r.headers.emplace_back("ETag",
+                                   etag(engine.read([](const Scene& s) { return s.version(); })));
             return r;
         }
         Problem p = problem_from(e);

@@ -119,18 +119,22 @@ int serve(server::CommandLine& cl) {
         spdlog::critical("{}", port.error().message);
         return 1;
     }
-    // /readyz answers 503 until the recovered scene's acceleration structures are built;
-    // requests that arrive meanwhile wait for the build (the engine's launch lock).
-    http.set_starting(true);
-    std::thread rebuild([&] {
-        Stopwatch clock;
-        auto built = engine.value()->commit();
-        if (!built) spdlog::error("building the recovered scene failed: {}",
-                                  built.error().describe());
-        if (store) store->set_rebuild_seconds(clock.ms() / 1000.0);
-        if (recovered != 0) spdlog::info("recovered scene built in {:.1f} ms", clock.ms());
-        http.set_starting(false);
-    });
+    // /readyz answers 503 until a recovered scene's acceleration structures are built; requests
+    // that arrive meanwhile wait for the build (the engine's launch lock). A new scene (empty, or
+    // the demo) is built by its first render, as without --data.
+    std::thread rebuild;
+    if (recovered != 0) {
+        http.set_starting(true);
+        rebuild = std::thread([&] {
+            Stopwatch clock;
+            auto built = engine.value()->commit();
+            if (!built)
+                spdlog::error("building the recovered scene failed: {}", built.error().describe());
+            if (store) store->set_rebuild_seconds(clock.ms() / 1000.0);
+            spdlog::info("recovered scene built in {:.1f} ms", clock.ms());
+            http.set_starting(false);
+        });
+    }
     signals.start([&http, &cl](int signo) {
         spdlog::info(
             "{} received: finishing in-flight requests (renders still running after {} "
@@ -143,7 +147,7 @@ int serve(server::CommandLine& cl) {
                  cl.config.token.empty() ? "no authentication"
                                          : "bearer token required, from " + cl.token_source);
     http.listen();
-    rebuild.join();
+    if (rebuild.joinable()) rebuild.join();
     store.reset();  // the journal's last fsync, before the engine goes
     spdlog::info("stopped");
     return 0;

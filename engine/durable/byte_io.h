@@ -144,8 +144,7 @@ private:
         get(n);
         if (!ok()) return;
         // Checked before allocating: a corrupt count must not ask for terabytes.
-        if (n > remaining() / sizeof(T))
-            return fail("array of " + std::to_string(n) + " elements");
+        if (n > remaining() / sizeof(T)) return fail("array of " + std::to_string(n) + " elements");
         v.resize(n);
         raw(v.data(), n * sizeof(T));
     }

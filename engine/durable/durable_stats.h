@@ -20,24 +20,23 @@ enum class FsyncMode : uint8_t {
 const char* fsync_mode_name(FsyncMode m);
 
 /// Fixed buckets of fsync latency, seconds (the last count is above every bound).
-inline constexpr std::array<double, 12> FSYNC_BOUNDS = {0.0001, 0.00025, 0.0005, 0.001, 0.0025,
-                                                        0.005,  0.01,    0.025,  0.05,  0.1,
-                                                        0.25,   1.0};
+inline constexpr std::array<double, 12> FSYNC_BOUNDS = {
+    0.0001, 0.00025, 0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 1.0};
 
 struct DurableStats {
     // Numbers in the table below.
-    uint64_t journal_bytes = 0;         ///< bytes in the journal segments on disk now
-    uint64_t journal_records = 0;       ///< records appended since start
+    uint64_t journal_bytes = 0;    ///< bytes in the journal segments on disk now
+    uint64_t journal_records = 0;  ///< records appended since start
     uint64_t journal_appended_bytes = 0;
-    uint64_t fsyncs = 0;                ///< fdatasync calls on journal segments (and directory)
-    uint64_t batches_per_fsync_max = 0; ///< largest group one fsync made durable
+    uint64_t fsyncs = 0;                 ///< fdatasync calls on journal segments (and directory)
+    uint64_t batches_per_fsync_max = 0;  ///< largest group one fsync made durable
     uint64_t snapshots_written = 0;
     uint64_t snapshot_failures = 0;
     uint64_t last_snapshot_version = 0;
     uint64_t last_snapshot_bytes = 0;
     uint64_t last_snapshot_unix_ms = 0;  ///< 0: none written since start
     uint64_t recovered_version = 0;
-    uint64_t recovered_records = 0;      ///< journal records replayed at start
+    uint64_t recovered_records = 0;  ///< journal records replayed at start
     uint64_t torn_records_truncated = 0;
     double fsync_seconds = 0.0;
     double last_snapshot_seconds = 0.0;  ///< copy under the lock plus writing
@@ -48,8 +47,8 @@ struct DurableStats {
     // Not in the table.
     FsyncMode mode = FsyncMode::Always;
     std::string directory;
-    bool failed = false;     ///< the journal hit an fsync error and refuses batches
-    std::string failure;     ///< why
+    bool failed = false;  ///< the journal hit an fsync error and refuses batches
+    std::string failure;  ///< why
     std::array<uint64_t, FSYNC_BOUNDS.size() + 1> fsync_buckets{};
 };
 
@@ -100,8 +99,8 @@ inline constexpr DurableCounterSpec DURABLE_COUNTERS[] = {
      DurableUnit::Milliseconds, false, nullptr, &DurableStats::last_snapshot_lock_ms},
     {"recovery_seconds", "Time to load the snapshot and replay the journal at start.",
      DurableUnit::Seconds, false, nullptr, &DurableStats::recovery_seconds},
-    {"rebuild_seconds", "Time to build the acceleration structures at start.",
-     DurableUnit::Seconds, false, nullptr, &DurableStats::rebuild_seconds},
+    {"rebuild_seconds", "Time to build the acceleration structures at start.", DurableUnit::Seconds,
+     false, nullptr, &DurableStats::rebuild_seconds},
 };
 
 }  // namespace strata::durable

@@ -22,20 +22,19 @@ Result<int> lock_directory(const std::string& dir) {
     const std::string path = join_path(dir, "LOCK");
     const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
     if (fd < 0)
-        return failure(ErrorCode::Storage,
-                       errno_message("cannot create the lock file " + path +
-                                     " (the data directory must be writable)"));
+        return failure(ErrorCode::Storage, errno_message("cannot create the lock file " + path +
+                                                         " (the data directory must be writable)"));
     if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
         const int err = errno;
         char holder[32] = {};
         const ssize_t n = ::pread(fd, holder, sizeof holder - 1, 0);
         ::close(fd);
         if (err == EWOULDBLOCK)
-            return failure(ErrorCode::Storage,
-                           "the data directory " + dir + " is in use by another strata-server" +
-                               (n > 0 ? " (pid " + std::string(holder, std::size_t(n)) + ")"
-                                      : std::string()) +
-                               "; two servers cannot share one --data");
+            return failure(
+                ErrorCode::Storage,
+                "the data directory " + dir + " is in use by another strata-server" +
+                    (n > 0 ? " (pid " + std::string(holder, std::size_t(n)) + ")" : std::string()) +
+                    "; two servers cannot share one --data");
         errno = err;
         return failure(ErrorCode::Storage, errno_message("cannot lock " + path));
     }
@@ -81,8 +80,8 @@ Result<std::unique_ptr<DurableStore>> DurableStore::open(const StoreOptions& opt
     store->m_stats.directory = dir;
 
     // Step: the journal, from here on.
-    auto journal = Journal::open(dir, store->m_recovery.version, options.journal,
-                                 store->m_recovery.segments);
+    auto journal =
+        Journal::open(dir, store->m_recovery.version, options.journal, store->m_recovery.segments);
     if (!journal) return Unexpected(journal.error());
     store->m_journal = std::move(journal.value());
     engine.set_journal(store->m_journal.get());

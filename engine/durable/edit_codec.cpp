@@ -15,19 +15,28 @@ namespace {
 template <std::size_t I, class T>
 constexpr bool TAG_IS = std::is_same_v<std::variant_alternative_t<I, Edit>, T>;
 static_assert(TAG_IS<0, AddMesh> && TAG_IS<1, UpdateMeshPositions> &&
-              TAG_IS<2, ReplaceMeshTopology> && TAG_IS<3, RemoveMesh> && TAG_IS<4, AddMaterial> &&
-              TAG_IS<5, UpdateMaterial> && TAG_IS<6, AddInstance> && TAG_IS<7, UpdateInstance> &&
-              TAG_IS<8, SetTransform> && TAG_IS<9, RemoveInstance> && TAG_IS<10, MarkDirty> &&
-              TAG_IS<11, SetCamera> && TAG_IS<12, SetLighting> && TAG_IS<13, Clear> &&
-              std::variant_size_v<Edit> == 14,
+                  TAG_IS<2, ReplaceMeshTopology> && TAG_IS<3, RemoveMesh> &&
+                  TAG_IS<4, AddMaterial> && TAG_IS<5, UpdateMaterial> && TAG_IS<6, AddInstance> &&
+                  TAG_IS<7, UpdateInstance> && TAG_IS<8, SetTransform> &&
+                  TAG_IS<9, RemoveInstance> && TAG_IS<10, MarkDirty> && TAG_IS<11, SetCamera> &&
+                  TAG_IS<12, SetLighting> && TAG_IS<13, Clear> && std::variant_size_v<Edit> == 14,
               "journal kind tags are the Edit variant's indices: append new kinds at the end");
 
 /// Kind names for messages (the wire names, as the protocol's op table spells them).
-constexpr const char* KIND_NAMES[] = {
-    "add_mesh",     "update_mesh_positions", "replace_mesh_topology", "remove_mesh",
-    "add_material", "update_material",       "add_instance",          "update_instance",
-    "set_transform", "remove_instance",      "mark_dirty",            "set_camera",
-    "set_lighting", "clear"};
+constexpr const char* KIND_NAMES[] = {"add_mesh",
+                                      "update_mesh_positions",
+                                      "replace_mesh_topology",
+                                      "remove_mesh",
+                                      "add_material",
+                                      "update_material",
+                                      "add_instance",
+                                      "update_instance",
+                                      "set_transform",
+                                      "remove_instance",
+                                      "mark_dirty",
+                                      "set_camera",
+                                      "set_lighting",
+                                      "clear"};
 static_assert(std::size(KIND_NAMES) == std::variant_size_v<Edit>);
 
 /// `E` is T or const T: the same function writes (const) and reads (mutable).
@@ -37,17 +46,29 @@ concept Kind = std::same_as<std::remove_const_t<E>, T>;
 // Step: one layout per edit kind -----------------------------------------------------------------
 
 template <class Io, Kind<AddMesh> E>
-void fields(Io& io, E& e) { io(e.id, e.positions, e.triangles, e.build, e.material); }
+void fields(Io& io, E& e) {
+    io(e.id, e.positions, e.triangles, e.build, e.material);
+}
 template <class Io, Kind<UpdateMeshPositions> E>
-void fields(Io& io, E& e) { io(e.mesh, e.offset, e.positions); }
+void fields(Io& io, E& e) {
+    io(e.mesh, e.offset, e.positions);
+}
 template <class Io, Kind<ReplaceMeshTopology> E>
-void fields(Io& io, E& e) { io(e.mesh, e.positions, e.triangles); }
+void fields(Io& io, E& e) {
+    io(e.mesh, e.positions, e.triangles);
+}
 template <class Io, Kind<RemoveMesh> E>
-void fields(Io& io, E& e) { io(e.mesh); }
+void fields(Io& io, E& e) {
+    io(e.mesh);
+}
 template <class Io, Kind<AddMaterial> E>
-void fields(Io& io, E& e) { io(e.id, e.material); }
+void fields(Io& io, E& e) {
+    io(e.id, e.material);
+}
 template <class Io, Kind<UpdateMaterial> E>
-void fields(Io& io, E& e) { io(e.material, e.base_color, e.roughness, e.metallic, e.emission); }
+void fields(Io& io, E& e) {
+    io(e.material, e.base_color, e.roughness, e.metallic, e.emission);
+}
 template <class Io, Kind<AddInstance> E>
 void fields(Io& io, E& e) {
     io(e.id, e.mesh, e.material, e.transform, e.visible, e.mask, e.user_id);
@@ -57,15 +78,25 @@ void fields(Io& io, E& e) {
     io(e.instance, e.material, e.transform, e.visible, e.mask, e.user_id);
 }
 template <class Io, Kind<SetTransform> E>
-void fields(Io& io, E& e) { io(e.instance, e.transform); }
+void fields(Io& io, E& e) {
+    io(e.instance, e.transform);
+}
 template <class Io, Kind<RemoveInstance> E>
-void fields(Io& io, E& e) { io(e.instance); }
+void fields(Io& io, E& e) {
+    io(e.instance);
+}
 template <class Io, Kind<MarkDirty> E>
-void fields(Io& io, E& e) { io(e.mesh, e.action); }
+void fields(Io& io, E& e) {
+    io(e.mesh, e.action);
+}
 template <class Io, Kind<SetCamera> E>
-void fields(Io& io, E& e) { io(e.eye, e.target, e.up, e.fov_y_deg); }
+void fields(Io& io, E& e) {
+    io(e.eye, e.target, e.up, e.fov_y_deg);
+}
 template <class Io, Kind<SetLighting> E>
-void fields(Io& io, E& e) { io(e.sun_direction, e.sun_color, e.sky_color, e.sky_intensity); }
+void fields(Io& io, E& e) {
+    io(e.sun_direction, e.sun_color, e.sky_color, e.sky_intensity);
+}
 template <class Io, Kind<Clear> E>
 void fields(Io&, E&) {}
 
@@ -108,8 +139,8 @@ Result<EditBatch> decode_batch(std::string_view bytes) {
         std::visit([&](auto& e) { fields(r, e); }, edit);
         if (!r.ok()) {
             r.fail("");  // keeps the first message
-            return failure(ErrorCode::InvalidArgument,
-                           "edit " + std::to_string(i) + " (" + KIND_NAMES[tag] + "): " + r.error());
+            return failure(ErrorCode::InvalidArgument, "edit " + std::to_string(i) + " (" +
+                                                           KIND_NAMES[tag] + "): " + r.error());
         }
         batch.edits.push_back(std::move(edit));
     }

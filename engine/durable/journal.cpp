@@ -14,9 +14,12 @@ namespace strata::durable {
 
 const char* fsync_mode_name(FsyncMode m) {
     switch (m) {
-        case FsyncMode::Always: return "always";
-        case FsyncMode::Batch: return "batch";
-        case FsyncMode::Off: return "off";
+        case FsyncMode::Always:
+            return "always";
+        case FsyncMode::Batch:
+            return "batch";
+        case FsyncMode::Off:
+            return "off";
     }
     return "always";
 }
@@ -112,8 +115,8 @@ Result<uint64_t> Journal::append(PendingRecord& record, uint64_t version) {
     Status s = write_all(f.fd, record.bytes, f.path, &written);
     if (!s) {
         // Step: leave no partial record behind; the batch is rolled back by the caller.
-        if (written > 0 && (::ftruncate(f.fd, off_t(f.size)) != 0 ||
-                            ::lseek(f.fd, off_t(f.size), SEEK_SET) < 0)) {
+        if (written > 0 &&
+            (::ftruncate(f.fd, off_t(f.size)) != 0 || ::lseek(f.fd, off_t(f.size), SEEK_SET) < 0)) {
             m_failure = errno_message("cannot cut a partial record off " + f.path);
             m_stats.failed = true;
             m_stats.failure = m_failure;

@@ -42,9 +42,9 @@ struct SegmentInfo {
 
 class Journal {
 public:
-    /// Opens the journal in `dir` for records after `version`: appends to `last` when given (a
-    /// segment recovery found valid up to its end), else creates `journal-<version>.log`.
-    /// `older` are the other segments on disk, oldest first (dropped after snapshots).
+    /// Opens the journal in `dir` for records after `version`. `segments` are the segments
+    /// recovery left on disk, oldest first: the newest (valid up to its end) is appended to; with
+    /// none, `journal-<version>.log` is created. Older ones are dropped after snapshots.
     static Result<std::unique_ptr<Journal>> open(const std::string& dir, uint64_t version,
                                                  const JournalOptions& options,
                                                  std::vector<SegmentInfo> segments);
@@ -97,14 +97,14 @@ private:
     std::vector<std::shared_ptr<File>> m_retired;  ///< rotated out, not yet fsynced
     std::vector<SegmentInfo> m_segments;           ///< every segment on disk, oldest first
     bool m_dir_dirty = false;                      ///< a segment was created since the last sync
-    uint64_t m_written = 0;         ///< position: bytes appended since open, over all segments
-    uint64_t m_synced = 0;          ///< position known durable
+    uint64_t m_written = 0;  ///< position: bytes appended since open, over all segments
+    uint64_t m_synced = 0;   ///< position known durable
     uint64_t m_records_written = 0;
     uint64_t m_records_synced = 0;
     bool m_syncing = false;
-    std::string m_failure;          ///< non-empty: an fsync failed; the journal takes no more
+    std::string m_failure;  ///< non-empty: an fsync failed; the journal takes no more
     uint64_t m_since_rotation = 0;
-    DurableStats m_stats;           ///< the counters the journal keeps
+    DurableStats m_stats;  ///< the counters the journal keeps
 
     std::thread m_background;  ///< Batch mode's periodic fsync
     std::condition_variable m_stop_cv;

@@ -159,8 +159,9 @@ std::string encode_snapshot(const EditBatch& scene, uint64_t version) {
 
 Result<DecodedSnapshot> decode_snapshot(std::string_view bytes) {
     if (bytes.size() < SNAPSHOT_HEADER_BYTES || std::memcmp(bytes.data(), SNAPSHOT_MAGIC, 8) != 0)
-        return failure(ErrorCode::InvalidArgument,
-                       "not a Strata snapshot (it must start with 'STRATAS1' and a 32-byte header)");
+        return failure(
+            ErrorCode::InvalidArgument,
+            "not a Strata snapshot (it must start with 'STRATAS1' and a 32-byte header)");
     if (get<uint32_t>(bytes, 8) != FORMAT_VERSION)
         return failure(ErrorCode::InvalidArgument,
                        "snapshot format " + std::to_string(get<uint32_t>(bytes, 8)) +

@@ -76,8 +76,8 @@ Result<RecoveryResult> recover(const std::string& dir, Engine& engine,
             continue;
         }
         if (Status s = engine.restore(std::move(snap->scene), version); !s)
-            return failure(ErrorCode::Storage, "snapshot " + path +
-                                                   " could not be loaded: " + s.error().describe());
+            return failure(ErrorCode::Storage,
+                           "snapshot " + path + " could not be loaded: " + s.error().describe());
         out.loaded_snapshot = true;
         out.snapshot_version = version;
         out.notes.push_back("loaded snapshot " + path + " (version " + std::to_string(version) +
@@ -103,16 +103,15 @@ Result<RecoveryResult> recover(const std::string& dir, Engine& engine,
         auto bytes = read_whole_file(path);
         if (!bytes) return Unexpected(bytes.error());
         const SegmentScan scan = scan_segment(bytes.value());
-        if (scan.empty_file || (scan.tail == SegmentScan::Tail::Torn && scan.records.empty() &&
-                                scan.valid_end == 0)) {
+        if (scan.empty_file ||
+            (scan.tail == SegmentScan::Tail::Torn && scan.records.empty() && scan.valid_end == 0)) {
             // A crash between creating the file and writing its header.
             if (!last && !options.truncate_damage)
                 return damaged(path, "the file has no complete header",
                                "later journal files would follow a gap");
             ::unlink(path.c_str());
             out.notes.push_back("removed " + path + " (no complete header: " +
-                                (scan.empty_file ? std::string("empty file") : scan.problem) +
-                                ")");
+                                (scan.empty_file ? std::string("empty file") : scan.problem) + ")");
             continue;
         }
         if (scan.tail == SegmentScan::Tail::Corrupt && scan.valid_end == 0) {

@@ -156,5 +156,26 @@ TEST(RenderBody, PassesEveryOptionAndTakesTheFormatFromTheFileName) {
     EXPECT_EQ(Json::parse(*render_body(plain, error)), Json::object());
 }
 
+TEST_F(Commands, SnapshotSaveThenLoadPutsTheSameSceneBackAsANewVersion) {
+    write(R"([{"op": "add_mesh", "id": "ball", "shape": {"type": "sphere", "segments": 8}},
+              {"op": "add_instance", "id": "b0", "mesh": "ball"}])");
+    ASSERT_EQ(run_edit(*transport, console(), file.string(), std::nullopt), 0);
+    const std::string before = srv.get("/v1/scene/instances/b0").json()["transform"].dump();
+    EXPECT_EQ(run_snapshot_save(*transport, console(), file.string()), 0);
+    EXPECT_NE(out.str().find("saved version 1"), std::string::npos) << out.str();
+    EXPECT_FALSE(std::filesystem::exists(file.string() + ".tmp"));
+    ASSERT_EQ(srv.edits({{{"op", "clear"}}}).status, 200);
+    EXPECT_EQ(run_snapshot_load(*transport, console(), file.string()), 0);
+    EXPECT_NE(out.str().find("the scene is now version 3"), std::string::npos) << out.str();
+    EXPECT_EQ(srv.get("/v1/scene/instances/b0").json()["transform"].dump(), before);
+}
+
+TEST_F(Commands, SnapshotLoadOfAFileThatIsNotOneChangesNothing) {
+    write("{\"edits\": []}");
+    EXPECT_EQ(run_snapshot_load(*transport, console(), file.string()), 3);
+    EXPECT_NE(err.str().find("not a Strata snapshot"), std::string::npos) << err.str();
+    EXPECT_EQ(srv.get("/v1/scene").json()["version"], 0);
+}
+
 }  // namespace
 }  // namespace strata::cli

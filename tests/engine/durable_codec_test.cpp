@@ -108,7 +108,8 @@ TEST(EditCodec, MeshArraysAreRawLittleEndianBuffers) {
     // count, tag, id length, id, offset, element count, then three floats as they are in memory.
     const float want[3] = {1.0f, 2.0f, 3.0f};
     ASSERT_EQ(bytes.size(), 4u + 1 + 4 + 1 + 4 + 8 + 12);
-    EXPECT_EQ(bytes.substr(bytes.size() - 12), std::string(reinterpret_cast<const char*>(want), 12));
+    EXPECT_EQ(bytes.substr(bytes.size() - 12),
+              std::string(reinterpret_cast<const char*>(want), 12));
 }
 
 TEST(EditCodec, EveryTruncationIsAnErrorNotACrash) {

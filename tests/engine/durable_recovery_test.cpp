@@ -155,7 +155,8 @@ TEST(Durability, ATornLastRecordIsCutOffAndReported) {
     EXPECT_EQ(test::version_of(*s.engine), 9u);
     EXPECT_EQ(s.store->recovery().torn_truncated, 1u);
     bool noted = false;
-    for (const auto& n : s.store->recovery().notes) noted |= n.find("torn last record") != std::string::npos;
+    for (const auto& n : s.store->recovery().notes)
+        noted |= n.find("torn last record") != std::string::npos;
     EXPECT_TRUE(noted);
     // The journal goes on after the cut: the next batch is version 10 and survives a restart.
     test::apply_ok(*s.engine, SetCamera{Vec3(0, 1, 9), std::nullopt, std::nullopt, std::nullopt});
@@ -257,9 +258,9 @@ TEST(Durability, ConcurrentBatchesShareFsyncs) {
     for (int t = 0; t < THREADS; ++t) {
         threads.emplace_back([&, t] {
             for (int i = 0; i < PER_THREAD; ++i)
-                test::apply_ok(*s.engine, test::instance_edit("i" + std::to_string(t) + "-" +
-                                                                  std::to_string(i),
-                                                              "box"));
+                test::apply_ok(
+                    *s.engine,
+                    test::instance_edit("i" + std::to_string(t) + "-" + std::to_string(i), "box"));
         });
     }
     for (auto& t : threads) t.join();
@@ -276,8 +277,8 @@ TEST(Durability, ConcurrentBatchesShareFsyncs) {
 }
 
 TEST(Durability, EveryFsyncModeKeepsWhatAGracefulStopWrote) {
-    for (auto mode : {durable::FsyncMode::Always, durable::FsyncMode::Batch,
-                      durable::FsyncMode::Off}) {
+    for (auto mode :
+         {durable::FsyncMode::Always, durable::FsyncMode::Batch, durable::FsyncMode::Off}) {
         TempDir dir;
         test::RandomEdits edits(21);
         uint64_t version = 0;
