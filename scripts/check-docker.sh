@@ -92,9 +92,8 @@ printf '  %s\n' "user $RT_USER, workdir $RT_WORKDIR, port $RT_PORT, volume $RT_V
     "env ${RT_ENV[*]}"
 STRATA_TARGETS=strata-server scripts/build.sh "$build"
 server_bin="$build/server/strata-server"
-for var in $("$server_bin" --help | grep -o 'STRATA_[A-Z_]*' | sort -u) STRATA_TOKEN; do
-    grep -q "\`$var\`" docker/README.md || fail "docker/README.md does not document $var"
-done
+tests/readme/check_docker_env.sh "$server_bin" docker/README.md ||
+    fail "docker/README.md does not document every STRATA_ variable (above)"
 grep -qF "docker build -f docker/Dockerfile" docker/README.md ||
     fail "docker/README.md has no build command"
 
