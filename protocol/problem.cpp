@@ -22,6 +22,7 @@ constexpr TypeInfo TYPES[] = {
     {"out-of-range", "Index out of range", 422},
     {"degenerate-transform", "Degenerate transform", 422},
     {"in-use", "Object in use", 422},
+    {"cycle", "Group cycle", 422},
     {"empty-mesh", "Empty mesh", 422},
     {"version-mismatch", "Scene version mismatch", 412},
     {"not-found", "Not found", 404},
@@ -57,6 +58,8 @@ ProblemType type_of(ErrorCode code) {
             return ProblemType::DegenerateTransform;
         case ErrorCode::InUse:
             return ProblemType::InUse;
+        case ErrorCode::Cycle:
+            return ProblemType::Cycle;
         case ErrorCode::EmptyMesh:
             return ProblemType::EmptyMesh;
         case ErrorCode::TooLarge:

@@ -19,8 +19,16 @@ static_assert(TAG_IS<0, AddMesh> && TAG_IS<1, UpdateMeshPositions> &&
                   TAG_IS<4, AddMaterial> && TAG_IS<5, UpdateMaterial> && TAG_IS<6, AddInstance> &&
                   TAG_IS<7, UpdateInstance> && TAG_IS<8, SetTransform> &&
                   TAG_IS<9, RemoveInstance> && TAG_IS<10, MarkDirty> && TAG_IS<11, SetCamera> &&
-                  TAG_IS<12, SetLighting> && TAG_IS<13, Clear> && std::variant_size_v<Edit> == 14,
+                  TAG_IS<12, SetLighting> && TAG_IS<13, Clear> && TAG_IS<14, AddGroup> &&
+                  TAG_IS<15, UpdateGroup> && TAG_IS<16, RemoveGroup> &&
+                  std::variant_size_v<Edit> == 17,
               "journal kind tags are the Edit variant's indices: append new kinds at the end");
+
+// An add_instance or update_instance that names a parent group is written under a tag of its own:
+// the fields of the older layout, then the parent. Files written before groups existed keep
+// reading back, and an edit without a parent is written exactly as before.
+constexpr uint8_t TAG_ADD_INSTANCE_WITH_PARENT = 64;
+constexpr uint8_t TAG_UPDATE_INSTANCE_WITH_PARENT = 65;
 
 /// Kind names for messages (the wire names, as the protocol's op table spells them).
 constexpr const char* KIND_NAMES[] = {"add_mesh",
@@ -36,7 +44,10 @@ constexpr const char* KIND_NAMES[] = {"add_mesh",
                                       "mark_dirty",
                                       "set_camera",
                                       "set_lighting",
-                                      "clear"};
+                                      "clear",
+                                      "add_group",
+                                      "update_group",
+                                      "remove_group"};
 static_assert(std::size(KIND_NAMES) == std::variant_size_v<Edit>);
 
 /// `E` is T or const T: the same function writes (const) and reads (mutable).
@@ -99,6 +110,18 @@ void fields(Io& io, E& e) {
 }
 template <class Io, Kind<Clear> E>
 void fields(Io&, E&) {}
+template <class Io, Kind<AddGroup> E>
+void fields(Io& io, E& e) {
+    io(e.id, e.parent, e.transform, e.visible);
+}
+template <class Io, Kind<UpdateGroup> E>
+void fields(Io& io, E& e) {
+    io(e.group, e.parent, e.transform, e.visible);
+}
+template <class Io, Kind<RemoveGroup> E>
+void fields(Io& io, E& e) {
+    io(e.group, e.recursive);
+}
 
 /// A default-constructed edit of kind `tag` (tag < variant size).
 template <std::size_t... I>
@@ -113,6 +136,18 @@ void encode_batch(const EditBatch& batch, std::string& out) {
     ByteWriter w(out);
     w(uint32_t(batch.edits.size()));
     for (const Edit& edit : batch.edits) {
+        if (const auto* add = std::get_if<AddInstance>(&edit); add && add->parent) {
+            w(TAG_ADD_INSTANCE_WITH_PARENT);
+            fields(w, *add);
+            w(*add->parent);
+            continue;
+        }
+        if (const auto* upd = std::get_if<UpdateInstance>(&edit); upd && upd->parent) {
+            w(TAG_UPDATE_INSTANCE_WITH_PARENT);
+            fields(w, *upd);
+            w(*upd->parent);
+            continue;
+        }
         w(uint8_t(edit.index()));
         std::visit([&](const auto& e) { fields(w, e); }, edit);
     }
@@ -131,6 +166,34 @@ Result<EditBatch> decode_batch(std::string_view bytes) {
         uint8_t tag = 0;
         r(tag);
         if (!r.ok()) break;
+        if (tag == TAG_ADD_INSTANCE_WITH_PARENT) {
+            AddInstance e;
+            fields(r, e);
+            std::string parent;
+            r(parent);
+            e.parent = std::move(parent);
+            if (!r.ok()) {
+                r.fail("");
+                return failure(ErrorCode::InvalidArgument,
+                               "edit " + std::to_string(i) + " (add_instance): " + r.error());
+            }
+            batch.edits.push_back(std::move(e));
+            continue;
+        }
+        if (tag == TAG_UPDATE_INSTANCE_WITH_PARENT) {
+            UpdateInstance e;
+            fields(r, e);
+            std::optional<std::string> parent;
+            r(parent);
+            e.parent = std::move(parent);
+            if (!r.ok()) {
+                r.fail("");
+                return failure(ErrorCode::InvalidArgument,
+                               "edit " + std::to_string(i) + " (update_instance): " + r.error());
+            }
+            batch.edits.push_back(std::move(e));
+            continue;
+        }
         if (tag >= std::variant_size_v<Edit>) {
             r.fail("unknown edit kind " + std::to_string(tag));
             break;

@@ -14,7 +14,7 @@ void FrameState::refresh_instance(const Scene& scene, uint32_t slot) {
     if (!scene.materials().contains(material)) material = scene.meshes().get(r.mesh)->material;
     shade.material = scene.materials().contains(material) ? material.index + 1 : DEFAULT_MATERIAL;
     shade.mesh_slot = r.mesh.index;
-    shade.normal_matrix = r.transform.normal_matrix();
+    shade.normal_matrix = r.world.normal_matrix();
 }
 
 void FrameState::sync(const Scene& scene) {

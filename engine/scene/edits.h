@@ -60,6 +60,7 @@ struct AddInstance {
     bool visible = true;
     uint32_t mask = 0xFFFFFFFFu;
     uint32_t user_id = 0;
+    std::optional<std::string> parent;  ///< a group id; nullopt: the root
 };
 
 struct UpdateInstance {
@@ -70,6 +71,8 @@ struct UpdateInstance {
     std::optional<bool> visible;
     std::optional<uint32_t> mask;
     std::optional<uint32_t> user_id;
+    /// Set: a group id moves the instance under that group; set to nullopt: to the root.
+    std::optional<std::optional<std::string>> parent;
 };
 
 struct SetTransform {
@@ -105,12 +108,38 @@ struct SetLighting {
     std::optional<float> sky_intensity;
 };
 
-/// Removes every mesh, instance and material and resets camera and lighting.
+/// Removes every mesh, instance, material and group and resets camera and lighting.
 struct Clear {};
+
+/// A new group: a node of the scene graph whose transform and visibility apply to everything
+/// below it.
+struct AddGroup {
+    std::string id;
+    std::optional<std::string> parent;  ///< a group id; nullopt: the root
+    Affine transform;
+    bool visible = true;
+};
+
+/// Changes some of a group's fields.
+struct UpdateGroup {
+    std::string group;
+    /// Set: a group id moves this group (with its subtree) under it; set to nullopt: to the root.
+    std::optional<std::optional<std::string>> parent;
+    std::optional<Affine> transform;
+    std::optional<bool> visible;
+};
+
+/// Removes a group; refused while it has children unless `recursive`, which removes the whole
+/// subtree, instances included.
+struct RemoveGroup {
+    std::string group;
+    bool recursive = false;
+};
 
 using Edit = std::variant<AddMesh, UpdateMeshPositions, ReplaceMeshTopology, RemoveMesh,
                           AddMaterial, UpdateMaterial, AddInstance, UpdateInstance, SetTransform,
-                          RemoveInstance, MarkDirty, SetCamera, SetLighting, Clear>;
+                          RemoveInstance, MarkDirty, SetCamera, SetLighting, Clear, AddGroup,
+                          UpdateGroup, RemoveGroup>;
 
 /// Copies the fields an edit sets onto a full value; unset fields keep theirs.
 void apply_to(Camera& c, const SetCamera& e);

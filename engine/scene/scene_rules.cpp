@@ -7,6 +7,7 @@
 #include <cmath>
 #include <string>
 
+#include "engine/scene/child_list.h"
 #include "engine/scene/scene.h"
 #include "engine/scene/undo_log.h"
 
@@ -247,6 +248,8 @@ Status Scene::apply_edit(AddInstance&& e, UndoLog& undo) {
         if (material.is_null()) return unknown("material", *e.material, "material");
     }
     if (Status s = check_transform(e.transform, "transform"); !s) return s;
+    auto parent = find_parent(e.parent, "parent");
+    if (!parent) return Unexpected(parent.error());
 
     MeshRecord& mesh = m_meshes.at(mesh_handle);
     InstanceRecord r;
@@ -258,10 +261,15 @@ Status Scene::apply_edit(AddInstance&& e, UndoLog& undo) {
     r.mask = e.mask;
     r.user_id = e.user_id;
     r.user_slot = static_cast<uint32_t>(mesh.users.size());
+    r.parent = parent.value();
+    std::vector<InstanceHandle>& siblings = children_of(r.parent).instances;
+    r.child_slot = static_cast<uint32_t>(siblings.size());
     bool reused = false;
     const InstanceHandle h = m_instances.insert(std::move(r), &reused);
     undo.records.emplace_back(undo::Inserted<InstanceHandle>{h, reused});
     mesh.users.push_back(h);
+    siblings.push_back(h);
+    mark_instance_world(h);
     m_instance_ids.emplace(std::move(e.id), h);
     mark_instance(h, dirty::InstanceAdded);
     return {};
@@ -278,8 +286,15 @@ Status Scene::apply_edit(UpdateInstance&& e, UndoLog& undo) {
     if (e.transform) {
         if (Status s = check_transform(*e.transform, "transform"); !s) return s;
     }
+    GroupHandle parent;
+    if (e.parent) {
+        auto found = find_parent(*e.parent, "parent");
+        if (!found) return Unexpected(found.error());
+        parent = found.value();
+    }
 
     save_instance(h, undo);
+    if (e.parent && !(parent == m_instances.at(h).parent)) reparent_instance(h, parent, undo);
     InstanceRecord& r = m_instances.at(h);
     uint32_t bits = 0;
     if (e.material) {
@@ -303,6 +318,7 @@ Status Scene::apply_edit(UpdateInstance&& e, UndoLog& undo) {
         bits |= dirty::InstanceUserId;
     }
     if (bits) mark_instance(h, bits);
+    if (e.transform || e.visible) mark_instance_world(h);
     return {};
 }
 
@@ -314,6 +330,7 @@ Status Scene::apply_edit(SetTransform&& e, UndoLog& undo) {
     save_instance(h, undo);
     m_instances.at(h).transform = e.transform;
     mark_instance(h, dirty::InstanceTransform);
+    mark_instance_world(h);
     return {};
 }
 
@@ -332,6 +349,7 @@ void Scene::remove_instance(InstanceHandle h, UndoLog& undo) {
     mesh.users[r.user_slot] = last;
     m_instances.at(last).user_slot = r.user_slot;
     mesh.users.pop_back();
+    detach_child(children_of(r.parent).instances, m_instances, r.child_slot);
     // Listed by its now stale handle, so the commit takes it out of the TLAS.
     if (r.dirty == 0) m_changes.instances.push_back(h);
     m_instance_ids.erase(r.id);
@@ -380,6 +398,7 @@ Status Scene::apply_edit(Clear&&, UndoLog& undo) {
     instances.reserve(m_instances.size());
     m_instances.for_each([&](InstanceHandle h, const InstanceRecord&) { instances.push_back(h); });
     for (InstanceHandle h : instances) remove_instance(h, undo);
+    while (!m_root.groups.empty()) remove_subtree(m_root.groups.back(), undo);
     std::vector<MeshHandle> meshes;
     m_meshes.for_each([&](MeshHandle h, const MeshRecord&) { meshes.push_back(h); });
     for (MeshHandle h : meshes) remove_mesh(h, undo);

@@ -64,6 +64,23 @@ struct InstanceState {
     uint32_t dirty = 0;
 };
 
+/// A group's editable state before an edit changed it.
+struct GroupState {
+    GroupHandle handle;
+    Affine transform;
+    bool visible = true;
+    uint32_t dirty = 0;
+};
+
+/// An instance or group moved from `old_parent`, where it was child number `old_slot`, to the
+/// end of another parent's child list.
+template <class H>
+struct Reparented {
+    H handle;
+    GroupHandle old_parent;
+    uint32_t old_slot = 0;
+};
+
 /// A material's values before an edit changed them.
 struct MaterialState {
     MaterialHandle handle;
@@ -78,7 +95,9 @@ using UndoRecord =
                  undo::Inserted<MaterialHandle>, undo::Removed<MeshHandle, MeshRecord>,
                  undo::Removed<InstanceHandle, InstanceRecord>,
                  undo::Removed<MaterialHandle, MaterialRecord>, undo::MeshDirty,
-                 undo::MeshPositions, undo::MeshTopology, undo::InstanceState, undo::MaterialState>;
+                 undo::MeshPositions, undo::MeshTopology, undo::InstanceState, undo::MaterialState,
+                 undo::Inserted<GroupHandle>, undo::Removed<GroupHandle, GroupRecord>,
+                 undo::GroupState, undo::Reparented<InstanceHandle>, undo::Reparented<GroupHandle>>;
 
 /// Everything needed to take one batch back.
 struct UndoLog {
@@ -92,6 +111,8 @@ struct UndoLog {
     std::size_t changed_meshes = 0;
     std::size_t changed_instances = 0;
     std::size_t changed_materials = 0;
+    std::size_t world_instances = 0;
+    std::size_t world_groups = 0;
 };
 
 }  // namespace strata

@@ -5,6 +5,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <thread>
@@ -138,6 +139,61 @@ TEST(Durability, ASnapshotPlusTheJournalAfterItRestoresTheScene) {
     EXPECT_EQ(s.store->recovery().snapshot_version, 20u);
     EXPECT_EQ(s.store->recovery().records_replayed, 15u);
     EXPECT_EQ(test::version_of(*s.engine), version);
+    EXPECT_TRUE(test::hits(*s.engine) == before);
+}
+
+TEST(Durability, GroupsAndParentsSurviveARestartThroughTheJournalAndASnapshot) {
+    TempDir dir;
+    test::Hits before;
+    std::vector<std::string> paths_before;
+    auto paths = [](Engine& e) {
+        return e.read([](const Scene& s) {
+            std::vector<std::string> out;
+            s.instances().for_each([&](InstanceHandle, const InstanceRecord& i) {
+                std::string p = i.id + ":";
+                for (const std::string& g : s.group_path(i.parent)) p += "/" + g;
+                p += i.world_visible ? "" : " hidden";
+                out.push_back(p);
+            });
+            std::sort(out.begin(), out.end());
+            return out;
+        });
+    };
+    {
+        Server s = start(options_for(dir));
+        AddInstance w0 = test::instance_edit("w0", "box", {1, 0, 0});
+        w0.parent = "wheels";
+        AddInstance w1 = test::instance_edit("w1", "box", {-1, 0, 0});
+        w1.parent = "wheels";
+        AddInstance body = test::instance_edit("body", "box", {0, 1, 0});
+        body.parent = "car";
+        test::apply_ok(*s.engine, test::mesh_edit("box", make_box(Vec3(0.8f))),
+                       AddGroup{"car", std::nullopt, Affine::translation({0, 0, -2}), true},
+                       AddGroup{"wheels", std::string("car"), Affine::identity(), true}, w0, w1,
+                       body, SetCamera{Vec3(0, 2, 9), Vec3(0), Vec3(0, 1, 0), 50.0f});
+        ASSERT_TRUE(s.store->snapshot_now().has_value());
+        // After the snapshot: journal records with every group op.
+        UpdateInstance out;
+        out.instance = "w1";
+        out.parent = std::optional<std::string>();
+        test::apply_ok(*s.engine,
+                       UpdateGroup{"car", std::nullopt, Affine::translation({1, 0, -2}), std::nullopt},
+                       out, AddGroup{"spare", std::string("car"), Affine::identity(), false});
+        AddInstance hidden = test::instance_edit("s0", "box", {0, 2, 0});
+        hidden.parent = "spare";
+        test::apply_ok(*s.engine, hidden, UpdateGroup{"wheels", std::nullopt, std::nullopt, false});
+        test::apply_ok(*s.engine, UpdateGroup{"wheels", std::nullopt, std::nullopt, true},
+                       AddGroup{"gone", std::nullopt, Affine::identity(), true},
+                       RemoveGroup{"gone", false});
+        before = test::hits(*s.engine);
+        paths_before = paths(*s.engine);
+    }
+    Server s = start(options_for(dir));
+    EXPECT_TRUE(s.store->recovery().loaded_snapshot);
+    EXPECT_EQ(s.store->recovery().records_replayed, 3u);
+    EXPECT_EQ(paths(*s.engine), paths_before);
+    EXPECT_EQ(paths_before, (std::vector<std::string>{"body:/car", "s0:/car/spare hidden",
+                                                      "w0:/car/wheels", "w1:"}));
     EXPECT_TRUE(test::hits(*s.engine) == before);
 }
 
