@@ -39,6 +39,13 @@ constexpr const char* KIND_NAMES[] = {"add_mesh",
                                       "clear"};
 static_assert(std::size(KIND_NAMES) == std::variant_size_v<Edit>);
 
+/// Kind tag bit: the edit's extension fields follow its base layout. Fields added to a kind after
+/// its layout was first written (a mesh's normals and uvs) are extensions: an edit without them
+/// is written exactly as before, so older files read the same and a file only grows the bit
+/// where it uses what is new.
+constexpr uint8_t EXTENDED = 0x80;
+static_assert(std::variant_size_v<Edit> < EXTENDED);
+
 /// `E` is T or const T: the same function writes (const) and reads (mutable).
 template <class E, class T>
 concept Kind = std::same_as<std::remove_const_t<E>, T>;
@@ -100,6 +107,37 @@ void fields(Io& io, E& e) {
 template <class Io, Kind<Clear> E>
 void fields(Io&, E&) {}
 
+// Step: extension fields of the kinds that have them -------------------------------------------
+
+template <class Io, class E>
+void extension(Io&, E&) {}
+template <class Io, Kind<AddMesh> E>
+void extension(Io& io, E& e) {
+    io(e.normals, e.uvs);
+}
+template <class Io, Kind<UpdateMeshPositions> E>
+void extension(Io& io, E& e) {
+    io(e.normals, e.uvs);
+}
+template <class Io, Kind<ReplaceMeshTopology> E>
+void extension(Io& io, E& e) {
+    io(e.normals, e.uvs);
+}
+
+template <class E>
+bool has_extension(const E&) {
+    return false;
+}
+bool has_extension(const AddMesh& e) {
+    return !e.normals.empty() || !e.uvs.empty();
+}
+bool has_extension(const UpdateMeshPositions& e) {
+    return e.normals || e.uvs;
+}
+bool has_extension(const ReplaceMeshTopology& e) {
+    return e.normals || e.uvs;
+}
+
 /// A default-constructed edit of kind `tag` (tag < variant size).
 template <std::size_t... I>
 Edit make_edit(std::size_t tag, std::index_sequence<I...>) {
@@ -113,8 +151,14 @@ void encode_batch(const EditBatch& batch, std::string& out) {
     ByteWriter w(out);
     w(uint32_t(batch.edits.size()));
     for (const Edit& edit : batch.edits) {
-        w(uint8_t(edit.index()));
-        std::visit([&](const auto& e) { fields(w, e); }, edit);
+        std::visit(
+            [&](const auto& e) {
+                const bool extended = has_extension(e);
+                w(uint8_t(edit.index() | (extended ? EXTENDED : 0)));
+                fields(w, e);
+                if (extended) extension(w, e);
+            },
+            edit);
     }
 }
 
@@ -131,12 +175,19 @@ Result<EditBatch> decode_batch(std::string_view bytes) {
         uint8_t tag = 0;
         r(tag);
         if (!r.ok()) break;
+        const bool extended = (tag & EXTENDED) != 0;
+        tag &= uint8_t(~EXTENDED);
         if (tag >= std::variant_size_v<Edit>) {
             r.fail("unknown edit kind " + std::to_string(tag));
             break;
         }
         Edit edit = make_edit(tag, std::make_index_sequence<std::variant_size_v<Edit>>());
-        std::visit([&](auto& e) { fields(r, e); }, edit);
+        std::visit(
+            [&](auto& e) {
+                fields(r, e);
+                if (extended) extension(r, e);
+            },
+            edit);
         if (!r.ok()) {
             r.fail("");  // keeps the first message
             return failure(ErrorCode::InvalidArgument, "edit " + std::to_string(i) + " (" +

@@ -53,6 +53,13 @@ struct MeshTopology {
     std::vector<Triangle> triangles;
 };
 
+/// The normals and uvs an edit replaced (each only when that edit touched it).
+struct MeshAttributes {
+    MeshHandle handle;
+    std::optional<std::vector<Vec3>> normals;
+    std::optional<std::vector<Vec2>> uvs;
+};
+
 /// An instance's editable state before an edit changed it.
 struct InstanceState {
     InstanceHandle handle;
@@ -73,12 +80,11 @@ struct MaterialState {
 
 }  // namespace undo
 
-using UndoRecord =
-    std::variant<undo::Inserted<MeshHandle>, undo::Inserted<InstanceHandle>,
-                 undo::Inserted<MaterialHandle>, undo::Removed<MeshHandle, MeshRecord>,
-                 undo::Removed<InstanceHandle, InstanceRecord>,
-                 undo::Removed<MaterialHandle, MaterialRecord>, undo::MeshDirty,
-                 undo::MeshPositions, undo::MeshTopology, undo::InstanceState, undo::MaterialState>;
+using UndoRecord = std::variant<
+    undo::Inserted<MeshHandle>, undo::Inserted<InstanceHandle>, undo::Inserted<MaterialHandle>,
+    undo::Removed<MeshHandle, MeshRecord>, undo::Removed<InstanceHandle, InstanceRecord>,
+    undo::Removed<MaterialHandle, MaterialRecord>, undo::MeshDirty, undo::MeshPositions,
+    undo::MeshTopology, undo::MeshAttributes, undo::InstanceState, undo::MaterialState>;
 
 /// Everything needed to take one batch back.
 struct UndoLog {
