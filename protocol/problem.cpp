@@ -76,7 +76,8 @@ ProblemType type_of(ErrorCode code) {
     return ProblemType::Internal;
 }
 
-/// The engine names array elements of `positions`/`indices`; point at the member the client used.
+/// The engine names array elements of `positions`/`indices`/`normals`/`uvs`; point at the member
+/// the client used.
 std::string wire_field(const std::string& field, const EditSource* src) {
     if (!src || field.empty()) return field;
     const std::string head = field.substr(0, field.find('/'));
@@ -85,6 +86,8 @@ std::string wire_field(const std::string& field, const EditSource* src) {
         if (head == "positions" && src->positions_b64) return "positions_b64";
         if (head == "indices" && src->indices_b64) return "indices_b64";
     }
+    if (head == "normals" && src->normals_b64) return "normals_b64";
+    if (head == "uvs" && src->uvs_b64) return "uvs_b64";
     return field;
 }
 

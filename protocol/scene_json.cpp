@@ -102,6 +102,8 @@ Json mesh_json(const Scene& s, MeshHandle h, const MeshRecord& m) {
         {"version", s.version()},
         {"vertices", m.positions.size()},
         {"triangles", m.triangles.size()},
+        {"normals", !m.normals.empty()},
+        {"uvs", !m.uvs.empty()},
         {"instances", m.users.size()},
         {"material", material_ref(s, m.material)},
         {"build",

@@ -2,6 +2,9 @@
 
 #include <concepts>
 #include <iterator>
+#include <optional>
+#include <string>
+#include <type_traits>
 #include <utility>
 
 #include "engine/durable/byte_io.h"
@@ -24,11 +27,6 @@ static_assert(TAG_IS<0, AddMesh> && TAG_IS<1, UpdateMeshPositions> &&
                   std::variant_size_v<Edit> == 17,
               "journal kind tags are the Edit variant's indices: append new kinds at the end");
 
-// An add_instance or update_instance that names a parent group is written under a tag of its own:
-// the fields of the older layout, then the parent. Files written before groups existed keep
-// reading back, and an edit without a parent is written exactly as before.
-constexpr uint8_t TAG_ADD_INSTANCE_WITH_PARENT = 64;
-constexpr uint8_t TAG_UPDATE_INSTANCE_WITH_PARENT = 65;
 
 /// Kind names for messages (the wire names, as the protocol's op table spells them).
 constexpr const char* KIND_NAMES[] = {"add_mesh",
@@ -49,6 +47,13 @@ constexpr const char* KIND_NAMES[] = {"add_mesh",
                                       "update_group",
                                       "remove_group"};
 static_assert(std::size(KIND_NAMES) == std::variant_size_v<Edit>);
+
+/// Kind tag bit: the edit's extension fields follow its base layout. Fields added to a kind after
+/// its layout was first written (a mesh's normals and uvs, an instance's parent group) are extensions: an edit without them
+/// is written exactly as before, so older files read the same and a file only grows the bit
+/// where it uses what is new.
+constexpr uint8_t EXTENDED = 0x80;
+static_assert(std::variant_size_v<Edit> < EXTENDED);
 
 /// `E` is T or const T: the same function writes (const) and reads (mutable).
 template <class E, class T>
@@ -123,6 +128,60 @@ void fields(Io& io, E& e) {
     io(e.group, e.recursive);
 }
 
+// Step: extension fields of the kinds that have them -------------------------------------------
+
+template <class Io, class E>
+void extension(Io&, E&) {}
+template <class Io, Kind<AddMesh> E>
+void extension(Io& io, E& e) {
+    io(e.normals, e.uvs);
+}
+template <class Io, Kind<UpdateMeshPositions> E>
+void extension(Io& io, E& e) {
+    io(e.normals, e.uvs);
+}
+template <class Io, Kind<ReplaceMeshTopology> E>
+void extension(Io& io, E& e) {
+    io(e.normals, e.uvs);
+}
+
+template <class Io, Kind<AddInstance> E>
+void extension(Io& io, E& e) {
+    io(e.parent);
+}
+/// update_instance's parent is "unchanged" (absent), "the root" (null) or a group: only a present
+/// parent is an extension, written as the optional group id.
+template <class Io, Kind<UpdateInstance> E>
+void extension(Io& io, E& e) {
+    if constexpr (std::is_const_v<E>) {
+        io(*e.parent);
+    } else {
+        std::optional<std::string> parent;
+        io(parent);
+        e.parent = std::move(parent);
+    }
+}
+
+template <class E>
+bool has_extension(const E&) {
+    return false;
+}
+bool has_extension(const AddMesh& e) {
+    return !e.normals.empty() || !e.uvs.empty();
+}
+bool has_extension(const UpdateMeshPositions& e) {
+    return e.normals || e.uvs;
+}
+bool has_extension(const ReplaceMeshTopology& e) {
+    return e.normals || e.uvs;
+}
+bool has_extension(const AddInstance& e) {
+    return e.parent.has_value();
+}
+bool has_extension(const UpdateInstance& e) {
+    return e.parent.has_value();
+}
+
 /// A default-constructed edit of kind `tag` (tag < variant size).
 template <std::size_t... I>
 Edit make_edit(std::size_t tag, std::index_sequence<I...>) {
@@ -136,20 +195,14 @@ void encode_batch(const EditBatch& batch, std::string& out) {
     ByteWriter w(out);
     w(uint32_t(batch.edits.size()));
     for (const Edit& edit : batch.edits) {
-        if (const auto* add = std::get_if<AddInstance>(&edit); add && add->parent) {
-            w(TAG_ADD_INSTANCE_WITH_PARENT);
-            fields(w, *add);
-            w(*add->parent);
-            continue;
-        }
-        if (const auto* upd = std::get_if<UpdateInstance>(&edit); upd && upd->parent) {
-            w(TAG_UPDATE_INSTANCE_WITH_PARENT);
-            fields(w, *upd);
-            w(*upd->parent);
-            continue;
-        }
-        w(uint8_t(edit.index()));
-        std::visit([&](const auto& e) { fields(w, e); }, edit);
+        std::visit(
+            [&](const auto& e) {
+                const bool extended = has_extension(e);
+                w(uint8_t(edit.index() | (extended ? EXTENDED : 0)));
+                fields(w, e);
+                if (extended) extension(w, e);
+            },
+            edit);
     }
 }
 
@@ -166,40 +219,19 @@ Result<EditBatch> decode_batch(std::string_view bytes) {
         uint8_t tag = 0;
         r(tag);
         if (!r.ok()) break;
-        if (tag == TAG_ADD_INSTANCE_WITH_PARENT) {
-            AddInstance e;
-            fields(r, e);
-            std::string parent;
-            r(parent);
-            e.parent = std::move(parent);
-            if (!r.ok()) {
-                r.fail("");
-                return failure(ErrorCode::InvalidArgument,
-                               "edit " + std::to_string(i) + " (add_instance): " + r.error());
-            }
-            batch.edits.push_back(std::move(e));
-            continue;
-        }
-        if (tag == TAG_UPDATE_INSTANCE_WITH_PARENT) {
-            UpdateInstance e;
-            fields(r, e);
-            std::optional<std::string> parent;
-            r(parent);
-            e.parent = std::move(parent);
-            if (!r.ok()) {
-                r.fail("");
-                return failure(ErrorCode::InvalidArgument,
-                               "edit " + std::to_string(i) + " (update_instance): " + r.error());
-            }
-            batch.edits.push_back(std::move(e));
-            continue;
-        }
+        const bool extended = (tag & EXTENDED) != 0;
+        tag &= uint8_t(~EXTENDED);
         if (tag >= std::variant_size_v<Edit>) {
             r.fail("unknown edit kind " + std::to_string(tag));
             break;
         }
         Edit edit = make_edit(tag, std::make_index_sequence<std::variant_size_v<Edit>>());
-        std::visit([&](auto& e) { fields(r, e); }, edit);
+        std::visit(
+            [&](auto& e) {
+                fields(r, e);
+                if (extended) extension(r, e);
+            },
+            edit);
         if (!r.ok()) {
             r.fail("");  // keeps the first message
             return failure(ErrorCode::InvalidArgument, "edit " + std::to_string(i) + " (" +

@@ -16,6 +16,7 @@ enum MeshBits : uint32_t {
     MeshTopology = 1u << 2,          ///< triangles (and maybe vertex count) replaced
     MeshRefitRequested = 1u << 3,    ///< mark_dirty {mesh, refit}
     MeshRebuildRequested = 1u << 4,  ///< mark_dirty {mesh, rebuild}
+    MeshAttributes = 1u << 5,        ///< normals or uvs changed: shading only, no BLAS work
 };
 
 enum InstanceBits : uint32_t {

@@ -210,6 +210,8 @@ EditBatch Scene::to_batch() const {
         e.id = m.id;
         e.positions = m.positions;
         e.triangles = m.triangles;
+        e.normals = m.normals;
+        e.uvs = m.uvs;
         e.build = m.build;
         if (const MaterialRecord* mat = m_materials.get(m.material)) e.material = mat->id;
         b.edits.emplace_back(std::move(e));

@@ -22,6 +22,8 @@ struct MeshRecord {
     std::string id;
     std::vector<Vec3> positions;
     std::vector<Triangle> triangles;
+    std::vector<Vec3> normals;  ///< per-vertex shading normals (object space); empty: none
+    std::vector<Vec2> uvs;      ///< per-vertex texture coordinates; empty: none
     BuildOptions build;
     MaterialHandle material;            ///< default for its instances; null: built-in default
     std::vector<InstanceHandle> users;  ///< instances that reference this mesh

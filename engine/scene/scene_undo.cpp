@@ -144,6 +144,12 @@ struct Reverser {
         mesh.triangles = std::move(r.triangles);
     }
 
+    void operator()(undo::MeshAttributes& r) {
+        MeshRecord& mesh = meshes.at(r.handle);
+        if (r.normals) mesh.normals = std::move(*r.normals);
+        if (r.uvs) mesh.uvs = std::move(*r.uvs);
+    }
+
     void operator()(undo::InstanceState& r) {
         InstanceRecord& inst = instances.at(r.handle);
         inst.material = r.material;

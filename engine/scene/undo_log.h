@@ -53,6 +53,13 @@ struct MeshTopology {
     std::vector<Triangle> triangles;
 };
 
+/// The normals and uvs an edit replaced (each only when that edit touched it).
+struct MeshAttributes {
+    MeshHandle handle;
+    std::optional<std::vector<Vec3>> normals;
+    std::optional<std::vector<Vec2>> uvs;
+};
+
 /// An instance's editable state before an edit changed it.
 struct InstanceState {
     InstanceHandle handle;
@@ -95,9 +102,10 @@ using UndoRecord =
                  undo::Inserted<MaterialHandle>, undo::Removed<MeshHandle, MeshRecord>,
                  undo::Removed<InstanceHandle, InstanceRecord>,
                  undo::Removed<MaterialHandle, MaterialRecord>, undo::MeshDirty,
-                 undo::MeshPositions, undo::MeshTopology, undo::InstanceState, undo::MaterialState,
-                 undo::Inserted<GroupHandle>, undo::Removed<GroupHandle, GroupRecord>,
-                 undo::GroupState, undo::Reparented<InstanceHandle>, undo::Reparented<GroupHandle>>;
+                 undo::MeshPositions, undo::MeshTopology, undo::MeshAttributes,
+                 undo::InstanceState, undo::MaterialState, undo::Inserted<GroupHandle>,
+                 undo::Removed<GroupHandle, GroupRecord>, undo::GroupState,
+                 undo::Reparented<InstanceHandle>, undo::Reparented<GroupHandle>>;
 
 /// Everything needed to take one batch back.
 struct UndoLog {

@@ -197,6 +197,54 @@ TEST(Durability, GroupsAndParentsSurviveARestartThroughTheJournalAndASnapshot) {
     EXPECT_TRUE(test::hits(*s.engine) == before);
 }
 
+TEST(Durability, NormalsAndUvsSurviveARestartFromJournalAndFromSnapshot) {
+    TempDir dir;
+    AddMesh m = test::mesh_edit("ball", make_sphere(1.0f, 8));
+    for (const Vec3& p : m.positions) m.normals.push_back(glm::normalize(p));
+    for (const Vec3& p : m.positions) m.uvs.emplace_back(p.x, p.y);
+    UpdateMeshPositions part;
+    part.mesh = "ball";
+    part.offset = 1;
+    part.normals = std::vector<Vec3>{{0, 1, 0}};
+    ReplaceMeshTopology topo;
+    topo.mesh = "quad";
+    topo.triangles = {{0, 2, 1}};
+    topo.uvs = std::vector<Vec2>{};
+    AddMesh quad = test::mesh_edit("quad", make_plane(Vec3(1.0f), 1, 1));
+    quad.uvs = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
+    auto attributes = [](const Engine& e) {
+        return e.read([](const Scene& s) {
+            std::vector<std::vector<float>> out;
+            for (const char* id : {"ball", "quad"}) {
+                const MeshRecord* r = s.mesh(s.find_mesh(id)).value();
+                std::vector<float> flat;
+                for (const Vec3& n : r->normals) flat.insert(flat.end(), {n.x, n.y, n.z});
+                flat.push_back(-1.0f);  // separates normals from uvs
+                for (const Vec2& uv : r->uvs) flat.insert(flat.end(), {uv.x, uv.y});
+                out.push_back(std::move(flat));
+            }
+            return out;
+        });
+    };
+    std::vector<std::vector<float>> before;
+    {
+        Server s = start(options_for(dir));
+        test::apply_ok(*s.engine, m, quad);
+        test::apply_ok(*s.engine, part, topo);
+        before = attributes(*s.engine);
+        ASSERT_EQ(before[1].size(), 1u) << "the quad's uvs were removed";
+    }
+    {
+        Server s = start(options_for(dir));
+        EXPECT_EQ(s.store->recovery().records_replayed, 2u);
+        EXPECT_EQ(attributes(*s.engine), before);
+        ASSERT_TRUE(s.store->snapshot_now().has_value());
+    }
+    Server s = start(options_for(dir));
+    EXPECT_TRUE(s.store->recovery().loaded_snapshot);
+    EXPECT_EQ(attributes(*s.engine), before);
+}
+
 TEST(Durability, ATornLastRecordIsCutOffAndReported) {
     TempDir dir;
     test::RandomEdits edits(3);

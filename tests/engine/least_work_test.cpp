@@ -62,6 +62,54 @@ TEST_F(LeastWork, CameraLightingAndMaterialEditsRebuildNothing) {
     EXPECT_TRUE(r.no_accel_work());
 }
 
+TEST_F(LeastWork, NormalsAndUvsEditsRebuildNothing) {
+    const std::size_t n = make_sphere(1.0f, 16).positions.size();
+    UpdateMeshPositions whole;
+    whole.mesh = "ball";
+    whole.normals = std::vector<Vec3>(n, Vec3(0, 1, 0));
+    whole.uvs = std::vector<Vec2>(n, Vec2(0.5f));
+    apply_ok(*engine, whole);
+    RebuildReport r = commit_ok(*engine);
+    EXPECT_TRUE(r.no_accel_work());
+    EXPECT_EQ(r.tlas_action, TlasAction::None);
+    EXPECT_EQ(r.blas_rebuilds + r.blas_refits, 0u);
+
+    UpdateMeshPositions part;
+    part.mesh = "ball";
+    part.offset = 3;
+    part.normals = std::vector<Vec3>{Vec3(1, 0, 0), Vec3(0, 0, 1)};
+    UpdateMeshPositions removed;
+    removed.mesh = "ball";
+    removed.uvs = std::vector<Vec2>{};
+    apply_ok(*engine, part, removed);
+    r = commit_ok(*engine);
+    EXPECT_TRUE(r.no_accel_work());
+    EXPECT_EQ(r.tlas_action, TlasAction::None);
+}
+
+TEST_F(LeastWork, PositionsWithNormalsRefitLikePositionsAlone) {
+    UpdateMeshPositions move;
+    move.mesh = "ball";
+    move.offset = 2;
+    move.positions = {Vec3(0.1f, 0.99f, 0.0f)};
+    const std::size_t n = make_sphere(1.0f, 16).positions.size();
+    move.normals = std::vector<Vec3>(n - 2, Vec3(0, 1, 0));
+    // A mesh without normals takes them only whole: refused, and nothing changes.
+    EditBatch refused;
+    refused.edits.emplace_back(move);
+    EXPECT_FALSE(engine->apply(std::move(refused)).has_value());
+    EXPECT_TRUE(commit_ok(*engine).no_accel_work());
+
+    move.offset = 0;
+    move.positions = make_sphere(1.0f, 16).positions;
+    move.normals = std::vector<Vec3>(n, Vec3(0, 1, 0));
+    apply_ok(*engine, move);
+    const RebuildReport r = commit_ok(*engine);
+    EXPECT_THAT(ids(r.refit), ElementsAre("ball"));
+    EXPECT_EQ(r.blas_rebuilds, 0u);
+    EXPECT_EQ(r.tlas_action, TlasAction::Update);
+}
+
 TEST_F(LeastWork, InstanceChangesAreOneTlasUpdateHoweverMany) {
     UpdateInstance hide;
     hide.instance = "b1";
