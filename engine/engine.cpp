@@ -181,7 +181,7 @@ Result<Frame> Engine::render_frame(const RenderRequest& request) {
 Result<EncodedFrame> Engine::render(const RenderRequest& request) {
     auto frame = render_frame(request);
     if (!frame) return Unexpected(frame.error());
-    auto encoded = encode_frame(frame->buffers, request);
+    auto encoded = encode_frame(frame->buffers, request, exr_attributes(frame.value()));
     if (encoded) encoded->info = std::move(frame->info);
     return encoded;
 }

@@ -49,7 +49,7 @@ RenderRequest read_render(FieldReader& r, const Json& v) {
             if (!aov)
                 r.schema_error("/aovs/" + std::to_string(i),
                                "expected an AOV name: color, albedo, normal, depth, position, "
-                               "instance_id, primitive_id or mesh_id");
+                               "instance_id, primitive_id, mesh_id or user_id");
             q.aovs.push_back(*aov);
         }
     }

@@ -35,6 +35,17 @@ std::string where_in_script(const StepRecord& r) {
     return s;
 }
 
+/// "hit b0 (ball)", "no hit" or "3 instances".
+std::string answer_note(StepKind kind, const Json& answer) {
+    if (kind == StepKind::Pick) {
+        const Json& hit = answer["hit"];
+        if (!hit.is_object()) return "no hit";
+        return "hit " + hit.value("instance", std::string("?")) + " (" +
+               hit.value("mesh", std::string("?")) + ")";
+    }
+    return std::to_string(answer.value("count", uint64_t(0))) + " listed";
+}
+
 const char* HEADER =
     " step  line  kind    iteration     version  tlas          rebuilds  refits     prims"
     "        ms  note";
@@ -59,8 +70,10 @@ std::string row(const StepRecord& r) {
                 pad(rep.contains("ms") ? fixed(rep["ms"].get<double>(), 3) : "-", 10);
     } else {
         line += std::string(12 + 10 + 8 + 10 + 10, ' ');
-        note = std::to_string(r.applied) + (r.applied == 1 ? " edit" : " edits");
+        if (r.step->kind == StepKind::Edits)
+            note = std::to_string(r.applied) + (r.applied == 1 ? " edit" : " edits");
     }
+    if (r.answer) note = answer_note(r.step->kind, *r.answer);
     if (r.step->kind == StepKind::Render)
         note = r.out.empty() ? human_bytes(r.bytes) + " (not saved)" : r.out;
     if (r.checks)
@@ -81,6 +94,7 @@ Json failure_json(const PlayResult& result) {
         if (!r.vars.empty()) f["vars"] = r.vars;
         if (!r.step->label.empty()) f["label"] = r.step->label;
         if (r.report) f["report"] = *r.report;
+        if (r.answer) f["answer"] = *r.answer;
     }
     if (!result.message.empty()) f["message"] = result.message;
     if (!result.mismatches.empty()) {
@@ -228,6 +242,7 @@ void JsonObserver::on_step(const StepRecord& r) {
     if (!r.step->label.empty()) j["label"] = r.step->label;
     if (r.step->kind == StepKind::Edits) j["applied"] = r.applied;
     if (r.report) j["report"] = *r.report;
+    if (r.answer) j["answer"] = *r.answer;
     if (r.step->kind == StepKind::Render) {
         j["bytes"] = r.bytes;
         if (!r.out.empty()) j["out"] = r.out;

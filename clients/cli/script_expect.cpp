@@ -1,6 +1,7 @@
 #include "clients/cli/script_expect.h"
 
 #include <algorithm>
+#include <iterator>
 #include <map>
 
 namespace strata::cli {
@@ -23,6 +24,29 @@ constexpr CountSource COUNT_FIELDS[] = {
     {"blas_refits", nullptr, "blas_refits"},
     {"primitives_built", nullptr, "primitives_built"},
     {"primitives_refit", nullptr, "primitives_refit"},
+};
+
+/// The fields of a pick or list step's expectation and where its answer keeps them.
+enum class AnswerType : uint8_t { Count, Text, IdSet, Hit };
+struct AnswerField {
+    const char* name;
+    const char* parent;  ///< nullptr: top level
+    const char* member;
+    AnswerType type;
+};
+constexpr AnswerField PICK_FIELDS[] = {
+    {"version", nullptr, "version", AnswerType::Count},
+    {"hit", nullptr, "hit", AnswerType::Hit},
+    {"hit.instance", "hit", "instance", AnswerType::Text},
+    {"hit.mesh", "hit", "mesh", AnswerType::Text},
+    {"hit.primitive", "hit", "primitive", AnswerType::Count},
+    {"hit.user_id", "hit", "user_id", AnswerType::Count},
+    {"hit.distance", "hit", "distance", AnswerType::Count},
+};
+constexpr AnswerField LIST_FIELDS[] = {
+    {"version", nullptr, "version", AnswerType::Count},
+    {"count", nullptr, "count", AnswerType::Count},
+    {"ids", nullptr, "ids", AnswerType::IdSet},
 };
 
 const std::vector<std::string> REBUILD_REASONS = {
@@ -157,6 +181,13 @@ std::string describe_meshes(const std::map<std::string, std::string>& m, bool wi
     return with_reasons ? "{" + out + "}" : "[" + out + "]";
 }
 
+/// What a field that is absent from a document reads as, and why.
+std::pair<std::string, std::string> absent(const Json& doc, const char* parent) {
+    if (parent && doc.contains(parent) && doc[parent].is_null())
+        return {"(no " + std::string(parent) + ")", std::string("nothing was ") + parent};
+    return {"(absent)", "the answer has no such member"};
+}
+
 std::optional<double> number_at(const Json& report, const char* parent, const char* member) {
     const Json* obj = &report;
     if (parent) {
@@ -170,8 +201,64 @@ std::optional<double> number_at(const Json& report, const char* parent, const ch
 
 }  // namespace
 
+Outcome<Expectation> Expectation::compile_answer(const Json& v,
+                                                 const std::vector<std::string>& names,
+                                                 ExpectTarget target) {
+    const bool pick = target == ExpectTarget::Pick;
+    const std::vector<AnswerField> fields =
+        pick ? std::vector<AnswerField>(std::begin(PICK_FIELDS), std::end(PICK_FIELDS))
+             : std::vector<AnswerField>(std::begin(LIST_FIELDS), std::end(LIST_FIELDS));
+    std::vector<std::string> allowed;
+    for (const AnswerField& f : fields) allowed.push_back(f.name);
+    if (auto bad =
+            check_members(v, pick ? "\"expect\" of a pick" : "\"expect\" of a list", allowed))
+        return Unexpected(*bad);
+    Expectation e;
+    for (const AnswerField& f : fields) {
+        if (!v.contains(f.name)) continue;
+        const Json& x = v[f.name];
+        switch (f.type) {
+            case AnswerType::Count: {
+                auto count = compile_count(x, f.name, names);
+                if (!count) return Unexpected(count.error());
+                e.m_counts.push_back({f.name, std::move(count.value()), f.parent, f.member});
+                break;
+            }
+            case AnswerType::Text: {
+                if (!x.is_string())
+                    return Unexpected(Failure{std::string("expect.") + f.name +
+                                              ": expected an id (a string), got " + x.dump()});
+                auto t = StringTemplate::compile(x.get<std::string>(), names);
+                if (!t)
+                    return Unexpected(
+                        Failure{std::string("expect.") + f.name + ": " + t.error().message});
+                e.m_texts.push_back({f.name, std::move(t.value()), f.parent, f.member});
+                break;
+            }
+            case AnswerType::IdSet: {
+                if (!x.is_array())
+                    return Unexpected(Failure{std::string("expect.") + f.name +
+                                              ": expected an array of ids, got " + x.dump()});
+                auto m = compile_meshes(x, f.name, names);
+                if (!m) return Unexpected(m.error());
+                e.m_meshes.push_back({f.name, std::move(m.value())});
+                break;
+            }
+            case AnswerType::Hit:
+                if (!x.is_boolean())
+                    return Unexpected(Failure{std::string("expect.") + f.name +
+                                              ": expected true (something is hit) or false, got " +
+                                              x.dump()});
+                e.m_hit = x.get<bool>();
+                break;
+        }
+    }
+    return e;
+}
+
 Outcome<Expectation> Expectation::compile(const Json& v, const std::vector<std::string>& names,
-                                          bool has_time) {
+                                          bool has_time, ExpectTarget target) {
+    if (target != ExpectTarget::Report) return compile_answer(v, names, target);
     std::vector<std::string> allowed = {"tlas",     "rebuilt", "refit",
                                         "released", "max_ms",  "max_primitives_built"};
     for (const CountSource& c : COUNT_FIELDS) allowed.push_back(c.name);
@@ -181,7 +268,7 @@ Outcome<Expectation> Expectation::compile(const Json& v, const std::vector<std::
         if (!v.contains(c.name)) continue;
         auto count = compile_count(v[c.name], c.name, names);
         if (!count) return Unexpected(count.error());
-        e.m_counts.push_back({c.name, std::move(count.value())});
+        e.m_counts.push_back({c.name, std::move(count.value()), c.parent, c.member});
     }
     if (v.contains("tlas")) {
         const Json& t = v["tlas"];
@@ -211,7 +298,8 @@ Outcome<Expectation> Expectation::compile(const Json& v, const std::vector<std::
 }
 
 std::size_t Expectation::count_checks() const {
-    return m_counts.size() + m_meshes.size() + (m_tlas ? 1 : 0) + (m_max_primitives_built ? 1 : 0);
+    return m_counts.size() + m_meshes.size() + m_texts.size() + (m_tlas ? 1 : 0) + (m_hit ? 1 : 0) +
+           (m_max_primitives_built ? 1 : 0);
 }
 
 std::size_t Expectation::count_budgets() const {
@@ -225,16 +313,33 @@ Outcome<std::vector<Mismatch>> Expectation::check(const Json& report, const Bind
 
     // Step 1: counts, exact or within bounds.
     for (const CountField& f : m_counts) {
-        const CountSource* src = nullptr;
-        for (const CountSource& c : COUNT_FIELDS) src = f.name == c.name ? &c : src;
         std::optional<double> lo, hi;
         const std::string expected = describe_count(f.expect, vars, lo, hi, error);
         if (error) return Unexpected(*error);
-        const std::optional<double> actual = number_at(report, src->parent, src->member);
+        const std::optional<double> actual = number_at(report, f.parent, f.member);
         if (!actual) {
-            out.push_back({f.name, expected, "(absent)", "the report has no such member"});
+            const auto [what, why] = absent(report, f.parent);
+            out.push_back({f.name, expected, what, why});
         } else if ((lo && *actual < *lo) || (hi && *actual > *hi)) {
             out.push_back({f.name, expected, format_number(*actual), ""});
+        }
+    }
+
+    // Step 1b (pick and list answers): whether anything was hit, and ids.
+    if (m_hit) {
+        const bool actual = report.contains("hit") && !report["hit"].is_null();
+        if (actual != *m_hit)
+            out.push_back({"hit", *m_hit ? "true" : "false", actual ? "true" : "false", ""});
+    }
+    for (const TextField& f : m_texts) {
+        auto expected = f.expect.render(vars);
+        if (!expected) return Unexpected(expected.error());
+        const Json* obj = f.parent && report.contains(f.parent) ? &report[f.parent] : &report;
+        if (!obj->is_object() || !obj->contains(f.member) || !(*obj)[f.member].is_string()) {
+            const auto [what, why] = absent(report, f.parent);
+            out.push_back({f.name, expected.value(), what, why});
+        } else if ((*obj)[f.member].get<std::string>() != expected.value()) {
+            out.push_back({f.name, expected.value(), (*obj)[f.member].get<std::string>(), ""});
         }
     }
 

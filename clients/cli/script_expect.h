@@ -12,6 +12,12 @@
 //   budgets   max_primitives_built (deterministic, always checked) and max_ms (the commit's
 //             wall time: checked only with --budgets, so CI never depends on timing)
 //
+// Pick and list steps check the answer instead (ExpectTarget):
+//
+//   pick      hit (true or false: whether anything was hit), hit.instance and hit.mesh (ids),
+//             hit.primitive, hit.user_id, hit.distance and version (counts)
+//   list      count and version (counts), ids (the exact set of ids listed)
+//
 // Numbers and ids may use `{expr}` substitutions (script_template.h).
 
 #include <optional>
@@ -44,12 +50,16 @@ struct Mismatch {
     std::string note;  ///< e.g. "missing: ball; unexpected: crate"
 };
 
-/// What a report must say.
+/// What an expectation is checked against: a rebuild report (commit, plan and render steps), a
+/// pick step's `{"version", "hit"}` or a list step's `{"version", "count", "ids"}`.
+enum class ExpectTarget : uint8_t { Report, Pick, List };
+
+/// What a report (or an answer) must say.
 class Expectation {
 public:
     /// Compiles an "expect" object. `has_time`: the report will have `ms` (not a plan).
     static Outcome<Expectation> compile(const Json& v, const std::vector<std::string>& names,
-                                        bool has_time);
+                                        bool has_time, ExpectTarget target = ExpectTarget::Report);
 
     /// What did not match (empty: everything did). Fails only when an expression cannot be
     /// evaluated.
@@ -63,9 +73,20 @@ public:
     bool names_meshes() const { return !m_meshes.empty(); }
 
 private:
+    static Outcome<Expectation> compile_answer(const Json& v, const std::vector<std::string>& names,
+                                               ExpectTarget target);
+
     struct CountField {
         std::string name;  ///< wire name, e.g. "blas_rebuilds"
         CountExpectation expect;
+        const char* parent = nullptr;  ///< where the checked document keeps it (nullptr: top)
+        const char* member = nullptr;
+    };
+    struct TextField {
+        std::string name;  ///< e.g. "hit.instance"
+        StringTemplate expect;
+        const char* parent = nullptr;
+        const char* member = nullptr;
     };
     struct MeshField {
         std::string name;
@@ -74,6 +95,8 @@ private:
     std::vector<CountField> m_counts;
     std::optional<std::string> m_tlas;
     std::vector<MeshField> m_meshes;
+    std::vector<TextField> m_texts;
+    std::optional<bool> m_hit;  ///< pick: whether anything must be hit
     std::optional<Expression> m_max_ms;
     std::optional<Expression> m_max_primitives_built;
 };

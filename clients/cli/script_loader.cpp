@@ -1,20 +1,69 @@
 // Loading scripts: strict JSON per line, step kinds and members, templates and expectations.
 
+#include <algorithm>
 #include <fstream>
 #include <iostream>
 #include <set>
 
 #include "clients/cli/script.h"
 
+#include "clients/cli/commands.h"
+
 namespace strata::cli {
 
 namespace {
 
-constexpr const char* KIND_KEYS[] = {"edits", "commit", "plan", "render", "repeat"};
+constexpr const char* KIND_KEYS[] = {"edits", "commit", "plan", "render", "repeat", "pick", "list"};
 
 void compile_expect(Step& s, const Json& v, const std::vector<std::string>& names) {
     if (!v.contains("expect")) return;
-    s.expect = value_or_throw(Expectation::compile(v["expect"], names, s.kind != StepKind::Plan));
+    const ExpectTarget target = s.kind == StepKind::Pick   ? ExpectTarget::Pick
+                                : s.kind == StepKind::List ? ExpectTarget::List
+                                                           : ExpectTarget::Report;
+    s.expect =
+        value_or_throw(Expectation::compile(v["expect"], names, s.kind != StepKind::Plan, target));
+}
+
+/// A pick step's object: the GET /v1/pick members (x, y, width, height required; camera).
+void compile_pick(Step& s, const Json& v, const std::vector<std::string>& names) {
+    const Json& p = v["pick"];
+    if (!p.is_object())
+        throw ScriptFailure{
+            "\"pick\" must be an object {\"x\", \"y\", \"width\", \"height\"} "
+            "(and optionally \"camera\")"};
+    if (auto bad = check_members(p, "\"pick\"", {"x", "y", "width", "height", "camera"}))
+        throw ScriptFailure{bad->message};
+    for (const char* key : {"x", "y", "width", "height"})
+        if (!p.contains(key)) throw ScriptFailure{std::string("\"pick\" needs \"") + key + "\""};
+    s.body = value_or_throw(JsonTemplate::compile(p, names));
+}
+
+/// A list step: the collection and an optional filter of query parameters.
+void compile_list(Step& s, const Json& v, const std::vector<std::string>& names) {
+    const std::vector<std::string>& collections = scene_collections();
+    const Json& c = v["list"];
+    if (!c.is_string() || std::find(collections.begin(), collections.end(), c.get<std::string>()) ==
+                              collections.end()) {
+        std::string known;
+        for (const std::string& k : collections) known += (known.empty() ? "" : ", ") + k;
+        throw ScriptFailure{"\"list\" names a collection: one of " + known + ", not " + c.dump()};
+    }
+    s.collection = c.get<std::string>();
+    if (v.contains("filter")) {
+        const Json& f = v["filter"];
+        if (!f.is_object())
+            throw ScriptFailure{
+                "\"filter\" must be an object of query parameters, such as "
+                "{\"mesh\": \"rock\", \"visible\": true}"};
+        for (const auto& [key, value] : f.items()) {
+            if (key == "limit" || key == "cursor")
+                throw ScriptFailure{"\"filter\" takes no \"" + key +
+                                    "\": a list step reads every page itself"};
+            if (!value.is_string() && !value.is_boolean() && !value.is_number())
+                throw ScriptFailure{"filter." + key + ": expected a string, number or boolean"};
+        }
+        s.body = value_or_throw(JsonTemplate::compile(f, names));
+    }
 }
 
 void require_empty_object(const Json& v, const char* key) {
@@ -33,8 +82,8 @@ Step compile_step(const Json& v, std::size_t line, std::vector<std::string>& nam
         if (!v.contains(KIND_KEYS[i])) continue;
         if (kind)
             throw ScriptFailure{
-                std::string("a step is one of edits, commit, plan, render or repeat; "
-                            "this one has both \"") +
+                std::string("a step is one of edits, commit, plan, render, repeat, pick or "
+                            "list; this one has both \"") +
                 kind + "\" and \"" + KIND_KEYS[i] + "\""};
         kind = KIND_KEYS[i];
         s.kind = StepKind(i);
@@ -43,8 +92,8 @@ Step compile_step(const Json& v, std::size_t line, std::vector<std::string>& nam
         std::string keys;
         for (const auto& [key, value] : v.items()) keys += (keys.empty() ? "" : ", ") + key;
         throw ScriptFailure{"unknown step (members: " + (keys.empty() ? "none" : keys) +
-                            "); a step has one of \"edits\", \"commit\", \"plan\", \"render\" or "
-                            "\"repeat\""};
+                            "); a step has one of \"edits\", \"commit\", \"plan\", \"render\", "
+                            "\"repeat\", \"pick\" or \"list\""};
     }
     if (v.contains("label")) {
         if (!v["label"].is_string()) throw ScriptFailure{"\"label\" must be a string"};
@@ -78,6 +127,18 @@ Step compile_step(const Json& v, std::size_t line, std::vector<std::string>& nam
                     throw ScriptFailure{"\"out\" must be a file name"};
                 s.out = value_or_throw(StringTemplate::compile(v["out"].get<std::string>(), names));
             }
+            compile_expect(s, v, names);
+            break;
+        case StepKind::Pick:
+            if (auto bad = check_members(v, "a pick step", {"pick", "expect", "label"}))
+                throw ScriptFailure{bad->message};
+            compile_pick(s, v, names);
+            compile_expect(s, v, names);
+            break;
+        case StepKind::List:
+            if (auto bad = check_members(v, "a list step", {"list", "filter", "expect", "label"}))
+                throw ScriptFailure{bad->message};
+            compile_list(s, v, names);
             compile_expect(s, v, names);
             break;
         case StepKind::Repeat: {

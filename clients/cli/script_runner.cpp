@@ -4,6 +4,7 @@
 #include <cctype>
 #include <chrono>
 #include <fstream>
+#include <map>
 
 namespace strata::cli {
 
@@ -14,6 +15,9 @@ using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point start) {
     return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
+
+/// Items per page a list step asks for (the protocol's largest).
+constexpr int LIST_PAGE_SIZE = 10000;
 
 /// Ends the play: thrown by the player, caught once in play().
 struct Stop {};
@@ -99,6 +103,12 @@ private:
             case StepKind::Render:
                 run_render(s, r);
                 break;
+            case StepKind::Pick:
+                run_pick(s, r);
+                break;
+            case StepKind::List:
+                run_list(s, r);
+                break;
             case StepKind::Repeat:
                 break;
         }
@@ -152,6 +162,45 @@ private:
                          "expect mesh lists on a commit step instead");
     }
 
+    /// POST /v1/pick for the step's one pixel; the answer is kept as {"version", "hit"}.
+    void run_pick(const Step& s, StepRecord& r) {
+        const Json p = value_of(s, s.body->instantiate(m_vars));
+        Json body = {{"width", p["width"]},
+                     {"height", p["height"]},
+                     {"pixels", Json::array({Json::array({p["x"], p["y"]})})}};
+        if (p.contains("camera")) body["camera"] = p["camera"];
+        const Json doc = answer_json(r, m_transport.pick(body.dump()));
+        const Json hits = doc.value("hits", Json::array());
+        if (!hits.is_array() || hits.size() != 1)
+            fail_request(r, {}, "the pick answer does not have one hit entry");
+        r.version = doc.value("version", uint64_t(0));
+        r.answer = Json{{"version", r.version}, {"hit", hits[0]}};
+    }
+
+    /// Walks every page of GET /v1/scene/{collection}; the answer is kept as {"version" (the
+    /// last page's), "count", "ids" (in listing order)}.
+    void run_list(const Step& s, StepRecord& r) {
+        std::multimap<std::string, std::string> query;
+        query.emplace("limit", std::to_string(LIST_PAGE_SIZE));
+        if (s.body) {
+            const Json filter = value_of(s, s.body->instantiate(m_vars));
+            for (const auto& [key, value] : filter.items())
+                query.emplace(key, value.is_string() ? value.get<std::string>() : value.dump());
+        }
+        Json ids = Json::array();
+        while (true) {
+            const Json page = answer_json(r, m_transport.scene_list(s.collection, query));
+            r.version = page.value("version", uint64_t(0));
+            for (const Json& item : page.value("items", Json::array()))
+                ids.push_back(item.value("id", std::string()));
+            const Json next = page.value("next_cursor", Json(nullptr));
+            if (!next.is_string()) break;
+            query.erase("cursor");
+            query.emplace("cursor", next.get<std::string>());
+        }
+        r.answer = Json{{"version", r.version}, {"count", ids.size()}, {"ids", std::move(ids)}};
+    }
+
     void write_frame(StepRecord& r, const std::filesystem::path& path, const std::string& bytes) {
         std::error_code ec;
         if (path.has_parent_path()) std::filesystem::create_directories(path.parent_path(), ec);
@@ -169,7 +218,8 @@ private:
     }
 
     void check(const Step& s, StepRecord& r) {
-        auto mismatches = value_of(s, s.expect->check(*r.report, m_vars, m_options.budgets));
+        const Json& checked = r.answer ? *r.answer : *r.report;
+        auto mismatches = value_of(s, s.expect->check(checked, m_vars, m_options.budgets));
         r.checks = s.expect->count_checks() + (m_options.budgets ? s.expect->count_budgets() : 0);
         if (!m_options.budgets) m_result.budgets_skipped += s.expect->count_budgets();
         if (mismatches.empty()) {

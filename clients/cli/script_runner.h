@@ -28,6 +28,8 @@ struct StepRecord {
     uint64_t version = 0;        ///< the scene version after (edits) or of (others) the step
     std::size_t applied = 0;     ///< edits: edits applied
     std::optional<Json> report;  ///< commit, plan and render: the rebuild report
+    /// pick: {"version", "hit"}; list: {"version", "count", "ids"} (what "expect" checks)
+    std::optional<Json> answer;
     std::string out;             ///< render: the file written ("" when not saved)
     std::size_t bytes = 0;       ///< render: image size
     std::size_t checks = 0;      ///< expectation fields checked

@@ -12,9 +12,11 @@
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfIDManifest.h>
 #include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfStandardAttributes.h>
 #include <ImfThreading.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -102,6 +104,30 @@ void init_exr_threads() {
     });
 }
 
+Imath::M44f imath_matrix(const glm::mat4& m) {
+    Imath::M44f out;
+    for (int i = 0; i < 4; ++i) {
+        for (int j = 0; j < 4; ++j) out[i][j] = m[i][j];
+    }
+    return out;
+}
+
+void add_attributes(Imf::Header& header, const ExrAttributes& a) {
+    if (a.world_to_camera) Imf::addWorldToCamera(header, imath_matrix(*a.world_to_camera));
+    if (a.world_to_ndc) Imf::addWorldToNDC(header, imath_matrix(*a.world_to_ndc));
+    if (a.ids.empty()) return;
+    Imf::IDManifest manifest;
+    for (const ExrIdTable& table : a.ids) {
+        Imf::IDManifest::ChannelGroupManifest& group = manifest.add(table.channel);
+        group.setComponent(table.component);
+        group.setLifetime(Imf::IDManifest::LIFETIME_FRAME);
+        group.setHashScheme(Imf::IDManifest::NOTHASHED);
+        group.setEncodingScheme(Imf::IDManifest::ID_SCHEME);
+        for (const auto& [id, text] : table.entries) group.insert(id, text);
+    }
+    Imf::addIDManifest(header, Imf::CompressedIDManifest(manifest));
+}
+
 /// `count` floats (every `stride`-th of `src`) as halves, rounded to nearest even.
 std::vector<half> to_half(const float* src, std::size_t stride, std::size_t count) {
     std::vector<half> out(count);
@@ -123,8 +149,8 @@ const DecodedExrChannel* DecodedExr::find(const std::string& name) const {
 }
 
 Result<std::string> encode_exr(uint32_t width, uint32_t height,
-                               const std::vector<ExrChannel>& channels,
-                               ExrCompression compression) {
+                               const std::vector<ExrChannel>& channels, ExrCompression compression,
+                               const ExrAttributes& attributes) {
     if (width == 0 || height == 0 || width > uint32_t(std::numeric_limits<int>::max()) ||
         height > uint32_t(std::numeric_limits<int>::max()))
         return failure(ErrorCode::InvalidArgument, "EXR needs a non-empty image");
@@ -140,6 +166,7 @@ Result<std::string> encode_exr(uint32_t width, uint32_t height,
         Imf::Header header(static_cast<int>(width), static_cast<int>(height));
         header.compression() = imf_compression(compression);
         header.zipCompressionLevel() = ZIP_LEVEL;
+        add_attributes(header, attributes);
         Imf::FrameBuffer frame;
         // OpenEXR writes only from slices of the file's own type: half channels are converted
         // here first (in parallel), float and uint channels are read in place.

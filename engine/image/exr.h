@@ -13,7 +13,10 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
+
+#include <glm/glm.hpp>
 
 #include "engine/core/result.h"
 
@@ -35,9 +38,29 @@ struct ExrChannel {
     std::size_t stride = 1;
 };
 
-/// Encodes a width x height image with `channels` (OpenEXR sorts them by name in the file).
+/// What the numbers of one UINT channel stand for: an entry of the file's ID manifest
+/// (OpenEXR's `idManifest` attribute, ImfIDManifest.h) with one text component per id, not
+/// hashed, valid for this frame only.
+struct ExrIdTable {
+    std::string channel;
+    std::string component;  ///< what the texts are ("instance", "mesh")
+    std::vector<std::pair<uint32_t, std::string>> entries;
+};
+
+/// Header attributes besides the channels.
+struct ExrAttributes {
+    /// OpenEXR's standard worldToCamera and worldToNDC (ImfStandardAttributes.h). glm matrices
+    /// (column vectors) are written as they lie in memory, which is Imath's row-vector layout.
+    std::optional<glm::mat4> world_to_camera;
+    std::optional<glm::mat4> world_to_ndc;
+    std::vector<ExrIdTable> ids;  ///< the ID manifest; none is written when empty
+};
+
+/// Encodes a width x height image with `channels` (OpenEXR sorts them by name in the file) and
+/// `attributes`.
 Result<std::string> encode_exr(uint32_t width, uint32_t height,
-                               const std::vector<ExrChannel>& channels, ExrCompression compression);
+                               const std::vector<ExrChannel>& channels, ExrCompression compression,
+                               const ExrAttributes& attributes = {});
 
 /// One decoded channel: floats for HALF and FLOAT channels, integers for UINT ones.
 struct DecodedExrChannel {

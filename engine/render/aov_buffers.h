@@ -14,6 +14,7 @@
 //   instance_id   pixel-centre ray       instance slot index (see below)                0xFFFFFFFF
 //   primitive_id  pixel-centre ray       triangle index within the instance's mesh      0xFFFFFFFF
 //   mesh_id       pixel-centre ray       mesh slot index                                0xFFFFFFFF
+//   user_id       pixel-centre ray       the instance's user_id (add/update_instance)   0xFFFFFFFF
 //
 // "Every sample" AOVs are antialiased exactly like the beauty image (what a denoiser expects);
 // "pixel-centre ray" AOVs come from one unjittered ray through the pixel centre, so they name a
@@ -24,7 +25,8 @@
 // hiding, re-masking or re-materialling it keeps it) and is the number the TLAS reports as a
 // hit's instance; a slot freed by a removal is reused by a later addition. `mesh_id` is likewise
 // the mesh's slot (Scene::find_mesh(id).index). Neither is the instance's `user_id`, which
-// clients choose freely and need not be unique.
+// clients choose freely and need not be unique: the `user_id` AOV carries it as given (a client
+// that uses 0xFFFFFFFF itself tells its hits from misses by instance_id or depth).
 
 #include <cstdint>
 #include <vector>
@@ -51,7 +53,7 @@ public:
     /// True when any AOV that comes from the pixel-centre ray is present.
     bool needs_centre_ray() const {
         return has(Aov::Depth) || has(Aov::Position) || has(Aov::InstanceId) ||
-               has(Aov::PrimitiveId) || has(Aov::MeshId);
+               has(Aov::PrimitiveId) || has(Aov::MeshId) || has(Aov::UserId);
     }
 
 private:
@@ -71,6 +73,7 @@ struct FrameBuffers {
     std::vector<uint32_t> instance_id;
     std::vector<uint32_t> primitive_id;
     std::vector<uint32_t> mesh_id;
+    std::vector<uint32_t> user_id;
 
     std::size_t pixel_count() const { return std::size_t(width) * height; }
 
@@ -88,6 +91,7 @@ struct FrameBuffers {
         if (set.has(Aov::InstanceId)) instance_id.resize(n);
         if (set.has(Aov::PrimitiveId)) primitive_id.resize(n);
         if (set.has(Aov::MeshId)) mesh_id.resize(n);
+        if (set.has(Aov::UserId)) user_id.resize(n);
     }
 
     /// As allocate(), but keeps the buffers (and their contents) when they already have this

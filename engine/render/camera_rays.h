@@ -11,6 +11,40 @@
 
 namespace strata {
 
+/// OpenEXR's worldToCamera for `c` (ImfStandardAttributes.h): camera space is left-handed with
+/// the eye at the origin, x to the right of the image, y up and z along the view, as the rays
+/// below use them. A glm (column-vector) matrix; its memory layout is Imath's row-vector M44f.
+inline glm::mat4 world_to_camera(const Camera& c) {
+    const Vec3 forward = glm::normalize(c.target - c.eye);
+    const Vec3 right = glm::normalize(glm::cross(forward, c.up));
+    const Vec3 up = glm::cross(right, forward);
+    glm::mat4 m(1.0f);
+    for (int k = 0; k < 3; ++k) {
+        m[k][0] = right[k];
+        m[k][1] = up[k];
+        m[k][2] = forward[k];
+    }
+    m[3] = glm::vec4(-glm::dot(right, c.eye), -glm::dot(up, c.eye), -glm::dot(forward, c.eye), 1);
+    return m;
+}
+
+/// OpenEXR's worldToNDC for `c` and a width x height image: after the divide by w, x runs from 0
+/// at the image's left edge to 1 at its right and y from 0 at the top to 1 at the bottom, so
+/// pixel (px, py)'s centre is ((px + 0.5) / width, (py + 0.5) / height). z (which the convention
+/// discards) comes out as 1 / camera-space z, which keeps the matrix invertible.
+inline glm::mat4 world_to_ndc(const Camera& c, uint32_t width, uint32_t height) {
+    const float tan_half = std::tan(glm::radians(c.fov_y_deg) * 0.5f);
+    const float aspect = float(width) / float(height);
+    glm::mat4 p(0.0f);  // camera (x, y, z, 1) -> (x', y', 1, z)
+    p[0][0] = 0.5f / (tan_half * aspect);
+    p[1][1] = -0.5f / tan_half;
+    p[2][0] = 0.5f;
+    p[2][1] = 0.5f;
+    p[2][3] = 1.0f;
+    p[3][2] = 1.0f;
+    return p * world_to_camera(c);
+}
+
 class CameraRays {
 public:
     CameraRays(const Camera& c, uint32_t width, uint32_t height) : m_eye(c.eye) {

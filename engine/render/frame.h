@@ -5,6 +5,8 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "engine/accel/report.h"
 #include "engine/render/aov_buffers.h"
@@ -21,10 +23,20 @@ struct FrameInfo {
     double render_ms = 0.0;      ///< tracing and shading
 };
 
+/// The client ids that the slot numbers in a frame's `instance_id` and `mesh_id` buffers stand
+/// for, at the frame's version: one (slot, id) pair per slot the buffer holds, sorted by slot.
+/// Empty for an AOV the frame does not carry.
+struct FrameIdNames {
+    std::vector<std::pair<uint32_t, std::string>> instances;
+    std::vector<std::pair<uint32_t, std::string>> meshes;
+};
+
 /// A frame's linear buffers.
 struct Frame {
     FrameBuffers buffers;
     FrameInfo info;
+    Camera camera;       ///< the camera the frame was traced with (the request's override applied)
+    FrameIdNames names;  ///< for the EXR ID manifest
 };
 
 /// A frame encoded for a client. The bytes are a std::string so that they move, uncopied, into

@@ -3,9 +3,9 @@
 #include <new>
 
 #include "engine/core/timer.h"
-#include "engine/image/exr.h"
 #include "engine/image/png.h"
 #include "engine/image/tonemap.h"
+#include "engine/render/camera_rays.h"
 
 namespace strata {
 
@@ -44,15 +44,28 @@ std::vector<ExrChannel> exr_channels(const FrameBuffers& f) {
     if (f.aovs.has(Aov::InstanceId)) add_uint(channels, f.instance_id, Aov::InstanceId);
     if (f.aovs.has(Aov::PrimitiveId)) add_uint(channels, f.primitive_id, Aov::PrimitiveId);
     if (f.aovs.has(Aov::MeshId)) add_uint(channels, f.mesh_id, Aov::MeshId);
+    if (f.aovs.has(Aov::UserId)) add_uint(channels, f.user_id, Aov::UserId);
     return channels;
 }
 
-Result<EncodedFrame> encode_frame(const FrameBuffers& buffers, const RenderRequest& request) {
+ExrAttributes exr_attributes(const Frame& frame) {
+    ExrAttributes a;
+    a.world_to_camera = world_to_camera(frame.camera);
+    a.world_to_ndc = world_to_ndc(frame.camera, frame.buffers.width, frame.buffers.height);
+    if (frame.buffers.aovs.has(Aov::InstanceId))
+        a.ids.push_back({aov_name(Aov::InstanceId), "instance", frame.names.instances});
+    if (frame.buffers.aovs.has(Aov::MeshId))
+        a.ids.push_back({aov_name(Aov::MeshId), "mesh", frame.names.meshes});
+    return a;
+}
+
+Result<EncodedFrame> encode_frame(const FrameBuffers& buffers, const RenderRequest& request,
+                                  const ExrAttributes& attributes) {
     Stopwatch clock;
     EncodedFrame out;
     if (request.format == ImageFormat::Exr) {
-        auto exr =
-            encode_exr(buffers.width, buffers.height, exr_channels(buffers), request.compression);
+        auto exr = encode_exr(buffers.width, buffers.height, exr_channels(buffers),
+                              request.compression, attributes);
         if (!exr) return Unexpected(exr.error());
         out.bytes = std::move(exr.value());
         out.content_type = "image/x-exr";

@@ -13,21 +13,30 @@
 //   instance_id   instance_id (uint; 0xFFFFFFFF where nothing was hit)
 //   primitive_id  primitive_id (uint)
 //   mesh_id       mesh_id (uint)
-// Compression as requested (default zip).
+//   user_id       user_id (uint)
+// Compression as requested (default zip). The header carries OpenEXR's standard worldToCamera and
+// worldToNDC for the frame's camera (camera_rays.h) and, with instance_id or mesh_id, an ID
+// manifest naming every slot the channels hold with its client id (component "instance" or
+// "mesh", lifetime frame: a freed slot may name another object in a later frame).
 
 #include <cstdint>
 #include <vector>
 
 #include "engine/core/result.h"
+#include "engine/image/exr.h"
 #include "engine/render/aov_buffers.h"
 #include "engine/render/frame.h"
 #include "engine/render/render_request.h"
 
 namespace strata {
 
-/// Encodes `buffers` in `request`'s format with its exposure, AOVs and compression; the result
-/// carries the encoding time (its `info` is the caller's to fill in).
-Result<EncodedFrame> encode_frame(const FrameBuffers& buffers, const RenderRequest& request);
+/// Encodes `buffers` in `request`'s format with its exposure, AOVs and compression, and (EXR only)
+/// `attributes`; the result carries the encoding time (its `info` is the caller's to fill in).
+Result<EncodedFrame> encode_frame(const FrameBuffers& buffers, const RenderRequest& request,
+                                  const ExrAttributes& attributes = {});
+
+/// The EXR header attributes of `frame`: camera matrices and the ID manifest.
+ExrAttributes exr_attributes(const Frame& frame);
 
 /// The EXR channels of `frame`: beauty and every AOV the frame carries.
 std::vector<ExrChannel> exr_channels(const FrameBuffers& frame);

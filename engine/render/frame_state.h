@@ -5,10 +5,12 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
 
+#include "engine/render/frame.h"
 #include "engine/scene/scene.h"
 
 namespace strata {
@@ -19,6 +21,7 @@ constexpr uint32_t DEFAULT_MATERIAL = 0;
 struct InstanceShade {
     uint32_t material = DEFAULT_MATERIAL;  ///< index into FrameState::materials
     uint32_t mesh_slot = 0;
+    uint32_t user_id = 0;           ///< the client's number, for the user_id AOV
     glm::mat3 normal_matrix{1.0f};  ///< object-to-world for normals
 };
 
@@ -58,11 +61,19 @@ public:
     std::vector<InstanceShade> instances;
     /// Indexed by mesh slot; null for meshes without normals and uvs.
     std::vector<std::shared_ptr<const MeshShade>> meshes;
+    /// Client ids by instance slot and by mesh slot ("" for a free slot): launches name the
+    /// slots their id AOVs hold without reading the editable scene.
+    std::vector<std::string> instance_ids;
+    std::vector<std::string> mesh_ids;
 
     /// The shading attributes of the mesh in `slot`, or nullptr.
     const MeshShade* mesh_shade(uint32_t slot) const {
         return slot < meshes.size() ? meshes[slot].get() : nullptr;
     }
+
+    /// The client ids of the slots in `buffers`' instance_id and mesh_id AOVs (this state must
+    /// be the one the buffers were traced from).
+    FrameIdNames id_names(const FrameBuffers& buffers) const;
 
 private:
     void refresh_instance(const Scene& scene, uint32_t slot);

@@ -9,8 +9,8 @@ namespace {
 
 constexpr const char* FORMAT_NAMES[] = {"png", "exr"};
 constexpr const char* COMPRESSION_NAMES[] = {"none", "zip", "piz"};
-constexpr const char* AOV_NAMES[] = {"color",    "albedo",      "normal",       "depth",
-                                     "position", "instance_id", "primitive_id", "mesh_id"};
+constexpr const char* AOV_NAMES[] = {"color",       "albedo",       "normal",  "depth",  "position",
+                                     "instance_id", "primitive_id", "mesh_id", "user_id"};
 
 template <class E, std::size_t N>
 std::optional<E> parse_name(const char* const (&names)[N], std::string_view s) {

@@ -27,11 +27,12 @@ enum class Aov : uint8_t {
     Position,
     InstanceId,
     PrimitiveId,
-    MeshId
+    MeshId,
+    UserId
 };
 
 /// Wire names: "png"/"exr", "none"/"zip"/"piz", "color", "albedo", "normal", "depth", "position",
-/// "instance_id", "primitive_id", "mesh_id".
+/// "instance_id", "primitive_id", "mesh_id", "user_id".
 const char* image_format_name(ImageFormat f);
 const char* exr_compression_name(ExrCompression c);
 const char* aov_name(Aov a);

@@ -307,6 +307,8 @@ private:
                 m_out.primitive_id[p] = hit ? packet.prim_id[i] : MISS_ID;
             if (aovs.has(Aov::MeshId))
                 m_out.mesh_id[p] = hit ? m_frame.instances[inst].mesh_slot : MISS_ID;
+            if (aovs.has(Aov::UserId))
+                m_out.user_id[p] = hit ? m_frame.instances[inst].user_id : MISS_ID;
         }
         return rays;
     }
@@ -346,6 +348,7 @@ Result<Frame> Renderer::render(const TlasStrategy& tlas, const FrameState& frame
     const auto resolved = resolve_camera(request.camera, frame.camera);
     if (!resolved) return Unexpected(resolved.error());
     const Camera camera = resolved.value();
+    out.camera = camera;
     if (should_stop(request.cancel)) return cancelled_error(*request.cancel);
     try {
         out.buffers.allocate(request.width, request.height, AovSet(request.aovs));
@@ -374,6 +377,7 @@ Result<Frame> Renderer::render(const TlasStrategy& tlas, const FrameState& frame
         out.info.samples = total;
         out.info.samples_added = samples.count;
         out.info.rays = kernel.rays();
+        out.names = frame.id_names(out.buffers);
     } catch (const std::bad_alloc&) {
         m_accumulator.reset();
         return failure(ErrorCode::TooLarge, "not enough memory for a frame of this size", "width");

@@ -1,9 +1,12 @@
 #pragma once
 // A Transport that records requests and answers like a tiny, predictable server: every batch
-// moves the version by one; commits report the TLAS action queued for them ("none" by default).
+// moves the version by one; commits report the TLAS action queued for them ("none" by default);
+// picks answer `pick_hit` for every pixel; listings page through `listed` two items at a time.
 
 #include <deque>
+#include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "clients/cli/json.h"
@@ -42,11 +45,25 @@ public:
         return json(200, {{"version", version}, {"last_report", last}});
     }
     Reply scene() override { return json(200, {{"version", version}}); }
-    Reply scene_list(const std::string&, const std::multimap<std::string, std::string>&) override {
-        return {};
+    Reply scene_list(const std::string& collection,
+                     const std::multimap<std::string, std::string>& query) override {
+        list_queries.emplace_back(collection, query);
+        const auto cursor = query.find("cursor");
+        const std::size_t first = cursor == query.end() ? 0 : std::stoul(cursor->second);
+        Json page = {{"version", version}, {"items", Json::array()}, {"next_cursor", nullptr}};
+        for (std::size_t i = first; i < listed.size() && i < first + 2; ++i)
+            page["items"].push_back({{"id", listed[i]}});
+        if (first + 2 < listed.size()) page["next_cursor"] = std::to_string(first + 2);
+        return json(200, page);
     }
     Reply scene_object(const std::string&, const std::string&) override { return {}; }
-    Reply pick(const std::string&) override { return {}; }
+    Reply pick(const std::string& body) override {
+        pick_bodies.push_back(Json::parse(body));
+        Json hits = Json::array();
+        for (std::size_t i = 0; i < pick_bodies.back()["pixels"].size(); ++i)
+            hits.push_back(pick_hit);
+        return json(200, {{"version", version}, {"hits", hits}});
+    }
     Reply get_snapshot() override { return {200, "", "application/vnd.strata.snapshot", "SNAP", {}}; }
     Reply put_snapshot(std::string bytes) override {
         snapshot_posted = std::move(bytes);
@@ -70,6 +87,10 @@ public:
     std::deque<std::string> tlas_actions;  ///< actions of the next reports, in order
     std::vector<Json> edit_bodies;
     std::vector<Json> render_bodies;
+    std::vector<Json> pick_bodies;
+    Json pick_hit = nullptr;          ///< what every picked pixel shows (null: nothing)
+    std::vector<std::string> listed;  ///< the ids every listing answers
+    std::vector<std::pair<std::string, std::multimap<std::string, std::string>>> list_queries;
     Json last;
     Reply refusal;
 

@@ -140,5 +140,88 @@ TEST(ScriptExpect, AnExpressionThatCannotBeEvaluatedIsAnError) {
     EXPECT_NE(m.error().message.find("division by zero"), std::string::npos);
 }
 
+/// A pick step's answer as the runner keeps it, and a list step's.
+const Json PICKED = Json::parse(
+    R"({"version": 4, "hit": {"instance": "b0", "mesh": "ball", "primitive": 97,
+        "distance": 7.02, "user_id": 12, "position": [0, 0, 1], "normal": [0, 0, 1]}})");
+const Json MISSED = Json::parse(R"({"version": 4, "hit": null})");
+const Json LISTED = Json::parse(R"({"version": 9, "count": 3, "ids": ["a", "b", "c"]})");
+
+std::vector<Mismatch> check_answer(const Json& expect, ExpectTarget target, const Json& answer) {
+    auto e = Expectation::compile(expect, {"n"}, true, target);
+    EXPECT_TRUE(e.has_value()) << (e.has_value() ? "" : e.error().message);
+    if (!e) return {};
+    Bindings vars;
+    vars.push("n", 2);
+    auto m = e.value().check(answer, vars, false);
+    EXPECT_TRUE(m.has_value()) << (m.has_value() ? "" : m.error().message);
+    return m.has_value() ? m.value() : std::vector<Mismatch>{};
+}
+
+TEST(ScriptExpect, APickChecksWhatWasHitWithIdsAndCounts) {
+    const Json all = Json::parse(
+        R"({"hit": true, "hit.instance": "b0", "hit.mesh": "ball", "hit.primitive": 97,
+            "hit.user_id": "{n * 6}", "hit.distance": {"min": 7, "max": 7.1}, "version": 4})");
+    EXPECT_TRUE(check_answer(all, ExpectTarget::Pick, PICKED).empty());
+    EXPECT_EQ(Expectation::compile(all, {"n"}, true, ExpectTarget::Pick).value().count_checks(),
+              7u);
+    const auto m = check_answer(Json::parse(R"({"hit.instance": "b{n}", "hit.user_id": 13})"),
+                                ExpectTarget::Pick, PICKED);
+    ASSERT_EQ(m.size(), 2u);
+    EXPECT_EQ(m[0].field, "hit.user_id");
+    EXPECT_EQ(m[0].actual, "12");
+    EXPECT_EQ(m[1].field, "hit.instance");
+    EXPECT_EQ(m[1].expected, "b2");
+    EXPECT_EQ(m[1].actual, "b0");
+}
+
+TEST(ScriptExpect, APickThatHitNothingFailsEveryHitField) {
+    EXPECT_TRUE(check_answer(Json::parse(R"({"hit": false})"), ExpectTarget::Pick, MISSED).empty());
+    const auto m = check_answer(Json::parse(R"({"hit": true, "hit.instance": "b0"})"),
+                                ExpectTarget::Pick, MISSED);
+    ASSERT_EQ(m.size(), 2u);
+    EXPECT_EQ(m[0].field, "hit");
+    EXPECT_EQ(m[0].expected, "true");
+    EXPECT_EQ(m[0].actual, "false");
+    EXPECT_EQ(m[1].actual, "(no hit)");
+    EXPECT_EQ(m[1].note, "nothing was hit");
+    const auto hit = check_answer(Json::parse(R"({"hit": false})"), ExpectTarget::Pick, PICKED);
+    ASSERT_EQ(hit.size(), 1u);
+    EXPECT_EQ(hit[0].actual, "true");
+}
+
+TEST(ScriptExpect, AListChecksTheCountAndTheExactSetOfIds) {
+    EXPECT_TRUE(check_answer(Json::parse(R"({"count": 3, "ids": ["c", "b", "a"], "version": 9})"),
+                             ExpectTarget::List, LISTED)
+                    .empty());
+    const auto m = check_answer(Json::parse(R"({"count": {"min": 4}, "ids": ["a", "b", "d"]})"),
+                                ExpectTarget::List, LISTED);
+    ASSERT_EQ(m.size(), 2u);
+    EXPECT_EQ(m[0].field, "count");
+    EXPECT_EQ(m[0].actual, "3");
+    EXPECT_EQ(m[1].field, "ids");
+    EXPECT_EQ(m[1].note, "missing: d; unexpected: c");
+}
+
+TEST(ScriptExpect, EachTargetAcceptsOnlyItsOwnFields) {
+    const auto error = [](const char* expect, ExpectTarget target) {
+        auto e = Expectation::compile(Json::parse(expect), {}, true, target);
+        return e.has_value() ? std::string("(compiled)") : e.error().message;
+    };
+    EXPECT_NE(error(R"({"tlas": "none"})", ExpectTarget::Pick).find("unknown member \"tlas\""),
+              std::string::npos);
+    EXPECT_NE(error(R"({"hit.instance": "a"})", ExpectTarget::List)
+                  .find("unknown member \"hit.instance\""),
+              std::string::npos);
+    EXPECT_NE(error(R"({"count": 1})", ExpectTarget::Report).find("unknown member \"count\""),
+              std::string::npos);
+    EXPECT_NE(error(R"({"hit": "b0"})", ExpectTarget::Pick).find("expected true"),
+              std::string::npos);
+    EXPECT_NE(error(R"({"hit.mesh": 3})", ExpectTarget::Pick).find("expected an id"),
+              std::string::npos);
+    EXPECT_NE(error(R"({"ids": "a"})", ExpectTarget::List).find("expected an array of ids"),
+              std::string::npos);
+}
+
 }  // namespace
 }  // namespace strata::cli

@@ -113,6 +113,60 @@ TEST(ScriptLoader, ABadExpectationFieldIsRefused) {
               std::string::npos);
 }
 
+TEST(ScriptLoader, PickAndListStepsAreReadWithTheirExpectations) {
+    auto s = load(
+        R"({"pick": {"x": 3, "y": "{1 + 1}", "width": 8, "height": 8, "camera": {"fov_y_deg": 30}}, "expect": {"hit.instance": "a"}})"
+        "\n"
+        R"({"list": "instances", "filter": {"mesh": "rock", "visible": true}, "expect": {"count": 3}, "label": "rocks"})"
+        "\n"
+        R"({"list": "meshes"})");
+    ASSERT_TRUE(s.has_value()) << s.error().describe();
+    ASSERT_EQ(s->steps.size(), 3u);
+    EXPECT_EQ(s->steps[0].kind, StepKind::Pick);
+    EXPECT_TRUE(s->steps[0].expect.has_value());
+    EXPECT_EQ(s->steps[1].kind, StepKind::List);
+    EXPECT_EQ(s->steps[1].collection, "instances");
+    EXPECT_TRUE(s->steps[1].body.has_value());
+    EXPECT_EQ(s->steps[1].label, "rocks");
+    EXPECT_EQ(s->steps[2].collection, "meshes");
+    EXPECT_FALSE(s->steps[2].body.has_value());
+    EXPECT_STREQ(step_kind_name(StepKind::Pick), "pick");
+    EXPECT_STREQ(step_kind_name(StepKind::List), "list");
+}
+
+TEST(ScriptLoader, MalformedPickAndListStepsAreRefused) {
+    EXPECT_NE(
+        error_of(R"({"pick": {"x": 3, "y": 4, "width": 8}})").find("\"pick\" needs \"height\""),
+        std::string::npos);
+    EXPECT_NE(error_of(R"({"pick": [3, 4]})").find("\"pick\" must be an object"),
+              std::string::npos);
+    EXPECT_NE(error_of(R"({"pick": {"x": 3, "y": 4, "width": 8, "height": 8, "z": 1}})")
+                  .find("unknown member \"z\""),
+              std::string::npos);
+    EXPECT_NE(error_of(R"({"pick": {"x": 3, "y": 4, "width": 8, "height": 8}, "out": "a.png"})")
+                  .find("unknown member \"out\""),
+              std::string::npos);
+    EXPECT_NE(
+        error_of(
+            R"({"pick": {"x": 3, "y": 4, "width": 8, "height": 8}, "expect": {"tlas": "none"}})")
+            .find("unknown member \"tlas\""),
+        std::string::npos);
+    EXPECT_NE(error_of(R"({"list": "rocks"})").find("one of meshes, instances, materials"),
+              std::string::npos);
+    EXPECT_NE(error_of(R"({"list": "instances", "filter": {"cursor": "x"}})")
+                  .find("a list step reads every page itself"),
+              std::string::npos);
+    EXPECT_NE(error_of(R"({"list": "instances", "filter": {"mesh": ["a"]}})")
+                  .find("filter.mesh: expected a string, number or boolean"),
+              std::string::npos);
+    EXPECT_NE(error_of(R"({"list": "instances", "expect": {"hit": true}})")
+                  .find("unknown member \"hit\""),
+              std::string::npos);
+    EXPECT_NE(error_of(R"({"pick": {"x": 1, "y": 1, "width": 2, "height": 2}, "list": "meshes"})")
+                  .find("this one has both \"pick\" and \"list\""),
+              std::string::npos);
+}
+
 TEST(ScriptLoader, ABadExpressionIsRefusedWithItsLine) {
     EXPECT_NE(
         error_of(

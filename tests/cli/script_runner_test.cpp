@@ -191,6 +191,48 @@ TEST_F(ScriptRunner, ARefusedRequestStopsThePlayWithStratasAnswer) {
     EXPECT_EQ(text.find('{'), std::string::npos) << "not raw JSON: " << text;
 }
 
+TEST_F(ScriptRunner, APickAsksForItsOnePixelAndChecksTheHit) {
+    fake.pick_hit = {{"instance", "b1"}, {"mesh", "ball"}, {"primitive", 3}, {"user_id", 7}};
+    const PlayResult r = run(
+        R"({"repeat": 2, "steps": [{"pick": {"x": "{n * 10}", "y": 5, "width": 64, "height": 32, "camera": {"fov_y_deg": 30}}, "expect": {"hit.instance": "b1", "hit.user_id": 7, "hit": true}}]})");
+    ASSERT_EQ(r.verdict, Verdict::Passed) << r.message;
+    EXPECT_EQ(r.checks_passed, 6u);
+    ASSERT_EQ(fake.pick_bodies.size(), 2u);
+    EXPECT_EQ(fake.pick_bodies[1], Json::parse(R"({"width": 64, "height": 32, "pixels": [[10, 5]],
+                                                   "camera": {"fov_y_deg": 30}})"));
+    ASSERT_EQ(observer.records.size(), 2u);
+    ASSERT_TRUE(observer.records[0].answer.has_value());
+    EXPECT_EQ((*observer.records[0].answer)["hit"]["mesh"], "ball");
+    EXPECT_FALSE(observer.records[0].report.has_value());
+
+    fake.pick_hit = nullptr;
+    const PlayResult missed = run(
+        R"({"pick": {"x": 0, "y": 0, "width": 4, "height": 4}, "expect": {"hit.instance": "b1"}})");
+    EXPECT_EQ(missed.verdict, Verdict::ExpectationFailed);
+    ASSERT_EQ(missed.mismatches.size(), 1u);
+    EXPECT_EQ(missed.mismatches[0].actual, "(no hit)");
+}
+
+TEST_F(ScriptRunner, AListFollowsEveryCursorWithItsFilter) {
+    fake.listed = {"a", "b", "c", "d", "e"};
+    const PlayResult r = run(
+        R"({"list": "instances", "filter": {"mesh": "rock-{1 + 1}", "visible": false}, "expect": {"count": 5, "ids": ["e", "d", "c", "b", "a"]}})");
+    ASSERT_EQ(r.verdict, Verdict::Passed) << r.message;
+    ASSERT_EQ(fake.list_queries.size(), 3u) << "pages of two";
+    for (const auto& [collection, query] : fake.list_queries) {
+        EXPECT_EQ(collection, "instances");
+        EXPECT_EQ(query.find("mesh")->second, "rock-2");
+        EXPECT_EQ(query.find("visible")->second, "false");
+    }
+    EXPECT_EQ(fake.list_queries[0].second.count("cursor"), 0u);
+    EXPECT_EQ(fake.list_queries[2].second.find("cursor")->second, "4");
+    EXPECT_EQ((*observer.records[0].answer)["ids"], Json({"a", "b", "c", "d", "e"}));
+
+    const PlayResult wrong = run(R"({"list": "meshes", "expect": {"count": 4}})");
+    EXPECT_EQ(wrong.verdict, Verdict::ExpectationFailed);
+    EXPECT_EQ(wrong.mismatches.at(0).actual, "5");
+}
+
 TEST_F(ScriptRunner, AnExpressionThatFailsWhilePlayingIsAScriptErrorNamingTheIteration) {
     const PlayResult r = run(
         R"({"repeat": 3, "steps": [{"edits": [{"op": "set_camera", "fov_y_deg": "{60 / (n - 1)}"}]}]})");

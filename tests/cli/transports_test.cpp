@@ -163,6 +163,35 @@ TEST_F(Transports, AScriptPlaysToTheSameVerdictThroughBoth) {
     EXPECT_EQ(play_text(*embedded, bad), Verdict::ExpectationFailed);
 }
 
+TEST_F(Transports, PickAndListStepsPlayToTheSameVerdictThroughBoth) {
+    const std::string good =
+        R"({"edits": [{"op": "clear"}, {"op": "add_mesh", "id": "m", "shape": {"type": "box"}}, {"op": "add_mesh", "id": "unused", "shape": {"type": "sphere"}}, {"repeat": 3, "var": "i", "items": [{"op": "add_instance", "id": "i{i}", "mesh": "m", "user_id": "{i + 10}", "transform": {"translate": ["{i * 3}", 0, 0]}}]}]})"
+        "\n"
+        R"({"pick": {"x": 32, "y": 32, "width": 64, "height": 64, "camera": {"eye": [0, 0, 10], "target": [0, 0, 0]}}, "expect": {"hit": true, "hit.instance": "i0", "hit.mesh": "m", "hit.user_id": 10, "hit.distance": {"min": 8, "max": 10}}})"
+        "\n"
+        R"({"pick": {"x": 0, "y": 0, "width": 64, "height": 64, "camera": {"eye": [0, 0, 10], "target": [0, 0, 0]}}, "expect": {"hit": false}})"
+        "\n"
+        R"({"list": "instances", "filter": {"mesh": "m"}, "expect": {"count": 3, "ids": ["i0", "i1", "i2"]}})"
+        "\n"
+        R"({"list": "meshes", "expect": {"ids": ["m", "unused"]}})"
+        "\n"
+        R"({"edits": [{"op": "update_instance", "instance": "i1", "visible": false}]})"
+        "\n"
+        R"({"list": "instances", "filter": {"visible": false}, "expect": {"count": 1, "ids": ["i1"]}})";
+    EXPECT_EQ(play_text(*http, good), Verdict::Passed);
+    EXPECT_EQ(play_text(*embedded, good), Verdict::Passed);
+    const std::string wrong_hit =
+        R"({"pick": {"x": 32, "y": 32, "width": 64, "height": 64, "camera": {"eye": [0, 0, 10], "target": [0, 0, 0]}}, "expect": {"hit.instance": "i2"}})";
+    EXPECT_EQ(play_text(*http, wrong_hit), Verdict::ExpectationFailed);
+    EXPECT_EQ(play_text(*embedded, wrong_hit), Verdict::ExpectationFailed);
+    const std::string wrong_count = R"({"list": "instances", "expect": {"count": 2}})";
+    EXPECT_EQ(play_text(*http, wrong_count), Verdict::ExpectationFailed);
+    EXPECT_EQ(play_text(*embedded, wrong_count), Verdict::ExpectationFailed);
+    const std::string outside = R"({"pick": {"x": 64, "y": 0, "width": 64, "height": 64}})";
+    EXPECT_EQ(play_text(*http, outside), Verdict::RequestFailed);
+    EXPECT_EQ(play_text(*embedded, outside), Verdict::RequestFailed);
+}
+
 TEST(HttpTransport, RefusesUrlsItCannotUse) {
     for (const char* url : {"localhost:7070", "ftp://host", "http://", "http://host/v1",
                             "http://host:port", "http://host:123456"}) {

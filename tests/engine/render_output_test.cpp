@@ -23,8 +23,9 @@ using test::render_frame_ok;
 using test::render_ok;
 using test::request;
 
-const std::vector<Aov> ALL_AOVS = {Aov::Color,    Aov::Albedo,     Aov::Normal,      Aov::Depth,
-                                   Aov::Position, Aov::InstanceId, Aov::PrimitiveId, Aov::MeshId};
+const std::vector<Aov> ALL_AOVS = {Aov::Color,       Aov::Albedo,   Aov::Normal,
+                                   Aov::Depth,       Aov::Position, Aov::InstanceId,
+                                   Aov::PrimitiveId, Aov::MeshId,   Aov::UserId};
 
 std::set<std::string> names(const DecodedExr& exr) {
     std::set<std::string> out;
@@ -50,8 +51,8 @@ TEST_P(RenderOutput, ExrCarriesEveryAovWithOpenExrNames) {
     ASSERT_EQ(exr.height, 39u);
     EXPECT_EQ(exr.compression, GetParam());
     const std::set<std::string> expected = {
-        "R",   "G", "B",   "A",   "albedo.R", "albedo.G",    "albedo.B",     "N.X",    "N.Y",
-        "N.Z", "Z", "P.X", "P.Y", "P.Z",      "instance_id", "primitive_id", "mesh_id"};
+        "R",   "G", "B",   "A",   "albedo.R", "albedo.G",    "albedo.B",     "N.X",     "N.Y",
+        "N.Z", "Z", "P.X", "P.Y", "P.Z",      "instance_id", "primitive_id", "mesh_id", "user_id"};
     EXPECT_EQ(names(exr), expected);
 
     const std::size_t n = 67u * 39u;
@@ -74,6 +75,7 @@ TEST_P(RenderOutput, ExrCarriesEveryAovWithOpenExrNames) {
         ASSERT_EQ(exr.find("instance_id")->u32[i], b.instance_id[i]);
         ASSERT_EQ(exr.find("primitive_id")->u32[i], b.primitive_id[i]);
         ASSERT_EQ(exr.find("mesh_id")->u32[i], b.mesh_id[i]);
+        ASSERT_EQ(exr.find("user_id")->u32[i], b.user_id[i]);
         ASSERT_EQ(exr.find("A")->f32[i], 1.0f);
         ASSERT_NEAR(exr.find("G")->f32[i], b.color[i].y, 1e-3f + 1e-3f * b.color[i].y);
         ASSERT_NEAR(exr.find("N.Z")->f32[i], b.normal[i].z, 1e-3f);

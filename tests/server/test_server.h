@@ -38,9 +38,10 @@ inline Reply to_reply(const httplib::Result& r) {
 
 class TestServer {
 public:
-    explicit TestServer(ServerConfig config = {}, bool demo = false) {
+    explicit TestServer(ServerConfig config = {}, bool demo = false,
+                        const EngineConfig& engine_config = {}) {
         spdlog::set_level(spdlog::level::warn);
-        auto engine = Engine::create();
+        auto engine = Engine::create(engine_config);
         EXPECT_TRUE(engine.has_value());
         m_engine = std::move(engine.value());
         if (demo) {
