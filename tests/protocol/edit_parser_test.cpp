@@ -197,6 +197,7 @@ TEST(EditParser, EveryOpHasAParserAndAnEngineStruct) {
     EXPECT_THAT(names, ::testing::ElementsAre("add_mesh", "update_mesh", "remove_mesh",
                                               "add_material", "update_material", "add_instance",
                                               "update_instance", "set_transform", "remove_instance",
+                                              "add_group", "update_group", "remove_group",
                                               "mark_dirty", "set_camera", "set_lighting", "clear"));
 }
 

@@ -187,7 +187,7 @@ class ServerCommandsTest(unittest.TestCase):
         code, _, _ = strata("scene", "list", "lights", env=self.env)
         self.assertEqual(code, 2)
 
-    def test_scene_groups_tree_and_group_path(self):
+    def test_scene_tree_groups_and_group_path(self):
         edits = [{"op": "clear"},
                  {"op": "add_mesh", "id": "ball", "shape": {"type": "sphere", "segments": 16}},
                  {"op": "set_camera", "eye": [0, 0, 5], "target": [0, 0, 0]},
