@@ -28,7 +28,7 @@ struct Reverser {
         const InstanceRecord& inst = instances.at(r.handle);
         MeshRecord& mesh = meshes.at(inst.mesh);
         STRATA_CHECK(!mesh.users.empty() && mesh.users.back() == r.handle);
-        mesh.users.pop_back();
+        mesh.users.mut().pop_back();
         instance_ids.erase(inst.id);
         instances.undo_insert(r.handle, r.reused_slot);
     }
@@ -47,13 +47,14 @@ struct Reverser {
         // Reverse the swap-remove from the mesh's user list.
         MeshRecord& mesh = meshes.at(r.record.mesh);
         const uint32_t slot = r.record.user_slot;
-        if (slot == mesh.users.size()) {
-            mesh.users.push_back(r.handle);
+        std::vector<InstanceHandle>& users = mesh.users.mut();
+        if (slot == users.size()) {
+            users.push_back(r.handle);
         } else {
-            const InstanceHandle moved = mesh.users[slot];
-            instances.at(moved).user_slot = static_cast<uint32_t>(mesh.users.size());
-            mesh.users.push_back(moved);
-            mesh.users[slot] = r.handle;
+            const InstanceHandle moved = users[slot];
+            instances.at(moved).user_slot = static_cast<uint32_t>(users.size());
+            users.push_back(moved);
+            users[slot] = r.handle;
         }
         instance_ids.emplace(r.record.id, r.handle);
         instances.undo_erase(r.handle, std::move(r.record));
@@ -74,9 +75,10 @@ struct Reverser {
     void operator()(undo::MeshPositions& r) {
         MeshRecord& mesh = meshes.at(r.handle);
         if (r.offset == 0 && r.positions.size() == mesh.positions.size()) {
-            mesh.positions.swap(r.positions);
+            mesh.positions = std::move(r.positions);
         } else {
-            std::copy(r.positions.begin(), r.positions.end(), mesh.positions.begin() + r.offset);
+            std::copy(r.positions.begin(), r.positions.end(),
+                      mesh.positions.mut().begin() + r.offset);
         }
     }
 

@@ -43,14 +43,14 @@ struct MeshDirty {
 struct MeshPositions {
     MeshHandle handle;
     uint32_t offset = 0;
-    std::vector<Vec3> positions;
+    CowVector<Vec3> positions;
 };
 
 /// The arrays a topology change replaced (positions only when they were replaced too).
 struct MeshTopology {
     MeshHandle handle;
-    std::optional<std::vector<Vec3>> positions;
-    std::vector<Triangle> triangles;
+    std::optional<CowVector<Vec3>> positions;
+    CowVector<Triangle> triangles;
 };
 
 /// An instance's editable state before an edit changed it.
