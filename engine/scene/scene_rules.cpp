@@ -134,7 +134,7 @@ Status Scene::apply_edit(UpdateMeshPositions&& e, UndoLog& undo) {
     if (e.positions.size() == r.positions.size()) {
         // Every vertex: replace the array, so the undo record holds the old one without a copy
         // (and a snapshot sharing it keeps reading it).
-        undo.records.emplace_back(undo::MeshPositions{h, 0, r.positions});
+        undo.records.emplace_back(undo::MeshPositionsReplaced{h, r.positions});
         r.positions = std::move(e.positions);
     } else {
         const auto first = r.positions.begin() + e.offset;

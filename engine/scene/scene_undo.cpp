@@ -74,12 +74,11 @@ struct Reverser {
 
     void operator()(undo::MeshPositions& r) {
         MeshRecord& mesh = meshes.at(r.handle);
-        if (r.offset == 0 && r.positions.size() == mesh.positions.size()) {
-            mesh.positions = std::move(r.positions);
-        } else {
-            std::copy(r.positions.begin(), r.positions.end(),
-                      mesh.positions.mut().begin() + r.offset);
-        }
+        std::copy(r.positions.begin(), r.positions.end(), mesh.positions.mut().begin() + r.offset);
+    }
+
+    void operator()(undo::MeshPositionsReplaced& r) {
+        meshes.at(r.handle).positions = std::move(r.positions);
     }
 
     void operator()(undo::MeshTopology& r) {

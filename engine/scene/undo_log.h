@@ -43,6 +43,12 @@ struct MeshDirty {
 struct MeshPositions {
     MeshHandle handle;
     uint32_t offset = 0;
+    std::vector<Vec3> positions;
+};
+
+/// The whole vertex array an update replaced (shared with the scene's snapshots, never copied).
+struct MeshPositionsReplaced {
+    MeshHandle handle;
     CowVector<Vec3> positions;
 };
 
@@ -78,7 +84,8 @@ using UndoRecord =
                  undo::Inserted<MaterialHandle>, undo::Removed<MeshHandle, MeshRecord>,
                  undo::Removed<InstanceHandle, InstanceRecord>,
                  undo::Removed<MaterialHandle, MaterialRecord>, undo::MeshDirty,
-                 undo::MeshPositions, undo::MeshTopology, undo::InstanceState, undo::MaterialState>;
+                 undo::MeshPositions, undo::MeshPositionsReplaced, undo::MeshTopology,
+                 undo::InstanceState, undo::MaterialState>;
 
 /// Everything needed to take one batch back.
 struct UndoLog {
