@@ -2,6 +2,7 @@
 
 #include "engine/core/memory_trim.h"
 #include "engine/core/timer.h"
+#include "engine/durable/edit_codec.h"
 #include "engine/durable/journal.h"
 #include "engine/render/frame_encode.h"
 
@@ -80,6 +81,16 @@ Status Engine::restore(EditBatch&& scene, uint64_t version) {
     if (!applied) return Unexpected(applied.error());
     m_scene.restore_version(version);
     return {};
+}
+
+Status Engine::restore_snapshot(std::string_view payload, uint64_t version) {
+    std::unique_lock lock(m_scene_mutex);
+    if (m_scene.version() != 0 || m_scene.instances().size() || m_scene.meshes().size())
+        return failure(ErrorCode::Internal, "restore needs an empty engine");
+    Status s = durable::decode_each(payload, [&](Edit&& e) { return m_scene.load(std::move(e)); });
+    if (s) s = m_scene.finish_load(version);
+    if (!s) m_scene.reset();
+    return s;
 }
 
 Result<RebuildReport> Engine::commit() {

@@ -66,6 +66,10 @@ public:
     /// Recovery: loads a whole-scene batch into this empty engine and sets the version it had
     /// (a snapshot's). Not journaled.
     Status restore(EditBatch&& scene, uint64_t version);
+    /// Recovery: loads a snapshot's scene (`payload`: its edit-batch bytes, edit_codec.h) into
+    /// this empty engine edit by edit, straight into the scene's storage: no whole batch decoded
+    /// first, no undo log. On error the engine is left empty.
+    Status restore_snapshot(std::string_view payload, uint64_t version);
 
     /// Brings the acceleration graph in line with the scene, doing the least work.
     Result<RebuildReport> commit();

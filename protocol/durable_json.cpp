@@ -8,6 +8,7 @@ Json durable_stats_to_json(const durable::DurableStats& s) {
     j["fsync"] = durable::fsync_mode_name(s.mode);
     j["failed"] = s.failed;
     if (s.failed) j["failure"] = s.failure;
+    if (!s.last_snapshot_error.empty()) j["last_snapshot_error"] = s.last_snapshot_error;
     for (const durable::DurableCounterSpec& spec : durable::DURABLE_COUNTERS) {
         if (spec.count) {
             j[std::string(spec.name)] = s.*spec.count;

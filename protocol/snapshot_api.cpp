@@ -7,13 +7,14 @@
 namespace strata::protocol {
 
 ApiResponse get_snapshot(const Engine& engine) {
-    // The copy is taken under the read lock; encoding happens after it is released.
-    auto [scene, version] =
-        engine.read([](const Scene& s) { return std::pair(s.to_batch(), s.version()); });
+    // The copy-on-write image is taken under the read lock (microseconds); the batch is built
+    // and encoded after it is released.
+    const SceneImage image = engine.read([](const Scene& s) { return s.image(); });
+    const uint64_t version = image.version;
     ApiResponse r;
     r.status = 200;
     r.content_type = SNAPSHOT_CONTENT_TYPE;
-    r.body = durable::encode_snapshot(scene, version);
+    r.body = durable::encode_snapshot(image.to_batch(), version);
     r.headers = {{"ETag", etag(version)},
                  {"Content-Disposition",
                   "attachment; filename=\"scene-" + std::to_string(version) + ".strata\""}};

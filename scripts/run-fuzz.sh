@@ -6,6 +6,13 @@
 #   http_request_fuzzer   raw HTTP/1.1 bytes: the front end's request reader (request line,
 #                         headers, framing, target, query, body), then the routes, protocol/api.h
 #                         and the engine
+#   journal_record_fuzzer journal segments and the edit-batch codec of their records (what
+#                         recovery reads from disk)
+#   snapshot_fuzzer       snapshots: header checks, the scene batch, import against restore (POST
+#                         /v1/scene/snapshot takes them from anyone)
+#
+# The two durable fuzzers' seed corpora are written by the encoder (tests/fuzz/durable_corpus.cpp)
+# into the scratch folder at each run, so they always match the current formats.
 #
 #   scripts/run-fuzz.sh [RUNS]        default RUNS=100000; CI calls it without arguments. The HTTP
 #                                     fuzzer gets RUNS/4: each of its inputs runs through the engine.
@@ -20,19 +27,26 @@ build="$root/build-fuzz"
 cmake -S "$root" -B "$build" -G Ninja \
     -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DSTRATA_FUZZ=ON -DSTRATA_BUILD_BENCHMARKS=OFF
-ninja -C "$build" -j "${STRATA_BUILD_JOBS:-2}" edit_batch_fuzzer http_request_fuzzer
+ninja -C "$build" -j "${STRATA_BUILD_JOBS:-2}" edit_batch_fuzzer http_request_fuzzer \
+    journal_record_fuzzer snapshot_fuzzer durable_corpus
 
 scratch="$(mktemp -d)"
 trap 'rm -rf "$scratch"' EXIT
 # A crashing input is kept in build-fuzz/artifacts/ (reproduce: <fuzzer> FILE).
 mkdir -p "$build/artifacts"
 
-run() {  # fuzzer corpus dictionary runs
-    cp -r "$root/tests/fuzz/$2" "$scratch/$2"
+run() {  # fuzzer corpus dictionary runs (no corpus folder in tests/fuzz: already in scratch)
+    [ -d "$scratch/$2" ] || cp -r "$root/tests/fuzz/$2" "$scratch/$2"
+    local dict=()
+    [ -n "$3" ] && dict=(-dict="$root/tests/fuzz/$3")
     "$build/tests/fuzz/$1" -runs="$4" -max_len=65536 -timeout=10 -rss_limit_mb=2048 \
-        -dict="$root/tests/fuzz/$3" -artifact_prefix="$build/artifacts/$1-" ${STRATA_FUZZ_ARGS:-} \
+        "${dict[@]}" -artifact_prefix="$build/artifacts/$1-" ${STRATA_FUZZ_ARGS:-} \
         "$scratch/$2"
     echo "fuzz: $1, $4 runs, no crash"
 }
 run edit_batch_fuzzer corpus json.dict "$runs"
 run http_request_fuzzer http_corpus http.dict "$((runs / 4))"
+mkdir -p "$scratch/journal_corpus" "$scratch/snapshot_corpus"
+"$build/tests/fuzz/durable_corpus" "$scratch/journal_corpus" "$scratch/snapshot_corpus"
+run journal_record_fuzzer journal_corpus "" "$runs"
+run snapshot_fuzzer snapshot_corpus "" "$runs"

@@ -74,6 +74,11 @@ void Application::install_hooks() {
     });
 }
 
+void Application::attach_store(durable::DurableStore* store) {
+    m_store = store;
+    m_context->store = store;
+}
+
 void Application::install_routes(const FrontEndCounters* front_end) {
     m_context = std::make_unique<ServerContext>(ServerContext{
         m_engine, m_config, m_metrics,

@@ -40,6 +40,9 @@ public:
         return m_routes.handle(wire_bytes, peer, close, context);
     }
 
+    /// The data directory for the routes (set while the front end refuses requests).
+    void attach_store(durable::DurableStore* store);
+
 private:
     void install_hooks();
     void install_routes(const FrontEndCounters* front_end);

@@ -41,7 +41,9 @@ durable::FsyncMode fsync_mode(const std::string& name) {
 
 /// Locks and recovers --data into `engine`; null (and a logged reason) when it cannot.
 std::unique_ptr<durable::DurableStore> open_data_dir(const server::ServerConfig& c,
-                                                     Engine& engine, bool& failed) {
+                                                     Engine& engine,
+                                                     durable::RecoveryProgress& progress,
+                                                     bool& failed) {
     failed = false;
     if (c.data_dir.empty()) {
         spdlog::warn("no --data directory: the scene lives in memory only and is lost on exit");
@@ -52,7 +54,9 @@ std::unique_ptr<durable::DurableStore> open_data_dir(const server::ServerConfig&
     o.journal.mode = fsync_mode(c.fsync);
     o.journal.fsync_interval_ms = c.fsync_interval_ms;
     o.recovery.truncate_damage = c.recover_truncate;
+    o.recovery.progress = &progress;
     o.snapshot_threshold_bytes = c.snapshot_threshold_kb << 10;
+    o.on_snapshot_failure = [](const std::string& why) { spdlog::error("{}", why); };
     Stopwatch clock;
     auto store = durable::DurableStore::open(o, engine);
     if (!store) {
@@ -98,43 +102,16 @@ int serve(server::CommandLine& cl) {
         spdlog::critical("cannot start the engine: {}", engine.error().describe());
         return 1;
     }
-    bool data_failed = false;
-    auto store = open_data_dir(cl.config, *engine.value(), data_failed);
-    if (data_failed) return 1;
-    const uint64_t recovered = engine.value()->read([](const Scene& s) { return s.version(); });
-    if (cl.config.demo && recovered != 0) {
-        spdlog::info("--demo ignored: the data directory holds a scene (version {})", recovered);
-    } else if (cl.config.demo) {
-        auto applied = engine.value()->apply(make_demo_scene());
-        if (!applied) {
-            spdlog::critical("demo scene rejected: {}", applied.error().describe());
-            return 1;
-        }
-        spdlog::info("demo scene loaded (version {})", applied.value().version);
-    }
-
-    server::Server http(cl.config, *engine.value(), store.get());
+    // Step: listen first. While the data directory is recovered and its scene built, /livez
+    // answers 200, /readyz 503 with how far recovery got, everything else 503 with Retry-After.
+    server::Server http(cl.config, *engine.value());
     auto port = http.bind();
     if (!port) {
         spdlog::critical("{}", port.error().message);
         return 1;
     }
-    // /readyz answers 503 until a recovered scene's acceleration structures are built; requests
-    // that arrive meanwhile wait for the build (the engine's launch lock). A new scene (empty, or
-    // the demo) is built by its first render, as without --data.
-    std::thread rebuild;
-    if (recovered != 0) {
-        http.set_starting(true);
-        rebuild = std::thread([&] {
-            Stopwatch clock;
-            auto built = engine.value()->commit();
-            if (!built)
-                spdlog::error("building the recovered scene failed: {}", built.error().describe());
-            if (store) store->set_rebuild_seconds(clock.ms() / 1000.0);
-            spdlog::info("recovered scene built in {:.1f} ms", clock.ms());
-            http.set_starting(false);
-        });
-    }
+    durable::RecoveryProgress progress;
+    http.set_starting(true, [&progress] { return progress.describe(); });
     signals.start([&http, &cl](int signo) {
         spdlog::info(
             "{} received: finishing in-flight requests (renders still running after {} "
@@ -146,8 +123,48 @@ int serve(server::CommandLine& cl) {
                  port.value(), cl.config.threads,
                  cl.config.token.empty() ? "no authentication"
                                          : "bearer token required, from " + cl.token_source);
-    http.listen();
-    if (rebuild.joinable()) rebuild.join();
+    std::thread serving([&http] { http.listen(); });
+    auto stop_serving = [&] {
+        http.stop();
+        serving.join();
+    };
+
+    // Step: the data directory, recovered while probes get their answers.
+    bool data_failed = false;
+    auto store = open_data_dir(cl.config, *engine.value(), progress, data_failed);
+    if (data_failed) {
+        stop_serving();
+        return 1;
+    }
+    http.attach_store(store.get());
+    const uint64_t recovered = engine.value()->read([](const Scene& s) { return s.version(); });
+    if (cl.config.demo && recovered != 0) {
+        spdlog::info("--demo ignored: the data directory holds a scene (version {})", recovered);
+    } else if (cl.config.demo) {
+        auto applied = engine.value()->apply(make_demo_scene());
+        if (!applied) {
+            spdlog::critical("demo scene rejected: {}", applied.error().describe());
+            stop_serving();
+            return 1;
+        }
+        spdlog::info("demo scene loaded (version {})", applied.value().version);
+    }
+
+    // Step: a recovered scene's acceleration structures, before the server is ready. A new
+    // scene (empty, or the demo) is built by its first render, as without --data.
+    if (recovered != 0) {
+        progress.version = recovered;
+        progress.phase = durable::RecoveryProgress::Building;
+        Stopwatch clock;
+        auto built = engine.value()->commit();
+        if (!built)
+            spdlog::error("building the recovered scene failed: {}", built.error().describe());
+        if (store) store->set_rebuild_seconds(clock.ms() / 1000.0);
+        spdlog::info("recovered scene built in {:.1f} ms", clock.ms());
+    }
+    progress.phase = durable::RecoveryProgress::Done;
+    http.set_starting(false);
+    serving.join();
     store.reset();  // the journal's last fsync, before the engine goes
     spdlog::info("stopped");
     return 0;

@@ -280,7 +280,12 @@ void Reactor::set_reading(Connection& c, Clock::time_point now) {
 
 void Reactor::advance(Connection& c, Clock::time_point now) {
     for (;;) {
-        ReaderStep step = c.reader.next({m_draining, c.restricted, m_starting.load()});
+        ReaderSituation situation{m_draining, c.restricted, m_starting.load(), {}};
+        if (situation.starting) {
+            std::lock_guard lock(m_progress_mutex);
+            if (m_progress) situation.progress = m_progress();
+        }
+        ReaderStep step = c.reader.next(situation);
         account(c);
         switch (step.kind) {
             case ReaderStep::Kind::NeedMore:

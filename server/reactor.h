@@ -54,8 +54,16 @@ public:
     void drain();
     /// True once drain() was called.
     bool draining() const { return m_drain_requested.load(); }
-    /// While true, /readyz answers 503 "starting" (requests are still served). Thread-safe.
-    void set_starting(bool starting) { m_starting.store(starting); }
+    /// While true (recovering the data directory, then building its acceleration structures),
+    /// /readyz answers 503 with `progress()` as its detail, and every other request but /livez
+    /// gets 503 with Retry-After. `progress` is called on the reactor thread. Thread-safe.
+    void set_starting(bool starting, std::function<std::string()> progress = {}) {
+        {
+            std::lock_guard lock(m_progress_mutex);
+            if (progress) m_progress = std::move(progress);
+        }
+        m_starting.store(starting);
+    }
     bool starting() const { return m_starting.load(); }
     /// A worker's answer for connection `conn`; `close`: close after writing it. Thread-safe.
     void complete(uint64_t conn, std::string response, bool close);
@@ -107,6 +115,8 @@ private:
 
     std::atomic<bool> m_drain_requested{false};
     std::atomic<bool> m_starting{false};
+    std::mutex m_progress_mutex;
+    std::function<std::string()> m_progress;  ///< what starting is doing; guarded by the mutex
     bool m_draining = false;
     Clock::time_point m_grace_deadline{};
     Clock::time_point m_hard_deadline{};

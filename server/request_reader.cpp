@@ -12,6 +12,14 @@ namespace {
 
 using protocol::ProblemType;
 
+/// The detail of a 503 while the server starts: what it is doing, and how far it got.
+std::string starting_detail(const std::string& progress) {
+    return "the server is starting: " +
+           (progress.empty() ? std::string("the recovered scene's acceleration structures are "
+                                           "being built")
+                             : progress);
+}
+
 /// Fields the front end consumes and never passes on. Framing and connection management are
 /// decided here, once (httplib would otherwise apply its own, laxer reading of them); Range is
 /// dropped because every answer is generated content (RFC 9110 lets a server ignore it), so a
@@ -71,11 +79,13 @@ ReaderStep RequestReader::next(const ReaderSituation& situation) {
     return m_phase == Phase::Head ? on_head(situation) : on_body();
 }
 
-ReaderStep RequestReader::answer(int status, const std::string& detail, bool close) {
+ReaderStep RequestReader::answer(int status, const std::string& detail, bool close,
+                                 const char* retry_after) {
     protocol::Problem p = protocol::make_problem(problem_type_for(status), detail);
     p.status = status;
     protocol::ApiResponse r = protocol::problem_response(p);
     if (status == 401) r.headers.emplace_back("WWW-Authenticate", "Bearer realm=\"strata\"");
+    if (retry_after) r.headers.emplace_back("Retry-After", retry_after);
     ReaderStep step;
     step.kind = ReaderStep::Kind::Answer;
     step.answer.status = status;
@@ -135,10 +145,10 @@ ReaderStep RequestReader::on_head(const ReaderSituation& situation) {
             ready ? protocol::json_response(
                         200, {{"status", m_target.path == "/livez" ? "ok" : "ready"}})
                   : protocol::problem_response(protocol::make_problem(
-                        ProblemType::Unavailable,
-                        situation.draining ? "the server is shutting down"
-                                           : "the server is starting: the recovered scene's "
-                                             "acceleration structures are being built"));
+                        ProblemType::Unavailable, situation.draining
+                                                      ? "the server is shutting down"
+                                                      : starting_detail(situation.progress)));
+        if (!ready && !situation.draining) r.headers.emplace_back("Retry-After", "1");
         ReaderStep step;
         step.kind = ReaderStep::Kind::Answer;
         step.answer = {r.status, m_head.method, m_target.path, {}, body || !m_head.keep_alive};
@@ -148,6 +158,11 @@ ReaderStep RequestReader::on_head(const ReaderSituation& situation) {
 
     // Step: refusals that need no body. The body is left unread: the connection closes.
     if (situation.draining) return answer(503, "the server is shutting down");
+    if (situation.starting) {
+        // Refused without reading a body (a connection with one unread closes); the client
+        // comes back when the scene is ready.
+        return answer(503, starting_detail(situation.progress), body || !m_head.keep_alive, "1");
+    }
     if (situation.restricted)
         return answer(429,
                       "this client holds too many connections already "

@@ -25,7 +25,10 @@ struct ReaderConfig {
 struct ReaderSituation {
     bool draining = false;    ///< shutting down: only health checks are answered
     bool restricted = false;  ///< the connection is over a connection limit: health checks only
-    bool starting = false;    ///< acceleration structures not built yet: /readyz answers 503
+    /// Recovering the scene or building its acceleration structures: /readyz answers 503 with
+    /// `progress`, every other request but /livez 503 with Retry-After.
+    bool starting = false;
+    std::string progress;  ///< while starting: how far, for the answers' detail
 };
 
 /// A complete request for a worker.
@@ -86,7 +89,8 @@ private:
 
     ReaderStep on_head(const ReaderSituation& situation);
     ReaderStep on_body();
-    ReaderStep answer(int status, const std::string& detail, bool close = true);
+    ReaderStep answer(int status, const std::string& detail, bool close = true,
+                      const char* retry_after = nullptr);
     ReaderStep finish_request();
     void compact();
 

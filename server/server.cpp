@@ -61,8 +61,14 @@ bool Server::ready() const {
     return m_listening && !m_reactor->draining() && !m_reactor->starting();
 }
 
-void Server::set_starting(bool starting) {
-    m_reactor->set_starting(starting);
+void Server::set_starting(bool starting, std::function<std::string()> progress) {
+    m_reactor->set_starting(starting, std::move(progress));
+}
+
+void Server::attach_store(durable::DurableStore* store) {
+    // Routes read the context only for requests the front end lets through, which it does not
+    // while starting; clearing `starting` afterwards publishes this write (an atomic store).
+    m_app->attach_store(store);
 }
 
 }  // namespace strata::server

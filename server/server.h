@@ -12,6 +12,8 @@
 // inside TBB, whatever --threads says.
 
 #include <atomic>
+#include <functional>
+#include <string>
 #include <memory>
 
 #include "engine/engine.h"
@@ -48,8 +50,12 @@ public:
 
     /// True while serving, not starting and not shutting down (GET /readyz).
     bool ready() const;
-    /// While true, /readyz answers 503: the recovered scene is still being built. Thread-safe.
-    void set_starting(bool starting);
+    /// While true (the data directory is being recovered, then its scene built), /readyz
+    /// answers 503 with `progress()` as its detail and every other endpoint but /livez 503 with
+    /// Retry-After. `progress` runs on the front end's thread. Thread-safe.
+    void set_starting(bool starting, std::function<std::string()> progress = {});
+    /// The data directory, once recovered (while starting; before that, routes see none).
+    void attach_store(durable::DurableStore* store);
     int port() const { return m_port; }
     ServerMetrics& metrics() { return m_metrics; }
 

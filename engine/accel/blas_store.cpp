@@ -47,8 +47,8 @@ struct MetricsAccumulator {
 }  // namespace
 
 MeshMetrics measure_mesh(const MeshRecord& mesh) {
-    const auto& p = mesh.positions;
-    const auto& t = mesh.triangles;
+    const std::vector<Vec3>& p = mesh.positions;
+    const std::vector<Triangle>& t = mesh.triangles;
     // Every vertex of a valid mesh may be unreferenced, so bounds come from the vertex array the
     // BVH would see through the triangles: measure triangles only.
     const MetricsAccumulator total = tbb::parallel_reduce(

@@ -1,10 +1,13 @@
 #pragma once
 // Little-endian binary writing and bounds-checked reading for the journal and snapshot codecs.
-// Both sides are called the same way, `io(field, ...)`, so one function per edit kind describes
-// its layout for encoding and decoding alike (edit_codec.cpp). Arrays of Vec3 and triangles are
-// copied as raw buffers: the host is little-endian, and a static_assert keeps it that way.
+// Both sides are called the same way, `io(field, ...)`, so one function describes a layout for
+// encoding and decoding alike: value_fields() below for the value types inside edits (Material,
+// BuildOptions, Affine), fields() in edit_codec.cpp for each edit kind. Arrays of Vec3 and
+// triangles are copied as raw buffers: the host is little-endian, and a static_assert keeps it
+// that way.
 
 #include <bit>
+#include <concepts>
 #include <cstdint>
 #include <cstring>
 #include <optional>
@@ -19,6 +22,31 @@ namespace strata::durable {
 
 static_assert(std::endian::native == std::endian::little,
               "the journal stores raw little-endian buffers");
+
+/// `E` is T or const T: the same function writes (const) and reads (mutable).
+template <class E, class T>
+concept Kind = std::same_as<std::remove_const_t<E>, T>;
+
+// Step: one field list per value type, used by the writer and the reader -------------------------
+
+template <class Io, Kind<BuildOptions> E>
+void value_fields(Io& io, E& v) {
+    io(v.prefer, v.allow_refit);
+}
+template <class Io, Kind<Material> E>
+void value_fields(Io& io, E& v) {
+    io(v.base_color, v.roughness, v.metallic, v.emission);
+}
+template <class Io, Kind<Affine> E>
+void value_fields(Io& io, E& v) {
+    io.raw(v.m.data(), sizeof(float) * v.m.size());
+}
+
+/// True for the types that have a value_fields() layout.
+template <class Io, class T>
+concept HasValueFields = requires(Io& io, T& v) { value_fields(io, v); };
+
+// Step: the writer and the reader ----------------------------------------------------------------
 
 /// Appends fields to a byte string.
 class ByteWriter {
@@ -49,12 +77,8 @@ private:
         } else if constexpr (std::is_same_v<T, Vec3> || std::is_same_v<T, Vec2> ||
                              std::is_same_v<T, Triangle>) {
             raw(&v, sizeof v);
-        } else if constexpr (std::is_same_v<T, Affine>) {
-            raw(v.m.data(), sizeof(float) * v.m.size());
-        } else if constexpr (std::is_same_v<T, BuildOptions>) {
-            (*this)(v.prefer, v.allow_refit);
-        } else if constexpr (std::is_same_v<T, Material>) {
-            (*this)(v.base_color, v.roughness, v.metallic, v.emission);
+        } else if constexpr (HasValueFields<ByteWriter, const T>) {
+            value_fields(*this, v);
         } else {
             put_other(v);
         }
@@ -131,12 +155,8 @@ private:
         } else if constexpr (std::is_same_v<T, Vec3> || std::is_same_v<T, Vec2> ||
                              std::is_same_v<T, Triangle>) {
             raw(&v, sizeof v);
-        } else if constexpr (std::is_same_v<T, Affine>) {
-            raw(v.m.data(), sizeof(float) * v.m.size());
-        } else if constexpr (std::is_same_v<T, BuildOptions>) {
-            (*this)(v.prefer, v.allow_refit);
-        } else if constexpr (std::is_same_v<T, Material>) {
-            (*this)(v.base_color, v.roughness, v.metallic, v.emission);
+        } else if constexpr (HasValueFields<ByteReader, T>) {
+            value_fields(*this, v);
         } else {
             get_other(v);
         }

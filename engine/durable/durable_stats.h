@@ -49,6 +49,7 @@ struct DurableStats {
     std::string directory;
     bool failed = false;  ///< the journal hit an fsync error and refuses batches
     std::string failure;  ///< why
+    std::string last_snapshot_error;  ///< why the newest snapshot attempt failed; empty: it did not
     std::array<uint64_t, FSYNC_BOUNDS.size() + 1> fsync_buckets{};
 };
 

@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <filesystem>
@@ -109,10 +110,23 @@ void DurableStore::snapshot_loop() {
     while (!m_stop) {
         m_loop_cv.wait_for(lock, std::chrono::milliseconds(20), [&] { return m_stop; });
         if (m_stop) break;
-        if (m_journal->bytes_since_rotation() < m_options.snapshot_threshold_bytes) continue;
+        const auto now = std::chrono::steady_clock::now();
+        const bool due = m_retry ? now >= m_retry_at
+                                 : m_journal->bytes_since_rotation() >=
+                                       m_options.snapshot_threshold_bytes;
+        if (!due) continue;
         lock.unlock();
-        (void)write_snapshot();
+        const Status written = write_snapshot();
         lock.lock();
+        if (written) {
+            m_retry = false;
+            continue;
+        }
+        // The journal still holds everything; try again later, less often while it fails.
+        m_retry_delay = m_retry ? std::min(m_retry_delay * 2, std::chrono::milliseconds(15000))
+                                : std::chrono::milliseconds(m_options.snapshot_retry_ms);
+        m_retry = true;
+        m_retry_at = std::chrono::steady_clock::now() + m_retry_delay;
     }
 }
 
@@ -123,28 +137,34 @@ Status DurableStore::snapshot_now() {
 Status DurableStore::write_snapshot() {
     std::lock_guard one_at_a_time(m_snapshot_mutex);
     Stopwatch clock;
-    // Step: a consistent copy and the journal's cut, in one critical section.
-    EditBatch scene;
-    uint64_t version = 0;
+    // Step: a consistent copy and the journal's cut, in one critical section. The copy shares
+    // the scene's chunks and buffers copy-on-write (Scene::image), so edits wait microseconds.
+    SceneImage image;
     double lock_ms = 0.0;
     Status rotated = m_engine.read([&](const Scene& s) {
         Stopwatch held;
-        scene = s.to_batch();
-        version = s.version();
-        Status r = m_journal->rotate(version);
+        image = s.image();
+        Status r = m_journal->rotate(image.version);
         lock_ms = held.ms();
         return r;
     });
+    const uint64_t version = image.version;
     auto fail = [&](const Error& e) -> Status {
-        std::lock_guard stats(m_stats_mutex);
-        ++m_stats.snapshot_failures;
+        const std::string why = "snapshot of version " + std::to_string(version) +
+                                " not written (the journal keeps every record): " + e.message;
+        {
+            std::lock_guard stats(m_stats_mutex);
+            ++m_stats.snapshot_failures;
+            m_stats.last_snapshot_error = why;
+        }
+        if (m_options.on_snapshot_failure) m_options.on_snapshot_failure(why);
         return Unexpected(e);
     };
     if (!rotated) return fail(rotated.error());
 
-    // Step: written outside the lock, atomically.
-    std::string bytes = encode_snapshot(scene, version);
-    scene = {};
+    // Step: serialised and written outside the lock, atomically.
+    std::string bytes = encode_snapshot(image.to_batch(), version);
+    image = {};
     if (Status s = write_file_atomically(m_options.dir, snapshot_name(version), bytes); !s)
         return fail(s.error());
 
@@ -165,6 +185,7 @@ Status DurableStore::write_snapshot() {
     m_stats.last_snapshot_unix_ms = unix_ms_now();
     m_stats.last_snapshot_seconds = clock.ms() / 1000.0;
     m_stats.last_snapshot_lock_ms = lock_ms;
+    m_stats.last_snapshot_error.clear();
     return {};
 }
 

@@ -7,8 +7,15 @@
 // for the copy, renders do not) and starts a new journal segment at that version in the same
 // critical section; it writes the snapshot outside the lock (temp file, fsync, rename, fsync the
 // directory) and only then removes the segments and snapshots it replaces.
+//
+// A snapshot that cannot be written (a full disk, a file size limit) changes nothing that matters:
+// the journal keeps every record (its segments are only removed after a snapshot is durable), the
+// failure is counted and described in the stats and passed to `on_snapshot_failure`, and the
+// background thread tries again after `snapshot_retry_ms`, doubling up to 15 s.
 
+#include <chrono>
 #include <condition_variable>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -29,6 +36,9 @@ struct StoreOptions {
     JournalOptions journal;
     RecoveryOptions recovery;
     uint64_t snapshot_threshold_bytes = 64ull << 20;
+    uint64_t snapshot_retry_ms = 1000;  ///< first retry after a failed background snapshot
+    /// Told why a snapshot failed (the server logs it). Runs on the snapshot's thread.
+    std::function<void(const std::string&)> on_snapshot_failure;
 };
 
 class DurableStore {
@@ -72,6 +82,10 @@ private:
     std::mutex m_loop_mutex;
     std::condition_variable m_loop_cv;
     bool m_stop = false;
+    // After a failed background snapshot (snapshot thread only): when to try again.
+    bool m_retry = false;
+    std::chrono::steady_clock::time_point m_retry_at;
+    std::chrono::milliseconds m_retry_delay{0};
     std::thread m_thread;
 };
 

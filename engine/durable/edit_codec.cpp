@@ -1,6 +1,7 @@
 #include "engine/durable/edit_codec.h"
 
 #include <concepts>
+#include <cstring>
 #include <iterator>
 #include <optional>
 #include <string>
@@ -49,15 +50,11 @@ constexpr const char* KIND_NAMES[] = {"add_mesh",
 static_assert(std::size(KIND_NAMES) == std::variant_size_v<Edit>);
 
 /// Kind tag bit: the edit's extension fields follow its base layout. Fields added to a kind after
-/// its layout was first written (a mesh's normals and uvs, an instance's parent group) are extensions: an edit without them
-/// is written exactly as before, so older files read the same and a file only grows the bit
-/// where it uses what is new.
+/// its layout was first written (a mesh's normals and uvs, an
+/// instance's parent group) are extensions: an edit without them is written exactly as before,
+/// so older files read the same and a file only grows the bit where it uses what is new.
 constexpr uint8_t EXTENDED = 0x80;
 static_assert(std::variant_size_v<Edit> < EXTENDED);
-
-/// `E` is T or const T: the same function writes (const) and reads (mutable).
-template <class E, class T>
-concept Kind = std::same_as<std::remove_const_t<E>, T>;
 
 // Step: one layout per edit kind -----------------------------------------------------------------
 
@@ -206,15 +203,12 @@ void encode_batch(const EditBatch& batch, std::string& out) {
     }
 }
 
-Result<EditBatch> decode_batch(std::string_view bytes) {
+Status decode_each(std::string_view bytes, const std::function<Status(Edit&&)>& sink) {
     ByteReader r(bytes);
     uint32_t count = 0;
     r(count);
-    EditBatch batch;
-    // Every edit takes at least its tag byte: a count beyond that is corruption, not a reason to
-    // reserve gigabytes.
+    // Every edit takes at least its tag byte: a count beyond that is corruption.
     if (r.ok() && count > r.remaining()) r.fail("edit count " + std::to_string(count));
-    if (r.ok()) batch.edits.reserve(count);
     for (uint32_t i = 0; i < count && r.ok(); ++i) {
         uint8_t tag = 0;
         r(tag);
@@ -233,15 +227,34 @@ Result<EditBatch> decode_batch(std::string_view bytes) {
             },
             edit);
         if (!r.ok()) {
-            r.fail("");  // keeps the first message
             return failure(ErrorCode::InvalidArgument, "edit " + std::to_string(i) + " (" +
                                                            KIND_NAMES[tag] + "): " + r.error());
         }
-        batch.edits.push_back(std::move(edit));
+        if (Status s = sink(std::move(edit)); !s) {
+            Error e = std::move(s).error();
+            e.edit_index = i;
+            return Unexpected(std::move(e));
+        }
     }
     if (r.ok() && r.remaining() != 0)
         r.fail(std::to_string(r.remaining()) + " bytes after the last edit");
     if (!r.ok()) return failure(ErrorCode::InvalidArgument, "edit batch: " + r.error());
+    return {};
+}
+
+Result<EditBatch> decode_batch(std::string_view bytes) {
+    EditBatch batch;
+    // The count is a hint only (decode_each checks it against the bytes left).
+    if (bytes.size() >= 4) {
+        uint32_t count = 0;
+        std::memcpy(&count, bytes.data(), sizeof count);
+        if (count <= bytes.size()) batch.edits.reserve(count);
+    }
+    Status s = decode_each(bytes, [&](Edit&& e) -> Status {
+        batch.edits.push_back(std::move(e));
+        return {};
+    });
+    if (!s) return Unexpected(std::move(s).error());
     return batch;
 }
 

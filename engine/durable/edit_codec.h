@@ -3,6 +3,7 @@
 // then per edit a one-byte kind tag and its fields (byte_io.h). Bulk vertex and index arrays are
 // raw little-endian buffers. The layout of each kind is written once, in edit_codec.cpp.
 
+#include <functional>
 #include <string>
 #include <string_view>
 
@@ -17,5 +18,11 @@ void encode_batch(const EditBatch& batch, std::string& out);
 /// Reads a whole batch back; the input must hold exactly one. An error (InvalidArgument) names
 /// the edit and the byte offset where decoding failed.
 Result<EditBatch> decode_batch(std::string_view bytes);
+
+/// The same, one edit at a time: each decoded edit goes to `sink` as soon as it is read (a
+/// snapshot restore loads it straight into the scene; no whole batch is held). A decoding error
+/// names the edit and offset like decode_batch's; the sink's first error stops decoding and comes
+/// back with the edit's index set.
+Status decode_each(std::string_view bytes, const std::function<Status(Edit&&)>& sink);
 
 }  // namespace strata::durable

@@ -157,7 +157,7 @@ std::string encode_snapshot(const EditBatch& scene, uint64_t version) {
     return out;
 }
 
-Result<DecodedSnapshot> decode_snapshot(std::string_view bytes) {
+Result<SnapshotView> open_snapshot(std::string_view bytes) {
     if (bytes.size() < SNAPSHOT_HEADER_BYTES || std::memcmp(bytes.data(), SNAPSHOT_MAGIC, 8) != 0)
         return failure(
             ErrorCode::InvalidArgument,
@@ -177,9 +177,15 @@ Result<DecodedSnapshot> decode_snapshot(std::string_view bytes) {
         return failure(ErrorCode::InvalidArgument,
                        "snapshot checksum mismatch in the payload at offset 32 (the file is "
                        "damaged)");
-    auto scene = decode_batch(payload);
+    return SnapshotView{get<uint64_t>(bytes, 16), payload};
+}
+
+Result<DecodedSnapshot> decode_snapshot(std::string_view bytes) {
+    auto view = open_snapshot(bytes);
+    if (!view) return Unexpected(view.error());
+    auto scene = decode_batch(view->payload);
     if (!scene) return failure(ErrorCode::InvalidArgument, "snapshot " + scene.error().message);
-    return DecodedSnapshot{get<uint64_t>(bytes, 16), std::move(scene.value())};
+    return DecodedSnapshot{view->version, std::move(scene.value())};
 }
 
 }  // namespace strata::durable

@@ -79,4 +79,12 @@ struct DecodedSnapshot {
 };
 Result<DecodedSnapshot> decode_snapshot(std::string_view bytes);
 
+/// A snapshot's header checked (magic, format, length, checksum) without decoding its scene:
+/// the version, and the payload (edit_codec.h's batch bytes) pointing into `bytes`.
+struct SnapshotView {
+    uint64_t version = 0;
+    std::string_view payload;
+};
+Result<SnapshotView> open_snapshot(std::string_view bytes);
+
 }  // namespace strata::durable

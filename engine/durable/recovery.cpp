@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 
 #include "engine/durable/edit_codec.h"
 #include "engine/durable/file_io.h"
@@ -34,9 +35,32 @@ void set_aside(const std::string& path, RecoveryResult& out) {
 
 }  // namespace
 
+std::string RecoveryProgress::describe() const {
+    const uint64_t v = version.load();
+    switch (phase.load()) {
+        case Opening: return "recovering the scene: opening the data directory";
+        case Snapshot:
+            return "recovering the scene: loading the snapshot of version " + std::to_string(v);
+        case Journal: {
+            const uint64_t total = journal_bytes_total.load();
+            const uint64_t done = std::min(journal_bytes_done.load(), total);
+            const int percent = total ? int(done * 100 / total) : 100;
+            return "recovering the scene: replaying the journal, at version " + std::to_string(v) +
+                   " after " + std::to_string(records_replayed.load()) + " records (" +
+                   std::to_string(percent) + "% of " + std::to_string(total) + " bytes)";
+        }
+        case Building:
+            return "the scene is recovered (version " + std::to_string(v) +
+                   "); its acceleration structures are being built";
+        default: return "ready";
+    }
+}
+
 Result<RecoveryResult> recover(const std::string& dir, Engine& engine,
                                const RecoveryOptions& options) {
     RecoveryResult out;
+    RecoveryProgress unreported;
+    RecoveryProgress& progress = options.progress ? *options.progress : unreported;
     auto names = list_files(dir);
     if (!names) return Unexpected(names.error());
 
@@ -60,24 +84,35 @@ Result<RecoveryResult> recover(const std::string& dir, Engine& engine,
 
     // Step: the newest snapshot that reads back whole.
     for (const auto& [version, path] : snapshots) {
+        progress.version = version;
+        progress.phase = RecoveryProgress::Snapshot;
         auto bytes = read_whole_file(path);
         if (!bytes) return Unexpected(bytes.error());
-        auto snap = decode_snapshot(bytes.value());
+        auto snap = open_snapshot(bytes.value());
         if (snap && snap->version != version) {
             snap = failure(ErrorCode::InvalidArgument,
                            "it holds version " + std::to_string(snap->version) +
                                " but its name says " + std::to_string(version));
         }
-        if (!snap) {
+        // Loaded straight into the scene's storage, edit by edit (Engine::restore_snapshot). A
+        // payload that does not decode is damage like a bad checksum; one the rules refuse is not
+        // a file problem and stops recovery.
+        Status loaded = snap ? engine.restore_snapshot(snap->payload, version) : Status{};
+        const bool undecodable = snap && !loaded &&
+                                 loaded.error().code == ErrorCode::InvalidArgument &&
+                                 loaded.error().edit_index == Error::NO_INDEX;
+        if (!snap || undecodable) {
+            const std::string why = !snap ? snap.error().message
+                                          : "snapshot " + loaded.error().message;
             if (!options.truncate_damage)
-                return damaged(path, snap.error().message,
-                               "the scene at that version cannot be loaded");
+                return damaged(path, why, "the scene at that version cannot be loaded");
             set_aside(path, out);
             continue;
         }
-        if (Status s = engine.restore(std::move(snap->scene), version); !s)
-            return failure(ErrorCode::Storage,
-                           "snapshot " + path + " could not be loaded: " + s.error().describe());
+        if (!loaded)
+            return failure(ErrorCode::Storage, "snapshot " + path +
+                                                   " could not be loaded: " +
+                                                   loaded.error().describe());
         out.loaded_snapshot = true;
         out.snapshot_version = version;
         out.notes.push_back("loaded snapshot " + path + " (version " + std::to_string(version) +
@@ -97,11 +132,25 @@ Result<RecoveryResult> recover(const std::string& dir, Engine& engine,
     segments.erase(segments.begin(), segments.begin() + std::ptrdiff_t(first));
 
     // Step: replay, checking that versions follow one another.
+    progress.version = current;
+    {
+        uint64_t total = 0;
+        std::error_code ec;
+        for (const auto& segment : segments) {
+            const auto size = std::filesystem::file_size(segment.second, ec);
+            if (!ec) total += size;
+        }
+        progress.journal_bytes_total = total;
+    }
+    progress.phase = RecoveryProgress::Journal;
+    uint64_t bytes_before = 0;  // in the segments before this one
     for (std::size_t i = 0; i < segments.size(); ++i) {
         const auto& [base, path] = segments[i];
         const bool last = i + 1 == segments.size();
         auto bytes = read_whole_file(path);
         if (!bytes) return Unexpected(bytes.error());
+        const uint64_t segment_start = bytes_before;
+        bytes_before += bytes->size();
         const SegmentScan scan = scan_segment(bytes.value());
         if (scan.empty_file ||
             (scan.tail == SegmentScan::Tail::Torn && scan.records.empty() && scan.valid_end == 0)) {
@@ -150,6 +199,9 @@ Result<RecoveryResult> recover(const std::string& dir, Engine& engine,
                     } else {
                         current = applied->version;
                         ++out.records_replayed;
+                        progress.version = current;
+                        progress.records_replayed = out.records_replayed;
+                        progress.journal_bytes_done = segment_start + r.offset + r.payload.size();
                         continue;
                     }
                 }

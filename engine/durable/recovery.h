@@ -3,6 +3,8 @@
 // through Engine::apply. A torn last record (a crash mid-write) is cut off and reported; damage
 // anywhere else stops recovery with the file and offset, unless truncation was asked for.
 
+#include <atomic>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -15,7 +17,23 @@ class Engine;
 
 namespace strata::durable {
 
+/// How far a start has got, written by recovery and the server's first build, read by other
+/// threads (the server's /readyz while it recovers). All fields are atomics.
+struct RecoveryProgress {
+    enum Phase : int { Opening, Snapshot, Journal, Building, Done };
+    std::atomic<int> phase{Opening};
+    std::atomic<uint64_t> version{0};  ///< the scene's version so far
+    std::atomic<uint64_t> journal_bytes_total{0};
+    std::atomic<uint64_t> journal_bytes_done{0};
+    std::atomic<uint64_t> records_replayed{0};
+
+    /// One line for people: the phase and how far it is.
+    std::string describe() const;
+};
+
 struct RecoveryOptions {
+    /// Where to report progress (optional; must outlive recover()).
+    RecoveryProgress* progress = nullptr;
     /// Damage before the end: keep what precedes it, set the rest aside (`.damaged` files) and
     /// start, instead of refusing to (--recover-truncate).
     bool truncate_damage = false;

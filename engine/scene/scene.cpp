@@ -126,6 +126,28 @@ Result<uint64_t> Scene::apply(EditBatch&& batch,
     return ++m_version;
 }
 
+Status Scene::load(Edit&& edit) {
+    // The rules record what they overwrite; a load never rolls back, so the log is dropped at once
+    // (its records of a fresh insert are a few bytes, and nothing is copied into it).
+    UndoLog discarded;
+    return std::visit([&](auto&& e) { return apply_edit(std::move(e), discarded); },
+                      std::move(edit));
+}
+
+Status Scene::finish_load(uint64_t version) {
+    flatten();  // the world transforms of everything loaded
+    if (over_budget(m_totals, m_budget))
+        return failure(ErrorCode::TooLarge, budget_message(m_totals, m_budget));
+    m_version = version;
+    return {};
+}
+
+void Scene::reset() {
+    const SceneBudget budget = m_budget;
+    *this = Scene();
+    m_budget = budget;
+}
+
 // Step: change tracking helpers ---------------------------------------------------------------
 
 void Scene::mark_mesh(MeshHandle h, uint32_t bits, UndoLog& undo) {
@@ -200,50 +222,55 @@ Bounds3 Scene::world_bounds() const {
     return world;
 }
 
-EditBatch Scene::to_batch() const {
+SceneImage Scene::image() const {
+    return SceneImage{m_meshes,   m_instances, m_materials, m_groups,
+                      m_root.groups, m_camera,   m_lighting, m_version};
+}
+
+EditBatch SceneImage::to_batch() const {
     EditBatch b;
-    m_materials.for_each([&](MaterialHandle, const MaterialRecord& m) {
+    materials.for_each([&](MaterialHandle, const MaterialRecord& m) {
         b.edits.emplace_back(AddMaterial{m.id, m.material});
     });
-    m_meshes.for_each([&](MeshHandle, const MeshRecord& m) {
+    meshes.for_each([&](MeshHandle, const MeshRecord& m) {
         AddMesh e;
         e.id = m.id;
-        e.positions = m.positions;
-        e.triangles = m.triangles;
+        e.positions = m.positions.get();
+        e.triangles = m.triangles.get();
         e.normals = m.normals;
         e.uvs = m.uvs;
         e.build = m.build;
-        if (const MaterialRecord* mat = m_materials.get(m.material)) e.material = mat->id;
+        if (const MaterialRecord* mat = materials.get(m.material)) e.material = mat->id;
         b.edits.emplace_back(std::move(e));
     });
     // Groups parents first (depth-first from the root), so each names a group already added.
-    std::vector<GroupHandle> stack(m_root.groups.rbegin(), m_root.groups.rend());
+    std::vector<GroupHandle> stack(root_groups.rbegin(), root_groups.rend());
     while (!stack.empty()) {
-        const GroupRecord& g = m_groups.at(stack.back());
+        const GroupRecord& g = groups.at(stack.back());
         stack.pop_back();
         AddGroup e;
         e.id = g.id;
-        if (!g.parent.is_null()) e.parent = m_groups.at(g.parent).id;
+        if (!g.parent.is_null()) e.parent = groups.at(g.parent).id;
         e.transform = g.transform;
         e.visible = g.visible;
         b.edits.emplace_back(std::move(e));
         stack.insert(stack.end(), g.children.groups.rbegin(), g.children.groups.rend());
     }
-    m_instances.for_each([&](InstanceHandle, const InstanceRecord& i) {
+    instances.for_each([&](InstanceHandle, const InstanceRecord& i) {
         AddInstance e;
         e.id = i.id;
-        e.mesh = m_meshes.at(i.mesh).id;
-        if (const MaterialRecord* mat = m_materials.get(i.material)) e.material = mat->id;
+        e.mesh = meshes.at(i.mesh).id;
+        if (const MaterialRecord* mat = materials.get(i.material)) e.material = mat->id;
         e.transform = i.transform;
         e.visible = i.visible;
         e.mask = i.mask;
         e.user_id = i.user_id;
-        if (!i.parent.is_null()) e.parent = m_groups.at(i.parent).id;
+        if (!i.parent.is_null()) e.parent = groups.at(i.parent).id;
         b.edits.emplace_back(std::move(e));
     });
-    b.edits.emplace_back(SetCamera{m_camera.eye, m_camera.target, m_camera.up, m_camera.fov_y_deg});
-    b.edits.emplace_back(SetLighting{m_lighting.sun_direction, m_lighting.sun_color,
-                                     m_lighting.sky_color, m_lighting.sky_intensity});
+    b.edits.emplace_back(SetCamera{camera.eye, camera.target, camera.up, camera.fov_y_deg});
+    b.edits.emplace_back(SetLighting{lighting.sun_direction, lighting.sun_color,
+                                     lighting.sky_color, lighting.sky_intensity});
     return b;
 }
 

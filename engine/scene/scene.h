@@ -10,6 +10,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "engine/core/cow.h"
 #include "engine/core/handle.h"
 #include "engine/core/result.h"
 #include "engine/scene/budget.h"
@@ -20,13 +21,15 @@ namespace strata {
 
 struct MeshRecord {
     std::string id;
-    std::vector<Vec3> positions;
-    std::vector<Triangle> triangles;
+    // The arrays are copy-on-write (engine/core/cow.h): a snapshot shares them, and an edit
+    // either replaces a whole array (no copy) or writes in place through mut().
+    CowVector<Vec3> positions;
+    CowVector<Triangle> triangles;
     std::vector<Vec3> normals;  ///< per-vertex shading normals (object space); empty: none
     std::vector<Vec2> uvs;      ///< per-vertex texture coordinates; empty: none
     BuildOptions build;
-    MaterialHandle material;            ///< default for its instances; null: built-in default
-    std::vector<InstanceHandle> users;  ///< instances that reference this mesh
+    MaterialHandle material;          ///< default for its instances; null: built-in default
+    CowVector<InstanceHandle> users;  ///< instances that reference this mesh
     uint32_t dirty = 0;                 ///< dirty::MeshBits since the last commit
     uint32_t dirty_begin = UINT32_MAX;  ///< vertices [dirty_begin, dirty_end) have new positions
     uint32_t dirty_end = 0;
@@ -95,6 +98,23 @@ struct SceneCounts {
 
 struct UndoLog;
 
+/// A consistent copy of a scene's state (Scene::image()). Its slot arrays and mesh buffers are
+/// shared copy-on-write with the scene, so taking one costs an atomic increment per chunk of
+/// slots, and it stays readable on another thread while the scene goes on being edited.
+struct SceneImage {
+    SlotArray<MeshRecord, MeshTag> meshes;
+    SlotArray<InstanceRecord, InstanceTag> instances;
+    SlotArray<MaterialRecord, MaterialTag> materials;
+    SlotArray<GroupRecord, GroupTag> groups;
+    std::vector<GroupHandle> root_groups;  ///< the root's child groups, in order
+    Camera camera;
+    Lighting lighting;
+    uint64_t version = 0;
+
+    /// A batch that builds this state from an empty scene.
+    EditBatch to_batch() const;
+};
+
 class Scene {
 public:
     /// Applies every edit of `batch` in order, each checked against the scene as the earlier
@@ -110,6 +130,15 @@ public:
 
     /// Recovery only: the version a restored snapshot had (the scene must be freshly loaded).
     void restore_version(uint64_t version) { m_version = version; }
+
+    /// Snapshot restore: adds one edit of a snapshot's scene straight into the storage, checked
+    /// by the same rule as apply() but with no undo log kept and no version bump. A refused edit
+    /// leaves the scene part-built: the caller discards it (reset()). End with finish_load().
+    Status load(Edit&& edit);
+    /// Ends a load: checks the budget over the whole scene and sets the snapshot's version.
+    Status finish_load(uint64_t version);
+    /// Back to an empty scene at version 0 (the budget is kept).
+    void reset();
 
     /// The budget every later batch must leave the scene within (TooLarge beyond it).
     void set_budget(const SceneBudget& budget) { m_budget = budget; }
@@ -149,7 +178,9 @@ public:
     Bounds3 world_bounds() const;
 
     /// A batch that builds this scene's current state from an empty scene.
-    EditBatch to_batch() const;
+    EditBatch to_batch() const { return image().to_batch(); }
+    /// The scene's state, shared copy-on-write: cheap enough to take under the scene lock.
+    SceneImage image() const;
 
     /// What changed since the last commit; the commit reads it and then calls clear_changes().
     const ChangeTracker& changes() const { return m_changes; }

@@ -258,14 +258,15 @@ Status Scene::apply_edit(UpdateMeshPositions&& e, UndoLog& undo) {
     // Step: positions (a BLAS refit at the next commit).
     mark_mesh(h, dirty::MeshPoints, undo);
     if (e.positions.size() == r.positions.size()) {
-        // Every vertex: swap the arrays, so the undo record holds the old ones without a copy.
-        r.positions.swap(e.positions);
-        undo.records.emplace_back(undo::MeshPositions{h, 0, std::move(e.positions)});
+        // Every vertex: replace the array, so the undo record holds the old one without a copy
+        // (and a snapshot sharing it keeps reading it).
+        undo.records.emplace_back(undo::MeshPositionsReplaced{h, r.positions});
+        r.positions = std::move(e.positions);
     } else {
         const auto first = r.positions.begin() + e.offset;
         undo.records.emplace_back(undo::MeshPositions{
             h, e.offset, std::vector<Vec3>(first, first + std::ptrdiff_t(e.positions.size()))});
-        std::copy(e.positions.begin(), e.positions.end(), first);
+        std::copy(e.positions.begin(), e.positions.end(), r.positions.mut().begin() + e.offset);
     }
     r.dirty_begin = std::min(r.dirty_begin, e.offset);
     r.dirty_end = std::max(r.dirty_end, static_cast<uint32_t>(end));
@@ -326,9 +327,9 @@ Status Scene::apply_edit(ReplaceMeshTopology&& e, UndoLog& undo) {
     mark_mesh(h, dirty::MeshTopology, undo);
     m_totals.vertices = m_totals.vertices - r.positions.size() + vertex_count;
     m_totals.triangles = m_totals.triangles - r.triangles.size() + e.triangles.size();
-    undo::MeshTopology old{h, std::nullopt, std::move(r.triangles)};
+    undo::MeshTopology old{h, std::nullopt, r.triangles};
     if (e.positions) {
-        old.positions = std::move(r.positions);
+        old.positions = r.positions;
         r.positions = std::move(*e.positions);
     }
     r.triangles = std::move(e.triangles);
@@ -428,7 +429,7 @@ Status Scene::apply_edit(AddInstance&& e, UndoLog& undo) {
     bool reused = false;
     const InstanceHandle h = m_instances.insert(std::move(r), &reused);
     undo.records.emplace_back(undo::Inserted<InstanceHandle>{h, reused});
-    mesh.users.push_back(h);
+    mesh.users.mut().push_back(h);
     siblings.push_back(h);
     mark_instance_world(h);
     m_instance_ids.emplace(std::move(e.id), h);
@@ -506,10 +507,11 @@ void Scene::remove_instance(InstanceHandle h, UndoLog& undo) {
     InstanceRecord& r = m_instances.at(h);
     MeshRecord& mesh = m_meshes.at(r.mesh);
     // Swap-remove from the mesh's user list, fixing the moved instance's back index.
-    const InstanceHandle last = mesh.users.back();
-    mesh.users[r.user_slot] = last;
+    std::vector<InstanceHandle>& users = mesh.users.mut();
+    const InstanceHandle last = users.back();
+    users[r.user_slot] = last;
     m_instances.at(last).user_slot = r.user_slot;
-    mesh.users.pop_back();
+    users.pop_back();
     detach_child(children_of(r.parent).instances, m_instances, r.child_slot);
     // Listed by its now stale handle, so the commit takes it out of the TLAS.
     if (r.dirty == 0) m_changes.instances.push_back(h);

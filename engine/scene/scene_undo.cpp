@@ -36,7 +36,7 @@ struct Reverser {
         const InstanceRecord& inst = instances.at(r.handle);
         MeshRecord& mesh = meshes.at(inst.mesh);
         STRATA_CHECK(!mesh.users.empty() && mesh.users.back() == r.handle);
-        mesh.users.pop_back();
+        mesh.users.mut().pop_back();
         std::vector<InstanceHandle>& siblings = children_of(inst.parent).instances;
         STRATA_CHECK(!siblings.empty() && siblings.back() == r.handle);
         siblings.pop_back();
@@ -58,13 +58,14 @@ struct Reverser {
         // Reverse the swap-remove from the mesh's user list.
         MeshRecord& mesh = meshes.at(r.record.mesh);
         const uint32_t slot = r.record.user_slot;
-        if (slot == mesh.users.size()) {
-            mesh.users.push_back(r.handle);
+        std::vector<InstanceHandle>& users = mesh.users.mut();
+        if (slot == users.size()) {
+            users.push_back(r.handle);
         } else {
-            const InstanceHandle moved = mesh.users[slot];
-            instances.at(moved).user_slot = static_cast<uint32_t>(mesh.users.size());
-            mesh.users.push_back(moved);
-            mesh.users[slot] = r.handle;
+            const InstanceHandle moved = users[slot];
+            instances.at(moved).user_slot = static_cast<uint32_t>(users.size());
+            users.push_back(moved);
+            users[slot] = r.handle;
         }
         undo_detach_child(children_of(r.record.parent).instances, instances, r.handle,
                           r.record.child_slot);
@@ -131,11 +132,11 @@ struct Reverser {
 
     void operator()(undo::MeshPositions& r) {
         MeshRecord& mesh = meshes.at(r.handle);
-        if (r.offset == 0 && r.positions.size() == mesh.positions.size()) {
-            mesh.positions.swap(r.positions);
-        } else {
-            std::copy(r.positions.begin(), r.positions.end(), mesh.positions.begin() + r.offset);
-        }
+        std::copy(r.positions.begin(), r.positions.end(), mesh.positions.mut().begin() + r.offset);
+    }
+
+    void operator()(undo::MeshPositionsReplaced& r) {
+        meshes.at(r.handle).positions = std::move(r.positions);
     }
 
     void operator()(undo::MeshTopology& r) {

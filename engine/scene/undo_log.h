@@ -46,11 +46,17 @@ struct MeshPositions {
     std::vector<Vec3> positions;
 };
 
+/// The whole vertex array an update replaced (shared with the scene's snapshots, never copied).
+struct MeshPositionsReplaced {
+    MeshHandle handle;
+    CowVector<Vec3> positions;
+};
+
 /// The arrays a topology change replaced (positions only when they were replaced too).
 struct MeshTopology {
     MeshHandle handle;
-    std::optional<std::vector<Vec3>> positions;
-    std::vector<Triangle> triangles;
+    std::optional<CowVector<Vec3>> positions;
+    CowVector<Triangle> triangles;
 };
 
 /// The normals and uvs an edit replaced (each only when that edit touched it).
@@ -102,10 +108,10 @@ using UndoRecord =
                  undo::Inserted<MaterialHandle>, undo::Removed<MeshHandle, MeshRecord>,
                  undo::Removed<InstanceHandle, InstanceRecord>,
                  undo::Removed<MaterialHandle, MaterialRecord>, undo::MeshDirty,
-                 undo::MeshPositions, undo::MeshTopology, undo::MeshAttributes,
-                 undo::InstanceState, undo::MaterialState, undo::Inserted<GroupHandle>,
-                 undo::Removed<GroupHandle, GroupRecord>, undo::GroupState,
-                 undo::Reparented<InstanceHandle>, undo::Reparented<GroupHandle>>;
+                 undo::MeshPositions, undo::MeshPositionsReplaced, undo::MeshTopology,
+                 undo::MeshAttributes, undo::InstanceState, undo::MaterialState,
+                 undo::Inserted<GroupHandle>, undo::Removed<GroupHandle, GroupRecord>,
+                 undo::GroupState, undo::Reparented<InstanceHandle>, undo::Reparented<GroupHandle>>;
 
 /// Everything needed to take one batch back.
 struct UndoLog {

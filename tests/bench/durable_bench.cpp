@@ -7,7 +7,12 @@
 //           replay) and to build its acceleration structures; from the journal alone and from a
 //           snapshot. Scenes: 1M instances of one small mesh, and 10 meshes of 1M triangles.
 //
-//   build/tests/bench/strata_durable_bench [edits|restart|all] [runs]   (default: all 3)
+//   stall   a 1M-instance scene behind a DurableStore; one thread applies one-edit batches
+//           (set_transform of a random instance) back to back while snapshots are written; the
+//           longest apply() that overlapped a snapshot, against the longest one in windows of
+//           the same length without a snapshot (the baseline, same run).
+//
+//   build/tests/bench/strata_durable_bench [edits|restart|stall|all] [runs]   (default: all 3)
 //   STRATA_BENCH_DIR picks where the data directories go (default: $TMPDIR).
 
 #include <unistd.h>
@@ -272,6 +277,108 @@ void bench_restart(int runs) {
     }
 }
 
+// Step: edit stalls during a snapshot ---------------------------------------------------------
+
+struct StallResult {
+    double with_snapshot_ms = 0;  ///< the longest apply() overlapping a snapshot
+    double without_ms = 0;        ///< the longest apply() in as long a window without one
+    double lock_ms = 0;           ///< the snapshot's own measure of its critical section
+    double snapshot_s = 0;        ///< the whole snapshot, serialisation and fsync included
+};
+
+StallResult run_stall() {
+    auto eng = engine();
+    const std::string dir = temp_dir();
+    durable::StoreOptions o;
+    o.dir = dir;
+    o.journal.mode = durable::FsyncMode::Off;  // the stall, not the fsync, is measured
+    o.snapshot_threshold_bytes = UINT64_MAX;
+    auto opened = durable::DurableStore::open(o, *eng);
+    if (!opened) std::abort();
+    auto store = std::move(opened.value());
+    for (auto& b : million_instances())
+        if (!eng->apply(std::move(b))) std::abort();
+    if (!eng->commit()) std::abort();
+
+    // One editor: each apply() is timed from its start to its return, on one clock.
+    using Clock = std::chrono::steady_clock;
+    struct Span {
+        Clock::time_point begin, end;
+    };
+    std::vector<Span> spans;
+    spans.reserve(1 << 22);
+    std::atomic<bool> stop{false};
+    std::thread editor([&] {
+        uint64_t n = 0;
+        while (!stop.load(std::memory_order_relaxed)) {
+            EditBatch b;
+            SetTransform e;
+            e.instance = "instance-" + std::to_string((n * 7919) % 1000000);
+            e.transform = Affine::translation({float(n % 100), 1.0f, 0.0f});
+            b.edits.emplace_back(std::move(e));
+            const auto t0 = Clock::now();
+            if (!eng->apply(std::move(b))) std::abort();
+            spans.push_back({t0, Clock::now()});
+            ++n;
+        }
+    });
+    auto longest = [&](Clock::time_point a, Clock::time_point b, std::size_t upto) {
+        double worst = 0;
+        for (std::size_t i = 0; i < upto; ++i)
+            if (spans[i].end >= a && spans[i].begin <= b)
+                worst = std::max(worst, std::chrono::duration<double, std::milli>(
+                                            spans[i].end - spans[i].begin)
+                                            .count());
+        return worst;
+    };
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    // The baseline window first, then the snapshot, each as long as the snapshot takes.
+    const auto quiet_begin = Clock::now();
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    const auto snap_begin = Clock::now();
+    if (!store->snapshot_now()) std::abort();
+    const auto snap_end = Clock::now();
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    std::this_thread::sleep_for(snap_end - snap_begin);
+    const auto quiet2_begin = Clock::now();
+    std::this_thread::sleep_for(snap_end - snap_begin);
+    const auto quiet2_end = Clock::now();
+    stop = true;
+    editor.join();
+    const std::size_t n = spans.size();
+    StallResult out;
+    out.with_snapshot_ms = longest(snap_begin, snap_end, n);
+    out.without_ms = std::max(longest(quiet_begin, snap_begin, n),
+                              longest(quiet2_begin, quiet2_end, n));
+    const durable::DurableStats st = store->stats();
+    out.lock_ms = st.last_snapshot_lock_ms;
+    out.snapshot_s = st.last_snapshot_seconds;
+    store.reset();
+    eng.reset();
+    std::filesystem::remove_all(dir);
+    return out;
+}
+
+void bench_stall(int runs) {
+    std::printf("stall: 1M instances, 1 editor thread applying one-edit batches back to back, a "
+                "snapshot written meanwhile; %d runs, median\n",
+                runs);
+    std::vector<double> with, without, lock, total;
+    for (int r = 0; r < runs; ++r) {
+        const StallResult s = run_stall();
+        std::printf("    run %d: longest apply %.2f ms during the snapshot, %.2f ms without; "
+                    "lock %.2f ms; snapshot %.2f s\n",
+                    r + 1, s.with_snapshot_ms, s.without_ms, s.lock_ms, s.snapshot_s);
+        with.push_back(s.with_snapshot_ms);
+        without.push_back(s.without_ms);
+        lock.push_back(s.lock_ms);
+        total.push_back(s.snapshot_s);
+    }
+    std::printf("  longest edit stall: %.2f ms during a snapshot, %.2f ms without (baseline); "
+                "snapshot lock %.2f ms; snapshot %.2f s\n",
+                median(with), median(without), median(lock), median(total));
+}
+
 }  // namespace
 }  // namespace strata
 
@@ -282,5 +389,6 @@ int main(int argc, char** argv) {
     std::printf("machine: %u hardware threads\n", std::thread::hardware_concurrency());
     if (what == "edits" || what == "all") strata::bench_edits(runs);
     if (what == "restart" || what == "all") strata::bench_restart(runs);
+    if (what == "stall" || what == "all") strata::bench_stall(runs);
     return 0;
 }

@@ -1,6 +1,7 @@
 // The written protocol against the tables it describes: protocol/edit-batch.schema.json is what
 // the op table generates, and protocol/README.md's ops index and counters table are generated
-// from the op table and ENGINE_COUNTERS between marker comments; every op has a `### ` section
+// from the op table, ENGINE_COUNTERS and DURABLE_COUNTERS between marker comments; every op has a
+// `### ` section
 // whose examples parse as that op.
 //
 // After a change to an op or a counter, regenerate both files, then read the diff:
@@ -19,6 +20,7 @@
 #include <gtest/gtest.h>
 
 #include "engine/counters.h"
+#include "engine/durable/durable_stats.h"
 #include "protocol/edit_ops.h"
 #include "protocol/edit_schema.h"
 
@@ -121,6 +123,25 @@ std::string counters_table() {
     return out;
 }
 
+/// The Prometheus name /metrics gives a durable number (server/metrics.cpp does the same).
+std::string durable_metric_name(const durable::DurableCounterSpec& c) {
+    std::string name = "strata_durable_" + std::string(c.name);
+    if (c.unit == durable::DurableUnit::Milliseconds) name.replace(name.size() - 3, 3, "_seconds");
+    return c.cumulative ? name + "_total" : name;
+}
+
+std::string durable_counters_table() {
+    static const char* const UNITS[] = {"count", "bytes", "seconds", "milliseconds"};
+    std::string out = "| `durability` member | Prometheus | type | unit | what it is |\n"
+                      "|---|---|---|---|---|\n";
+    for (const durable::DurableCounterSpec& c : durable::DURABLE_COUNTERS) {
+        out += "| `" + std::string(c.name) + "` | `" + durable_metric_name(c) + "` | " +
+               (c.cumulative ? "counter" : "gauge") + " | " + UNITS[int(c.unit)] + " | " +
+               std::string(c.help) + " |\n";
+    }
+    return out;
+}
+
 /// `text` with the lines between `<!-- BEGIN GENERATED name: ... -->` and
 /// `<!-- END GENERATED name -->` replaced by `content`; nullopt when a marker is missing.
 std::optional<std::string> with_region(const std::string& text, const std::string& name,
@@ -149,6 +170,8 @@ TEST(ProtocolDocs, ReadmeOpsIndexAndCountersTableAreGeneratedFromTheirTables) {
     ASSERT_TRUE(updated) << "README lacks the edit-ops markers";
     updated = with_region(*updated, "counters", counters_table());
     ASSERT_TRUE(updated) << "README lacks the counters markers";
+    updated = with_region(*updated, "durable-counters", durable_counters_table());
+    ASSERT_TRUE(updated) << "README lacks the durable-counters markers";
     if (updating()) {
         if (*updated != readme) write_text(README_PATH, *updated);
         GTEST_SKIP() << "rewrote the generated parts of " << README_PATH;

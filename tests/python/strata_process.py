@@ -4,7 +4,9 @@
         ... server.url ...
 
 The server is started with --port 0 and its log is read until it says which port it got, so
-there is no race for a port. Standard library only.
+there is no race for a port; then, unless wait_ready=False, /readyz is polled until it answers 200
+(a server with --data listens while it recovers its scene, answering 503 meanwhile). Standard
+library only.
 """
 
 import os
@@ -13,6 +15,8 @@ import signal
 import subprocess
 import tempfile
 import time
+import urllib.error
+import urllib.request
 from typing import Callable, Dict, List, Optional
 
 _LISTENING = re.compile(r"listening on (http://[0-9.]+:([0-9]+))")
@@ -23,9 +27,10 @@ class ServerProcess:
 
     def __init__(self, binary: str, args: Optional[List[str]] = None, timeout: float = 30.0,
                  env: Optional[Dict[str, str]] = None,
-                 preexec_fn: Optional[Callable[[], None]] = None):
+                 preexec_fn: Optional[Callable[[], None]] = None, wait_ready: bool = True):
         """`env`: variables added to this process's environment (STRATA_TOKEN is not inherited).
-        `preexec_fn` runs in the child before exec (resource limits, another user)."""
+        `preexec_fn` runs in the child before exec (resource limits, another user).
+        `wait_ready`: return only once /readyz answers 200 (else as soon as it listens)."""
         self._log = tempfile.NamedTemporaryFile(prefix="strata-server-", suffix=".log",
                                                 delete=False)
         self.log_path = self._log.name
@@ -36,6 +41,27 @@ class ServerProcess:
             stdout=self._log, stderr=subprocess.STDOUT, env=full_env, preexec_fn=preexec_fn)
         self.url = self._wait_for_port(timeout)
         self.port = int(self.url.rsplit(":", 1)[1])
+        if wait_ready:
+            self._wait_until_ready(timeout)
+
+    def _wait_until_ready(self, timeout: float) -> None:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            try:
+                with urllib.request.urlopen(self.url + "/readyz", timeout=5) as answer:
+                    if answer.status == 200:
+                        return
+            except urllib.error.HTTPError as e:
+                if e.code != 503:
+                    raise
+            except (urllib.error.URLError, ConnectionError):
+                pass
+            if self.process.poll() is not None:
+                raise RuntimeError(f"strata-server exited with {self.process.returncode}:\n"
+                                   + self.log())
+            time.sleep(0.02)
+        self.stop()
+        raise RuntimeError("strata-server did not become ready:\n" + self.log())
 
     def _wait_for_port(self, timeout: float) -> str:
         deadline = time.monotonic() + timeout

@@ -84,17 +84,27 @@ TEST(RequestReader, HealthChecksAreAnsweredHereEvenWhenDrainingOrRestricted) {
     EXPECT_THAT(head.answer.bytes, Not(HasSubstr("ready")));
 }
 
-TEST(RequestReader, ReadyzIsUnavailableWhileTheRecoveredSceneIsBuilt) {
+TEST(RequestReader, WhileStartingReadyzSaysHowFarAndEverythingButLivezIsRefusedWithRetryAfter) {
     Reader r;
-    ReaderStep ready = r.feed("GET /readyz HTTP/1.1\r\nHost: a\r\n\r\n", {false, false, true});
+    const ReaderSituation starting{false, false, true, "replaying the journal, at version 7"};
+    ReaderStep ready = r.feed("GET /readyz HTTP/1.1\r\nHost: a\r\n\r\n", starting);
     ASSERT_EQ(ready.kind, Kind::Answer);
     EXPECT_EQ(ready.answer.status, 503);
-    EXPECT_THAT(ready.answer.bytes, HasSubstr("starting"));
-    ReaderStep live = r.feed("GET /livez HTTP/1.1\r\nHost: a\r\n\r\n", {false, false, true});
+    EXPECT_THAT(ready.answer.bytes, HasSubstr("starting: replaying the journal, at version 7"));
+    EXPECT_THAT(ready.answer.bytes, HasSubstr("Retry-After: 1\r\n"));
+    ReaderStep live = r.feed("GET /livez HTTP/1.1\r\nHost: a\r\n\r\n", starting);
     EXPECT_EQ(live.answer.status, 200);
-    // Other requests are served meanwhile (they wait for the build in the engine).
-    ReaderStep scene = r.feed("GET /v1/scene HTTP/1.1\r\nHost: a\r\n\r\n", {false, false, true});
-    EXPECT_EQ(scene.kind, Kind::Request);
+    ReaderStep scene = r.feed("GET /v1/scene HTTP/1.1\r\nHost: a\r\n\r\n", starting);
+    ASSERT_EQ(scene.kind, Kind::Answer);
+    EXPECT_EQ(scene.answer.status, 503);
+    EXPECT_FALSE(scene.answer.close);
+    EXPECT_THAT(scene.answer.bytes, HasSubstr("Retry-After: 1\r\n"));
+    EXPECT_THAT(scene.answer.bytes, HasSubstr("replaying the journal"));
+    // A body is left unread: that connection closes.
+    ReaderStep edit = r.feed(
+        "POST /v1/edits HTTP/1.1\r\nHost: a\r\nContent-Length: 2\r\n\r\n", starting);
+    EXPECT_EQ(edit.answer.status, 503);
+    EXPECT_TRUE(edit.answer.close);
 }
 
 TEST(RequestReader, RefusalsComeBeforeTheBodyIsRead) {

@@ -180,6 +180,51 @@ class DataDirectory(unittest.TestCase):
         self.assertEqual(s.version(), n)
         self.assertEqual(durable_scene.check(s, n), "")
 
+    def test_a_snapshot_the_disk_cannot_hold_keeps_the_journal_and_is_retried(self):
+        # Files up to 256 KiB: journal segments stay under it (each snapshot attempt starts a new
+        # one), snapshots of the growing scene soon do not.
+        limit = 256 * 1024
+
+        def small_files():  # a soft limit: the test lifts it later without privileges
+            resource.setrlimit(resource.RLIMIT_FSIZE, (limit, resource.RLIM_INFINITY))
+
+        s = self.server("--snapshot-threshold-kb", "32", preexec_fn=small_files)
+
+        def durability():
+            return s.json("GET", "/v1/stats")[1]["durability"]
+
+        n = stream(s, 0, 120)  # every batch acknowledged: the journal is unaffected
+        deadline = time.monotonic() + 20
+        while durability()["snapshot_failures"] == 0:
+            self.assertLess(time.monotonic(), deadline, "a snapshot should have failed")
+            time.sleep(0.05)
+        stats = durability()
+        self.assertIn("File too large", stats["last_snapshot_error"])
+        self.assertIn("the journal keeps every record", stats["last_snapshot_error"])
+        self.assertIn("File too large", s.log())
+        self.assertFalse(stats["failed"], "a failed snapshot does not stop the journal")
+        self.assertEqual(glob.glob(os.path.join(self.data, "*.tmp")), [])
+        # Retried without any new edit.
+        failures = stats["snapshot_failures"]
+        while durability()["snapshot_failures"] == failures:
+            self.assertLess(time.monotonic(), deadline + 20, "the snapshot should be retried")
+            time.sleep(0.05)
+        self.assertTrue(s.alive())
+        n = stream(s, n, 5)
+        self.assertEqual(durable_scene.check(s, n), "")
+        # Room again: the next retry succeeds, and replaces the journal it kept.
+        written = durability()["snapshots_written"]
+        resource.prlimit(s.pid, resource.RLIMIT_FSIZE,
+                         (resource.RLIM_INFINITY, resource.RLIM_INFINITY))
+        while durability()["snapshots_written"] == written:
+            self.assertLess(time.monotonic(), deadline + 120, "the retry should succeed")
+            time.sleep(0.05)
+        self.assertNotIn("last_snapshot_error", durability())
+        s.kill()
+        s = self.server()
+        self.assertEqual(s.version(), n)
+        self.assertEqual(durable_scene.check(s, n), "")
+
     def test_two_servers_cannot_share_a_directory(self):
         self.server()
         code, log = run_server(["--data", self.data])
@@ -204,22 +249,44 @@ class DataDirectory(unittest.TestCase):
         self.assertEqual(durable_scene.check(s, 40), "")
         self.assertIn("loaded snapshot", s.log())
 
-    def test_readyz_answers_503_until_the_recovered_scene_is_built(self):
+    def test_the_server_listens_while_it_recovers_and_answers_503_until_built(self):
+        # A journal long enough that replaying it takes a while: 300k instances in 15 batches.
         s = self.server()
         status, _ = s.json("POST", "/v1/edits", {"edits": [
-            {"op": "add_mesh", "id": "big", "shape": {"type": "sphere", "segments": 1400}},
-            {"op": "add_instance", "id": "b", "mesh": "big"}]})
+            {"op": "add_mesh", "id": "m", "shape": {"type": "box"}}]})
         self.assertEqual(status, 200)
+        per = 20000
+        for b in range(15):
+            edits = [{"op": "add_instance", "id": f"i{b * per + k}", "mesh": "m",
+                      "transform": {"translate": [k % 1000, b, k // 1000]}} for k in range(per)]
+            status, answer = s.json("POST", "/v1/edits", {"edits": edits})
+            self.assertEqual(status, 200, answer)
         s.kill()
-        s = self.server()
-        first = s.call("GET", "/readyz")
-        self.assertEqual(first[0], 503, "the build of 2M triangles should still be running")
-        self.assertIn(b"starting", first[2])
-        self.assertEqual(s.call("GET", "/livez")[0], 200)
-        deadline = time.monotonic() + 60
-        while s.call("GET", "/readyz")[0] != 200:
+
+        s = self.server(wait_ready=False)
+        details, refused = [], None
+        deadline = time.monotonic() + 120
+        while True:
             self.assertLess(time.monotonic(), deadline)
-            time.sleep(0.05)
+            self.assertEqual(s.call("GET", "/livez")[0], 200, "alive from the first moment")
+            status, _, body = s.call("GET", "/readyz")
+            if status == 200:
+                break
+            self.assertEqual(status, 503, body)
+            details.append(json.loads(body)["detail"])
+            if refused is None:
+                refused = s.call("GET", "/v1/scene")
+            time.sleep(0.01)
+        self.assertTrue(any("replaying the journal" in d for d in details), details)
+        self.assertTrue(any("%" in d and "records" in d for d in details), details)
+        self.assertTrue(any("being built" in d for d in details), details)
+        # Everything else waits for the scene, with a hint when to come back.
+        self.assertIsNotNone(refused)
+        self.assertEqual(refused[0], 503)
+        self.assertEqual(refused[1].get("Retry-After"), "1")
+        self.assertIn(b"starting", refused[2])
+        self.assertEqual(s.version(), 16)
+        self.assertEqual(s.json("GET", "/v1/scene")[1]["counts"]["instances"], 300000)
         self.assertGreater(s.json("GET", "/v1/stats")[1]["durability"]["rebuild_seconds"], 0)
 
 

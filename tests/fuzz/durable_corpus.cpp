@@ -1,0 +1,120 @@
+// Writes the seed corpora of journal_record_fuzzer and snapshot_fuzzer with the encoder itself,
+// so that the seeds always match the current formats (scripts/run-fuzz.sh runs it before them):
+//
+//   durable_corpus JOURNAL_DIR SNAPSHOT_DIR
+//
+// Journal seeds: every edit kind alone as a record payload, a batch of all of them, a segment
+// file of several records, and the same segment torn in its last record. Snapshot seeds: the
+// snapshot of a small scene (every record type, non-default fields), an empty scene's, and the
+// bare payload of the first (which the fuzzer wraps in a header).
+
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "engine/durable/journal_format.h"
+#include "engine/scene/scene.h"
+#include "tests/fuzz/durable_fuzz_util.h"
+
+namespace strata {
+namespace {
+
+std::vector<Edit> every_kind() {
+    std::vector<Edit> edits;
+    AddMesh m;
+    m.id = "tri";
+    m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+    m.triangles = {{0, 1, 2}, {1, 3, 2}};
+    m.build = {BuildPreference::FastBuild, false};
+    m.material = "red";
+    edits.emplace_back(AddMaterial{"red", Material{{1, 0, 0}, 0.25f, 0.5f, {0, 0, 0}}});
+    edits.emplace_back(std::move(m));
+    edits.emplace_back(UpdateMeshPositions{"tri", 1, {{2, 0, 0}}});
+    edits.emplace_back(ReplaceMeshTopology{"tri", std::nullopt, {{0, 2, 1}}});
+    edits.emplace_back(UpdateMaterial{"red", Vec3(0.5f), std::nullopt, 0.1f, std::nullopt});
+    AddInstance i;
+    i.id = "a";
+    i.mesh = "tri";
+    i.transform = Affine::translation({1, 2, 3});
+    i.visible = false;
+    i.mask = 6;
+    i.user_id = 77;
+    edits.emplace_back(i);
+    UpdateInstance u;
+    u.instance = "a";
+    u.material = std::optional<std::string>("red");
+    u.visible = true;
+    edits.emplace_back(u);
+    edits.emplace_back(SetTransform{"a", Affine::scaling({2, 2, 2})});
+    edits.emplace_back(MarkDirty{std::string("tri"), DirtyAction::Refit});
+    edits.emplace_back(SetCamera{Vec3(1), std::nullopt, std::nullopt, 30.0f});
+    edits.emplace_back(SetLighting{std::nullopt, Vec3(2), std::nullopt, 0.5f});
+    edits.emplace_back(RemoveInstance{"a"});
+    edits.emplace_back(RemoveMesh{"tri"});
+    edits.emplace_back(Clear{});
+    return edits;
+}
+
+bool write(const std::string& path, const std::string& bytes) {
+    std::ofstream out(path, std::ios::binary);
+    out << bytes;
+    if (!out.good()) std::fprintf(stderr, "cannot write %s\n", path.c_str());
+    return out.good();
+}
+
+std::string record(const EditBatch& batch, uint64_t version) {
+    durable::PendingRecord r = durable::prepare_record(batch);
+    durable::stamp_record(r, version);
+    return r.bytes;
+}
+
+}  // namespace
+}  // namespace strata
+
+int main(int argc, char** argv) {
+    using namespace strata;
+    if (argc != 3) {
+        std::fprintf(stderr, "usage: durable_corpus JOURNAL_DIR SNAPSHOT_DIR\n");
+        return 2;
+    }
+    const std::string journal = argv[1], snapshot = argv[2];
+    bool ok = true;
+
+    // Step: journal payloads and segments.
+    const std::vector<Edit> kinds = every_kind();
+    EditBatch all;
+    for (std::size_t k = 0; k < kinds.size(); ++k) {
+        EditBatch one;
+        one.edits.push_back(kinds[k]);
+        ok &= write(journal + "/payload-" + std::to_string(k), fuzz::encoded(one));
+        all.edits.push_back(kinds[k]);
+    }
+    ok &= write(journal + "/payload-all", fuzz::encoded(all));
+    EditBatch first, second;
+    first.edits.assign(kinds.begin(), kinds.begin() + 6);
+    second.edits.push_back(kinds[7]);
+    const std::string segment =
+        durable::segment_header(41) + record(first, 42) + record(second, 43) + record(all, 44);
+    ok &= write(journal + "/segment", segment);
+    ok &= write(journal + "/segment-torn", segment.substr(0, segment.size() - 5));
+    ok &= write(journal + "/segment-empty", durable::segment_header(0));
+
+    // Step: snapshots of a small scene, built by the scene's own rules.
+    Scene scene;
+    EditBatch build;
+    build.edits.assign(kinds.begin(), kinds.begin() + 11);  // up to set_lighting
+    AddInstance b;
+    b.id = "b";
+    b.mesh = "tri";
+    build.edits.emplace_back(b);
+    if (!scene.apply(std::move(build))) {
+        std::fprintf(stderr, "the seed scene was refused\n");
+        return 1;
+    }
+    const EditBatch state = scene.to_batch();
+    ok &= write(snapshot + "/scene.snap", durable::encode_snapshot(state, scene.version()));
+    ok &= write(snapshot + "/empty.snap", durable::encode_snapshot(Scene().to_batch(), 0));
+    ok &= write(snapshot + "/scene-payload", fuzz::encoded(state));
+    return ok ? 0 : 1;
+}
