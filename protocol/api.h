@@ -103,4 +103,12 @@ ApiResponse get_snapshot(const Engine& engine);
 ApiResponse post_snapshot(Engine& engine, std::string body,
                           std::optional<std::string_view> if_match);
 
+/// POST /v1/assets: imports one model file, the body, as ONE batch: atomic, journaled and
+/// counted like POST /v1/edits, If-Match honoured (assets_api.cpp). The format comes from
+/// `?format=` or `content_type`; the query may also give `name`, `prefix` and `instance`.
+ApiResponse post_assets(Engine& engine, std::string body,
+                        const std::multimap<std::string, std::string>& query,
+                        std::optional<std::string_view> content_type,
+                        std::optional<std::string_view> if_match);
+
 }  // namespace strata::protocol

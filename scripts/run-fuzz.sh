@@ -6,9 +6,16 @@
 #   http_request_fuzzer   raw HTTP/1.1 bytes: the front end's request reader (request line,
 #                         headers, framing, target, query, body), then the routes, protocol/api.h
 #                         and the engine
+#   gltf_import_fuzzer    .glb and .gltf files: tinygltf (compiled here, instrumented), the glTF
+#   obj_import_fuzzer     importer, OBJ (tinyobjloader) and our PLY reader, then the asset's batch
+#   ply_import_fuzzer     through the scene's rules (protocol/assets/)
 #
 #   scripts/run-fuzz.sh [RUNS]        default RUNS=100000; CI calls it without arguments. The HTTP
 #                                     fuzzer gets RUNS/4: each of its inputs runs through the engine.
+#                                     Each importer fuzzer gets RUNS/4 too.
+#
+# The importers' corpora start from the small seeds in tests/fuzz/asset_corpus/ plus every file of
+# that format in Debian's assimp-testmodels (copied to scratch at run time, never committed).
 #
 # New inputs the fuzzers find go to scratch copies of the corpora, never into the repository.
 set -euo pipefail
@@ -20,7 +27,8 @@ build="$root/build-fuzz"
 cmake -S "$root" -B "$build" -G Ninja \
     -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DSTRATA_FUZZ=ON -DSTRATA_BUILD_BENCHMARKS=OFF
-ninja -C "$build" -j "${STRATA_BUILD_JOBS:-2}" edit_batch_fuzzer http_request_fuzzer
+ninja -C "$build" -j "${STRATA_BUILD_JOBS:-2}" edit_batch_fuzzer http_request_fuzzer \
+    gltf_import_fuzzer obj_import_fuzzer ply_import_fuzzer
 
 scratch="$(mktemp -d)"
 trap 'rm -rf "$scratch"' EXIT
@@ -28,11 +36,32 @@ trap 'rm -rf "$scratch"' EXIT
 mkdir -p "$build/artifacts"
 
 run() {  # fuzzer corpus dictionary runs
-    cp -r "$root/tests/fuzz/$2" "$scratch/$2"
+    mkdir -p "$scratch/$2"
+    cp -r "$root/tests/fuzz/$2/." "$scratch/$2/"
+    local dict=()
+    [ -n "$3" ] && dict=(-dict="$root/tests/fuzz/$3")
     "$build/tests/fuzz/$1" -runs="$4" -max_len=65536 -timeout=10 -rss_limit_mb=2048 \
-        -dict="$root/tests/fuzz/$3" -artifact_prefix="$build/artifacts/$1-" ${STRATA_FUZZ_ARGS:-} \
+        "${dict[@]}" -artifact_prefix="$build/artifacts/$1-" ${STRATA_FUZZ_ARGS:-} \
         "$scratch/$2"
     echo "fuzz: $1, $4 runs, no crash"
 }
 run edit_batch_fuzzer corpus json.dict "$runs"
 run http_request_fuzzer http_corpus http.dict "$((runs / 4))"
+
+# The importers, seeded from assimp-testmodels' files of their format (odd and broken ones too).
+models="${STRATA_ASSIMP_MODELS_DIR:-/usr/share/assimp/models}"
+for format in gltf obj ply; do
+    mkdir -p "$scratch/asset_corpus/$format"
+    if [ -d "$models" ]; then
+        case "$format" in
+            gltf) pattern='.*\.\(gltf\|glb\)' ;;
+            *) pattern=".*\\.$format" ;;
+        esac
+        n=0
+        while IFS= read -r -d '' f; do
+            cp "$f" "$scratch/asset_corpus/$format/assimp-$n-$(basename "$f")"
+            n=$((n + 1))
+        done < <(find "$models" -type f -size -64k -iregex "$pattern" -print0)
+    fi
+    run "${format}_import_fuzzer" "asset_corpus/$format" "" "$((runs / 4))"
+done
