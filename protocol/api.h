@@ -25,6 +25,8 @@ struct ApiLimits {
     JsonLimits json;
     uint64_t max_pixels = 16ull << 20;  ///< width * height of one render (--max-pixels)
     int render_timeout_s = 0;  ///< a render running longer stops (--render-timeout); 0: none
+    /// The engine's scene budget (--max-scene-*): imports size their reads by the room left.
+    SceneBudget budget;
 };
 
 /// One endpoint's answer, ready for any transport.
@@ -109,6 +111,6 @@ ApiResponse post_snapshot(Engine& engine, std::string body,
 ApiResponse post_assets(Engine& engine, std::string body,
                         const std::multimap<std::string, std::string>& query,
                         std::optional<std::string_view> content_type,
-                        std::optional<std::string_view> if_match);
+                        std::optional<std::string_view> if_match, const ApiLimits& limits);
 
 }  // namespace strata::protocol

@@ -127,17 +127,18 @@ std::optional<AssetQuery> parse_query(const std::multimap<std::string, std::stri
 ApiResponse post_assets(Engine& engine, std::string body,
                         const std::multimap<std::string, std::string>& query,
                         std::optional<std::string_view> content_type,
-                        std::optional<std::string_view> if_match) {
+                        std::optional<std::string_view> if_match, const ApiLimits& api_limits) {
     Problem problem;
     const auto condition = if_match ? parse_if_match(*if_match, problem) : IfMatch{};
     if (!condition) return problem_response(problem);
     const auto q = parse_query(query, content_type, problem);
     if (!q) return problem_response(problem);
 
-    // Step 1: the room left in the scene budget bounds what the importer may allocate.
+    // Step 1: the room left in the scene budget bounds what the importer may allocate (the
+    // engine checks the batch against the budget again when it applies it).
     assets::ImportLimits limits;
     engine.read([&](const Scene& s) {
-        const SceneBudget& b = s.budget();
+        const SceneBudget& b = api_limits.budget;
         const MeshTotals& t = s.mesh_totals();
         limits.max_vertices = b.max_vertices > t.vertices ? b.max_vertices - t.vertices : 0;
         limits.max_triangles = b.max_triangles > t.triangles ? b.max_triangles - t.triangles : 0;

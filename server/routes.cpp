@@ -78,7 +78,7 @@ void add_api_routes(Router& router, ServerContext& ctx) {
         const std::optional<std::string> if_match = header("If-Match");
         const std::optional<std::string> content_type = header("Content-Type");
         send(res, protocol::post_assets(ctx.engine, std::move(body), req.params, content_type,
-                                        if_match));
+                                        if_match, ctx.api_limits));
     });
     router.post("/v1/commit", [&ctx](const Req&, Res& res, std::string&&) {
         respond(ctx, res, protocol::post_commit(ctx.engine), "commit");

@@ -77,8 +77,6 @@ public:
 
     /// The budget every later batch must leave the scene within (TooLarge beyond it).
     void set_budget(const SceneBudget& budget) { m_budget = budget; }
-    /// The budget batches are checked against.
-    const SceneBudget& budget() const { return m_budget; }
     /// What the meshes hold now.
     const MeshTotals& mesh_totals() const { return m_totals; }
 

@@ -577,8 +577,10 @@ Imported<Asset> import_gltf(std::span<const uint8_t> bytes, bool binary, const s
             return sink.unsupported("buffers", first_line(err));
         return sink.invalid("", "not valid glTF: " + first_line(err.empty() ? warn : err));
     }
-    for (const std::string& ext : model.extensionsRequired)
-        return sink.unsupported("extensionsRequired", "extension " + ext + " is not supported");
+    if (!model.extensionsRequired.empty())
+        return sink.unsupported("extensionsRequired", "extension " +
+                                                          model.extensionsRequired.front() +
+                                                          " is not supported");
     // Step 3: the model into the intermediate form, every reference checked.
     return GltfReader(model, sink, limits).read();
 }

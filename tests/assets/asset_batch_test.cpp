@@ -25,7 +25,7 @@ TEST(AssetBatch, ASharedGltfMeshIsOneSceneMeshWithSeveralInstances) {
     const std::string path = std::string(STRATA_ASSIMP_MODELS_DIR) +
                               "/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb";
     const std::string glb = read_file(path);
-    ASSERT_FALSE(glb.empty()) << path;
+    if (glb.empty()) GTEST_SKIP() << path << " missing: install assimp-testmodels";
     auto asset = import_asset(AssetFormat::Glb, bytes_of(glb), "2CylinderEngine.glb", {});
     ASSERT_TRUE(asset.has_value()) << asset.error().describe();
     AssetBatch b = asset_to_batch(std::move(asset.value()), {"engine", true});
@@ -108,11 +108,10 @@ TEST(AssetBatch, ImportingTwiceUnderOnePrefixIsRefusedAndChangesNothing) {
 }
 
 TEST(AssetBatch, AttributesTheSceneCannotHoldYetAreNamedInTheWarnings) {
-    auto asset = import_asset(
-        AssetFormat::Glb,
-        bytes_of(read_file(std::string(STRATA_ASSIMP_MODELS_DIR) +
-                           "/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb")),
-        "box.glb", {});
+    const std::string glb = read_file(std::string(STRATA_ASSIMP_MODELS_DIR) +
+                                      "/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb");
+    if (glb.empty()) GTEST_SKIP() << "assimp-testmodels missing";
+    auto asset = import_asset(AssetFormat::Glb, bytes_of(glb), "box.glb", {});
     ASSERT_TRUE(asset.has_value()) << asset.error().describe();
     AssetBatch b = asset_to_batch(std::move(asset.value()), {"box", true});
     EXPECT_THAT(b.warnings, Contains(HasSubstr("vertex normals dropped")));
