@@ -32,6 +32,7 @@ struct EngineCounters {
     uint64_t renders = 0;
     uint64_t rays_traced = 0;
     uint64_t picks = 0;
+    uint64_t world_transforms = 0;
     double commit_seconds = 0.0;
     double render_seconds = 0.0;
     double tlas_merge_seconds = 0.0;
@@ -90,6 +91,10 @@ inline constexpr CounterSpec ENGINE_COUNTERS[] = {
      &EngineCounters::rays_traced},
     {"picks", "Picks answered (each traces one ray per pixel asked about).", CounterUnit::Count,
      &EngineCounters::picks},
+    {"world_transforms",
+     "World transforms recomputed (groups and instances below moved, reparented, shown or hidden "
+     "groups, and edited instances).",
+     CounterUnit::Count, &EngineCounters::world_transforms},
     {"commit_seconds", "Wall time spent in commits.", CounterUnit::Seconds, nullptr,
      &EngineCounters::commit_seconds},
     {"render_seconds", "Wall time spent tracing and shading in launches.", CounterUnit::Seconds,

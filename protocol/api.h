@@ -78,12 +78,20 @@ ApiResponse get_render(Engine& engine, const std::multimap<std::string, std::str
 /// GET /v1/scene.
 ApiResponse get_scene(const Engine& engine);
 
-/// The object kinds of GET /v1/scene/{meshes,instances,materials}/{id}.
-enum class SceneObject : uint8_t { Mesh, Instance, Material };
-/// GET /v1/scene/{meshes,instances,materials}/{id}.
+/// The object kinds of GET /v1/scene/{meshes,instances,materials,groups}/{id}.
+enum class SceneObject : uint8_t { Mesh, Instance, Material, Group };
+/// GET /v1/scene/{meshes,instances,materials,groups}/{id}.
 ApiResponse get_scene_object(const Engine& engine, SceneObject kind, std::string_view id);
-/// GET /v1/scene/{meshes,instances,materials}: one page of the collection (scene_list.cpp).
+/// GET /v1/scene/{meshes,instances,materials,groups}: one page of the collection
+/// (scene_list.cpp).
 ApiResponse get_scene_list(const Engine& engine, SceneObject kind,
+                           const std::multimap<std::string, std::string>& query);
+/// GET /v1/scene/groups/{id}/children: one page of a group's child groups, then its instances
+/// (scene_tree.cpp).
+ApiResponse get_group_children(const Engine& engine, std::string_view id,
+                               const std::multimap<std::string, std::string>& query);
+/// GET /v1/scene/tree: the scene graph nested `depth` levels, at most `max_nodes` nodes.
+ApiResponse get_scene_tree(const Engine& engine,
                            const std::multimap<std::string, std::string>& query);
 
 /// GET /v1/pick: what lies under one pixel (pick_api.cpp).

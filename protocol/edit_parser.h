@@ -20,6 +20,8 @@ namespace strata::protocol {
 struct EditSource {
     bool positions_b64 = false;
     bool indices_b64 = false;
+    bool normals_b64 = false;
+    bool uvs_b64 = false;
     bool shape = false;
 };
 

@@ -37,10 +37,20 @@ constexpr std::string_view SHARED_DEFS = R"json({
     "items": {"$ref": "#/$defs/u32"},
     "description": "three vertex indices per triangle, flat"
   },
+  "normals": {
+    "type": "array",
+    "items": {"type": "number"},
+    "description": "x y z per vertex, flat (non-zero; normalised when shading)"
+  },
+  "uvs": {
+    "type": "array",
+    "items": {"type": "number"},
+    "description": "u v per vertex, flat"
+  },
   "base64": {
     "type": "string",
     "pattern": "^(?:[A-Za-z0-9+/]{4})*(?:[A-Za-z0-9+/]{2}==|[A-Za-z0-9+/]{3}=)?$",
-    "description": "RFC 4648 base64 of little-endian float32 (positions) or uint32 (indices) triples"
+    "description": "RFC 4648 base64 of little-endian float32 (positions, normals) or uint32 (indices) triples, or float32 pairs (uvs)"
   },
   "transform": {
     "oneOf": [

@@ -273,6 +273,27 @@ std::vector<Vec3> FieldReader::positions(const Json& v, const std::string& ptr) 
     return out;
 }
 
+std::vector<Vec3> FieldReader::normals(const Json& v, const std::string& ptr) {
+    const std::vector<float> flat = floats(v, ptr);
+    if (flat.size() % 3 != 0)
+        record_value_error(ptr, "normals has " + std::to_string(flat.size()) +
+                                    " numbers, not a multiple of 3 (x y z per vertex)");
+    std::vector<Vec3> out(flat.size() / 3);
+    for (std::size_t i = 0; i < out.size(); ++i)
+        out[i] = {flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]};
+    return out;
+}
+
+std::vector<Vec2> FieldReader::uvs(const Json& v, const std::string& ptr) {
+    const std::vector<float> flat = floats(v, ptr);
+    if (flat.size() % 2 != 0)
+        record_value_error(ptr, "uvs has " + std::to_string(flat.size()) +
+                                    " numbers, not a multiple of 2 (u v per vertex)");
+    std::vector<Vec2> out(flat.size() / 2);
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = {flat[2 * i], flat[2 * i + 1]};
+    return out;
+}
+
 std::vector<Triangle> FieldReader::indices(const Json& v, const std::string& ptr) {
     const std::size_t n = array_size(v, ptr, "a flat array of integers");
     std::vector<Triangle> out(n / 3);
@@ -316,6 +337,22 @@ std::vector<Vec3> FieldReader::positions_b64(const Json& v, const std::string& p
         if (!is_finite(out[i]))
             record_value_error(ptr,
                                "vertex " + std::to_string(i) + " has a NaN or infinite coordinate",
+                               ErrorCode::NotFinite);
+    }
+    return out;
+}
+
+std::vector<Vec3> FieldReader::normals_b64(const Json& v, const std::string& ptr) {
+    return positions_b64(v, ptr);
+}
+
+std::vector<Vec2> FieldReader::uvs_b64(const Json& v, const std::string& ptr) {
+    const std::string bytes = base64_bytes(v, ptr, 8);
+    std::vector<Vec2> out(bytes.size() / 8);
+    for (std::size_t i = 0; i < out.size(); ++i) {
+        for (int k = 0; k < 2; ++k) out[i][k] = load_le<float>(bytes.data() + i * 8 + k * 4);
+        if (!is_finite(out[i]))
+            record_value_error(ptr, "vertex " + std::to_string(i) + " has a NaN or infinite uv",
                                ErrorCode::NotFinite);
     }
     return out;

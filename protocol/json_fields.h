@@ -80,6 +80,12 @@ public:
     std::vector<Triangle> indices(const Json& v, const std::string& ptr);
     /// Base64 little-endian float32 triples.
     std::vector<Vec3> positions_b64(const Json& v, const std::string& ptr);
+    /// Per-vertex normals: as positions (flat triples, or base64 float32 triples).
+    std::vector<Vec3> normals(const Json& v, const std::string& ptr);
+    std::vector<Vec3> normals_b64(const Json& v, const std::string& ptr);
+    /// Per-vertex texture coordinates: flat u v pairs, or base64 float32 pairs.
+    std::vector<Vec2> uvs(const Json& v, const std::string& ptr);
+    std::vector<Vec2> uvs_b64(const Json& v, const std::string& ptr);
     /// Base64 little-endian uint32 triples.
     std::vector<Triangle> indices_b64(const Json& v, const std::string& ptr);
 

@@ -12,6 +12,7 @@ Json hit_to_json(const std::optional<PickHit>& hit) {
     if (!hit) return nullptr;
     return {{"instance", hit->instance},
             {"mesh", hit->mesh},
+            {"group_path", hit->group_path},
             {"primitive", hit->primitive},
             {"distance", float_to_json(hit->distance)},
             {"position", vec3_to_json(hit->position)},

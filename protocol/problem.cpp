@@ -22,6 +22,7 @@ constexpr TypeInfo TYPES[] = {
     {"out-of-range", "Index out of range", 422},
     {"degenerate-transform", "Degenerate transform", 422},
     {"in-use", "Object in use", 422},
+    {"cycle", "Group cycle", 422},
     {"empty-mesh", "Empty mesh", 422},
     {"invalid-asset", "Invalid asset", 422},
     {"version-mismatch", "Scene version mismatch", 412},
@@ -58,6 +59,8 @@ ProblemType type_of(ErrorCode code) {
             return ProblemType::DegenerateTransform;
         case ErrorCode::InUse:
             return ProblemType::InUse;
+        case ErrorCode::Cycle:
+            return ProblemType::Cycle;
         case ErrorCode::EmptyMesh:
             return ProblemType::EmptyMesh;
         case ErrorCode::TooLarge:
@@ -74,7 +77,8 @@ ProblemType type_of(ErrorCode code) {
     return ProblemType::Internal;
 }
 
-/// The engine names array elements of `positions`/`indices`; point at the member the client used.
+/// The engine names array elements of `positions`/`indices`/`normals`/`uvs`; point at the member
+/// the client used.
 std::string wire_field(const std::string& field, const EditSource* src) {
     if (!src || field.empty()) return field;
     const std::string head = field.substr(0, field.find('/'));
@@ -83,6 +87,8 @@ std::string wire_field(const std::string& field, const EditSource* src) {
         if (head == "positions" && src->positions_b64) return "positions_b64";
         if (head == "indices" && src->indices_b64) return "indices_b64";
     }
+    if (head == "normals" && src->normals_b64) return "normals_b64";
+    if (head == "uvs" && src->uvs_b64) return "uvs_b64";
     return field;
 }
 

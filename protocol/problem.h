@@ -26,6 +26,7 @@ enum class ProblemType : uint8_t {
     OutOfRange,           ///< 422 an index or vertex range is outside the mesh
     DegenerateTransform,  ///< 422 a singular or badly conditioned transform
     InUse,                ///< 422 the object is still referenced
+    Cycle,                ///< 422 a group would end up inside itself
     EmptyMesh,            ///< 422 a mesh without vertices or triangles
     InvalidAsset,         ///< 422 an uploaded model file is malformed or uses what Strata lacks
     VersionMismatch,      ///< 412 If-Match names another version

@@ -44,6 +44,8 @@ Json report_to_json(const RebuildReport& r) {
               {"released", r.released},
               {"primitives_built", r.primitives_built},
               {"primitives_refit", r.primitives_refit},
+              {"world_transforms", r.world_transforms},
+              {"instances_changed", r.instances_changed},
               {"memory_bytes", {{"blas", r.memory_blas_bytes}, {"tlas", r.memory_tlas_bytes}}}};
     if (!r.planned) {
         j["ms"] = r.phases.total_ms;

@@ -35,6 +35,16 @@ Json material_ref(const Scene& s, MaterialHandle h) {
     return m ? Json(m.value()->id) : Json(nullptr);
 }
 
+/// The id of a group handle, or null for the root.
+Json group_ref(const Scene& s, GroupHandle h) {
+    const auto g = s.group(h);
+    return g ? Json(g.value()->id) : Json(nullptr);
+}
+
+Json affine_to_json(const Affine& a) {
+    return floats_to_json(a.to_rows16().data(), 16);
+}
+
 }  // namespace
 
 Json float_to_json(float f) {
@@ -71,6 +81,7 @@ Json scene_summary_to_json(const Scene& s) {
              {{"meshes", c.meshes},
               {"instances", c.instances},
               {"materials", c.materials},
+              {"groups", c.groups},
               {"triangles", c.triangles},
               {"instanced_triangles", c.instanced_triangles}}},
             {"bounds", bounds_to_json(s.world_bounds())},
@@ -91,6 +102,8 @@ Json mesh_json(const Scene& s, MeshHandle h, const MeshRecord& m) {
         {"version", s.version()},
         {"vertices", m.positions.size()},
         {"triangles", m.triangles.size()},
+        {"normals", !m.normals.empty()},
+        {"uvs", !m.uvs.empty()},
         {"instances", m.users.size()},
         {"material", material_ref(s, m.material)},
         {"build",
@@ -106,11 +119,28 @@ Json instance_json(const Scene& s, InstanceHandle h, const InstanceRecord& i,
                 {"mesh", s.mesh(i.mesh).value()->id},
                 {"material", material_ref(s, i.material)},
                 {"resolved_material", material_fields(s.resolved_material(i))},
-                {"transform", floats_to_json(i.transform.to_rows16().data(), 16)},
+                {"transform", affine_to_json(i.transform)},
                 {"visible", i.visible},
                 {"mask", i.mask},
                 {"user_id", i.user_id},
-                {"bounds", bounds_to_json(i.transform.transform_bounds(mesh_local_bounds))}};
+                {"parent", group_ref(s, i.parent)},
+                {"world_transform", affine_to_json(i.world)},
+                {"world_visible", i.world_visible},
+                {"bounds", bounds_to_json(i.world.transform_bounds(mesh_local_bounds))}};
+}
+
+Json group_json(const Scene& s, GroupHandle h, const GroupRecord& g) {
+    return Json{{"id", g.id},
+                {"index", h.index},
+                {"version", s.version()},
+                {"parent", group_ref(s, g.parent)},
+                {"transform", affine_to_json(g.transform)},
+                {"visible", g.visible},
+                {"world_transform", affine_to_json(g.world)},
+                {"world_visible", g.world_visible},
+                {"children",
+                 {{"groups", g.children.groups.size()},
+                  {"instances", g.children.instances.size()}}}};
 }
 
 Json material_json(const Scene& s, const MaterialRecord& m) {
@@ -132,6 +162,13 @@ std::optional<Json> instance_to_json(const Scene& s, std::string_view id) {
     const auto r = s.instance(h);
     if (!r) return std::nullopt;
     return instance_json(s, h, *r.value(), mesh_bounds(*s.mesh(r.value()->mesh).value()));
+}
+
+std::optional<Json> group_to_json(const Scene& s, std::string_view id) {
+    const GroupHandle h = s.find_group(id);
+    const auto r = s.group(h);
+    if (!r) return std::nullopt;
+    return group_json(s, h, *r.value());
 }
 
 std::optional<Json> material_to_json(const Scene& s, std::string_view id) {

@@ -1,5 +1,5 @@
 #pragma once
-// Scene state as JSON for GET /v1/scene and GET /v1/scene/{meshes,instances,materials}/{id}.
+// Scene state as JSON for GET /v1/scene and GET /v1/scene/{meshes,instances,materials,groups}/{id}.
 // Call these under the engine's read lock (Engine::read) so one document shows one version.
 
 #include <optional>
@@ -30,10 +30,13 @@ Json mesh_json(const Scene& s, MeshHandle h, const MeshRecord& m);
 Json instance_json(const Scene& s, InstanceHandle h, const InstanceRecord& i,
                    const Bounds3& mesh_local_bounds);
 Json material_json(const Scene& s, const MaterialRecord& m);
+/// A group: parent, own and world transform and visibility, and how many children it has.
+Json group_json(const Scene& s, GroupHandle h, const GroupRecord& g);
 
 /// One object's state, or nullopt when no object has that id.
 std::optional<Json> mesh_to_json(const Scene& s, std::string_view id);
 std::optional<Json> instance_to_json(const Scene& s, std::string_view id);
 std::optional<Json> material_to_json(const Scene& s, std::string_view id);
+std::optional<Json> group_to_json(const Scene& s, std::string_view id);
 
 }  // namespace strata::protocol

@@ -1,10 +1,13 @@
-// GET /v1/scene/{meshes,instances,materials}: paginated listings.
+// GET /v1/scene/{meshes,instances,materials,groups}: paginated listings.
 //
 // Pages walk the collection in slot order, which never changes while an object exists: an object
 // that exists for the whole walk appears exactly once, and objects added or removed during the
 // walk may or may not appear. The cursor names the slot the next page starts at; it is opaque
 // to clients (and checked: a cursor of another collection, or a made-up one, is refused).
+// A `parent=` filter naming a group pages through that group's children in the same slot order
+// (sorted per page: the cost follows the group, not the scene); `parent=` empty is the root.
 
+#include <algorithm>
 #include <charconv>
 #include <unordered_map>
 
@@ -18,13 +21,14 @@ namespace {
 constexpr uint32_t DEFAULT_PAGE = 100;
 constexpr uint32_t MAX_PAGE = 10000;
 
-constexpr const char* COLLECTIONS[] = {"meshes", "instances", "materials"};
+constexpr const char* COLLECTIONS[] = {"meshes", "instances", "materials", "groups"};
 
 struct ListQuery {
     uint32_t limit = DEFAULT_PAGE;
     uint32_t first_slot = 0;
     std::optional<std::string> mesh;  ///< instances: only those of this mesh
     std::optional<bool> visible;      ///< instances: only (in)visible ones
+    std::optional<std::string> parent;  ///< instances, groups: only children of (empty: root)
 };
 
 Problem bad_query(const std::string& parameter, std::string message) {
@@ -56,6 +60,7 @@ std::optional<ListQuery> parse_list_query(SceneObject kind,
                                           Problem& problem) {
     ListQuery q;
     const bool instances = kind == SceneObject::Instance;
+    const bool graph = instances || kind == SceneObject::Group;
     for (const auto& [key, text] : query) {
         if (query.count(key) > 1) {
             problem = bad_query(key, "query parameter '" + key + "' is given more than once");
@@ -86,32 +91,62 @@ std::optional<ListQuery> parse_list_query(SceneObject kind,
                 return std::nullopt;
             }
             q.visible = text == "true";
+        } else if (graph && key == "parent") {
+            q.parent = text;
         } else {
-            problem = bad_query(
-                key, "unknown query parameter '" + key + "': " + COLLECTIONS[int(kind)] + " take " +
-                         (instances ? "limit, cursor, mesh and visible" : "limit and cursor"));
+            problem = bad_query(key, "unknown query parameter '" + key + "': " +
+                                         COLLECTIONS[int(kind)] + " take " +
+                                         (instances ? "limit, cursor, mesh, visible and parent"
+                                          : graph   ? "limit, cursor and parent"
+                                                    : "limit and cursor"));
             return std::nullopt;
         }
     }
     return q;
 }
 
+/// The slots of `handles`, sorted: a child list in the listings' slot order.
+template <class H>
+std::vector<uint32_t> sorted_slots(const std::vector<H>& handles) {
+    std::vector<uint32_t> slots;
+    slots.reserve(handles.size());
+    for (H h : handles) slots.push_back(h.index);
+    std::sort(slots.begin(), slots.end());
+    return slots;
+}
+
 /// One page of `objects` from q.first_slot: up to q.limit documents of the objects `keep`
-/// accepts, and the cursor of the next accepted object, or null when there is none.
+/// accepts, and the cursor of the next accepted object, or null when there is none. With `only`,
+/// just those slots (sorted) are visited, instead of every slot.
 template <class Objects, class Keep, class ToJson>
 Json page(SceneObject kind, const Objects& objects, const ListQuery& q, Keep&& keep,
-          ToJson&& to_json) {
+          ToJson&& to_json, const std::vector<uint32_t>* only = nullptr) {
     Json items = Json::array();
     Json next = nullptr;
-    for (uint32_t slot = q.first_slot; slot < objects.slot_count(); ++slot) {
-        if (!objects.alive_at(slot) || !keep(objects.at_slot(slot))) continue;
+    auto visit = [&](uint32_t slot) {
+        if (!objects.alive_at(slot) || !keep(objects.at_slot(slot))) return true;
         if (items.size() == q.limit) {
             next = encode_cursor(kind, slot);
-            break;
+            return false;
         }
         items.push_back(to_json(objects.handle_at(slot), objects.at_slot(slot)));
+        return true;
+    };
+    if (only) {
+        for (auto it = std::lower_bound(only->begin(), only->end(), q.first_slot);
+             it != only->end() && visit(*it); ++it) {
+        }
+    } else {
+        for (uint32_t slot = q.first_slot; slot < objects.slot_count() && visit(slot); ++slot) {
+        }
     }
     return Json{{"items", std::move(items)}, {"next_cursor", std::move(next)}};
+}
+
+Problem no_group(const std::string& id, const char* parameter) {
+    Problem p = make_problem(ProblemType::NotFound, "no group with id '" + id + "'");
+    p.pointer = std::string("/") + parameter;
+    return p;
 }
 
 }  // namespace
@@ -122,7 +157,22 @@ ApiResponse get_scene_list(const Engine& engine, SceneObject kind,
     const auto q = parse_list_query(kind, query, problem);
     if (!q) return problem_response(problem);
     // One read lock: every item and the page's version belong together.
+    std::optional<Problem> missing;
     auto [doc, version] = engine.read([&](const Scene& s) -> std::pair<Json, uint64_t> {
+        // parent=: a group's children (sorted slots), or the root's (a filtered walk).
+        GroupHandle parent;
+        std::vector<uint32_t> children;
+        if (q->parent && !q->parent->empty()) {
+            parent = s.find_group(*q->parent);
+            if (!s.group(parent)) {
+                missing = no_group(*q->parent, "parent");
+                return {nullptr, s.version()};
+            }
+            children = kind == SceneObject::Group ? sorted_slots(s.children(parent).groups)
+                                                  : sorted_slots(s.children(parent).instances);
+        }
+        const std::vector<uint32_t>* only = parent.is_null() ? nullptr : &children;
+        const bool root_only = q->parent && q->parent->empty();
         switch (kind) {
             case SceneObject::Mesh:
                 return {page(
@@ -136,13 +186,25 @@ ApiResponse get_scene_list(const Engine& engine, SceneObject kind,
                                 return material_json(s, m);
                             }),
                         s.version()};
+            case SceneObject::Group:
+                return {page(
+                            kind, s.groups(), *q,
+                            [&](const GroupRecord& g) { return !root_only || g.parent.is_null(); },
+                            [&](GroupHandle h, const GroupRecord& g) { return group_json(s, h, g); },
+                            only),
+                        s.version()};
             case SceneObject::Instance:
                 break;
         }
         MeshHandle mesh;
         if (q->mesh) {
             mesh = s.find_mesh(*q->mesh);
-            if (!s.mesh(mesh)) return {nullptr, s.version()};
+            if (!s.mesh(mesh)) {
+                Problem p = make_problem(ProblemType::NotFound, "no mesh with id '" + *q->mesh + "'");
+                p.pointer = "/mesh";
+                missing = p;
+                return {nullptr, s.version()};
+            }
         }
         // Object-space bounds once per mesh, not once per instance.
         std::unordered_map<uint32_t, Bounds3> bounds;
@@ -150,20 +212,18 @@ ApiResponse get_scene_list(const Engine& engine, SceneObject kind,
                     kind, s.instances(), *q,
                     [&](const InstanceRecord& i) {
                         return (!q->mesh || i.mesh == mesh) &&
-                               (!q->visible || i.visible == *q->visible);
+                               (!q->visible || i.visible == *q->visible) &&
+                               (!root_only || i.parent.is_null());
                     },
                     [&](InstanceHandle h, const InstanceRecord& i) {
                         auto [it, fresh] = bounds.try_emplace(i.mesh.index);
                         if (fresh) it->second = mesh_bounds(*s.mesh(i.mesh).value());
                         return instance_json(s, h, i, it->second);
-                    }),
+                    },
+                    only),
                 s.version()};
     });
-    if (doc.is_null()) {
-        Problem p = make_problem(ProblemType::NotFound, "no mesh with id '" + *q->mesh + "'");
-        p.pointer = "/mesh";
-        return with_etag(problem_response(p), version);
-    }
+    if (missing) return with_etag(problem_response(*missing), version);
     doc["version"] = version;
     return with_etag(json_response(200, doc), version);
 }

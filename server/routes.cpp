@@ -108,6 +108,13 @@ void add_api_routes(Router& router, ServerContext& ctx) {
     add_scene_object_route(router, ctx, "meshes", protocol::SceneObject::Mesh);
     add_scene_object_route(router, ctx, "instances", protocol::SceneObject::Instance);
     add_scene_object_route(router, ctx, "materials", protocol::SceneObject::Material);
+    add_scene_object_route(router, ctx, "groups", protocol::SceneObject::Group);
+    router.get("/v1/scene/groups/([^/]+)/children", [&ctx](const Req& req, Res& res) {
+        send(res, protocol::get_group_children(
+                      ctx.engine, decode_path_segment(req.matches[1].str()), req.params));
+    });
+    router.get("/v1/scene/tree",
+               [&ctx](const Req& req, Res& res) { send(res, protocol::get_scene_tree(ctx.engine, req.params)); });
     router.get("/v1/pick", [&ctx](const Req& req, Res& res) {
         send(res, protocol::get_pick(ctx.engine, req.params));
     });

@@ -53,7 +53,7 @@ int run_plan(Transport& t, const Console& c);
 int run_stats(Transport& t, const Console& c);
 int run_scene(Transport& t, const Console& c);
 
-/// The collections `strata scene list` can walk: meshes, instances, materials.
+/// The collections `strata scene list` can walk: meshes, instances, materials, groups.
 const std::vector<std::string>& scene_collections();
 
 struct SceneListArgs {
@@ -62,12 +62,21 @@ struct SceneListArgs {
     std::optional<uint64_t> max_items;       ///< stop after this many
     std::optional<std::string> mesh;         ///< instances of this mesh only
     std::optional<bool> visible;             ///< only visible (true) or hidden (false) instances
+    std::optional<std::string> parent;       ///< children of this group only ("" the root)
 };
 /// `strata scene list COLLECTION`: every page, following cursors; one line per object (one JSON
 /// document per line with --json).
 int run_scene_list(Transport& t, const Console& c, const SceneListArgs& args);
-/// `strata scene get KIND ID`: KIND is mesh, instance or material.
+/// `strata scene get KIND ID`: KIND is mesh, instance, material or group.
 int run_scene_get(Transport& t, const Console& c, const std::string& kind, const std::string& id);
+
+struct SceneTreeArgs {
+    uint32_t depth = 8;
+    uint32_t max_nodes = 1000;
+    std::optional<std::string> group;  ///< the subtree of this group; the whole scene when unset
+};
+/// `strata scene tree`: the scene graph as an indented outline (the document with --json).
+int run_scene_tree(Transport& t, const Console& c, const SceneTreeArgs& args);
 
 struct PickArgs {
     uint32_t x = 0, y = 0;

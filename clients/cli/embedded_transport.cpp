@@ -73,6 +73,7 @@ std::optional<protocol::SceneObject> collection_kind(const std::string& collecti
     if (collection == "meshes") return protocol::SceneObject::Mesh;
     if (collection == "instances") return protocol::SceneObject::Instance;
     if (collection == "materials") return protocol::SceneObject::Material;
+    if (collection == "groups") return protocol::SceneObject::Group;
     return std::nullopt;
 }
 
@@ -85,6 +86,7 @@ Reply no_route(const std::string& collection) {
 
 Reply EmbeddedTransport::scene_list(const std::string& collection,
                                     const std::multimap<std::string, std::string>& query) {
+    if (collection == "tree") return to_reply(protocol::get_scene_tree(*m_engine, query));
     const auto kind = collection_kind(collection);
     if (!kind) return no_route(collection);
     return to_reply(protocol::get_scene_list(*m_engine, *kind, query));

@@ -152,8 +152,8 @@ int main(int argc, char** argv) {
     scene_cmd->require_subcommand(0, 1);
     SceneListArgs list;
     CLI::App* list_cmd =
-        scene_cmd->add_subcommand("list", "List meshes, instances or materials, one per line");
-    list_cmd->add_option("collection", list.collection, "meshes, instances or materials")
+        scene_cmd->add_subcommand("list", "List meshes, instances, materials or groups, one per line");
+    list_cmd->add_option("collection", list.collection, "meshes, instances, materials or groups")
         ->required()
         ->check(CLI::IsMember(scene_collections()));
     list_cmd->add_option("--page-size", list.page_size, "Objects per request (1 to 10000)")
@@ -161,12 +161,21 @@ int main(int argc, char** argv) {
     list_cmd->add_option("--max", list.max_items, "Stop after this many objects");
     list_cmd->add_option("--mesh", list.mesh, "Instances: only those of this mesh");
     list_cmd->add_option("--visible", list.visible, "Instances: only visible (true) or hidden");
+    list_cmd->add_option("--parent", list.parent,
+                         "Instances, groups: only children of this group (\"\" for the root)");
     std::string get_kind, get_id;
     CLI::App* get_cmd = scene_cmd->add_subcommand("get", "Print one object's document");
-    get_cmd->add_option("kind", get_kind, "mesh, instance or material")
+    get_cmd->add_option("kind", get_kind, "mesh, instance, material or group")
         ->required()
-        ->check(CLI::IsMember({"mesh", "instance", "material"}));
+        ->check(CLI::IsMember({"mesh", "instance", "material", "group"}));
     get_cmd->add_option("id", get_id, "The object's id")->required();
+    SceneTreeArgs tree;
+    CLI::App* tree_cmd = scene_cmd->add_subcommand("tree", "Print the scene graph as an outline");
+    tree_cmd->add_option("--depth", tree.depth, "Group levels to expand (0 to 64)")
+        ->check(CLI::Range(0, 64));
+    tree_cmd->add_option("--max-nodes", tree.max_nodes, "Most nodes to print (1 to 10000)")
+        ->check(CLI::Range(1, 10000));
+    tree_cmd->add_option("--group", tree.group, "Only the subtree of this group");
     PickArgs pick;
     CLI::App* pick_cmd = app.add_subcommand("pick", "Print what lies under one pixel");
     pick_cmd->add_option("x", pick.x, "Column, 0 at the left")->required();
@@ -226,6 +235,7 @@ int main(int argc, char** argv) {
     if (stats_cmd->parsed()) return run_stats(t, console);
     if (list_cmd->parsed()) return run_scene_list(t, console, list);
     if (get_cmd->parsed()) return run_scene_get(t, console, get_kind, get_id);
+    if (tree_cmd->parsed()) return run_scene_tree(t, console, tree);
     if (scene_cmd->parsed()) return run_scene(t, console);
     if (pick_cmd->parsed()) return run_pick(t, console, pick);
     if (snapshot_save->parsed()) return run_snapshot_save(t, console, snapshot_file);

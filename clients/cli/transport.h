@@ -56,7 +56,8 @@ public:
     virtual Reply stats() = 0;
     /// GET /v1/scene.
     virtual Reply scene() = 0;
-    /// GET /v1/scene/{collection} (meshes, instances or materials): one page of the listing.
+    /// GET /v1/scene/{collection} (meshes, instances, materials or groups): one page of the
+    /// listing; "tree" is GET /v1/scene/tree.
     virtual Reply scene_list(const std::string& collection,
                              const std::multimap<std::string, std::string>& query) = 0;
     /// GET /v1/scene/{collection}/{id}.

@@ -108,6 +108,8 @@ CommitPlan AccelGraph::plan(const Scene& scene) const {
         report.tlas_action = TlasAction::Update;
     }
     report.tlas_instances = scene.instances().size();
+    report.world_transforms = changes.world_transforms;
+    report.instances_changed = plan.tlas.changed.size() + plan.tlas.blas_changed.size();
     report.tlas.strategy = m_tlas->name();
     report.phases.plan_ms = clock.ms();
     return plan;

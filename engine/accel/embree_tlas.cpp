@@ -137,9 +137,9 @@ private:
             rtcSetGeometryInstancedScene(t.geometry, blas_scene);
             t.blas = blas_scene;
         }
-        rtcSetGeometryTransform(t.geometry, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, r.transform.m.data());
+        rtcSetGeometryTransform(t.geometry, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, r.world.m.data());
         rtcSetGeometryMask(t.geometry, r.mask);
-        if (r.visible) {
+        if (r.world_visible) {
             rtcEnableGeometry(t.geometry);
         } else {
             rtcDisableGeometry(t.geometry);

@@ -351,7 +351,7 @@ private:
         const InstanceRecord& r = *inst.value();
         touch(h.index);
         hold(h.index, h.generation);
-        if (r.visible) {
+        if (r.world_visible) {
             put_dynamic(h.index, r, blas);
         } else {
             remove_dynamic(h.index);
@@ -375,7 +375,7 @@ private:
             rtcSetGeometryInstancedScene(e.geometry, blas_scene);
             e.blas = blas_scene;
         }
-        e.transform = r.transform.m;
+        e.transform = r.world.m;
         e.mask = r.mask;
         rtcSetGeometryTransform(e.geometry, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, e.transform.data());
         rtcSetGeometryMask(e.geometry, e.mask);
@@ -453,7 +453,7 @@ private:
         const InstanceRecord& r = *inst.value();
         hold(h.index, h.generation);
         s.edited = m_serial;
-        if (!r.visible) {
+        if (!r.world_visible) {
             release_static(h.index);
             return;
         }
@@ -465,7 +465,7 @@ private:
             attach_static(h.index, g);
         }
         rtcSetGeometryInstancedScene(g, blas_scene);
-        rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, r.transform.m.data());
+        rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, r.world.m.data());
         rtcSetGeometryMask(g, r.mask);
         rtcCommitGeometry(g);
     }

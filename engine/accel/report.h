@@ -59,6 +59,12 @@ struct RebuildReport {
     uint32_t blas_refits = 0;
     uint64_t primitives_built = 0;
     uint64_t primitives_refit = 0;
+    /// World transforms (groups and instances) recomputed by the flattening of the batches this
+    /// commit covers: what group moves cost before the TLAS.
+    uint64_t world_transforms = 0;
+    /// Instances handed to the TLAS (changed, or their BLAS changed): a group move hands over
+    /// the instances below the group, and no others.
+    uint64_t instances_changed = 0;
     int64_t memory_blas_bytes = 0;  ///< bytes Embree holds for BLASes, after the commit
     int64_t memory_tlas_bytes = 0;  ///< bytes Embree holds for the TLAS, after the commit
     CommitPhases phases;

@@ -13,7 +13,7 @@
 
 namespace strata {
 
-/// Typed generational handle. `Tag` only keeps mesh, instance and material handles apart.
+/// Typed generational handle. `Tag` only keeps mesh, instance, material and group handles apart.
 template <class Tag>
 struct Handle {
     static constexpr uint32_t INVALID_INDEX = std::numeric_limits<uint32_t>::max();
@@ -28,9 +28,11 @@ struct Handle {
 struct MeshTag;
 struct InstanceTag;
 struct MaterialTag;
+struct GroupTag;
 using MeshHandle = Handle<MeshTag>;
 using InstanceHandle = Handle<InstanceTag>;
 using MaterialHandle = Handle<MaterialTag>;
+using GroupHandle = Handle<GroupTag>;
 
 /// Flat storage indexed by slot. Erased slots are reused (lowest generation bump first, LIFO).
 template <class T, class Tag>

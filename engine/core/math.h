@@ -10,11 +10,13 @@
 
 namespace strata {
 
+using Vec2 = glm::vec2;
 using Vec3 = glm::vec3;
 using Vec4 = glm::vec4;
 
 inline bool is_finite(float v) { return std::isfinite(v); }
 inline bool is_finite(const Vec3& v) { return is_finite(v.x) && is_finite(v.y) && is_finite(v.z); }
+inline bool is_finite(const Vec2& v) { return is_finite(v.x) && is_finite(v.y); }
 
 /// Axis-aligned box; empty when lower > upper.
 struct Bounds3 {

@@ -11,6 +11,7 @@ const char* error_code_name(ErrorCode code) {
         case ErrorCode::OutOfRange: return "out_of_range";
         case ErrorCode::DegenerateTransform: return "degenerate_transform";
         case ErrorCode::InUse: return "in_use";
+        case ErrorCode::Cycle: return "cycle";
         case ErrorCode::EmptyMesh: return "empty_mesh";
         case ErrorCode::StaleHandle: return "stale_handle";
         case ErrorCode::TooLarge: return "too_large";

@@ -18,6 +18,7 @@ enum class ErrorCode {
     OutOfRange,           ///< an index or vertex range is outside the mesh
     DegenerateTransform,  ///< a transform is singular or badly conditioned
     InUse,                ///< the object is still referenced (a mesh with instances)
+    Cycle,                ///< a group would end up inside itself
     EmptyMesh,            ///< a mesh without vertices or triangles
     StaleHandle,          ///< a handle whose object was removed
     TooLarge,             ///< a request exceeds a configured limit

@@ -46,7 +46,8 @@ private:
         } else if constexpr (std::is_same_v<T, std::string>) {
             put(uint32_t(v.size()));
             raw(v.data(), v.size());
-        } else if constexpr (std::is_same_v<T, Vec3> || std::is_same_v<T, Triangle>) {
+        } else if constexpr (std::is_same_v<T, Vec3> || std::is_same_v<T, Vec2> ||
+                             std::is_same_v<T, Triangle>) {
             raw(&v, sizeof v);
         } else if constexpr (std::is_same_v<T, Affine>) {
             raw(v.m.data(), sizeof(float) * v.m.size());
@@ -60,7 +61,8 @@ private:
     }
     template <class T>
     void put_other(const std::vector<T>& v) {
-        static_assert(std::is_same_v<T, Vec3> || std::is_same_v<T, Triangle>);
+        static_assert(std::is_same_v<T, Vec3> || std::is_same_v<T, Vec2> ||
+                      std::is_same_v<T, Triangle>);
         put(uint64_t(v.size()));
         raw(v.data(), v.size() * sizeof(T));
     }
@@ -126,7 +128,8 @@ private:
             if (n > remaining()) return fail("string of " + std::to_string(n) + " bytes");
             v.assign(m_in.data() + m_pos, n);
             m_pos += n;
-        } else if constexpr (std::is_same_v<T, Vec3> || std::is_same_v<T, Triangle>) {
+        } else if constexpr (std::is_same_v<T, Vec3> || std::is_same_v<T, Vec2> ||
+                             std::is_same_v<T, Triangle>) {
             raw(&v, sizeof v);
         } else if constexpr (std::is_same_v<T, Affine>) {
             raw(v.m.data(), sizeof(float) * v.m.size());

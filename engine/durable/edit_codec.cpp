@@ -2,6 +2,9 @@
 
 #include <concepts>
 #include <iterator>
+#include <optional>
+#include <string>
+#include <type_traits>
 #include <utility>
 
 #include "engine/durable/byte_io.h"
@@ -19,8 +22,11 @@ static_assert(TAG_IS<0, AddMesh> && TAG_IS<1, UpdateMeshPositions> &&
                   TAG_IS<4, AddMaterial> && TAG_IS<5, UpdateMaterial> && TAG_IS<6, AddInstance> &&
                   TAG_IS<7, UpdateInstance> && TAG_IS<8, SetTransform> &&
                   TAG_IS<9, RemoveInstance> && TAG_IS<10, MarkDirty> && TAG_IS<11, SetCamera> &&
-                  TAG_IS<12, SetLighting> && TAG_IS<13, Clear> && std::variant_size_v<Edit> == 14,
+                  TAG_IS<12, SetLighting> && TAG_IS<13, Clear> && TAG_IS<14, AddGroup> &&
+                  TAG_IS<15, UpdateGroup> && TAG_IS<16, RemoveGroup> &&
+                  std::variant_size_v<Edit> == 17,
               "journal kind tags are the Edit variant's indices: append new kinds at the end");
+
 
 /// Kind names for messages (the wire names, as the protocol's op table spells them).
 constexpr const char* KIND_NAMES[] = {"add_mesh",
@@ -36,8 +42,18 @@ constexpr const char* KIND_NAMES[] = {"add_mesh",
                                       "mark_dirty",
                                       "set_camera",
                                       "set_lighting",
-                                      "clear"};
+                                      "clear",
+                                      "add_group",
+                                      "update_group",
+                                      "remove_group"};
 static_assert(std::size(KIND_NAMES) == std::variant_size_v<Edit>);
+
+/// Kind tag bit: the edit's extension fields follow its base layout. Fields added to a kind after
+/// its layout was first written (a mesh's normals and uvs, an instance's parent group) are extensions: an edit without them
+/// is written exactly as before, so older files read the same and a file only grows the bit
+/// where it uses what is new.
+constexpr uint8_t EXTENDED = 0x80;
+static_assert(std::variant_size_v<Edit> < EXTENDED);
 
 /// `E` is T or const T: the same function writes (const) and reads (mutable).
 template <class E, class T>
@@ -99,6 +115,72 @@ void fields(Io& io, E& e) {
 }
 template <class Io, Kind<Clear> E>
 void fields(Io&, E&) {}
+template <class Io, Kind<AddGroup> E>
+void fields(Io& io, E& e) {
+    io(e.id, e.parent, e.transform, e.visible);
+}
+template <class Io, Kind<UpdateGroup> E>
+void fields(Io& io, E& e) {
+    io(e.group, e.parent, e.transform, e.visible);
+}
+template <class Io, Kind<RemoveGroup> E>
+void fields(Io& io, E& e) {
+    io(e.group, e.recursive);
+}
+
+// Step: extension fields of the kinds that have them -------------------------------------------
+
+template <class Io, class E>
+void extension(Io&, E&) {}
+template <class Io, Kind<AddMesh> E>
+void extension(Io& io, E& e) {
+    io(e.normals, e.uvs);
+}
+template <class Io, Kind<UpdateMeshPositions> E>
+void extension(Io& io, E& e) {
+    io(e.normals, e.uvs);
+}
+template <class Io, Kind<ReplaceMeshTopology> E>
+void extension(Io& io, E& e) {
+    io(e.normals, e.uvs);
+}
+
+template <class Io, Kind<AddInstance> E>
+void extension(Io& io, E& e) {
+    io(e.parent);
+}
+/// update_instance's parent is "unchanged" (absent), "the root" (null) or a group: only a present
+/// parent is an extension, written as the optional group id.
+template <class Io, Kind<UpdateInstance> E>
+void extension(Io& io, E& e) {
+    if constexpr (std::is_const_v<E>) {
+        io(*e.parent);
+    } else {
+        std::optional<std::string> parent;
+        io(parent);
+        e.parent = std::move(parent);
+    }
+}
+
+template <class E>
+bool has_extension(const E&) {
+    return false;
+}
+bool has_extension(const AddMesh& e) {
+    return !e.normals.empty() || !e.uvs.empty();
+}
+bool has_extension(const UpdateMeshPositions& e) {
+    return e.normals || e.uvs;
+}
+bool has_extension(const ReplaceMeshTopology& e) {
+    return e.normals || e.uvs;
+}
+bool has_extension(const AddInstance& e) {
+    return e.parent.has_value();
+}
+bool has_extension(const UpdateInstance& e) {
+    return e.parent.has_value();
+}
 
 /// A default-constructed edit of kind `tag` (tag < variant size).
 template <std::size_t... I>
@@ -113,8 +195,14 @@ void encode_batch(const EditBatch& batch, std::string& out) {
     ByteWriter w(out);
     w(uint32_t(batch.edits.size()));
     for (const Edit& edit : batch.edits) {
-        w(uint8_t(edit.index()));
-        std::visit([&](const auto& e) { fields(w, e); }, edit);
+        std::visit(
+            [&](const auto& e) {
+                const bool extended = has_extension(e);
+                w(uint8_t(edit.index() | (extended ? EXTENDED : 0)));
+                fields(w, e);
+                if (extended) extension(w, e);
+            },
+            edit);
     }
 }
 
@@ -131,12 +219,19 @@ Result<EditBatch> decode_batch(std::string_view bytes) {
         uint8_t tag = 0;
         r(tag);
         if (!r.ok()) break;
+        const bool extended = (tag & EXTENDED) != 0;
+        tag &= uint8_t(~EXTENDED);
         if (tag >= std::variant_size_v<Edit>) {
             r.fail("unknown edit kind " + std::to_string(tag));
             break;
         }
         Edit edit = make_edit(tag, std::make_index_sequence<std::variant_size_v<Edit>>());
-        std::visit([&](auto& e) { fields(r, e); }, edit);
+        std::visit(
+            [&](auto& e) {
+                fields(r, e);
+                if (extended) extension(r, e);
+            },
+            edit);
         if (!r.ok()) {
             r.fail("");  // keeps the first message
             return failure(ErrorCode::InvalidArgument, "edit " + std::to_string(i) + " (" +

@@ -35,6 +35,7 @@ struct PickRequest {
 struct PickHit {
     std::string instance;
     std::string mesh;
+    std::vector<std::string> group_path;  ///< the groups from the root down to its parent
     uint32_t primitive = 0;  ///< triangle index in the mesh
     float distance = 0.0f;   ///< along the unit-length camera ray
     Vec3 position{0.0f};     ///< world space

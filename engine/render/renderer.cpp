@@ -34,10 +34,35 @@ static_assert(MAX_ACCUMULATED_SAMPLES <= PixelSampler::MAX_SAMPLES &&
 /// A surface a ray reached, prepared for shading.
 struct SurfaceHit {
     Vec3 position;
-    Vec3 normal;  ///< unit, facing the incoming ray
-    Vec3 origin;  ///< where rays leaving the surface start
+    Vec3 normal;    ///< shading normal: unit, facing the incoming ray
+    Vec3 geometry;  ///< geometric normal: unit, facing the incoming ray
+    Vec3 origin;    ///< where rays leaving the surface start
     uint32_t material;
+
+    /// True when direction `l` leaves on the side the ray came from. Shading normals may lean
+    /// past the true surface; light from behind it must not leak through.
+    bool above(const Vec3& l) const { return glm::dot(geometry, l) > 0.0f; }
 };
+
+/// Least cosine between a shading normal and the view direction: a shading normal that leans
+/// away from the viewer (silhouettes of coarse smooth meshes) is bent back just enough.
+constexpr float MIN_SHADING_COS = 0.01f;
+
+/// The shading normal at a hit: the interpolated vertex normal `ns` (world space, unnormalised),
+/// turned to the side of the geometric normal `ng` (unit, facing the viewer) and bent toward the
+/// viewer `v` so that the view is above it.
+Vec3 shading_normal(Vec3 ns, const Vec3& ng, const Vec3& v) {
+    const float len2 = glm::dot(ns, ns);
+    if (!(len2 > 0.0f) || !std::isfinite(len2)) return ng;
+    ns /= std::sqrt(len2);
+    if (glm::dot(ns, ng) < 0.0f) ns = -ns;
+    const float c = glm::dot(ns, v);
+    if (c < MIN_SHADING_COS) {
+        ns = glm::normalize(ns + (MIN_SHADING_COS - c) * v);
+        if (!is_finite(ns)) return ng;
+    }
+    return ns;
+}
 
 /// Everything one launch's tiles share.
 class FrameKernel {
@@ -108,7 +133,12 @@ private:
         if (glm::dot(n, dir) > 0.0f) n = -n;
         SurfaceHit s;
         s.position = org + hits.tfar[i] * dir;
+        s.geometry = n;
         s.normal = n;
+        const MeshShade* mesh = m_frame.mesh_shade(inst.mesh_slot);
+        if (mesh && !mesh->normals.empty() && hits.prim_id[i] < mesh->triangles.size())
+            s.normal = shading_normal(
+                inst.normal_matrix * mesh->normal(hits.prim_id[i], hits.u[i], hits.v[i]), n, -dir);
         s.origin = offset_origin(s.position, n, org, hits.tfar[i]);
         s.material = inst.material;
         return s;
@@ -124,6 +154,7 @@ private:
     /// Queues lane i's shadow ray when `hit` faces the sun.
     void queue_sun(SunQueue& q, uint32_t i, const SurfaceHit& hit) const {
         if (!m_sky.has_sun() || glm::dot(hit.normal, m_sky.sun_direction()) <= 0.0f) return;
+        if (!hit.above(m_sky.sun_direction())) return;
         if (!ray_origin_ok(hit.origin)) return;
         set_lane(q.rays, i, hit.origin, m_sky.sun_direction());
         q.valid[i] = -1;
@@ -202,7 +233,7 @@ private:
             queue_sun(sun, i, hit);
             const BsdfSample b =
                 Bsdf(m).sample(hit.normal, -dir, bounce_u[i][0], bounce_u[i][1], bounce_u[i][2]);
-            if (b.valid && ray_origin_ok(hit.origin)) {
+            if (b.valid && hit.above(b.dir) && ray_origin_ok(hit.origin)) {
                 set_lane(bounce, i, hit.origin, b.dir);
                 weight[i] = b.weight;
                 bounce_valid[i] = -1;

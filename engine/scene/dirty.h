@@ -16,6 +16,7 @@ enum MeshBits : uint32_t {
     MeshTopology = 1u << 2,          ///< triangles (and maybe vertex count) replaced
     MeshRefitRequested = 1u << 3,    ///< mark_dirty {mesh, refit}
     MeshRebuildRequested = 1u << 4,  ///< mark_dirty {mesh, rebuild}
+    MeshAttributes = 1u << 5,        ///< normals or uvs changed: shading only, no BLAS work
 };
 
 enum InstanceBits : uint32_t {
@@ -25,6 +26,15 @@ enum InstanceBits : uint32_t {
     InstanceMask = 1u << 3,
     InstanceMaterial = 1u << 4,  ///< shading only
     InstanceUserId = 1u << 5,    ///< shading only
+};
+
+/// A group's bits all mean the same to the flattening at the end of a batch: the world
+/// transforms and visibility of its subtree must be recomputed. They are kept apart for reports.
+enum GroupBits : uint32_t {
+    GroupAdded = 1u << 0,
+    GroupTransform = 1u << 1,
+    GroupParent = 1u << 2,
+    GroupVisibility = 1u << 3,
 };
 
 enum MaterialBits : uint32_t {
@@ -42,6 +52,7 @@ enum SceneBits : uint32_t {
     TlasUpdateRequested = 1u << 2,   ///< mark_dirty {tlas, refit}
     TlasRebuildRequested = 1u << 3,  ///< mark_dirty {tlas, rebuild}
     Materials = 1u << 4,
+    Groups = 1u << 5,  ///< a group was added, changed or removed (no acceleration work by itself)
 };
 
 }  // namespace strata::dirty
@@ -55,6 +66,9 @@ struct ChangeTracker {
     std::vector<InstanceHandle> instances;
     std::vector<MaterialHandle> materials;
     uint32_t scene_bits = 0;
+    /// World transforms (groups and instances) recomputed by the flattening of the batches since
+    /// the last commit.
+    uint64_t world_transforms = 0;
 
     bool empty() const {
         return meshes.empty() && instances.empty() && materials.empty() && scene_bits == 0;
@@ -64,6 +78,7 @@ struct ChangeTracker {
         instances.clear();
         materials.clear();
         scene_bits = 0;
+        world_transforms = 0;
     }
 };
 

@@ -19,20 +19,31 @@ struct AddMesh {
     std::vector<Triangle> triangles;
     BuildOptions build;
     std::optional<std::string> material;  ///< default material of the mesh's instances
+    std::vector<Vec3> normals = {};       ///< per-vertex shading normals; empty: none
+    std::vector<Vec2> uvs = {};           ///< per-vertex texture coordinates; empty: none
 };
 
-/// New positions for vertices [offset, offset + positions.size()); vertex count is unchanged.
+/// New vertex data for vertices [offset, offset + n): positions (empty: unchanged) and, when set,
+/// normals and uvs over their own length from the same offset. The vertex count is unchanged. A
+/// mesh without normals (uvs) takes them only whole (offset 0, one per vertex); an empty array
+/// removes them. Only positions touch the BLAS.
 struct UpdateMeshPositions {
     std::string mesh;
     uint32_t offset = 0;
     std::vector<Vec3> positions;
+    std::optional<std::vector<Vec3>> normals = std::nullopt;
+    std::optional<std::vector<Vec2>> uvs = std::nullopt;
 };
 
-/// New triangles, and optionally a whole new vertex array (which may change the vertex count).
+/// New triangles, and optionally a whole new vertex array (which may change the vertex count),
+/// with whole new normals and uvs when set (empty: removed). A vertex count change must bring
+/// new normals (uvs) for a mesh that has them.
 struct ReplaceMeshTopology {
     std::string mesh;
     std::optional<std::vector<Vec3>> positions;
     std::vector<Triangle> triangles;
+    std::optional<std::vector<Vec3>> normals = std::nullopt;
+    std::optional<std::vector<Vec2>> uvs = std::nullopt;
 };
 
 struct RemoveMesh {
@@ -60,6 +71,7 @@ struct AddInstance {
     bool visible = true;
     uint32_t mask = 0xFFFFFFFFu;
     uint32_t user_id = 0;
+    std::optional<std::string> parent;  ///< a group id; nullopt: the root
 };
 
 struct UpdateInstance {
@@ -70,6 +82,8 @@ struct UpdateInstance {
     std::optional<bool> visible;
     std::optional<uint32_t> mask;
     std::optional<uint32_t> user_id;
+    /// Set: a group id moves the instance under that group; set to nullopt: to the root.
+    std::optional<std::optional<std::string>> parent;
 };
 
 struct SetTransform {
@@ -105,12 +119,38 @@ struct SetLighting {
     std::optional<float> sky_intensity;
 };
 
-/// Removes every mesh, instance and material and resets camera and lighting.
+/// Removes every mesh, instance, material and group and resets camera and lighting.
 struct Clear {};
+
+/// A new group: a node of the scene graph whose transform and visibility apply to everything
+/// below it.
+struct AddGroup {
+    std::string id;
+    std::optional<std::string> parent;  ///< a group id; nullopt: the root
+    Affine transform;
+    bool visible = true;
+};
+
+/// Changes some of a group's fields.
+struct UpdateGroup {
+    std::string group;
+    /// Set: a group id moves this group (with its subtree) under it; set to nullopt: to the root.
+    std::optional<std::optional<std::string>> parent;
+    std::optional<Affine> transform;
+    std::optional<bool> visible;
+};
+
+/// Removes a group; refused while it has children unless `recursive`, which removes the whole
+/// subtree, instances included.
+struct RemoveGroup {
+    std::string group;
+    bool recursive = false;
+};
 
 using Edit = std::variant<AddMesh, UpdateMeshPositions, ReplaceMeshTopology, RemoveMesh,
                           AddMaterial, UpdateMaterial, AddInstance, UpdateInstance, SetTransform,
-                          RemoveInstance, MarkDirty, SetCamera, SetLighting, Clear>;
+                          RemoveInstance, MarkDirty, SetCamera, SetLighting, Clear, AddGroup,
+                          UpdateGroup, RemoveGroup>;
 
 /// Copies the fields an edit sets onto a full value; unset fields keep theirs.
 void apply_to(Camera& c, const SetCamera& e);

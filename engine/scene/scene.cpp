@@ -50,6 +50,9 @@ InstanceHandle Scene::find_instance(std::string_view id) const {
 MaterialHandle Scene::find_material(std::string_view id) const {
     return lookup<decltype(m_material_ids), MaterialHandle>(m_material_ids, id);
 }
+GroupHandle Scene::find_group(std::string_view id) const {
+    return lookup<decltype(m_group_ids), GroupHandle>(m_group_ids, id);
+}
 
 Result<const MeshRecord*> Scene::mesh(MeshHandle h) const {
     if (const MeshRecord* r = m_meshes.get(h)) return r;
@@ -62,6 +65,10 @@ Result<const InstanceRecord*> Scene::instance(InstanceHandle h) const {
 Result<const MaterialRecord*> Scene::material(MaterialHandle h) const {
     if (const MaterialRecord* r = m_materials.get(h)) return r;
     return Unexpected(stale("material"));
+}
+Result<const GroupRecord*> Scene::group(GroupHandle h) const {
+    if (const GroupRecord* r = m_groups.get(h)) return r;
+    return Unexpected(stale("group"));
 }
 
 Material Scene::resolved_material(const InstanceRecord& inst) const {
@@ -82,6 +89,8 @@ Result<uint64_t> Scene::apply(EditBatch&& batch,
     undo.changed_instances = m_changes.instances.size();
     undo.changed_materials = m_changes.materials.size();
     undo.totals = m_totals;
+    undo.world_instances = m_world_instances.size();
+    undo.world_groups = m_world_groups.size();
     // The budget applies to where the batch leaves the scene; the error names the edit after
     // which it stayed over, to point the client at what to split or shrink.
     std::size_t over_from = over_budget(m_totals, m_budget) ? 0 : Error::NO_INDEX;
@@ -112,6 +121,8 @@ Result<uint64_t> Scene::apply(EditBatch&& batch,
             return Unexpected(std::move(s).error());
         }
     }
+    // The batch stands: bring the world transforms it dirtied up to date (cannot fail).
+    flatten();
     return ++m_version;
 }
 
@@ -167,9 +178,10 @@ SceneCounts Scene::counts() const {
     c.meshes = m_meshes.size();
     c.instances = m_instances.size();
     c.materials = m_materials.size();
+    c.groups = m_groups.size();
     m_meshes.for_each([&](MeshHandle, const MeshRecord& m) { c.triangles += m.triangles.size(); });
     m_instances.for_each([&](InstanceHandle, const InstanceRecord& i) {
-        if (i.visible) c.instanced_triangles += m_meshes.at(i.mesh).triangles.size();
+        if (i.world_visible) c.instanced_triangles += m_meshes.at(i.mesh).triangles.size();
     });
     return c;
 }
@@ -178,12 +190,12 @@ Bounds3 Scene::world_bounds() const {
     std::unordered_map<uint32_t, Bounds3> mesh_bounds;
     Bounds3 world;
     m_instances.for_each([&](InstanceHandle, const InstanceRecord& i) {
-        if (!i.visible) return;
+        if (!i.world_visible) return;
         auto [it, fresh] = mesh_bounds.try_emplace(i.mesh.index);
         if (fresh) {
             for (const Vec3& p : m_meshes.at(i.mesh).positions) it->second.extend(p);
         }
-        world.extend(i.transform.transform_bounds(it->second));
+        world.extend(i.world.transform_bounds(it->second));
     });
     return world;
 }
@@ -198,10 +210,25 @@ EditBatch Scene::to_batch() const {
         e.id = m.id;
         e.positions = m.positions;
         e.triangles = m.triangles;
+        e.normals = m.normals;
+        e.uvs = m.uvs;
         e.build = m.build;
         if (const MaterialRecord* mat = m_materials.get(m.material)) e.material = mat->id;
         b.edits.emplace_back(std::move(e));
     });
+    // Groups parents first (depth-first from the root), so each names a group already added.
+    std::vector<GroupHandle> stack(m_root.groups.rbegin(), m_root.groups.rend());
+    while (!stack.empty()) {
+        const GroupRecord& g = m_groups.at(stack.back());
+        stack.pop_back();
+        AddGroup e;
+        e.id = g.id;
+        if (!g.parent.is_null()) e.parent = m_groups.at(g.parent).id;
+        e.transform = g.transform;
+        e.visible = g.visible;
+        b.edits.emplace_back(std::move(e));
+        stack.insert(stack.end(), g.children.groups.rbegin(), g.children.groups.rend());
+    }
     m_instances.for_each([&](InstanceHandle, const InstanceRecord& i) {
         AddInstance e;
         e.id = i.id;
@@ -211,6 +238,7 @@ EditBatch Scene::to_batch() const {
         e.visible = i.visible;
         e.mask = i.mask;
         e.user_id = i.user_id;
+        if (!i.parent.is_null()) e.parent = m_groups.at(i.parent).id;
         b.edits.emplace_back(std::move(e));
     });
     b.edits.emplace_back(SetCamera{m_camera.eye, m_camera.target, m_camera.up, m_camera.fov_y_deg});

@@ -22,6 +22,8 @@ struct MeshRecord {
     std::string id;
     std::vector<Vec3> positions;
     std::vector<Triangle> triangles;
+    std::vector<Vec3> normals;  ///< per-vertex shading normals (object space); empty: none
+    std::vector<Vec2> uvs;      ///< per-vertex texture coordinates; empty: none
     BuildOptions build;
     MaterialHandle material;            ///< default for its instances; null: built-in default
     std::vector<InstanceHandle> users;  ///< instances that reference this mesh
@@ -30,16 +32,49 @@ struct MeshRecord {
     uint32_t dirty_end = 0;
 };
 
+/// Deepest a group may sit: the groups on the path from the root to any group, itself included.
+/// Beyond it add_group and reparenting are refused (TooLarge).
+constexpr uint32_t MAX_GROUP_DEPTH = 64;
+
+/// The direct children of a group (or of the root), in the order they joined; removal swaps the
+/// last child into the hole, and each child keeps its position (`child_slot`).
+struct Children {
+    std::vector<GroupHandle> groups;
+    std::vector<InstanceHandle> instances;
+
+    bool empty() const { return groups.empty() && instances.empty(); }
+};
+
 struct InstanceRecord {
     std::string id;
     MeshHandle mesh;
     MaterialHandle material;  ///< null: the mesh's default
-    Affine transform;
-    bool visible = true;
+    Affine transform;         ///< relative to the parent group (world when at the root)
+    bool visible = true;      ///< its own flag; hidden too when a group above it is hidden
+    GroupHandle parent;       ///< null: the root
+    uint32_t child_slot = 0;  ///< position in the parent's `Children::instances`
+    /// Product of the ancestors' transforms and its own, and whether it and every ancestor are
+    /// visible: what the TLAS and shading use. Brought up to date at the end of each applied
+    /// batch for the subtrees that batch dirtied.
+    Affine world;
+    bool world_visible = true;
     uint32_t mask = 0xFFFFFFFFu;
     uint32_t user_id = 0;
     uint32_t user_slot = 0;  ///< position in the mesh's `users`
     uint32_t dirty = 0;      ///< dirty::InstanceBits since the last commit
+};
+
+/// A scene-graph node: its transform and visibility apply to everything below it.
+struct GroupRecord {
+    std::string id;
+    GroupHandle parent;       ///< null: the root
+    uint32_t child_slot = 0;  ///< position in the parent's `Children::groups`
+    Affine transform;         ///< relative to the parent
+    bool visible = true;
+    Affine world;  ///< as for InstanceRecord::world
+    bool world_visible = true;
+    Children children;
+    uint32_t dirty = 0;  ///< dirty::GroupBits until the batch's flattening
 };
 
 struct MaterialRecord {
@@ -53,6 +88,7 @@ struct SceneCounts {
     std::size_t meshes = 0;
     std::size_t instances = 0;
     std::size_t materials = 0;
+    std::size_t groups = 0;
     uint64_t triangles = 0;            ///< over meshes, each counted once
     uint64_t instanced_triangles = 0;  ///< over visible instances
 };
@@ -86,15 +122,22 @@ public:
     MeshHandle find_mesh(std::string_view id) const;
     InstanceHandle find_instance(std::string_view id) const;
     MaterialHandle find_material(std::string_view id) const;
+    GroupHandle find_group(std::string_view id) const;
 
     /// The record, or a StaleHandle error for a removed or never-issued handle.
     Result<const MeshRecord*> mesh(MeshHandle h) const;
     Result<const InstanceRecord*> instance(InstanceHandle h) const;
     Result<const MaterialRecord*> material(MaterialHandle h) const;
+    Result<const GroupRecord*> group(GroupHandle h) const;
 
     const SlotArray<MeshRecord, MeshTag>& meshes() const { return m_meshes; }
     const SlotArray<InstanceRecord, InstanceTag>& instances() const { return m_instances; }
     const SlotArray<MaterialRecord, MaterialTag>& materials() const { return m_materials; }
+    const SlotArray<GroupRecord, GroupTag>& groups() const { return m_groups; }
+    /// The children of group `parent`, or of the root when `parent` is null (a live handle).
+    const Children& children(GroupHandle parent) const;
+    /// Ids of the groups from the root down to `parent` (empty for the root). O(depth).
+    std::vector<std::string> group_path(GroupHandle parent) const;
     const Camera& camera() const { return m_camera; }
     const Lighting& lighting() const { return m_lighting; }
 
@@ -130,6 +173,9 @@ private:
     Status apply_edit(SetCamera&& e, UndoLog& undo);
     Status apply_edit(SetLighting&& e, UndoLog& undo);
     Status apply_edit(Clear&& e, UndoLog& undo);
+    Status apply_edit(AddGroup&& e, UndoLog& undo);
+    Status apply_edit(UpdateGroup&& e, UndoLog& undo);
+    Status apply_edit(RemoveGroup&& e, UndoLog& undo);
 
     /// Plays `undo` backwards (scene_undo.cpp).
     void roll_back(UndoLog& undo);
@@ -143,9 +189,38 @@ private:
     void remove_mesh(MeshHandle h, UndoLog& undo);
     void remove_material(MaterialHandle h, UndoLog& undo);
 
+    // Scene graph helpers (scene_graph.cpp).
+    Children& children_of(GroupHandle parent);
+    /// Resolves an optional parent id (field `field` in errors).
+    Result<GroupHandle> find_parent(const std::optional<std::string>& id, const char* field) const;
+    /// Checks that group `g` may move under `parent`: no cycle, depth within MAX_GROUP_DEPTH.
+    Status check_group_move(GroupHandle g, GroupHandle parent) const;
+    /// Moves an instance or a group to another parent's child list, recording the undo step.
+    void reparent_instance(InstanceHandle h, GroupHandle parent, UndoLog& undo);
+    void reparent_group(GroupHandle g, GroupHandle parent, UndoLog& undo);
+    void save_group(GroupHandle g, UndoLog& undo) const;
+    void mark_group(GroupHandle g, uint32_t bits);
+    void mark_instance_world(InstanceHandle h) { m_world_instances.push_back(h); }
+    void remove_group(GroupHandle g, UndoLog& undo);
+    /// Removes `g`, the groups and the instances below it (children before parents).
+    void remove_subtree(GroupHandle g, UndoLog& undo);
+    /// Recomputes the world transform and visibility of every dirty subtree and dirty instance
+    /// (Hydra's transform flattening, incremental): runs once per applied batch, costs what the
+    /// batch dirtied, and marks the instances whose world changed for the TLAS.
+    void flatten();
+    /// Recomputes one instance's world from its parent's; marks it when it changed.
+    void refresh_instance_world(InstanceHandle h, InstanceRecord& r);
+
     SlotArray<MeshRecord, MeshTag> m_meshes;
     SlotArray<InstanceRecord, InstanceTag> m_instances;
     SlotArray<MaterialRecord, MaterialTag> m_materials;
+    SlotArray<GroupRecord, GroupTag> m_groups;
+    Children m_root;
+    /// Instances and groups whose world the next flatten() must recompute (groups: those whose
+    /// `dirty` went from 0). Both only grow during a batch, so undo restores their lengths.
+    std::vector<InstanceHandle> m_world_instances;
+    std::vector<GroupHandle> m_world_groups;
+    std::unordered_map<std::string, GroupHandle> m_group_ids;
     std::unordered_map<std::string, MeshHandle> m_mesh_ids;
     std::unordered_map<std::string, InstanceHandle> m_instance_ids;
     std::unordered_map<std::string, MaterialHandle> m_material_ids;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <string>
 
+#include "engine/scene/child_list.h"
 #include "engine/scene/scene.h"
 #include "engine/scene/undo_log.h"
 
@@ -70,6 +71,86 @@ Status check_triangles(const std::vector<Triangle>& tris, std::size_t vertex_cou
     return {};
 }
 
+/// Per-vertex normals: every component finite and the vector not zero. `first_vertex` as above.
+Status check_normals(const std::vector<Vec3>& normals, uint64_t first_vertex = 0) {
+    for (std::size_t i = 0; i < normals.size(); ++i) {
+        const Vec3& n = normals[i];
+        if (!is_finite(n))
+            return failure(ErrorCode::NotFinite,
+                           "normal of vertex " + std::to_string(first_vertex + i) +
+                               " has a NaN or infinite component",
+                           "normals/" + std::to_string(i * 3));
+        // Squared length in double: tiny finite components must still give a direction.
+        const glm::dvec3 d(n);
+        const double len2 = glm::dot(d, d);
+        if (!(len2 > 1e-24))
+            return failure(ErrorCode::InvalidArgument,
+                           "normal of vertex " + std::to_string(first_vertex + i) + " is zero",
+                           "normals/" + std::to_string(i * 3));
+    }
+    return {};
+}
+
+/// Per-vertex texture coordinates: every component finite.
+Status check_uvs(const std::vector<Vec2>& uvs, uint64_t first_vertex = 0) {
+    for (std::size_t i = 0; i < uvs.size(); ++i) {
+        if (is_finite(uvs[i])) continue;
+        const int k = std::isfinite(uvs[i].x) ? 1 : 0;
+        return failure(ErrorCode::NotFinite,
+                       "uv of vertex " + std::to_string(first_vertex + i) +
+                           " has a NaN or infinite " + "uv"[k] + " coordinate",
+                       "uvs/" + std::to_string(i * 2 + k));
+    }
+    return {};
+}
+
+/// A whole attribute array (normals or uvs) for a mesh of `vertex_count` vertices: one per vertex.
+template <class T>
+Status check_attribute_count(const std::vector<T>& values, std::size_t vertex_count,
+                             const char* field) {
+    if (values.size() == vertex_count) return {};
+    return failure(ErrorCode::InvalidArgument,
+                   std::string(field) + " has " + std::to_string(values.size()) +
+                       " entries but the mesh has " + std::to_string(vertex_count) +
+                       " vertices (one per vertex)",
+                   field);
+}
+
+/// An attribute update from vertex `offset`: an empty array removes the attribute; a mesh that
+/// has none takes it only whole; otherwise the range must lie inside the mesh.
+template <class T>
+Status check_attribute_range(const std::vector<T>& values, uint32_t offset,
+                             const std::vector<T>& current, std::size_t vertex_count,
+                             const std::string& mesh, const char* field) {
+    if (values.empty()) return {};
+    if (current.empty()) {
+        if (offset == 0 && values.size() == vertex_count) return {};
+        return failure(ErrorCode::InvalidArgument,
+                       "mesh '" + mesh + "' has no " + field + " yet: give one per vertex (" +
+                           std::to_string(vertex_count) + ") from offset 0",
+                       field);
+    }
+    const uint64_t end = uint64_t(offset) + values.size();
+    if (end > vertex_count)
+        return failure(ErrorCode::OutOfRange,
+                       std::string(field) + " for vertices [" + std::to_string(offset) + ", " +
+                           std::to_string(end) + ") are outside mesh '" + mesh + "' which has " +
+                           std::to_string(vertex_count) + " vertices",
+                       field);
+    return {};
+}
+
+/// Writes `values` over `dst` from `offset` (an empty `values` clears `dst`; an empty `dst` takes
+/// `values` whole).
+template <class T>
+void patch_attribute(std::vector<T>& dst, std::vector<T>&& values, uint32_t offset) {
+    if (values.empty() || dst.empty()) {
+        dst = std::move(values);
+    } else {
+        std::copy(values.begin(), values.end(), dst.begin() + offset);
+    }
+}
+
 Status check_transform(const Affine& t, const char* field) {
     if (const char* why = transform_problem(t)) {
         const bool finite = t.is_finite();
@@ -91,6 +172,15 @@ Status Scene::apply_edit(AddMesh&& e, UndoLog& undo) {
             e.positions.empty() ? "positions" : "indices");
     if (Status s = check_vertex_array(e.positions); !s) return s;
     if (Status s = check_triangles(e.triangles, e.positions.size(), "indices"); !s) return s;
+    if (!e.normals.empty()) {
+        if (Status s = check_attribute_count(e.normals, e.positions.size(), "normals"); !s)
+            return s;
+        if (Status s = check_normals(e.normals); !s) return s;
+    }
+    if (!e.uvs.empty()) {
+        if (Status s = check_attribute_count(e.uvs, e.positions.size(), "uvs"); !s) return s;
+        if (Status s = check_uvs(e.uvs); !s) return s;
+    }
     MaterialHandle material;
     if (e.material) {
         material = find_material(*e.material);
@@ -103,6 +193,8 @@ Status Scene::apply_edit(AddMesh&& e, UndoLog& undo) {
     r.id = e.id;
     r.positions = std::move(e.positions);
     r.triangles = std::move(e.triangles);
+    r.normals = std::move(e.normals);
+    r.uvs = std::move(e.uvs);
     r.build = e.build;
     r.material = material;
     bool reused = false;
@@ -119,17 +211,51 @@ Status Scene::apply_edit(UpdateMeshPositions&& e, UndoLog& undo) {
     const MeshHandle h = find_mesh(e.mesh);
     if (h.is_null()) return unknown("mesh", e.mesh, "mesh");
     MeshRecord& r = m_meshes.at(h);
-    if (e.positions.empty())
-        return failure(ErrorCode::InvalidArgument, "no positions given", "positions");
+    if (e.positions.empty() && !e.normals && !e.uvs)
+        return failure(ErrorCode::InvalidArgument, "no positions, normals or uvs given",
+                       "positions");
     const uint64_t end = uint64_t(e.offset) + e.positions.size();
-    if (end > r.positions.size())
-        return failure(ErrorCode::OutOfRange,
-                       "vertices [" + std::to_string(e.offset) + ", " + std::to_string(end) +
-                           ") are outside mesh '" + e.mesh + "' which has " +
-                           std::to_string(r.positions.size()) + " vertices",
-                       e.offset ? "offset" : "positions");
-    if (Status s = check_positions(e.positions, "positions", e.offset); !s) return s;
+    if (!e.positions.empty()) {
+        if (end > r.positions.size())
+            return failure(ErrorCode::OutOfRange,
+                           "vertices [" + std::to_string(e.offset) + ", " + std::to_string(end) +
+                               ") are outside mesh '" + e.mesh + "' which has " +
+                               std::to_string(r.positions.size()) + " vertices",
+                           e.offset ? "offset" : "positions");
+        if (Status s = check_positions(e.positions, "positions", e.offset); !s) return s;
+    }
+    if (e.normals) {
+        if (Status s = check_attribute_range(*e.normals, e.offset, r.normals, r.positions.size(),
+                                             e.mesh, "normals");
+            !s)
+            return s;
+        if (Status s = check_normals(*e.normals, e.offset); !s) return s;
+    }
+    if (e.uvs) {
+        if (Status s =
+                check_attribute_range(*e.uvs, e.offset, r.uvs, r.positions.size(), e.mesh, "uvs");
+            !s)
+            return s;
+        if (Status s = check_uvs(*e.uvs, e.offset); !s) return s;
+    }
 
+    // Step: normals and uvs (shading only: no BLAS work).
+    if (e.normals || e.uvs) {
+        mark_mesh(h, dirty::MeshAttributes, undo);
+        undo::MeshAttributes old{h, std::nullopt, std::nullopt};
+        if (e.normals) {
+            old.normals = r.normals;
+            patch_attribute(r.normals, std::move(*e.normals), e.offset);
+        }
+        if (e.uvs) {
+            old.uvs = r.uvs;
+            patch_attribute(r.uvs, std::move(*e.uvs), e.offset);
+        }
+        undo.records.emplace_back(std::move(old));
+    }
+    if (e.positions.empty()) return {};
+
+    // Step: positions (a BLAS refit at the next commit).
     mark_mesh(h, dirty::MeshPoints, undo);
     if (e.positions.size() == r.positions.size()) {
         // Every vertex: swap the arrays, so the undo record holds the old ones without a copy.
@@ -160,7 +286,43 @@ Status Scene::apply_edit(ReplaceMeshTopology&& e, UndoLog& undo) {
         vertex_count = e.positions->size();
     }
     if (Status s = check_triangles(e.triangles, vertex_count, "indices"); !s) return s;
+    // Normals and uvs: whole arrays for the new vertex count; kept ones must still fit it.
+    const bool count_changes = vertex_count != r.positions.size();
+    if (e.normals && !e.normals->empty()) {
+        if (Status s = check_attribute_count(*e.normals, vertex_count, "normals"); !s) return s;
+        if (Status s = check_normals(*e.normals); !s) return s;
+    } else if (!e.normals && count_changes && !r.normals.empty()) {
+        return failure(ErrorCode::InvalidArgument,
+                       "mesh '" + e.mesh + "' has normals for " +
+                           std::to_string(r.positions.size()) + " vertices: a topology change to " +
+                           std::to_string(vertex_count) +
+                           " vertices needs new normals (or [] to remove them)",
+                       "normals");
+    }
+    if (e.uvs && !e.uvs->empty()) {
+        if (Status s = check_attribute_count(*e.uvs, vertex_count, "uvs"); !s) return s;
+        if (Status s = check_uvs(*e.uvs); !s) return s;
+    } else if (!e.uvs && count_changes && !r.uvs.empty()) {
+        return failure(ErrorCode::InvalidArgument,
+                       "mesh '" + e.mesh + "' has uvs for " + std::to_string(r.positions.size()) +
+                           " vertices: a topology change to " + std::to_string(vertex_count) +
+                           " vertices needs new uvs (or [] to remove them)",
+                       "uvs");
+    }
 
+    if (e.normals || e.uvs) {
+        mark_mesh(h, dirty::MeshAttributes, undo);
+        undo::MeshAttributes old{h, std::nullopt, std::nullopt};
+        if (e.normals) {
+            old.normals = std::move(r.normals);
+            r.normals = std::move(*e.normals);
+        }
+        if (e.uvs) {
+            old.uvs = std::move(r.uvs);
+            r.uvs = std::move(*e.uvs);
+        }
+        undo.records.emplace_back(std::move(old));
+    }
     mark_mesh(h, dirty::MeshTopology, undo);
     m_totals.vertices = m_totals.vertices - r.positions.size() + vertex_count;
     m_totals.triangles = m_totals.triangles - r.triangles.size() + e.triangles.size();
@@ -247,6 +409,8 @@ Status Scene::apply_edit(AddInstance&& e, UndoLog& undo) {
         if (material.is_null()) return unknown("material", *e.material, "material");
     }
     if (Status s = check_transform(e.transform, "transform"); !s) return s;
+    auto parent = find_parent(e.parent, "parent");
+    if (!parent) return Unexpected(parent.error());
 
     MeshRecord& mesh = m_meshes.at(mesh_handle);
     InstanceRecord r;
@@ -258,10 +422,15 @@ Status Scene::apply_edit(AddInstance&& e, UndoLog& undo) {
     r.mask = e.mask;
     r.user_id = e.user_id;
     r.user_slot = static_cast<uint32_t>(mesh.users.size());
+    r.parent = parent.value();
+    std::vector<InstanceHandle>& siblings = children_of(r.parent).instances;
+    r.child_slot = static_cast<uint32_t>(siblings.size());
     bool reused = false;
     const InstanceHandle h = m_instances.insert(std::move(r), &reused);
     undo.records.emplace_back(undo::Inserted<InstanceHandle>{h, reused});
     mesh.users.push_back(h);
+    siblings.push_back(h);
+    mark_instance_world(h);
     m_instance_ids.emplace(std::move(e.id), h);
     mark_instance(h, dirty::InstanceAdded);
     return {};
@@ -278,8 +447,15 @@ Status Scene::apply_edit(UpdateInstance&& e, UndoLog& undo) {
     if (e.transform) {
         if (Status s = check_transform(*e.transform, "transform"); !s) return s;
     }
+    GroupHandle parent;
+    if (e.parent) {
+        auto found = find_parent(*e.parent, "parent");
+        if (!found) return Unexpected(found.error());
+        parent = found.value();
+    }
 
     save_instance(h, undo);
+    if (e.parent && !(parent == m_instances.at(h).parent)) reparent_instance(h, parent, undo);
     InstanceRecord& r = m_instances.at(h);
     uint32_t bits = 0;
     if (e.material) {
@@ -303,6 +479,7 @@ Status Scene::apply_edit(UpdateInstance&& e, UndoLog& undo) {
         bits |= dirty::InstanceUserId;
     }
     if (bits) mark_instance(h, bits);
+    if (e.transform || e.visible) mark_instance_world(h);
     return {};
 }
 
@@ -314,6 +491,7 @@ Status Scene::apply_edit(SetTransform&& e, UndoLog& undo) {
     save_instance(h, undo);
     m_instances.at(h).transform = e.transform;
     mark_instance(h, dirty::InstanceTransform);
+    mark_instance_world(h);
     return {};
 }
 
@@ -332,6 +510,7 @@ void Scene::remove_instance(InstanceHandle h, UndoLog& undo) {
     mesh.users[r.user_slot] = last;
     m_instances.at(last).user_slot = r.user_slot;
     mesh.users.pop_back();
+    detach_child(children_of(r.parent).instances, m_instances, r.child_slot);
     // Listed by its now stale handle, so the commit takes it out of the TLAS.
     if (r.dirty == 0) m_changes.instances.push_back(h);
     m_instance_ids.erase(r.id);
@@ -380,6 +559,7 @@ Status Scene::apply_edit(Clear&&, UndoLog& undo) {
     instances.reserve(m_instances.size());
     m_instances.for_each([&](InstanceHandle h, const InstanceRecord&) { instances.push_back(h); });
     for (InstanceHandle h : instances) remove_instance(h, undo);
+    while (!m_root.groups.empty()) remove_subtree(m_root.groups.back(), undo);
     std::vector<MeshHandle> meshes;
     m_meshes.for_each([&](MeshHandle h, const MeshRecord&) { meshes.push_back(h); });
     for (MeshHandle h : meshes) remove_mesh(h, undo);

@@ -2,6 +2,7 @@
 // change of scene_rules.cpp exactly, in reverse order, so slot arrays hand back the same slots
 // and generations and every record, id, dirty bit and change list is as before the batch.
 
+#include "engine/scene/child_list.h"
 #include "engine/scene/scene.h"
 #include "engine/scene/undo_log.h"
 
@@ -18,6 +19,13 @@ struct Reverser {
     std::unordered_map<std::string, MeshHandle>& mesh_ids;
     std::unordered_map<std::string, InstanceHandle>& instance_ids;
     std::unordered_map<std::string, MaterialHandle>& material_ids;
+    SlotArray<GroupRecord, GroupTag>& groups;
+    std::unordered_map<std::string, GroupHandle>& group_ids;
+    Children& root;
+
+    Children& children_of(GroupHandle parent) {
+        return parent.is_null() ? root : groups.at(parent).children;
+    }
 
     void operator()(undo::Inserted<MeshHandle>& r) {
         mesh_ids.erase(meshes.at(r.handle).id);
@@ -29,6 +37,9 @@ struct Reverser {
         MeshRecord& mesh = meshes.at(inst.mesh);
         STRATA_CHECK(!mesh.users.empty() && mesh.users.back() == r.handle);
         mesh.users.pop_back();
+        std::vector<InstanceHandle>& siblings = children_of(inst.parent).instances;
+        STRATA_CHECK(!siblings.empty() && siblings.back() == r.handle);
+        siblings.pop_back();
         instance_ids.erase(inst.id);
         instances.undo_insert(r.handle, r.reused_slot);
     }
@@ -55,8 +66,55 @@ struct Reverser {
             mesh.users.push_back(moved);
             mesh.users[slot] = r.handle;
         }
+        undo_detach_child(children_of(r.record.parent).instances, instances, r.handle,
+                          r.record.child_slot);
         instance_ids.emplace(r.record.id, r.handle);
         instances.undo_erase(r.handle, std::move(r.record));
+    }
+
+    void operator()(undo::Inserted<GroupHandle>& r) {
+        const GroupRecord& g = groups.at(r.handle);
+        std::vector<GroupHandle>& siblings = children_of(g.parent).groups;
+        STRATA_CHECK(!siblings.empty() && siblings.back() == r.handle);
+        siblings.pop_back();
+        group_ids.erase(g.id);
+        groups.undo_insert(r.handle, r.reused_slot);
+    }
+
+    void operator()(undo::Removed<GroupHandle, GroupRecord>& r) {
+        undo_detach_child(children_of(r.record.parent).groups, groups, r.handle,
+                          r.record.child_slot);
+        group_ids.emplace(r.record.id, r.handle);
+        groups.undo_erase(r.handle, std::move(r.record));
+    }
+
+    void operator()(undo::GroupState& r) {
+        GroupRecord& g = groups.at(r.handle);
+        g.transform = r.transform;
+        g.visible = r.visible;
+        g.dirty = r.dirty;
+    }
+
+    template <class H>
+    void operator()(undo::Reparented<H>& r) {
+        auto& records = [&]() -> auto& {
+            if constexpr (std::is_same_v<H, InstanceHandle>) return instances;
+            else return groups;
+        }();
+        auto& rec = records.at(r.handle);
+        auto& now = [&]() -> std::vector<H>& {
+            if constexpr (std::is_same_v<H, InstanceHandle>) return children_of(rec.parent).instances;
+            else return children_of(rec.parent).groups;
+        }();
+        STRATA_CHECK(!now.empty() && now.back() == r.handle);
+        now.pop_back();
+        auto& old = [&]() -> std::vector<H>& {
+            if constexpr (std::is_same_v<H, InstanceHandle>) return children_of(r.old_parent).instances;
+            else return children_of(r.old_parent).groups;
+        }();
+        undo_detach_child(old, records, r.handle, r.old_slot);
+        rec.parent = r.old_parent;
+        rec.child_slot = r.old_slot;
     }
 
     void operator()(undo::Removed<MaterialHandle, MaterialRecord>& r) {
@@ -86,6 +144,12 @@ struct Reverser {
         mesh.triangles = std::move(r.triangles);
     }
 
+    void operator()(undo::MeshAttributes& r) {
+        MeshRecord& mesh = meshes.at(r.handle);
+        if (r.normals) mesh.normals = std::move(*r.normals);
+        if (r.uvs) mesh.uvs = std::move(*r.uvs);
+    }
+
     void operator()(undo::InstanceState& r) {
         InstanceRecord& inst = instances.at(r.handle);
         inst.material = r.material;
@@ -106,8 +170,8 @@ struct Reverser {
 }  // namespace
 
 void Scene::roll_back(UndoLog& undo) {
-    Reverser reverse{m_meshes,   m_instances,    m_materials,
-                     m_mesh_ids, m_instance_ids, m_material_ids};
+    Reverser reverse{m_meshes,       m_instances, m_materials, m_mesh_ids, m_instance_ids,
+                     m_material_ids, m_groups,    m_group_ids, m_root};
     for (auto it = undo.records.rbegin(); it != undo.records.rend(); ++it) std::visit(reverse, *it);
     m_camera = undo.camera;
     m_lighting = undo.lighting;
@@ -116,6 +180,8 @@ void Scene::roll_back(UndoLog& undo) {
     m_changes.meshes.resize(undo.changed_meshes);
     m_changes.instances.resize(undo.changed_instances);
     m_changes.materials.resize(undo.changed_materials);
+    m_world_instances.resize(undo.world_instances);
+    m_world_groups.resize(undo.world_groups);
 }
 
 }  // namespace strata

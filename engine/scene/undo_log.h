@@ -53,6 +53,13 @@ struct MeshTopology {
     std::vector<Triangle> triangles;
 };
 
+/// The normals and uvs an edit replaced (each only when that edit touched it).
+struct MeshAttributes {
+    MeshHandle handle;
+    std::optional<std::vector<Vec3>> normals;
+    std::optional<std::vector<Vec2>> uvs;
+};
+
 /// An instance's editable state before an edit changed it.
 struct InstanceState {
     InstanceHandle handle;
@@ -62,6 +69,23 @@ struct InstanceState {
     uint32_t mask = 0;
     uint32_t user_id = 0;
     uint32_t dirty = 0;
+};
+
+/// A group's editable state before an edit changed it.
+struct GroupState {
+    GroupHandle handle;
+    Affine transform;
+    bool visible = true;
+    uint32_t dirty = 0;
+};
+
+/// An instance or group moved from `old_parent`, where it was child number `old_slot`, to the
+/// end of another parent's child list.
+template <class H>
+struct Reparented {
+    H handle;
+    GroupHandle old_parent;
+    uint32_t old_slot = 0;
 };
 
 /// A material's values before an edit changed them.
@@ -78,7 +102,10 @@ using UndoRecord =
                  undo::Inserted<MaterialHandle>, undo::Removed<MeshHandle, MeshRecord>,
                  undo::Removed<InstanceHandle, InstanceRecord>,
                  undo::Removed<MaterialHandle, MaterialRecord>, undo::MeshDirty,
-                 undo::MeshPositions, undo::MeshTopology, undo::InstanceState, undo::MaterialState>;
+                 undo::MeshPositions, undo::MeshTopology, undo::MeshAttributes,
+                 undo::InstanceState, undo::MaterialState, undo::Inserted<GroupHandle>,
+                 undo::Removed<GroupHandle, GroupRecord>, undo::GroupState,
+                 undo::Reparented<InstanceHandle>, undo::Reparented<GroupHandle>>;
 
 /// Everything needed to take one batch back.
 struct UndoLog {
@@ -92,6 +119,8 @@ struct UndoLog {
     std::size_t changed_meshes = 0;
     std::size_t changed_instances = 0;
     std::size_t changed_materials = 0;
+    std::size_t world_instances = 0;
+    std::size_t world_groups = 0;
 };
 
 }  // namespace strata

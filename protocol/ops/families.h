@@ -14,6 +14,12 @@ std::span<const EditOp> mesh_ops();
 std::span<const EditOp> material_ops();
 /// add_instance, update_instance, set_transform, remove_instance (instance_ops.cpp).
 std::span<const EditOp> instance_ops();
+/// add_group, update_group, remove_group (group_ops.cpp).
+std::span<const EditOp> group_ops();
+
+/// Reads an optional `parent` member: absent leaves `out` unset; null sets it to the root
+/// (nullopt inside); a string sets the group id (group_ops.cpp).
+void read_parent(OpFields& f, std::optional<std::optional<std::string>>& out);
 /// mark_dirty, set_camera, set_lighting, clear (scene_ops.cpp).
 std::span<const EditOp> scene_ops();
 

@@ -22,6 +22,9 @@ Edit parse_add_instance(OpFields& f) {
     e.mesh = f.id("mesh");
     f.read("material", e.material);
     read_instance_values(f, e);
+    std::optional<std::optional<std::string>> parent;
+    read_parent(f, parent);
+    if (parent) e.parent = *parent;
     return e;
 }
 
@@ -34,10 +37,22 @@ Edit parse_update_instance(OpFields& f) {
             m->is_null() ? std::optional<std::string>() : f.reader().id(*m, f.pointer("material"));
     }
     read_instance_values(f, e);
+    read_parent(f, e.parent);
     return e;
 }
 
+/// `group` in place of `instance` moves a group: the engine's update_group with a transform.
 Edit parse_set_transform(OpFields& f) {
+    if (f.get("group")) {
+        if (f.get("instance"))
+            f.reader().schema_error(f.pointer("group"), "give instance or group, not both");
+        UpdateGroup g;
+        g.group = f.id("group");
+        Affine t;
+        f.read("transform", t);
+        g.transform = t;
+        return g;
+    }
     SetTransform e;
     e.instance = f.id("instance");
     f.read("transform", e.transform);
@@ -50,7 +65,8 @@ Edit parse_remove_instance(OpFields& f) {
 
 constexpr EditOp OPS[] = {
     {"add_instance",
-     "A new instance of a mesh: transform, material, visibility, ray mask and user id.",
+     "A new instance of a mesh: transform, material, visibility, ray mask, user id and parent "
+     "group.",
      R"json({
   "type": "object",
   "properties": {
@@ -60,14 +76,16 @@ constexpr EditOp OPS[] = {
     "transform": {"$ref": "#/$defs/transform"},
     "visible": {"type": "boolean"},
     "mask": {"$ref": "#/$defs/u32"},
-    "user_id": {"$ref": "#/$defs/u32"}
+    "user_id": {"$ref": "#/$defs/u32"},
+    "parent": {"oneOf": [{"$ref": "#/$defs/id"}, {"type": "null"}]}
   },
   "required": ["id", "mesh"],
   "additionalProperties": false
 })json",
      parse_add_instance, edit_kinds<AddInstance>()},
     {"update_instance",
-     "Changes some of an instance's fields; material null reverts to the mesh's default.",
+     "Changes some of an instance's fields; material null reverts to the mesh's default, parent "
+     "null moves it to the root.",
      R"json({
   "type": "object",
   "properties": {
@@ -76,23 +94,26 @@ constexpr EditOp OPS[] = {
     "transform": {"$ref": "#/$defs/transform"},
     "visible": {"type": "boolean"},
     "mask": {"$ref": "#/$defs/u32"},
-    "user_id": {"$ref": "#/$defs/u32"}
+    "user_id": {"$ref": "#/$defs/u32"},
+    "parent": {"oneOf": [{"$ref": "#/$defs/id"}, {"type": "null"}]}
   },
   "required": ["instance"],
   "additionalProperties": false
 })json",
      parse_update_instance, edit_kinds<UpdateInstance>()},
-    {"set_transform", "Replaces an instance's transform.",
+    {"set_transform", "Replaces the transform of an instance, or of a group (`group` in place of `instance`).",
      R"json({
   "type": "object",
   "properties": {
     "instance": {"$ref": "#/$defs/id"},
+    "group": {"$ref": "#/$defs/id"},
     "transform": {"$ref": "#/$defs/transform"}
   },
-  "required": ["instance", "transform"],
+  "required": ["transform"],
+  "oneOf": [{"required": ["instance"]}, {"required": ["group"]}],
   "additionalProperties": false
 })json",
-     parse_set_transform, edit_kinds<SetTransform>()},
+     parse_set_transform, edit_kinds<SetTransform, UpdateGroup>()},
     {"remove_instance", "Removes an instance.",
      R"json({
   "type": "object",

@@ -38,6 +38,16 @@ std::optional<std::vector<Triangle>> read_indices(OpFields& f) {
                       &EditSource::indices_b64);
 }
 
+std::optional<std::vector<Vec3>> read_normals(OpFields& f) {
+    return read_array(f, "normals", "normals_b64", &FieldReader::normals, &FieldReader::normals_b64,
+                      &EditSource::normals_b64);
+}
+
+std::optional<std::vector<Vec2>> read_uvs(OpFields& f) {
+    return read_array(f, "uvs", "uvs_b64", &FieldReader::uvs, &FieldReader::uvs_b64,
+                      &EditSource::uvs_b64);
+}
+
 /// `[n, n]` of integers in [1, hi].
 std::pair<uint32_t, uint32_t> read_pair(FieldReader& r, const Json& v, const std::string& ptr,
                                         uint32_t hi) {
@@ -133,6 +143,8 @@ Edit parse_add_mesh(OpFields& f) {
         e.positions = std::move(*positions);
         e.triangles = std::move(*indices);
     }
+    if (auto normals = read_normals(f)) e.normals = std::move(*normals);
+    if (auto uvs = read_uvs(f)) e.uvs = std::move(*uvs);
     if (const Json* b = f.get("build")) e.build = read_build(r, *b, f.pointer("build"));
     f.read("material", e.material);
     return e;
@@ -143,6 +155,8 @@ Edit parse_update_mesh(OpFields& f) {
     std::string mesh = f.id("mesh");
     auto positions = read_positions(f);
     auto indices = read_indices(f);
+    auto normals = read_normals(f);
+    auto uvs = read_uvs(f);
     if (indices) {
         // A topology change: new triangles and optionally a whole new vertex array.
         if (f.get("offset"))
@@ -152,14 +166,18 @@ Edit parse_update_mesh(OpFields& f) {
         e.mesh = std::move(mesh);
         e.positions = std::move(positions);
         e.triangles = std::move(*indices);
+        e.normals = std::move(normals);
+        e.uvs = std::move(uvs);
         return e;
     }
-    if (!positions)
+    if (!positions && !normals && !uvs)
         r.schema_error(f.pointer("positions"),
-                       "update_mesh needs positions or positions_b64 (or indices)");
+                       "update_mesh needs positions, normals or uvs (or indices)");
     UpdateMeshPositions e;
     e.mesh = std::move(mesh);
-    e.positions = std::move(*positions);
+    if (positions) e.positions = std::move(*positions);
+    e.normals = std::move(normals);
+    e.uvs = std::move(uvs);
     f.read("offset", e.offset);
     return e;
 }
@@ -169,7 +187,9 @@ Edit parse_remove_mesh(OpFields& f) {
 }
 
 constexpr EditOp OPS[] = {
-    {"add_mesh", "A new mesh from flat arrays, base64 arrays or a procedural shape.",
+    {"add_mesh",
+     "A new mesh from flat arrays, base64 arrays or a procedural shape; optionally with "
+     "per-vertex normals and uvs.",
      R"json({
   "type": "object",
   "properties": {
@@ -178,12 +198,17 @@ constexpr EditOp OPS[] = {
     "positions_b64": {"$ref": "#/$defs/base64"},
     "indices": {"$ref": "#/$defs/indices"},
     "indices_b64": {"$ref": "#/$defs/base64"},
+    "normals": {"$ref": "#/$defs/normals"},
+    "normals_b64": {"$ref": "#/$defs/base64"},
+    "uvs": {"$ref": "#/$defs/uvs"},
+    "uvs_b64": {"$ref": "#/$defs/base64"},
     "shape": {"$ref": "#/$defs/shape"},
     "build": {"$ref": "#/$defs/build"},
     "material": {"$ref": "#/$defs/id"}
   },
   "required": ["id"],
   "additionalProperties": false,
+  "not": {"anyOf": [{"required": ["normals", "normals_b64"]}, {"required": ["uvs", "uvs_b64"]}]},
   "oneOf": [
     {
       "required": ["shape"],
@@ -201,7 +226,8 @@ constexpr EditOp OPS[] = {
 })json",
      parse_add_mesh, edit_kinds<AddMesh>()},
     {"update_mesh",
-     "New positions for a vertex range (offset in vertices), or with indices a topology change.",
+     "New positions, normals or uvs for a vertex range (offset in vertices), or with indices a "
+     "topology change.",
      R"json({
   "type": "object",
   "properties": {
@@ -210,6 +236,10 @@ constexpr EditOp OPS[] = {
     "positions_b64": {"$ref": "#/$defs/base64"},
     "indices": {"$ref": "#/$defs/indices"},
     "indices_b64": {"$ref": "#/$defs/base64"},
+    "normals": {"$ref": "#/$defs/normals"},
+    "normals_b64": {"$ref": "#/$defs/base64"},
+    "uvs": {"$ref": "#/$defs/uvs"},
+    "uvs_b64": {"$ref": "#/$defs/base64"},
     "offset": {"$ref": "#/$defs/u32"}
   },
   "required": ["mesh"],
@@ -218,12 +248,16 @@ constexpr EditOp OPS[] = {
     "anyOf": [
       {"required": ["positions", "positions_b64"]},
       {"required": ["indices", "indices_b64"]},
+      {"required": ["normals", "normals_b64"]},
+      {"required": ["uvs", "uvs_b64"]},
       {"required": ["indices", "offset"]},
       {"required": ["indices_b64", "offset"]}
     ]
   },
   "anyOf": [{"required": ["positions"]}, {"required": ["positions_b64"]},
-            {"required": ["indices"]}, {"required": ["indices_b64"]}]
+            {"required": ["indices"]}, {"required": ["indices_b64"]},
+            {"required": ["normals"]}, {"required": ["normals_b64"]},
+            {"required": ["uvs"]}, {"required": ["uvs_b64"]}]
 })json",
      parse_update_mesh, edit_kinds<UpdateMeshPositions, ReplaceMeshTopology>()},
     {"remove_mesh", "Removes a mesh that no instance uses.",

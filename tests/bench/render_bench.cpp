@@ -393,6 +393,34 @@ void BM_EngineRender(benchmark::State& state) {
         double(WIDTH) * HEIGHT * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
 }
 
+/// BM_EngineRender on mesh_1m with the sphere's own vertex normals: what interpolated shading
+/// normals cost a full frame (compare with BM_EngineRender/0).
+void BM_EngineRenderSmooth(benchmark::State& state) {
+    static const std::unique_ptr<Engine> engine = [] {
+        const SceneDesc d = mesh_1m();
+        auto e = make_engine(d);
+        UpdateMeshPositions normals;
+        normals.mesh = "m0";
+        normals.normals.emplace();
+        for (const Vec3& p : d.meshes[0].positions) normals.normals->push_back(glm::normalize(p));
+        EditBatch b;
+        b.edits.emplace_back(std::move(normals));
+        (void)e->apply(std::move(b)).value();
+        return e;
+    }();
+    state.SetLabel("mesh_1m_smooth");
+    RenderRequest r;
+    r.width = WIDTH;
+    r.height = HEIGHT;
+    double rays = 0.0;
+    for (auto _ : state) {
+        auto frame = engine->render_frame(r);
+        rays = double(frame.value().info.rays);
+        benchmark::DoNotOptimize(frame.value().buffers.color.data());
+    }
+    report(state, rays);
+}
+
 BENCHMARK(BM_EnginePrimary)
     ->Arg(0)
     ->Arg(1)
@@ -432,6 +460,10 @@ BENCHMARK(BM_EngineTlas16)
 BENCHMARK(BM_EngineRender)
     ->Arg(0)
     ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->ComputeStatistics("min", min_of);
+BENCHMARK(BM_EngineRenderSmooth)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->ComputeStatistics("min", min_of);

@@ -69,6 +69,8 @@ TEST_F(Transports, EveryEndpointAnswersTheSameInProcessAsOverHttp) {
         {"op": "add_mesh", "id": "ball", "shape": {"type": "sphere", "segments": 12}},
         {"op": "add_material", "id": "red", "base_color": [0.9, 0.1, 0.1]},
         {"op": "add_instance", "id": "b0", "mesh": "ball", "material": "red"},
+        {"op": "add_group", "id": "g", "transform": {"translate": [2, 0, 0]}},
+        {"op": "add_instance", "id": "b1", "mesh": "ball", "parent": "g"},
         {"op": "set_camera", "eye": [0, 1, 5], "target": [0, 0, 0]}]})";
     same("edits", [&](Transport& t) { return t.edits(scene, std::nullopt); });
     same("plan", [](Transport& t) { return t.plan(); });
@@ -107,7 +109,9 @@ TEST_F(Transports, EveryEndpointAnswersTheSameInProcessAsOverHttp) {
          [](Transport& t) { return t.scene_list("instances", {{"mesh", "ball"}}); });
     same("list bad cursor",
          [](Transport& t) { return t.scene_list("meshes", {{"cursor", "instances-0"}}); });
-    same("list unknown collection", [](Transport& t) { return t.scene_list("groups", {}); });
+    same("list unknown collection", [](Transport& t) { return t.scene_list("widgets", {}); });
+    same("list groups", [](Transport& t) { return t.scene_list("groups", {{"parent", ""}}); });
+    same("tree", [](Transport& t) { return t.scene_list("tree", {{"depth", "3"}}); });
     same("object with a slash", [](Transport& t) { return t.scene_object("instances", "a/b"); });
     same("object", [](Transport& t) { return t.scene_object("materials", "red"); });
     same("pick", [](Transport& t) {

@@ -240,5 +240,222 @@ TEST(Differential, ThousandsOfInstancesMatchAFreshBuildThroughTheSynchronousFall
     EXPECT_EQ(coverage.after_swap, 0);
 }
 
+// Groups: random trees, moves, reparenting (cycles included, which must be refused without a
+// trace), hides and shows at every level, against a flat scene built from scratch with the world
+// transforms and visibility the test computes itself by walking each instance's ancestors.
+
+class RandomGroups {
+public:
+    explicit RandomGroups(uint64_t seed) : m_rng(seed) {}
+
+    EditBatch initial() {
+        EditBatch b;
+        b.edits.emplace_back(test::mesh_edit("box", make_box(Vec3(0.8f))));
+        b.edits.emplace_back(test::mesh_edit("ball", make_sphere(0.5f, 12)));
+        b.edits.emplace_back(SetCamera{Vec3(0, 3, 16), Vec3(0), Vec3(0, 1, 0), 60.0f});
+        for (int i = 0; i < 6; ++i) b.edits.emplace_back(add_group());
+        for (int i = 0; i < 24; ++i) b.edits.emplace_back(add_instance());
+        return b;
+    }
+
+    EditBatch next() {
+        EditBatch b;
+        const int n = integer(1, 4);
+        for (int i = 0; i < n; ++i) {
+            b.edits.push_back(edit());
+            // The model learns what a recursive removal took only after the batch.
+            if (std::holds_alternative<RemoveGroup>(b.edits.back())) break;
+        }
+        return b;
+    }
+
+    /// Resets the model's ids: after a refused batch, or a recursive removal.
+    void reset_to(const std::vector<std::string>& groups, const std::vector<std::string>& instances) {
+        m_groups = groups;
+        m_instances = instances;
+    }
+    const std::vector<std::string>& groups() const { return m_groups; }
+    const std::vector<std::string>& instances() const { return m_instances; }
+
+private:
+    Edit edit() {
+        const int k = integer(0, 99);
+        if (k < 20 && !m_groups.empty())
+            return UpdateGroup{pick(m_groups), std::nullopt, transform(), std::nullopt};
+        if (k < 35 && !m_groups.empty())
+            return UpdateGroup{pick(m_groups), parent(), std::nullopt, std::nullopt};
+        if (k < 50 && !m_groups.empty())
+            return UpdateGroup{pick(m_groups), std::nullopt, std::nullopt, chance(0.5)};
+        if (k < 60 && !m_instances.empty()) {
+            UpdateInstance u;
+            u.instance = pick(m_instances);
+            u.parent = parent();
+            return u;
+        }
+        if (k < 70 && !m_instances.empty()) return SetTransform{pick(m_instances), transform()};
+        if (k < 76 && !m_instances.empty()) {
+            UpdateInstance u;
+            u.instance = pick(m_instances);
+            u.visible = chance(0.7);
+            return u;
+        }
+        if (k < 84) return add_group();
+        if (k < 94) return add_instance();
+        if (k < 97 && !m_instances.empty()) {
+            const std::size_t i = std::size_t(integer(0, int(m_instances.size()) - 1));
+            RemoveInstance r{m_instances[i]};
+            m_instances.erase(m_instances.begin() + std::ptrdiff_t(i));
+            return r;
+        }
+        if (!m_groups.empty()) {
+            // Recursive removal: the model learns what went from the engine afterwards.
+            return RemoveGroup{pick(m_groups), true};
+        }
+        return add_group();
+    }
+
+    AddGroup add_group() {
+        AddGroup g;
+        g.id = "g" + std::to_string(m_counter++);
+        if (!m_groups.empty() && chance(0.7)) g.parent = pick(m_groups);
+        g.transform = transform();
+        g.visible = chance(0.9);
+        m_groups.push_back(g.id);
+        return g;
+    }
+
+    AddInstance add_instance() {
+        AddInstance e;
+        e.id = "i" + std::to_string(m_counter++);
+        e.mesh = chance(0.5) ? "box" : "ball";
+        e.transform = transform();
+        e.visible = chance(0.9);
+        if (!m_groups.empty() && chance(0.8)) e.parent = pick(m_groups);
+        m_instances.push_back(e.id);
+        return e;
+    }
+
+    std::optional<std::string> parent() {
+        if (m_groups.empty() || chance(0.2)) return std::nullopt;
+        return pick(m_groups);
+    }
+
+    Affine transform() {
+        const Vec3 t(uniform(-2.5f, 2.5f), uniform(-1.5f, 1.5f), uniform(-2.5f, 2.5f));
+        const Vec3 r(uniform(-30, 30), uniform(-180, 180), uniform(-30, 30));
+        return Affine::trs(t, Affine::rotation_euler_deg(r), Vec3(uniform(0.7f, 1.2f)));
+    }
+
+    std::string pick(const std::vector<std::string>& v) {
+        return v[std::size_t(integer(0, int(v.size()) - 1))];
+    }
+    float uniform(float lo, float hi) { return std::uniform_real_distribution<float>(lo, hi)(m_rng); }
+    int integer(int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(m_rng); }
+    bool chance(double p) { return std::bernoulli_distribution(p)(m_rng); }
+
+    std::mt19937_64 m_rng;
+    std::vector<std::string> m_groups;
+    std::vector<std::string> m_instances;
+    int m_counter = 0;
+};
+
+/// The flat scene: the meshes and camera of `s`, and each instance at the root with the world
+/// transform and visibility computed here from its ancestors' local values.
+EditBatch flattened_by_walking(const Scene& s, std::size_t& visible) {
+    EditBatch b;
+    for (Edit& e : s.to_batch().edits) {
+        if (std::holds_alternative<AddMesh>(e) || std::holds_alternative<SetCamera>(e))
+            b.edits.push_back(std::move(e));
+    }
+    visible = 0;
+    s.instances().for_each([&](InstanceHandle, const InstanceRecord& i) {
+        std::vector<const GroupRecord*> path;
+        for (GroupHandle g = i.parent; !g.is_null(); g = s.group(g).value()->parent)
+            path.push_back(s.group(g).value());
+        Affine world;
+        bool shown = i.visible;
+        bool first = true;
+        for (auto it = path.rbegin(); it != path.rend(); ++it) {
+            world = first ? (*it)->transform : world * (*it)->transform;
+            first = false;
+            shown = shown && (*it)->visible;
+        }
+        world = first ? i.transform : world * i.transform;
+        AddInstance e;
+        e.id = i.id;
+        e.mesh = s.mesh(i.mesh).value()->id;
+        e.transform = world;
+        e.visible = shown;
+        visible += shown;
+        b.edits.emplace_back(std::move(e));
+    });
+    return b;
+}
+
+TEST(Differential, GroupsMatchAFlatSceneBuiltFromTheWorldTransforms) {
+    int launches = 0, refused = 0, hit_pixels = 0, recursive_removals = 0;
+    std::size_t hidden_by_groups = 0;
+    for (int seq = 0; seq < 40; ++seq) {
+        RandomGroups edits(0x6A0F0000u + uint64_t(seq));
+        EngineConfig config;
+        config.accel.tlas = seq % 2 ? TlasKind::Embree : TlasKind::Incremental;
+        auto engine = std::move(Engine::create(config).value());
+        ASSERT_TRUE(engine->apply(edits.initial()).has_value());
+        for (int batch = 0; batch < 16; ++batch) {
+            const auto groups_before = edits.groups();
+            const auto instances_before = edits.instances();
+            auto applied = engine->apply(edits.next());
+            if (!applied) {
+                // Only a cycle or the depth limit may refuse these batches.
+                ASSERT_TRUE(applied.error().code == ErrorCode::Cycle ||
+                            applied.error().code == ErrorCode::InvalidArgument)
+                    << applied.error().describe();
+                edits.reset_to(groups_before, instances_before);
+                ++refused;
+            }
+            // What a recursive removal took with it.
+            const auto [groups_now, instances_now] = engine->read([&](const Scene& s) {
+                std::vector<std::string> g, i;
+                for (const auto& id : edits.groups())
+                    if (!s.find_group(id).is_null()) g.push_back(id);
+                for (const auto& id : edits.instances())
+                    if (!s.find_instance(id).is_null()) i.push_back(id);
+                return std::pair(g, i);
+            });
+            recursive_removals += groups_now.size() < edits.groups().size();
+            edits.reset_to(groups_now, instances_now);
+            if (batch % 3 == 1) continue;  // let some batches pile up
+
+            const HitFrame incremental = render(*engine, 0xFFFFFFFFu);
+            std::size_t visible = 0;
+            const EditBatch flat =
+                engine->read([&](const Scene& s) { return flattened_by_walking(s, visible); });
+            hidden_by_groups += engine->read([](const Scene& s) {
+                std::size_t n = 0;
+                s.instances().for_each([&](InstanceHandle, const InstanceRecord& i) {
+                    n += i.visible && !i.world_visible;
+                });
+                return n;
+            });
+            auto scratch_engine = test::make_engine();
+            ASSERT_TRUE(scratch_engine->apply(EditBatch(flat)).has_value());
+            const HitFrame scratch = render(*scratch_engine, 0xFFFFFFFFu);
+            const std::string diff = compare(incremental, scratch);
+            ASSERT_TRUE(diff.empty()) << "sequence " << seq << " batch " << batch << " differs:\n"
+                                      << diff;
+            ++launches;
+            for (const auto& id : incremental.instance_ids) hit_pixels += !id.empty();
+        }
+    }
+    const double coverage = double(hit_pixels) / (double(launches) * WIDTH * HEIGHT);
+    ::testing::Test::RecordProperty("launches", launches);
+    ::testing::Test::RecordProperty("refused_batches", refused);
+    EXPECT_GT(launches, 300);
+    EXPECT_GT(refused, 5) << "cycles should be tried, and refused";
+    EXPECT_GT(recursive_removals, 3);
+    EXPECT_GT(hidden_by_groups, 100u) << "group hiding should be exercised";
+    EXPECT_GT(coverage, 0.05);
+}
+
 }  // namespace
 }  // namespace strata

@@ -90,6 +90,64 @@ TEST(EditCodec, EveryEditKindRoundTripsByteForByte) {
     EXPECT_FALSE(upd.material->has_value());
 }
 
+TEST(EditCodec, GroupEditsAndParentsRoundTrip) {
+    EditBatch b;
+    b.edits.emplace_back(AddGroup{"car", std::nullopt, Affine::translation({1, 2, 3}), false});
+    b.edits.emplace_back(AddGroup{"wheels", std::string("car"), Affine::scaling({2, 2, 2}), true});
+    AddInstance inside;
+    inside.id = "w0";
+    inside.mesh = "tri";
+    inside.parent = "wheels";
+    b.edits.emplace_back(inside);
+    UpdateInstance to_root;
+    to_root.instance = "w0";
+    to_root.parent = std::optional<std::string>();
+    b.edits.emplace_back(to_root);
+    UpdateInstance to_group;
+    to_group.instance = "w0";
+    to_group.parent = std::optional<std::string>("car");
+    to_group.mask = 3;
+    b.edits.emplace_back(to_group);
+    b.edits.emplace_back(UpdateGroup{"wheels", std::optional<std::string>(), std::nullopt, false});
+    b.edits.emplace_back(UpdateGroup{"car", std::nullopt, Affine::translation({0, 1, 0}), std::nullopt});
+    b.edits.emplace_back(RemoveGroup{"car", true});
+    const std::string bytes = encoded(b);
+    auto back = durable::decode_batch(bytes);
+    ASSERT_TRUE(back.has_value()) << back.error().describe();
+    EXPECT_EQ(encoded(back.value()), bytes);
+    const auto& car = std::get<AddGroup>(back->edits[0]);
+    EXPECT_FALSE(car.parent.has_value());
+    EXPECT_FALSE(car.visible);
+    EXPECT_EQ(car.transform, Affine::translation({1, 2, 3}));
+    EXPECT_EQ(std::get<AddGroup>(back->edits[1]).parent, std::optional<std::string>("car"));
+    EXPECT_EQ(std::get<AddInstance>(back->edits[2]).parent, std::optional<std::string>("wheels"));
+    const auto& root = std::get<UpdateInstance>(back->edits[3]);
+    ASSERT_TRUE(root.parent.has_value());
+    EXPECT_FALSE(root.parent->has_value());
+    const auto& moved = std::get<UpdateInstance>(back->edits[4]);
+    EXPECT_EQ(*moved.parent, std::optional<std::string>("car"));
+    EXPECT_EQ(moved.mask, std::optional<uint32_t>(3));
+    const auto& wheels = std::get<UpdateGroup>(back->edits[5]);
+    ASSERT_TRUE(wheels.parent.has_value());
+    EXPECT_FALSE(wheels.parent->has_value());
+    EXPECT_EQ(wheels.visible, std::optional<bool>(false));
+    EXPECT_TRUE(std::get<RemoveGroup>(back->edits[7]).recursive);
+}
+
+TEST(EditCodec, AnInstanceWithoutAParentIsWrittenAsBeforeGroups) {
+    // Journals written before groups existed hold tag 6 with the older layout; an add_instance
+    // without a parent must still be exactly that, and one with a parent must not be.
+    AddInstance e;
+    e.id = "a";
+    e.mesh = "m";
+    const std::string plain = encoded(EditBatch{{e}});
+    EXPECT_EQ(uint8_t(plain[4]), 6u);
+    e.parent = "g";
+    const std::string with_parent = encoded(EditBatch{{e}});
+    EXPECT_NE(uint8_t(with_parent[4]), 6u);
+    EXPECT_EQ(with_parent.substr(5, plain.size() - 5), plain.substr(5));
+}
+
 TEST(EditCodec, RandomBatchesRoundTrip) {
     test::RandomEdits edits(1234);
     for (int i = 0; i < 200; ++i) {

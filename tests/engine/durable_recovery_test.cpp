@@ -5,6 +5,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <thread>
@@ -139,6 +140,109 @@ TEST(Durability, ASnapshotPlusTheJournalAfterItRestoresTheScene) {
     EXPECT_EQ(s.store->recovery().records_replayed, 15u);
     EXPECT_EQ(test::version_of(*s.engine), version);
     EXPECT_TRUE(test::hits(*s.engine) == before);
+}
+
+TEST(Durability, GroupsAndParentsSurviveARestartThroughTheJournalAndASnapshot) {
+    TempDir dir;
+    test::Hits before;
+    std::vector<std::string> paths_before;
+    auto paths = [](Engine& e) {
+        return e.read([](const Scene& s) {
+            std::vector<std::string> out;
+            s.instances().for_each([&](InstanceHandle, const InstanceRecord& i) {
+                std::string p = i.id + ":";
+                for (const std::string& g : s.group_path(i.parent)) p += "/" + g;
+                p += i.world_visible ? "" : " hidden";
+                out.push_back(p);
+            });
+            std::sort(out.begin(), out.end());
+            return out;
+        });
+    };
+    {
+        Server s = start(options_for(dir));
+        AddInstance w0 = test::instance_edit("w0", "box", {1, 0, 0});
+        w0.parent = "wheels";
+        AddInstance w1 = test::instance_edit("w1", "box", {-1, 0, 0});
+        w1.parent = "wheels";
+        AddInstance body = test::instance_edit("body", "box", {0, 1, 0});
+        body.parent = "car";
+        test::apply_ok(*s.engine, test::mesh_edit("box", make_box(Vec3(0.8f))),
+                       AddGroup{"car", std::nullopt, Affine::translation({0, 0, -2}), true},
+                       AddGroup{"wheels", std::string("car"), Affine::identity(), true}, w0, w1,
+                       body, SetCamera{Vec3(0, 2, 9), Vec3(0), Vec3(0, 1, 0), 50.0f});
+        ASSERT_TRUE(s.store->snapshot_now().has_value());
+        // After the snapshot: journal records with every group op.
+        UpdateInstance out;
+        out.instance = "w1";
+        out.parent = std::optional<std::string>();
+        test::apply_ok(*s.engine,
+                       UpdateGroup{"car", std::nullopt, Affine::translation({1, 0, -2}), std::nullopt},
+                       out, AddGroup{"spare", std::string("car"), Affine::identity(), false});
+        AddInstance hidden = test::instance_edit("s0", "box", {0, 2, 0});
+        hidden.parent = "spare";
+        test::apply_ok(*s.engine, hidden, UpdateGroup{"wheels", std::nullopt, std::nullopt, false});
+        test::apply_ok(*s.engine, UpdateGroup{"wheels", std::nullopt, std::nullopt, true},
+                       AddGroup{"gone", std::nullopt, Affine::identity(), true},
+                       RemoveGroup{"gone", false});
+        before = test::hits(*s.engine);
+        paths_before = paths(*s.engine);
+    }
+    Server s = start(options_for(dir));
+    EXPECT_TRUE(s.store->recovery().loaded_snapshot);
+    EXPECT_EQ(s.store->recovery().records_replayed, 3u);
+    EXPECT_EQ(paths(*s.engine), paths_before);
+    EXPECT_EQ(paths_before, (std::vector<std::string>{"body:/car", "s0:/car/spare hidden",
+                                                      "w0:/car/wheels", "w1:"}));
+    EXPECT_TRUE(test::hits(*s.engine) == before);
+}
+
+TEST(Durability, NormalsAndUvsSurviveARestartFromJournalAndFromSnapshot) {
+    TempDir dir;
+    AddMesh m = test::mesh_edit("ball", make_sphere(1.0f, 8));
+    for (const Vec3& p : m.positions) m.normals.push_back(glm::normalize(p));
+    for (const Vec3& p : m.positions) m.uvs.emplace_back(p.x, p.y);
+    UpdateMeshPositions part;
+    part.mesh = "ball";
+    part.offset = 1;
+    part.normals = std::vector<Vec3>{{0, 1, 0}};
+    ReplaceMeshTopology topo;
+    topo.mesh = "quad";
+    topo.triangles = {{0, 2, 1}};
+    topo.uvs = std::vector<Vec2>{};
+    AddMesh quad = test::mesh_edit("quad", make_plane(Vec3(1.0f), 1, 1));
+    quad.uvs = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
+    auto attributes = [](const Engine& e) {
+        return e.read([](const Scene& s) {
+            std::vector<std::vector<float>> out;
+            for (const char* id : {"ball", "quad"}) {
+                const MeshRecord* r = s.mesh(s.find_mesh(id)).value();
+                std::vector<float> flat;
+                for (const Vec3& n : r->normals) flat.insert(flat.end(), {n.x, n.y, n.z});
+                flat.push_back(-1.0f);  // separates normals from uvs
+                for (const Vec2& uv : r->uvs) flat.insert(flat.end(), {uv.x, uv.y});
+                out.push_back(std::move(flat));
+            }
+            return out;
+        });
+    };
+    std::vector<std::vector<float>> before;
+    {
+        Server s = start(options_for(dir));
+        test::apply_ok(*s.engine, m, quad);
+        test::apply_ok(*s.engine, part, topo);
+        before = attributes(*s.engine);
+        ASSERT_EQ(before[1].size(), 1u) << "the quad's uvs were removed";
+    }
+    {
+        Server s = start(options_for(dir));
+        EXPECT_EQ(s.store->recovery().records_replayed, 2u);
+        EXPECT_EQ(attributes(*s.engine), before);
+        ASSERT_TRUE(s.store->snapshot_now().has_value());
+    }
+    Server s = start(options_for(dir));
+    EXPECT_TRUE(s.store->recovery().loaded_snapshot);
+    EXPECT_EQ(attributes(*s.engine), before);
 }
 
 TEST(Durability, ATornLastRecordIsCutOffAndReported) {

@@ -104,6 +104,45 @@ TEST(EditParser, UpdateMeshIsAPositionsUpdateOrATopologyChange) {
     EXPECT_EQ(both.positions->size(), 1u);
 }
 
+TEST(EditParser, NormalsAndUvsComeFlatOrBase64) {
+    const auto e = one<AddMesh>(
+        R"({"op":"add_mesh","id":"t","positions":[0,0,0, 1,0,0, 0,1,0],"indices":[0,1,2],
+        "normals":[0,0,1, 0,0.5,1, 0,0,2],"uvs":[0,0, 1,0, 0.5,1]})");
+    EXPECT_THAT(e.normals, ::testing::ElementsAre(Vec3(0, 0, 1), Vec3(0, 0.5f, 1), Vec3(0, 0, 2)));
+    EXPECT_THAT(e.uvs, ::testing::ElementsAre(Vec2(0, 0), Vec2(1, 0), Vec2(0.5f, 1)));
+
+    const float n[6] = {0, 1, 0, 1, 0, 0};
+    const float uv[4] = {0.25f, 0.75f, 1, -1};
+    const auto u = one<UpdateMeshPositions>(
+        R"({"op":"update_mesh","mesh":"t","offset":1,"normals_b64":")" + b64(n, sizeof n) +
+        R"(","uvs_b64":")" + b64(uv, sizeof uv) + "\"}");
+    EXPECT_TRUE(u.positions.empty());
+    EXPECT_EQ(u.offset, 1u);
+    ASSERT_TRUE(u.normals.has_value());
+    EXPECT_THAT(*u.normals, ::testing::ElementsAre(Vec3(0, 1, 0), Vec3(1, 0, 0)));
+    ASSERT_TRUE(u.uvs.has_value());
+    EXPECT_THAT(*u.uvs, ::testing::ElementsAre(Vec2(0.25f, 0.75f), Vec2(1, -1)));
+
+    const auto removed =
+        one<ReplaceMeshTopology>(R"({"op":"update_mesh","mesh":"t","indices":[0,2,1],"uvs":[]})");
+    EXPECT_FALSE(removed.normals.has_value());
+    ASSERT_TRUE(removed.uvs.has_value());
+    EXPECT_TRUE(removed.uvs->empty());
+
+    EXPECT_EQ(fails(R"({"op":"update_mesh","mesh":"t","uvs":[0,0,1]})").pointer, "/edits/0/uvs");
+    EXPECT_EQ(fails(R"({"op":"update_mesh","mesh":"t","uvs_b64":"AAAAAAAA"})").pointer,
+              "/edits/0/uvs_b64");
+}
+
+TEST(EditParser, EngineErrorsInNormalsPointAtTheBase64MemberWhenUsed) {
+    const float n[3] = {0, 0, 0};
+    ParsedBatch b = parse_ok(R"({"edits": [{"op":"update_mesh","mesh":"t","normals_b64":")" +
+                             b64(n, sizeof n) + "\"}]}");
+    Error e = make_error(ErrorCode::InvalidArgument, "normal of vertex 0 is zero", "normals/0");
+    e.edit_index = 0;
+    EXPECT_EQ(problem_from_batch_error(e, b.sources).pointer, "/edits/0/normals_b64");
+}
+
 TEST(EditParser, InstanceOpsReadEveryField) {
     const auto add = one<AddInstance>(R"({"op":"add_instance","id":"i","mesh":"m","material":"red",
         "transform":{"translate":[1,2,3]},"visible":false,"mask":4294967295,"user_id":9})");

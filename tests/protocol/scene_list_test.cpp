@@ -146,7 +146,10 @@ TEST_F(SceneList, BadQueriesAreRefusedNamingTheParameter) {
         {SceneObject::Instance, {{"cursor", "instances-1ffffffff"}}, 400, "/cursor"},
         {SceneObject::Instance, {{"visible", "yes"}}, 400, "/visible"},
         {SceneObject::Instance, {{"mesh", "nope"}}, 404, "/mesh"},
-        {SceneObject::Instance, {{"parent", "g"}}, 400, "/parent"},
+        {SceneObject::Instance, {{"parent", "g"}}, 404, "/parent"},
+        {SceneObject::Group, {{"parent", "g"}}, 404, "/parent"},
+        {SceneObject::Group, {{"mesh", "ball"}}, 400, "/mesh"},
+        {SceneObject::Material, {{"parent", ""}}, 400, "/parent"},
         {SceneObject::Mesh, {{"mesh", "ball"}}, 400, "/mesh"},
         {SceneObject::Material, {{"visible", "true"}}, 400, "/visible"},
     };
@@ -158,6 +161,99 @@ TEST_F(SceneList, BadQueriesAreRefusedNamingTheParameter) {
     const Json end = page(SceneObject::Instance, {{"cursor", "instances-ffff"}});
     EXPECT_TRUE(end["items"].empty());
     EXPECT_TRUE(end["next_cursor"].is_null());
+}
+
+// Groups: car > wheels > i0, i2; car > i4; i1 under wheels2 (a second child group of car).
+class SceneListGroups : public SceneList {
+protected:
+    void SetUp() override {
+        SceneList::SetUp();
+        EditBatch b;
+        b.edits.emplace_back(AddGroup{"car", std::nullopt, Affine::translation({0, 0, 5}), true});
+        b.edits.emplace_back(AddGroup{"wheels", std::string("car"), Affine::identity(), false});
+        b.edits.emplace_back(AddGroup{"wheels2", std::string("car"), Affine::identity(), true});
+        for (const auto& [id, parent] : {std::pair("/World/i4", "car"), {"/World/i2", "wheels"},
+                                         {"/World/i0", "wheels"}, {"/World/i1", "wheels2"}}) {
+            UpdateInstance u;
+            u.instance = id;
+            u.parent = std::optional<std::string>(parent);
+            b.edits.emplace_back(u);
+        }
+        ASSERT_TRUE(engine->apply(std::move(b)).has_value());
+    }
+
+    Json children(const std::string& group, const Query& q, int status = 200) {
+        const ApiResponse r = get_group_children(*engine, group, q);
+        EXPECT_EQ(r.status, status) << r.body;
+        return Json::parse(r.body);
+    }
+};
+
+TEST_F(SceneListGroups, GroupsListAndFilterByParent) {
+    EXPECT_EQ(walk(SceneObject::Group, {}, 1), (std::vector<std::string>{"car", "wheels", "wheels2"}));
+    EXPECT_EQ(walk(SceneObject::Group, {{"parent", ""}}, 1), (std::vector<std::string>{"car"}));
+    EXPECT_EQ(walk(SceneObject::Group, {{"parent", "car"}}, 1),
+              (std::vector<std::string>{"wheels", "wheels2"}));
+    // Children of a group come in slot order, whatever order they joined in.
+    EXPECT_EQ(walk(SceneObject::Instance, {{"parent", "wheels"}}, 1),
+              (std::vector<std::string>{"/World/i0", "/World/i2"}));
+    EXPECT_EQ(walk(SceneObject::Instance, {{"parent", ""}}, 1000).size(), 26u);
+    EXPECT_EQ(walk(SceneObject::Instance, {{"parent", "wheels"}, {"mesh", "ball"}}, 5),
+              (std::vector<std::string>{"/World/i0", "/World/i2"}));
+    const Json doc = page(SceneObject::Instance, {{"parent", "wheels"}})["items"][0];
+    EXPECT_EQ(doc["parent"], "wheels");
+    EXPECT_EQ(doc["visible"], false);  // i0 is hidden on its own (i % 5 == 0)
+    EXPECT_EQ(doc["world_visible"], false);
+    EXPECT_EQ(doc["world_transform"][11], 5);
+    const Json car = Json::parse(get_scene_object(*engine, SceneObject::Group, "car").body);
+    EXPECT_EQ(car["children"]["groups"], 2);
+    EXPECT_EQ(car["children"]["instances"], 1);
+    EXPECT_TRUE(car["parent"].is_null());
+    EXPECT_EQ(get_scene_object(*engine, SceneObject::Group, "nope").status, 404);
+}
+
+TEST_F(SceneListGroups, ChildrenPageThroughGroupsThenInstances) {
+    std::vector<std::string> seen;
+    Query q{{"limit", "1"}};
+    for (int pages = 0; pages < 10; ++pages) {
+        const Json p = children("car", q);
+        for (const Json& item : p["items"])
+            seen.push_back(item["kind"].get<std::string>() + ":" + item["id"].get<std::string>());
+        if (p["next_cursor"].is_null()) break;
+        q.erase("cursor");
+        q.emplace("cursor", p["next_cursor"].get<std::string>());
+    }
+    EXPECT_EQ(seen, (std::vector<std::string>{"group:wheels", "group:wheels2", "instance:/World/i4"}));
+    EXPECT_EQ(children("nope", {}, 404)["status"], 404);
+    EXPECT_EQ(children("car", {{"cursor", "instances-1"}}, 400)["pointer"], "/cursor");
+    EXPECT_EQ(children("car", {{"depth", "1"}}, 400)["pointer"], "/depth");
+}
+
+TEST_F(SceneListGroups, TheTreeNestsToTheAskedDepthWithinItsNodeBudget) {
+    auto tree = [&](const Query& q, int status = 200) {
+        const ApiResponse r = get_scene_tree(*engine, q);
+        EXPECT_EQ(r.status, status) << r.body;
+        return Json::parse(r.body);
+    };
+    const Json shallow = tree({{"depth", "0"}});
+    ASSERT_EQ(shallow["groups"].size(), 1u);
+    EXPECT_EQ(shallow["groups"][0]["group_count"], 2);
+    EXPECT_FALSE(shallow["groups"][0].contains("groups"));
+    EXPECT_EQ(shallow["instances"].size(), 26u);
+    const Json deep = tree({{"depth", "2"}});
+    const Json& wheels = deep["groups"][0]["groups"][0];
+    EXPECT_EQ(wheels["id"], "wheels");
+    EXPECT_EQ(wheels["world_visible"], false);
+    EXPECT_EQ(wheels["instances"].size(), 2u);
+    EXPECT_FALSE(deep["truncated"]);
+    const Json cut = tree({{"depth", "2"}, {"max_nodes", "3"}});
+    EXPECT_TRUE(cut["truncated"]);
+    const Json sub = tree({{"group", "car"}, {"depth", "0"}});
+    EXPECT_EQ(sub["group"], "car");
+    EXPECT_EQ(sub["groups"].size(), 2u);
+    EXPECT_EQ(tree({{"group", "nope"}}, 404)["pointer"], "/group");
+    EXPECT_EQ(tree({{"depth", "65"}}, 400)["pointer"], "/depth");
+    EXPECT_EQ(tree({{"limit", "5"}}, 400)["pointer"], "/limit");
 }
 
 }  // namespace

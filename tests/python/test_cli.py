@@ -201,8 +201,43 @@ class ServerCommandsTest(unittest.TestCase):
         code, _, err = strata("pick", "64", "0", "--width", "64", "--height", "64", env=self.env)
         self.assertEqual(code, 3)
         self.assertIn("/pixels/0", err)
-        code, _, _ = strata("scene", "list", "groups", env=self.env)
+        code, _, _ = strata("scene", "list", "lights", env=self.env)
         self.assertEqual(code, 2)
+
+    def test_scene_groups_tree_and_group_path(self):
+        edits = [{"op": "clear"},
+                 {"op": "add_mesh", "id": "ball", "shape": {"type": "sphere", "segments": 16}},
+                 {"op": "set_camera", "eye": [0, 0, 5], "target": [0, 0, 0]},
+                 {"op": "add_group", "id": "car"},
+                 {"op": "add_group", "id": "wheels", "parent": "car", "visible": False},
+                 {"op": "add_instance", "id": "body", "mesh": "ball", "parent": "car"},
+                 {"op": "add_instance", "id": "w0", "mesh": "ball", "parent": "wheels"},
+                 {"op": "add_instance", "id": "lamp", "mesh": "ball",
+                  "transform": {"translate": [0, 9, 0]}}]
+        code, _, err = strata("edit", "-", env=self.env, stdin=json.dumps({"edits": edits}))
+        self.assertEqual(code, 0, err)
+        code, out, err = strata("scene", "list", "groups", env=self.env)
+        self.assertEqual(code, 0, err)
+        self.assertEqual(out.splitlines(), ["car  groups=1  instances=1",
+                                            "wheels  parent=car  groups=0  instances=1  hidden"])
+        code, out, _ = strata("scene", "list", "instances", "--parent", "car", env=self.env)
+        self.assertEqual(out.splitlines(), ["body  mesh=ball  parent=car"])
+        code, out, _ = strata("scene", "list", "instances", "--parent", "", env=self.env)
+        self.assertEqual([line.split()[0] for line in out.splitlines()], ["lamp"])
+        code, out, _ = strata("--json", "scene", "get", "group", "wheels", env=self.env)
+        self.assertEqual(code, 0)
+        self.assertFalse(json.loads(out)["world_visible"])
+        code, out, err = strata("scene", "tree", env=self.env)
+        self.assertEqual(code, 0, err)
+        self.assertEqual(out.splitlines(), ["car/  (1 groups, 1 instances)",
+                                            "  wheels/  (0 groups, 1 instances, hidden)",
+                                            "    w0  mesh=ball  hidden",
+                                            "  body  mesh=ball",
+                                            "lamp  mesh=ball"])
+        code, out, err = strata("pick", "32", "32", "--width", "64", "--height", "64",
+                                env=self.env)
+        self.assertEqual(code, 0, err)
+        self.assertRegex(out, r"^instance body  mesh ball  groups car  primitive \d+")
 
     def test_a_missing_token_is_a_401_problem(self):
         code, _, err = strata("stats", env={"STRATA_SERVER": self.server.url})

@@ -189,6 +189,46 @@ class ClientTest(unittest.TestCase):
         self.assertEqual(p.body["element"], "header")
         self.assertEqual(self.client.stats()["version"], self.version + 1)
 
+    def test_groups_children_tree_and_group_path(self):
+        self.client.edit([
+            {"op": "add_group", "id": "car"},
+            {"op": "add_group", "id": "wheels", "parent": "car"},
+            {"op": "update_instance", "instance": "b0", "parent": "wheels"},
+            {"op": "add_instance", "id": "spare", "mesh": "ball", "parent": "car",
+             "transform": {"translate": [0, 50, 0]}},
+        ])
+        self.assertEqual([g["id"] for g in self.client.groups(page_size=1)], ["car", "wheels"])
+        self.assertEqual([g["id"] for g in self.client.groups(parent="")], ["car"])
+        self.assertEqual([i["id"] for i in self.client.instances(parent="wheels")], ["b0"])
+        self.assertEqual([i["id"] for i in self.client.instances(parent="")], [])
+        kids = list(self.client.children("car", page_size=1))
+        self.assertEqual([(k["kind"], k["id"]) for k in kids],
+                         [("group", "wheels"), ("instance", "spare")])
+        tree = self.client.tree(depth=2)
+        self.assertEqual(tree["groups"][0]["id"], "car")
+        self.assertEqual(tree["groups"][0]["groups"][0]["instances"][0]["id"], "b0")
+        self.assertFalse(tree["truncated"])
+        self.assertTrue(self.client.tree(depth=2, max_nodes=2)["truncated"])
+        self.assertEqual(self.client.pick(32, 32, 64, 64)["group_path"], ["car", "wheels"])
+        # Moving the car moves b0 out of the view.
+        self.client.edit([{"op": "set_transform", "group": "car",
+                           "transform": {"translate": [100, 0, 0]}}])
+        self.assertIsNone(self.client.pick(32, 32, 64, 64))
+        b0 = self.client.scene("instances", "b0")
+        self.assertEqual(b0["parent"], "wheels")
+        self.assertEqual(b0["world_transform"][3], 100)
+        self.assertEqual(self.client.scene("groups", "wheels")["children"]["instances"], 1)
+        with self.assertRaises(ProblemError) as caught:
+            self.client.edit([{"op": "update_group", "group": "car", "parent": "wheels"}])
+        self.assertEqual(caught.exception.status, 422)
+        self.assertIn("'car' > 'wheels' > 'car'", caught.exception.detail)
+        with self.assertRaises(ProblemError) as caught:
+            self.client.edit([{"op": "remove_group", "group": "car"}])
+        self.assertEqual(caught.exception.status, 422)
+        self.client.edit([{"op": "remove_group", "group": "car", "recursive": True}])
+        self.assertEqual(list(self.client.groups()), [])
+        self.assertEqual(self.client.scene()["counts"]["instances"], 0)
+
     def test_one_connection_is_kept_alive_across_requests(self):
         self.client.stats()
         sock = self.client._conn.sock

@@ -257,11 +257,12 @@ class Client:
 
     def scene(self, kind: Optional[str] = None, id: Optional[str] = None) -> Dict[str, Any]:
         """The scene summary (GET /v1/scene), or one object's state with kind "meshes",
-        "instances" or "materials" and its id (GET /v1/scene/{kind}/{id})."""
+        "instances", "materials" or "groups" and its id (GET /v1/scene/{kind}/{id})."""
         if kind is None:
             return self._json("GET", "/v1/scene")
-        if kind not in ("meshes", "instances", "materials") or not id:
-            raise ValueError("scene(kind, id): kind is 'meshes', 'instances' or 'materials'")
+        if kind not in ("meshes", "instances", "materials", "groups") or not id:
+            raise ValueError(
+                "scene(kind, id): kind is 'meshes', 'instances', 'materials' or 'groups'")
         return self._json("GET", f"/v1/scene/{kind}/{urllib.parse.quote(id, safe='')}")
 
     def _list(self, collection: str, page_size: int, **filters: Any) -> Iterator[Dict[str, Any]]:
@@ -277,11 +278,34 @@ class Client:
             query["cursor"] = page["next_cursor"]
 
     def instances(self, page_size: int = 1000, mesh: Optional[str] = None,
-                  visible: Optional[bool] = None) -> Iterator[Dict[str, Any]]:
+                  visible: Optional[bool] = None,
+                  parent: Optional[str] = None) -> Iterator[Dict[str, Any]]:
         """Every instance (GET /v1/scene/instances, following cursors page by page), optionally
-        only those of one mesh or only (in)visible ones. Each item is the document
-        scene("instances", id) returns."""
-        return self._list("instances", page_size, mesh=mesh, visible=visible)
+        only those of one mesh, only (in)visible ones, or only the children of group `parent`
+        ("" for the root). Each item is the document scene("instances", id) returns."""
+        return self._list("instances", page_size, mesh=mesh, visible=visible, parent=parent)
+
+    def groups(self, page_size: int = 1000,
+               parent: Optional[str] = None) -> Iterator[Dict[str, Any]]:
+        """Every group (GET /v1/scene/groups, following cursors), optionally only the children
+        of group `parent` ("" for the root)."""
+        return self._list("groups", page_size, parent=parent)
+
+    def children(self, group: str, page_size: int = 1000) -> Iterator[Dict[str, Any]]:
+        """A group's direct children (GET /v1/scene/groups/{id}/children, following cursors):
+        its groups, then its instances, each document with "kind" "group" or "instance"."""
+        return self._list(f"groups/{urllib.parse.quote(group, safe='')}/children", page_size)
+
+    def tree(self, depth: int = 1, group: Optional[str] = None,
+             max_nodes: Optional[int] = None) -> Dict[str, Any]:
+        """The scene graph nested `depth` levels deep from the root or from `group`
+        (GET /v1/scene/tree): {"groups": [...], "instances": [...], "truncated": bool, ...}."""
+        query: Dict[str, str] = {"depth": str(depth)}
+        if group is not None:
+            query["group"] = group
+        if max_nodes is not None:
+            query["max_nodes"] = str(max_nodes)
+        return self._json("GET", f"/v1/scene/tree?{urllib.parse.urlencode(query)}")
 
     def meshes(self, page_size: int = 1000) -> Iterator[Dict[str, Any]]:
         """Every mesh (GET /v1/scene/meshes, following cursors)."""
@@ -294,7 +318,8 @@ class Client:
     def pick(self, x: int, y: int, width: int, height: int,
              camera: Optional[Dict[str, Any]] = None) -> Optional[Dict[str, Any]]:
         """What lies under pixel (x, y) of a width x height frame (POST /v1/pick): a dict with
-        instance, mesh, primitive, distance, position, normal and user_id, or None."""
+        instance, mesh, group_path, primitive, distance, position, normal and user_id, or
+        None."""
         return self.pick_many([(x, y)], width, height, camera)[0]
 
     def pick_many(self, pixels: Iterable[Tuple[int, int]], width: int, height: int,

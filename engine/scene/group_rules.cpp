@@ -1,0 +1,102 @@
+// The rules of the group ops (add_group, update_group, remove_group), in the manner of
+// scene_rules.cpp: check against the scene as the batch left it, then change it, recording what
+// the change overwrote. World transforms are not touched here: flatten() does that once the
+// whole batch passed (scene_graph.cpp).
+
+#include "engine/scene/child_list.h"
+#include "engine/scene/scene.h"
+#include "engine/scene/undo_log.h"
+
+namespace strata {
+
+namespace {
+
+Status check_group_transform(const Affine& t) {
+    if (const char* why = transform_problem(t))
+        return failure(t.is_finite() ? ErrorCode::DegenerateTransform : ErrorCode::NotFinite, why,
+                       "transform");
+    return {};
+}
+
+}  // namespace
+
+Status Scene::apply_edit(AddGroup&& e, UndoLog& undo) {
+    if (e.id.empty()) return failure(ErrorCode::InvalidArgument, "group id is empty", "id");
+    if (!find_group(e.id).is_null())
+        return failure(ErrorCode::DuplicateId, "group '" + e.id + "' already exists", "id");
+    auto parent = find_parent(e.parent, "parent");
+    if (!parent) return Unexpected(parent.error());
+    if (Status s = check_group_move(GroupHandle{}, parent.value()); !s) return s;
+    if (Status s = check_group_transform(e.transform); !s) return s;
+
+    GroupRecord r;
+    r.id = e.id;
+    r.parent = parent.value();
+    r.transform = e.transform;
+    r.visible = e.visible;
+    std::vector<GroupHandle>& siblings = children_of(r.parent).groups;
+    r.child_slot = static_cast<uint32_t>(siblings.size());
+    bool reused = false;
+    const GroupHandle h = m_groups.insert(std::move(r), &reused);
+    undo.records.emplace_back(undo::Inserted<GroupHandle>{h, reused});
+    children_of(parent.value()).groups.push_back(h);
+    m_group_ids.emplace(std::move(e.id), h);
+    mark_group(h, dirty::GroupAdded);
+    return {};
+}
+
+Status Scene::apply_edit(UpdateGroup&& e, UndoLog& undo) {
+    const GroupHandle h = find_group(e.group);
+    if (h.is_null())
+        return failure(ErrorCode::UnknownId, "unknown group '" + e.group + "'", "group");
+    GroupHandle parent;
+    if (e.parent) {
+        auto found = find_parent(*e.parent, "parent");
+        if (!found) return Unexpected(found.error());
+        parent = found.value();
+        if (parent == h)
+            return failure(ErrorCode::Cycle,
+                           "group '" + e.group + "' cannot be its own parent (the cycle '" +
+                               e.group + "' > '" + e.group + "')",
+                           "parent");
+        if (Status s = check_group_move(h, parent); !s) return s;
+    }
+    if (e.transform) {
+        if (Status s = check_group_transform(*e.transform); !s) return s;
+    }
+
+    save_group(h, undo);
+    uint32_t bits = 0;
+    if (e.parent && !(parent == m_groups.at(h).parent)) {
+        reparent_group(h, parent, undo);
+        bits |= dirty::GroupParent;
+    }
+    GroupRecord& r = m_groups.at(h);
+    if (e.transform) {
+        r.transform = *e.transform;
+        bits |= dirty::GroupTransform;
+    }
+    if (e.visible) {
+        r.visible = *e.visible;
+        bits |= dirty::GroupVisibility;
+    }
+    if (bits) mark_group(h, bits);
+    return {};
+}
+
+Status Scene::apply_edit(RemoveGroup&& e, UndoLog& undo) {
+    const GroupHandle h = find_group(e.group);
+    if (h.is_null())
+        return failure(ErrorCode::UnknownId, "unknown group '" + e.group + "'", "group");
+    const Children& c = m_groups.at(h).children;
+    if (!c.empty() && !e.recursive)
+        return failure(ErrorCode::InUse,
+                       "group '" + e.group + "' still has " + std::to_string(c.groups.size()) +
+                           " group(s) and " + std::to_string(c.instances.size()) +
+                           " instance(s); remove them first or pass \"recursive\": true",
+                       "group");
+    remove_subtree(h, undo);
+    return {};
+}
+
+}  // namespace strata

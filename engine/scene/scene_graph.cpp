@@ -1,0 +1,186 @@
+// The scene graph: parents, child lists and the flattening of transforms. Groups form a forest
+// under an implicit root; instances hang from groups or from the root. An edit that changes a
+// group's transform, visibility or parent only marks the group; flatten() then recomputes the
+// world transforms below each dirty group once per batch (Hydra's DirtyTransform flattening, done
+// incrementally: the cost follows the dirtied subtrees, never the scene), and hands the instances
+// whose world changed to the TLAS as ordinary transform/visibility changes.
+
+#include <algorithm>
+
+#include "engine/scene/child_list.h"
+#include "engine/scene/scene.h"
+#include "engine/scene/undo_log.h"
+
+namespace strata {
+
+const Children& Scene::children(GroupHandle parent) const {
+    return parent.is_null() ? m_root : m_groups.at(parent).children;
+}
+
+Children& Scene::children_of(GroupHandle parent) {
+    return parent.is_null() ? m_root : m_groups.at(parent).children;
+}
+
+std::vector<std::string> Scene::group_path(GroupHandle parent) const {
+    std::vector<std::string> path;
+    for (GroupHandle g = parent; !g.is_null(); g = m_groups.at(g).parent)
+        path.push_back(m_groups.at(g).id);
+    std::reverse(path.begin(), path.end());
+    return path;
+}
+
+Result<GroupHandle> Scene::find_parent(const std::optional<std::string>& id,
+                                       const char* field) const {
+    if (!id) return GroupHandle{};
+    const GroupHandle g = find_group(*id);
+    if (g.is_null())
+        return failure(ErrorCode::UnknownId, "unknown group '" + *id + "'", field);
+    return g;
+}
+
+Status Scene::check_group_move(GroupHandle g, GroupHandle parent) const {
+    if (parent.is_null()) return {};
+    // Step: cycle. Walking up from the new parent must not meet the group itself.
+    std::vector<GroupHandle> up;
+    uint32_t parent_depth = 0;
+    for (GroupHandle p = parent; !p.is_null(); p = m_groups.at(p).parent) {
+        up.push_back(p);
+        ++parent_depth;
+        if (p == g) {
+            std::string cycle;
+            for (auto it = up.rbegin(); it != up.rend(); ++it)
+                cycle += "'" + m_groups.at(*it).id + "' > ";
+            cycle += "'" + m_groups.at(g).id + "'";
+            return failure(ErrorCode::Cycle,
+                           "group '" + m_groups.at(g).id + "' cannot move under '" +
+                               m_groups.at(parent).id + "': that makes the cycle " + cycle,
+                           "parent");
+        }
+    }
+    // Step: depth. The deepest group of the moved subtree lands at parent_depth + its height.
+    uint32_t height = 1;
+    if (!g.is_null()) {
+        std::vector<std::pair<GroupHandle, uint32_t>> stack{{g, 1}};
+        while (!stack.empty()) {
+            auto [h, level] = stack.back();
+            stack.pop_back();
+            height = std::max(height, level);
+            for (GroupHandle c : m_groups.at(h).children.groups) stack.emplace_back(c, level + 1);
+        }
+    }
+    if (parent_depth + height > MAX_GROUP_DEPTH)
+        return failure(ErrorCode::InvalidArgument,
+                       "groups would nest " + std::to_string(parent_depth + height) +
+                           " deep under '" + m_groups.at(parent).id + "'; the limit is " +
+                           std::to_string(MAX_GROUP_DEPTH),
+                       "parent");
+    return {};
+}
+
+void Scene::reparent_instance(InstanceHandle h, GroupHandle parent, UndoLog& undo) {
+    InstanceRecord& r = m_instances.at(h);
+    undo.records.emplace_back(undo::Reparented<InstanceHandle>{h, r.parent, r.child_slot});
+    detach_child(children_of(r.parent).instances, m_instances, r.child_slot);
+    std::vector<InstanceHandle>& list = children_of(parent).instances;
+    r.parent = parent;
+    r.child_slot = static_cast<uint32_t>(list.size());
+    list.push_back(h);
+    mark_instance_world(h);
+}
+
+void Scene::reparent_group(GroupHandle g, GroupHandle parent, UndoLog& undo) {
+    GroupRecord& r = m_groups.at(g);
+    undo.records.emplace_back(undo::Reparented<GroupHandle>{g, r.parent, r.child_slot});
+    detach_child(children_of(r.parent).groups, m_groups, r.child_slot);
+    std::vector<GroupHandle>& list = children_of(parent).groups;
+    GroupRecord& moved = m_groups.at(g);
+    moved.parent = parent;
+    moved.child_slot = static_cast<uint32_t>(list.size());
+    list.push_back(g);
+}
+
+void Scene::save_group(GroupHandle g, UndoLog& undo) const {
+    const GroupRecord& r = m_groups.at(g);
+    undo.records.emplace_back(undo::GroupState{g, r.transform, r.visible, r.dirty});
+}
+
+void Scene::mark_group(GroupHandle g, uint32_t bits) {
+    GroupRecord& r = m_groups.at(g);
+    if (r.dirty == 0) m_world_groups.push_back(g);
+    r.dirty |= bits;
+    m_changes.scene_bits |= dirty::Groups;
+}
+
+void Scene::remove_group(GroupHandle g, UndoLog& undo) {
+    GroupRecord& r = m_groups.at(g);
+    STRATA_CHECK(r.children.empty());
+    detach_child(children_of(r.parent).groups, m_groups, r.child_slot);
+    m_group_ids.erase(r.id);
+    m_changes.scene_bits |= dirty::Groups;
+    undo.records.emplace_back(undo::Removed<GroupHandle, GroupRecord>{g, m_groups.take(g)});
+}
+
+void Scene::remove_subtree(GroupHandle g, UndoLog& undo) {
+    // Depth-first, children before their parent; the depth limit bounds the recursion.
+    GroupRecord& r = m_groups.at(g);
+    while (!r.children.instances.empty()) remove_instance(r.children.instances.back(), undo);
+    while (!r.children.groups.empty()) remove_subtree(r.children.groups.back(), undo);
+    remove_group(g, undo);
+}
+
+// Step: flattening -------------------------------------------------------------------------------
+
+void Scene::refresh_instance_world(InstanceHandle h, InstanceRecord& r) {
+    Affine world = r.transform;
+    bool visible = r.visible;
+    if (const GroupRecord* p = m_groups.get(r.parent)) {
+        world = p->world * r.transform;
+        visible = visible && p->world_visible;
+    }
+    ++m_changes.world_transforms;
+    uint32_t bits = 0;
+    if (!(world == r.world)) bits |= dirty::InstanceTransform;
+    if (visible != r.world_visible) bits |= dirty::InstanceVisibility;
+    r.world = world;
+    r.world_visible = visible;
+    if (bits) mark_instance(h, bits);
+}
+
+void Scene::flatten() {
+    // Step: dirty subtrees. A dirty group under another dirty group is done by the upper one;
+    // every group a subtree walk visits is cleaned, so no group is visited twice.
+    std::vector<GroupHandle> stack;
+    for (GroupHandle top : m_world_groups) {
+        const GroupRecord* r = m_groups.get(top);
+        if (!r || r->dirty == 0) continue;
+        bool covered = false;
+        for (GroupHandle p = r->parent; !p.is_null() && !covered; p = m_groups.at(p).parent)
+            covered = m_groups.at(p).dirty != 0;
+        if (covered) continue;
+        stack.push_back(top);
+        while (!stack.empty()) {
+            const GroupHandle g = stack.back();
+            stack.pop_back();
+            GroupRecord& group = m_groups.at(g);
+            group.world = group.transform;
+            group.world_visible = group.visible;
+            if (const GroupRecord* p = m_groups.get(group.parent)) {
+                group.world = p->world * group.transform;
+                group.world_visible = group.visible && p->world_visible;
+            }
+            group.dirty = 0;
+            ++m_changes.world_transforms;
+            for (InstanceHandle h : group.children.instances)
+                refresh_instance_world(h, m_instances.at(h));
+            stack.insert(stack.end(), group.children.groups.begin(), group.children.groups.end());
+        }
+    }
+    // Step: single instances (added, moved, shown, hidden or reparented). Their parents are clean.
+    for (InstanceHandle h : m_world_instances) {
+        if (InstanceRecord* r = m_instances.get(h)) refresh_instance_world(h, *r);
+    }
+    m_world_groups.clear();
+    m_world_instances.clear();
+}
+
+}  // namespace strata
