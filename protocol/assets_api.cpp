@@ -55,6 +55,7 @@ struct AssetQuery {
     AssetFormat format = AssetFormat::Glb;
     std::string name;
     std::string prefix;
+    std::optional<std::string> parent;
     bool instance = true;
 };
 
@@ -62,8 +63,10 @@ std::optional<AssetQuery> parse_query(const std::multimap<std::string, std::stri
                                       std::optional<std::string_view> content_type,
                                       Problem& problem) {
     for (const auto& [key, value] : query) {
-        if (key != "format" && key != "name" && key != "prefix" && key != "instance") {
-            problem = bad_query(key, "unknown parameter (expected format, name, prefix, instance)");
+        if (key != "format" && key != "name" && key != "prefix" && key != "instance" &&
+            key != "parent") {
+            problem = bad_query(
+                key, "unknown parameter (expected format, name, prefix, parent, instance)");
             return std::nullopt;
         }
         if (query.count(key) > 1) {
@@ -112,6 +115,14 @@ std::optional<AssetQuery> parse_query(const std::multimap<std::string, std::stri
                                           " bytes of UTF-8 without control characters");
         return std::nullopt;
     }
+    if (auto parent = get("parent")) {
+        if (parent->empty() || parent->size() > 256 || !is_valid_utf8(*parent) ||
+            has_control(*parent)) {
+            problem = bad_query("parent", "must be a group id");
+            return std::nullopt;
+        }
+        q.parent = *parent;
+    }
     if (auto inst = get("instance")) {
         if (*inst != "true" && *inst != "false") {
             problem = bad_query("instance", "expected true or false");
@@ -151,7 +162,7 @@ ApiResponse post_assets(Engine& engine, std::string body,
     body = {};
     if (!asset) return problem_response(asset_problem(asset.error()));
     assets::AssetBatch out =
-        assets::asset_to_batch(std::move(asset.value()), {q->prefix, q->instance});
+        assets::asset_to_batch(std::move(asset.value()), {q->prefix, q->instance, q->parent});
     const std::size_t edits = out.batch.edits.size();
 
     // Step 3: apply it like any batch; an engine refusal names the id it was creating.
@@ -181,7 +192,8 @@ ApiResponse post_assets(Engine& engine, std::string body,
     const Json answer = {{"version", done.version},  {"applied", edits},
                          {"format", assets::format_name(q->format)},
                          {"meshes", out.meshes},     {"materials", out.materials},
-                         {"instances", out.instances}, {"warnings", out.warnings}};
+                         {"groups", out.groups},     {"instances", out.instances},
+                         {"warnings", out.warnings}};
     return with_etag(json_response(200, answer), done.version);
 }
 

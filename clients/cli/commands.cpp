@@ -270,6 +270,7 @@ int run_import(Transport& t, const Console& c, const ImportArgs& args) {
     query.emplace("name", slash == std::string::npos ? args.file : args.file.substr(slash + 1));
     if (!args.prefix.empty()) query.emplace("prefix", args.prefix);
     if (!args.format.empty()) query.emplace("format", args.format);
+    if (!args.parent.empty()) query.emplace("parent", args.parent);
     if (!args.instance) query.emplace("instance", "false");
     int code = OK;
     const auto doc =
@@ -283,7 +284,8 @@ int run_import(Transport& t, const Console& c, const ImportArgs& args) {
     }
     auto count = [&](const char* key) { return doc->value(key, Json::array()).size(); };
     c.out << "imported " << args.file << ": " << count("meshes") << " meshes, "
-          << count("materials") << " materials, " << count("instances")
+          << count("materials") << " materials, " << count("groups") << " groups, "
+          << count("instances")
           << " instances; the scene is now version " << doc->value("version", 0) << '\n';
     return OK;
 }

@@ -92,9 +92,10 @@ struct ImportArgs {
     std::string file;
     std::string prefix;  ///< "": the server's default (the file name's stem)
     std::string format;  ///< "": from the file name's extension
+    std::string parent;  ///< "": the asset's group goes to the root
     bool instance = true;
 };
-/// `strata import FILE [--prefix P] [--format F] [--no-instance]`: POST /v1/assets with the
+/// `strata import FILE [--prefix P] [--parent G] [--format F] [--no-instance]`: POST /v1/assets with the
 /// file's bytes; prints the ids created and the new version, and the server's warnings on stderr.
 int run_import(Transport& t, const Console& c, const ImportArgs& args);
 

@@ -202,6 +202,8 @@ int main(int argc, char** argv) {
         ->required();
     import_cmd->add_option("--prefix", import_args.prefix,
                            "Id prefix of what it creates (default: the file name's stem)");
+    import_cmd->add_option("--parent", import_args.parent,
+                           "Group to put the asset's group under (default: the root)");
     import_cmd->add_option("--format", import_args.format,
                            "glb, gltf, obj or ply (default: from the extension)");
     bool no_instance = false;

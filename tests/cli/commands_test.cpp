@@ -210,7 +210,8 @@ TEST_F(ImportCommand, ImportsAFileUnderItsStemOrAPrefixAndPrintsWhatItCreated) {
     args.file = obj.string();
     EXPECT_EQ(run_import(*transport, console(), args), 0) << err.str();
     EXPECT_EQ(out.str(), "imported " + obj.string() +
-                             ": 1 meshes, 0 materials, 1 instances; the scene is now version 1\n");
+                             ": 1 meshes, 0 materials, 1 groups, 1 instances; the scene is now "
+                             "version 1\n");
     EXPECT_EQ(srv.get("/v1/scene/instances/tri.node0").status, 200);
     args.prefix = "second";
     args.instance = false;

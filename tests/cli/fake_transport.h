@@ -57,7 +57,8 @@ public:
         asset_posted = std::move(bytes);
         asset_query = query;
         return json(200, {{"version", ++version}, {"applied", 2}, {"meshes", {"a.mesh0"}},
-                          {"materials", Json::array()}, {"instances", {"a.node0"}},
+                          {"materials", Json::array()}, {"groups", {"a"}},
+                          {"instances", {"a.node0"}},
                           {"warnings", Json::array()}});
     }
     std::string describe() const override { return "the fake"; }

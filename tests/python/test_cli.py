@@ -156,7 +156,8 @@ class ServerCommandsTest(unittest.TestCase):
                 f.write("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
             code, out, err = strata("import", obj, "--prefix", "clitri", env=self.env)
             self.assertEqual(code, 0, err)
-            self.assertRegex(out, r"^imported .*tri.obj: 1 meshes, 0 materials, 1 instances; "
+            self.assertRegex(out, r"^imported .*tri.obj: 1 meshes, 0 materials, 1 groups, "
+                                  r"1 instances; "
                                   r"the scene is now version \d+\n$")
             code, out, err = strata("--json", "scene", "get", "instance", "clitri.node0",
                                     env=self.env)

@@ -174,6 +174,8 @@ class ClientTest(unittest.TestCase):
         self.assertEqual(answer["version"], self.version + 1)
         self.assertEqual(answer["meshes"], ["cow.mesh0"])
         self.assertEqual(answer["instances"], ["cow.node0"])
+        self.assertEqual(answer["groups"], ["cow"])
+        self.assertEqual(self.client.scene("instances", "cow.node0")["parent"], "cow")
         self.assertEqual(self.client.scene("meshes", "cow.mesh0")["triangles"], 5856)
         with tempfile.NamedTemporaryFile("w", suffix=".ply", delete=False) as f:
             f.write("ply\nformat ascii 1.0\nelement vertex 1\n")

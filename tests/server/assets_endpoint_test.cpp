@@ -112,6 +112,17 @@ TEST_F(Assets, ASecondImportUnderTheSamePrefixIsRefusedAsADuplicate) {
     EXPECT_EQ(srv.get("/v1/scene").json()["version"], 1);
 }
 
+TEST_F(Assets, TheAssetsGroupJoinsTheGroupNamedByParent) {
+    ASSERT_EQ(srv.edits({{{"op", "add_group"}, {"id", "shelf"}}}).status, 200);
+    const Reply r = upload("?prefix=tri&parent=shelf", TRIANGLE_OBJ, "model/obj");
+    ASSERT_EQ(r.status, 200) << r.body;
+    EXPECT_EQ(r.json()["groups"], Json::array({"tri"}));
+    EXPECT_EQ(srv.get("/v1/scene/instances/tri.node0").json()["parent"], "tri");
+    const Reply missing = upload("?prefix=b&parent=nowhere", TRIANGLE_OBJ, "model/obj");
+    expect_problem(missing, 422, "unknown-id");
+    EXPECT_EQ(srv.get("/v1/scene").json()["version"], 2);
+}
+
 TEST_F(Assets, IfMatchIsHonouredLikeEdits) {
     const Reply stale = upload("?format=obj", TRIANGLE_OBJ, "model/obj", {{"If-Match", "\"5\""}});
     expect_problem(stale, 412, "version-mismatch");

@@ -178,15 +178,15 @@ class Client:
         return self._json("POST", "/v1/edits", {"edits": list(edits)}, headers)["version"]
 
     def import_asset(self, path: str, prefix: Optional[str] = None, fmt: Optional[str] = None,
-                     instance: bool = True,
+                     instance: bool = True, parent: Optional[str] = None,
                      if_match: Union[int, str, None] = None) -> Dict[str, Any]:
         """Imports a glTF (.glb, or .gltf with embedded data), OBJ or PLY file (POST /v1/assets)
         as one batch; returns the answer: {"version", "applied", "format", "meshes",
-        "materials", "instances", "warnings"}.
+        "materials", "groups", "instances", "warnings"}.
 
         `prefix` starts every id it creates (default: the file name's stem); `fmt` is glb, gltf,
         obj or ply (default: from the extension); `instance=False` creates meshes and materials
-        only. A file Strata cannot read raises ProblemError 422 whose body names the "file" and
+        only; `parent` names the group the asset's own group joins (default: the root). A file Strata cannot read raises ProblemError 422 whose body names the "file" and
         the "element" at fault.
         """
         with open(path, "rb") as f:
@@ -198,6 +198,8 @@ class Client:
             query["format"] = fmt
         if not instance:
             query["instance"] = "false"
+        if parent is not None:
+            query["parent"] = parent
         headers = {"Content-Type": "application/octet-stream"}
         if if_match is not None:
             headers["If-Match"] = f'"{if_match}"' if isinstance(if_match, int) else if_match
