@@ -25,6 +25,8 @@ struct ApiLimits {
     JsonLimits json;
     uint64_t max_pixels = 16ull << 20;  ///< width * height of one render (--max-pixels)
     int render_timeout_s = 0;  ///< a render running longer stops (--render-timeout); 0: none
+    /// The engine's scene budget (--max-scene-*): imports size their reads by the room left.
+    SceneBudget budget;
 };
 
 /// One endpoint's answer, ready for any transport.
@@ -110,5 +112,13 @@ ApiResponse get_snapshot(const Engine& engine);
 /// own version is not reused. `if_match` as for post_edits.
 ApiResponse post_snapshot(Engine& engine, std::string body,
                           std::optional<std::string_view> if_match);
+
+/// POST /v1/assets: imports one model file, the body, as ONE batch: atomic, journaled and
+/// counted like POST /v1/edits, If-Match honoured (assets_api.cpp). The format comes from
+/// `?format=` or `content_type`; the query may also give `name`, `prefix` and `instance`.
+ApiResponse post_assets(Engine& engine, std::string body,
+                        const std::multimap<std::string, std::string>& query,
+                        std::optional<std::string_view> content_type,
+                        std::optional<std::string_view> if_match, const ApiLimits& limits);
 
 }  // namespace strata::protocol

@@ -24,6 +24,7 @@ constexpr TypeInfo TYPES[] = {
     {"in-use", "Object in use", 422},
     {"cycle", "Group cycle", 422},
     {"empty-mesh", "Empty mesh", 422},
+    {"invalid-asset", "Invalid asset", 422},
     {"version-mismatch", "Scene version mismatch", 412},
     {"not-found", "Not found", 404},
     {"method-not-allowed", "Method not allowed", 405},
@@ -165,6 +166,8 @@ Json problem_to_json(const Problem& p) {
               {"detail", p.detail}};
     if (p.edit_index != Error::NO_INDEX) j["edit_index"] = p.edit_index;
     if (p.pointer) j["pointer"] = *p.pointer;
+    if (p.file) j["file"] = *p.file;
+    if (p.element) j["element"] = *p.element;
     return j;
 }
 

@@ -28,6 +28,7 @@ enum class ProblemType : uint8_t {
     InUse,                ///< 422 the object is still referenced
     Cycle,                ///< 422 a group would end up inside itself
     EmptyMesh,            ///< 422 a mesh without vertices or triangles
+    InvalidAsset,         ///< 422 an uploaded model file is malformed or uses what Strata lacks
     VersionMismatch,      ///< 412 If-Match names another version
     NotFound,             ///< 404 no such route or object
     MethodNotAllowed,     ///< 405 the route exists for other methods
@@ -52,6 +53,8 @@ struct Problem {
     std::string detail;
     std::size_t edit_index = Error::NO_INDEX;
     std::optional<std::string> pointer;  ///< JSON pointer into the request, when one applies
+    std::optional<std::string> file;     ///< POST /v1/assets: the uploaded file's name
+    std::optional<std::string> element;  ///< POST /v1/assets: the element of the file at fault
 };
 
 /// "https://strata.dev/problems/<slug>".

@@ -10,12 +10,19 @@
 #                         recovery reads from disk)
 #   snapshot_fuzzer       snapshots: header checks, the scene batch, import against restore (POST
 #                         /v1/scene/snapshot takes them from anyone)
+#   gltf_import_fuzzer    .glb and .gltf files: tinygltf (compiled here, instrumented), the glTF
+#   obj_import_fuzzer     importer, OBJ (tinyobjloader) and our PLY reader, then the asset's batch
+#   ply_import_fuzzer     through the scene's rules (protocol/assets/)
 #
 # The two durable fuzzers' seed corpora are written by the encoder (tests/fuzz/durable_corpus.cpp)
 # into the scratch folder at each run, so they always match the current formats.
 #
 #   scripts/run-fuzz.sh [RUNS]        default RUNS=100000; CI calls it without arguments. The HTTP
 #                                     fuzzer gets RUNS/4: each of its inputs runs through the engine.
+#                                     Each importer fuzzer gets RUNS/4 too.
+#
+# The importers' corpora start from the small seeds in tests/fuzz/asset_corpus/ plus every file of
+# that format in Debian's assimp-testmodels (copied to scratch at run time, never committed).
 #
 # New inputs the fuzzers find go to scratch copies of the corpora, never into the repository.
 set -euo pipefail
@@ -28,15 +35,17 @@ cmake -S "$root" -B "$build" -G Ninja \
     -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DSTRATA_FUZZ=ON -DSTRATA_BUILD_BENCHMARKS=OFF
 ninja -C "$build" -j "${STRATA_BUILD_JOBS:-2}" edit_batch_fuzzer http_request_fuzzer \
-    journal_record_fuzzer snapshot_fuzzer durable_corpus
+    journal_record_fuzzer snapshot_fuzzer durable_corpus \
+    gltf_import_fuzzer obj_import_fuzzer ply_import_fuzzer
 
 scratch="$(mktemp -d)"
 trap 'rm -rf "$scratch"' EXIT
 # A crashing input is kept in build-fuzz/artifacts/ (reproduce: <fuzzer> FILE).
 mkdir -p "$build/artifacts"
 
-run() {  # fuzzer corpus dictionary runs (no corpus folder in tests/fuzz: already in scratch)
-    [ -d "$scratch/$2" ] || cp -r "$root/tests/fuzz/$2" "$scratch/$2"
+run() {  # fuzzer corpus dictionary runs (corpus: a folder in tests/fuzz, a scratch one, or both)
+    mkdir -p "$scratch/$2"
+    if [ -d "$root/tests/fuzz/$2" ]; then cp -r "$root/tests/fuzz/$2/." "$scratch/$2/"; fi
     local dict=()
     [ -n "$3" ] && dict=(-dict="$root/tests/fuzz/$3")
     "$build/tests/fuzz/$1" -runs="$4" -max_len=65536 -timeout=10 -rss_limit_mb=2048 \
@@ -50,3 +59,21 @@ mkdir -p "$scratch/journal_corpus" "$scratch/snapshot_corpus"
 "$build/tests/fuzz/durable_corpus" "$scratch/journal_corpus" "$scratch/snapshot_corpus"
 run journal_record_fuzzer journal_corpus "" "$runs"
 run snapshot_fuzzer snapshot_corpus "" "$runs"
+
+# The importers, seeded from assimp-testmodels' files of their format (odd and broken ones too).
+models="${STRATA_ASSIMP_MODELS_DIR:-/usr/share/assimp/models}"
+for format in gltf obj ply; do
+    mkdir -p "$scratch/asset_corpus/$format"
+    if [ -d "$models" ]; then
+        case "$format" in
+            gltf) pattern='.*\.\(gltf\|glb\)' ;;
+            *) pattern=".*\\.$format" ;;
+        esac
+        n=0
+        while IFS= read -r -d '' f; do
+            cp "$f" "$scratch/asset_corpus/$format/assimp-$n-$(basename "$f")"
+            n=$((n + 1))
+        done < <(find "$models" -type f -size -64k -iregex "$pattern" -print0)
+    fi
+    run "${format}_import_fuzzer" "asset_corpus/$format" "" "$((runs / 4))"
+done

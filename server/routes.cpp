@@ -70,6 +70,16 @@ void add_api_routes(Router& router, ServerContext& ctx) {
                                        : std::nullopt;
         send(res, protocol::post_edits(ctx.engine, std::move(body), if_match, ctx.api_limits));
     });
+    router.post("/v1/assets", [&ctx](const Req& req, Res& res, std::string&& body) {
+        const auto header = [&](const char* name) {
+            return req.has_header(name) ? std::optional(req.get_header_value(name))
+                                        : std::nullopt;
+        };
+        const std::optional<std::string> if_match = header("If-Match");
+        const std::optional<std::string> content_type = header("Content-Type");
+        send(res, protocol::post_assets(ctx.engine, std::move(body), req.params, content_type,
+                                        if_match, ctx.api_limits));
+    });
     router.post("/v1/commit", [&ctx](const Req&, Res& res, std::string&&) {
         respond(ctx, res, protocol::post_commit(ctx.engine), "commit");
     });

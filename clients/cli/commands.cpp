@@ -258,6 +258,38 @@ int run_snapshot_save(Transport& t, const Console& c, const std::string& file) {
     return OK;
 }
 
+int run_import(Transport& t, const Console& c, const ImportArgs& args) {
+    std::ifstream in(args.file, std::ios::binary);
+    if (!in) {
+        c.err << "strata: cannot open '" << args.file << "'\n";
+        return BAD_INPUT;
+    }
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::multimap<std::string, std::string> query;
+    const std::size_t slash = args.file.find_last_of('/');
+    query.emplace("name", slash == std::string::npos ? args.file : args.file.substr(slash + 1));
+    if (!args.prefix.empty()) query.emplace("prefix", args.prefix);
+    if (!args.format.empty()) query.emplace("format", args.format);
+    if (!args.parent.empty()) query.emplace("parent", args.parent);
+    if (!args.instance) query.emplace("instance", "false");
+    int code = OK;
+    const auto doc =
+        json_answer(c, t, "import " + args.file, t.import_asset(std::move(bytes), query), code);
+    if (!doc) return code;
+    for (const Json& w : doc->value("warnings", Json::array()))
+        if (w.is_string()) c.err << "strata: warning: " << w.get<std::string>() << '\n';
+    if (c.json) {
+        c.out << doc->dump() << '\n';
+        return OK;
+    }
+    auto count = [&](const char* key) { return doc->value(key, Json::array()).size(); };
+    c.out << "imported " << args.file << ": " << count("meshes") << " meshes, "
+          << count("materials") << " materials, " << count("groups") << " groups, "
+          << count("instances")
+          << " instances; the scene is now version " << doc->value("version", 0) << '\n';
+    return OK;
+}
+
 int run_snapshot_load(Transport& t, const Console& c, const std::string& file) {
     std::string bytes;
     if (file == "-") {

@@ -87,6 +87,18 @@ int run_pick(Transport& t, const Console& c, const PickArgs& args);
 /// `strata snapshot save FILE`: the server's scene into a snapshot file (- for stdout); the file
 /// is written whole or not at all (a temporary file renamed).
 int run_snapshot_save(Transport& t, const Console& c, const std::string& file);
+/// What `strata import` sends.
+struct ImportArgs {
+    std::string file;
+    std::string prefix;  ///< "": the server's default (the file name's stem)
+    std::string format;  ///< "": from the file name's extension
+    std::string parent;  ///< "": the asset's group goes to the root
+    bool instance = true;
+};
+/// `strata import FILE [--prefix P] [--parent G] [--format F] [--no-instance]`: POST /v1/assets with the
+/// file's bytes; prints the ids created and the new version, and the server's warnings on stderr.
+int run_import(Transport& t, const Console& c, const ImportArgs& args);
+
 /// `strata snapshot load FILE`: replaces the server's scene with the file's (- for stdin).
 int run_snapshot_load(Transport& t, const Console& c, const std::string& file);
 

@@ -110,4 +110,11 @@ Reply EmbeddedTransport::put_snapshot(std::string bytes) {
     return to_reply(protocol::post_snapshot(*m_engine, std::move(bytes), std::nullopt));
 }
 
+Reply EmbeddedTransport::import_asset(std::string bytes,
+                                      const std::multimap<std::string, std::string>& query) {
+    return to_reply(protocol::post_assets(*m_engine, std::move(bytes), query,
+                                          std::string("application/octet-stream"), std::nullopt,
+                                          LIMITS));
+}
+
 }  // namespace strata::cli

@@ -148,4 +148,16 @@ Reply HttpTransport::put_snapshot(std::string bytes) {
     return post("/v1/scene/snapshot", bytes, "", "application/vnd.strata.snapshot");
 }
 
+Reply HttpTransport::import_asset(std::string bytes,
+                                  const std::multimap<std::string, std::string>& query) {
+    std::string path = "/v1/assets";
+    char sep = '?';
+    for (const auto& [key, value] : query) {
+        path += sep + percent_encode(key) + "=" + percent_encode(value);
+        sep = '&';
+    }
+    // The format travels in the query (?format= or the name's extension).
+    return post(path.c_str(), bytes, "", "application/octet-stream");
+}
+
 }  // namespace strata::cli

@@ -38,6 +38,8 @@ public:
     Reply pick(const std::string& body) override;
     Reply get_snapshot() override;
     Reply put_snapshot(std::string bytes) override;
+    Reply import_asset(std::string bytes,
+                       const std::multimap<std::string, std::string>& query) override;
     std::string describe() const override { return m_url; }
 
 private:

@@ -195,6 +195,20 @@ int main(int argc, char** argv) {
         "load", "Replace the server's scene with FILE's (POST /v1/scene/snapshot; - for stdin)");
     snapshot_load->add_option("file", snapshot_file, "Snapshot file to read")->required();
 
+    ImportArgs import_args;
+    CLI::App* import_cmd =
+        app.add_subcommand("import", "Import a glTF, OBJ or PLY file (POST /v1/assets)");
+    import_cmd->add_option("file", import_args.file, "Model file (.glb, .gltf, .obj, .ply)")
+        ->required();
+    import_cmd->add_option("--prefix", import_args.prefix,
+                           "Id prefix of what it creates (default: the file name's stem)");
+    import_cmd->add_option("--parent", import_args.parent,
+                           "Group to put the asset's group under (default: the root)");
+    import_cmd->add_option("--format", import_args.format,
+                           "glb, gltf, obj or ply (default: from the extension)");
+    bool no_instance = false;
+    import_cmd->add_flag("--no-instance", no_instance, "Create meshes and materials only");
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -228,5 +242,9 @@ int main(int argc, char** argv) {
     if (pick_cmd->parsed()) return run_pick(t, console, pick);
     if (snapshot_save->parsed()) return run_snapshot_save(t, console, snapshot_file);
     if (snapshot_load->parsed()) return run_snapshot_load(t, console, snapshot_file);
+    if (import_cmd->parsed()) {
+        import_args.instance = !no_instance;
+        return run_import(t, console, import_args);
+    }
     return USAGE;
 }

@@ -68,6 +68,10 @@ public:
     virtual Reply get_snapshot() = 0;
     /// POST /v1/scene/snapshot: replaces the scene with a snapshot file's.
     virtual Reply put_snapshot(std::string bytes) = 0;
+    /// POST /v1/assets: imports a model file's bytes; `query` holds name, format, prefix,
+    /// instance.
+    virtual Reply import_asset(std::string bytes,
+                               const std::multimap<std::string, std::string>& query) = 0;
     /// Where requests go, for messages: "http://127.0.0.1:7070" or "the embedded engine".
     virtual std::string describe() const = 0;
 };

@@ -179,3 +179,60 @@ TEST_F(Commands, SnapshotLoadOfAFileThatIsNotOneChangesNothing) {
 
 }  // namespace
 }  // namespace strata::cli
+
+namespace strata::cli {
+namespace {
+
+class ImportCommand : public ::testing::Test {
+protected:
+    void SetUp() override {
+        auto t = HttpTransport::create({"http://127.0.0.1:" + std::to_string(srv.port()), "", 60});
+        ASSERT_TRUE(t.has_value());
+        transport = std::move(t.value());
+        dir = std::filesystem::temp_directory_path() /
+              ("strata-import-" +
+               std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        std::filesystem::create_directories(dir);
+    }
+    void TearDown() override { std::filesystem::remove_all(dir); }
+    Console console(bool json = false) { return Console{out, err, json}; }
+
+    server::test::TestServer srv;
+    std::unique_ptr<HttpTransport> transport;
+    std::ostringstream out, err;
+    std::filesystem::path dir;
+};
+
+TEST_F(ImportCommand, ImportsAFileUnderItsStemOrAPrefixAndPrintsWhatItCreated) {
+    const std::filesystem::path obj = dir / "tri.obj";
+    std::ofstream(obj) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    ImportArgs args;
+    args.file = obj.string();
+    EXPECT_EQ(run_import(*transport, console(), args), 0) << err.str();
+    EXPECT_EQ(out.str(), "imported " + obj.string() +
+                             ": 1 meshes, 0 materials, 1 groups, 1 instances; the scene is now "
+                             "version 1\n");
+    EXPECT_EQ(srv.get("/v1/scene/instances/tri.node0").status, 200);
+    args.prefix = "second";
+    args.instance = false;
+    EXPECT_EQ(run_import(*transport, console(true), args), 0) << err.str();
+    const Json doc = Json::parse(out.str().substr(out.str().find('\n') + 1));
+    EXPECT_EQ(doc["meshes"], Json::array({"second.mesh0"}));
+    EXPECT_EQ(doc["instances"], Json::array());
+}
+
+TEST_F(ImportCommand, ARefusedFileShowsTheProblemAndExitsWithThree) {
+    const std::filesystem::path ply = dir / "broken.ply";
+    std::ofstream(ply) << "ply\nformat ascii 1.0\nelement vertex 1\n";
+    ImportArgs args;
+    args.file = ply.string();
+    EXPECT_EQ(run_import(*transport, console(), args), 3);
+    EXPECT_NE(err.str().find("422 Invalid asset"), std::string::npos) << err.str();
+    EXPECT_NE(err.str().find("broken.ply: header"), std::string::npos) << err.str();
+    EXPECT_EQ(srv.get("/v1/scene").json()["version"], 0);
+    args.file = (dir / "missing.obj").string();
+    EXPECT_EQ(run_import(*transport, console(), args), 2);
+}
+
+}  // namespace
+}  // namespace strata::cli

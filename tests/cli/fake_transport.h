@@ -69,7 +69,18 @@ public:
         snapshot_posted = std::move(bytes);
         return json(200, {{"version", ++version}, {"applied", 1}});
     }
+    Reply import_asset(std::string bytes,
+                       const std::multimap<std::string, std::string>& query) override {
+        asset_posted = std::move(bytes);
+        asset_query = query;
+        return json(200, {{"version", ++version}, {"applied", 2}, {"meshes", {"a.mesh0"}},
+                          {"materials", Json::array()}, {"groups", {"a"}},
+                          {"instances", {"a.node0"}},
+                          {"warnings", Json::array()}});
+    }
     std::string describe() const override { return "the fake"; }
+    std::string asset_posted;
+    std::multimap<std::string, std::string> asset_query;
     std::string snapshot_posted;
 
     /// A 422 problem answer for every later edit batch.

@@ -149,6 +149,24 @@ class ServerCommandsTest(unittest.TestCase):
                                 env={"STRATA_TOKEN": "wrong"})
         self.assertEqual(code, 0, out + err)
 
+    def test_import_uploads_a_model_file(self):
+        with tempfile.TemporaryDirectory() as d:
+            obj = os.path.join(d, "tri.obj")
+            with open(obj, "w") as f:
+                f.write("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+            code, out, err = strata("import", obj, "--prefix", "clitri", env=self.env)
+            self.assertEqual(code, 0, err)
+            self.assertRegex(out, r"^imported .*tri.obj: 1 meshes, 0 materials, 1 groups, "
+                                  r"1 instances; "
+                                  r"the scene is now version \d+\n$")
+            code, out, err = strata("--json", "scene", "get", "instance", "clitri.node0",
+                                    env=self.env)
+            self.assertEqual(code, 0, err)
+            self.assertEqual(json.loads(out)["mesh"], "clitri.mesh0")
+            code, out, err = strata("import", obj, "--prefix", "clitri", env=self.env)
+            self.assertEqual(code, 3)
+            self.assertIn("422 Duplicate id", err)
+
     def test_scene_list_get_and_pick_read_the_scene_object_by_object(self):
         edits = [{"op": "clear"},
                  {"op": "add_mesh", "id": "ball", "shape": {"type": "sphere", "segments": 16}},

@@ -166,6 +166,31 @@ class ClientTest(unittest.TestCase):
         self.assertEqual(caught.exception.status, 422)
         self.assertEqual(caught.exception.pointer, "/pixels/0")
 
+    def test_import_asset_uploads_a_model_and_answers_its_ids(self):
+        spot = os.path.join(os.environ.get("STRATA_MODELS_DIR", ""), "spot.obj")
+        if not os.path.exists(spot):
+            self.skipTest(spot + " missing")
+        answer = self.client.import_asset(spot, prefix="cow")
+        self.assertEqual(answer["version"], self.version + 1)
+        self.assertEqual(answer["meshes"], ["cow.mesh0"])
+        self.assertEqual(answer["instances"], ["cow.node0"])
+        self.assertEqual(answer["groups"], ["cow"])
+        self.assertEqual(self.client.scene("instances", "cow.node0")["parent"], "cow")
+        self.assertEqual(self.client.scene("meshes", "cow.mesh0")["triangles"], 5856)
+        with tempfile.NamedTemporaryFile("w", suffix=".ply", delete=False) as f:
+            f.write("ply\nformat ascii 1.0\nelement vertex 1\n")
+        try:
+            with self.assertRaises(ProblemError) as caught:
+                self.client.import_asset(f.name)
+        finally:
+            os.unlink(f.name)
+        p = caught.exception
+        self.assertEqual(p.status, 422)
+        self.assertEqual(p.title, "Invalid asset")
+        self.assertEqual(p.body["file"], os.path.basename(f.name))
+        self.assertEqual(p.body["element"], "header")
+        self.assertEqual(self.client.stats()["version"], self.version + 1)
+
     def test_groups_children_tree_and_group_path(self):
         self.client.edit([
             {"op": "add_group", "id": "car"},

@@ -83,6 +83,21 @@ class DataDirectory(unittest.TestCase):
         self.assertIn("strata_durable_journal_bytes ", metrics)
         self.assertIn("strata_durable_fsync_duration_seconds_bucket", metrics)
 
+    def test_an_imported_asset_is_journaled_and_survives_a_kill(self):
+        s = self.server()
+        ply = (b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+               b"property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+               b"end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n")
+        status, _, body = s.call("POST", "/v1/assets?format=ply&prefix=quad", ply,
+                                 {"Content-Type": "application/ply"})
+        self.assertEqual(status, 200, body)
+        before = s.json("GET", "/v1/scene/meshes/quad.mesh0")[1]
+        s.kill()
+        s = self.server()
+        self.assertEqual(s.version(), 1)
+        self.assertEqual(s.json("GET", "/v1/scene/meshes/quad.mesh0")[1], before)
+        self.assertEqual(s.json("GET", "/v1/scene/instances/quad.node0")[0], 200)
+
     def test_a_torn_last_record_is_truncated_and_logged(self):
         self.fill(6)
         seg = segments(self.data)[-1]

@@ -1,0 +1,157 @@
+#include "protocol/assets/asset.h"
+
+#include <cctype>
+
+namespace strata::assets {
+
+namespace {
+
+std::string lower(std::string_view s) {
+    std::string out(s);
+    for (char& c : out) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return out;
+}
+
+std::string_view trim(std::string_view v) {
+    while (!v.empty() && (v.back() == ' ' || v.back() == '\t')) v.remove_suffix(1);
+    while (!v.empty() && (v.front() == ' ' || v.front() == '\t')) v.remove_prefix(1);
+    return v;
+}
+
+}  // namespace
+
+const char* format_name(AssetFormat f) {
+    switch (f) {
+        case AssetFormat::Glb:
+            return "glb";
+        case AssetFormat::Gltf:
+            return "gltf";
+        case AssetFormat::Obj:
+            return "obj";
+        case AssetFormat::Ply:
+            return "ply";
+    }
+    return "?";
+}
+
+std::optional<AssetFormat> format_from_name(std::string_view name) {
+    const std::string n = lower(name);
+    if (n == "glb") return AssetFormat::Glb;
+    if (n == "gltf") return AssetFormat::Gltf;
+    if (n == "obj") return AssetFormat::Obj;
+    if (n == "ply") return AssetFormat::Ply;
+    return std::nullopt;
+}
+
+std::optional<AssetFormat> format_from_media_type(std::string_view type) {
+    const std::string t = lower(trim(type.substr(0, type.find(';'))));
+    if (t == "model/gltf-binary") return AssetFormat::Glb;
+    if (t == "model/gltf+json") return AssetFormat::Gltf;
+    if (t == "model/obj") return AssetFormat::Obj;
+    if (t == "application/ply" || t == "model/ply" || t == "model/x-ply") return AssetFormat::Ply;
+    return std::nullopt;
+}
+
+uint64_t Asset::vertex_count() const {
+    uint64_t n = 0;
+    for (const AssetMesh& m : meshes) n += m.positions.size();
+    return n;
+}
+
+uint64_t Asset::triangle_count() const {
+    uint64_t n = 0;
+    for (const AssetMesh& m : meshes) n += m.triangles.size();
+    return n;
+}
+
+std::string AssetError::describe() const {
+    std::string out = file;
+    if (!element.empty()) out += ": " + element;
+    return out + ": " + message;
+}
+
+Expected<void, AssetError> check_budget(const Asset& asset, const ImportLimits& limits,
+                                        const ErrorSink& sink) {
+    const uint64_t v = asset.vertex_count();
+    const uint64_t t = asset.triangle_count();
+    if (v > limits.max_vertices)
+        return sink.too_large("", "the asset holds " + std::to_string(v) +
+                                      " vertices; the scene has room for " +
+                                      std::to_string(limits.max_vertices) +
+                                      " (max_scene_vertices)");
+    if (t > limits.max_triangles)
+        return sink.too_large("", "the asset holds " + std::to_string(t) +
+                                      " triangles; the scene has room for " +
+                                      std::to_string(limits.max_triangles) +
+                                      " (max_scene_triangles)");
+    if (asset.nodes.size() > limits.max_nodes)
+        return sink.too_large("", "the asset holds " + std::to_string(asset.nodes.size()) +
+                                      " nodes; at most " + std::to_string(limits.max_nodes));
+    return {};
+}
+
+Expected<void, AssetError> validate_asset(const Asset& asset, const ErrorSink& sink) {
+    // Step 1: meshes, their attributes and their triangles.
+    for (std::size_t i = 0; i < asset.meshes.size(); ++i) {
+        const AssetMesh& m = asset.meshes[i];
+        const std::string where = "mesh " + std::to_string(i) +
+                                  (m.name.empty() ? "" : " ('" + m.name + "')");
+        const std::size_t n = m.positions.size();
+        if (n == 0 || m.triangles.empty())
+            return sink.invalid(where, "has no vertices or no triangles");
+        if (n > UINT32_MAX) return sink.too_large(where, "has more than 2^32 vertices");
+        for (std::size_t v = 0; v < n; ++v)
+            if (!is_finite(m.positions[v]) ||
+                glm::any(glm::greaterThan(glm::abs(m.positions[v]), Vec3(float(MAX_COORDINATE)))))
+                return sink.invalid(where, "position " + std::to_string(v) +
+                                               " is not finite or lies beyond 1e15");
+        for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+            const Triangle& tri = m.triangles[t];
+            for (int k = 0; k < 3; ++k)
+                if (tri[k] >= n)
+                    return sink.invalid(where, "triangle " + std::to_string(t) + " uses vertex " +
+                                                   std::to_string(tri[k]) + " of only " +
+                                                   std::to_string(n));
+        }
+        if (!m.normals.empty() && m.normals.size() != n)
+            return sink.invalid(where, "has " + std::to_string(m.normals.size()) +
+                                           " normals for " + std::to_string(n) + " vertices");
+        if (!m.uvs.empty() && m.uvs.size() != n)
+            return sink.invalid(where, "has " + std::to_string(m.uvs.size()) + " uvs for " +
+                                           std::to_string(n) + " vertices");
+        if (!m.colors.empty() && m.colors.size() != n)
+            return sink.invalid(where, "has " + std::to_string(m.colors.size()) +
+                                           " colors for " + std::to_string(n) + " vertices");
+        if (m.material < -1 || m.material >= int(asset.materials.size()))
+            return sink.invalid(where, "refers to material " + std::to_string(m.material) +
+                                           " of only " + std::to_string(asset.materials.size()));
+    }
+    // Step 2: materials, each within the engine's ranges.
+    for (std::size_t i = 0; i < asset.materials.size(); ++i) {
+        const AssetMaterial& m = asset.materials[i];
+        const std::string where = "material " + std::to_string(i) +
+                                  (m.name.empty() ? "" : " ('" + m.name + "')");
+        if (Status s = check_material(m.material); !s)
+            return sink.invalid(where, s.error().field + ": " + s.error().message);
+        if (m.base_color_texture < -1 || m.base_color_texture >= int(asset.textures.size()))
+            return sink.invalid(where, "refers to texture " + std::to_string(m.base_color_texture) +
+                                           " of only " + std::to_string(asset.textures.size()));
+    }
+    // Step 3: the node tree, parents first, and the world transforms it produces.
+    for (std::size_t i = 0; i < asset.nodes.size(); ++i) {
+        const AssetNode& node = asset.nodes[i];
+        const std::string where = "node " + std::to_string(i) +
+                                  (node.name.empty() ? "" : " ('" + node.name + "')");
+        if (node.parent < -1 || node.parent >= int(i))
+            return sink.invalid(where, "its parent " + std::to_string(node.parent) +
+                                           " does not come before it");
+        if (!node.local.is_finite()) return sink.invalid(where, "transform is not finite");
+        for (int mesh : node.meshes)
+            if (mesh < 0 || mesh >= int(asset.meshes.size()))
+                return sink.invalid(where, "refers to mesh " + std::to_string(mesh) + " of only " +
+                                               std::to_string(asset.meshes.size()));
+    }
+    return {};
+}
+
+}  // namespace strata::assets

@@ -1,0 +1,139 @@
+#pragma once
+// The intermediate form every importer produces: meshes, materials, textures and a node tree,
+// read from untrusted bytes and checked, before anything reaches the scene. asset_batch.h turns
+// it into one engine edit batch. Nothing here touches the filesystem, HTTP or the engine's scene:
+// an importer is a pure function of the uploaded bytes.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "engine/core/expected.h"
+#include "engine/core/math.h"
+#include "engine/scene/types.h"
+
+namespace strata::assets {
+
+/// The file formats the importers read.
+enum class AssetFormat : uint8_t { Glb, Gltf, Obj, Ply };
+
+/// "glb", "gltf", "obj", "ply".
+const char* format_name(AssetFormat f);
+/// The format named by a `format` query value or a file extension (case-insensitive, no dot).
+std::optional<AssetFormat> format_from_name(std::string_view name);
+/// The format of a Content-Type (model/gltf-binary, model/gltf+json, model/obj, application/ply,
+/// model/ply, text/plain is not one), parameters after ';' ignored.
+std::optional<AssetFormat> format_from_media_type(std::string_view type);
+
+/// One triangle mesh. Optional attributes are empty or hold one entry per position.
+struct AssetMesh {
+    std::string name;
+    std::vector<Vec3> positions;
+    std::vector<Triangle> triangles;
+    std::vector<Vec3> normals;
+    std::vector<glm::vec2> uvs;
+    std::vector<Vec3> colors;  ///< linear RGB in [0, 1]
+    int material = -1;         ///< index into Asset::materials; -1: the built-in default
+};
+
+/// An image a material refers to: encoded bytes (PNG, JPEG) or an external name it could not
+/// read (never read from the server's filesystem).
+struct AssetTexture {
+    std::string name;
+    std::string mime_type;       ///< "image/png", "image/jpeg", or "" when unknown
+    std::vector<uint8_t> bytes;  ///< empty when only `uri` is known
+    std::string uri;             ///< the file's own reference (OBJ map_Kd, glTF external uri)
+};
+
+/// A PBR metallic-roughness material, values already in the engine's ranges.
+struct AssetMaterial {
+    std::string name;
+    Material material;
+    int base_color_texture = -1;  ///< index into Asset::textures; -1: none
+};
+
+/// One node of the hierarchy: a local transform, its parent and the meshes it places.
+struct AssetNode {
+    std::string name;
+    int parent = -1;  ///< index into Asset::nodes; -1: a root
+    Affine local;
+    std::vector<int> meshes;  ///< indices into Asset::meshes
+};
+
+/// A whole imported file. Nodes are ordered parents first (a node's parent has a lower index).
+struct Asset {
+    std::vector<AssetMesh> meshes;
+    std::vector<AssetMaterial> materials;
+    std::vector<AssetTexture> textures;
+    std::vector<AssetNode> nodes;
+    std::vector<std::string> warnings;  ///< what was read but ignored, for the answer
+
+    /// Vertices and triangles over meshes, each counted once.
+    uint64_t vertex_count() const;
+    uint64_t triangle_count() const;
+};
+
+/// Why a file cannot be imported: the file, the element inside it and what is wrong.
+struct AssetError {
+    enum class Kind : uint8_t {
+        Invalid,      ///< malformed or inconsistent (422)
+        Unsupported,  ///< valid, but uses something Strata does not import (422)
+        TooLarge,     ///< more than the scene's budget allows (413)
+    };
+    Kind kind = Kind::Invalid;
+    std::string file;     ///< the upload's name ("bunny.obj", or the format when unnamed)
+    std::string element;  ///< "accessors[3]", "line 12", "element face 7", ...; "" for the whole
+    std::string message;
+
+    /// "bunny.obj: line 12: face index 900 is outside the 500 vertices".
+    std::string describe() const;
+};
+
+template <class T>
+using Imported = Expected<T, AssetError>;
+
+/// What an importer may allocate: the room left in the scene budget (checked before reading
+/// counts a header declares, so a tiny file cannot ask for gigabytes).
+struct ImportLimits {
+    uint64_t max_vertices = uint64_t(1) << 24;
+    uint64_t max_triangles = uint64_t(1) << 24;
+    uint32_t max_nodes = 1u << 16;
+    uint32_t max_json_depth = 64;  ///< glTF JSON nesting (tinygltf recurses over `extras`)
+};
+
+/// Builds errors for one file.
+class ErrorSink {
+public:
+    explicit ErrorSink(std::string file) : m_file(std::move(file)) {}
+    const std::string& file() const { return m_file; }
+    Unexpected<AssetError> invalid(std::string element, std::string message) const {
+        return make(AssetError::Kind::Invalid, std::move(element), std::move(message));
+    }
+    Unexpected<AssetError> unsupported(std::string element, std::string message) const {
+        return make(AssetError::Kind::Unsupported, std::move(element), std::move(message));
+    }
+    Unexpected<AssetError> too_large(std::string element, std::string message) const {
+        return make(AssetError::Kind::TooLarge, std::move(element), std::move(message));
+    }
+
+private:
+    Unexpected<AssetError> make(AssetError::Kind k, std::string element, std::string msg) const {
+        return Unexpected(AssetError{k, m_file, std::move(element), std::move(msg)});
+    }
+    std::string m_file;
+};
+
+/// Checks an asset's counts against `limits` (TooLarge naming the count and the limit).
+Expected<void, AssetError> check_budget(const Asset& asset, const ImportLimits& limits,
+                                        const ErrorSink& sink);
+
+/// Checks every index, every number and every reference of an asset an importer produced:
+/// triangles inside their mesh, finite positions, material, texture, mesh and parent indices in
+/// range, parents before children. Importers call it last; a failure names the element.
+Expected<void, AssetError> validate_asset(const Asset& asset, const ErrorSink& sink);
+
+}  // namespace strata::assets

@@ -1,0 +1,157 @@
+#include "protocol/assets/asset_batch.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "engine/scene/scene.h"
+
+namespace strata::assets {
+
+namespace {
+
+std::string label(const std::string& kind, std::size_t i, const std::string& name) {
+    return kind + " " + std::to_string(i) + (name.empty() ? "" : " ('" + name + "')");
+}
+
+/// True when every normal is finite and not zero (what add_mesh accepts).
+bool usable_normals(const std::vector<Vec3>& normals) {
+    for (const Vec3& n : normals)
+        if (!is_finite(n) || glm::dot(n, n) == 0.0f) return false;
+    return true;
+}
+
+bool usable_uvs(const std::vector<glm::vec2>& uvs) {
+    for (const glm::vec2& t : uvs)
+        if (!std::isfinite(t.x) || !std::isfinite(t.y)) return false;
+    return true;
+}
+
+}  // namespace
+
+AssetBatch asset_to_batch(Asset&& asset, const BatchOptions& options) {
+    AssetBatch out;
+    out.warnings = std::move(asset.warnings);
+    const std::string& p = options.prefix;
+    auto push = [&](Edit&& e, const std::string& id, std::vector<std::string>& list) {
+        list.push_back(id);
+        out.edit_ids.push_back(id);
+        out.batch.edits.emplace_back(std::move(e));
+    };
+
+    // Step 1: materials.
+    std::size_t textures_dropped = 0;
+    for (std::size_t i = 0; i < asset.materials.size(); ++i) {
+        AddMaterial e;
+        e.id = p + ".material" + std::to_string(i);
+        e.material = asset.materials[i].material;
+        if (asset.materials[i].base_color_texture >= 0) ++textures_dropped;
+        const std::string id = e.id;
+        push(std::move(e), id, out.materials);
+    }
+    // Step 2: meshes with their normals and uvs; what the scene cannot hold is named in the
+    // warnings rather than dropped silently.
+    bool colors = false;
+    for (std::size_t i = 0; i < asset.meshes.size(); ++i) {
+        AssetMesh& m = asset.meshes[i];
+        colors = colors || !m.colors.empty();
+        AddMesh e;
+        e.id = p + ".mesh" + std::to_string(i);
+        e.positions = std::move(m.positions);
+        e.triangles = std::move(m.triangles);
+        if (usable_normals(m.normals)) {
+            e.normals = std::move(m.normals);
+        } else {
+            out.warnings.push_back(label("mesh", i, m.name) +
+                                   ": normals dropped (some are zero or not finite)");
+        }
+        if (usable_uvs(m.uvs)) {
+            e.uvs = std::move(m.uvs);
+        } else {
+            out.warnings.push_back(label("mesh", i, m.name) +
+                                   ": texture coordinates dropped (some are not finite)");
+        }
+        if (m.material >= 0) e.material = out.materials[std::size_t(m.material)];
+        const std::string id = e.id;
+        push(std::move(e), id, out.meshes);
+    }
+    if (colors) out.warnings.push_back("vertex colours dropped: the scene has no vertex colours");
+    if (textures_dropped)
+        out.warnings.push_back(std::to_string(textures_dropped) +
+                               " base-colour texture reference(s) dropped: materials have no "
+                               "textures yet");
+    if (!options.instance) return out;
+
+    // Step 3: the asset's own group, then the node tree (nodes come parents first).
+    {
+        AddGroup g;
+        g.id = p;
+        g.parent = options.parent;
+        push(std::move(g), p, out.groups);
+    }
+    const std::size_t n = asset.nodes.size();
+    std::vector<bool> has_children(n, false);
+    std::vector<uint32_t> depth(n, 1);  // a root node's group would sit under the asset's group
+    for (std::size_t i = 0; i < n; ++i) {
+        const int parent = asset.nodes[i].parent;
+        if (parent < 0) continue;
+        has_children[std::size_t(parent)] = true;
+        depth[i] = depth[std::size_t(parent)] + 1;
+    }
+    uint32_t deepest = 1;  // the asset's group
+    for (std::size_t i = 0; i < n; ++i)
+        if (has_children[i]) deepest = std::max(deepest, depth[i] + 1);
+    const bool flatten = deepest > MAX_GROUP_DEPTH;
+    if (flatten)
+        out.warnings.push_back("the node tree is " + std::to_string(deepest) +
+                               " levels deep, more than the scene's groups allow (" +
+                               std::to_string(MAX_GROUP_DEPTH) +
+                               "): flattened to world transforms under '" + p + "'");
+    std::vector<bool> placed(n, false);      // false: left out (with its subtree)
+    std::vector<std::string> group_of(n);    // the group a node's children join
+    std::vector<Affine> world(n);            // only used when flattening
+    for (std::size_t i = 0; i < n; ++i) {
+        const AssetNode& node = asset.nodes[i];
+        const int parent = node.parent;
+        if (parent >= 0 && !placed[std::size_t(parent)]) continue;
+        world[i] = parent >= 0 ? world[std::size_t(parent)] * node.local : node.local;
+        const Affine& t = flatten ? world[i] : node.local;
+        if (const char* why = transform_problem(t)) {
+            out.warnings.push_back(label("node", i, node.name) +
+                                   " left out with its children: its transform is unusable (" +
+                                   why + ")");
+            continue;
+        }
+        placed[i] = true;
+        const std::string& parent_group =
+            parent >= 0 && !flatten ? group_of[std::size_t(parent)] : p;
+        // A node with children is a group; a leaf's instances carry its transform themselves.
+        Affine instance_transform = t;
+        std::string instance_parent = parent_group;
+        if (has_children[i] && !flatten) {
+            AddGroup g;
+            g.id = p + ".group" + std::to_string(i);
+            g.parent = parent_group;
+            g.transform = node.local;
+            group_of[i] = g.id;
+            const std::string id = g.id;
+            push(std::move(g), id, out.groups);
+            instance_transform = Affine::identity();
+            instance_parent = group_of[i];
+        } else {
+            group_of[i] = parent_group;
+        }
+        for (std::size_t k = 0; k < node.meshes.size(); ++k) {
+            AddInstance e;
+            e.id = p + ".node" + std::to_string(i) +
+                   (node.meshes.size() > 1 ? "." + std::to_string(k) : "");
+            e.mesh = out.meshes[std::size_t(node.meshes[k])];
+            e.transform = instance_transform;
+            e.parent = instance_parent;
+            const std::string id = e.id;
+            push(std::move(e), id, out.instances);
+        }
+    }
+    return out;
+}
+
+}  // namespace strata::assets

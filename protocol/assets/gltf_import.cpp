@@ -1,0 +1,588 @@
+#include "protocol/assets/gltf_import.h"
+
+#include <algorithm>
+#include <cstring>
+#include <exception>
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include "protocol/assets/tinygltf_config.h"
+
+namespace strata::assets {
+
+namespace {
+
+// Filesystem callbacks: tinygltf reaches the filesystem only through these. An upload is one
+// file: every file it names "exists" only so that the read that follows is refused with a
+// message that says why (tinygltf would otherwise answer "file not found").
+bool any_file_exists(const std::string&, void*) {
+    return true;
+}
+std::string keep_path(const std::string& path, void*) {
+    return path;
+}
+bool refuse_read(std::vector<unsigned char>*, std::string* err, const std::string& path, void*) {
+    if (err)
+        *err += "external file '" + path +
+                "' refused: upload a .glb, or a .gltf whose buffers are data: URIs\n";
+    return false;
+}
+bool refuse_write(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
+    if (err) *err += "writing files is not allowed\n";
+    return false;
+}
+
+/// Keeps a data: URI image's encoded bytes as they are; decoding is the renderer's business. An
+/// image in a buffer view is copied later, after its range is checked (tinygltf hands this
+/// callback a pointer into the buffer without checking the view lies inside it).
+bool keep_encoded_image(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+                        const unsigned char* bytes, int size, void*) {
+    if (image->bufferView < 0 && size > 0) image->image.assign(bytes, bytes + size);
+    image->as_is = true;
+    return true;
+}
+
+/// Deepest nesting of `[`/`{` in JSON text, strings skipped; stops counting past `limit`.
+uint32_t json_depth(std::string_view text, uint32_t limit) {
+    uint32_t depth = 0, deepest = 0;
+    bool in_string = false;
+    for (std::size_t i = 0; i < text.size(); ++i) {
+        const char c = text[i];
+        if (in_string) {
+            if (c == '\\')
+                ++i;
+            else if (c == '"')
+                in_string = false;
+        } else if (c == '"') {
+            in_string = true;
+        } else if (c == '[' || c == '{') {
+            deepest = std::max(deepest, ++depth);
+            if (deepest > limit) return deepest;
+        } else if ((c == ']' || c == '}') && depth > 0) {
+            --depth;
+        }
+    }
+    return deepest;
+}
+
+/// The JSON chunk of a .glb, for the depth check (the container is checked again by tinygltf).
+std::string_view glb_json(std::span<const uint8_t> bytes) {
+    if (bytes.size() < 20) return {};
+    uint32_t length = 0;
+    std::memcpy(&length, bytes.data() + 12, 4);
+    if (length > bytes.size() - 20) return {};
+    return {reinterpret_cast<const char*>(bytes.data()) + 20, length};
+}
+
+/// A checked view of one accessor's elements.
+struct AccessorView {
+    const uint8_t* base = nullptr;
+    std::size_t stride = 0;
+    std::size_t count = 0;
+    int component = 0;  ///< TINYGLTF_COMPONENT_TYPE_*
+    int width = 0;      ///< components per element
+    bool normalized = false;
+
+    /// Component `c` of element `i` as a float (normalized integers mapped to [0, 1]).
+    float get(std::size_t i, int c) const {
+        const uint8_t* p = base + i * stride;
+        switch (component) {
+            case TINYGLTF_COMPONENT_TYPE_FLOAT: {
+                float v;
+                std::memcpy(&v, p + 4 * c, 4);
+                return v;
+            }
+            case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+                return normalized ? p[c] / 255.0f : float(p[c]);
+            case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+                uint16_t v;
+                std::memcpy(&v, p + 2 * c, 2);
+                return normalized ? v / 65535.0f : float(v);
+            }
+            default:
+                return 0.0f;
+        }
+    }
+    /// Element `i` of a scalar integer accessor.
+    uint32_t index(std::size_t i) const {
+        const uint8_t* p = base + i * stride;
+        switch (component) {
+            case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+                return p[0];
+            case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+                uint16_t v;
+                std::memcpy(&v, p, 2);
+                return v;
+            }
+            default: {
+                uint32_t v;
+                std::memcpy(&v, p, 4);
+                return v;
+            }
+        }
+    }
+};
+
+const char* mode_name(int mode) {
+    switch (mode) {
+        case TINYGLTF_MODE_POINTS:
+            return "POINTS";
+        case TINYGLTF_MODE_LINE:
+            return "LINES";
+        case TINYGLTF_MODE_LINE_LOOP:
+            return "LINE_LOOP";
+        case TINYGLTF_MODE_LINE_STRIP:
+            return "LINE_STRIP";
+        case TINYGLTF_MODE_TRIANGLE_STRIP:
+            return "TRIANGLE_STRIP";
+        case TINYGLTF_MODE_TRIANGLE_FAN:
+            return "TRIANGLE_FAN";
+        default:
+            return "unknown";
+    }
+}
+
+float unit(double v) {
+    return float(std::clamp(v, 0.0, 1.0));
+}
+
+class GltfReader {
+public:
+    GltfReader(const tinygltf::Model& model, const ErrorSink& sink, const ImportLimits& limits)
+        : m_model(model), m_sink(sink), m_limits(limits) {}
+
+    Imported<Asset> read() {
+        if (auto ok = read_materials(); !ok) return Unexpected(ok.error());
+        if (auto ok = read_nodes(); !ok) return Unexpected(ok.error());
+        if (auto ok = check_budget(m_asset, m_limits, m_sink); !ok) return Unexpected(ok.error());
+        if (auto ok = validate_asset(m_asset, m_sink); !ok) return Unexpected(ok.error());
+        return std::move(m_asset);
+    }
+
+private:
+    /// accessors[i], checked against its buffer view and buffer.
+    Imported<AccessorView> accessor(int i, const std::string& use) {
+        const std::string where = use + " (accessors[" + std::to_string(i) + "])";
+        if (i < 0 || std::size_t(i) >= m_model.accessors.size())
+            return m_sink.invalid(use, "accessor " + std::to_string(i) + " does not exist (" +
+                                           std::to_string(m_model.accessors.size()) +
+                                           " accessors)");
+        const tinygltf::Accessor& a = m_model.accessors[std::size_t(i)];
+        if (a.sparse.isSparse)
+            return m_sink.unsupported(where, "sparse accessors are not supported");
+        if (a.bufferView < 0 || std::size_t(a.bufferView) >= m_model.bufferViews.size())
+            return m_sink.invalid(where, "bufferView " + std::to_string(a.bufferView) +
+                                             " does not exist");
+        const tinygltf::BufferView& view = m_model.bufferViews[std::size_t(a.bufferView)];
+        if (view.buffer < 0 || std::size_t(view.buffer) >= m_model.buffers.size())
+            return m_sink.invalid(where, "buffer " + std::to_string(view.buffer) +
+                                             " does not exist");
+        const std::vector<unsigned char>& data = m_model.buffers[std::size_t(view.buffer)].data;
+        if (view.byteOffset > data.size() || view.byteLength > data.size() - view.byteOffset)
+            return m_sink.invalid(where, "its buffer view lies outside buffer " +
+                                             std::to_string(view.buffer) + " (" +
+                                             std::to_string(data.size()) + " bytes)");
+        const int size = tinygltf::GetComponentSizeInBytes(uint32_t(a.componentType));
+        const int width = tinygltf::GetNumComponentsInType(uint32_t(a.type));
+        if (size <= 0 || width <= 0)
+            return m_sink.invalid(where, "unknown component type or element type");
+        const std::size_t element = std::size_t(size) * std::size_t(width);
+        const std::size_t stride = view.byteStride ? view.byteStride : element;
+        if (stride < element)
+            return m_sink.invalid(where, "byteStride " + std::to_string(stride) +
+                                             " is smaller than one element");
+        AccessorView out;
+        out.count = a.count;
+        out.stride = stride;
+        out.component = a.componentType;
+        out.width = width;
+        out.normalized = a.normalized;
+        if (a.count == 0) return out;
+        // Overflow-safe: offset + stride * (count - 1) + element <= byteLength.
+        const std::size_t room = view.byteLength;
+        if (a.byteOffset > room || element > room - a.byteOffset ||
+            (a.count - 1) > (room - a.byteOffset - element) / stride)
+            return m_sink.invalid(where, std::to_string(a.count) + " elements from byte " +
+                                             std::to_string(a.byteOffset) +
+                                             " run past its buffer view (" +
+                                             std::to_string(room) + " bytes)");
+        out.base = data.data() + view.byteOffset + a.byteOffset;
+        return out;
+    }
+
+    Expected<void, AssetError> read_materials() {
+        for (std::size_t i = 0; i < m_model.materials.size(); ++i) {
+            const tinygltf::Material& gm = m_model.materials[i];
+            const std::string where = "materials[" + std::to_string(i) + "]";
+            const auto& pbr = gm.pbrMetallicRoughness;
+            AssetMaterial m;
+            m.name = gm.name;
+            for (double v : pbr.baseColorFactor)
+                if (!std::isfinite(v)) return m_sink.invalid(where, "baseColorFactor is not finite");
+            for (double v : gm.emissiveFactor)
+                if (!std::isfinite(v)) return m_sink.invalid(where, "emissiveFactor is not finite");
+            if (!std::isfinite(pbr.metallicFactor) || !std::isfinite(pbr.roughnessFactor))
+                return m_sink.invalid(where, "metallicFactor or roughnessFactor is not finite");
+            if (pbr.baseColorFactor.size() >= 3)
+                m.material.base_color = {unit(pbr.baseColorFactor[0]),
+                                         unit(pbr.baseColorFactor[1]),
+                                         unit(pbr.baseColorFactor[2])};
+            m.material.metallic = unit(pbr.metallicFactor);
+            m.material.roughness = unit(pbr.roughnessFactor);
+            if (gm.emissiveFactor.size() >= 3)
+                m.material.emission = {unit(gm.emissiveFactor[0]), unit(gm.emissiveFactor[1]),
+                                       unit(gm.emissiveFactor[2])};
+            const int texture = pbr.baseColorTexture.index;
+            if (texture >= 0) {
+                auto t = read_texture(texture, where + ".baseColorTexture");
+                if (!t) return Unexpected(t.error());
+                m.base_color_texture = t.value();
+            }
+            m_asset.materials.push_back(std::move(m));
+        }
+        return {};
+    }
+
+    /// textures[i]'s image as an asset texture (each image once).
+    Imported<int> read_texture(int i, const std::string& use) {
+        if (std::size_t(i) >= m_model.textures.size())
+            return m_sink.invalid(use, "texture " + std::to_string(i) + " does not exist");
+        const int source = m_model.textures[std::size_t(i)].source;
+        if (source < 0 || std::size_t(source) >= m_model.images.size())
+            return m_sink.invalid("textures[" + std::to_string(i) + "]",
+                                  "image " + std::to_string(source) + " does not exist");
+        if (auto it = m_images.find(source); it != m_images.end()) return it->second;
+        const tinygltf::Image& image = m_model.images[std::size_t(source)];
+        AssetTexture t;
+        t.name = image.name;
+        t.mime_type = image.mimeType;
+        t.uri = image.uri;
+        if (image.bufferView >= 0) {
+            const std::string at = "images[" + std::to_string(source) + "]";
+            if (std::size_t(image.bufferView) >= m_model.bufferViews.size())
+                return m_sink.invalid(at, "bufferView " + std::to_string(image.bufferView) +
+                                              " does not exist");
+            const tinygltf::BufferView& view = m_model.bufferViews[std::size_t(image.bufferView)];
+            if (view.buffer < 0 || std::size_t(view.buffer) >= m_model.buffers.size())
+                return m_sink.invalid(at, "its buffer view names no buffer");
+            const std::vector<unsigned char>& data = m_model.buffers[std::size_t(view.buffer)].data;
+            if (view.byteOffset > data.size() || view.byteLength > data.size() - view.byteOffset)
+                return m_sink.invalid(at, "its buffer view lies outside its buffer");
+            const auto begin = data.begin() + std::ptrdiff_t(view.byteOffset);
+            t.bytes.assign(begin, begin + std::ptrdiff_t(view.byteLength));
+        } else if (!image.image.empty()) {
+            t.bytes.assign(image.image.begin(), image.image.end());
+        }
+        const int index = int(m_asset.textures.size());
+        m_asset.textures.push_back(std::move(t));
+        m_images.emplace(source, index);
+        return index;
+    }
+
+    /// The asset meshes of glTF mesh `i`, one per primitive, read once.
+    Imported<std::vector<int>> read_mesh(int i) {
+        if (auto it = m_meshes.find(i); it != m_meshes.end()) return it->second;
+        if (i < 0 || std::size_t(i) >= m_model.meshes.size())
+            return m_sink.invalid("meshes", "mesh " + std::to_string(i) + " does not exist (" +
+                                                std::to_string(m_model.meshes.size()) +
+                                                " meshes)");
+        const tinygltf::Mesh& gm = m_model.meshes[std::size_t(i)];
+        std::vector<int> out;
+        for (std::size_t p = 0; p < gm.primitives.size(); ++p) {
+            const std::string where =
+                "meshes[" + std::to_string(i) + "].primitives[" + std::to_string(p) + "]";
+            auto mesh = read_primitive(gm.primitives[p], where);
+            if (!mesh) return Unexpected(mesh.error());
+            mesh.value().name = gm.name;
+            out.push_back(int(m_asset.meshes.size()));
+            m_asset.meshes.push_back(std::move(mesh.value()));
+        }
+        if (out.empty())
+            return m_sink.invalid("meshes[" + std::to_string(i) + "]", "has no primitives");
+        m_meshes.emplace(i, out);
+        return out;
+    }
+
+    Imported<AssetMesh> read_primitive(const tinygltf::Primitive& prim, const std::string& where) {
+        const int mode = prim.mode < 0 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
+        if (mode != TINYGLTF_MODE_TRIANGLES)
+            return m_sink.unsupported(where, std::string("mode ") + std::to_string(mode) + " (" +
+                                                 mode_name(mode) +
+                                                 ") is not supported; only triangles (4)");
+        if (!prim.targets.empty()) warn_once("morph targets ignored (the base shape is kept)");
+        AssetMesh mesh;
+        mesh.material = prim.material;
+        if (prim.material >= int(m_model.materials.size()))
+            return m_sink.invalid(where, "material " + std::to_string(prim.material) +
+                                             " does not exist");
+        // Step 1: positions, against the budget left before allocating.
+        const auto pos_it = prim.attributes.find("POSITION");
+        if (pos_it == prim.attributes.end())
+            return m_sink.invalid(where, "has no POSITION attribute");
+        auto pos = accessor(pos_it->second, where + ".attributes.POSITION");
+        if (!pos) return Unexpected(pos.error());
+        const AccessorView& pv = pos.value();
+        if (pv.component != TINYGLTF_COMPONENT_TYPE_FLOAT || pv.width != 3)
+            return m_sink.unsupported(where + ".attributes.POSITION",
+                                      "positions must be float VEC3");
+        if (pv.count == 0) return m_sink.invalid(where + ".attributes.POSITION", "has no vertices");
+        m_vertices += pv.count;
+        if (m_vertices > m_limits.max_vertices)
+            return m_sink.too_large(where, "the asset holds at least " +
+                                               std::to_string(m_vertices) +
+                                               " vertices; the scene has room for " +
+                                               std::to_string(m_limits.max_vertices) +
+                                               " (max_scene_vertices)");
+        mesh.positions.resize(pv.count);
+        for (std::size_t v = 0; v < pv.count; ++v)
+            mesh.positions[v] = {pv.get(v, 0), pv.get(v, 1), pv.get(v, 2)};
+        // Step 2: triangles, every index checked.
+        std::size_t n_indices = pv.count;
+        AccessorView iv;
+        if (prim.indices >= 0) {
+            auto idx = accessor(prim.indices, where + ".indices");
+            if (!idx) return Unexpected(idx.error());
+            iv = idx.value();
+            if (iv.width != 1 || (iv.component != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
+                                  iv.component != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+                                  iv.component != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT))
+                return m_sink.invalid(where + ".indices", "indices must be unsigned SCALAR");
+            n_indices = iv.count;
+        }
+        if (n_indices % 3 != 0 || n_indices == 0)
+            return m_sink.invalid(where, std::to_string(n_indices) +
+                                             " indices do not make whole triangles");
+        m_triangles += n_indices / 3;
+        if (m_triangles > m_limits.max_triangles)
+            return m_sink.too_large(where, "the asset holds at least " +
+                                               std::to_string(m_triangles) +
+                                               " triangles; the scene has room for " +
+                                               std::to_string(m_limits.max_triangles) +
+                                               " (max_scene_triangles)");
+        mesh.triangles.resize(n_indices / 3);
+        for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+            for (int k = 0; k < 3; ++k) {
+                const std::size_t at = 3 * t + std::size_t(k);
+                const uint32_t v = prim.indices >= 0 ? iv.index(at) : uint32_t(at);
+                if (v >= pv.count)
+                    return m_sink.invalid(where + ".indices",
+                                          "index " + std::to_string(at) + " is " +
+                                              std::to_string(v) + ", outside the " +
+                                              std::to_string(pv.count) + " vertices");
+                mesh.triangles[t][k] = v;
+            }
+        }
+        // Step 3: optional attributes, one per vertex.
+        if (auto ok = read_attribute(prim, "NORMAL", where, pv.count, 3, mesh); !ok)
+            return Unexpected(ok.error());
+        if (auto ok = read_attribute(prim, "TEXCOORD_0", where, pv.count, 2, mesh); !ok)
+            return Unexpected(ok.error());
+        if (auto ok = read_attribute(prim, "COLOR_0", where, pv.count, 3, mesh); !ok)
+            return Unexpected(ok.error());
+        return mesh;
+    }
+
+    Expected<void, AssetError> read_attribute(const tinygltf::Primitive& prim, const char* name,
+                                              const std::string& where, std::size_t vertices,
+                                              int width, AssetMesh& mesh) {
+        const auto it = prim.attributes.find(name);
+        if (it == prim.attributes.end()) return {};
+        const std::string use = where + ".attributes." + name;
+        auto acc = accessor(it->second, use);
+        if (!acc) return Unexpected(acc.error());
+        const AccessorView& a = acc.value();
+        const bool is_color = width == 3 && std::string_view(name) == "COLOR_0";
+        const bool ok_width = a.width == width || (is_color && a.width == 4);
+        // Normals are float; uvs and colours may also be normalized unsigned bytes or shorts.
+        const bool small_int = a.component == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                               a.component == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
+        const bool ok_type = a.component == TINYGLTF_COMPONENT_TYPE_FLOAT ||
+                             ((width == 2 || is_color) && small_int && a.normalized);
+        if (!ok_width || !ok_type)
+            return m_sink.invalid(use, "unexpected element or component type");
+        if (a.count != vertices)
+            return m_sink.invalid(use, std::to_string(a.count) + " elements for " +
+                                           std::to_string(vertices) + " vertices");
+        for (std::size_t v = 0; v < vertices; ++v) {
+            if (width == 2) {
+                mesh.uvs.push_back({a.get(v, 0), a.get(v, 1)});
+                if (!std::isfinite(mesh.uvs.back().x) || !std::isfinite(mesh.uvs.back().y))
+                    return m_sink.invalid(use, "element " + std::to_string(v) + " is not finite");
+                continue;
+            }
+            const Vec3 value{a.get(v, 0), a.get(v, 1), a.get(v, 2)};
+            if (!is_finite(value))
+                return m_sink.invalid(use, "element " + std::to_string(v) + " is not finite");
+            if (is_color)
+                mesh.colors.push_back(glm::clamp(value, Vec3(0.0f), Vec3(1.0f)));
+            else
+                mesh.normals.push_back(value);
+        }
+        return {};
+    }
+
+    /// nodes[i]'s local transform: a column-major matrix or translation, rotation, scale.
+    Imported<Affine> local_transform(const tinygltf::Node& n, const std::string& where) {
+        Affine out;
+        if (n.matrix.size() == 16) {
+            for (double v : n.matrix)
+                if (!std::isfinite(v)) return m_sink.invalid(where, "matrix is not finite");
+            if (std::abs(n.matrix[3]) > 1e-6 || std::abs(n.matrix[7]) > 1e-6 ||
+                std::abs(n.matrix[11]) > 1e-6 || std::abs(n.matrix[15] - 1.0) > 1e-6)
+                return m_sink.invalid(where, "matrix is not affine (last row is not 0 0 0 1)");
+            for (int r = 0; r < 3; ++r)
+                for (int c = 0; c < 4; ++c) out.at(r, c) = float(n.matrix[std::size_t(c * 4 + r)]);
+            return out;
+        }
+        if (!n.matrix.empty()) return m_sink.invalid(where, "matrix must have 16 numbers");
+        Vec3 t(0.0f), s(1.0f);
+        Vec4 q(0.0f, 0.0f, 0.0f, 1.0f);
+        if (n.translation.size() == 3) t = {n.translation[0], n.translation[1], n.translation[2]};
+        if (n.scale.size() == 3) s = {n.scale[0], n.scale[1], n.scale[2]};
+        if (n.rotation.size() == 4)
+            q = {n.rotation[0], n.rotation[1], n.rotation[2], n.rotation[3]};
+        if (!is_finite(t) || !is_finite(s) || !std::isfinite(q.x) || !std::isfinite(q.y) ||
+            !std::isfinite(q.z) || !std::isfinite(q.w))
+            return m_sink.invalid(where, "translation, rotation or scale is not finite");
+        if (glm::length(q) < 1e-6f) return m_sink.invalid(where, "rotation is a zero quaternion");
+        return Affine::trs(t, Affine::rotation_quaternion(q), s);
+    }
+
+    /// The scene's node trees, parents first; each node reached once (cycles and shared
+    /// children are refused).
+    Expected<void, AssetError> read_nodes() {
+        const std::size_t count = m_model.nodes.size();
+        if (count > m_limits.max_nodes)
+            return m_sink.too_large("nodes", std::to_string(count) + " nodes; at most " +
+                                                 std::to_string(m_limits.max_nodes));
+        // Step 1: the roots: the default scene's, else the first scene's, else every node no
+        // other node lists as a child; with no nodes at all, every mesh at the origin.
+        std::vector<int> roots;
+        if (!m_model.scenes.empty()) {
+            const int s = m_model.defaultScene >= 0 ? m_model.defaultScene : 0;
+            if (std::size_t(s) >= m_model.scenes.size())
+                return m_sink.invalid("scene", "scene " + std::to_string(s) + " does not exist");
+            roots = m_model.scenes[std::size_t(s)].nodes;
+        } else {
+            std::vector<bool> is_child(count, false);
+            for (const tinygltf::Node& n : m_model.nodes)
+                for (int c : n.children)
+                    if (c >= 0 && std::size_t(c) < count) is_child[std::size_t(c)] = true;
+            for (std::size_t i = 0; i < count; ++i)
+                if (!is_child[i]) roots.push_back(int(i));
+        }
+        if (count == 0) {
+            for (std::size_t i = 0; i < m_model.meshes.size(); ++i) {
+                auto meshes = read_mesh(int(i));
+                if (!meshes) return Unexpected(meshes.error());
+                AssetNode node;
+                node.name = m_model.meshes[i].name;
+                node.meshes = meshes.value();
+                m_asset.nodes.push_back(std::move(node));
+            }
+            return {};
+        }
+        // Step 2: depth first with an explicit stack (a deep chain must not overflow ours).
+        std::vector<bool> seen(count, false);
+        std::vector<std::pair<int, int>> stack;  // (glTF node, parent asset node)
+        for (auto it = roots.rbegin(); it != roots.rend(); ++it) stack.emplace_back(*it, -1);
+        while (!stack.empty()) {
+            const auto [g, parent] = stack.back();
+            stack.pop_back();
+            if (g < 0 || std::size_t(g) >= count)
+                return m_sink.invalid(parent < 0 ? "scenes" : "nodes",
+                                      "node " + std::to_string(g) + " does not exist (" +
+                                          std::to_string(count) + " nodes)");
+            const std::string where = "nodes[" + std::to_string(g) + "]";
+            if (seen[std::size_t(g)])
+                return m_sink.invalid(where, "is reached twice (a cycle, or a node with two "
+                                             "parents)");
+            seen[std::size_t(g)] = true;
+            const tinygltf::Node& n = m_model.nodes[std::size_t(g)];
+            AssetNode node;
+            node.name = n.name;
+            node.parent = parent;
+            auto local = local_transform(n, where);
+            if (!local) return Unexpected(local.error());
+            node.local = local.value();
+            if (n.mesh >= 0) {
+                auto meshes = read_mesh(n.mesh);
+                if (!meshes) return Unexpected(meshes.error());
+                node.meshes = meshes.value();
+            }
+            const int self = int(m_asset.nodes.size());
+            m_asset.nodes.push_back(std::move(node));
+            for (auto c = n.children.rbegin(); c != n.children.rend(); ++c)
+                stack.emplace_back(*c, self);
+        }
+        return {};
+    }
+
+    void warn_once(const std::string& what) {
+        if (std::find(m_asset.warnings.begin(), m_asset.warnings.end(), what) ==
+            m_asset.warnings.end())
+            m_asset.warnings.push_back(what);
+    }
+
+    const tinygltf::Model& m_model;
+    const ErrorSink& m_sink;
+    const ImportLimits& m_limits;
+    Asset m_asset;
+    std::map<int, std::vector<int>> m_meshes;  ///< glTF mesh -> asset meshes
+    std::map<int, int> m_images;               ///< glTF image -> asset texture
+    uint64_t m_vertices = 0;
+    uint64_t m_triangles = 0;
+};
+
+/// tinygltf's message, one line, without its trailing newline.
+std::string first_line(const std::string& text) {
+    std::string out = text.substr(0, text.find('\n'));
+    return out.empty() ? "could not be parsed" : out;
+}
+
+}  // namespace
+
+Imported<Asset> import_gltf(std::span<const uint8_t> bytes, bool binary, const std::string& file,
+                            const ImportLimits& limits) {
+    const ErrorSink sink(file);
+    if (bytes.size() > std::numeric_limits<unsigned int>::max())
+        return sink.too_large("", "the file is larger than 4 GiB");
+    // Step 1: refuse JSON nested deeper than any glTF needs (tinygltf recurses over extras).
+    const std::string_view json =
+        binary ? glb_json(bytes)
+               : std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+    if (json_depth(json, limits.max_json_depth) > limits.max_json_depth)
+        return sink.invalid("", "JSON nested deeper than " +
+                                    std::to_string(limits.max_json_depth) + " levels");
+    // Step 2: parse with the filesystem closed.
+    tinygltf::TinyGLTF loader;
+    loader.SetFsCallbacks({&any_file_exists, &keep_path, &refuse_read, &refuse_write, nullptr});
+    loader.SetImageLoader(&keep_encoded_image, nullptr);
+    loader.SetStoreOriginalJSONForExtrasAndExtensions(false);
+    tinygltf::Model model;
+    std::string err, warn;
+    bool ok = false;
+    try {
+        ok = binary ? loader.LoadBinaryFromMemory(&model, &err, &warn, bytes.data(),
+                                                  unsigned(bytes.size()), "")
+                    : loader.LoadASCIIFromString(&model, &err, &warn,
+                                                 reinterpret_cast<const char*>(bytes.data()),
+                                                 unsigned(bytes.size()), "");
+    } catch (const std::exception& e) {
+        return sink.invalid("", std::string("not valid glTF: ") + e.what());
+    }
+    if (!ok) {
+        if (err.find("external file") != std::string::npos)
+            return sink.unsupported("buffers", first_line(err));
+        return sink.invalid("", "not valid glTF: " + first_line(err.empty() ? warn : err));
+    }
+    if (!model.extensionsRequired.empty())
+        return sink.unsupported("extensionsRequired", "extension " +
+                                                          model.extensionsRequired.front() +
+                                                          " is not supported");
+    // Step 3: the model into the intermediate form, every reference checked.
+    return GltfReader(model, sink, limits).read();
+}
+
+}  // namespace strata::assets

@@ -1,0 +1,231 @@
+#include "protocol/assets/obj_import.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <unordered_map>
+
+#include <tiny_obj_loader.h>
+
+namespace strata::assets {
+
+namespace {
+
+/// Looks material libraries up in the upload only.
+class UploadMaterialReader : public tinyobj::MaterialReader {
+public:
+    explicit UploadMaterialReader(const SideFiles& files) : m_files(files) {}
+
+    bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
+                    std::map<std::string, int>* ids, std::string* warn,
+                    std::string* err) override {
+        const auto it = m_files.find(name);
+        if (it == m_files.end()) {
+            missing.push_back(name);
+            return false;
+        }
+        std::istringstream in(it->second);
+        tinyobj::LoadMtl(ids, materials, &in, warn, err);
+        return true;
+    }
+
+    std::vector<std::string> missing;
+
+private:
+    const SideFiles& m_files;
+};
+
+float unit(float v) {
+    return std::isfinite(v) ? std::clamp(v, 0.0f, 1.0f) : 0.0f;
+}
+
+/// Phong/Blinn exponent to a GGX-style perceptual roughness: alpha = sqrt(2 / (Ns + 2)) is the
+/// usual Blinn-Phong match, and roughness = sqrt(alpha). No specular colour at all reads as
+/// fully rough.
+float roughness_from(const tinyobj::material_t& m) {
+    const float ks = std::max({m.specular[0], m.specular[1], m.specular[2]});
+    if (!(ks > 0.0f)) return 1.0f;
+    const float ns = std::isfinite(m.shininess) ? std::clamp(m.shininess, 0.0f, 1e4f) : 0.0f;
+    return unit(std::sqrt(std::sqrt(2.0f / (ns + 2.0f))));
+}
+
+std::string mime_of(const std::string& name) {
+    std::string lower = name;
+    for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
+    if (lower.ends_with(".png")) return "image/png";
+    if (lower.ends_with(".jpg") || lower.ends_with(".jpeg")) return "image/jpeg";
+    return "";
+}
+
+struct VertexKey {
+    int v, vt, vn;
+    bool operator==(const VertexKey&) const = default;
+};
+struct VertexKeyHash {
+    std::size_t operator()(const VertexKey& k) const {
+        return std::hash<uint64_t>()((uint64_t(uint32_t(k.v)) << 32) ^
+                                     (uint64_t(uint32_t(k.vt)) << 16) ^ uint32_t(k.vn));
+    }
+};
+
+}  // namespace
+
+Imported<Asset> import_obj(std::span<const uint8_t> bytes, const std::string& file,
+                           const SideFiles& side_files, const ImportLimits& limits) {
+    const ErrorSink sink(file);
+    // Step 1: parse, the MTL from the upload only, polygons kept whole (tinyobjloader's own
+    // triangulation reads vertices before anything checked the indices).
+    tinyobj::attrib_t attrib;
+    std::vector<tinyobj::shape_t> shapes;
+    std::vector<tinyobj::material_t> mtl;
+    std::string warn, err;
+    std::istringstream in(std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+    UploadMaterialReader reader(side_files);
+    bool ok = false;
+    try {
+        ok = tinyobj::LoadObj(&attrib, &shapes, &mtl, &warn, &err, &in, &reader,
+                              /*triangulate=*/false, /*default_vcols_fallback=*/false);
+    } catch (const std::exception& e) {
+        return sink.invalid("", std::string("not a valid OBJ file: ") + e.what());
+    }
+    if (!ok) return sink.invalid("", "not a valid OBJ file: " + err.substr(0, err.find('\n')));
+    Asset asset;
+    for (const std::string& name : reader.missing)
+        asset.warnings.push_back("mtllib '" + name +
+                                 "' is not part of the upload; its materials are left out");
+
+    // Step 2: materials.
+    for (std::size_t i = 0; i < mtl.size(); ++i) {
+        const tinyobj::material_t& m = mtl[i];
+        AssetMaterial out;
+        out.name = m.name;
+        out.material.base_color = {unit(m.diffuse[0]), unit(m.diffuse[1]), unit(m.diffuse[2])};
+        out.material.roughness = m.roughness > 0.0f ? unit(m.roughness) : roughness_from(m);
+        out.material.metallic = unit(m.metallic);
+        for (int c = 0; c < 3; ++c)
+            out.material.emission[c] =
+                std::isfinite(m.emission[c]) ? std::clamp(m.emission[c], 0.0f, 1e4f) : 0.0f;
+        if (!m.diffuse_texname.empty()) {
+            AssetTexture t;
+            t.name = m.diffuse_texname;
+            t.uri = m.diffuse_texname;
+            t.mime_type = mime_of(m.diffuse_texname);
+            if (auto it = side_files.find(m.diffuse_texname); it != side_files.end())
+                t.bytes.assign(it->second.begin(), it->second.end());
+            out.base_color_texture = int(asset.textures.size());
+            asset.textures.push_back(std::move(t));
+        }
+        asset.materials.push_back(std::move(out));
+    }
+
+    // Step 3: count triangles against the budget before building anything.
+    const std::size_t n_positions = attrib.vertices.size() / 3;
+    const std::size_t n_normals = attrib.normals.size() / 3;
+    const std::size_t n_uvs = attrib.texcoords.size() / 2;
+    uint64_t triangles = 0;
+    for (std::size_t s = 0; s < shapes.size(); ++s) {
+        const tinyobj::mesh_t& m = shapes[s].mesh;
+        std::size_t corners = 0;
+        for (unsigned char fv : m.num_face_vertices) {
+            corners += fv;
+            if (fv >= 3) triangles += fv - 2u;
+        }
+        if (corners != m.indices.size() || m.material_ids.size() != m.num_face_vertices.size())
+            return sink.unsupported("shape " + std::to_string(s) + " ('" + shapes[s].name + "')",
+                                    "a face has more than 255 corners");
+    }
+    if (triangles == 0)
+        return sink.invalid("", "has no faces (points and lines are not imported)");
+    if (triangles > limits.max_triangles)
+        return sink.too_large("", "the asset holds " + std::to_string(triangles) +
+                                      " triangles; the scene has room for " +
+                                      std::to_string(limits.max_triangles) +
+                                      " (max_scene_triangles)");
+
+    // Step 4: one mesh per material; corners with the same (v, vt, vn) share a vertex.
+    std::map<int, int> mesh_of_material;
+    std::vector<std::unordered_map<VertexKey, uint32_t, VertexKeyHash>> welds;
+    AssetNode root;
+    root.name = file;
+    for (std::size_t s = 0; s < shapes.size(); ++s) {
+        const tinyobj::mesh_t& m = shapes[s].mesh;
+        std::size_t corner = 0;
+        for (std::size_t f = 0; f < m.num_face_vertices.size(); ++f) {
+            const unsigned fv = m.num_face_vertices[f];
+            const std::size_t first = corner;
+            corner += fv;
+            if (fv < 3) continue;
+            int material = m.material_ids[f];
+            if (material < -1 || material >= int(mtl.size())) material = -1;
+            auto [it, added] = mesh_of_material.emplace(material, int(asset.meshes.size()));
+            if (added) {
+                AssetMesh mesh;
+                mesh.material = material;
+                mesh.name = material >= 0 ? mtl[std::size_t(material)].name : shapes[s].name;
+                asset.meshes.push_back(std::move(mesh));
+                welds.emplace_back();
+                root.meshes.push_back(it->second);
+            }
+            AssetMesh& mesh = asset.meshes[std::size_t(it->second)];
+            auto& weld = welds[std::size_t(it->second)];
+            uint32_t ids[256];
+            for (unsigned k = 0; k < fv; ++k) {
+                const tinyobj::index_t& idx = m.indices[first + k];
+                const std::string where = "shape " + std::to_string(s) + " face " +
+                                          std::to_string(f);
+                if (idx.vertex_index < 0 || std::size_t(idx.vertex_index) >= n_positions)
+                    return sink.invalid(where, "vertex index " +
+                                                   std::to_string(idx.vertex_index + 1) +
+                                                   " is outside the " +
+                                                   std::to_string(n_positions) + " vertices");
+                if (idx.normal_index >= 0 && std::size_t(idx.normal_index) >= n_normals)
+                    return sink.invalid(where, "normal index " +
+                                                   std::to_string(idx.normal_index + 1) +
+                                                   " is outside the " + std::to_string(n_normals) +
+                                                   " normals");
+                if (idx.texcoord_index >= 0 && std::size_t(idx.texcoord_index) >= n_uvs)
+                    return sink.invalid(where, "texture coordinate index " +
+                                                   std::to_string(idx.texcoord_index + 1) +
+                                                   " is outside the " + std::to_string(n_uvs) +
+                                                   " texture coordinates");
+                const VertexKey key{idx.vertex_index, idx.texcoord_index, idx.normal_index};
+                auto [w, fresh] = weld.emplace(key, uint32_t(mesh.positions.size()));
+                if (fresh) {
+                    const std::size_t v = std::size_t(idx.vertex_index) * 3;
+                    mesh.positions.push_back({attrib.vertices[v], attrib.vertices[v + 1],
+                                              attrib.vertices[v + 2]});
+                }
+                ids[k] = w->second;
+            }
+            for (unsigned k = 1; k + 1 < fv; ++k) mesh.triangles.push_back({ids[0], ids[k], ids[k + 1]});
+        }
+    }
+    // Step 5: normals and uvs where every corner of a mesh has them (OBJ allows mixing).
+    for (std::size_t i = 0; i < asset.meshes.size(); ++i) {
+        AssetMesh& mesh = asset.meshes[i];
+        bool all_n = n_normals > 0, all_t = n_uvs > 0;
+        std::vector<const VertexKey*> by_vertex(mesh.positions.size());
+        for (const auto& [key, v] : welds[i]) {
+            by_vertex[v] = &key;
+            all_n = all_n && key.vn >= 0;
+            all_t = all_t && key.vt >= 0;
+        }
+        for (const VertexKey* key : by_vertex) {
+            if (all_n) {
+                const std::size_t n = std::size_t(key->vn) * 3;
+                mesh.normals.push_back(
+                    {attrib.normals[n], attrib.normals[n + 1], attrib.normals[n + 2]});
+            }
+            if (all_t) {
+                const std::size_t t = std::size_t(key->vt) * 2;
+                mesh.uvs.push_back({attrib.texcoords[t], attrib.texcoords[t + 1]});
+            }
+        }
+    }
+    asset.nodes.push_back(std::move(root));
+    if (auto ok2 = check_budget(asset, limits, sink); !ok2) return Unexpected(ok2.error());
+    if (auto ok2 = validate_asset(asset, sink); !ok2) return Unexpected(ok2.error());
+    return asset;
+}
+
+}  // namespace strata::assets

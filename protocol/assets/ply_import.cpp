@@ -1,0 +1,402 @@
+#include "protocol/assets/ply_import.h"
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+
+namespace strata::assets {
+
+namespace {
+
+enum class PlyType : uint8_t { Int8, Uint8, Int16, Uint16, Int32, Uint32, Float32, Float64 };
+
+std::optional<PlyType> type_named(std::string_view n) {
+    if (n == "char" || n == "int8") return PlyType::Int8;
+    if (n == "uchar" || n == "uint8") return PlyType::Uint8;
+    if (n == "short" || n == "int16") return PlyType::Int16;
+    if (n == "ushort" || n == "uint16") return PlyType::Uint16;
+    if (n == "int" || n == "int32") return PlyType::Int32;
+    if (n == "uint" || n == "uint32") return PlyType::Uint32;
+    if (n == "float" || n == "float32") return PlyType::Float32;
+    if (n == "double" || n == "float64") return PlyType::Float64;
+    return std::nullopt;
+}
+
+std::size_t size_of(PlyType t) {
+    static constexpr std::size_t SIZES[] = {1, 1, 2, 2, 4, 4, 4, 8};
+    return SIZES[int(t)];
+}
+
+bool is_integral(PlyType t) {
+    return t != PlyType::Float32 && t != PlyType::Float64;
+}
+
+/// Most corners one face may list (a polygon beyond this is not a mesh face).
+constexpr double MAX_FACE_CORNERS = 65536;
+/// Longest header accepted.
+constexpr std::size_t MAX_HEADER = 1 << 16;
+
+struct PlyProperty {
+    std::string name;
+    PlyType type = PlyType::Float32;
+    bool list = false;
+    PlyType count_type = PlyType::Uint8;
+};
+
+struct PlyElement {
+    std::string name;
+    uint64_t count = 0;
+    std::vector<PlyProperty> properties;
+};
+
+enum class PlyEncoding : uint8_t { Ascii, Little, Big };
+
+struct PlyHeader {
+    PlyEncoding encoding = PlyEncoding::Ascii;
+    std::vector<PlyElement> elements;
+    std::size_t body = 0;  ///< offset of the first byte after end_header
+};
+
+std::vector<std::string_view> split(std::string_view line) {
+    std::vector<std::string_view> out;
+    std::size_t i = 0;
+    while (i < line.size()) {
+        while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
+        const std::size_t start = i;
+        while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') ++i;
+        if (i > start) out.push_back(line.substr(start, i - start));
+    }
+    return out;
+}
+
+Imported<PlyHeader> read_header(std::string_view text, const ErrorSink& sink) {
+    PlyHeader h;
+    std::size_t pos = 0;
+    int line_no = 0;
+    bool format_seen = false;
+    while (true) {
+        const std::size_t nl = text.find('\n', pos);
+        if (nl == std::string_view::npos || nl > MAX_HEADER)
+            return sink.invalid("header", "no end_header within the first 64 KiB");
+        const std::string_view line = text.substr(pos, nl - pos);
+        pos = nl + 1;
+        ++line_no;
+        const auto words = split(line);
+        const std::string where = "header line " + std::to_string(line_no);
+        if (line_no == 1) {
+            if (words.size() != 1 || words[0] != "ply")
+                return sink.invalid("header", "does not start with 'ply'");
+            continue;
+        }
+        if (words.empty() || words[0] == "comment" || words[0] == "obj_info") continue;
+        if (words[0] == "end_header") break;
+        if (words[0] == "format") {
+            if (words.size() != 3 || words[2] != "1.0")
+                return sink.unsupported(where, "expected 'format <encoding> 1.0'");
+            if (words[1] == "ascii")
+                h.encoding = PlyEncoding::Ascii;
+            else if (words[1] == "binary_little_endian")
+                h.encoding = PlyEncoding::Little;
+            else if (words[1] == "binary_big_endian")
+                h.encoding = PlyEncoding::Big;
+            else
+                return sink.unsupported(where, "unknown encoding '" + std::string(words[1]) + "'");
+            format_seen = true;
+        } else if (words[0] == "element") {
+            uint64_t count = 0;
+            if (words.size() != 3 ||
+                std::from_chars(words[2].data(), words[2].data() + words[2].size(), count).ec !=
+                    std::errc())
+                return sink.invalid(where, "expected 'element <name> <count>'");
+            h.elements.push_back({std::string(words[1]), count, {}});
+        } else if (words[0] == "property") {
+            if (h.elements.empty()) return sink.invalid(where, "a property before any element");
+            PlyProperty p;
+            if (words.size() == 5 && words[1] == "list") {
+                const auto ct = type_named(words[2]);
+                const auto vt = type_named(words[3]);
+                if (!ct || !vt || !is_integral(*ct))
+                    return sink.invalid(where, "bad list property types");
+                p.list = true;
+                p.count_type = *ct;
+                p.type = *vt;
+                p.name = words[4];
+            } else if (words.size() == 3) {
+                const auto t = type_named(words[1]);
+                if (!t) return sink.invalid(where, "unknown type '" + std::string(words[1]) + "'");
+                p.type = *t;
+                p.name = words[2];
+            } else {
+                return sink.invalid(where, "expected 'property <type> <name>' or 'property list "
+                                           "<count type> <type> <name>'");
+            }
+            h.elements.back().properties.push_back(std::move(p));
+        } else {
+            return sink.invalid(where, "unknown keyword '" + std::string(words[0]) + "'");
+        }
+    }
+    if (!format_seen) return sink.invalid("header", "has no format line");
+    h.body = pos;
+    return h;
+}
+
+/// Reads the body's values one at a time, in any of the three encodings.
+class ValueReader {
+public:
+    ValueReader(std::span<const uint8_t> body, PlyEncoding encoding)
+        : m_p(body.data()), m_end(body.data() + body.size()), m_encoding(encoding) {}
+
+    std::size_t remaining() const { return std::size_t(m_end - m_p); }
+
+    /// The next value as a double; false at the end of the data or on a malformed number.
+    bool read(PlyType t, double& out) {
+        if (m_encoding == PlyEncoding::Ascii) return read_text(t, out);
+        const std::size_t n = size_of(t);
+        if (remaining() < n) return false;
+        uint8_t b[8];
+        std::memcpy(b, m_p, n);
+        m_p += n;
+        if (m_encoding == PlyEncoding::Big) std::reverse(b, b + n);
+        switch (t) {
+            case PlyType::Int8:
+                out = int8_t(b[0]);
+                break;
+            case PlyType::Uint8:
+                out = b[0];
+                break;
+            case PlyType::Int16: {
+                int16_t v;
+                std::memcpy(&v, b, 2);
+                out = v;
+                break;
+            }
+            case PlyType::Uint16: {
+                uint16_t v;
+                std::memcpy(&v, b, 2);
+                out = v;
+                break;
+            }
+            case PlyType::Int32: {
+                int32_t v;
+                std::memcpy(&v, b, 4);
+                out = v;
+                break;
+            }
+            case PlyType::Uint32: {
+                uint32_t v;
+                std::memcpy(&v, b, 4);
+                out = v;
+                break;
+            }
+            case PlyType::Float32: {
+                float v;
+                std::memcpy(&v, b, 4);
+                out = v;
+                break;
+            }
+            case PlyType::Float64:
+                std::memcpy(&out, b, 8);
+                break;
+        }
+        return true;
+    }
+
+private:
+    bool read_text(PlyType t, double& out) {
+        while (m_p < m_end && std::isspace(*m_p)) ++m_p;
+        const uint8_t* start = m_p;
+        while (m_p < m_end && !std::isspace(*m_p)) ++m_p;
+        if (m_p == start) return false;
+        const char* first = reinterpret_cast<const char*>(start);
+        const char* last = reinterpret_cast<const char*>(m_p);
+        const auto [end, ec] = std::from_chars(first, last, out);
+        if (ec != std::errc() || end != last) return false;
+        if (is_integral(t) && out != std::floor(out)) return false;
+        return true;
+    }
+
+    const uint8_t* m_p;
+    const uint8_t* m_end;
+    PlyEncoding m_encoding;
+};
+
+/// Which vertex property feeds which attribute.
+struct VertexSlots {
+    int x = -1, y = -1, z = -1, nx = -1, ny = -1, nz = -1, r = -1, g = -1, b = -1, u = -1, v = -1;
+    float color_scale = 1.0f;
+};
+
+VertexSlots vertex_slots(const PlyElement& e) {
+    VertexSlots s;
+    for (std::size_t i = 0; i < e.properties.size(); ++i) {
+        const PlyProperty& p = e.properties[i];
+        if (p.list) continue;
+        const std::string& n = p.name;
+        const int k = int(i);
+        if (n == "x") s.x = k;
+        if (n == "y") s.y = k;
+        if (n == "z") s.z = k;
+        if (n == "nx") s.nx = k;
+        if (n == "ny") s.ny = k;
+        if (n == "nz") s.nz = k;
+        if (n == "red" || n == "diffuse_red") s.r = k;
+        if (n == "green" || n == "diffuse_green") s.g = k;
+        if (n == "blue" || n == "diffuse_blue") s.b = k;
+        if (n == "u" || n == "s" || n == "texture_u" || n == "texture_s") s.u = k;
+        if (n == "v" || n == "t" || n == "texture_v" || n == "texture_t") s.v = k;
+    }
+    if (s.r >= 0) {
+        const PlyType t = e.properties[std::size_t(s.r)].type;
+        s.color_scale = t == PlyType::Uint8    ? 1.0f / 255.0f
+                        : t == PlyType::Uint16 ? 1.0f / 65535.0f
+                                               : 1.0f;
+    }
+    return s;
+}
+
+}  // namespace
+
+Imported<Asset> import_ply(std::span<const uint8_t> bytes, const std::string& file,
+                           const ImportLimits& limits) {
+    const ErrorSink sink(file);
+    auto parsed = read_header(
+        std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()), sink);
+    if (!parsed) return Unexpected(parsed.error());
+    const PlyHeader& header = parsed.value();
+    ValueReader in(bytes.subspan(header.body), header.encoding);
+
+    Asset asset;
+    AssetMesh mesh;
+    mesh.name = file;
+    bool have_vertices = false;
+    uint64_t skipped_faces = 0;
+    for (const PlyElement& e : header.elements) {
+        const std::string where = "element " + e.name;
+        // Step 1: the declared count must fit the bytes that follow (each element takes at
+        // least one byte per property) and, for vertices and faces, the budget.
+        if (e.count > 0 && e.properties.empty())
+            return sink.invalid(where, "has no properties");
+        if (e.count > in.remaining())
+            return sink.invalid(where, "declares " + std::to_string(e.count) +
+                                           " elements, more than the " +
+                                           std::to_string(in.remaining()) + " bytes that follow");
+        const bool is_vertex = e.name == "vertex";
+        const bool is_face = e.name == "face";
+        VertexSlots slots;
+        int face_list = -1;
+        if (is_vertex) {
+            if (have_vertices) return sink.invalid(where, "a second vertex element");
+            have_vertices = true;
+            slots = vertex_slots(e);
+            if (slots.x < 0 || slots.y < 0 || slots.z < 0)
+                return sink.invalid(where, "has no x, y and z properties");
+            if (e.count > limits.max_vertices)
+                return sink.too_large(where, std::to_string(e.count) +
+                                                 " vertices; the scene has room for " +
+                                                 std::to_string(limits.max_vertices) +
+                                                 " (max_scene_vertices)");
+            mesh.positions.reserve(e.count);
+        }
+        if (is_face) {
+            for (std::size_t i = 0; i < e.properties.size(); ++i)
+                if (e.properties[i].list && (e.properties[i].name == "vertex_indices" ||
+                                             e.properties[i].name == "vertex_index"))
+                    face_list = int(i);
+            if (face_list < 0)
+                return sink.invalid(where, "has no vertex_indices list");
+            if (!is_integral(e.properties[std::size_t(face_list)].type))
+                return sink.invalid(where, "vertex_indices must be integers");
+            if (e.count > limits.max_triangles)
+                return sink.too_large(where, std::to_string(e.count) +
+                                                 " faces; the scene has room for " +
+                                                 std::to_string(limits.max_triangles) +
+                                                 " triangles (max_scene_triangles)");
+            mesh.triangles.reserve(e.count);
+        }
+        // Step 2: every element, every property read (so that binary offsets stay right).
+        double row[64];
+        std::vector<uint32_t> corners;
+        for (uint64_t i = 0; i < e.count; ++i) {
+            const std::string at = where + " " + std::to_string(i);
+            for (std::size_t k = 0; k < e.properties.size(); ++k) {
+                const PlyProperty& p = e.properties[k];
+                double value = 0.0;
+                if (!p.list) {
+                    if (!in.read(p.type, value))
+                        return sink.invalid(at, "property " + p.name +
+                                                    ": missing or malformed value");
+                    if (k < std::size(row)) row[k] = value;
+                    continue;
+                }
+                double n = 0.0;
+                if (!in.read(p.count_type, n) || n < 0 || n > MAX_FACE_CORNERS)
+                    return sink.invalid(at, "property " + p.name + ": bad list length");
+                const bool keep = is_face && int(k) == face_list;
+                if (keep) corners.clear();
+                for (uint32_t c = 0; c < uint32_t(n); ++c) {
+                    if (!in.read(p.type, value))
+                        return sink.invalid(at, "property " + p.name +
+                                                    ": missing or malformed value");
+                    if (!keep) continue;
+                    if (value < 0 || value >= double(mesh.positions.size()))
+                        return sink.invalid(at, "vertex index " + std::to_string(int64_t(value)) +
+                                                    " is outside the " +
+                                                    std::to_string(mesh.positions.size()) +
+                                                    " vertices read before it");
+                    corners.push_back(uint32_t(value));
+                }
+            }
+            if (is_vertex) {
+                auto get = [&](int slot) {
+                    return slot >= 0 && std::size_t(slot) < std::size(row) ? float(row[slot])
+                                                                            : 0.0f;
+                };
+                mesh.positions.push_back({get(slots.x), get(slots.y), get(slots.z)});
+                if (slots.nx >= 0 && slots.ny >= 0 && slots.nz >= 0)
+                    mesh.normals.push_back({get(slots.nx), get(slots.ny), get(slots.nz)});
+                if (slots.r >= 0 && slots.g >= 0 && slots.b >= 0)
+                    mesh.colors.push_back(glm::clamp(
+                        Vec3(get(slots.r), get(slots.g), get(slots.b)) * slots.color_scale,
+                        Vec3(0.0f), Vec3(1.0f)));
+                if (slots.u >= 0 && slots.v >= 0) mesh.uvs.push_back({get(slots.u), get(slots.v)});
+            }
+            if (is_face) {
+                if (corners.size() < 3) {
+                    ++skipped_faces;
+                    continue;
+                }
+                for (std::size_t c = 1; c + 1 < corners.size(); ++c)
+                    mesh.triangles.push_back({corners[0], corners[c], corners[c + 1]});
+                if (mesh.triangles.size() > limits.max_triangles)
+                    return sink.too_large(where, "more than " +
+                                                     std::to_string(limits.max_triangles) +
+                                                     " triangles (max_scene_triangles)");
+            }
+        }
+    }
+    if (!have_vertices) return sink.invalid("header", "has no vertex element");
+    if (mesh.triangles.empty())
+        return sink.invalid("element face", "no faces: point clouds are not imported");
+    if (skipped_faces)
+        asset.warnings.push_back(std::to_string(skipped_faces) +
+                                 " faces with fewer than 3 corners skipped");
+    // Non-finite optional attributes are dropped rather than refusing the whole file.
+    for (const Vec3& n : mesh.normals)
+        if (!is_finite(n)) {
+            mesh.normals.clear();
+            asset.warnings.push_back("normals dropped: some are not finite");
+            break;
+        }
+    asset.meshes.push_back(std::move(mesh));
+    AssetNode root;
+    root.name = file;
+    root.meshes = {0};
+    asset.nodes.push_back(std::move(root));
+    if (auto ok = check_budget(asset, limits, sink); !ok) return Unexpected(ok.error());
+    if (auto ok = validate_asset(asset, sink); !ok) return Unexpected(ok.error());
+    return asset;
+}
+
+}  // namespace strata::assets

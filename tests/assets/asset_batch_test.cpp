@@ -1,0 +1,177 @@
+// The asset as one engine batch: shared meshes stay shared in the scene (one BLAS, many
+// instances), world transforms are composed, the batch is atomic, and what the scene cannot hold
+// yet is named.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "engine/engine.h"
+#include "protocol/assets/asset_batch.h"
+#include "tests/assets/asset_test_util.h"
+
+namespace strata::assets::test {
+namespace {
+
+using ::testing::Contains;
+using ::testing::HasSubstr;
+
+std::unique_ptr<Engine> make_engine() {
+    auto e = Engine::create();
+    EXPECT_TRUE(e.has_value());
+    return std::move(e.value());
+}
+
+TEST(AssetBatch, ASharedGltfMeshIsOneSceneMeshWithSeveralInstances) {
+    const std::string path = std::string(STRATA_ASSIMP_MODELS_DIR) +
+                              "/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb";
+    const std::string glb = read_file(path);
+    if (glb.empty()) GTEST_SKIP() << path << " missing: install assimp-testmodels";
+    auto asset = import_asset(AssetFormat::Glb, bytes_of(glb), "2CylinderEngine.glb", {});
+    ASSERT_TRUE(asset.has_value()) << asset.error().describe();
+    AssetBatch b = asset_to_batch(std::move(asset.value()), {"engine", true});
+    EXPECT_EQ(b.meshes.size(), 34u);
+    EXPECT_EQ(b.instances.size(), 115u);
+    EXPECT_EQ(b.materials.size(), 34u);
+    // The asset's group plus one per node with children (15 of the 82 nodes have some).
+    EXPECT_EQ(b.groups.front(), "engine");
+
+    const std::size_t b_groups = b.groups.size();
+    auto engine = make_engine();
+    auto applied = engine->apply(std::move(b.batch));
+    ASSERT_TRUE(applied.has_value()) << applied.error().describe();
+    auto report = engine->commit();
+    ASSERT_TRUE(report.has_value()) << report.error().describe();
+    EXPECT_EQ(report.value().rebuilt.size(), 34u);  // one BLAS per mesh, not per instance
+    engine->read([&](const Scene& s) {
+        const SceneCounts c = s.counts();
+        EXPECT_EQ(c.meshes, 34u);
+        EXPECT_EQ(c.instances, 115u);
+        std::size_t most = 0;
+        s.meshes().for_each([&](auto, const MeshRecord& m) { most = std::max(most, m.users.size()); });
+        EXPECT_EQ(most, 20u);
+        EXPECT_GT(c.instanced_triangles, c.triangles);
+        EXPECT_EQ(c.groups, b_groups);
+    });
+}
+
+TEST(AssetBatch, TheNodeTreeBecomesGroupsAndInstancesGetTheComposedWorldTransform) {
+    const std::string nodes = R"([
+      {"children": [1], "translation": [10, 0, 0]},
+      {"mesh": 0, "translation": [0, 5, 0], "scale": [3, 3, 3]}])";
+    auto asset = import_text(AssetFormat::Gltf, triangle_gltf(nodes));
+    ASSERT_TRUE(asset.has_value()) << asset.error().describe();
+    AssetBatch b = asset_to_batch(std::move(asset.value()), {"t", true, "holder"});
+    ASSERT_EQ(b.groups, (std::vector<std::string>{"t", "t.group0"}));
+    ASSERT_EQ(b.instances, std::vector<std::string>{"t.node1"});
+    auto engine = make_engine();
+    EditBatch holder;
+    AddGroup g;
+    g.id = "holder";
+    g.transform = Affine::translation({0, 0, 100});
+    holder.edits.emplace_back(g);
+    ASSERT_TRUE(engine->apply(std::move(holder)).has_value());
+    auto applied = engine->apply(std::move(b.batch));
+    ASSERT_TRUE(applied.has_value()) << applied.error().describe();
+    engine->read([](const Scene& s) {
+        const InstanceRecord* inst = s.instance(s.find_instance("t.node1")).value();
+        EXPECT_EQ(inst->transform.transform_point(Vec3(1, 0, 0)), Vec3(3, 5, 0));  // local
+        EXPECT_EQ(inst->world.transform_point(Vec3(1, 0, 0)), Vec3(13, 5, 100));
+        EXPECT_EQ(inst->parent, s.find_group("t.group0"));
+        const GroupRecord* top = s.group(s.find_group("t")).value();
+        EXPECT_EQ(top->parent, s.find_group("holder"));
+    });
+}
+
+TEST(AssetBatch, ATreeDeeperThanTheScenesGroupsIsFlattenedToWorldTransforms) {
+    // A chain of 80 nodes, each moved by 1 along x; the leaf places the mesh.
+    std::string nodes = "[";
+    for (int i = 0; i < 80; ++i)
+        nodes += std::string(i ? ", " : "") + "{\"translation\": [1, 0, 0]" +
+                 (i < 79 ? ", \"children\": [" + std::to_string(i + 1) + "]" : ", \"mesh\": 0") +
+                 "}";
+    nodes += "]";
+    auto asset = import_text(AssetFormat::Gltf, triangle_gltf(nodes));
+    ASSERT_TRUE(asset.has_value()) << asset.error().describe();
+    AssetBatch b = asset_to_batch(std::move(asset.value()), {"deep", true});
+    EXPECT_EQ(b.groups, std::vector<std::string>{"deep"});
+    EXPECT_THAT(b.warnings, Contains(HasSubstr("flattened")));
+    auto engine = make_engine();
+    auto applied = engine->apply(std::move(b.batch));
+    ASSERT_TRUE(applied.has_value()) << applied.error().describe();
+    engine->read([](const Scene& s) {
+        const InstanceRecord* inst = s.instance(s.find_instance("deep.node79")).value();
+        EXPECT_EQ(inst->world.transform_point(Vec3(0)), Vec3(80, 0, 0));
+    });
+}
+
+TEST(AssetBatch, ANodeTheSceneCannotPlaceIsLeftOutWithAWarning) {
+    auto asset = import_text(AssetFormat::Gltf,
+                             triangle_gltf(R"([{"mesh": 0, "scale": [0, 0, 0]}])"));
+    ASSERT_TRUE(asset.has_value()) << asset.error().describe();
+    AssetBatch b = asset_to_batch(std::move(asset.value()), {"z", true});
+    EXPECT_TRUE(b.instances.empty());
+    EXPECT_EQ(b.meshes.size(), 1u);
+    ASSERT_FALSE(b.warnings.empty());
+    EXPECT_THAT(b.warnings.back(), HasSubstr("node 0 left out"));
+}
+
+TEST(AssetBatch, ZeroNormalsAreDroppedForTheirMeshWithAWarning) {
+    auto asset = import_text(AssetFormat::Obj,
+                             "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nf 1//1 2//1 3//1\n");
+    ASSERT_TRUE(asset.has_value()) << asset.error().describe();
+    AssetBatch b = asset_to_batch(std::move(asset.value()), {"zn", true});
+    EXPECT_THAT(b.warnings, Contains(HasSubstr("normals dropped")));
+    auto engine = make_engine();
+    ASSERT_TRUE(engine->apply(std::move(b.batch)).has_value());
+}
+
+TEST(AssetBatch, WithoutInstancingOnlyMeshesAndMaterialsAreCreated) {
+    auto asset = import_text(AssetFormat::Gltf, triangle_gltf(R"([{"mesh": 0}])"));
+    ASSERT_TRUE(asset.has_value());
+    AssetBatch b = asset_to_batch(std::move(asset.value()), {"m", false});
+    EXPECT_EQ(b.meshes, std::vector<std::string>{"m.mesh0"});
+    EXPECT_TRUE(b.instances.empty());
+    EXPECT_EQ(b.batch.edits.size(), 1u);
+}
+
+TEST(AssetBatch, ImportingTwiceUnderOnePrefixIsRefusedAndChangesNothing) {
+    auto engine = make_engine();
+    for (int round = 0; round < 2; ++round) {
+        auto asset = import_text(AssetFormat::Obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+        ASSERT_TRUE(asset.has_value());
+        AssetBatch b = asset_to_batch(std::move(asset.value()), {"dup", true});
+        auto applied = engine->apply(std::move(b.batch));
+        if (round == 0) {
+            ASSERT_TRUE(applied.has_value());
+            continue;
+        }
+        ASSERT_FALSE(applied.has_value());
+        EXPECT_EQ(applied.error().code, ErrorCode::DuplicateId);
+        engine->read([](const Scene& s) {
+            EXPECT_EQ(s.version(), 1u);
+            EXPECT_EQ(s.counts().meshes, 1u);
+            EXPECT_EQ(s.counts().instances, 1u);
+        });
+    }
+}
+
+TEST(AssetBatch, NormalsAndUvsReachTheSceneAndTexturesAreNamedInTheWarnings) {
+    const std::string glb = read_file(std::string(STRATA_ASSIMP_MODELS_DIR) +
+                                      "/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb");
+    if (glb.empty()) GTEST_SKIP() << "assimp-testmodels missing";
+    auto asset = import_asset(AssetFormat::Glb, bytes_of(glb), "box.glb", {});
+    ASSERT_TRUE(asset.has_value()) << asset.error().describe();
+    AssetBatch b = asset_to_batch(std::move(asset.value()), {"box", true});
+    EXPECT_THAT(b.warnings, Contains(HasSubstr("texture reference(s) dropped")));
+    // Normals and uvs reach the scene.
+    auto engine = make_engine();
+    ASSERT_TRUE(engine->apply(std::move(b.batch)).has_value());
+    engine->read([](const Scene& s) {
+        const MeshRecord* m = s.mesh(s.find_mesh("box.mesh0")).value();
+        EXPECT_EQ(m->normals.size(), m->positions.size());
+        EXPECT_EQ(m->uvs.size(), m->positions.size());
+    });
+}
+
+}  // namespace
+}  // namespace strata::assets::test

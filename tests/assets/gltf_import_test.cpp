@@ -1,0 +1,160 @@
+// The glTF importer: a real multi-node model whose meshes are shared, node transforms (TRS and
+// matrices, composed down the tree), and refusals: other primitive modes, external files, bad
+// indices, cycles.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "tests/assets/asset_test_util.h"
+
+namespace strata::assets::test {
+namespace {
+
+using ::testing::HasSubstr;
+
+const std::string MODELS = STRATA_ASSIMP_MODELS_DIR;
+
+/// Skips the test without Debian's assimp-testmodels.
+#define REQUIRE_TESTMODELS()                                              \
+    if (read_file(MODELS + "/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb").empty()) \
+    GTEST_SKIP() << MODELS << " missing: install assimp-testmodels"
+
+Imported<Asset> import_path(const std::string& relative) {
+    const std::string text = read_file(MODELS + "/" + relative);
+    if (text.empty())
+        return Unexpected(AssetError{AssetError::Kind::Invalid, relative, "", "cannot read"});
+    const auto format = relative.ends_with(".glb") ? AssetFormat::Glb : AssetFormat::Gltf;
+    return import_asset(format, bytes_of(text), relative, {});
+}
+
+TEST(GltfImport, TwoCylinderEngineSharesEachMeshBetweenTheNodesThatUseIt) {
+    REQUIRE_TESTMODELS();
+    auto a = import_path("glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb");
+    ASSERT_TRUE(a.has_value()) << a.error().describe();
+    const Asset& asset = a.value();
+    // Counted independently from the file's JSON: 82 nodes reachable from the scene, 67 of them
+    // with a mesh, 29 distinct meshes of 34 primitives in all, 34 materials.
+    EXPECT_EQ(asset.nodes.size(), 82u);
+    EXPECT_EQ(asset.meshes.size(), 34u);
+    EXPECT_EQ(asset.materials.size(), 34u);
+    std::size_t placements = 0;
+    std::map<int, int> users;
+    for (const AssetNode& n : asset.nodes) {
+        placements += n.meshes.size();
+        for (int m : n.meshes) ++users[m];
+    }
+    EXPECT_EQ(placements, 115u);
+    int most = 0;
+    for (const auto& [mesh, count] : users) most = std::max(most, count);
+    EXPECT_EQ(most, 20);  // glTF mesh 6 is placed by 20 nodes
+}
+
+TEST(GltfImport, NodeTransformsAreReadAsTrsOrColumnMajorMatrices) {
+    const std::string nodes = R"([
+      {"children": [1], "translation": [1, 2, 3], "scale": [2, 2, 2]},
+      {"mesh": 0, "rotation": [0, 0, 0.7071068, 0.7071068]},
+      {"mesh": 0, "matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0, 5,6,7,1]}])";
+    auto a = import_text(AssetFormat::Gltf,
+                         triangle_gltf(nodes, "", R"([{"nodes": [0, 2]}])"));
+    ASSERT_TRUE(a.has_value()) << a.error().describe();
+    const Asset& asset = a.value();
+    ASSERT_EQ(asset.meshes.size(), 1u);  // one glTF mesh, used twice
+    ASSERT_EQ(asset.nodes.size(), 3u);
+    EXPECT_EQ(asset.nodes[1].parent, 0);
+    const Vec3 p = asset.nodes[0].local.transform_point(
+        asset.nodes[1].local.transform_point(Vec3(1, 0, 0)));
+    EXPECT_NEAR(p.x, 1.0f, 1e-5f);  // rotated 90 degrees about z, scaled by 2, moved
+    EXPECT_NEAR(p.y, 4.0f, 1e-5f);
+    EXPECT_NEAR(p.z, 3.0f, 1e-5f);
+    EXPECT_EQ(asset.nodes[2].local.transform_point(Vec3(0)), Vec3(5, 6, 7));
+    EXPECT_EQ(asset.nodes[2].meshes, std::vector<int>{0});
+}
+
+TEST(GltfImport, ModesOtherThanTrianglesAreRefusedNamingThePrimitive) {
+    auto a = import_text(AssetFormat::Gltf, triangle_gltf(R"([{"mesh": 0}])", R"(, "mode": 1)"));
+    ASSERT_FALSE(a.has_value());
+    EXPECT_EQ(a.error().kind, AssetError::Kind::Unsupported);
+    EXPECT_EQ(a.error().element, "meshes[0].primitives[0]");
+    EXPECT_THAT(a.error().message, HasSubstr("LINES"));
+}
+
+TEST(GltfImport, AnExternalBufferIsRefusedAndNeverRead) {
+    REQUIRE_TESTMODELS();
+    auto a = import_path("glTF2/BoxTextured-glTF/BoxTextured.gltf");
+    ASSERT_FALSE(a.has_value());
+    EXPECT_EQ(a.error().kind, AssetError::Kind::Unsupported);
+    EXPECT_THAT(a.error().message, HasSubstr("external file"));
+    // Even a path that exists on this machine is not read.
+    std::string doc = triangle_gltf(R"([{"mesh": 0}])");
+    doc.replace(doc.find("data:"), doc.find('"', doc.find("data:")) - doc.find("data:"),
+                "/etc/hostname");
+    auto b = import_text(AssetFormat::Gltf, doc);
+    ASSERT_FALSE(b.has_value());
+    EXPECT_THAT(b.error().message, HasSubstr("refused"));
+}
+
+TEST(GltfImport, EmbeddedAndBinaryBoxesImportWithTheirTexture) {
+    REQUIRE_TESTMODELS();
+    for (const char* path : {"glTF2/BoxTextured-glTF-Embedded/BoxTextured.gltf",
+                             "glTF2/BoxTextured-glTF-Binary/BoxTextured.glb"}) {
+        auto a = import_path(path);
+        ASSERT_TRUE(a.has_value()) << a.error().describe();
+        ASSERT_EQ(a.value().meshes.size(), 1u) << path;
+        EXPECT_EQ(a.value().meshes[0].triangles.size(), 12u) << path;
+        ASSERT_EQ(a.value().textures.size(), 1u) << path;
+        EXPECT_FALSE(a.value().textures[0].bytes.empty()) << path;
+        EXPECT_EQ(a.value().materials[0].base_color_texture, 0) << path;
+        EXPECT_EQ(a.value().meshes[0].uvs.size(), a.value().meshes[0].positions.size()) << path;
+    }
+}
+
+TEST(GltfImport, AnIndexOutsideTheVerticesIsRefusedNamingTheAccessor) {
+    std::string doc = triangle_gltf(R"([{"mesh": 0}])");
+    // The index buffer view is 6 bytes; a count of 6 runs past it.
+    doc.replace(doc.find(R"("count": 3, "type": "SCALAR")"), 10, R"("count": 6)");
+    auto a = import_text(AssetFormat::Gltf, doc);
+    ASSERT_FALSE(a.has_value());
+    EXPECT_EQ(a.error().element, "meshes[0].primitives[0].indices (accessors[1])");
+    EXPECT_THAT(a.error().message, HasSubstr("run past its buffer view"));
+}
+
+TEST(GltfImport, CyclesAndNodesWithTwoParentsAreRefused) {
+    auto cycle = import_text(AssetFormat::Gltf,
+                             triangle_gltf(R"([{"children": [1]}, {"children": [0], "mesh": 0}])"));
+    ASSERT_FALSE(cycle.has_value());
+    EXPECT_THAT(cycle.error().message, HasSubstr("reached twice"));
+    auto shared = import_text(
+        AssetFormat::Gltf,
+        triangle_gltf(R"([{"children": [2]}, {"children": [2]}, {"mesh": 0}])", "",
+                      R"([{"nodes": [0, 1]}])"));
+    ASSERT_FALSE(shared.has_value());
+    EXPECT_EQ(shared.error().element, "nodes[2]");
+}
+
+TEST(GltfImport, DeeplyNestedJsonIsRefusedBeforeParsing) {
+    const std::string deep = R"({"asset": {"version": "2.0"}, "extras": )" +
+                             std::string(5000, '[') + std::string(5000, ']') + "}";
+    auto a = import_text(AssetFormat::Gltf, deep);
+    ASSERT_FALSE(a.has_value());
+    EXPECT_THAT(a.error().message, HasSubstr("nested deeper"));
+}
+
+TEST(GltfImport, AssimpsBrokenFilesAreRefusedWithTheirReason) {
+    REQUIRE_TESTMODELS();
+    const std::pair<const char*, const char*> cases[] = {
+        {"glTF2/IndexOutOfRange/IndexOutOfRange.gltf", ""},
+        {"glTF2/RecursiveNodes/RecursiveNodes.gltf", ""},
+        {"glTF2/BoxWithInfinites-glTF-Binary/BoxWithInfinites.glb", "not finite"},
+        {"glTF2/glTF-Asset-Generator/Mesh_PrimitiveMode/Mesh_PrimitiveMode_00.gltf", ""},
+    };
+    for (const auto& [path, words] : cases) {
+        auto a = import_path(path);
+        ASSERT_FALSE(a.has_value()) << path;
+        EXPECT_EQ(a.error().file, path);
+        EXPECT_FALSE(a.error().message.empty());
+        EXPECT_THAT(a.error().describe(), HasSubstr(words)) << a.error().describe();
+    }
+}
+
+}  // namespace
+}  // namespace strata::assets::test

@@ -1,0 +1,139 @@
+// The OBJ importer: the real bunny and Spot, MTL materials from the upload only, polygons,
+// attributes, and refusals naming the face.
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "tests/assets/asset_test_util.h"
+
+namespace strata::assets::test {
+namespace {
+
+using ::testing::HasSubstr;
+
+Imported<Asset> import_model(const std::string& name) {
+    const std::string text = read_file(std::string(STRATA_MODELS_DIR) + "/" + name);
+    if (text.empty()) return Unexpected(AssetError{AssetError::Kind::Invalid, name, "", "missing"});
+    return import_asset(AssetFormat::Obj, bytes_of(text), name, {});
+}
+
+/// Skips the test when the shared models are not on this machine (a bare checkout, docker).
+#define REQUIRE_MODEL(name)                                                              \
+    if (read_file(std::string(STRATA_MODELS_DIR) + "/" + (name)).empty())                \
+    GTEST_SKIP() << STRATA_MODELS_DIR "/" << (name) << " missing"
+
+TEST(ObjImport, TheStanfordBunnyIsOneMeshOfAllItsTriangles) {
+    REQUIRE_MODEL("stanford-bunny.obj");
+    auto a = import_model("stanford-bunny.obj");
+    ASSERT_TRUE(a.has_value()) << a.error().describe();
+    ASSERT_EQ(a.value().meshes.size(), 1u);
+    EXPECT_EQ(a.value().meshes[0].triangles.size(), 69451u);  // SOURCES.md
+    EXPECT_EQ(a.value().nodes.size(), 1u);
+    EXPECT_EQ(a.value().nodes[0].meshes, std::vector<int>{0});
+}
+
+TEST(ObjImport, SpotKeepsItsTrianglesAndTextureCoordinates) {
+    REQUIRE_MODEL("spot.obj");
+    auto a = import_model("spot.obj");
+    ASSERT_TRUE(a.has_value()) << a.error().describe();
+    ASSERT_EQ(a.value().meshes.size(), 1u);
+    const AssetMesh& m = a.value().meshes[0];
+    EXPECT_EQ(m.triangles.size(), 5856u);
+    if (!m.uvs.empty()) {
+        EXPECT_EQ(m.uvs.size(), m.positions.size());
+    }
+}
+
+const std::string CUBE_FACES = R"(mtllib cube.mtl
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+v 0 0 1
+vt 0 0
+vt 1 0
+vt 1 1
+vn 0 0 -1
+usemtl red
+f 1/1/1 2/2/1 3/3/1 4/1/1
+usemtl shiny
+f 1 2 5
+f -5 -3 -1
+)";
+
+const std::string CUBE_MTL = R"(newmtl red
+Kd 1.5 0.2 0.1
+Ks 0 0 0
+newmtl shiny
+Kd 0.5 0.5 0.5
+Ks 1 1 1
+Ns 1000
+Ke 0.5 0 0
+map_Kd shiny.png
+)";
+
+TEST(ObjImport, MaterialsComeFromTheUploadedMtlWithKdKsNsAndMapKdMapped) {
+    auto a = import_text(AssetFormat::Obj, CUBE_FACES, {{"cube.mtl", CUBE_MTL}});
+    ASSERT_TRUE(a.has_value()) << a.error().describe();
+    const Asset& asset = a.value();
+    ASSERT_EQ(asset.materials.size(), 2u);
+    EXPECT_EQ(asset.materials[0].name, "red");
+    EXPECT_EQ(asset.materials[0].material.base_color, Vec3(1.0f, 0.2f, 0.1f));  // clamped
+    EXPECT_EQ(asset.materials[0].material.roughness, 1.0f);  // no specular: fully rough
+    EXPECT_LT(asset.materials[1].material.roughness, 0.25f);  // Ns 1000: glossy
+    EXPECT_EQ(asset.materials[1].material.emission, Vec3(0.5f, 0, 0));
+    ASSERT_EQ(asset.materials[1].base_color_texture, 0);
+    EXPECT_EQ(asset.textures[0].uri, "shiny.png");
+    EXPECT_EQ(asset.textures[0].mime_type, "image/png");
+    EXPECT_TRUE(asset.textures[0].bytes.empty());  // not uploaded
+    // One mesh per material: the quad (two triangles) and the two triangles.
+    ASSERT_EQ(asset.meshes.size(), 2u);
+    EXPECT_EQ(asset.meshes[0].material, 0);
+    EXPECT_EQ(asset.meshes[0].triangles.size(), 2u);
+    EXPECT_EQ(asset.meshes[1].material, 1);
+    EXPECT_EQ(asset.meshes[1].triangles.size(), 2u);
+    // The second triangle used negative (relative) indices: vertices 1, 3 and 5.
+    const AssetMesh& m = asset.meshes[1];
+    const Triangle t = m.triangles[1];
+    EXPECT_EQ(m.positions[t[0]], Vec3(0, 0, 0));
+    EXPECT_EQ(m.positions[t[1]], Vec3(1, 1, 0));
+    EXPECT_EQ(m.positions[t[2]], Vec3(0, 0, 1));
+}
+
+TEST(ObjImport, AnMtllibOutsideTheUploadIsNeverReadAndIsNamedInTheWarnings) {
+    std::string obj = CUBE_FACES;
+    obj.replace(0, 15, "mtllib /etc/passwd");
+    auto a = import_text(AssetFormat::Obj, obj);
+    ASSERT_TRUE(a.has_value()) << a.error().describe();
+    EXPECT_TRUE(a.value().materials.empty());
+    ASSERT_FALSE(a.value().warnings.empty());
+    EXPECT_THAT(a.value().warnings[0], HasSubstr("/etc/passwd"));
+    EXPECT_THAT(a.value().warnings[0], HasSubstr("not part of the upload"));
+}
+
+TEST(ObjImport, AFaceIndexOutsideTheVerticesIsRefusedNamingTheFace) {
+    auto a = import_text(AssetFormat::Obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 9\n");
+    ASSERT_FALSE(a.has_value());
+    EXPECT_EQ(a.error().element, "shape 0 face 1");
+    EXPECT_THAT(a.error().message, HasSubstr("vertex index 9"));
+    auto b = import_text(AssetFormat::Obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//2 3//1\n");
+    ASSERT_FALSE(b.has_value());
+    EXPECT_THAT(b.error().message, HasSubstr("normal index 2"));
+}
+
+TEST(ObjImport, PointsAndLinesAloneAreRefusedAsHavingNoFaces) {
+    auto a = import_text(AssetFormat::Obj, "v 0 0 0\nv 1 0 0\nl 1 2\np 1\n");
+    ASSERT_FALSE(a.has_value());
+    EXPECT_THAT(a.error().message, HasSubstr("no faces"));
+}
+
+TEST(ObjImport, TooManyTrianglesForTheSceneIsTooLarge) {
+    ImportLimits limits;
+    limits.max_triangles = 1;
+    auto a = import_text(AssetFormat::Obj, CUBE_FACES, {}, limits);
+    ASSERT_FALSE(a.has_value());
+    EXPECT_EQ(a.error().kind, AssetError::Kind::TooLarge);
+}
+
+}  // namespace
+}  // namespace strata::assets::test

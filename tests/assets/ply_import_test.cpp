@@ -1,0 +1,174 @@
+// The PLY reader: the three encodings agree, polygons are fan-triangulated, attributes are read,
+// and every broken header or body is refused naming the element.
+
+#include <bit>
+#include <cstring>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "tests/assets/asset_test_util.h"
+
+namespace strata::assets::test {
+namespace {
+
+using ::testing::HasSubstr;
+
+const std::string QUAD_ASCII = R"(ply
+format ascii 1.0
+comment a unit quad and a triangle, with normals and colours
+element vertex 5
+property float x
+property float y
+property float z
+property float nx
+property float ny
+property float nz
+property uchar red
+property uchar green
+property uchar blue
+element face 2
+property list uchar int vertex_indices
+end_header
+0 0 0 0 0 1 255 0 0
+1 0 0 0 0 1 0 255 0
+1 1 0 0 0 1 0 0 255
+0 1 0 0 0 1 255 255 255
+2 2 2 0 0 1 0 0 0
+4 0 1 2 3
+3 1 4 2
+)";
+
+/// The same file in binary, little- or big-endian.
+std::string quad_binary(bool big) {
+    std::string header = QUAD_ASCII.substr(0, QUAD_ASCII.find("end_header\n") + 11);
+    header.replace(header.find("ascii"), 5, big ? "binary_big_endian" : "binary_little_endian");
+    const float v[5][6] = {{0, 0, 0, 0, 0, 1}, {1, 0, 0, 0, 0, 1}, {1, 1, 0, 0, 0, 1},
+                           {0, 1, 0, 0, 0, 1}, {2, 2, 2, 0, 0, 1}};
+    const uint8_t c[5][3] = {{255, 0, 0}, {0, 255, 0}, {0, 0, 255}, {255, 255, 255}, {0, 0, 0}};
+    auto put = [&](std::string& out, const void* p, std::size_t n) {
+        std::string b(static_cast<const char*>(p), n);
+        if (big) std::reverse(b.begin(), b.end());
+        out += b;
+    };
+    std::string body;
+    for (int i = 0; i < 5; ++i) {
+        for (float f : v[i]) put(body, &f, 4);
+        body.append(reinterpret_cast<const char*>(c[i]), 3);
+    }
+    const int32_t quad[4] = {0, 1, 2, 3}, tri[3] = {1, 4, 2};
+    body += char(4);
+    for (int32_t i : quad) put(body, &i, 4);
+    body += char(3);
+    for (int32_t i : tri) put(body, &i, 4);
+    return header + body;
+}
+
+void expect_quad_mesh(const Asset& a) {
+    ASSERT_EQ(a.meshes.size(), 1u);
+    const AssetMesh& m = a.meshes[0];
+    ASSERT_EQ(m.positions.size(), 5u);
+    EXPECT_EQ(m.positions[4], Vec3(2, 2, 2));
+    ASSERT_EQ(m.triangles.size(), 3u);  // the quad as a fan of two, then the triangle
+    EXPECT_EQ(m.triangles[0], Triangle(0, 1, 2));
+    EXPECT_EQ(m.triangles[1], Triangle(0, 2, 3));
+    EXPECT_EQ(m.triangles[2], Triangle(1, 4, 2));
+    ASSERT_EQ(m.normals.size(), 5u);
+    EXPECT_EQ(m.normals[0], Vec3(0, 0, 1));
+    ASSERT_EQ(m.colors.size(), 5u);
+    EXPECT_EQ(m.colors[1], Vec3(0, 1, 0));
+    ASSERT_EQ(a.nodes.size(), 1u);
+    EXPECT_EQ(a.nodes[0].meshes, std::vector<int>{0});
+}
+
+TEST(PlyImport, AsciiQuadsAreFanTriangulatedWithNormalsAndColours) {
+    auto a = import_text(AssetFormat::Ply, QUAD_ASCII);
+    ASSERT_TRUE(a.has_value()) << a.error().describe();
+    expect_quad_mesh(a.value());
+}
+
+TEST(PlyImport, BinaryLittleAndBigEndianGiveTheSameMeshAsAscii) {
+    for (bool big : {false, true}) {
+        auto a = import_text(AssetFormat::Ply, quad_binary(big));
+        ASSERT_TRUE(a.has_value()) << a.error().describe();
+        expect_quad_mesh(a.value());
+    }
+}
+
+TEST(PlyImport, TextureCoordinatesAreReadUnderEitherName) {
+    const std::string ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                            "property float y\nproperty float z\nproperty float s\n"
+                            "property float t\nelement face 1\n"
+                            "property list uchar uint vertex_index\nend_header\n"
+                            "0 0 0 0 0\n1 0 0 1 0\n0 1 0 0 1\n3 0 1 2\n";
+    auto a = import_text(AssetFormat::Ply, ply);
+    ASSERT_TRUE(a.has_value()) << a.error().describe();
+    ASSERT_EQ(a.value().meshes[0].uvs.size(), 3u);
+    EXPECT_EQ(a.value().meshes[0].uvs[2], glm::vec2(0, 1));
+}
+
+/// The error of importing `text`, which must fail.
+AssetError refusal(const std::string& text, const ImportLimits& limits = {}) {
+    auto a = import_text(AssetFormat::Ply, text, {}, limits);
+    EXPECT_FALSE(a.has_value());
+    return a.has_value() ? AssetError{} : a.error();
+}
+
+TEST(PlyImport, AFaceIndexOutsideTheVerticesIsRefusedNamingTheFace) {
+    std::string ply = QUAD_ASCII;
+    ply.replace(ply.find("3 1 4 2"), 7, "3 1 5 2");
+    const AssetError e = refusal(ply);
+    EXPECT_EQ(e.kind, AssetError::Kind::Invalid);
+    EXPECT_EQ(e.file, "test.ply");
+    EXPECT_EQ(e.element, "element face 1");
+    EXPECT_THAT(e.message, HasSubstr("vertex index 5"));
+}
+
+TEST(PlyImport, ATruncatedBinaryBodyIsRefused) {
+    const std::string ply = quad_binary(false);
+    for (std::size_t cut : {std::size_t(1), std::size_t(7), std::size_t(40)}) {
+        const AssetError e = refusal(ply.substr(0, ply.size() - cut));
+        EXPECT_THAT(e.element, HasSubstr("element")) << e.describe();
+        EXPECT_THAT(e.message, HasSubstr("missing or malformed")) << e.describe();
+    }
+}
+
+TEST(PlyImport, AHugeDeclaredCountIsRefusedBeforeAnythingIsAllocated) {
+    std::string ply = QUAD_ASCII;
+    ply.replace(ply.find("vertex 5"), 8, "vertex 4000000000");
+    EXPECT_THAT(refusal(ply).message, HasSubstr("more than the"));
+    // Within the bytes that follow but over the scene's room: TooLarge.
+    ImportLimits small;
+    small.max_vertices = 4;
+    const AssetError e = refusal(QUAD_ASCII, small);
+    EXPECT_EQ(e.kind, AssetError::Kind::TooLarge);
+    EXPECT_THAT(e.message, HasSubstr("max_scene_vertices"));
+}
+
+TEST(PlyImport, BrokenHeadersAreRefusedNamingTheLine) {
+    EXPECT_EQ(refusal("ply\nformat ascii 1.0\nelement vertex 1\n").element, "header");
+    EXPECT_THAT(refusal("plx\nformat ascii 1.0\nend_header\n").message, HasSubstr("'ply'"));
+    EXPECT_EQ(refusal("ply\nformat ascii 2.0\nend_header\n").kind,
+              AssetError::Kind::Unsupported);
+    EXPECT_EQ(refusal("ply\nformat ascii 1.0\nproperty float x\nend_header\n").element,
+              "header line 3");
+    EXPECT_THAT(refusal("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+                        "end_header\n1\n")
+                    .message,
+                HasSubstr("x, y and z"));
+}
+
+TEST(PlyImport, APointCloudIsRefusedAsHavingNoFaces) {
+    const std::string ply = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\n"
+                            "property float y\nproperty float z\nend_header\n0 0 0\n1 1 1\n";
+    EXPECT_THAT(refusal(ply).message, HasSubstr("no faces"));
+}
+
+TEST(PlyImport, NonFinitePositionsAreRefused) {
+    std::string ply = QUAD_ASCII;
+    ply.replace(ply.find("2 2 2 0 0 1"), 5, "2 nan 2");
+    EXPECT_THAT(refusal(ply).message, HasSubstr("not finite"));
+}
+
+}  // namespace
+}  // namespace strata::assets::test

@@ -1,0 +1,74 @@
+// libFuzzer target for one importer (protocol/assets/), built once per format:
+//   gltf_import_fuzzer (.glb when the input starts with "glTF", else .gltf JSON),
+//   obj_import_fuzzer, ply_import_fuzzer.
+//
+// Checks, besides "no crash, no sanitizer report, no exception":
+//   - a refusal names the file and says what is wrong;
+//   - an accepted asset passes validate_asset again (every index in range) and its batch goes
+//     through the scene's rules; a refused batch leaves the scene as it was.
+// Small limits keep each input cheap: the budget checks run on every input.
+// Build and run: scripts/run-fuzz.sh (its corpora are seeded from assimp-testmodels).
+
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+#include "engine/scene/scene.h"
+#include "protocol/assets/asset_batch.h"
+#include "protocol/assets/import.h"
+
+namespace {
+
+using namespace strata;
+using namespace strata::assets;
+
+[[noreturn]] void fail(const char* what) {
+    std::fprintf(stderr, "asset fuzzer: %s\n", what);
+    std::abort();
+}
+
+AssetFormat format_of(const uint8_t* data, std::size_t size) {
+#if defined(STRATA_FUZZ_GLTF)
+    return size >= 4 && std::memcmp(data, "glTF", 4) == 0 ? AssetFormat::Glb : AssetFormat::Gltf;
+#elif defined(STRATA_FUZZ_OBJ)
+    (void)data, (void)size;
+    return AssetFormat::Obj;
+#else
+    (void)data, (void)size;
+    return AssetFormat::Ply;
+#endif
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
+    static Scene scene;
+    ImportLimits limits;
+    limits.max_vertices = 1u << 16;
+    limits.max_triangles = 1u << 16;
+    limits.max_nodes = 1024;
+    const SideFiles side = {{"fuzz.mtl", "newmtl a\nKd 0.5 0.5 0.5\nmap_Kd a.png\n"}};
+    auto asset = import_asset(format_of(data, size), {data, size}, "fuzz", limits, side);
+    if (!asset) {
+        if (asset.error().file != "fuzz" || asset.error().message.empty())
+            fail("a refusal without its file or message");
+        return 0;
+    }
+    if (!validate_asset(asset.value(), ErrorSink("fuzz")).has_value())
+        fail("an accepted asset does not validate");
+    AssetBatch b = asset_to_batch(std::move(asset.value()), {"f", true});
+    const uint64_t version = scene.version();
+    auto applied = scene.apply(std::move(b.batch));
+    if (!applied) {
+        if (scene.version() != version || scene.counts().meshes != 0)
+            fail("a refused batch changed the scene");
+        return 0;
+    }
+    EditBatch clear;
+    clear.edits.emplace_back(Clear{});
+    if (!scene.apply(std::move(clear)).has_value()) fail("clear was refused");
+    scene.clear_changes();
+    return 0;
+}
