@@ -111,6 +111,9 @@ TEST_F(ScriptRunner, ARenderAnswerWithoutItsReportIsARequestFailure) {
         Reply pick(const std::string&) override { return {}; }
         Reply get_snapshot() override { return {}; }
         Reply put_snapshot(std::string) override { return {}; }
+        Reply import_asset(std::string, const std::multimap<std::string, std::string>&) override {
+            return {};
+        }
         std::string describe() const override { return "no report"; }
     } transport;
     script = load(R"({"render": {}})");
