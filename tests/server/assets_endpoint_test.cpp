@@ -38,8 +38,9 @@ TEST_F(Assets, AnObjUploadAnswersItsIdsAndTheNewVersion) {
     EXPECT_EQ(r.header("ETag"), "\"1\"");
     const Json j = r.json();
     EXPECT_EQ(j["version"], 1);
-    EXPECT_EQ(j["applied"], 2);
+    EXPECT_EQ(j["applied"], 3);  // the asset's group, its mesh, its instance
     EXPECT_EQ(j["format"], "obj");
+    EXPECT_EQ(j["groups"], Json::array({"tri"}));
     EXPECT_EQ(j["meshes"], Json::array({"tri.mesh0"}));
     EXPECT_EQ(j["instances"], Json::array({"tri.node0"}));
     EXPECT_EQ(srv.get("/v1/scene/meshes/tri.mesh0").json()["triangles"], 1);
