@@ -2,6 +2,9 @@
 // change of scene_rules.cpp exactly, in reverse order, so slot arrays hand back the same slots
 // and generations and every record, id, dirty bit and change list is as before the batch.
 
+#include <type_traits>
+#include <vector>
+
 #include "engine/scene/child_list.h"
 #include "engine/scene/scene.h"
 #include "engine/scene/undo_log.h"
@@ -9,6 +12,13 @@
 namespace strata {
 
 namespace {
+
+/// The list of `c` that holds children of handle type H (instances or groups).
+template <class H>
+std::vector<H>& child_list(Children& c) {
+    if constexpr (std::is_same_v<H, InstanceHandle>) return c.instances;
+    else return c.groups;
+}
 
 /// Reverses one undo record on the scene's storage. A friend-free helper: Scene passes in the
 /// pieces it owns.
@@ -103,16 +113,10 @@ struct Reverser {
             else return groups;
         }();
         auto& rec = records.at(r.handle);
-        auto& now = [&]() -> std::vector<H>& {
-            if constexpr (std::is_same_v<H, InstanceHandle>) return children_of(rec.parent).instances;
-            else return children_of(rec.parent).groups;
-        }();
+        std::vector<H>& now = child_list<H>(children_of(rec.parent));
         STRATA_CHECK(!now.empty() && now.back() == r.handle);
         now.pop_back();
-        auto& old = [&]() -> std::vector<H>& {
-            if constexpr (std::is_same_v<H, InstanceHandle>) return children_of(r.old_parent).instances;
-            else return children_of(r.old_parent).groups;
-        }();
+        std::vector<H>& old = child_list<H>(children_of(r.old_parent));
         undo_detach_child(old, records, r.handle, r.old_slot);
         rec.parent = r.old_parent;
         rec.child_slot = r.old_slot;
