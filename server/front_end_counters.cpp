@@ -8,6 +8,8 @@ void FrontEndCounters::write_prometheus(std::string& out) const {
                name + " " + std::to_string(v) + "\n";
     };
     line("strata_http_connections_open", "gauge", "Open client connections.", open.load());
+    line("strata_http_requests_in_flight", "gauge",
+         "Requests a worker is handling (this /metrics request included).", handling.load());
     line("strata_http_connections_accepted_total", "counter", "Connections accepted.",
          accepted.load());
     line("strata_http_connections_restricted_total", "counter",

@@ -15,6 +15,7 @@ struct FrontEndCounters {
     std::atomic<uint64_t> timeouts{0};     ///< 408s and abandoned writes
     std::atomic<uint64_t> client_gone{0};  ///< clients that left while a worker had their request
     std::atomic<uint64_t> open{0};
+    std::atomic<uint64_t> handling{0};  ///< requests handed to a worker, not yet answered
 
     /// Appends the Prometheus text of these counters.
     void write_prometheus(std::string& out) const;

@@ -328,6 +328,7 @@ void Reactor::dispatch(Connection& c, PreparedRequest&& request, Clock::time_poi
     c.in_flight = request.wire_bytes.size();
     account(c);
     watch(c, EPOLLRDHUP | EPOLLONESHOT);
+    ++m_counters.handling;
     m_dispatch(c.id, std::move(request), c.cancel, c.peer, !c.keep_alive, now);
 }
 
@@ -338,6 +339,7 @@ void Reactor::take_completions(Clock::time_point now) {
         done.swap(m_done);
     }
     for (Completion& d : done) {
+        --m_counters.handling;
         auto it = m_connections.find(d.conn);
         if (it == m_connections.end()) continue;  // closed at the drain's hard deadline
         Connection& c = *it->second;

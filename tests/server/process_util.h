@@ -74,14 +74,26 @@ inline int wait_exit(pid_t pid, int seconds) {
     return -1;
 }
 
-/// Polls GET /livez on the loopback port until it answers 200 (true) or 10 s pass (false).
-inline bool wait_live(int port) {
+/// Polls GET /readyz on the loopback port until it answers 200 (true) or 10 s pass (false).
+/// Not /livez: that answers 200 as soon as the server listens, while it still loads its scene
+/// and answers every other request 503.
+inline bool wait_ready(int port) {
     httplib::Client c("127.0.0.1", port);
     for (int i = 0; i < 500; ++i) {
-        if (auto r = c.Get("/livez"); r && r->status == 200) return true;
+        if (auto r = c.Get("/readyz"); r && r->status == 200) return true;
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
     return false;
+}
+
+/// The value of an unlabelled metric in GET /metrics, or -1 when it cannot be read.
+inline double metric_value(int port, const std::string& name) {
+    httplib::Client c("127.0.0.1", port);
+    auto r = c.Get("/metrics");
+    if (!r || r->status != 200) return -1;
+    const std::string line = "\n" + name + " ";
+    const auto at = r->body.find(line);
+    return at == std::string::npos ? -1 : std::stod(r->body.substr(at + line.size()));
 }
 
 }  // namespace strata::server::test
