@@ -79,7 +79,7 @@ ApiResponse get_render(Engine& engine, const std::multimap<std::string, std::str
 ApiResponse get_scene(const Engine& engine);
 
 /// The object kinds of GET /v1/scene/{meshes,instances,materials,groups}/{id}.
-enum class SceneObject : uint8_t { Mesh, Instance, Material, Group };
+enum class SceneObject : uint8_t { Mesh, Instance, Material, Group, Texture };
 /// GET /v1/scene/{meshes,instances,materials,groups}/{id}.
 ApiResponse get_scene_object(const Engine& engine, SceneObject kind, std::string_view id);
 /// GET /v1/scene/{meshes,instances,materials,groups}: one page of the collection

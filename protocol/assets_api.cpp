@@ -191,7 +191,8 @@ ApiResponse post_assets(Engine& engine, std::string body,
     const ApplyResult& done = applied.value();
     const Json answer = {{"version", done.version},  {"applied", edits},
                          {"format", assets::format_name(q->format)},
-                         {"meshes", out.meshes},     {"materials", out.materials},
+                         {"textures", out.textures}, {"meshes", out.meshes},
+                         {"materials", out.materials},
                          {"groups", out.groups},     {"instances", out.instances},
                          {"warnings", out.warnings}};
     return with_etag(json_response(200, answer), done.version);

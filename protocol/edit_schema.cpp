@@ -52,6 +52,11 @@ constexpr std::string_view SHARED_DEFS = R"json({
     "pattern": "^(?:[A-Za-z0-9+/]{4})*(?:[A-Za-z0-9+/]{2}==|[A-Za-z0-9+/]{3}=)?$",
     "description": "RFC 4648 base64 of little-endian float32 (positions, normals) or uint32 (indices) triples, or float32 pairs (uvs)"
   },
+  "image_base64": {
+    "type": "string",
+    "pattern": "^(?:[A-Za-z0-9+/]{4})*(?:[A-Za-z0-9+/]{2}==|[A-Za-z0-9+/]{3}=)?$",
+    "description": "RFC 4648 base64 of a PNG or JPEG file"
+  },
   "transform": {
     "oneOf": [
       {
@@ -81,6 +86,15 @@ constexpr std::string_view SHARED_DEFS = R"json({
         "description": "translate * rotate * scale; rotate_deg applies X, then Y, then Z"
       }
     ]
+  },
+  "sampler": {
+    "type": "object",
+    "properties": {
+      "wrap": {"enum": ["repeat", "clamp", "mirror"]},
+      "filter": {"enum": ["bilinear", "nearest"]}
+    },
+    "additionalProperties": false,
+    "description": "how base_color_texture is read outside [0, 1) and between texels (default repeat, bilinear)"
   },
   "build": {
     "type": "object",

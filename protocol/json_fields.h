@@ -95,6 +95,8 @@ public:
     /// recorded a TooLarge value error, when the batch's shapes would exceed
     /// MAX_SHAPE_TRIANGLES_PER_BATCH: then generate nothing.
     bool reserve_shape_triangles(uint64_t triangles, const std::string& ptr);
+    /// A base64 string of any bytes (an image file).
+    std::string bytes_b64(const Json& v, const std::string& ptr) { return base64_bytes(v, ptr, 1); }
 
 private:
     template <class Names>

@@ -23,7 +23,7 @@ namespace {
 RenderRequest read_render(FieldReader& r, const Json& v) {
     r.expect_object(v, "",
                     {"width", "height", "format", "spp", "aovs", "compression", "accumulate",
-                     "exposure", "camera"});
+                     "exposure", "camera", "filter"});
     RenderRequest q;
     auto u32 = [&](const char* key, uint32_t& out, uint64_t hi) {
         if (const Json* f = FieldReader::member(v, key))
@@ -56,6 +56,8 @@ RenderRequest read_render(FieldReader& r, const Json& v) {
     if (const Json* f = FieldReader::member(v, "accumulate"))
         q.accumulate = r.boolean(*f, "/accumulate");
     if (const Json* f = FieldReader::member(v, "exposure")) q.exposure = r.number(*f, "/exposure");
+    if (const Json* f = FieldReader::member(v, "filter"))
+        q.filter = r.choice(*f, "/filter", {"none", "atrous"}) == 1;
     if (const Json* f = FieldReader::member(v, "camera")) q.camera = read_camera_override(r, *f);
     return q;
 }

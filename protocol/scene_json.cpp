@@ -2,6 +2,8 @@
 
 #include <charconv>
 
+#include "engine/image/texture_decode.h"
+
 namespace strata::protocol {
 
 namespace {
@@ -26,7 +28,10 @@ Json material_fields(const Material& m) {
     return {{"base_color", vec3_to_json(m.base_color)},
             {"roughness", shortest(m.roughness)},
             {"metallic", shortest(m.metallic)},
-            {"emission", vec3_to_json(m.emission)}};
+            {"emission", vec3_to_json(m.emission)},
+            {"sampler",
+             {{"wrap", texture_wrap_name(m.base_color_sampler.wrap)},
+              {"filter", texture_filter_name(m.base_color_sampler.filter)}}}};
 }
 
 /// The id of a material handle, or null for the default.
@@ -82,6 +87,7 @@ Json scene_summary_to_json(const Scene& s) {
               {"instances", c.instances},
               {"materials", c.materials},
               {"groups", c.groups},
+              {"textures", c.textures},
               {"triangles", c.triangles},
               {"instanced_triangles", c.instanced_triangles}}},
             {"bounds", bounds_to_json(s.world_bounds())},
@@ -146,6 +152,8 @@ Json group_json(const Scene& s, GroupHandle h, const GroupRecord& g) {
 Json material_json(const Scene& s, const MaterialRecord& m) {
     Json j = material_fields(m.material);
     j["id"] = m.id;
+    const auto t = s.texture(m.base_color_texture);
+    j["base_color_texture"] = t ? Json(t.value()->id) : Json(nullptr);
     j["version"] = s.version();
     return j;
 }
@@ -169,6 +177,23 @@ std::optional<Json> group_to_json(const Scene& s, std::string_view id) {
     const auto r = s.group(h);
     if (!r) return std::nullopt;
     return group_json(s, h, *r.value());
+}
+
+Json texture_json(const Scene& s, const TextureRecord& t) {
+    const char* format = texture_format(*t.encoded);
+    return {{"id", t.id},
+            {"width", t.image->width},
+            {"height", t.image->height},
+            {"format", format ? format : "unknown"},
+            {"encoded_bytes", t.encoded->size()},
+            {"decoded_bytes", t.image->bytes()},
+            {"version", s.version()}};
+}
+
+std::optional<Json> texture_to_json(const Scene& s, std::string_view id) {
+    const auto r = s.texture(s.find_texture(id));
+    if (!r) return std::nullopt;
+    return texture_json(s, *r.value());
 }
 
 std::optional<Json> material_to_json(const Scene& s, std::string_view id) {

@@ -1,5 +1,6 @@
 #pragma once
-// Scene state as JSON for GET /v1/scene and GET /v1/scene/{meshes,instances,materials,groups}/{id}.
+// Scene state as JSON for GET /v1/scene and
+// GET /v1/scene/{meshes,instances,materials,groups,textures}/{id}.
 // Call these under the engine's read lock (Engine::read) so one document shows one version.
 
 #include <optional>
@@ -32,11 +33,14 @@ Json instance_json(const Scene& s, InstanceHandle h, const InstanceRecord& i,
 Json material_json(const Scene& s, const MaterialRecord& m);
 /// A group: parent, own and world transform and visibility, and how many children it has.
 Json group_json(const Scene& s, GroupHandle h, const GroupRecord& g);
+/// A texture: its size, format and the bytes it takes encoded and decoded.
+Json texture_json(const Scene& s, const TextureRecord& t);
 
 /// One object's state, or nullopt when no object has that id.
 std::optional<Json> mesh_to_json(const Scene& s, std::string_view id);
 std::optional<Json> instance_to_json(const Scene& s, std::string_view id);
 std::optional<Json> material_to_json(const Scene& s, std::string_view id);
 std::optional<Json> group_to_json(const Scene& s, std::string_view id);
+std::optional<Json> texture_to_json(const Scene& s, std::string_view id);
 
 }  // namespace strata::protocol

@@ -1,4 +1,4 @@
-// GET /v1/scene/{meshes,instances,materials,groups}: paginated listings.
+// GET /v1/scene/{meshes,instances,materials,groups,textures}: paginated listings.
 //
 // Pages walk the collection in slot order, which never changes while an object exists: an object
 // that exists for the whole walk appears exactly once, and objects added or removed during the
@@ -21,7 +21,7 @@ namespace {
 constexpr uint32_t DEFAULT_PAGE = 100;
 constexpr uint32_t MAX_PAGE = 10000;
 
-constexpr const char* COLLECTIONS[] = {"meshes", "instances", "materials", "groups"};
+constexpr const char* COLLECTIONS[] = {"meshes", "instances", "materials", "groups", "textures"};
 
 struct ListQuery {
     uint32_t limit = DEFAULT_PAGE;
@@ -184,6 +184,13 @@ ApiResponse get_scene_list(const Engine& engine, SceneObject kind,
                             kind, s.materials(), *q, [](const MaterialRecord&) { return true; },
                             [&](MaterialHandle, const MaterialRecord& m) {
                                 return material_json(s, m);
+                            }),
+                        s.version()};
+            case SceneObject::Texture:
+                return {page(
+                            kind, s.textures(), *q, [](const TextureRecord&) { return true; },
+                            [&](TextureHandle, const TextureRecord& t) {
+                                return texture_json(s, t);
                             }),
                         s.version()};
             case SceneObject::Group:

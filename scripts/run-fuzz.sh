@@ -13,16 +13,21 @@
 #   gltf_import_fuzzer    .glb and .gltf files: tinygltf (compiled here, instrumented), the glTF
 #   obj_import_fuzzer     importer, OBJ (tinyobjloader) and our PLY reader, then the asset's batch
 #   ply_import_fuzzer     through the scene's rules (protocol/assets/)
+#   texture_decode_fuzzer PNG and JPEG bytes: libpng and libturbojpeg behind our header checks and
+#                         limits, then texture lookups (engine/image/texture_decode.h)
 #
 # The two durable fuzzers' seed corpora are written by the encoder (tests/fuzz/durable_corpus.cpp)
 # into the scratch folder at each run, so they always match the current formats.
 #
 #   scripts/run-fuzz.sh [RUNS]        default RUNS=100000; CI calls it without arguments. The HTTP
 #                                     fuzzer gets RUNS/4: each of its inputs runs through the engine.
-#                                     Each importer fuzzer gets RUNS/4 too.
+#                                     Each importer fuzzer gets RUNS/4 too, and so does the
+#                                     texture decoder.
 #
 # The importers' corpora start from the small seeds in tests/fuzz/asset_corpus/ plus every file of
-# that format in Debian's assimp-testmodels (copied to scratch at run time, never committed).
+# that format in Debian's assimp-testmodels (copied to scratch at run time, never committed); the
+# texture decoder's from tests/fuzz/texture_corpus/ plus assimp-testmodels' small PNG and JPEG
+# files.
 #
 # New inputs the fuzzers find go to scratch copies of the corpora, never into the repository.
 set -euo pipefail
@@ -36,7 +41,7 @@ cmake -S "$root" -B "$build" -G Ninja \
     -DSTRATA_FUZZ=ON -DSTRATA_BUILD_BENCHMARKS=OFF
 ninja -C "$build" -j "${STRATA_BUILD_JOBS:-2}" edit_batch_fuzzer http_request_fuzzer \
     journal_record_fuzzer snapshot_fuzzer durable_corpus \
-    gltf_import_fuzzer obj_import_fuzzer ply_import_fuzzer
+    gltf_import_fuzzer obj_import_fuzzer ply_import_fuzzer texture_decode_fuzzer
 
 scratch="$(mktemp -d)"
 trap 'rm -rf "$scratch"' EXIT
@@ -77,3 +82,14 @@ for format in gltf obj ply; do
     fi
     run "${format}_import_fuzzer" "asset_corpus/$format" "" "$((runs / 4))"
 done
+
+# The texture decoder, seeded from small PNG and JPEG files of assimp-testmodels too.
+mkdir -p "$scratch/texture_corpus"
+if [ -d "$models" ]; then
+    n=0
+    while IFS= read -r -d '' f; do
+        cp "$f" "$scratch/texture_corpus/assimp-$n-$(basename "$f")"
+        n=$((n + 1))
+    done < <(find "$models" -type f -size -64k -iregex '.*\.\(png\|jpg\|jpeg\)' -print0)
+fi
+run texture_decode_fuzzer texture_corpus "" "$((runs / 4))"

@@ -85,7 +85,8 @@ void Application::install_routes(const FrontEndCounters* front_end) {
         protocol::ApiLimits{
             protocol::JsonLimits{m_config.max_json_depth, m_config.max_array_elements},
             m_config.max_pixels, m_config.render_timeout_s,
-            SceneBudget{m_config.max_scene_triangles, m_config.max_scene_vertices}},
+            SceneBudget{m_config.max_scene_triangles, m_config.max_scene_vertices,
+                        m_config.max_texture_mb << 20}},
         front_end, m_store});
     Router router(m_routes, m_config.max_body_bytes);
     add_api_routes(router, *m_context);

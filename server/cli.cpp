@@ -117,6 +117,10 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
     app.add_option("--max-scene-vertices", c.max_scene_vertices,
                    "Most vertices over the scene's meshes (an edit batch beyond it: 413)")
         ->check(CLI::Range(uint64_t(1), uint64_t(1) << 32));
+    app.add_option("--max-texture-mb", c.max_texture_mb,
+                   "Most decoded texture memory in MiB, 6 bytes a texel (add_texture beyond it: "
+                   "413)")
+        ->check(CLI::Range(uint64_t(1), uint64_t(1) << 20));
     app.add_option("--token-file", cl.token_file,
                    "File holding a bearer token; then every endpoint but /livez and /readyz needs "
                    "'Authorization: Bearer <token>'. Or give the token itself in STRATA_TOKEN")

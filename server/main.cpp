@@ -92,7 +92,8 @@ int serve(server::CommandLine& cl) {
     }
 
     EngineConfig engine_config;
-    engine_config.budget = {cl.config.max_scene_triangles, cl.config.max_scene_vertices};
+    engine_config.budget = {cl.config.max_scene_triangles, cl.config.max_scene_vertices,
+                            cl.config.max_texture_mb << 20};
     engine_config.accel.tlas = *parse_tlas_kind(cl.config.tlas);  // checked by the parser
     engine_config.accel.tlas_policy.max_dynamic_fraction = cl.config.tlas_max_dynamic_fraction;
     engine_config.accel.tlas_policy.min_instances = cl.config.tlas_min_instances;

@@ -42,6 +42,7 @@ struct ServerConfig {
     // The scene budget (engine/scene/budget.h), checked when a batch is validated.
     uint64_t max_scene_triangles = 1ull << 24;
     uint64_t max_scene_vertices = 1ull << 24;
+    uint64_t max_texture_mb = 256;  ///< decoded texels over all textures, in MiB
 
     // The TLAS strategy (engine/accel/tlas.h) and the incremental strategy's policy.
     std::string tlas = "incremental";  ///< "incremental" or "embree"

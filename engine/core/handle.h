@@ -31,10 +31,12 @@ struct MeshTag;
 struct InstanceTag;
 struct MaterialTag;
 struct GroupTag;
+struct TextureTag;
 using MeshHandle = Handle<MeshTag>;
 using InstanceHandle = Handle<InstanceTag>;
 using MaterialHandle = Handle<MaterialTag>;
 using GroupHandle = Handle<GroupTag>;
+using TextureHandle = Handle<TextureTag>;
 
 /// Flat storage indexed by slot. Erased slots are reused (lowest generation bump first, LIFO).
 ///

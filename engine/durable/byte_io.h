@@ -42,6 +42,12 @@ void value_fields(Io& io, E& v) {
     io.raw(v.m.data(), sizeof(float) * v.m.size());
 }
 
+/// Largest stored value of each enum a layout holds (a byte above it is corruption).
+template <class T>
+constexpr uint8_t ENUM_MAX = 1;
+template <>
+constexpr uint8_t ENUM_MAX<TextureWrap> = 2;
+
 /// True for the types that have a value_fields() layout.
 template <class Io, class T>
 concept HasValueFields = requires(Io& io, T& v) { value_fields(io, v); };
@@ -136,7 +142,8 @@ private:
         if constexpr (std::is_enum_v<T>) {
             uint8_t b = 0;
             get(b);
-            if (b > 1) return fail("enum value " + std::to_string(b) + " out of range");
+            if (b > ENUM_MAX<T>)
+                return fail("enum value " + std::to_string(b) + " out of range");
             v = static_cast<T>(b);
         } else if constexpr (std::is_same_v<T, bool>) {
             uint8_t b = 0;

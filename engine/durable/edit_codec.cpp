@@ -25,7 +25,8 @@ static_assert(TAG_IS<0, AddMesh> && TAG_IS<1, UpdateMeshPositions> &&
                   TAG_IS<9, RemoveInstance> && TAG_IS<10, MarkDirty> && TAG_IS<11, SetCamera> &&
                   TAG_IS<12, SetLighting> && TAG_IS<13, Clear> && TAG_IS<14, AddGroup> &&
                   TAG_IS<15, UpdateGroup> && TAG_IS<16, RemoveGroup> &&
-                  std::variant_size_v<Edit> == 17,
+                  TAG_IS<17, AddTexture> && TAG_IS<18, RemoveTexture> &&
+                  std::variant_size_v<Edit> == 19,
               "journal kind tags are the Edit variant's indices: append new kinds at the end");
 
 
@@ -46,7 +47,9 @@ constexpr const char* KIND_NAMES[] = {"add_mesh",
                                       "clear",
                                       "add_group",
                                       "update_group",
-                                      "remove_group"};
+                                      "remove_group",
+                                      "add_texture",
+                                      "remove_texture"};
 static_assert(std::size(KIND_NAMES) == std::variant_size_v<Edit>);
 
 /// Kind tag bit: the edit's extension fields follow its base layout. Fields added to a kind after
@@ -124,6 +127,14 @@ template <class Io, Kind<RemoveGroup> E>
 void fields(Io& io, E& e) {
     io(e.group, e.recursive);
 }
+template <class Io, Kind<AddTexture> E>
+void fields(Io& io, E& e) {
+    io(e.id, e.data);
+}
+template <class Io, Kind<RemoveTexture> E>
+void fields(Io& io, E& e) {
+    io(e.texture);
+}
 
 // Step: extension fields of the kinds that have them -------------------------------------------
 
@@ -145,6 +156,30 @@ void extension(Io& io, E& e) {
 template <class Io, Kind<AddInstance> E>
 void extension(Io& io, E& e) {
     io(e.parent);
+}
+/// A material's texture and its sampler.
+template <class Io, Kind<AddMaterial> E>
+void extension(Io& io, E& e) {
+    io(e.base_color_texture, e.material.base_color_sampler.wrap,
+       e.material.base_color_sampler.filter);
+}
+/// update_material's texture is "unchanged" (absent), "none" (null) or a texture id, like
+/// update_instance's parent; the sampler fields are plain optionals.
+template <class Io, Kind<UpdateMaterial> E>
+void extension(Io& io, E& e) {
+    if constexpr (std::is_const_v<E>) {
+        io(e.base_color_texture.has_value());
+        if (e.base_color_texture) io(*e.base_color_texture);
+    } else {
+        bool set = false;
+        io(set);
+        if (set) {
+            std::optional<std::string> texture;
+            io(texture);
+            e.base_color_texture = std::move(texture);
+        }
+    }
+    io(e.wrap, e.filter);
 }
 /// update_instance's parent is "unchanged" (absent), "the root" (null) or a group: only a present
 /// parent is an extension, written as the optional group id.
@@ -177,6 +212,12 @@ bool has_extension(const AddInstance& e) {
 }
 bool has_extension(const UpdateInstance& e) {
     return e.parent.has_value();
+}
+bool has_extension(const AddMaterial& e) {
+    return e.base_color_texture.has_value() || !(e.material.base_color_sampler == TextureSampler{});
+}
+bool has_extension(const UpdateMaterial& e) {
+    return e.base_color_texture.has_value() || e.wrap.has_value() || e.filter.has_value();
 }
 
 /// A default-constructed edit of kind `tag` (tag < variant size).

@@ -94,6 +94,22 @@ struct FrameBuffers {
         if (set.has(Aov::UserId)) user_id.resize(n);
     }
 
+    /// Drops the buffers of the AOVs outside `set` (what a launch traced for its own use only).
+    void keep_only(AovSet set) {
+        auto drop = [&](Aov a, auto& buffer) {
+            if (!set.has(a)) buffer = {};
+        };
+        drop(Aov::Albedo, albedo);
+        drop(Aov::Normal, normal);
+        drop(Aov::Depth, depth);
+        drop(Aov::Position, position);
+        drop(Aov::InstanceId, instance_id);
+        drop(Aov::PrimitiveId, primitive_id);
+        drop(Aov::MeshId, mesh_id);
+        drop(Aov::UserId, user_id);
+        aovs = set;
+    }
+
     /// As allocate(), but keeps the buffers (and their contents) when they already have this
     /// size and set: for callers that write every pixel of many frames.
     void reserve_frame(uint32_t w, uint32_t h, AovSet set) {

@@ -76,8 +76,17 @@ void FrameState::sync(const Scene& scene) {
     if (changes.scene_bits & dirty::Camera) camera = scene.camera();
     if (changes.scene_bits & dirty::Lighting) lighting = scene.lighting();
     for (MaterialHandle h : changes.materials) {
-        if (h.index + 1 >= materials.size()) materials.resize(h.index + 2);
-        if (const MaterialRecord* m = scene.materials().get(h)) materials[h.index + 1] = m->material;
+        if (h.index + 1 >= materials.size()) {
+            materials.resize(h.index + 2);
+            material_textures.resize(h.index + 2);
+        }
+        if (const MaterialRecord* m = scene.materials().get(h)) {
+            materials[h.index + 1] = m->material;
+            const TextureRecord* t = scene.textures().get(m->base_color_texture);
+            material_textures[h.index + 1] = t ? t->image : nullptr;
+        } else if (!scene.materials().alive_at(h.index)) {
+            material_textures[h.index + 1].reset();  // removed: let its texels go
+        }
     }
     for (MeshHandle h : changes.meshes) refresh_mesh(scene, h);
     for (InstanceHandle h : changes.instances) refresh_instance(scene, h.index);

@@ -47,7 +47,10 @@ struct MeshShade {
 
 class FrameState {
 public:
-    FrameState() { materials.push_back(Material{}); }
+    FrameState() {
+        materials.push_back(Material{});
+        material_textures.emplace_back();
+    }
 
     /// Copies the entries the scene's change lists name.
     void sync(const Scene& scene);
@@ -57,6 +60,9 @@ public:
     Lighting lighting;
     /// [0] is the built-in default; material slot s lives at s + 1.
     std::vector<Material> materials;
+    /// The base-colour texture of each entry of `materials` (null: none). Textures are immutable
+    /// and cannot be removed while a material names them, so sharing the texels is safe.
+    std::vector<std::shared_ptr<const TextureImage>> material_textures;
     /// Indexed by instance slot (the inst_id of a hit).
     std::vector<InstanceShade> instances;
     /// Indexed by mesh slot; null for meshes without normals and uvs.
@@ -65,6 +71,18 @@ public:
     /// slots their id AOVs hold without reading the editable scene.
     std::vector<std::string> instance_ids;
     std::vector<std::string> mesh_ids;
+
+    /// The base colour of material `material` (an index into `materials`) at a hit on the mesh
+    /// `mesh` (nullptr: no uvs) at barycentrics (u, v) of triangle `prim`: the material's colour,
+    /// times its texture where it has one and the mesh has uvs.
+    Vec3 base_color(uint32_t material, const MeshShade* mesh, uint32_t prim, float u,
+                    float v) const {
+        const Material& m = materials[material];
+        const TextureImage* tex = material_textures[material].get();
+        if (!tex || !mesh || mesh->uvs.empty() || prim >= mesh->triangles.size())
+            return m.base_color;
+        return m.base_color * tex->sample(mesh->uv(prim, u, v), m.base_color_sampler);
+    }
 
     /// The shading attributes of the mesh in `slot`, or nullptr.
     const MeshShade* mesh_shade(uint32_t slot) const {

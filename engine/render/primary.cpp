@@ -74,11 +74,14 @@ void render_primary(const TlasStrategy& tlas, const FrameState& frame,
                     const Vec3 dir(packet.dir_x[i], packet.dir_y[i], packet.dir_z[i]);
                     if (glm::dot(n, dir) > 0.0f) n = -n;
                     const Material& m = materials[shade.material];
+                    const Vec3 base =
+                        frame.base_color(shade.material, frame.mesh_shade(shade.mesh_slot),
+                                         packet.prim_id[i], packet.u[i], packet.v[i]);
                     distance[p] = packet.tfar[i];
                     instance[p] = inst;
                     primitive[p] = packet.prim_id[i];
                     normal[p] = n;
-                    color[p] = m.base_color * (light.sun_color * std::max(0.0f, glm::dot(n, sun)) +
+                    color[p] = base * (light.sun_color * std::max(0.0f, glm::dot(n, sun)) +
                                                background) +
                                m.emission;
                 }

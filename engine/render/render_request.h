@@ -56,6 +56,9 @@ struct RenderRequest {
     /// size instead of starting over.
     bool accumulate = false;
     float exposure = 0.0f;  ///< EV stops applied before tone mapping (PNG only; EXR is linear)
+    /// Smooth the colour with the edge-aware filter of aov_filter.h (guided by albedo, normal
+    /// and depth, which the launch then computes even when not asked for). Off by default.
+    bool filter = false;
     /// Overrides the scene camera for this frame. Fields it leaves out come from the scene
     /// camera of the version the launch renders, so the frame never mixes two versions.
     std::optional<SetCamera> camera;

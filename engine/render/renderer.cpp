@@ -7,6 +7,7 @@
 #include <new>
 
 #include "engine/core/timer.h"
+#include "engine/render/aov_filter.h"
 #include "engine/render/camera_rays.h"
 #include "engine/render/sampler.h"
 #include "engine/render/shading.h"
@@ -38,6 +39,7 @@ struct SurfaceHit {
     Vec3 geometry;  ///< geometric normal: unit, facing the incoming ray
     Vec3 origin;    ///< where rays leaving the surface start
     uint32_t material;
+    Vec3 base_color;  ///< the material's, times its texture at the hit's uv
 
     /// True when direction `l` leaves on the side the ray came from. Shading normals may lean
     /// past the true surface; light from behind it must not leak through.
@@ -141,7 +143,15 @@ private:
                 inst.normal_matrix * mesh->normal(hits.prim_id[i], hits.u[i], hits.v[i]), n, -dir);
         s.origin = offset_origin(s.position, n, org, hits.tfar[i]);
         s.material = inst.material;
+        s.base_color = m_frame.base_color(inst.material, mesh, hits.prim_id[i], hits.u[i], hits.v[i]);
         return s;
+    }
+
+    /// The material of a hit with its textured base colour.
+    Material shading_material(const SurfaceHit& hit) const {
+        Material m = m_frame.materials[hit.material];
+        m.base_color = hit.base_color;
+        return m;
     }
 
     /// Shadow rays toward the sun from up to one surface per lane.
@@ -174,7 +184,7 @@ private:
             ++rays;
             if (q.rays.tfar[i] == -std::numeric_limits<float>::infinity()) continue;
             const Vec3 v(-from.dir_x[i], -from.dir_y[i], -from.dir_z[i]);
-            const Bsdf bsdf(m_frame.materials[hits[i].material], min_roughness[i]);
+            const Bsdf bsdf(shading_material(hits[i]), min_roughness[i]);
             radiance[i] +=
                 bsdf.eval_cos(hits[i].normal, v, m_sky.sun_direction()) * m_sky.sun_irradiance();
         }
@@ -225,7 +235,7 @@ private:
                 continue;
             }
             const SurfaceHit& hit = first[i] = surface(primary, i);
-            const Material& m = m_frame.materials[hit.material];
+            const Material m = shading_material(hit);
             radiance[i] = m.emission;
             first_roughness[i] = m.roughness;
             sums[i]->albedo += m.base_color;
@@ -261,7 +271,7 @@ private:
                     continue;
                 }
                 const SurfaceHit& hit = second[i] = surface(bounce, i);
-                const Material& m = m_frame.materials[hit.material];
+                const Material m = shading_material(hit);
                 incoming[i] = m.emission + m.base_color * m_sky.radiance(hit.normal);
                 min_roughness[i] = std::max(MIN_SECONDARY_ROUGHNESS, first_roughness[i]);
                 queue_sun(sun2, i, hit);
@@ -351,7 +361,15 @@ Result<Frame> Renderer::render(const TlasStrategy& tlas, const FrameState& frame
     out.camera = camera;
     if (should_stop(request.cancel)) return cancelled_error(*request.cancel);
     try {
-        out.buffers.allocate(request.width, request.height, AovSet(request.aovs));
+        // The filter's guides are traced like requested AOVs and dropped after it ran.
+        AovSet aovs(request.aovs);
+        const AovSet requested = aovs;
+        if (request.filter) {
+            aovs.add(Aov::Albedo);
+            aovs.add(Aov::Normal);
+            aovs.add(Aov::Depth);
+        }
+        out.buffers.allocate(request.width, request.height, aovs);
         SampleRange samples{0, request.spp};
         PixelSums* accum = nullptr;
         if (request.accumulate) {
@@ -374,6 +392,10 @@ Result<Frame> Renderer::render(const TlasStrategy& tlas, const FrameState& frame
             return cancelled_error(*request.cancel);
         }
         if (request.accumulate) m_accumulator.finish(samples);
+        if (request.filter) {
+            filter_frame(out.buffers);
+            out.buffers.keep_only(requested);
+        }
         out.info.samples = total;
         out.info.samples_added = samples.count;
         out.info.rays = kernel.rays();

@@ -13,21 +13,26 @@ namespace strata {
 struct SceneBudget {
     uint64_t max_triangles = uint64_t(1) << 24;
     uint64_t max_vertices = uint64_t(1) << 24;
+    /// Decoded texture memory (6 bytes a texel, engine/image/texture.h) over all textures.
+    uint64_t max_texture_bytes = uint64_t(256) << 20;
 };
 
 /// What the scene's meshes hold, each mesh counted once.
 struct MeshTotals {
     uint64_t vertices = 0;
     uint64_t triangles = 0;
+    uint64_t texture_bytes = 0;  ///< decoded texels of every texture
 
     bool grew_from(const MeshTotals& before) const {
-        return vertices > before.vertices || triangles > before.triangles;
+        return vertices > before.vertices || triangles > before.triangles ||
+               texture_bytes > before.texture_bytes;
     }
 };
 
 /// True when `totals` exceed `budget`.
 inline bool over_budget(const MeshTotals& totals, const SceneBudget& budget) {
-    return totals.triangles > budget.max_triangles || totals.vertices > budget.max_vertices;
+    return totals.triangles > budget.max_triangles || totals.vertices > budget.max_vertices ||
+           totals.texture_bytes > budget.max_texture_bytes;
 }
 
 /// "the scene would hold N triangles, over its budget of M (max_scene_triangles)".

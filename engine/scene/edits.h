@@ -53,6 +53,7 @@ struct RemoveMesh {
 struct AddMaterial {
     std::string id;
     Material material;
+    std::optional<std::string> base_color_texture = std::nullopt;  ///< a texture id
 };
 
 struct UpdateMaterial {
@@ -61,6 +62,22 @@ struct UpdateMaterial {
     std::optional<float> roughness;
     std::optional<float> metallic;
     std::optional<Vec3> emission;
+    /// Set: a texture id; set to nullopt: no texture any more.
+    std::optional<std::optional<std::string>> base_color_texture = std::nullopt;
+    std::optional<TextureWrap> wrap = std::nullopt;
+    std::optional<TextureFilter> filter = std::nullopt;
+};
+
+/// A texture from PNG or JPEG bytes (the format is read from the bytes). Decoded when the edit is
+/// applied; the encoded bytes are kept for snapshots.
+struct AddTexture {
+    std::string id;
+    std::string data;
+};
+
+/// Removes a texture; refused while a material refers to it.
+struct RemoveTexture {
+    std::string texture;
 };
 
 struct AddInstance {
@@ -119,7 +136,7 @@ struct SetLighting {
     std::optional<float> sky_intensity;
 };
 
-/// Removes every mesh, instance, material and group and resets camera and lighting.
+/// Removes every mesh, instance, material, texture and group and resets camera and lighting.
 struct Clear {};
 
 /// A new group: a node of the scene graph whose transform and visibility apply to everything
@@ -150,7 +167,7 @@ struct RemoveGroup {
 using Edit = std::variant<AddMesh, UpdateMeshPositions, ReplaceMeshTopology, RemoveMesh,
                           AddMaterial, UpdateMaterial, AddInstance, UpdateInstance, SetTransform,
                           RemoveInstance, MarkDirty, SetCamera, SetLighting, Clear, AddGroup,
-                          UpdateGroup, RemoveGroup>;
+                          UpdateGroup, RemoveGroup, AddTexture, RemoveTexture>;
 
 /// Copies the fields an edit sets onto a full value; unset fields keep theirs.
 void apply_to(Camera& c, const SetCamera& e);

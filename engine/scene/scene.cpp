@@ -39,6 +39,8 @@ void apply_to(Material& m, const UpdateMaterial& e) {
     if (e.roughness) m.roughness = *e.roughness;
     if (e.metallic) m.metallic = *e.metallic;
     if (e.emission) m.emission = *e.emission;
+    if (e.wrap) m.base_color_sampler.wrap = *e.wrap;
+    if (e.filter) m.base_color_sampler.filter = *e.filter;
 }
 
 MeshHandle Scene::find_mesh(std::string_view id) const {
@@ -52,6 +54,9 @@ MaterialHandle Scene::find_material(std::string_view id) const {
 }
 GroupHandle Scene::find_group(std::string_view id) const {
     return lookup<decltype(m_group_ids), GroupHandle>(m_group_ids, id);
+}
+TextureHandle Scene::find_texture(std::string_view id) const {
+    return lookup<decltype(m_texture_ids), TextureHandle>(m_texture_ids, id);
 }
 
 Result<const MeshRecord*> Scene::mesh(MeshHandle h) const {
@@ -69,6 +74,10 @@ Result<const MaterialRecord*> Scene::material(MaterialHandle h) const {
 Result<const GroupRecord*> Scene::group(GroupHandle h) const {
     if (const GroupRecord* r = m_groups.get(h)) return r;
     return Unexpected(stale("group"));
+}
+Result<const TextureRecord*> Scene::texture(TextureHandle h) const {
+    if (const TextureRecord* r = m_textures.get(h)) return r;
+    return Unexpected(stale("texture"));
 }
 
 Material Scene::resolved_material(const InstanceRecord& inst) const {
@@ -201,6 +210,7 @@ SceneCounts Scene::counts() const {
     c.instances = m_instances.size();
     c.materials = m_materials.size();
     c.groups = m_groups.size();
+    c.textures = m_textures.size();
     m_meshes.for_each([&](MeshHandle, const MeshRecord& m) { c.triangles += m.triangles.size(); });
     m_instances.for_each([&](InstanceHandle, const InstanceRecord& i) {
         if (i.world_visible) c.instanced_triangles += m_meshes.at(i.mesh).triangles.size();
@@ -223,14 +233,21 @@ Bounds3 Scene::world_bounds() const {
 }
 
 SceneImage Scene::image() const {
-    return SceneImage{m_meshes,   m_instances, m_materials, m_groups,
-                      m_root.groups, m_camera,   m_lighting, m_version};
+    return SceneImage{m_meshes,       m_instances, m_materials, m_groups, m_textures,
+                      m_root.groups, m_camera,    m_lighting,  m_version};
 }
 
 EditBatch SceneImage::to_batch() const {
     EditBatch b;
+    // Textures before the materials that name them.
+    textures.for_each([&](TextureHandle, const TextureRecord& t) {
+        b.edits.emplace_back(AddTexture{t.id, *t.encoded});
+    });
     materials.for_each([&](MaterialHandle, const MaterialRecord& m) {
-        b.edits.emplace_back(AddMaterial{m.id, m.material});
+        AddMaterial e{m.id, m.material};
+        if (const TextureRecord* t = textures.get(m.base_color_texture))
+            e.base_color_texture = t->id;
+        b.edits.emplace_back(std::move(e));
     });
     meshes.for_each([&](MeshHandle, const MeshRecord& m) {
         AddMesh e;

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <unordered_map>
@@ -13,6 +14,7 @@
 #include "engine/core/cow.h"
 #include "engine/core/handle.h"
 #include "engine/core/result.h"
+#include "engine/image/texture.h"
 #include "engine/scene/budget.h"
 #include "engine/scene/dirty.h"
 #include "engine/scene/edits.h"
@@ -84,6 +86,16 @@ struct MaterialRecord {
     std::string id;
     Material material;
     uint32_t dirty = 0;
+    TextureHandle base_color_texture;  ///< null: none
+};
+
+/// A decoded texture. Textures are immutable once added (remove and add again to change one), so
+/// launches share the decoded texels with the scene.
+struct TextureRecord {
+    std::string id;
+    std::shared_ptr<const TextureImage> image;
+    /// The PNG or JPEG bytes it was decoded from: what a snapshot writes.
+    std::shared_ptr<const std::string> encoded;
 };
 
 /// Totals for the scene endpoint and the demo.
@@ -92,6 +104,7 @@ struct SceneCounts {
     std::size_t instances = 0;
     std::size_t materials = 0;
     std::size_t groups = 0;
+    std::size_t textures = 0;
     uint64_t triangles = 0;            ///< over meshes, each counted once
     uint64_t instanced_triangles = 0;  ///< over visible instances
 };
@@ -106,6 +119,7 @@ struct SceneImage {
     SlotArray<InstanceRecord, InstanceTag> instances;
     SlotArray<MaterialRecord, MaterialTag> materials;
     SlotArray<GroupRecord, GroupTag> groups;
+    SlotArray<TextureRecord, TextureTag> textures;
     std::vector<GroupHandle> root_groups;  ///< the root's child groups, in order
     Camera camera;
     Lighting lighting;
@@ -152,17 +166,20 @@ public:
     InstanceHandle find_instance(std::string_view id) const;
     MaterialHandle find_material(std::string_view id) const;
     GroupHandle find_group(std::string_view id) const;
+    TextureHandle find_texture(std::string_view id) const;
 
     /// The record, or a StaleHandle error for a removed or never-issued handle.
     Result<const MeshRecord*> mesh(MeshHandle h) const;
     Result<const InstanceRecord*> instance(InstanceHandle h) const;
     Result<const MaterialRecord*> material(MaterialHandle h) const;
     Result<const GroupRecord*> group(GroupHandle h) const;
+    Result<const TextureRecord*> texture(TextureHandle h) const;
 
     const SlotArray<MeshRecord, MeshTag>& meshes() const { return m_meshes; }
     const SlotArray<InstanceRecord, InstanceTag>& instances() const { return m_instances; }
     const SlotArray<MaterialRecord, MaterialTag>& materials() const { return m_materials; }
     const SlotArray<GroupRecord, GroupTag>& groups() const { return m_groups; }
+    const SlotArray<TextureRecord, TextureTag>& textures() const { return m_textures; }
     /// The children of group `parent`, or of the root when `parent` is null (a live handle).
     const Children& children(GroupHandle parent) const;
     /// Ids of the groups from the root down to `parent` (empty for the root). O(depth).
@@ -207,6 +224,8 @@ private:
     Status apply_edit(AddGroup&& e, UndoLog& undo);
     Status apply_edit(UpdateGroup&& e, UndoLog& undo);
     Status apply_edit(RemoveGroup&& e, UndoLog& undo);
+    Status apply_edit(AddTexture&& e, UndoLog& undo);
+    Status apply_edit(RemoveTexture&& e, UndoLog& undo);
 
     /// Plays `undo` backwards (scene_undo.cpp).
     void roll_back(UndoLog& undo);
@@ -219,6 +238,9 @@ private:
     void remove_instance(InstanceHandle h, UndoLog& undo);
     void remove_mesh(MeshHandle h, UndoLog& undo);
     void remove_material(MaterialHandle h, UndoLog& undo);
+    void remove_texture(TextureHandle h, UndoLog& undo);
+    /// Resolves an optional texture id of a material edit (field `base_color_texture`).
+    Result<TextureHandle> find_material_texture(const std::optional<std::string>& id) const;
 
     // Scene graph helpers (scene_graph.cpp).
     Children& children_of(GroupHandle parent);
@@ -246,6 +268,7 @@ private:
     SlotArray<InstanceRecord, InstanceTag> m_instances;
     SlotArray<MaterialRecord, MaterialTag> m_materials;
     SlotArray<GroupRecord, GroupTag> m_groups;
+    SlotArray<TextureRecord, TextureTag> m_textures;
     Children m_root;
     /// Instances and groups whose world the next flatten() must recompute (groups: those whose
     /// `dirty` went from 0). Both only grow during a batch, so undo restores their lengths.
@@ -255,6 +278,7 @@ private:
     std::unordered_map<std::string, MeshHandle> m_mesh_ids;
     std::unordered_map<std::string, InstanceHandle> m_instance_ids;
     std::unordered_map<std::string, MaterialHandle> m_material_ids;
+    std::unordered_map<std::string, TextureHandle> m_texture_ids;
     Camera m_camera;
     Lighting m_lighting;
     ChangeTracker m_changes;

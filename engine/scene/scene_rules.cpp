@@ -7,6 +7,7 @@
 #include <cmath>
 #include <string>
 
+#include "engine/image/texture_decode.h"
 #include "engine/scene/child_list.h"
 #include "engine/scene/scene.h"
 #include "engine/scene/undo_log.h"
@@ -364,12 +365,23 @@ void Scene::remove_mesh(MeshHandle h, UndoLog& undo) {
 
 // Step: material ops -----------------------------------------------------------------------------
 
+Result<TextureHandle> Scene::find_material_texture(const std::optional<std::string>& id) const {
+    if (!id) return TextureHandle{};
+    const TextureHandle h = find_texture(*id);
+    if (h.is_null())
+        return failure(ErrorCode::UnknownId, "unknown texture '" + *id + "'", "base_color_texture");
+    return h;
+}
+
 Status Scene::apply_edit(AddMaterial&& e, UndoLog& undo) {
     if (Status s = check_new_id(e.id, !find_material(e.id).is_null(), "material"); !s) return s;
     if (Status s = check_material(e.material); !s) return s;
+    const auto texture = find_material_texture(e.base_color_texture);
+    if (!texture) return Unexpected(texture.error());
 
     bool reused = false;
-    const MaterialHandle h = m_materials.insert(MaterialRecord{e.id, e.material, 0}, &reused);
+    const MaterialHandle h =
+        m_materials.insert(MaterialRecord{e.id, e.material, 0, texture.value()}, &reused);
     undo.records.emplace_back(undo::Inserted<MaterialHandle>{h, reused});
     m_material_ids.emplace(std::move(e.id), h);
     mark_material(h, dirty::MaterialAdded);
@@ -383,9 +395,17 @@ Status Scene::apply_edit(UpdateMaterial&& e, UndoLog& undo) {
     Material updated = r.material;
     apply_to(updated, e);
     if (Status s = check_material(updated); !s) return s;
+    TextureHandle texture = r.base_color_texture;
+    if (e.base_color_texture) {
+        const auto found = find_material_texture(*e.base_color_texture);
+        if (!found) return Unexpected(found.error());
+        texture = found.value();
+    }
 
-    undo.records.emplace_back(undo::MaterialState{h, r.material, r.dirty});
+    undo.records.emplace_back(
+        undo::MaterialState{h, r.material, r.dirty, r.base_color_texture});
     r.material = updated;
+    r.base_color_texture = texture;
     mark_material(h, dirty::MaterialParams);
     return {};
 }
@@ -396,6 +416,63 @@ void Scene::remove_material(MaterialHandle h, UndoLog& undo) {
     m_material_ids.erase(r.id);
     undo.records.emplace_back(
         undo::Removed<MaterialHandle, MaterialRecord>{h, m_materials.take(h)});
+}
+
+// Step: texture ops ------------------------------------------------------------------------------
+
+Status Scene::apply_edit(AddTexture&& e, UndoLog& undo) {
+    if (Status s = check_new_id(e.id, !find_texture(e.id).is_null(), "texture"); !s) return s;
+    // What is left of the budget bounds the decode: a huge image is refused from its header,
+    // before its texels are allocated.
+    TextureLimits limits;
+    limits.max_bytes = m_budget.max_texture_bytes > m_totals.texture_bytes
+                           ? m_budget.max_texture_bytes - m_totals.texture_bytes
+                           : 0;
+    auto image = decode_texture(e.data, limits);
+    if (!image) {
+        Error err = std::move(image).error();
+        err.message = "texture '" + e.id + "': " + err.message;
+        return Unexpected(std::move(err));
+    }
+
+    m_totals.texture_bytes += image.value().bytes();
+    TextureRecord r;
+    r.id = e.id;
+    r.image = std::make_shared<const TextureImage>(std::move(image).value());
+    r.encoded = std::make_shared<const std::string>(std::move(e.data));
+    bool reused = false;
+    const TextureHandle h = m_textures.insert(std::move(r), &reused);
+    undo.records.emplace_back(undo::Inserted<TextureHandle>{h, reused});
+    m_texture_ids.emplace(std::move(e.id), h);
+    m_changes.scene_bits |= dirty::Textures;
+    return {};
+}
+
+Status Scene::apply_edit(RemoveTexture&& e, UndoLog& undo) {
+    const TextureHandle h = find_texture(e.texture);
+    if (h.is_null()) return unknown("texture", e.texture, "texture");
+    // Materials are few next to texels; a scan keeps no user list to undo.
+    std::size_t users = 0;
+    std::string first;
+    m_materials.for_each([&](MaterialHandle, const MaterialRecord& m) {
+        if (!(m.base_color_texture == h)) return;
+        if (users++ == 0) first = m.id;
+    });
+    if (users > 0)
+        return failure(ErrorCode::InUse,
+                       "texture '" + e.texture + "' is still used by " + std::to_string(users) +
+                           " material(s), e.g. '" + first + "'",
+                       "texture");
+    remove_texture(h, undo);
+    return {};
+}
+
+void Scene::remove_texture(TextureHandle h, UndoLog& undo) {
+    TextureRecord& r = m_textures.at(h);
+    m_totals.texture_bytes -= r.image->bytes();
+    m_texture_ids.erase(r.id);
+    m_changes.scene_bits |= dirty::Textures;
+    undo.records.emplace_back(undo::Removed<TextureHandle, TextureRecord>{h, m_textures.take(h)});
 }
 
 // Step: instance ops -----------------------------------------------------------------------------
@@ -568,6 +645,9 @@ Status Scene::apply_edit(Clear&&, UndoLog& undo) {
     std::vector<MaterialHandle> materials;
     m_materials.for_each([&](MaterialHandle h, const MaterialRecord&) { materials.push_back(h); });
     for (MaterialHandle h : materials) remove_material(h, undo);
+    std::vector<TextureHandle> textures;
+    m_textures.for_each([&](TextureHandle h, const TextureRecord&) { textures.push_back(h); });
+    for (TextureHandle h : textures) remove_texture(h, undo);
     m_camera = Camera{};
     m_lighting = Lighting{};
     m_changes.scene_bits |= dirty::Camera | dirty::Lighting | dirty::Materials;

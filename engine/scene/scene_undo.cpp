@@ -32,6 +32,8 @@ struct Reverser {
     SlotArray<GroupRecord, GroupTag>& groups;
     std::unordered_map<std::string, GroupHandle>& group_ids;
     Children& root;
+    SlotArray<TextureRecord, TextureTag>& textures;
+    std::unordered_map<std::string, TextureHandle>& texture_ids;
 
     Children& children_of(GroupHandle parent) {
         return parent.is_null() ? root : groups.at(parent).children;
@@ -127,6 +129,16 @@ struct Reverser {
         materials.undo_erase(r.handle, std::move(r.record));
     }
 
+    void operator()(undo::Inserted<TextureHandle>& r) {
+        texture_ids.erase(textures.at(r.handle).id);
+        textures.undo_insert(r.handle, r.reused_slot);
+    }
+
+    void operator()(undo::Removed<TextureHandle, TextureRecord>& r) {
+        texture_ids.emplace(r.record.id, r.handle);
+        textures.undo_erase(r.handle, std::move(r.record));
+    }
+
     void operator()(undo::MeshDirty& r) {
         MeshRecord& mesh = meshes.at(r.handle);
         mesh.dirty = r.dirty;
@@ -169,6 +181,7 @@ struct Reverser {
         MaterialRecord& m = materials.at(r.handle);
         m.material = r.material;
         m.dirty = r.dirty;
+        m.base_color_texture = r.base_color_texture;
     }
 };
 
@@ -176,7 +189,8 @@ struct Reverser {
 
 void Scene::roll_back(UndoLog& undo) {
     Reverser reverse{m_meshes,       m_instances, m_materials, m_mesh_ids, m_instance_ids,
-                     m_material_ids, m_groups,    m_group_ids, m_root};
+                     m_material_ids, m_groups,    m_group_ids, m_root,
+                     m_textures,     m_texture_ids};
     for (auto it = undo.records.rbegin(); it != undo.records.rend(); ++it) std::visit(reverse, *it);
     m_camera = undo.camera;
     m_lighting = undo.lighting;

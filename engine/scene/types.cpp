@@ -8,6 +8,18 @@ const char* build_preference_name(BuildPreference p) {
     return p == BuildPreference::FastTrace ? "fast_trace" : "fast_build";
 }
 
+const char* texture_wrap_name(TextureWrap w) {
+    switch (w) {
+        case TextureWrap::Clamp: return "clamp";
+        case TextureWrap::Mirror: return "mirror";
+        default: return "repeat";
+    }
+}
+
+const char* texture_filter_name(TextureFilter f) {
+    return f == TextureFilter::Nearest ? "nearest" : "bilinear";
+}
+
 namespace {
 
 Status bad(ErrorCode code, const char* field, const char* message) {

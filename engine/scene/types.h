@@ -27,12 +27,30 @@ struct BuildOptions {
 
 const char* build_preference_name(BuildPreference p);
 
-/// Surface description. Colors are linear RGB.
+/// How texture coordinates outside [0, 1) map into an image.
+enum class TextureWrap : uint8_t { Repeat, Clamp, Mirror };
+/// How a texture lookup between texels is filtered.
+enum class TextureFilter : uint8_t { Bilinear, Nearest };
+
+/// How a material reads its texture (glTF's sampler, reduced to what the renderer does).
+struct TextureSampler {
+    TextureWrap wrap = TextureWrap::Repeat;
+    TextureFilter filter = TextureFilter::Bilinear;
+
+    friend bool operator==(const TextureSampler&, const TextureSampler&) = default;
+};
+
+const char* texture_wrap_name(TextureWrap w);
+const char* texture_filter_name(TextureFilter f);
+
+/// Surface description. Colors are linear RGB. The base-colour texture itself is named by the
+/// material's record (MaterialRecord::base_color_texture); its texels multiply `base_color`.
 struct Material {
     Vec3 base_color{0.8f};
     float roughness = 0.5f;
     float metallic = 0.0f;
     Vec3 emission{0.0f};
+    TextureSampler base_color_sampler = {};
 
     friend bool operator==(const Material&, const Material&) = default;
 };

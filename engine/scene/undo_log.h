@@ -99,6 +99,7 @@ struct MaterialState {
     MaterialHandle handle;
     Material material;
     uint32_t dirty = 0;
+    TextureHandle base_color_texture;
 };
 
 }  // namespace undo
@@ -111,7 +112,8 @@ using UndoRecord =
                  undo::MeshPositions, undo::MeshPositionsReplaced, undo::MeshTopology,
                  undo::MeshAttributes, undo::InstanceState, undo::MaterialState,
                  undo::Inserted<GroupHandle>, undo::Removed<GroupHandle, GroupRecord>,
-                 undo::GroupState, undo::Reparented<InstanceHandle>, undo::Reparented<GroupHandle>>;
+                 undo::GroupState, undo::Reparented<InstanceHandle>, undo::Reparented<GroupHandle>,
+                 undo::Inserted<TextureHandle>, undo::Removed<TextureHandle, TextureRecord>>;
 
 /// Everything needed to take one batch back.
 struct UndoLog {

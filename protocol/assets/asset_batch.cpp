@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "engine/image/texture_decode.h"
 #include "engine/scene/scene.h"
 
 namespace strata::assets {
@@ -38,17 +39,45 @@ AssetBatch asset_to_batch(Asset&& asset, const BatchOptions& options) {
         out.batch.edits.emplace_back(std::move(e));
     };
 
-    // Step 1: materials.
-    std::size_t textures_dropped = 0;
+    // Step 1: textures whose bytes came with the upload (the engine decodes them when it applies
+    // the batch: a damaged PNG or JPEG refuses the whole import, naming the texture). Images the
+    // upload does not hold, or in formats the engine does not decode, are named in a warning.
+    std::vector<std::string> texture_ids(asset.textures.size());
+    for (std::size_t i = 0; i < asset.textures.size(); ++i) {
+        AssetTexture& t = asset.textures[i];
+        const std::string what =
+            label("texture", i, t.name.empty() ? t.uri : t.name);
+        if (t.bytes.empty()) {
+            out.warnings.push_back(what + " left out: its image is not part of the upload" +
+                                   (t.uri.empty() ? std::string() : " ('" + t.uri + "')"));
+            continue;
+        }
+        AddTexture e;
+        e.id = p + ".texture" + std::to_string(i);
+        e.data.assign(t.bytes.begin(), t.bytes.end());
+        t.bytes = {};
+        if (!texture_format(e.data)) {
+            out.warnings.push_back(what + " left out: only PNG and JPEG images are decoded" +
+                                   (t.mime_type.empty() ? std::string()
+                                                        : " (it is " + t.mime_type + ")"));
+            continue;
+        }
+        texture_ids[i] = e.id;
+        const std::string id = e.id;
+        push(std::move(e), id, out.textures);
+    }
+    // Step 2: materials.
     for (std::size_t i = 0; i < asset.materials.size(); ++i) {
         AddMaterial e;
         e.id = p + ".material" + std::to_string(i);
         e.material = asset.materials[i].material;
-        if (asset.materials[i].base_color_texture >= 0) ++textures_dropped;
+        const int texture = asset.materials[i].base_color_texture;
+        if (texture >= 0 && !texture_ids[std::size_t(texture)].empty())
+            e.base_color_texture = texture_ids[std::size_t(texture)];
         const std::string id = e.id;
         push(std::move(e), id, out.materials);
     }
-    // Step 2: meshes with their normals and uvs; what the scene cannot hold is named in the
+    // Step 3: meshes with their normals and uvs; what the scene cannot hold is named in the
     // warnings rather than dropped silently.
     bool colors = false;
     for (std::size_t i = 0; i < asset.meshes.size(); ++i) {
@@ -75,13 +104,9 @@ AssetBatch asset_to_batch(Asset&& asset, const BatchOptions& options) {
         push(std::move(e), id, out.meshes);
     }
     if (colors) out.warnings.push_back("vertex colours dropped: the scene has no vertex colours");
-    if (textures_dropped)
-        out.warnings.push_back(std::to_string(textures_dropped) +
-                               " base-colour texture reference(s) dropped: materials have no "
-                               "textures yet");
     if (!options.instance) return out;
 
-    // Step 3: the asset's own group, then the node tree (nodes come parents first).
+    // Step 4: the asset's own group, then the node tree (nodes come parents first).
     {
         AddGroup g;
         g.id = p;

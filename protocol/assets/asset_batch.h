@@ -1,5 +1,6 @@
 #pragma once
-// The intermediate asset as ONE engine edit batch: its materials, its meshes (each asset mesh
+// The intermediate asset as ONE engine edit batch: its textures (those whose PNG or JPEG bytes came
+// with the upload), its materials, its meshes (each asset mesh
 // once, so nodes that share a glTF mesh share one BLAS), and, unless asked not to, the node tree
 // as scene-graph groups with one instance per (node, mesh). The scene applies it atomically and
 // the journal records it like any POST /v1/edits batch.
@@ -29,6 +30,7 @@ struct BatchOptions {
 /// The batch and the ids it creates, in the order of its edits.
 struct AssetBatch {
     EditBatch batch;
+    std::vector<std::string> textures;
     std::vector<std::string> meshes;
     std::vector<std::string> materials;
     std::vector<std::string> groups;

@@ -238,10 +238,36 @@ private:
                 auto t = read_texture(texture, where + ".baseColorTexture");
                 if (!t) return Unexpected(t.error());
                 m.base_color_texture = t.value();
+                m.material.base_color_sampler = read_sampler(texture);
+                if (pbr.baseColorTexture.texCoord != 0)
+                    warn_once(where + ".baseColorTexture uses TEXCOORD_" +
+                              std::to_string(pbr.baseColorTexture.texCoord) +
+                              "; only TEXCOORD_0 is imported, so it is read with those");
             }
             m_asset.materials.push_back(std::move(m));
         }
         return {};
+    }
+
+    /// textures[i]'s sampler (i is a valid index) as the engine's: one wrap mode for both axes
+    /// (wrapS's; a different wrapT is named in a warning) and the magnification filter.
+    TextureSampler read_sampler(int i) {
+        TextureSampler out;
+        const int s = m_model.textures[std::size_t(i)].sampler;
+        if (s < 0 || std::size_t(s) >= m_model.samplers.size()) return out;  // glTF: repeat, linear
+        const tinygltf::Sampler& sampler = m_model.samplers[std::size_t(s)];
+        auto wrap = [](int mode) {
+            return mode == TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE      ? TextureWrap::Clamp
+                   : mode == TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT ? TextureWrap::Mirror
+                                                                    : TextureWrap::Repeat;
+        };
+        out.wrap = wrap(sampler.wrapS);
+        if (wrap(sampler.wrapT) != out.wrap)
+            warn_once("samplers[" + std::to_string(s) +
+                      "]: wrapS and wrapT differ; both axes use wrapS");
+        if (sampler.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST)
+            out.filter = TextureFilter::Nearest;
+        return out;
     }
 
     /// textures[i]'s image as an asset texture (each image once).

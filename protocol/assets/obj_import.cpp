@@ -218,7 +218,9 @@ Imported<Asset> import_obj(std::span<const uint8_t> bytes, const std::string& fi
             }
             if (all_t) {
                 const std::size_t t = std::size_t(key->vt) * 2;
-                mesh.uvs.push_back({attrib.texcoords[t], attrib.texcoords[t + 1]});
+                // OBJ's v grows upward from the image's bottom row; the engine's (glTF's) grows
+                // downward from the top row.
+                mesh.uvs.push_back({attrib.texcoords[t], 1.0f - attrib.texcoords[t + 1]});
             }
         }
     }

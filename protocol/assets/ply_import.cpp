@@ -360,7 +360,9 @@ Imported<Asset> import_ply(std::span<const uint8_t> bytes, const std::string& fi
                     mesh.colors.push_back(glm::clamp(
                         Vec3(get(slots.r), get(slots.g), get(slots.b)) * slots.color_scale,
                         Vec3(0.0f), Vec3(1.0f)));
-                if (slots.u >= 0 && slots.v >= 0) mesh.uvs.push_back({get(slots.u), get(slots.v)});
+                // PLY's v, like OBJ's, grows upward; the engine's grows downward.
+                if (slots.u >= 0 && slots.v >= 0)
+                    mesh.uvs.push_back({get(slots.u), 1.0f - get(slots.v)});
             }
             if (is_face) {
                 if (corners.size() < 3) {

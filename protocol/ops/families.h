@@ -12,6 +12,8 @@ namespace strata::protocol::ops {
 std::span<const EditOp> mesh_ops();
 /// add_material, update_material (material_ops.cpp).
 std::span<const EditOp> material_ops();
+/// add_texture, remove_texture (texture_ops.cpp).
+std::span<const EditOp> texture_ops();
 /// add_instance, update_instance, set_transform, remove_instance (instance_ops.cpp).
 std::span<const EditOp> instance_ops();
 /// add_group, update_group, remove_group (group_ops.cpp).

@@ -1,5 +1,6 @@
-// Material ops: add_material, update_material.
+// Material ops: add_material, update_material (with a base-colour texture and its sampler).
 
+#include "protocol/edit_schema.h"
 #include "protocol/ops/families.h"
 
 namespace strata::protocol::ops {
@@ -15,10 +16,31 @@ void read_material_values(OpFields& f, M& m) {
     f.read("emission", m.emission);
 }
 
+/// The `sampler` object: `wrap` and `filter`, each optional.
+void read_sampler(OpFields& f, std::optional<TextureWrap>& wrap,
+                  std::optional<TextureFilter>& filter) {
+    static const MemberRule SAMPLER = schema_members("/$defs/sampler");
+    const Json* s = f.get("sampler");
+    if (!s) return;
+    FieldReader& r = f.reader();
+    const std::string ptr = f.pointer("sampler");
+    r.expect_object(*s, ptr, SAMPLER);
+    if (const Json* w = FieldReader::member(*s, "wrap"))
+        wrap = TextureWrap(r.choice(*w, child(ptr, "wrap"), {"repeat", "clamp", "mirror"}));
+    if (const Json* fl = FieldReader::member(*s, "filter"))
+        filter = TextureFilter(r.choice(*fl, child(ptr, "filter"), {"bilinear", "nearest"}));
+}
+
 Edit parse_add_material(OpFields& f) {
     AddMaterial e;
     e.id = f.id("id");
     read_material_values(f, e.material);
+    f.read("base_color_texture", e.base_color_texture);
+    std::optional<TextureWrap> wrap;
+    std::optional<TextureFilter> filter;
+    read_sampler(f, wrap, filter);
+    if (wrap) e.material.base_color_sampler.wrap = *wrap;
+    if (filter) e.material.base_color_sampler.filter = *filter;
     return e;
 }
 
@@ -26,11 +48,17 @@ Edit parse_update_material(OpFields& f) {
     UpdateMaterial e;
     e.material = f.id("material");
     read_material_values(f, e);
+    if (const Json* t = f.get("base_color_texture"))
+        e.base_color_texture = t->is_null() ? std::optional<std::string>()
+                                            : f.reader().id(*t, f.pointer("base_color_texture"));
+    read_sampler(f, e.wrap, e.filter);
     return e;
 }
 
 constexpr EditOp OPS[] = {
-    {"add_material", "A new material: base colour, roughness, metallic and emission.",
+    {"add_material",
+     "A new material: base colour (optionally times a texture), roughness, metallic and "
+     "emission.",
      R"json({
   "type": "object",
   "properties": {
@@ -38,7 +66,9 @@ constexpr EditOp OPS[] = {
     "base_color": {"$ref": "#/$defs/vec3"},
     "roughness": {"type": "number"},
     "metallic": {"type": "number"},
-    "emission": {"$ref": "#/$defs/vec3"}
+    "emission": {"$ref": "#/$defs/vec3"},
+    "base_color_texture": {"$ref": "#/$defs/id"},
+    "sampler": {"$ref": "#/$defs/sampler"}
   },
   "required": ["id"],
   "additionalProperties": false
@@ -52,7 +82,9 @@ constexpr EditOp OPS[] = {
     "base_color": {"$ref": "#/$defs/vec3"},
     "roughness": {"type": "number"},
     "metallic": {"type": "number"},
-    "emission": {"$ref": "#/$defs/vec3"}
+    "emission": {"$ref": "#/$defs/vec3"},
+    "base_color_texture": {"oneOf": [{"$ref": "#/$defs/id"}, {"type": "null"}]},
+    "sampler": {"$ref": "#/$defs/sampler"}
   },
   "required": ["material"],
   "additionalProperties": false

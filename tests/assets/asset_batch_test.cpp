@@ -155,22 +155,58 @@ TEST(AssetBatch, ImportingTwiceUnderOnePrefixIsRefusedAndChangesNothing) {
     }
 }
 
-TEST(AssetBatch, NormalsAndUvsReachTheSceneAndTexturesAreNamedInTheWarnings) {
+TEST(AssetBatch, NormalsUvsAndTheEmbeddedTextureReachTheScene) {
     const std::string glb = read_file(std::string(STRATA_ASSIMP_MODELS_DIR) +
                                       "/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb");
     if (glb.empty()) GTEST_SKIP() << "assimp-testmodels missing";
     auto asset = import_asset(AssetFormat::Glb, bytes_of(glb), "box.glb", {});
     ASSERT_TRUE(asset.has_value()) << asset.error().describe();
     AssetBatch b = asset_to_batch(std::move(asset.value()), {"box", true});
-    EXPECT_THAT(b.warnings, Contains(HasSubstr("texture reference(s) dropped")));
-    // Normals and uvs reach the scene.
+    EXPECT_EQ(b.textures, std::vector<std::string>{"box.texture0"});
+    // Normals, uvs and the texture reach the scene; the material names the texture.
     auto engine = make_engine();
-    ASSERT_TRUE(engine->apply(std::move(b.batch)).has_value());
+    auto applied = engine->apply(std::move(b.batch));
+    ASSERT_TRUE(applied.has_value()) << applied.error().describe();
     engine->read([](const Scene& s) {
         const MeshRecord* m = s.mesh(s.find_mesh("box.mesh0")).value();
         EXPECT_EQ(m->normals.size(), m->positions.size());
         EXPECT_EQ(m->uvs.size(), m->positions.size());
+        const TextureRecord* t = s.texture(s.find_texture("box.texture0")).value();
+        EXPECT_EQ(t->image->width, 211u);  // CesiumLogoFlat.png, a palette PNG
+        const MaterialRecord* mat = s.material(m->material).value();
+        EXPECT_EQ(mat->base_color_texture, s.find_texture("box.texture0"));
     });
+}
+
+TEST(AssetBatch, TexturesWithoutBytesOrInAnotherFormatAreLeftOutWithAWarning) {
+    Asset asset;
+    asset.textures.push_back(AssetTexture{"logo", "image/png", {}, "logo.png"});
+    asset.textures.push_back(AssetTexture{"web", "image/webp", {'R', 'I', 'F', 'F'}, ""});
+    asset.materials.push_back(AssetMaterial{"a", Material{}, 0});
+    asset.materials.push_back(AssetMaterial{"b", Material{}, 1});
+    AssetBatch b = asset_to_batch(std::move(asset), {"t", false});
+    EXPECT_TRUE(b.textures.empty());
+    EXPECT_THAT(b.warnings, Contains(HasSubstr("not part of the upload ('logo.png')")));
+    EXPECT_THAT(b.warnings, Contains(HasSubstr("only PNG and JPEG (it is image/webp)")));
+    auto engine = make_engine();
+    ASSERT_TRUE(engine->apply(std::move(b.batch)).has_value());
+    engine->read([](const Scene& s) {
+        EXPECT_TRUE(s.material(s.find_material("t.material0")).value()->base_color_texture.is_null());
+    });
+}
+
+TEST(AssetBatch, ADamagedEmbeddedImageRefusesTheWholeImportNamingTheTexture) {
+    Asset asset;
+    const std::string png = "\x89PNG\r\n\x1a\n-not-really";
+    asset.textures.push_back(AssetTexture{"logo", "image/png", {png.begin(), png.end()}, ""});
+    asset.materials.push_back(AssetMaterial{"a", Material{}, 0});
+    AssetBatch b = asset_to_batch(std::move(asset), {"t", false});
+    ASSERT_EQ(b.textures.size(), 1u);
+    auto engine = make_engine();
+    auto applied = engine->apply(std::move(b.batch));
+    ASSERT_FALSE(applied.has_value());
+    EXPECT_THAT(applied.error().message, HasSubstr("texture 't.texture0': corrupt PNG"));
+    EXPECT_EQ(engine->read([](const Scene& s) { return s.materials().size(); }), 0u);
 }
 
 }  // namespace

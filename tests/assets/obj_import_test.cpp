@@ -4,6 +4,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "engine/engine.h"
+#include "engine/image/png.h"
+#include "protocol/assets/asset_batch.h"
 #include "tests/assets/asset_test_util.h"
 
 namespace strata::assets::test {
@@ -98,6 +101,28 @@ TEST(ObjImport, MaterialsComeFromTheUploadedMtlWithKdKsNsAndMapKdMapped) {
     EXPECT_EQ(m.positions[t[0]], Vec3(0, 0, 0));
     EXPECT_EQ(m.positions[t[1]], Vec3(1, 1, 0));
     EXPECT_EQ(m.positions[t[2]], Vec3(0, 0, 1));
+}
+
+TEST(ObjImport, AMapKdImageThatCameWithTheUploadBecomesTheMaterialsTexture) {
+    const uint8_t rgb[] = {200, 100, 50};
+    const std::string png = encode_png(rgb, 1, 1, 3).value();
+    auto a = import_text(AssetFormat::Obj, CUBE_FACES,
+                         {{"cube.mtl", CUBE_MTL}, {"shiny.png", png}});
+    ASSERT_TRUE(a.has_value()) << a.error().describe();
+    EXPECT_EQ(a.value().textures.at(0).bytes.size(), png.size());
+    // OBJ's v grows upward: "vt 1 1" is the top-right corner, (1, 0) for the engine.
+    EXPECT_EQ(a.value().meshes[0].uvs.size(), a.value().meshes[0].positions.size());
+    EXPECT_THAT(a.value().meshes[0].uvs, ::testing::Contains(glm::vec2(1, 0)));
+    AssetBatch b = asset_to_batch(std::move(a.value()), {"cube", false});
+    EXPECT_EQ(b.textures, std::vector<std::string>{"cube.texture0"});
+    auto engine = Engine::create();
+    ASSERT_TRUE(engine.has_value());
+    auto applied = engine.value()->apply(std::move(b.batch));
+    ASSERT_TRUE(applied.has_value()) << applied.error().describe();
+    engine.value()->read([](const Scene& s) {
+        const MaterialRecord* shiny = s.material(s.find_material("cube.material1")).value();
+        EXPECT_EQ(shiny->base_color_texture, s.find_texture("cube.texture0"));
+    });
 }
 
 TEST(ObjImport, AnMtllibOutsideTheUploadIsNeverReadAndIsNamedInTheWarnings) {

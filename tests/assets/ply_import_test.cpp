@@ -104,7 +104,9 @@ TEST(PlyImport, TextureCoordinatesAreReadUnderEitherName) {
     auto a = import_text(AssetFormat::Ply, ply);
     ASSERT_TRUE(a.has_value()) << a.error().describe();
     ASSERT_EQ(a.value().meshes[0].uvs.size(), 3u);
-    EXPECT_EQ(a.value().meshes[0].uvs[2], glm::vec2(0, 1));
+    // PLY's v grows upward; the engine's downward from the image's top row.
+    EXPECT_EQ(a.value().meshes[0].uvs[2], glm::vec2(0, 0));
+    EXPECT_EQ(a.value().meshes[0].uvs[1], glm::vec2(1, 1));
 }
 
 /// The error of importing `text`, which must fail.

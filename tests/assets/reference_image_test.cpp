@@ -1,6 +1,6 @@
 // Imported models against stored reference images, compared with a tolerance (as the demo's
 // reference test does): Spot, the bunny and the multi-node 2CylinderEngine, each framed by a
-// camera computed from its world bounds.
+// camera computed from its world bounds; and BoxTextured, whose embedded PNG must show.
 //
 // Regenerate after an intended change of the renderer or the importers, then look at them:
 //   STRATA_UPDATE_REFERENCE=1 ctest --test-dir build -R AssetReferenceImage
@@ -19,16 +19,23 @@ namespace {
 
 constexpr uint32_t WIDTH = 240, HEIGHT = 180, SPP = 8;
 
-/// Imports `path` as `format`, frames it and compares the frame with data/<name>.png.
-void check_reference(const std::string& path, AssetFormat format, const std::string& name) {
+/// Imports `path` as `format`, frames it and compares the frame with data/<name>.png. Returns the
+/// ids of the textures the import created.
+std::vector<std::string> check_reference(const std::string& path, AssetFormat format,
+                                         const std::string& name) {
     const std::string bytes = read_file(path);
-    if (bytes.empty()) GTEST_SKIP() << path << " missing";
+    if (bytes.empty()) {
+        ADD_FAILURE() << path << " missing";
+        return {};
+    }
     auto asset = import_asset(format, bytes_of(bytes), name, {});
-    ASSERT_TRUE(asset.has_value()) << asset.error().describe();
+    EXPECT_TRUE(asset.has_value()) << asset.error().describe();
+    if (!asset) return {};
     AssetBatch b = asset_to_batch(std::move(asset.value()), {name, true});
+    const std::vector<std::string> textures = b.textures;
     auto engine = strata::test::engine_with(std::move(b.batch));
     const Bounds3 box = engine->read([](const Scene& s) { return s.world_bounds(); });
-    ASSERT_FALSE(box.empty());
+    EXPECT_FALSE(box.empty());
     const float size = glm::length(box.extent());
     SetCamera cam;
     cam.target = box.center();
@@ -36,11 +43,12 @@ void check_reference(const std::string& path, AssetFormat format, const std::str
     cam.fov_y_deg = 40.0f;
     EditBatch view;
     view.edits.emplace_back(cam);
-    ASSERT_TRUE(engine->apply(std::move(view)).has_value());
+    EXPECT_TRUE(engine->apply(std::move(view)).has_value());
     const EncodedFrame image = strata::test::render_ok(
         *engine, strata::test::request(WIDTH, HEIGHT, SPP, {}, ImageFormat::Png));
     strata::test::expect_matches_reference(STRATA_ASSET_TEST_DATA_DIR, name, image, WIDTH,
                                            HEIGHT);
+    return textures;
 }
 
 TEST(AssetReferenceImage, SpotMatchesTheStoredFrame) {
@@ -56,6 +64,13 @@ TEST(AssetReferenceImage, TwoCylinderEngineMatchesTheStoredFrame) {
     check_reference(std::string(STRATA_ASSIMP_MODELS_DIR) +
                         "/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb",
                     AssetFormat::Glb, "engine");
+}
+
+TEST(AssetReferenceImage, BoxTexturedShowsItsEmbeddedTexture) {
+    const auto textures = check_reference(
+        std::string(STRATA_ASSIMP_MODELS_DIR) + "/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb",
+        AssetFormat::Glb, "box_textured");
+    EXPECT_EQ(textures, std::vector<std::string>{"box_textured.texture0"});
 }
 
 }  // namespace

@@ -18,6 +18,7 @@
 #include "tests/engine/durable_test_util.h"
 #include "tests/engine/random_edits.h"
 #include "tests/engine/test_util.h"
+#include "tests/engine/texture_test_util.h"
 
 namespace strata {
 namespace {
@@ -243,6 +244,50 @@ TEST(Durability, NormalsAndUvsSurviveARestartFromJournalAndFromSnapshot) {
     Server s = start(options_for(dir));
     EXPECT_TRUE(s.store->recovery().loaded_snapshot);
     EXPECT_EQ(attributes(*s.engine), before);
+}
+
+TEST(Durability, TexturesAndMaterialBindingsSurviveARestartFromJournalAndFromSnapshot) {
+    TempDir dir;
+    AddMaterial m{"m", Material{}};
+    m.base_color_texture = "checker";
+    m.material.base_color_sampler = {TextureWrap::Mirror, TextureFilter::Nearest};
+    UpdateMaterial rebind;
+    rebind.material = "m";
+    rebind.base_color_texture = std::optional<std::string>("photo");
+    rebind.wrap = TextureWrap::Clamp;
+    auto state = [](const Engine& e) {
+        return e.read([](const Scene& s) {
+            std::string out;
+            s.textures().for_each([&](TextureHandle, const TextureRecord& t) {
+                out += t.id + ":" + std::to_string(t.image->width) + "x" +
+                       std::to_string(t.image->height) + ";";
+            });
+            const MaterialRecord* mat = s.material(s.find_material("m")).value();
+            out += "m->" + s.texture(mat->base_color_texture).value()->id + " wrap " +
+                   texture_wrap_name(mat->material.base_color_sampler.wrap) + " filter " +
+                   texture_filter_name(mat->material.base_color_sampler.filter);
+            out += " bytes " + std::to_string(s.mesh_totals().texture_bytes);
+            return out;
+        });
+    };
+    std::string before;
+    {
+        Server s = start(options_for(dir));
+        test::apply_ok(*s.engine, AddTexture{"checker", test::four_colour_png()}, m);
+        test::apply_ok(*s.engine, AddTexture{"photo", test::jpeg_bytes(8, 4, 200, 100, 50)},
+                       rebind, RemoveTexture{"checker"});
+        before = state(*s.engine);
+        ASSERT_EQ(before, "photo:8x4;m->photo wrap clamp filter nearest bytes 192");
+    }
+    {
+        Server s = start(options_for(dir));
+        EXPECT_EQ(s.store->recovery().records_replayed, 2u);
+        EXPECT_EQ(state(*s.engine), before);
+        ASSERT_TRUE(s.store->snapshot_now().has_value());
+    }
+    Server s = start(options_for(dir));
+    EXPECT_TRUE(s.store->recovery().loaded_snapshot);
+    EXPECT_EQ(state(*s.engine), before);
 }
 
 TEST(Durability, ATornLastRecordIsCutOffAndReported) {

@@ -1,0 +1,35 @@
+#pragma once
+// Decoding untrusted PNG and JPEG bytes into a TextureImage (libpng, libturbojpeg). The format
+// comes from the first bytes, never from a name. The header is read first: an image larger than
+// the limits is refused before any texel memory is allocated. Texels are taken as sRGB (what glTF
+// and OBJ base-colour textures are) and converted to linear once, here. Alpha is dropped;
+// greyscale and palette images become RGB.
+
+#include <cstdint>
+#include <string_view>
+
+#include "engine/core/result.h"
+#include "engine/image/texture.h"
+
+namespace strata {
+
+/// Largest width or height accepted.
+constexpr uint32_t MAX_TEXTURE_SIDE = 16384;
+
+struct TextureLimits {
+    uint32_t max_side = MAX_TEXTURE_SIDE;
+    /// Decoded bytes (width * height * TEXTURE_BYTES_PER_TEXEL) the image may take.
+    uint64_t max_bytes = uint64_t(1) << 30;
+};
+
+/// Which decoder the bytes call for: "png", "jpeg", or nullptr for neither.
+const char* texture_format(std::string_view bytes);
+
+/// Decodes a PNG or JPEG. Errors (field "data"): InvalidArgument for bytes that are neither or
+/// are corrupt (the message says what the decoder found), TooLarge for an image over `limits`.
+Result<TextureImage> decode_texture(std::string_view bytes, const TextureLimits& limits);
+
+/// The linear value of an 8-bit sRGB code, as 0..65535.
+uint16_t srgb8_to_linear16(uint8_t code);
+
+}  // namespace strata

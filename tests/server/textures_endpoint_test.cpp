@@ -1,0 +1,115 @@
+// Textures over real HTTP: add_texture with base64 PNG and JPEG bytes, the material binding, the
+// texture documents and listing, and every refusal with its status and pointer (a corrupt image
+// named, a huge one refused from its header with 413, a texture in use).
+
+#include <gmock/gmock.h>
+
+#include "engine/image/png.h"
+#include "protocol/base64.h"
+#include "tests/server/test_server.h"
+
+namespace strata::server::test {
+namespace {
+
+using ::testing::HasSubstr;
+
+std::string png_2x2() {
+    const uint8_t rgb[] = {255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255};
+    return encode_png(rgb, 2, 2, 3).value();
+}
+
+Json add_texture(const std::string& id, const std::string& bytes) {
+    return {{"op", "add_texture"}, {"id", id}, {"data", protocol::encode_base64(bytes)}};
+}
+
+class Textures : public ::testing::Test {
+protected:
+    TestServer srv;
+};
+
+TEST_F(Textures, ATextureIsAddedBoundListedAndRemoved) {
+    const Reply r = srv.edits(
+        {add_texture("checker", png_2x2()),
+         {{"op", "add_material"},
+          {"id", "m"},
+          {"base_color_texture", "checker"},
+          {"sampler", {{"wrap", "mirror"}, {"filter", "nearest"}}}}});
+    ASSERT_EQ(r.status, 200) << r.body;
+    const Json t = srv.get("/v1/scene/textures/checker").json();
+    EXPECT_EQ(t["width"], 2);
+    EXPECT_EQ(t["height"], 2);
+    EXPECT_EQ(t["format"], "png");
+    EXPECT_EQ(t["decoded_bytes"], 24);
+    EXPECT_EQ(t["encoded_bytes"], png_2x2().size());
+    const Json m = srv.get("/v1/scene/materials/m").json();
+    EXPECT_EQ(m["base_color_texture"], "checker");
+    EXPECT_EQ(m["sampler"], (Json{{"wrap", "mirror"}, {"filter", "nearest"}}));
+    const Json list = srv.get("/v1/scene/textures").json();
+    ASSERT_EQ(list["items"].size(), 1u);
+    EXPECT_EQ(list["items"][0]["id"], "checker");
+    EXPECT_EQ(srv.get("/v1/scene").json()["counts"]["textures"], 1);
+
+    expect_problem(srv.edits({{{"op", "remove_texture"}, {"texture", "checker"}}}), 422,
+                   "in-use", "/edits/0/texture");
+    const Reply gone = srv.edits(
+        {{{"op", "update_material"}, {"material", "m"}, {"base_color_texture", nullptr}},
+         {{"op", "remove_texture"}, {"texture", "checker"}}});
+    ASSERT_EQ(gone.status, 200) << gone.body;
+    expect_problem(srv.get("/v1/scene/textures/checker"), 404, "not-found");
+    EXPECT_EQ(srv.get("/v1/scene/materials/m").json()["base_color_texture"], nullptr);
+}
+
+TEST_F(Textures, ACorruptImageIs422NamingTheTextureAndTheDecodersReason) {
+    const std::string png = png_2x2();
+    const Reply r = srv.edits({add_texture("ok", png), add_texture("broken", png.substr(0, 40))});
+    expect_problem(r, 422, "invalid-value", "/edits/1/data");
+    EXPECT_THAT(r.json()["detail"].get<std::string>(), HasSubstr("texture 'broken'"));
+    EXPECT_THAT(r.json()["detail"].get<std::string>(), HasSubstr("corrupt PNG"));
+    expect_problem(srv.edits({add_texture("gif", "GIF89a")}), 422, "invalid-value",
+                   "/edits/0/data");
+    expect_problem(srv.get("/v1/scene/textures/ok"), 404);  // the batch was refused whole
+    expect_problem(
+        srv.edits({{{"op", "add_material"}, {"id", "m"}, {"base_color_texture", "nope"}}}), 422,
+        "unknown-id", "/edits/0/base_color_texture");
+}
+
+TEST(TexturesBudget, AnImageOverTheTextureBudgetIs413FromItsHeader) {
+    EngineConfig engine;
+    engine.budget.max_texture_bytes = 30;  // one 2x2 texture (24 bytes), not two
+    TestServer srv({}, false, engine);
+    ASSERT_EQ(srv.edits({add_texture("a", png_2x2())}).status, 200);
+    const Reply r = srv.edits({add_texture("b", png_2x2())});
+    expect_problem(r, 413, "too-large", "/edits/0/data");
+    EXPECT_THAT(r.json()["detail"].get<std::string>(), HasSubstr("max_texture_mb"));
+}
+
+TEST_F(Textures, ATexturedMaterialRendersItsTexels) {
+    const Reply r = srv.edits(
+        {add_texture("red", encode_png(std::vector<uint8_t>{255, 0, 0}.data(), 1, 1, 3).value()),
+         {{"op", "add_material"},
+          {"id", "m"},
+          {"base_color", {1, 1, 1}},
+          {"base_color_texture", "red"}},
+         {{"op", "add_mesh"},
+          {"id", "quad"},
+          {"positions", {-1, -1, 0, 1, -1, 0, -1, 1, 0, 1, 1, 0}},
+          {"indices", {0, 1, 2, 1, 3, 2}},
+          {"uvs", {0, 1, 1, 1, 0, 0, 1, 0}}},
+         {{"op", "add_instance"}, {"id", "q"}, {"mesh", "quad"}, {"material", "m"}},
+         {{"op", "set_camera"}, {"eye", {0, 0, 3}}, {"target", {0, 0, 0}}}});
+    ASSERT_EQ(r.status, 200) << r.body;
+    const Reply img = srv.post(
+        "/v1/render",
+        Json{{"width", 16}, {"height", 16}, {"spp", 1}, {"format", "png"}});
+    ASSERT_EQ(img.status, 200) << img.body.substr(0, 200);
+    auto decoded = decode_png(img.body);
+    ASSERT_TRUE(decoded.has_value());
+    const auto& px = decoded.value().pixels;
+    const int ch = decoded.value().channels;
+    const std::size_t centre = (8 * 16 + 8) * std::size_t(ch);
+    EXPECT_GT(px[centre], 2 * px[centre + 1]) << "the centre pixel is red";
+    EXPECT_GT(px[centre], 2 * px[centre + 2]);
+}
+
+}  // namespace
+}  // namespace strata::server::test
