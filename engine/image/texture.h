@@ -42,7 +42,8 @@ struct TextureImage {
         const float fx = uv.x * float(width);
         const float fy = uv.y * float(height);
         if (s.filter == TextureFilter::Nearest)
-            return texel(wrap(floor_index(fx), width, s.wrap), wrap(floor_index(fy), height, s.wrap));
+            return texel(wrap(floor_index(fx), width, s.wrap),
+                         wrap(floor_index(fy), height, s.wrap));
         // Bilinear: texel centres sit at half-integers.
         const float gx = fx - 0.5f, gy = fy - 0.5f;
         const float x0f = std::floor(gx), y0f = std::floor(gy);

@@ -122,8 +122,8 @@ Result<TextureImage> decode_png_texture(std::string_view bytes, const TextureLim
     png_read_update_info(s->png, s->info);
     s->image.width = png_get_image_width(s->png, s->info);
     s->image.height = png_get_image_height(s->png, s->info);
-    if (png_get_channels(s->png, s->info) != 3 || png_get_rowbytes(s->png, s->info) !=
-                                                      std::size_t(s->image.width) * 3)
+    if (png_get_channels(s->png, s->info) != 3 ||
+        png_get_rowbytes(s->png, s->info) != std::size_t(s->image.width) * 3)
         return failure(ErrorCode::InvalidArgument, "PNG pixel layout could not be read as RGB",
                        FIELD);
     try {
@@ -165,7 +165,8 @@ Result<TextureImage> decode_jpeg_texture(std::string_view bytes, const TextureLi
         return failure(ErrorCode::InvalidArgument,
                        std::string("corrupt JPEG: ") + tjGetErrorStr2(tj.h), FIELD);
     if (width <= 0 || height <= 0)
-        return failure(ErrorCode::InvalidArgument, "JPEG image has no pixels", FIELD);
+        return failure(ErrorCode::InvalidArgument, "corrupt JPEG: the header gives no image size",
+                       FIELD);
     if (Status s = check_size(uint32_t(width), uint32_t(height), limits, "JPEG"); !s)
         return Unexpected(s.error());
     if (colorspace == TJCS_CMYK || colorspace == TJCS_YCCK)

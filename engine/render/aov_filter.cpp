@@ -53,6 +53,33 @@ void filter_frame(FrameBuffers& b, const AovFilterSettings& settings) {
             lum[p] = luminance(light[p]);
         }
     });
+    // Fireflies (a pixel far brighter than every neighbour: a rare bright path) would be spread
+    // over the whole kernel; they are clamped to their brightest neighbour first.
+    std::vector<Vec3> clamped(light);
+    for_rows(h, [&](uint32_t y) {
+        for (uint32_t x = 0; x < w; ++x) {
+            const std::size_t p = std::size_t(y) * w + x;
+            if (!covered[p]) continue;
+            float brightest = 0.0f;
+            for (int dy = -1; dy <= 1; ++dy) {
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const int qx = int(x) + dx, qy = int(y) + dy;
+                    if ((dx == 0 && dy == 0) || qx < 0 || qy < 0 || qx >= int(w) || qy >= int(h))
+                        continue;
+                    const std::size_t q = std::size_t(qy) * w + std::size_t(qx);
+                    if (covered[q]) brightest = std::max(brightest, lum[q]);
+                }
+            }
+            if (lum[p] > brightest && lum[p] > 0.0f) clamped[p] = light[p] * (brightest / lum[p]);
+        }
+    });
+    light.swap(clamped);
+    for_rows(h, [&](uint32_t y) {
+        for (uint32_t x = 0; x < w; ++x) {
+            const std::size_t p = std::size_t(y) * w + x;
+            lum[p] = luminance(light[p]);
+        }
+    });
     for_rows(h, [&](uint32_t y) {
         for (uint32_t x = 0; x < w; ++x) {
             const std::size_t p = std::size_t(y) * w + x;

@@ -143,7 +143,8 @@ private:
                 inst.normal_matrix * mesh->normal(hits.prim_id[i], hits.u[i], hits.v[i]), n, -dir);
         s.origin = offset_origin(s.position, n, org, hits.tfar[i]);
         s.material = inst.material;
-        s.base_color = m_frame.base_color(inst.material, mesh, hits.prim_id[i], hits.u[i], hits.v[i]);
+        s.base_color =
+            m_frame.base_color(inst.material, mesh, hits.prim_id[i], hits.u[i], hits.v[i]);
         return s;
     }
 

@@ -191,7 +191,8 @@ TEST(AssetBatch, TexturesWithoutBytesOrInAnotherFormatAreLeftOutWithAWarning) {
     auto engine = make_engine();
     ASSERT_TRUE(engine->apply(std::move(b.batch)).has_value());
     engine->read([](const Scene& s) {
-        EXPECT_TRUE(s.material(s.find_material("t.material0")).value()->base_color_texture.is_null());
+        const MaterialRecord* m = s.material(s.find_material("t.material0")).value();
+        EXPECT_TRUE(m->base_color_texture.is_null());
     });
 }
 

@@ -20,6 +20,7 @@
 #include "engine/engine.h"
 #include "engine/render/aov_filter.h"
 #include "engine/scene/demo_scene.h"
+#include "engine/scene/shapes.h"
 #include "protocol/assets/asset_batch.h"
 #include "protocol/assets/import.h"
 
@@ -79,9 +80,9 @@ void measure(const char* name, Engine& engine, uint32_t w, uint32_t h, uint32_t 
         FrameBuffers copy = guides.buffers;
         const auto t0 = std::chrono::steady_clock::now();
         filter_frame(copy);
-        ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() -
-                                                               t0)
-                         .count());
+        ms.push_back(
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                .count());
     }
     std::printf("%-14s filter alone: median %.2f ms over 7 runs at %ux%u\n", name, median(ms), w,
                 h);
@@ -106,8 +107,8 @@ int main(int argc, char** argv) {
     auto demo = engine_with(make_demo_scene());
     measure("demo", *demo, w, h, ref_spp);
 
-    const std::string path =
-        std::string(STRATA_ASSIMP_MODELS_DIR) + "/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb";
+    const std::string path = std::string(STRATA_ASSIMP_MODELS_DIR) +
+                             "/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb";
     std::ifstream in(path, std::ios::binary);
     const std::string bytes{std::istreambuf_iterator<char>(in), {}};
     auto asset = assets::import_asset(
@@ -123,7 +124,8 @@ int main(int argc, char** argv) {
     const Bounds3 box = model->read([](const Scene& s) { return s.world_bounds(); });
     const float size = glm::length(box.extent());
     EditBatch view;
-    AddMesh ground = add_mesh_edit("ground", make_plane(Vec3(4.0f * size, 0, 4.0f * size), 1, 1), {});
+    AddMesh ground =
+        add_mesh_edit("ground", make_plane(Vec3(4.0f * size, 0, 4.0f * size), 1, 1), {});
     view.edits.emplace_back(std::move(ground));
     AddInstance g;
     g.id = "ground";

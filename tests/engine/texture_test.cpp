@@ -122,8 +122,8 @@ TEST(TextureLookup, NearestReadsTheTexelUnderTheCoordinateWithVDownward) {
 TEST(TextureLookup, BilinearBlendsTheFourNearestTexelCentres) {
     const TextureImage t = four_colours();
     const TextureSampler clamp{TextureWrap::Clamp, TextureFilter::Bilinear};
-    expect_near(t.sample({0.25f, 0.25f}, clamp), Vec3(1, 0, 0));   // a texel centre
-    expect_near(t.sample({0.5f, 0.5f}, clamp), Vec3(0.5f, 0.5f, 0.5f));  // all four, equally
+    expect_near(t.sample({0.25f, 0.25f}, clamp), Vec3(1, 0, 0));          // a texel centre
+    expect_near(t.sample({0.5f, 0.5f}, clamp), Vec3(0.5f, 0.5f, 0.5f));   // all four, equally
     expect_near(t.sample({0.5f, 0.25f}, clamp), Vec3(0.5f, 0.5f, 0.0f));  // red and green
     // Clamp: beyond the edge is the edge texel.
     expect_near(t.sample({-3.0f, 0.25f}, clamp), Vec3(1, 0, 0));
@@ -195,7 +195,8 @@ TEST(TextureRules, ACorruptImageIsRefusedNamingTheTextureAndChangesNothing) {
     auto engine = test::make_engine();
     apply_ok(*engine, texture_edit("good"));
     const std::string png = test::four_colour_png();
-    const Error e = refused(*engine, batch(texture_edit("ok"), texture_edit("bad", png.substr(0, 30))));
+    const Error e =
+        refused(*engine, batch(texture_edit("ok"), texture_edit("bad", png.substr(0, 30))));
     EXPECT_EQ(e.code, ErrorCode::InvalidArgument);
     EXPECT_EQ(e.edit_index, 1u);
     EXPECT_EQ(e.field, "data");
@@ -247,8 +248,8 @@ TEST(TextureRules, ARefusedBatchRestoresRemovedTexturesAndMaterialBindings) {
     swap.material = "m";
     swap.base_color_texture = std::optional<std::string>("u");
     swap.wrap = TextureWrap::Mirror;
-    const Error e = refused(*engine, batch(swap, RemoveTexture{"t"}, texture_edit("v"),
-                                           RemoveMesh{"missing"}));
+    const Error e =
+        refused(*engine, batch(swap, RemoveTexture{"t"}, texture_edit("v"), RemoveMesh{"missing"}));
     EXPECT_EQ(e.edit_index, 3u);
     const std::string after = engine->read([](const Scene& s) {
         std::string out;

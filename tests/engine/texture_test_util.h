@@ -35,8 +35,8 @@ inline std::string jpeg_bytes(uint32_t w, uint32_t h, uint8_t r, uint8_t g, uint
     tjhandle tj = tjInitCompress();
     unsigned char* out = nullptr;
     unsigned long size = 0;
-    const int rc = tjCompress2(tj, rgb.data(), int(w), 0, int(h), TJPF_RGB, &out, &size, TJSAMP_444,
-                               100, 0);
+    const int rc =
+        tjCompress2(tj, rgb.data(), int(w), 0, int(h), TJPF_RGB, &out, &size, TJSAMP_444, 100, 0);
     EXPECT_EQ(rc, 0) << tjGetErrorStr2(tj);
     std::string bytes(reinterpret_cast<const char*>(out), size);
     tjFree(out);

@@ -14,7 +14,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     TextureLimits limits;
     limits.max_side = 4096;
     limits.max_bytes = uint64_t(32) << 20;
-    auto image = decode_texture(std::string_view(reinterpret_cast<const char*>(data), size), limits);
+    auto image =
+        decode_texture(std::string_view(reinterpret_cast<const char*>(data), size), limits);
     if (!image) return 0;
     const TextureImage& t = image.value();
     if (t.width == 0 || t.height == 0 || t.texels.size() != std::size_t(t.width) * t.height * 3)

@@ -189,13 +189,29 @@ TEST(EditParser, MaterialCameraLightingAndSceneOps) {
         "m");
     one<Clear>(R"({"op":"clear"})");
     one<RemoveMesh>(R"({"op":"remove_mesh","mesh":"m"})");
+    // Textures: base64 bytes kept as they are (decoded by the engine), materials bind them.
+    EXPECT_EQ(one<AddTexture>(R"({"op":"add_texture","id":"t","data":"iVBORw=="})").data,
+              std::string("\x89PNG", 4));
+    EXPECT_EQ(one<RemoveTexture>(R"({"op":"remove_texture","texture":"t"})").texture, "t");
+    const auto bound = one<AddMaterial>(
+        R"({"op":"add_material","id":"m","base_color_texture":"t","sampler":{"wrap":"clamp"}})");
+    EXPECT_EQ(bound.base_color_texture, std::optional<std::string>("t"));
+    EXPECT_EQ(bound.material.base_color_sampler.wrap, TextureWrap::Clamp);
+    EXPECT_EQ(bound.material.base_color_sampler.filter, TextureFilter::Bilinear);
+    const auto unbound = one<UpdateMaterial>(
+        R"({"op":"update_material","material":"m","base_color_texture":null,"sampler":{"filter":"nearest"}})");
+    ASSERT_TRUE(unbound.base_color_texture.has_value());
+    EXPECT_FALSE(unbound.base_color_texture->has_value());
+    EXPECT_EQ(unbound.filter, std::optional<TextureFilter>(TextureFilter::Nearest));
+    EXPECT_FALSE(unbound.wrap.has_value());
 }
 
 TEST(EditParser, EveryOpHasAParserAndAnEngineStruct) {
     std::vector<std::string_view> names;
     for (const EditOp& op : edit_ops()) names.push_back(op.name);
     EXPECT_THAT(names, ::testing::ElementsAre("add_mesh", "update_mesh", "remove_mesh",
-                                              "add_material", "update_material", "add_instance",
+                                              "add_texture", "remove_texture", "add_material",
+                                              "update_material", "add_instance",
                                               "update_instance", "set_transform", "remove_instance",
                                               "add_group", "update_group", "remove_group",
                                               "mark_dirty", "set_camera", "set_lighting", "clear"));

@@ -28,12 +28,11 @@ protected:
 };
 
 TEST_F(Textures, ATextureIsAddedBoundListedAndRemoved) {
-    const Reply r = srv.edits(
-        {add_texture("checker", png_2x2()),
-         {{"op", "add_material"},
-          {"id", "m"},
-          {"base_color_texture", "checker"},
-          {"sampler", {{"wrap", "mirror"}, {"filter", "nearest"}}}}});
+    const Reply r = srv.edits({add_texture("checker", png_2x2()),
+                               {{"op", "add_material"},
+                                {"id", "m"},
+                                {"base_color_texture", "checker"},
+                                {"sampler", {{"wrap", "mirror"}, {"filter", "nearest"}}}}});
     ASSERT_EQ(r.status, 200) << r.body;
     const Json t = srv.get("/v1/scene/textures/checker").json();
     EXPECT_EQ(t["width"], 2);
@@ -49,11 +48,11 @@ TEST_F(Textures, ATextureIsAddedBoundListedAndRemoved) {
     EXPECT_EQ(list["items"][0]["id"], "checker");
     EXPECT_EQ(srv.get("/v1/scene").json()["counts"]["textures"], 1);
 
-    expect_problem(srv.edits({{{"op", "remove_texture"}, {"texture", "checker"}}}), 422,
-                   "in-use", "/edits/0/texture");
-    const Reply gone = srv.edits(
-        {{{"op", "update_material"}, {"material", "m"}, {"base_color_texture", nullptr}},
-         {{"op", "remove_texture"}, {"texture", "checker"}}});
+    expect_problem(srv.edits({{{"op", "remove_texture"}, {"texture", "checker"}}}), 422, "in-use",
+                   "/edits/0/texture");
+    const Reply gone =
+        srv.edits({{{"op", "update_material"}, {"material", "m"}, {"base_color_texture", nullptr}},
+                   {{"op", "remove_texture"}, {"texture", "checker"}}});
     ASSERT_EQ(gone.status, 200) << gone.body;
     expect_problem(srv.get("/v1/scene/textures/checker"), 404, "not-found");
     EXPECT_EQ(srv.get("/v1/scene/materials/m").json()["base_color_texture"], nullptr);
@@ -98,9 +97,8 @@ TEST_F(Textures, ATexturedMaterialRendersItsTexels) {
          {{"op", "add_instance"}, {"id", "q"}, {"mesh", "quad"}, {"material", "m"}},
          {{"op", "set_camera"}, {"eye", {0, 0, 3}}, {"target", {0, 0, 0}}}});
     ASSERT_EQ(r.status, 200) << r.body;
-    const Reply img = srv.post(
-        "/v1/render",
-        Json{{"width", 16}, {"height", 16}, {"spp", 1}, {"format", "png"}});
+    const Reply img =
+        srv.post("/v1/render", Json{{"width", 16}, {"height", 16}, {"spp", 1}, {"format", "png"}});
     ASSERT_EQ(img.status, 200) << img.body.substr(0, 200);
     auto decoded = decode_png(img.body);
     ASSERT_TRUE(decoded.has_value());

@@ -224,7 +224,8 @@ class Client:
         """Renders a frame (POST /v1/render); returns the encoded image.
 
         Every other request member passes through `opts`: spp, aovs, compression, accumulate,
-        exposure, camera={"eye": [...], "target": [...], "up": [...], "fov_y_deg": ...}.
+        exposure, filter ("none" or "atrous"), camera={"eye": [...], "target": [...], "up": [...],
+        "fov_y_deg": ...}.
         `last_render` then holds the version the frame shows and its commit's summary.
         """
         body = {"width": width, "height": height, "format": fmt}
@@ -316,6 +317,11 @@ class Client:
     def materials(self, page_size: int = 1000) -> Iterator[Dict[str, Any]]:
         """Every material (GET /v1/scene/materials, following cursors)."""
         return self._list("materials", page_size)
+
+    def textures(self, page_size: int = 1000) -> Iterator[Dict[str, Any]]:
+        """Every texture (GET /v1/scene/textures, following cursors): id, width, height, format,
+        encoded_bytes, decoded_bytes."""
+        return self._list("textures", page_size)
 
     def pick(self, x: int, y: int, width: int, height: int,
              camera: Optional[Dict[str, Any]] = None) -> Optional[Dict[str, Any]]:
