@@ -187,7 +187,7 @@ TEST(AssetBatch, TexturesWithoutBytesOrInAnotherFormatAreLeftOutWithAWarning) {
     AssetBatch b = asset_to_batch(std::move(asset), {"t", false});
     EXPECT_TRUE(b.textures.empty());
     EXPECT_THAT(b.warnings, Contains(HasSubstr("not part of the upload ('logo.png')")));
-    EXPECT_THAT(b.warnings, Contains(HasSubstr("only PNG and JPEG (it is image/webp)")));
+    EXPECT_THAT(b.warnings, Contains(HasSubstr("only PNG and JPEG images are decoded (it is image/webp)")));
     auto engine = make_engine();
     ASSERT_TRUE(engine->apply(std::move(b.batch)).has_value());
     engine->read([](const Scene& s) {
