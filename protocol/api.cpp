@@ -221,8 +221,8 @@ ApiResponse get_scene(const Engine& engine) {
 ApiResponse get_scene_object(const Engine& engine, SceneObject kind, std::string_view id) {
     using ToJson = std::optional<Json> (*)(const Scene&, std::string_view);
     static constexpr ToJson TO_JSON[] = {mesh_to_json, instance_to_json, material_to_json,
-                                         group_to_json};
-    static constexpr const char* NAMES[] = {"mesh", "instance", "material", "group"};
+                                         group_to_json, light_to_json};
+    static constexpr const char* NAMES[] = {"mesh", "instance", "material", "group", "light"};
     // One read lock: the document and its version belong together.
     auto [doc, version] = engine.read(
         [&](const Scene& s) { return std::pair(TO_JSON[int(kind)](s, id), s.version()); });

@@ -78,11 +78,11 @@ ApiResponse get_render(Engine& engine, const std::multimap<std::string, std::str
 /// GET /v1/scene.
 ApiResponse get_scene(const Engine& engine);
 
-/// The object kinds of GET /v1/scene/{meshes,instances,materials,groups}/{id}.
-enum class SceneObject : uint8_t { Mesh, Instance, Material, Group };
-/// GET /v1/scene/{meshes,instances,materials,groups}/{id}.
+/// The object kinds of GET /v1/scene/{meshes,instances,materials,groups,lights}/{id}.
+enum class SceneObject : uint8_t { Mesh, Instance, Material, Group, Light };
+/// GET /v1/scene/{meshes,instances,materials,groups,lights}/{id}.
 ApiResponse get_scene_object(const Engine& engine, SceneObject kind, std::string_view id);
-/// GET /v1/scene/{meshes,instances,materials,groups}: one page of the collection
+/// GET /v1/scene/{meshes,instances,materials,groups,lights}: one page of the collection
 /// (scene_list.cpp).
 ApiResponse get_scene_list(const Engine& engine, SceneObject kind,
                            const std::multimap<std::string, std::string>& query);

@@ -109,6 +109,7 @@ void add_api_routes(Router& router, ServerContext& ctx) {
     add_scene_object_route(router, ctx, "instances", protocol::SceneObject::Instance);
     add_scene_object_route(router, ctx, "materials", protocol::SceneObject::Material);
     add_scene_object_route(router, ctx, "groups", protocol::SceneObject::Group);
+    add_scene_object_route(router, ctx, "lights", protocol::SceneObject::Light);
     router.get("/v1/scene/groups/([^/]+)/children", [&ctx](const Req& req, Res& res) {
         send(res, protocol::get_group_children(
                       ctx.engine, decode_path_segment(req.matches[1].str()), req.params));

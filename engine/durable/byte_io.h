@@ -37,10 +37,21 @@ template <class Io, Kind<Material> E>
 void value_fields(Io& io, E& v) {
     io(v.base_color, v.roughness, v.metallic, v.emission);
 }
+template <class Io, Kind<Light> E>
+void value_fields(Io& io, E& v) {
+    io(v.kind, v.position, v.direction, v.color, v.intensity, v.angle_deg, v.inner_angle_deg,
+       v.width, v.height);
+}
 template <class Io, Kind<Affine> E>
 void value_fields(Io& io, E& v) {
     io.raw(v.m.data(), sizeof(float) * v.m.size());
 }
+
+/// The largest value an enum's byte may hold (two-valued enums unless said otherwise).
+template <class T>
+constexpr uint8_t ENUM_MAX = 1;
+template <>
+constexpr uint8_t ENUM_MAX<LightKind> = 2;
 
 /// True for the types that have a value_fields() layout.
 template <class Io, class T>
@@ -136,7 +147,8 @@ private:
         if constexpr (std::is_enum_v<T>) {
             uint8_t b = 0;
             get(b);
-            if (b > 1) return fail("enum value " + std::to_string(b) + " out of range");
+            if (b > ENUM_MAX<T>)
+                return fail("enum value " + std::to_string(b) + " out of range");
             v = static_cast<T>(b);
         } else if constexpr (std::is_same_v<T, bool>) {
             uint8_t b = 0;

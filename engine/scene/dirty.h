@@ -53,6 +53,7 @@ enum SceneBits : uint32_t {
     TlasRebuildRequested = 1u << 3,  ///< mark_dirty {tlas, rebuild}
     Materials = 1u << 4,
     Groups = 1u << 5,  ///< a group was added, changed or removed (no acceleration work by itself)
+    Lights = 1u << 6,  ///< a light was added, changed or removed (shading only)
 };
 
 }  // namespace strata::dirty

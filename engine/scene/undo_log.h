@@ -101,6 +101,12 @@ struct MaterialState {
     uint32_t dirty = 0;
 };
 
+/// A light's values before an edit changed them.
+struct LightState {
+    LightHandle handle;
+    Light light;
+};
+
 }  // namespace undo
 
 using UndoRecord =
@@ -111,7 +117,9 @@ using UndoRecord =
                  undo::MeshPositions, undo::MeshPositionsReplaced, undo::MeshTopology,
                  undo::MeshAttributes, undo::InstanceState, undo::MaterialState,
                  undo::Inserted<GroupHandle>, undo::Removed<GroupHandle, GroupRecord>,
-                 undo::GroupState, undo::Reparented<InstanceHandle>, undo::Reparented<GroupHandle>>;
+                 undo::GroupState, undo::Reparented<InstanceHandle>, undo::Reparented<GroupHandle>,
+                 undo::Inserted<LightHandle>, undo::Removed<LightHandle, LightRecord>,
+                 undo::LightState>;
 
 /// Everything needed to take one batch back.
 struct UndoLog {
