@@ -74,6 +74,7 @@ std::optional<protocol::SceneObject> collection_kind(const std::string& collecti
     if (collection == "instances") return protocol::SceneObject::Instance;
     if (collection == "materials") return protocol::SceneObject::Material;
     if (collection == "groups") return protocol::SceneObject::Group;
+    if (collection == "lights") return protocol::SceneObject::Light;
     return std::nullopt;
 }
 

@@ -30,12 +30,14 @@ void rect_axes(const Vec3& n, Vec3& u, Vec3& v) {
 float light_power(const Light& l) {
     const float c = mean(l.color) * l.intensity;
     switch (l.kind) {
-        case LightKind::Point: return 4.0f * PI * c;
+        case LightKind::Point:
+            return 4.0f * PI * c;
         case LightKind::Spot: {
             const float half = 0.5f * radians(l.angle_deg + l.inner_angle_deg);
             return 2.0f * PI * (1.0f - std::cos(half)) * c;
         }
-        case LightKind::Rect: return PI * l.width * l.height * c;
+        case LightKind::Rect:
+            return PI * l.width * l.height * c;
     }
     return 0.0f;
 }
@@ -58,7 +60,8 @@ void LightTable::build(std::vector<Light> lights, std::vector<EmitterTriangle> e
     };
     for (uint32_t i = 0; i < m_lights.size(); ++i) add(i, light_power(m_lights[i]));
     for (uint32_t i = 0; i < m_emitters.size(); ++i)
-        add(uint32_t(m_lights.size()) + i, emitter_power(m_emitters[i].emission, m_emitters[i].area));
+        add(uint32_t(m_lights.size()) + i,
+            emitter_power(m_emitters[i].emission, m_emitters[i].area));
     m_total = float(total);
 }
 
@@ -104,7 +107,9 @@ LightSample LightTable::sample_light(const Light& l, const Vec3& p, float u0, fl
     const Vec3 radiance = l.color * l.intensity;
     const float cos_axis = -glm::dot(s.dir, axis);  // at the light, toward the receiver
     switch (l.kind) {
-        case LightKind::Point: s.weight = radiance / d2; break;
+        case LightKind::Point:
+            s.weight = radiance / d2;
+            break;
         case LightKind::Spot: {
             const float cos_outer = std::cos(radians(l.angle_deg));
             const float cos_inner = std::cos(radians(l.inner_angle_deg));

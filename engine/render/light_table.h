@@ -20,8 +20,8 @@ namespace strata {
 
 /// A point on a light chosen for a receiver.
 struct LightSample {
-    Vec3 dir{0.0f};       ///< unit, from the receiver toward the light
-    float distance = 0;   ///< to the chosen point (shadow rays stop short of it)
+    Vec3 dir{0.0f};      ///< unit, from the receiver toward the light
+    float distance = 0;  ///< to the chosen point (shadow rays stop short of it)
     /// Incident radiance over the solid-angle density of the choice: multiplied by the BRDF times
     /// the cosine at the receiver, it is the light's contribution.
     Vec3 weight{0.0f};

@@ -6,7 +6,6 @@ namespace strata::protocol::ops {
 
 namespace {
 
-
 /// The values both ops carry; `L` is a whole Light (add) or an UpdateLight of optionals.
 template <class L>
 void read_light_values(OpFields& f, L& l) {

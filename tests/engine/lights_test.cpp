@@ -77,8 +77,7 @@ Vec3 floor_under_sun(float irradiance) {
 }
 
 void expect_close(const Vec3& got, const Vec3& want, float relative) {
-    for (int k = 0; k < 3; ++k)
-        EXPECT_NEAR(got[k], want[k], relative * want[k]) << "channel " << k;
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(got[k], want[k], relative * want[k]) << "channel " << k;
 }
 
 // Step: rules ------------------------------------------------------------------------------------
@@ -201,7 +200,8 @@ TEST(Lights, ClearRemovesThem) {
     engine->read([](const Scene& s) { EXPECT_EQ(s.lights().size(), 0u); });
 }
 
-// Step: least work ---------------------------------------------------------------------------------
+// Step: least work
+// ---------------------------------------------------------------------------------
 
 TEST(Lights, LightEditsRebuildNothing) {
     auto engine = test::engine_with(dark_floor());
@@ -278,7 +278,8 @@ TEST(Lights, TheSceneImageRebuildsTheLights) {
     EXPECT_EQ(r->light, spot);
 }
 
-// Step: known answers ------------------------------------------------------------------------------
+// Step: known answers
+// ------------------------------------------------------------------------------
 
 TEST(LightsRender, WithNoLightTheDarkFloorIsBlack) {
     auto engine = test::engine_with(dark_floor());

@@ -317,6 +317,10 @@ class Client:
         """Every material (GET /v1/scene/materials, following cursors)."""
         return self._list("materials", page_size)
 
+    def lights(self, page_size: int = 1000) -> Iterator[Dict[str, Any]]:
+        """Every point, spot and rect light (GET /v1/scene/lights, following cursors)."""
+        return self._list("lights", page_size)
+
     def pick(self, x: int, y: int, width: int, height: int,
              camera: Optional[Dict[str, Any]] = None) -> Optional[Dict[str, Any]]:
         """What lies under pixel (x, y) of a width x height frame (POST /v1/pick): a dict with
