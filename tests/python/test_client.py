@@ -133,7 +133,7 @@ class ClientTest(unittest.TestCase):
             self.client.scene("materials", "nope/../x")
         self.assertEqual(caught.exception.status, 404)
         with self.assertRaises(ValueError):
-            self.client.scene("lights", "sun")
+            self.client.scene("cameras", "main")
 
     def test_instances_follows_cursors_through_every_page(self):
         self.client.edit([{"op": "add_instance", "id": f"/World/b{i}", "mesh": "ball",

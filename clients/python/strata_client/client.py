@@ -259,12 +259,12 @@ class Client:
 
     def scene(self, kind: Optional[str] = None, id: Optional[str] = None) -> Dict[str, Any]:
         """The scene summary (GET /v1/scene), or one object's state with kind "meshes",
-        "instances", "materials" or "groups" and its id (GET /v1/scene/{kind}/{id})."""
+        "instances", "materials", "groups" or "lights" and its id (GET /v1/scene/{kind}/{id})."""
         if kind is None:
             return self._json("GET", "/v1/scene")
-        if kind not in ("meshes", "instances", "materials", "groups") or not id:
-            raise ValueError(
-                "scene(kind, id): kind is 'meshes', 'instances', 'materials' or 'groups'")
+        if kind not in ("meshes", "instances", "materials", "groups", "lights") or not id:
+            raise ValueError("scene(kind, id): kind is 'meshes', 'instances', 'materials', "
+                             "'groups' or 'lights'")
         return self._json("GET", f"/v1/scene/{kind}/{urllib.parse.quote(id, safe='')}")
 
     def _list(self, collection: str, page_size: int, **filters: Any) -> Iterator[Dict[str, Any]]:
