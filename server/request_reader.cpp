@@ -149,7 +149,13 @@ ReaderStep RequestReader::on_head(const ReaderSituation& situation) {
             protocol::Json report = {{"status", livez ? "ok" : "ready"}};
             if (!livez && !extra.section.empty()) {
                 protocol::Json& section = report[extra.section];
-                for (const auto& [name, value] : extra.numbers) section[name] = value;
+                for (const auto& [name, value] : extra.numbers) {
+                    // Versions and counts are whole numbers: written as integers.
+                    if (value >= 0 && value < 9007199254740992.0 && value == double(int64_t(value)))
+                        section[name] = int64_t(value);
+                    else
+                        section[name] = value;
+                }
             }
             r = protocol::json_response(200, report);
         } else {

@@ -36,16 +36,15 @@ std::string restamp_entry(std::string_view entry, uint64_t version) {
 Result<LogEntry> decode_entry(std::string_view bytes) {
     constexpr std::size_t HEADER = durable::RECORD_HEADER_BYTES;
     if (bytes.size() < HEADER)
-        return failure(ErrorCode::InvalidArgument,
-                       "log entry of " + std::to_string(bytes.size()) +
-                           " bytes is shorter than its 16-byte header");
+        return failure(ErrorCode::InvalidArgument, "log entry of " + std::to_string(bytes.size()) +
+                                                       " bytes is shorter than its 16-byte header");
     const uint32_t length = get<uint32_t>(bytes, 0);
     const uint32_t crc = get<uint32_t>(bytes, 4);
     const uint64_t version = get<uint64_t>(bytes, 8);
     if (uint64_t(length) != bytes.size() - HEADER)
         return failure(ErrorCode::InvalidArgument,
-                       "log entry says its payload has " + std::to_string(length) +
-                           " bytes but " + std::to_string(bytes.size() - HEADER) + " follow");
+                       "log entry says its payload has " + std::to_string(length) + " bytes but " +
+                           std::to_string(bytes.size() - HEADER) + " follow");
     const std::string_view payload = bytes.substr(HEADER);
     if (durable::crc32c(&version, sizeof version,
                         durable::crc32c(payload.data(), payload.size())) != crc)

@@ -55,8 +55,8 @@ RedisConnection::~RedisConnection() {
 Result<std::unique_ptr<RedisConnection>> RedisConnection::connect(
     const RedisUrl& url, std::chrono::milliseconds connect_timeout,
     std::chrono::milliseconds command_timeout) {
-    redisContext* c = redisConnectWithTimeout(url.host.c_str(), url.port,
-                                              to_timeval(connect_timeout));
+    redisContext* c =
+        redisConnectWithTimeout(url.host.c_str(), url.port, to_timeval(connect_timeout));
     const std::string address = url.host + ":" + std::to_string(url.port);
     if (c == nullptr)
         return failure(ErrorCode::Storage, "cannot connect to Redis at " + address +
@@ -114,8 +114,8 @@ Result<RedisReply> RedisConnection::eval(const std::string& script,
             auto loaded = run({"SCRIPT", "LOAD", script});
             if (!loaded) return loaded;
             if (loaded.value().type != RedisReply::Type::String)
-                return failure(ErrorCode::Storage, "Redis at " + m_address +
-                                                       ": SCRIPT LOAD answered no SHA1");
+                return failure(ErrorCode::Storage,
+                               "Redis at " + m_address + ": SCRIPT LOAD answered no SHA1");
             sha = m_script_shas.emplace(script, loaded.value().str).first;
         }
         const std::string count = std::to_string(keys.size());

@@ -32,9 +32,9 @@ struct RedisReply {
 class RedisConnection {
 public:
     /// Connects to `url`'s server. Errors (Storage) name the address and the cause.
-    static Result<std::unique_ptr<RedisConnection>> connect(const RedisUrl& url,
-                                                            std::chrono::milliseconds connect_timeout,
-                                                            std::chrono::milliseconds command_timeout);
+    static Result<std::unique_ptr<RedisConnection>> connect(
+        const RedisUrl& url, std::chrono::milliseconds connect_timeout,
+        std::chrono::milliseconds command_timeout);
     ~RedisConnection();
     RedisConnection(const RedisConnection&) = delete;
     RedisConnection& operator=(const RedisConnection&) = delete;

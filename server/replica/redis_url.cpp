@@ -7,14 +7,13 @@ namespace strata::replica {
 namespace {
 
 Unexpected<Error> bad(std::string_view url, const std::string& why) {
-    return failure(ErrorCode::InvalidArgument,
-                   "--log '" + std::string(url.substr(0, 200)) + "': " + why +
-                       " (expected redis://HOST:PORT/STREAM)");
+    return failure(ErrorCode::InvalidArgument, "--log '" + std::string(url.substr(0, 200)) + "': " +
+                                                   why + " (expected redis://HOST:PORT/STREAM)");
 }
 
 bool plain_name_char(char c) {
-    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-           c == '-' || c == '.' || c == '_';
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' ||
+           c == '.' || c == '_';
 }
 
 }  // namespace

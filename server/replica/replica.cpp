@@ -89,9 +89,7 @@ std::unique_ptr<Replica> Replica::start(const ReplicaOptions& options, Engine& e
 
 Replica::~Replica() {
     m_shutdown = true;
-    {
-        std::lock_guard lock(m_mutex);
-    }
+    { std::lock_guard lock(m_mutex); }
     m_cv.notify_all();
     {
         std::lock_guard lock(m_snapshot_mutex);
@@ -148,13 +146,14 @@ void Replica::reader_loop() {
     bool warned = false;
     while (!m_shutdown && !m_stopped) {
         if (!conn) {
-            auto made = RedisConnection::connect(m_options.url, CONNECT_TIMEOUT,
-                                                 READER_COMMAND_TIMEOUT);
+            auto made =
+                RedisConnection::connect(m_options.url, CONNECT_TIMEOUT, READER_COMMAND_TIMEOUT);
             if (!made) {
                 if (!warned)
-                    spdlog::warn("edit log: {}; retrying with backoff (writes answer 503 "
-                                 "meanwhile, reads serve version {})",
-                                 made.error().message, m_applied.load());
+                    spdlog::warn(
+                        "edit log: {}; retrying with backoff (writes answer 503 "
+                        "meanwhile, reads serve version {})",
+                        made.error().message, m_applied.load());
                 warned = true;
                 if (!sleep_for(backoff)) break;
                 backoff = std::min(backoff * 2, BACKOFF_MAX);
@@ -251,8 +250,8 @@ Status Replica::on_connect(RedisConnection& c) {
 Status Replica::read_and_apply(RedisConnection& c) {
     const RedisUrl& url = m_options.url;
     const std::string after = entry_id(m_applied.load());
-    auto reply = c.command({"XREAD", "COUNT", READ_COUNT, "BLOCK", BLOCK_MS, "STREAMS",
-                            url.stream, after});
+    auto reply =
+        c.command({"XREAD", "COUNT", READ_COUNT, "BLOCK", BLOCK_MS, "STREAMS", url.stream, after});
     if (!reply) return Unexpected(reply.error());
     if (reply.value().is_nil()) {
         // Nothing new for a second: refresh the head (entries trimmed away show up here).
@@ -262,8 +261,8 @@ Status Replica::read_and_apply(RedisConnection& c) {
         if (!head.value().is_nil() && parse_u64(head.value().str, v)) set_log_version(v);
         if (m_log_version.load() > m_applied.load()) {
             // The head moved but XREAD found nothing after us: the entries are gone.
-            auto again = c.command({"XRANGE", url.stream, entry_id(m_applied.load() + 1), "+",
-                                    "COUNT", "1"});
+            auto again = c.command(
+                {"XRANGE", url.stream, entry_id(m_applied.load() + 1), "+", "COUNT", "1"});
             if (!again) return Unexpected(again.error());
             if (again.value().elements.empty()) {
                 stop_loudly("the log is at version " + std::to_string(m_log_version.load()) +
@@ -291,14 +290,15 @@ Status Replica::read_and_apply(RedisConnection& c) {
         const auto& fields = e.elements[1].elements;
         for (std::size_t i = 0; i + 1 < fields.size(); i += 2) {
             if (fields[i].str == "r") record = &fields[i + 1].str;
-            if (fields[i].str == "t") (void)std::from_chars(fields[i + 1].str.data(),
-                                                          fields[i + 1].str.data() +
-                                                              fields[i + 1].str.size(),
-                                                          appended_ms);
+            if (fields[i].str == "t")
+                (void)std::from_chars(fields[i + 1].str.data(),
+                                      fields[i + 1].str.data() + fields[i + 1].str.size(),
+                                      appended_ms);
         }
         const uint64_t applied = m_applied.load();
         if (!parse_entry_version(id, version) || record == nullptr) {
-            stop_loudly("the log entry " + id + " is not a Strata entry (no version id or no "
+            stop_loudly("the log entry " + id +
+                        " is not a Strata entry (no version id or no "
                         "field 'r')");
             return storage("poisoned");
         }
@@ -373,8 +373,8 @@ RedisConnection* Replica::writer(Error& error) {
                                ? BACKOFF_FIRST
                                : std::min(m_writer_backoff * 2, BACKOFF_MAX);
         m_writer_retry_at = now + m_writer_backoff;
-        error = make_error(ErrorCode::Storage,
-                           "the edit log is unreachable: " + made.error().message);
+        error =
+            make_error(ErrorCode::Storage, "the edit log is unreachable: " + made.error().message);
         return nullptr;
     }
     m_writer_backoff = milliseconds(0);
@@ -417,15 +417,21 @@ Result<ApplyResult> Replica::append(EditBatch&& batch, std::optional<uint64_t> e
         }
         const uint64_t base = m_applied.load();
         if (expected && base != *expected)
-            return failure(ErrorCode::VersionMismatch,
-                           "the scene is at version " + std::to_string(base) + ", not " +
-                               std::to_string(*expected));
+            return failure(ErrorCode::VersionMismatch, "the scene is at version " +
+                                                           std::to_string(base) + ", not " +
+                                                           std::to_string(*expected));
         // Step: validate against the local scene at `base`.
-        auto copy = durable::decode_batch(std::string_view(entry).substr(durable::RECORD_HEADER_BYTES));
+        auto copy =
+            durable::decode_batch(std::string_view(entry).substr(durable::RECORD_HEADER_BYTES));
         if (!copy) return Unexpected(copy.error());
         if (Status ok = m_engine.validate(std::move(copy.value()), base); !ok) {
-            if (ok.error().code == ErrorCode::VersionMismatch) continue;  // the reader moved on
-            return Unexpected(ok.error());
+            if (ok.error().code != ErrorCode::VersionMismatch) return Unexpected(ok.error());
+            // The reader applied an entry meanwhile: validate again at the new version.
+            if (Clock::now() >= deadline)
+                return storage("the scene kept moving: the batch could not be validated within " +
+                               std::to_string(m_options.write_timeout.count()) + " ms");
+            std::this_thread::yield();
+            continue;
         }
         // Step: append only while the log's head is still `base`.
         const std::string stamped = restamp_entry(entry, base + 1);
@@ -436,8 +442,7 @@ Result<ApplyResult> Replica::append(EditBatch&& batch, std::optional<uint64_t> e
             Error error;
             RedisConnection* c = writer(error);
             if (!c) return Unexpected(error);
-            return c->eval(APPEND_SCRIPT,
-                           {m_options.url.stream, m_options.url.version_key()},
+            return c->eval(APPEND_SCRIPT, {m_options.url.stream, m_options.url.version_key()},
                            {base_text, stamped, now_text});
         }();
         if (!reply) return Unexpected(reply.error());
@@ -453,7 +458,8 @@ Result<ApplyResult> Replica::append(EditBatch&& batch, std::optional<uint64_t> e
             if (!wait_applied(head, left())) {
                 if (m_stopped) return stopped();
                 return storage("the batch was appended to the edit log as version " +
-                               std::to_string(head) + " but this replica has not applied it "
+                               std::to_string(head) +
+                               " but this replica has not applied it "
                                "in time (it will; read with min_version=" +
                                std::to_string(head) + ")");
             }
@@ -467,9 +473,9 @@ Result<ApplyResult> Replica::append(EditBatch&& batch, std::optional<uint64_t> e
         }
         set_log_version(head);
         if (expected)
-            return failure(ErrorCode::VersionMismatch,
-                           "the edit log is at version " + std::to_string(head) + ", not " +
-                               std::to_string(*expected));
+            return failure(ErrorCode::VersionMismatch, "the edit log is at version " +
+                                                           std::to_string(head) + ", not " +
+                                                           std::to_string(*expected));
         if (!wait_applied(head, left())) {
             if (m_stopped) return stopped();
             return storage("the edit log kept moving: the batch could not be appended within " +
@@ -480,9 +486,9 @@ Result<ApplyResult> Replica::append(EditBatch&& batch, std::optional<uint64_t> e
 
 bool Replica::wait_applied(uint64_t version, milliseconds timeout) {
     std::unique_lock lock(m_mutex);
-    return m_cv.wait_for(lock, timeout,
-                         [&] { return m_applied.load() >= version || m_stopped || m_shutdown; }) &&
-           m_applied.load() >= version;
+    return m_cv.wait_for(lock, timeout, [&] {
+        return m_applied.load() >= version || m_stopped || m_shutdown;
+    }) && m_applied.load() >= version;
 }
 
 ReplicaStatus Replica::status() const {
@@ -499,8 +505,8 @@ ReplicaStatus Replica::status() const {
     s.log_version = std::max(m_log_version.load(), s.applied_version);
     s.lag_entries = s.log_version - s.applied_version;
     const int64_t since = m_lag_since_ms.load();
-    s.lag_seconds = s.lag_entries > 0 && since > 0 ? std::max<int64_t>(0, unix_ms() - since) / 1e3
-                                                   : 0.0;
+    s.lag_seconds =
+        s.lag_entries > 0 && since > 0 ? std::max<int64_t>(0, unix_ms() - since) / 1e3 : 0.0;
     s.last_snapshot_version = std::max(s.last_snapshot_version, m_known_snapshot.load());
     return s;
 }
@@ -539,8 +545,8 @@ Status Replica::write_snapshot() {
     const std::string bytes = durable::encode_snapshot(image.to_batch(), image.version);
     const uint64_t version = image.version;
     image = {};
-    auto reply = c.eval(SNAPSHOT_SCRIPT, {url.snapshot_key(), url.stream},
-                        {std::to_string(version), bytes});
+    auto reply =
+        c.eval(SNAPSHOT_SCRIPT, {url.snapshot_key(), url.stream}, {std::to_string(version), bytes});
     if (!reply) return Unexpected(reply.error());
     const RedisReply& r = reply.value();
     if (r.elements.size() != 3) return storage("the snapshot script answered something unexpected");
@@ -549,9 +555,10 @@ Status Replica::write_snapshot() {
         std::lock_guard lock(m_mutex);
         ++m_counters.snapshots_written;
         m_counters.entries_trimmed += uint64_t(r.elements[2].integer);
-        spdlog::info("edit log: stored the snapshot of version {} ({} bytes) in {}; trimmed {} "
-                     "entries",
-                     version, bytes.size(), url.snapshot_key(), r.elements[2].integer);
+        spdlog::info(
+            "edit log: stored the snapshot of version {} ({} bytes) in {}; trimmed {} "
+            "entries",
+            version, bytes.size(), url.snapshot_key(), r.elements[2].integer);
     }
     return {};
 }

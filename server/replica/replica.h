@@ -48,23 +48,23 @@ struct ReplicaOptions {
 
 /// What /readyz, /metrics and GET /v1/stats say about the replica.
 struct ReplicaStatus {
-    std::string log;            ///< redis://host:port/stream
-    bool connected = false;     ///< the reader holds a connection now
-    bool joined = false;        ///< caught up once with the log as it was at start
-    bool stopped = false;       ///< stopped for good (see stop_reason)
-    std::string stop_reason;    ///< why: a poisoned entry, a gap, a log behind this replica
+    std::string log;          ///< redis://host:port/stream
+    bool connected = false;   ///< the reader holds a connection now
+    bool joined = false;      ///< caught up once with the log as it was at start
+    bool stopped = false;     ///< stopped for good (see stop_reason)
+    std::string stop_reason;  ///< why: a poisoned entry, a gap, a log behind this replica
     uint64_t applied_version = 0;
-    uint64_t log_version = 0;   ///< the newest version this replica knows the log has
-    uint64_t lag_entries = 0;   ///< log_version - applied_version
-    double lag_seconds = 0.0;   ///< how long the oldest unapplied entry has waited (0: none)
+    uint64_t log_version = 0;  ///< the newest version this replica knows the log has
+    uint64_t lag_entries = 0;  ///< log_version - applied_version
+    double lag_seconds = 0.0;  ///< how long the oldest unapplied entry has waited (0: none)
     uint64_t entries_applied = 0;
-    uint64_t appends = 0;            ///< batches this replica appended
-    uint64_t append_conflicts = 0;   ///< appends refused because the log had moved on
-    uint64_t reconnects = 0;         ///< connections the reader made after losing one
+    uint64_t appends = 0;                  ///< batches this replica appended
+    uint64_t append_conflicts = 0;         ///< appends refused because the log had moved on
+    uint64_t reconnects = 0;               ///< connections the reader made after losing one
     uint64_t snapshot_loaded_version = 0;  ///< the Redis snapshot this replica started from
     uint64_t snapshots_written = 0;
-    uint64_t last_snapshot_version = 0;    ///< newest snapshot this replica knows of
-    uint64_t entries_trimmed = 0;          ///< entries this replica's snapshots trimmed
+    uint64_t last_snapshot_version = 0;  ///< newest snapshot this replica knows of
+    uint64_t entries_trimmed = 0;        ///< entries this replica's snapshots trimmed
 };
 
 class Replica {

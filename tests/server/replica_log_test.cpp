@@ -52,8 +52,8 @@ TEST(RedisUrl, RefusesWhatItCannotUseAndSaysWhichPart) {
         auto u = parse_redis_url(url);
         ASSERT_FALSE(u.has_value()) << url;
         EXPECT_EQ(u.error().code, ErrorCode::InvalidArgument);
-        EXPECT_NE(u.error().message.find(why), std::string::npos) << url << ": "
-                                                                  << u.error().message;
+        EXPECT_NE(u.error().message.find(why), std::string::npos)
+            << url << ": " << u.error().message;
     }
 }
 

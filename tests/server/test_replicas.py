@@ -169,6 +169,12 @@ class Replicas(unittest.TestCase):
             status, _ = s.json("POST", "/v1/edits", durable_scene.batch(n))
             self.assertEqual(status, 503)
 
+    def test_the_demo_scene_is_appended_once_to_an_empty_log(self):
+        servers = self.replicas(2, "--demo")
+        self.assert_converged(servers, 1)
+        self.assertEqual(self.redis.command("XLEN", self.stream), 1)
+        self.assertIn("--demo ignored: the edit log holds a scene already", servers[1].log())
+
     def test_min_version_waits_for_the_replica_and_names_the_lag_when_it_cannot(self):
         a, b = self.replicas(2, "--min-version-wait-ms", "400")
         status, answer = a.json("POST", "/v1/edits", durable_scene.batch(0))
