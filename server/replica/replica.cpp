@@ -425,7 +425,25 @@ Result<ApplyResult> Replica::append(EditBatch&& batch, std::optional<uint64_t> e
             durable::decode_batch(std::string_view(entry).substr(durable::RECORD_HEADER_BYTES));
         if (!copy) return Unexpected(copy.error());
         if (Status ok = m_engine.validate(std::move(copy.value()), base); !ok) {
-            if (ok.error().code != ErrorCode::VersionMismatch) return Unexpected(ok.error());
+            if (ok.error().code != ErrorCode::VersionMismatch) {
+                // Refused at `base`: maybe only because this replica has not applied what the
+                // log holds yet (a client writing on one replica, then on another). The answer
+                // stands only against the log's head.
+                auto head = log_head();
+                if (!head) return Unexpected(head.error());
+                if (head.value() <= base) return Unexpected(ok.error());
+                set_log_version(head.value());
+                if (expected)
+                    return failure(ErrorCode::VersionMismatch,
+                                   "the edit log is at version " + std::to_string(head.value()) +
+                                       ", not " + std::to_string(*expected));
+                if (!wait_applied(head.value(), left())) {
+                    if (m_stopped) return stopped();
+                    return storage("this replica did not catch up with the edit log (version " +
+                                   std::to_string(head.value()) + ") in time to validate");
+                }
+                continue;
+            }
             // The reader applied an entry meanwhile: validate again at the new version.
             if (Clock::now() >= deadline)
                 return storage("the scene kept moving: the batch could not be validated within " +
@@ -482,6 +500,19 @@ Result<ApplyResult> Replica::append(EditBatch&& batch, std::optional<uint64_t> e
                            std::to_string(m_options.write_timeout.count()) + " ms");
         }
     }
+}
+
+Result<uint64_t> Replica::log_head() {
+    std::lock_guard lock(m_writer_mutex);
+    Error error;
+    RedisConnection* c = writer(error);
+    if (!c) return Unexpected(error);
+    auto head = c->command({"GET", m_options.url.version_key()});
+    if (!head) return Unexpected(head.error());
+    uint64_t v = 0;
+    if (!head.value().is_nil() && !parse_u64(head.value().str, v))
+        return storage("the key " + m_options.url.version_key() + " does not hold a version");
+    return v;
 }
 
 bool Replica::wait_applied(uint64_t version, milliseconds timeout) {

@@ -104,6 +104,8 @@ private:
     void mark_joined();
     void snapshot_loop();
     Status write_snapshot();
+    /// The log's last version, read on the writer connection.
+    Result<uint64_t> log_head();
     /// The writer connection, made on demand; null (and `error`) while Redis is unreachable.
     RedisConnection* writer(Error& error);
     bool sleep_for(std::chrono::milliseconds d);  ///< false once shutting down

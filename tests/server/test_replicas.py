@@ -69,6 +69,15 @@ class Replicas(unittest.TestCase):
             self.assertEqual(durable_scene.check(s, 24), "")
         self.assertEqual(self.redis.command("XLEN", self.stream), 24)
 
+    def test_a_batch_that_depends_on_a_write_just_made_on_another_replica_is_accepted(self):
+        a, b = self.replicas(2)
+        for n in range(0, 40, 4):
+            # Batch n adds mesh-n on a; batch n+1 instances it on b, which may not have applied
+            # batch n yet: b must catch up with the log before refusing it.
+            self.stream_batches([a], n, 1)
+            self.stream_batches([b], n + 1, 3)
+        self.assert_converged([a, b], 40)
+
     def test_concurrent_if_match_writers_on_different_replicas_get_one_winner_per_version(self):
         servers = self.replicas()
         for version in range(8):
@@ -168,6 +177,25 @@ class Replicas(unittest.TestCase):
             self.assertEqual(durable_scene.check(s, n), "")
             status, _ = s.json("POST", "/v1/edits", durable_scene.batch(n))
             self.assertEqual(status, 503)
+
+    def test_a_replica_started_before_redis_waits_then_joins(self):
+        self.redis.kill()
+        s = Server(["--log", self.redis.url(self.stream)], wait_ready=False)
+        self.addCleanup(s.stop)
+        time.sleep(0.5)
+        status, _, body = s.call("GET", "/readyz")
+        self.assertEqual(status, 503)
+        self.assertIn("Redis unreachable", json.loads(body)["detail"])
+        status, _, body = s.call("POST", "/v1/edits", durable_scene.batch(0))
+        self.assertEqual(status, 503, body)
+        self.assertIn("edit log", json.loads(body)["detail"])
+        self.assertEqual(s.call("GET", "/v1/scene")[0], 200)  # reads of version 0 work
+        self.redis.start()
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline and s.call("GET", "/readyz")[0] != 200:
+            time.sleep(0.05)
+        self.assertEqual(s.call("GET", "/readyz")[0], 200)
+        self.assertEqual(self.stream_batches([s], 0, 2), 2)
 
     def test_the_demo_scene_is_appended_once_to_an_empty_log(self):
         servers = self.replicas(2, "--demo")
