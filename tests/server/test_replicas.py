@@ -18,6 +18,22 @@ from redis_fixture import REDIS_SERVER, RedisProcess
 RENDER = "/v1/render?width=64&height=48&spp=2"
 
 
+def crc32c(data: bytes) -> int:
+    crc = 0xFFFFFFFF
+    for byte in data:
+        crc ^= byte
+        for _ in range(8):
+            crc = (crc >> 1) ^ (0x82F63B78 if crc & 1 else 0)
+    return crc ^ 0xFFFFFFFF
+
+
+def log_entry(payload: bytes, version: int) -> bytes:
+    """A well-formed log entry (engine/durable/journal_format.h's record) around `payload`."""
+    v = version.to_bytes(8, "little")
+    return (len(payload).to_bytes(4, "little") + crc32c(payload + v).to_bytes(4, "little") + v
+            + payload)
+
+
 @unittest.skipIf(REDIS_SERVER is None,
                  "redis-server is not installed (scripts/install-deps.sh installs it)")
 class Replicas(unittest.TestCase):
@@ -202,6 +218,27 @@ class Replicas(unittest.TestCase):
         self.assert_converged(servers, 1)
         self.assertEqual(self.redis.command("XLEN", self.stream), 1)
         self.assertIn("--demo ignored: the edit log holds a scene already", servers[1].log())
+
+    def test_an_entry_that_does_not_apply_stops_the_replicas_loudly(self):
+        servers = self.replicas(2)
+        n = self.stream_batches(servers, 0, 2)
+        self.assertEqual(crc32c(b"123456789"), 0xE3069283)
+        # Checksum and encoding are fine (one remove_instance, kind tag 9), but the instance does
+        # not exist: applying it would fail on every replica.
+        payload = (1).to_bytes(4, "little") + bytes([9]) + (4).to_bytes(4, "little") + b"nope"
+        self.redis.command("XADD", self.stream, f"{n + 1}-0", "v", str(n + 1), "t", "0",
+                           "r", log_entry(payload, n + 1))
+        self.redis.command("SET", self.stream + ":version", str(n + 1))
+        for s in servers:
+            deadline = time.monotonic() + 10
+            while time.monotonic() < deadline and s.call("GET", "/readyz")[0] == 200:
+                time.sleep(0.05)
+            status, _, body = s.call("GET", "/readyz")
+            self.assertEqual(status, 503)
+            detail = json.loads(body)["detail"]
+            self.assertIn(f"does not apply at version {n}", detail)
+            self.assertIn("nope", detail)
+            self.assertEqual(durable_scene.check(s, n), "")
 
     def test_min_version_waits_for_the_replica_and_names_the_lag_when_it_cannot(self):
         a, b = self.replicas(2, "--min-version-wait-ms", "400")
