@@ -260,6 +260,21 @@ class Replicas(unittest.TestCase):
         self.assertIn("strata_replica_applied_version 1", metrics)
         self.assertIn("strata_replica_lag_seconds 0", metrics)
 
+    def test_min_version_without_a_log_waits_for_this_servers_own_writes(self):
+        s = Server(["--min-version-wait-ms", "300"])
+        self.addCleanup(s.stop)
+        status, _, body = s.call("GET", "/v1/scene?min_version=1")
+        self.assertEqual(status, 503)
+        self.assertIn("behind min_version 1", json.loads(body)["detail"])
+        done = []
+        reader = threading.Thread(
+            target=lambda: done.append(s.call("GET", "/v1/scene?min_version=1")[0]))
+        reader.start()
+        time.sleep(0.05)
+        self.assertEqual(s.json("POST", "/v1/edits", durable_scene.batch(0))[0], 200)
+        reader.join()
+        self.assertEqual(done, [200])
+
     def test_a_replica_joining_after_trimming_loads_the_snapshot_and_follows(self):
         servers = self.replicas(2, "--log-snapshot-every", "5")
         n = self.stream_batches(servers, 0, 23)
