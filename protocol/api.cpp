@@ -153,7 +153,7 @@ std::optional<IfMatch> parse_if_match(std::string_view value, Problem& problem) 
 }
 
 ApiResponse post_edits(Engine& engine, std::string body, std::optional<std::string_view> if_match,
-                       const ApiLimits& limits) {
+                       const ApiLimits& limits, const BatchApply* apply) {
     Problem problem;
     const auto condition = if_match ? parse_if_match(*if_match, problem) : IfMatch{};
     if (!condition) return problem_response(problem);
@@ -163,7 +163,8 @@ ApiResponse post_edits(Engine& engine, std::string body, std::optional<std::stri
     if (!parsed) return problem_response(problem_from(parsed.error()));
     ParsedBatch& batch = parsed.value();
 
-    auto applied = engine.apply(std::move(batch.batch), condition->version);
+    auto applied = apply ? (*apply)(std::move(batch.batch), condition->version)
+                         : engine.apply(std::move(batch.batch), condition->version);
     if (!applied) {
         const Error& e = applied.error();
         if (e.code == ErrorCode::VersionMismatch) {

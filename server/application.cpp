@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include "server/context.h"
+#include "server/replica/replica.h"
 #include "server/http_util.h"
 #include "server/router.h"
 
@@ -79,6 +80,13 @@ void Application::attach_store(durable::DurableStore* store) {
     m_context->store = store;
 }
 
+void Application::attach_replica(replica::Replica* replica) {
+    m_context->replica = replica;
+    m_context->append_to_log = [replica](EditBatch&& batch, std::optional<uint64_t> expected) {
+        return replica->append(std::move(batch), expected);
+    };
+}
+
 void Application::install_routes(const FrontEndCounters* front_end) {
     m_context = std::make_unique<ServerContext>(ServerContext{
         m_engine, m_config, m_metrics,
@@ -86,7 +94,7 @@ void Application::install_routes(const FrontEndCounters* front_end) {
             protocol::JsonLimits{m_config.max_json_depth, m_config.max_array_elements},
             m_config.max_pixels, m_config.render_timeout_s,
             SceneBudget{m_config.max_scene_triangles, m_config.max_scene_vertices}},
-        front_end, m_store});
+        front_end, m_store, nullptr, {}});
     Router router(m_routes, m_config.max_body_bytes);
     add_api_routes(router, *m_context);
     // The front end answers /livez and /readyz itself; these routes make them known to the

@@ -16,6 +16,9 @@
 namespace strata::durable {
 class DurableStore;
 }
+namespace strata::replica {
+class Replica;
+}
 
 namespace strata::server {
 
@@ -42,6 +45,8 @@ public:
 
     /// The data directory for the routes (set while the front end refuses requests).
     void attach_store(durable::DurableStore* store);
+    /// The shared edit log for the routes (set while the front end refuses requests).
+    void attach_replica(replica::Replica* replica);
 
 private:
     void install_hooks();

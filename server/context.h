@@ -9,6 +9,9 @@
 namespace strata::durable {
 class DurableStore;
 }
+namespace strata::replica {
+class Replica;
+}
 
 namespace strata::server {
 
@@ -21,6 +24,11 @@ struct ServerContext {
     protocol::ApiLimits api_limits;
     const FrontEndCounters* front_end = nullptr;  ///< connection counters for /metrics
     durable::DurableStore* store = nullptr;       ///< the data directory; null without --data
+    replica::Replica* replica = nullptr;          ///< the shared edit log; null without --log
+    protocol::BatchApply append_to_log;           ///< the replica's append, when there is one
+
+    /// Where write endpoints send batches: the log's append with --log, else the engine.
+    const protocol::BatchApply* batch_apply() const { return replica ? &append_to_log : nullptr; }
 };
 
 class Router;

@@ -280,7 +280,7 @@ void Reactor::set_reading(Connection& c, Clock::time_point now) {
 
 void Reactor::advance(Connection& c, Clock::time_point now) {
     for (;;) {
-        ReaderSituation situation{m_draining, c.restricted, m_starting.load(), {}};
+        ReaderSituation situation{m_draining, c.restricted, m_starting.load(), {}, &m_readiness};
         if (situation.starting) {
             std::lock_guard lock(m_progress_mutex);
             if (m_progress) situation.progress = m_progress();

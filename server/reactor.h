@@ -65,6 +65,8 @@ public:
         m_starting.store(starting);
     }
     bool starting() const { return m_starting.load(); }
+    /// What else /readyz asks (request_reader.h); set before run(), never after.
+    void set_readiness(std::function<Readiness()> readiness) { m_readiness = std::move(readiness); }
     /// A worker's answer for connection `conn`; `close`: close after writing it. Thread-safe.
     void complete(uint64_t conn, std::string response, bool close);
 
@@ -117,6 +119,7 @@ private:
     std::atomic<bool> m_starting{false};
     std::mutex m_progress_mutex;
     std::function<std::string()> m_progress;  ///< what starting is doing; guarded by the mutex
+    std::function<Readiness()> m_readiness;   ///< set before run()
     bool m_draining = false;
     Clock::time_point m_grace_deadline{};
     Clock::time_point m_hard_deadline{};

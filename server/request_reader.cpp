@@ -139,15 +139,31 @@ ReaderStep RequestReader::on_head(const ReaderSituation& situation) {
     // load, the connection limits or the shutdown state.
     const bool body = m_head.framing != BodyFraming::None;
     if (is_health_path(m_target.path) && (m_head.method == "GET" || m_head.method == "HEAD")) {
-        const bool ready =
-            m_target.path == "/livez" || (!situation.draining && !situation.starting);
-        protocol::ApiResponse r =
-            ready ? protocol::json_response(
-                        200, {{"status", m_target.path == "/livez" ? "ok" : "ready"}})
-                  : protocol::problem_response(protocol::make_problem(
-                        ProblemType::Unavailable, situation.draining
-                                                      ? "the server is shutting down"
-                                                      : starting_detail(situation.progress)));
+        const bool livez = m_target.path == "/livez";
+        Readiness extra;
+        if (!livez && situation.readiness && *situation.readiness)
+            extra = (*situation.readiness)();
+        const bool ready = livez || (!situation.draining && !situation.starting && extra.ready);
+        protocol::ApiResponse r;
+        if (ready) {
+            protocol::Json report = {{"status", livez ? "ok" : "ready"}};
+            if (!livez && !extra.section.empty()) {
+                protocol::Json& section = report[extra.section];
+                for (const auto& [name, value] : extra.numbers) {
+                    // Versions and counts are whole numbers: written as integers.
+                    if (value >= 0 && value < 9007199254740992.0 && value == double(int64_t(value)))
+                        section[name] = int64_t(value);
+                    else
+                        section[name] = value;
+                }
+            }
+            r = protocol::json_response(200, report);
+        } else {
+            r = protocol::problem_response(protocol::make_problem(
+                ProblemType::Unavailable, situation.draining   ? "the server is shutting down"
+                                          : situation.starting ? starting_detail(situation.progress)
+                                                               : extra.detail));
+        }
         if (!ready && !situation.draining) r.headers.emplace_back("Retry-After", "1");
         ReaderStep step;
         step.kind = ReaderStep::Kind::Answer;

@@ -6,6 +6,7 @@
 // Encoding, and the health endpoints. No sockets, so tests and the fuzzer drive it directly.
 
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -21,6 +22,14 @@ struct ReaderConfig {
     std::string token;  ///< bearer token every path but /livez and /readyz needs; empty: none
 };
 
+/// Beyond starting and draining, what /readyz says (a replica following its edit log).
+struct Readiness {
+    bool ready = true;
+    std::string detail;   ///< when not ready: why (the 503 problem's detail)
+    std::string section;  ///< when not empty: `numbers` go into the body under this member
+    std::vector<std::pair<std::string, double>> numbers;
+};
+
 /// What the front end knows when the reader decides.
 struct ReaderSituation {
     bool draining = false;    ///< shutting down: only health checks are answered
@@ -29,6 +38,8 @@ struct ReaderSituation {
     /// `progress`, every other request but /livez 503 with Retry-After.
     bool starting = false;
     std::string progress;  ///< while starting: how far, for the answers' detail
+    /// Asked by /readyz only (set before serving, never changed); null: ready when not starting.
+    const std::function<Readiness()>* readiness = nullptr;
 };
 
 /// A complete request for a worker.

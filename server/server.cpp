@@ -57,6 +57,14 @@ void Server::stop() {
     m_reactor->drain();
 }
 
+void Server::attach_replica(replica::Replica* replica) {
+    m_app->attach_replica(replica);
+}
+
+void Server::set_readiness(std::function<Readiness()> readiness) {
+    m_reactor->set_readiness(std::move(readiness));
+}
+
 bool Server::ready() const {
     return m_listening && !m_reactor->draining() && !m_reactor->starting();
 }

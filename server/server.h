@@ -19,10 +19,14 @@
 #include "engine/engine.h"
 #include "server/listener.h"
 #include "server/metrics.h"
+#include "server/request_reader.h"
 #include "server/server_config.h"
 
 namespace strata::durable {
 class DurableStore;
+}
+namespace strata::replica {
+class Replica;
 }
 
 namespace strata::server {
@@ -56,6 +60,10 @@ public:
     void set_starting(bool starting, std::function<std::string()> progress = {});
     /// The data directory, once recovered (while starting; before that, routes see none).
     void attach_store(durable::DurableStore* store);
+    /// The shared edit log (while starting, like attach_store).
+    void attach_replica(replica::Replica* replica);
+    /// What /readyz asks beyond starting and draining (a replica's state). Before listen() only.
+    void set_readiness(std::function<Readiness()> readiness);
     int port() const { return m_port; }
     ServerMetrics& metrics() { return m_metrics; }
 
