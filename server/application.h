@@ -21,6 +21,7 @@ namespace strata::server {
 
 struct FrontEndCounters;
 struct ServerContext;
+class StreamHub;
 
 class Application {
 public:
@@ -28,7 +29,7 @@ public:
     /// adds the connection counters to /metrics. All must outlive the application.
     Application(const ServerConfig& config, Engine& engine, ServerMetrics& metrics,
                 const FrontEndCounters* front_end, std::function<bool()> ready,
-                durable::DurableStore* store = nullptr);
+                durable::DurableStore* store = nullptr, StreamHub* streams = nullptr);
     ~Application();
     Application(const Application&) = delete;
     Application& operator=(const Application&) = delete;
@@ -45,7 +46,7 @@ public:
 
 private:
     void install_hooks();
-    void install_routes(const FrontEndCounters* front_end);
+    void install_routes(const FrontEndCounters* front_end, StreamHub* streams);
 
     const ServerConfig& m_config;
     Engine& m_engine;

@@ -50,6 +50,8 @@ struct ServerConfig {
     bool tlas_background_merge = true;
 
     std::string token;  ///< bearer token; empty: no authentication
+    /// Origins allowed cross-origin access (cors.h): "", "*" or a comma-separated list.
+    std::string cors_origin;
     bool demo = false;  ///< start with the demo scene
 };
 
