@@ -33,6 +33,10 @@ constexpr std::chrono::seconds LINGER_TIME{2};
 constexpr std::size_t LINGER_BYTES = std::size_t(8) << 20;
 /// Precision of every deadline.
 constexpr std::chrono::milliseconds TICK{20};
+/// A stream's socket send buffer. Frames a slow viewer has not taken wait in the stream's
+/// channel (one pending, replaced by newer ones), not in the kernel: without a cap, send-buffer
+/// autotuning would queue megabytes of stale frames per viewer.
+constexpr int STREAM_SEND_BUFFER = 256 * 1024;
 /// How long accept() pauses when the process is out of file descriptors.
 constexpr std::chrono::milliseconds ACCEPT_PAUSE{100};
 
@@ -565,6 +569,7 @@ void Reactor::begin_stream(Connection& c, std::shared_ptr<StreamChannel> stream,
     c.next_part = now;
     c.deadline = now + std::chrono::seconds(m_config.write_timeout_s);
     c.watching = 0;
+    ::setsockopt(c.fd, SOL_SOCKET, SO_SNDBUF, &STREAM_SEND_BUFFER, sizeof STREAM_SEND_BUFFER);
     const uint64_t id = c.id;
     c.stream->attach([this, id] {
         {

@@ -22,16 +22,23 @@ constexpr std::chrono::milliseconds QUIET_WAIT{250};
 /// that left even when nothing is committed.
 constexpr std::chrono::seconds HEARTBEAT{15};
 
-/// One multipart part: headers, the JPEG, and the next boundary at once, so that a browser shows
-/// the frame on arrival instead of waiting for the boundary that ends it.
+/// One frame: the JPEG, then the next boundary and the next part's headers at once. A browser
+/// shows a part only once the next part's headers arrive (Chromium finishes an image part
+/// there), so they cannot wait for the next frame; the frame's version and sample count travel
+/// inside the JPEG instead, as a comment (COM segment) "strata version=V samples=S".
 std::string frame_part(const std::string& jpeg, uint64_t version, uint32_t samples) {
+    const std::string comment =
+        "strata version=" + std::to_string(version) + " samples=" + std::to_string(samples);
+    const std::size_t length = comment.size() + 2;  // a segment length counts itself
     std::string part;
-    part.reserve(jpeg.size() + 160);
-    part += "Content-Type: image/jpeg\r\nContent-Length: " + std::to_string(jpeg.size()) +
-            "\r\nX-Strata-Version: " + std::to_string(version) +
-            "\r\nX-Strata-Samples: " + std::to_string(samples) + "\r\n\r\n";
-    part += jpeg;
-    part += "\r\n--strata-frame\r\n";
+    part.reserve(jpeg.size() + comment.size() + 64);
+    part.append(jpeg, 0, 2);  // SOI
+    part += "\xFF\xFE";
+    part += char(length >> 8);
+    part += char(length & 0xFF);
+    part += comment;
+    part.append(jpeg, 2, std::string::npos);
+    part += STREAM_PART_SEPARATOR;
     return part;
 }
 

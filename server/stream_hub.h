@@ -35,6 +35,10 @@
 
 namespace strata::server {
 
+/// What ends every frame and starts the next part: the boundary and the part's headers.
+inline constexpr const char* STREAM_PART_SEPARATOR =
+    "\r\n--strata-frame\r\nContent-Type: image/jpeg\r\n\r\n";
+
 /// What one viewer watches.
 struct ViewerSpec {
     RenderRequest request;      ///< each launch: size, spp, exposure, camera override

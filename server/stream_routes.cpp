@@ -59,6 +59,9 @@ std::variant<ViewerSpec, protocol::Problem> parse_viewer(
     if (auto p = take_number(params, "quality", 1, 100, spec.quality)) return *p;
     if (auto p = take_number(params, "max_samples", 1u, MAX_STREAM_SAMPLES, spec.max_samples))
         return *p;
+    // An opaque value that makes a viewer's URL its own: browsers share one in-flight image
+    // between equal URLs, so a reloaded page would wait on the stream of the page it replaced.
+    if (auto it = params.find("client"); it != params.end()) params.erase(it);
     for (const char* fixed : {"format", "aovs", "compression", "accumulate"}) {
         if (params.count(fixed))
             return bad_parameter(fixed, std::string("query parameter '") + fixed +
@@ -118,7 +121,9 @@ void add_stream_routes(Router& router, ServerContext& ctx) {
             "Cache-Control: no-store\r\n"
             "Connection: close\r\n"
             "\r\n"
-            "--strata-frame\r\n";
+            "--strata-frame\r\n"
+            "Content-Type: image/jpeg\r\n"
+            "\r\n";
         auto channel = ctx.streams->watch(std::move(std::get<ViewerSpec>(parsed)), std::move(head));
         if (!channel) return stream_unavailable(res);
         hand_over(res, std::move(channel));

@@ -10,6 +10,14 @@ import { ScenePanel } from './scene_panel.js';
 
 const $ = (id) => document.getElementById(id);
 
+/// Page parameters: ?width=&height= fix the frame size (else it fits the window), and
+/// ?fps=, ?quality=, ?max_samples= are passed to the stream (a slow link or a slow server).
+const page = new URLSearchParams(location.search);
+const pageNumber = (name, fallback) => {
+  const v = Number(page.get(name));
+  return page.has(name) && Number.isFinite(v) && v > 0 ? v : fallback;
+};
+
 /// Everything the panels share; exposed as window.strata for tests and the console.
 const state = {
   version: null,        // newest scene version seen
@@ -35,17 +43,26 @@ function status(text) {
 // Step: the frame stream. The camera override travels in the URL; a new camera opens a new
 // stream (the browser closes the old one, and the server stops rendering it).
 let streamTimer = null;
+let streamCount = 0;
+const clientId = Math.random().toString(36).slice(2, 10);
 function openStream(camera) {
   const [w, h] = state.size;
-  const params = { width: w, height: h, quality: 80, fps: 20, max_samples: 32 };
+  const params = {
+    width: w, height: h, quality: pageNumber('quality', 80), fps: pageNumber('fps', 20),
+    max_samples: pageNumber('max_samples', 32),
+  };
   if (camera) {
     params.eye = camera.eye.map((v) => v.toFixed(4)).join(',');
     params.target = camera.target.map((v) => v.toFixed(4)).join(',');
     params.up = camera.up.map((v) => v.toFixed(4)).join(',');
     params.fov_y_deg = camera.fov_y_deg.toFixed(3);
   }
+  const key = JSON.stringify(params);
+  if (key === state.streamKey) return;
+  state.streamKey = key;
+  // Unique per stream: the browser would share an in-flight image between equal URLs.
+  params.client = `${clientId}-${++streamCount}`;
   const url = withToken('/v1/stream', params);
-  if (url === state.streamUrl) return;
   state.streamUrl = url;
   const img = $('frame');
   img.width = w;
@@ -213,6 +230,10 @@ function openEvents() {
 }
 
 function fitSize() {
+  if (page.has('width') && page.has('height')) {
+    state.size = [Math.round(pageNumber('width', 640)), Math.round(pageNumber('height', 360))];
+    return;
+  }
   const pane = $('view-pane');
   const w = Math.max(320, Math.min(1280, Math.floor((pane.clientWidth - 16) / 16) * 16));
   state.size = [w, Math.round((w * 9) / 16)];
@@ -260,7 +281,7 @@ $('follow').classList.add('on');
 $('token-open').addEventListener('click', () => askToken());
 $('token-form').addEventListener('submit', () => {
   setToken($('token-input').value.trim());
-  state.streamUrl = '';
+  state.streamKey = '';
   start();
 });
 $('token-clear').addEventListener('click', () => {

@@ -113,9 +113,11 @@ class Browser:
                              + "; ".join(self.console[-10:]))
 
     def navigate(self, url):
+        # The old document may still answer at first (the same URL included): mark it, and wait
+        # for a document without the mark.
+        self.evaluate("window.__strata_old_page = true")
         self.send("Page.navigate", {"url": url})
-        # The old document may still answer at first: wait for the new one.
-        self.wait_for(f"location.href === {json.dumps(url)} && document.readyState === 'complete'")
+        self.wait_for("!window.__strata_old_page && document.readyState === 'complete'")
 
     def click(self, x, y):
         """A left click at page coordinates (pointer events follow from the mouse events)."""

@@ -58,7 +58,6 @@ class ViewerInChromium(unittest.TestCase):
     def setUpClass(cls):
         env = {"STRATA_TOKEN": cls.token} if cls.token else {}
         cls.server = ServerProcess(SERVER, ["--demo"], env=env)
-        # A 1000 px window gives a 640x360 frame: quick enough to render on a busy CI machine.
         cls.browser = Browser(width=1000, height=720)
 
     @classmethod
@@ -69,21 +68,27 @@ class ViewerInChromium(unittest.TestCase):
     def shot(self, name):
         self.browser.screenshot(os.path.join(SHOTS, name + ".png"))
 
+    # A small frame and few samples: quick to render on a busy CI machine (one with two cores
+    # shared by other builds renders 640x360 in about a second).
+    PAGE = "/?width=320&height=180&max_samples=4&fps=30"
+
     def open_viewer(self):
-        self.browser.navigate(self.server.url + "/")
+        self.browser.navigate(self.server.url + self.PAGE)
         self.browser.wait_for(SAMPLE + " !== null", timeout=20)
 
-    def wait_settled(self, timeout=15.0):
-        """Waits until progressive refinement stops changing the frame."""
+    def wait_settled(self, quiet=1.5, timeout=30.0):
+        """Waits until progressive refinement has stopped changing the frame for `quiet` s."""
         deadline = time.monotonic() + timeout
         last = self.browser.evaluate(SAMPLE)
+        since = time.monotonic()
         while time.monotonic() < deadline:
-            time.sleep(0.4)
+            time.sleep(0.1)
             now = self.browser.evaluate(SAMPLE)
-            if now == last:
+            if now != last:
+                last, since = now, time.monotonic()
+            elif time.monotonic() - since >= quiet:
                 return now
-            last = now
-        return last
+        raise AssertionError("the frame kept changing: progressive refinement did not end")
 
 
 class ViewerWithoutToken(ViewerInChromium):
@@ -176,7 +181,7 @@ class ViewerWithToken(ViewerInChromium):
     token = "browser-test-token"
 
     def test_the_token_is_asked_once_kept_in_session_storage_and_used(self):
-        self.browser.navigate(self.server.url + "/")
+        self.browser.navigate(self.server.url + self.PAGE)
         self.browser.wait_for("document.getElementById('token-dialog').open")
         self.shot("token-dialog")
         self.browser.evaluate(
@@ -186,7 +191,7 @@ class ViewerWithToken(ViewerInChromium):
         self.assertEqual(self.browser.evaluate("sessionStorage.getItem('strata.token')"),
                          self.token)
         # A reload keeps it: no second question.
-        self.browser.navigate(self.server.url + "/")
+        self.browser.navigate(self.server.url + self.PAGE)
         self.browser.wait_for(SAMPLE + " !== null", timeout=20)
         self.assertFalse(self.browser.evaluate("document.getElementById('token-dialog').open"))
         self.shot("token-accepted")
