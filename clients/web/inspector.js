@@ -79,7 +79,7 @@ export class Inspector {
     row('mesh', d.mesh);
     row('material', d.material === null ? '(mesh default)' : d.material);
     row('group path', path.length ? '/' + path.join('/') : '(root)');
-    row('version', String(d.version));
+    row('version', String(d.version)).id = 'sel-version';
     root.append(table);
 
     const vec = (name, values) => {

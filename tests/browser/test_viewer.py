@@ -152,6 +152,11 @@ class ViewerWithoutToken(ViewerInChromium):
             time.sleep(0.05)
         self.assertAlmostEqual(doc["transform"][3], -1.25, places=4)
         self.browser.wait_for("document.getElementById('message').textContent.includes('Applied')")
+        # The panel reloads the instance at its new version before the next edit (an edit based
+        # on the old version would be a 412 conflict, shown as such).
+        self.browser.wait_for(
+            f"document.getElementById('sel-version') && "
+            f"document.getElementById('sel-version').textContent == '{doc['version']}'")
 
         # Hidden from the viewer: the scene says so.
         self.browser.evaluate(
