@@ -24,6 +24,7 @@ namespace strata::server {
 
 struct FrontEndCounters;
 struct ServerContext;
+class StreamHub;
 
 class Application {
 public:
@@ -31,7 +32,7 @@ public:
     /// adds the connection counters to /metrics. All must outlive the application.
     Application(const ServerConfig& config, Engine& engine, ServerMetrics& metrics,
                 const FrontEndCounters* front_end, std::function<bool()> ready,
-                durable::DurableStore* store = nullptr);
+                durable::DurableStore* store = nullptr, StreamHub* streams = nullptr);
     ~Application();
     Application(const Application&) = delete;
     Application& operator=(const Application&) = delete;
@@ -50,7 +51,7 @@ public:
 
 private:
     void install_hooks();
-    void install_routes(const FrontEndCounters* front_end);
+    void install_routes(const FrontEndCounters* front_end, StreamHub* streams);
 
     const ServerConfig& m_config;
     Engine& m_engine;

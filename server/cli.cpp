@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 
 #include "server/auth.h"
+#include "server/cors.h"
 #include "server/listener.h"
 #include "server/replica/redis_url.h"
 #include "strata/version.h"
@@ -140,6 +141,11 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
                    "'Authorization: Bearer <token>'. Or give the token itself in STRATA_TOKEN")
         ->check(CLI::ExistingFile);
     app.add_flag("--insecure", cl.insecure, "Allow a non-loopback --host without a token");
+    app.add_option("--cors-origin", c.cors_origin,
+                   "Origins whose pages may call the API (CORS): a comma-separated list such as "
+                   "'https://viewer.example.org,http://localhost:8000', or '*' for any; empty: "
+                   "none. Preflights (OPTIONS) from them are answered; the token is still "
+                   "required");
     app.add_flag("--demo", c.demo, "Start with the demo scene");
     app.add_option("--tlas", c.tlas,
                    "TLAS strategy: incremental (a commit costs what its instance edits touch) or "
@@ -209,6 +215,7 @@ std::string finish_config(CommandLine& cl) {
         auto url = replica::parse_redis_url(cl.config.log_url);
         if (!url) return url.error().message;
     }
+    if (auto cors = CorsPolicy::parse(cl.config.cors_origin); !cors) return cors.error().message;
     // Resolved first: an unknown name is an error of its own, not "non-loopback".
     auto addresses = resolve_host(cl.config.host);
     if (!addresses) return addresses.error().message;

@@ -146,6 +146,8 @@ int serve(server::CommandLine& cl) {
                  port.value(), cl.config.threads,
                  cl.config.token.empty() ? "no authentication"
                                          : "bearer token required, from " + cl.token_source);
+    spdlog::info("viewer: open http://{}:{}/ in a browser{}", cl.config.host, port.value(),
+                 cl.config.token.empty() ? "" : " (it asks for the token once per tab)");
     std::thread serving([&http] { http.listen(); });
     auto stop_serving = [&] {
         http.stop();

@@ -18,6 +18,7 @@
 #include "server/request_target.h"
 #include "server/route_table.h"
 #include "server/router.h"
+#include "server/stream_hub.h"
 
 namespace strata::server {
 
@@ -219,6 +220,7 @@ void add_api_routes(Router& router, ServerContext& ctx) {
         if (ctx.front_end) ctx.front_end->write_prometheus(text);
         if (ctx.store) write_durable_metrics(text, ctx.store->stats());
         if (ctx.replica) replica::write_replica_metrics(text, ctx.replica->status());
+        if (ctx.streams) write_stream_metrics(text, ctx.streams->stats());
         res.set_content(text, "text/plain; version=0.0.4; charset=utf-8");
     });
 }

@@ -13,8 +13,8 @@
 
 #include <atomic>
 #include <functional>
-#include <string>
 #include <memory>
+#include <string>
 
 #include "engine/engine.h"
 #include "server/listener.h"
@@ -33,6 +33,7 @@ namespace strata::server {
 
 class Application;
 class Reactor;
+class StreamHub;
 class WorkerPool;
 
 class Server {
@@ -66,17 +67,21 @@ public:
     void set_readiness(std::function<Readiness()> readiness);
     int port() const { return m_port; }
     ServerMetrics& metrics() { return m_metrics; }
+    /// The live viewer's streams (counts for tests and /metrics).
+    StreamHub& streams() { return *m_streams; }
 
 private:
     ServerConfig m_config;
     Engine& m_engine;
     ServerMetrics m_metrics;
     std::unique_ptr<Reactor> m_reactor;
+    std::unique_ptr<StreamHub> m_streams;  ///< viewer frames and commit events
     std::unique_ptr<Application> m_app;
     std::unique_ptr<WorkerPool> m_workers;  ///< after m_reactor: workers call into it until joined
     Listener m_listener;
     int m_port = -1;
     std::atomic<bool> m_listening{false};
+    std::atomic<int> m_api_heavy{0};  ///< API renders and commits queued or running
 };
 
 }  // namespace strata::server

@@ -56,6 +56,8 @@ struct ServerConfig {
     int min_version_wait_ms = 5000;   ///< longest a read waits for its min_version
 
     std::string token;  ///< bearer token; empty: no authentication
+    /// Origins allowed cross-origin access (cors.h): "", "*" or a comma-separated list.
+    std::string cors_origin;
     bool demo = false;  ///< start with the demo scene
 };
 
