@@ -73,6 +73,22 @@ Result<ApplyResult> Engine::apply(EditBatch&& batch, std::optional<uint64_t> exp
     return ApplyResult{version.value(), count};
 }
 
+Status Engine::validate(EditBatch&& batch, uint64_t version) {
+    std::unique_lock lock(m_scene_mutex);
+    if (version != m_scene.version())
+        return failure(ErrorCode::VersionMismatch,
+                       "the scene is at version " + std::to_string(m_scene.version()) + ", not " +
+                           std::to_string(version));
+    // The hook runs once every rule has passed; its error makes the scene roll the batch back.
+    bool passed = false;
+    auto checked = m_scene.apply(std::move(batch), [&](uint64_t) -> Status {
+        passed = true;
+        return failure(ErrorCode::Internal, "validation only");
+    });
+    if (passed) return {};
+    return Unexpected(std::move(checked).error());
+}
+
 Status Engine::restore(EditBatch&& scene, uint64_t version) {
     std::unique_lock lock(m_scene_mutex);
     if (m_scene.version() != 0)

@@ -56,6 +56,12 @@ public:
     /// VersionMismatch error and leaves the scene untouched.
     Result<ApplyResult> apply(EditBatch&& batch, std::optional<uint64_t> expected_version);
 
+    /// Checks `batch` against the scene at `version` without keeping it: every rule runs, then
+    /// the changes are rolled back (no version bump, no journal record, nothing counted). A
+    /// shared edit log (server/replica) validates a batch this way before appending it. The
+    /// scene at another version is a VersionMismatch error.
+    Status validate(EditBatch&& batch, uint64_t version);
+
     /// From now on every applied batch is written to `journal` (engine/durable/journal.h) under
     /// the scene lock before apply() returns, and apply() waits until it is as durable as the
     /// journal's fsync mode promises. A batch the journal cannot store is not applied (a Storage

@@ -153,7 +153,7 @@ std::optional<IfMatch> parse_if_match(std::string_view value, Problem& problem) 
 }
 
 ApiResponse post_edits(Engine& engine, std::string body, std::optional<std::string_view> if_match,
-                       const ApiLimits& limits) {
+                       const ApiLimits& limits, const BatchApply* apply) {
     Problem problem;
     const auto condition = if_match ? parse_if_match(*if_match, problem) : IfMatch{};
     if (!condition) return problem_response(problem);
@@ -163,7 +163,8 @@ ApiResponse post_edits(Engine& engine, std::string body, std::optional<std::stri
     if (!parsed) return problem_response(problem_from(parsed.error()));
     ParsedBatch& batch = parsed.value();
 
-    auto applied = engine.apply(std::move(batch.batch), condition->version);
+    auto applied = apply ? (*apply)(std::move(batch.batch), condition->version)
+                         : engine.apply(std::move(batch.batch), condition->version);
     if (!applied) {
         const Error& e = applied.error();
         if (e.code == ErrorCode::VersionMismatch) {
@@ -221,8 +222,9 @@ ApiResponse get_scene(const Engine& engine) {
 ApiResponse get_scene_object(const Engine& engine, SceneObject kind, std::string_view id) {
     using ToJson = std::optional<Json> (*)(const Scene&, std::string_view);
     static constexpr ToJson TO_JSON[] = {mesh_to_json, instance_to_json, material_to_json,
-                                         group_to_json, texture_to_json};
-    static constexpr const char* NAMES[] = {"mesh", "instance", "material", "group", "texture"};
+                                         group_to_json, light_to_json, texture_to_json};
+    static constexpr const char* NAMES[] = {"mesh",  "instance", "material",
+                                            "group", "light",    "texture"};
     // One read lock: the document and its version belong together.
     auto [doc, version] = engine.read(
         [&](const Scene& s) { return std::pair(TO_JSON[int(kind)](s, id), s.version()); });

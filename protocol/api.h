@@ -6,6 +6,7 @@
 // statuses and header names are plain data.
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -60,10 +61,15 @@ struct IfMatch {
 /// match (RFC 9110 uses strong comparison); a list of several tags is refused.
 std::optional<IfMatch> parse_if_match(std::string_view value, Problem& problem);
 
+/// Where the write endpoints send a checked batch with its If-Match version: by default straight
+/// into the engine; a server following a shared edit log (server/replica) passes the log's
+/// append, which answers once the batch is in the log and applied (Storage errors: 503).
+using BatchApply = std::function<Result<ApplyResult>(EditBatch&&, std::optional<uint64_t>)>;
+
 /// POST /v1/edits. `if_match` is the If-Match header when the request has one. The body is
 /// consumed (freed once parsed).
 ApiResponse post_edits(Engine& engine, std::string body, std::optional<std::string_view> if_match,
-                       const ApiLimits& limits);
+                       const ApiLimits& limits, const BatchApply* apply = nullptr);
 /// POST /v1/commit.
 ApiResponse post_commit(Engine& engine);
 /// GET /v1/plan.
@@ -78,11 +84,11 @@ ApiResponse get_render(Engine& engine, const std::multimap<std::string, std::str
 /// GET /v1/scene.
 ApiResponse get_scene(const Engine& engine);
 
-/// The object kinds of GET /v1/scene/{meshes,instances,materials,groups}/{id}.
-enum class SceneObject : uint8_t { Mesh, Instance, Material, Group, Texture };
-/// GET /v1/scene/{meshes,instances,materials,groups}/{id}.
+/// The object kinds of GET /v1/scene/{meshes,instances,materials,groups,lights,textures}/{id}.
+enum class SceneObject : uint8_t { Mesh, Instance, Material, Group, Light, Texture };
+/// GET /v1/scene/{meshes,instances,materials,groups,lights,textures}/{id}.
 ApiResponse get_scene_object(const Engine& engine, SceneObject kind, std::string_view id);
-/// GET /v1/scene/{meshes,instances,materials,groups}: one page of the collection
+/// GET /v1/scene/{meshes,instances,materials,groups,lights}: one page of the collection
 /// (scene_list.cpp).
 ApiResponse get_scene_list(const Engine& engine, SceneObject kind,
                            const std::multimap<std::string, std::string>& query);
@@ -111,7 +117,8 @@ ApiResponse get_snapshot(const Engine& engine);
 /// (a Clear, then the snapshot's edits): a new version, journaled like any batch. The snapshot's
 /// own version is not reused. `if_match` as for post_edits.
 ApiResponse post_snapshot(Engine& engine, std::string body,
-                          std::optional<std::string_view> if_match);
+                          std::optional<std::string_view> if_match,
+                          const BatchApply* apply = nullptr);
 
 /// POST /v1/assets: imports one model file, the body, as ONE batch: atomic, journaled and
 /// counted like POST /v1/edits, If-Match honoured (assets_api.cpp). The format comes from
@@ -119,6 +126,7 @@ ApiResponse post_snapshot(Engine& engine, std::string body,
 ApiResponse post_assets(Engine& engine, std::string body,
                         const std::multimap<std::string, std::string>& query,
                         std::optional<std::string_view> content_type,
-                        std::optional<std::string_view> if_match, const ApiLimits& limits);
+                        std::optional<std::string_view> if_match, const ApiLimits& limits,
+                        const BatchApply* apply = nullptr);
 
 }  // namespace strata::protocol

@@ -138,7 +138,8 @@ std::optional<AssetQuery> parse_query(const std::multimap<std::string, std::stri
 ApiResponse post_assets(Engine& engine, std::string body,
                         const std::multimap<std::string, std::string>& query,
                         std::optional<std::string_view> content_type,
-                        std::optional<std::string_view> if_match, const ApiLimits& api_limits) {
+                        std::optional<std::string_view> if_match, const ApiLimits& api_limits,
+                        const BatchApply* apply) {
     Problem problem;
     const auto condition = if_match ? parse_if_match(*if_match, problem) : IfMatch{};
     if (!condition) return problem_response(problem);
@@ -166,7 +167,8 @@ ApiResponse post_assets(Engine& engine, std::string body,
     const std::size_t edits = out.batch.edits.size();
 
     // Step 3: apply it like any batch; an engine refusal names the id it was creating.
-    auto applied = engine.apply(std::move(out.batch), condition->version);
+    auto applied = apply ? (*apply)(std::move(out.batch), condition->version)
+                         : engine.apply(std::move(out.batch), condition->version);
     if (!applied) {
         const Error& e = applied.error();
         if (e.code == ErrorCode::VersionMismatch) {

@@ -87,6 +87,7 @@ Json scene_summary_to_json(const Scene& s) {
               {"instances", c.instances},
               {"materials", c.materials},
               {"groups", c.groups},
+              {"lights", c.lights},
               {"textures", c.textures},
               {"triangles", c.triangles},
               {"instanced_triangles", c.instanced_triangles}}},
@@ -158,6 +159,21 @@ Json material_json(const Scene& s, const MaterialRecord& m) {
     return j;
 }
 
+Json light_json(const Scene& s, const LightRecord& r) {
+    const Light& l = r.light;
+    return Json{{"id", r.id},
+                {"version", s.version()},
+                {"type", light_kind_name(l.kind)},
+                {"position", vec3_to_json(l.position)},
+                {"direction", vec3_to_json(l.direction)},
+                {"color", vec3_to_json(l.color)},
+                {"intensity", shortest(l.intensity)},
+                {"angle_deg", shortest(l.angle_deg)},
+                {"inner_angle_deg", shortest(l.inner_angle_deg)},
+                {"width", shortest(l.width)},
+                {"height", shortest(l.height)}};
+}
+
 std::optional<Json> mesh_to_json(const Scene& s, std::string_view id) {
     const MeshHandle h = s.find_mesh(id);
     const auto r = s.mesh(h);
@@ -177,6 +193,12 @@ std::optional<Json> group_to_json(const Scene& s, std::string_view id) {
     const auto r = s.group(h);
     if (!r) return std::nullopt;
     return group_json(s, h, *r.value());
+}
+
+std::optional<Json> light_to_json(const Scene& s, std::string_view id) {
+    const LightRecord* r = s.lights().get(s.find_light(id));
+    if (!r) return std::nullopt;
+    return light_json(s, *r);
 }
 
 Json texture_json(const Scene& s, const TextureRecord& t) {

@@ -31,6 +31,7 @@ Json mesh_json(const Scene& s, MeshHandle h, const MeshRecord& m);
 Json instance_json(const Scene& s, InstanceHandle h, const InstanceRecord& i,
                    const Bounds3& mesh_local_bounds);
 Json material_json(const Scene& s, const MaterialRecord& m);
+Json light_json(const Scene& s, const LightRecord& l);
 /// A group: parent, own and world transform and visibility, and how many children it has.
 Json group_json(const Scene& s, GroupHandle h, const GroupRecord& g);
 /// A texture: its size, format and the bytes it takes encoded and decoded.
@@ -41,6 +42,7 @@ std::optional<Json> mesh_to_json(const Scene& s, std::string_view id);
 std::optional<Json> instance_to_json(const Scene& s, std::string_view id);
 std::optional<Json> material_to_json(const Scene& s, std::string_view id);
 std::optional<Json> group_to_json(const Scene& s, std::string_view id);
+std::optional<Json> light_to_json(const Scene& s, std::string_view id);
 std::optional<Json> texture_to_json(const Scene& s, std::string_view id);
 
 }  // namespace strata::protocol

@@ -1,4 +1,4 @@
-// GET /v1/scene/{meshes,instances,materials,groups,textures}: paginated listings.
+// GET /v1/scene/{meshes,instances,materials,groups,lights,textures}: paginated listings.
 //
 // Pages walk the collection in slot order, which never changes while an object exists: an object
 // that exists for the whole walk appears exactly once, and objects added or removed during the
@@ -21,7 +21,8 @@ namespace {
 constexpr uint32_t DEFAULT_PAGE = 100;
 constexpr uint32_t MAX_PAGE = 10000;
 
-constexpr const char* COLLECTIONS[] = {"meshes", "instances", "materials", "groups", "textures"};
+constexpr const char* COLLECTIONS[] = {"meshes", "instances", "materials",
+                                       "groups", "lights",    "textures"};
 
 struct ListQuery {
     uint32_t limit = DEFAULT_PAGE;
@@ -185,6 +186,11 @@ ApiResponse get_scene_list(const Engine& engine, SceneObject kind,
                             [&](MaterialHandle, const MaterialRecord& m) {
                                 return material_json(s, m);
                             }),
+                        s.version()};
+            case SceneObject::Light:
+                return {page(
+                            kind, s.lights(), *q, [](const LightRecord&) { return true; },
+                            [&](LightHandle, const LightRecord& l) { return light_json(s, l); }),
                         s.version()};
             case SceneObject::Texture:
                 return {page(

@@ -22,7 +22,7 @@ ApiResponse get_snapshot(const Engine& engine) {
 }
 
 ApiResponse post_snapshot(Engine& engine, std::string body,
-                          std::optional<std::string_view> if_match) {
+                          std::optional<std::string_view> if_match, const BatchApply* apply) {
     Problem problem;
     const auto condition = if_match ? parse_if_match(*if_match, problem) : IfMatch{};
     if (!condition) return problem_response(problem);
@@ -38,7 +38,8 @@ ApiResponse post_snapshot(Engine& engine, std::string body,
     batch.edits.emplace_back(Clear{});
     for (Edit& e : snapshot->scene.edits) batch.edits.push_back(std::move(e));
     snapshot->scene.edits.clear();
-    auto applied = engine.apply(std::move(batch), condition->version);
+    auto applied = apply ? (*apply)(std::move(batch), condition->version)
+                         : engine.apply(std::move(batch), condition->version);
     if (!applied) {
         const Error& e = applied.error();
         if (e.code == ErrorCode::VersionMismatch) {

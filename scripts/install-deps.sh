@@ -19,17 +19,18 @@ esac
 # What strata-server's ELF NEEDED entries resolve to (readelf -d; libc6 is always there), and
 # OpenEXR for the renderer. scripts/check-docker.sh fails if ldd finds a library missing.
 runtime_pkgs=(
-    libembree3-3 libtbb12 libopenexr-3-1-30 libpng16-16 libturbojpeg0 libspdlog1.10 libfmt9
-    libcpp-httplib0.11
-    libstdc++6 libgcc-s1
+    libembree3-3 libtbb12 libopenexr-3-1-30 libpng16-16 libspdlog1.10 libfmt9 libcpp-httplib0.11
+    libhiredis0.14 libstdc++6 libgcc-s1 libturbojpeg0
 )
 build_pkgs=(
     build-essential cmake ninja-build pkg-config git ca-certificates curl
     libembree-dev libglm-dev libopenexr-dev nlohmann-json3-dev libcpp-httplib-dev libtbb-dev
     libgtest-dev libgmock-dev libbenchmark-dev libpng-dev libturbojpeg0-dev
     libtinygltf-dev libtinyobjloader-dev libcli11-dev libspdlog-dev
+    libhiredis-dev redis-server  # the shared edit log (server/replica) and its tests
     clang libclang-rt-14-dev
     python3 python3-jsonschema python3-numpy python3-yaml
+    chromium python3-websocket  # browser tests of the viewer (ctest -L browser, DevTools protocol)
     assimp-testmodels mmdebstrap
     mount  # scripts/check-docker.sh mounts inside its root; minimal Debian roots lack it
 )

@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include "server/context.h"
+#include "server/replica/replica.h"
 #include "server/http_util.h"
 #include "server/router.h"
 
@@ -22,7 +23,7 @@ double ms_since(std::chrono::steady_clock::time_point t) {
 
 Application::Application(const ServerConfig& config, Engine& engine, ServerMetrics& metrics,
                          const FrontEndCounters* front_end, std::function<bool()> ready,
-                         durable::DurableStore* store)
+                         durable::DurableStore* store, StreamHub* streams)
     : m_config(config),
       m_engine(engine),
       m_metrics(metrics),
@@ -32,7 +33,7 @@ Application::Application(const ServerConfig& config, Engine& engine, ServerMetri
     m_routes.set_keep_alive_timeout(m_config.keep_alive_timeout_s);
     m_routes.set_keep_alive_max_count(m_config.max_keep_alive_requests);
     install_hooks();
-    install_routes(front_end);
+    install_routes(front_end, streams);
 }
 
 Application::~Application() = default;
@@ -79,7 +80,14 @@ void Application::attach_store(durable::DurableStore* store) {
     m_context->store = store;
 }
 
-void Application::install_routes(const FrontEndCounters* front_end) {
+void Application::attach_replica(replica::Replica* replica) {
+    m_context->replica = replica;
+    m_context->append_to_log = [replica](EditBatch&& batch, std::optional<uint64_t> expected) {
+        return replica->append(std::move(batch), expected);
+    };
+}
+
+void Application::install_routes(const FrontEndCounters* front_end, StreamHub* streams) {
     m_context = std::make_unique<ServerContext>(ServerContext{
         m_engine, m_config, m_metrics,
         protocol::ApiLimits{
@@ -87,9 +95,11 @@ void Application::install_routes(const FrontEndCounters* front_end) {
             m_config.max_pixels, m_config.render_timeout_s,
             SceneBudget{m_config.max_scene_triangles, m_config.max_scene_vertices,
                         m_config.max_texture_mb << 20}},
-        front_end, m_store});
+        front_end, m_store, nullptr, {}, streams});
     Router router(m_routes, m_config.max_body_bytes);
     add_api_routes(router, *m_context);
+    add_stream_routes(router, *m_context);
+    add_web_routes(router);
     // The front end answers /livez and /readyz itself; these routes make them known to the
     // router, so that other methods get 405 with Allow.
     router.get("/livez", [](const httplib::Request&, httplib::Response& res) {

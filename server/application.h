@@ -16,11 +16,15 @@
 namespace strata::durable {
 class DurableStore;
 }
+namespace strata::replica {
+class Replica;
+}
 
 namespace strata::server {
 
 struct FrontEndCounters;
 struct ServerContext;
+class StreamHub;
 
 class Application {
 public:
@@ -28,7 +32,7 @@ public:
     /// adds the connection counters to /metrics. All must outlive the application.
     Application(const ServerConfig& config, Engine& engine, ServerMetrics& metrics,
                 const FrontEndCounters* front_end, std::function<bool()> ready,
-                durable::DurableStore* store = nullptr);
+                durable::DurableStore* store = nullptr, StreamHub* streams = nullptr);
     ~Application();
     Application(const Application&) = delete;
     Application& operator=(const Application&) = delete;
@@ -42,10 +46,12 @@ public:
 
     /// The data directory for the routes (set while the front end refuses requests).
     void attach_store(durable::DurableStore* store);
+    /// The shared edit log for the routes (set while the front end refuses requests).
+    void attach_replica(replica::Replica* replica);
 
 private:
     void install_hooks();
-    void install_routes(const FrontEndCounters* front_end);
+    void install_routes(const FrontEndCounters* front_end, StreamHub* streams);
 
     const ServerConfig& m_config;
     Engine& m_engine;

@@ -8,7 +8,9 @@
 #include <CLI/CLI.hpp>
 
 #include "server/auth.h"
+#include "server/cors.h"
 #include "server/listener.h"
+#include "server/replica/redis_url.h"
 #include "strata/version.h"
 
 namespace strata::server {
@@ -54,6 +56,23 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
                  "At start, if the journal or a snapshot is damaged before its end, keep what "
                  "precedes the damage, set the rest aside (*.damaged) and start, instead of "
                  "refusing to");
+    app.add_option("--log", c.log_url,
+                   "Shared edit log, redis://HOST:PORT/STREAM: this server becomes a replica that "
+                   "appends its batches to the Redis stream and applies every batch from it in "
+                   "order (see README, Scaling out). Empty: batches apply locally only");
+    app.add_option("--log-snapshot-every", c.log_snapshot_every,
+                   "With --log: every this many versions a snapshot of the scene is stored in "
+                   "Redis for joining replicas, and the stream is trimmed below the previous one "
+                   "(0: this replica stores none)")
+        ->check(CLI::Range(uint64_t(0), uint64_t(1) << 40));
+    app.add_option("--log-write-timeout-ms", c.log_write_timeout_ms,
+                   "With --log: longest a batch may take to be appended and applied here "
+                   "(503 beyond)")
+        ->check(CLI::Range(100, 600000));
+    app.add_option("--min-version-wait-ms", c.min_version_wait_ms,
+                   "Longest a read with min_version (or X-Strata-Min-Version) waits for this "
+                   "server to reach that version (503 beyond)")
+        ->check(CLI::Range(0, 600000));
     app.add_option("--max-body-mb", max_body_mb, "Largest request body, in MiB (413 beyond)")
         ->check(CLI::Range(1, 4096));
     app.add_option("--max-pixels", c.max_pixels,
@@ -126,6 +145,11 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
                    "'Authorization: Bearer <token>'. Or give the token itself in STRATA_TOKEN")
         ->check(CLI::ExistingFile);
     app.add_flag("--insecure", cl.insecure, "Allow a non-loopback --host without a token");
+    app.add_option("--cors-origin", c.cors_origin,
+                   "Origins whose pages may call the API (CORS): a comma-separated list such as "
+                   "'https://viewer.example.org,http://localhost:8000', or '*' for any; empty: "
+                   "none. Preflights (OPTIONS) from them are answered; the token is still "
+                   "required");
     app.add_flag("--demo", c.demo, "Start with the demo scene");
     app.add_option("--tlas", c.tlas,
                    "TLAS strategy: incremental (a commit costs what its instance edits touch) or "
@@ -191,6 +215,11 @@ std::string finish_config(CommandLine& cl) {
         cl.config.token = std::move(token.value());
         cl.token_source = TOKEN_ENV;
     }
+    if (!cl.config.log_url.empty()) {
+        auto url = replica::parse_redis_url(cl.config.log_url);
+        if (!url) return url.error().message;
+    }
+    if (auto cors = CorsPolicy::parse(cl.config.cors_origin); !cors) return cors.error().message;
     // Resolved first: an unknown name is an error of its own, not "non-loopback".
     auto addresses = resolve_host(cl.config.host);
     if (!addresses) return addresses.error().message;

@@ -9,10 +9,14 @@
 namespace strata::durable {
 class DurableStore;
 }
+namespace strata::replica {
+class Replica;
+}
 
 namespace strata::server {
 
 struct FrontEndCounters;
+class StreamHub;
 
 struct ServerContext {
     Engine& engine;
@@ -21,6 +25,12 @@ struct ServerContext {
     protocol::ApiLimits api_limits;
     const FrontEndCounters* front_end = nullptr;  ///< connection counters for /metrics
     durable::DurableStore* store = nullptr;       ///< the data directory; null without --data
+    replica::Replica* replica = nullptr;          ///< the shared edit log; null without --log
+    protocol::BatchApply append_to_log;           ///< the replica's append, when there is one
+    StreamHub* streams = nullptr;                 ///< /v1/stream and /v1/events; null: 503
+
+    /// Where write endpoints send batches: the log's append with --log, else the engine.
+    const protocol::BatchApply* batch_apply() const { return replica ? &append_to_log : nullptr; }
 };
 
 class Router;
@@ -28,5 +38,11 @@ class Router;
 /// Every /v1 endpoint (over protocol/api.h) and GET /metrics; liveness and readiness are
 /// answered by the front end (request_reader.cpp).
 void add_api_routes(Router& router, ServerContext& ctx);
+
+/// GET /v1/stream and GET /v1/events (stream_routes.cpp).
+void add_stream_routes(Router& router, ServerContext& ctx);
+
+/// GET / and /web/...: the viewer's files (web_routes.cpp).
+void add_web_routes(Router& router);
 
 }  // namespace strata::server

@@ -2,6 +2,7 @@
 
 #include <sys/resource.h>
 
+#include <atomic>
 #include <csignal>
 #include <thread>
 
@@ -13,6 +14,7 @@
 #include "server/cli.h"
 #include "server/healthcheck.h"
 #include "server/log_sink.h"
+#include "server/replica/replica.h"
 #include "server/server.h"
 #include "server/shutdown.h"
 
@@ -113,6 +115,27 @@ int serve(server::CommandLine& cl) {
     }
     durable::RecoveryProgress progress;
     http.set_starting(true, [&progress] { return progress.describe(); });
+    // With --log, /readyz also asks the replica: joined, not stopped, and how far behind.
+    std::atomic<replica::Replica*> follower{nullptr};
+    http.set_readiness([&follower] {
+        server::Readiness r;
+        replica::Replica* f = follower.load();
+        if (!f) return r;
+        const replica::ReplicaStatus s = f->status();
+        r.ready = s.joined && !s.stopped;
+        r.detail = s.stopped ? "the replica stopped following the edit log: " + s.stop_reason
+                             : "the replica is catching up with the edit log " + s.log +
+                                   " (applied " + std::to_string(s.applied_version) + " of " +
+                                   std::to_string(s.log_version) +
+                                   (s.connected ? ")" : "; Redis unreachable)");
+        r.section = "replica";
+        r.numbers = {{"applied_version", double(s.applied_version)},
+                     {"log_version", double(s.log_version)},
+                     {"lag_entries", double(s.lag_entries)},
+                     {"lag_seconds", s.lag_seconds},
+                     {"connected", s.connected ? 1.0 : 0.0}};
+        return r;
+    });
     signals.start([&http, &cl](int signo) {
         spdlog::info(
             "{} received: finishing in-flight requests (renders still running after {} "
@@ -124,6 +147,8 @@ int serve(server::CommandLine& cl) {
                  port.value(), cl.config.threads,
                  cl.config.token.empty() ? "no authentication"
                                          : "bearer token required, from " + cl.token_source);
+    spdlog::info("viewer: open http://{}:{}/ in a browser{}", cl.config.host, port.value(),
+                 cl.config.token.empty() ? "" : " (it asks for the token once per tab)");
     std::thread serving([&http] { http.listen(); });
     auto stop_serving = [&] {
         http.stop();
@@ -139,7 +164,30 @@ int serve(server::CommandLine& cl) {
     }
     http.attach_store(store.get());
     const uint64_t recovered = engine.value()->read([](const Scene& s) { return s.version(); });
-    if (cl.config.demo && recovered != 0) {
+    // Step: the shared edit log. The replica follows it from the recovered version (an empty
+    // scene first loads the log's snapshot); every batch reaches the engine through it.
+    std::unique_ptr<replica::Replica> follow;
+    if (!cl.config.log_url.empty()) {
+        replica::ReplicaOptions o;
+        o.url = replica::parse_redis_url(cl.config.log_url).value();  // checked by finish_config
+        o.snapshot_every = cl.config.log_snapshot_every;
+        o.write_timeout = std::chrono::milliseconds(cl.config.log_write_timeout_ms);
+        follow = replica::Replica::start(o, *engine.value());
+        follower = follow.get();
+        http.attach_replica(follow.get());
+        spdlog::info("following the edit log {} from version {}", o.url.describe(), recovered);
+    }
+    if (follow && cl.config.demo) {
+        // Appended only to an empty log: one replica's demo wins, the others find it there.
+        auto applied = follow->append(make_demo_scene(), uint64_t{0});
+        if (applied)
+            spdlog::info("demo scene appended to the edit log (version {})",
+                         applied.value().version);
+        else if (applied.error().code == ErrorCode::VersionMismatch)
+            spdlog::info("--demo ignored: the edit log holds a scene already");
+        else
+            spdlog::warn("demo scene not appended: {}", applied.error().message);
+    } else if (cl.config.demo && recovered != 0) {
         spdlog::info("--demo ignored: the data directory holds a scene (version {})", recovered);
     } else if (cl.config.demo) {
         auto applied = engine.value()->apply(make_demo_scene());
@@ -166,7 +214,8 @@ int serve(server::CommandLine& cl) {
     progress.phase = durable::RecoveryProgress::Done;
     http.set_starting(false);
     serving.join();
-    store.reset();  // the journal's last fsync, before the engine goes
+    follow.reset();  // the reader stops before the journal and the engine go
+    store.reset();   // the journal's last fsync, before the engine goes
     spdlog::info("stopped");
     return 0;
 }

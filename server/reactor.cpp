@@ -33,6 +33,10 @@ constexpr std::chrono::seconds LINGER_TIME{2};
 constexpr std::size_t LINGER_BYTES = std::size_t(8) << 20;
 /// Precision of every deadline.
 constexpr std::chrono::milliseconds TICK{20};
+/// A stream's socket send buffer. Frames a slow viewer has not taken wait in the stream's
+/// channel (one pending, replaced by newer ones), not in the kernel: without a cap, send-buffer
+/// autotuning would queue megabytes of stale frames per viewer.
+constexpr int STREAM_SEND_BUFFER = 256 * 1024;
 /// How long accept() pauses when the process is out of file descriptors.
 constexpr std::chrono::milliseconds ACCEPT_PAUSE{100};
 
@@ -69,7 +73,7 @@ double ms_since(std::chrono::steady_clock::time_point t,
 }  // namespace
 
 struct Reactor::Connection {
-    enum class Phase : uint8_t { Idle, Reading, Busy, Writing, Lingering };
+    enum class Phase : uint8_t { Idle, Reading, Busy, Writing, Lingering, Streaming };
 
     Connection(uint64_t id_, int fd_, Peer peer_, const ReaderConfig& config)
         : id(id_), fd(fd_), peer(std::move(peer_)), reader(config) {}
@@ -91,9 +95,14 @@ struct Reactor::Connection {
     std::size_t out_pos = 0;
     bool close_after = false;
     std::size_t served = 0;
-    std::size_t in_flight = 0;  ///< bytes of the request a worker has
-    std::size_t accounted = 0;  ///< what this connection adds to Reactor::m_buffered
-    std::size_t discarded = 0;  ///< Lingering
+    std::size_t in_flight = 0;              ///< bytes of the request a worker has
+    std::size_t accounted = 0;              ///< what this connection adds to Reactor::m_buffered
+    std::size_t discarded = 0;              ///< Lingering, Streaming
+    std::shared_ptr<StreamChannel> stream;  ///< Streaming
+    StreamChannel::Part part;               ///< Streaming: the part being written
+    std::size_t part_pos = 0;
+    Clock::time_point next_part{};  ///< Streaming: no part starts before (the channel's pace)
+    uint32_t watching = 0;          ///< Streaming: the events epoll watches
 };
 
 Reactor::Reactor(const ServerConfig& config, ServerMetrics& metrics, Dispatch dispatch)
@@ -103,11 +112,16 @@ Reactor::Reactor(const ServerConfig& config, ServerMetrics& metrics, Dispatch di
     m_reader_config.limits.max_target_bytes = config.max_uri_bytes;
     m_reader_config.limits.max_body_bytes = config.max_body_bytes;
     m_reader_config.token = config.token;
+    // The command line checked it (cli.cpp); a policy that does not parse allows no origin.
+    if (auto cors = CorsPolicy::parse(config.cors_origin)) m_reader_config.cors = cors.value();
     m_wake = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
 }
 
 Reactor::~Reactor() {
-    for (auto& [id, c] : m_connections) ::close(c->fd);
+    for (auto& [id, c] : m_connections) {
+        if (c->stream) c->stream->detach();
+        ::close(c->fd);
+    }
     if (m_wake >= 0) ::close(m_wake);
     if (m_epoll >= 0) ::close(m_epoll);
 }
@@ -121,8 +135,20 @@ void Reactor::drain() {
 void Reactor::complete(uint64_t conn, std::string response, bool close) {
     {
         std::lock_guard lock(m_done_mutex);
-        m_done.push_back({conn, std::move(response), close});
+        m_done.push_back({conn, std::move(response), close, nullptr});
     }
+    wake();
+}
+
+void Reactor::complete_stream(uint64_t conn, std::shared_ptr<StreamChannel> stream) {
+    {
+        std::lock_guard lock(m_done_mutex);
+        m_done.push_back({conn, {}, true, std::move(stream)});
+    }
+    wake();
+}
+
+void Reactor::wake() {
     const uint64_t one = 1;
     [[maybe_unused]] const ssize_t n = ::write(m_wake, &one, sizeof one);
 }
@@ -160,6 +186,7 @@ void Reactor::run(int listen_fd) {
             }
         }
         take_completions(now);
+        take_ready_streams(now);
         if (m_drain_requested && !m_draining) begin_drain(now);
         if (now - m_last_sweep >= TICK) sweep(now);
         if (m_draining && drain_finished(now)) break;
@@ -241,6 +268,8 @@ void Reactor::on_event(Connection& c, uint32_t events, Clock::time_point now) {
             if (events & (EPOLLERR | EPOLLHUP)) return close(c.id);
             write_to(c, now);
             return;
+        case Phase::Streaming:
+            return on_stream_event(c, events, now);
         case Phase::Lingering: {
             const ssize_t n = ::recv(c.fd, m_scratch.data(), m_scratch.size(), 0);
             if (n < 0 && (errno == EAGAIN || errno == EINTR)) return;
@@ -280,7 +309,7 @@ void Reactor::set_reading(Connection& c, Clock::time_point now) {
 
 void Reactor::advance(Connection& c, Clock::time_point now) {
     for (;;) {
-        ReaderSituation situation{m_draining, c.restricted, m_starting.load(), {}};
+        ReaderSituation situation{m_draining, c.restricted, m_starting.load(), {}, &m_readiness};
         if (situation.starting) {
             std::lock_guard lock(m_progress_mutex);
             if (m_progress) situation.progress = m_progress();
@@ -346,6 +375,15 @@ void Reactor::take_completions(Clock::time_point now) {
         c.cancel.reset();
         c.in_flight = 0;
         account(c);
+        if (d.stream) {
+            if (c.peer_gone) {
+                d.stream->detach();
+                close(c.id);
+                continue;
+            }
+            begin_stream(c, std::move(d.stream), now);
+            continue;
+        }
         const bool close = d.close || !c.keep_alive || m_draining || c.peer_gone;
         start_write(c, std::move(d.response), close, now);
     }
@@ -411,6 +449,7 @@ void Reactor::close(uint64_t id) {
     if (it == m_connections.end()) return;
     Connection& c = *it->second;
     if (c.cancel) c.cancel->cancel(CancelReason::ClientGone);
+    if (c.stream) c.stream->detach();
     epoll_ctl(m_epoll, EPOLL_CTL_DEL, c.fd, nullptr);
     ::close(c.fd);
     m_buffered -= c.accounted;
@@ -441,6 +480,12 @@ void Reactor::sweep(Clock::time_point now) {
                 c->cancel->cancel(CancelReason::Shutdown);
             continue;
         }
+        if (c->phase == Phase::Streaming) {
+            // Late only while a write makes no progress: a viewer may watch for hours.
+            const bool writing = c->out_pos < c->out.size() || c->part;
+            if (writing && now >= c->deadline) expired.push_back(id);
+            continue;
+        }
         const bool late =
             c->phase == Phase::Reading
                 ? now >= c->read_deadline || (!c->reader.reading_body() && now >= c->deadline)
@@ -450,7 +495,7 @@ void Reactor::sweep(Clock::time_point now) {
     for (uint64_t id : expired) {
         Connection& c = *m_connections.at(id);
         if (c.phase != Phase::Reading) {
-            if (c.phase == Phase::Writing) ++m_counters.timeouts;
+            if (c.phase == Phase::Writing || c.phase == Phase::Streaming) ++m_counters.timeouts;
             close(id);
             continue;
         }
@@ -469,6 +514,17 @@ void Reactor::sweep(Clock::time_point now) {
         a.bytes = problem_bytes(p, true);
         answer(c, a, now);
     }
+    // Streams whose next part waited for its pace.
+    std::vector<uint64_t> paced;
+    for (auto& [id, c] : m_connections) {
+        if (c->phase == Phase::Streaming && !c->part && c->out_pos >= c->out.size() &&
+            now >= c->next_part)
+            paced.push_back(id);
+    }
+    for (uint64_t id : paced) {
+        if (auto it = m_connections.find(id); it != m_connections.end())
+            stream_write(*it->second, now);
+    }
 }
 
 void Reactor::begin_drain(Clock::time_point now) {
@@ -481,15 +537,130 @@ void Reactor::begin_drain(Clock::time_point now) {
             idle.push_back(id);
     }
     for (uint64_t id : idle) close(id);
+    // Streams end: the part being written finishes, then the connection closes.
+    std::vector<uint64_t> streams;
+    for (const auto& [id, c] : m_connections) {
+        if (c->phase == Connection::Phase::Streaming) streams.push_back(id);
+    }
+    for (uint64_t id : streams) {
+        Connection& c = *m_connections.at(id);
+        c.stream->end();
+        stream_write(c, now);
+    }
 }
 
 bool Reactor::drain_finished(Clock::time_point now) const {
     if (now >= m_hard_deadline) return true;
     for (const auto& [id, c] : m_connections) {
-        if (c->phase == Connection::Phase::Busy || c->phase == Connection::Phase::Writing)
+        if (c->phase == Connection::Phase::Busy || c->phase == Connection::Phase::Writing ||
+            c->phase == Connection::Phase::Streaming)
             return false;
     }
     return true;
+}
+
+void Reactor::begin_stream(Connection& c, std::shared_ptr<StreamChannel> stream,
+                           Clock::time_point now) {
+    c.phase = Connection::Phase::Streaming;
+    c.stream = std::move(stream);
+    c.out = c.stream->head();
+    c.out_pos = 0;
+    c.close_after = true;
+    c.next_part = now;
+    c.deadline = now + std::chrono::seconds(m_config.write_timeout_s);
+    c.watching = 0;
+    ::setsockopt(c.fd, SOL_SOCKET, SO_SNDBUF, &STREAM_SEND_BUFFER, sizeof STREAM_SEND_BUFFER);
+    const uint64_t id = c.id;
+    c.stream->attach([this, id] {
+        {
+            std::lock_guard lock(m_done_mutex);
+            m_ready_streams.push_back(id);
+        }
+        wake();
+    });
+    if (m_draining) c.stream->end();
+    stream_write(c, now);
+}
+
+void Reactor::take_ready_streams(Clock::time_point now) {
+    std::vector<uint64_t> ready;
+    {
+        std::lock_guard lock(m_done_mutex);
+        ready.swap(m_ready_streams);
+    }
+    for (uint64_t id : ready) {
+        auto it = m_connections.find(id);
+        if (it == m_connections.end()) continue;
+        Connection& c = *it->second;
+        // A part in progress takes the next one itself when it is done.
+        if (c.phase == Connection::Phase::Streaming && !c.part && c.out_pos >= c.out.size())
+            stream_write(c, now);
+    }
+}
+
+void Reactor::stream_write(Connection& c, Clock::time_point now) {
+    const auto watch_for = [&](uint32_t events) {
+        if (c.watching != events) watch(c, events);
+        c.watching = events;
+    };
+    for (;;) {
+        const std::string* buf = nullptr;
+        std::size_t* pos = nullptr;
+        if (c.out_pos < c.out.size()) {
+            buf = &c.out;
+            pos = &c.out_pos;
+        } else if (c.part && c.part_pos < c.part->size()) {
+            buf = c.part.get();
+            pos = &c.part_pos;
+        } else {
+            if (c.part) {
+                c.part.reset();
+                c.stream->written();
+            }
+            if (c.stream->ended()) {
+                // The producer or the drain ended it: close as any answer with Connection: close.
+                c.stream->detach();
+                c.stream.reset();
+                c.out = std::string();
+                c.out_pos = 0;
+                c.phase = Connection::Phase::Writing;
+                return finish_response(c, now);
+            }
+            if (now < c.next_part) return watch_for(EPOLLIN | EPOLLRDHUP);  // sweep() resumes
+            StreamChannel::Part next = c.stream->take();
+            if (!next) return watch_for(EPOLLIN | EPOLLRDHUP);
+            c.part = std::move(next);
+            c.part_pos = 0;
+            c.next_part = now + c.stream->min_interval();
+            c.deadline = now + std::chrono::seconds(m_config.write_timeout_s);
+            continue;
+        }
+        const ssize_t n =
+            ::send(c.fd, buf->data() + *pos, buf->size() - *pos, MSG_NOSIGNAL | MSG_DONTWAIT);
+        if (n > 0) {
+            *pos += std::size_t(n);
+            c.deadline = now + std::chrono::seconds(m_config.write_timeout_s);
+        } else if (n < 0 && errno == EINTR) {
+            continue;
+        } else if (n < 0 && errno == EAGAIN) {
+            return watch_for(EPOLLIN | EPOLLRDHUP | EPOLLOUT);
+        } else {
+            return close(c.id);
+        }
+    }
+}
+
+void Reactor::on_stream_event(Connection& c, uint32_t events, Clock::time_point now) {
+    if (events & (EPOLLRDHUP | EPOLLHUP | EPOLLERR)) return close(c.id);
+    if (events & EPOLLIN) {
+        // A streaming client has nothing more to say: whatever it sends is read and dropped,
+        // and an end of input means it left.
+        const ssize_t n = ::recv(c.fd, m_scratch.data(), m_scratch.size(), 0);
+        if (n == 0 || (n < 0 && errno != EAGAIN && errno != EINTR)) return close(c.id);
+        c.discarded += n > 0 ? std::size_t(n) : 0;
+        if (c.discarded > LINGER_BYTES) return close(c.id);
+    }
+    if (events & EPOLLOUT) stream_write(c, now);
 }
 
 }  // namespace strata::server

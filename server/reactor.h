@@ -10,11 +10,15 @@
 // socket is watched only for the client leaving, which cancels a render) -> Writing -> Idle, or
 // Lingering (write side shut, unread input discarded briefly so that the client reads the answer
 // instead of a reset) -> closed. Requests pipelined on one connection are served in order.
+// A worker may answer with a stream instead (complete_stream, stream_channel.h): the connection
+// then goes Busy -> Streaming, where the reactor writes the channel's parts as the producer
+// offers them, paced and bounded by the channel, until the client leaves, the producer ends the
+// stream, or the drain ends it (then the part being written finishes and the connection closes).
 //
-// Shutdown (drain()): idle and half-read connections close at once; the listening socket stays
-// open so that /readyz answers 503 (and /livez 200) while in-flight requests finish; after
-// --shutdown-grace their renders are cancelled; run() returns once nothing is in flight, or a
-// second later at the latest.
+// Shutdown (drain()): idle and half-read connections close at once, streams end; the listening
+// socket stays open so that /readyz answers 503 (and /livez 200) while in-flight requests finish;
+// after --shutdown-grace their renders are cancelled; run() returns once nothing is in flight, or
+// a second later at the latest.
 
 #include <atomic>
 #include <chrono>
@@ -31,6 +35,7 @@
 #include "server/request_reader.h"
 #include "server/route_table.h"
 #include "server/server_config.h"
+#include "server/stream_channel.h"
 
 namespace strata::server {
 
@@ -65,8 +70,13 @@ public:
         m_starting.store(starting);
     }
     bool starting() const { return m_starting.load(); }
+    /// What else /readyz asks (request_reader.h); set before run(), never after.
+    void set_readiness(std::function<Readiness()> readiness) { m_readiness = std::move(readiness); }
     /// A worker's answer for connection `conn`; `close`: close after writing it. Thread-safe.
     void complete(uint64_t conn, std::string response, bool close);
+    /// A worker's answer that is a stream: the reactor writes `stream`'s head, then its parts.
+    /// Thread-safe.
+    void complete_stream(uint64_t conn, std::shared_ptr<StreamChannel> stream);
 
     const FrontEndCounters& counters() const { return m_counters; }
 
@@ -92,6 +102,11 @@ private:
     void begin_drain(Clock::time_point now);
     bool drain_finished(Clock::time_point now) const;
     void watch(const Connection& c, uint32_t events);
+    void begin_stream(Connection& c, std::shared_ptr<StreamChannel> stream, Clock::time_point now);
+    void stream_write(Connection& c, Clock::time_point now);
+    void on_stream_event(Connection& c, uint32_t events, Clock::time_point now);
+    void take_ready_streams(Clock::time_point now);
+    void wake();
 
     const ServerConfig& m_config;
     ReaderConfig m_reader_config;
@@ -117,6 +132,7 @@ private:
     std::atomic<bool> m_starting{false};
     std::mutex m_progress_mutex;
     std::function<std::string()> m_progress;  ///< what starting is doing; guarded by the mutex
+    std::function<Readiness()> m_readiness;   ///< set before run()
     bool m_draining = false;
     Clock::time_point m_grace_deadline{};
     Clock::time_point m_hard_deadline{};
@@ -126,9 +142,11 @@ private:
         uint64_t conn;
         std::string response;
         bool close;
+        std::shared_ptr<StreamChannel> stream;  ///< set: a stream instead of `response`
     };
     std::mutex m_done_mutex;
     std::vector<Completion> m_done;
+    std::vector<uint64_t> m_ready_streams;  ///< streams offered a part; guarded by m_done_mutex
 };
 
 }  // namespace strata::server

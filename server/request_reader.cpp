@@ -75,6 +75,56 @@ bool is_health_path(std::string_view path) {
     return path == "/livez" || path == "/readyz";
 }
 
+bool is_public_path(std::string_view path) {
+    return path == "/" || (path.rfind("/web/", 0) == 0 && path.size() > 5);
+}
+
+bool accepts_query_token(std::string_view path) {
+    return path == "/v1/stream" || path == "/v1/events" || path == "/v1/render";
+}
+
+const std::optional<std::string>& RequestReader::cors_origin() {
+    if (!m_cors_checked) {
+        m_cors_checked = true;
+        m_cors_origin = m_config.cors.allow(m_head.header("Origin"));
+    }
+    return m_cors_origin;
+}
+
+bool RequestReader::authorized() {
+    if (m_config.token.empty() || is_health_path(m_target.path)) return true;
+    const bool get = m_head.method == "GET" || m_head.method == "HEAD";
+    if (get && is_public_path(m_target.path)) return true;
+    if (const std::string* auth = m_head.header("Authorization"))
+        return bearer_token_matches(*auth, m_config.token);
+    if (!get || !accepts_query_token(m_target.path)) return false;
+    for (const auto& [name, value] : m_target.query) {
+        if (name == QUERY_TOKEN) return bearer_token_matches("Bearer " + value, m_config.token);
+    }
+    return false;
+}
+
+ReaderStep RequestReader::preflight() {
+    // A CORS preflight carries no credentials (Fetch standard), so it is answered before the
+    // token check. An origin not allowed gets the same 204 without the Access-Control headers:
+    // the browser then refuses the real request.
+    protocol::ApiResponse r;
+    r.status = 204;
+    if (const auto& origin = cors_origin()) {
+        r.headers = {{"Access-Control-Allow-Origin", *origin},
+                     {"Vary", "Origin"},
+                     {"Access-Control-Allow-Methods", CORS_ALLOW_METHODS},
+                     {"Access-Control-Allow-Headers", CORS_ALLOW_HEADERS},
+                     {"Access-Control-Max-Age", "600"}};
+    }
+    ReaderStep step;
+    step.kind = ReaderStep::Kind::Answer;
+    const bool close = m_head.framing != BodyFraming::None || !m_head.keep_alive;
+    step.answer = {204, m_head.method, m_target.path, {}, close};
+    step.answer.bytes = response_bytes(r, close);
+    return step;
+}
+
 ReaderStep RequestReader::next(const ReaderSituation& situation) {
     return m_phase == Phase::Head ? on_head(situation) : on_body();
 }
@@ -86,6 +136,8 @@ ReaderStep RequestReader::answer(int status, const std::string& detail, bool clo
     protocol::ApiResponse r = protocol::problem_response(p);
     if (status == 401) r.headers.emplace_back("WWW-Authenticate", "Bearer realm=\"strata\"");
     if (retry_after) r.headers.emplace_back("Retry-After", retry_after);
+    if (!m_head.method.empty() && cors_origin())
+        r.headers.emplace_back("Access-Control-Allow-Origin", *cors_origin());
     ReaderStep step;
     step.kind = ReaderStep::Kind::Answer;
     step.answer.status = status;
@@ -127,6 +179,8 @@ ReaderStep RequestReader::on_head(const ReaderSituation& situation) {
     m_scanned = 0;
     m_head = RequestHead{};
     m_target = RequestTarget{};
+    m_cors_checked = false;
+    m_cors_origin.reset();
     auto parsed = parse_request_head(buffered.substr(0, end), limits);
     m_pos += end;
     if (auto* e = std::get_if<HttpError>(&parsed)) return answer(e->status, e->detail);
@@ -139,15 +193,31 @@ ReaderStep RequestReader::on_head(const ReaderSituation& situation) {
     // load, the connection limits or the shutdown state.
     const bool body = m_head.framing != BodyFraming::None;
     if (is_health_path(m_target.path) && (m_head.method == "GET" || m_head.method == "HEAD")) {
-        const bool ready =
-            m_target.path == "/livez" || (!situation.draining && !situation.starting);
-        protocol::ApiResponse r =
-            ready ? protocol::json_response(
-                        200, {{"status", m_target.path == "/livez" ? "ok" : "ready"}})
-                  : protocol::problem_response(protocol::make_problem(
-                        ProblemType::Unavailable, situation.draining
-                                                      ? "the server is shutting down"
-                                                      : starting_detail(situation.progress)));
+        const bool livez = m_target.path == "/livez";
+        Readiness extra;
+        if (!livez && situation.readiness && *situation.readiness)
+            extra = (*situation.readiness)();
+        const bool ready = livez || (!situation.draining && !situation.starting && extra.ready);
+        protocol::ApiResponse r;
+        if (ready) {
+            protocol::Json report = {{"status", livez ? "ok" : "ready"}};
+            if (!livez && !extra.section.empty()) {
+                protocol::Json& section = report[extra.section];
+                for (const auto& [name, value] : extra.numbers) {
+                    // Versions and counts are whole numbers: written as integers.
+                    if (value >= 0 && value < 9007199254740992.0 && value == double(int64_t(value)))
+                        section[name] = int64_t(value);
+                    else
+                        section[name] = value;
+                }
+            }
+            r = protocol::json_response(200, report);
+        } else {
+            r = protocol::problem_response(protocol::make_problem(
+                ProblemType::Unavailable, situation.draining   ? "the server is shutting down"
+                                          : situation.starting ? starting_detail(situation.progress)
+                                                               : extra.detail));
+        }
         if (!ready && !situation.draining) r.headers.emplace_back("Retry-After", "1");
         ReaderStep step;
         step.kind = ReaderStep::Kind::Answer;
@@ -168,12 +238,21 @@ ReaderStep RequestReader::on_head(const ReaderSituation& situation) {
                       "this client holds too many connections already "
                       "(--max-connections-per-client, --max-connections); only /livez and "
                       "/readyz are answered on this one");
-    if (!m_config.token.empty() && !is_health_path(m_target.path)) {
+    if (m_head.method == "OPTIONS" && m_head.header("Origin") &&
+        m_head.header("Access-Control-Request-Method"))
+        return preflight();
+    if (!authorized()) {
         const std::string* auth = m_head.header("Authorization");
-        if (!auth || !bearer_token_matches(*auth, m_config.token))
-            return answer(401, auth ? "the bearer token is not valid"
-                                    : "this server requires Authorization: Bearer <token>");
+        return answer(401, auth ? "the bearer token is not valid"
+                           : accepts_query_token(m_target.path)
+                               ? "this server requires Authorization: Bearer <token> (or, "
+                                 "from a browser, ?access_token=<token>)"
+                               : "this server requires Authorization: Bearer <token>");
     }
+    // The token in the query is never passed on: routes would refuse an unknown parameter.
+    m_target.query.erase(std::remove_if(m_target.query.begin(), m_target.query.end(),
+                                        [](const auto& p) { return p.first == QUERY_TOKEN; }),
+                         m_target.query.end());
     if (const std::string* coding = m_head.header("Content-Encoding");
         coding && !iequals(*coding, "identity"))
         return answer(415, "Content-Encoding '" + coding->substr(0, 32) +
@@ -231,6 +310,7 @@ ReaderStep RequestReader::finish_request() {
     r.path = m_target.path;
     r.keep_alive = m_head.keep_alive;
     r.heavy = r.path == "/v1/render" || r.path == "/v1/commit";
+    if (const auto& origin = cors_origin()) r.cors_origin = *origin;
     // What httplib reads: a canonical HTTP/1.1 request with a Content-Length body. httplib
     // percent-decodes header values (a quirk of 0.11), so '%' is escaped for it to undo.
     std::string& w = r.wire_bytes;

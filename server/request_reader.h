@@ -6,10 +6,13 @@
 // Encoding, and the health endpoints. No sockets, so tests and the fuzzer drive it directly.
 
 #include <cstddef>
+#include <functional>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "server/cors.h"
 #include "server/http_parser.h"
 #include "server/request_target.h"
 
@@ -19,6 +22,15 @@ namespace strata::server {
 struct ReaderConfig {
     HttpLimits limits;
     std::string token;  ///< bearer token every path but /livez and /readyz needs; empty: none
+    CorsPolicy cors;    ///< origins answered cross-origin (--cors-origin)
+};
+
+/// Beyond starting and draining, what /readyz says (a replica following its edit log).
+struct Readiness {
+    bool ready = true;
+    std::string detail;   ///< when not ready: why (the 503 problem's detail)
+    std::string section;  ///< when not empty: `numbers` go into the body under this member
+    std::vector<std::pair<std::string, double>> numbers;
 };
 
 /// What the front end knows when the reader decides.
@@ -29,6 +41,8 @@ struct ReaderSituation {
     /// `progress`, every other request but /livez 503 with Retry-After.
     bool starting = false;
     std::string progress;  ///< while starting: how far, for the answers' detail
+    /// Asked by /readyz only (set before serving, never changed); null: ready when not starting.
+    const std::function<Readiness()>* readiness = nullptr;
 };
 
 /// A complete request for a worker.
@@ -38,6 +52,8 @@ struct PreparedRequest {
     std::string wire_bytes;  ///< the request as httplib reads it (see request_reader.cpp)
     bool keep_alive = true;
     bool heavy = false;  ///< renders and commits, which may take seconds
+    /// The request's Origin when --cors-origin allows it: its answer carries add_cors_headers.
+    std::string cors_origin;
 };
 
 /// An answer written without a worker.
@@ -64,6 +80,18 @@ struct ReaderStep {
 
 /// The paths the front end answers itself, open without a token.
 bool is_health_path(std::string_view path);
+
+/// The viewer's static files (GET / and /web/...): no scene data, open without a token (the
+/// page asks for the token and sends it with every request it makes).
+bool is_public_path(std::string_view path);
+
+/// GET paths that also take the token as the query parameter `access_token`, for browsers'
+/// <img> and EventSource, which cannot send an Authorization header. The parameter is removed
+/// before the request reaches a route (and the access log, which never shows queries anyway).
+bool accepts_query_token(std::string_view path);
+
+/// The query parameter that carries the token on those paths.
+inline constexpr const char* QUERY_TOKEN = "access_token";
 
 class RequestReader {
 public:
@@ -92,6 +120,9 @@ private:
     ReaderStep answer(int status, const std::string& detail, bool close = true,
                       const char* retry_after = nullptr);
     ReaderStep finish_request();
+    ReaderStep preflight();
+    bool authorized();
+    const std::optional<std::string>& cors_origin();
     void compact();
 
     const ReaderConfig& m_config;
@@ -104,6 +135,8 @@ private:
     std::string m_body;
     uint64_t m_body_left = 0;  ///< with BodyFraming::Length
     ChunkedDecoder m_chunked{0};
+    std::optional<std::string> m_cors_origin;  ///< cors_origin()'s answer for this head
+    bool m_cors_checked = false;
 };
 
 }  // namespace strata::server

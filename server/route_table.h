@@ -10,6 +10,7 @@
 // the plain httplib::Request/Response interface.
 
 #include <chrono>
+#include <memory>
 #include <string>
 #include <string_view>
 
@@ -18,6 +19,8 @@
 #include "engine/core/cancel.h"
 
 namespace strata::server {
+
+class StreamChannel;
 
 /// The two ends of a connection.
 struct Peer {
@@ -36,6 +39,9 @@ struct RequestContext {
     std::chrono::steady_clock::time_point received = std::chrono::steady_clock::now();
     /// Set by the logger when the response says `Connection: close`.
     bool close = false;
+    /// Set by a streaming route (stream_routes.cpp): the front end writes this channel instead
+    /// of the handler's response.
+    std::shared_ptr<StreamChannel> stream;
 };
 
 /// The context of the request this thread is handling, or nullptr outside one.

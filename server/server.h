@@ -13,22 +13,27 @@
 
 #include <atomic>
 #include <functional>
-#include <string>
 #include <memory>
+#include <string>
 
 #include "engine/engine.h"
 #include "server/listener.h"
 #include "server/metrics.h"
+#include "server/request_reader.h"
 #include "server/server_config.h"
 
 namespace strata::durable {
 class DurableStore;
+}
+namespace strata::replica {
+class Replica;
 }
 
 namespace strata::server {
 
 class Application;
 class Reactor;
+class StreamHub;
 class WorkerPool;
 
 class Server {
@@ -56,19 +61,27 @@ public:
     void set_starting(bool starting, std::function<std::string()> progress = {});
     /// The data directory, once recovered (while starting; before that, routes see none).
     void attach_store(durable::DurableStore* store);
+    /// The shared edit log (while starting, like attach_store).
+    void attach_replica(replica::Replica* replica);
+    /// What /readyz asks beyond starting and draining (a replica's state). Before listen() only.
+    void set_readiness(std::function<Readiness()> readiness);
     int port() const { return m_port; }
     ServerMetrics& metrics() { return m_metrics; }
+    /// The live viewer's streams (counts for tests and /metrics).
+    StreamHub& streams() { return *m_streams; }
 
 private:
     ServerConfig m_config;
     Engine& m_engine;
     ServerMetrics m_metrics;
     std::unique_ptr<Reactor> m_reactor;
+    std::unique_ptr<StreamHub> m_streams;  ///< viewer frames and commit events
     std::unique_ptr<Application> m_app;
     std::unique_ptr<WorkerPool> m_workers;  ///< after m_reactor: workers call into it until joined
     Listener m_listener;
     int m_port = -1;
     std::atomic<bool> m_listening{false};
+    std::atomic<int> m_api_heavy{0};  ///< API renders and commits queued or running
 };
 
 }  // namespace strata::server

@@ -50,7 +50,15 @@ struct ServerConfig {
     uint32_t tlas_min_instances = 1024;
     bool tlas_background_merge = true;
 
+    // Replicas (server/replica/replica.h): the shared edit log, and read-your-writes waits.
+    std::string log_url;              ///< redis://HOST:PORT/STREAM; empty: no shared log
+    uint64_t log_snapshot_every = 1000;  ///< versions between snapshots stored in Redis; 0: none
+    int log_write_timeout_ms = 5000;  ///< longest a write waits to be appended and applied
+    int min_version_wait_ms = 5000;   ///< longest a read waits for its min_version
+
     std::string token;  ///< bearer token; empty: no authentication
+    /// Origins allowed cross-origin access (cors.h): "", "*" or a comma-separated list.
+    std::string cors_origin;
     bool demo = false;  ///< start with the demo scene
 };
 

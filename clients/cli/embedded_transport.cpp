@@ -74,6 +74,8 @@ std::optional<protocol::SceneObject> collection_kind(const std::string& collecti
     if (collection == "instances") return protocol::SceneObject::Instance;
     if (collection == "materials") return protocol::SceneObject::Material;
     if (collection == "groups") return protocol::SceneObject::Group;
+    if (collection == "lights") return protocol::SceneObject::Light;
+    if (collection == "textures") return protocol::SceneObject::Texture;
     return std::nullopt;
 }
 

@@ -108,8 +108,9 @@ int main(int argc, char** argv) {
     play_cmd->add_flag("--embedded", play.embedded,
                        "Play against an in-process engine instead of a server");
     play_cmd->add_flag("--demo", play.demo, "With --embedded: start from the demo scene");
-    play_cmd->add_flag("--budgets", play.budgets,
-                       "Also check the time budget max_ms (max_primitives_built is always checked)");
+    play_cmd->add_flag(
+        "--budgets", play.budgets,
+        "Also check the time budget max_ms (max_primitives_built is always checked)");
     play_cmd
         ->add_option("--max-repeat", play.max_repeat,
                      "Play at most N iterations of each repeat step (quick checks)")
@@ -151,9 +152,11 @@ int main(int argc, char** argv) {
     CLI::App* scene_cmd = app.add_subcommand("scene", "Print the scene summary");
     scene_cmd->require_subcommand(0, 1);
     SceneListArgs list;
-    CLI::App* list_cmd =
-        scene_cmd->add_subcommand("list", "List meshes, instances, materials or groups, one per line");
-    list_cmd->add_option("collection", list.collection, "meshes, instances, materials or groups")
+    CLI::App* list_cmd = scene_cmd->add_subcommand(
+        "list", "List meshes, instances, materials, groups, lights or textures, one per line");
+    list_cmd
+        ->add_option("collection", list.collection,
+                     "meshes, instances, materials, groups, lights or textures")
         ->required()
         ->check(CLI::IsMember(scene_collections()));
     list_cmd->add_option("--page-size", list.page_size, "Objects per request (1 to 10000)")
@@ -165,9 +168,9 @@ int main(int argc, char** argv) {
                          "Instances, groups: only children of this group (\"\" for the root)");
     std::string get_kind, get_id;
     CLI::App* get_cmd = scene_cmd->add_subcommand("get", "Print one object's document");
-    get_cmd->add_option("kind", get_kind, "mesh, instance, material or group")
+    get_cmd->add_option("kind", get_kind, "mesh, instance, material, group, light or texture")
         ->required()
-        ->check(CLI::IsMember({"mesh", "instance", "material", "group"}));
+        ->check(CLI::IsMember({"mesh", "instance", "material", "group", "light", "texture"}));
     get_cmd->add_option("id", get_id, "The object's id")->required();
     SceneTreeArgs tree;
     CLI::App* tree_cmd = scene_cmd->add_subcommand("tree", "Print the scene graph as an outline");

@@ -33,6 +33,12 @@ std::string item_line(const std::string& collection, const Json& item) {
         line += "  vertices=" + std::to_string(item.value("vertices", uint64_t(0))) +
                 "  triangles=" + std::to_string(item.value("triangles", uint64_t(0))) +
                 "  instances=" + std::to_string(item.value("instances", uint64_t(0)));
+    } else if (collection == "lights") {
+        line += "  type=" + item.value("type", std::string("?"));
+    } else if (collection == "textures") {
+        line += "  " + std::to_string(item.value("width", uint64_t(0))) + "x" +
+                std::to_string(item.value("height", uint64_t(0))) + "  " +
+                item.value("format", std::string("?"));
     }
     return line;
 }
@@ -40,7 +46,8 @@ std::string item_line(const std::string& collection, const Json& item) {
 }  // namespace
 
 const std::vector<std::string>& scene_collections() {
-    static const std::vector<std::string> names = {"meshes", "instances", "materials", "groups"};
+    static const std::vector<std::string> names = {"meshes", "instances", "materials", "groups",
+                                                   "lights", "textures"};
     return names;
 }
 
@@ -76,8 +83,12 @@ int run_scene_list(Transport& t, const Console& c, const SceneListArgs& args) {
 }
 
 int run_scene_get(Transport& t, const Console& c, const std::string& kind, const std::string& id) {
-    static const std::pair<const char*, const char*> KINDS[] = {
-        {"mesh", "meshes"}, {"instance", "instances"}, {"material", "materials"}, {"group", "groups"}};
+    static const std::pair<const char*, const char*> KINDS[] = {{"mesh", "meshes"},
+                                                                {"instance", "instances"},
+                                                                {"material", "materials"},
+                                                                {"group", "groups"},
+                                                                {"light", "lights"},
+                                                                {"texture", "textures"}};
     for (const auto& [singular, collection] : KINDS) {
         if (kind != singular) continue;
         int code = OK;
@@ -103,7 +114,8 @@ void print_tree(const Console& c, const Json& node, int indent) {
         print_tree(c, g, indent + 1);
     }
     for (const Json& i : node.value("instances", Json::array()))
-        c.out << pad << i.value("id", std::string("?")) << "  mesh=" << i.value("mesh", std::string("?"))
+        c.out << pad << i.value("id", std::string("?"))
+              << "  mesh=" << i.value("mesh", std::string("?"))
               << (i.value("world_visible", true) ? "" : "  hidden") << '\n';
 }
 
@@ -154,10 +166,9 @@ int run_pick(Transport& t, const Console& c, const PickArgs& args) {
         for (const Json& g : path) joined += (joined.empty() ? "" : "/") + g.get<std::string>();
         c.out << "  groups " << joined;
     }
-    c.out << "  primitive "
-          << hit.value("primitive", uint64_t(0)) << "  distance " << hit.value("distance", 0.0)
-          << "  user_id " << hit.value("user_id", uint64_t(0)) << "  at version "
-          << doc->value("version", uint64_t(0)) << '\n';
+    c.out << "  primitive " << hit.value("primitive", uint64_t(0)) << "  distance "
+          << hit.value("distance", 0.0) << "  user_id " << hit.value("user_id", uint64_t(0))
+          << "  at version " << doc->value("version", uint64_t(0)) << '\n';
     return OK;
 }
 

@@ -5,13 +5,20 @@
 namespace strata {
 
 namespace {
-thread_local int t_category = -1;  ///< set_thread_category's override, -1 none
+/// set_thread_category's override: the device it is for and its category (-1 none).
+struct ThreadCategory {
+    uint64_t device = 0;
+    int category = -1;
+};
+thread_local ThreadCategory t_category;
+std::atomic<uint64_t> g_device_serial{0};
 }  // namespace
 
-void EmbreeDevice::set_thread_category(int c) { t_category = c; }
+void EmbreeDevice::set_thread_category(int c) const { t_category = {m_serial, c}; }
 
 Result<std::unique_ptr<EmbreeDevice>> EmbreeDevice::create(const std::string& config) {
     std::unique_ptr<EmbreeDevice> d(new EmbreeDevice());
+    d->m_serial = ++g_device_serial;
     d->m_device = rtcNewDevice(config.empty() ? nullptr : config.c_str());
     if (!d->m_device) {
         const RTCError code = rtcGetDeviceError(nullptr);
@@ -47,7 +54,10 @@ bool EmbreeDevice::on_memory(void* self, long bytes, bool /*post*/) {
     auto* d = static_cast<EmbreeDevice*>(self);
     // Embree's documented usage: accumulate every call's signed byte count (allocations positive,
     // frees and undone allocations negative), whether it comes before or after the event.
-    const int c = t_category >= 0 ? t_category : d->m_category.load(std::memory_order_relaxed);
+    const ThreadCategory t = t_category;
+    const int c = t.device == d->m_serial && t.category >= 0
+                      ? t.category
+                      : d->m_category.load(std::memory_order_relaxed);
     d->m_bytes[c].fetch_add(bytes, std::memory_order_relaxed);
     return true;
 }

@@ -31,9 +31,11 @@ public:
     /// Attributes Embree allocations from now on to `c` (commits are serialised, so one global
     /// category is exact).
     void set_category(MemoryCategory c) { m_category.store(int(c), std::memory_order_relaxed); }
-    /// Attributes Embree allocations made on the calling thread to `c` whatever the device's
-    /// category is (background TLAS builds run beside commits); -1 ends the override.
-    static void set_thread_category(int c);
+    /// Attributes this device's Embree allocations made on the calling thread to `c` whatever
+    /// the device's category is (background TLAS builds run beside commits); -1 ends the
+    /// override. The override names this device, so a thread that keeps one (a TBB worker that
+    /// left an arena unobserved) never misattributes another device's memory.
+    void set_thread_category(int c) const;
     /// Moves `bytes` from category `from` to `to`: memory that is freed later under `to` (a BLAS
     /// the store let go of while a TLAS copy still references it).
     void transfer(MemoryCategory from, MemoryCategory to, int64_t bytes) {
@@ -55,6 +57,7 @@ private:
     static bool on_memory(void* self, long bytes, bool post);
 
     RTCDeviceTy* m_device = nullptr;
+    uint64_t m_serial = 0;  ///< unique per process (addresses are reused)
     std::atomic<int> m_category{int(MemoryCategory::Other)};
     std::atomic<int64_t> m_bytes[3] = {};
     std::mutex m_error_mutex;

@@ -60,9 +60,15 @@ void skip_stale(const RTCFilterFunctionNArguments* args) {
 
 /// Sets the calling thread's memory category to the TLAS for a scope: background merges are
 /// released from the commit thread, whatever phase it is in.
-struct TlasMemoryScope {
-    TlasMemoryScope() { EmbreeDevice::set_thread_category(int(MemoryCategory::Tlas)); }
-    ~TlasMemoryScope() { EmbreeDevice::set_thread_category(-1); }
+class TlasMemoryScope {
+public:
+    explicit TlasMemoryScope(const EmbreeDevice& d) : m_device(d) {
+        d.set_thread_category(int(MemoryCategory::Tlas));
+    }
+    ~TlasMemoryScope() { m_device.set_thread_category(-1); }
+
+private:
+    const EmbreeDevice& m_device;
 };
 
 /// The hit fields of one ray (ng .. inst_id are contiguous in RayHit1).
@@ -489,13 +495,13 @@ private:
             }
             entries.push_back(e);
         }
-        m_merge = std::make_unique<TlasMerge>(m_device, m_static_setup, m_static_geoms,
+        m_merge = std::make_unique<TlasMerge>(m_device, m_arena, m_static_setup, m_static_geoms,
                                               std::move(entries), m_serial);
     }
 
     void cancel_merge() {
         if (!m_merge) return;
-        TlasMemoryScope memory;
+        TlasMemoryScope memory(m_device);
         if (!m_merge->done()) m_report.merge_cancelled = true;
         m_merge.reset();
     }
@@ -504,7 +510,7 @@ private:
     /// not edited since the merge started leave the dynamic tier.
     void swap_finished_merge() {
         if (!m_merge || !m_merge->done()) return;
-        TlasMemoryScope memory;
+        TlasMemoryScope memory(m_device);
         m_merge->join();
         if (!m_merge->succeeded()) {
             m_merge.reset();
@@ -555,9 +561,9 @@ private:
     void retire(RTCScene scene, std::vector<RTCGeometry> geoms, std::vector<RTCGeometry> table) {
         reap_retired(false);
         auto done = std::make_shared<std::atomic<bool>>(false);
-        std::thread t([scene, done, geoms = std::move(geoms), table = std::move(table)] {
+        std::thread t([&device = m_device, scene, done, geoms = std::move(geoms), table = std::move(table)] {
             {
-                TlasMemoryScope memory;
+                TlasMemoryScope memory(device);
                 for (RTCGeometry g : geoms) rtcReleaseGeometry(g);
                 rtcReleaseScene(scene);
             }
@@ -615,6 +621,7 @@ private:
     std::vector<DynEntry> m_dyn;  ///< by dynamic-tier geometry id
     bool m_dyn_dirty = false;
 
+    MergeArena m_arena{m_device};  ///< before m_merge: outlives every merge
     std::unique_ptr<TlasMerge> m_merge;
     struct Retiring {
         std::thread thread;

@@ -16,14 +16,18 @@ namespace {
 /// whatever phase the commit running beside it is in.
 class TlasMemoryObserver final : public tbb::task_scheduler_observer {
 public:
-    explicit TlasMemoryObserver(tbb::task_arena& arena) : tbb::task_scheduler_observer(arena) {
+    TlasMemoryObserver(tbb::task_arena& arena, const EmbreeDevice& device)
+        : tbb::task_scheduler_observer(arena), m_device(device) {
         observe(true);
     }
     ~TlasMemoryObserver() override { observe(false); }
     void on_scheduler_entry(bool) override {
-        EmbreeDevice::set_thread_category(int(MemoryCategory::Tlas));
+        m_device.set_thread_category(int(MemoryCategory::Tlas));
     }
-    void on_scheduler_exit(bool) override { EmbreeDevice::set_thread_category(-1); }
+    void on_scheduler_exit(bool) override { m_device.set_thread_category(-1); }
+
+private:
+    const EmbreeDevice& m_device;
 };
 
 bool keep_going(void* cancel, double) {
@@ -32,14 +36,38 @@ bool keep_going(void* cancel, double) {
 
 }  // namespace
 
-TlasMerge::TlasMerge(EmbreeDevice& device, TlasSceneSetup setup,
+struct MergeArena::Impl {
+    // Low priority: the arena gets worker threads only when launches and commits (normal
+    // priority) leave some idle.
+    tbb::task_arena arena{tbb::task_arena::automatic, 1, tbb::task_arena::priority::low};
+    std::unique_ptr<TlasMemoryObserver> observer;
+};
+
+MergeArena::MergeArena(const EmbreeDevice& device) : m_impl(std::make_unique<Impl>()) {
+    m_impl->arena.initialize();
+    m_impl->observer = std::make_unique<TlasMemoryObserver>(m_impl->arena, device);
+}
+
+MergeArena::~MergeArena() {
+    // Workers still inside keep a TLAS override for this device only (embree_device.cpp), and
+    // the device is not used past its TLAS.
+    m_impl->observer.reset();
+}
+
+void MergeArena::execute_function(const std::function<void()>& f) { m_impl->arena.execute(f); }
+
+TlasMerge::TlasMerge(EmbreeDevice& device, MergeArena& arena, TlasSceneSetup setup,
                      const std::vector<RTCGeometryTy*>& static_geoms,
                      std::vector<MergeEntry> entries, uint64_t serial)
-    : m_device(device), m_setup(setup), m_entries(std::move(entries)), m_serial(serial) {
+    : m_device(device),
+      m_arena(arena),
+      m_setup(setup),
+      m_entries(std::move(entries)),
+      m_serial(serial) {
     m_thread = std::thread([this, &static_geoms] {
-        EmbreeDevice::set_thread_category(int(MemoryCategory::Tlas));
+        m_device.set_thread_category(int(MemoryCategory::Tlas));
         run(static_geoms);
-        EmbreeDevice::set_thread_category(-1);
+        m_device.set_thread_category(-1);
         m_done.store(true, std::memory_order_release);
     });
 }
@@ -87,14 +115,8 @@ void TlasMerge::run(const std::vector<RTCGeometryTy*>& static_geoms) {
         if ((slot & 4095) == 0 && m_cancel.load(std::memory_order_relaxed)) break;
         if (m_geoms[slot]) rtcAttachGeometryByID(scene, m_geoms[slot], slot);
     }
-    if (!m_cancel.load(std::memory_order_relaxed)) {
-        // Low priority: the arena gets worker threads only when launches and commits (normal
-        // priority) leave some idle. Only the build runs inside it.
-        tbb::task_arena arena(tbb::task_arena::automatic, 1, tbb::task_arena::priority::low);
-        arena.initialize();
-        TlasMemoryObserver observer(arena);
-        arena.execute([&] { rtcCommitScene(scene); });
-    }
+    // Only the build runs inside the low-priority arena.
+    if (!m_cancel.load(std::memory_order_relaxed)) m_arena.execute([&] { rtcCommitScene(scene); });
     rtcSetSceneProgressMonitorFunction(scene, nullptr, nullptr);
     // A cancelled build leaves the scene unusable; any other failure reports through the device.
     if (m_cancel.load(std::memory_order_relaxed)) {

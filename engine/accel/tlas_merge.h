@@ -12,6 +12,7 @@
 #include <array>
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <thread>
 #include <vector>
@@ -37,10 +38,34 @@ struct MergeEntry {
     uint32_t mask = 0;
 };
 
+/// The low-priority TBB arena merges build in, observed so that every thread working in it
+/// attributes its Embree allocations to the TLAS. It outlives the merges: a worker that leaves
+/// the arena after its build returned still has its category reset (an observer removed while
+/// workers are inside never tells them they left).
+class MergeArena {
+public:
+    explicit MergeArena(const EmbreeDevice& device);
+    ~MergeArena();
+    MergeArena(const MergeArena&) = delete;
+    MergeArena& operator=(const MergeArena&) = delete;
+
+    /// Runs `f` in the arena and waits for it.
+    template <typename F>
+    void execute(F&& f) {
+        execute_function(std::function<void()>(std::forward<F>(f)));
+    }
+
+private:
+    void execute_function(const std::function<void()>& f);
+    struct Impl;
+    std::unique_ptr<Impl> m_impl;
+};
+
 class TlasMerge {
 public:
-    /// Starts building. `static_geoms` (by slot) must stay unchanged until join() returns.
-    TlasMerge(EmbreeDevice& device, TlasSceneSetup setup,
+    /// Starts building in `arena`. `static_geoms` (by slot) must stay unchanged until join()
+    /// returns.
+    TlasMerge(EmbreeDevice& device, MergeArena& arena, TlasSceneSetup setup,
               const std::vector<RTCGeometryTy*>& static_geoms, std::vector<MergeEntry> entries,
               uint64_t serial);
     /// Cancels, joins and releases whatever was built and not taken.
@@ -70,6 +95,7 @@ private:
     void discard();
 
     EmbreeDevice& m_device;
+    MergeArena& m_arena;
     TlasSceneSetup m_setup;
     std::vector<MergeEntry> m_entries;
     uint64_t m_serial;

@@ -15,7 +15,7 @@
 
 namespace strata {
 
-/// Typed generational handle. `Tag` only keeps mesh, instance, material and group handles apart.
+/// Typed generational handle. `Tag` only keeps mesh, instance, material, group and light handles apart.
 template <class Tag>
 struct Handle {
     static constexpr uint32_t INVALID_INDEX = std::numeric_limits<uint32_t>::max();
@@ -32,11 +32,13 @@ struct InstanceTag;
 struct MaterialTag;
 struct GroupTag;
 struct TextureTag;
+struct LightTag;
 using MeshHandle = Handle<MeshTag>;
 using InstanceHandle = Handle<InstanceTag>;
 using MaterialHandle = Handle<MaterialTag>;
 using GroupHandle = Handle<GroupTag>;
 using TextureHandle = Handle<TextureTag>;
+using LightHandle = Handle<LightTag>;
 
 /// Flat storage indexed by slot. Erased slots are reused (lowest generation bump first, LIFO).
 ///

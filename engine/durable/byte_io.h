@@ -37,14 +37,21 @@ template <class Io, Kind<Material> E>
 void value_fields(Io& io, E& v) {
     io(v.base_color, v.roughness, v.metallic, v.emission);
 }
+template <class Io, Kind<Light> E>
+void value_fields(Io& io, E& v) {
+    io(v.kind, v.position, v.direction, v.color, v.intensity, v.angle_deg, v.inner_angle_deg,
+       v.width, v.height);
+}
 template <class Io, Kind<Affine> E>
 void value_fields(Io& io, E& v) {
     io.raw(v.m.data(), sizeof(float) * v.m.size());
 }
 
-/// Largest stored value of each enum a layout holds (a byte above it is corruption).
+/// The largest value an enum's byte may hold (two-valued enums unless said otherwise).
 template <class T>
 constexpr uint8_t ENUM_MAX = 1;
+template <>
+constexpr uint8_t ENUM_MAX<LightKind> = 2;
 template <>
 constexpr uint8_t ENUM_MAX<TextureWrap> = 2;
 

@@ -24,9 +24,10 @@ static_assert(TAG_IS<0, AddMesh> && TAG_IS<1, UpdateMeshPositions> &&
                   TAG_IS<7, UpdateInstance> && TAG_IS<8, SetTransform> &&
                   TAG_IS<9, RemoveInstance> && TAG_IS<10, MarkDirty> && TAG_IS<11, SetCamera> &&
                   TAG_IS<12, SetLighting> && TAG_IS<13, Clear> && TAG_IS<14, AddGroup> &&
-                  TAG_IS<15, UpdateGroup> && TAG_IS<16, RemoveGroup> &&
-                  TAG_IS<17, AddTexture> && TAG_IS<18, RemoveTexture> &&
-                  std::variant_size_v<Edit> == 19,
+                  TAG_IS<15, UpdateGroup> && TAG_IS<16, RemoveGroup> && TAG_IS<17, AddLight> &&
+                  TAG_IS<18, UpdateLight> && TAG_IS<19, RemoveLight> &&
+                  TAG_IS<20, AddTexture> && TAG_IS<21, RemoveTexture> &&
+                  std::variant_size_v<Edit> == 22,
               "journal kind tags are the Edit variant's indices: append new kinds at the end");
 
 
@@ -48,6 +49,9 @@ constexpr const char* KIND_NAMES[] = {"add_mesh",
                                       "add_group",
                                       "update_group",
                                       "remove_group",
+                                      "add_light",
+                                      "update_light",
+                                      "remove_light",
                                       "add_texture",
                                       "remove_texture"};
 static_assert(std::size(KIND_NAMES) == std::variant_size_v<Edit>);
@@ -134,6 +138,20 @@ void fields(Io& io, E& e) {
 template <class Io, Kind<RemoveTexture> E>
 void fields(Io& io, E& e) {
     io(e.texture);
+}
+
+template <class Io, Kind<AddLight> E>
+void fields(Io& io, E& e) {
+    io(e.id, e.light);
+}
+template <class Io, Kind<UpdateLight> E>
+void fields(Io& io, E& e) {
+    io(e.light, e.kind, e.position, e.direction, e.color, e.intensity, e.angle_deg,
+       e.inner_angle_deg, e.width, e.height);
+}
+template <class Io, Kind<RemoveLight> E>
+void fields(Io& io, E& e) {
+    io(e.light);
 }
 
 // Step: extension fields of the kinds that have them -------------------------------------------

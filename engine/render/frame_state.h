@@ -11,6 +11,7 @@
 #include <glm/glm.hpp>
 
 #include "engine/render/frame.h"
+#include "engine/render/light_table.h"
 #include "engine/scene/scene.h"
 
 namespace strata {
@@ -71,6 +72,15 @@ public:
     /// slots their id AOVs hold without reading the editable scene.
     std::vector<std::string> instance_ids;
     std::vector<std::string> mesh_ids;
+    /// The scene's lights and emitting triangles, rebuilt only by commits that change a light or
+    /// something an emitter depends on (its instance, mesh or material).
+    LightTable lights;
+
+    /// True when instance slot `slot` is visible and its material emits: its triangles are in
+    /// `lights`, so bounce rays that reach it weigh its emission by MIS.
+    bool is_emitter(uint32_t slot) const {
+        return slot < m_emitter.size() && m_emitter[slot] != 0;
+    }
 
     /// The base colour of material `material` (an index into `materials`) at a hit on the mesh
     /// `mesh` (nullptr: no uvs) at barycentrics (u, v) of triangle `prim`: the material's colour,
@@ -94,8 +104,15 @@ public:
     FrameIdNames id_names(const FrameBuffers& buffers) const;
 
 private:
-    void refresh_instance(const Scene& scene, uint32_t slot);
+    /// Refreshes an instance's shading data; returns true when it is or was an emitter.
+    bool refresh_instance(const Scene& scene, uint32_t slot);
+    /// Whether the instance in `slot` should be an emitter now (the slot's shade is current).
+    bool emits(const Scene& scene, uint32_t slot) const;
+    void rebuild_lights(const Scene& scene);
     void refresh_mesh(const Scene& scene, MeshHandle h);
+
+    std::vector<uint8_t> m_emitter;  ///< by instance slot
+    std::size_t m_emitters = 0;      ///< slots set in m_emitter
 };
 
 }  // namespace strata

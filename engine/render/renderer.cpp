@@ -1,6 +1,7 @@
 #include "engine/render/renderer.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -18,8 +19,27 @@ namespace strata {
 namespace {
 
 // Sample dimensions: group 0 is the pixel jitter and the bounce direction, dimension 4 (group 1)
-// picks the BRDF lobe.
+// picks the BRDF lobe, groups 2 and 3 choose a point on a light at the first and second surface.
 constexpr uint32_t DIM_LOBE = 4;
+constexpr uint32_t DIM_GROUP_LIGHT = 2;
+
+/// Shadow rays toward a light point stop this far short of it (relative): an emitting triangle
+/// must not shadow itself.
+constexpr float SHADOW_SHORTEN = 0.999f;
+
+/// Multiple importance sampling weight of a strategy of density `a` against one of density `b`
+/// (Veach's power heuristic, beta = 2).
+float power_heuristic(float a, float b) {
+    if (!(b > 0.0f)) return 1.0f;
+    if (!(a > 0.0f)) return 0.0f;
+    // As ratios, so that huge densities (near-mirror lobes) cannot overflow.
+    if (a >= b) {
+        const float r = b / a;
+        return 1.0f / (1.0f + r * r);
+    }
+    const float r = a / b;
+    return r * r / (1.0f + r * r);
+}
 
 /// Samples of one packet between two polls of the cancel token.
 constexpr uint32_t CANCEL_POLL_SAMPLES = 16;
@@ -155,39 +175,59 @@ private:
         return m;
     }
 
-    /// Shadow rays toward the sun from up to one surface per lane.
-    struct SunQueue {
+    /// Shadow rays from up to one surface per lane, each with the radiance it adds to its lane
+    /// when nothing blocks it.
+    struct ShadowQueue {
         alignas(64) Ray16 rays;
         ValidMask16 valid = {};
+        Vec3 add[PACKET_LANES];
         bool any = false;
+
+        void push(uint32_t i, const Vec3& origin, const Vec3& dir, float tfar, const Vec3& value) {
+            set_lane(rays, i, origin, dir);
+            rays.tfar[i] = tfar;
+            add[i] = value;
+            valid[i] = -1;
+            any = true;
+        }
     };
 
-    /// Queues lane i's shadow ray when `hit` faces the sun.
-    void queue_sun(SunQueue& q, uint32_t i, const SurfaceHit& hit) const {
+    /// Queues lane i's shadow ray toward the sun when `hit` faces it, seen through `bsdf` from `v`.
+    void queue_sun(ShadowQueue& q, uint32_t i, const SurfaceHit& hit, const Bsdf& bsdf,
+                   const Vec3& v) const {
         if (!m_sky.has_sun() || glm::dot(hit.normal, m_sky.sun_direction()) <= 0.0f) return;
         if (!hit.above(m_sky.sun_direction())) return;
         if (!ray_origin_ok(hit.origin)) return;
-        set_lane(q.rays, i, hit.origin, m_sky.sun_direction());
-        q.valid[i] = -1;
-        q.any = true;
+        const Vec3 f = bsdf.eval_cos(hit.normal, v, m_sky.sun_direction());
+        if (f.x <= 0.0f && f.y <= 0.0f && f.z <= 0.0f) return;
+        q.push(i, hit.origin, m_sky.sun_direction(), std::numeric_limits<float>::infinity(),
+               f * m_sky.sun_irradiance());
     }
 
-    /// Traces the queued shadow rays and adds the sun, seen through the BRDF of each unoccluded
-    /// surface (its roughness raised to min_roughness[i]) from the ray in `from` that reached it,
-    /// to radiance[i]. Returns the rays traced.
-    uint64_t add_sun(SunQueue& q, const RayHit16& from, const SurfaceHit* hits,
-                     const float* min_roughness, Vec3* radiance) const {
+    /// Queues lane i's shadow ray toward a point chosen on the scene's lights (next-event
+    /// estimation) with the 3 numbers in `u`. `mis`: a bounce ray from this surface may also reach
+    /// emitting triangles, so their share is weighted by the power heuristic.
+    void queue_light(ShadowQueue& q, uint32_t i, const SurfaceHit& hit, const Bsdf& bsdf,
+                     const Vec3& v, const std::array<float, 4>& u, bool mis) const {
+        if (!ray_origin_ok(hit.origin)) return;
+        const LightSample s = m_frame.lights.sample(hit.origin, u[0], u[1], u[2]);
+        if (!s.valid || !hit.above(s.dir)) return;
+        Vec3 f = bsdf.eval_cos(hit.normal, v, s.dir);
+        if (f.x <= 0.0f && f.y <= 0.0f && f.z <= 0.0f) return;
+        if (mis && s.pdf > 0.0f) f *= power_heuristic(s.pdf, bsdf.pdf(hit.normal, v, s.dir));
+        q.push(i, hit.origin, s.dir, s.distance * SHADOW_SHORTEN, f * s.weight);
+    }
+
+    /// Traces the queued shadow rays and adds the radiance of each unblocked one to its lane.
+    /// Returns the rays traced.
+    uint64_t trace_shadows(ShadowQueue& q, Vec3* radiance) const {
         if (!q.any) return 0;
         m_tlas.occluded16(q.valid, q.rays);
         uint64_t rays = 0;
         for (uint32_t i = 0; i < PACKET_LANES; ++i) {
             if (!q.valid[i]) continue;
             ++rays;
-            if (q.rays.tfar[i] == -std::numeric_limits<float>::infinity()) continue;
-            const Vec3 v(-from.dir_x[i], -from.dir_y[i], -from.dir_z[i]);
-            const Bsdf bsdf(shading_material(hits[i]), min_roughness[i]);
-            radiance[i] +=
-                bsdf.eval_cos(hits[i].normal, v, m_sky.sun_direction()) * m_sky.sun_irradiance();
+            if (q.rays.tfar[i] != -std::numeric_limits<float>::infinity()) radiance[i] += q.add[i];
         }
         return rays;
     }
@@ -218,15 +258,16 @@ private:
         const RayHit16& primary = camera.aim(px, py);
         m_tlas.intersect16(valid, camera.packet(), true);
 
-        // Step: shade first hits; queue sun shadow rays and bounce rays.
+        // Step: shade first hits; queue shadow rays (sun, lights) and bounce rays.
+        const bool lights = !m_frame.lights.empty();
         Vec3 radiance[PACKET_LANES];
         Vec3 weight[PACKET_LANES];
-        SurfaceHit first[PACKET_LANES];
+        float bounce_pdf[PACKET_LANES];
         float first_roughness[PACKET_LANES] = {};
         alignas(64) RayHit16 bounce;
         ValidMask16 bounce_valid = {};
         bool any_bounce = false;
-        SunQueue sun;
+        ShadowQueue sun, light;
         for (uint32_t i = 0; i < PACKET_LANES; ++i) {
             if (!valid[i]) continue;
             const Vec3 dir(primary.dir_x[i], primary.dir_y[i], primary.dir_z[i]);
@@ -235,34 +276,37 @@ private:
                 sums[i]->color += radiance[i];
                 continue;
             }
-            const SurfaceHit& hit = first[i] = surface(primary, i);
+            const SurfaceHit hit = surface(primary, i);
             const Material m = shading_material(hit);
+            const Bsdf bsdf(m);
             radiance[i] = m.emission;
             first_roughness[i] = m.roughness;
             sums[i]->albedo += m.base_color;
             sums[i]->normal += hit.normal;
-            queue_sun(sun, i, hit);
+            queue_sun(sun, i, hit, bsdf, -dir);
+            if (lights)
+                queue_light(light, i, hit, bsdf, -dir, samplers[i].get4(index, DIM_GROUP_LIGHT),
+                            true);
             const BsdfSample b =
-                Bsdf(m).sample(hit.normal, -dir, bounce_u[i][0], bounce_u[i][1], bounce_u[i][2]);
+                bsdf.sample(hit.normal, -dir, bounce_u[i][0], bounce_u[i][1], bounce_u[i][2]);
             if (b.valid && hit.above(b.dir) && ray_origin_ok(hit.origin)) {
                 set_lane(bounce, i, hit.origin, b.dir);
                 weight[i] = b.weight;
+                bounce_pdf[i] = b.pdf;
                 bounce_valid[i] = -1;
                 any_bounce = true;
             }
         }
 
-        // Step: the sun at first hits.
-        const float no_regularisation[PACKET_LANES] = {};
-        rays += add_sun(sun, primary, first, no_regularisation, radiance);
+        // Step: direct light at first hits.
+        rays += trace_shadows(sun, radiance);
+        rays += trace_shadows(light, radiance);
 
         // Step: one bounce, ended by the sky or by direct light at the second surface.
         if (any_bounce) {
             m_tlas.intersect16(bounce_valid, bounce, false);
             Vec3 incoming[PACKET_LANES];
-            SurfaceHit second[PACKET_LANES];
-            float min_roughness[PACKET_LANES];
-            SunQueue sun2;
+            ShadowQueue sun2, light2;
             for (uint32_t i = 0; i < PACKET_LANES; ++i) {
                 if (!bounce_valid[i]) continue;
                 ++rays;
@@ -271,13 +315,26 @@ private:
                     incoming[i] = m_sky.radiance(dir);
                     continue;
                 }
-                const SurfaceHit& hit = second[i] = surface(bounce, i);
+                const SurfaceHit hit = surface(bounce, i);
                 const Material m = shading_material(hit);
-                incoming[i] = m.emission + m.base_color * m_sky.radiance(hit.normal);
-                min_roughness[i] = std::max(MIN_SECONDARY_ROUGHNESS, first_roughness[i]);
-                queue_sun(sun2, i, hit);
+                // An emitter in the light table was also sampled at the first hit: weigh its
+                // emission against that strategy.
+                float emission_weight = 1.0f;
+                if (lights && m_frame.is_emitter(bounce.inst_id[i])) {
+                    const float pdf_light = m_frame.lights.emitter_pdf(
+                        m.emission, bounce.tfar[i], glm::dot(hit.geometry, -dir));
+                    emission_weight = power_heuristic(bounce_pdf[i], pdf_light);
+                }
+                incoming[i] = m.emission * emission_weight + m.base_color * m_sky.radiance(hit.normal);
+                const Bsdf bsdf(m, std::max(MIN_SECONDARY_ROUGHNESS, first_roughness[i]));
+                queue_sun(sun2, i, hit, bsdf, -dir);
+                // The path ends here: light sampling is the only strategy, so no MIS.
+                if (lights)
+                    queue_light(light2, i, hit, bsdf, -dir,
+                                samplers[i].get4(index, DIM_GROUP_LIGHT + 1), false);
             }
-            rays += add_sun(sun2, bounce, second, min_roughness, incoming);
+            rays += trace_shadows(sun2, incoming);
+            rays += trace_shadows(light2, incoming);
             for (uint32_t i = 0; i < PACKET_LANES; ++i) {
                 if (bounce_valid[i])
                     radiance[i] += clamp_max_component(weight[i] * incoming[i], INDIRECT_CLAMP);

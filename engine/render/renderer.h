@@ -3,10 +3,14 @@
 // a path of at most two surfaces traced in 4x4 packets through the TlasStrategy:
 //
 //   1. camera ray (jittered inside the pixel, intersect16, coherent);
-//   2. sun: a shadow ray per lit hit (occluded16) - hard shadows from a directional sun;
+//   2. direct light: a shadow ray toward the sun per lit hit (occluded16) - hard shadows from a
+//      directional sun - and, when the scene has lights or emitting meshes, one toward a point
+//      chosen on them (next-event estimation, light_table.h), weighted against bounce rays that
+//      reach the same emitter by multiple importance sampling (power heuristic);
 //   3. one bounce: a direction drawn from the BRDF (intersect16, incoherent). A miss gathers the
-//      sky dome; a hit gathers its emission, the sun with a second shadow ray (occluded16) and the
-//      sky as base_color * sky(n), unoccluded (the path ends there). Against fireflies, the second
+//      sky dome; a hit gathers its emission (MIS-weighted when it is in the light table), the sun
+//      and one light point with shadow rays (occluded16) and the sky as base_color * sky(n),
+//      unoccluded (the path ends there). Against fireflies, the second
 //      surface shades the sun with its roughness raised to at least MIN_SECONDARY_ROUGHNESS and
 //      the first surface's roughness (path regularisation: a rough floor sees no pin-point
 //      caustics of the sun in a chrome ball, a mirror still reflects sharp highlights), and each

@@ -159,16 +159,28 @@ BsdfSample Bsdf::sample(const Vec3& n, const Vec3& v, float u0, float u1, float 
     if (l_local.z <= 0.0f) return out;
 
     // Step: weight by the mixture pdf of both lobes (one-sample MIS, balance heuristic).
-    const Vec3 h = glm::normalize(v_local + l_local);
-    const float pdf_spec =
-        smith_g1(v_local.z, m_alpha) * ggx_d(std::max(0.0f, h.z), m_alpha) / (4.0f * v_local.z);
-    const float pdf_diffuse = l_local.z * INV_PI;
-    const float pdf = p_spec * pdf_spec + (1.0f - p_spec) * pdf_diffuse;
+    const float pdf = local_pdf(v_local, l_local, p_spec);
     if (!(pdf > 0.0f)) return out;
     out.dir = glm::normalize(frame.to_world(l_local));
     out.weight = eval_cos(n, v, out.dir) / pdf;
+    out.pdf = pdf;
     out.valid = is_finite(out.weight);
     return out;
+}
+
+float Bsdf::local_pdf(const Vec3& v, const Vec3& l, float p_spec) const {
+    const Vec3 h = glm::normalize(v + l);
+    const float pdf_spec = smith_g1(v.z, m_alpha) * ggx_d(std::max(0.0f, h.z), m_alpha) / (4.0f * v.z);
+    const float pdf_diffuse = l.z * INV_PI;
+    return p_spec * pdf_spec + (1.0f - p_spec) * pdf_diffuse;
+}
+
+float Bsdf::pdf(const Vec3& n, const Vec3& v, const Vec3& l) const {
+    const Frame frame(n);
+    const Vec3 v_local = frame.to_local(v);
+    const Vec3 l_local = frame.to_local(l);
+    if (v_local.z <= 0.0f || l_local.z <= 0.0f) return 0.0f;
+    return local_pdf(v_local, l_local, specular_probability(v_local.z));
 }
 
 }  // namespace strata

@@ -54,6 +54,7 @@ private:
 struct BsdfSample {
     Vec3 dir{0.0f};
     Vec3 weight{0.0f};  ///< f * cos / pdf
+    float pdf = 0.0f;   ///< solid-angle density of `dir`
     bool valid = false;
 };
 
@@ -71,11 +72,16 @@ public:
     /// visible-normal sampling) from three uniform numbers.
     BsdfSample sample(const Vec3& n, const Vec3& v, float u0, float u1, float u_lobe) const;
 
+    /// The solid-angle density with which sample() draws `l`. Unit vectors; `n` faces `v`.
+    float pdf(const Vec3& n, const Vec3& v, const Vec3& l) const;
+
     const Vec3& base_color() const { return m_base; }
 
 private:
     /// Probability of choosing the specular lobe at this view angle.
     float specular_probability(float n_dot_v) const;
+    /// The mixture density of local direction `l` for local view `v` (both above the surface).
+    float local_pdf(const Vec3& v, const Vec3& l, float p_spec) const;
 
     Vec3 m_base;
     Vec3 m_f0;

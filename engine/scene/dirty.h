@@ -53,7 +53,8 @@ enum SceneBits : uint32_t {
     TlasRebuildRequested = 1u << 3,  ///< mark_dirty {tlas, rebuild}
     Materials = 1u << 4,
     Groups = 1u << 5,  ///< a group was added, changed or removed (no acceleration work by itself)
-    Textures = 1u << 6,  ///< a texture was added or removed (shading only, through materials)
+    Textures = 1u << 7,  ///< a texture was added or removed (shading only, through materials)
+    Lights = 1u << 6,  ///< a light was added, changed or removed (shading only)
 };
 
 }  // namespace strata::dirty

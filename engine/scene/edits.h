@@ -136,7 +136,8 @@ struct SetLighting {
     std::optional<float> sky_intensity;
 };
 
-/// Removes every mesh, instance, material, texture and group and resets camera and lighting.
+/// Removes every mesh, instance, material, texture, group and light and resets camera and
+/// lighting.
 struct Clear {};
 
 /// A new group: a node of the scene graph whose transform and visibility apply to everything
@@ -164,15 +165,41 @@ struct RemoveGroup {
     bool recursive = false;
 };
 
+/// A new light (types.h: Light).
+struct AddLight {
+    std::string id;
+    Light light;
+};
+
+/// Light fields to change; unset fields keep their value.
+struct UpdateLight {
+    std::string light;
+    std::optional<LightKind> kind;
+    std::optional<Vec3> position;
+    std::optional<Vec3> direction;
+    std::optional<Vec3> color;
+    std::optional<float> intensity;
+    std::optional<float> angle_deg;
+    std::optional<float> inner_angle_deg;
+    std::optional<float> width;
+    std::optional<float> height;
+};
+
+struct RemoveLight {
+    std::string light;
+};
+
 using Edit = std::variant<AddMesh, UpdateMeshPositions, ReplaceMeshTopology, RemoveMesh,
                           AddMaterial, UpdateMaterial, AddInstance, UpdateInstance, SetTransform,
                           RemoveInstance, MarkDirty, SetCamera, SetLighting, Clear, AddGroup,
-                          UpdateGroup, RemoveGroup, AddTexture, RemoveTexture>;
+                          UpdateGroup, RemoveGroup, AddLight, UpdateLight, RemoveLight,
+                          AddTexture, RemoveTexture>;
 
 /// Copies the fields an edit sets onto a full value; unset fields keep theirs.
 void apply_to(Camera& c, const SetCamera& e);
 void apply_to(Lighting& l, const SetLighting& e);
 void apply_to(Material& m, const UpdateMaterial& e);
+void apply_to(Light& l, const UpdateLight& e);
 
 /// Edits applied atomically: all or none.
 struct EditBatch {

@@ -34,6 +34,18 @@ void apply_to(Lighting& l, const SetLighting& e) {
     if (e.sky_intensity) l.sky_intensity = *e.sky_intensity;
 }
 
+void apply_to(Light& l, const UpdateLight& e) {
+    if (e.kind) l.kind = *e.kind;
+    if (e.position) l.position = *e.position;
+    if (e.direction) l.direction = *e.direction;
+    if (e.color) l.color = *e.color;
+    if (e.intensity) l.intensity = *e.intensity;
+    if (e.angle_deg) l.angle_deg = *e.angle_deg;
+    if (e.inner_angle_deg) l.inner_angle_deg = *e.inner_angle_deg;
+    if (e.width) l.width = *e.width;
+    if (e.height) l.height = *e.height;
+}
+
 void apply_to(Material& m, const UpdateMaterial& e) {
     if (e.base_color) m.base_color = *e.base_color;
     if (e.roughness) m.roughness = *e.roughness;
@@ -54,6 +66,9 @@ MaterialHandle Scene::find_material(std::string_view id) const {
 }
 GroupHandle Scene::find_group(std::string_view id) const {
     return lookup<decltype(m_group_ids), GroupHandle>(m_group_ids, id);
+}
+LightHandle Scene::find_light(std::string_view id) const {
+    return lookup<decltype(m_light_ids), LightHandle>(m_light_ids, id);
 }
 TextureHandle Scene::find_texture(std::string_view id) const {
     return lookup<decltype(m_texture_ids), TextureHandle>(m_texture_ids, id);
@@ -210,6 +225,7 @@ SceneCounts Scene::counts() const {
     c.instances = m_instances.size();
     c.materials = m_materials.size();
     c.groups = m_groups.size();
+    c.lights = m_lights.size();
     c.textures = m_textures.size();
     m_meshes.for_each([&](MeshHandle, const MeshRecord& m) { c.triangles += m.triangles.size(); });
     m_instances.for_each([&](InstanceHandle, const InstanceRecord& i) {
@@ -233,7 +249,7 @@ Bounds3 Scene::world_bounds() const {
 }
 
 SceneImage Scene::image() const {
-    return SceneImage{m_meshes,       m_instances, m_materials, m_groups, m_textures,
+    return SceneImage{m_meshes,        m_instances, m_materials, m_groups, m_lights, m_textures,
                       m_root.groups, m_camera,    m_lighting,  m_version};
 }
 
@@ -285,6 +301,8 @@ EditBatch SceneImage::to_batch() const {
         if (!i.parent.is_null()) e.parent = groups.at(i.parent).id;
         b.edits.emplace_back(std::move(e));
     });
+    lights.for_each(
+        [&](LightHandle, const LightRecord& l) { b.edits.emplace_back(AddLight{l.id, l.light}); });
     b.edits.emplace_back(SetCamera{camera.eye, camera.target, camera.up, camera.fov_y_deg});
     b.edits.emplace_back(SetLighting{lighting.sun_direction, lighting.sun_color,
                                      lighting.sky_color, lighting.sky_intensity});

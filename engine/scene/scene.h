@@ -1,5 +1,5 @@
 #pragma once
-// The editable scene: flat slot arrays of meshes, instances and materials, string ids mapped to
+// The editable scene: flat slot arrays of meshes, instances, materials, groups and lights, string ids mapped to
 // generational handles, dirty bits and a version. No Embree here: editing only records changes;
 // the acceleration layer reads them at commit time.
 
@@ -98,12 +98,21 @@ struct TextureRecord {
     std::shared_ptr<const std::string> encoded;
 };
 
+struct LightRecord {
+    std::string id;
+    Light light;
+};
+
+/// Most lights a scene may hold (TooLarge beyond): launches copy and sample the whole list.
+constexpr std::size_t MAX_LIGHTS = 4096;
+
 /// Totals for the scene endpoint and the demo.
 struct SceneCounts {
     std::size_t meshes = 0;
     std::size_t instances = 0;
     std::size_t materials = 0;
     std::size_t groups = 0;
+    std::size_t lights = 0;
     std::size_t textures = 0;
     uint64_t triangles = 0;            ///< over meshes, each counted once
     uint64_t instanced_triangles = 0;  ///< over visible instances
@@ -119,6 +128,7 @@ struct SceneImage {
     SlotArray<InstanceRecord, InstanceTag> instances;
     SlotArray<MaterialRecord, MaterialTag> materials;
     SlotArray<GroupRecord, GroupTag> groups;
+    SlotArray<LightRecord, LightTag> lights;
     SlotArray<TextureRecord, TextureTag> textures;
     std::vector<GroupHandle> root_groups;  ///< the root's child groups, in order
     Camera camera;
@@ -166,6 +176,7 @@ public:
     InstanceHandle find_instance(std::string_view id) const;
     MaterialHandle find_material(std::string_view id) const;
     GroupHandle find_group(std::string_view id) const;
+    LightHandle find_light(std::string_view id) const;
     TextureHandle find_texture(std::string_view id) const;
 
     /// The record, or a StaleHandle error for a removed or never-issued handle.
@@ -179,6 +190,7 @@ public:
     const SlotArray<InstanceRecord, InstanceTag>& instances() const { return m_instances; }
     const SlotArray<MaterialRecord, MaterialTag>& materials() const { return m_materials; }
     const SlotArray<GroupRecord, GroupTag>& groups() const { return m_groups; }
+    const SlotArray<LightRecord, LightTag>& lights() const { return m_lights; }
     const SlotArray<TextureRecord, TextureTag>& textures() const { return m_textures; }
     /// The children of group `parent`, or of the root when `parent` is null (a live handle).
     const Children& children(GroupHandle parent) const;
@@ -224,6 +236,9 @@ private:
     Status apply_edit(AddGroup&& e, UndoLog& undo);
     Status apply_edit(UpdateGroup&& e, UndoLog& undo);
     Status apply_edit(RemoveGroup&& e, UndoLog& undo);
+    Status apply_edit(AddLight&& e, UndoLog& undo);
+    Status apply_edit(UpdateLight&& e, UndoLog& undo);
+    Status apply_edit(RemoveLight&& e, UndoLog& undo);
     Status apply_edit(AddTexture&& e, UndoLog& undo);
     Status apply_edit(RemoveTexture&& e, UndoLog& undo);
 
@@ -238,6 +253,7 @@ private:
     void remove_instance(InstanceHandle h, UndoLog& undo);
     void remove_mesh(MeshHandle h, UndoLog& undo);
     void remove_material(MaterialHandle h, UndoLog& undo);
+    void remove_light(LightHandle h, UndoLog& undo);
     void remove_texture(TextureHandle h, UndoLog& undo);
     /// Resolves an optional texture id of a material edit (field `base_color_texture`).
     Result<TextureHandle> find_material_texture(const std::optional<std::string>& id) const;
@@ -268,6 +284,7 @@ private:
     SlotArray<InstanceRecord, InstanceTag> m_instances;
     SlotArray<MaterialRecord, MaterialTag> m_materials;
     SlotArray<GroupRecord, GroupTag> m_groups;
+    SlotArray<LightRecord, LightTag> m_lights;
     SlotArray<TextureRecord, TextureTag> m_textures;
     Children m_root;
     /// Instances and groups whose world the next flatten() must recompute (groups: those whose
@@ -278,6 +295,7 @@ private:
     std::unordered_map<std::string, MeshHandle> m_mesh_ids;
     std::unordered_map<std::string, InstanceHandle> m_instance_ids;
     std::unordered_map<std::string, MaterialHandle> m_material_ids;
+    std::unordered_map<std::string, LightHandle> m_light_ids;
     std::unordered_map<std::string, TextureHandle> m_texture_ids;
     Camera m_camera;
     Lighting m_lighting;

@@ -613,6 +613,52 @@ Status Scene::apply_edit(MarkDirty&& e, UndoLog& undo) {
     return {};
 }
 
+// Step: light ops -------------------------------------------------------------------------------
+
+Status Scene::apply_edit(AddLight&& e, UndoLog& undo) {
+    if (Status s = check_new_id(e.id, !find_light(e.id).is_null(), "light"); !s) return s;
+    if (Status s = check_light(e.light); !s) return s;
+    if (m_lights.size() >= MAX_LIGHTS)
+        return failure(ErrorCode::TooLarge,
+                       "the scene already holds " + std::to_string(MAX_LIGHTS) +
+                           " lights, the most it may",
+                       "id");
+
+    bool reused = false;
+    const LightHandle h = m_lights.insert(LightRecord{e.id, e.light}, &reused);
+    undo.records.emplace_back(undo::Inserted<LightHandle>{h, reused});
+    m_light_ids.emplace(std::move(e.id), h);
+    m_changes.scene_bits |= dirty::Lights;
+    return {};
+}
+
+Status Scene::apply_edit(UpdateLight&& e, UndoLog& undo) {
+    const LightHandle h = find_light(e.light);
+    if (h.is_null()) return unknown("light", e.light, "light");
+    LightRecord& r = m_lights.at(h);
+    Light updated = r.light;
+    apply_to(updated, e);
+    if (Status s = check_light(updated); !s) return s;
+
+    undo.records.emplace_back(undo::LightState{h, r.light});
+    r.light = updated;
+    m_changes.scene_bits |= dirty::Lights;
+    return {};
+}
+
+Status Scene::apply_edit(RemoveLight&& e, UndoLog& undo) {
+    const LightHandle h = find_light(e.light);
+    if (h.is_null()) return unknown("light", e.light, "light");
+    remove_light(h, undo);
+    return {};
+}
+
+void Scene::remove_light(LightHandle h, UndoLog& undo) {
+    m_light_ids.erase(m_lights.at(h).id);
+    undo.records.emplace_back(undo::Removed<LightHandle, LightRecord>{h, m_lights.take(h)});
+    m_changes.scene_bits |= dirty::Lights;
+}
+
 // Camera and lighting are saved whole at the start of each batch (UndoLog::camera, ::lighting).
 Status Scene::apply_edit(SetCamera&& e, UndoLog&) {
     Camera updated = m_camera;
@@ -645,6 +691,9 @@ Status Scene::apply_edit(Clear&&, UndoLog& undo) {
     std::vector<MaterialHandle> materials;
     m_materials.for_each([&](MaterialHandle h, const MaterialRecord&) { materials.push_back(h); });
     for (MaterialHandle h : materials) remove_material(h, undo);
+    std::vector<LightHandle> lights;
+    m_lights.for_each([&](LightHandle h, const LightRecord&) { lights.push_back(h); });
+    for (LightHandle h : lights) remove_light(h, undo);
     std::vector<TextureHandle> textures;
     m_textures.for_each([&](TextureHandle h, const TextureRecord&) { textures.push_back(h); });
     for (TextureHandle h : textures) remove_texture(h, undo);

@@ -31,6 +31,8 @@ struct Reverser {
     std::unordered_map<std::string, MaterialHandle>& material_ids;
     SlotArray<GroupRecord, GroupTag>& groups;
     std::unordered_map<std::string, GroupHandle>& group_ids;
+    SlotArray<LightRecord, LightTag>& lights;
+    std::unordered_map<std::string, LightHandle>& light_ids;
     Children& root;
     SlotArray<TextureRecord, TextureTag>& textures;
     std::unordered_map<std::string, TextureHandle>& texture_ids;
@@ -177,6 +179,18 @@ struct Reverser {
         inst.dirty = r.dirty;
     }
 
+    void operator()(undo::Inserted<LightHandle>& r) {
+        light_ids.erase(lights.at(r.handle).id);
+        lights.undo_insert(r.handle, r.reused_slot);
+    }
+
+    void operator()(undo::Removed<LightHandle, LightRecord>& r) {
+        light_ids.emplace(r.record.id, r.handle);
+        lights.undo_erase(r.handle, std::move(r.record));
+    }
+
+    void operator()(undo::LightState& r) { lights.at(r.handle).light = r.light; }
+
     void operator()(undo::MaterialState& r) {
         MaterialRecord& m = materials.at(r.handle);
         m.material = r.material;
@@ -189,8 +203,8 @@ struct Reverser {
 
 void Scene::roll_back(UndoLog& undo) {
     Reverser reverse{m_meshes,       m_instances, m_materials, m_mesh_ids, m_instance_ids,
-                     m_material_ids, m_groups,    m_group_ids, m_root,
-                     m_textures,     m_texture_ids};
+                     m_material_ids, m_groups,    m_group_ids, m_lights,   m_light_ids,
+                     m_root,         m_textures,  m_texture_ids};
     for (auto it = undo.records.rbegin(); it != undo.records.rend(); ++it) std::visit(reverse, *it);
     m_camera = undo.camera;
     m_lighting = undo.lighting;

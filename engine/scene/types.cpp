@@ -122,4 +122,57 @@ Status check_material(const Material& m) {
     return {};
 }
 
+const char* light_kind_name(LightKind k) {
+    switch (k) {
+        case LightKind::Point: return "point";
+        case LightKind::Spot: return "spot";
+        case LightKind::Rect: return "rect";
+    }
+    return "point";
+}
+
+/// Largest light intensity and rect side accepted: far beyond any sensible scene, small enough
+/// that products of them stay finite in float.
+constexpr float MAX_LIGHT_INTENSITY = 1e12f;
+constexpr float MAX_LIGHT_SIZE = 1e6f;
+
+Status check_light(const Light& l) {
+    if (!is_finite(l.position))
+        return bad(ErrorCode::NotFinite, "position", "position has a NaN or infinite component");
+    if (!within(l.position, MAX_COORDINATE))
+        return bad(ErrorCode::InvalidArgument, "position",
+                   "position is farther than 1e15 from the origin");
+    if (!is_finite(l.direction))
+        return bad(ErrorCode::NotFinite, "direction",
+                   "direction has a NaN or infinite component");
+    const glm::dvec3 d(l.direction);
+    if (!(glm::dot(d, d) > 1e-24))
+        return bad(ErrorCode::InvalidArgument, "direction", "direction has zero length");
+    if (!is_finite(l.color))
+        return bad(ErrorCode::NotFinite, "color", "color has a NaN or infinite component");
+    if (glm::any(glm::lessThan(l.color, Vec3(0.0f))))
+        return bad(ErrorCode::InvalidArgument, "color", "color components must be >= 0");
+    if (!std::isfinite(l.intensity))
+        return bad(ErrorCode::NotFinite, "intensity", "intensity is NaN or infinite");
+    if (!(l.intensity >= 0.0f && l.intensity <= MAX_LIGHT_INTENSITY))
+        return bad(ErrorCode::InvalidArgument, "intensity", "intensity must be in [0, 1e12]");
+    if (!std::isfinite(l.angle_deg))
+        return bad(ErrorCode::NotFinite, "angle_deg", "angle_deg is NaN or infinite");
+    if (!(l.angle_deg > 0.0f && l.angle_deg <= 90.0f))
+        return bad(ErrorCode::InvalidArgument, "angle_deg", "angle_deg must be in (0, 90]");
+    if (!std::isfinite(l.inner_angle_deg))
+        return bad(ErrorCode::NotFinite, "inner_angle_deg", "inner_angle_deg is NaN or infinite");
+    if (!(l.inner_angle_deg >= 0.0f && l.inner_angle_deg <= l.angle_deg))
+        return bad(ErrorCode::InvalidArgument, "inner_angle_deg",
+                   "inner_angle_deg must be in [0, angle_deg]");
+    for (const auto& [field, v] : {std::pair{"width", l.width}, std::pair{"height", l.height}}) {
+        if (!std::isfinite(v))
+            return bad(ErrorCode::NotFinite, field, "size is NaN or infinite");
+        if (!(v > 0.0f && v <= MAX_LIGHT_SIZE))
+            return failure(ErrorCode::InvalidArgument,
+                           std::string(field) + " must be in (0, 1e6]", field);
+    }
+    return {};
+}
+
 }  // namespace strata

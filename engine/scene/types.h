@@ -75,6 +75,36 @@ struct Lighting {
     friend bool operator==(const Lighting&, const Lighting&) = default;
 };
 
+enum class LightKind : uint8_t { Point, Spot, Rect };
+
+const char* light_kind_name(LightKind k);
+
+/// A light beyond the sun and sky, sampled by next-event estimation. Lights are not geometry:
+/// rays do not hit them, and editing one touches no acceleration structure.
+///
+/// Units, as for the sun (shading.h): a point or spot light of `intensity` I and `color` c
+/// delivers irradiance I * c / d^2 at distance d, like a sun of color I * c / (pi d^2). A rect
+/// light emits radiance `intensity * color` from its front side (the side `direction` points to)
+/// over a width x height rectangle centred at `position`; its width runs along
+/// normalize(cross(W, direction)), W = +y, or +z when `direction` is within ~1 degree of +-y.
+struct Light {
+    LightKind kind = LightKind::Point;
+    Vec3 position{0.0f, 3.0f, 0.0f};
+    Vec3 direction{0.0f, -1.0f, 0.0f};  ///< spot axis, rect normal (any length but zero)
+    Vec3 color{1.0f};
+    float intensity = 10.0f;
+    float angle_deg = 30.0f;        ///< spot: half-angle of the cone, (0, 90]
+    float inner_angle_deg = 25.0f;  ///< spot: full intensity inside, fading to 0 at angle_deg
+    float width = 1.0f;             ///< rect
+    float height = 1.0f;            ///< rect
+
+    friend bool operator==(const Light&, const Light&) = default;
+};
+
+/// Checks a light: finite, colors and intensity >= 0, direction non-zero, angles and sizes in
+/// range. The error names the field.
+Status check_light(const Light& l);
+
 /// Checks a camera: finite, eye != target, up not along the view, fov in (0, 180).
 Status check_camera(const Camera& c);
 /// Checks lighting: finite, non-zero sun direction, non-negative colors and intensity.

@@ -102,6 +102,12 @@ struct MaterialState {
     TextureHandle base_color_texture;
 };
 
+/// A light's values before an edit changed them.
+struct LightState {
+    LightHandle handle;
+    Light light;
+};
+
 }  // namespace undo
 
 using UndoRecord =
@@ -113,7 +119,9 @@ using UndoRecord =
                  undo::MeshAttributes, undo::InstanceState, undo::MaterialState,
                  undo::Inserted<GroupHandle>, undo::Removed<GroupHandle, GroupRecord>,
                  undo::GroupState, undo::Reparented<InstanceHandle>, undo::Reparented<GroupHandle>,
-                 undo::Inserted<TextureHandle>, undo::Removed<TextureHandle, TextureRecord>>;
+                 undo::Inserted<TextureHandle>, undo::Removed<TextureHandle, TextureRecord>,
+                 undo::Inserted<LightHandle>, undo::Removed<LightHandle, LightRecord>,
+                 undo::LightState>;
 
 /// Everything needed to take one batch back.
 struct UndoLog {

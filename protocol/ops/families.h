@@ -19,6 +19,9 @@ std::span<const EditOp> instance_ops();
 /// add_group, update_group, remove_group (group_ops.cpp).
 std::span<const EditOp> group_ops();
 
+/// add_light, update_light, remove_light (light_ops.cpp).
+std::span<const EditOp> light_ops();
+
 /// Reads an optional `parent` member: absent leaves `out` unset; null sets it to the root
 /// (nullopt inside); a string sets the group id (group_ops.cpp).
 void read_parent(OpFields& f, std::optional<std::optional<std::string>>& out);

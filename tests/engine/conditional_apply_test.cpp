@@ -57,5 +57,33 @@ TEST(ConditionalApply, OnlyOneOfManyRacingWritersWithTheSameVersionWins) {
     EXPECT_EQ(engine->read([](const Scene& s) { return s.version(); }), 1u);
 }
 
+TEST(Validate, AcceptsAGoodBatchAndLeavesTheSceneAsItWas) {
+    auto engine = test::make_engine();
+    test::apply_ok(*engine, AddMaterial{"a", {}});
+    ASSERT_TRUE(engine->commit().has_value());
+    ASSERT_TRUE(engine->validate(one_material("b"), 1).has_value());
+    EXPECT_EQ(engine->read([](const Scene& s) { return s.version(); }), 1u);
+    EXPECT_TRUE(engine->read([](const Scene& s) { return s.find_material("b").is_null(); }));
+    EXPECT_TRUE(engine->read([](const Scene& s) { return s.changes().empty(); }));
+    // The validated batch then applies for real.
+    EXPECT_TRUE(engine->apply(one_material("b"), uint64_t{1}).has_value());
+}
+
+TEST(Validate, AnswersTheRuleErrorOfABadBatch) {
+    auto engine = test::make_engine();
+    test::apply_ok(*engine, AddMaterial{"a", {}});
+    auto r = engine->validate(one_material("a"), 1);
+    ASSERT_FALSE(r.has_value());
+    EXPECT_EQ(r.error().code, ErrorCode::DuplicateId);
+    EXPECT_EQ(r.error().edit_index, 0u);
+}
+
+TEST(Validate, RefusesAnotherVersion) {
+    auto engine = test::make_engine();
+    auto r = engine->validate(one_material("a"), 3);
+    ASSERT_FALSE(r.has_value());
+    EXPECT_EQ(r.error().code, ErrorCode::VersionMismatch);
+}
+
 }  // namespace
 }  // namespace strata

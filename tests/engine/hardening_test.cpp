@@ -2,10 +2,15 @@
 // scenes beyond their budget, renders that must stop early, memory reports that must stay
 // truthful across slot reuse.
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <thread>
+#include <utility>
 
+#include <embree3/rtcore.h>
+
+#include "engine/accel/embree_device.h"
 #include "engine/core/cancel.h"
 #include "tests/engine/test_util.h"
 
@@ -141,6 +146,55 @@ TEST(MemoryReport, NewMeshesInRemovedMeshesSlotsKeepEveryCategoryTruthful) {
     commit_ok(*engine);
     EXPECT_EQ(engine->memory_bytes(MemoryCategory::Blas), 0);
     EXPECT_EQ(engine->memory_bytes(MemoryCategory::Tlas), 0);
+}
+
+/// Allocates a one-triangle Embree scene on `d`, builds it and frees it again; returns what the
+/// device's categories held while it lived: {blas, tlas}.
+std::pair<int64_t, int64_t> bytes_of_a_scene_built_on(EmbreeDevice& d) {
+    RTCScene scene = rtcNewScene(d.get());
+    RTCGeometry g = rtcNewGeometry(d.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                          RTC_FORMAT_FLOAT3, 12, 3));
+    const float p[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    std::copy(p, p + 9, v);
+    auto* t = static_cast<unsigned*>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 12, 1));
+    t[0] = 0, t[1] = 1, t[2] = 2;
+    rtcCommitGeometry(g);
+    rtcAttachGeometry(scene, g);
+    rtcCommitScene(scene);
+    const std::pair<int64_t, int64_t> held{d.bytes(MemoryCategory::Blas),
+                                           d.bytes(MemoryCategory::Tlas)};
+    rtcReleaseGeometry(g);
+    rtcReleaseScene(scene);
+    return held;
+}
+
+TEST(MemoryReport, AThreadsCategoryForOneDeviceNeverCountsAnotherDevicesMemory) {
+    // Background TLAS builds tag their threads (TBB workers included) with the TLAS category. A
+    // worker that kept its tag after its arena's observer went (one engine's TLAS destroyed, or
+    // a merge's arena) counted the next engine's BLAS builds as TLAS memory on that thread: the
+    // BLAS category later went negative by what the TLAS kept.
+    auto a = EmbreeDevice::create("threads=1");
+    auto b = EmbreeDevice::create("threads=1");
+    ASSERT_TRUE(a.has_value() && b.has_value());
+    (*a)->set_thread_category(int(MemoryCategory::Tlas));
+    {
+        MemoryScope scope(**b, MemoryCategory::Blas);
+        const auto [blas, tlas] = bytes_of_a_scene_built_on(**b);
+        EXPECT_GT(blas, 0);
+        EXPECT_EQ(tlas, 0);
+    }
+    EXPECT_EQ((*b)->bytes(MemoryCategory::Blas), 0);
+    // The override still applies to its own device.
+    {
+        MemoryScope scope(**a, MemoryCategory::Blas);
+        const auto [blas, tlas] = bytes_of_a_scene_built_on(**a);
+        EXPECT_EQ(blas, 0);
+        EXPECT_GT(tlas, 0);
+    }
+    (*a)->set_thread_category(-1);
+    EXPECT_EQ((*a)->bytes(MemoryCategory::Tlas), 0);
 }
 
 std::unique_ptr<Engine> engine_with_a_sphere() {

@@ -214,6 +214,7 @@ TEST(EditParser, EveryOpHasAParserAndAnEngineStruct) {
                                               "update_material", "add_instance",
                                               "update_instance", "set_transform", "remove_instance",
                                               "add_group", "update_group", "remove_group",
+                                              "add_light", "update_light", "remove_light",
                                               "mark_dirty", "set_camera", "set_lighting", "clear"));
 }
 

@@ -204,8 +204,17 @@ class ServerCommandsTest(unittest.TestCase):
         code, _, err = strata("pick", "64", "0", "--width", "64", "--height", "64", env=self.env)
         self.assertEqual(code, 3)
         self.assertIn("/pixels/0", err)
-        code, _, _ = strata("scene", "list", "lights", env=self.env)
+        code, _, _ = strata("scene", "list", "cameras", env=self.env)
         self.assertEqual(code, 2)
+        code, _, err = strata("edit", "-", env=self.env, stdin=json.dumps(
+            {"edits": [{"op": "add_light", "id": "lamp", "type": "spot"}]}))
+        self.assertEqual(code, 0, err)
+        code, out, err = strata("scene", "list", "lights", env=self.env)
+        self.assertEqual(code, 0, err)
+        self.assertEqual(out, "lamp  type=spot\n")
+        code, out, err = strata("--json", "scene", "get", "light", "lamp", env=self.env)
+        self.assertEqual(code, 0, err)
+        self.assertEqual(json.loads(out)["type"], "spot")
 
     def test_scene_tree_groups_and_group_path(self):
         edits = [{"op": "clear"},

@@ -133,7 +133,7 @@ class ClientTest(unittest.TestCase):
             self.client.scene("materials", "nope/../x")
         self.assertEqual(caught.exception.status, 404)
         with self.assertRaises(ValueError):
-            self.client.scene("lights", "sun")
+            self.client.scene("cameras", "main")
 
     def test_instances_follows_cursors_through_every_page(self):
         self.client.edit([{"op": "add_instance", "id": f"/World/b{i}", "mesh": "ball",
@@ -230,6 +230,30 @@ class ClientTest(unittest.TestCase):
         self.client.edit([{"op": "remove_group", "group": "car", "recursive": True}])
         self.assertEqual(list(self.client.groups()), [])
         self.assertEqual(self.client.scene()["counts"]["instances"], 0)
+
+    def test_lights_are_listed_edited_and_refused_with_the_field_named(self):
+        self.client.edit([
+            {"op": "add_light", "id": "lamp", "type": "spot", "position": [0, 4, 0],
+             "intensity": 40, "angle_deg": 35},
+            {"op": "add_light", "id": "panel", "type": "rect", "direction": [0, 0, 1],
+             "width": 2, "height": 1},
+        ])
+        self.assertEqual([l["id"] for l in self.client.lights(page_size=1)], ["lamp", "panel"])
+        self.assertEqual(self.client.scene()["counts"]["lights"], 2)
+        self.client.edit([{"op": "update_light", "light": "lamp", "color": [1, 0.5, 0.25]}])
+        lamp = self.client.scene("lights", "lamp")
+        self.assertEqual((lamp["type"], lamp["color"], lamp["angle_deg"]),
+                         ("spot", [1, 0.5, 0.25], 35))
+        before = self.client.stats()["version"]
+        with self.assertRaises(ProblemError) as caught:
+            self.client.edit([{"op": "remove_light", "light": "panel"},
+                              {"op": "update_light", "light": "lamp", "inner_angle_deg": 50}])
+        self.assertEqual(caught.exception.status, 422)
+        self.assertEqual(caught.exception.pointer, "/edits/1/inner_angle_deg")
+        self.assertEqual(self.client.stats()["version"], before)
+        self.assertEqual(len(list(self.client.lights())), 2)
+        self.client.edit([{"op": "remove_light", "light": "panel"}])
+        self.assertEqual([l["id"] for l in self.client.lights()], ["lamp"])
 
     def test_one_connection_is_kept_alive_across_requests(self):
         self.client.stats()

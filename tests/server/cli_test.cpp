@@ -49,7 +49,8 @@ ScopedEnv clean_env() {
     return ScopedEnv{{"STRATA_HOST", nullptr},       {"STRATA_PORT", nullptr},
                      {"STRATA_DATA", nullptr},       {"STRATA_TOKEN", nullptr},
                      {"STRATA_TOKEN_FILE", nullptr}, {"STRATA_INSECURE", nullptr},
-                     {"STRATA_LOG_LEVEL", nullptr}, {"STRATA_TLAS", nullptr}};
+                     {"STRATA_LOG_LEVEL", nullptr}, {"STRATA_TLAS", nullptr},
+                     {"STRATA_LOG", nullptr}};
 }
 
 /// Parses `args` (after the program name); fails the test on a usage error.
@@ -103,6 +104,21 @@ TEST(CommandLine, TheTlasStrategyIsIncrementalUnlessToldOtherwise) {
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
     EXPECT_TRUE(std::holds_alternative<int>(parse_command_line(int(argv.size()), argv.data())));
+}
+
+TEST(CommandLine, TheEditLogComesFromLogOrStrataLogAndABadUrlIsRefused) {
+    auto base = clean_env();
+    EXPECT_EQ(parse({}).config.log_url, "");
+    {
+        ScopedEnv env{{"STRATA_LOG", "redis://redis:6379/scene"}};
+        CommandLine cl = parse({"--log-snapshot-every", "50", "--min-version-wait-ms", "250"});
+        EXPECT_EQ(cl.config.log_url, "redis://redis:6379/scene");
+        EXPECT_EQ(cl.config.log_snapshot_every, 50u);
+        EXPECT_EQ(cl.config.min_version_wait_ms, 250);
+        EXPECT_EQ(finish_config(cl), "");
+    }
+    CommandLine bad = parse({"--log", "redis://redis:6379"});
+    EXPECT_NE(finish_config(bad).find("the stream name is missing"), std::string::npos);
 }
 
 TEST(CommandLine, TheCommandLineWinsOverTheEnvironment) {

@@ -84,6 +84,37 @@ TEST(RequestReader, HealthChecksAreAnsweredHereEvenWhenDrainingOrRestricted) {
     EXPECT_THAT(head.answer.bytes, Not(HasSubstr("ready")));
 }
 
+TEST(RequestReader, ReadyzAsksTheReadinessHookAndReportsItsNumbers) {
+    Reader r;
+    std::function<Readiness()> behind = [] {
+        Readiness x;
+        x.ready = false;
+        x.detail = "the replica stopped following the edit log: poisoned log entry 4-0";
+        return x;
+    };
+    ReaderSituation s;
+    s.readiness = &behind;
+    ReaderStep stopped = r.feed("GET /readyz HTTP/1.1\r\nHost: a\r\n\r\n", s);
+    ASSERT_EQ(stopped.kind, Kind::Answer);
+    EXPECT_EQ(stopped.answer.status, 503);
+    EXPECT_THAT(stopped.answer.bytes, HasSubstr("poisoned log entry 4-0"));
+    // /livez does not ask.
+    EXPECT_EQ(r.feed("GET /livez HTTP/1.1\r\nHost: a\r\n\r\n", s).answer.status, 200);
+
+    std::function<Readiness()> following = [] {
+        Readiness x;
+        x.section = "replica";
+        x.numbers = {{"applied_version", 12.0}, {"lag_seconds", 0.25}};
+        return x;
+    };
+    s.readiness = &following;
+    ReaderStep ready = r.feed("GET /readyz HTTP/1.1\r\nHost: a\r\n\r\n", s);
+    EXPECT_EQ(ready.answer.status, 200);
+    EXPECT_THAT(ready.answer.bytes,
+                HasSubstr("\"replica\":{\"applied_version\":12,\"lag_seconds\":0.25}"));
+    EXPECT_THAT(ready.answer.bytes, HasSubstr("\"status\":\"ready\""));
+}
+
 TEST(RequestReader, WhileStartingReadyzSaysHowFarAndEverythingButLivezIsRefusedWithRetryAfter) {
     Reader r;
     const ReaderSituation starting{false, false, true, "replaying the journal, at version 7"};

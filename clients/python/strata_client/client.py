@@ -260,12 +260,13 @@ class Client:
 
     def scene(self, kind: Optional[str] = None, id: Optional[str] = None) -> Dict[str, Any]:
         """The scene summary (GET /v1/scene), or one object's state with kind "meshes",
-        "instances", "materials" or "groups" and its id (GET /v1/scene/{kind}/{id})."""
+        "instances", "materials", "groups", "lights" or "textures" and its id (GET /v1/scene/{kind}/{id})."""
         if kind is None:
             return self._json("GET", "/v1/scene")
-        if kind not in ("meshes", "instances", "materials", "groups") or not id:
-            raise ValueError(
-                "scene(kind, id): kind is 'meshes', 'instances', 'materials' or 'groups'")
+        if kind not in ("meshes", "instances", "materials", "groups", "lights",
+                        "textures") or not id:
+            raise ValueError("scene(kind, id): kind is 'meshes', 'instances', 'materials', "
+                             "'groups', 'lights' or 'textures'")
         return self._json("GET", f"/v1/scene/{kind}/{urllib.parse.quote(id, safe='')}")
 
     def _list(self, collection: str, page_size: int, **filters: Any) -> Iterator[Dict[str, Any]]:
@@ -322,6 +323,9 @@ class Client:
         """Every texture (GET /v1/scene/textures, following cursors): id, width, height, format,
         encoded_bytes, decoded_bytes."""
         return self._list("textures", page_size)
+    def lights(self, page_size: int = 1000) -> Iterator[Dict[str, Any]]:
+        """Every point, spot and rect light (GET /v1/scene/lights, following cursors)."""
+        return self._list("lights", page_size)
 
     def pick(self, x: int, y: int, width: int, height: int,
              camera: Optional[Dict[str, Any]] = None) -> Optional[Dict[str, Any]]:

@@ -1,0 +1,57 @@
+// HTTP to Strata: the token (sessionStorage, this tab only), JSON requests with If-Match, and
+// problem documents (RFC 9457) turned into readable errors.
+
+const TOKEN_KEY = 'strata.token';
+
+export function token() {
+  return sessionStorage.getItem(TOKEN_KEY) || '';
+}
+
+export function setToken(value) {
+  if (value) sessionStorage.setItem(TOKEN_KEY, value);
+  else sessionStorage.removeItem(TOKEN_KEY);
+}
+
+/// An answer other than 2xx: `status`, the problem document (or null) and a one-line message.
+export class ApiError extends Error {
+  constructor(status, problem, text) {
+    const detail = problem && (problem.detail || problem.title);
+    super(`${status}${detail ? ': ' + detail : text ? ': ' + text.slice(0, 200) : ''}`);
+    this.status = status;
+    this.problem = problem;
+  }
+}
+
+/// fetch() with the token and JSON; resolves to {doc, etag (a number or null), response}.
+export async function api(path, { method = 'GET', body, ifMatch } = {}) {
+  const headers = {};
+  if (token()) headers.Authorization = 'Bearer ' + token();
+  if (body !== undefined) headers['Content-Type'] = 'application/json';
+  if (ifMatch !== undefined && ifMatch !== null) headers['If-Match'] = `"${ifMatch}"`;
+  const response = await fetch(path, {
+    method, headers, body: body === undefined ? undefined : JSON.stringify(body),
+  });
+  const text = await response.text();
+  let doc = null;
+  try { doc = text ? JSON.parse(text) : null; } catch { doc = null; }
+  if (!response.ok) throw new ApiError(response.status, doc, text);
+  const tag = response.headers.get('ETag');
+  return { doc, etag: tag ? Number(tag.replace(/"/g, '')) : null, response };
+}
+
+/// A URL for <img> and EventSource, which cannot send headers: the token as ?access_token=.
+export function withToken(path, params = {}) {
+  const q = new URLSearchParams(params);
+  if (token()) q.set('access_token', token());
+  const s = q.toString();
+  return s ? `${path}?${s}` : path;
+}
+
+/// Applies one edit batch, conditional on `version` (If-Match) when given.
+export function edit(edits, version) {
+  return api('/v1/edits', { method: 'POST', body: { edits }, ifMatch: version });
+}
+
+export function enc(id) {
+  return encodeURIComponent(id);
+}

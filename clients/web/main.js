@@ -1,0 +1,299 @@
+// The Strata viewer: the live frame stream (GET /v1/stream), a per-viewer camera, picking and
+// selection, edits through /v1/edits with If-Match, the scene list, and the commit-cost panel fed
+// by GET /v1/events. Plain ES modules, no build step; served by strata-server at GET /.
+
+import { api, edit, enc, setToken, token, withToken, ApiError } from './api.js';
+import { CameraControl, project } from './camera.js';
+import { CostPanel } from './cost.js';
+import { Inspector } from './inspector.js';
+import { ScenePanel } from './scene_panel.js';
+
+const $ = (id) => document.getElementById(id);
+
+/// Page parameters: ?width=&height= fix the frame size (else it fits the window), and
+/// ?fps=, ?quality=, ?max_samples= are passed to the stream (a slow link or a slow server).
+const page = new URLSearchParams(location.search);
+const pageNumber = (name, fallback) => {
+  const v = Number(page.get(name));
+  return page.has(name) && Number.isFinite(v) && v > 0 ? v : fallback;
+};
+
+/// Everything the panels share; exposed as window.strata for tests and the console.
+const state = {
+  version: null,        // newest scene version seen
+  sceneCamera: null,    // the scene's camera (GET /v1/scene)
+  size: [960, 540],
+  selected: null,       // the selected instance's document
+  frameVersion: null,   // version of the newest frame shown
+  streamUrl: '',
+};
+window.strata = state;
+
+function message(text, kind = 'error') {
+  const m = $('message');
+  m.textContent = text;
+  m.className = kind === 'info' ? 'info' : '';
+  m.hidden = !text;
+}
+
+function status(text) {
+  $('status').textContent = text;
+}
+
+// Step: the frame stream. The camera override travels in the URL; a new camera opens a new
+// stream (the browser closes the old one, and the server stops rendering it).
+let streamTimer = null;
+let streamCount = 0;
+const clientId = Math.random().toString(36).slice(2, 10);
+function openStream(camera) {
+  const [w, h] = state.size;
+  const params = {
+    width: w, height: h, quality: pageNumber('quality', 80), fps: pageNumber('fps', 20),
+    max_samples: pageNumber('max_samples', 32),
+  };
+  if (camera) {
+    params.eye = camera.eye.map((v) => v.toFixed(4)).join(',');
+    params.target = camera.target.map((v) => v.toFixed(4)).join(',');
+    params.up = camera.up.map((v) => v.toFixed(4)).join(',');
+    params.fov_y_deg = camera.fov_y_deg.toFixed(3);
+  }
+  const key = JSON.stringify(params);
+  if (key === state.streamKey) return;
+  state.streamKey = key;
+  // Unique per stream: the browser would share an in-flight image between equal URLs.
+  params.client = `${clientId}-${++streamCount}`;
+  const url = withToken('/v1/stream', params);
+  state.streamUrl = url;
+  const img = $('frame');
+  img.width = w;
+  img.height = h;
+  img.src = url;
+}
+
+/// Throttles stream reopening while the camera is being dragged.
+function cameraChanged(camera) {
+  $('follow').classList.toggle('on', camera === null);
+  clearTimeout(streamTimer);
+  streamTimer = setTimeout(() => {
+    openStream(camera);
+    drawSelection();
+  }, camera ? 60 : 0);
+  drawSelection();
+}
+
+/// The camera the frame shows: the override or the scene camera.
+function viewCamera() {
+  return controls.camera || state.sceneCamera;
+}
+
+// Step: the selection outline: the selected instance's world bounds, projected with the view's
+// camera onto the overlay.
+function drawSelection() {
+  const canvas = $('overlay');
+  const [w, h] = state.size;
+  canvas.width = w;
+  canvas.height = h;
+  const ctx = canvas.getContext('2d');
+  ctx.clearRect(0, 0, w, h);
+  const doc = state.selected;
+  const cam = viewCamera();
+  if (!doc || !doc.bounds || !cam || doc.world_visible === false) return;
+  const { min, max } = doc.bounds;
+  const corners = [];
+  for (let i = 0; i < 8; ++i) {
+    corners.push([i & 1 ? max[0] : min[0], i & 2 ? max[1] : min[1], i & 4 ? max[2] : min[2]]);
+  }
+  const p = corners.map((c) => project(cam, c, w, h));
+  ctx.strokeStyle = '#ffcc33';
+  ctx.lineWidth = 2;
+  ctx.fillStyle = 'rgba(255, 204, 51, 0.12)';
+  const edges = [[0, 1], [2, 3], [4, 5], [6, 7], [0, 2], [1, 3], [4, 6], [5, 7], [0, 4], [1, 5], [2, 6], [3, 7]];
+  ctx.beginPath();
+  for (const [a, b] of edges) {
+    if (!p[a] || !p[b]) continue;
+    ctx.moveTo(p[a][0], p[a][1]);
+    ctx.lineTo(p[b][0], p[b][1]);
+  }
+  ctx.stroke();
+  const visible = p.filter(Boolean);
+  if (visible.length === 8) {
+    const xs = visible.map((q) => q[0]), ys = visible.map((q) => q[1]);
+    ctx.fillRect(Math.min(...xs), Math.min(...ys), Math.max(...xs) - Math.min(...xs), Math.max(...ys) - Math.min(...ys));
+  }
+}
+
+async function refreshScene() {
+  const { doc } = await api('/v1/scene');
+  state.sceneCamera = doc.camera;
+  state.version = doc.version;
+  status(`version ${doc.version} · ${doc.counts.instances} instances · ${doc.counts.triangles} triangles`);
+  return doc;
+}
+
+// Step: picking. The pick asks with the frame's own size and camera, so it names what the frame
+// shows under the click.
+async function pickAt(x, y) {
+  const [w, h] = state.size;
+  const params = { x: Math.floor(x), y: Math.floor(y), width: w, height: h };
+  const cam = controls.camera;
+  if (cam) {
+    params.eye = cam.eye.join(',');
+    params.target = cam.target.join(',');
+    params.up = cam.up.join(',');
+    params.fov_y_deg = cam.fov_y_deg;
+  }
+  try {
+    const { doc } = await api('/v1/pick?' + new URLSearchParams(params));
+    if (!doc.hit) {
+      select(null);
+      return;
+    }
+    await select(doc.hit.instance, doc.hit);
+  } catch (e) {
+    message('Pick failed: ' + e.message);
+  }
+}
+
+async function select(id, hit) {
+  if (!id) {
+    state.selected = null;
+    inspector.show(null);
+    scenePanel.mark(null);
+    drawSelection();
+    return;
+  }
+  try {
+    const { doc } = await api('/v1/scene/instances/' + enc(id));
+    state.selected = doc;
+    inspector.show(doc, hit);
+    scenePanel.mark(id);
+    drawSelection();
+  } catch (e) {
+    message('Cannot read instance ' + id + ': ' + e.message);
+  }
+}
+
+/// Reloads the selected instance (after a commit: another client may have changed it).
+async function reloadSelection() {
+  if (!state.selected) return;
+  const id = state.selected.id;
+  try {
+    const { doc } = await api('/v1/scene/instances/' + enc(id));
+    state.selected = doc;
+    inspector.refresh(doc);
+  } catch (e) {
+    if (e instanceof ApiError && e.status === 404) {
+      message(`The selected instance '${id}' was removed by another client.`, 'info');
+      select(null);
+    }
+  }
+  drawSelection();
+}
+
+// Step: edits from the inspector, each one batch with If-Match on the version the panel shows.
+async function applyEdit(edits, basedOn) {
+  try {
+    const { doc } = await edit(edits, basedOn);
+    message(`Applied (version ${doc.version}).`, 'info');
+    state.version = doc.version;
+    await reloadSelection();
+    return true;
+  } catch (e) {
+    if (e instanceof ApiError && e.status === 412) {
+      message(`Conflict: the scene changed since version ${basedOn} (another client edited it). ` +
+              'Nothing was applied; the panel now shows the current values, check them and apply again.');
+      await reloadSelection();
+    } else {
+      message('Edit refused: ' + e.message);
+    }
+    return false;
+  }
+}
+
+// Step: commit events, for the cost panel and to notice other clients' edits.
+let events = null;
+function openEvents() {
+  if (events) events.close();
+  events = new EventSource(withToken('/v1/events'));
+  events.addEventListener('hello', (e) => {
+    const d = JSON.parse(e.data);
+    if (d.report) costPanel.add(d.report);
+  });
+  events.addEventListener('commit', async (e) => {
+    const d = JSON.parse(e.data);
+    costPanel.add(d.report);
+    await refreshScene().catch(() => {});
+    if (!controls.camera) drawSelection();
+    if (state.selected) reloadSelection();
+  });
+  events.onerror = () => status('event stream interrupted; retrying…');
+}
+
+function fitSize() {
+  if (page.has('width') && page.has('height')) {
+    state.size = [Math.round(pageNumber('width', 640)), Math.round(pageNumber('height', 360))];
+    return;
+  }
+  const pane = $('view-pane');
+  const w = Math.max(320, Math.min(1280, Math.floor((pane.clientWidth - 16) / 16) * 16));
+  state.size = [w, Math.round((w * 9) / 16)];
+}
+
+// Step: token. With a server that needs one, the first request answers 401: ask once, keep it
+// in sessionStorage for this tab.
+function askToken(reason) {
+  $('token-input').value = token();
+  $('token-dialog').querySelector('p').textContent = reason ||
+    'This server needs a token. It stays in this tab only (sessionStorage).';
+  if (!$('token-dialog').open) $('token-dialog').showModal();
+}
+
+async function start() {
+  message('');
+  try {
+    await refreshScene();
+  } catch (e) {
+    if (e instanceof ApiError && e.status === 401) {
+      status('token needed');
+      askToken(token() ? 'The token was refused; enter the right one.' : undefined);
+      return;
+    }
+    message('Cannot reach the server: ' + e.message);
+    return;
+  }
+  fitSize();
+  openStream(controls.camera);
+  openEvents();
+  scenePanel.load();
+}
+
+const controls = new CameraControl($('view'), {
+  onChange: cameraChanged,
+  onClick: pickAt,
+  getSceneCamera: () => state.sceneCamera,
+});
+const inspector = new Inspector($('inspector'), { applyEdit });
+const scenePanel = new ScenePanel($('scene-list'), $('scene-search'), $('scene-more'), { onSelect: (id) => select(id) });
+const costPanel = new CostPanel($('cost-chart'), $('last-report'));
+
+$('follow').addEventListener('click', () => controls.follow());
+$('follow').classList.add('on');
+$('token-open').addEventListener('click', () => askToken());
+$('token-form').addEventListener('submit', () => {
+  setToken($('token-input').value.trim());
+  state.streamKey = '';
+  start();
+});
+$('token-clear').addEventListener('click', () => {
+  setToken('');
+  $('token-dialog').close();
+});
+$('frame').addEventListener('load', () => { message(''); });
+$('frame').addEventListener('error', () => {
+  if (state.streamUrl) status('frame stream interrupted');
+});
+
+state.select = select;
+state.pickAt = pickAt;
+state.controls = controls;
+start();

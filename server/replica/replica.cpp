@@ -1,0 +1,597 @@
+#include "server/replica/replica.h"
+
+#include <algorithm>
+#include <charconv>
+
+#include <spdlog/spdlog.h>
+
+#include "engine/durable/edit_codec.h"
+#include "engine/durable/journal_format.h"
+#include "server/replica/log_entry.h"
+#include "server/replica/redis_connection.h"
+
+namespace strata::replica {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using std::chrono::milliseconds;
+
+constexpr milliseconds CONNECT_TIMEOUT{1000};
+constexpr milliseconds READER_COMMAND_TIMEOUT{5000};  // above XREAD's BLOCK
+constexpr milliseconds WRITER_COMMAND_TIMEOUT{2000};
+constexpr const char* BLOCK_MS = "1000";
+constexpr const char* READ_COUNT = "256";
+constexpr milliseconds BACKOFF_FIRST{50};
+constexpr milliseconds BACKOFF_MAX{2000};
+
+// Appends ARGV[2] as version ARGV[1] + 1 only while the log's last version is ARGV[1]. Returns
+// {1, new version} or {0, the log's version}. One script: Redis runs it atomically.
+const std::string APPEND_SCRIPT = R"lua(
+local head = tonumber(redis.call('GET', KEYS[2]) or '0')
+if head ~= tonumber(ARGV[1]) then return {0, head} end
+local v = head + 1
+redis.call('XADD', KEYS[1], string.format('%d-0', v), 'v', string.format('%d', v), 't', ARGV[3], 'r', ARGV[2])
+redis.call('SET', KEYS[2], string.format('%d', v))
+return {1, v}
+)lua";
+
+// Stores snapshot ARGV[2] of version ARGV[1] when newer than the stored one, then trims the
+// stream below the snapshot it replaced. Returns {stored 0/1, the stored version, trimmed}.
+const std::string SNAPSHOT_SCRIPT = R"lua(
+local cur = tonumber(redis.call('HGET', KEYS[1], 'version') or '0')
+local v = tonumber(ARGV[1])
+if v <= cur then return {0, cur, 0} end
+redis.call('HSET', KEYS[1], 'version', ARGV[1], 'bytes', ARGV[2])
+local trimmed = 0
+if cur > 0 then trimmed = redis.call('XTRIM', KEYS[2], 'MINID', string.format('%d-0', cur + 1)) end
+return {1, v, trimmed}
+)lua";
+
+int64_t unix_ms() {
+    return std::chrono::duration_cast<milliseconds>(
+               std::chrono::system_clock::now().time_since_epoch())
+        .count();
+}
+
+bool parse_u64(std::string_view s, uint64_t& out) {
+    const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
+    return ec == std::errc() && end == s.data() + s.size();
+}
+
+/// "123-0" -> 123.
+bool parse_entry_version(std::string_view id, uint64_t& v) {
+    const std::size_t dash = id.find('-');
+    return dash != std::string_view::npos && parse_u64(id.substr(0, dash), v);
+}
+
+Unexpected<Error> storage(std::string message) {
+    return failure(ErrorCode::Storage, std::move(message));
+}
+
+}  // namespace
+
+Replica::Replica(const ReplicaOptions& options, Engine& engine)
+    : m_options(options), m_engine(engine) {
+    m_counters.log = options.url.describe();
+}
+
+std::unique_ptr<Replica> Replica::start(const ReplicaOptions& options, Engine& engine) {
+    std::unique_ptr<Replica> r(new Replica(options, engine));
+    const uint64_t version = engine.read([](const Scene& s) { return s.version(); });
+    r->m_applied = version;
+    r->m_log_version = version;
+    r->m_reader = std::thread([p = r.get()] { p->reader_loop(); });
+    if (options.snapshot_every > 0)
+        r->m_snapshotter = std::thread([p = r.get()] { p->snapshot_loop(); });
+    return r;
+}
+
+Replica::~Replica() {
+    m_shutdown = true;
+    { std::lock_guard lock(m_mutex); }
+    m_cv.notify_all();
+    {
+        std::lock_guard lock(m_snapshot_mutex);
+        m_snapshot_due = true;
+    }
+    m_snapshot_cv.notify_all();
+    if (m_reader.joinable()) m_reader.join();
+    if (m_snapshotter.joinable()) m_snapshotter.join();
+}
+
+bool Replica::sleep_for(milliseconds d) {
+    std::unique_lock lock(m_mutex);
+    m_cv.wait_for(lock, d, [&] { return m_shutdown.load(); });
+    return !m_shutdown.load();
+}
+
+void Replica::stop_loudly(const std::string& why) {
+    {
+        std::lock_guard lock(m_mutex);
+        if (m_stopped) return;
+        m_stop_reason = why;
+        m_stopped = true;
+    }
+    m_cv.notify_all();
+    spdlog::critical(
+        "replica stopped: {}. It applies nothing more from {} and answers 503 to writes and "
+        "/readyz; reads show version {}. Fix the log, then restart it.",
+        why, m_options.url.describe(), m_applied.load());
+}
+
+void Replica::mark_joined() {
+    {
+        std::lock_guard lock(m_mutex);
+        m_joined = true;
+    }
+    m_cv.notify_all();
+    spdlog::info("edit log {}: caught up at version {}; following", m_options.url.describe(),
+                 m_applied.load());
+}
+
+void Replica::set_log_version(uint64_t v) {
+    uint64_t cur = m_log_version.load();
+    while (v > cur && !m_log_version.compare_exchange_weak(cur, v)) {
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The reader: the one path by which batches reach the engine.
+
+void Replica::reader_loop() {
+    std::unique_ptr<RedisConnection> conn;
+    milliseconds backoff = BACKOFF_FIRST;
+    bool had_connection = false;
+    bool warned = false;
+    while (!m_shutdown && !m_stopped) {
+        if (!conn) {
+            auto made =
+                RedisConnection::connect(m_options.url, CONNECT_TIMEOUT, READER_COMMAND_TIMEOUT);
+            if (!made) {
+                if (!warned)
+                    spdlog::warn(
+                        "edit log: {}; retrying with backoff (writes answer 503 "
+                        "meanwhile, reads serve version {})",
+                        made.error().message, m_applied.load());
+                warned = true;
+                if (!sleep_for(backoff)) break;
+                backoff = std::min(backoff * 2, BACKOFF_MAX);
+                continue;
+            }
+            conn = std::move(made.value());
+            if (Status s = on_connect(*conn); !s) {
+                conn.reset();
+                if (m_stopped) break;
+                if (!sleep_for(backoff)) break;
+                backoff = std::min(backoff * 2, BACKOFF_MAX);
+                continue;
+            }
+            if (had_connection) {
+                std::lock_guard lock(m_mutex);
+                ++m_counters.reconnects;
+            }
+            if (warned || had_connection)
+                spdlog::info("edit log {} reachable again at version {} (applied {})",
+                             m_options.url.describe(), m_log_version.load(), m_applied.load());
+            had_connection = true;
+            warned = false;
+            backoff = BACKOFF_FIRST;
+            m_connected = true;
+        }
+        if (Status s = read_and_apply(*conn); !s) {
+            if (m_stopped || m_shutdown) break;
+            spdlog::warn("edit log: {}; reconnecting", s.error().message);
+            conn.reset();
+            m_connected = false;
+            warned = true;
+        }
+    }
+    m_connected = false;
+}
+
+Status Replica::on_connect(RedisConnection& c) {
+    const RedisUrl& url = m_options.url;
+    // Step: the log's head, and the snapshot an empty replica starts from.
+    auto head = c.command({"GET", url.version_key()});
+    if (!head) return Unexpected(head.error());
+    uint64_t log_version = 0;
+    if (!head.value().is_nil() && !parse_u64(head.value().str, log_version)) {
+        stop_loudly("the key " + url.version_key() + " does not hold a version ('" +
+                    head.value().str.substr(0, 40) + "')");
+        return storage("bad version key");
+    }
+    auto snap_version = c.command({"HGET", url.snapshot_key(), "version"});
+    if (!snap_version) return Unexpected(snap_version.error());
+    uint64_t snapshot = 0;
+    if (!snap_version.value().is_nil()) (void)parse_u64(snap_version.value().str, snapshot);
+    m_known_snapshot = std::max(m_known_snapshot.load(), snapshot);
+
+    const uint64_t applied = m_applied.load();
+    if (log_version < applied) {
+        stop_loudly("the log ends at version " + std::to_string(log_version) +
+                    ", behind this replica's version " + std::to_string(applied) +
+                    " (was Redis reset, or did it lose acknowledged entries?)");
+        return storage("log behind the replica");
+    }
+    if (applied == 0 && snapshot > 0 && !m_joined) {
+        auto bytes = c.command({"HGET", url.snapshot_key(), "bytes"});
+        if (!bytes) return Unexpected(bytes.error());
+        auto view = durable::open_snapshot(bytes.value().str);
+        if (!view || view.value().version != snapshot) {
+            stop_loudly("the snapshot in " + url.snapshot_key() + " is unusable: " +
+                        (view ? "it holds version " + std::to_string(view.value().version) +
+                                    ", the hash says " + std::to_string(snapshot)
+                              : view.error().message));
+            return storage("bad snapshot");
+        }
+        if (Status s = m_engine.restore_snapshot(view.value().payload, snapshot); !s) {
+            stop_loudly("the snapshot of version " + std::to_string(snapshot) +
+                        " does not load: " + s.error().describe());
+            return storage("bad snapshot");
+        }
+        {
+            std::lock_guard lock(m_mutex);
+            m_applied = snapshot;
+            m_counters.snapshot_loaded_version = snapshot;
+        }
+        m_cv.notify_all();
+        spdlog::info("edit log: loaded the snapshot of version {} ({} bytes) from {}", snapshot,
+                     bytes.value().str.size(), url.snapshot_key());
+    }
+    set_log_version(log_version);
+    if (!m_joined) {
+        m_join_target = log_version;
+        if (m_applied.load() >= m_join_target) mark_joined();
+    }
+    return {};
+}
+
+Status Replica::read_and_apply(RedisConnection& c) {
+    const RedisUrl& url = m_options.url;
+    const std::string after = entry_id(m_applied.load());
+    auto reply =
+        c.command({"XREAD", "COUNT", READ_COUNT, "BLOCK", BLOCK_MS, "STREAMS", url.stream, after});
+    if (!reply) return Unexpected(reply.error());
+    if (reply.value().is_nil()) {
+        // Nothing new for a second: refresh the head (entries trimmed away show up here).
+        auto head = c.command({"GET", url.version_key()});
+        if (!head) return Unexpected(head.error());
+        uint64_t v = 0;
+        if (!head.value().is_nil() && parse_u64(head.value().str, v)) set_log_version(v);
+        if (m_log_version.load() > m_applied.load()) {
+            // The head moved but XREAD found nothing after us: the entries are gone.
+            auto again = c.command(
+                {"XRANGE", url.stream, entry_id(m_applied.load() + 1), "+", "COUNT", "1"});
+            if (!again) return Unexpected(again.error());
+            if (again.value().elements.empty()) {
+                stop_loudly("the log is at version " + std::to_string(m_log_version.load()) +
+                            " but holds no entry after version " +
+                            std::to_string(m_applied.load()) + " (trimmed or deleted)");
+                return storage("gap");
+            }
+        }
+        return {};
+    }
+    // [[stream, [[id, [field, value, ...]], ...]]]
+    const RedisReply& streams = reply.value();
+    if (streams.elements.empty() || streams.elements[0].elements.size() < 2) return {};
+    const std::vector<RedisReply>& entries = streams.elements[0].elements[1].elements;
+    for (const RedisReply& e : entries) {
+        if (m_shutdown) return {};
+        if (e.elements.size() < 2) {
+            stop_loudly("the log returned a malformed entry");
+            return storage("malformed");
+        }
+        uint64_t version = 0;
+        const std::string& id = e.elements[0].str;
+        const std::string* record = nullptr;
+        int64_t appended_ms = 0;
+        const auto& fields = e.elements[1].elements;
+        for (std::size_t i = 0; i + 1 < fields.size(); i += 2) {
+            if (fields[i].str == "r") record = &fields[i + 1].str;
+            if (fields[i].str == "t")
+                (void)std::from_chars(fields[i + 1].str.data(),
+                                      fields[i + 1].str.data() + fields[i + 1].str.size(),
+                                      appended_ms);
+        }
+        const uint64_t applied = m_applied.load();
+        if (!parse_entry_version(id, version) || record == nullptr) {
+            stop_loudly("the log entry " + id +
+                        " is not a Strata entry (no version id or no "
+                        "field 'r')");
+            return storage("poisoned");
+        }
+        if (version != applied + 1) {
+            stop_loudly("the log entry of version " + std::to_string(version) +
+                        " follows this replica's version " + std::to_string(applied) +
+                        ": the entries between were trimmed before it read them (restart it "
+                        "with an empty scene to load the snapshot)");
+            return storage("gap");
+        }
+        set_log_version(version);
+        if (m_lag_since_ms.load() == 0) m_lag_since_ms = appended_ms ? appended_ms : unix_ms();
+
+        // Step: check and apply the entry at exactly the version it was appended for.
+        auto decoded = decode_entry(*record);
+        if (!decoded || decoded.value().version != version) {
+            stop_loudly("poisoned log entry " + id + ": " +
+                        (decoded ? "it says version " + std::to_string(decoded.value().version)
+                                 : decoded.error().message));
+            return storage("poisoned");
+        }
+        auto batch = durable::decode_batch(decoded.value().payload);
+        if (!batch) {
+            stop_loudly("poisoned log entry " + id + ": " + batch.error().describe());
+            return storage("poisoned");
+        }
+        auto done = m_engine.apply(std::move(batch.value()), applied);
+        if (!done) {
+            stop_loudly("poisoned log entry " + id + " does not apply at version " +
+                        std::to_string(applied) + ": " + done.error().describe());
+            return storage("poisoned");
+        }
+        {
+            std::lock_guard lock(m_mutex);
+            m_applied = version;
+            ++m_counters.entries_applied;
+        }
+        m_cv.notify_all();
+        if (version >= m_log_version.load()) {
+            m_lag_since_ms = 0;
+        } else {
+            m_lag_since_ms = appended_ms ? appended_ms : m_lag_since_ms.load();
+        }
+        if (!m_joined && version >= m_join_target) mark_joined();
+        if (m_options.snapshot_every > 0 && version % m_options.snapshot_every == 0 &&
+            version > m_known_snapshot.load()) {
+            {
+                std::lock_guard lock(m_snapshot_mutex);
+                m_snapshot_due = true;
+            }
+            m_snapshot_cv.notify_one();
+        }
+    }
+    return {};
+}
+
+// ---------------------------------------------------------------------------------------------
+// The write path: validate, append conditionally, wait for the reader.
+
+RedisConnection* Replica::writer(Error& error) {
+    if (m_writer && !m_writer->broken()) return m_writer.get();
+    m_writer.reset();
+    const auto now = Clock::now();
+    if (now < m_writer_retry_at) {
+        error = make_error(ErrorCode::Storage, "the edit log " + m_options.url.describe() +
+                                                   " is unreachable (retrying)");
+        return nullptr;
+    }
+    auto made = RedisConnection::connect(m_options.url, CONNECT_TIMEOUT, WRITER_COMMAND_TIMEOUT);
+    if (!made) {
+        m_writer_backoff = m_writer_backoff.count() == 0
+                               ? BACKOFF_FIRST
+                               : std::min(m_writer_backoff * 2, BACKOFF_MAX);
+        m_writer_retry_at = now + m_writer_backoff;
+        error =
+            make_error(ErrorCode::Storage, "the edit log is unreachable: " + made.error().message);
+        return nullptr;
+    }
+    m_writer_backoff = milliseconds(0);
+    m_writer = std::move(made.value());
+    return m_writer.get();
+}
+
+Result<ApplyResult> Replica::append(EditBatch&& batch, std::optional<uint64_t> expected) {
+    const auto deadline = Clock::now() + m_options.write_timeout;
+    auto left = [&] {
+        return std::max(milliseconds(0),
+                        std::chrono::duration_cast<milliseconds>(deadline - Clock::now()));
+    };
+    auto stopped = [&]() -> Unexpected<Error> {
+        std::lock_guard lock(m_mutex);
+        return storage("this replica has stopped following the edit log: " + m_stop_reason);
+    };
+    if (m_stopped) return stopped();
+    {
+        std::unique_lock lock(m_mutex);
+        m_cv.wait_until(lock, deadline, [&] { return m_joined || m_stopped || m_shutdown; });
+    }
+    if (m_stopped) return stopped();
+    if (!m_joined)
+        return storage("this replica has not caught up with the edit log " +
+                       m_options.url.describe() + " yet (is Redis reachable?)");
+
+    // The entry is encoded once; each attempt only restamps its version.
+    const std::size_t count = batch.edits.size();
+    std::string entry = encode_entry(batch, 0);
+    batch = {};
+    for (;;) {
+        // Step: the version to validate at. A client that saw a newer version (If-Match) than
+        // this replica has applied waits for it first.
+        if (expected && m_applied.load() < *expected && !wait_applied(*expected, left())) {
+            if (m_stopped) return stopped();
+            return storage("this replica is at version " + std::to_string(m_applied.load()) +
+                           ", behind the If-Match version " + std::to_string(*expected) +
+                           ", and did not catch up in time");
+        }
+        const uint64_t base = m_applied.load();
+        if (expected && base != *expected)
+            return failure(ErrorCode::VersionMismatch, "the scene is at version " +
+                                                           std::to_string(base) + ", not " +
+                                                           std::to_string(*expected));
+        // Step: validate against the local scene at `base`.
+        auto copy =
+            durable::decode_batch(std::string_view(entry).substr(durable::RECORD_HEADER_BYTES));
+        if (!copy) return Unexpected(copy.error());
+        if (Status ok = m_engine.validate(std::move(copy.value()), base); !ok) {
+            if (ok.error().code != ErrorCode::VersionMismatch) {
+                // Refused at `base`: maybe only because this replica has not applied what the
+                // log holds yet (a client writing on one replica, then on another). The answer
+                // stands only against the log's head.
+                auto head = log_head();
+                if (!head) return Unexpected(head.error());
+                if (head.value() <= base) return Unexpected(ok.error());
+                set_log_version(head.value());
+                if (expected)
+                    return failure(ErrorCode::VersionMismatch,
+                                   "the edit log is at version " + std::to_string(head.value()) +
+                                       ", not " + std::to_string(*expected));
+                if (!wait_applied(head.value(), left())) {
+                    if (m_stopped) return stopped();
+                    return storage("this replica did not catch up with the edit log (version " +
+                                   std::to_string(head.value()) + ") in time to validate");
+                }
+                continue;
+            }
+            // The reader applied an entry meanwhile: validate again at the new version.
+            if (Clock::now() >= deadline)
+                return storage("the scene kept moving: the batch could not be validated within " +
+                               std::to_string(m_options.write_timeout.count()) + " ms");
+            std::this_thread::yield();
+            continue;
+        }
+        // Step: append only while the log's head is still `base`.
+        const std::string stamped = restamp_entry(entry, base + 1);
+        const std::string base_text = std::to_string(base);
+        const std::string now_text = std::to_string(unix_ms());
+        Result<RedisReply> reply = [&]() -> Result<RedisReply> {
+            std::lock_guard lock(m_writer_mutex);
+            Error error;
+            RedisConnection* c = writer(error);
+            if (!c) return Unexpected(error);
+            return c->eval(APPEND_SCRIPT, {m_options.url.stream, m_options.url.version_key()},
+                           {base_text, stamped, now_text});
+        }();
+        if (!reply) return Unexpected(reply.error());
+        const RedisReply& r = reply.value();
+        if (r.elements.size() != 2)
+            return storage("the edit log's append script answered something unexpected");
+        const uint64_t head = uint64_t(r.elements[1].integer);
+        if (r.elements[0].integer == 1) {
+            {
+                std::lock_guard lock(m_mutex);
+                ++m_counters.appends;
+            }
+            if (!wait_applied(head, left())) {
+                if (m_stopped) return stopped();
+                return storage("the batch was appended to the edit log as version " +
+                               std::to_string(head) +
+                               " but this replica has not applied it "
+                               "in time (it will; read with min_version=" +
+                               std::to_string(head) + ")");
+            }
+            return ApplyResult{head, count};
+        }
+        // Step: the log moved on. With If-Match that is the client's answer; without, catch
+        // up and try again.
+        {
+            std::lock_guard lock(m_mutex);
+            ++m_counters.append_conflicts;
+        }
+        set_log_version(head);
+        if (expected)
+            return failure(ErrorCode::VersionMismatch, "the edit log is at version " +
+                                                           std::to_string(head) + ", not " +
+                                                           std::to_string(*expected));
+        if (!wait_applied(head, left())) {
+            if (m_stopped) return stopped();
+            return storage("the edit log kept moving: the batch could not be appended within " +
+                           std::to_string(m_options.write_timeout.count()) + " ms");
+        }
+    }
+}
+
+Result<uint64_t> Replica::log_head() {
+    std::lock_guard lock(m_writer_mutex);
+    Error error;
+    RedisConnection* c = writer(error);
+    if (!c) return Unexpected(error);
+    auto head = c->command({"GET", m_options.url.version_key()});
+    if (!head) return Unexpected(head.error());
+    uint64_t v = 0;
+    if (!head.value().is_nil() && !parse_u64(head.value().str, v))
+        return storage("the key " + m_options.url.version_key() + " does not hold a version");
+    return v;
+}
+
+bool Replica::wait_applied(uint64_t version, milliseconds timeout) {
+    std::unique_lock lock(m_mutex);
+    return m_cv.wait_for(lock, timeout, [&] {
+        return m_applied.load() >= version || m_stopped || m_shutdown;
+    }) && m_applied.load() >= version;
+}
+
+ReplicaStatus Replica::status() const {
+    ReplicaStatus s;
+    {
+        std::lock_guard lock(m_mutex);
+        s = m_counters;
+        s.stop_reason = m_stop_reason;
+    }
+    s.connected = m_connected;
+    s.joined = m_joined;
+    s.stopped = m_stopped;
+    s.applied_version = m_applied;
+    s.log_version = std::max(m_log_version.load(), s.applied_version);
+    s.lag_entries = s.log_version - s.applied_version;
+    const int64_t since = m_lag_since_ms.load();
+    s.lag_seconds =
+        s.lag_entries > 0 && since > 0 ? std::max<int64_t>(0, unix_ms() - since) / 1e3 : 0.0;
+    s.last_snapshot_version = std::max(s.last_snapshot_version, m_known_snapshot.load());
+    return s;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Snapshots in Redis, and trimming.
+
+void Replica::snapshot_loop() {
+    for (;;) {
+        {
+            std::unique_lock lock(m_snapshot_mutex);
+            m_snapshot_cv.wait(lock, [&] { return m_snapshot_due || m_shutdown; });
+            m_snapshot_due = false;
+        }
+        if (m_shutdown) return;
+        if (Status s = write_snapshot(); !s)
+            spdlog::warn("edit log snapshot not stored (the log keeps its entries): {}",
+                         s.error().message);
+    }
+}
+
+Status Replica::write_snapshot() {
+    const RedisUrl& url = m_options.url;
+    auto made = RedisConnection::connect(url, CONNECT_TIMEOUT, milliseconds(30000));
+    if (!made) return Unexpected(made.error());
+    RedisConnection& c = *made.value();
+    // Step: another replica may have stored this version already.
+    auto stored = c.command({"HGET", url.snapshot_key(), "version"});
+    if (!stored) return Unexpected(stored.error());
+    uint64_t have = 0;
+    if (!stored.value().is_nil()) (void)parse_u64(stored.value().str, have);
+    m_known_snapshot = std::max(m_known_snapshot.load(), have);
+    SceneImage image = m_engine.read([](const Scene& s) { return s.image(); });
+    if (image.version <= have) return {};
+    // Step: encoded outside the scene lock, stored and trimmed in one script.
+    const std::string bytes = durable::encode_snapshot(image.to_batch(), image.version);
+    const uint64_t version = image.version;
+    image = {};
+    auto reply =
+        c.eval(SNAPSHOT_SCRIPT, {url.snapshot_key(), url.stream}, {std::to_string(version), bytes});
+    if (!reply) return Unexpected(reply.error());
+    const RedisReply& r = reply.value();
+    if (r.elements.size() != 3) return storage("the snapshot script answered something unexpected");
+    m_known_snapshot = std::max(m_known_snapshot.load(), uint64_t(r.elements[1].integer));
+    if (r.elements[0].integer == 1) {
+        std::lock_guard lock(m_mutex);
+        ++m_counters.snapshots_written;
+        m_counters.entries_trimmed += uint64_t(r.elements[2].integer);
+        spdlog::info(
+            "edit log: stored the snapshot of version {} ({} bytes) in {}; trimmed {} "
+            "entries",
+            version, bytes.size(), url.snapshot_key(), r.elements[2].integer);
+    }
+    return {};
+}
+
+}  // namespace strata::replica

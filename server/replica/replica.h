@@ -1,0 +1,144 @@
+#pragma once
+// A replica: this server's engine following the shared edit log, a Redis stream (issue 16).
+//
+// One writer path. Every batch reaches the engine through the reader thread, which reads the
+// stream in order (XREAD BLOCK) and applies each entry at exactly the version it was appended
+// for, this replica's own batches included. append() only validates a batch against the local
+// scene at version V, appends it with a Lua script that succeeds only while the stream's last
+// version is still V, and waits until the reader has applied it. Since every replica applies the
+// same entries in the same order from the same state, all hold the same scene at each version.
+//
+// Failures. An entry that fails its checksum or does not apply (a poisoned entry), a gap in the
+// versions (entries trimmed before this replica read them) or a log that ends before this
+// replica's version stop the replica loudly: it applies nothing more, /readyz answers 503 with
+// the reason, writes 503, and the reason is logged and exported. Redis unreachable: writes fail
+// with a Storage error (503), reads and renders of the applied version go on, and the reader
+// reconnects with backoff (50 ms doubling to 2 s) and catches up.
+//
+// Snapshots and trimming. Every `snapshot_every` versions a background thread stores a snapshot
+// of the scene (journal_format.h's snapshot bytes) in the hash `<stream>:snapshot`, replacing an
+// older one, and trims the stream below the snapshot it replaced (XTRIM MINID): the log keeps the
+// entries since the previous snapshot, so a replica that had reached it can still follow. A new
+// replica with an empty scene loads the snapshot and follows the stream from its version.
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "engine/engine.h"
+#include "server/replica/redis_url.h"
+
+namespace strata::replica {
+
+class RedisConnection;
+
+struct ReplicaOptions {
+    RedisUrl url;
+    /// The longest a write may take to be appended and applied here (conflicts retried meanwhile).
+    std::chrono::milliseconds write_timeout{5000};
+    /// Versions between snapshots stored in Redis; 0: this replica writes none.
+    uint64_t snapshot_every = 1000;
+};
+
+/// What /readyz, /metrics and GET /v1/stats say about the replica.
+struct ReplicaStatus {
+    std::string log;          ///< redis://host:port/stream
+    bool connected = false;   ///< the reader holds a connection now
+    bool joined = false;      ///< caught up once with the log as it was at start
+    bool stopped = false;     ///< stopped for good (see stop_reason)
+    std::string stop_reason;  ///< why: a poisoned entry, a gap, a log behind this replica
+    uint64_t applied_version = 0;
+    uint64_t log_version = 0;  ///< the newest version this replica knows the log has
+    uint64_t lag_entries = 0;  ///< log_version - applied_version
+    double lag_seconds = 0.0;  ///< how long the oldest unapplied entry has waited (0: none)
+    uint64_t entries_applied = 0;
+    uint64_t appends = 0;                  ///< batches this replica appended
+    uint64_t append_conflicts = 0;         ///< appends refused because the log had moved on
+    uint64_t reconnects = 0;               ///< connections the reader made after losing one
+    uint64_t snapshot_loaded_version = 0;  ///< the Redis snapshot this replica started from
+    uint64_t snapshots_written = 0;
+    uint64_t last_snapshot_version = 0;  ///< newest snapshot this replica knows of
+    uint64_t entries_trimmed = 0;        ///< entries this replica's snapshots trimmed
+};
+
+class Replica {
+public:
+    /// Starts following the log into `engine` (its version is where following starts; an empty
+    /// engine first loads the log's snapshot, if there is one). Redis need not be reachable yet.
+    static std::unique_ptr<Replica> start(const ReplicaOptions& options, Engine& engine);
+    /// Stops the threads.
+    ~Replica();
+    Replica(const Replica&) = delete;
+    Replica& operator=(const Replica&) = delete;
+
+    /// Validates `batch` at the applied version, appends it to the log and returns once this
+    /// replica has applied it. With `expected` (If-Match), a log at another version is a
+    /// VersionMismatch; without, the batch is revalidated and retried after catching up. Redis
+    /// unreachable, a stopped replica or a timeout: a Storage error saying which.
+    Result<ApplyResult> append(EditBatch&& batch, std::optional<uint64_t> expected);
+
+    /// Waits until the applied version is at least `version`; false on timeout or when the
+    /// replica stopped.
+    bool wait_applied(uint64_t version, std::chrono::milliseconds timeout);
+
+    uint64_t applied_version() const { return m_applied.load(); }
+    ReplicaStatus status() const;
+    /// Ready to serve: joined, not stopped.
+    bool ready() const { return m_joined.load() && !m_stopped.load(); }
+
+private:
+    Replica(const ReplicaOptions& options, Engine& engine);
+    void reader_loop();
+    /// After a (re)connection: the log's head, the snapshot to start from.
+    Status on_connect(RedisConnection& c);
+    /// Reads and applies one XREAD's worth; errors lose the connection.
+    Status read_and_apply(RedisConnection& c);
+    void stop_loudly(const std::string& why);
+    void set_log_version(uint64_t v);
+    void mark_joined();
+    void snapshot_loop();
+    Status write_snapshot();
+    /// The log's last version, read on the writer connection.
+    Result<uint64_t> log_head();
+    /// The writer connection, made on demand; null (and `error`) while Redis is unreachable.
+    RedisConnection* writer(Error& error);
+    bool sleep_for(std::chrono::milliseconds d);  ///< false once shutting down
+
+    const ReplicaOptions m_options;
+    Engine& m_engine;
+
+    std::atomic<uint64_t> m_applied{0};
+    std::atomic<uint64_t> m_log_version{0};
+    std::atomic<bool> m_joined{false};
+    std::atomic<bool> m_stopped{false};
+    std::atomic<bool> m_connected{false};
+    std::atomic<bool> m_shutdown{false};
+    std::atomic<int64_t> m_lag_since_ms{0};  ///< unix ms the oldest unapplied entry was appended
+    uint64_t m_join_target = 0;              ///< reader thread only
+
+    mutable std::mutex m_mutex;  ///< guards the fields below and pairs with m_cv
+    std::condition_variable m_cv;
+    std::string m_stop_reason;
+    ReplicaStatus m_counters;  ///< the counting fields only
+
+    std::mutex m_writer_mutex;
+    std::unique_ptr<RedisConnection> m_writer;
+    std::chrono::steady_clock::time_point m_writer_retry_at{};
+    std::chrono::milliseconds m_writer_backoff{0};
+
+    std::mutex m_snapshot_mutex;
+    std::condition_variable m_snapshot_cv;
+    bool m_snapshot_due = false;
+    std::atomic<uint64_t> m_known_snapshot{0};
+
+    std::thread m_reader;
+    std::thread m_snapshotter;
+};
+
+}  // namespace strata::replica

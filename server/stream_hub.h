@@ -1,0 +1,135 @@
+#pragma once
+// The live viewer's producer: renders frames for GET /v1/stream and publishes commit events for
+// GET /v1/events, into StreamChannels the front end writes (stream_channel.h).
+//
+// Frames. Viewers asking for the same view (the same render parameters) share one render per
+// (scene version, view): a render happens only when the scene version moved or progressive
+// accumulation can still improve the frame (up to max_samples), never more often than the
+// fastest of those viewers asked (fps), and not at all when nothing changed. Every viewer render
+// runs on the hub's one thread - viewers together hold one render slot - and it waits while any
+// API render or commit is queued or running, so API clients go first: one waits at most for the
+// viewer frame in progress. Renders use the engine's render path (Engine::render_frame with the
+// request GET /v1/render parses, accumulating) and are encoded as JPEG (jpeg_encode.h).
+//
+// Events. Each commit that brought edits in becomes one `commit` event with its version and
+// rebuild report: the hub's own renders hand their report over directly; commits other clients
+// cause (POST /v1/commit, API renders, picks) are noticed within IDLE_WAIT from the engine's
+// commit counter and last report. Two such commits closer together than that are reported as
+// the later one only (the engine has no commit callback yet; see the report of issue 15).
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "engine/core/cancel.h"
+#include "engine/engine.h"
+#include "server/stream_channel.h"
+
+namespace strata::server {
+
+/// What ends every frame and starts the next part: the boundary and the part's headers.
+inline constexpr const char* STREAM_PART_SEPARATOR =
+    "\r\n--strata-frame\r\nContent-Type: image/jpeg\r\n\r\n";
+
+/// What one viewer watches.
+struct ViewerSpec {
+    RenderRequest request;      ///< each launch: size, spp, exposure, camera override
+    int quality = 75;           ///< JPEG quality, 1..100
+    double fps = 10.0;          ///< most frames per second this viewer is sent
+    uint32_t max_samples = 16;  ///< accumulation stops improving the frame here
+    std::string key;            ///< viewers with equal keys share renders
+};
+
+/// Cumulative counts, for /metrics and tests.
+struct StreamHubStats {
+    uint64_t viewers = 0;          ///< frame streams open now
+    uint64_t event_clients = 0;    ///< event streams open now
+    uint64_t views = 0;            ///< distinct views rendered for now
+    uint64_t frames_rendered = 0;  ///< viewer renders (each shared by its view's viewers)
+    uint64_t frames_offered = 0;   ///< frames handed to viewers' channels
+    uint64_t render_errors = 0;
+    uint64_t events_published = 0;  ///< commit events (each sent to every event client)
+    uint64_t deferred_for_api = 0;  ///< times a due viewer render waited for API renders
+    uint64_t frames_dropped = 0;    ///< frames open viewers missed (a newer one replaced them)
+    std::size_t held_bytes = 0;     ///< frame bytes held for open viewers (pending and writing)
+};
+
+/// The stats as Prometheus text (strata_stream_*), appended to `out`.
+void write_stream_metrics(std::string& out, const StreamHubStats& stats);
+
+class StreamHub {
+public:
+    /// `api_busy`: true while an API render or commit is queued or running.
+    StreamHub(Engine& engine, std::function<bool()> api_busy);
+    ~StreamHub();
+    StreamHub(const StreamHub&) = delete;
+    StreamHub& operator=(const StreamHub&) = delete;
+
+    /// A new frame stream whose response starts with `head`; null once stopped.
+    std::shared_ptr<StreamChannel> watch(ViewerSpec spec, std::string head);
+    /// A new event stream whose response starts with `head`; null once stopped.
+    std::shared_ptr<StreamChannel> subscribe(std::string head);
+    /// Queues a commit event (quick, any thread); commits at a version already reported are
+    /// ignored.
+    void on_commit(const RebuildReport& report);
+
+    /// Ends every stream and stops rendering (a viewer render in progress is cancelled).
+    /// Idempotent, thread-safe.
+    void stop();
+    /// stop(), then waits for the hub's thread.
+    void join();
+
+    StreamHubStats stats() const;
+    /// The report of the newest commit that brought edits in (no-change commits, which every
+    /// launch makes, do not replace it), or the engine's last report before the first.
+    RebuildReport last_commit() const;
+
+private:
+    using Clock = std::chrono::steady_clock;
+    struct View {
+        ViewerSpec spec;
+        std::vector<std::shared_ptr<StreamChannel>> viewers;
+        uint64_t version = UINT64_MAX;  ///< of the last frame
+        uint32_t samples = 0;           ///< in the last frame
+        uint32_t launches = 0;          ///< at that version (guards against restarts)
+        uint64_t failed_version = UINT64_MAX;
+        Clock::time_point next_render{};
+        StreamChannel::Part last;  ///< the newest frame, for viewers who join
+    };
+
+    void run();
+    void publish_events(std::vector<RebuildReport> reports, Clock::time_point now);
+    /// Queues the engine's last report when a commit happened since the last look.
+    void poll_commits();
+    /// Renders the most overdue view that needs a frame; false when none did.
+    bool render_one(Clock::time_point now);
+    uint64_t scene_version() const;
+
+    Engine& m_engine;
+    std::function<bool()> m_api_busy;
+    CancelToken m_cancel;  ///< the hub's renders; cancelled by stop()
+
+    mutable std::mutex m_mutex;
+    std::condition_variable m_wake;
+    bool m_stopping = false;
+    bool m_poked = false;
+    std::map<std::string, View> m_views;
+    std::vector<std::shared_ptr<StreamChannel>> m_event_clients;
+    std::vector<RebuildReport> m_reports;
+    uint64_t m_commits_seen = 0;      ///< the engine's commit counter at the last look
+    uint64_t m_reported_version = 0;  ///< of the newest commit event
+    std::optional<RebuildReport> m_last_commit;
+    Clock::time_point m_next_heartbeat{};
+    StreamHubStats m_stats;
+    std::thread m_thread;
+};
+
+}  // namespace strata::server

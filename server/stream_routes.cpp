@@ -1,0 +1,160 @@
+// GET /v1/stream (the live viewer's JPEG frames) and GET /v1/events (commit events): the
+// handlers check the request and open a stream on the hub (stream_hub.h); the front end then
+// writes it (reactor.h, Streaming) without holding a worker.
+
+#include <charconv>
+#include <cmath>
+
+#include "engine/render/accumulator.h"
+#include "protocol/render_parser.h"
+#include "protocol/report_json.h"
+#include "server/context.h"
+#include "server/http_util.h"
+#include "server/route_table.h"
+#include "server/router.h"
+#include "server/stream_hub.h"
+
+namespace strata::server {
+
+namespace {
+
+using protocol::ProblemType;
+
+/// Bounds of the stream-only parameters.
+constexpr double MAX_STREAM_FPS = 60.0;
+constexpr uint32_t MAX_STREAM_SAMPLES = 4096;
+
+protocol::Problem bad_parameter(const std::string& name, const std::string& detail) {
+    protocol::Problem p = protocol::make_problem(ProblemType::InvalidRequest, detail);
+    p.pointer = "/" + name;
+    return p;
+}
+
+/// Takes `name` out of `params` as a number in [lo, hi]; `out` keeps its default when absent.
+template <class T>
+std::optional<protocol::Problem> take_number(std::multimap<std::string, std::string>& params,
+                                             const std::string& name, T lo, T hi, T& out) {
+    auto it = params.find(name);
+    if (it == params.end()) return std::nullopt;
+    const std::string text = it->second;
+    params.erase(it);
+    double v = 0;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+    if (ec != std::errc() || end != text.data() + text.size() || !std::isfinite(v) ||
+        v < double(lo) || v > double(hi) || (std::is_integral_v<T> && v != std::floor(v)))
+        return bad_parameter(name, "query parameter '" + name + "' must be a" +
+                                       (std::is_integral_v<T> ? "n integer" : " number") +
+                                       " from " + protocol::Json(lo).dump() + " to " +
+                                       protocol::Json(hi).dump() + ", not '" + text + "'");
+    out = T(v);
+    return std::nullopt;
+}
+
+/// The stream's parameters: fps, quality and max_samples of its own, the rest as GET
+/// /v1/render reads them (protocol/render_parser.h).
+std::variant<ViewerSpec, protocol::Problem> parse_viewer(
+    std::multimap<std::string, std::string> params, const protocol::ApiLimits& limits) {
+    ViewerSpec spec;
+    if (auto p = take_number(params, "fps", 0.1, MAX_STREAM_FPS, spec.fps)) return *p;
+    if (auto p = take_number(params, "quality", 1, 100, spec.quality)) return *p;
+    if (auto p = take_number(params, "max_samples", 1u, MAX_STREAM_SAMPLES, spec.max_samples))
+        return *p;
+    // An opaque value that makes a viewer's URL its own: browsers share one in-flight image
+    // between equal URLs, so a reloaded page would wait on the stream of the page it replaced.
+    if (auto it = params.find("client"); it != params.end()) params.erase(it);
+    for (const char* fixed : {"format", "aovs", "compression", "accumulate"}) {
+        if (params.count(fixed))
+            return bad_parameter(fixed, std::string("query parameter '") + fixed +
+                                            "' does not apply to /v1/stream: frames are JPEG, "
+                                            "accumulating up to max_samples");
+    }
+    // Equal render parameters share renders; the per-viewer pace does not split a view.
+    spec.key = "q=" + std::to_string(spec.quality) + "&s=" + std::to_string(spec.max_samples);
+    for (const auto& [name, value] : params) spec.key += "&" + name + "=" + value;
+    auto request = protocol::parse_render_query(params);
+    if (!request) return protocol::problem_from(request.error());
+    spec.request = std::move(request.value());
+    const uint64_t pixels = uint64_t(spec.request.width) * spec.request.height;
+    if (pixels > std::min<uint64_t>(limits.max_pixels, MAX_ACCUMULATE_PIXELS)) {
+        protocol::Problem p = protocol::make_problem(
+            ProblemType::TooLarge, std::to_string(spec.request.width) + "x" +
+                                       std::to_string(spec.request.height) +
+                                       " is more pixels than a stream renders (--max-pixels)");
+        p.pointer = "/width";
+        return p;
+    }
+    if (Status s = check_render_request(spec.request); !s) return protocol::problem_from(s.error());
+    return spec;
+}
+
+/// GET only: the headers of a stream exist only as the stream starts.
+bool refuse_head(const httplib::Request& req, httplib::Response& res) {
+    if (req.method != "HEAD") return false;
+    res.set_header("Allow", "GET");
+    send_problem(res, protocol::make_problem(ProblemType::MethodNotAllowed,
+                                             "HEAD " + req.path + " is not served: use GET"));
+    return true;
+}
+
+void stream_unavailable(httplib::Response& res) {
+    send_problem(res, protocol::make_problem(ProblemType::Unavailable,
+                                             "the server is shutting down; streams are closed"));
+}
+
+/// Hands `channel` to the front end instead of the httplib response.
+void hand_over(httplib::Response& res, std::shared_ptr<StreamChannel> channel) {
+    res.status = 200;  // for the access log; the front end writes the channel's head
+    if (RequestContext* context = current_request()) context->stream = std::move(channel);
+}
+
+}  // namespace
+
+void add_stream_routes(Router& router, ServerContext& ctx) {
+    router.get("/v1/stream", [&ctx](const httplib::Request& req, httplib::Response& res) {
+        if (refuse_head(req, res)) return;
+        auto parsed = parse_viewer(req.params, ctx.api_limits);
+        if (auto* p = std::get_if<protocol::Problem>(&parsed)) return send_problem(res, *p);
+        if (!ctx.streams || !current_request()) return stream_unavailable(res);
+        std::string head =
+            "HTTP/1.1 200 OK\r\n"
+            "Content-Type: multipart/x-mixed-replace; boundary=strata-frame\r\n"
+            "Cache-Control: no-store\r\n"
+            "Connection: close\r\n"
+            "\r\n"
+            "--strata-frame\r\n"
+            "Content-Type: image/jpeg\r\n"
+            "\r\n";
+        auto channel = ctx.streams->watch(std::move(std::get<ViewerSpec>(parsed)), std::move(head));
+        if (!channel) return stream_unavailable(res);
+        hand_over(res, std::move(channel));
+    });
+    router.get("/v1/events", [&ctx](const httplib::Request& req, httplib::Response& res) {
+        if (refuse_head(req, res)) return;
+        if (!req.params.empty())
+            return send_problem(res, bad_parameter(req.params.begin()->first,
+                                                   "GET /v1/events takes no query parameter ('" +
+                                                       req.params.begin()->first + "')"));
+        if (!ctx.streams || !current_request()) return stream_unavailable(res);
+        // The first event says where the scene stands: its version and the last commit's
+        // report (null before the first commit).
+        const EngineCounters counters = ctx.engine.counters();
+        const uint64_t version = ctx.engine.read([](const Scene& s) { return s.version(); });
+        const protocol::Json hello = {
+            {"version", version},
+            {"report", counters.commits ? protocol::report_to_json(ctx.streams->last_commit())
+                                        : protocol::Json(nullptr)}};
+        std::string head =
+            "HTTP/1.1 200 OK\r\n"
+            "Content-Type: text/event-stream\r\n"
+            "Cache-Control: no-store\r\n"
+            "Connection: close\r\n"
+            "\r\n"
+            "retry: 2000\n\nevent: hello\ndata: " +
+            hello.dump() + "\n\n";
+        auto channel = ctx.streams->subscribe(std::move(head));
+        if (!channel) return stream_unavailable(res);
+        hand_over(res, std::move(channel));
+    });
+}
+
+}  // namespace strata::server

@@ -1,0 +1,206 @@
+"""The viewer (clients/web) in headless Debian chromium against a real strata-server --demo:
+a frame appears, another client's edit changes it within a second, a click selects the instance
+under it, an edit made in the viewer reaches /v1/scene, and the token flow works. Screenshots go
+to $STRATA_SCREENSHOT_DIR (build/browser-screenshots in CTest), kept as CI artifacts.
+"""
+
+import json
+import os
+import statistics
+import sys
+import time
+import unittest
+import urllib.request
+
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "python"))
+from strata_process import ServerProcess  # noqa: E402
+
+from cdp import Browser, find_chromium  # noqa: E402
+
+SERVER = os.environ.get("STRATA_SERVER_BINARY", "")
+SHOTS = os.environ.get("STRATA_SCREENSHOT_DIR", os.path.join(os.getcwd(), "browser-screenshots"))
+
+# Pixels of the frame, downsampled in the page (same origin: the canvas is not tainted).
+SAMPLE = """(() => {
+  const img = document.getElementById('frame');
+  if (!img.complete || !img.naturalWidth) return null;
+  const c = document.createElement('canvas'); c.width = 64; c.height = 36;
+  const ctx = c.getContext('2d'); ctx.drawImage(img, 0, 0, 64, 36);
+  return Array.from(ctx.getImageData(0, 0, 64, 36).data);
+})()"""
+
+
+def luminance(rgba):
+    return [0.2126 * rgba[i] + 0.7152 * rgba[i + 1] + 0.0722 * rgba[i + 2]
+            for i in range(0, len(rgba), 4)]
+
+
+def mean_abs_diff(a, b):
+    return sum(abs(x - y) for x, y in zip(a, b)) / len(a)
+
+
+def request(server, method, path, body=None, token=None):
+    headers = {"Content-Type": "application/json"}
+    if token:
+        headers["Authorization"] = "Bearer " + token
+    data = json.dumps(body).encode() if body is not None else None
+    req = urllib.request.Request(server.url + path, data=data, method=method, headers=headers)
+    with urllib.request.urlopen(req, timeout=30) as r:
+        return json.load(r)
+
+
+@unittest.skipUnless(find_chromium(), "chromium is not installed: browser tests skipped "
+                     "(scripts/install-deps.sh installs it)")
+class ViewerInChromium(unittest.TestCase):
+    token = None
+
+    @classmethod
+    def setUpClass(cls):
+        env = {"STRATA_TOKEN": cls.token} if cls.token else {}
+        cls.server = ServerProcess(SERVER, ["--demo"], env=env)
+        cls.browser = Browser(width=1000, height=720)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.browser.close()
+        cls.server.stop()
+
+    def shot(self, name):
+        self.browser.screenshot(os.path.join(SHOTS, name + ".png"))
+
+    # A small frame and few samples: quick to render on a busy CI machine (one with two cores
+    # shared by other builds renders 640x360 in about a second).
+    PAGE = "/?width=320&height=180&max_samples=4&fps=30"
+
+    def open_viewer(self):
+        self.browser.navigate(self.server.url + self.PAGE)
+        self.browser.wait_for(SAMPLE + " !== null", timeout=20)
+
+    def wait_settled(self, quiet=1.5, timeout=30.0):
+        """Waits until progressive refinement has stopped changing the frame for `quiet` s."""
+        deadline = time.monotonic() + timeout
+        last = self.browser.evaluate(SAMPLE)
+        since = time.monotonic()
+        while time.monotonic() < deadline:
+            time.sleep(0.1)
+            now = self.browser.evaluate(SAMPLE)
+            if now != last:
+                last, since = now, time.monotonic()
+            elif time.monotonic() - since >= quiet:
+                return now
+        raise AssertionError("the frame kept changing: progressive refinement did not end")
+
+
+class ViewerWithoutToken(ViewerInChromium):
+    def test_1_a_frame_appears_and_is_not_blank(self):
+        self.open_viewer()
+        lum = luminance(self.browser.evaluate(SAMPLE))
+        self.shot("frame")
+        self.assertGreater(statistics.pstdev(lum), 10.0, "the frame is flat")
+        self.assertGreater(statistics.mean(lum), 10.0, "the frame is black")
+
+    def test_2_an_edit_by_another_client_changes_the_frame_within_a_second(self):
+        self.open_viewer()
+        before = luminance(self.wait_settled())
+        start = time.monotonic()
+        request(self.server, "POST", "/v1/edits",
+                {"edits": [{"op": "set_transform", "instance": "ball",
+                            "transform": {"translate": [2.5, 3.0, 0.5], "scale": 1.6}}]})
+        changed = None
+        while time.monotonic() - start < 1.0:
+            now = luminance(self.browser.evaluate(SAMPLE))
+            if mean_abs_diff(before, now) > 2.0:
+                changed = time.monotonic() - start
+                break
+            time.sleep(0.02)
+        self.shot("after-edit")
+        self.assertIsNotNone(changed, "the frame did not change within a second of the edit")
+        print(f"frame changed {changed * 1000:.0f} ms after the edit", file=sys.stderr)
+
+    def test_3_a_click_selects_the_instance_under_it_and_an_edit_reaches_the_scene(self):
+        self.open_viewer()
+        width, height = self.browser.evaluate("window.strata.size")
+        # A pixel that shows the ball, found with the pick endpoint itself.
+        target = None
+        for fx, fy in [(0.5, 0.5), (0.5, 0.45), (0.5, 0.55), (0.45, 0.5), (0.55, 0.5)]:
+            x, y = int(width * fx), int(height * fy)
+            hit = request(self.server, "GET", f"/v1/pick?x={x}&y={y}&width={width}&height={height}")["hit"]
+            if hit:
+                target = (x, y, hit["instance"])
+                break
+        self.assertIsNotNone(target, "nothing in the middle of the demo frame")
+        x, y, instance = target
+        rect = self.browser.evaluate(
+            "(() => { const r = document.getElementById('frame').getBoundingClientRect();"
+            " return [r.left, r.top]; })()")
+        self.browser.click(rect[0] + x + 0.5, rect[1] + y + 0.5)
+        selected = self.browser.wait_for(
+            "document.getElementById('inspector').dataset.instance", timeout=5)
+        self.assertEqual(selected, instance)
+        self.shot("selected")
+
+        # The viewer's own edit: a new x translation through the inspector.
+        self.browser.evaluate(
+            "(() => { document.getElementById('sel-translate-0').value = '-1.25';"
+            " document.getElementById('sel-apply').click(); return true; })()")
+        deadline = time.monotonic() + 5
+        doc = None
+        while time.monotonic() < deadline:
+            doc = request(self.server, "GET", "/v1/scene/instances/" + instance)
+            if abs(doc["transform"][3] - (-1.25)) < 1e-4:
+                break
+            time.sleep(0.05)
+        self.assertAlmostEqual(doc["transform"][3], -1.25, places=4)
+        self.browser.wait_for("document.getElementById('message').textContent.includes('Applied')")
+        # The panel reloads the instance at its new version before the next edit (an edit based
+        # on the old version would be a 412 conflict, shown as such).
+        self.browser.wait_for(
+            f"document.getElementById('sel-version') && "
+            f"document.getElementById('sel-version').textContent == '{doc['version']}'")
+
+        # Hidden from the viewer: the scene says so.
+        self.browser.evaluate(
+            "(() => { const b = document.getElementById('sel-visible'); b.checked = false;"
+            " b.dispatchEvent(new Event('change')); return true; })()")
+        deadline = time.monotonic() + 5
+        while time.monotonic() < deadline:
+            doc = request(self.server, "GET", "/v1/scene/instances/" + instance)
+            if not doc["visible"]:
+                break
+            time.sleep(0.05)
+        self.assertFalse(doc["visible"])
+
+    def test_4_the_cost_panel_shows_each_commit(self):
+        self.open_viewer()
+        version = request(self.server, "POST", "/v1/edits",
+                          {"edits": [{"op": "set_transform", "instance": "crate-a",
+                                      "transform": {"translate": [1, 0.5, 2]}}]})["version"]
+        self.browser.wait_for(
+            f"document.getElementById('last-report').dataset.version == '{version}'", timeout=5)
+        text = self.browser.evaluate("document.getElementById('last-report').textContent")
+        self.assertIn("TLAS:", text)
+        self.shot("cost-panel")
+
+
+class ViewerWithToken(ViewerInChromium):
+    token = "browser-test-token"
+
+    def test_the_token_is_asked_once_kept_in_session_storage_and_used(self):
+        self.browser.navigate(self.server.url + self.PAGE)
+        self.browser.wait_for("document.getElementById('token-dialog').open")
+        self.shot("token-dialog")
+        self.browser.evaluate(
+            "(() => { document.getElementById('token-input').value = 'browser-test-token';"
+            " document.getElementById('token-form').requestSubmit(); return true; })()")
+        self.browser.wait_for(SAMPLE + " !== null", timeout=20)
+        self.assertEqual(self.browser.evaluate("sessionStorage.getItem('strata.token')"),
+                         self.token)
+        # A reload keeps it: no second question.
+        self.browser.navigate(self.server.url + self.PAGE)
+        self.browser.wait_for(SAMPLE + " !== null", timeout=20)
+        self.assertFalse(self.browser.evaluate("document.getElementById('token-dialog').open"))
+        self.shot("token-accepted")
+
+
+if __name__ == "__main__":
+    unittest.main()

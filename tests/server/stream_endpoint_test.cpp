@@ -1,0 +1,443 @@
+// GET /v1/stream and GET /v1/events against the real server in-process, read over raw sockets
+// (a stream never ends, which httplib's client cannot read): frames arrive, stop when the client
+// leaves, nothing renders when nothing changed, a slow reader holds at most a frame or two, the
+// drain ends streams; plus the token in the query, CORS and the viewer's files.
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <optional>
+#include <thread>
+
+#include "server/cors.h"
+#include "server/stream_hub.h"
+#include "test_server.h"
+
+namespace strata::server::test {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using namespace std::chrono_literals;
+
+/// One connection, read with deadlines.
+class RawClient {
+public:
+    explicit RawClient(int port, int rcvbuf = 0) {
+        m_fd = ::socket(AF_INET, SOCK_STREAM, 0);
+        if (rcvbuf > 0) setsockopt(m_fd, SOL_SOCKET, SO_RCVBUF, &rcvbuf, sizeof rcvbuf);
+        sockaddr_in a{};
+        a.sin_family = AF_INET;
+        a.sin_port = htons(uint16_t(port));
+        a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+        EXPECT_EQ(::connect(m_fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+    }
+    ~RawClient() { close(); }
+    void close() {
+        if (m_fd >= 0) ::close(m_fd);
+        m_fd = -1;
+    }
+    void send_get(const std::string& target, const std::string& headers = {}) {
+        const std::string req = "GET " + target + " HTTP/1.1\r\nHost: t\r\n" + headers + "\r\n";
+        ASSERT_EQ(::send(m_fd, req.data(), req.size(), MSG_NOSIGNAL), ssize_t(req.size()));
+    }
+    /// Reads until `needle` is buffered past `from`; its position, or nothing on timeout/EOF.
+    std::optional<std::size_t> wait_for(const std::string& needle, std::size_t from = 0,
+                                        std::chrono::milliseconds timeout = 5000ms) {
+        const auto end = Clock::now() + timeout;
+        for (;;) {
+            if (auto p = m_in.find(needle, from); p != std::string::npos) return p;
+            if (!read_some(end)) return std::nullopt;
+        }
+    }
+    /// Reads until `n` bytes are buffered.
+    bool wait_bytes(std::size_t n, std::chrono::milliseconds timeout = 5000ms) {
+        const auto end = Clock::now() + timeout;
+        while (m_in.size() < n) {
+            if (!read_some(end)) return false;
+        }
+        return true;
+    }
+    /// True when the server closes the connection within `timeout` (bytes before are kept).
+    bool wait_eof(std::chrono::milliseconds timeout) {
+        const auto end = Clock::now() + timeout;
+        while (read_some(end)) {
+        }
+        return m_eof;
+    }
+    std::string& in() { return m_in; }
+
+private:
+    bool read_some(Clock::time_point end) {
+        const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(end - Clock::now());
+        if (left.count() <= 0 || m_eof) return false;
+        pollfd p{m_fd, POLLIN, 0};
+        if (::poll(&p, 1, int(left.count())) <= 0) return false;
+        char buf[65536];
+        const ssize_t n = ::recv(m_fd, buf, sizeof buf, 0);
+        if (n <= 0) {
+            m_eof = true;
+            return false;
+        }
+        m_in.append(buf, std::size_t(n));
+        return true;
+    }
+
+    int m_fd = -1;
+    std::string m_in;
+    bool m_eof = false;
+};
+
+/// One multipart frame.
+struct Part {
+    std::string jpeg;
+    uint64_t version = 0;
+    uint32_t samples = 0;
+};
+
+std::string header_value(const std::string& head, const std::string& name) {
+    const std::size_t p = head.find(name + ": ");
+    if (p == std::string::npos) return {};
+    const std::size_t start = p + name.size() + 2;
+    return head.substr(start, head.find("\r\n", start) - start);
+}
+
+/// Reads a frame stream: the response head once, then part after part.
+class FrameReader {
+public:
+    FrameReader(int port, const std::string& query, const std::string& headers = {}, int rcvbuf = 0)
+        : m_client(port, rcvbuf) {
+        m_client.send_get("/v1/stream?" + query, headers);
+    }
+    /// The response head ("" when none came).
+    std::string head() {
+        // Up to the first part's headers, which the response sends at once.
+        auto end = m_client.wait_for("\r\n\r\n");
+        if (!end) return {};
+        auto first = m_client.wait_for("--strata-frame\r\nContent-Type: image/jpeg\r\n\r\n");
+        if (!first) return {};
+        m_pos =
+            *first + std::string_view("--strata-frame\r\nContent-Type: image/jpeg\r\n\r\n").size();
+        return m_client.in().substr(0, *end + 4);
+    }
+    std::optional<Part> next(std::chrono::milliseconds timeout = 10000ms) {
+        // Parts are the JPEG up to the next separator; the version and sample count are in
+        // the JPEG's comment segment "strata version=V samples=S".
+        auto end = m_client.wait_for(STREAM_PART_SEPARATOR, m_pos, timeout);
+        if (!end) return std::nullopt;
+        Part part;
+        part.jpeg = m_client.in().substr(m_pos, *end - m_pos);
+        m_pos = *end + std::string_view(STREAM_PART_SEPARATOR).size();
+        const std::size_t c = part.jpeg.find("strata version=");
+        if (c == std::string::npos) return std::nullopt;
+        part.version = std::stoull(part.jpeg.substr(c + 15));
+        part.samples = uint32_t(std::stoul(part.jpeg.substr(part.jpeg.find("samples=", c) + 8)));
+        return part;
+    }
+    /// The first frame showing `version` or later.
+    std::optional<Part> next_at(uint64_t version, std::chrono::milliseconds timeout = 10000ms) {
+        const auto end = Clock::now() + timeout;
+        while (Clock::now() < end) {
+            auto p =
+                next(std::chrono::duration_cast<std::chrono::milliseconds>(end - Clock::now()));
+            if (!p) return std::nullopt;
+            if (p->version >= version) return p;
+        }
+        return std::nullopt;
+    }
+    RawClient& client() { return m_client; }
+
+private:
+    RawClient m_client;
+    std::size_t m_pos = 0;
+};
+
+bool is_jpeg(const std::string& b) {
+    return b.size() > 4 && uint8_t(b[0]) == 0xFF && uint8_t(b[1]) == 0xD8 &&
+           uint8_t(b[b.size() - 2]) == 0xFF && uint8_t(b[b.size() - 1]) == 0xD9;
+}
+
+/// Polls `pred` for up to `timeout`.
+template <class Pred>
+bool eventually(Pred pred, std::chrono::milliseconds timeout = 3000ms) {
+    const auto end = Clock::now() + timeout;
+    while (Clock::now() < end) {
+        if (pred()) return true;
+        std::this_thread::sleep_for(10ms);
+    }
+    return pred();
+}
+
+Json move_ball(float x) {
+    return {
+        {"op", "set_transform"}, {"instance", "ball"}, {"transform", {{"translate", {x, 1.5, 0}}}}};
+}
+
+uint64_t scene_version(TestServer& s) {
+    return s.engine().read([](const Scene& scene) { return scene.version(); });
+}
+
+TEST(StreamEndpoint, FramesArriveAsJpegPartsOfAMultipartResponse) {
+    TestServer s({}, true);
+    FrameReader r(s.port(), "width=64&height=36&max_samples=2&fps=30");
+    const std::string head = r.head();
+    EXPECT_EQ(head.rfind("HTTP/1.1 200 OK\r\n", 0), 0u) << head;
+    EXPECT_EQ(header_value(head, "Content-Type"),
+              "multipart/x-mixed-replace; boundary=strata-frame");
+    auto first = r.next();
+    ASSERT_TRUE(first.has_value());
+    EXPECT_TRUE(is_jpeg(first->jpeg));
+    EXPECT_EQ(first->version, scene_version(s));
+    // Progressive accumulation improves the frame: a second one with more samples.
+    auto second = r.next();
+    ASSERT_TRUE(second.has_value());
+    EXPECT_GT(second->samples, first->samples);
+}
+
+TEST(StreamEndpoint, AnEditByAnotherClientSendsAFrameOfTheNewVersion) {
+    TestServer s({}, true);
+    FrameReader r(s.port(), "width=64&height=36&max_samples=1&fps=30");
+    ASSERT_FALSE(r.head().empty());
+    ASSERT_TRUE(r.next().has_value());
+    const Reply edit = s.edits({move_ball(2.0f)});
+    ASSERT_EQ(edit.status, 200) << edit.body;
+    auto part = r.next_at(edit.json()["version"].get<uint64_t>(), 10000ms);
+    ASSERT_TRUE(part.has_value());
+    EXPECT_TRUE(is_jpeg(part->jpeg));
+}
+
+TEST(StreamEndpoint, NothingRendersWhenNothingChanged) {
+    TestServer s({}, true);
+    FrameReader r(s.port(), "width=64&height=36&max_samples=3&fps=60");
+    ASSERT_FALSE(r.head().empty());
+    // Frames until the accumulation is complete (a paced viewer may skip one in between).
+    for (std::optional<Part> p = r.next(); !p || p->samples < 3; p = r.next())
+        ASSERT_TRUE(p.has_value());
+    EXPECT_EQ(s.server().streams().stats().frames_rendered, 3u);
+    const uint64_t rendered = s.server().streams().stats().frames_rendered;
+    std::this_thread::sleep_for(400ms);
+    EXPECT_EQ(s.server().streams().stats().frames_rendered, rendered);
+    EXPECT_FALSE(r.next(200ms).has_value());
+}
+
+TEST(StreamEndpoint, RenderingStopsWhenTheClientLeaves) {
+    TestServer s({}, true);
+    {
+        FrameReader r(s.port(), "width=64&height=36&max_samples=1&fps=30");
+        ASSERT_FALSE(r.head().empty());
+        ASSERT_TRUE(r.next().has_value());
+        EXPECT_EQ(s.server().streams().stats().viewers, 1u);
+    }
+    EXPECT_TRUE(eventually([&] {
+        const StreamHubStats st = s.server().streams().stats();
+        return st.viewers == 0 && st.views == 0;
+    }));
+    const uint64_t rendered = s.server().streams().stats().frames_rendered;
+    ASSERT_EQ(s.edits({move_ball(3.0f)}).status, 200);
+    std::this_thread::sleep_for(300ms);
+    EXPECT_EQ(s.server().streams().stats().frames_rendered, rendered);
+}
+
+TEST(StreamEndpoint, ViewersOfTheSameViewShareOneRenderPerVersion) {
+    TestServer s({}, true);
+    const std::string q = "width=64&height=36&max_samples=1&fps=30";
+    FrameReader a(s.port(), q), b(s.port(), q);
+    ASSERT_FALSE(a.head().empty());
+    ASSERT_FALSE(b.head().empty());
+    ASSERT_TRUE(a.next().has_value());
+    ASSERT_TRUE(b.next().has_value());
+    const uint64_t before = s.server().streams().stats().frames_rendered;
+    const Reply edit = s.edits({move_ball(1.0f)});
+    const uint64_t v = edit.json()["version"].get<uint64_t>();
+    auto pa = a.next_at(v), pb = b.next_at(v);
+    ASSERT_TRUE(pa && pb);
+    EXPECT_EQ(pa->jpeg, pb->jpeg);
+    EXPECT_EQ(s.server().streams().stats().frames_rendered, before + 1);
+    EXPECT_EQ(s.server().streams().stats().views, 1u);
+    // Another size is another view.
+    FrameReader c(s.port(), "width=32&height=18&max_samples=1&fps=30");
+    ASSERT_FALSE(c.head().empty());
+    ASSERT_TRUE(c.next().has_value());
+    EXPECT_EQ(s.server().streams().stats().views, 2u);
+}
+
+TEST(StreamEndpoint, ViewerRendersWaitWhileAnApiRenderRuns) {
+    TestServer s({}, true);
+    // A view that always has more samples to add: the hub renders as often as it may.
+    FrameReader r(s.port(), "width=160&height=90&max_samples=4096&fps=60");
+    ASSERT_FALSE(r.head().empty());
+    ASSERT_TRUE(r.next().has_value());
+    for (int i = 0; i < 3; ++i) {
+        const Reply api = s.get("/v1/render?width=640&height=360&spp=2");
+        EXPECT_EQ(api.status, 200) << api.body;
+    }
+    EXPECT_GT(s.server().streams().stats().deferred_for_api, 0u);
+    // And the stream goes on afterwards.
+    EXPECT_TRUE(r.next().has_value());
+}
+
+TEST(StreamEndpoint, ASlowReaderHoldsAtMostTwoFramesAndMissesTheRest) {
+    TestServer s({}, true);
+    // A client that never reads, with a tiny receive buffer: once the socket buffers are full
+    // (the server caps a stream's send buffer), every later frame replaces the pending one
+    // instead of queueing. A second viewer of the same view reads every frame it gets, to know
+    // how large a frame is.
+    const std::string view = "width=480&height=270&quality=100&max_samples=1&fps=60";
+    FrameReader slow(s.port(), view, {}, 4096);
+    FrameReader reader(s.port(), view);
+    ASSERT_FALSE(reader.head().empty());
+    ASSERT_TRUE(reader.next().has_value());
+    std::size_t largest_held = 0, largest_frame = 0;
+    for (int i = 0; i < 25; ++i) {
+        const Reply edit = s.edits({move_ball(float(i % 7) * 0.3f)});
+        ASSERT_EQ(edit.status, 200);
+        auto frame = reader.next_at(edit.json()["version"].get<uint64_t>());
+        ASSERT_TRUE(frame.has_value());
+        largest_frame = std::max(largest_frame, frame->jpeg.size());
+        largest_held = std::max(largest_held, s.server().streams().stats().held_bytes);
+    }
+    const StreamHubStats st = s.server().streams().stats();
+    EXPECT_GT(st.frames_dropped, 0u);
+    EXPECT_EQ(st.viewers, 2u);
+    // Per viewer: one frame being written and one pending, each with its part headers.
+    EXPECT_LE(largest_held, 2 * 2 * (largest_frame + 256));
+}
+
+TEST(StreamEndpoint, TheDrainEndsFrameAndEventStreams) {
+    auto s = std::make_unique<TestServer>(ServerConfig{}, true);
+    FrameReader frames(s->port(), "width=64&height=36&max_samples=1&fps=30");
+    ASSERT_FALSE(frames.head().empty());
+    ASSERT_TRUE(frames.next().has_value());
+    RawClient events(s->port());
+    events.send_get("/v1/events");
+    ASSERT_TRUE(events.wait_for("event: hello").has_value());
+    const auto start = Clock::now();
+    s->server().stop();
+    EXPECT_TRUE(frames.client().wait_eof(3000ms));
+    EXPECT_TRUE(events.wait_eof(3000ms));
+    s.reset();  // the server thread has returned: run() finished its drain
+    EXPECT_LT(Clock::now() - start, 3000ms);
+}
+
+TEST(EventsEndpoint, EachCommitIsOneEventWithItsVersionAndReport) {
+    TestServer s({}, true);
+    RawClient c(s.port());
+    c.send_get("/v1/events");
+    auto hello = c.wait_for("event: hello\ndata: ");
+    ASSERT_TRUE(hello.has_value());
+    EXPECT_NE(c.in().find("Content-Type: text/event-stream"), std::string::npos);
+    for (int i = 1; i <= 2; ++i) {
+        const Reply edit = s.edits({move_ball(float(i))});
+        ASSERT_EQ(edit.status, 200);
+        ASSERT_EQ(s.post("/v1/commit", std::string()).status, 200);
+        const uint64_t v = edit.json()["version"].get<uint64_t>();
+        auto at = c.wait_for("id: " + std::to_string(v) + "\nevent: commit\ndata: ");
+        ASSERT_TRUE(at.has_value()) << c.in();
+        const std::size_t data = c.in().find("data: ", *at) + 6;
+        const Json j = Json::parse(c.in().substr(data, c.in().find('\n', data) - data));
+        EXPECT_EQ(j["version"].get<uint64_t>(), v);
+        EXPECT_EQ(j["report"]["version"].get<uint64_t>(), v);
+        EXPECT_TRUE(j["report"].contains("tlas")) << j.dump();
+    }
+    // A commit with nothing new is no event.
+    ASSERT_EQ(s.post("/v1/commit", std::string()).status, 200);
+    EXPECT_FALSE(c.wait_for("event: commit", c.in().rfind("event: commit") + 1, 300ms));
+}
+
+TEST(StreamEndpoint, BadParametersAreRefusedWithAProblemNamingThem) {
+    TestServer s({}, true);
+    expect_problem(s.get("/v1/stream?fps=0"), 400, "invalid-request", "/fps");
+    expect_problem(s.get("/v1/stream?quality=101"), 400, "invalid-request", "/quality");
+    expect_problem(s.get("/v1/stream?format=png"), 400, "invalid-request", "/format");
+    expect_problem(s.get("/v1/stream?width=0"), 400, "invalid-request", "/width");
+    expect_problem(s.get("/v1/stream?width=65536&height=65536"), 413);
+    expect_problem(s.get("/v1/events?x=1"), 400, "invalid-request", "/x");
+}
+
+TEST(StreamEndpoint, TheTokenMayComeInTheQueryOnStreamPathsOnly) {
+    ServerConfig config;
+    config.token = "s3cret";
+    TestServer s(config, true);
+    expect_problem(s.get("/v1/stream?width=64&height=36"), 401);
+    expect_problem(s.get("/v1/stream?width=64&height=36&access_token=wrong"), 401);
+    FrameReader r(s.port(), "width=64&height=36&max_samples=1&access_token=s3cret");
+    EXPECT_EQ(r.head().rfind("HTTP/1.1 200", 0), 0u);
+    EXPECT_TRUE(r.next().has_value());
+    RawClient e(s.port());
+    e.send_get("/v1/events?access_token=s3cret");
+    EXPECT_TRUE(e.wait_for("event: hello").has_value());
+    expect_problem(s.get("/v1/scene?access_token=s3cret"), 401);
+    EXPECT_EQ(s.get("/v1/scene", {{"Authorization", "Bearer s3cret"}}).status, 200);
+    // The viewer's page itself is open: it asks for the token.
+    const Reply page = s.get("/");
+    EXPECT_EQ(page.status, 200);
+    EXPECT_EQ(page.header("Content-Type"), "text/html; charset=utf-8");
+}
+
+TEST(Cors, AllowedOriginsGetPreflightAnswersAndAccessControlHeaders) {
+    ServerConfig config;
+    config.token = "s3cret";
+    config.cors_origin = "http://viewer.test, http://other.test:8000";
+    TestServer s(config, true);
+    const httplib::Headers preflight = {{"Origin", "http://viewer.test"},
+                                        {"Access-Control-Request-Method", "POST"},
+                                        {"Access-Control-Request-Headers", "authorization"}};
+    auto c = s.client();
+    auto r = c.Options("/v1/edits", preflight);
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->status, 204);
+    EXPECT_EQ(r->get_header_value("Access-Control-Allow-Origin"), "http://viewer.test");
+    EXPECT_NE(r->get_header_value("Access-Control-Allow-Headers").find("Authorization"),
+              std::string::npos);
+    auto denied = c.Options(
+        "/v1/edits", {{"Origin", "http://evil.test"}, {"Access-Control-Request-Method", "POST"}});
+    ASSERT_TRUE(denied);
+    EXPECT_FALSE(denied->has_header("Access-Control-Allow-Origin"));
+    const Reply scene = s.get(
+        "/v1/scene", {{"Origin", "http://other.test:8000"}, {"Authorization", "Bearer s3cret"}});
+    EXPECT_EQ(scene.status, 200);
+    EXPECT_EQ(scene.header("Access-Control-Allow-Origin"), "http://other.test:8000");
+    EXPECT_NE(scene.header("Access-Control-Expose-Headers").find("ETag"), std::string::npos);
+    // Refusals by the front end carry it too, so that the page can read why.
+    const Reply refused = s.get("/v1/scene", {{"Origin", "http://viewer.test"}});
+    EXPECT_EQ(refused.status, 401);
+    EXPECT_EQ(refused.header("Access-Control-Allow-Origin"), "http://viewer.test");
+    EXPECT_EQ(
+        s.get("/v1/scene", {{"Origin", "http://evil.test"}, {"Authorization", "Bearer s3cret"}})
+            .header("Access-Control-Allow-Origin"),
+        "");
+    FrameReader stream(s.port(), "width=32&height=18&max_samples=1&access_token=s3cret",
+                       "Origin: http://viewer.test\r\n");
+    EXPECT_EQ(header_value(stream.head(), "Access-Control-Allow-Origin"), "http://viewer.test");
+}
+
+TEST(CorsPolicy, ParsesOriginListsAndRefusesWhatIsNoOrigin) {
+    EXPECT_FALSE(CorsPolicy::parse("").value().enabled());
+    auto any = CorsPolicy::parse("*");
+    ASSERT_TRUE(any.has_value());
+    const std::string o = "https://x.example";
+    EXPECT_EQ(any.value().allow(&o), o);
+    EXPECT_FALSE(CorsPolicy::parse("https://x.example/path").has_value());
+    EXPECT_FALSE(CorsPolicy::parse("x.example").has_value());
+    auto list = CorsPolicy::parse("HTTPS://X.example");
+    ASSERT_TRUE(list.has_value());
+    EXPECT_EQ(list.value().allow(&o), o);
+    const std::string other = "https://y.example";
+    EXPECT_FALSE(list.value().allow(&other).has_value());
+    EXPECT_FALSE(list.value().allow(nullptr).has_value());
+}
+
+TEST(WebRoutes, TheViewerFilesAreServedAndUnknownOnesAreNotFound) {
+    TestServer s;
+    const Reply page = s.get("/");
+    EXPECT_EQ(page.status, 200);
+    EXPECT_NE(page.body.find("<title>"), std::string::npos);
+    expect_problem(s.get("/web/no-such-file.js"), 404, "not-found");
+    expect_problem(s.get("/web/../CMakeLists.txt"), 404);
+}
+
+}  // namespace
+}  // namespace strata::server::test

@@ -1,0 +1,302 @@
+"""Replicas following one edit log in Redis Streams (issue 16), with a real redis-server (AOF on,
+fsync always) and real strata-server processes: convergence, one winner per version under
+If-Match races, a replica SIGKILLed and restarted, Redis SIGKILLed mid-stream, a poisoned entry,
+read-your-writes with min_version, and a replica joining from a snapshot after trimming.
+Skipped, saying so, only where redis-server is not installed (scripts/install-deps.sh installs it).
+"""
+
+import json
+import threading
+import time
+import unittest
+import uuid
+
+import durable_scene
+from hostile import Server
+from redis_fixture import REDIS_SERVER, RedisProcess
+
+RENDER = "/v1/render?width=64&height=48&spp=2"
+
+
+def crc32c(data: bytes) -> int:
+    crc = 0xFFFFFFFF
+    for byte in data:
+        crc ^= byte
+        for _ in range(8):
+            crc = (crc >> 1) ^ (0x82F63B78 if crc & 1 else 0)
+    return crc ^ 0xFFFFFFFF
+
+
+def log_entry(payload: bytes, version: int) -> bytes:
+    """A well-formed log entry (engine/durable/journal_format.h's record) around `payload`."""
+    v = version.to_bytes(8, "little")
+    return (len(payload).to_bytes(4, "little") + crc32c(payload + v).to_bytes(4, "little") + v
+            + payload)
+
+
+@unittest.skipIf(REDIS_SERVER is None,
+                 "redis-server is not installed (scripts/install-deps.sh installs it)")
+class Replicas(unittest.TestCase):
+    def setUp(self):
+        self.redis = RedisProcess()
+        self.addCleanup(self.redis.stop)
+        self.stream = "strata-" + uuid.uuid4().hex[:8]
+
+    def replica(self, *extra):
+        s = Server(["--log", self.redis.url(self.stream), "--threads", "8"] + list(extra))
+        self.addCleanup(s.stop)
+        return s
+
+    def replicas(self, n=3, *extra):
+        return [self.replica(*extra) for _ in range(n)]
+
+    def at(self, server, version, path="/v1/scene"):
+        sep = "&" if "?" in path else "?"
+        return server.call("GET", f"{path}{sep}min_version={version}")
+
+    def assert_converged(self, servers, version):
+        scenes, frames = [], []
+        for s in servers:
+            status, _, body = self.at(s, version)
+            self.assertEqual(status, 200, body)
+            scenes.append(json.loads(body))
+            status, _, frame = self.at(s, version, RENDER)
+            self.assertEqual(status, 200, frame[:300])
+            frames.append(frame)
+        for scene in scenes:
+            self.assertEqual(scene["version"], version)
+            self.assertEqual(scene, scenes[0])
+        for frame in frames:
+            self.assertEqual(frame, frames[0], "frames differ between replicas")
+
+    def stream_batches(self, servers, first, count):
+        for n in range(first, first + count):
+            s = servers[n % len(servers)]
+            status, answer = s.json("POST", "/v1/edits", durable_scene.batch(n))
+            self.assertEqual(status, 200, answer)
+            self.assertEqual(answer["version"], n + 1)
+        return first + count
+
+    def test_round_robin_batches_converge_to_one_version_and_identical_frames(self):
+        servers = self.replicas()
+        self.stream_batches(servers, 0, 24)
+        self.assert_converged(servers, 24)
+        for s in servers:
+            self.assertEqual(durable_scene.check(s, 24), "")
+        self.assertEqual(self.redis.command("XLEN", self.stream), 24)
+
+    def test_a_batch_that_depends_on_a_write_just_made_on_another_replica_is_accepted(self):
+        a, b = self.replicas(2)
+        for n in range(0, 40, 4):
+            # Batch n adds mesh-n on a; batch n+1 instances it on b, which may not have applied
+            # batch n yet: b must catch up with the log before refusing it.
+            self.stream_batches([a], n, 1)
+            self.stream_batches([b], n + 1, 3)
+        self.assert_converged([a, b], 40)
+
+    def test_concurrent_if_match_writers_on_different_replicas_get_one_winner_per_version(self):
+        servers = self.replicas()
+        for version in range(8):
+            results = [None] * len(servers)
+            barrier = threading.Barrier(len(servers))
+
+            def write(k):
+                barrier.wait()
+                body = {"edits": [{"op": "add_material", "id": f"w{k}-v{version}"}]}
+                results[k] = servers[k].json("POST", "/v1/edits", body,
+                                             headers={"If-Match": f'"{version}"'})
+
+            threads = [threading.Thread(target=write, args=(k,)) for k in range(len(servers))]
+            for t in threads:
+                t.start()
+            for t in threads:
+                t.join()
+            statuses = sorted(r[0] for r in results)
+            self.assertEqual(statuses, [200] + [412] * (len(servers) - 1), results)
+            winner = next(r[1] for r in results if r[0] == 200)
+            self.assertEqual(winner["version"], version + 1)
+        self.assert_converged(servers, 8)
+        status, materials = servers[0].json("GET", "/v1/scene/materials?min_version=8")
+        self.assertEqual(status, 200)
+        self.assertEqual(len(materials["items"]), 8, materials)
+
+    def test_a_replica_killed_and_restarted_catches_up(self):
+        servers = self.replicas()
+        n = self.stream_batches(servers, 0, 10)
+        servers[2].kill()
+        n = self.stream_batches(servers[:2], n, 10)
+        servers[2] = self.replica()
+        n = self.stream_batches(servers, n, 4)
+        self.assert_converged(servers, n)
+        self.assertEqual(durable_scene.check(servers[2], n), "")
+
+    def test_redis_restarted_mid_stream_loses_no_acknowledged_batch(self):
+        servers = self.replicas()
+        acked, refused, stop = [], [], threading.Event()
+
+        def writer():
+            k = 0
+            while not stop.is_set():
+                body = {"edits": [{"op": "add_material", "id": f"m{k}"}]}
+                try:
+                    status, answer = servers[k % 3].json("POST", "/v1/edits", body)
+                except OSError:
+                    status, answer = 0, {}
+                (acked if status == 200 else refused).append((k, status, answer))
+                k += 1
+
+        t = threading.Thread(target=writer, daemon=True)
+        t.start()
+        self.addCleanup(stop.set)
+        time.sleep(0.8)
+        self.redis.kill()
+        time.sleep(0.5)
+        # Redis is down: writes are refused with a problem, renders of the applied version work.
+        status, headers, body = servers[0].call("POST", "/v1/edits",
+                                                {"edits": [{"op": "add_material", "id": "x"}]})
+        self.assertEqual(status, 503, body)
+        self.assertIn("problem+json", headers.get("Content-Type", ""))
+        self.assertEqual(servers[1].call("GET", RENDER)[0], 200)
+        self.redis.start()
+        time.sleep(1.0)
+        stop.set()
+        t.join()
+        self.assertGreater(len(acked), 5)
+        self.assertTrue(any(r[1] == 503 for r in refused), refused[:5])
+        head = int(self.redis.command("GET", self.stream + ":version"))
+        self.assertGreaterEqual(head, max(a[2]["version"] for a in acked))
+        self.assert_converged(servers, head)
+        for s in servers:
+            status, listing = s.json("GET", "/v1/scene/materials?limit=10000")
+            have = {m["id"] for m in listing["items"]}
+            missing = [k for k, _, _ in acked if f"m{k}" not in have]
+            self.assertEqual(missing, [], "acknowledged batches lost")
+
+    def test_a_poisoned_entry_stops_the_replicas_loudly(self):
+        servers = self.replicas(2)
+        n = self.stream_batches(servers, 0, 3)
+        # An entry no Strata server wrote: a bad checksum.
+        self.redis.command("XADD", self.stream, f"{n + 1}-0", "v", str(n + 1), "t", "0",
+                           "r", b"\x04\x00\x00\x00\xde\xad\xbe\xef" + (n + 1).to_bytes(8, "little")
+                           + b"\x00\x00\x00\x00")
+        self.redis.command("SET", self.stream + ":version", str(n + 1))
+        for s in servers:
+            deadline = time.monotonic() + 10
+            while time.monotonic() < deadline and s.call("GET", "/readyz")[0] == 200:
+                time.sleep(0.05)
+            status, _, body = s.call("GET", "/readyz")
+            self.assertEqual(status, 503)
+            self.assertIn("poisoned", json.loads(body)["detail"])
+            self.assertIn("strata_replica_stopped 1", s.call("GET", "/metrics")[2].decode())
+            self.assertIn("replica stopped", s.log())
+            # Reads of the last applied version still work; writes are refused.
+            self.assertEqual(durable_scene.check(s, n), "")
+            status, _ = s.json("POST", "/v1/edits", durable_scene.batch(n))
+            self.assertEqual(status, 503)
+
+    def test_a_replica_started_before_redis_waits_then_joins(self):
+        self.redis.kill()
+        s = Server(["--log", self.redis.url(self.stream)], wait_ready=False)
+        self.addCleanup(s.stop)
+        time.sleep(0.5)
+        status, _, body = s.call("GET", "/readyz")
+        self.assertEqual(status, 503)
+        self.assertIn("Redis unreachable", json.loads(body)["detail"])
+        status, _, body = s.call("POST", "/v1/edits", durable_scene.batch(0))
+        self.assertEqual(status, 503, body)
+        self.assertIn("edit log", json.loads(body)["detail"])
+        self.assertEqual(s.call("GET", "/v1/scene")[0], 200)  # reads of version 0 work
+        self.redis.start()
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline and s.call("GET", "/readyz")[0] != 200:
+            time.sleep(0.05)
+        self.assertEqual(s.call("GET", "/readyz")[0], 200)
+        self.assertEqual(self.stream_batches([s], 0, 2), 2)
+
+    def test_the_demo_scene_is_appended_once_to_an_empty_log(self):
+        servers = self.replicas(2, "--demo")
+        self.assert_converged(servers, 1)
+        self.assertEqual(self.redis.command("XLEN", self.stream), 1)
+        self.assertIn("--demo ignored: the edit log holds a scene already", servers[1].log())
+
+    def test_an_entry_that_does_not_apply_stops_the_replicas_loudly(self):
+        servers = self.replicas(2)
+        n = self.stream_batches(servers, 0, 2)
+        self.assertEqual(crc32c(b"123456789"), 0xE3069283)
+        # Checksum and encoding are fine (one remove_instance, kind tag 9), but the instance does
+        # not exist: applying it would fail on every replica.
+        payload = (1).to_bytes(4, "little") + bytes([9]) + (4).to_bytes(4, "little") + b"nope"
+        self.redis.command("XADD", self.stream, f"{n + 1}-0", "v", str(n + 1), "t", "0",
+                           "r", log_entry(payload, n + 1))
+        self.redis.command("SET", self.stream + ":version", str(n + 1))
+        for s in servers:
+            deadline = time.monotonic() + 10
+            while time.monotonic() < deadline and s.call("GET", "/readyz")[0] == 200:
+                time.sleep(0.05)
+            status, _, body = s.call("GET", "/readyz")
+            self.assertEqual(status, 503)
+            detail = json.loads(body)["detail"]
+            self.assertIn(f"does not apply at version {n}", detail)
+            self.assertIn("nope", detail)
+            self.assertEqual(durable_scene.check(s, n), "")
+
+    def test_min_version_waits_for_the_replica_and_names_the_lag_when_it_cannot(self):
+        a, b = self.replicas(2, "--min-version-wait-ms", "400")
+        status, answer = a.json("POST", "/v1/edits", durable_scene.batch(0))
+        self.assertEqual(status, 200)
+        status, _, body = b.call("GET", "/v1/scene", headers={"X-Strata-Min-Version": "1"})
+        self.assertEqual(status, 200)
+        self.assertEqual(json.loads(body)["version"], 1)
+        status, headers, body = b.call("GET", "/v1/render?width=8&height=8&min_version=5")
+        self.assertEqual(status, 503)
+        self.assertIn("behind min_version 5", json.loads(body)["detail"])
+        self.assertEqual(b.call("GET", "/v1/scene?min_version=x")[0], 400)
+        status, _, body = b.call("GET", "/readyz")
+        self.assertEqual(status, 200)
+        ready = json.loads(body)["replica"]
+        self.assertEqual(ready["applied_version"], 1)
+        self.assertEqual(ready["lag_entries"], 0)
+        metrics = b.call("GET", "/metrics")[2].decode()
+        self.assertIn("strata_replica_applied_version 1", metrics)
+        self.assertIn("strata_replica_lag_seconds 0", metrics)
+
+    def test_min_version_without_a_log_waits_for_this_servers_own_writes(self):
+        s = Server(["--min-version-wait-ms", "300"])
+        self.addCleanup(s.stop)
+        status, _, body = s.call("GET", "/v1/scene?min_version=1")
+        self.assertEqual(status, 503)
+        self.assertIn("behind min_version 1", json.loads(body)["detail"])
+        done = []
+        reader = threading.Thread(
+            target=lambda: done.append(s.call("GET", "/v1/scene?min_version=1")[0]))
+        reader.start()
+        time.sleep(0.05)
+        self.assertEqual(s.json("POST", "/v1/edits", durable_scene.batch(0))[0], 200)
+        reader.join()
+        self.assertEqual(done, [200])
+
+    def test_a_replica_joining_after_trimming_loads_the_snapshot_and_follows(self):
+        servers = self.replicas(2, "--log-snapshot-every", "5")
+        n = self.stream_batches(servers, 0, 23)
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline:
+            snap = self.redis.command("HGET", self.stream + ":snapshot", "version")
+            if snap is not None and int(snap) >= 20:
+                break
+            time.sleep(0.05)
+        snap = int(self.redis.command("HGET", self.stream + ":snapshot", "version"))
+        self.assertGreaterEqual(snap, 20)
+        # Trimmed below the snapshot the newest replaced (at least 15): the log is shorter.
+        first = self.redis.command("XRANGE", self.stream, "-", "+", "COUNT", "1")[0][0]
+        self.assertGreater(int(first.split(b"-")[0]), 10)
+        self.assertLess(self.redis.command("XLEN", self.stream), 13)
+        late = self.replica("--log-snapshot-every", "5")
+        self.assertIn(f"loaded the snapshot of version {snap}", late.log())
+        servers.append(late)
+        n = self.stream_batches(servers, n, 3)
+        self.assert_converged(servers, n)
+        self.assertEqual(durable_scene.check(late, n), "")
+
+
+if __name__ == "__main__":
+    unittest.main()
