@@ -96,7 +96,7 @@ constexpr EditOp OPS[] = {
   "additionalProperties": false
 })json",
      parse_set_lighting, edit_kinds<SetLighting>()},
-    {"clear", "Removes every mesh, instance, material, group and light and resets camera and lighting.",
+    {"clear", "Removes every mesh, instance, material, texture, group and light and resets camera and lighting.",
      R"json({"type": "object", "additionalProperties": false})json", parse_clear,
      edit_kinds<Clear>()},
 };
