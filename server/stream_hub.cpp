@@ -275,8 +275,15 @@ bool StreamHub::render_one(Clock::time_point now) {
             }
             View& v = it->second;
             const bool stale = v.version != version;
+            // A frame without ids (an edit raced the launch meant to trace them) while a viewer
+            // highlights: one more launch traces them, even past max_samples.
+            const bool needs_ids =
+                v.frame && !v.frame->ids &&
+                std::any_of(v.viewers.begin(), v.viewers.end(),
+                            [](const Watcher& w) { return !w.highlight.empty(); });
             const bool improvable =
-                !stale && v.samples < v.spec.max_samples && v.launches < v.spec.max_samples;
+                !stale &&
+                ((v.samples < v.spec.max_samples && v.launches < v.spec.max_samples) || needs_ids);
             const bool due = (stale || improvable) && v.failed_version != version &&
                              now >= v.next_render && v.next_render < oldest;
             if (due) {
