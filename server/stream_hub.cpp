@@ -1,10 +1,13 @@
 #include "server/stream_hub.h"
 
 #include <algorithm>
+#include <set>
 
 #include <spdlog/spdlog.h>
 
+#include "engine/image/highlight.h"
 #include "engine/image/jpeg_encode.h"
+#include "engine/image/tonemap.h"
 #include "protocol/json_document.h"
 #include "protocol/report_json.h"
 
@@ -50,6 +53,15 @@ std::size_t prune(std::vector<std::shared_ptr<StreamChannel>>& channels) {
     return channels.size();
 }
 
+/// The same for a view's watchers.
+template <class W>
+std::size_t prune_watchers(std::vector<W>& watchers) {
+    watchers.erase(std::remove_if(watchers.begin(), watchers.end(),
+                                  [](const W& w) { return w.channel->gone(); }),
+                   watchers.end());
+    return watchers.size();
+}
+
 }  // namespace
 
 void write_stream_metrics(std::string& out, const StreamHubStats& s) {
@@ -69,6 +81,9 @@ void write_stream_metrics(std::string& out, const StreamHubStats& s) {
          s.render_errors);
     line("strata_stream_commit_events_total", "counter", "Commit events published.",
          s.events_published);
+    line("strata_stream_highlight_encodes_total", "counter",
+         "Frames encoded with a selected instance tinted (one per frame and instance).",
+         s.highlight_encodes);
     line("strata_stream_renders_deferred_total", "counter",
          "Times a due viewer render waited for API renders or commits.", s.deferred_for_api);
 }
@@ -89,6 +104,7 @@ std::shared_ptr<StreamChannel> StreamHub::watch(ViewerSpec spec, std::string hea
     const auto interval = std::chrono::milliseconds(int64_t(1000.0 / spec.fps));
     auto channel =
         std::make_shared<StreamChannel>(StreamChannel::Mode::Latest, std::move(head), interval);
+    const std::string highlight = spec.highlight;
     std::lock_guard lock(m_mutex);
     if (m_stopping) return nullptr;
     View& view = m_views[spec.key];
@@ -98,8 +114,13 @@ std::shared_ptr<StreamChannel> StreamHub::watch(ViewerSpec spec, std::string hea
         // The view renders as often as its most eager viewer; each is paced by its channel.
         view.spec.fps = std::max(view.spec.fps, spec.fps);
     }
-    if (view.last) channel->offer(view.last);  // something to show at once
-    view.viewers.push_back(channel);
+    Watcher watcher{channel, highlight};
+    if (auto it = view.parts.find(watcher.highlight); it != view.parts.end()) {
+        channel->offer(it->second);  // something to show at once
+    } else if (view.frame) {
+        watcher.needs_frame = true;  // the hub's thread encodes the newest frame for it
+    }
+    view.viewers.push_back(std::move(watcher));
     ++m_stats.viewers;
     m_poked = true;
     m_wake.notify_one();
@@ -133,7 +154,7 @@ void StreamHub::stop() {
         if (m_stopping) return;
         m_stopping = true;
         for (auto& [key, view] : m_views)
-            all.insert(all.end(), view.viewers.begin(), view.viewers.end());
+            for (auto& w : view.viewers) all.push_back(w.channel);
         all.insert(all.end(), m_event_clients.begin(), m_event_clients.end());
         m_views.clear();
         m_event_clients.clear();
@@ -153,7 +174,8 @@ StreamHubStats StreamHub::stats() const {
     StreamHubStats s = m_stats;
     s.viewers = 0;
     for (const auto& [key, view] : m_views) {
-        for (const auto& c : view.viewers) {
+        for (const auto& w : view.viewers) {
+            const auto& c = w.channel;
             if (c->gone()) continue;
             ++s.viewers;
             s.frames_dropped += c->dropped();
@@ -195,7 +217,8 @@ void StreamHub::run() {
         const Clock::time_point now = Clock::now();
         publish_events(std::move(reports), now);
         // Renders one view at a time, so that events go out between frames.
-        const bool rendered = render_one(now);
+        const bool served = serve_joiners();
+        const bool rendered = render_one(now) || served;
         lock.lock();
         if (rendered) m_poked = true;  // another view may be due as well
     }
@@ -240,18 +263,27 @@ bool StreamHub::render_one(Clock::time_point now) {
     const uint64_t version = scene_version();
     std::string key;
     ViewerSpec spec;
+    std::set<std::string> highlights;           // of the view's viewers ("" for none)
+    std::shared_ptr<const ViewFrame> previous;  // of this accumulation, with its ids
     {
         std::lock_guard lock(m_mutex);
         Clock::time_point oldest = Clock::time_point::max();
         for (auto it = m_views.begin(); it != m_views.end();) {
-            if (prune(it->second.viewers) == 0) {
+            if (prune_watchers(it->second.viewers) == 0) {
                 it = m_views.erase(it);
                 continue;
             }
             View& v = it->second;
             const bool stale = v.version != version;
+            // A frame without ids (an edit raced the launch meant to trace them) while a viewer
+            // highlights: one more launch traces them, even past max_samples.
+            const bool needs_ids =
+                v.frame && !v.frame->ids &&
+                std::any_of(v.viewers.begin(), v.viewers.end(),
+                            [](const Watcher& w) { return !w.highlight.empty(); });
             const bool improvable =
-                !stale && v.samples < v.spec.max_samples && v.launches < v.spec.max_samples;
+                !stale &&
+                ((v.samples < v.spec.max_samples && v.launches < v.spec.max_samples) || needs_ids);
             const bool due = (stale || improvable) && v.failed_version != version &&
                              now >= v.next_render && v.next_render < oldest;
             if (due) {
@@ -265,33 +297,70 @@ bool StreamHub::render_one(Clock::time_point now) {
             ++m_stats.deferred_for_api;
             return false;
         }
-        spec = m_views.at(key).spec;
+        const View& chosen = m_views.at(key);
+        spec = chosen.spec;
+        for (const Watcher& w : chosen.viewers) highlights.insert(w.highlight);
+        if (chosen.frame && chosen.frame->version == version && chosen.frame->ids)
+            previous = chosen.frame;
     }
 
-    // Step: render (accumulating) and encode, outside the lock.
+    // Step: render (accumulating), outside the lock; the first launch of a version traces ids.
     RenderRequest request = spec.request;
     request.accumulate = true;
     request.cancel = &m_cancel;
+    if (!previous) {
+        request.format = ImageFormat::Exr;  // AOVs are listed with EXR only; nothing encodes it
+        request.aovs = {Aov::InstanceId};
+    }
     auto frame = m_engine.render_frame(request);
-    Result<std::string> jpeg =
-        frame ? encode_jpeg_linear(frame->buffers.color.data(), frame->buffers.width,
-                                   frame->buffers.height, request.exposure, spec.quality)
-              : Result<std::string>(Unexpected(frame.error()));
+
+    // Step: tone-map once, then one JPEG per distinct highlight.
+    std::shared_ptr<ViewFrame> kept;
+    std::map<std::string, StreamChannel::Part> parts;
+    Status encoded;
+    if (!frame) {
+        encoded = Unexpected(frame.error());
+    } else {
+        auto f = std::make_shared<ViewFrame>();
+        FrameBuffers& b = frame->buffers;
+        f->width = b.width;
+        f->height = b.height;
+        f->version = frame->info.version;
+        f->samples = frame->info.samples;
+        f->rgb.resize(std::size_t(b.width) * b.height * 3);
+        tonemap_to_srgb8(b.color.data(), b.pixel_count(), request.exposure, f->rgb.data());
+        if (!b.instance_id.empty()) {
+            f->ids = std::make_shared<const std::vector<uint32_t>>(std::move(b.instance_id));
+            f->names = std::make_shared<const std::vector<std::pair<uint32_t, std::string>>>(
+                std::move(frame->names.instances));
+        } else if (previous && previous->version == f->version) {
+            f->ids = previous->ids;
+            f->names = previous->names;
+        }
+        kept = std::move(f);
+        for (const std::string& h : highlights) {
+            auto part = encode_part(*kept, h, spec.quality);
+            if (!part) {
+                encoded = Unexpected(part.error());
+                break;
+            }
+            parts[h] = std::move(part.value());
+        }
+    }
 
     // Step: hand the frame to the view's viewers.
-    std::vector<std::shared_ptr<StreamChannel>> viewers;
-    StreamChannel::Part part;
+    std::vector<std::pair<std::shared_ptr<StreamChannel>, StreamChannel::Part>> offers;
     {
         std::lock_guard lock(m_mutex);
         auto it = m_views.find(key);
         if (it == m_views.end() || m_stopping) return true;
         View& v = it->second;
         v.next_render = now + std::chrono::milliseconds(int64_t(1000.0 / v.spec.fps));
-        if (!jpeg) {
+        if (!encoded) {
             // Retried once the scene changes (a camera override the new camera makes valid).
             ++m_stats.render_errors;
             v.failed_version = version;
-            spdlog::warn("viewer render failed: {}", jpeg.error().message);
+            spdlog::warn("viewer render failed: {}", encoded.error().message);
             return true;
         }
         ++m_stats.frames_rendered;
@@ -305,13 +374,94 @@ bool StreamHub::render_one(Clock::time_point now) {
         v.launches = info.version == v.version ? v.launches + 1 : 1;
         v.version = info.version;
         v.samples = info.samples;
-        part = std::make_shared<const std::string>(
-            frame_part(jpeg.value(), info.version, info.samples));
-        v.last = part;
-        viewers = v.viewers;
-        m_stats.frames_offered += viewers.size();
+        v.frame = kept;
+        v.parts = std::move(parts);
+        for (Watcher& w : v.viewers) {
+            auto p = v.parts.find(w.highlight);
+            if (p == v.parts.end()) {
+                w.needs_frame = true;  // joined during the render with a new highlight
+                continue;
+            }
+            w.needs_frame = false;
+            offers.emplace_back(w.channel, p->second);
+        }
+        m_stats.frames_offered += offers.size();
     }
-    for (auto& c : viewers) c->offer(part);
+    for (auto& [c, part] : offers) c->offer(part);
+    return true;
+}
+
+Result<StreamChannel::Part> StreamHub::encode_part(const ViewFrame& frame,
+                                                   const std::string& highlight, int quality) {
+    Result<std::string> jpeg = [&]() -> Result<std::string> {
+        if (highlight.empty() || !frame.ids)
+            return encode_jpeg(frame.rgb.data(), frame.width, frame.height, quality);
+        // The slot that shows the instance in this frame; none when it is not in view.
+        uint32_t slot = MISS_ID;
+        for (const auto& [s, id] : *frame.names) {
+            if (id == highlight) slot = s;
+        }
+        std::vector<uint8_t> rgb = frame.rgb;
+        highlight_instance(rgb.data(), frame.ids->data(), frame.width, frame.height, slot);
+        {
+            std::lock_guard lock(m_mutex);
+            ++m_stats.highlight_encodes;
+        }
+        return encode_jpeg(rgb.data(), frame.width, frame.height, quality);
+    }();
+    if (!jpeg) return Unexpected(jpeg.error());
+    return StreamChannel::Part(std::make_shared<const std::string>(
+        frame_part(jpeg.value(), frame.version, frame.samples)));
+}
+
+bool StreamHub::serve_joiners() {
+    // Step: what waits: (view, highlight) pairs and the frame to encode for them.
+    struct Job {
+        std::string key, highlight;
+        std::shared_ptr<const ViewFrame> frame;
+        int quality = 75;
+    };
+    std::vector<Job> jobs;
+    {
+        std::lock_guard lock(m_mutex);
+        for (auto& [key, v] : m_views) {
+            if (!v.frame) continue;
+            for (const Watcher& w : v.viewers) {
+                if (!w.needs_frame) continue;
+                const bool queued = std::any_of(jobs.begin(), jobs.end(), [&](const Job& j) {
+                    return j.key == key && j.highlight == w.highlight;
+                });
+                if (!queued) jobs.push_back({key, w.highlight, v.frame, v.spec.quality});
+            }
+        }
+    }
+    if (jobs.empty()) return false;
+
+    // Step: encode outside the lock; offer only if no newer frame came meanwhile (that one
+    // served them).
+    for (const Job& job : jobs) {
+        auto part = encode_part(*job.frame, job.highlight, job.quality);
+        std::vector<std::shared_ptr<StreamChannel>> to;
+        {
+            std::lock_guard lock(m_mutex);
+            auto it = m_views.find(job.key);
+            if (it == m_views.end() || it->second.frame != job.frame) continue;
+            View& v = it->second;
+            if (!part) {
+                ++m_stats.render_errors;
+                spdlog::warn("viewer frame encoding failed: {}", part.error().message);
+            } else {
+                v.parts[job.highlight] = part.value();
+            }
+            for (Watcher& w : v.viewers) {
+                if (!w.needs_frame || w.highlight != job.highlight) continue;
+                w.needs_frame = false;
+                if (part) to.push_back(w.channel);
+            }
+            m_stats.frames_offered += to.size();
+        }
+        for (auto& c : to) c->offer(part.value());
+    }
     return true;
 }
 

@@ -11,6 +11,15 @@
 // viewer frame in progress. Renders use the engine's render path (Engine::render_frame with the
 // request GET /v1/render parses, accumulating) and are encoded as JPEG (jpeg_encode.h).
 //
+// Highlight. A viewer may name a selected instance (`highlight`): its frames tint exactly the
+// pixels whose instance_id AOV is that instance (engine/image/highlight.h). The highlight is not
+// part of the view: the render stays shared and each distinct highlight gets its own JPEG of it.
+// The ids come from the pixel-centre ray, the same for every launch of one accumulation, so the
+// first launch at a version traces them and later launches reuse them. A viewer that joins with
+// a highlight the newest frame was not encoded for gets that frame encoded for it, so a new
+// selection shows at once, without a render, even when accumulation has ended. An instance the
+// frame does not show (removed since, hidden, off screen) tints nothing.
+//
 // Events. Each commit that brought edits in becomes one `commit` event with its version and
 // rebuild report: the hub's own renders hand their report over directly; commits other clients
 // cause (POST /v1/commit, API renders, picks) are noticed within IDLE_WAIT from the engine's
@@ -46,6 +55,7 @@ struct ViewerSpec {
     double fps = 10.0;          ///< most frames per second this viewer is sent
     uint32_t max_samples = 16;  ///< accumulation stops improving the frame here
     std::string key;            ///< viewers with equal keys share renders
+    std::string highlight;      ///< instance id whose pixels are tinted; "" for none
 };
 
 /// Cumulative counts, for /metrics and tests.
@@ -56,10 +66,11 @@ struct StreamHubStats {
     uint64_t frames_rendered = 0;  ///< viewer renders (each shared by its view's viewers)
     uint64_t frames_offered = 0;   ///< frames handed to viewers' channels
     uint64_t render_errors = 0;
-    uint64_t events_published = 0;  ///< commit events (each sent to every event client)
-    uint64_t deferred_for_api = 0;  ///< times a due viewer render waited for API renders
-    uint64_t frames_dropped = 0;    ///< frames open viewers missed (a newer one replaced them)
-    std::size_t held_bytes = 0;     ///< frame bytes held for open viewers (pending and writing)
+    uint64_t events_published = 0;   ///< commit events (each sent to every event client)
+    uint64_t deferred_for_api = 0;   ///< times a due viewer render waited for API renders
+    uint64_t frames_dropped = 0;     ///< frames open viewers missed (a newer one replaced them)
+    uint64_t highlight_encodes = 0;  ///< JPEGs encoded with a highlight (one per frame and id)
+    std::size_t held_bytes = 0;      ///< frame bytes held for open viewers (pending and writing)
 };
 
 /// The stats as Prometheus text (strata_stream_*), appended to `out`.
@@ -94,16 +105,42 @@ public:
 
 private:
     using Clock = std::chrono::steady_clock;
+    /// One viewer of a view.
+    struct Watcher {
+        std::shared_ptr<StreamChannel> channel;
+        std::string highlight;
+        bool needs_frame = false;  ///< joined after the newest frame; not encoded for it yet
+    };
+    /// The newest frame of a view, kept to encode it for viewers that join with another
+    /// highlight.
+    struct ViewFrame {
+        uint32_t width = 0, height = 0;
+        uint64_t version = 0;
+        uint32_t samples = 0;
+        std::vector<uint8_t> rgb;  ///< tone-mapped, no highlight
+        /// instance_id AOV and the ids of its slots; shared by the frames of one accumulation
+        /// (null only when an edit raced the launch that should have traced them).
+        std::shared_ptr<const std::vector<uint32_t>> ids;
+        std::shared_ptr<const std::vector<std::pair<uint32_t, std::string>>> names;
+    };
     struct View {
         ViewerSpec spec;
-        std::vector<std::shared_ptr<StreamChannel>> viewers;
+        std::vector<Watcher> viewers;
         uint64_t version = UINT64_MAX;  ///< of the last frame
         uint32_t samples = 0;           ///< in the last frame
         uint32_t launches = 0;          ///< at that version (guards against restarts)
         uint64_t failed_version = UINT64_MAX;
         Clock::time_point next_render{};
-        StreamChannel::Part last;  ///< the newest frame, for viewers who join
+        std::shared_ptr<const ViewFrame> frame;            ///< the newest frame
+        std::map<std::string, StreamChannel::Part> parts;  ///< it encoded, per highlight
     };
+
+    /// `frame` as one stream part for viewers highlighting `highlight`.
+    Result<StreamChannel::Part> encode_part(const ViewFrame& frame, const std::string& highlight,
+                                            int quality);
+    /// Encodes the newest frame for viewers that joined with a highlight it lacked; false when
+    /// none waited.
+    bool serve_joiners();
 
     void run();
     void publish_events(std::vector<RebuildReport> reports, Clock::time_point now);

@@ -62,6 +62,14 @@ std::variant<ViewerSpec, protocol::Problem> parse_viewer(
     // An opaque value that makes a viewer's URL its own: browsers share one in-flight image
     // between equal URLs, so a reloaded page would wait on the stream of the page it replaced.
     if (auto it = params.find("client"); it != params.end()) params.erase(it);
+    // The selected instance, tinted per viewer after the shared render: not part of the view.
+    if (auto it = params.find("highlight"); it != params.end()) {
+        spec.highlight = it->second;
+        params.erase(it);
+        if (spec.highlight.empty())
+            return bad_parameter("highlight",
+                                 "query parameter 'highlight' must name an instance, not ''");
+    }
     for (const char* fixed : {"format", "aovs", "compression", "accumulate"}) {
         if (params.count(fixed))
             return bad_parameter(fixed, std::string("query parameter '") + fixed +
@@ -114,6 +122,18 @@ void add_stream_routes(Router& router, ServerContext& ctx) {
         if (refuse_head(req, res)) return;
         auto parsed = parse_viewer(req.params, ctx.api_limits);
         if (auto* p = std::get_if<protocol::Problem>(&parsed)) return send_problem(res, *p);
+        // An unknown instance is refused at once (a typo would otherwise tint nothing, silently);
+        // one removed later simply stops being tinted.
+        if (const std::string& id = std::get<ViewerSpec>(parsed).highlight; !id.empty()) {
+            const bool known =
+                ctx.engine.read([&](const Scene& s) { return !s.find_instance(id).is_null(); });
+            if (!known) {
+                protocol::Problem p = protocol::make_problem(
+                    ProblemType::NotFound, "highlight: no instance with id '" + id + "'");
+                p.pointer = "/highlight";
+                return send_problem(res, p);
+            }
+        }
         if (!ctx.streams || !current_request()) return stream_unavailable(res);
         std::string head =
             "HTTP/1.1 200 OK\r\n"

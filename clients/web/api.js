@@ -19,6 +19,7 @@ export class ApiError extends Error {
     super(`${status}${detail ? ': ' + detail : text ? ': ' + text.slice(0, 200) : ''}`);
     this.status = status;
     this.problem = problem;
+    this.etag = null;
   }
 }
 
@@ -34,9 +35,14 @@ export async function api(path, { method = 'GET', body, ifMatch } = {}) {
   const text = await response.text();
   let doc = null;
   try { doc = text ? JSON.parse(text) : null; } catch { doc = null; }
-  if (!response.ok) throw new ApiError(response.status, doc, text);
   const tag = response.headers.get('ETag');
-  return { doc, etag: tag ? Number(tag.replace(/"/g, '')) : null, response };
+  const etag = tag ? Number(tag.replace(/"/g, '')) : null;
+  if (!response.ok) {
+    const error = new ApiError(response.status, doc, text);
+    error.etag = etag;  // a 412 names the current version
+    throw error;
+  }
+  return { doc, etag, response };
 }
 
 /// A URL for <img> and EventSource, which cannot send headers: the token as ?access_token=.

@@ -1,6 +1,8 @@
-// The selected instance: its document (id, mesh, material, transform, group path) and the edits
-// the viewer makes to it - move, rotate, scale, visibility, colour - each one batch with
-// If-Match on the version the panel was filled from.
+// The selection: an instance's document (id, mesh, material, transform, group path) or a group's
+// (id, path, children), and the edits the viewer makes to it - move, rotate, scale, visibility,
+// and an instance's colour - each one batch with If-Match on the version the panel was filled
+// from. Each group in the path is a link that selects it. While the user types, a commit by
+// someone else does not overwrite the fields: the panel notes it, and Apply then meets a 412.
 
 const fmt = (v) => (Math.abs(v) < 1e-9 ? 0 : Number(v.toFixed(4)));
 
@@ -35,23 +37,33 @@ function unhex(h) {
 }
 
 export class Inspector {
-  constructor(root, { applyEdit }) {
+  constructor(root, { applyEdit, onSelectGroup }) {
     this.root = root;
     this.applyEdit = applyEdit;
+    this.onSelectGroup = onSelectGroup;
     this.doc = null;
-    this.hit = null;
+    this.dirty = false;
   }
 
-  show(doc, hit) {
+  /// A new selection, or new values from the server (after a commit or a conflict).
+  show(doc) {
     this.doc = doc;
-    this.hit = hit || null;
+    this.dirty = false;
     this.render();
   }
 
-  /// New values from the server (after a commit or a conflict).
-  refresh(doc) {
-    this.doc = doc;
-    this.render();
+  /// The scene moved on (to `version`) while the user was typing: say so, keep the fields.
+  outdated(version) {
+    const note = this.root.querySelector('#sel-outdated');
+    if (note) {
+      note.hidden = false;
+      note.textContent = `The scene changed (now version ${version}) since these values were ` +
+        `read at version ${this.doc.version}; applying them will be refused as a conflict.`;
+    }
+  }
+
+  edit(edits) {
+    return this.applyEdit(edits, this.doc.version);
   }
 
   render() {
@@ -59,14 +71,13 @@ export class Inspector {
     const root = this.root;
     root.replaceChildren();
     root.classList.toggle('muted', !d);
+    root.dataset.instance = d && d.kind === 'instance' ? d.id : '';
+    root.dataset.group = d && d.kind === 'group' ? d.id : '';
     if (!d) {
       root.textContent = 'Nothing selected. Click the image to pick an instance.';
-      root.dataset.instance = '';
       return;
     }
-    root.dataset.instance = d.id;
     const t = decompose(d.transform);
-    const path = this.hit ? this.hit.group_path : d.parent ? [d.parent] : [];
     const table = document.createElement('table');
     const row = (k, v) => {
       const tr = table.insertRow();
@@ -75,10 +86,16 @@ export class Inspector {
       if (v instanceof Node) cell.append(v); else cell.textContent = v;
       return cell;
     };
+    row('kind', d.kind);
     row('id', d.id).id = 'sel-id';
-    row('mesh', d.mesh);
-    row('material', d.material === null ? '(mesh default)' : d.material);
-    row('group path', path.length ? '/' + path.join('/') : '(root)');
+    if (d.kind === 'instance') {
+      row('mesh', d.mesh);
+      row('material', d.material === null ? '(mesh default)' : d.material);
+    }
+    row(d.kind === 'group' ? 'parent path' : 'group path', this.pathLinks(d.path || [])).id = 'sel-path';
+    if (d.kind === 'group') {
+      row('children', `${d.children.groups} groups, ${d.children.instances} instances`);
+    }
     row('version', String(d.version)).id = 'sel-version';
     root.append(table);
 
@@ -95,6 +112,7 @@ export class Inspector {
         input.step = name === 'rotate' ? '5' : '0.1';
         input.value = fmt(v);
         input.id = `sel-${name}-${i}`;
+        input.addEventListener('input', () => { this.dirty = true; });
         div.append(input);
       });
       root.append(div);
@@ -103,6 +121,15 @@ export class Inspector {
     vec('rotate', t.rotate_deg);
     vec('scale', t.scale);
 
+    const note = document.createElement('div');
+    note.id = 'sel-outdated';
+    note.className = 'note';
+    note.hidden = true;
+    root.append(note);
+
+    // Groups and instances take the same edits: set_transform with `group` or `instance`,
+    // visibility through update_group or update_instance.
+    const target = d.kind === 'group' ? { group: d.id } : { instance: d.id };
     const controls = document.createElement('div');
     controls.className = 'row';
     const apply = document.createElement('button');
@@ -110,21 +137,45 @@ export class Inspector {
     apply.id = 'sel-apply';
     apply.onclick = () => {
       const read = (name) => [0, 1, 2].map((i) => Number(root.querySelector(`#sel-${name}-${i}`).value));
-      this.applyEdit([{ op: 'set_transform', instance: d.id,
-        transform: { translate: read('translate'), rotate_deg: read('rotate'), scale: read('scale') } }], d.version);
+      this.edit([{ op: 'set_transform', ...target,
+        transform: { translate: read('translate'), rotate_deg: read('rotate'), scale: read('scale') } }]);
     };
     const visible = document.createElement('label');
     const box = document.createElement('input');
     box.type = 'checkbox';
     box.checked = d.visible;
     box.id = 'sel-visible';
-    box.onchange = () => this.applyEdit([{ op: 'update_instance', instance: d.id, visible: box.checked }], d.version);
+    box.onchange = () => this.edit([{ op: d.kind === 'group' ? 'update_group' : 'update_instance', ...target,
+      visible: box.checked }]);
     visible.append(box, ' visible');
     controls.append(apply, visible);
     root.append(controls);
+    if (d.kind === 'instance') this.colorRow(d);
+  }
 
-    // Colour: the instance gets a material of its own ("<id>.color") the first time, so the
-    // change never repaints other instances sharing a material.
+  /// "/a/b" with each group a link that selects it; "(root)" when empty.
+  pathLinks(path) {
+    const span = document.createElement('span');
+    if (!path.length) {
+      span.textContent = '(root)';
+      return span;
+    }
+    path.forEach((g) => {
+      span.append('/');
+      const link = document.createElement('button');
+      link.className = 'path-link';
+      link.textContent = g;
+      link.dataset.group = g;
+      link.title = `select group '${g}'`;
+      link.onclick = () => this.onSelectGroup(g);
+      span.append(link);
+    });
+    return span;
+  }
+
+  // Colour: the instance gets a material of its own ("<id>.color") the first time, so the
+  // change never repaints other instances sharing a material.
+  colorRow(d) {
     const colorRow = document.createElement('div');
     colorRow.className = 'row';
     const color = document.createElement('input');
@@ -140,12 +191,12 @@ export class Inspector {
         : [{ op: 'add_material', id: own, base_color: base, roughness: m.roughness, metallic: m.metallic,
              emission: m.emission },
            { op: 'update_instance', instance: d.id, material: own }];
-      this.applyEdit(edits, d.version);
+      this.edit(edits);
     };
     const colorLabel = document.createElement('span');
     colorLabel.textContent = 'colour';
     colorLabel.style.width = '5em';
     colorRow.append(colorLabel, color);
-    root.append(colorRow);
+    this.root.append(colorRow);
   }
 }

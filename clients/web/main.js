@@ -3,7 +3,7 @@
 // by GET /v1/events. Plain ES modules, no build step; served by strata-server at GET /.
 
 import { api, edit, enc, setToken, token, withToken, ApiError } from './api.js';
-import { CameraControl, project } from './camera.js';
+import { CameraControl } from './camera.js';
 import { CostPanel } from './cost.js';
 import { Inspector } from './inspector.js';
 import { ScenePanel } from './scene_panel.js';
@@ -23,7 +23,7 @@ const state = {
   version: null,        // newest scene version seen
   sceneCamera: null,    // the scene's camera (GET /v1/scene)
   size: [960, 540],
-  selected: null,       // the selected instance's document
+  selected: null,       // the selected instance's or group's document (kind: 'instance' | 'group')
   frameVersion: null,   // version of the newest frame shown
   streamUrl: '',
 };
@@ -32,7 +32,7 @@ window.strata = state;
 function message(text, kind = 'error') {
   const m = $('message');
   m.textContent = text;
-  m.className = kind === 'info' ? 'info' : '';
+  m.className = kind;
   m.hidden = !text;
 }
 
@@ -57,6 +57,8 @@ function openStream(camera) {
     params.up = camera.up.map((v) => v.toFixed(4)).join(',');
     params.fov_y_deg = camera.fov_y_deg.toFixed(3);
   }
+  // The selected instance is tinted by the server, pixel by pixel, from the frame's instance ids.
+  if (state.selected && state.selected.kind === 'instance') params.highlight = state.selected.id;
   const key = JSON.stringify(params);
   if (key === state.streamKey) return;
   state.streamKey = key;
@@ -86,40 +88,14 @@ function viewCamera() {
   return controls.camera || state.sceneCamera;
 }
 
-// Step: the selection outline: the selected instance's world bounds, projected with the view's
-// camera onto the overlay.
+// Step: the selection highlight. The server tints the selected instance's pixels in the stream
+// (highlight=<id>), so the overlay only needs clearing; a selection change reopens the stream.
 function drawSelection() {
   const canvas = $('overlay');
   const [w, h] = state.size;
   canvas.width = w;
   canvas.height = h;
-  const ctx = canvas.getContext('2d');
-  ctx.clearRect(0, 0, w, h);
-  const doc = state.selected;
-  const cam = viewCamera();
-  if (!doc || !doc.bounds || !cam || doc.world_visible === false) return;
-  const { min, max } = doc.bounds;
-  const corners = [];
-  for (let i = 0; i < 8; ++i) {
-    corners.push([i & 1 ? max[0] : min[0], i & 2 ? max[1] : min[1], i & 4 ? max[2] : min[2]]);
-  }
-  const p = corners.map((c) => project(cam, c, w, h));
-  ctx.strokeStyle = '#ffcc33';
-  ctx.lineWidth = 2;
-  ctx.fillStyle = 'rgba(255, 204, 51, 0.12)';
-  const edges = [[0, 1], [2, 3], [4, 5], [6, 7], [0, 2], [1, 3], [4, 6], [5, 7], [0, 4], [1, 5], [2, 6], [3, 7]];
-  ctx.beginPath();
-  for (const [a, b] of edges) {
-    if (!p[a] || !p[b]) continue;
-    ctx.moveTo(p[a][0], p[a][1]);
-    ctx.lineTo(p[b][0], p[b][1]);
-  }
-  ctx.stroke();
-  const visible = p.filter(Boolean);
-  if (visible.length === 8) {
-    const xs = visible.map((q) => q[0]), ys = visible.map((q) => q[1]);
-    ctx.fillRect(Math.min(...xs), Math.min(...ys), Math.max(...xs) - Math.min(...xs), Math.max(...ys) - Math.min(...ys));
-  }
+  canvas.getContext('2d').clearRect(0, 0, w, h);
 }
 
 async function refreshScene() {
@@ -154,36 +130,66 @@ async function pickAt(x, y) {
   }
 }
 
-async function select(id, hit) {
+/// The groups from the root down to `parent` (walking GET /v1/scene/groups/{id}).
+async function groupPath(parent) {
+  const path = [];
+  for (let id = parent; id && path.length < 64; ) {
+    path.unshift(id);
+    const { doc } = await api('/v1/scene/groups/' + enc(id));
+    id = doc.parent;
+  }
+  return path;
+}
+
+async function readSelected(kind, id) {
+  const { doc } = await api(`/v1/scene/${kind === 'group' ? 'groups' : 'instances'}/` + enc(id));
+  doc.kind = kind;
+  doc.path = await groupPath(doc.parent);
+  return doc;
+}
+
+function selectionChanged() {
+  const s = state.selected;
+  scenePanel.mark(s ? s.id : null, s ? s.kind : null);
+  drawSelection();
+  openStream(controls.camera);
+}
+
+async function select(id, hit, kind = 'instance') {
   if (!id) {
     state.selected = null;
     inspector.show(null);
-    scenePanel.mark(null);
-    drawSelection();
+    selectionChanged();
     return;
   }
   try {
-    const { doc } = await api('/v1/scene/instances/' + enc(id));
+    const doc = await readSelected(kind, id);
+    if (hit && hit.group_path) doc.path = hit.group_path;
     state.selected = doc;
-    inspector.show(doc, hit);
-    scenePanel.mark(id);
-    drawSelection();
+    inspector.show(doc);
+    selectionChanged();
   } catch (e) {
-    message('Cannot read instance ' + id + ': ' + e.message);
+    message(`Cannot read ${kind} ${id}: ${e.message}`);
   }
 }
 
-/// Reloads the selected instance (after a commit: another client may have changed it).
-async function reloadSelection() {
+/// Reloads the selection (after a commit: another client may have changed it). While the user
+/// is typing into the inspector (`force` unset), the fields keep their values: the apply that
+/// follows is checked against the version they were read at.
+async function reloadSelection(force = false) {
   if (!state.selected) return;
-  const id = state.selected.id;
+  const { id, kind } = state.selected;
   try {
-    const { doc } = await api('/v1/scene/instances/' + enc(id));
+    const doc = await readSelected(kind, id);
+    if (!force && inspector.dirty) {
+      inspector.outdated(doc.version);
+      return;
+    }
     state.selected = doc;
-    inspector.refresh(doc);
+    inspector.show(doc);
   } catch (e) {
     if (e instanceof ApiError && e.status === 404) {
-      message(`The selected instance '${id}' was removed by another client.`, 'info');
+      message(`The selected ${kind} '${id}' was removed by another client.`, 'info');
       select(null);
     }
   }
@@ -196,13 +202,15 @@ async function applyEdit(edits, basedOn) {
     const { doc } = await edit(edits, basedOn);
     message(`Applied (version ${doc.version}).`, 'info');
     state.version = doc.version;
-    await reloadSelection();
+    await reloadSelection(true);
     return true;
   } catch (e) {
     if (e instanceof ApiError && e.status === 412) {
-      message(`Conflict: the scene changed since version ${basedOn} (another client edited it). ` +
-              'Nothing was applied; the panel now shows the current values, check them and apply again.');
-      await reloadSelection();
+      const now = e.etag !== null ? ` (now version ${e.etag})` : '';
+      message(`Conflict: the scene changed since version ${basedOn}${now}: another client edited it. ` +
+              'Nothing was applied; the panel now shows the current values, check them and apply again.',
+              'conflict');
+      await reloadSelection(true);
     } else {
       message('Edit refused: ' + e.message);
     }
@@ -272,8 +280,12 @@ const controls = new CameraControl($('view'), {
   onClick: pickAt,
   getSceneCamera: () => state.sceneCamera,
 });
-const inspector = new Inspector($('inspector'), { applyEdit });
-const scenePanel = new ScenePanel($('scene-list'), $('scene-search'), $('scene-more'), { onSelect: (id) => select(id) });
+const inspector = new Inspector($('inspector'), {
+  applyEdit, onSelectGroup: (id) => select(id, null, 'group'),
+});
+const scenePanel = new ScenePanel($('scene-list'), $('scene-search'), $('scene-more'), {
+  onSelect: (id, kind) => select(id, null, kind),
+});
 const costPanel = new CostPanel($('cost-chart'), $('last-report'));
 
 $('follow').addEventListener('click', () => controls.follow());

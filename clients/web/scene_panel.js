@@ -1,5 +1,5 @@
-// The scene panel: instances from the paginated listing (GET /v1/scene/instances), searchable
-// by id (filtered as pages arrive), a click selects.
+// The scene panel: groups, then instances, from the paginated listings (GET /v1/scene/groups,
+// GET /v1/scene/instances), searchable by id (filtered as pages arrive); a click selects.
 
 import { api } from './api.js';
 
@@ -13,7 +13,9 @@ export class ScenePanel {
     this.onSelect = onSelect;
     this.items = [];
     this.cursor = null;
+    this.kind = 'groups';  // the listing the next page comes from
     this.selected = null;
+    this.selectedKind = null;
     let timer = null;
     search.addEventListener('input', () => {
       clearTimeout(timer);
@@ -25,27 +27,39 @@ export class ScenePanel {
   async load() {
     this.items = [];
     this.cursor = null;
+    this.kind = 'groups';
     await this.page();
   }
 
+  /// The next page: groups first, then instances once the groups are all listed.
   async page() {
     const q = new URLSearchParams({ limit: PAGE });
     if (this.cursor) q.set('cursor', this.cursor);
     try {
-      const { doc } = await api('/v1/scene/instances?' + q);
-      this.items.push(...doc.items.map((i) => ({ id: i.id, mesh: i.mesh, visible: i.world_visible })));
+      const { doc } = await api(`/v1/scene/${this.kind}?` + q);
+      this.items.push(...doc.items.map((i) => this.kind === 'groups'
+        ? { kind: 'group', id: i.id, label: `${i.id}  ·  group${i.world_visible ? '' : '  (hidden)'}` }
+        : { kind: 'instance', id: i.id, label: `${i.id}  ·  ${i.mesh}${i.world_visible ? '' : '  (hidden)'}` }));
       this.cursor = doc.next_cursor;
+      if (!this.cursor && this.kind === 'groups') {
+        this.kind = 'instances';
+        if (this.items.length < PAGE) return this.page();
+        this.cursor = '';
+      }
     } catch (e) {
       this.cursor = null;
-      this.list.textContent = 'Cannot list instances: ' + e.message;
+      this.list.textContent = `Cannot list ${this.kind}: ` + e.message;
       return;
     }
     this.render();
   }
 
-  mark(id) {
+  mark(id, kind) {
     this.selected = id;
-    for (const li of this.list.children) li.classList.toggle('selected', li.dataset.id === id);
+    this.selectedKind = kind;
+    for (const li of this.list.children) {
+      li.classList.toggle('selected', li.dataset.id === id && li.dataset.kind === kind);
+    }
   }
 
   render() {
@@ -55,11 +69,13 @@ export class ScenePanel {
       if (needle && !item.id.toLowerCase().includes(needle)) continue;
       const li = document.createElement('li');
       li.dataset.id = item.id;
-      li.textContent = `${item.id}  ·  ${item.mesh}${item.visible ? '' : '  (hidden)'}`;
-      li.classList.toggle('selected', item.id === this.selected);
-      li.onclick = () => this.onSelect(item.id);
+      li.dataset.kind = item.kind;
+      li.className = item.kind;
+      li.textContent = (item.kind === 'group' ? '▸ ' : '') + item.label;
+      li.classList.toggle('selected', item.id === this.selected && item.kind === this.selectedKind);
+      li.onclick = () => this.onSelect(item.id, item.kind);
       this.list.append(li);
     }
-    this.more.hidden = !this.cursor;
+    this.more.hidden = this.cursor === null;
   }
 }

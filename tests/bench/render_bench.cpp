@@ -24,6 +24,8 @@
 
 #include "engine/engine.h"
 #include "engine/image/exr.h"
+#include "engine/image/highlight.h"
+#include "engine/image/jpeg_encode.h"
 #include "engine/image/png.h"
 #include "engine/image/tonemap.h"
 #include "engine/render/camera_rays.h"
@@ -529,6 +531,60 @@ void BM_ExrFrame1080p(benchmark::State& state) {
     state.counters["MB"] = double(bytes) / 1e6;
 }
 
+/// The live viewer's per-frame encoding at 1080p, quality 80: a plain JPEG of a tone-mapped
+/// frame (range 0) against one with the selected instance highlighted first (range 1: a copy of
+/// the 8-bit frame, highlight_instance on the instance under the centre pixel, the encode).
+void BM_StreamJpeg1080p(benchmark::State& state) {
+    const FrameBuffers& f = demo_1080p();
+    std::vector<uint8_t> rgb(f.pixel_count() * 3);
+    tonemap_to_srgb8(f.color.data(), f.pixel_count(), 0.0f, rgb.data());
+    const uint32_t slot = f.instance_id[f.pixel_count() / 2 + f.width / 2];
+    std::size_t tinted = 0;
+    for (auto _ : state) {
+        if (state.range(0) == 0) {
+            benchmark::DoNotOptimize(encode_jpeg(rgb.data(), f.width, f.height, 80).value());
+            continue;
+        }
+        std::vector<uint8_t> copy = rgb;
+        tinted = highlight_instance(copy.data(), f.instance_id.data(), f.width, f.height, slot);
+        benchmark::DoNotOptimize(encode_jpeg(copy.data(), f.width, f.height, 80).value());
+    }
+    state.SetLabel(state.range(0) == 0 ? "plain" : "highlighted");
+    state.counters["tinted_px"] = double(tinted);
+}
+
+/// What tracing the instance_id AOV adds to a stream launch (640x360, 1 spp, demo scene): the
+/// pixel-centre ray, which the stream hub pays once per scene version (range 1) or never (0).
+void BM_StreamLaunchIds(benchmark::State& state) {
+    static const std::unique_ptr<Engine> engine = [] {
+        auto e = std::move(Engine::create().value());
+        STRATA_CHECK(e->apply(make_demo_scene()).has_value());
+        return e;
+    }();
+    RenderRequest r;
+    r.width = 640;
+    r.height = 360;
+    r.format = ImageFormat::Exr;
+    if (state.range(0) == 1) r.aovs = {Aov::InstanceId};
+    for (auto _ : state) {
+        auto frame = engine->render_frame(r);
+        benchmark::DoNotOptimize(frame.value().buffers.color.data());
+    }
+    state.SetLabel(state.range(0) == 0 ? "color only" : "with instance_id");
+}
+
+BENCHMARK(BM_StreamJpeg1080p)
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->ComputeStatistics("min", min_of);
+BENCHMARK(BM_StreamLaunchIds)
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->ComputeStatistics("min", min_of);
 BENCHMARK(BM_ToneMap1080p)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()

@@ -126,6 +126,22 @@ class Browser:
                                                    "buttons": 1 if kind == "mousePressed" else 0,
                                                    "clickCount": 1})
 
+    def touch(self, kind, points):
+        """One touch event ("touchStart", "touchMove", "touchEnd") with `points` [(x, y), ...]
+        in page coordinates (touchEnd: the points still down)."""
+        self.send("Input.dispatchTouchEvent", {
+            "type": kind,
+            "touchPoints": [{"x": x, "y": y, "id": i} for i, (x, y) in enumerate(points)]})
+
+    def touch_drag(self, starts, ends, steps=8):
+        """Fingers down at `starts`, moved together in `steps` to `ends`, lifted."""
+        self.touch("touchStart", starts)
+        for k in range(1, steps + 1):
+            f = k / steps
+            self.touch("touchMove", [(sx + (ex - sx) * f, sy + (ey - sy) * f)
+                                     for (sx, sy), (ex, ey) in zip(starts, ends)])
+        self.touch("touchEnd", [])
+
     def screenshot(self, path):
         data = self.send("Page.captureScreenshot", {"format": "png"})["data"]
         os.makedirs(os.path.dirname(path), exist_ok=True)

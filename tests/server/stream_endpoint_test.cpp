@@ -9,6 +9,8 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <turbojpeg.h>
+
 #include <chrono>
 #include <optional>
 #include <thread>
@@ -355,6 +357,139 @@ TEST(StreamEndpoint, BadParametersAreRefusedWithAProblemNamingThem) {
     expect_problem(s.get("/v1/stream?width=0"), 400, "invalid-request", "/width");
     expect_problem(s.get("/v1/stream?width=65536&height=65536"), 413);
     expect_problem(s.get("/v1/events?x=1"), 400, "invalid-request", "/x");
+    expect_problem(s.get("/v1/stream?highlight="), 400, "invalid-request", "/highlight");
+    expect_problem(s.get("/v1/stream?highlight=no-such-instance"), 404, "not-found", "/highlight");
+}
+
+/// A stream part decoded to packed RGB. Fast upsampling: a pixel's chroma comes from its own
+/// 16x16 block only, so blocks whose source pixels are equal decode to equal bytes.
+std::vector<uint8_t> decode_rgb(const std::string& jpeg, int width, int height) {
+    std::vector<uint8_t> rgb(std::size_t(width) * height * 3);
+    tjhandle h = tjInitDecompress();
+    const int rc = tjDecompress2(h, reinterpret_cast<const unsigned char*>(jpeg.data()),
+                                 (unsigned long)jpeg.size(), rgb.data(), width, 0, height, TJPF_RGB,
+                                 TJFLAG_FASTUPSAMPLE);
+    tjDestroy(h);
+    EXPECT_EQ(rc, 0);
+    return rc == 0 ? rgb : std::vector<uint8_t>{};
+}
+
+/// The instance_id AOV of the scene camera's view at this size (the stream's pixel-centre ids).
+std::vector<uint32_t> instance_ids(TestServer& s, uint32_t width, uint32_t height) {
+    RenderRequest r;
+    r.width = width;
+    r.height = height;
+    r.format = ImageFormat::Exr;
+    r.aovs = {Aov::InstanceId};
+    auto frame = s.engine().render_frame(r);
+    EXPECT_TRUE(frame.has_value());
+    return frame ? frame->buffers.instance_id : std::vector<uint32_t>{};
+}
+
+/// Compares a highlighted frame with a plain one of the same render: every 16x16 JPEG block
+/// without a pixel of `slot` decodes to the same bytes, and the instance's inner pixels (all
+/// 8-neighbours its own too) moved clearly towards the highlight colour.
+void expect_tinted_exactly(const std::string& plain_jpeg, const std::string& tinted_jpeg,
+                           const std::vector<uint32_t>& ids, uint32_t slot, int w, int h) {
+    const auto plain = decode_rgb(plain_jpeg, w, h), tinted = decode_rgb(tinted_jpeg, w, h);
+    ASSERT_FALSE(plain.empty() || tinted.empty());
+    auto block_has_slot = [&](int bx, int by) {
+        for (int y = by * 16; y < std::min(h, by * 16 + 16); ++y)
+            for (int x = bx * 16; x < std::min(w, bx * 16 + 16); ++x)
+                if (ids[std::size_t(y) * w + x] == slot) return true;
+        return false;
+    };
+    std::size_t clean_pixels = 0, inner = 0;
+    double inner_diff = 0;
+    for (int y = 0; y < h; ++y) {
+        for (int x = 0; x < w; ++x) {
+            const std::size_t p = std::size_t(y) * w + x;
+            if (!block_has_slot(x / 16, y / 16)) {
+                ++clean_pixels;
+                for (int c = 0; c < 3; ++c)
+                    ASSERT_EQ(plain[3 * p + c], tinted[3 * p + c])
+                        << "pixel " << x << "," << y << " is far from the instance but changed";
+                continue;
+            }
+            bool interior = x > 0 && y > 0 && x + 1 < w && y + 1 < h;
+            for (int dy = -1; interior && dy <= 1; ++dy)
+                for (int dx = -1; interior && dx <= 1; ++dx)
+                    interior = ids[std::size_t(y + dy) * w + x + dx] == slot;
+            if (!interior) continue;
+            ++inner;
+            for (int c = 0; c < 3; ++c)
+                inner_diff += std::abs(plain[3 * p + c] - tinted[3 * p + c]);
+        }
+    }
+    EXPECT_GT(clean_pixels, std::size_t(w) * h / 4) << "the instance should not fill the frame";
+    ASSERT_GT(inner, 20u) << "the instance should show some inner pixels";
+    EXPECT_GT(inner_diff / double(inner * 3), 15.0) << "the instance's pixels were not tinted";
+}
+
+TEST(StreamEndpoint, AHighlightTintsOnlyTheInstancesPixelsAndTheRenderStaysShared) {
+    TestServer s({}, true);
+    const int W = 128, H = 72;
+    const std::string q = "width=128&height=72&max_samples=1&fps=30&quality=95";
+    const uint32_t ball =
+        s.engine().read([](const Scene& scene) { return scene.find_instance("ball").index; });
+    const uint32_t crate =
+        s.engine().read([](const Scene& scene) { return scene.find_instance("crate-a").index; });
+    const auto ids = instance_ids(s, W, H);
+    ASSERT_EQ(ids.size(), std::size_t(W) * H);
+
+    // The highlighting viewer first: its render carries ids; the plain viewer who joins gets
+    // the same render encoded without the tint.
+    FrameReader tinted(s.port(), q + "&highlight=ball");
+    ASSERT_FALSE(tinted.head().empty());
+    auto t = tinted.next();
+    ASSERT_TRUE(t.has_value());
+    FrameReader plain(s.port(), q);
+    ASSERT_FALSE(plain.head().empty());
+    auto p = plain.next();
+    ASSERT_TRUE(p.has_value());
+    EXPECT_EQ(p->version, t->version);
+    EXPECT_EQ(p->samples, t->samples);
+    EXPECT_NE(p->jpeg, t->jpeg);
+    StreamHubStats st = s.server().streams().stats();
+    EXPECT_EQ(st.views, 1u);
+    EXPECT_EQ(st.frames_rendered, 1u) << "one shared render, two encodings";
+    expect_tinted_exactly(p->jpeg, t->jpeg, ids, ball, W, H);
+
+    // Another selection once accumulation has ended: the newest frame, encoded for it, at once.
+    FrameReader other(s.port(), q + "&highlight=crate-a");
+    ASSERT_FALSE(other.head().empty());
+    auto o = other.next(3000ms);
+    ASSERT_TRUE(o.has_value());
+    EXPECT_EQ(o->version, t->version);
+    EXPECT_EQ(s.server().streams().stats().frames_rendered, 1u);
+    expect_tinted_exactly(p->jpeg, o->jpeg, ids, crate, W, H);
+    EXPECT_GE(s.server().streams().stats().highlight_encodes, 2u);
+}
+
+TEST(StreamEndpoint, AHighlightJoiningAPlainViewNeedsNoRenderAndAnEditKeepsItTinted) {
+    TestServer s({}, true);
+    const int W = 96, H = 54;
+    const std::string q = "width=96&height=54&max_samples=1&fps=30&quality=95";
+    FrameReader plain(s.port(), q);
+    ASSERT_FALSE(plain.head().empty());
+    ASSERT_TRUE(plain.next().has_value());
+    FrameReader tinted(s.port(), q + "&highlight=ball");
+    ASSERT_FALSE(tinted.head().empty());
+    auto t = tinted.next(3000ms);
+    ASSERT_TRUE(t.has_value()) << "a new highlight shows at once even after accumulation ended";
+    EXPECT_EQ(s.server().streams().stats().frames_rendered, 1u);
+
+    // The ball moves: the next frames of both viewers show the new version, tinted where the
+    // ball is now.
+    const Reply edit = s.edits({move_ball(-1.5f)});
+    ASSERT_EQ(edit.status, 200) << edit.body;
+    const uint64_t v = edit.json()["version"].get<uint64_t>();
+    auto p2 = plain.next_at(v), t2 = tinted.next_at(v);
+    ASSERT_TRUE(p2 && t2);
+    ASSERT_EQ(p2->samples, t2->samples);
+    const uint32_t ball =
+        s.engine().read([](const Scene& scene) { return scene.find_instance("ball").index; });
+    expect_tinted_exactly(p2->jpeg, t2->jpeg, instance_ids(s, W, H), ball, W, H);
 }
 
 TEST(StreamEndpoint, TheTokenMayComeInTheQueryOnStreamPathsOnly) {
