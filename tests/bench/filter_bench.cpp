@@ -52,6 +52,16 @@ double rmse(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
     return std::sqrt(sum / double(3 * a.size()));
 }
 
+/// RMSE as a display shows it: each channel compressed with c / (1 + c) first.
+double display_rmse(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+    double sum = 0.0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        const Vec3 d = a[i] / (1.0f + a[i]) - b[i] / (1.0f + b[i]);
+        sum += double(d.x) * d.x + double(d.y) * d.y + double(d.z) * d.z;
+    }
+    return std::sqrt(sum / double(3 * a.size()));
+}
+
 double median(std::vector<double> v) {
     std::sort(v.begin(), v.end());
     return v[v.size() / 2];
@@ -67,6 +77,10 @@ void measure(const char* name, Engine& engine, uint32_t w, uint32_t h, uint32_t 
                     rmse(filtered.buffers.color, reference.buffers.color),
                     100.0 * rmse(filtered.buffers.color, reference.buffers.color) /
                         rmse(plain.buffers.color, reference.buffers.color));
+        const double dp = display_rmse(plain.buffers.color, reference.buffers.color);
+        const double df = display_rmse(filtered.buffers.color, reference.buffers.color);
+        std::printf("%-14s %3u spp  display rmse plain %.4f  filtered %.4f  (%.0f%%)\n", name,
+                    spp, dp, df, 100.0 * df / dp);
     }
     // The filter alone, on a 1-spp frame with its guides.
     RenderRequest r;
