@@ -26,6 +26,8 @@ const state = {
   selected: null,       // the selected instance's or group's document (kind: 'instance' | 'group')
   frameVersion: null,   // version of the newest frame shown
   streamUrl: '',
+  listedVersion: null,  // the version the scene panel was last listed for
+  listTimer: 0,
 };
 window.strata = state;
 
@@ -230,6 +232,13 @@ function openEvents() {
   events.addEventListener('commit', async (e) => {
     const d = JSON.parse(e.data);
     costPanel.add(d.report);
+    if (d.version !== state.listedVersion) {
+      // The scene changed (a no-work commit keeps its version): list it again, at most every
+      // 300 ms.
+      state.listedVersion = d.version;
+      clearTimeout(state.listTimer);
+      state.listTimer = setTimeout(() => scenePanel.refresh(), 300);
+    }
     await refreshScene().catch(() => {});
     if (!controls.camera) drawSelection();
     if (state.selected) reloadSelection();
@@ -266,7 +275,7 @@ async function start() {
       askToken(token() ? 'The token was refused; enter the right one.' : undefined);
       return;
     }
-    message('Cannot reach the server: ' + e.message);
+    message('Cannot reach the server: ' + e.message, 'unreachable');
     return;
   }
   fitSize();
@@ -300,7 +309,11 @@ $('token-clear').addEventListener('click', () => {
   setToken('');
   $('token-dialog').close();
 });
-$('frame').addEventListener('load', () => { message(''); });
+// A frame arriving answers "cannot reach the server", and only that: a conflict or a refused edit
+// stays until the user's next action.
+$('frame').addEventListener('load', () => {
+  if ($('message').className === 'unreachable') message('');
+});
 $('frame').addEventListener('error', () => {
   if (state.streamUrl) status('frame stream interrupted');
 });

@@ -1,5 +1,6 @@
 // The scene panel: groups, then instances, from the paginated listings (GET /v1/scene/groups,
-// GET /v1/scene/instances), searchable by id (filtered as pages arrive); a click selects.
+// GET /v1/scene/instances), searchable by id (filtered as pages arrive), listed again after each
+// commit that changed the scene; a click selects.
 
 import { api } from './api.js';
 
@@ -31,27 +32,64 @@ export class ScenePanel {
     await this.page();
   }
 
-  /// The next page: groups first, then instances once the groups are all listed.
-  async page() {
+  /// One page into `s` ({items, cursor, kind}): groups first, then instances once the groups
+  /// are all listed (cursor '' then means "instances from the start").
+  async fetchPage(s) {
     const q = new URLSearchParams({ limit: PAGE });
-    if (this.cursor) q.set('cursor', this.cursor);
+    if (s.cursor) q.set('cursor', s.cursor);
+    const { doc } = await api(`/v1/scene/${s.kind}?` + q);
+    s.items.push(...doc.items.map((i) => s.kind === 'groups'
+      ? { kind: 'group', id: i.id, label: `${i.id}  ·  group${i.world_visible ? '' : '  (hidden)'}` }
+      : { kind: 'instance', id: i.id, label: `${i.id}  ·  ${i.mesh}${i.world_visible ? '' : '  (hidden)'}` }));
+    s.cursor = doc.next_cursor;
+    if (!s.cursor && s.kind === 'groups') {
+      s.kind = 'instances';
+      s.cursor = '';
+    }
+  }
+
+  /// The next page (the "more" button).
+  async page() {
+    const s = { items: this.items, cursor: this.cursor, kind: this.kind };
     try {
-      const { doc } = await api(`/v1/scene/${this.kind}?` + q);
-      this.items.push(...doc.items.map((i) => this.kind === 'groups'
-        ? { kind: 'group', id: i.id, label: `${i.id}  ·  group${i.world_visible ? '' : '  (hidden)'}` }
-        : { kind: 'instance', id: i.id, label: `${i.id}  ·  ${i.mesh}${i.world_visible ? '' : '  (hidden)'}` }));
-      this.cursor = doc.next_cursor;
-      if (!this.cursor && this.kind === 'groups') {
-        this.kind = 'instances';
-        if (this.items.length < PAGE) return this.page();
-        this.cursor = '';
-      }
+      await this.fetchPage(s);
+      // A short group list is followed by the first instances at once.
+      if (s.kind === 'instances' && s.cursor === '' && s.items.length < PAGE) await this.fetchPage(s);
     } catch (e) {
       this.cursor = null;
       this.list.textContent = `Cannot list ${this.kind}: ` + e.message;
       return;
     }
+    Object.assign(this, s);
     this.render();
+  }
+
+  /// Lists the scene again after a commit (another client may have added, removed or hidden
+  /// something), as far as the pages shown so far reached; the old list stays until the new one
+  /// is complete. Calls during a refresh coalesce into one more.
+  async refresh() {
+    if (this.refreshing) {
+      this.again = true;
+      return;
+    }
+    this.refreshing = true;
+    try {
+      const want = Math.max(this.items.length, PAGE);
+      const s = { items: [], cursor: null, kind: 'groups' };
+      do {
+        await this.fetchPage(s);
+      } while (s.cursor !== null && s.items.length < want);
+      Object.assign(this, s);
+      this.render();
+    } catch (e) {
+      // Keep the list shown; the next commit tries again.
+    } finally {
+      this.refreshing = false;
+      if (this.again) {
+        this.again = false;
+        this.refresh();
+      }
+    }
   }
 
   mark(id, kind) {

@@ -9,7 +9,8 @@ chromium against a real strata-server --demo (each class its own server):
 - another client's edit between the viewer's read and its write makes the viewer's If-Match fail
   (412): the page says so clearly, applies nothing, reloads the current values, and a second
   apply succeeds;
-- a one-finger drag orbits and a two-finger pinch zooms the viewer's camera (CDP touch events).
+- a one-finger drag orbits and a two-finger pinch zooms the viewer's camera (CDP touch events);
+- the scene panel lists the scene again when another client adds, hides or removes an instance.
 """
 
 import base64
@@ -241,6 +242,32 @@ class ViewerSelectionAndEdits(ViewerInChromium):
         self.browser.touch_drag([(cx - 80, cy), (cx + 80, cy)], [(cx - 20, cy), (cx + 20, cy)])
         self.assertGreater(dist(camera()), dist(pinched) * 1.5)
         self.shot("touch")
+
+    def test_5_the_scene_panel_follows_other_clients_edits(self):
+        self.open_viewer()
+        self.select_from_panel("instance", "ball")
+        item = "#scene-list li[data-kind=\"instance\"][data-id=\"newcomer\"]"
+        self.assertFalse(self.browser.evaluate(f"!!document.querySelector('{item}')"))
+        request(self.server, "POST", "/v1/edits", {"edits": [
+            {"op": "add_instance", "id": "newcomer", "mesh": "crate",
+             "transform": {"translate": [0, 3, -3]}}]})
+        self.browser.wait_for(f"!!document.querySelector('{item}')", timeout=5)
+        # The selection stays marked across the new listing.
+        self.assertTrue(self.browser.evaluate(
+            "document.querySelector('#scene-list li[data-id=\"ball\"]').classList.contains('selected')"))
+        # A search typed before the change still filters the new list.
+        self.browser.evaluate(
+            "(() => { const f = document.getElementById('scene-search'); f.value = 'newcomer';"
+            " f.dispatchEvent(new Event('input')); return true; })()")
+        request(self.server, "POST", "/v1/edits", {"edits": [
+            {"op": "update_instance", "instance": "newcomer", "visible": False}]})
+        self.browser.wait_for(f"document.querySelector('{item}') &&"
+                              f" document.querySelector('{item}').textContent.includes('hidden')",
+                              timeout=5)
+        self.assertEqual(self.browser.evaluate("document.querySelectorAll('#scene-list li').length"), 1)
+        request(self.server, "POST", "/v1/edits", {"edits": [
+            {"op": "remove_instance", "instance": "newcomer"}]})
+        self.browser.wait_for(f"!document.querySelector('{item}')", timeout=5)
 
 
 if __name__ == "__main__":
