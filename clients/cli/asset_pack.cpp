@@ -39,7 +39,8 @@ std::vector<std::string> tokens(const std::string& line) {
 std::string percent_decode(const std::string& s) {
     std::string out;
     for (std::size_t i = 0; i < s.size(); ++i) {
-        if (s[i] == '%' && i + 2 < s.size() && std::isxdigit(static_cast<unsigned char>(s[i + 1])) &&
+        if (s[i] == '%' && i + 2 < s.size() &&
+            std::isxdigit(static_cast<unsigned char>(s[i + 1])) &&
             std::isxdigit(static_cast<unsigned char>(s[i + 2]))) {
             out += char(std::stoi(s.substr(i + 1, 2), nullptr, 16));
             i += 2;
@@ -58,8 +59,7 @@ public:
     /// `reference`, named by `who` (for messages), resolved against each folder of `bases` in
     /// turn; the first that exists is kept. False (and `error`) when none does.
     bool add(const std::string& reference, const std::string& who,
-             const std::vector<fs::path>& bases, std::string& error,
-             fs::path* resolved = nullptr) {
+             const std::vector<fs::path>& bases, std::string& error, fs::path* resolved = nullptr) {
         std::string r = reference;
         std::replace(r.begin(), r.end(), '\\', '/');
         if (r.empty()) return true;
@@ -75,8 +75,7 @@ public:
             std::error_code ec;
             if (fs::is_regular_file(p, ec)) {
                 if (resolved) *resolved = p;
-                if (std::find(m_files.begin(), m_files.end(), p) == m_files.end() &&
-                    p != m_model)
+                if (std::find(m_files.begin(), m_files.end(), p) == m_files.end() && p != m_model)
                     m_files.push_back(p);
                 return true;
             }
@@ -93,8 +92,7 @@ private:
     std::vector<fs::path> m_files;
 };
 
-bool collect_obj(const fs::path& model, const std::string& text, Collector& c,
-                 std::string& error) {
+bool collect_obj(const fs::path& model, const std::string& text, Collector& c, std::string& error) {
     const fs::path dir = model.parent_path();
     std::istringstream in(text);
     std::vector<fs::path> mtls;
@@ -153,7 +151,7 @@ fs::path common_root(const std::vector<fs::path>& paths) {
     for (const fs::path& p : paths) {
         for (;;) {
             const fs::path rel = p.parent_path().lexically_relative(root);
-            if (!rel.empty() && *rel.begin() != ".." ) break;
+            if (!rel.empty() && *rel.begin() != "..") break;
             if (root.parent_path() == root) break;
             root = root.parent_path();
         }
@@ -178,7 +176,11 @@ std::string header(const std::string& name, const std::string& prefix, uint64_t 
     put_octal(h, 124, 12, size);
     put_octal(h, 136, 12, 0);
     h[156] = type;
-    std::memcpy(h.data() + 257, gnu ? "ustar  " : "ustar\0" "00", 8);
+    std::memcpy(h.data() + 257,
+                gnu ? "ustar  "
+                    : "ustar\0"
+                      "00",
+                8);
     if (!gnu) std::memcpy(h.data() + 345, prefix.data(), std::min<std::size_t>(prefix.size(), 155));
     std::memset(h.data() + 148, ' ', 8);
     unsigned sum = 0;
@@ -204,8 +206,8 @@ std::string write_tar(const std::vector<std::pair<std::string, std::string>>& fi
             const std::size_t slash = path.find('/', path.size() > 101 ? path.size() - 101 : 0);
             if (slash != std::string::npos && slash <= 155 && path.size() - slash - 1 <= 100 &&
                 slash > 0) {
-                out += header(path.substr(slash + 1), path.substr(0, slash), bytes.size(), '0',
-                              false);
+                out +=
+                    header(path.substr(slash + 1), path.substr(0, slash), bytes.size(), '0', false);
             } else {
                 out += header("././@LongLink", "", path.size() + 1, 'L', true);
                 out += path;

@@ -11,9 +11,9 @@ namespace strata::cli {
 
 /// One upload, ready to send.
 struct PackedAsset {
-    std::string bytes;               ///< the model file, or the tar archive
-    bool archive = false;            ///< bytes is a tar of the model and `side_files`
-    std::string model_path;          ///< the model's path inside the archive
+    std::string bytes;                    ///< the model file, or the tar archive
+    bool archive = false;                 ///< bytes is a tar of the model and `side_files`
+    std::string model_path;               ///< the model's path inside the archive
     std::vector<std::string> side_files;  ///< archive paths of the files packed with it
 };
 

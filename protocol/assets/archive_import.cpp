@@ -31,8 +31,7 @@ std::string relative_to(std::string_view folder, std::string_view path) {
     const auto from = split(folder);
     const auto to = split(path);
     std::size_t common = 0;
-    while (common < from.size() && common + 1 < to.size() && from[common] == to[common])
-        ++common;
+    while (common < from.size() && common + 1 < to.size() && from[common] == to[common]) ++common;
     std::string out;
     for (std::size_t i = common; i < from.size(); ++i) out += "../";
     for (std::size_t i = common; i < to.size(); ++i) {
@@ -67,9 +66,8 @@ Imported<ArchiveAsset> import_archive(std::span<const uint8_t> body, const std::
         return sink.invalid("", "the archive holds no model (.obj, .gltf, .glb or .ply)" +
                                     std::string(entries.value().empty() ? ": it is empty" : ""));
     if (models.size() > 1)
-        return sink.invalid("", "the archive holds " + std::to_string(models.size()) +
-                                    " models (" + quoted_list(models) +
-                                    "); upload one model per archive");
+        return sink.invalid("", "the archive holds " + std::to_string(models.size()) + " models (" +
+                                    quoted_list(models) + "); upload one model per archive");
     const TarEntry& model = *models.front();
 
     // Step 3: the other files, by their path relative to the model's folder.
@@ -78,9 +76,9 @@ Imported<ArchiveAsset> import_archive(std::span<const uint8_t> body, const std::
     SideFiles side;
     for (const TarEntry& e : entries.value())
         if (&e != &model)
-            side.emplace(relative_to(folder, e.path),
-                         std::string(reinterpret_cast<const char*>(e.bytes.data()),
-                                     e.bytes.size()));
+            side.emplace(
+                relative_to(folder, e.path),
+                std::string(reinterpret_cast<const char*>(e.bytes.data()), e.bytes.size()));
 
     // Step 4: the import, its errors naming the archive and the model.
     ArchiveAsset out;

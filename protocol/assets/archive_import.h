@@ -22,7 +22,6 @@ struct ArchiveAsset {
 /// archive's other files as its side files. None or several models: Invalid, naming them. An
 /// importer's error names the file as "<archive>: <model path>".
 Imported<ArchiveAsset> import_archive(std::span<const uint8_t> body, const std::string& archive,
-                                      const ImportLimits& limits,
-                                      const TarLimits& tar_limits = {});
+                                      const ImportLimits& limits, const TarLimits& tar_limits = {});
 
 }  // namespace strata::assets

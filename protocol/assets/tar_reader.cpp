@@ -18,8 +18,8 @@ constexpr uint64_t MAX_META_BYTES = 64 * 1024;
 struct Field {
     std::size_t offset, length;
 };
-constexpr Field NAME{0, 100}, SIZE{124, 12}, CHECKSUM{148, 8}, LINKNAME{157, 100},
-    MAGIC{257, 6}, PREFIX{345, 155};
+constexpr Field NAME{0, 100}, SIZE{124, 12}, CHECKSUM{148, 8}, LINKNAME{157, 100}, MAGIC{257, 6},
+    PREFIX{345, 155};
 constexpr std::size_t TYPEFLAG = 156;
 
 std::string_view text(const uint8_t* header, Field f) {
@@ -151,8 +151,9 @@ Imported<std::vector<TarEntry>> read_tar(std::span<const uint8_t> body, const st
         const std::string at = "header at byte " + std::to_string(offset);
         // Step 1: one header block, or the end-of-archive block.
         if (offset == size)
-            return sink.invalid(at, "the archive ends without its end-of-archive block "
-                                    "(truncated?)");
+            return sink.invalid(at,
+                                "the archive ends without its end-of-archive block "
+                                "(truncated?)");
         if (size - offset < BLOCK)
             return sink.invalid(at, "the archive ends inside a header (truncated?)");
         const uint8_t* h = body.data() + offset;
@@ -163,23 +164,24 @@ Imported<std::vector<TarEntry>> read_tar(std::span<const uint8_t> body, const st
             break;
         }
         if (++headers > limits.max_entries)
-            return sink.too_large(at, "more than " + std::to_string(limits.max_entries) +
-                                          " entries in one archive");
+            return sink.too_large(
+                at, "more than " + std::to_string(limits.max_entries) + " entries in one archive");
         // Step 2: the checksum, the magic and the size, each against the body.
         const auto stored = number(h, CHECKSUM);
         const auto [unsigned_sum, signed_sum] = header_sums(h);
         if (!stored)
-            return sink.invalid(at, "its checksum field is not an octal number (not a tar "
-                                    "archive?)");
+            return sink.invalid(at,
+                                "its checksum field is not an octal number (not a tar "
+                                "archive?)");
         if (int64_t(*stored) != unsigned_sum && int64_t(*stored) != signed_sum)
-            return sink.invalid(at, "header checksum mismatch: it says " +
-                                        std::to_string(*stored) + ", the header sums to " +
-                                        std::to_string(unsigned_sum) +
+            return sink.invalid(at, "header checksum mismatch: it says " + std::to_string(*stored) +
+                                        ", the header sums to " + std::to_string(unsigned_sum) +
                                         " (damaged, or not a tar archive)");
         const std::string_view magic = text(h, {MAGIC.offset, 5});
         if (magic != "ustar")
-            return sink.invalid(at, "not a ustar header (only POSIX ustar, pax and GNU tar "
-                                    "archives are read)");
+            return sink.invalid(at,
+                                "not a ustar header (only POSIX ustar, pax and GNU tar "
+                                "archives are read)");
         const char type = char(h[TYPEFLAG]);
         std::string raw_name(text(h, NAME));
         // POSIX ustar ("ustar\0") splits long names into prefix and name; GNU ("ustar ") uses
@@ -188,7 +190,8 @@ Imported<std::vector<TarEntry>> read_tar(std::span<const uint8_t> body, const st
             if (const std::string_view prefix = text(h, PREFIX); !prefix.empty())
                 raw_name = std::string(prefix) + "/" + raw_name;
         }
-        if (long_name && type != 'L' && type != 'x' && type != 'g') raw_name = *std::exchange(long_name, {});
+        if (long_name && type != 'L' && type != 'x' && type != 'g')
+            raw_name = *std::exchange(long_name, {});
         const std::string where = raw_name.empty() ? at : entry_label(raw_name);
         const auto entry_size = number(h, SIZE);
         if (!entry_size) return sink.invalid(where, "its size field is not an octal number");
@@ -228,8 +231,9 @@ Imported<std::vector<TarEntry>> read_tar(std::span<const uint8_t> body, const st
                 auto path = pax_path(data_text, size_record);
                 if (!path) return sink.invalid(at, "a malformed pax extended header");
                 if (size_record)
-                    return sink.unsupported(at, "a pax 'size' record (entries over 8 GiB) is "
-                                                "not read");
+                    return sink.unsupported(at,
+                                            "a pax 'size' record (entries over 8 GiB) is "
+                                            "not read");
                 if (!path->empty()) long_name = std::move(*path);
                 continue;
             }
@@ -244,8 +248,8 @@ Imported<std::vector<TarEntry>> read_tar(std::span<const uint8_t> body, const st
             case '3':
             case '4':
             case '6':
-                return sink.unsupported(where, type == '6' ? "is a FIFO: refused"
-                                                           : "is a device file: refused");
+                return sink.unsupported(
+                    where, type == '6' ? "is a FIFO: refused" : "is a device file: refused");
             default:
                 return sink.unsupported(where, "has entry type '" +
                                                    printable_name(std::string_view(&type, 1)) +

@@ -23,8 +23,8 @@ struct TarEntry {
 
 /// What one archive may hold.
 struct TarLimits {
-    uint32_t max_entries = 4096;               ///< headers of any kind, directories included
-    uint64_t max_total_bytes = 256ull << 20;   ///< sum of the regular files' sizes
+    uint32_t max_entries = 4096;              ///< headers of any kind, directories included
+    uint64_t max_total_bytes = 256ull << 20;  ///< sum of the regular files' sizes
 };
 
 /// Reads every regular file of a ustar archive; directories and pax global headers are skipped.
@@ -33,8 +33,7 @@ struct TarLimits {
 /// octal, data past the end of the body, a missing end-of-archive block, an absolute name or one
 /// with "..", a hard or symbolic link, a device or FIFO, an unknown entry type, two entries with
 /// the same name, more than `limits` allow (TooLarge).
-Imported<std::vector<TarEntry>> read_tar(std::span<const uint8_t> body,
-                                         const std::string& archive,
+Imported<std::vector<TarEntry>> read_tar(std::span<const uint8_t> body, const std::string& archive,
                                          const TarLimits& limits = {});
 
 /// `name` with bytes outside printable ASCII as '?', at most 200 bytes: safe in any message.

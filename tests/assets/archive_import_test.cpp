@@ -15,11 +15,13 @@ namespace {
 
 using ::testing::HasSubstr;
 
-const std::string QUAD_OBJ = "mtllib ../materials/quad.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\n"
-                             "v 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl painted\n"
-                             "f 1/1 2/2 3/3 4/4\n";
-const std::string QUAD_MTL = "newmtl painted\nKd 0.8 0.4 0.2\nKs 0.5 0.5 0.5\nNs 100\n"
-                             "map_Kd ./textures/paint.png\n";
+const std::string QUAD_OBJ =
+    "mtllib ../materials/quad.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\n"
+    "v 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl painted\n"
+    "f 1/1 2/2 3/3 4/4\n";
+const std::string QUAD_MTL =
+    "newmtl painted\nKd 0.8 0.4 0.2\nKs 0.5 0.5 0.5\nNs 100\n"
+    "map_Kd ./textures/paint.png\n";
 
 Imported<ArchiveAsset> import(const std::string& archive) {
     return import_archive(bytes_of(archive), "quad.tar", {});
@@ -56,8 +58,9 @@ TEST(ArchiveImport, AMissingSideFileIsAWarningNotAFailure) {
 
 TEST(ArchiveImport, AReferenceCannotClimbOutOfTheArchive) {
     // The model at the root names ../quad.mtl: no entry can be above the root.
-    const std::string archive = tar_file("quad.obj", "mtllib ../quad.mtl\nv 0 0 0\nv 1 0 0\n"
-                                                     "v 0 1 0\nf 1 2 3\n") +
+    const std::string archive = tar_file("quad.obj",
+                                         "mtllib ../quad.mtl\nv 0 0 0\nv 1 0 0\n"
+                                         "v 0 1 0\nf 1 2 3\n") +
                                 tar_file("quad.mtl", "newmtl a\nKd 1 0 0\n") + tar_end();
     auto r = import(archive);
     ASSERT_TRUE(r.has_value()) << r.error().describe();
@@ -68,9 +71,9 @@ TEST(ArchiveImport, AReferenceCannotClimbOutOfTheArchive) {
 TEST(ArchiveImport, AGltfReadsItsExternalBufferAndImageFromTheArchive) {
     const std::string folder = STRATA_ASSIMP_MODELS_DIR "/glTF2/BoxTextured-glTF";
     if (read_file(folder + "/BoxTextured.gltf").empty()) GTEST_SKIP() << folder << " missing";
-    const std::string archive =
-        run_tar(folder, "--transform=s,^,box/,", "BoxTextured.gltf BoxTextured0.bin "
-                                                 "CesiumLogoFlat.png");
+    const std::string archive = run_tar(folder, "--transform=s,^,box/,",
+                                        "BoxTextured.gltf BoxTextured0.bin "
+                                        "CesiumLogoFlat.png");
     ASSERT_FALSE(archive.empty());
     auto r = import(archive);
     ASSERT_TRUE(r.has_value()) << r.error().describe();
@@ -98,7 +101,8 @@ TEST(ArchiveImport, AGltfWithoutItsBufferNamesTheArchiveTheModelAndTheFile) {
     auto r = import(tar_file("BoxTextured.gltf", gltf) + tar_end());
     ASSERT_FALSE(r.has_value());
     EXPECT_EQ(r.error().file, "quad.tar: BoxTextured.gltf");
-    EXPECT_THAT(r.error().message, HasSubstr("'BoxTextured0.bin' refused: it is not part of the upload"));
+    EXPECT_THAT(r.error().message,
+                HasSubstr("'BoxTextured0.bin' refused: it is not part of the upload"));
 }
 
 TEST(ArchiveImport, AnArchiveWithoutAModelIsRefused) {
@@ -110,8 +114,8 @@ TEST(ArchiveImport, AnArchiveWithoutAModelIsRefused) {
 }
 
 TEST(ArchiveImport, AnArchiveWithTwoModelsIsRefusedNamingBoth) {
-    auto r = import(tar_file("a/one.obj", "v 0 0 0\n") + tar_file("b/two.PLY", "ply\n") +
-                    tar_end());
+    auto r =
+        import(tar_file("a/one.obj", "v 0 0 0\n") + tar_file("b/two.PLY", "ply\n") + tar_end());
     ASSERT_FALSE(r.has_value());
     EXPECT_THAT(r.error().message, HasSubstr("holds 2 models ('a/one.obj', 'b/two.PLY')"));
 }

@@ -154,8 +154,7 @@ TEST(TarReader, ASymlinkWrittenByTarIsRefusedNamingItsTarget) {
 TEST(TarReader, HardLinksDevicesAndFifosAreRefused) {
     EXPECT_THAT(refusal(tar_header("b.obj", 0, '1', "a.obj") + tar_end()).message,
                 HasSubstr("hard link to 'a.obj'"));
-    EXPECT_THAT(refusal(tar_header("null", 0, '3') + tar_end()).message,
-                HasSubstr("device file"));
+    EXPECT_THAT(refusal(tar_header("null", 0, '3') + tar_end()).message, HasSubstr("device file"));
     EXPECT_THAT(refusal(tar_header("pipe", 0, '6') + tar_end()).message, HasSubstr("FIFO"));
     EXPECT_THAT(refusal(tar_header("odd", 0, 'Z') + tar_end()).message,
                 HasSubstr("entry type 'Z'"));
@@ -186,8 +185,8 @@ TEST(TarReader, EntryCountAndTotalSizeAreBounded) {
 
 TEST(TarReader, ALongNameWithNoEntryAfterItIsRefused) {
     const std::string name(150, 'n');
-    const std::string archive = tar_header("././@LongLink", name.size() + 1, 'L') +
-                                tar_padded(name + '\0') + tar_end();
+    const std::string archive =
+        tar_header("././@LongLink", name.size() + 1, 'L') + tar_padded(name + '\0') + tar_end();
     EXPECT_THAT(refusal(archive).message, HasSubstr("with no entry after it"));
 }
 

@@ -39,8 +39,7 @@ std::string run_tar(const std::filesystem::path& dir, const std::string& options
     return pclose(pipe) == 0 ? out : "";
 }
 
-std::string tar_header(const std::string& name, uint64_t size, char type,
-                       const std::string& link) {
+std::string tar_header(const std::string& name, uint64_t size, char type, const std::string& link) {
     std::string h(512, '\0');
     std::memcpy(h.data(), name.data(), std::min<std::size_t>(name.size(), 100));
     std::snprintf(h.data() + 100, 8, "%07o", 0644);

@@ -18,6 +18,7 @@
 #include "engine/scene/scene.h"
 #include "protocol/assets/archive_import.h"
 #include "protocol/assets/asset_batch.h"
+#include "protocol/assets/side_files.h"
 
 namespace {
 
@@ -43,8 +44,8 @@ void check_entries(std::span<const uint8_t> body) {
             e.bytes.data() + e.bytes.size() > body.data() + body.size())
             fail("an entry outside the archive");
         const auto normal = normalize_reference(e.path);
-        if (e.path.empty() || !normal || *normal != e.path ||
-            e.path.substr(0, 2) == ".." || e.path.find("/../") != std::string::npos)
+        if (e.path.empty() || !normal || *normal != e.path || e.path.substr(0, 2) == ".." ||
+            e.path.find("/../") != std::string::npos)
             fail("an entry name that is not normal and relative");
     }
 }
@@ -70,7 +71,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
     Asset& asset = archived.value().asset;
     if (!validate_asset(asset, ErrorSink("fuzz")).has_value())
         fail("an accepted asset does not validate");
-    AssetBatch b = asset_to_batch(std::move(asset), {"f", true});
+    AssetBatch b = asset_to_batch(std::move(asset), {"f", true, std::nullopt});
     const uint64_t version = scene.version();
     auto applied = scene.apply(std::move(b.batch));
     if (!applied) {
