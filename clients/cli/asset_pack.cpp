@@ -74,6 +74,19 @@ public:
             const fs::path p = (base / r).lexically_normal();
             std::error_code ec;
             if (fs::is_regular_file(p, ec)) {
+                // A model from elsewhere must not make the upload carry any file it likes
+                // (../../.ssh/id_rsa): outside the model's folder, only the kinds of file a
+                // model names are packed.
+                const std::string ext = lower_extension(p);
+                const fs::path rel = p.lexically_relative(m_model.parent_path());
+                const bool inside = !rel.empty() && *rel.begin() != "..";
+                if (!inside && ext != ".mtl" && ext != ".bin" && ext != ".png" && ext != ".jpg" &&
+                    ext != ".jpeg") {
+                    error = who + " names '" + reference + "' (" + p.string() +
+                            "): outside the model's folder only .mtl, .bin, .png and .jpg files "
+                            "are packed";
+                    return false;
+                }
                 if (resolved) *resolved = p;
                 if (std::find(m_files.begin(), m_files.end(), p) == m_files.end() && p != m_model)
                     m_files.push_back(p);

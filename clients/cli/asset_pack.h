@@ -17,8 +17,10 @@ struct PackedAsset {
     std::vector<std::string> side_files;  ///< archive paths of the files packed with it
 };
 
-/// Reads `file` and the files it names. A named file that cannot be read, or an absolute
-/// reference, is an error (the message says which file names what); nothing is sent then.
+/// Reads `file` and the files it names. A named file that cannot be read, an absolute
+/// reference, or a file outside the model's folder that is not a .mtl, .bin, .png or .jpg (an
+/// untrusted model must not make the upload carry arbitrary local files) is an error (the
+/// message says which file names what); nothing is sent then.
 bool pack_asset(const std::string& file, PackedAsset& out, std::string& error);
 
 /// A POSIX ustar archive of `files` (archive path, bytes), GNU long names past 255 bytes.

@@ -288,6 +288,18 @@ TEST_F(ImportCommand, AMissingSideFileStopsTheImportBeforeAnythingIsSent) {
     EXPECT_EQ(srv.get("/v1/scene").json()["version"], 0);
 }
 
+TEST_F(ImportCommand, AModelCannotMakeTheUploadCarryAnyLocalFile) {
+    write_file(dir, "secret.txt", "password");
+    write_file(dir, "models/quad.obj", "mtllib ../secret.txt\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    ImportArgs args;
+    args.file = (dir / "models" / "quad.obj").string();
+    EXPECT_EQ(run_import(*transport, console(), args), 2);
+    EXPECT_NE(err.str().find("outside the model's folder only .mtl, .bin, .png and .jpg files"),
+              std::string::npos)
+        << err.str();
+    EXPECT_EQ(srv.get("/v1/scene").json()["version"], 0);
+}
+
 TEST(AssetPack, LongNamesWrittenByOurTarWriterAreReadBackByGnuTar) {
     const std::string long_name = std::string(120, 'd') + "/" + std::string(90, 'f') + ".png";
     const std::string longer = std::string(300, 'e') + ".bin";

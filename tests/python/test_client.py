@@ -230,6 +230,17 @@ class ClientTest(unittest.TestCase):
                 self.client.import_asset(obj)
         self.assertIn("quad.obj (mtllib) names 'gone.mtl'", str(caught.exception))
         self.assertEqual(self.client.stats()["version"], self.version)
+        with tempfile.TemporaryDirectory() as d:
+            os.makedirs(os.path.join(d, "models"))
+            with open(os.path.join(d, "secret.txt"), "w") as f:
+                f.write("password")
+            obj = os.path.join(d, "models", "quad.obj")
+            with open(obj, "w") as f:
+                f.write("mtllib ../secret.txt\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+            with self.assertRaises(ValueError) as refused:
+                self.client.import_asset(obj)
+        self.assertIn("outside the model's folder only .mtl", str(refused.exception))
+        self.assertEqual(self.client.stats()["version"], self.version)
 
     def test_groups_children_tree_and_group_path(self):
         self.client.edit([

@@ -4,8 +4,9 @@ An .obj's `mtllib` files and the `map_Kd` images they name (relative to the MTL'
 the OBJ's), and a .gltf's external `buffers` and `images` URIs, are packed with the model into a
 POSIX tar archive in memory, each at its path under the deepest folder that holds them all; the
 server finds them relative to the model's folder (POST /v1/assets, protocol/README.md
-"Archives"). A referenced file that is missing, or an absolute reference, raises
-FileNotFoundError / ValueError before anything is sent.
+"Archives"). A referenced file that is missing raises FileNotFoundError, an absolute reference
+or a file outside the model's folder that is not a .mtl, .bin, .png or .jpg ValueError (an
+untrusted model must not make the upload carry arbitrary local files), before anything is sent.
 """
 
 import io
@@ -23,7 +24,10 @@ class PackedAsset(NamedTuple):
     side_files: List[str]  # archive paths of the files packed with it
 
 
-def _resolve(reference: str, who: str, bases: List[str]) -> str:
+_OUTSIDE_KINDS = (".mtl", ".bin", ".png", ".jpg", ".jpeg")
+
+
+def _resolve(reference: str, who: str, bases: List[str], model_folder: str) -> str:
     ref = reference.replace("\\", "/")
     if ref.startswith("/") or (len(ref) >= 2 and ref[1] == ":"):
         raise ValueError(f"{who} names '{reference}', an absolute path: the server looks side "
@@ -32,6 +36,12 @@ def _resolve(reference: str, who: str, bases: List[str]) -> str:
     for base in bases:
         path = os.path.normpath(os.path.join(base, ref))
         if os.path.isfile(path):
+            # A model from elsewhere must not make the upload carry any file it likes
+            # (../../.ssh/id_rsa): outside the model's folder only these kinds are packed.
+            outside = os.path.relpath(path, model_folder).split(os.sep)[0] == ".."
+            if outside and os.path.splitext(path)[1].lower() not in _OUTSIDE_KINDS:
+                raise ValueError(f"{who} names '{reference}' ({path}): outside the model's "
+                                 "folder only .mtl, .bin, .png and .jpg files are packed")
             return path
         tried.append(path)
     raise FileNotFoundError(f"{who} names '{reference}', which is not a readable file "
@@ -46,7 +56,7 @@ def _obj_side_files(model: str, text: str) -> List[str]:
         words = line.split()
         if len(words) >= 2 and words[0] == "mtllib":
             for name in words[1:]:
-                mtl = _resolve(name, os.path.basename(model) + " (mtllib)", [folder])
+                mtl = _resolve(name, os.path.basename(model) + " (mtllib)", [folder], folder)
                 if mtl not in mtls:
                     mtls.append(mtl)
     files += mtls
@@ -57,7 +67,7 @@ def _obj_side_files(model: str, text: str) -> List[str]:
                 # The importer binds map_Kd only; the file name is its last word.
                 if len(words) >= 2 and words[0] == "map_Kd":
                     files.append(_resolve(words[-1], os.path.basename(mtl) + " (map_Kd)",
-                                          [os.path.dirname(mtl), folder]))
+                                          [os.path.dirname(mtl), folder], folder))
     return files
 
 
@@ -79,7 +89,7 @@ def _gltf_side_files(model: str, text: str) -> List[str]:
                 continue
             files.append(_resolve(urllib.parse.unquote(uri),
                                   f"{os.path.basename(model)} ({kind}[{i}])",
-                                  [os.path.dirname(model)]))
+                                  [os.path.dirname(model)], os.path.dirname(model)))
     return files
 
 
