@@ -1,8 +1,10 @@
 // POST /v1/assets: the upload through an importer (protocol/assets/) into one engine batch.
 
 #include <algorithm>
+#include <cctype>
 
 #include "protocol/api.h"
+#include "protocol/assets/archive_import.h"
 #include "protocol/assets/asset_batch.h"
 #include "protocol/assets/import.h"
 #include "protocol/safe_text.h"
@@ -51,8 +53,26 @@ bool has_control(std::string_view s) {
     });
 }
 
+std::string lower(std::string_view s) {
+    std::string out(s);
+    for (char& c : out) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return out;
+}
+
+/// A tar archive by its Content-Type (parameters after ';' ignored).
+bool is_tar_media_type(std::string_view type) {
+    std::string t = lower(type.substr(0, type.find(';')));
+    while (!t.empty() && (t.back() == ' ' || t.back() == '\t')) t.pop_back();
+    return t == "application/x-tar" || t == "application/tar";
+}
+
+bool ends_with_tar(std::string_view name) {
+    return name.size() >= 4 && lower(name.substr(name.size() - 4)) == ".tar";
+}
+
 struct AssetQuery {
     AssetFormat format = AssetFormat::Glb;
+    bool archive = false;  ///< a tar of one model and its side files; `format` is then the model's
     std::string name;
     std::string prefix;
     std::optional<std::string> parent;
@@ -80,37 +100,49 @@ std::optional<AssetQuery> parse_query(const std::multimap<std::string, std::stri
     };
     AssetQuery q;
     // Step 1: the format: ?format= wins, then the Content-Type, then the name's extension.
+    // A tar archive (?format=tar, application/x-tar, a name ending in .tar) holds the model and
+    // its side files; the model's format then comes from its extension inside the archive.
     std::optional<AssetFormat> format;
     if (auto f = get("format")) {
+        q.archive = lower(*f) == "tar";
         format = assets::format_from_name(*f);
-        if (!format) {
+        if (!format && !q.archive) {
             problem = bad_query("format", "'" + to_valid_utf8(*f) +
-                                              "' is not one of glb, gltf, obj, ply");
+                                              "' is not one of glb, gltf, obj, ply, tar");
             return std::nullopt;
         }
     }
-    if (!format && content_type) format = assets::format_from_media_type(*content_type);
+    if (!format && !q.archive && content_type) {
+        format = assets::format_from_media_type(*content_type);
+        q.archive = !format && is_tar_media_type(*content_type);
+    }
     q.name = get("name").value_or("");
     if (!is_valid_utf8(q.name) || has_control(q.name) || q.name.size() > 256) {
         problem = bad_query("name", "must be valid UTF-8 without control characters, at most "
                                     "256 bytes");
         return std::nullopt;
     }
-    if (!format && q.name.find('.') != std::string::npos)
+    if (!format && !q.archive && q.name.find('.') != std::string::npos) {
         format = assets::format_from_name(q.name.substr(q.name.rfind('.') + 1));
-    if (!format) {
+        q.archive = !format && ends_with_tar(q.name);
+    }
+    if (!format && !q.archive) {
         problem = make_problem(
             ProblemType::InvalidRequest,
-            "the file's format is unknown: give ?format=glb|gltf|obj|ply, or a Content-Type of "
-            "model/gltf-binary, model/gltf+json, model/obj or application/ply");
+            "the file's format is unknown: give ?format=glb|gltf|obj|ply|tar, or a Content-Type "
+            "of model/gltf-binary, model/gltf+json, model/obj, application/ply or "
+            "application/x-tar");
         return std::nullopt;
     }
-    q.format = *format;
-    if (q.name.empty()) q.name = std::string("upload.") + assets::format_name(q.format);
-    // Step 2: the id prefix and the instance flag.
-    q.prefix = get("prefix").value_or(prefix_from_name(q.name));
-    if (q.prefix.empty()) q.prefix = assets::format_name(q.format);
-    if (q.prefix.size() > MAX_PREFIX || !is_valid_utf8(q.prefix) || has_control(q.prefix)) {
+    if (format) q.format = *format;
+    if (q.name.empty())
+        q.name = q.archive ? "upload.tar" : std::string("upload.") + assets::format_name(q.format);
+    // Step 2: the id prefix (an archive's default is its model's stem, set once it is found)
+    // and the instance flag.
+    q.prefix = get("prefix").value_or(q.archive ? "" : prefix_from_name(q.name));
+    if (q.prefix.empty() && !q.archive) q.prefix = assets::format_name(q.format);
+    if (q.prefix.size() > MAX_PREFIX || !is_valid_utf8(q.prefix) || has_control(q.prefix) ||
+        (q.prefix.empty() && get("prefix"))) {
         problem = bad_query("prefix", "must be 1 to " + std::to_string(MAX_PREFIX) +
                                           " bytes of UTF-8 without control characters");
         return std::nullopt;
@@ -143,7 +175,7 @@ ApiResponse post_assets(Engine& engine, std::string body,
     Problem problem;
     const auto condition = if_match ? parse_if_match(*if_match, problem) : IfMatch{};
     if (!condition) return problem_response(problem);
-    const auto q = parse_query(query, content_type, problem);
+    auto q = parse_query(query, content_type, problem);
     if (!q) return problem_response(problem);
 
     // Step 1: the room left in the scene budget bounds what the importer may allocate (the
@@ -156,10 +188,25 @@ ApiResponse post_assets(Engine& engine, std::string body,
         limits.max_triangles = b.max_triangles > t.triangles ? b.max_triangles - t.triangles : 0;
     });
 
-    // Step 2: import, then build the one batch.
-    auto asset = assets::import_asset(
-        q->format, std::span(reinterpret_cast<const uint8_t*>(body.data()), body.size()), q->name,
-        limits);
+    // Step 2: import (an archive: its one model with the archive's other files as side files),
+    // then build the one batch.
+    const std::span bytes(reinterpret_cast<const uint8_t*>(body.data()), body.size());
+    std::optional<std::string> model;
+    assets::Imported<assets::Asset> asset = assets::Asset{};
+    if (q->archive) {
+        auto archived = assets::import_archive(bytes, q->name, limits);
+        if (archived) {
+            q->format = archived.value().format;
+            model = archived.value().model;
+            if (q->prefix.empty()) q->prefix = prefix_from_name(*model);
+            if (q->prefix.empty()) q->prefix = assets::format_name(q->format);
+            asset = std::move(archived.value().asset);
+        } else {
+            asset = Unexpected(archived.error());
+        }
+    } else {
+        asset = assets::import_asset(q->format, bytes, q->name, limits);
+    }
     body = {};
     if (!asset) return problem_response(asset_problem(asset.error()));
     assets::AssetBatch out =
@@ -191,12 +238,13 @@ ApiResponse post_assets(Engine& engine, std::string body,
         return problem_response(p);
     }
     const ApplyResult& done = applied.value();
-    const Json answer = {{"version", done.version},  {"applied", edits},
+    Json answer = {{"version", done.version},  {"applied", edits},
                          {"format", assets::format_name(q->format)},
                          {"textures", out.textures}, {"meshes", out.meshes},
                          {"materials", out.materials},
                          {"groups", out.groups},     {"instances", out.instances},
                          {"warnings", out.warnings}};
+    if (model) answer["model"] = *model;
     return with_etag(json_response(200, answer), done.version);
 }
 

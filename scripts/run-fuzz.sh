@@ -13,6 +13,8 @@
 #   gltf_import_fuzzer    .glb and .gltf files: tinygltf (compiled here, instrumented), the glTF
 #   obj_import_fuzzer     importer, OBJ (tinyobjloader) and our PLY reader, then the asset's batch
 #   ply_import_fuzzer     through the scene's rules (protocol/assets/)
+#   archive_import_fuzzer tar uploads: our ustar reader, the one model it holds and its side files,
+#                         then that model's importer and batch (protocol/assets/archive_import.h)
 #   texture_decode_fuzzer PNG and JPEG bytes: libpng and libturbojpeg behind our header checks and
 #                         limits, then texture lookups (engine/image/texture_decode.h)
 #
@@ -21,10 +23,11 @@
 #
 #   scripts/run-fuzz.sh [RUNS]        default RUNS=100000; CI calls it without arguments. The HTTP
 #                                     fuzzer gets RUNS/4: each of its inputs runs through the engine.
-#                                     Each importer fuzzer gets RUNS/4 too, and so does the
-#                                     texture decoder.
+#                                     Each importer fuzzer gets RUNS/4 too, and so do the
+#                                     archive fuzzer and the texture decoder.
 #
-# The importers' corpora start from the small seeds in tests/fuzz/asset_corpus/ plus every file of
+# The archive fuzzer's seeds are tar archives written at run time by `tar` (an OBJ with its MTL,
+# a .gltf with its .bin and PNG from assimp-testmodels). The importers' corpora start from the small seeds in tests/fuzz/asset_corpus/ plus every file of
 # that format in Debian's assimp-testmodels (copied to scratch at run time, never committed); the
 # texture decoder's from tests/fuzz/texture_corpus/ plus assimp-testmodels' small PNG and JPEG
 # files.
@@ -41,7 +44,8 @@ cmake -S "$root" -B "$build" -G Ninja \
     -DSTRATA_FUZZ=ON -DSTRATA_BUILD_BENCHMARKS=OFF
 ninja -C "$build" -j "${STRATA_BUILD_JOBS:-2}" edit_batch_fuzzer http_request_fuzzer \
     journal_record_fuzzer snapshot_fuzzer durable_corpus \
-    gltf_import_fuzzer obj_import_fuzzer ply_import_fuzzer texture_decode_fuzzer
+    gltf_import_fuzzer obj_import_fuzzer ply_import_fuzzer archive_import_fuzzer \
+    texture_decode_fuzzer
 
 scratch="$(mktemp -d)"
 trap 'rm -rf "$scratch"' EXIT
@@ -82,6 +86,18 @@ for format in gltf obj ply; do
     fi
     run "${format}_import_fuzzer" "asset_corpus/$format" "" "$((runs / 4))"
 done
+
+# Tar uploads, seeded with archives tar writes now.
+mkdir -p "$scratch/archive_corpus"
+tar cf "$scratch/archive_corpus/quad-obj.tar" -C "$root/tests/fuzz/asset_corpus/obj" quad-mtl.obj
+if [ -d "$models/glTF2/BoxTextured-glTF" ]; then
+    tar cf "$scratch/archive_corpus/box-gltf.tar" -C "$models/glTF2" BoxTextured-glTF
+fi
+if [ -f "$models/OBJ/cube_usemtl.obj" ]; then
+    tar cf "$scratch/archive_corpus/cube-obj-mtl.tar" -C "$models/OBJ" cube_usemtl.obj \
+        cube_usemtl.mtl
+fi
+run archive_import_fuzzer archive_corpus "" "$((runs / 4))"
 
 # The texture decoder, seeded from small PNG and JPEG files of assimp-testmodels too.
 mkdir -p "$scratch/texture_corpus"

@@ -1,5 +1,7 @@
 #include "clients/cli/commands.h"
 
+#include "clients/cli/asset_pack.h"
+
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
@@ -259,15 +261,37 @@ int run_snapshot_save(Transport& t, const Console& c, const std::string& file) {
 }
 
 int run_import(Transport& t, const Console& c, const ImportArgs& args) {
-    std::ifstream in(args.file, std::ios::binary);
-    if (!in) {
-        c.err << "strata: cannot open '" << args.file << "'\n";
-        return BAD_INPUT;
+    // An .obj with MTL files or a .gltf with external files goes as a tar of them all (unless
+    // --format says how to read the file alone); a missing side file stops here.
+    PackedAsset packed;
+    std::string bytes;
+    if (args.format.empty()) {
+        std::string error;
+        if (!pack_asset(args.file, packed, error)) {
+            c.err << "strata: " << error << '\n';
+            return BAD_INPUT;
+        }
+        bytes = std::move(packed.bytes);
+    } else {
+        std::ifstream in(args.file, std::ios::binary);
+        if (!in) {
+            c.err << "strata: cannot open '" << args.file << "'\n";
+            return BAD_INPUT;
+        }
+        bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
     }
-    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     std::multimap<std::string, std::string> query;
     const std::size_t slash = args.file.find_last_of('/');
-    query.emplace("name", slash == std::string::npos ? args.file : args.file.substr(slash + 1));
+    const std::string name = slash == std::string::npos ? args.file : args.file.substr(slash + 1);
+    if (packed.archive) {
+        query.emplace("name", name.substr(0, name.rfind('.')) + ".tar");
+        query.emplace("format", "tar");
+        if (!c.json)
+            for (const std::string& f : packed.side_files)
+                c.err << "strata: packing " << f << " with " << packed.model_path << '\n';
+    } else {
+        query.emplace("name", name);
+    }
     if (!args.prefix.empty()) query.emplace("prefix", args.prefix);
     if (!args.format.empty()) query.emplace("format", args.format);
     if (!args.parent.empty()) query.emplace("parent", args.parent);

@@ -13,19 +13,26 @@ namespace strata::assets {
 
 namespace {
 
-// Filesystem callbacks: tinygltf reaches the filesystem only through these. An upload is one
-// file: every file it names "exists" only so that the read that follows is refused with a
-// message that says why (tinygltf would otherwise answer "file not found").
+// Filesystem callbacks: tinygltf reaches the filesystem only through these, and they reach only
+// the upload's side files (user data: the SideFiles). Every file a model names "exists" so that
+// the read that follows names what is missing (tinygltf would otherwise answer "file not found").
 bool any_file_exists(const std::string&, void*) {
     return true;
 }
 std::string keep_path(const std::string& path, void*) {
     return path;
 }
-bool refuse_read(std::vector<unsigned char>*, std::string* err, const std::string& path, void*) {
+bool read_side_file(std::vector<unsigned char>* out, std::string* err, const std::string& path,
+                    void* user) {
+    const auto* files = static_cast<const SideFiles*>(user);
+    if (const std::string* file = files ? find_side_file(*files, path) : nullptr) {
+        out->assign(file->begin(), file->end());
+        return true;
+    }
     if (err)
         *err += "external file '" + path +
-                "' refused: upload a .glb, or a .gltf whose buffers are data: URIs\n";
+                "' refused: it is not part of the upload (upload a .glb, a .gltf whose buffers "
+                "are data: URIs, or a tar archive holding the .gltf and its files)\n";
     return false;
 }
 bool refuse_write(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
@@ -570,7 +577,7 @@ std::string first_line(const std::string& text) {
 }  // namespace
 
 Imported<Asset> import_gltf(std::span<const uint8_t> bytes, bool binary, const std::string& file,
-                            const ImportLimits& limits) {
+                            const ImportLimits& limits, const SideFiles& side_files) {
     const ErrorSink sink(file);
     if (bytes.size() > std::numeric_limits<unsigned int>::max())
         return sink.too_large("", "the file is larger than 4 GiB");
@@ -581,9 +588,10 @@ Imported<Asset> import_gltf(std::span<const uint8_t> bytes, bool binary, const s
     if (json_depth(json, limits.max_json_depth) > limits.max_json_depth)
         return sink.invalid("", "JSON nested deeper than " +
                                     std::to_string(limits.max_json_depth) + " levels");
-    // Step 2: parse with the filesystem closed.
+    // Step 2: parse with the filesystem closed: external files come from the side files only.
     tinygltf::TinyGLTF loader;
-    loader.SetFsCallbacks({&any_file_exists, &keep_path, &refuse_read, &refuse_write, nullptr});
+    loader.SetFsCallbacks({&any_file_exists, &keep_path, &read_side_file, &refuse_write,
+                           const_cast<SideFiles*>(&side_files)});
     loader.SetImageLoader(&keep_encoded_image, nullptr);
     loader.SetStoreOriginalJSONForExtrasAndExtensions(false);
     tinygltf::Model model;

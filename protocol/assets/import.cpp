@@ -16,9 +16,9 @@ Imported<Asset> import_asset(AssetFormat format, std::span<const uint8_t> bytes,
     try {
         switch (format) {
             case AssetFormat::Glb:
-                return import_gltf(bytes, true, file, limits);
+                return import_gltf(bytes, true, file, limits, side_files);
             case AssetFormat::Gltf:
-                return import_gltf(bytes, false, file, limits);
+                return import_gltf(bytes, false, file, limits, side_files);
             case AssetFormat::Obj:
                 return import_obj(bytes, file, side_files, limits);
             case AssetFormat::Ply:

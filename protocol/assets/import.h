@@ -9,7 +9,8 @@
 namespace strata::assets {
 
 /// Reads `bytes` as `format`. `file` names the upload in errors; `side_files` are files uploaded
-/// with it (an OBJ's MTL and images), looked up by name, never on the filesystem. No exception
+/// with it (an OBJ's MTL and images, a .gltf's buffers and images), looked up by the name the
+/// model gives them (side_files.h), never on the filesystem. No exception
 /// escapes: a library that throws becomes an Invalid error.
 Imported<Asset> import_asset(AssetFormat format, std::span<const uint8_t> bytes,
                              const std::string& file, const ImportLimits& limits,

@@ -19,17 +19,24 @@ public:
     bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
                     std::map<std::string, int>* ids, std::string* warn,
                     std::string* err) override {
-        const auto it = m_files.find(name);
-        if (it == m_files.end()) {
+        const std::string* file = find_side_file(m_files, name);
+        if (!file) {
             missing.push_back(name);
             return false;
         }
-        std::istringstream in(it->second);
+        std::istringstream in(*file);
+        const std::size_t before = materials->size();
         tinyobj::LoadMtl(ids, materials, &in, warn, err);
+        // An MTL names its images relative to its own folder.
+        const std::size_t slash = name.find_last_of("/\\");
+        folders.resize(before, "");
+        folders.resize(materials->size(),
+                       slash == std::string::npos ? "" : name.substr(0, slash + 1));
         return true;
     }
 
     std::vector<std::string> missing;
+    std::vector<std::string> folders;  ///< per material: its MTL's folder ("" or "dir/")
 
 private:
     const SideFiles& m_files;
@@ -110,8 +117,11 @@ Imported<Asset> import_obj(std::span<const uint8_t> bytes, const std::string& fi
             t.name = m.diffuse_texname;
             t.uri = m.diffuse_texname;
             t.mime_type = mime_of(m.diffuse_texname);
-            if (auto it = side_files.find(m.diffuse_texname); it != side_files.end())
-                t.bytes.assign(it->second.begin(), it->second.end());
+            const std::string& folder = i < reader.folders.size() ? reader.folders[i] : "";
+            const std::string* image =
+                folder.empty() ? nullptr : find_side_file(side_files, folder + m.diffuse_texname);
+            if (!image) image = find_side_file(side_files, m.diffuse_texname);
+            if (image) t.bytes.assign(image->begin(), image->end());
             out.base_color_texture = int(asset.textures.size());
             asset.textures.push_back(std::move(t));
         }

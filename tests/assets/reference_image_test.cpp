@@ -1,6 +1,8 @@
 // Imported models against stored reference images, compared with a tolerance (as the demo's
 // reference test does): Spot, the bunny and the multi-node 2CylinderEngine, each framed by a
-// camera computed from its world bounds; and BoxTextured, whose embedded PNG must show.
+// camera computed from its world bounds; and BoxTextured, whose embedded PNG must show, also
+// when it comes as a .gltf with its external .bin and PNG in a tar archive (that .gltf's sampler
+// mirrors the texture where the .glb's repeats it, hence its own reference frame).
 //
 // Regenerate after an intended change of the renderer or the importers, then look at them:
 //   STRATA_UPDATE_REFERENCE=1 ctest --test-dir build -R AssetReferenceImage
@@ -9,8 +11,10 @@
 
 #include <gtest/gtest.h>
 
+#include "protocol/assets/archive_import.h"
 #include "protocol/assets/asset_batch.h"
 #include "tests/assets/asset_test_util.h"
+#include "tests/assets/tar_test_util.h"
 #include "tests/engine/reference_image.h"
 #include "tests/engine/render_test_util.h"
 
@@ -19,16 +23,9 @@ namespace {
 
 constexpr uint32_t WIDTH = 240, HEIGHT = 180, SPP = 8;
 
-/// Imports `path` as `format`, frames it and compares the frame with data/<name>.png. Returns the
-/// ids of the textures the import created.
-std::vector<std::string> check_reference(const std::string& path, AssetFormat format,
-                                         const std::string& name) {
-    const std::string bytes = read_file(path);
-    if (bytes.empty()) {
-        ADD_FAILURE() << path << " missing";
-        return {};
-    }
-    auto asset = import_asset(format, bytes_of(bytes), name, {});
+/// Frames an imported asset and compares the frame with data/<name>.png. Returns the ids of the
+/// textures the import created.
+std::vector<std::string> check_reference(Imported<Asset> asset, const std::string& name) {
     EXPECT_TRUE(asset.has_value()) << asset.error().describe();
     if (!asset) return {};
     AssetBatch b = asset_to_batch(std::move(asset.value()), {name, true});
@@ -51,6 +48,17 @@ std::vector<std::string> check_reference(const std::string& path, AssetFormat fo
     return textures;
 }
 
+/// Imports `path` as `format` and checks it against data/<name>.png.
+std::vector<std::string> check_reference(const std::string& path, AssetFormat format,
+                                         const std::string& name) {
+    const std::string bytes = read_file(path);
+    if (bytes.empty()) {
+        ADD_FAILURE() << path << " missing";
+        return {};
+    }
+    return check_reference(import_asset(format, bytes_of(bytes), name, {}), name);
+}
+
 TEST(AssetReferenceImage, SpotMatchesTheStoredFrame) {
     check_reference(std::string(STRATA_MODELS_DIR) + "/spot.obj", AssetFormat::Obj, "spot");
 }
@@ -71,6 +79,18 @@ TEST(AssetReferenceImage, BoxTexturedShowsItsEmbeddedTexture) {
         std::string(STRATA_ASSIMP_MODELS_DIR) + "/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb",
         AssetFormat::Glb, "box_textured");
     EXPECT_EQ(textures, std::vector<std::string>{"box_textured.texture0"});
+}
+
+TEST(AssetReferenceImage, BoxTexturedFromATarOfItsGltfBinAndPngShowsItsExternalTexture) {
+    const std::string folder = std::string(STRATA_ASSIMP_MODELS_DIR) + "/glTF2/BoxTextured-glTF";
+    const std::string archive =
+        run_tar(folder, "", "BoxTextured.gltf BoxTextured0.bin CesiumLogoFlat.png");
+    ASSERT_FALSE(archive.empty()) << folder << " missing, or tar failed";
+    auto imported = import_archive(bytes_of(archive), "box_textured_gltf.tar", {});
+    ASSERT_TRUE(imported.has_value()) << imported.error().describe();
+    const auto textures =
+        check_reference(std::move(imported.value().asset), "box_textured_gltf");
+    EXPECT_EQ(textures, std::vector<std::string>{"box_textured_gltf.texture0"});
 }
 
 }  // namespace

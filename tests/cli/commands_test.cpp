@@ -1,14 +1,17 @@
 // The one-shot subcommands against a real server: what they print, what they write, their exit
 // codes, and problem details shown as fields, never as raw JSON.
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include <gtest/gtest.h>
 
+#include "clients/cli/asset_pack.h"
 #include "clients/cli/commands.h"
 #include "clients/cli/http_transport.h"
+#include "engine/image/png.h"
 #include "tests/server/test_server.h"
 
 namespace strata::cli {
@@ -232,6 +235,87 @@ TEST_F(ImportCommand, ARefusedFileShowsTheProblemAndExitsWithThree) {
     EXPECT_EQ(srv.get("/v1/scene").json()["version"], 0);
     args.file = (dir / "missing.obj").string();
     EXPECT_EQ(run_import(*transport, console(), args), 2);
+}
+
+/// Writes `bytes` to `dir`/`relative`, creating its folders.
+void write_file(const std::filesystem::path& dir, const std::string& relative,
+                const std::string& bytes) {
+    std::filesystem::create_directories((dir / relative).parent_path());
+    std::ofstream(dir / relative, std::ios::binary) << bytes;
+}
+
+TEST_F(ImportCommand, AnObjIsSentWithItsMtlAndImageAndTheTextureIsBound) {
+    // The MTL in a sibling folder, its image relative to the MTL: the archive's root is the
+    // folder above both.
+    write_file(dir, "models/quad.obj",
+               "mtllib ../materials/quad.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+               "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl painted\nf 1/1 2/2 3/3 4/4\n");
+    write_file(dir, "materials/quad.mtl", "newmtl painted\nKd 0.8 0.4 0.2\nmap_Kd tex/p.png\n");
+    const uint8_t rgb[] = {255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255};
+    write_file(dir, "materials/tex/p.png", encode_png(rgb, 2, 2, 3).value());
+    ImportArgs args;
+    args.file = (dir / "models" / "quad.obj").string();
+    ASSERT_EQ(run_import(*transport, console(), args), 0) << err.str();
+    EXPECT_NE(err.str().find("packing materials/tex/p.png with models/quad.obj"),
+              std::string::npos)
+        << err.str();
+    EXPECT_EQ(srv.get("/v1/scene/materials/quad.material0").json()["base_color_texture"],
+              "quad.texture0");
+    EXPECT_EQ(srv.get("/v1/scene/textures").json()["items"].size(), 1u);
+}
+
+TEST_F(ImportCommand, AGltfDirectoryIsSentWithItsBufferAndImage) {
+    const std::string gltf = STRATA_ASSIMP_MODELS_DIR "/glTF2/BoxTextured-glTF/BoxTextured.gltf";
+    if (!std::filesystem::exists(gltf)) GTEST_SKIP() << gltf << " missing";
+    ImportArgs args;
+    args.file = gltf;
+    ASSERT_EQ(run_import(*transport, console(true), args), 0) << err.str();
+    const Json doc = Json::parse(out.str());
+    EXPECT_EQ(doc["format"], "gltf");
+    EXPECT_EQ(doc["model"], "BoxTextured.gltf");
+    EXPECT_EQ(doc["textures"], Json::array({"BoxTextured.texture0"}));
+    EXPECT_EQ(srv.get("/v1/scene/textures/BoxTextured.texture0").json()["format"], "png");
+}
+
+TEST_F(ImportCommand, AMissingSideFileStopsTheImportBeforeAnythingIsSent) {
+    write_file(dir, "quad.obj", "mtllib gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    ImportArgs args;
+    args.file = (dir / "quad.obj").string();
+    EXPECT_EQ(run_import(*transport, console(), args), 2);
+    EXPECT_NE(err.str().find("quad.obj (mtllib) names 'gone.mtl', which is not a readable file"),
+              std::string::npos)
+        << err.str();
+    EXPECT_EQ(srv.get("/v1/scene").json()["version"], 0);
+}
+
+TEST_F(ImportCommand, AModelCannotMakeTheUploadCarryAnyLocalFile) {
+    write_file(dir, "secret.txt", "password");
+    write_file(dir, "models/quad.obj", "mtllib ../secret.txt\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    ImportArgs args;
+    args.file = (dir / "models" / "quad.obj").string();
+    EXPECT_EQ(run_import(*transport, console(), args), 2);
+    EXPECT_NE(err.str().find("outside the model's folder only .mtl, .bin, .png and .jpg files"),
+              std::string::npos)
+        << err.str();
+    EXPECT_EQ(srv.get("/v1/scene").json()["version"], 0);
+}
+
+TEST(AssetPack, LongNamesWrittenByOurTarWriterAreReadBackByGnuTar) {
+    const std::string long_name = std::string(120, 'd') + "/" + std::string(90, 'f') + ".png";
+    const std::string longer = std::string(300, 'e') + ".bin";
+    const std::string archive =
+        write_tar({{"a.obj", "v"}, {long_name, "png"}, {longer, "bin"}});
+    const auto scratch = std::filesystem::temp_directory_path() / "strata-asset-pack-test.tar";
+    std::ofstream(scratch, std::ios::binary) << archive;
+    FILE* pipe = popen(("tar tf '" + scratch.string() + "'").c_str(), "r");
+    ASSERT_NE(pipe, nullptr);
+    std::string listing;
+    char buffer[4096];
+    for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0;)
+        listing.append(buffer, n);
+    EXPECT_EQ(pclose(pipe), 0);
+    std::filesystem::remove(scratch);
+    EXPECT_EQ(listing, "a.obj\n" + long_name + "\n" + longer + "\n");
 }
 
 }  // namespace

@@ -167,6 +167,21 @@ class ServerCommandsTest(unittest.TestCase):
             self.assertEqual(code, 3)
             self.assertIn("422 Duplicate id", err)
 
+    def test_import_packs_a_gltf_directory(self):
+        gltf = os.path.join(os.environ.get("STRATA_ASSIMP_MODELS_DIR", "/usr/share/assimp/models"),
+                            "glTF2", "BoxTextured-glTF", "BoxTextured.gltf")
+        if not os.path.exists(gltf):
+            self.skipTest(gltf + " missing")
+        code, out, err = strata("--json", "import", gltf, "--prefix", "clibox", env=self.env)
+        self.assertEqual(code, 0, err)
+        answer = json.loads(out)
+        self.assertEqual(answer["model"], "BoxTextured.gltf")
+        self.assertEqual(answer["textures"], ["clibox.texture0"])
+        code, out, err = strata("--json", "scene", "get", "texture", "clibox.texture0",
+                                env=self.env)
+        self.assertEqual(code, 0, err)
+        self.assertEqual(json.loads(out)["format"], "png")
+
     def test_scene_list_get_and_pick_read_the_scene_object_by_object(self):
         edits = [{"op": "clear"},
                  {"op": "add_mesh", "id": "ball", "shape": {"type": "sphere", "segments": 16}},

@@ -191,6 +191,57 @@ class ClientTest(unittest.TestCase):
         self.assertEqual(p.body["element"], "header")
         self.assertEqual(self.client.stats()["version"], self.version + 1)
 
+    def test_import_asset_packs_an_obj_with_its_mtl_and_image(self):
+        png = os.path.join(os.path.dirname(__file__), "..", "assets", "data", "bunny.png")
+        with tempfile.TemporaryDirectory() as d:
+            os.makedirs(os.path.join(d, "models"))
+            os.makedirs(os.path.join(d, "materials", "tex"))
+            with open(os.path.join(d, "models", "quad.obj"), "w") as f:
+                f.write("mtllib ../materials/quad.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                        "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl painted\nf 1/1 2/2 3/3 4/4\n")
+            with open(os.path.join(d, "materials", "quad.mtl"), "w") as f:
+                f.write("newmtl painted\nKd 0.8 0.4 0.2\nmap_Kd tex/p.png\n")
+            with open(png, "rb") as src, open(os.path.join(d, "materials", "tex", "p.png"),
+                                              "wb") as dst:
+                dst.write(src.read())
+            answer = self.client.import_asset(os.path.join(d, "models", "quad.obj"))
+        self.assertEqual(answer["model"], "models/quad.obj")
+        self.assertEqual(answer["textures"], ["quad.texture0"])
+        self.assertEqual(self.client.scene("materials", "quad.material0")["base_color_texture"],
+                         "quad.texture0")
+
+    def test_import_asset_packs_a_gltf_directory(self):
+        gltf = os.path.join(os.environ.get("STRATA_ASSIMP_MODELS_DIR", "/usr/share/assimp/models"),
+                            "glTF2", "BoxTextured-glTF", "BoxTextured.gltf")
+        if not os.path.exists(gltf):
+            self.skipTest(gltf + " missing")
+        answer = self.client.import_asset(gltf)
+        self.assertEqual(answer["format"], "gltf")
+        self.assertEqual(answer["model"], "BoxTextured.gltf")
+        self.assertEqual(answer["textures"], ["BoxTextured.texture0"])
+        self.assertEqual(self.client.scene("textures", "BoxTextured.texture0")["format"], "png")
+
+    def test_import_asset_refuses_a_missing_side_file_before_sending(self):
+        with tempfile.TemporaryDirectory() as d:
+            obj = os.path.join(d, "quad.obj")
+            with open(obj, "w") as f:
+                f.write("mtllib gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+            with self.assertRaises(FileNotFoundError) as caught:
+                self.client.import_asset(obj)
+        self.assertIn("quad.obj (mtllib) names 'gone.mtl'", str(caught.exception))
+        self.assertEqual(self.client.stats()["version"], self.version)
+        with tempfile.TemporaryDirectory() as d:
+            os.makedirs(os.path.join(d, "models"))
+            with open(os.path.join(d, "secret.txt"), "w") as f:
+                f.write("password")
+            obj = os.path.join(d, "models", "quad.obj")
+            with open(obj, "w") as f:
+                f.write("mtllib ../secret.txt\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+            with self.assertRaises(ValueError) as refused:
+                self.client.import_asset(obj)
+        self.assertIn("outside the model's folder only .mtl", str(refused.exception))
+        self.assertEqual(self.client.stats()["version"], self.version)
+
     def test_groups_children_tree_and_group_path(self):
         self.client.edit([
             {"op": "add_group", "id": "car"},

@@ -1,17 +1,24 @@
 // POST /v1/assets over real HTTP: formats from Content-Type or ?format=, the ids it answers,
-// atomicity, If-Match, the budget, and problems that name the file and the element.
+// atomicity, If-Match, the budget, and problems that name the file and the element; tar archives
+// of a model and its side files (written by GNU tar at test time).
 
 #include <fstream>
 #include <sstream>
 
 #include <gmock/gmock.h>
 
+#include "engine/image/png.h"
+#include "tests/assets/tar_test_util.h"
 #include "tests/server/test_server.h"
 
 namespace strata::server::test {
 namespace {
 
 using ::testing::HasSubstr;
+using assets::test::run_tar;
+using assets::test::ScratchDir;
+using assets::test::tar_end;
+using assets::test::tar_file;
 
 const std::string TRIANGLE_OBJ = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
 
@@ -138,6 +145,90 @@ TEST_F(Assets, AnExternalBufferIsRefusedWithoutReadingTheServersFiles) {
     const Reply r = upload("", gltf, "model/gltf+json");
     expect_problem(r, 422, "invalid-asset");
     EXPECT_THAT(r.json()["detail"].get<std::string>(), HasSubstr("external file"));
+}
+
+/// An OBJ quad, its MTL (Kd, Ks/Ns, map_Kd) and a 2x2 PNG, as `tar` writes them.
+std::string painted_quad_tar() {
+    ScratchDir dir;
+    dir.write("quad/quad.obj", "mtllib quad.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                               "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl painted\n"
+                               "f 1/1 2/2 3/3 4/4\n");
+    dir.write("quad/quad.mtl", "newmtl painted\nKd 0.8 0.4 0.2\nKs 0.5 0.5 0.5\nNs 100\n"
+                               "map_Kd textures/paint.png\n");
+    const uint8_t rgb[] = {255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255};
+    dir.write("quad/textures/paint.png", encode_png(rgb, 2, 2, 3).value());
+    return run_tar(dir.path(), "", "quad");
+}
+
+TEST_F(Assets, AnObjMtlAndPngArchiveImportsWithTheTextureBoundToTheMaterial) {
+    const std::string archive = painted_quad_tar();
+    ASSERT_FALSE(archive.empty()) << "tar failed";
+    const Reply r = upload("?name=quad.tar", archive, "application/x-tar");
+    ASSERT_EQ(r.status, 200) << r.body;
+    const Json j = r.json();
+    EXPECT_EQ(j["format"], "obj");
+    EXPECT_EQ(j["model"], "quad/quad.obj");
+    EXPECT_EQ(j["textures"], Json::array({"quad.texture0"}));
+    EXPECT_EQ(j["materials"], Json::array({"quad.material0"}));
+    EXPECT_EQ(j["warnings"], Json::array());
+    const Json list = srv.get("/v1/scene/textures").json();
+    ASSERT_EQ(list["items"].size(), 1u);
+    EXPECT_EQ(list["items"][0]["id"], "quad.texture0");
+    const Json m = srv.get("/v1/scene/materials/quad.material0").json();
+    EXPECT_EQ(m["base_color_texture"], "quad.texture0");
+    EXPECT_LT(m["roughness"].get<double>(), 1.0);  // from Ks and Ns
+    EXPECT_EQ(srv.get("/v1/stats").json()["counters"]["batches_applied"], 1);
+}
+
+TEST_F(Assets, AGltfWithItsExternalBinAndPngImportsAsATarAndRenders) {
+    const std::string folder = STRATA_ASSIMP_MODELS_DIR "/glTF2/BoxTextured-glTF";
+    const std::string archive =
+        run_tar(folder, "", "BoxTextured.gltf BoxTextured0.bin CesiumLogoFlat.png");
+    if (archive.empty()) GTEST_SKIP() << folder << " missing";
+    const Reply r = upload("?format=tar", archive, "application/octet-stream");
+    ASSERT_EQ(r.status, 200) << r.body;
+    EXPECT_EQ(r.json()["format"], "gltf");
+    EXPECT_EQ(r.json()["textures"], Json::array({"BoxTextured.texture0"}));
+    const Json material =
+        srv.get("/v1/scene/materials/" + r.json()["materials"][0].get<std::string>()).json();
+    EXPECT_EQ(material["base_color_texture"], "BoxTextured.texture0");
+    EXPECT_EQ(srv.get("/v1/scene/textures/BoxTextured.texture0").json()["format"], "png");
+    EXPECT_EQ(srv.get("/v1/render?width=32&height=32").status, 200);
+}
+
+TEST_F(Assets, ABrokenArchiveIsA422NamingTheArchiveAndTheEntryAndChangesNothing) {
+    const Reply link = upload("?name=evil.tar",
+                              tar_file("quad.obj", TRIANGLE_OBJ) +
+                                  tar_file("../../etc/passwd", "root") + tar_end(),
+                              "application/x-tar");
+    expect_problem(link, 422, "invalid-asset");
+    EXPECT_EQ(link.json()["file"], "evil.tar");
+    EXPECT_EQ(link.json()["element"], "entry '../../etc/passwd'");
+    const Reply two = upload("?format=tar",
+                             tar_file("a.obj", TRIANGLE_OBJ) + tar_file("b.obj", TRIANGLE_OBJ) +
+                                 tar_end(),
+                             "application/x-tar");
+    expect_problem(two, 422, "invalid-asset");
+    EXPECT_THAT(two.json()["detail"].get<std::string>(),
+                HasSubstr("upload.tar: the archive holds 2 models ('a.obj', 'b.obj')"));
+    const Reply bad_model =
+        upload("?format=tar", tar_file("m/bad.obj", "v 0 0 0\nf 1 2 7\n") + tar_end(), "");
+    expect_problem(bad_model, 422, "invalid-asset");
+    EXPECT_EQ(bad_model.json()["file"], "upload.tar: m/bad.obj");
+    expect_problem(upload("?format=tar", "not a tar archive", ""), 422, "invalid-asset");
+    EXPECT_EQ(srv.get("/v1/scene").json()["version"], 0);
+    EXPECT_EQ(srv.get("/v1/stats").json()["counters"]["batches_applied"], 0);
+}
+
+TEST_F(Assets, AnArchivesPrefixDefaultsToItsModelsStem) {
+    const Reply r = upload("", tar_file("dir/tri.obj", TRIANGLE_OBJ) + tar_end(),
+                           "application/x-tar; charset=binary");
+    ASSERT_EQ(r.status, 200) << r.body;
+    EXPECT_EQ(r.json()["meshes"], Json::array({"tri.mesh0"}));
+    const Reply named = upload("?prefix=other&name=x.tar",
+                               tar_file("tri.obj", TRIANGLE_OBJ) + tar_end(), "");
+    ASSERT_EQ(named.status, 200) << named.body;
+    EXPECT_EQ(named.json()["meshes"], Json::array({"other.mesh0"}));
 }
 
 }  // namespace

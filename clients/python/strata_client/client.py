@@ -6,6 +6,7 @@ import os
 import urllib.parse
 from typing import Any, Dict, Iterable, Iterator, List, Optional, Tuple, Union
 
+from strata_client.asset_pack import pack_asset
 from strata_client.png import decode_png
 
 
@@ -180,18 +181,30 @@ class Client:
     def import_asset(self, path: str, prefix: Optional[str] = None, fmt: Optional[str] = None,
                      instance: bool = True, parent: Optional[str] = None,
                      if_match: Union[int, str, None] = None) -> Dict[str, Any]:
-        """Imports a glTF (.glb, or .gltf with embedded data), OBJ or PLY file (POST /v1/assets)
-        as one batch; returns the answer: {"version", "applied", "format", "meshes",
-        "materials", "groups", "instances", "warnings"}.
+        """Imports a glTF (.glb or .gltf), OBJ or PLY file (POST /v1/assets) as one batch;
+        returns the answer: {"version", "applied", "format", "textures", "meshes", "materials",
+        "groups", "instances", "warnings"} (and "model" when it went as an archive).
+
+        An .obj that names MTL files (and the map_Kd images they name), or a .gltf with external
+        buffers or images, is sent as a tar archive of them all, built in memory (asset_pack.py);
+        a file they name that is missing locally raises FileNotFoundError before anything is
+        sent. With `fmt` given, the file is sent alone.
 
         `prefix` starts every id it creates (default: the file name's stem); `fmt` is glb, gltf,
         obj or ply (default: from the extension); `instance=False` creates meshes and materials
         only; `parent` names the group the asset's own group joins (default: the root). A file Strata cannot read raises ProblemError 422 whose body names the "file" and
         the "element" at fault.
         """
-        with open(path, "rb") as f:
-            data = f.read()
+        if fmt is None:
+            packed = pack_asset(path)
+            data = packed.data
+        else:
+            with open(path, "rb") as f:
+                data = f.read()
+            packed = None
         query = {"name": os.path.basename(path)}
+        if packed is not None and packed.archive:
+            query = {"name": os.path.splitext(os.path.basename(path))[0] + ".tar", "format": "tar"}
         if prefix is not None:
             query["prefix"] = prefix
         if fmt is not None:
