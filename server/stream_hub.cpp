@@ -424,8 +424,10 @@ bool StreamHub::serve_joiners() {
     std::vector<Job> jobs;
     {
         std::lock_guard lock(m_mutex);
-        for (auto& [key, v] : m_views) {
+        for (auto& [view_key, v] : m_views) {
             if (!v.frame) continue;
+            // A plain reference: lambdas cannot capture structured bindings before clang 16.
+            const std::string& key = view_key;
             for (const Watcher& w : v.viewers) {
                 if (!w.needs_frame) continue;
                 const bool queued = std::any_of(jobs.begin(), jobs.end(), [&](const Job& j) {
