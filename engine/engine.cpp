@@ -164,7 +164,13 @@ Result<RebuildReport> Engine::commit_locked(std::unique_lock<std::shared_mutex>*
     c.tlas_merges_cancelled += report.tlas.merge_cancelled;
     c.commit_seconds += report.phases.total_ms / 1000.0;
     m_last_report = report;
+    if (m_commit_listener) m_commit_listener(report);
     return report;
+}
+
+void Engine::set_commit_listener(CommitListener listener) {
+    std::lock_guard stats(m_stats_mutex);
+    m_commit_listener = std::move(listener);
 }
 
 RebuildReport Engine::plan() const {

@@ -12,6 +12,7 @@
 //   Lock order is always launch, then scene.
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -128,6 +129,12 @@ public:
     EngineCounters counters() const;
     /// The report of the most recent commit (default-constructed before the first).
     RebuildReport last_report() const;
+    /// Called with every commit's report, on the committing thread, right after the counters
+    /// took it (one listener; an empty function removes it, and once this returns the old one is
+    /// not running and never runs again). The commit may still hold the scene for its launch:
+    /// the listener must be quick and must not call into this engine.
+    using CommitListener = std::function<void(const RebuildReport&)>;
+    void set_commit_listener(CommitListener listener);
     /// Acceleration-structure memory now.
     int64_t memory_bytes(MemoryCategory c) const { return m_accel->memory_bytes(c); }
 
@@ -160,6 +167,7 @@ private:
     mutable std::mutex m_stats_mutex;
     EngineCounters m_counters;
     RebuildReport m_last_report;
+    CommitListener m_commit_listener;  ///< guarded by m_stats_mutex
 };
 
 }  // namespace strata

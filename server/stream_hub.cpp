@@ -18,12 +18,13 @@ namespace {
 /// How long the thread sleeps when nothing wakes it (the pace of progressive refinement and of
 /// retrying a render the API deferred).
 constexpr std::chrono::milliseconds IDLE_WAIT{10};
-/// The same with no stream open: only commits are watched for (the first event describes the
-/// state anyway).
+/// The same with no stream open (commits wake the thread themselves).
 constexpr std::chrono::milliseconds QUIET_WAIT{250};
 /// Event streams get a comment this often, so that proxies and the front end notice a client
 /// that left even when nothing is committed.
 constexpr std::chrono::seconds HEARTBEAT{15};
+/// Commit events waiting for the hub's thread, at most.
+constexpr std::size_t MAX_QUEUED_REPORTS = 1024;
 
 /// One frame: the JPEG, then the next boundary and the next part's headers at once. A browser
 /// shows a part only once the next part's headers arrive (Chromium finishes an image part
@@ -81,6 +82,9 @@ void write_stream_metrics(std::string& out, const StreamHubStats& s) {
          s.render_errors);
     line("strata_stream_commit_events_total", "counter", "Commit events published.",
          s.events_published);
+    line("strata_stream_commit_events_dropped_total", "counter",
+         "Commit events dropped because 1024 were already waiting for the hub's thread.",
+         s.events_dropped);
     line("strata_stream_highlight_encodes_total", "counter",
          "Frames encoded with a selected instance tinted (one per frame and instance).",
          s.highlight_encodes);
@@ -91,8 +95,8 @@ void write_stream_metrics(std::string& out, const StreamHubStats& s) {
 StreamHub::StreamHub(Engine& engine, std::function<bool()> api_busy)
     : m_engine(engine), m_api_busy(std::move(api_busy)) {
     // Commits before the hub existed are no events (the first event, hello, describes them).
-    m_commits_seen = m_engine.counters().commits;
     m_reported_version = m_engine.last_report().version;
+    m_engine.set_commit_listener([this](const RebuildReport& r) { on_commit(r); });
     m_thread = std::thread([this] { run(); });
 }
 
@@ -142,12 +146,21 @@ void StreamHub::on_commit(const RebuildReport& report) {
     if (m_stopping || report.version <= m_reported_version) return;
     m_reported_version = report.version;
     m_last_commit = report;
+    if (m_event_clients.empty()) return;  // a new client's hello carries the last one
+    // A render of the hub's own can take seconds while clients commit: the queue is bounded
+    // (the oldest go first, and the count says so).
+    if (m_reports.size() >= MAX_QUEUED_REPORTS) {
+        m_reports.erase(m_reports.begin());
+        ++m_stats.events_dropped;
+    }
     m_reports.push_back(report);
     m_poked = true;
     m_wake.notify_one();
 }
 
 void StreamHub::stop() {
+    // First: once this returns, no commit calls on_commit any more.
+    m_engine.set_commit_listener(nullptr);
     std::vector<std::shared_ptr<StreamChannel>> all;
     {
         std::lock_guard lock(m_mutex);
@@ -208,9 +221,6 @@ void StreamHub::run() {
                         [&] { return m_stopping || m_poked; });
         m_poked = false;
         if (m_stopping) break;
-        lock.unlock();
-        poll_commits();
-        lock.lock();
         std::vector<RebuildReport> reports;
         reports.swap(m_reports);
         lock.unlock();
@@ -222,13 +232,6 @@ void StreamHub::run() {
         lock.lock();
         if (rendered) m_poked = true;  // another view may be due as well
     }
-}
-
-void StreamHub::poll_commits() {
-    const uint64_t commits = m_engine.counters().commits;
-    if (commits == m_commits_seen) return;
-    m_commits_seen = commits;
-    on_commit(m_engine.last_report());
 }
 
 void StreamHub::publish_events(std::vector<RebuildReport> reports, Clock::time_point now) {

@@ -21,10 +21,9 @@
 // frame does not show (removed since, hidden, off screen) tints nothing.
 //
 // Events. Each commit that brought edits in becomes one `commit` event with its version and
-// rebuild report: the hub's own renders hand their report over directly; commits other clients
-// cause (POST /v1/commit, API renders, picks) are noticed within IDLE_WAIT from the engine's
-// commit counter and last report. Two such commits closer together than that are reported as
-// the later one only (the engine has no commit callback yet; see the report of issue 15).
+// rebuild report, whoever caused it (the hub's renders, POST /v1/commit, API renders, picks): the
+// hub is the engine's commit listener, which queues the report and wakes the hub's thread, so
+// commits in quick succession are each reported, in order.
 
 #include <chrono>
 #include <condition_variable>
@@ -67,6 +66,7 @@ struct StreamHubStats {
     uint64_t frames_offered = 0;   ///< frames handed to viewers' channels
     uint64_t render_errors = 0;
     uint64_t events_published = 0;   ///< commit events (each sent to every event client)
+    uint64_t events_dropped = 0;     ///< commit events dropped from a full queue (oldest first)
     uint64_t deferred_for_api = 0;   ///< times a due viewer render waited for API renders
     uint64_t frames_dropped = 0;     ///< frames open viewers missed (a newer one replaced them)
     uint64_t highlight_encodes = 0;  ///< JPEGs encoded with a highlight (one per frame and id)
@@ -144,8 +144,6 @@ private:
 
     void run();
     void publish_events(std::vector<RebuildReport> reports, Clock::time_point now);
-    /// Queues the engine's last report when a commit happened since the last look.
-    void poll_commits();
     /// Renders the most overdue view that needs a frame; false when none did.
     bool render_one(Clock::time_point now);
     uint64_t scene_version() const;
@@ -161,7 +159,6 @@ private:
     std::map<std::string, View> m_views;
     std::vector<std::shared_ptr<StreamChannel>> m_event_clients;
     std::vector<RebuildReport> m_reports;
-    uint64_t m_commits_seen = 0;      ///< the engine's commit counter at the last look
     uint64_t m_reported_version = 0;  ///< of the newest commit event
     std::optional<RebuildReport> m_last_commit;
     Clock::time_point m_next_heartbeat{};
