@@ -12,23 +12,19 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 
 #include "engine/scene/scene.h"
 #include "protocol/assets/archive_import.h"
 #include "protocol/assets/asset_batch.h"
 #include "protocol/assets/side_files.h"
+#include "tests/fuzz/asset_fuzz_util.h"
 
 namespace {
 
 using namespace strata;
 using namespace strata::assets;
 
-[[noreturn]] void fail(const char* what) {
-    std::fprintf(stderr, "archive fuzzer: %s\n", what);
-    std::abort();
-}
+[[noreturn]] void fail(const char* what) { fuzz::fail("archive fuzzer", what); }
 
 void check_entries(std::span<const uint8_t> body) {
     TarLimits limits;
@@ -68,20 +64,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
             fail("a refusal without its archive or message");
         return 0;
     }
-    Asset& asset = archived.value().asset;
-    if (!validate_asset(asset, ErrorSink("fuzz")).has_value())
-        fail("an accepted asset does not validate");
-    AssetBatch b = asset_to_batch(std::move(asset), {"f", true, std::nullopt});
-    const uint64_t version = scene.version();
-    auto applied = scene.apply(std::move(b.batch));
-    if (!applied) {
-        if (scene.version() != version || scene.counts().meshes != 0)
-            fail("a refused batch changed the scene");
-        return 0;
-    }
-    EditBatch clear;
-    clear.edits.emplace_back(Clear{});
-    if (!scene.apply(std::move(clear)).has_value()) fail("clear was refused");
-    scene.clear_changes();
+    fuzz::apply_accepted("archive fuzzer", scene, std::move(archived.value().asset));
     return 0;
 }

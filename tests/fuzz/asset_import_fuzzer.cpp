@@ -11,23 +11,19 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
 #include <cstring>
 
 #include "engine/scene/scene.h"
 #include "protocol/assets/asset_batch.h"
 #include "protocol/assets/import.h"
+#include "tests/fuzz/asset_fuzz_util.h"
 
 namespace {
 
 using namespace strata;
 using namespace strata::assets;
 
-[[noreturn]] void fail(const char* what) {
-    std::fprintf(stderr, "asset fuzzer: %s\n", what);
-    std::abort();
-}
+[[noreturn]] void fail(const char* what) { fuzz::fail("asset fuzzer", what); }
 
 AssetFormat format_of(const uint8_t* data, std::size_t size) {
 #if defined(STRATA_FUZZ_GLTF)
@@ -56,19 +52,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
             fail("a refusal without its file or message");
         return 0;
     }
-    if (!validate_asset(asset.value(), ErrorSink("fuzz")).has_value())
-        fail("an accepted asset does not validate");
-    AssetBatch b = asset_to_batch(std::move(asset.value()), {"f", true});
-    const uint64_t version = scene.version();
-    auto applied = scene.apply(std::move(b.batch));
-    if (!applied) {
-        if (scene.version() != version || scene.counts().meshes != 0)
-            fail("a refused batch changed the scene");
-        return 0;
-    }
-    EditBatch clear;
-    clear.edits.emplace_back(Clear{});
-    if (!scene.apply(std::move(clear)).has_value()) fail("clear was refused");
-    scene.clear_changes();
+    fuzz::apply_accepted("asset fuzzer", scene, std::move(asset.value()));
     return 0;
 }
