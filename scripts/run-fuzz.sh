@@ -25,6 +25,10 @@
 #                                     fuzzer gets RUNS/4: each of its inputs runs through the engine.
 #                                     Each importer fuzzer gets RUNS/4 too, and so do the
 #                                     archive fuzzer and the texture decoder.
+#   scripts/run-fuzz.sh --build-only  configures and builds only. STRATA_FUZZ_ALSO names more
+#                                     targets to build in the same folder: scripts/test.sh builds
+#                                     strata_engine_tests here and runs it under ASan + UBSan,
+#                                     so the sanitized libraries are compiled once for both.
 #
 # The archive fuzzer's seeds are tar archives written at run time by `tar` (an OBJ with its MTL,
 # a .gltf with its .bin and PNG from assimp-testmodels). The importers' corpora start from the small seeds in tests/fuzz/asset_corpus/ plus every file of
@@ -35,6 +39,11 @@
 # New inputs the fuzzers find go to scratch copies of the corpora, never into the repository.
 set -euo pipefail
 
+build_only=0
+if [ "${1:-}" = "--build-only" ]; then
+    build_only=1
+    shift
+fi
 runs="${1:-100000}"
 root="$(cd "$(dirname "$0")/.." && pwd)"
 build="$root/build-fuzz"
@@ -45,7 +54,8 @@ cmake -S "$root" -B "$build" -G Ninja \
 ninja -C "$build" -j "${STRATA_BUILD_JOBS:-2}" edit_batch_fuzzer http_request_fuzzer \
     journal_record_fuzzer snapshot_fuzzer durable_corpus \
     gltf_import_fuzzer obj_import_fuzzer ply_import_fuzzer archive_import_fuzzer \
-    texture_decode_fuzzer
+    texture_decode_fuzzer ${STRATA_FUZZ_ALSO:-}
+[ "$build_only" = 1 ] && exit 0
 
 scratch="$(mktemp -d)"
 trap 'rm -rf "$scratch"' EXIT

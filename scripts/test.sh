@@ -5,10 +5,11 @@
 # Steps:
 #   1. scripts/install-deps.sh              Debian packages (idempotent)
 #   2. build/ (RelWithDebInfo)               full build, then every CTest test
-#   3. build-asan/ (ASan + UBSan)            engine tests under the sanitizers
+#   3. build-fuzz/ (clang, ASan + UBSan)     engine tests under the sanitizers, in the build the
+#                                            fuzzers use (the sanitized libraries compile once)
 #   4. build-tsan/ (ThreadSanitizer)         the engine tests that run background TLAS merges beside
-#                                            commits, launches and edits
-#   5. build-fuzz/ (clang, libFuzzer)        the edit-batch parser fuzzer, bounded run
+#                                            commits, launches and edits (only those are built)
+#   5. build-fuzz/ (clang, libFuzzer)        every fuzzer (scripts/run-fuzz.sh), bounded runs
 #   6. build-docker/ (mmdebstrap, chroot)    docker/: lint, and the image's runtime stage run in a
 #                                            fresh Debian 12 root (scripts/check-docker.sh)
 set -euo pipefail
@@ -25,20 +26,19 @@ scripts/build.sh build -DCMAKE_BUILD_TYPE=RelWithDebInfo
 step "running the test suite"
 ctest --test-dir build --output-on-failure --timeout 600
 
-step "engine tests under AddressSanitizer and UndefinedBehaviorSanitizer (build-asan/)"
-STRATA_TARGETS=strata_engine_tests scripts/build.sh build-asan \
-    -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSTRATA_SANITIZE=ON -DSTRATA_BUILD_BENCHMARKS=OFF
+step "engine tests under AddressSanitizer and UndefinedBehaviorSanitizer (build-fuzz/, clang)"
+STRATA_FUZZ_ALSO=strata_engine_tests scripts/run-fuzz.sh --build-only
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-    build-asan/tests/engine/strata_engine_tests
+    build-fuzz/tests/engine/strata_engine_tests
 
 step "engine concurrency tests under ThreadSanitizer (build-tsan/)"
-STRATA_TARGETS=strata_engine_tests scripts/build.sh build-tsan \
+STRATA_TARGETS=strata_engine_tsan_tests scripts/build.sh build-tsan \
     -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSTRATA_TSAN=ON -DSTRATA_BUILD_BENCHMARKS=OFF
 TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/tests/engine/tsan.supp" \
-    timeout 900 build-tsan/tests/engine/strata_engine_tests \
+    timeout 900 build-tsan/tests/engine/strata_engine_tsan_tests \
     --gtest_filter='IncrementalTlas.*:Differential.ThousandsOfInstancesMatchAFreshBuildThroughMerges*'
 
-step "fuzzing the edit-batch parser (build-fuzz/)"
+step "fuzzing: edit batches, HTTP requests, journal, snapshots, assets, textures (build-fuzz/)"
 scripts/run-fuzz.sh
 
 step "docker image checks: lint, runtime stage in a Debian 12 root (build-docker/)"

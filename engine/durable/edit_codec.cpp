@@ -283,6 +283,11 @@ Status decode_each(std::string_view bytes, const std::function<Status(Edit&&)>& 
             [&](auto& e) {
                 fields(r, e);
                 if (extended) extension(r, e);
+                // The encoder sets the bit exactly when there is something to extend with: a bit
+                // on a kind without extension fields, or on extension fields that all say
+                // "absent", is not a form any writer produces (and would re-encode differently).
+                if (r.ok() && extended && !has_extension(e))
+                    r.fail("extension bit on an edit with no extension fields");
             },
             edit);
         if (!r.ok()) {

@@ -196,6 +196,27 @@ TEST(EditCodec, AnUnknownKindIsNamed) {
         << back.error().message;
 }
 
+TEST(EditCodec, AnExtensionBitWithNothingToExtendIsRefused) {
+    // Found by journal_record_fuzzer: a set_camera tag with the extension bit decoded, then
+    // re-encoded without it. Every decodable form must be the one the encoder writes.
+    const std::string found("\x01\x00\x00\x00\x8b\x01\xf8\x00\x60\x63\x00\x3f\x60\x00\x00"
+                            "\x00\x80\x3f\x00\x00\x01\x00\x00\xf0\x41",
+                            25);
+    auto back = durable::decode_batch(found);
+    ASSERT_FALSE(back.has_value()) << "decoded to " << encoded(back.value()).size() << " bytes";
+    EXPECT_NE(back.error().message.find("extension bit"), std::string::npos)
+        << back.error().message;
+    EXPECT_NE(back.error().message.find("set_camera"), std::string::npos) << back.error().message;
+
+    // The same for every kind written without the bit: setting it never decodes.
+    for (const Edit& edit : every_kind().edits) {
+        std::string bytes = encoded(EditBatch{{edit}});
+        ASSERT_EQ(uint8_t(bytes[4]) & 0x80u, 0u);
+        bytes[4] = char(uint8_t(bytes[4]) | 0x80u);
+        EXPECT_FALSE(durable::decode_batch(bytes).has_value()) << "kind " << edit.index();
+    }
+}
+
 TEST(JournalFormat, ATornRecordAtTheEndIsToldFromDamageInTheMiddle) {
     std::string file = durable::segment_header(0);
     std::vector<std::size_t> starts;
