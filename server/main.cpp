@@ -10,7 +10,7 @@
 
 #include "engine/core/timer.h"
 #include "engine/durable/durable_store.h"
-#include "engine/scene/demo_scene.h"
+#include "protocol/demo/demo_models.h"
 #include "server/cli.h"
 #include "server/healthcheck.h"
 #include "server/log_sink.h"
@@ -177,9 +177,19 @@ int serve(server::CommandLine& cl) {
         http.attach_replica(follow.get());
         spdlog::info("following the edit log {} from version {}", o.url.describe(), recovered);
     }
+    auto demo_scene = [] {
+        auto batch = demo::scene_with_models();
+        if (!batch) spdlog::critical("demo scene not built: {}", batch.error().describe());
+        return batch;
+    };
     if (follow && cl.config.demo) {
         // Appended only to an empty log: one replica's demo wins, the others find it there.
-        auto applied = follow->append(make_demo_scene(), uint64_t{0});
+        auto batch = demo_scene();
+        if (!batch) {
+            stop_serving();
+            return 1;
+        }
+        auto applied = follow->append(std::move(batch.value()), uint64_t{0});
         if (applied)
             spdlog::info("demo scene appended to the edit log (version {})",
                          applied.value().version);
@@ -190,7 +200,12 @@ int serve(server::CommandLine& cl) {
     } else if (cl.config.demo && recovered != 0) {
         spdlog::info("--demo ignored: the data directory holds a scene (version {})", recovered);
     } else if (cl.config.demo) {
-        auto applied = engine.value()->apply(make_demo_scene());
+        auto batch = demo_scene();
+        if (!batch) {
+            stop_serving();
+            return 1;
+        }
+        auto applied = engine.value()->apply(std::move(batch.value()));
         if (!applied) {
             spdlog::critical("demo scene rejected: {}", applied.error().describe());
             stop_serving();

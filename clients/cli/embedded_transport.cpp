@@ -1,7 +1,7 @@
 #include "clients/cli/embedded_transport.h"
 
 #include "engine/engine.h"
-#include "engine/scene/demo_scene.h"
+#include "protocol/demo/demo_models.h"
 #include "protocol/api.h"
 
 namespace strata::cli {
@@ -28,7 +28,10 @@ Outcome<std::unique_ptr<EmbeddedTransport>> EmbeddedTransport::create(bool demo)
     if (!engine)
         return Unexpected(Failure{"cannot start the engine: " + engine.error().describe()});
     if (demo) {
-        auto applied = engine.value()->apply(make_demo_scene());
+        auto batch = demo::scene_with_models();
+        if (!batch)
+            return Unexpected(Failure{"demo scene not built: " + batch.error().describe()});
+        auto applied = engine.value()->apply(std::move(batch.value()));
         if (!applied)
             return Unexpected(Failure{"demo scene rejected: " + applied.error().describe()});
     }

@@ -272,8 +272,12 @@ TEST(Validation, EachAppliedBatchIncrementsTheVersionByOne) {
 TEST(Handles, AStaleHandleIsRefused) {
     auto engine = test::make_engine();
     apply_ok(*engine, tiny_mesh("m"), instance_edit("a", "m"));
-    const auto [mesh, inst] = engine->read(
+    // Plain variables, not a structured binding: clang 14 (the sanitizer build) refuses to
+    // capture bindings in the lambda below.
+    const auto handles = engine->read(
         [](const Scene& s) { return std::pair(s.find_mesh("m"), s.find_instance("a")); });
+    const MeshHandle mesh = handles.first;
+    const InstanceHandle inst = handles.second;
     apply_ok(*engine, RemoveInstance{"a"}, instance_edit("b", "m"));
     engine->read([&](const Scene& s) {
         const InstanceHandle b = s.find_instance("b");

@@ -72,7 +72,7 @@ def check_output(cmd, output, expected):
     report = json.loads(output)
     assert report["blas_rebuilds"] == 0 and report["blas_refits"] == 0, report
     assert report["rebuilt"] == [] and report["refit"] == [], report
-    assert report["tlas"]["action"] == "update" and report["tlas"]["instances"] == 20, report
+    assert report["tlas"]["action"] == "update" and report["tlas"]["instances"] == 21, report
     assert report["version"] == 3, report
 
 
