@@ -205,7 +205,9 @@ TEST(SplitRows, BandsCoverTheFrameInOrderStartingOnPacketRowsWhereTheyCan) {
             for (const RowBand& b : bands) {
                 EXPECT_EQ(b.y0, next);
                 EXPECT_GT(b.rows, 0u);
-                if (h >= 4 * n + 4) EXPECT_EQ(b.y0 % 4, 0u) << h << " in " << n;
+                if (h >= 4 * n + 4) {
+                    EXPECT_EQ(b.y0 % 4, 0u) << h << " in " << n;
+                }
                 next = b.y0 + b.rows;
             }
             EXPECT_EQ(next, h);
