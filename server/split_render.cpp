@@ -60,7 +60,7 @@ struct FetchBoard {
 
 /// One peer's band, fetched on a thread of its own.
 struct PeerFetch {
-    const Peer* peer = nullptr;
+    const PeerServer* peer = nullptr;
     uint32_t index = 0;  ///< the band's index
     RowBand band;
     std::unique_ptr<httplib::Client> client;
@@ -123,8 +123,8 @@ Unexpected<Error> cancelled(const CancelToken& token) {
 
 }  // namespace
 
-Result<std::vector<Peer>> parse_peers(std::string_view list) {
-    std::vector<Peer> peers;
+Result<std::vector<PeerServer>> parse_peers(std::string_view list) {
+    std::vector<PeerServer> peers;
     std::size_t start = 0;
     while (start <= list.size()) {
         const std::size_t comma = std::min(list.find(',', start), list.size());
@@ -153,7 +153,7 @@ Result<std::vector<Peer>> parse_peers(std::string_view list) {
         const std::size_t colon = rest.rfind(':');
         if (colon == std::string_view::npos || colon == 0)
             return bad("expected host:port");
-        Peer p;
+        PeerServer p;
         p.host = std::string(rest.substr(0, colon));
         if (p.host.size() > 2 && p.host.front() == '[' && p.host.back() == ']')
             p.host = p.host.substr(1, p.host.size() - 2);
@@ -185,7 +185,7 @@ std::string band_query(const RenderRequest& request, RowBand band) {
     return q;
 }
 
-SplitRenderer::SplitRenderer(Engine& engine, std::vector<Peer> peers, std::string token,
+SplitRenderer::SplitRenderer(Engine& engine, std::vector<PeerServer> peers, std::string token,
                              std::chrono::milliseconds peer_timeout)
     : m_engine(engine),
       m_peers(std::move(peers)),

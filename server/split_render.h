@@ -33,7 +33,7 @@
 namespace strata::server {
 
 /// One peer: its base URL as given (`http://host:port`) and where to connect.
-struct Peer {
+struct PeerServer {
     std::string url;
     std::string host;
     int port = 80;
@@ -41,22 +41,22 @@ struct Peer {
 
 /// Parses --peers: comma-separated `http://host:port` (or `host:port`) URLs without paths. The
 /// error names the item at fault.
-Result<std::vector<Peer>> parse_peers(std::string_view list);
+Result<std::vector<PeerServer>> parse_peers(std::string_view list);
 
 class SplitRenderer {
 public:
     /// `token`: sent to peers as `Authorization: Bearer` when not empty (the server's own).
-    SplitRenderer(Engine& engine, std::vector<Peer> peers, std::string token,
+    SplitRenderer(Engine& engine, std::vector<PeerServer> peers, std::string token,
                   std::chrono::milliseconds peer_timeout);
 
     /// Renders `request` (checked; its cancel token set) in `split` bands: protocol::SplitRender.
     Result<protocol::SplitFrame> render(const RenderRequest& request, uint32_t split);
 
-    const std::vector<Peer>& peers() const { return m_peers; }
+    const std::vector<PeerServer>& peers() const { return m_peers; }
 
 private:
     Engine& m_engine;
-    std::vector<Peer> m_peers;
+    std::vector<PeerServer> m_peers;
     std::string m_token;
     std::chrono::milliseconds m_peer_timeout;
 };
