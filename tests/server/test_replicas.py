@@ -407,6 +407,33 @@ class SplitWithoutLog(unittest.TestCase):
         self.assertEqual(status, 422, body)
         self.assertEqual(json.loads(body)["pointer"], "/split")
 
+    def test_a_peer_that_never_answers_costs_the_peer_timeout_and_no_more_than_the_deadline(self):
+        # A listening socket that accepts (in the kernel's backlog) and never answers.
+        silent = socket.socket()
+        silent.bind(("127.0.0.1", 0))
+        silent.listen(8)
+        self.addCleanup(silent.close)
+        url = f"http://127.0.0.1:{silent.getsockname()[1]}"
+        coordinator = Server(["--peers", url, "--peer-timeout-ms", "300"])
+        self.addCleanup(coordinator.stop)
+        self.assertEqual(coordinator.json("POST", "/v1/edits", durable_scene.batch(0))[0], 200)
+        path = f"/v1/render?{SPLIT_VIEW}"
+        single = coordinator.call("GET", path)[2]
+        status, headers, frame = coordinator.call("GET", path + "&split=2")
+        self.assertEqual(status, 200, frame[:300])
+        self.assertTrue(headers["X-Strata-Split"].startswith(
+            f"2 bands at version 1: local, local ({url}: "), headers["X-Strata-Split"])
+        self.assertEqual(frame, single)
+        # The render's deadline bounds the wait for a peer, whatever --peer-timeout-ms says.
+        patient = Server(["--peers", url, "--peer-timeout-ms", "60000", "--render-timeout", "1"])
+        self.addCleanup(patient.stop)
+        t0 = time.monotonic()
+        status, _, body = patient.call("GET", path + "&split=2")
+        self.assertEqual(status, 503, body)
+        self.assertIn("deadline-exceeded", json.loads(body)["type"])
+        self.assertLess(time.monotonic() - t0, 20)
+        self.assertEqual(patient.call("GET", "/readyz")[0], 200)
+
 
 if __name__ == "__main__":
     unittest.main()
