@@ -55,7 +55,8 @@ std::string report_header(const RebuildReport& report) {
 }
 
 ApiResponse render(Engine& engine, RenderRequest request, const ApiLimits& limits,
-                   CancelToken* cancel, uint32_t split = 1, const SplitRender* split_render = nullptr) {
+                   CancelToken* cancel, uint32_t split = 1,
+                   const SplitRender* split_render = nullptr) {
     const RenderRequest& q0 = request;
     const uint64_t pixels = uint64_t(q0.width) * q0.height;
     if (pixels > limits.max_pixels) {

@@ -67,8 +67,9 @@ RenderRequest read_render(FieldReader& r, const Json& v, uint32_t* split) {
     if (const Json* f = FieldReader::member(v, "band")) {
         if (!f->is_array() || f->size() != 2)
             r.schema_error("/band", "expected [y0, rows]: the first row and the number of rows");
-        q.band = RowBand{static_cast<uint32_t>(r.integer((*f)[0], "/band/0", 0, MAX_RENDER_SIDE - 1)),
-                         static_cast<uint32_t>(r.integer((*f)[1], "/band/1", 1, MAX_RENDER_SIDE))};
+        const uint64_t y0 = r.integer((*f)[0], "/band/0", 0, MAX_RENDER_SIDE - 1);
+        const uint64_t rows = r.integer((*f)[1], "/band/1", 1, MAX_RENDER_SIDE);
+        q.band = RowBand{static_cast<uint32_t>(y0), static_cast<uint32_t>(rows)};
     }
     if (const Json* f = FieldReader::member(v, "split")) {
         *split = static_cast<uint32_t>(r.integer(*f, "/split", 1, MAX_RENDER_SPLIT));

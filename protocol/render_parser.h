@@ -26,8 +26,8 @@ class FieldReader;
 SetCamera read_camera_override(FieldReader& r, const Json& v);
 
 /// Query parameters as the JSON body they stand for: numbers and booleans as text, `aovs`,
-/// `band` and vectors as comma-separated lists, `eye`, `target`, `up` and `fov_y_deg` into a "camera"
-/// object. A parameter given twice, or "camera" itself, is an error.
+/// `band` and vectors as comma-separated lists, `eye`, `target`, `up` and `fov_y_deg` into a
+/// "camera" object. A parameter given twice, or "camera" itself, is an error.
 Parsed<Json> query_to_body(const std::multimap<std::string, std::string>& params);
 
 /// `{"width", "height", "format", "spp", "aovs", "compression", "accumulate", "exposure",

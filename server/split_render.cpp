@@ -116,9 +116,8 @@ struct FetchGuard {
 };
 
 Unexpected<Error> cancelled(const CancelToken& token) {
-    return failure(ErrorCode::Cancelled,
-                   std::string("the split render stopped early: ") +
-                       cancel_reason_text(token.reason()));
+    return failure(ErrorCode::Cancelled, std::string("the split render stopped early: ") +
+                                             cancel_reason_text(token.reason()));
 }
 
 }  // namespace
@@ -151,8 +150,7 @@ Result<std::vector<PeerServer>> parse_peers(std::string_view list) {
         if (!rest.empty() && rest.back() == '/') rest.remove_suffix(1);
         if (rest.find('/') != std::string_view::npos) return bad("a peer URL has no path");
         const std::size_t colon = rest.rfind(':');
-        if (colon == std::string_view::npos || colon == 0)
-            return bad("expected host:port");
+        if (colon == std::string_view::npos || colon == 0) return bad("expected host:port");
         PeerServer p;
         p.host = std::string(rest.substr(0, colon));
         if (p.host.size() > 2 && p.host.front() == '[' && p.host.back() == ']')
@@ -170,11 +168,13 @@ Result<std::vector<PeerServer>> parse_peers(std::string_view list) {
 std::string band_query(const RenderRequest& request, RowBand band) {
     const RenderRequest b = band_request(request, band);
     std::string q = "width=" + std::to_string(b.width) + "&height=" + std::to_string(b.height) +
-                    "&spp=" + std::to_string(b.spp) + "&format=exr&compression=none&band=" +
-                    std::to_string(band.y0) + "," + std::to_string(band.rows);
+                    "&spp=" + std::to_string(b.spp) +
+                    "&format=exr&compression=none&band=" + std::to_string(band.y0) + "," +
+                    std::to_string(band.rows);
     if (!b.aovs.empty()) {
         q += "&aovs=";
-        for (std::size_t i = 0; i < b.aovs.size(); ++i) q += (i ? "," : "") + std::string(aov_name(b.aovs[i]));
+        for (std::size_t i = 0; i < b.aovs.size(); ++i)
+            q += (i ? "," : "") + std::string(aov_name(b.aovs[i]));
     }
     if (b.camera) {
         if (b.camera->eye) q += "&eye=" + vec_text(*b.camera->eye);
@@ -304,8 +304,8 @@ Result<protocol::SplitFrame> SplitRenderer::render(const RenderRequest& request,
                 if (Status s = assembly.place(f.buffers, bands[k].y0, f.names); !s)
                     return Unexpected(s.error());
             }
-            note = " (version moved from " + std::to_string(version) + " during the split: " +
-                   "every band rendered here)";
+            note = " (version moved from " + std::to_string(version) +
+                   " during the split: " + "every band rendered here)";
             info = all->front().info;
             first.camera = all->front().camera;
             std::fill(labels.begin(), labels.end(), "local");
@@ -324,8 +324,8 @@ Result<protocol::SplitFrame> SplitRenderer::render(const RenderRequest& request,
     encoded->info.render_ms = clock.ms();
     protocol::SplitFrame out;
     out.frame = std::move(encoded.value());
-    out.bands = std::to_string(split) + " bands at version " + std::to_string(out.frame.info.version) +
-                note + ":";
+    out.bands = std::to_string(split) + " bands at version " +
+                std::to_string(out.frame.info.version) + note + ":";
     for (std::size_t k = 0; k < labels.size(); ++k) out.bands += (k ? ", " : " ") + labels[k];
     return out;
 }

@@ -41,8 +41,8 @@ void merge_names(std::vector<std::pair<uint32_t, std::string>>& into,
 
 /// Reads the float channels `names` (one per component) of `exr` into a Vec3 or float buffer.
 template <class T>
-Status read_floats(const DecodedExr& exr, std::initializer_list<const char*> names,
-                   ExrPixel type, std::vector<T>& out, std::size_t n) {
+Status read_floats(const DecodedExr& exr, std::initializer_list<const char*> names, ExrPixel type,
+                   std::vector<T>& out, std::size_t n) {
     out.resize(n);
     float* dst = reinterpret_cast<float*>(out.data());
     const std::size_t stride = names.size();
@@ -64,10 +64,10 @@ Status read_floats(const DecodedExr& exr, std::initializer_list<const char*> nam
 Status read_uints(const DecodedExr& exr, Aov aov, std::vector<uint32_t>& out, std::size_t n) {
     const DecodedExrChannel* c = exr.find(aov_name(aov));
     if (!c || c->type != ExrPixel::Uint || c->u32.size() != n)
-        return failure(ErrorCode::InvalidArgument,
-                       std::string("the band's EXR has no UINT channel '") + aov_name(aov) +
-                           "' of its size",
-                       "band");
+        return failure(
+            ErrorCode::InvalidArgument,
+            std::string("the band's EXR has no UINT channel '") + aov_name(aov) + "' of its size",
+            "band");
     out = c->u32;
     return {};
 }
@@ -203,10 +203,10 @@ Result<Frame> FrameAssembly::finish(const RenderRequest& request, const Camera& 
                                     FrameInfo info) && {
     const auto missing = std::find(m_filled.begin(), m_filled.end(), false);
     if (missing != m_filled.end())
-        return failure(ErrorCode::Internal,
-                       "row " + std::to_string(missing - m_filled.begin()) +
-                           " of the frame came from no band",
-                       "band");
+        return failure(
+            ErrorCode::Internal,
+            "row " + std::to_string(missing - m_filled.begin()) + " of the frame came from no band",
+            "band");
     if (request.filter) {
         try {
             filter_frame(m_buffers);
@@ -220,7 +220,8 @@ Result<Frame> FrameAssembly::finish(const RenderRequest& request, const Camera& 
     frame.info = std::move(info);
     frame.camera = camera;
     frame.frame_height = frame.buffers.height;
-    if (frame.buffers.aovs.has(Aov::InstanceId)) frame.names.instances = std::move(m_names.instances);
+    if (frame.buffers.aovs.has(Aov::InstanceId))
+        frame.names.instances = std::move(m_names.instances);
     if (frame.buffers.aovs.has(Aov::MeshId)) frame.names.meshes = std::move(m_names.meshes);
     return frame;
 }

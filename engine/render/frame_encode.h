@@ -16,7 +16,8 @@
 //   user_id       user_id (uint)
 // A band (RenderRequest::band) is written at full precision instead: beauty, albedo and normal
 // as FLOAT, so that a process assembling bands (band_assembly.h) gets the very floats a whole
-// render would encode. Compression as requested (default zip). The header carries OpenEXR's standard worldToCamera and
+// render would encode. Compression as requested (default zip). The header carries OpenEXR's
+// standard worldToCamera and
 // worldToNDC for the frame's camera (camera_rays.h) and, with instance_id or mesh_id, an ID
 // manifest naming every slot the channels hold with its client id (component "instance" or
 // "mesh", lifetime frame: a freed slot may name another object in a later frame).

@@ -98,9 +98,9 @@ TEST_F(BandRender, EveryBandHoldsTheSameRowsAsAWholeRender) {
             const RenderRequest whole = request(size.w, size.h, spp, ALL_AOVS);
             const Frame reference = render_frame_ok(*engine, whole);
             // Aligned and unaligned starts and ends, single rows, the first and last rows.
-            const std::vector<RowBand> bands = {{0, size.h},     {0, 1},          {size.h - 1, 1},
-                                                {1, size.h - 2}, {3, 2},          {2, 3},
-                                                {4, 1},          {size.h / 2, size.h - size.h / 2}};
+            const std::vector<RowBand> bands = {
+                {0, size.h}, {0, 1}, {size.h - 1, 1}, {1, size.h - 2},
+                {3, 2},      {2, 3}, {4, 1},          {size.h / 2, size.h - size.h / 2}};
             for (const RowBand b : bands) {
                 SCOPED_TRACE(std::to_string(size.w) + "x" + std::to_string(size.h) + " spp " +
                              std::to_string(spp) + " rows " + std::to_string(b.y0) + "+" +

@@ -35,8 +35,8 @@ TEST(SplitRender, PeersAreCommaSeparatedHttpHostPorts) {
     EXPECT_EQ((*peers)[1].url, "http://10.0.0.3:80");
     EXPECT_EQ((*peers)[2].host, "::1");
     EXPECT_TRUE(parse_peers("").value().empty());
-    for (const char* bad : {"https://a:1", "a", "a:0", "a:99999", "a:1,,b:2", "http://a:1/v1",
-                            ":80", "a:x"}) {
+    for (const char* bad :
+         {"https://a:1", "a", "a:0", "a:99999", "a:1,,b:2", "http://a:1/v1", ":80", "a:x"}) {
         auto r = parse_peers(bad);
         ASSERT_FALSE(r.has_value()) << bad;
         EXPECT_EQ(r.error().field, "peers") << bad;
