@@ -211,6 +211,38 @@ Result<Frame> Engine::render_frame(const RenderRequest& request) {
     return frame;
 }
 
+Result<std::vector<Frame>> Engine::render_bands(const RenderRequest& request,
+                                                const std::vector<RowBand>& bands) {
+    RenderRequest band = request;
+    for (const RowBand& b : bands) {
+        band.band = b;
+        if (Status s = check_render_request(band); !s) return Unexpected(s.error());
+    }
+    auto frames = launch([&](const FrameState& state, const TlasStrategy& tlas,
+                             const RebuildReport& report) -> Result<std::vector<Frame>> {
+        std::vector<Frame> out;
+        for (const RowBand& b : bands) {
+            band.band = b;
+            auto rendered = m_renderer.render(tlas, state, band);
+            if (!rendered) return Unexpected(rendered.error());
+            rendered->info.report = report;
+            out.push_back(std::move(rendered.value()));
+        }
+        return out;
+    });
+    if (frames) {
+        // One render in the counters, however many bands it traced.
+        uint64_t rays = 0;
+        double ms = 0.0;
+        for (const Frame& f : frames.value()) {
+            rays += f.info.rays;
+            ms += f.info.render_ms;
+        }
+        add_rays(rays, ms / 1000.0);
+    }
+    return frames;
+}
+
 Result<EncodedFrame> Engine::render(const RenderRequest& request) {
     auto frame = render_frame(request);
     if (!frame) return Unexpected(frame.error());

@@ -18,6 +18,7 @@
 #include <optional>
 #include <shared_mutex>
 #include <utility>
+#include <vector>
 
 #include "engine/accel/accel_graph.h"
 #include "engine/counters.h"
@@ -90,6 +91,11 @@ public:
 
     /// Commits and renders one frame's linear buffers: what render() encodes.
     Result<Frame> render_frame(const RenderRequest& request);
+
+    /// Commits once and renders each of `bands` of `request` (RenderRequest::band), all from
+    /// that one commit: the frames show one version. The request's own band is ignored.
+    Result<std::vector<Frame>> render_bands(const RenderRequest& request,
+                                            const std::vector<RowBand>& bands);
 
     /// Commits, then traces one primary ray per pixel (primary.h) into `out`, whose buffers are
     /// reused when they already have the frame's size (no allocation, no page faults: for callers

@@ -55,7 +55,8 @@ std::string report_header(const RebuildReport& report) {
 }
 
 ApiResponse render(Engine& engine, RenderRequest request, const ApiLimits& limits,
-                   CancelToken* cancel) {
+                   CancelToken* cancel, uint32_t split = 1,
+                   const SplitRender* split_render = nullptr) {
     const RenderRequest& q0 = request;
     const uint64_t pixels = uint64_t(q0.width) * q0.height;
     if (pixels > limits.max_pixels) {
@@ -73,8 +74,22 @@ ApiResponse render(Engine& engine, RenderRequest request, const ApiLimits& limit
         token.set_deadline(CancelToken::Clock::now() +
                            std::chrono::seconds(limits.render_timeout_s));
     request.cancel = &token;
-    // A camera override's missing fields come from the camera of the version the launch renders.
-    auto image = engine.render(request);
+    std::string bands;
+    Result<EncodedFrame> image = [&]() -> Result<EncodedFrame> {
+        if (split <= 1) {
+            // A camera override's missing fields come from the camera of the version the
+            // launch renders.
+            return engine.render(request);
+        }
+        if (!split_render)
+            return failure(ErrorCode::InvalidArgument,
+                           "this server has no peers to split a frame across (--peers)", "split");
+        if (Status s = check_render_request(request); !s) return Unexpected(s.error());
+        auto frame = (*split_render)(request, split);
+        if (!frame) return Unexpected(frame.error());
+        bands = std::move(frame->bands);
+        return std::move(frame->frame);
+    }();
     if (!image && image.error().code == ErrorCode::Cancelled &&
         token.reason() == CancelReason::Deadline)
         return problem_response(make_problem(
@@ -93,6 +108,7 @@ ApiResponse render(Engine& engine, RenderRequest request, const ApiLimits& limit
                  {"X-Strata-Report", report_header(frame.info.report)},
                  {"X-Strata-Samples", std::to_string(frame.info.samples)},
                  {"Cache-Control", "no-store"}};
+    if (!bands.empty()) r.headers.emplace_back("X-Strata-Split", std::move(bands));
     r.commit = std::move(frame.info.report);
     return r;
 }
@@ -198,20 +214,23 @@ ApiResponse get_plan(const Engine& engine) {
 }
 
 ApiResponse post_render(Engine& engine, std::string_view body, const ApiLimits& limits,
-                        CancelToken* cancel) {
+                        CancelToken* cancel, const SplitRender* split_render) {
     // An empty body means every default, like GET without a query.
     auto doc = body.empty() ? Parsed<Json>(Json::object()) : parse_json(body, limits.json);
     if (!doc) return problem_response(problem_from(doc.error()));
-    auto spec = parse_render_body(doc.value());
+    uint32_t split = 1;
+    auto spec = parse_render_body(doc.value(), &split);
     if (!spec) return problem_response(problem_from(spec.error()));
-    return render(engine, spec.value(), limits, cancel);
+    return render(engine, spec.value(), limits, cancel, split, split_render);
 }
 
 ApiResponse get_render(Engine& engine, const std::multimap<std::string, std::string>& query,
-                       const ApiLimits& limits, CancelToken* cancel) {
-    auto spec = parse_render_query(query);
+                       const ApiLimits& limits, CancelToken* cancel,
+                       const SplitRender* split_render) {
+    uint32_t split = 1;
+    auto spec = parse_render_query(query, &split);
     if (!spec) return problem_response(problem_from(spec.error()));
-    return render(engine, spec.value(), limits, cancel);
+    return render(engine, spec.value(), limits, cancel, split, split_render);
 }
 
 ApiResponse get_scene(const Engine& engine) {

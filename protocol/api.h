@@ -74,13 +74,26 @@ ApiResponse post_edits(Engine& engine, std::string body, std::optional<std::stri
 ApiResponse post_commit(Engine& engine);
 /// GET /v1/plan.
 ApiResponse get_plan(const Engine& engine);
+/// A frame rendered in bands by several processes: encoded exactly as one render of the same
+/// request, and what became of each band (the X-Strata-Split header).
+struct SplitFrame {
+    EncodedFrame frame;
+    std::string bands;
+};
+/// Renders `request` (checked, its cancel token carrying the render's deadline) in `split` bands
+/// (server/split_render.h); the error names the field at fault.
+using SplitRender = std::function<Result<SplitFrame>(const RenderRequest& request,
+                                                     uint32_t split)>;
+
 /// POST /v1/render: an empty body means every default. `cancel`, when given, stops the render
-/// early (the client left, the server shuts down); the render's deadline is set on it.
+/// early (the client left, the server shuts down); the render's deadline is set on it. `split`:
+/// how a request with `split` above 1 is rendered; without one such a request is a 422.
 ApiResponse post_render(Engine& engine, std::string_view body, const ApiLimits& limits,
-                        CancelToken* cancel = nullptr);
+                        CancelToken* cancel = nullptr, const SplitRender* split = nullptr);
 /// GET /v1/render with its query parameters.
 ApiResponse get_render(Engine& engine, const std::multimap<std::string, std::string>& query,
-                       const ApiLimits& limits, CancelToken* cancel = nullptr);
+                       const ApiLimits& limits, CancelToken* cancel = nullptr,
+                       const SplitRender* split = nullptr);
 /// GET /v1/scene.
 ApiResponse get_scene(const Engine& engine);
 

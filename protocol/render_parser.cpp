@@ -20,10 +20,15 @@ SetCamera read_camera_override(FieldReader& r, const Json& v) {
 
 namespace {
 
-RenderRequest read_render(FieldReader& r, const Json& v) {
-    r.expect_object(v, "",
-                    {"width", "height", "format", "spp", "aovs", "compression", "accumulate",
-                     "exposure", "camera", "filter"});
+RenderRequest read_render(FieldReader& r, const Json& v, uint32_t* split) {
+    if (split)
+        r.expect_object(v, "",
+                        {"width", "height", "format", "spp", "aovs", "compression", "accumulate",
+                         "exposure", "camera", "filter", "band", "split"});
+    else
+        r.expect_object(v, "",
+                        {"width", "height", "format", "spp", "aovs", "compression", "accumulate",
+                         "exposure", "camera", "filter", "band"});
     RenderRequest q;
     auto u32 = [&](const char* key, uint32_t& out, uint64_t hi) {
         if (const Json* f = FieldReader::member(v, key))
@@ -59,6 +64,29 @@ RenderRequest read_render(FieldReader& r, const Json& v) {
     if (const Json* f = FieldReader::member(v, "filter"))
         q.filter = r.choice(*f, "/filter", {"none", "atrous"}) == 1;
     if (const Json* f = FieldReader::member(v, "camera")) q.camera = read_camera_override(r, *f);
+    if (const Json* f = FieldReader::member(v, "band")) {
+        if (!f->is_array() || f->size() != 2)
+            r.schema_error("/band", "expected [y0, rows]: the first row and the number of rows");
+        const uint64_t y0 = r.integer((*f)[0], "/band/0", 0, MAX_RENDER_SIDE - 1);
+        const uint64_t rows = r.integer((*f)[1], "/band/1", 1, MAX_RENDER_SIDE);
+        q.band = RowBand{static_cast<uint32_t>(y0), static_cast<uint32_t>(rows)};
+    }
+    if (const Json* f = FieldReader::member(v, "split")) {
+        *split = static_cast<uint32_t>(r.integer(*f, "/split", 1, MAX_RENDER_SPLIT));
+        // Value errors: what a split cannot be combined with (the engine checks the band).
+        if (*split > 1 && q.band)
+            r.record_value_error("/split",
+                                 "split and band do not combine: a band is one process's part "
+                                 "of a split frame");
+        else if (*split > 1 && q.accumulate)
+            r.record_value_error("/split",
+                                 "a split frame cannot accumulate: accumulated samples live on "
+                                 "one process");
+        else if (*split > q.height)
+            r.record_value_error("/split", "split " + std::to_string(*split) +
+                                               " asks for more bands than the frame's " +
+                                               std::to_string(q.height) + " rows");
+    }
     return q;
 }
 
@@ -94,10 +122,11 @@ Json list_from_text(const std::string& text, bool numbers) {
 
 }  // namespace
 
-Parsed<RenderRequest> parse_render_body(const Json& body) {
+Parsed<RenderRequest> parse_render_body(const Json& body, uint32_t* split) {
     FieldReader r;
+    if (split) *split = 1;
     try {
-        RenderRequest q = read_render(r, body);
+        RenderRequest q = read_render(r, body, split);
         if (r.value_error()) return Unexpected(*r.value_error());
         return q;
     } catch (const RequestFailure& f) {
@@ -128,7 +157,7 @@ Parsed<Json> query_to_body(const std::multimap<std::string, std::string>& params
         }
         if (key == "aovs") {
             slot = text.empty() ? Json::array() : list_from_text(text, false);
-        } else if (key == "eye" || key == "target" || key == "up") {
+        } else if (key == "eye" || key == "target" || key == "up" || key == "band") {
             slot = list_from_text(text, true);
         } else {
             slot = scalar_from_text(text);
@@ -137,10 +166,11 @@ Parsed<Json> query_to_body(const std::multimap<std::string, std::string>& params
     return body;
 }
 
-Parsed<RenderRequest> parse_render_query(const std::multimap<std::string, std::string>& params) {
+Parsed<RenderRequest> parse_render_query(const std::multimap<std::string, std::string>& params,
+                                         uint32_t* split) {
     auto body = query_to_body(params);
     if (!body) return Unexpected(std::move(body).error());
-    return parse_render_body(body.value());
+    return parse_render_body(body.value(), split);
 }
 
 }  // namespace strata::protocol

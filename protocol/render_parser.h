@@ -16,6 +16,8 @@ namespace strata::protocol {
 
 /// Largest width or height (the schema bound; the server also caps width * height).
 constexpr uint32_t MAX_RENDER_SIDE = 65536;
+/// Most processes one frame is split across (`split`).
+constexpr uint32_t MAX_RENDER_SPLIT = 16;
 
 
 class FieldReader;
@@ -23,17 +25,23 @@ class FieldReader;
 /// A camera override `{"eye", "target", "up", "fov_y_deg"}` (every member optional) at /camera.
 SetCamera read_camera_override(FieldReader& r, const Json& v);
 
-/// Query parameters as the JSON body they stand for: numbers and booleans as text, `aovs` and
-/// vectors as comma-separated lists, `eye`, `target`, `up` and `fov_y_deg` into a "camera"
-/// object. A parameter given twice, or "camera" itself, is an error.
+/// Query parameters as the JSON body they stand for: numbers and booleans as text, `aovs`,
+/// `band` and vectors as comma-separated lists, `eye`, `target`, `up` and `fov_y_deg` into a
+/// "camera" object. A parameter given twice, or "camera" itself, is an error.
 Parsed<Json> query_to_body(const std::multimap<std::string, std::string>& params);
 
 /// `{"width", "height", "format", "spp", "aovs", "compression", "accumulate", "exposure",
-/// "camera": {"eye", "target", "up", "fov_y_deg"}}`, every member optional.
-Parsed<RenderRequest> parse_render_body(const Json& body);
+/// "filter", "camera": {"eye", "target", "up", "fov_y_deg"}, "band": [y0, rows], "split"}`,
+/// every member optional. `split` (how many processes render the frame, [1, MAX_RENDER_SPLIT],
+/// 1 when absent) is written to `*split`; without `split` the member is refused as unknown (a
+/// caller that cannot split). A split above 1 with `band` or `accumulate`, or above the height,
+/// is a value error at /split; the engine checks the band itself (check_render_request).
+Parsed<RenderRequest> parse_render_body(const Json& body, uint32_t* split = nullptr);
 
-/// The same members as query parameters: numbers and booleans as text, `aovs` and vectors as
-/// comma-separated lists, and the camera override as `eye`, `target`, `up`, `fov_y_deg`.
-Parsed<RenderRequest> parse_render_query(const std::multimap<std::string, std::string>& params);
+/// The same members as query parameters: numbers and booleans as text, `aovs`, `band` and
+/// vectors as comma-separated lists, and the camera override as `eye`, `target`, `up`,
+/// `fov_y_deg`.
+Parsed<RenderRequest> parse_render_query(const std::multimap<std::string, std::string>& params,
+                                         uint32_t* split = nullptr);
 
 }  // namespace strata::protocol

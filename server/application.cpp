@@ -8,6 +8,7 @@
 #include "server/replica/replica.h"
 #include "server/http_util.h"
 #include "server/router.h"
+#include "server/split_render.h"
 
 namespace strata::server {
 
@@ -95,7 +96,21 @@ void Application::install_routes(const FrontEndCounters* front_end, StreamHub* s
             m_config.max_pixels, m_config.render_timeout_s,
             SceneBudget{m_config.max_scene_triangles, m_config.max_scene_vertices,
                         m_config.max_texture_mb << 20}},
-        front_end, m_store, nullptr, {}, streams});
+        front_end, m_store, nullptr, {}, streams, {}});
+    if (!m_config.peers.empty()) {
+        // finish_config checked the list.
+        auto peers = parse_peers(m_config.peers);
+        if (peers && !peers.value().empty()) {
+            auto splitter = std::make_shared<SplitRenderer>(
+                m_engine, std::move(peers.value()), m_config.token,
+                std::chrono::milliseconds(m_config.peer_timeout_ms));
+            spdlog::info("split renders: up to {} bands, with peers {}",
+                         splitter->peers().size() + 1, m_config.peers);
+            m_context->split_render = [splitter](const RenderRequest& r, uint32_t split) {
+                return splitter->render(r, split);
+            };
+        }
+    }
     Router router(m_routes, m_config.max_body_bytes);
     add_api_routes(router, *m_context);
     add_stream_routes(router, *m_context);

@@ -11,6 +11,7 @@
 #include "server/cors.h"
 #include "server/listener.h"
 #include "server/replica/redis_url.h"
+#include "server/split_render.h"
 #include "strata/version.h"
 
 namespace strata::server {
@@ -73,6 +74,16 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
                    "Longest a read with min_version (or X-Strata-Min-Version) waits for this "
                    "server to reach that version (503 beyond)")
         ->check(CLI::Range(0, 600000));
+    app.add_option("--peers", c.peers,
+                   "Other servers holding the same scene (replicas of the same --log), as "
+                   "comma-separated http://host:port: GET /v1/render?split=N renders horizontal "
+                   "bands of the frame on this server and N-1 of them and answers the frame one "
+                   "render gives, byte for byte; a peer that is down, slow or at another version "
+                   "has its band rendered here. Peers get this server's token. Empty: no split");
+    app.add_option("--peer-timeout-ms", c.peer_timeout_ms,
+                   "With --peers: longest a split render waits for one peer's band before "
+                   "rendering it here")
+        ->check(CLI::Range(50, 600000));
     app.add_option("--max-body-mb", max_body_mb, "Largest request body, in MiB (413 beyond)")
         ->check(CLI::Range(1, 4096));
     app.add_option("--max-pixels", c.max_pixels,
@@ -219,6 +230,7 @@ std::string finish_config(CommandLine& cl) {
         auto url = replica::parse_redis_url(cl.config.log_url);
         if (!url) return url.error().message;
     }
+    if (auto peers = parse_peers(cl.config.peers); !peers) return peers.error().message;
     if (auto cors = CorsPolicy::parse(cl.config.cors_origin); !cors) return cors.error().message;
     // Resolved first: an unknown name is an error of its own, not "non-loopback".
     auto addresses = resolve_host(cl.config.host);

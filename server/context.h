@@ -28,9 +28,13 @@ struct ServerContext {
     replica::Replica* replica = nullptr;          ///< the shared edit log; null without --log
     protocol::BatchApply append_to_log;           ///< the replica's append, when there is one
     StreamHub* streams = nullptr;                 ///< /v1/stream and /v1/events; null: 503
+    /// Renders `split=N` frames with --peers (split_render.h); empty without peers.
+    protocol::SplitRender split_render;
 
     /// Where write endpoints send batches: the log's append with --log, else the engine.
     const protocol::BatchApply* batch_apply() const { return replica ? &append_to_log : nullptr; }
+    /// How `split` renders are made: null without --peers (a split above 1 is then a 422).
+    const protocol::SplitRender* split() const { return split_render ? &split_render : nullptr; }
 };
 
 class Router;

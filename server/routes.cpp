@@ -156,7 +156,8 @@ void add_api_routes(Router& router, ServerContext& ctx) {
     router.post("/v1/render", [&ctx](const Req& req, Res& res, std::string&& body) {
         if (!await_min_version(ctx, req, res)) return;
         respond_render(ctx, res, [&] {
-            return protocol::post_render(ctx.engine, body, ctx.api_limits, request_cancel());
+            return protocol::post_render(ctx.engine, body, ctx.api_limits, request_cancel(),
+                                         ctx.split());
         });
     });
     router.get("/v1/render", [&ctx](const Req& req, Res& res) {
@@ -171,7 +172,8 @@ void add_api_routes(Router& router, ServerContext& ctx) {
         const auto query = await_min_version(ctx, req, res);
         if (!query) return;
         respond_render(ctx, res, [&] {
-            return protocol::get_render(ctx.engine, *query, ctx.api_limits, request_cancel());
+            return protocol::get_render(ctx.engine, *query, ctx.api_limits, request_cancel(),
+                                        ctx.split());
         });
     });
     router.get("/v1/scene", [&ctx](const Req& req, Res& res) {

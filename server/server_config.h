@@ -56,6 +56,10 @@ struct ServerConfig {
     int log_write_timeout_ms = 5000;  ///< longest a write waits to be appended and applied
     int min_version_wait_ms = 5000;   ///< longest a read waits for its min_version
 
+    // Frames across replicas (split_render.h).
+    std::string peers;            ///< comma-separated http://host:port; empty: no split renders
+    int peer_timeout_ms = 10000;  ///< longest a split render waits for one peer's band
+
     std::string token;  ///< bearer token; empty: no authentication
     /// Origins allowed cross-origin access (cors.h): "", "*" or a comma-separated list.
     std::string cors_origin;

@@ -70,7 +70,7 @@ std::variant<ViewerSpec, protocol::Problem> parse_viewer(
             return bad_parameter("highlight",
                                  "query parameter 'highlight' must name an instance, not ''");
     }
-    for (const char* fixed : {"format", "aovs", "compression", "accumulate"}) {
+    for (const char* fixed : {"format", "aovs", "compression", "accumulate", "band"}) {
         if (params.count(fixed))
             return bad_parameter(fixed, std::string("query parameter '") + fixed +
                                             "' does not apply to /v1/stream: frames are JPEG, "

@@ -247,6 +247,22 @@ Result<DecodedExr> decode_exr(const uint8_t* data, std::size_t size) {
                 frame.insert(c.name, Imf::Slice::Make(Imf::FLOAT, c.f32.data(), window));
             }
         }
+        if (Imf::hasIDManifest(header)) {
+            const Imf::IDManifest manifest(Imf::idManifest(header));
+            for (std::size_t g = 0; g < manifest.size(); ++g) {
+                const Imf::IDManifest::ChannelGroupManifest& group = manifest[g];
+                ExrIdTable& table = image.ids.emplace_back();
+                if (!group.getChannels().empty()) table.channel = *group.getChannels().begin();
+                if (!group.getComponents().empty()) table.component = group.getComponents()[0];
+                for (auto it = group.begin(); it != group.end(); ++it) {
+                    if (it.id() > UINT32_MAX)
+                        return failure(ErrorCode::InvalidArgument,
+                                       "EXR ID manifest holds an id beyond 32 bits");
+                    table.entries.emplace_back(uint32_t(it.id()),
+                                               it.text().empty() ? std::string() : it.text()[0]);
+                }
+            }
+        }
         file.setFrameBuffer(frame);
         file.readPixels(window.min.y, window.max.y);
     } catch (const std::exception& e) {

@@ -76,6 +76,7 @@ struct DecodedExr {
     uint32_t height = 0;
     std::optional<ExrCompression> compression;  ///< nullopt: some other compression
     std::vector<DecodedExrChannel> channels;    ///< in file order (sorted by name)
+    std::vector<ExrIdTable> ids;                ///< the ID manifest's tables (first component)
 
     /// The channel called `name`, or nullptr.
     const DecodedExrChannel* find(const std::string& name) const;

@@ -4,6 +4,7 @@
 // the commit its launch ran, so a caller never has to ask for that report separately.
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -37,6 +38,9 @@ struct Frame {
     FrameInfo info;
     Camera camera;       ///< the camera the frame was traced with (the request's override applied)
     FrameIdNames names;  ///< for the EXR ID manifest
+    /// The rows of the whole frame the buffers hold, when the request asked for a band.
+    std::optional<RowBand> band;
+    uint32_t frame_height = 0;  ///< the whole frame's height (the buffers' without a band)
 };
 
 /// A frame encoded for a client. The bytes are a std::string so that they move, uncopied, into

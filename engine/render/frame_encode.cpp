@@ -30,14 +30,15 @@ void add_uint(std::vector<ExrChannel>& out, const std::vector<uint32_t>& buffer,
 
 }  // namespace
 
-std::vector<ExrChannel> exr_channels(const FrameBuffers& f) {
+std::vector<ExrChannel> exr_channels(const FrameBuffers& f, bool full_precision) {
     static const char* const RGB[3] = {"R", "G", "B"};
     static const char* const XYZ[3] = {"X", "Y", "Z"};
+    const ExrPixel colour = full_precision ? ExrPixel::Float : ExrPixel::Half;
     std::vector<ExrChannel> channels;
-    add_vec3(channels, f.color, "", RGB, ExrPixel::Half);
+    add_vec3(channels, f.color, "", RGB, colour);
     channels.push_back(ExrChannel{"A", ExrPixel::Half, &ONE, nullptr, 0});
-    if (f.aovs.has(Aov::Albedo)) add_vec3(channels, f.albedo, "albedo", RGB, ExrPixel::Half);
-    if (f.aovs.has(Aov::Normal)) add_vec3(channels, f.normal, "N", XYZ, ExrPixel::Half);
+    if (f.aovs.has(Aov::Albedo)) add_vec3(channels, f.albedo, "albedo", RGB, colour);
+    if (f.aovs.has(Aov::Normal)) add_vec3(channels, f.normal, "N", XYZ, colour);
     if (f.aovs.has(Aov::Depth))
         channels.push_back(ExrChannel{"Z", ExrPixel::Float, f.depth.data(), nullptr, 1});
     if (f.aovs.has(Aov::Position)) add_vec3(channels, f.position, "P", XYZ, ExrPixel::Float);
@@ -51,7 +52,9 @@ std::vector<ExrChannel> exr_channels(const FrameBuffers& f) {
 ExrAttributes exr_attributes(const Frame& frame) {
     ExrAttributes a;
     a.world_to_camera = world_to_camera(frame.camera);
-    a.world_to_ndc = world_to_ndc(frame.camera, frame.buffers.width, frame.buffers.height);
+    // A band's matrices are those of the whole frame it is part of.
+    const uint32_t height = frame.band ? frame.frame_height : frame.buffers.height;
+    a.world_to_ndc = world_to_ndc(frame.camera, frame.buffers.width, height);
     if (frame.buffers.aovs.has(Aov::InstanceId))
         a.ids.push_back({aov_name(Aov::InstanceId), "instance", frame.names.instances});
     if (frame.buffers.aovs.has(Aov::MeshId))
@@ -64,7 +67,8 @@ Result<EncodedFrame> encode_frame(const FrameBuffers& buffers, const RenderReque
     Stopwatch clock;
     EncodedFrame out;
     if (request.format == ImageFormat::Exr) {
-        auto exr = encode_exr(buffers.width, buffers.height, exr_channels(buffers),
+        auto exr = encode_exr(buffers.width, buffers.height,
+                              exr_channels(buffers, request.band.has_value()),
                               request.compression, attributes);
         if (!exr) return Unexpected(exr.error());
         out.bytes = std::move(exr.value());

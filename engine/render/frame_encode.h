@@ -14,7 +14,10 @@
 //   primitive_id  primitive_id (uint)
 //   mesh_id       mesh_id (uint)
 //   user_id       user_id (uint)
-// Compression as requested (default zip). The header carries OpenEXR's standard worldToCamera and
+// A band (RenderRequest::band) is written at full precision instead: beauty, albedo and normal
+// as FLOAT, so that a process assembling bands (band_assembly.h) gets the very floats a whole
+// render would encode. Compression as requested (default zip). The header carries OpenEXR's
+// standard worldToCamera and
 // worldToNDC for the frame's camera (camera_rays.h) and, with instance_id or mesh_id, an ID
 // manifest naming every slot the channels hold with its client id (component "instance" or
 // "mesh", lifetime frame: a freed slot may name another object in a later frame).
@@ -38,7 +41,8 @@ Result<EncodedFrame> encode_frame(const FrameBuffers& buffers, const RenderReque
 /// The EXR header attributes of `frame`: camera matrices and the ID manifest.
 ExrAttributes exr_attributes(const Frame& frame);
 
-/// The EXR channels of `frame`: beauty and every AOV the frame carries.
-std::vector<ExrChannel> exr_channels(const FrameBuffers& frame);
+/// The EXR channels of `frame`: beauty and every AOV the frame carries; with `full_precision`
+/// beauty, albedo and normal are FLOAT rather than HALF (a band's encoding).
+std::vector<ExrChannel> exr_channels(const FrameBuffers& frame, bool full_precision = false);
 
 }  // namespace strata

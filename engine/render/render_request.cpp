@@ -67,6 +67,25 @@ Status check_render_request(const RenderRequest& r) {
                                "' needs format exr; a PNG carries only the color image",
                            "aovs/" + std::to_string(i));
     }
+    if (r.band) {
+        const RowBand& b = *r.band;
+        if (b.rows == 0 || b.y0 >= r.height || b.rows > r.height - b.y0)
+            return failure(ErrorCode::InvalidArgument,
+                           "band rows [" + std::to_string(b.y0) + ", " +
+                               std::to_string(uint64_t(b.y0) + b.rows) +
+                               ") must be a non-empty range inside the frame's " +
+                               std::to_string(r.height) + " rows",
+                           "band");
+        if (r.accumulate)
+            return failure(ErrorCode::InvalidArgument,
+                           "a band cannot accumulate: accumulated sums belong to whole frames",
+                           "band");
+        if (r.filter)
+            return failure(ErrorCode::InvalidArgument,
+                           "a band cannot be filtered: the filter reads pixels beyond the band's "
+                           "edges (filter the assembled frame)",
+                           "band");
+    }
     if (r.camera) {
         // What can be judged without the scene camera: the override's own numbers.
         const SetCamera& c = *r.camera;

@@ -40,6 +40,14 @@ std::optional<ImageFormat> parse_image_format(std::string_view s);
 std::optional<ExrCompression> parse_exr_compression(std::string_view s);
 std::optional<Aov> parse_aov(std::string_view s);
 
+/// Rows [y0, y0 + rows) of a frame: the part of it one process renders when a frame is split
+/// across processes (server/split_render.h).
+struct RowBand {
+    uint32_t y0 = 0;
+    uint32_t rows = 0;
+    friend bool operator==(const RowBand&, const RowBand&) = default;
+};
+
 /// One frame to render. renderer.h, aov_buffers.h, frame_encode.h, accumulator.h and tonemap.h
 /// give the details of each field's effect.
 struct RenderRequest {
@@ -62,6 +70,12 @@ struct RenderRequest {
     /// Overrides the scene camera for this frame. Fields it leaves out come from the scene
     /// camera of the version the launch renders, so the frame never mixes two versions.
     std::optional<SetCamera> camera;
+    /// Renders only these rows of the width x height frame: every pixel's samples, camera rays
+    /// and sample sequence are those of the whole frame, so the band is bit for bit the same rows
+    /// of a whole render. The frame's buffers then hold `rows` rows. Not with `accumulate` (the
+    /// sums belong to whole frames) or `filter` (it reads neighbours across the band's edges:
+    /// a caller assembling bands filters the assembled frame, renderer.h).
+    std::optional<RowBand> band;
     /// Not part of what a client asks: the caller's stop flag (deadline, client gone, shutdown),
     /// polled between packets. A cancelled launch returns ErrorCode::Cancelled.
     const CancelToken* cancel = nullptr;
@@ -76,7 +90,7 @@ constexpr uint64_t MAX_RENDER_PIXELS = 64ull * 1024 * 1024;
 constexpr uint32_t MAX_RENDER_SPP = 4096;
 
 /// Checks a request (sizes, spp, exposure, camera override, duplicate AOVs, AOVs other than color
-/// with PNG); the error names the field.
+/// with PNG, a band outside the frame or with accumulate or filter); the error names the field.
 Status check_render_request(const RenderRequest& r);
 
 }  // namespace strata

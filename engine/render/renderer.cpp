@@ -86,17 +86,21 @@ Vec3 shading_normal(Vec3 ns, const Vec3& ng, const Vec3& v) {
     return ns;
 }
 
-/// Everything one launch's tiles share.
+/// Everything one launch's tiles share. `out` holds rows [row0, row0 + out.height) of a
+/// out.width x `frame_height` frame; tiles may trace rows beyond them (whole packets), which are
+/// not written.
 class FrameKernel {
 public:
     FrameKernel(const TlasStrategy& tlas, const FrameState& frame, const Camera& camera,
-                FrameBuffers& out, SampleRange samples, uint32_t total_samples, PixelSums* accum,
-                const CancelToken* cancel)
+                FrameBuffers& out, uint32_t frame_height, uint32_t row0, SampleRange samples,
+                uint32_t total_samples, PixelSums* accum, const CancelToken* cancel)
         : m_tlas(tlas),
           m_frame(frame),
-          m_rays(camera, out.width, out.height),
+          m_rays(camera, out.width, frame_height),
           m_sky(frame.lighting),
           m_out(out),
+          m_row0(row0),
+          m_row1(row0 + out.height),
           m_samples(samples),
           m_inv_total(total_samples > 0 ? 1.0f / float(total_samples) : 0.0f),
           m_accum(accum),
@@ -348,6 +352,13 @@ private:
         return rays;
     }
 
+    /// Where pixel (x, y) of the frame lies in the output buffers, or SIZE_MAX for a row the
+    /// buffers do not hold.
+    std::size_t out_index(uint32_t x, uint32_t y) const {
+        if (y < m_row0 || y >= m_row1) return SIZE_MAX;
+        return std::size_t(y - m_row0) * m_out.width + x;
+    }
+
     /// Traces the unjittered pixel-centre rays and writes depth, position and ids.
     uint64_t trace_centre(CameraPacket& camera, uint32_t x0, uint32_t y0,
                           const ValidMask16& valid) const {
@@ -359,8 +370,8 @@ private:
         const AovSet aovs = m_out.aovs;
         for (uint32_t i = 0; i < PACKET_LANES; ++i) {
             if (!valid[i]) continue;
-            const std::size_t p =
-                std::size_t(y0 + i / PACKET_SIZE) * m_out.width + x0 + i % PACKET_SIZE;
+            const std::size_t p = out_index(x0 + i % PACKET_SIZE, y0 + i / PACKET_SIZE);
+            if (p == SIZE_MAX) continue;
             const uint32_t inst = packet.inst_id[i];
             const bool hit = inst != INVALID_ID;
             const float t = hit ? packet.tfar[i] : std::numeric_limits<float>::infinity();
@@ -386,8 +397,8 @@ private:
         const AovSet aovs = m_out.aovs;
         for (uint32_t i = 0; i < PACKET_LANES; ++i) {
             if (!valid[i]) continue;
-            const std::size_t p =
-                std::size_t(y0 + i / PACKET_SIZE) * m_out.width + x0 + i % PACKET_SIZE;
+            const std::size_t p = out_index(x0 + i % PACKET_SIZE, y0 + i / PACKET_SIZE);
+            if (p == SIZE_MAX) continue;
             m_out.color[p] = sums[i]->color * m_inv_total;
             if (aovs.has(Aov::Albedo)) m_out.albedo[p] = sums[i]->albedo * m_inv_total;
             if (aovs.has(Aov::Normal)) m_out.normal[p] = sums[i]->normal * m_inv_total;
@@ -399,6 +410,7 @@ private:
     const CameraRays m_rays;
     const SkyModel m_sky;
     FrameBuffers& m_out;
+    const uint32_t m_row0, m_row1;
     const SampleRange m_samples;
     const float m_inv_total;
     PixelSums* const m_accum;
@@ -427,7 +439,16 @@ Result<Frame> Renderer::render(const TlasStrategy& tlas, const FrameState& frame
             aovs.add(Aov::Normal);
             aovs.add(Aov::Depth);
         }
-        out.buffers.allocate(request.width, request.height, aovs);
+        // A band traces whole packets (rows rounded out to PACKET_SIZE), so that every packet
+        // holds the lanes it holds in the whole frame, and keeps only its own rows.
+        const RowBand band = request.band.value_or(RowBand{0, request.height});
+        const uint32_t trace_begin = band.y0 / PACKET_SIZE * PACKET_SIZE;
+        const uint32_t trace_end =
+            std::min(request.height, (band.y0 + band.rows + PACKET_SIZE - 1) / PACKET_SIZE *
+                                         PACKET_SIZE);
+        out.band = request.band;
+        out.frame_height = request.height;
+        out.buffers.allocate(request.width, band.rows, aovs);
         SampleRange samples{0, request.spp};
         PixelSums* accum = nullptr;
         if (request.accumulate) {
@@ -441,9 +462,10 @@ Result<Frame> Renderer::render(const TlasStrategy& tlas, const FrameState& frame
             accum = m_accumulator.sums();
         }
         const uint32_t total = samples.first + samples.count;
-        FrameKernel kernel(tlas, frame, camera, out.buffers, samples, total, accum, request.cancel);
-        parallel_for_tiles(request.width, request.height,
-                           [&](const TileRect& tile) { kernel.render_tile(tile); });
+        FrameKernel kernel(tlas, frame, camera, out.buffers, request.height, band.y0, samples,
+                           total, accum, request.cancel);
+        parallel_for_tile_rows(request.width, request.height, trace_begin, trace_end,
+                               [&](const TileRect& tile) { kernel.render_tile(tile); });
         if (should_stop(request.cancel)) {
             // Some pixels hold fewer samples than the others: the sums cannot be continued.
             if (request.accumulate) m_accumulator.reset();

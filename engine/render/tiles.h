@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <utility>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -32,19 +33,33 @@ struct TileRect {
     uint32_t x0, y0, x1, y1;
 };
 
-/// Calls `f(const TileRect&)` for every tile of a width x height image, in parallel.
+/// Calls `f(const TileRect&)` for every tile of a width x height image that overlaps rows
+/// [row_begin, row_end), clipped to them, in parallel. With `row_begin` a multiple of
+/// PACKET_SIZE and `row_end` a multiple of it or `height`, every packet of those rows has the
+/// pixels and lanes it has in the whole image (packet_lanes).
 template <class F>
-void parallel_for_tiles(uint32_t width, uint32_t height, F&& f) {
+void parallel_for_tile_rows(uint32_t width, uint32_t height, uint32_t row_begin, uint32_t row_end,
+                            F&& f) {
+    row_end = std::min(row_end, height);
+    if (row_begin >= row_end || width == 0) return;
     const uint32_t cols = (width + TILE_SIZE - 1) / TILE_SIZE;
-    const uint32_t rows = (height + TILE_SIZE - 1) / TILE_SIZE;
+    const uint32_t first = row_begin / TILE_SIZE;
+    const uint32_t rows = (row_end + TILE_SIZE - 1) / TILE_SIZE - first;
     auto run = [&](const tbb::blocked_range<uint32_t>& range) {
         for (uint32_t t = range.begin(); t != range.end(); ++t) {
             const uint32_t x0 = (t % cols) * TILE_SIZE;
-            const uint32_t y0 = (t / cols) * TILE_SIZE;
-            f(TileRect{x0, y0, std::min(x0 + TILE_SIZE, width), std::min(y0 + TILE_SIZE, height)});
+            const uint32_t y0 = (first + t / cols) * TILE_SIZE;
+            f(TileRect{x0, std::max(y0, row_begin), std::min(x0 + TILE_SIZE, width),
+                       std::min(y0 + TILE_SIZE, row_end)});
         }
     };
     tbb::parallel_for(tbb::blocked_range<uint32_t>(0, cols * rows), run);
+}
+
+/// Calls `f(const TileRect&)` for every tile of a width x height image, in parallel.
+template <class F>
+void parallel_for_tiles(uint32_t width, uint32_t height, F&& f) {
+    parallel_for_tile_rows(width, height, 0, height, std::forward<F>(f));
 }
 
 /// Marks the lanes of the packet at (x0, y0) that fall inside the tile; returns how many do.

@@ -82,5 +82,54 @@ TEST(RenderParser, ACameraOverrideKeepsOnlyTheFieldsItNames) {
     EXPECT_FALSE(r.value().camera->target.has_value());
 }
 
+TEST(RenderParser, BandAndSplitAreReadFromTheBodyAndTheQuery) {
+    uint32_t split = 0;
+    auto body = parse_render_body(Json::parse(R"({"height": 100, "band": [8, 12], "split": 1})"),
+                                  &split);
+    ASSERT_TRUE(body.has_value()) << body.error().message;
+    ASSERT_TRUE(body.value().band.has_value());
+    EXPECT_EQ(*body.value().band, (RowBand{8, 12}));
+    EXPECT_EQ(split, 1u);
+    auto query = parse_render_query({{"height", "90"}, {"split", "3"}}, &split);
+    ASSERT_TRUE(query.has_value()) << query.error().message;
+    EXPECT_EQ(split, 3u);
+    EXPECT_FALSE(query.value().band.has_value());
+    auto band = parse_render_query({{"band", "0,7"}, {"format", "exr"}}, &split);
+    ASSERT_TRUE(band.has_value()) << band.error().message;
+    EXPECT_EQ(*band.value().band, (RowBand{0, 7}));
+    EXPECT_EQ(split, 1u);  // absent: a plain render
+}
+
+TEST(RenderParser, BadBandsAndSplitsAreRefusedNamingTheParameter) {
+    uint32_t split = 0;
+    auto pointer = [&](std::multimap<std::string, std::string> params) {
+        auto r = parse_render_query(params, &split);
+        return r.has_value() ? std::string("(accepted)") : r.error().pointer;
+    };
+    EXPECT_EQ(pointer({{"band", "3"}}), "/band");
+    EXPECT_EQ(pointer({{"band", "1,2,3"}}), "/band");
+    EXPECT_EQ(pointer({{"band", "x,2"}}), "/band/0");
+    EXPECT_EQ(pointer({{"band", "-1,2"}}), "/band/0");
+    EXPECT_EQ(pointer({{"band", "0,0"}}), "/band/1");
+    EXPECT_EQ(pointer({{"band", "0,1.5"}}), "/band/1");
+    EXPECT_EQ(pointer({{"band", "0,2"}, {"band", "2,2"}}), "/band");
+    EXPECT_EQ(pointer({{"split", "0"}}), "/split");
+    EXPECT_EQ(pointer({{"split", "17"}}), "/split");
+    EXPECT_EQ(pointer({{"split", "two"}}), "/split");
+    EXPECT_EQ(pointer({{"split", "2"}, {"band", "0,4"}}), "/split");
+    EXPECT_EQ(pointer({{"split", "2"}, {"accumulate", "true"}}), "/split");
+    EXPECT_EQ(pointer({{"split", "9"}, {"height", "8"}}), "/split");
+    EXPECT_EQ(pointer({{"split", "8"}, {"height", "8"}}), "(accepted)");
+    auto refused = parse_render_query({{"split", "2"}, {"band", "0,4"}}, &split);
+    ASSERT_FALSE(refused.has_value());
+    EXPECT_THAT(refused.error().message, ::testing::HasSubstr("band"));
+    // A caller that cannot split (GET /v1/stream) does not know the member at all.
+    auto unknown = parse_render_query({{"split", "2"}});
+    ASSERT_FALSE(unknown.has_value());
+    EXPECT_EQ(unknown.error().pointer, "/split");
+    EXPECT_EQ(parse_render_body(Json::parse(R"({"band": {"y0": 1}})"), &split).error().pointer,
+              "/band");
+}
+
 }  // namespace
 }  // namespace strata::protocol

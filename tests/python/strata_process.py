@@ -27,17 +27,21 @@ class ServerProcess:
 
     def __init__(self, binary: str, args: Optional[List[str]] = None, timeout: float = 30.0,
                  env: Optional[Dict[str, str]] = None,
-                 preexec_fn: Optional[Callable[[], None]] = None, wait_ready: bool = True):
+                 preexec_fn: Optional[Callable[[], None]] = None, wait_ready: bool = True,
+                 port: int = 0):
         """`env`: variables added to this process's environment (STRATA_TOKEN is not inherited).
         `preexec_fn` runs in the child before exec (resource limits, another user).
-        `wait_ready`: return only once /readyz answers 200 (else as soon as it listens)."""
+        `wait_ready`: return only once /readyz answers 200 (else as soon as it listens).
+        `port`: a port chosen beforehand (servers that must know each other's, --peers); 0 lets
+        the server pick a free one."""
         self._log = tempfile.NamedTemporaryFile(prefix="strata-server-", suffix=".log",
                                                 delete=False)
         self.log_path = self._log.name
         full_env = {k: v for k, v in os.environ.items() if k != "STRATA_TOKEN"}
         full_env.update(env or {})
         self.process = subprocess.Popen(
-            [binary, "--host", "127.0.0.1", "--port", "0", "--log-level", "info"] + (args or []),
+            [binary, "--host", "127.0.0.1", "--port", str(port), "--log-level", "info"]
+            + (args or []),
             stdout=self._log, stderr=subprocess.STDOUT, env=full_env, preexec_fn=preexec_fn)
         self.url = self._wait_for_port(timeout)
         self.port = int(self.url.rsplit(":", 1)[1])

@@ -22,8 +22,9 @@ class Server(ServerProcess):
     adversarial suites need besides: memory, signals, and requests that return problems."""
 
     def __init__(self, args: Optional[List[str]] = None, env: Optional[Dict[str, str]] = None,
-                 preexec_fn=None, wait_ready: bool = True):
-        super().__init__(SERVER, args, env=env, preexec_fn=preexec_fn, wait_ready=wait_ready)
+                 preexec_fn=None, wait_ready: bool = True, port: int = 0):
+        super().__init__(SERVER, args, env=env, preexec_fn=preexec_fn, wait_ready=wait_ready,
+                         port=port)
         self.pid = self.process.pid
 
     def alive(self) -> bool:

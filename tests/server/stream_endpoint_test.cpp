@@ -380,6 +380,9 @@ TEST(StreamEndpoint, BadParametersAreRefusedWithAProblemNamingThem) {
     expect_problem(s.get("/v1/stream?width=65536&height=65536"), 413);
     expect_problem(s.get("/v1/events?x=1"), 400, "invalid-request", "/x");
     expect_problem(s.get("/v1/stream?highlight="), 400, "invalid-request", "/highlight");
+    // A stream is one process's view: no bands, no split.
+    expect_problem(s.get("/v1/stream?band=0,4"), 400, "invalid-request", "/band");
+    expect_problem(s.get("/v1/stream?split=2"), 400, "invalid-request", "/split");
     expect_problem(s.get("/v1/stream?highlight=no-such-instance"), 404, "not-found", "/highlight");
 }
 

@@ -6,6 +6,7 @@ Skipped, saying so, only where redis-server is not installed (scripts/install-de
 """
 
 import json
+import socket
 import threading
 import time
 import unittest
@@ -16,6 +17,24 @@ from hostile import Server
 from redis_fixture import REDIS_SERVER, RedisProcess
 
 RENDER = "/v1/render?width=64&height=48&spp=2"
+# Frames across replicas: odd sizes, a camera override that sees every instance.
+SPLIT_VIEW = "width=83&height=61&spp=2&eye=3.5,4,13&target=3.5,0.5,0"
+SPLIT_RENDERS = [
+    f"/v1/render?{SPLIT_VIEW}",
+    f"/v1/render?{SPLIT_VIEW}&format=exr&aovs=albedo,depth,instance_id,mesh_id",
+    f"/v1/render?{SPLIT_VIEW}&filter=atrous&exposure=0.5",
+]
+
+
+def free_ports(n: int) -> list:
+    """n loopback ports free now (servers that must know each other's ports before they start)."""
+    sockets = [socket.socket() for _ in range(n)]
+    for s in sockets:
+        s.bind(("127.0.0.1", 0))
+    ports = [s.getsockname()[1] for s in sockets]
+    for s in sockets:
+        s.close()
+    return ports
 
 
 def crc32c(data: bytes) -> int:
@@ -42,10 +61,18 @@ class Replicas(unittest.TestCase):
         self.addCleanup(self.redis.stop)
         self.stream = "strata-" + uuid.uuid4().hex[:8]
 
-    def replica(self, *extra):
-        s = Server(["--log", self.redis.url(self.stream), "--threads", "8"] + list(extra))
+    def replica(self, *extra, port=0):
+        s = Server(["--log", self.redis.url(self.stream), "--threads", "8"] + list(extra),
+                   port=port)
         self.addCleanup(s.stop)
         return s
+
+    def peered_replicas(self, n=3, *extra):
+        """n replicas, each started with the other n-1 as --peers."""
+        ports = free_ports(n)
+        urls = [f"http://127.0.0.1:{p}" for p in ports]
+        return [self.replica("--peers", ",".join(u for u in urls if u != urls[i]), *extra,
+                             port=ports[i]) for i in range(n)]
 
     def replicas(self, n=3, *extra):
         return [self.replica(*extra) for _ in range(n)]
@@ -296,6 +323,116 @@ class Replicas(unittest.TestCase):
         n = self.stream_batches(servers, n, 3)
         self.assert_converged(servers, n)
         self.assertEqual(durable_scene.check(late, n), "")
+
+    def assert_split_equals_single(self, coordinator, path, split, version, used_peers):
+        single = coordinator.call("GET", f"{path}&min_version={version}")
+        self.assertEqual(single[0], 200, single[2][:300])
+        status, headers, frame = coordinator.call("GET",
+                                                  f"{path}&split={split}&min_version={version}")
+        self.assertEqual(status, 200, frame[:300])
+        self.assertEqual(headers["ETag"], f'"{version}"')
+        self.assertEqual(headers["Content-Type"], single[1]["Content-Type"])
+        bands = headers["X-Strata-Split"]
+        self.assertTrue(bands.startswith(f"{split} bands at version {version}: local"), bands)
+        if used_peers:
+            self.assertNotIn("local (", bands)
+        self.assertTrue(frame == single[2], f"split={split} {path} differs from one render: "
+                        f"{len(frame)} vs {len(single[2])} bytes; {bands}")
+        return bands
+
+    def test_a_split_render_is_the_bytes_of_a_single_render(self):
+        servers = self.peered_replicas(3)
+        n = self.stream_batches(servers, 0, 7)
+        self.assert_converged(servers, n)
+        for split in (2, 3):
+            for path in SPLIT_RENDERS:
+                self.assert_split_equals_single(servers[split % 3], path, split, n, True)
+        # A POST body splits too; more bands than processes, or a band with split, are 422.
+        status, headers, frame = servers[0].call(
+            "POST", "/v1/render", {"width": 40, "height": 30, "split": 3, "camera": {"eye": [3, 2, 9]}})
+        self.assertEqual(status, 200, frame[:300])
+        self.assertEqual(frame, servers[0].call(
+            "POST", "/v1/render", {"width": 40, "height": 30, "camera": {"eye": [3, 2, 9]}})[2])
+        status, _, body = servers[0].call("GET", f"{SPLIT_RENDERS[0]}&split=4")
+        self.assertEqual(status, 422, body)
+        self.assertEqual(json.loads(body)["pointer"], "/split")
+        self.assertIn("needs 3 peers", json.loads(body)["detail"])
+        status, _, body = servers[0].call("GET", f"{SPLIT_RENDERS[0]}&split=2&band=0,8")
+        self.assertEqual(status, 422, body)
+        self.assertEqual(json.loads(body)["pointer"], "/split")
+
+    def test_a_split_render_with_a_peer_down_renders_its_band_locally(self):
+        servers = self.peered_replicas(3, "--peer-timeout-ms", "3000")
+        n = self.stream_batches(servers, 0, 5)
+        self.assert_converged(servers, n)
+        down = servers[2].url
+        servers[2].kill()
+        for path in SPLIT_RENDERS[:2]:
+            bands = self.assert_split_equals_single(servers[0], path, 3, n, False)
+            self.assertIn(f"local ({down}:", bands)
+            self.assertIn(servers[1].url, bands)
+        # The survivors keep converging, and keep splitting.
+        n = self.stream_batches(servers[:2], n, 2)
+        self.assert_split_equals_single(servers[1], SPLIT_RENDERS[0], 2, n, True)
+
+
+class SplitWithoutLog(unittest.TestCase):
+    """Split renders need no shared log: any peers holding the scene at the frame's version do,
+    and a peer at another version has its band rendered by the coordinator."""
+
+    def test_peers_at_the_same_version_serve_bands_and_one_at_another_does_not(self):
+        ports = free_ports(2)
+        peer = Server(port=ports[1])
+        self.addCleanup(peer.stop)
+        coordinator = Server(["--peers", peer.url], port=ports[0])
+        self.addCleanup(coordinator.stop)
+        for n in range(5):
+            for s in (coordinator, peer):
+                self.assertEqual(s.json("POST", "/v1/edits", durable_scene.batch(n))[0], 200)
+        path = f"/v1/render?{SPLIT_VIEW}&format=exr&aovs=instance_id"
+        single = coordinator.call("GET", path)[2]
+        status, headers, frame = coordinator.call("GET", path + "&split=2")
+        self.assertEqual(status, 200, frame[:300])
+        self.assertEqual(headers["X-Strata-Split"], f"2 bands at version 5: local, {peer.url}")
+        self.assertEqual(frame, single)
+        # The peer moves ahead: its band is rendered here, and the frame is still version 5's.
+        self.assertEqual(peer.json("POST", "/v1/edits", durable_scene.batch(5))[0], 200)
+        status, headers, frame = coordinator.call("GET", path + "&split=2")
+        self.assertEqual(status, 200, frame[:300])
+        self.assertEqual(headers["X-Strata-Split"],
+                         f"2 bands at version 5: local, local ({peer.url}: at version 6, not 5)")
+        self.assertEqual(frame, single)
+        # Without --peers a split is a 422 naming it.
+        status, _, body = peer.call("GET", path + "&split=2")
+        self.assertEqual(status, 422, body)
+        self.assertEqual(json.loads(body)["pointer"], "/split")
+
+    def test_a_peer_that_never_answers_costs_the_peer_timeout_and_no_more_than_the_deadline(self):
+        # A listening socket that accepts (in the kernel's backlog) and never answers.
+        silent = socket.socket()
+        silent.bind(("127.0.0.1", 0))
+        silent.listen(8)
+        self.addCleanup(silent.close)
+        url = f"http://127.0.0.1:{silent.getsockname()[1]}"
+        coordinator = Server(["--peers", url, "--peer-timeout-ms", "300"])
+        self.addCleanup(coordinator.stop)
+        self.assertEqual(coordinator.json("POST", "/v1/edits", durable_scene.batch(0))[0], 200)
+        path = f"/v1/render?{SPLIT_VIEW}"
+        single = coordinator.call("GET", path)[2]
+        status, headers, frame = coordinator.call("GET", path + "&split=2")
+        self.assertEqual(status, 200, frame[:300])
+        self.assertTrue(headers["X-Strata-Split"].startswith(
+            f"2 bands at version 1: local, local ({url}: "), headers["X-Strata-Split"])
+        self.assertEqual(frame, single)
+        # The render's deadline bounds the wait for a peer, whatever --peer-timeout-ms says.
+        patient = Server(["--peers", url, "--peer-timeout-ms", "60000", "--render-timeout", "1"])
+        self.addCleanup(patient.stop)
+        t0 = time.monotonic()
+        status, _, body = patient.call("GET", path + "&split=2")
+        self.assertEqual(status, 503, body)
+        self.assertIn("deadline-exceeded", json.loads(body)["type"])
+        self.assertLess(time.monotonic() - t0, 20)
+        self.assertEqual(patient.call("GET", "/readyz")[0], 200)
 
 
 if __name__ == "__main__":

@@ -1,0 +1,333 @@
+#include "server/split_render.h"
+
+#include <algorithm>
+#include <charconv>
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include <httplib.h>
+
+#include "engine/core/timer.h"
+#include "engine/image/exr.h"
+#include "engine/render/band_assembly.h"
+#include "engine/render/frame_encode.h"
+
+namespace strata::server {
+
+namespace {
+
+/// Longest a coordinator waits to connect to a peer (the whole request has --peer-timeout-ms).
+constexpr std::chrono::milliseconds CONNECT_TIMEOUT{1000};
+
+/// `f` as text that reads back (strtod, then to float) as exactly `f`: the shortest text of the
+/// double holding it.
+std::string exact_text(float f) {
+    char buf[64];
+    const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, double(f));
+    return ec == std::errc() ? std::string(buf, end) : std::string("nan");
+}
+
+std::string vec_text(const Vec3& v) {
+    return exact_text(v.x) + "," + exact_text(v.y) + "," + exact_text(v.z);
+}
+
+std::optional<uint64_t> version_of_etag(std::string_view etag) {
+    if (etag.size() < 3 || etag.front() != '"' || etag.back() != '"') return std::nullopt;
+    etag = etag.substr(1, etag.size() - 2);
+    uint64_t v = 0;
+    const auto [end, ec] = std::from_chars(etag.data(), etag.data() + etag.size(), v);
+    if (ec != std::errc() || end != etag.data() + etag.size()) return std::nullopt;
+    return v;
+}
+
+/// `text` fit for a header value: printable ASCII, at most 160 characters.
+std::string header_safe(std::string text) {
+    if (text.size() > 160) text = text.substr(0, 157) + "...";
+    for (char& c : text)
+        if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) > 0x7e) c = '?';
+    return text;
+}
+
+/// Waits for the fetches to finish; wakes the coordinator as each does.
+struct FetchBoard {
+    std::mutex mutex;
+    std::condition_variable changed;
+    std::size_t pending = 0;
+};
+
+/// One peer's band, fetched on a thread of its own.
+struct PeerFetch {
+    const PeerServer* peer = nullptr;
+    uint32_t index = 0;  ///< the band's index
+    RowBand band;
+    std::unique_ptr<httplib::Client> client;
+    std::thread thread;
+    // Written by the thread, read once it has finished.
+    std::optional<uint64_t> version;
+    std::optional<DecodedBand> decoded;
+    std::string failure;
+
+    void run(const std::string& path, const httplib::Headers& headers, uint32_t width,
+             AovSet aovs) {
+        try {
+            auto res = client->Get(path.c_str(), headers);
+            if (!res) {
+                failure = httplib::to_string(res.error());
+                return;
+            }
+            if (res->status != 200) {
+                failure = std::to_string(res->status);
+                return;
+            }
+            version = version_of_etag(res->get_header_value("ETag"));
+            if (!version) {
+                failure = "no version (ETag) in the answer";
+                return;
+            }
+            auto exr = decode_exr(res->body);
+            if (!exr) {
+                failure = exr.error().message;
+                return;
+            }
+            auto band_buffers = band_from_exr(exr.value(), width, band.rows, aovs);
+            if (!band_buffers) {
+                failure = band_buffers.error().message;
+                return;
+            }
+            decoded = std::move(band_buffers.value());
+        } catch (const std::exception& e) {
+            failure = e.what();
+        }
+    }
+};
+
+/// Stops and joins every fetch when the coordinator returns, whichever way.
+struct FetchGuard {
+    std::vector<std::unique_ptr<PeerFetch>>& fetches;
+    ~FetchGuard() {
+        for (auto& f : fetches)
+            if (f->client) f->client->stop();
+        for (auto& f : fetches)
+            if (f->thread.joinable()) f->thread.join();
+    }
+};
+
+Unexpected<Error> cancelled(const CancelToken& token) {
+    return failure(ErrorCode::Cancelled, std::string("the split render stopped early: ") +
+                                             cancel_reason_text(token.reason()));
+}
+
+}  // namespace
+
+Result<std::vector<PeerServer>> parse_peers(std::string_view list) {
+    std::vector<PeerServer> peers;
+    std::size_t start = 0;
+    while (start <= list.size()) {
+        const std::size_t comma = std::min(list.find(',', start), list.size());
+        std::string_view item = list.substr(start, comma - start);
+        start = comma + 1;
+        while (!item.empty() && item.front() == ' ') item.remove_prefix(1);
+        while (!item.empty() && item.back() == ' ') item.remove_suffix(1);
+        if (item.empty()) {
+            if (list.empty()) break;
+            return failure(ErrorCode::InvalidArgument,
+                           "--peers has an empty item: give comma-separated http://host:port",
+                           "peers");
+        }
+        auto bad = [&](const std::string& why) {
+            return failure(ErrorCode::InvalidArgument,
+                           "--peers item '" + std::string(item) + "': " + why, "peers");
+        };
+        std::string_view rest = item;
+        if (rest.rfind("http://", 0) == 0) {
+            rest.remove_prefix(7);
+        } else if (rest.find("://") != std::string_view::npos) {
+            return bad("only http:// peers are supported");
+        }
+        if (!rest.empty() && rest.back() == '/') rest.remove_suffix(1);
+        if (rest.find('/') != std::string_view::npos) return bad("a peer URL has no path");
+        const std::size_t colon = rest.rfind(':');
+        if (colon == std::string_view::npos || colon == 0) return bad("expected host:port");
+        PeerServer p;
+        p.host = std::string(rest.substr(0, colon));
+        if (p.host.size() > 2 && p.host.front() == '[' && p.host.back() == ']')
+            p.host = p.host.substr(1, p.host.size() - 2);
+        const std::string_view port = rest.substr(colon + 1);
+        const auto [end, ec] = std::from_chars(port.data(), port.data() + port.size(), p.port);
+        if (ec != std::errc() || end != port.data() + port.size() || p.port < 1 || p.port > 65535)
+            return bad("the port must be a number in [1, 65535]");
+        p.url = "http://" + std::string(rest);
+        peers.push_back(std::move(p));
+    }
+    return peers;
+}
+
+std::string band_query(const RenderRequest& request, RowBand band) {
+    const RenderRequest b = band_request(request, band);
+    std::string q = "width=" + std::to_string(b.width) + "&height=" + std::to_string(b.height) +
+                    "&spp=" + std::to_string(b.spp) +
+                    "&format=exr&compression=none&band=" + std::to_string(band.y0) + "," +
+                    std::to_string(band.rows);
+    if (!b.aovs.empty()) {
+        q += "&aovs=";
+        for (std::size_t i = 0; i < b.aovs.size(); ++i)
+            q += (i ? "," : "") + std::string(aov_name(b.aovs[i]));
+    }
+    if (b.camera) {
+        if (b.camera->eye) q += "&eye=" + vec_text(*b.camera->eye);
+        if (b.camera->target) q += "&target=" + vec_text(*b.camera->target);
+        if (b.camera->up) q += "&up=" + vec_text(*b.camera->up);
+        if (b.camera->fov_y_deg) q += "&fov_y_deg=" + exact_text(*b.camera->fov_y_deg);
+    }
+    return q;
+}
+
+SplitRenderer::SplitRenderer(Engine& engine, std::vector<PeerServer> peers, std::string token,
+                             std::chrono::milliseconds peer_timeout)
+    : m_engine(engine),
+      m_peers(std::move(peers)),
+      m_token(std::move(token)),
+      m_peer_timeout(peer_timeout) {}
+
+Result<protocol::SplitFrame> SplitRenderer::render(const RenderRequest& request, uint32_t split) {
+    Stopwatch clock;
+    if (split < 2 || split - 1 > m_peers.size())
+        return failure(ErrorCode::InvalidArgument,
+                       "split " + std::to_string(split) + " needs " + std::to_string(split - 1) +
+                           " peers; this server has " + std::to_string(m_peers.size()) +
+                           " (--peers)",
+                       "split");
+    const std::vector<RowBand> bands = split_rows(request.height, split);
+    if (bands.size() != split)
+        return failure(ErrorCode::InvalidArgument,
+                       "split " + std::to_string(split) + " asks for more bands than the frame's " +
+                           std::to_string(request.height) + " rows",
+                       "split");
+    const RenderRequest base = band_request(request, RowBand{});
+    const AovSet aovs = band_aovs(request);
+    const uint64_t asked = m_engine.read([](const Scene& s) { return s.version(); });
+
+    // Step: ask the peers for bands 1..split-1, each on a thread of its own.
+    httplib::Headers headers;
+    if (!m_token.empty()) headers.emplace("Authorization", "Bearer " + m_token);
+    FetchBoard board;
+    std::vector<std::unique_ptr<PeerFetch>> fetches;
+    FetchGuard guard{fetches};
+    for (uint32_t k = 1; k < split; ++k) {
+        auto f = std::make_unique<PeerFetch>();
+        f->peer = &m_peers[k - 1];
+        f->index = k;
+        f->band = bands[k];
+        f->client = std::make_unique<httplib::Client>(f->peer->host, f->peer->port);
+        f->client->set_connection_timeout(std::min(CONNECT_TIMEOUT, m_peer_timeout));
+        f->client->set_read_timeout(m_peer_timeout);
+        f->client->set_write_timeout(m_peer_timeout);
+        f->client->set_keep_alive(false);
+        const std::string path =
+            "/v1/render?" + band_query(request, bands[k]) + "&min_version=" + std::to_string(asked);
+        {
+            std::lock_guard lock(board.mutex);
+            ++board.pending;
+        }
+        PeerFetch* raw = f.get();
+        fetches.push_back(std::move(f));
+        raw->thread = std::thread([raw, path, headers, &board, width = request.width, aovs] {
+            raw->run(path, headers, width, aovs);
+            std::lock_guard lock(board.mutex);
+            --board.pending;
+            board.changed.notify_all();
+        });
+    }
+
+    // Step: band 0 here; its launch's version is the frame's.
+    auto own = m_engine.render_bands(base, {bands[0]});
+    if (!own) return Unexpected(own.error());
+    Frame& first = own.value().front();
+    const uint64_t version = first.info.version;
+
+    // Step: wait for the peers, still honouring the request's cancellation.
+    {
+        std::unique_lock lock(board.mutex);
+        while (board.pending > 0) {
+            if (should_stop(request.cancel)) return cancelled(*request.cancel);
+            board.changed.wait_for(lock, std::chrono::milliseconds(10));
+        }
+    }
+    if (should_stop(request.cancel)) return cancelled(*request.cancel);
+
+    // Step: keep the peers' bands at exactly this version; render the others here.
+    FrameAssembly assembly(request.width, request.height, aovs);
+    if (Status s = assembly.place(first.buffers, bands[0].y0, first.names); !s)
+        return Unexpected(s.error());
+    std::vector<std::string> labels(split, "local");
+    std::vector<RowBand> missing;
+    std::vector<uint32_t> missing_index;
+    for (auto& f : fetches) {
+        if (f->thread.joinable()) f->thread.join();
+        std::string why = f->failure;
+        if (why.empty() && f->version != version)
+            why = "at version " + std::to_string(*f->version) + ", not " + std::to_string(version);
+        if (why.empty()) {
+            if (Status s = assembly.place(f->decoded->buffers, f->band.y0, f->decoded->names); !s)
+                why = s.error().message;
+        }
+        if (why.empty()) {
+            labels[f->index] = f->peer->url;
+        } else {
+            labels[f->index] = "local (" + f->peer->url + ": " + header_safe(why) + ")";
+            missing.push_back(f->band);
+            missing_index.push_back(f->index);
+        }
+    }
+    FrameInfo info = first.info;
+    std::string note;
+    if (!missing.empty()) {
+        auto local = m_engine.render_bands(base, missing);
+        if (!local) return Unexpected(local.error());
+        if (local->front().info.version == version) {
+            for (std::size_t i = 0; i < missing.size(); ++i) {
+                const Frame& f = local.value()[i];
+                if (Status s = assembly.place(f.buffers, missing[i].y0, f.names); !s)
+                    return Unexpected(s.error());
+            }
+        } else {
+            // An edit landed between the two launches: one launch renders every band, so the
+            // frame shows one version.
+            auto all = m_engine.render_bands(base, bands);
+            if (!all) return Unexpected(all.error());
+            assembly = FrameAssembly(request.width, request.height, aovs);
+            for (std::size_t k = 0; k < bands.size(); ++k) {
+                const Frame& f = all.value()[k];
+                if (Status s = assembly.place(f.buffers, bands[k].y0, f.names); !s)
+                    return Unexpected(s.error());
+            }
+            note = " (version moved from " + std::to_string(version) +
+                   " during the split: " + "every band rendered here)";
+            info = all->front().info;
+            first.camera = all->front().camera;
+            std::fill(labels.begin(), labels.end(), "local");
+        }
+    }
+    if (should_stop(request.cancel)) return cancelled(*request.cancel);
+
+    // Step: finish and encode the frame as one render does.
+    info.samples = request.spp;
+    info.samples_added = request.spp;
+    auto frame = std::move(assembly).finish(request, first.camera, info);
+    if (!frame) return Unexpected(frame.error());
+    auto encoded = encode_frame(frame->buffers, request, exr_attributes(frame.value()));
+    if (!encoded) return Unexpected(encoded.error());
+    encoded->info = std::move(frame->info);
+    encoded->info.render_ms = clock.ms();
+    protocol::SplitFrame out;
+    out.frame = std::move(encoded.value());
+    out.bands = std::to_string(split) + " bands at version " +
+                std::to_string(out.frame.info.version) + note + ":";
+    for (std::size_t k = 0; k < labels.size(); ++k) out.bands += (k ? ", " : " ") + labels[k];
+    return out;
+}
+
+}  // namespace strata::server
