@@ -4,9 +4,12 @@
 // same snapshot (version, ids, hits, rendered frames, and what later batches do), and a replace
 // that fails must leave the old scene exactly as it was.
 
+#include <atomic>
 #include <filesystem>
 #include <set>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -145,6 +148,70 @@ TEST(SnapshotReplace, AFullSceneReplacedByASnapshotMatchesAFreshEngineRestoredFr
     EXPECT_EQ(encoded_scene(*replaced), encoded_scene(*fresh));
     EXPECT_TRUE(test::hits(*replaced) == test::hits(*fresh));
     EXPECT_EQ(render_png(*replaced), render_png(*fresh));
+}
+
+TEST(SnapshotReplace, ReadersAndRendersDuringAReplaceSeeTheOldSceneOrTheNewOneNeverAMix) {
+    const std::string bytes = snapshot_of(21, 30, "new");
+    auto view = durable::open_snapshot(bytes);
+    ASSERT_TRUE(view.has_value());
+    auto engine = test::make_engine();
+    build_scene(*engine, 5, 12, "old");
+    const uint64_t old_version = test::version_of(*engine);
+    const std::size_t new_instances = [&] {
+        auto fresh = test::make_engine();
+        EXPECT_TRUE(fresh->restore_snapshot(view->payload, view->version).has_value());
+        return fresh->read([](const Scene& s) { return s.instances().size(); });
+    }();
+    const std::size_t old_instances = engine->read([](const Scene& s) {
+        return s.instances().size();
+    });
+    std::atomic<bool> stop{false};
+    std::atomic<int> mixed{0}, reads{0}, renders{0};
+    std::vector<uint64_t> rendered;  // the render thread's versions, in order
+    std::thread reader([&] {
+        while (!stop) {
+            engine->read([&](const Scene& s) {
+                const bool old_scene = s.version() == old_version &&
+                                       !s.find_instance("a-old").is_null() &&
+                                       s.find_instance("a-new").is_null() &&
+                                       s.instances().size() == old_instances;
+                const bool new_scene = s.version() == view->version &&
+                                       s.find_instance("a-old").is_null() &&
+                                       !s.find_instance("a-new").is_null() &&
+                                       s.instances().size() == new_instances;
+                if (!old_scene && !new_scene) ++mixed;
+            });
+            ++reads;
+        }
+    });
+    std::thread renderer([&] {
+        PrimarySettings settings;
+        settings.width = 32;
+        settings.height = 24;
+        while (!stop) {
+            auto f = engine->render_primary(settings);
+            if (f) rendered.push_back(f->info.version);
+            ++renders;
+        }
+    });
+    while (reads < 10 || renders < 2) std::this_thread::yield();
+    auto done = engine->replace_with_snapshot(view->payload, view->version);
+    const int renders_at_swap = renders;
+    while (renders < renders_at_swap + 2) std::this_thread::yield();
+    stop = true;
+    reader.join();
+    renderer.join();
+    ASSERT_TRUE(done.has_value()) << done.error().describe();
+    EXPECT_EQ(mixed, 0);
+    ASSERT_FALSE(rendered.empty());
+    EXPECT_EQ(rendered.front(), old_version);
+    EXPECT_EQ(rendered.back(), view->version);
+    for (std::size_t i = 0; i < rendered.size(); ++i) {
+        EXPECT_TRUE(rendered[i] == old_version || rendered[i] == view->version) << rendered[i];
+        if (i > 0) {
+            EXPECT_LE(rendered[i - 1], rendered[i]) << "a render went back in time";
+        }
+    }
 }
 
 TEST(SnapshotReplace, AnEmptyEngineIsReplacedLikeARestore) {
