@@ -94,7 +94,8 @@ public:
     /// (when attached) starts a new segment at `version` and the scenes are swapped. Readers and
     /// launches see the old scene or the new one, never a mix; the next commit builds
     /// everything, as after a restore. On any error nothing changed. The caller must be the
-    /// only writer meanwhile (the replica's reader is).
+    /// only writer meanwhile (the replica's reader is). With a journal attached, call it through
+    /// DurableStore::replace_scene, which writes the snapshot the new segment starts from.
     Result<SnapshotReplace> replace_with_snapshot(
         std::string_view payload, uint64_t version,
         const std::function<Status()>& before_swap = nullptr);
