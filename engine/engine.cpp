@@ -11,7 +11,7 @@ namespace strata {
 Result<std::unique_ptr<Engine>> Engine::create(const EngineConfig& config) {
     auto accel = AccelGraph::create(config.accel);
     if (!accel) return Unexpected(accel.error());
-    auto engine = std::unique_ptr<Engine>(new Engine(std::move(accel.value())));
+    auto engine = std::unique_ptr<Engine>(new Engine(config, std::move(accel.value())));
     engine->m_scene.set_budget(config.budget);
     return engine;
 }
@@ -99,14 +99,83 @@ Status Engine::restore(EditBatch&& scene, uint64_t version) {
     return {};
 }
 
+namespace {
+
+/// Loads a snapshot's payload into `scene` (empty), edit by edit; on error it is left part-built.
+Status load_snapshot(Scene& scene, std::string_view payload, uint64_t version) {
+    Status s = durable::decode_each(payload, [&](Edit&& e) { return scene.load(std::move(e)); });
+    if (s) s = scene.finish_load(version);
+    return s;
+}
+
+}  // namespace
+
 Status Engine::restore_snapshot(std::string_view payload, uint64_t version) {
     std::unique_lock lock(m_scene_mutex);
     if (m_scene.version() != 0 || m_scene.instances().size() || m_scene.meshes().size())
         return failure(ErrorCode::Internal, "restore needs an empty engine");
-    Status s = durable::decode_each(payload, [&](Edit&& e) { return m_scene.load(std::move(e)); });
-    if (s) s = m_scene.finish_load(version);
+    Status s = load_snapshot(m_scene, payload, version);
     if (!s) m_scene.reset();
     return s;
+}
+
+Result<SnapshotReplace> Engine::replace_with_snapshot(std::string_view payload, uint64_t version,
+                                                      const std::function<Status()>& before_swap) {
+    Stopwatch clock;
+    SnapshotReplace out;
+    out.version = version;
+    auto not_newer = [&](uint64_t current) {
+        return failure(ErrorCode::VersionMismatch,
+                       "the snapshot of version " + std::to_string(version) +
+                           " is not newer than the scene (version " + std::to_string(current) +
+                           "): nothing replaced");
+    };
+    if (const uint64_t current = read([](const Scene& s) { return s.version(); });
+        version <= current)
+        return not_newer(current);
+
+    // Step: the new scene and an empty acceleration graph, built while the old scene serves. A
+    // loaded scene lists everything as added, so the fresh graph's first commit builds it all,
+    // exactly as in an engine that restored the snapshot; nothing of the old graph (slots, BLASes,
+    // TLAS tiers, background merges) carries over.
+    Scene fresh;
+    fresh.set_budget(m_config.budget);
+    if (Status s = load_snapshot(fresh, payload, version); !s) return Unexpected(s.error());
+    auto accel = AccelGraph::create(m_config.accel);
+    if (!accel) return Unexpected(accel.error());
+    out.load_ms = clock.ms();
+    if (before_swap) {
+        if (Status s = before_swap(); !s) return Unexpected(s.error());
+    }
+
+    // Step: the swap. The old scene, graph and frame state are destroyed after the locks go.
+    std::unique_ptr<AccelGraph> graph = std::move(accel.value());
+    FrameState frame;
+    {
+        std::lock_guard launch_lock(m_launch_mutex);
+        std::unique_lock lock(m_scene_mutex);
+        Stopwatch held;
+        out.old_version = m_scene.version();
+        if (version <= out.old_version) return not_newer(out.old_version);
+        // Later records go to a segment that starts at the snapshot's version (recovery then
+        // reads the snapshot and that segment, never the old scene's records followed by a gap).
+        if (m_journal) {
+            if (Status s = m_journal->rotate(version); !s) return Unexpected(s.error());
+        }
+        graph->set_refit_policy(m_accel->refit_policy());
+        std::swap(m_scene, fresh);
+        {
+            std::lock_guard accel_lock(m_accel_mutex);
+            std::swap(m_accel, graph);
+        }
+        std::swap(m_frame, frame);
+        out.lock_ms = held.ms();
+    }
+    fresh = Scene();
+    graph.reset();
+    frame = FrameState();
+    release_free_memory();
+    return out;
 }
 
 Result<RebuildReport> Engine::commit() {
@@ -287,6 +356,11 @@ void Engine::add_rays(uint64_t rays, double seconds) {
 EngineCounters Engine::counters() const {
     std::lock_guard stats(m_stats_mutex);
     return m_counters;
+}
+
+int64_t Engine::memory_bytes(MemoryCategory c) const {
+    std::lock_guard accel_lock(m_accel_mutex);
+    return m_accel->memory_bytes(c);
 }
 
 RebuildReport Engine::last_report() const {

@@ -17,6 +17,7 @@
 #include <mutex>
 #include <optional>
 #include <shared_mutex>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -44,6 +45,14 @@ struct EngineConfig {
 struct ApplyResult {
     uint64_t version = 0;
     std::size_t applied = 0;
+};
+
+/// What Engine::replace_with_snapshot() did.
+struct SnapshotReplace {
+    uint64_t old_version = 0;  ///< the scene it replaced
+    uint64_t version = 0;      ///< the snapshot's, the scene's now
+    double load_ms = 0.0;      ///< decoding and loading the new scene, outside every lock
+    double lock_ms = 0.0;      ///< the exclusive hold: the journal's cut and the swap
 };
 
 class Engine {
@@ -78,6 +87,19 @@ public:
     /// this empty engine edit by edit, straight into the scene's storage: no whole batch decoded
     /// first, no undo log. On error the engine is left empty.
     Status restore_snapshot(std::string_view payload, uint64_t version);
+    /// Replaces the whole scene, whatever it holds, with a snapshot's scene (`payload`, as for
+    /// restore_snapshot) at `version`, which must be newer than the scene's: a replica that finds
+    /// its log trimmed past its version jumps to the log's snapshot. The new scene and a fresh
+    /// acceleration graph are built outside the locks, then `before_swap` runs (a data directory
+    /// writes the snapshot there); the launch and scene locks are held only while the journal
+    /// (when attached) starts a new segment at `version` and the scenes are swapped. Readers and
+    /// launches see the old scene or the new one, never a mix; the next commit builds
+    /// everything, as after a restore. On any error nothing changed. The caller must be the
+    /// only writer meanwhile (the replica's reader is). With a journal attached, call it through
+    /// DurableStore::replace_scene, which writes the snapshot the new segment starts from.
+    Result<SnapshotReplace> replace_with_snapshot(
+        std::string_view payload, uint64_t version,
+        const std::function<Status()>& before_swap = nullptr);
 
     /// Brings the acceleration graph in line with the scene, doing the least work.
     Result<RebuildReport> commit();
@@ -141,8 +163,8 @@ public:
     /// the listener must be quick and must not call into this engine.
     using CommitListener = std::function<void(const RebuildReport&)>;
     void set_commit_listener(CommitListener listener);
-    /// Acceleration-structure memory now.
-    int64_t memory_bytes(MemoryCategory c) const { return m_accel->memory_bytes(c); }
+    /// Acceleration-structure memory now (takes no lock a launch or an edit holds).
+    int64_t memory_bytes(MemoryCategory c) const;
 
     void set_refit_policy(const RefitPolicy& p);
     RefitPolicy refit_policy() const;
@@ -155,17 +177,21 @@ public:
     void add_rays(uint64_t rays, double seconds);
 
 private:
-    explicit Engine(std::unique_ptr<AccelGraph> accel) : m_accel(std::move(accel)) {}
+    Engine(const EngineConfig& config, std::unique_ptr<AccelGraph> accel)
+        : m_config(config), m_accel(std::move(accel)) {}
     /// The commit, with the launch mutex held. With `keep_scene_lock`, the scene's exclusive
     /// lock is handed to the caller instead of released (the caller then reads the scene at
     /// exactly the committed version).
     Result<RebuildReport> commit_locked(std::unique_lock<std::shared_mutex>* keep_scene_lock =
                                             nullptr);
 
+    const EngineConfig m_config;  ///< what a replaced scene's budget and acceleration graph use
     mutable std::mutex m_launch_mutex;
     mutable std::shared_mutex m_scene_mutex;
     Scene m_scene;
+    /// Replaced only by replace_with_snapshot(), under the launch, scene and accel locks.
     std::unique_ptr<AccelGraph> m_accel;
+    mutable std::mutex m_accel_mutex;  ///< lets memory_bytes() read m_accel during a replace
     durable::Journal* m_journal = nullptr;
     FrameState m_frame;
     Renderer m_renderer;  ///< guarded by the launch mutex (it holds the accumulation state)

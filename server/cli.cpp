@@ -63,7 +63,8 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
                    "order (see README, Scaling out). Empty: batches apply locally only");
     app.add_option("--log-snapshot-every", c.log_snapshot_every,
                    "With --log: every this many versions a snapshot of the scene is stored in "
-                   "Redis for joining replicas, and the stream is trimmed below the previous one "
+                   "Redis for joining replicas (and for replicas that fell behind the trimmed "
+                   "stream, which jump to it), and the stream is trimmed below the previous one "
                    "(0: this replica stores none)")
         ->check(CLI::Range(uint64_t(0), uint64_t(1) << 40));
     app.add_option("--log-write-timeout-ms", c.log_write_timeout_ms,

@@ -172,6 +172,7 @@ int serve(server::CommandLine& cl) {
         o.url = replica::parse_redis_url(cl.config.log_url).value();  // checked by finish_config
         o.snapshot_every = cl.config.log_snapshot_every;
         o.write_timeout = std::chrono::milliseconds(cl.config.log_write_timeout_ms);
+        o.store = store.get();
         follow = replica::Replica::start(o, *engine.value());
         follower = follow.get();
         http.attach_replica(follow.get());

@@ -169,15 +169,7 @@ Status DurableStore::write_snapshot() {
         return fail(s.error());
 
     // Step: what the snapshot replaces.
-    m_journal->drop_segments_before(version);
-    if (auto names = list_files(m_options.dir)) {
-        for (const std::string& name : names.value()) {
-            uint64_t v = 0;
-            if (parse_snapshot_name(name, v) && v < version)
-                ::unlink(join_path(m_options.dir, name).c_str());
-        }
-        (void)sync_directory(m_options.dir);
-    }
+    remove_covered(version);
     std::lock_guard stats(m_stats_mutex);
     ++m_stats.snapshots_written;
     m_stats.last_snapshot_version = version;
@@ -187,6 +179,54 @@ Status DurableStore::write_snapshot() {
     m_stats.last_snapshot_lock_ms = lock_ms;
     m_stats.last_snapshot_error.clear();
     return {};
+}
+
+void DurableStore::remove_covered(uint64_t version) {
+    m_journal->drop_segments_before(version);
+    if (auto names = list_files(m_options.dir)) {
+        for (const std::string& name : names.value()) {
+            uint64_t v = 0;
+            if (parse_snapshot_name(name, v) && v < version)
+                ::unlink(join_path(m_options.dir, name).c_str());
+        }
+        (void)sync_directory(m_options.dir);
+    }
+}
+
+Result<SnapshotReplace> DurableStore::replace_scene(std::string_view snapshot) {
+    // One snapshot at a time: the background thread neither rotates nor removes meanwhile.
+    std::lock_guard one_at_a_time(m_snapshot_mutex);
+    Stopwatch clock;
+    auto view = open_snapshot(snapshot);
+    if (!view) return Unexpected(view.error());
+    const uint64_t version = view->version;
+    const std::string name = snapshot_name(version);
+    // Step: the snapshot is durable here before the swap. A crash before the swap recovers it
+    // (its version covers every record the journal holds); the journal's next segment starts
+    // at it under the scene lock, so no record after it can land in an older segment.
+    bool written = false;
+    auto replaced = m_engine.replace_with_snapshot(view->payload, version, [&]() -> Status {
+        if (Status s = write_file_atomically(m_options.dir, name, snapshot); !s) return s;
+        written = true;
+        return {};
+    });
+    if (!replaced) {
+        if (written) {
+            ::unlink(join_path(m_options.dir, name).c_str());
+            (void)sync_directory(m_options.dir);
+        }
+        return Unexpected(replaced.error());
+    }
+    remove_covered(version);
+    std::lock_guard stats(m_stats_mutex);
+    ++m_stats.snapshots_written;
+    m_stats.last_snapshot_version = version;
+    m_stats.last_snapshot_bytes = snapshot.size();
+    m_stats.last_snapshot_unix_ms = unix_ms_now();
+    m_stats.last_snapshot_seconds = clock.ms() / 1000.0;
+    m_stats.last_snapshot_lock_ms = replaced->lock_ms;
+    m_stats.last_snapshot_error.clear();
+    return replaced;
 }
 
 void DurableStore::set_rebuild_seconds(double seconds) {

@@ -19,6 +19,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <string_view>
 #include <thread>
 
 #include "engine/durable/durable_stats.h"
@@ -27,6 +28,7 @@
 
 namespace strata {
 class Engine;
+struct SnapshotReplace;
 }
 
 namespace strata::durable {
@@ -58,6 +60,14 @@ public:
     /// Writes a snapshot now (the background thread does this by itself past the threshold).
     Status snapshot_now();
 
+    /// Replaces the engine's scene with `snapshot` (journal_format.h's snapshot bytes, as a shared
+    /// edit log stores them) through Engine::replace_with_snapshot, durably: the bytes are written
+    /// as this directory's snapshot of their version before the scenes are swapped, the journal
+    /// continues in a segment starting at that version, and the older snapshots and segments are
+    /// then removed. A crash at any point recovers either the old scene or the new one. On error
+    /// the scene is unchanged and the file is removed again.
+    Result<SnapshotReplace> replace_scene(std::string_view snapshot);
+
     /// Records how long the acceleration structures took to build after recovery.
     void set_rebuild_seconds(double seconds);
 
@@ -68,6 +78,8 @@ private:
     DurableStore(const StoreOptions& options, Engine& engine);
     void snapshot_loop();
     Status write_snapshot();
+    /// After a durable snapshot of `version`: removes the segments and snapshots it covers.
+    void remove_covered(uint64_t version);
 
     StoreOptions m_options;
     Engine& m_engine;

@@ -5,6 +5,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "engine/durable/durable_store.h"
 #include "engine/durable/edit_codec.h"
 #include "engine/durable/journal_format.h"
 #include "server/replica/log_entry.h"
@@ -214,30 +215,19 @@ Status Replica::on_connect(RedisConnection& c) {
                     " (was Redis reset, or did it lose acknowledged entries?)");
         return storage("log behind the replica");
     }
-    if (applied == 0 && snapshot > 0 && !m_joined) {
-        auto bytes = c.command({"HGET", url.snapshot_key(), "bytes"});
-        if (!bytes) return Unexpected(bytes.error());
-        auto view = durable::open_snapshot(bytes.value().str);
-        if (!view || view.value().version != snapshot) {
-            stop_loudly("the snapshot in " + url.snapshot_key() + " is unusable: " +
-                        (view ? "it holds version " + std::to_string(view.value().version) +
-                                    ", the hash says " + std::to_string(snapshot)
-                              : view.error().message));
-            return storage("bad snapshot");
+    // Step: an empty replica starts from the snapshot; one holding a scene jumps to it only when
+    // the entries after its version were trimmed away.
+    if (applied == 0 && snapshot > 0) {
+        if (Status s = load_snapshot(c, 0, ""); !s) return s;
+    } else if (snapshot > applied && log_version > applied) {
+        auto held = holds_entry_after(c, applied);
+        if (!held) return Unexpected(held.error());
+        if (!held.value()) {
+            const std::string gap = "the log (at version " + std::to_string(log_version) +
+                                    ") no longer holds the entries after version " +
+                                    std::to_string(applied);
+            if (Status s = load_snapshot(c, applied, gap); !s) return s;
         }
-        if (Status s = m_engine.restore_snapshot(view.value().payload, snapshot); !s) {
-            stop_loudly("the snapshot of version " + std::to_string(snapshot) +
-                        " does not load: " + s.error().describe());
-            return storage("bad snapshot");
-        }
-        {
-            std::lock_guard lock(m_mutex);
-            m_applied = snapshot;
-            m_counters.snapshot_loaded_version = snapshot;
-        }
-        m_cv.notify_all();
-        spdlog::info("edit log: loaded the snapshot of version {} ({} bytes) from {}", snapshot,
-                     bytes.value().str.size(), url.snapshot_key());
     }
     set_log_version(log_version);
     if (!m_joined) {
@@ -261,14 +251,19 @@ Status Replica::read_and_apply(RedisConnection& c) {
         if (!head.value().is_nil() && parse_u64(head.value().str, v)) set_log_version(v);
         if (m_log_version.load() > m_applied.load()) {
             // The head moved but XREAD found nothing after us: the entries are gone.
-            auto again = c.command(
-                {"XRANGE", url.stream, entry_id(m_applied.load() + 1), "+", "COUNT", "1"});
-            if (!again) return Unexpected(again.error());
-            if (again.value().elements.empty()) {
-                stop_loudly("the log is at version " + std::to_string(m_log_version.load()) +
-                            " but holds no entry after version " +
-                            std::to_string(m_applied.load()) + " (trimmed or deleted)");
-                return storage("gap");
+            const uint64_t applied = m_applied.load();
+            auto held = holds_entry_after(c, applied);
+            if (!held) return Unexpected(held.error());
+            if (!held.value()) {
+                if (Status s = load_snapshot(c, applied,
+                                             "the log is at version " +
+                                                 std::to_string(m_log_version.load()) +
+                                                 " but holds no entry after version " +
+                                                 std::to_string(applied) +
+                                                 " (trimmed or deleted)");
+                    !s)
+                    return s;
+                if (!m_joined && m_applied.load() >= m_join_target) mark_joined();
             }
         }
         return {};
@@ -302,12 +297,24 @@ Status Replica::read_and_apply(RedisConnection& c) {
                         "field 'r')");
             return storage("poisoned");
         }
-        if (version != applied + 1) {
+        if (version <= applied) {
             stop_loudly("the log entry of version " + std::to_string(version) +
+                        " comes after this replica's version " + std::to_string(applied) +
+                        " in the stream (entries out of order)");
+            return storage("out of order");
+        }
+        if (version != applied + 1) {
+            // Trimmed before this replica read them: jump to the snapshot, then read on from it
+            // (the rest of this reply is older than the snapshot's version or read again).
+            if (Status s = load_snapshot(
+                    c, applied,
+                    "the log entry of version " + std::to_string(version) +
                         " follows this replica's version " + std::to_string(applied) +
-                        ": the entries between were trimmed before it read them (restart it "
-                        "with an empty scene to load the snapshot)");
-            return storage("gap");
+                        ": the entries between were trimmed before it read them");
+                !s)
+                return s;
+            if (!m_joined && m_applied.load() >= m_join_target) mark_joined();
+            return {};
         }
         set_log_version(version);
         if (m_lag_since_ms.load() == 0) m_lag_since_ms = appended_ms ? appended_ms : unix_ms();
@@ -351,6 +358,77 @@ Status Replica::read_and_apply(RedisConnection& c) {
             }
             m_snapshot_cv.notify_one();
         }
+    }
+    return {};
+}
+
+Result<bool> Replica::holds_entry_after(RedisConnection& c, uint64_t applied) {
+    auto first = c.command(
+        {"XRANGE", m_options.url.stream, entry_id(applied + 1), "+", "COUNT", "1"});
+    if (!first) return Unexpected(first.error());
+    const RedisReply& r = first.value();
+    uint64_t version = 0;
+    return !r.elements.empty() && !r.elements[0].elements.empty() &&
+           parse_entry_version(r.elements[0].elements[0].str, version) && version == applied + 1;
+}
+
+Status Replica::load_snapshot(RedisConnection& c, uint64_t applied, const std::string& gap) {
+    const RedisUrl& url = m_options.url;
+    // Step: the stored snapshot, version and bytes in one read (the script sets both at once).
+    auto stored = c.command({"HMGET", url.snapshot_key(), "version", "bytes"});
+    if (!stored) return Unexpected(stored.error());
+    const RedisReply& r = stored.value();
+    uint64_t snapshot = 0;
+    if (r.elements.size() == 2 && !r.elements[0].is_nil())
+        (void)parse_u64(r.elements[0].str, snapshot);
+    m_known_snapshot = std::max(m_known_snapshot.load(), snapshot);
+    if (snapshot <= applied) {
+        // Only a newer snapshot bridges a gap; an older one never replaces anything.
+        stop_loudly(gap + ", and the snapshot in " + url.snapshot_key() + " is " +
+                    (snapshot == 0 ? std::string("missing")
+                                   : "at version " + std::to_string(snapshot)) +
+                    ", not newer than this replica's version " + std::to_string(applied) +
+                    ": nothing can bridge the gap (was the stream trimmed by hand?)");
+        return storage("gap");
+    }
+    const std::string& bytes = r.elements[1].str;
+    auto view = durable::open_snapshot(bytes);
+    if (!view || view.value().version != snapshot) {
+        stop_loudly("the snapshot in " + url.snapshot_key() + " is unusable: " +
+                    (view ? "it holds version " + std::to_string(view.value().version) +
+                                ", the hash says " + std::to_string(snapshot)
+                          : view.error().message));
+        return storage("bad snapshot");
+    }
+    // Step: the whole scene replaced in one swap (and written to the data directory first, when
+    // there is one); on failure the old scene stays and the replica stops.
+    auto replaced = m_options.store ? m_options.store->replace_scene(bytes)
+                                    : m_engine.replace_with_snapshot(view.value().payload, snapshot);
+    if (!replaced) {
+        stop_loudly("the snapshot of version " + std::to_string(snapshot) + " does not load" +
+                    (applied ? " in place of this replica's version " + std::to_string(applied)
+                             : std::string()) +
+                    ": " + replaced.error().describe());
+        return storage("bad snapshot");
+    }
+    {
+        std::lock_guard lock(m_mutex);
+        m_applied = snapshot;
+        m_counters.snapshot_loaded_version = snapshot;
+        if (applied > 0) ++m_counters.snapshot_jumps;
+    }
+    m_cv.notify_all();
+    set_log_version(snapshot);
+    if (applied == 0) {
+        spdlog::info("edit log: loaded the snapshot of version {} ({} bytes) from {}", snapshot,
+                     bytes.size(), url.snapshot_key());
+    } else {
+        spdlog::info(
+            "edit log: {}; loaded the snapshot of version {} ({} bytes) from {} in place of "
+            "version {} (built in {:.1f} ms, scene locked {:.3f} ms{}); following from version {}",
+            gap, snapshot, bytes.size(), url.snapshot_key(), applied, replaced->load_ms,
+            replaced->lock_ms, m_options.store ? ", written to the data directory" : "",
+            snapshot + 1);
     }
     return {};
 }

@@ -9,17 +9,24 @@
 // same entries in the same order from the same state, all hold the same scene at each version.
 //
 // Failures. An entry that fails its checksum or does not apply (a poisoned entry), a gap in the
-// versions (entries trimmed before this replica read them) or a log that ends before this
-// replica's version stop the replica loudly: it applies nothing more, /readyz answers 503 with
-// the reason, writes 503, and the reason is logged and exported. Redis unreachable: writes fail
-// with a Storage error (503), reads and renders of the applied version go on, and the reader
-// reconnects with backoff (50 ms doubling to 2 s) and catches up.
+// versions that no snapshot bridges, or a log that ends before this replica's version stop the
+// replica loudly: it applies nothing more, /readyz answers 503 with the reason, writes 503, and
+// the reason is logged and exported. Redis unreachable: writes fail with a Storage error (503),
+// reads and renders of the applied version go on, and the reader reconnects with backoff (50 ms
+// doubling to 2 s) and catches up.
 //
 // Snapshots and trimming. Every `snapshot_every` versions a background thread stores a snapshot
 // of the scene (journal_format.h's snapshot bytes) in the hash `<stream>:snapshot`, replacing an
 // older one, and trims the stream below the snapshot it replaced (XTRIM MINID): the log keeps the
 // entries since the previous snapshot, so a replica that had reached it can still follow. A new
 // replica with an empty scene loads the snapshot and follows the stream from its version.
+//
+// Snapshot jumps. A replica that holds a scene at version A while the entries after A were
+// trimmed (it was stopped, or restarted on a data directory that recovered A) and the stored
+// snapshot is at S > A replaces its whole scene with the snapshot's (Engine::replace_with_snapshot,
+// or DurableStore::replace_scene when the server has --data, so that the directory then holds S)
+// and follows from S + 1. It jumps only over a real gap: the entry after A is gone and the
+// snapshot is newer than A. A snapshot that does not load stops the replica with the old scene.
 
 #include <atomic>
 #include <chrono>
@@ -34,6 +41,10 @@
 #include "engine/engine.h"
 #include "server/replica/redis_url.h"
 
+namespace strata::durable {
+class DurableStore;
+}
+
 namespace strata::replica {
 
 class RedisConnection;
@@ -44,6 +55,9 @@ struct ReplicaOptions {
     std::chrono::milliseconds write_timeout{5000};
     /// Versions between snapshots stored in Redis; 0: this replica writes none.
     uint64_t snapshot_every = 1000;
+    /// The server's data directory (--data), if any: a snapshot jump goes through it, so that
+    /// the directory holds the snapshot's version afterwards. Must outlive the replica.
+    durable::DurableStore* store = nullptr;
 };
 
 /// What /readyz, /metrics and GET /v1/stats say about the replica.
@@ -61,7 +75,8 @@ struct ReplicaStatus {
     uint64_t appends = 0;                  ///< batches this replica appended
     uint64_t append_conflicts = 0;         ///< appends refused because the log had moved on
     uint64_t reconnects = 0;               ///< connections the reader made after losing one
-    uint64_t snapshot_loaded_version = 0;  ///< the Redis snapshot this replica started from
+    uint64_t snapshot_loaded_version = 0;  ///< the newest Redis snapshot this replica loaded
+    uint64_t snapshot_jumps = 0;  ///< scenes replaced by a newer snapshot over a trimmed gap
     uint64_t snapshots_written = 0;
     uint64_t last_snapshot_version = 0;  ///< newest snapshot this replica knows of
     uint64_t entries_trimmed = 0;        ///< entries this replica's snapshots trimmed
@@ -99,6 +114,12 @@ private:
     Status on_connect(RedisConnection& c);
     /// Reads and applies one XREAD's worth; errors lose the connection.
     Status read_and_apply(RedisConnection& c);
+    /// Whether the log still holds the entry after version `applied`.
+    Result<bool> holds_entry_after(RedisConnection& c, uint64_t applied);
+    /// Loads the stored snapshot in place of the scene at `applied` (0: an empty scene joining;
+    /// else a jump over entries trimmed away, `gap` saying which). Stops loudly when the snapshot
+    /// is not newer than `applied` or does not load; a Redis error only loses the connection.
+    Status load_snapshot(RedisConnection& c, uint64_t applied, const std::string& gap);
     void stop_loudly(const std::string& why);
     void set_log_version(uint64_t v);
     void mark_joined();

@@ -42,6 +42,10 @@ constexpr ReplicaMetricSpec REPLICA_METRICS[] = {
      [](const ReplicaStatus& s) { return double(s.snapshots_written); }},
     {"strata_replica_snapshot_version", "gauge", "Newest snapshot version known in Redis.",
      [](const ReplicaStatus& s) { return double(s.last_snapshot_version); }},
+    {"strata_replica_snapshot_jumps_total", "counter",
+     "Times this replica replaced its scene with a newer Redis snapshot because the log entries "
+     "after its version had been trimmed.",
+     [](const ReplicaStatus& s) { return double(s.snapshot_jumps); }},
 };
 
 }  // namespace

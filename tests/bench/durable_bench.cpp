@@ -12,7 +12,15 @@
 //           longest apply() that overlapped a snapshot, against the longest one in windows of
 //           the same length without a snapshot (the baseline, same run).
 //
-//   build/tests/bench/strata_durable_bench [edits|restart|stall|all] [runs]   (default: all 3)
+//   replace a 1M-instance scene behind a DurableStore is replaced by another 1M-instance scene's
+//           snapshot (DurableStore::replace_scene, what a replica does over a trimmed gap) while
+//           one thread reads the scene version back to back: the scene lock's hold during the
+//           swap, the longest read during the replace against the longest in as long a window
+//           without one, and as the baseline restore_snapshot of the same bytes into an empty
+//           engine (how long loading under the lock would hold it).
+//
+//   build/tests/bench/strata_durable_bench [edits|restart|stall|replace|all] [runs]
+//   (default: all 3)
 //   STRATA_BENCH_DIR picks where the data directories go (default: $TMPDIR).
 
 #include <unistd.h>
@@ -32,6 +40,7 @@
 
 #include "engine/core/timer.h"
 #include "engine/durable/durable_store.h"
+#include "engine/durable/journal_format.h"
 #include "engine/engine.h"
 #include "engine/scene/shapes.h"
 #include "server/server.h"
@@ -379,6 +388,132 @@ void bench_stall(int runs) {
                 median(with), median(without), median(lock), median(total));
 }
 
+// Step: the lock a snapshot jump holds ------------------------------------------------------
+
+struct ReplaceResult {
+    double lock_ms = 0;          ///< the swap's exclusive hold (SnapshotReplace::lock_ms)
+    double load_ms = 0;          ///< the new scene built aside
+    double replace_s = 0;        ///< replace_scene in all (the snapshot file written and fsynced)
+    double longest_read_ms = 0;  ///< the longest read() overlapping the replace
+    double quiet_read_ms = 0;    ///< the longest read() in as long a window without one
+    double restore_s = 0;        ///< baseline: restore_snapshot into an empty engine
+    double first_commit_s = 0;   ///< the build after the swap (the next render pays it)
+};
+
+ReplaceResult run_replace(const std::string& snapshot) {
+    auto eng = engine();
+    const std::string dir = temp_dir();
+    durable::StoreOptions o;
+    o.dir = dir;
+    o.snapshot_threshold_bytes = UINT64_MAX;
+    auto opened = durable::DurableStore::open(o, *eng);
+    if (!opened) std::abort();
+    auto store = std::move(opened.value());
+    // The old scene: 1M instances laid out differently, built.
+    for (auto& b : million_instances()) {
+        for (Edit& e : b.edits)
+            if (auto* i = std::get_if<AddInstance>(&e)) i->transform.m[7] = 3.0f;
+        if (!eng->apply(std::move(b))) std::abort();
+    }
+    if (!eng->commit()) std::abort();
+
+    using Clock = std::chrono::steady_clock;
+    struct Span {
+        Clock::time_point begin, end;
+    };
+    // Reads take about a microsecond: only those over 50 us are kept (0 below means none was).
+    std::vector<Span> spans;
+    spans.reserve(1 << 20);
+    std::atomic<bool> stop{false};
+    std::thread reader([&] {
+        while (!stop.load(std::memory_order_relaxed) && spans.size() < spans.capacity()) {
+            const auto t0 = Clock::now();
+            (void)eng->read([](const Scene& s) { return s.version(); });
+            const auto t1 = Clock::now();
+            if (t1 - t0 > std::chrono::microseconds(50)) spans.push_back({t0, t1});
+        }
+    });
+    auto longest = [&](Clock::time_point a, Clock::time_point b, std::size_t upto) {
+        double worst = 0;
+        for (std::size_t i = 0; i < upto; ++i)
+            if (spans[i].end >= a && spans[i].begin <= b)
+                worst = std::max(worst, std::chrono::duration<double, std::milli>(
+                                            spans[i].end - spans[i].begin)
+                                            .count());
+        return worst;
+    };
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    const auto begin = Clock::now();
+    auto replaced = store->replace_scene(snapshot);
+    if (!replaced) {
+        std::fprintf(stderr, "replace failed: %s\n", replaced.error().describe().c_str());
+        std::abort();
+    }
+    const auto end = Clock::now();
+    const auto quiet_begin = Clock::now();
+    std::this_thread::sleep_for(end - begin);
+    const auto quiet_end = Clock::now();
+    stop = true;
+    reader.join();
+    ReplaceResult out;
+    out.lock_ms = replaced->lock_ms;
+    out.load_ms = replaced->load_ms;
+    out.replace_s = std::chrono::duration<double>(end - begin).count();
+    out.longest_read_ms = longest(begin, end, spans.size());
+    out.quiet_read_ms = longest(quiet_begin, quiet_end, spans.size());
+    Stopwatch build;
+    if (!eng->commit()) std::abort();
+    out.first_commit_s = build.ms() / 1000.0;
+    store.reset();
+    eng.reset();
+    std::filesystem::remove_all(dir);
+
+    auto empty = engine();
+    auto view = durable::open_snapshot(snapshot);
+    if (!view) std::abort();
+    Stopwatch restore;
+    if (!empty->restore_snapshot(view->payload, view->version)) std::abort();
+    out.restore_s = restore.ms() / 1000.0;
+    return out;
+}
+
+void bench_replace(int runs) {
+    std::printf("replace: a built 1M-instance scene replaced by another 1M-instance scene's "
+                "snapshot through a DurableStore (fsync always), 1 reader thread; %d runs, "
+                "median\n",
+                runs);
+    std::string snapshot;
+    {
+        auto source = engine();
+        for (auto& b : million_instances())
+            if (!source->apply(std::move(b))) std::abort();
+        snapshot = source->read(
+            [](const Scene& s) { return durable::encode_snapshot(s.to_batch(), s.version() + 50); });
+    }
+    std::vector<double> lock, load, total, longest, quiet, restore, build;
+    for (int r = 0; r < runs; ++r) {
+        const ReplaceResult x = run_replace(snapshot);
+        std::printf("    run %d: lock %.3f ms; load aside %.2f s; replace %.2f s; longest read "
+                    "%.2f ms during, %.2f ms without; restore into an empty engine %.2f s; "
+                    "first commit %.2f s\n",
+                    r + 1, x.lock_ms, x.load_ms / 1000.0, x.replace_s, x.longest_read_ms,
+                    x.quiet_read_ms, x.restore_s, x.first_commit_s);
+        lock.push_back(x.lock_ms);
+        load.push_back(x.load_ms / 1000.0);
+        total.push_back(x.replace_s);
+        longest.push_back(x.longest_read_ms);
+        quiet.push_back(x.quiet_read_ms);
+        restore.push_back(x.restore_s);
+        build.push_back(x.first_commit_s);
+    }
+    std::printf("  scene lock held %.3f ms by the swap (%.0f MB snapshot); built aside in %.2f s, "
+                "replace %.2f s in all; longest read %.2f ms during the replace, %.2f ms without "
+                "(baseline); restore_snapshot (the lock held while loading) %.2f s; first commit "
+                "after the swap %.2f s\n",
+                median(lock), double(snapshot.size()) / 1e6, median(load), median(total),
+                median(longest), median(quiet), median(restore), median(build));
+}
+
 }  // namespace
 }  // namespace strata
 
@@ -390,5 +525,6 @@ int main(int argc, char** argv) {
     if (what == "edits" || what == "all") strata::bench_edits(runs);
     if (what == "restart" || what == "all") strata::bench_restart(runs);
     if (what == "stall" || what == "all") strata::bench_stall(runs);
+    if (what == "replace" || what == "all") strata::bench_replace(runs);
     return 0;
 }

@@ -1,12 +1,16 @@
 """Replicas following one edit log in Redis Streams (issue 16), with a real redis-server (AOF on,
 fsync always) and real strata-server processes: convergence, one winner per version under
 If-Match races, a replica SIGKILLed and restarted, Redis SIGKILLed mid-stream, a poisoned entry,
-read-your-writes with min_version, and a replica joining from a snapshot after trimming.
+read-your-writes with min_version, a replica joining from a snapshot after trimming, and replicas
+that hold a scene jumping to the snapshot over entries trimmed while they were stopped.
 Skipped, saying so, only where redis-server is not installed (scripts/install-deps.sh installs it).
 """
 
 import json
 import socket
+import shutil
+import signal
+import tempfile
 import threading
 import time
 import unittest
@@ -317,12 +321,91 @@ class Replicas(unittest.TestCase):
         first = self.redis.command("XRANGE", self.stream, "-", "+", "COUNT", "1")[0][0]
         self.assertGreater(int(first.split(b"-")[0]), 10)
         self.assertLess(self.redis.command("XLEN", self.stream), 13)
-        late = self.replica("--log-snapshot-every", "5")
+        data = tempfile.mkdtemp(prefix="strata-replica-")
+        self.addCleanup(shutil.rmtree, data, True)
+        late = self.replica("--log-snapshot-every", "5", "--data", data)
         self.assertIn(f"loaded the snapshot of version {snap}", late.log())
         servers.append(late)
         n = self.stream_batches(servers, n, 3)
         self.assert_converged(servers, n)
         self.assertEqual(durable_scene.check(late, n), "")
+        # Its directory holds the snapshot it joined from and what followed: it restarts alone.
+        late.stop()
+        alone = Server(["--data", data])
+        self.addCleanup(alone.stop)
+        self.assertEqual(durable_scene.check(alone, n), "")
+
+    def trim_past(self, writer, n, behind):
+        """Streams batches through `writer` until a stored snapshot is at least 20 and the log no
+        longer holds the entry after version `behind`; returns the version reached."""
+        n = self.stream_batches([writer], n, 23 - n)
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline:
+            snap = self.redis.command("HGET", self.stream + ":snapshot", "version")
+            if snap is not None and int(snap) >= 20:
+                break
+            time.sleep(0.05)
+        snap = int(self.redis.command("HGET", self.stream + ":snapshot", "version"))
+        self.assertGreaterEqual(snap, 20)
+        first = self.redis.command("XRANGE", self.stream, "-", "+", "COUNT", "1")[0][0]
+        self.assertGreater(int(first.split(b"-")[0]), behind + 1, "the gap should be real")
+        return n, snap
+
+    def metric(self, server, name):
+        _, _, text = server.call("GET", "/metrics")
+        for line in text.decode().splitlines():
+            if line.startswith(name + " "):
+                return float(line.split()[1])
+        self.fail(f"{name} missing from /metrics")
+
+    def test_a_replica_restarted_on_its_data_directory_after_trimming_jumps_to_the_snapshot(self):
+        data = tempfile.mkdtemp(prefix="strata-replica-")
+        self.addCleanup(shutil.rmtree, data, True)
+        a = self.replica("--log-snapshot-every", "5")
+        b = self.replica("--log-snapshot-every", "5", "--data", data)
+        n = self.stream_batches([a, b], 0, 7)
+        self.assertEqual(self.at(b, n)[0], 200)
+        b.kill()
+        n, snap = self.trim_past(a, n, 7)
+        # Restarted on its directory, B recovers version 7, finds the entries after it trimmed
+        # and replaces its scene with the snapshot instead of stopping.
+        b = self.replica("--log-snapshot-every", "5", "--data", data)
+        self.assertEqual(self.at(b, n)[0], 200)
+        log = b.log()
+        self.assertIn("recovered version 7", log)
+        self.assertIn(f"loaded the snapshot of version {snap}", log)
+        self.assertIn("in place of version 7", log)
+        self.assertEqual(self.metric(b, "strata_replica_snapshot_jumps_total"), 1)
+        self.assertEqual(self.metric(b, "strata_replica_stopped"), 0)
+        n = self.stream_batches([a, b], n, 3)
+        self.assertEqual(self.metric(b, "strata_durable_last_snapshot_version"), snap)
+        self.assert_converged([a, b], n)
+        self.assertEqual(durable_scene.check(b, n), "")
+        # The directory now holds the snapshot and what followed: alone, without the log, it
+        # recovers version n, not version 7 followed by a gap.
+        b.stop()
+        alone = Server(["--data", data])
+        self.addCleanup(alone.stop)
+        self.assertIn(f"recovered version {n} (snapshot {snap}", alone.log())
+        self.assertEqual(durable_scene.check(alone, n), "")
+        self.assertEqual(self.at(alone, n, RENDER)[2], self.at(a, n, RENDER)[2])
+
+    def test_a_replica_paused_while_the_log_was_trimmed_jumps_to_the_snapshot_when_resumed(self):
+        a = self.replica("--log-snapshot-every", "5")
+        b = self.replica("--log-snapshot-every", "5")
+        n = self.stream_batches([a, b], 0, 7)
+        self.assertEqual(self.at(b, n)[0], 200)
+        b.signal(signal.SIGSTOP)
+        self.addCleanup(b.signal, signal.SIGCONT)
+        n, snap = self.trim_past(a, n, 8)  # the entry it may have had queued, at most
+        b.signal(signal.SIGCONT)
+        self.assertEqual(self.at(b, n)[0], 200)
+        n = self.stream_batches([a, b], n, 3)
+        self.assert_converged([a, b], n)
+        self.assertEqual(durable_scene.check(b, n), "")
+        self.assertIn(f"loaded the snapshot of version {snap}", b.log())
+        self.assertEqual(self.metric(b, "strata_replica_snapshot_jumps_total"), 1)
+        self.assertEqual(self.metric(a, "strata_replica_snapshot_jumps_total"), 0)
 
     def assert_split_equals_single(self, coordinator, path, split, version, used_peers):
         single = coordinator.call("GET", f"{path}&min_version={version}")
