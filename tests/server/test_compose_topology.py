@@ -434,6 +434,20 @@ class ComposeTopology(unittest.TestCase):
         self.assertIn(b"multipart/x-mixed-replace", got)
         self.assertIn(b"\xff\xd9", got[got.find(b"\xff\xd8"):] if b"\xff\xd8" in got else b"",
                       "nginx held the tail of the first frame back")
+    def test_one_replica_holds_more_viewers_through_nginx_than_one_client_may_open_directly(self):
+        # Behind nginx every connection comes from nginx's address: the per-client connection
+        # limit must allow a replica's share of the viewers' long-lived streams.
+        limit = int(self.env_of["strata-1"].get("STRATA_MAX_CONNECTIONS_PER_CLIENT", "128"))
+        self.replicas["strata-2"].kill()
+        self.replicas["strata-3"].kill()
+        viewers = 160
+        streams = [self.open_stream("/v1/events") for _ in range(viewers)]
+        held = [self.read_until(s, lambda b: b"event: hello" in b or b"\r\n\r\n" in b
+                                and not b.startswith(b"HTTP/1.1 200")) for s in streams]
+        refused = [h.split(b"\r\n", 1)[0] for h in held if b"event: hello" not in h]
+        self.assertEqual(refused, [], f"{len(refused)} of {viewers} viewers refused "
+                                      f"(STRATA_MAX_CONNECTIONS_PER_CLIENT {limit})")
+
 
 if __name__ == "__main__":
     unittest.main()
