@@ -129,6 +129,9 @@ class ComposeTopology(unittest.TestCase):
             self.addresses[f"{name}:{env['STRATA_PORT']}"] = f"127.0.0.1:{self.replica_ports[name]}"
         self.env_of = {}  # replica -> the environment it was started with
         self.replicas = {name: self.start_replica(name, services[name]) for name in REPLICAS}
+        # Cleanups run last-first: all three begin their graceful stop at once.
+        self.addCleanup(lambda: [r.signal(signal.SIGTERM) for r in self.replicas.values()
+                                 if r.alive()])
         self.nginx = Endpoint(self.start_nginx(services["nginx"]), self.token)
 
     # --- the topology ----------------------------------------------------------------------
