@@ -5,8 +5,9 @@ docker/nginx-replicas.conf in front. Only what a container supplies is translate
 hostnames and container ports become free loopback ports, volumes and secrets become temporary
 files; every other flag, variable and nginx directive is used as written, so a mistake in either
 file fails here. Through nginx: edits, read-your-writes with min_version and X-Strata-Min-Version,
-PNG renders equal to each replica's own, reads and renders spread over all three replicas, and
-nginx still serving reads and writes after a replica is SIGKILLed.
+PNG renders equal to each replica's own, reads and renders spread over all three replicas
+(each replica's /metrics), nginx still serving reads and writes after a replica is SIGKILLed, the
+viewer's streams arriving unbuffered, and 160 viewer streams held on one replica.
 Skipped, saying so, only where redis-server or nginx is not installed
 (scripts/install-deps.sh installs both).
 """
@@ -346,8 +347,9 @@ class ComposeTopology(unittest.TestCase):
 
     def test_edits_through_nginx_read_back_and_render_as_each_replica_renders_them(self):
         version = self.post_batches(0, 12)
-        self.assertEqual(int(self.redis.command("GET", "strata:version")), version)
-        for k in range(6):
+        stream = self.env_of["strata-1"]["STRATA_LOG"].rsplit("/", 1)[1]
+        self.assertEqual(int(self.redis.command("GET", stream + ":version")), version)
+        for _ in range(6):
             # Read-your-writes through whichever replica nginx picks.
             self.assertEqual(durable_scene.check(Endpoint(self.nginx.port, self.token, version),
                                                  version), "")
@@ -392,7 +394,7 @@ class ComposeTopology(unittest.TestCase):
         # Writes first, before reads have made nginx mark the dead replica down: a write that
         # finds it is passed on (nothing was sent to it, so it cannot have been appended).
         version = self.post_batches(version, 6)
-        for k in range(9):
+        for _ in range(9):
             status, _, frame = self.nginx.call("GET", f"{RENDER}&min_version={version}")
             self.assertEqual(status, 200, frame[:300])
             self.assertEqual(durable_scene.check(Endpoint(self.nginx.port, self.token, version),
@@ -437,6 +439,7 @@ class ComposeTopology(unittest.TestCase):
         self.assertIn(b"multipart/x-mixed-replace", got)
         self.assertIn(b"\xff\xd9", got[got.find(b"\xff\xd8"):] if b"\xff\xd8" in got else b"",
                       "nginx held the tail of the first frame back")
+
     def test_one_replica_holds_more_viewers_through_nginx_than_one_client_may_open_directly(self):
         # Behind nginx every connection comes from nginx's address: the per-client connection
         # limit must allow a replica's share of the viewers' long-lived streams.
