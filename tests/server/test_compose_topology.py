@@ -6,7 +6,8 @@ hostnames and container ports become free loopback ports, volumes and secrets be
 files; every other flag, variable and nginx directive is used as written, so a mistake in either
 file fails here. Through nginx: edits, read-your-writes with min_version and X-Strata-Min-Version,
 PNG renders equal to each replica's own, reads and renders spread over all three replicas
-(each replica's /metrics), nginx still serving reads and writes after a replica is SIGKILLed, the
+(each replica's /metrics), nginx still serving reads and writes after a replica is SIGKILLed, a write answered 503 not
+sent on to another replica, the
 viewer's streams arriving unbuffered, and 160 viewer streams held on one replica.
 Skipped, saying so, only where redis-server or nginx is not installed
 (scripts/install-deps.sh installs both).
@@ -310,6 +311,16 @@ class ComposeTopology(unittest.TestCase):
     def direct(self, name, min_version=None) -> Endpoint:
         return Endpoint(self.replicas[name].port, self.token, min_version)
 
+    def responses(self, code_class: str) -> dict:
+        """name -> strata_http_responses_total{code=code_class} from each live replica."""
+        out = {}
+        for name, replica in self.replicas.items():
+            if replica.alive():
+                text = self.direct(name).call("GET", "/metrics")[2].decode()
+                out[name] = int(re.search(r'^strata_http_responses_total\{code="%s"\} (\d+)'
+                                          % code_class, text, re.M).group(1))
+        return out
+
     def metrics(self) -> dict:
         """name -> (renders, 2xx responses) from each replica's own /metrics."""
         out = {}
@@ -403,6 +414,20 @@ class ComposeTopology(unittest.TestCase):
             self.assertEqual(durable_scene.check(self.direct(name, version), version), "")
         # nginx did try the dead replica (else this proved nothing) and passed on.
         self.assertIn("Connection refused", self.nginx_output())
+
+    def test_a_write_answered_503_is_not_sent_to_another_replica(self):
+        version = self.post_batches(0, 2)
+        self.redis.kill()  # every replica now answers a write 503: the log is unreachable
+        before = self.responses("5xx")
+        status, answer = self.nginx.json("POST", "/v1/edits", durable_scene.batch(version))
+        self.assertEqual(status, 503, answer)
+        self.assertEqual(answer.get("status"), 503, answer)  # the replica's problem, not nginx's
+        after = self.responses("5xx")
+        self.assertEqual(sum(after[n] - before[n] for n in REPLICAS), 1,
+                         f"nginx sent one write to several replicas: {before} -> {after}")
+        # Reads of what was applied still work through nginx.
+        self.assertEqual(durable_scene.check(Endpoint(self.nginx.port, self.token, version),
+                                             version), "")
 
     def read_until(self, sock, done, seconds=3.0) -> bytes:
         got, deadline = b"", time.monotonic() + seconds
