@@ -5,10 +5,10 @@ docker/nginx-replicas.conf in front. Only what a container supplies is translate
 hostnames and container ports become free loopback ports, volumes and secrets become temporary
 files; every other flag, variable and nginx directive is used as written, so a mistake in either
 file fails here. Through nginx: edits, read-your-writes with min_version and X-Strata-Min-Version,
-PNG renders equal to each replica's own, reads and renders spread over all three replicas
-(each replica's /metrics), nginx still serving reads and writes after a replica is SIGKILLed, a write answered 503 not
-sent on to another replica, the
-viewer's streams arriving unbuffered, and 160 viewer streams held on one replica.
+PNG renders equal to each replica's own, reads and renders spread over all three replicas (each
+replica's /metrics), nginx still serving reads and writes after a replica is SIGKILLed, a write
+answered 503 not sent on to another replica, the viewer's streams arriving unbuffered, and 160
+viewer streams held on one replica.
 Skipped, saying so, only where redis-server or nginx is not installed
 (scripts/install-deps.sh installs both).
 """
