@@ -28,6 +28,7 @@ build_pkgs=(
     libgtest-dev libgmock-dev libbenchmark-dev libpng-dev libturbojpeg0-dev
     libtinygltf-dev libtinyobjloader-dev libcli11-dev libspdlog-dev
     libhiredis-dev redis-server  # the shared edit log (server/replica) and its tests
+    nginx  # test_compose_topology.py runs docker/nginx-replicas.conf as its child process
     clang libclang-rt-14-dev
     python3 python3-jsonschema python3-numpy python3-yaml
     chromium python3-websocket  # browser tests of the viewer (ctest -L browser, DevTools protocol)

@@ -28,20 +28,23 @@ class ServerProcess:
     def __init__(self, binary: str, args: Optional[List[str]] = None, timeout: float = 30.0,
                  env: Optional[Dict[str, str]] = None,
                  preexec_fn: Optional[Callable[[], None]] = None, wait_ready: bool = True,
-                 port: int = 0):
+                 port: int = 0, default_flags: bool = True):
         """`env`: variables added to this process's environment (STRATA_TOKEN is not inherited).
         `preexec_fn` runs in the child before exec (resource limits, another user).
         `wait_ready`: return only once /readyz answers 200 (else as soon as it listens).
         `port`: a port chosen beforehand (servers that must know each other's, --peers); 0 lets
-        the server pick a free one."""
+        the server pick a free one.
+        `default_flags`: False runs exactly `binary` + `args` (no --host, --port, --log-level), for
+        a deployment's own flags and environment (tests/server/test_compose_topology.py); the
+        server must then log at info level and `port` must be the port it listens on."""
         self._log = tempfile.NamedTemporaryFile(prefix="strata-server-", suffix=".log",
                                                 delete=False)
         self.log_path = self._log.name
         full_env = {k: v for k, v in os.environ.items() if k != "STRATA_TOKEN"}
         full_env.update(env or {})
+        flags = ["--host", "127.0.0.1", "--port", str(port), "--log-level", "info"]
         self.process = subprocess.Popen(
-            [binary, "--host", "127.0.0.1", "--port", str(port), "--log-level", "info"]
-            + (args or []),
+            [binary] + (flags if default_flags else []) + (args or []),
             stdout=self._log, stderr=subprocess.STDOUT, env=full_env, preexec_fn=preexec_fn)
         self.url = self._wait_for_port(timeout)
         self.port = int(self.url.rsplit(":", 1)[1])
@@ -64,8 +67,9 @@ class ServerProcess:
                 raise RuntimeError(f"strata-server exited with {self.process.returncode}:\n"
                                    + self.log())
             time.sleep(0.02)
+        log = self.log()  # stop() removes the log file
         self.stop()
-        raise RuntimeError("strata-server did not become ready:\n" + self.log())
+        raise RuntimeError("strata-server did not become ready:\n" + log)
 
     def _wait_for_port(self, timeout: float) -> str:
         deadline = time.monotonic() + timeout
@@ -78,8 +82,9 @@ class ServerProcess:
                 raise RuntimeError(f"strata-server exited with {self.process.returncode}:\n"
                                    + self.log())
             time.sleep(0.02)
+        log = self.log()
         self.stop()
-        raise RuntimeError("strata-server did not start listening:\n" + self.log())
+        raise RuntimeError("strata-server did not start listening:\n" + log)
 
     def log(self) -> str:
         """Everything the server has logged so far."""

@@ -22,9 +22,10 @@ class Server(ServerProcess):
     adversarial suites need besides: memory, signals, and requests that return problems."""
 
     def __init__(self, args: Optional[List[str]] = None, env: Optional[Dict[str, str]] = None,
-                 preexec_fn=None, wait_ready: bool = True, port: int = 0):
+                 preexec_fn=None, wait_ready: bool = True, port: int = 0,
+                 default_flags: bool = True):
         super().__init__(SERVER, args, env=env, preexec_fn=preexec_fn, wait_ready=wait_ready,
-                         port=port)
+                         port=port, default_flags=default_flags)
         self.pid = self.process.pid
 
     def alive(self) -> bool:

@@ -24,17 +24,21 @@ def free_port() -> int:
 class RedisProcess:
     """redis-server in its own directory; restart() keeps the directory and port."""
 
-    def __init__(self):
+    def __init__(self, config: Optional[List[str]] = None):
+        """`config`: redis-server's arguments besides --port and --logfile (a deployment's own,
+        e.g. docker/compose.replicas.yml's); by default AOF on, fsync always, in self.dir."""
         self.dir = tempfile.mkdtemp(prefix="strata-redis-")
         self.port = free_port()
+        self.config = config if config is not None else [
+            "--bind", "127.0.0.1", "--dir", self.dir, "--appendonly", "yes",
+            "--appendfsync", "always", "--save", "", "--daemonize", "no"]
         self.process: Optional[subprocess.Popen] = None
         self.start()
 
     def start(self) -> None:
         self.process = subprocess.Popen(
-            [REDIS_SERVER, "--port", str(self.port), "--bind", "127.0.0.1", "--dir", self.dir,
-             "--appendonly", "yes", "--appendfsync", "always", "--save", "",
-             "--daemonize", "no", "--logfile", os.path.join(self.dir, "redis.log")],
+            [REDIS_SERVER] + self.config
+            + ["--port", str(self.port), "--logfile", os.path.join(self.dir, "redis.log")],
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         deadline = time.monotonic() + 20
         while time.monotonic() < deadline:
