@@ -50,6 +50,18 @@ uint64_t unix_ms_now() {
                         .count());
 }
 
+/// Records a snapshot now on disk (written in the background or replacing the scene).
+void note_snapshot_written(DurableStats& s, uint64_t version, std::size_t bytes, double ms,
+                           double lock_ms) {
+    ++s.snapshots_written;
+    s.last_snapshot_version = version;
+    s.last_snapshot_bytes = bytes;
+    s.last_snapshot_unix_ms = unix_ms_now();
+    s.last_snapshot_seconds = ms / 1000.0;
+    s.last_snapshot_lock_ms = lock_ms;
+    s.last_snapshot_error.clear();
+}
+
 }  // namespace
 
 DurableStore::DurableStore(const StoreOptions& options, Engine& engine)
@@ -171,13 +183,7 @@ Status DurableStore::write_snapshot() {
     // Step: what the snapshot replaces.
     remove_covered(version);
     std::lock_guard stats(m_stats_mutex);
-    ++m_stats.snapshots_written;
-    m_stats.last_snapshot_version = version;
-    m_stats.last_snapshot_bytes = bytes.size();
-    m_stats.last_snapshot_unix_ms = unix_ms_now();
-    m_stats.last_snapshot_seconds = clock.ms() / 1000.0;
-    m_stats.last_snapshot_lock_ms = lock_ms;
-    m_stats.last_snapshot_error.clear();
+    note_snapshot_written(m_stats, version, bytes.size(), clock.ms(), lock_ms);
     return {};
 }
 
@@ -219,13 +225,7 @@ Result<SnapshotReplace> DurableStore::replace_scene(std::string_view snapshot) {
     }
     remove_covered(version);
     std::lock_guard stats(m_stats_mutex);
-    ++m_stats.snapshots_written;
-    m_stats.last_snapshot_version = version;
-    m_stats.last_snapshot_bytes = snapshot.size();
-    m_stats.last_snapshot_unix_ms = unix_ms_now();
-    m_stats.last_snapshot_seconds = clock.ms() / 1000.0;
-    m_stats.last_snapshot_lock_ms = replaced->lock_ms;
-    m_stats.last_snapshot_error.clear();
+    note_snapshot_written(m_stats, version, snapshot.size(), clock.ms(), replaced->lock_ms);
     return replaced;
 }
 

@@ -15,7 +15,6 @@ split frame is checked against the split=1 frame (same bytes) once per run. Stan
 import argparse
 import http.client
 import os
-import socket
 import statistics
 import sys
 import time
@@ -23,18 +22,9 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path[:0] = [os.path.join(HERE, "..", "server"), os.path.join(HERE, "..", "python")]
 
-from redis_fixture import RedisProcess  # noqa: E402
+from redis_fixture import RedisProcess, free_ports  # noqa: E402
 from strata_process import ServerProcess  # noqa: E402
 
-
-def free_ports(n):
-    sockets = [socket.socket() for _ in range(n)]
-    for s in sockets:
-        s.bind(("127.0.0.1", 0))
-    ports = [s.getsockname()[1] for s in sockets]
-    for s in sockets:
-        s.close()
-    return ports
 
 
 def get(conn, path):

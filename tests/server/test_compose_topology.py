@@ -31,7 +31,7 @@ import yaml
 
 import durable_scene
 from hostile import SERVER, Server
-from redis_fixture import REDIS_SERVER, RedisProcess
+from redis_fixture import REDIS_SERVER, RedisProcess, free_ports
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 DOCKER = os.path.join(ROOT, "docker")
@@ -41,15 +41,6 @@ NGINX = shutil.which("nginx") or next(
 REPLICAS = ("strata-1", "strata-2", "strata-3")
 RENDER = "/v1/render?width=64&height=48&spp=2"
 
-
-def free_ports(n: int) -> list:
-    sockets = [socket.socket() for _ in range(n)]
-    for s in sockets:
-        s.bind(("127.0.0.1", 0))
-    ports = [s.getsockname()[1] for s in sockets]
-    for s in sockets:
-        s.close()
-    return ports
 
 
 def image_spec() -> dict:

@@ -18,7 +18,7 @@ import uuid
 
 import durable_scene
 from hostile import Server
-from redis_fixture import REDIS_SERVER, RedisProcess
+from redis_fixture import REDIS_SERVER, RedisProcess, free_ports
 
 RENDER = "/v1/render?width=64&height=48&spp=2"
 # Frames across replicas: odd sizes, a camera override that sees every instance.
@@ -29,16 +29,6 @@ SPLIT_RENDERS = [
     f"/v1/render?{SPLIT_VIEW}&filter=atrous&exposure=0.5",
 ]
 
-
-def free_ports(n: int) -> list:
-    """n loopback ports free now (servers that must know each other's ports before they start)."""
-    sockets = [socket.socket() for _ in range(n)]
-    for s in sockets:
-        s.bind(("127.0.0.1", 0))
-    ports = [s.getsockname()[1] for s in sockets]
-    for s in sockets:
-        s.close()
-    return ports
 
 
 def crc32c(data: bytes) -> int:
@@ -309,14 +299,7 @@ class Replicas(unittest.TestCase):
     def test_a_replica_joining_after_trimming_loads_the_snapshot_and_follows(self):
         servers = self.replicas(2, "--log-snapshot-every", "5")
         n = self.stream_batches(servers, 0, 23)
-        deadline = time.monotonic() + 10
-        while time.monotonic() < deadline:
-            snap = self.redis.command("HGET", self.stream + ":snapshot", "version")
-            if snap is not None and int(snap) >= 20:
-                break
-            time.sleep(0.05)
-        snap = int(self.redis.command("HGET", self.stream + ":snapshot", "version"))
-        self.assertGreaterEqual(snap, 20)
+        snap = self.stored_snapshot_at_least(20)
         # Trimmed below the snapshot the newest replaced (at least 15): the log is shorter.
         first = self.redis.command("XRANGE", self.stream, "-", "+", "COUNT", "1")[0][0]
         self.assertGreater(int(first.split(b"-")[0]), 10)
@@ -335,18 +318,23 @@ class Replicas(unittest.TestCase):
         self.addCleanup(alone.stop)
         self.assertEqual(durable_scene.check(alone, n), "")
 
+    def stored_snapshot_at_least(self, version):
+        """Waits (up to 10 s) until Redis holds a snapshot of at least `version`; returns its."""
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline:
+            snap = self.redis.command("HGET", self.stream + ":snapshot", "version")
+            if snap is not None and int(snap) >= version:
+                break
+            time.sleep(0.05)
+        snap = int(self.redis.command("HGET", self.stream + ":snapshot", "version"))
+        self.assertGreaterEqual(snap, version)
+        return snap
+
     def trim_past(self, writer, n, behind):
         """Streams batches through `writer` until a stored snapshot is at least 20 and the log no
         longer holds the entry after version `behind`; returns the version reached."""
         n = self.stream_batches([writer], n, 23 - n)
-        deadline = time.monotonic() + 10
-        while time.monotonic() < deadline:
-            snap = self.redis.command("HGET", self.stream + ":snapshot", "version")
-            if snap is not None and int(snap) >= 20:
-                break
-            time.sleep(0.05)
-        snap = int(self.redis.command("HGET", self.stream + ":snapshot", "version"))
-        self.assertGreaterEqual(snap, 20)
+        snap = self.stored_snapshot_at_least(20)
         first = self.redis.command("XRANGE", self.stream, "-", "+", "COUNT", "1")[0][0]
         self.assertGreater(int(first.split(b"-")[0]), behind + 1, "the gap should be real")
         return n, snap
