@@ -76,6 +76,10 @@ std::variant<ViewerSpec, protocol::Problem> parse_viewer(
                                             "' does not apply to /v1/stream: frames are JPEG, "
                                             "accumulating up to max_samples");
     }
+    // The edge-aware filter is on by default here, unlike GET /v1/render: a viewer shows few
+    // samples per pixel while it moves, and the filter follows each pixel's noise, so it leaves
+    // a converged frame (almost) as it is. `filter=none` turns it off.
+    if (!params.count("filter")) params.emplace("filter", "atrous");
     // Equal render parameters share renders; the per-viewer pace does not split a view.
     spec.key = "q=" + std::to_string(spec.quality) + "&s=" + std::to_string(spec.max_samples);
     for (const auto& [name, value] : params) spec.key += "&" + name + "=" + value;

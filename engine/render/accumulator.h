@@ -23,7 +23,7 @@ namespace strata {
 
 /// Most samples per pixel one accumulation gathers; launches beyond it add nothing.
 constexpr uint32_t MAX_ACCUMULATED_SAMPLES = 1u << 16;
-/// Largest frame that can be accumulated (the sums take 36 bytes per pixel).
+/// Largest frame that can be accumulated (the sums take 40 bytes per pixel).
 constexpr uint64_t MAX_ACCUMULATE_PIXELS = 16ull * 1024 * 1024;
 
 /// What must match for a launch to continue the previous accumulation.
@@ -41,6 +41,9 @@ struct PixelSums {
     Vec3 color{0.0f};
     Vec3 albedo{0.0f};
     Vec3 normal{0.0f};
+    /// Sum of the squared luminance of the colour samples: with `color`, the pixel's sample
+    /// variance, which the filter (aov_filter.h) uses as its noise level.
+    float luminance2 = 0.0f;
 };
 
 /// Samples a launch should trace: [first, first + count).

@@ -93,7 +93,8 @@ class FrameKernel {
 public:
     FrameKernel(const TlasStrategy& tlas, const FrameState& frame, const Camera& camera,
                 FrameBuffers& out, uint32_t frame_height, uint32_t row0, SampleRange samples,
-                uint32_t total_samples, PixelSums* accum, const CancelToken* cancel)
+                uint32_t total_samples, PixelSums* accum, float* variance,
+                const CancelToken* cancel)
         : m_tlas(tlas),
           m_frame(frame),
           m_rays(camera, out.width, frame_height),
@@ -103,7 +104,9 @@ public:
           m_row1(row0 + out.height),
           m_samples(samples),
           m_inv_total(total_samples > 0 ? 1.0f / float(total_samples) : 0.0f),
+          m_total(total_samples),
           m_accum(accum),
+          m_variance(variance),
           m_cancel(cancel) {}
 
     void render_tile(const TileRect& tile) const {
@@ -277,7 +280,7 @@ private:
             const Vec3 dir(primary.dir_x[i], primary.dir_y[i], primary.dir_z[i]);
             if (primary.inst_id[i] == INVALID_ID) {
                 radiance[i] = m_sky.radiance(dir);
-                sums[i]->color += radiance[i];
+                add_color(*sums[i], radiance[i]);
                 continue;
             }
             const SurfaceHit hit = surface(primary, i);
@@ -347,7 +350,7 @@ private:
 
         // Step: add the sample's radiance of every hit lane (misses were added above).
         for (uint32_t i = 0; i < PACKET_LANES; ++i) {
-            if (valid[i] && primary.inst_id[i] != INVALID_ID) sums[i]->color += radiance[i];
+            if (valid[i] && primary.inst_id[i] != INVALID_ID) add_color(*sums[i], radiance[i]);
         }
         return rays;
     }
@@ -357,6 +360,12 @@ private:
     std::size_t out_index(uint32_t x, uint32_t y) const {
         if (y < m_row0 || y >= m_row1) return SIZE_MAX;
         return std::size_t(y - m_row0) * m_out.width + x;
+    }
+
+    static void add_color(PixelSums& sums, const Vec3& radiance) {
+        sums.color += radiance;
+        const float l = luminance(radiance);
+        sums.luminance2 += l * l;
     }
 
     /// Traces the unjittered pixel-centre rays and writes depth, position and ids.
@@ -400,6 +409,15 @@ private:
             const std::size_t p = out_index(x0 + i % PACKET_SIZE, y0 + i / PACKET_SIZE);
             if (p == SIZE_MAX) continue;
             m_out.color[p] = sums[i]->color * m_inv_total;
+            if (m_variance) {
+                // The samples' variance over the count squared: a stratified sequence's mean
+                // converges about like 1/spp, not 1/sqrt(spp) (tests/bench/NOTES.md: over the
+                // count alone, the filter took converged detail for noise at 64 spp).
+                const float mean = luminance(sums[i]->color) * m_inv_total;
+                const float spread = sums[i]->luminance2 * m_inv_total - mean * mean;
+                m_variance[p] =
+                    std::max(0.0f, spread) / (float(m_total) * float(m_total - 1));
+            }
             if (aovs.has(Aov::Albedo)) m_out.albedo[p] = sums[i]->albedo * m_inv_total;
             if (aovs.has(Aov::Normal)) m_out.normal[p] = sums[i]->normal * m_inv_total;
         }
@@ -413,7 +431,9 @@ private:
     const uint32_t m_row0, m_row1;
     const SampleRange m_samples;
     const float m_inv_total;
+    const uint32_t m_total;
     PixelSums* const m_accum;
+    float* const m_variance;
     const CancelToken* const m_cancel;
     mutable std::atomic<uint64_t> m_ray_count{0};
 };
@@ -462,8 +482,12 @@ Result<Frame> Renderer::render(const TlasStrategy& tlas, const FrameState& frame
             accum = m_accumulator.sums();
         }
         const uint32_t total = samples.first + samples.count;
+        // The filter's noise level: each pixel's variance of the mean, from two samples on.
+        std::vector<float> variance;
+        if (request.filter && total >= 2) variance.resize(out.buffers.pixel_count());
         FrameKernel kernel(tlas, frame, camera, out.buffers, request.height, band.y0, samples,
-                           total, accum, request.cancel);
+                           total, accum, variance.empty() ? nullptr : variance.data(),
+                           request.cancel);
         parallel_for_tile_rows(request.width, request.height, trace_begin, trace_end,
                                [&](const TileRect& tile) { kernel.render_tile(tile); });
         if (should_stop(request.cancel)) {
@@ -473,7 +497,7 @@ Result<Frame> Renderer::render(const TlasStrategy& tlas, const FrameState& frame
         }
         if (request.accumulate) m_accumulator.finish(samples);
         if (request.filter) {
-            filter_frame(out.buffers);
+            filter_frame(out.buffers, variance);
             out.buffers.keep_only(requested);
         }
         out.info.samples = total;

@@ -6,6 +6,9 @@
 //
 // The reference is one launch of REFERENCE_SPP samples; its first samples are the ones the
 // few-spp frames use (each pixel has one fixed sequence), a 1/REFERENCE_SPP share of it.
+// The filter's cost is timed twice per scene: filter_frame alone on a 1-spp frame (the spatial
+// noise estimate), and the median render time with the filter minus the one without at 4 spp
+// (the measured per-pixel variance), each at WIDTHxHEIGHT and at 640x360.
 
 #include <algorithm>
 #include <chrono>
@@ -67,9 +70,35 @@ double median(std::vector<double> v) {
     return v[v.size() / 2];
 }
 
+/// Median over 7 runs of filter_frame alone, and of a 4-spp render with the filter minus one
+/// without, at w x h.
+void time_filter(const char* name, Engine& engine, uint32_t w, uint32_t h) {
+    RenderRequest r;
+    r.width = w;
+    r.height = h;
+    r.format = ImageFormat::Exr;
+    r.aovs = {Aov::Albedo, Aov::Normal, Aov::Depth};
+    const Frame guides = engine.render_frame(r).value();
+    std::vector<double> ms, with, without;
+    for (int i = 0; i < 7; ++i) {
+        FrameBuffers copy = guides.buffers;
+        const auto t0 = std::chrono::steady_clock::now();
+        filter_frame(copy);
+        ms.push_back(
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                .count());
+        with.push_back(render(engine, w, h, 4, true).info.render_ms);
+        without.push_back(render(engine, w, h, 4, false).info.render_ms);
+    }
+    std::printf("%-14s %ux%u: filter alone (1 spp) median %.2f ms; 4-spp render %.2f ms "
+                "filtered, %.2f ms plain (difference %.2f ms)\n",
+                name, w, h, median(ms), median(with), median(without),
+                median(with) - median(without));
+}
+
 void measure(const char* name, Engine& engine, uint32_t w, uint32_t h, uint32_t ref_spp) {
     const Frame reference = render(engine, w, h, ref_spp, false);
-    for (uint32_t spp : {1u, 4u, 16u}) {
+    for (uint32_t spp : {1u, 4u, 16u, 64u}) {
         const Frame plain = render(engine, w, h, spp, false);
         const Frame filtered = render(engine, w, h, spp, true);
         std::printf("%-14s %3u spp  rmse plain %.4f  filtered %.4f  (%.0f%%)\n", name, spp,
@@ -82,24 +111,9 @@ void measure(const char* name, Engine& engine, uint32_t w, uint32_t h, uint32_t 
         std::printf("%-14s %3u spp  display rmse plain %.4f  filtered %.4f  (%.0f%%)\n", name,
                     spp, dp, df, 100.0 * df / dp);
     }
-    // The filter alone, on a 1-spp frame with its guides.
-    RenderRequest r;
-    r.width = w;
-    r.height = h;
-    r.format = ImageFormat::Exr;
-    r.aovs = {Aov::Albedo, Aov::Normal, Aov::Depth};
-    const Frame guides = engine.render_frame(r).value();
-    std::vector<double> ms;
-    for (int i = 0; i < 7; ++i) {
-        FrameBuffers copy = guides.buffers;
-        const auto t0 = std::chrono::steady_clock::now();
-        filter_frame(copy);
-        ms.push_back(
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
-                .count());
-    }
-    std::printf("%-14s filter alone: median %.2f ms over 7 runs at %ux%u\n", name, median(ms), w,
-                h);
+    if (std::getenv("STRATA_FILTER_BENCH_NO_TIMES")) return;
+    time_filter(name, engine, w, h);
+    time_filter(name, engine, 640, 360);
 }
 
 std::unique_ptr<Engine> engine_with(EditBatch batch) {

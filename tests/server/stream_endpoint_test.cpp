@@ -451,6 +451,32 @@ void expect_tinted_exactly(const std::string& plain_jpeg, const std::string& tin
     EXPECT_GT(inner_diff / double(inner * 3), 15.0) << "the instance's pixels were not tinted";
 }
 
+TEST(StreamEndpoint, TheFilterIsOnByDefaultAndFilterNoneTurnsItOff) {
+    TestServer s({}, true);
+    const std::string q = "width=96&height=54&max_samples=1&fps=30&quality=95";
+    // No `filter` is the same view as filter=atrous: the two viewers share one render.
+    FrameReader by_default(s.port(), q);
+    ASSERT_FALSE(by_default.head().empty());
+    auto d = by_default.next();
+    ASSERT_TRUE(d.has_value());
+    FrameReader atrous(s.port(), q + "&filter=atrous");
+    ASSERT_FALSE(atrous.head().empty());
+    auto a = atrous.next();
+    ASSERT_TRUE(a.has_value());
+    EXPECT_EQ(a->jpeg, d->jpeg);
+    EXPECT_EQ(s.server().streams().stats().views, 1u);
+    EXPECT_EQ(s.server().streams().stats().frames_rendered, 1u);
+    // filter=none is another view, rendered on its own, and its 1-spp frame is the grainy one.
+    FrameReader plain(s.port(), q + "&filter=none");
+    ASSERT_FALSE(plain.head().empty());
+    auto p = plain.next();
+    ASSERT_TRUE(p.has_value());
+    EXPECT_EQ(p->samples, d->samples);
+    EXPECT_NE(p->jpeg, d->jpeg);
+    EXPECT_EQ(s.server().streams().stats().frames_rendered, 2u);
+    expect_problem(s.get("/v1/stream?filter=yes"), 422, "", "/filter");
+}
+
 TEST(StreamEndpoint, AHighlightTintsOnlyTheInstancesPixelsAndTheRenderStaysShared) {
     TestServer s({}, true);
     const int W = 128, H = 72;
