@@ -54,8 +54,9 @@ inline float luminance(const Vec3& c) {
 }
 
 /// Filters `buffers.color` in place using `albedo`, `normal` and `depth`, which must be present
-/// (same size). `variance`: per pixel, the variance of the mean of the colour's luminance (the
-/// samples' variance divided by their count), or empty when unknown (fewer than 2 samples).
+/// (same size). `variance`: per pixel, the variance of the mean of the colour's luminance as the
+/// caller estimates it (the renderer: the samples' variance over the count squared), or empty
+/// when unknown (fewer than 2 samples).
 void filter_frame(FrameBuffers& buffers, std::span<const float> variance = {},
                   const AovFilterSettings& settings = {});
 
