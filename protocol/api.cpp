@@ -75,8 +75,11 @@ ApiResponse render(Engine& engine, RenderRequest request, const ApiLimits& limit
                            std::chrono::seconds(limits.render_timeout_s));
     request.cancel = &token;
     std::string bands;
+    // The filter reads each pixel's measured noise from 2 samples on, which bands do not carry:
+    // such a frame is rendered here whole, so that it stays the bytes of an unsplit render.
+    const bool whole = split > 1 && request.filter && request.spp > 1;
     Result<EncodedFrame> image = [&]() -> Result<EncodedFrame> {
-        if (split <= 1) {
+        if (split <= 1 || whole) {
             // A camera override's missing fields come from the camera of the version the
             // launch renders.
             return engine.render(request);
@@ -99,6 +102,10 @@ ApiResponse render(Engine& engine, RenderRequest request, const ApiLimits& limit
                 "accumulate several shorter renders"));
     if (!image) return problem_response(problem_from(image.error()));
     EncodedFrame& frame = image.value();
+    if (whole)
+        bands = "1 band at version " + std::to_string(frame.info.version) +
+                ": local (not split: a filtered frame of more than 1 sample needs each pixel's "
+                "noise, which bands do not carry)";
     ApiResponse r;
     r.status = 200;
     r.content_type = std::move(frame.content_type);

@@ -410,13 +410,10 @@ private:
             if (p == SIZE_MAX) continue;
             m_out.color[p] = sums[i]->color * m_inv_total;
             if (m_variance) {
-                // The samples' variance over the count squared: a stratified sequence's mean
-                // converges about like 1/spp, not 1/sqrt(spp) (tests/bench/NOTES.md: over the
-                // count alone, the filter took converged detail for noise at 64 spp).
+                // The variance of the mean of independent samples, s^2 / n (aov_filter.h).
                 const float mean = luminance(sums[i]->color) * m_inv_total;
                 const float spread = sums[i]->luminance2 * m_inv_total - mean * mean;
-                m_variance[p] =
-                    std::max(0.0f, spread) / (float(m_total) * float(m_total - 1));
+                m_variance[p] = std::max(0.0f, spread) / float(m_total - 1);
             }
             if (aovs.has(Aov::Albedo)) m_out.albedo[p] = sums[i]->albedo * m_inv_total;
             if (aovs.has(Aov::Normal)) m_out.normal[p] = sums[i]->normal * m_inv_total;
@@ -497,7 +494,8 @@ Result<Frame> Renderer::render(const TlasStrategy& tlas, const FrameState& frame
         }
         if (request.accumulate) m_accumulator.finish(samples);
         if (request.filter) {
-            filter_frame(out.buffers, variance);
+            filter_frame(out.buffers, variance, total, {}, &m_filter_scratch);
+            if (out.buffers.pixel_count() > KEEP_FILTER_SCRATCH_PIXELS) m_filter_scratch.release();
             out.buffers.keep_only(requested);
         }
         out.info.samples = total;

@@ -26,6 +26,7 @@
 #include "engine/accel/tlas.h"
 #include "engine/core/result.h"
 #include "engine/render/accumulator.h"
+#include "engine/render/aov_filter.h"
 #include "engine/render/frame.h"
 #include "engine/render/frame_state.h"
 #include "engine/render/render_request.h"
@@ -46,6 +47,12 @@ public:
 
 private:
     Accumulator m_accumulator;
+    /// The filter's working memory, kept for frames up to KEEP_FILTER_SCRATCH_PIXELS (what an
+    /// interactive view filters frame after frame), freed after larger ones.
+    FilterScratch m_filter_scratch;
 };
+
+/// Largest frame whose filter memory a Renderer keeps (1280x720: about 90 MB).
+constexpr uint64_t KEEP_FILTER_SCRATCH_PIXELS = 1280ull * 720;
 
 }  // namespace strata

@@ -1,6 +1,7 @@
 #pragma once
 // Deterministic per-pixel sample sequence: shuffled, Owen-scrambled Sobol points (Burley 2020,
-// "Practical Hash-based Owen Scrambling", with Vegdahl's improved Laine-Karras hash).
+// "Practical Hash-based Owen Scrambling", with Vegdahl's improved Laine-Karras hash), each pixel's
+// copy digitally shifted (XOR) by a blue-noise mask (blue_noise.h).
 //
 // Sample `i` of pixel (x, y) in dimension `d` is a pure function of (x, y, i, d): it does not
 // depend on the image size, the tile a pixel falls in, the thread that renders it or on how many
@@ -8,10 +9,17 @@
 // makes accumulating two launches of k samples equal to one launch of 2k samples.
 //
 // Dimensions come in groups of four (one 4-D Sobol net each, "padded" with an independent seed
-// per group): the first 2^m samples of a pixel are stratified in every group at 2^m strata.
+// per group): the first 2^m samples of a pixel are stratified in every group at 2^m strata. The
+// shuffle and the scramble are the same for every pixel; what tells pixels apart is the shift of
+// each dimension: the top 12 bits of its coordinates are XORed with the pixel's rank in the
+// blue-noise mask (read at an offset of its own per dimension). A digital shift keeps the nets
+// intact, and sample i of neighbouring pixels then differs the way the mask's ranks do: evenly,
+// with no clumps, so a frame's error is fine-grained (blue) rather than blotchy (white).
 
 #include <array>
 #include <cstdint>
+
+#include "engine/render/blue_noise.h"
 
 namespace strata {
 
@@ -102,58 +110,87 @@ constexpr uint32_t hash_combine(uint32_t seed, uint32_t v) {
     return hash_u32(seed ^ (v + 0x9e3779b9u + (seed << 6) + (seed >> 2)));
 }
 
+namespace sampler_detail {
+
+/// The index shuffle's and each dimension's scramble seed of one group of dimensions.
+struct GroupSeeds {
+    uint32_t index = 0;
+    uint32_t dim[4] = {};
+};
+
+constexpr GroupSeeds make_group_seeds(uint32_t group) {
+    GroupSeeds g;
+    g.index = hash_combine(0x5eed5eedu, group);
+    for (uint32_t d = 0; d < 4; ++d) g.dim[d] = hash_combine(g.index, d + 1);
+    return g;
+}
+
+/// Groups whose seeds are a table (the renderer uses four).
+constexpr uint32_t TABLED_GROUPS = 8;
+inline constexpr std::array<GroupSeeds, TABLED_GROUPS> GROUP_SEEDS = [] {
+    std::array<GroupSeeds, TABLED_GROUPS> t{};
+    for (uint32_t g = 0; g < TABLED_GROUPS; ++g) t[g] = make_group_seeds(g);
+    return t;
+}();
+
+}  // namespace sampler_detail
+
 /// The sample sequence of one pixel.
 class PixelSampler {
 public:
     /// Dimensions one group holds.
     static constexpr uint32_t GROUP = 4;
-    /// Groups whose seeds are computed once, up front (the renderer uses two).
-    static constexpr uint32_t CACHED_GROUPS = 2;
     /// Sample indices must be below this.
     static constexpr uint32_t MAX_SAMPLES = 1u << 16;
 
-    constexpr PixelSampler() = default;
-    constexpr PixelSampler(uint32_t x, uint32_t y)
-        : m_seed(hash_combine(hash_combine(0x5eed5eedu, x), y)) {
-        for (uint32_t g = 0; g < CACHED_GROUPS; ++g) m_groups[g] = seeds(g);
-    }
+    PixelSampler() = default;
+    PixelSampler(uint32_t x, uint32_t y)
+        : m_mask(&blue_noise_mask()),
+          m_x(x & (BLUE_NOISE_SIZE - 1)),
+          m_y(y & (BLUE_NOISE_SIZE - 1)) {}
 
     /// The 4-D point of sample `index` in dimension group `group`, each coordinate in [0, 1).
-    constexpr std::array<float, 4> get4(uint32_t index, uint32_t group) const {
-        const GroupSeeds g = group < CACHED_GROUPS ? m_groups[group] : seeds(group);
+    std::array<float, 4> get4(uint32_t index, uint32_t group) const {
+        const GroupSeeds g = seeds(group);
         const uint32_t shuffled = shuffle(index, g.index);
         std::array<float, 4> out{};
-        for (uint32_t d = 0; d < 4; ++d) out[d] = coordinate(shuffled, d, g);
+        for (uint32_t d = 0; d < 4; ++d) out[d] = coordinate(shuffled, d, g, group * GROUP + d);
         return out;
     }
 
     /// Coordinate `dim` of sample `index` (dimension d is coordinate d % 4 of group d / 4).
-    constexpr float get1(uint32_t index, uint32_t dim) const {
-        const uint32_t group = dim / GROUP;
-        const GroupSeeds g = group < CACHED_GROUPS ? m_groups[group] : seeds(group);
-        return coordinate(shuffle(index, g.index), dim % GROUP, g);
+    float get1(uint32_t index, uint32_t dim) const {
+        const GroupSeeds g = seeds(dim / GROUP);
+        return coordinate(shuffle(index, g.index), dim % GROUP, g, dim);
     }
 
 private:
-    struct GroupSeeds {
-        uint32_t index = 0;
-        uint32_t dim[GROUP] = {};
-    };
+    using GroupSeeds = sampler_detail::GroupSeeds;
 
-    constexpr GroupSeeds seeds(uint32_t group) const {
-        GroupSeeds g;
-        g.index = hash_combine(m_seed, group);
-        for (uint32_t d = 0; d < GROUP; ++d) g.dim[d] = hash_combine(g.index, d + 1);
-        return g;
+    static constexpr GroupSeeds seeds(uint32_t group) {
+        using namespace sampler_detail;
+        return group < TABLED_GROUPS ? GROUP_SEEDS[group] : make_group_seeds(group);
     }
 
-    static constexpr float coordinate(uint32_t shuffled, uint32_t d, const GroupSeeds& g) {
+    /// The digital shift of dimension `dim`: the pixel's blue-noise rank, read at the
+    /// dimension's own offset into the mask (an R2 sequence, so that the dimensions' offsets
+    /// are far apart), as the top 12 bits.
+    uint32_t shift(uint32_t dim) const {
+        const uint32_t ox = (0x80000000u + dim * 3242174889u) >> (32 - BLUE_NOISE_LOG2);
+        const uint32_t oy = (0x80000000u + dim * 2447445413u) >> (32 - BLUE_NOISE_LOG2);
+        constexpr uint32_t wrap = BLUE_NOISE_SIZE - 1;
+        const uint32_t rank =
+            (*m_mask)[((m_y + oy) & wrap) * BLUE_NOISE_SIZE + ((m_x + ox) & wrap)];
+        return rank << (32 - 2 * BLUE_NOISE_LOG2);
+    }
+
+    float coordinate(uint32_t shuffled, uint32_t d, const GroupSeeds& g, uint32_t dim) const {
         using namespace sampler_detail;
-        return to_unit(owen_scramble(sobol16(shuffled, d), g.dim[d]));
+        return to_unit(owen_scramble(sobol16(shuffled, d), g.dim[d]) ^ shift(dim));
     }
 
     /// Owen-scrambles the index: the first 2^m samples stay one aligned block of 2^m Sobol points
-    /// (so they stay stratified), in a per-pixel order. Scrambling flips a bit according to the
+    /// (so they stay stratified), in a shuffled order. Scrambling flips a bit according to the
     /// bits above it, so for indices below 2^16 the upper half is one constant; dropping it XORs
     /// every point with one constant, which the Owen scramble of the point absorbs.
     static constexpr uint32_t shuffle(uint32_t index, uint32_t seed) {
@@ -162,8 +199,8 @@ private:
 
     static constexpr float to_unit(uint32_t bits) { return float(bits >> 8) * 0x1p-24f; }
 
-    uint32_t m_seed = 0;
-    GroupSeeds m_groups[CACHED_GROUPS] = {};
+    const BlueNoiseMask* m_mask = nullptr;
+    uint32_t m_x = 0, m_y = 0;
 };
 
 }  // namespace strata

@@ -7,8 +7,9 @@
 // The reference is one launch of REFERENCE_SPP samples; its first samples are the ones the
 // few-spp frames use (each pixel has one fixed sequence), a 1/REFERENCE_SPP share of it.
 // The filter's cost is timed twice per scene: filter_frame alone on a 1-spp frame (the spatial
-// noise estimate), and the median render time with the filter minus the one without at 4 spp
-// (the measured per-pixel variance), each at WIDTHxHEIGHT and at 640x360.
+// noise estimate; with memory of its own and with a reused FilterScratch), and the median render
+// time with the filter minus the one without at 4 spp (the measured per-pixel variance, the
+// renderer's reused memory), each at WIDTHxHEIGHT and at 640x360.
 
 #include <algorithm>
 #include <chrono>
@@ -70,8 +71,9 @@ double median(std::vector<double> v) {
     return v[v.size() / 2];
 }
 
-/// Median over 7 runs of filter_frame alone, and of a 4-spp render with the filter minus one
-/// without, at w x h.
+/// Median over 7 runs of filter_frame alone (with memory of its own, and with a FilterScratch
+/// reused as the renderer does), and of a 4-spp render with the filter minus one without, at
+/// w x h.
 void time_filter(const char* name, Engine& engine, uint32_t w, uint32_t h) {
     RenderRequest r;
     r.width = w;
@@ -79,20 +81,25 @@ void time_filter(const char* name, Engine& engine, uint32_t w, uint32_t h) {
     r.format = ImageFormat::Exr;
     r.aovs = {Aov::Albedo, Aov::Normal, Aov::Depth};
     const Frame guides = engine.render_frame(r).value();
-    std::vector<double> ms, with, without;
-    for (int i = 0; i < 7; ++i) {
+    const auto time_ms = [&](FilterScratch* scratch) {
         FrameBuffers copy = guides.buffers;
         const auto t0 = std::chrono::steady_clock::now();
-        filter_frame(copy);
-        ms.push_back(
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
-                .count());
+        filter_frame(copy, {}, 1, {}, scratch);
+        return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+            .count();
+    };
+    FilterScratch scratch;
+    time_ms(&scratch);
+    std::vector<double> own, reused, with, without;
+    for (int i = 0; i < 7; ++i) {
+        own.push_back(time_ms(nullptr));
+        reused.push_back(time_ms(&scratch));
         with.push_back(render(engine, w, h, 4, true).info.render_ms);
         without.push_back(render(engine, w, h, 4, false).info.render_ms);
     }
-    std::printf("%-14s %ux%u: filter alone (1 spp) median %.2f ms; 4-spp render %.2f ms "
-                "filtered, %.2f ms plain (difference %.2f ms)\n",
-                name, w, h, median(ms), median(with), median(without),
+    std::printf("%-14s %ux%u: filter alone (1 spp) median %.2f ms, %.2f ms reusing its memory; "
+                "4-spp render %.2f ms filtered, %.2f ms plain (difference %.2f ms)\n",
+                name, w, h, median(own), median(reused), median(with), median(without),
                 median(with) - median(without));
 }
 

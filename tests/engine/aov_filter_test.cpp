@@ -56,7 +56,7 @@ TEST(AovFilter, LowersTheErrorOfOneAndFourSampleFramesOfTheDemoScene) {
     const Frame reference = test::render_frame_ok(*engine, request(1024, false));
     // At 96x72 the demo's spheres are a few pixels across, so 4 spp gains less than on the
     // bench's 200x150 frame (tests/bench/NOTES.md).
-    for (const auto [spp, most] : {std::pair{1u, 0.8}, std::pair{4u, 0.92}}) {
+    for (const auto& [spp, most] : {std::pair{1u, 0.8}, std::pair{4u, 0.92}}) {
         const auto [before, after] = errors(*engine, reference, spp);
         EXPECT_LT(after, most * before) << spp << " spp: " << before << " -> " << after;
     }
@@ -103,26 +103,74 @@ TEST(AovFilter, ANoiseFreeFramePassesThroughUnchanged) {
 }
 
 TEST(AovFilter, NoPixelMovesFartherThanItsNoiseAllows) {
-    // A small measured noise everywhere: a pixel's lighting moves at most change_sigmas / 2 of
-    // its (3x3 smoothed, here uniform) standard deviation, however far the taps disagree.
-    FrameBuffers b = converged_frame();
-    const std::vector<Vec3> before = b.color;
-    const float deviation = 1e-3f;
-    const std::vector<float> variance(before.size(), deviation * deviation);
-    AovFilterSettings settings;
-    filter_frame(b, variance, settings);
-    std::size_t moved = 0;
-    for (std::size_t p = 0; p < before.size(); ++p) {
-        // The lighting luminance (the colour over the albedo) moved by at most k s / 2, s the
-        // deviation carried into lighting units as demodulation scales the luminance.
-        const Vec3 albedo(0.6f, 0.5f, 0.4f);
-        const float lighting = luminance(before[p] / albedo);
-        const float s = deviation * lighting / luminance(before[p]);
-        const float lighting_change = std::abs(luminance(b.color[p] / albedo) - lighting);
-        EXPECT_LE(lighting_change, 0.5f * settings.change_sigmas * s * 1.01f) << p;
-        moved += b.color[p] != before[p];
+    // A small measured noise everywhere: a pixel's lighting moves at most k / 2 of its (3x3
+    // smoothed, here uniform) standard deviation, however far the taps disagree; k is
+    // change_sigmas from converged_samples on, 0.5 more per halving below, at most
+    // few_samples_change_sigmas.
+    const AovFilterSettings settings;
+    for (const auto& [samples, k] :
+         {std::pair{64u, 1.0f}, std::pair{16u, 2.0f}, std::pair{4u, 3.0f}, std::pair{2u, 3.0f}}) {
+        FrameBuffers b = converged_frame();
+        const std::vector<Vec3> before = b.color;
+        const float deviation = 1e-3f;
+        // The renderer passes s^2 / n; the filter divides by n once more (stratified samples).
+        const std::vector<float> variance(before.size(), deviation * deviation * float(samples));
+        filter_frame(b, variance, samples, settings);
+        std::size_t moved = 0;
+        for (std::size_t p = 0; p < before.size(); ++p) {
+            // The lighting luminance (the colour over the albedo) moved by at most k s / 2, s
+            // the deviation carried into lighting units as demodulation scales the luminance.
+            const Vec3 albedo(0.6f, 0.5f, 0.4f);
+            const float lighting = luminance(before[p] / albedo);
+            const float s = deviation * lighting / luminance(before[p]);
+            const float lighting_change = std::abs(luminance(b.color[p] / albedo) - lighting);
+            EXPECT_LE(lighting_change, 0.5f * k * s * 1.01f) << samples << " samples, " << p;
+            moved += b.color[p] != before[p];
+        }
+        EXPECT_GT(moved, 0u) << "the noise allows some smoothing";
     }
-    EXPECT_GT(moved, 0u) << "the noise allows some smoothing";
+}
+
+TEST(AovFilter, TakesFirefliesDownAndKeepsConvergedHighlights) {
+    // Two pixels five times brighter than a flat surround: one whose 4 samples disagree as a
+    // rare bright path makes them (one sample of 17, three of 0.5: spread 7.1), one whose
+    // samples all agree (a highlight). The first is a firefly, the second is signal.
+    FrameBuffers b = converged_frame();
+    std::vector<float> variance(b.pixel_count(), 1e-4f);
+    const Vec3 albedo(0.6f, 0.5f, 0.4f);
+    const std::size_t firefly = 8 * 32 + 8, highlight = 8 * 32 + 24;
+    for (std::size_t p : {firefly, highlight})
+        b.color[p] = 5.0f * luminance(b.color[p]) * albedo / luminance(albedo);
+    const float l = luminance(b.color[firefly]);
+    variance[firefly] = (l * 1.4f) * (l * 1.4f) / 4.0f;  // s^2 / n, s = 1.4 times the mean
+    variance[highlight] = 0.0f;
+    const Vec3 highlight_before = b.color[highlight];
+    const float surround = luminance(b.color[firefly + 1]);
+    filter_frame(b, variance, 4);
+    EXPECT_LT(luminance(b.color[firefly]), 1.2f * surround) << "the firefly is taken down";
+    EXPECT_NEAR(b.color[highlight].x, highlight_before.x, 1e-5f) << "the highlight stays";
+    EXPECT_NEAR(b.color[highlight].y, highlight_before.y, 1e-5f);
+}
+
+TEST(AovFilter, ReusedWorkingMemoryGivesTheSameFrames) {
+    // Frames of two sizes and different content through one FilterScratch, against the same
+    // frames filtered with memory of their own: a reused buffer must carry nothing over.
+    auto engine = demo_engine();
+    FilterScratch scratch;
+    const uint32_t sizes[][2] = {{W, H}, {W, H}, {50, 31}, {W, H}};
+    for (uint32_t i = 0; i < 4; ++i) {
+        RenderRequest r = request(1 + i, false, {Aov::Albedo, Aov::Normal, Aov::Depth});
+        r.width = sizes[i][0];
+        r.height = sizes[i][1];
+        const Frame frame = test::render_frame_ok(*engine, r);
+        FrameBuffers own = frame.buffers, reused = frame.buffers;
+        filter_frame(own, {});
+        filter_frame(reused, {}, 1, {}, &scratch);
+        EXPECT_EQ(own.color, reused.color) << i;
+        EXPECT_GT(scratch.bytes(), std::size_t(r.width) * r.height * 20 * sizeof(float));
+    }
+    scratch.release();
+    EXPECT_EQ(scratch.bytes(), 0u);
 }
 
 TEST(AovFilter, AConstantFrameStaysConstantWhateverItsNoise) {

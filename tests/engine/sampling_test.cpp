@@ -1,5 +1,6 @@
-// The sample sequence (range, stratification, independence between pixels) and the BRDF (its
-// importance sampling agrees with its evaluation; energy is conserved).
+// The sample sequence (range, stratification, independence between pixels, blue-noise spread of
+// neighbouring pixels' samples), the blue-noise mask, and the BRDF (its importance sampling
+// agrees with its evaluation; energy is conserved).
 
 #include <cmath>
 #include <numbers>
@@ -8,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "engine/render/blue_noise.h"
 #include "engine/render/sampler.h"
 #include "engine/render/shading.h"
 
@@ -78,6 +80,68 @@ TEST(PixelSampler, NeighbouringPixelsAreDecorrelated) {
         same += a.get1(i, 0) == c.get1(i, 0);
     }
     EXPECT_LT(same, 4);
+}
+
+TEST(BlueNoiseMask, HoldsEveryRankOnceAndIsTheSameEachTime) {
+    const BlueNoiseMask& mask = blue_noise_mask();
+    std::set<uint16_t> ranks(mask.begin(), mask.end());
+    EXPECT_EQ(ranks.size(), BLUE_NOISE_PIXELS);
+    EXPECT_EQ(*ranks.rbegin(), BLUE_NOISE_PIXELS - 1);
+    EXPECT_EQ(make_blue_noise_mask(), mask);
+}
+
+/// Squared distance between pixels p and q of the mask's tile, on the torus.
+uint32_t torus_distance2(uint32_t p, uint32_t q) {
+    const auto axis = [](uint32_t a, uint32_t b) {
+        const uint32_t d = a > b ? a - b : b - a;
+        return std::min(d, BLUE_NOISE_SIZE - d);
+    };
+    const uint32_t dx = axis(p % BLUE_NOISE_SIZE, q % BLUE_NOISE_SIZE);
+    const uint32_t dy = axis(p / BLUE_NOISE_SIZE, q / BLUE_NOISE_SIZE);
+    return dx * dx + dy * dy;
+}
+
+TEST(BlueNoiseMask, EveryThresholdIsSpreadEvenly) {
+    // White noise fails both: 256 random pixels of 4096 almost surely include two closer than 2,
+    // and the count of 64 fair coins strays past 32 +- 8 in some of 64 blocks.
+    const BlueNoiseMask& mask = blue_noise_mask();
+    for (uint32_t threshold : {64u, 256u}) {
+        std::vector<uint32_t> set;
+        for (uint32_t p = 0; p < BLUE_NOISE_PIXELS; ++p)
+            if (mask[p] < threshold) set.push_back(p);
+        uint32_t closest = ~0u;
+        for (std::size_t i = 0; i < set.size(); ++i)
+            for (std::size_t j = i + 1; j < set.size(); ++j)
+                closest = std::min(closest, torus_distance2(set[i], set[j]));
+        EXPECT_GE(closest, threshold == 64u ? 16u : 4u) << "ranks below " << threshold;
+    }
+    for (uint32_t by = 0; by < BLUE_NOISE_SIZE; by += 8) {
+        for (uint32_t bx = 0; bx < BLUE_NOISE_SIZE; bx += 8) {
+            uint32_t low = 0;
+            for (uint32_t y = by; y < by + 8; ++y)
+                for (uint32_t x = bx; x < bx + 8; ++x)
+                    low += mask[y * BLUE_NOISE_SIZE + x] < BLUE_NOISE_PIXELS / 2;
+            EXPECT_NEAR(double(low), 32.0, 4.0) << "block " << bx << ", " << by;
+        }
+    }
+}
+
+TEST(PixelSampler, NeighboursFirstSamplesAreSpreadApart) {
+    // Sample 0 of neighbouring pixels: independent uniform values lie 1/3 apart on average;
+    // the blue-noise shifts push them farther apart in every dimension the renderer uses.
+    for (uint32_t dim = 0; dim < 16; ++dim) {
+        double sum = 0.0;
+        uint32_t count = 0;
+        for (uint32_t y = 0; y < 64; ++y) {
+            for (uint32_t x = 0; x < 64; ++x) {
+                const float u = PixelSampler(x, y).get1(0, dim);
+                sum += std::abs(u - PixelSampler(x + 1, y).get1(0, dim));
+                sum += std::abs(u - PixelSampler(x, y + 1).get1(0, dim));
+                count += 2;
+            }
+        }
+        EXPECT_GT(sum / count, 0.38) << "dimension " << dim;
+    }
 }
 
 /// Directional albedo of `bsdf` for view angle theta, two ways: the mean weight of its own

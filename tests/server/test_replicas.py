@@ -26,8 +26,11 @@ SPLIT_VIEW = "width=83&height=61&spp=2&eye=3.5,4,13&target=3.5,0.5,0"
 SPLIT_RENDERS = [
     f"/v1/render?{SPLIT_VIEW}",
     f"/v1/render?{SPLIT_VIEW}&format=exr&aovs=albedo,depth,instance_id,mesh_id",
-    f"/v1/render?{SPLIT_VIEW}&filter=atrous&exposure=0.5",
+    f"/v1/render?{SPLIT_VIEW.replace('spp=2', 'spp=1')}&filter=atrous&exposure=0.5",
 ]
+# Filtered from 2 samples on, the filter reads each pixel's measured noise, which bands do not
+# carry: the coordinator renders such a frame whole and says so.
+SPLIT_WHOLE_RENDER = f"/v1/render?{SPLIT_VIEW}&filter=atrous&exposure=0.5"
 
 
 
@@ -418,6 +421,13 @@ class Replicas(unittest.TestCase):
         for split in (2, 3):
             for path in SPLIT_RENDERS:
                 self.assert_split_equals_single(servers[split % 3], path, split, n, True)
+            single = servers[0].call("GET", f"{SPLIT_WHOLE_RENDER}&min_version={n}")
+            status, headers, frame = servers[0].call(
+                "GET", f"{SPLIT_WHOLE_RENDER}&split={split}&min_version={n}")
+            self.assertEqual(status, 200, frame[:300])
+            self.assertEqual(frame, single[2])
+            self.assertTrue(headers["X-Strata-Split"].startswith(
+                f"1 band at version {n}: local (not split: a filtered frame"), headers)
         # A POST body splits too; more bands than processes, or a band with split, are 422.
         status, headers, frame = servers[0].call(
             "POST", "/v1/render", {"width": 40, "height": 30, "split": 3, "camera": {"eye": [3, 2, 9]}})
