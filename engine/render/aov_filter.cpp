@@ -93,7 +93,7 @@ struct Planes {
     Plane r, g, b, lum;
     explicit Planes(std::size_t n) : r(n), g(n), b(n), lum(n) {}
     void update_luminance(std::size_t p) {
-        lum[p] = 0.2126f * r[p] + 0.7152f * g[p] + 0.0722f * b[p];
+        lum[p] = luminance(Vec3(r[p], g[p], b[p]));
     }
 };
 
@@ -239,7 +239,7 @@ void atrous_row(const Layout& l, const Guides& g,
         store(&out.r[p], r);
         store(&out.g[p], gg);
         store(&out.b[p], b);
-        store(&out.lum[p], 0.2126f * r + 0.7152f * gg + 0.0722f * b);
+        store(&out.lum[p], 0.2126f * r + 0.7152f * gg + 0.0722f * b);  // luminance(), 4 lanes
         store(&out_variance[p], select(keep, load(&variance[p]), sv * inv * inv));
     }
 }
@@ -303,7 +303,7 @@ void filter_frame(FrameBuffers& b, std::span<const float> pixel_variance, uint32
             }
             if (measured) {
                 const float lc = luminance(b.color[i]);
-                const float la = 0.2126f * g.ar[p] + 0.7152f * g.ag[p] + 0.0722f * g.ab[p];
+                const float la = luminance(Vec3(g.ar[p], g.ag[p], g.ab[p]));
                 const float scale =
                     lc > 1e-6f ? light.lum[p] / lc : 1.0f / std::max(la, MIN_ALBEDO);
                 const float independent = std::max(0.0f, pixel_variance[i]) * scale * scale;

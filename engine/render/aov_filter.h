@@ -63,11 +63,6 @@ struct AovFilterSettings {
     float firefly_noise_sigmas = 2.0f;
 };
 
-/// Rec. 709 luminance of linear RGB: the quantity whose noise the filter measures.
-inline float luminance(const Vec3& c) {
-    return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z;
-}
-
 /// The filter's working memory (about 100 bytes a pixel), kept between frames by a caller that
 /// filters many: allocating and first touching it each frame cost about as much as one pass.
 /// One filter_frame at a time may use it.

@@ -32,10 +32,6 @@ float schlick_weight(float cos_theta) {
     return m2 * m2 * m;
 }
 
-float luminance(const Vec3& c) {
-    return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z;
-}
-
 /// GGX normal distribution for cos(n, h).
 float ggx_d(float n_dot_h, float alpha) {
     const float a2 = alpha * alpha;

@@ -193,19 +193,34 @@ struct RestartResult {
 };
 
 /// Writes `batches` through a store in `dir` (snapshot at the end when asked), closes it.
-void write_scene(const std::string& dir, std::vector<EditBatch> batches, bool snapshot) {
-    auto eng = engine();
+/// A store on `dir` journaling with `mode` that takes no snapshot of its own (the benches say
+/// when).
+std::unique_ptr<durable::DurableStore> store_without_snapshots(Engine& eng, const std::string& dir,
+                                                               durable::FsyncMode mode) {
     durable::StoreOptions o;
     o.dir = dir;
-    o.journal.mode = durable::FsyncMode::Off;  // the write side is not what is measured
+    o.journal.mode = mode;
     o.snapshot_threshold_bytes = UINT64_MAX;
-    auto store = durable::DurableStore::open(o, *eng);
-    if (!store) std::abort();
+    auto opened = durable::DurableStore::open(o, eng);
+    if (!opened) std::abort();
+    return std::move(opened.value());
+}
+
+/// One timed call on one clock (the stall and replace benches keep those over a threshold).
+using Clock = std::chrono::steady_clock;
+struct Span {
+    Clock::time_point begin, end;
+};
+
+void write_scene(const std::string& dir, std::vector<EditBatch> batches, bool snapshot) {
+    auto eng = engine();
+    // The write side is not what is measured.
+    auto store = store_without_snapshots(*eng, dir, durable::FsyncMode::Off);
     for (auto& b : batches)
         if (!eng->apply(std::move(b))) std::abort();
     if (!snapshot) return;
-    if (!store.value()->snapshot_now()) std::abort();
-    const durable::DurableStats st = store.value()->stats();
+    if (!store->snapshot_now()) std::abort();
+    const durable::DurableStats st = store->stats();
     std::printf(
         "    snapshot at version %llu: %.1f ms holding the scene lock (the copy), %.2f s in "
         "all, %.0f MB\n",
@@ -298,22 +313,13 @@ struct StallResult {
 StallResult run_stall() {
     auto eng = engine();
     const std::string dir = temp_dir();
-    durable::StoreOptions o;
-    o.dir = dir;
-    o.journal.mode = durable::FsyncMode::Off;  // the stall, not the fsync, is measured
-    o.snapshot_threshold_bytes = UINT64_MAX;
-    auto opened = durable::DurableStore::open(o, *eng);
-    if (!opened) std::abort();
-    auto store = std::move(opened.value());
+    // The stall, not the fsync, is measured.
+    auto store = store_without_snapshots(*eng, dir, durable::FsyncMode::Off);
     for (auto& b : million_instances())
         if (!eng->apply(std::move(b))) std::abort();
     if (!eng->commit()) std::abort();
 
     // One editor: each apply() is timed from its start to its return, on one clock.
-    using Clock = std::chrono::steady_clock;
-    struct Span {
-        Clock::time_point begin, end;
-    };
     std::vector<Span> spans;
     spans.reserve(1 << 22);
     std::atomic<bool> stop{false};
@@ -403,12 +409,7 @@ struct ReplaceResult {
 ReplaceResult run_replace(const std::string& snapshot) {
     auto eng = engine();
     const std::string dir = temp_dir();
-    durable::StoreOptions o;
-    o.dir = dir;
-    o.snapshot_threshold_bytes = UINT64_MAX;
-    auto opened = durable::DurableStore::open(o, *eng);
-    if (!opened) std::abort();
-    auto store = std::move(opened.value());
+    auto store = store_without_snapshots(*eng, dir, durable::StoreOptions{}.journal.mode);
     // The old scene: 1M instances laid out differently, built.
     for (auto& b : million_instances()) {
         for (Edit& e : b.edits)
@@ -417,10 +418,6 @@ ReplaceResult run_replace(const std::string& snapshot) {
     }
     if (!eng->commit()) std::abort();
 
-    using Clock = std::chrono::steady_clock;
-    struct Span {
-        Clock::time_point begin, end;
-    };
     // Reads take about a microsecond: only those over 50 us are kept (0 below means none was).
     std::vector<Span> spans;
     spans.reserve(1 << 20);

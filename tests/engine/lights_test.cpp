@@ -23,17 +23,10 @@ using test::apply_ok;
 using test::commit_ok;
 using test::instance_edit;
 using test::mesh_edit;
+using test::point_light;
 
 constexpr float PI = std::numbers::pi_v<float>;
 constexpr float HEIGHT = 2.0f;
-
-Light point_light(Vec3 at, float intensity) {
-    Light l;
-    l.kind = LightKind::Point;
-    l.position = at;
-    l.intensity = intensity;
-    return l;
-}
 
 /// A floor with sky and sun off, seen at 45 degrees through a 2-degree camera.
 EditBatch dark_floor() {

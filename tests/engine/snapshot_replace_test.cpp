@@ -24,6 +24,7 @@
 namespace strata {
 namespace {
 
+using test::point_light;
 using test::TempDir;
 
 std::string encoded_scene(const Engine& engine) {
@@ -32,14 +33,6 @@ std::string encoded_scene(const Engine& engine) {
         durable::encode_batch(s.to_batch(), out);
         return out;
     });
-}
-
-Light point_light(Vec3 at, float intensity) {
-    Light l;
-    l.kind = LightKind::Point;
-    l.position = at;
-    l.intensity = intensity;
-    return l;
 }
 
 /// Random meshes and instances (with removals, so slots have holes), then groups, lights, a

@@ -27,6 +27,14 @@ inline AddInstance instance_edit(const std::string& id, const std::string& mesh,
     return e;
 }
 
+inline Light point_light(Vec3 at, float intensity) {
+    Light l;
+    l.kind = LightKind::Point;
+    l.position = at;
+    l.intensity = intensity;
+    return l;
+}
+
 inline std::unique_ptr<Engine> make_engine() {
     auto engine = Engine::create();
     EXPECT_TRUE(engine.has_value()) << (engine.has_value() ? "" : engine.error().describe());
