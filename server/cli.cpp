@@ -16,17 +16,10 @@
 
 namespace strata::server {
 
-std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
-    CommandLine cl;
-    ServerConfig& c = cl.config;
-    c.threads = std::max(8u, std::thread::hardware_concurrency());
-    std::size_t max_body_mb = c.max_body_bytes >> 20;
-    std::size_t max_buffered_mb = c.max_buffered_bytes >> 20;
+namespace {
 
-    CLI::App app{
-        "strata-server: a dynamic ray-tracing scene server (JSON over HTTP; see "
-        "protocol/README.md)"};
-    app.option_defaults()->always_capture_default();
+/// Where the server listens and how many requests it handles at once.
+void add_network_options(CLI::App& app, ServerConfig& c) {
     app.add_option("--host", c.host,
                    "Address to listen on; a non-loopback one needs a token (--token-file or "
                    "STRATA_TOKEN) or --insecure");
@@ -35,6 +28,10 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
                    "HTTP worker threads, i.e. requests handled at once (rendering uses every core "
                    "through TBB regardless)")
         ->check(CLI::Range(1, 1024));
+}
+
+/// The data directory: where the journal and snapshots go and how hard they are kept.
+void add_durability_options(CLI::App& app, ServerConfig& c) {
     app.add_option("--data", c.data_dir,
                    "Data directory: every acknowledged edit batch is journaled there and the scene "
                    "is snapshotted in the background; a restart recovers it. Created if missing; "
@@ -57,6 +54,10 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
                  "At start, if the journal or a snapshot is damaged before its end, keep what "
                  "precedes the damage, set the rest aside (*.damaged) and start, instead of "
                  "refusing to");
+}
+
+/// Scaling out: the shared edit log replicas follow, and the peers split renders go to.
+void add_replication_options(CLI::App& app, ServerConfig& c) {
     app.add_option("--log", c.log_url,
                    "Shared edit log, redis://HOST:PORT/STREAM: this server becomes a replica that "
                    "appends its batches to the Redis stream and applies every batch from it in "
@@ -85,6 +86,11 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
                    "With --peers: longest a split render waits for one peer's band before "
                    "rendering it here")
         ->check(CLI::Range(50, 600000));
+}
+
+/// How large a request's body, frame and JSON may be. `max_body_mb` receives --max-body-mb,
+/// which the config holds in bytes.
+void add_request_limit_options(CLI::App& app, ServerConfig& c, std::size_t& max_body_mb) {
     app.add_option("--max-body-mb", max_body_mb, "Largest request body, in MiB (413 beyond)")
         ->check(CLI::Range(1, 4096));
     app.add_option("--max-pixels", c.max_pixels,
@@ -96,6 +102,11 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
     app.add_option("--max-array-elements", c.max_array_elements,
                    "Most elements in one JSON array (413 beyond)")
         ->check(CLI::Range(std::size_t(16), std::size_t(1) << 30));
+}
+
+/// What one connection, and all of them together, may take: timeouts, head sizes, counts and
+/// buffered data. `max_buffered_mb` receives --max-buffered-mb, which the config holds in bytes.
+void add_connection_options(CLI::App& app, ServerConfig& c, std::size_t& max_buffered_mb) {
     app.add_option("--header-timeout", c.header_timeout_s,
                    "Seconds a client has to send a request's line and headers, from its first "
                    "byte (408 beyond)")
@@ -136,6 +147,10 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
     app.add_option("--listen-backlog", c.listen_backlog,
                    "Connections the kernel queues before the server accepts them")
         ->check(CLI::Range(1, 1 << 16));
+}
+
+/// How long renders may run, also at shutdown, and how large the scene may grow.
+void add_render_limit_options(CLI::App& app, ServerConfig& c) {
     app.add_option("--render-timeout", c.render_timeout_s,
                    "Seconds a render may run before it is stopped (503 deadline-exceeded)")
         ->check(CLI::Range(1, 86400));
@@ -152,16 +167,24 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
                    "Most decoded texture memory in MiB, 6 bytes a texel (add_texture beyond it: "
                    "413)")
         ->check(CLI::Range(uint64_t(1), uint64_t(1) << 20));
+}
+
+/// Who may call the API: the bearer token, the loopback rule's override and CORS origins.
+void add_access_options(CLI::App& app, CommandLine& cl) {
     app.add_option("--token-file", cl.token_file,
                    "File holding a bearer token; then every endpoint but /livez and /readyz needs "
                    "'Authorization: Bearer <token>'. Or give the token itself in STRATA_TOKEN")
         ->check(CLI::ExistingFile);
     app.add_flag("--insecure", cl.insecure, "Allow a non-loopback --host without a token");
-    app.add_option("--cors-origin", c.cors_origin,
+    app.add_option("--cors-origin", cl.config.cors_origin,
                    "Origins whose pages may call the API (CORS): a comma-separated list such as "
                    "'https://viewer.example.org,http://localhost:8000', or '*' for any; empty: "
                    "none. Preflights (OPTIONS) from them are answered; the token is still "
                    "required");
+}
+
+/// The scene the server starts with and how its top-level acceleration structure is kept.
+void add_scene_options(CLI::App& app, ServerConfig& c) {
     app.add_flag("--demo", c.demo, "Start with the demo scene");
     app.add_option("--tlas", c.tlas,
                    "TLAS strategy: incremental (a commit costs what its instance edits touch) or "
@@ -178,11 +201,11 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
     app.add_option("--tlas-background-merge", c.tlas_background_merge,
                    "Incremental TLAS: rebuild the static tier with the edits in the background "
                    "and swap it in at a later commit (true or false)");
-    app.add_option("--log-level", cl.log_level, "trace, debug, info, warn, error, critical or off")
-        ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
-    // Every option above can also come from the environment, --x-y from STRATA_X_Y (containers
-    // are configured that way); the command line wins. --help, --version and --healthcheck are
-    // about one invocation, so they have no variable.
+}
+
+/// Lets every option added so far but --help also come from the environment, --x-y from
+/// STRATA_X_Y (containers are configured that way); the command line wins.
+void add_environment_variables(CLI::App& app) {
     for (CLI::Option* opt : app.get_options()) {
         if (opt->get_lnames().empty() || opt->get_lnames().front() == "help") continue;
         std::string name = "STRATA_" + opt->get_lnames().front();
@@ -190,11 +213,44 @@ std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
             ch = ch == '-' ? '_' : char(std::toupper(static_cast<unsigned char>(ch)));
         opt->envname(name);
     }
+}
+
+/// --version and --healthcheck: they answer one invocation instead of starting a server.
+void add_invocation_options(CLI::App& app, CommandLine& cl) {
     app.set_version_flag("--version", std::string("strata-server ") + VERSION,
                          "Print the version and exit");
     app.add_flag("--healthcheck", cl.healthcheck,
                  "Start no server: GET /readyz on --host (a wildcard address means 127.0.0.1 or "
                  "::1) and --port, exit 0 on 200 and 1 otherwise");
+}
+
+}  // namespace
+
+std::variant<CommandLine, int> parse_command_line(int argc, char** argv) {
+    CommandLine cl;
+    ServerConfig& c = cl.config;
+    c.threads = std::max(8u, std::thread::hardware_concurrency());
+    std::size_t max_body_mb = c.max_body_bytes >> 20;
+    std::size_t max_buffered_mb = c.max_buffered_bytes >> 20;
+
+    CLI::App app{
+        "strata-server: a dynamic ray-tracing scene server (JSON over HTTP; see "
+        "protocol/README.md)"};
+    app.option_defaults()->always_capture_default();
+    add_network_options(app, c);
+    add_durability_options(app, c);
+    add_replication_options(app, c);
+    add_request_limit_options(app, c, max_body_mb);
+    add_connection_options(app, c, max_buffered_mb);
+    add_render_limit_options(app, c);
+    add_access_options(app, cl);
+    add_scene_options(app, c);
+    app.add_option("--log-level", cl.log_level, "trace, debug, info, warn, error, critical or off")
+        ->check(CLI::IsMember({"trace", "debug", "info", "warn", "error", "critical", "off"}));
+    // Every option above can also come from the environment. --help, --version and
+    // --healthcheck are about one invocation, so they have no variable.
+    add_environment_variables(app);
+    add_invocation_options(app, cl);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -77,37 +77,169 @@ std::unique_ptr<durable::DurableStore> open_data_dir(const server::ServerConfig&
     return std::move(store.value());
 }
 
-/// Serves until SIGTERM or SIGINT; returns the process exit code.
-int serve(server::CommandLine& cl) {
-    server::ShutdownSignals signals;  // before any thread starts, so that all inherit the mask
+/// Makes writes fail with an error instead of killing the process, and lowers
+/// --max-connections to what the open-file limit leaves room for.
+void prepare_process(server::ServerConfig& c) {
     // Writes to a connection the client closed fail with EPIPE instead of killing the process.
     std::signal(SIGPIPE, SIG_IGN);
     // A file size limit (ulimit -f) makes journal writes fail with EFBIG instead of killing us.
     std::signal(SIGXFSZ, SIG_IGN);
     const rlim_t files = raise_file_limit();
-    if (files != RLIM_INFINITY && files < cl.config.max_connections + 64) {
+    if (files != RLIM_INFINITY && files < c.max_connections + 64) {
         spdlog::warn(
             "only {} open files allowed (ulimit -n): lowering --max-connections from {} "
             "to {}",
-            files, cl.config.max_connections, files > 128 ? files - 64 : 64);
-        cl.config.max_connections = files > 128 ? std::size_t(files - 64) : 64;
+            files, c.max_connections, files > 128 ? files - 64 : 64);
+        c.max_connections = files > 128 ? std::size_t(files - 64) : 64;
     }
+}
 
+/// The engine with the scene budget and TLAS strategy of `c`; null (and a logged reason) when
+/// it cannot start.
+std::unique_ptr<Engine> create_engine(const server::ServerConfig& c) {
     EngineConfig engine_config;
-    engine_config.budget = {cl.config.max_scene_triangles, cl.config.max_scene_vertices,
-                            cl.config.max_texture_mb << 20};
-    engine_config.accel.tlas = *parse_tlas_kind(cl.config.tlas);  // checked by the parser
-    engine_config.accel.tlas_policy.max_dynamic_fraction = cl.config.tlas_max_dynamic_fraction;
-    engine_config.accel.tlas_policy.min_instances = cl.config.tlas_min_instances;
-    engine_config.accel.tlas_policy.background_merge = cl.config.tlas_background_merge;
+    engine_config.budget = {c.max_scene_triangles, c.max_scene_vertices, c.max_texture_mb << 20};
+    engine_config.accel.tlas = *parse_tlas_kind(c.tlas);  // checked by the parser
+    engine_config.accel.tlas_policy.max_dynamic_fraction = c.tlas_max_dynamic_fraction;
+    engine_config.accel.tlas_policy.min_instances = c.tlas_min_instances;
+    engine_config.accel.tlas_policy.background_merge = c.tlas_background_merge;
     auto engine = Engine::create(engine_config);
     if (!engine) {
         spdlog::critical("cannot start the engine: {}", engine.error().describe());
-        return 1;
+        return nullptr;
     }
+    return std::move(engine.value());
+}
+
+/// What /readyz says about the replica `f` (null without --log: ready): joined, not stopped,
+/// and how far behind the edit log it is.
+server::Readiness replica_readiness(const replica::Replica* f) {
+    server::Readiness r;
+    if (!f) return r;
+    const replica::ReplicaStatus s = f->status();
+    r.ready = s.joined && !s.stopped;
+    r.detail = s.stopped ? "the replica stopped following the edit log: " + s.stop_reason
+                         : "the replica is catching up with the edit log " + s.log +
+                               " (applied " + std::to_string(s.applied_version) + " of " +
+                               std::to_string(s.log_version) +
+                               (s.connected ? ")" : "; Redis unreachable)");
+    r.section = "replica";
+    r.numbers = {{"applied_version", double(s.applied_version)},
+                 {"log_version", double(s.log_version)},
+                 {"lag_entries", double(s.lag_entries)},
+                 {"lag_seconds", s.lag_seconds},
+                 {"connected", s.connected ? 1.0 : 0.0}};
+    return r;
+}
+
+/// Starts the graceful shutdown of `http` at the first SIGINT or SIGTERM.
+void stop_on_signal(server::ShutdownSignals& signals, server::Server& http,
+                    const server::ServerConfig& c) {
+    signals.start([&http, &c](int signo) {
+        spdlog::info(
+            "{} received: finishing in-flight requests (renders still running after {} "
+            "s are stopped; a second signal exits at once)",
+            signo == SIGINT ? "SIGINT" : "SIGTERM", c.shutdown_grace_s);
+        http.stop();
+    });
+}
+
+/// Logs where the server listens, how clients authenticate and where the viewer is.
+void log_listening(const server::CommandLine& cl, int port) {
+    spdlog::info("strata-server listening on http://{}:{} ({} threads, {})", cl.config.host, port,
+                 cl.config.threads,
+                 cl.config.token.empty() ? "no authentication"
+                                         : "bearer token required, from " + cl.token_source);
+    spdlog::info("viewer: open http://{}:{}/ in a browser{}", cl.config.host, port,
+                 cl.config.token.empty() ? "" : " (it asks for the token once per tab)");
+}
+
+/// Follows the shared edit log (--log) from the `recovered` version (a snapshot jump goes
+/// through `store`, when there is one) and hands the replica to the server and to /readyz.
+std::unique_ptr<replica::Replica> follow_edit_log(const server::ServerConfig& c, Engine& engine,
+                                                  durable::DurableStore* store,
+                                                  uint64_t recovered, server::Server& http,
+                                                  std::atomic<replica::Replica*>& follower) {
+    replica::ReplicaOptions o;
+    o.url = replica::parse_redis_url(c.log_url).value();  // checked by finish_config
+    o.snapshot_every = c.log_snapshot_every;
+    o.write_timeout = std::chrono::milliseconds(c.log_write_timeout_ms);
+    o.store = store;
+    auto follow = replica::Replica::start(o, engine);
+    follower = follow.get();
+    http.attach_replica(follow.get());
+    spdlog::info("following the edit log {} from version {}", o.url.describe(), recovered);
+    return follow;
+}
+
+/// The demo scene's batch; a logged reason when it cannot be built.
+Result<EditBatch> demo_scene() {
+    auto batch = demo::scene_with_models();
+    if (!batch) spdlog::critical("demo scene not built: {}", batch.error().describe());
+    return batch;
+}
+
+/// Appends the demo scene to an empty edit log only: one replica's demo wins, the others find
+/// it there. False when the demo scene cannot be built.
+bool append_demo_scene(replica::Replica& follow) {
+    auto batch = demo_scene();
+    if (!batch) return false;
+    auto applied = follow.append(std::move(batch.value()), uint64_t{0});
+    if (applied)
+        spdlog::info("demo scene appended to the edit log (version {})", applied.value().version);
+    else if (applied.error().code == ErrorCode::VersionMismatch)
+        spdlog::info("--demo ignored: the edit log holds a scene already");
+    else
+        spdlog::warn("demo scene not appended: {}", applied.error().message);
+    return true;
+}
+
+/// Applies the demo scene to the engine. False when it cannot be built or the engine rejects it.
+bool apply_demo_scene(Engine& engine) {
+    auto batch = demo_scene();
+    if (!batch) return false;
+    auto applied = engine.apply(std::move(batch.value()));
+    if (!applied) {
+        spdlog::critical("demo scene rejected: {}", applied.error().describe());
+        return false;
+    }
+    spdlog::info("demo scene loaded (version {})", applied.value().version);
+    return true;
+}
+
+/// Starts with the demo scene (--demo): through the edit log when following one, else in the
+/// engine unless the data directory recovered a scene. False when the server cannot go on.
+bool load_demo_scene(replica::Replica* follow, Engine& engine, uint64_t recovered) {
+    if (follow) return append_demo_scene(*follow);
+    if (recovered != 0) {
+        spdlog::info("--demo ignored: the data directory holds a scene (version {})", recovered);
+        return true;
+    }
+    return apply_demo_scene(engine);
+}
+
+/// Builds the acceleration structures of the scene recovered at version `recovered`, before
+/// the server is ready, telling /readyz and the data directory's stats about it.
+void build_recovered_scene(Engine& engine, durable::DurableStore* store,
+                           durable::RecoveryProgress& progress, uint64_t recovered) {
+    progress.version = recovered;
+    progress.phase = durable::RecoveryProgress::Building;
+    Stopwatch clock;
+    auto built = engine.commit();
+    if (!built) spdlog::error("building the recovered scene failed: {}", built.error().describe());
+    if (store) store->set_rebuild_seconds(clock.ms() / 1000.0);
+    spdlog::info("recovered scene built in {:.1f} ms", clock.ms());
+}
+
+/// Serves until SIGTERM or SIGINT; returns the process exit code.
+int serve(server::CommandLine& cl) {
+    server::ShutdownSignals signals;  // before any thread starts, so that all inherit the mask
+    prepare_process(cl.config);
+    std::unique_ptr<Engine> engine = create_engine(cl.config);
+    if (!engine) return 1;
     // Step: listen first. While the data directory is recovered and its scene built, /livez
     // answers 200, /readyz 503 with how far recovery got, everything else 503 with Retry-After.
-    server::Server http(cl.config, *engine.value());
+    server::Server http(cl.config, *engine);
     auto port = http.bind();
     if (!port) {
         spdlog::critical("{}", port.error().message);
@@ -117,38 +249,9 @@ int serve(server::CommandLine& cl) {
     http.set_starting(true, [&progress] { return progress.describe(); });
     // With --log, /readyz also asks the replica: joined, not stopped, and how far behind.
     std::atomic<replica::Replica*> follower{nullptr};
-    http.set_readiness([&follower] {
-        server::Readiness r;
-        replica::Replica* f = follower.load();
-        if (!f) return r;
-        const replica::ReplicaStatus s = f->status();
-        r.ready = s.joined && !s.stopped;
-        r.detail = s.stopped ? "the replica stopped following the edit log: " + s.stop_reason
-                             : "the replica is catching up with the edit log " + s.log +
-                                   " (applied " + std::to_string(s.applied_version) + " of " +
-                                   std::to_string(s.log_version) +
-                                   (s.connected ? ")" : "; Redis unreachable)");
-        r.section = "replica";
-        r.numbers = {{"applied_version", double(s.applied_version)},
-                     {"log_version", double(s.log_version)},
-                     {"lag_entries", double(s.lag_entries)},
-                     {"lag_seconds", s.lag_seconds},
-                     {"connected", s.connected ? 1.0 : 0.0}};
-        return r;
-    });
-    signals.start([&http, &cl](int signo) {
-        spdlog::info(
-            "{} received: finishing in-flight requests (renders still running after {} "
-            "s are stopped; a second signal exits at once)",
-            signo == SIGINT ? "SIGINT" : "SIGTERM", cl.config.shutdown_grace_s);
-        http.stop();
-    });
-    spdlog::info("strata-server listening on http://{}:{} ({} threads, {})", cl.config.host,
-                 port.value(), cl.config.threads,
-                 cl.config.token.empty() ? "no authentication"
-                                         : "bearer token required, from " + cl.token_source);
-    spdlog::info("viewer: open http://{}:{}/ in a browser{}", cl.config.host, port.value(),
-                 cl.config.token.empty() ? "" : " (it asks for the token once per tab)");
+    http.set_readiness([&follower] { return replica_readiness(follower.load()); });
+    stop_on_signal(signals, http, cl.config);
+    log_listening(cl, port.value());
     std::thread serving([&http] { http.listen(); });
     auto stop_serving = [&] {
         http.stop();
@@ -157,76 +260,26 @@ int serve(server::CommandLine& cl) {
 
     // Step: the data directory, recovered while probes get their answers.
     bool data_failed = false;
-    auto store = open_data_dir(cl.config, *engine.value(), progress, data_failed);
+    auto store = open_data_dir(cl.config, *engine, progress, data_failed);
     if (data_failed) {
         stop_serving();
         return 1;
     }
     http.attach_store(store.get());
-    const uint64_t recovered = engine.value()->read([](const Scene& s) { return s.version(); });
+    const uint64_t recovered = engine->read([](const Scene& s) { return s.version(); });
     // Step: the shared edit log. The replica follows it from the recovered version (an empty
     // scene first loads the log's snapshot); every batch reaches the engine through it.
     std::unique_ptr<replica::Replica> follow;
-    if (!cl.config.log_url.empty()) {
-        replica::ReplicaOptions o;
-        o.url = replica::parse_redis_url(cl.config.log_url).value();  // checked by finish_config
-        o.snapshot_every = cl.config.log_snapshot_every;
-        o.write_timeout = std::chrono::milliseconds(cl.config.log_write_timeout_ms);
-        o.store = store.get();
-        follow = replica::Replica::start(o, *engine.value());
-        follower = follow.get();
-        http.attach_replica(follow.get());
-        spdlog::info("following the edit log {} from version {}", o.url.describe(), recovered);
-    }
-    auto demo_scene = [] {
-        auto batch = demo::scene_with_models();
-        if (!batch) spdlog::critical("demo scene not built: {}", batch.error().describe());
-        return batch;
-    };
-    if (follow && cl.config.demo) {
-        // Appended only to an empty log: one replica's demo wins, the others find it there.
-        auto batch = demo_scene();
-        if (!batch) {
-            stop_serving();
-            return 1;
-        }
-        auto applied = follow->append(std::move(batch.value()), uint64_t{0});
-        if (applied)
-            spdlog::info("demo scene appended to the edit log (version {})",
-                         applied.value().version);
-        else if (applied.error().code == ErrorCode::VersionMismatch)
-            spdlog::info("--demo ignored: the edit log holds a scene already");
-        else
-            spdlog::warn("demo scene not appended: {}", applied.error().message);
-    } else if (cl.config.demo && recovered != 0) {
-        spdlog::info("--demo ignored: the data directory holds a scene (version {})", recovered);
-    } else if (cl.config.demo) {
-        auto batch = demo_scene();
-        if (!batch) {
-            stop_serving();
-            return 1;
-        }
-        auto applied = engine.value()->apply(std::move(batch.value()));
-        if (!applied) {
-            spdlog::critical("demo scene rejected: {}", applied.error().describe());
-            stop_serving();
-            return 1;
-        }
-        spdlog::info("demo scene loaded (version {})", applied.value().version);
+    if (!cl.config.log_url.empty())
+        follow = follow_edit_log(cl.config, *engine, store.get(), recovered, http, follower);
+    if (cl.config.demo && !load_demo_scene(follow.get(), *engine, recovered)) {
+        stop_serving();
+        return 1;
     }
 
     // Step: a recovered scene's acceleration structures, before the server is ready. A new
     // scene (empty, or the demo) is built by its first render, as without --data.
-    if (recovered != 0) {
-        progress.version = recovered;
-        progress.phase = durable::RecoveryProgress::Building;
-        Stopwatch clock;
-        auto built = engine.value()->commit();
-        if (!built)
-            spdlog::error("building the recovered scene failed: {}", built.error().describe());
-        if (store) store->set_rebuild_seconds(clock.ms() / 1000.0);
-        spdlog::info("recovered scene built in {:.1f} ms", clock.ms());
-    }
+    if (recovered != 0) build_recovered_scene(*engine, store.get(), progress, recovered);
     progress.phase = durable::RecoveryProgress::Done;
     http.set_starting(false);
     serving.join();

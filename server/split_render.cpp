@@ -120,6 +120,165 @@ Unexpected<Error> cancelled(const CancelToken& token) {
                                              cancel_reason_text(token.reason()));
 }
 
+/// How one split render is cut into bands: what its steps read.
+struct SplitPlan {
+    const RenderRequest& request;
+    std::vector<RowBand> bands;  ///< band 0 rendered here, band k asked of peer k
+    RenderRequest base;          ///< band_request of the request: what launches here render
+    AovSet aovs;                 ///< the AOVs every band carries
+};
+
+/// A split frame being put together from its bands.
+struct SplitAssembly {
+    FrameAssembly assembly;
+    FrameInfo info;                   ///< the info of the launch whose version the frame shows
+    Camera camera;                    ///< the camera that launch traced with
+    std::vector<std::string> labels;  ///< per band: "local", its peer's URL, or why not the peer
+    std::string note;                 ///< told after the version when it moved during the split
+};
+
+/// The `split` bands of `request`: an error when the `peer_count` peers cannot take split - 1
+/// of them or the frame has too few rows.
+Result<std::vector<RowBand>> split_bands(const RenderRequest& request, uint32_t split,
+                                         std::size_t peer_count) {
+    if (split < 2 || split - 1 > peer_count)
+        return failure(ErrorCode::InvalidArgument,
+                       "split " + std::to_string(split) + " needs " + std::to_string(split - 1) +
+                           " peers; this server has " + std::to_string(peer_count) +
+                           " (--peers)",
+                       "split");
+    std::vector<RowBand> bands = split_rows(request.height, split);
+    if (bands.size() != split)
+        return failure(ErrorCode::InvalidArgument,
+                       "split " + std::to_string(split) + " asks for more bands than the frame's " +
+                           std::to_string(request.height) + " rows",
+                       "split");
+    return bands;
+}
+
+/// The fetch of band `index` (`band`) from `peer`, whose client gives the peer `timeout` at
+/// most (and CONNECT_TIMEOUT at most to connect).
+std::unique_ptr<PeerFetch> make_fetch(const PeerServer& peer, uint32_t index, RowBand band,
+                                      std::chrono::milliseconds timeout) {
+    auto f = std::make_unique<PeerFetch>();
+    f->peer = &peer;
+    f->index = index;
+    f->band = band;
+    f->client = std::make_unique<httplib::Client>(peer.host, peer.port);
+    f->client->set_connection_timeout(std::min(CONNECT_TIMEOUT, timeout));
+    f->client->set_read_timeout(timeout);
+    f->client->set_write_timeout(timeout);
+    f->client->set_keep_alive(false);
+    return f;
+}
+
+/// Runs `f` on a thread of its own, asking its peer for `path`; `board` counts it as pending
+/// until it has finished.
+void start_fetch(PeerFetch& f, const std::string& path, const httplib::Headers& headers,
+                 FetchBoard& board, uint32_t width, AovSet aovs) {
+    {
+        std::lock_guard lock(board.mutex);
+        ++board.pending;
+    }
+    PeerFetch* raw = &f;
+    f.thread = std::thread([raw, path, headers, &board, width, aovs] {
+        raw->run(path, headers, width, aovs);
+        std::lock_guard lock(board.mutex);
+        --board.pending;
+        board.changed.notify_all();
+    });
+}
+
+/// Waits until no fetch on `board` is pending; false as soon as `cancel` says to stop.
+bool wait_for_fetches(FetchBoard& board, const CancelToken* cancel) {
+    std::unique_lock lock(board.mutex);
+    while (board.pending > 0) {
+        if (should_stop(cancel)) return false;
+        board.changed.wait_for(lock, std::chrono::milliseconds(10));
+    }
+    return true;
+}
+
+/// Places each peer's band that came at exactly `version` and reads back, labelling it with
+/// its peer, or with why it does not count. Returns the bands that do not, to render here.
+std::vector<RowBand> place_peer_bands(std::vector<std::unique_ptr<PeerFetch>>& fetches,
+                                      uint64_t version, SplitAssembly& parts) {
+    std::vector<RowBand> missing;
+    for (auto& f : fetches) {
+        if (f->thread.joinable()) f->thread.join();
+        std::string why = f->failure;
+        if (why.empty() && f->version != version)
+            why = "at version " + std::to_string(*f->version) + ", not " + std::to_string(version);
+        if (why.empty()) {
+            const DecodedBand& decoded = *f->decoded;
+            if (Status s = parts.assembly.place(decoded.buffers, f->band.y0, decoded.names); !s)
+                why = s.error().message;
+        }
+        if (why.empty()) {
+            parts.labels[f->index] = f->peer->url;
+        } else {
+            parts.labels[f->index] = "local (" + f->peer->url + ": " + header_safe(why) + ")";
+            missing.push_back(f->band);
+        }
+    }
+    return missing;
+}
+
+/// Places the frames of one launch, frame k at the rows of `bands[k]`.
+Status place_bands(FrameAssembly& assembly, const std::vector<Frame>& frames,
+                   const std::vector<RowBand>& bands) {
+    for (std::size_t i = 0; i < bands.size(); ++i) {
+        const Frame& f = frames[i];
+        if (Status s = assembly.place(f.buffers, bands[i].y0, f.names); !s) return s;
+    }
+    return {};
+}
+
+/// Renders the `missing` bands here, in one launch, and places them. Should that launch be at
+/// another version than `version`, every band is rendered here instead, so that the frame
+/// shows one version.
+Status render_missing_bands(Engine& engine, const SplitPlan& plan,
+                            const std::vector<RowBand>& missing, uint64_t version,
+                            SplitAssembly& parts) {
+    auto local = engine.render_bands(plan.base, missing);
+    if (!local) return Unexpected(local.error());
+    if (local->front().info.version == version)
+        return place_bands(parts.assembly, local.value(), missing);
+    // An edit landed between the two launches: one launch renders every band, so the frame
+    // shows one version.
+    auto all = engine.render_bands(plan.base, plan.bands);
+    if (!all) return Unexpected(all.error());
+    parts.assembly = FrameAssembly(plan.request.width, plan.request.height, plan.aovs);
+    if (Status s = place_bands(parts.assembly, all.value(), plan.bands); !s) return s;
+    parts.note = " (version moved from " + std::to_string(version) + " during the split: " +
+                 "every band rendered here)";
+    parts.info = all->front().info;
+    parts.camera = all->front().camera;
+    std::fill(parts.labels.begin(), parts.labels.end(), "local");
+    return {};
+}
+
+/// Finishes and encodes the assembled frame the way one render of `request` does; its bands
+/// text says where each of the `split` bands came from. `clock` has timed the whole render.
+Result<protocol::SplitFrame> encode_split_frame(const RenderRequest& request, uint32_t split,
+                                                SplitAssembly&& parts, const Stopwatch& clock) {
+    parts.info.samples = request.spp;
+    parts.info.samples_added = request.spp;
+    auto frame = std::move(parts.assembly).finish(request, parts.camera, parts.info);
+    if (!frame) return Unexpected(frame.error());
+    auto encoded = encode_frame(frame->buffers, request, exr_attributes(frame.value()));
+    if (!encoded) return Unexpected(encoded.error());
+    encoded->info = std::move(frame->info);
+    encoded->info.render_ms = clock.ms();
+    protocol::SplitFrame out;
+    out.frame = std::move(encoded.value());
+    out.bands = std::to_string(split) + " bands at version " +
+                std::to_string(out.frame.info.version) + parts.note + ":";
+    for (std::size_t k = 0; k < parts.labels.size(); ++k)
+        out.bands += (k ? ", " : " ") + parts.labels[k];
+    return out;
+}
+
 }  // namespace
 
 Result<std::vector<PeerServer>> parse_peers(std::string_view list) {
@@ -194,20 +353,10 @@ SplitRenderer::SplitRenderer(Engine& engine, std::vector<PeerServer> peers, std:
 
 Result<protocol::SplitFrame> SplitRenderer::render(const RenderRequest& request, uint32_t split) {
     Stopwatch clock;
-    if (split < 2 || split - 1 > m_peers.size())
-        return failure(ErrorCode::InvalidArgument,
-                       "split " + std::to_string(split) + " needs " + std::to_string(split - 1) +
-                           " peers; this server has " + std::to_string(m_peers.size()) +
-                           " (--peers)",
-                       "split");
-    const std::vector<RowBand> bands = split_rows(request.height, split);
-    if (bands.size() != split)
-        return failure(ErrorCode::InvalidArgument,
-                       "split " + std::to_string(split) + " asks for more bands than the frame's " +
-                           std::to_string(request.height) + " rows",
-                       "split");
-    const RenderRequest base = band_request(request, RowBand{});
-    const AovSet aovs = band_aovs(request);
+    auto bands = split_bands(request, split, m_peers.size());
+    if (!bands) return Unexpected(bands.error());
+    const SplitPlan plan{request, std::move(bands.value()), band_request(request, RowBand{}),
+                         band_aovs(request)};
     const uint64_t asked = m_engine.read([](const Scene& s) { return s.version(); });
 
     // Step: ask the peers for bands 1..split-1, each on a thread of its own.
@@ -217,117 +366,36 @@ Result<protocol::SplitFrame> SplitRenderer::render(const RenderRequest& request,
     std::vector<std::unique_ptr<PeerFetch>> fetches;
     FetchGuard guard{fetches};
     for (uint32_t k = 1; k < split; ++k) {
-        auto f = std::make_unique<PeerFetch>();
-        f->peer = &m_peers[k - 1];
-        f->index = k;
-        f->band = bands[k];
-        f->client = std::make_unique<httplib::Client>(f->peer->host, f->peer->port);
-        f->client->set_connection_timeout(std::min(CONNECT_TIMEOUT, m_peer_timeout));
-        f->client->set_read_timeout(m_peer_timeout);
-        f->client->set_write_timeout(m_peer_timeout);
-        f->client->set_keep_alive(false);
-        const std::string path =
-            "/v1/render?" + band_query(request, bands[k]) + "&min_version=" + std::to_string(asked);
-        {
-            std::lock_guard lock(board.mutex);
-            ++board.pending;
-        }
-        PeerFetch* raw = f.get();
-        fetches.push_back(std::move(f));
-        raw->thread = std::thread([raw, path, headers, &board, width = request.width, aovs] {
-            raw->run(path, headers, width, aovs);
-            std::lock_guard lock(board.mutex);
-            --board.pending;
-            board.changed.notify_all();
-        });
+        fetches.push_back(make_fetch(m_peers[k - 1], k, plan.bands[k], m_peer_timeout));
+        const std::string path = "/v1/render?" + band_query(request, plan.bands[k]) +
+                                 "&min_version=" + std::to_string(asked);
+        start_fetch(*fetches.back(), path, headers, board, request.width, plan.aovs);
     }
 
     // Step: band 0 here; its launch's version is the frame's.
-    auto own = m_engine.render_bands(base, {bands[0]});
+    auto own = m_engine.render_bands(plan.base, {plan.bands[0]});
     if (!own) return Unexpected(own.error());
-    Frame& first = own.value().front();
+    const Frame& first = own.value().front();
     const uint64_t version = first.info.version;
 
     // Step: wait for the peers, still honouring the request's cancellation.
-    {
-        std::unique_lock lock(board.mutex);
-        while (board.pending > 0) {
-            if (should_stop(request.cancel)) return cancelled(*request.cancel);
-            board.changed.wait_for(lock, std::chrono::milliseconds(10));
-        }
-    }
-    if (should_stop(request.cancel)) return cancelled(*request.cancel);
+    if (!wait_for_fetches(board, request.cancel) || should_stop(request.cancel))
+        return cancelled(*request.cancel);
 
     // Step: keep the peers' bands at exactly this version; render the others here.
-    FrameAssembly assembly(request.width, request.height, aovs);
-    if (Status s = assembly.place(first.buffers, bands[0].y0, first.names); !s)
+    SplitAssembly parts{FrameAssembly(request.width, request.height, plan.aovs), first.info,
+                        first.camera, std::vector<std::string>(split, "local"), {}};
+    if (Status s = parts.assembly.place(first.buffers, plan.bands[0].y0, first.names); !s)
         return Unexpected(s.error());
-    std::vector<std::string> labels(split, "local");
-    std::vector<RowBand> missing;
-    std::vector<uint32_t> missing_index;
-    for (auto& f : fetches) {
-        if (f->thread.joinable()) f->thread.join();
-        std::string why = f->failure;
-        if (why.empty() && f->version != version)
-            why = "at version " + std::to_string(*f->version) + ", not " + std::to_string(version);
-        if (why.empty()) {
-            if (Status s = assembly.place(f->decoded->buffers, f->band.y0, f->decoded->names); !s)
-                why = s.error().message;
-        }
-        if (why.empty()) {
-            labels[f->index] = f->peer->url;
-        } else {
-            labels[f->index] = "local (" + f->peer->url + ": " + header_safe(why) + ")";
-            missing.push_back(f->band);
-            missing_index.push_back(f->index);
-        }
-    }
-    FrameInfo info = first.info;
-    std::string note;
+    const std::vector<RowBand> missing = place_peer_bands(fetches, version, parts);
     if (!missing.empty()) {
-        auto local = m_engine.render_bands(base, missing);
-        if (!local) return Unexpected(local.error());
-        if (local->front().info.version == version) {
-            for (std::size_t i = 0; i < missing.size(); ++i) {
-                const Frame& f = local.value()[i];
-                if (Status s = assembly.place(f.buffers, missing[i].y0, f.names); !s)
-                    return Unexpected(s.error());
-            }
-        } else {
-            // An edit landed between the two launches: one launch renders every band, so the
-            // frame shows one version.
-            auto all = m_engine.render_bands(base, bands);
-            if (!all) return Unexpected(all.error());
-            assembly = FrameAssembly(request.width, request.height, aovs);
-            for (std::size_t k = 0; k < bands.size(); ++k) {
-                const Frame& f = all.value()[k];
-                if (Status s = assembly.place(f.buffers, bands[k].y0, f.names); !s)
-                    return Unexpected(s.error());
-            }
-            note = " (version moved from " + std::to_string(version) +
-                   " during the split: " + "every band rendered here)";
-            info = all->front().info;
-            first.camera = all->front().camera;
-            std::fill(labels.begin(), labels.end(), "local");
-        }
+        if (Status s = render_missing_bands(m_engine, plan, missing, version, parts); !s)
+            return Unexpected(s.error());
     }
     if (should_stop(request.cancel)) return cancelled(*request.cancel);
 
     // Step: finish and encode the frame as one render does.
-    info.samples = request.spp;
-    info.samples_added = request.spp;
-    auto frame = std::move(assembly).finish(request, first.camera, info);
-    if (!frame) return Unexpected(frame.error());
-    auto encoded = encode_frame(frame->buffers, request, exr_attributes(frame.value()));
-    if (!encoded) return Unexpected(encoded.error());
-    encoded->info = std::move(frame->info);
-    encoded->info.render_ms = clock.ms();
-    protocol::SplitFrame out;
-    out.frame = std::move(encoded.value());
-    out.bands = std::to_string(split) + " bands at version " +
-                std::to_string(out.frame.info.version) + note + ":";
-    for (std::size_t k = 0; k < labels.size(); ++k) out.bands += (k ? ", " : " ") + labels[k];
-    return out;
+    return encode_split_frame(request, split, std::move(parts), clock);
 }
 
 }  // namespace strata::server

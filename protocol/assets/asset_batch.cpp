@@ -27,26 +27,24 @@ bool usable_uvs(const std::vector<glm::vec2>& uvs) {
     return true;
 }
 
-}  // namespace
+/// Appends `e`, the edit that creates `id`, to the batch, listing `id` in `ids` (one of the
+/// batch's lists) and among the edit ids.
+void add_edit(AssetBatch& out, Edit&& e, const std::string& id, std::vector<std::string>& ids) {
+    ids.push_back(id);
+    out.edit_ids.push_back(id);
+    out.batch.edits.emplace_back(std::move(e));
+}
 
-AssetBatch asset_to_batch(Asset&& asset, const BatchOptions& options) {
-    AssetBatch out;
-    out.warnings = std::move(asset.warnings);
-    const std::string& p = options.prefix;
-    auto push = [&](Edit&& e, const std::string& id, std::vector<std::string>& list) {
-        list.push_back(id);
-        out.edit_ids.push_back(id);
-        out.batch.edits.emplace_back(std::move(e));
-    };
-
-    // Step 1: textures whose bytes came with the upload (the engine decodes them when it applies
-    // the batch: a damaged PNG or JPEG refuses the whole import, naming the texture). Images the
-    // upload does not hold, or in formats the engine does not decode, are named in a warning.
-    std::vector<std::string> texture_ids(asset.textures.size());
-    for (std::size_t i = 0; i < asset.textures.size(); ++i) {
-        AssetTexture& t = asset.textures[i];
-        const std::string what =
-            label("texture", i, t.name.empty() ? t.uri : t.name);
+/// Adds the textures whose bytes came with the upload (the engine decodes them when it applies
+/// the batch: a damaged PNG or JPEG refuses the whole import, naming the texture). Images the
+/// upload does not hold, or in formats the engine does not decode, are named in a warning.
+/// Returns each texture's id, empty for those left out.
+std::vector<std::string> add_textures(std::vector<AssetTexture>& textures, const std::string& p,
+                                      AssetBatch& out) {
+    std::vector<std::string> texture_ids(textures.size());
+    for (std::size_t i = 0; i < textures.size(); ++i) {
+        AssetTexture& t = textures[i];
+        const std::string what = label("texture", i, t.name.empty() ? t.uri : t.name);
         if (t.bytes.empty()) {
             out.warnings.push_back(what + " left out: its image is not part of the upload" +
                                    (t.uri.empty() ? std::string() : " ('" + t.uri + "')"));
@@ -64,24 +62,34 @@ AssetBatch asset_to_batch(Asset&& asset, const BatchOptions& options) {
         }
         texture_ids[i] = e.id;
         const std::string id = e.id;
-        push(std::move(e), id, out.textures);
+        add_edit(out, std::move(e), id, out.textures);
     }
-    // Step 2: materials.
-    for (std::size_t i = 0; i < asset.materials.size(); ++i) {
+    return texture_ids;
+}
+
+/// Adds the materials, each with its base colour texture when the batch holds that texture
+/// (`texture_ids`: add_textures' answer).
+void add_materials(const std::vector<AssetMaterial>& materials,
+                   const std::vector<std::string>& texture_ids, const std::string& p,
+                   AssetBatch& out) {
+    for (std::size_t i = 0; i < materials.size(); ++i) {
         AddMaterial e;
         e.id = p + ".material" + std::to_string(i);
-        e.material = asset.materials[i].material;
-        const int texture = asset.materials[i].base_color_texture;
+        e.material = materials[i].material;
+        const int texture = materials[i].base_color_texture;
         if (texture >= 0 && !texture_ids[std::size_t(texture)].empty())
             e.base_color_texture = texture_ids[std::size_t(texture)];
         const std::string id = e.id;
-        push(std::move(e), id, out.materials);
+        add_edit(out, std::move(e), id, out.materials);
     }
-    // Step 3: meshes with their normals and uvs; what the scene cannot hold is named in the
-    // warnings rather than dropped silently.
+}
+
+/// Adds the meshes with their normals and uvs; what the scene cannot hold is named in the
+/// warnings rather than dropped silently.
+void add_meshes(std::vector<AssetMesh>& meshes, const std::string& p, AssetBatch& out) {
     bool colors = false;
-    for (std::size_t i = 0; i < asset.meshes.size(); ++i) {
-        AssetMesh& m = asset.meshes[i];
+    for (std::size_t i = 0; i < meshes.size(); ++i) {
+        AssetMesh& m = meshes[i];
         colors = colors || !m.colors.empty();
         AddMesh e;
         e.id = p + ".mesh" + std::to_string(i);
@@ -101,41 +109,60 @@ AssetBatch asset_to_batch(Asset&& asset, const BatchOptions& options) {
         }
         if (m.material >= 0) e.material = out.materials[std::size_t(m.material)];
         const std::string id = e.id;
-        push(std::move(e), id, out.meshes);
+        add_edit(out, std::move(e), id, out.meshes);
     }
     if (colors) out.warnings.push_back("vertex colours dropped: the scene has no vertex colours");
-    if (!options.instance) return out;
+}
 
-    // Step 4: the asset's own group, then the node tree (nodes come parents first).
-    {
-        AddGroup g;
-        g.id = p;
-        g.parent = options.parent;
-        push(std::move(g), p, out.groups);
-    }
-    const std::size_t n = asset.nodes.size();
-    std::vector<bool> has_children(n, false);
+/// What the node tree asks of the scene's groups.
+struct TreeShape {
+    std::vector<bool> has_children;  ///< per node
+    uint32_t deepest = 1;            ///< group levels needed, the asset's group included
+};
+
+/// The shape of the node tree `nodes` (parents come first).
+TreeShape tree_shape(const std::vector<AssetNode>& nodes) {
+    const std::size_t n = nodes.size();
+    TreeShape shape;
+    shape.has_children.assign(n, false);
     std::vector<uint32_t> depth(n, 1);  // a root node's group would sit under the asset's group
     for (std::size_t i = 0; i < n; ++i) {
-        const int parent = asset.nodes[i].parent;
+        const int parent = nodes[i].parent;
         if (parent < 0) continue;
-        has_children[std::size_t(parent)] = true;
+        shape.has_children[std::size_t(parent)] = true;
         depth[i] = depth[std::size_t(parent)] + 1;
     }
-    uint32_t deepest = 1;  // the asset's group
     for (std::size_t i = 0; i < n; ++i)
-        if (has_children[i]) deepest = std::max(deepest, depth[i] + 1);
-    const bool flatten = deepest > MAX_GROUP_DEPTH;
-    if (flatten)
-        out.warnings.push_back("the node tree is " + std::to_string(deepest) +
-                               " levels deep, more than the scene's groups allow (" +
-                               std::to_string(MAX_GROUP_DEPTH) +
-                               "): flattened to world transforms under '" + p + "'");
+        if (shape.has_children[i]) shape.deepest = std::max(shape.deepest, depth[i] + 1);
+    return shape;
+}
+
+/// Adds one instance of each of `node`'s meshes under the group `parent` at `transform`; `id`
+/// is the node's, and tells its instances apart when it has several meshes.
+void add_instances(const AssetNode& node, const std::string& id, const Affine& transform,
+                   const std::string& parent, AssetBatch& out) {
+    for (std::size_t k = 0; k < node.meshes.size(); ++k) {
+        AddInstance e;
+        e.id = id + (node.meshes.size() > 1 ? "." + std::to_string(k) : "");
+        e.mesh = out.meshes[std::size_t(node.meshes[k])];
+        e.transform = transform;
+        e.parent = parent;
+        const std::string instance_id = e.id;
+        add_edit(out, std::move(e), instance_id, out.instances);
+    }
+}
+
+/// Adds the node tree (`has_children`: tree_shape's) under the asset's group `p`, or, with
+/// `flatten`, every node's instances directly under `p` at its world transform. A node whose
+/// transform the scene cannot use is left out with its subtree, and a warning.
+void add_nodes(const std::vector<AssetNode>& nodes, const std::vector<bool>& has_children,
+               bool flatten, const std::string& p, AssetBatch& out) {
+    const std::size_t n = nodes.size();
     std::vector<bool> placed(n, false);      // false: left out (with its subtree)
     std::vector<std::string> group_of(n);    // the group a node's children join
     std::vector<Affine> world(n);            // only used when flattening
     for (std::size_t i = 0; i < n; ++i) {
-        const AssetNode& node = asset.nodes[i];
+        const AssetNode& node = nodes[i];
         const int parent = node.parent;
         if (parent >= 0 && !placed[std::size_t(parent)]) continue;
         world[i] = parent >= 0 ? world[std::size_t(parent)] * node.local : node.local;
@@ -159,23 +186,43 @@ AssetBatch asset_to_batch(Asset&& asset, const BatchOptions& options) {
             g.transform = node.local;
             group_of[i] = g.id;
             const std::string id = g.id;
-            push(std::move(g), id, out.groups);
+            add_edit(out, std::move(g), id, out.groups);
             instance_transform = Affine::identity();
             instance_parent = group_of[i];
         } else {
             group_of[i] = parent_group;
         }
-        for (std::size_t k = 0; k < node.meshes.size(); ++k) {
-            AddInstance e;
-            e.id = p + ".node" + std::to_string(i) +
-                   (node.meshes.size() > 1 ? "." + std::to_string(k) : "");
-            e.mesh = out.meshes[std::size_t(node.meshes[k])];
-            e.transform = instance_transform;
-            e.parent = instance_parent;
-            const std::string id = e.id;
-            push(std::move(e), id, out.instances);
-        }
+        add_instances(node, p + ".node" + std::to_string(i), instance_transform, instance_parent,
+                      out);
     }
+}
+
+}  // namespace
+
+AssetBatch asset_to_batch(Asset&& asset, const BatchOptions& options) {
+    AssetBatch out;
+    out.warnings = std::move(asset.warnings);
+    const std::string& p = options.prefix;
+    const std::vector<std::string> texture_ids = add_textures(asset.textures, p, out);
+    add_materials(asset.materials, texture_ids, p, out);
+    add_meshes(asset.meshes, p, out);
+    if (!options.instance) return out;
+
+    // The asset's own group, then the node tree (nodes come parents first).
+    {
+        AddGroup g;
+        g.id = p;
+        g.parent = options.parent;
+        add_edit(out, std::move(g), p, out.groups);
+    }
+    const TreeShape shape = tree_shape(asset.nodes);
+    const bool flatten = shape.deepest > MAX_GROUP_DEPTH;
+    if (flatten)
+        out.warnings.push_back("the node tree is " + std::to_string(shape.deepest) +
+                               " levels deep, more than the scene's groups allow (" +
+                               std::to_string(MAX_GROUP_DEPTH) +
+                               "): flattened to world transforms under '" + p + "'");
+    add_nodes(asset.nodes, shape.has_children, flatten, p, out);
     return out;
 }
 
