@@ -1,6 +1,6 @@
 #pragma once
 // The transport-independent half of every /v1 endpoint: a request's body, query or id in; status,
-// body, content type and headers out. strata-server's routes are thin httplib adapters over these
+// body, content type and headers out. strata-server's routes are thin adapters over these
 // functions and `strata play --embedded` calls them in-process, so both answer the same reports,
 // problem documents and headers, validated the same way. Nothing here includes an HTTP library;
 // statuses and header names are plain data.

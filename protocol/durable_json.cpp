@@ -26,4 +26,16 @@ Json durable_stats_to_json(const durable::DurableStats& s) {
     return j;
 }
 
+std::string durable_metric_name(const durable::DurableCounterSpec& spec) {
+    std::string name = "strata_durable_" + std::string(spec.name);
+    if (spec.unit == durable::DurableUnit::Milliseconds) name.replace(name.size() - 3, 3, "_seconds");
+    return spec.cumulative ? name + "_total" : name;
+}
+
+double durable_metric_value(const durable::DurableCounterSpec& spec,
+                            const durable::DurableStats& s) {
+    const double v = spec.value(s);
+    return spec.unit == durable::DurableUnit::Milliseconds ? v / 1000.0 : v;
+}
+
 }  // namespace strata::protocol

@@ -12,8 +12,8 @@ namespace strata::server {
 /// --token-file or STRATA_TOKEN_FILE; every flag --x-y has a variable STRATA_X_Y).
 inline constexpr const char* TOKEN_ENV = "STRATA_TOKEN";
 
-/// Longest --max-uri-bytes: httplib, which routes the request, refuses longer request lines.
-inline constexpr std::size_t MAX_URI_BYTES = 8000;
+/// Longest --max-uri-bytes. The whole head is bounded by --max-header-bytes as well.
+inline constexpr std::size_t MAX_URI_BYTES = 64 * 1024;
 
 /// What the command line and the environment ask for.
 struct CommandLine {

@@ -37,16 +37,16 @@ struct ServerContext {
     const protocol::SplitRender* split() const { return split_render ? &split_render : nullptr; }
 };
 
-class Router;
+class RouteTable;
 
 /// Every /v1 endpoint (over protocol/api.h) and GET /metrics; liveness and readiness are
 /// answered by the front end (request_reader.cpp).
-void add_api_routes(Router& router, ServerContext& ctx);
+void add_api_routes(RouteTable& routes, ServerContext& ctx);
 
 /// GET /v1/stream and GET /v1/events (stream_routes.cpp).
-void add_stream_routes(Router& router, ServerContext& ctx);
+void add_stream_routes(RouteTable& routes, ServerContext& ctx);
 
 /// GET / and /web/...: the viewer's files (web_routes.cpp).
-void add_web_routes(Router& router);
+void add_web_routes(RouteTable& routes);
 
 }  // namespace strata::server

@@ -67,17 +67,11 @@ std::optional<std::string> CorsPolicy::allow(const std::string* origin) const {
     return *origin;
 }
 
-std::string cors_header_lines(const std::string& allowed_origin) {
-    return "Access-Control-Allow-Origin: " + allowed_origin +
+std::string cors_header_lines(std::string_view allowed_origin) {
+    return "Access-Control-Allow-Origin: " + std::string(allowed_origin) +
            "\r\nVary: Origin\r\n"
            "Access-Control-Expose-Headers: ETag, Retry-After, X-Strata-Rebuild, X-Strata-Report, "
            "X-Strata-Samples\r\n";
-}
-
-void add_cors_headers(std::string& response, const std::string& allowed_origin) {
-    const std::size_t eol = response.find("\r\n");
-    if (eol == std::string::npos) return;
-    response.insert(eol + 2, cors_header_lines(allowed_origin));
 }
 
 }  // namespace strata::server

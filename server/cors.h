@@ -1,7 +1,7 @@
 #pragma once
 // Cross-origin access (--cors-origin): which browser origins may call the API from a page served
 // elsewhere, the headers their answers carry, and the answer to a preflight (OPTIONS). Applied
-// once at the front end, to every answer: the workers' (add_cors_headers), the front end's own
+// by the response writer (response_writer.h) to every answer: the workers', the front end's own
 // refusals and the streams' heads.
 
 #include <optional>
@@ -32,10 +32,7 @@ private:
 };
 
 /// The header lines (each ending in CRLF) of an answer to an allowed origin.
-std::string cors_header_lines(const std::string& allowed_origin);
-
-/// Inserts cors_header_lines after the status line of a complete response.
-void add_cors_headers(std::string& response, const std::string& allowed_origin);
+std::string cors_header_lines(std::string_view allowed_origin);
 
 /// Methods and request headers a preflight allows.
 inline constexpr const char* CORS_ALLOW_METHODS = "GET, HEAD, POST, OPTIONS";

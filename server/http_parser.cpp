@@ -201,7 +201,7 @@ std::optional<HttpError> interpret_fields(RequestHead& head) {
 
 }  // namespace
 
-const std::string* RequestHead::header(std::string_view name) const {
+const std::string* find_header(const std::vector<HeaderField>& headers, std::string_view name) {
     for (const HeaderField& f : headers) {
         if (iequals(f.name, name)) return &f.value;
     }

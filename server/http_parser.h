@@ -23,7 +23,8 @@ struct HttpLimits {
     uint64_t max_body_bytes = 256ull << 20;  ///< decoded body (413)
 };
 
-/// Longest header line accepted (431 beyond): httplib refuses longer ones itself.
+/// Longest header line accepted (431 beyond), as common proxies in front (nginx's 8 KiB header
+/// buffers) would.
 constexpr std::size_t MAX_HEADER_LINE_BYTES = 8192;
 
 /// Why a request is refused: the status to answer and a detail naming what was wrong.
@@ -37,6 +38,9 @@ struct HeaderField {
     std::string name;
     std::string value;
 };
+
+/// The value of the first field in `headers` named `name` (case-insensitive), or nullptr.
+const std::string* find_header(const std::vector<HeaderField>& headers, std::string_view name);
 
 /// How the body is delimited.
 enum class BodyFraming : uint8_t { None, Length, Chunked };
@@ -52,8 +56,7 @@ struct RequestHead {
     bool keep_alive = true;       ///< from the version and the Connection header
     bool expect_continue = false;
 
-    /// The value of the field named `name` (case-insensitive), or nullptr when absent.
-    const std::string* header(std::string_view name) const;
+    const std::string* header(std::string_view name) const { return find_header(headers, name); }
 };
 
 /// Case-insensitive ASCII comparison.

@@ -1,22 +1,149 @@
 #include "server/metrics.h"
 
 #include <cstdio>
+#include <iterator>
+#include <string_view>
+#include <utility>
+
+#include "protocol/durable_json.h"
 
 namespace strata::server {
 
 namespace {
 
-void header(std::string& out, const char* name, const char* type, const char* help) {
-    out += "# HELP ";
-    out += name;
-    out += ' ';
-    out += help;
-    out += "\n# TYPE ";
-    out += name;
-    out += ' ';
-    out += type;
-    out += '\n';
+// Step: the tables of families that mirror a stats struct, one row per field.
+
+/// Reads one numeric field of `S` as a double.
+template <class S>
+class FieldReader {
+public:
+    constexpr FieldReader(uint64_t S::*f) : m_count(f) {}               // NOLINT: implicit
+    constexpr FieldReader(double S::*f) : m_real(f) {}                  // NOLINT
+    constexpr FieldReader(bool S::*f) : m_flag(f) {}                    // NOLINT
+    constexpr FieldReader(std::atomic<uint64_t> S::*f) : m_atomic(f) {}  // NOLINT
+
+    double operator()(const S& s) const {
+        if (m_count) return double(s.*m_count);
+        if (m_real) return s.*m_real;
+        if (m_flag) return s.*m_flag ? 1.0 : 0.0;
+        return double((s.*m_atomic).load(std::memory_order_relaxed));
+    }
+
+private:
+    uint64_t S::*m_count = nullptr;
+    double S::*m_real = nullptr;
+    bool S::*m_flag = nullptr;
+    std::atomic<uint64_t> S::*m_atomic = nullptr;
+};
+
+/// One field exported as one series named after it.
+template <class S>
+struct FieldMetric {
+    std::string_view field;
+    FieldReader<S> read;
+    MetricType type;
+    std::string_view help;
+};
+
+/// The field's name and reader from one token, so that the exported name cannot drift from it.
+#define STRATA_FIELD(S, field) #field, FieldReader<S>(&S::field)
+
+using Replica = replica::ReplicaStatus;
+constexpr MetricType COUNTER = MetricType::Counter;
+constexpr MetricType GAUGE = MetricType::Gauge;
+
+constexpr FieldMetric<FrontEndCounters> FRONT_END_METRICS[] = {
+    {STRATA_FIELD(FrontEndCounters, connections_open), GAUGE, "Open client connections."},
+    {STRATA_FIELD(FrontEndCounters, requests_in_flight), GAUGE,
+     "Requests a worker is handling (this /metrics request included)."},
+    {STRATA_FIELD(FrontEndCounters, connections_accepted), COUNTER, "Connections accepted."},
+    {STRATA_FIELD(FrontEndCounters, connections_restricted), COUNTER,
+     "Connections over a connection limit, served health checks only."},
+    {STRATA_FIELD(FrontEndCounters, connections_refused), COUNTER,
+     "Connections closed at once, over every limit."},
+    {STRATA_FIELD(FrontEndCounters, timeouts), COUNTER,
+     "Requests that did not arrive, and answers not taken, in time."},
+    {STRATA_FIELD(FrontEndCounters, clients_gone), COUNTER,
+     "Clients that disconnected while their request was being handled (their renders stop)."},
+};
+
+constexpr FieldMetric<StreamHubStats> STREAM_METRICS[] = {
+    {STRATA_FIELD(StreamHubStats, viewers), GAUGE, "Open frame streams (GET /v1/stream)."},
+    {STRATA_FIELD(StreamHubStats, event_clients), GAUGE, "Open event streams (GET /v1/events)."},
+    {STRATA_FIELD(StreamHubStats, views), GAUGE, "Distinct views those streams render."},
+    {STRATA_FIELD(StreamHubStats, frames_rendered), COUNTER,
+     "Viewer renders (each shared by the viewers of its view)."},
+    {STRATA_FIELD(StreamHubStats, frames_sent), COUNTER, "Frames handed to viewers."},
+    {STRATA_FIELD(StreamHubStats, render_errors), COUNTER, "Viewer renders that failed."},
+    {STRATA_FIELD(StreamHubStats, commit_events), COUNTER, "Commit events published."},
+    {STRATA_FIELD(StreamHubStats, commit_events_dropped), COUNTER,
+     "Commit events dropped because 1024 were already waiting for the hub's thread."},
+    {STRATA_FIELD(StreamHubStats, renders_deferred), COUNTER,
+     "Times a due viewer render waited for API renders or commits."},
+    {STRATA_FIELD(StreamHubStats, frames_dropped), COUNTER,
+     "Frames open viewers missed because a newer one replaced them (slow viewers)."},
+    {STRATA_FIELD(StreamHubStats, highlight_encodes), COUNTER,
+     "Frames encoded with a selected instance tinted (one per frame and instance)."},
+    {STRATA_FIELD(StreamHubStats, held_bytes), GAUGE,
+     "Frame bytes held for open viewers (pending and being written)."},
+};
+
+constexpr FieldMetric<Replica> REPLICA_METRICS[] = {
+    {STRATA_FIELD(Replica, connected), GAUGE, "1 while the reader holds a connection to Redis."},
+    {STRATA_FIELD(Replica, joined), GAUGE,
+     "1 once the replica caught up with the log as it was at start (/readyz)."},
+    {STRATA_FIELD(Replica, stopped), GAUGE,
+     "1 once the replica stopped following the log (a poisoned entry, a gap); see /readyz."},
+    {STRATA_FIELD(Replica, applied_version), GAUGE, "Scene version this replica has applied."},
+    {STRATA_FIELD(Replica, log_version), GAUGE, "Newest version this replica knows the log has."},
+    {STRATA_FIELD(Replica, lag_entries), GAUGE, "Log entries this replica has not applied yet."},
+    {STRATA_FIELD(Replica, lag_seconds), GAUGE,
+     "How long the oldest unapplied log entry has waited (0 when caught up)."},
+    {STRATA_FIELD(Replica, entries_applied), COUNTER, "Log entries applied by this replica."},
+    {STRATA_FIELD(Replica, appends), COUNTER, "Batches this replica appended to the log."},
+    {STRATA_FIELD(Replica, append_conflicts), COUNTER,
+     "Appends refused because the log had moved past the validated version."},
+    {STRATA_FIELD(Replica, reconnects), COUNTER, "Reader reconnections to Redis."},
+    {STRATA_FIELD(Replica, snapshot_loaded_version), GAUGE,
+     "Version of the newest Redis snapshot this replica loaded (0: none)."},
+    {STRATA_FIELD(Replica, snapshot_jumps), COUNTER,
+     "Times this replica replaced its scene with a newer Redis snapshot because the log entries "
+     "after its version had been trimmed."},
+    {STRATA_FIELD(Replica, snapshots_written), COUNTER, "Snapshots this replica stored in Redis."},
+    {STRATA_FIELD(Replica, snapshot_version), GAUGE, "Newest snapshot version known in Redis."},
+    {STRATA_FIELD(Replica, entries_trimmed), COUNTER,
+     "Log entries trimmed after this replica's snapshots."},
+};
+
+#undef STRATA_FIELD
+
+/// Converts to any field type: counts an aggregate's fields by how many it can be built from.
+struct AnyField {
+    template <class T>
+    constexpr operator T() const noexcept;  // NOLINT: implicit by design; never defined
+};
+
+template <class T, std::size_t... I>
+constexpr bool builds_from(std::index_sequence<I...>) {
+    return requires { T{(void(I), AnyField{})...}; };
 }
+
+/// The number of fields of the aggregate `T`.
+template <class T, std::size_t N = 0>
+constexpr std::size_t field_count() {
+    if constexpr (builds_from<T>(std::make_index_sequence<N + 1>()))
+        return field_count<T, N + 1>();
+    else
+        return N;
+}
+
+// A new field needs a row (or, not being a number, a place in the exceptions named here).
+static_assert(field_count<FrontEndCounters>() == std::size(FRONT_END_METRICS));
+static_assert(field_count<StreamHubStats>() == std::size(STREAM_METRICS));
+static_assert(field_count<Replica>() == std::size(REPLICA_METRICS) + 2,  // log, stop_reason
+              "every number of ReplicaStatus needs a row in REPLICA_METRICS");
+
+// Step: building the registry.
 
 std::string number(double v) {
     char buf[64];
@@ -24,10 +151,159 @@ std::string number(double v) {
     return buf;
 }
 
-void metric(std::string& out, const char* name, const char* type, const char* help, double v) {
-    header(out, name, type, help);
-    out += name;
-    out += ' ' + number(v) + '\n';
+MetricFamily scalar(std::string name, std::string help, MetricType type, MetricPart part,
+                    std::function<double(const MetricsSnapshot&)> value) {
+    if (type == MetricType::Counter) name += "_total";
+    MetricFamily f{std::move(name), std::move(help), type, part, {}, {}};
+    f.samples = [value = std::move(value)](const MetricsSnapshot& s) {
+        return std::vector<MetricSample>{{"", value(s)}};
+    };
+    return f;
+}
+
+/// A family with one sample per value of `label`.
+MetricFamily labelled(std::string name, std::string help, MetricType type, MetricPart part,
+                      std::string label, std::vector<std::string> values,
+                      std::function<double(const MetricsSnapshot&, std::size_t)> value) {
+    MetricFamily f{std::move(name), std::move(help), type, part, {}, {}};
+    f.samples = [label = std::move(label), values = std::move(values),
+                 value = std::move(value)](const MetricsSnapshot& s) {
+        std::vector<MetricSample> out;
+        for (std::size_t i = 0; i < values.size(); ++i)
+            out.push_back({label + "=\"" + values[i] + "\"", value(s, i)});
+        return out;
+    };
+    return f;
+}
+
+MetricFamily histogram(std::string name, std::string help, MetricPart part,
+                       std::function<HistogramCounts(const MetricsSnapshot&)> counts) {
+    MetricFamily f{std::move(name), std::move(help), MetricType::Histogram, part, {}, {}};
+    f.histogram = std::move(counts);
+    return f;
+}
+
+/// The rows of `table` as families named `prefix` + field.
+template <class S, std::size_t N, class Get>
+void add_fields(std::vector<MetricFamily>& out, const FieldMetric<S> (&table)[N],
+                const char* prefix, MetricPart part, Get get) {
+    for (const FieldMetric<S>& row : table) {
+        out.push_back(scalar(prefix + std::string(row.field), std::string(row.help), row.type,
+                             part, [read = row.read, get](const MetricsSnapshot& s) {
+                                 return read(get(s));
+                             }));
+    }
+}
+
+void add_engine_families(std::vector<MetricFamily>& out) {
+    for (const CounterSpec& spec : ENGINE_COUNTERS) {
+        out.push_back(scalar("strata_" + std::string(spec.name), std::string(spec.help),
+                             MetricType::Counter, MetricPart::Engine,
+                             [&spec](const MetricsSnapshot& s) { return spec.value(s.engine); }));
+    }
+    const auto gauge = [&](const char* name, const char* help,
+                           std::function<double(const MetricsSnapshot&)> value) {
+        out.push_back(scalar(name, help, GAUGE, MetricPart::Engine, std::move(value)));
+    };
+    gauge("strata_scene_version", "Scene version (applied batches).",
+          [](const MetricsSnapshot& s) { return double(s.scene_version); });
+    gauge("strata_scene_meshes", "Meshes in the scene.",
+          [](const MetricsSnapshot& s) { return double(s.scene.meshes); });
+    gauge("strata_scene_instances", "Instances in the scene.",
+          [](const MetricsSnapshot& s) { return double(s.scene.instances); });
+    gauge("strata_scene_triangles", "Triangles over meshes, each counted once.",
+          [](const MetricsSnapshot& s) { return double(s.scene.triangles); });
+    out.push_back(labelled("strata_accel_memory_bytes",
+                           "Bytes Embree holds for acceleration structures.", GAUGE,
+                           MetricPart::Engine, "level", {"blas", "tlas"},
+                           [](const MetricsSnapshot& s, std::size_t i) {
+                               return double(i == 0 ? s.blas_bytes : s.tlas_bytes);
+                           }));
+    out.push_back(labelled(
+        "strata_tlas_instances",
+        "Instances in each tier of the TLAS after the last commit (incremental strategy: static "
+        "and dynamic; embree: all in static).",
+        GAUGE, MetricPart::Engine, "tier", {"static", "dynamic"},
+        [](const MetricsSnapshot& s, std::size_t i) {
+            return double(i == 0 ? s.tiers.static_instances : s.tiers.dynamic_instances);
+        }));
+    gauge("strata_tlas_stale_copies",
+          "Static-tier copies of instances edited since the static build (skipped by rays).",
+          [](const MetricsSnapshot& s) { return double(s.tiers.stale_copies); });
+    gauge("strata_tlas_merge_running",
+          "1 while a background TLAS merge was building after the last commit.",
+          [](const MetricsSnapshot& s) { return s.tiers.merge_running ? 1.0 : 0.0; });
+}
+
+void add_server_families(std::vector<MetricFamily>& out) {
+    out.push_back(labelled("strata_http_responses_total", "HTTP responses by status class.",
+                           COUNTER, MetricPart::Server, "code",
+                           {"1xx", "2xx", "3xx", "4xx", "5xx"},
+                           [](const MetricsSnapshot& s, std::size_t i) {
+                               return double(s.responses[i]);
+                           }));
+    out.push_back(histogram("strata_commit_duration_seconds",
+                            "Wall time of commits (explicit and before renders).",
+                            MetricPart::Server,
+                            [](const MetricsSnapshot& s) { return s.commit_seconds; }));
+    out.push_back(histogram("strata_render_duration_seconds",
+                            "Wall time of renders, commit and encoding included.",
+                            MetricPart::Server,
+                            [](const MetricsSnapshot& s) { return s.render_seconds; }));
+    add_fields(out, FRONT_END_METRICS, "strata_http_", MetricPart::FrontEnd,
+               [](const MetricsSnapshot& s) -> const FrontEndCounters& { return *s.front_end; });
+}
+
+void add_durable_families(std::vector<MetricFamily>& out) {
+    for (const durable::DurableCounterSpec& spec : durable::DURABLE_COUNTERS) {
+        MetricFamily f{protocol::durable_metric_name(spec), std::string(spec.help),
+                       spec.cumulative ? COUNTER : GAUGE, MetricPart::Durable, {}, {}};
+        f.samples = [&spec](const MetricsSnapshot& s) {
+            return std::vector<MetricSample>{{"", protocol::durable_metric_value(spec, *s.durable)}};
+        };
+        out.push_back(std::move(f));
+    }
+    out.push_back(scalar("strata_durable_failed",
+                         "1 when an fsync failed and the journal refuses batches.", GAUGE,
+                         MetricPart::Durable,
+                         [](const MetricsSnapshot& s) { return s.durable->failed ? 1.0 : 0.0; }));
+    out.push_back(histogram("strata_durable_fsync_duration_seconds", "Wall time of journal fsyncs.",
+                            MetricPart::Durable, [](const MetricsSnapshot& s) {
+                                const durable::DurableStats& d = *s.durable;
+                                return HistogramCounts{
+                                    durable::FSYNC_BOUNDS,
+                                    {d.fsync_buckets.begin(), d.fsync_buckets.end()},
+                                    d.fsync_seconds};
+                            }));
+}
+
+std::vector<MetricFamily> build_registry() {
+    std::vector<MetricFamily> out;
+    add_engine_families(out);
+    add_server_families(out);
+    add_durable_families(out);
+    add_fields(out, REPLICA_METRICS, "strata_replica_", MetricPart::Replica,
+               [](const MetricsSnapshot& s) -> const Replica& { return *s.replica; });
+    add_fields(out, STREAM_METRICS, "strata_stream_", MetricPart::Streams,
+               [](const MetricsSnapshot& s) -> const StreamHubStats& { return *s.streams; });
+    return out;
+}
+
+// Step: the writer.
+
+const char* type_name(MetricType t) {
+    return t == MetricType::Counter ? "counter" : t == MetricType::Gauge ? "gauge" : "histogram";
+}
+
+void write_histogram(std::string& out, const std::string& name, const HistogramCounts& h) {
+    uint64_t cumulative = 0;
+    for (std::size_t i = 0; i < h.buckets.size(); ++i) {
+        cumulative += h.buckets[i];
+        const std::string le = i < h.bounds.size() ? number(h.bounds[i]) : "+Inf";
+        out += name + "_bucket{le=\"" + le + "\"} " + std::to_string(cumulative) + '\n';
+    }
+    out += name + "_sum " + number(h.sum) + '\n';
+    out += name + "_count " + std::to_string(cumulative) + '\n';
 }
 
 }  // namespace
@@ -38,29 +314,11 @@ void Histogram::observe(double seconds) {
     std::lock_guard lock(m_mutex);
     ++m_buckets[i];
     m_sum += seconds;
-    ++m_count;
 }
 
-void Histogram::write(std::string& out, const char* name, const char* help) const {
-    std::array<uint64_t, BOUNDS.size() + 1> buckets;
-    double sum;
-    uint64_t count;
-    {
-        std::lock_guard lock(m_mutex);
-        buckets = m_buckets;
-        sum = m_sum;
-        count = m_count;
-    }
-    header(out, name, "histogram", help);
-    uint64_t cumulative = 0;
-    for (std::size_t i = 0; i < BOUNDS.size(); ++i) {
-        cumulative += buckets[i];
-        out += std::string(name) + "_bucket{le=\"" + number(BOUNDS[i]) + "\"} " +
-               std::to_string(cumulative) + '\n';
-    }
-    out += std::string(name) + "_bucket{le=\"+Inf\"} " + std::to_string(count) + '\n';
-    out += std::string(name) + "_sum " + number(sum) + '\n';
-    out += std::string(name) + "_count " + std::to_string(count) + '\n';
+HistogramCounts Histogram::counts() const {
+    std::lock_guard lock(m_mutex);
+    return {BOUNDS, {m_buckets.begin(), m_buckets.end()}, m_sum};
 }
 
 void ServerMetrics::count_response(int status) {
@@ -69,88 +327,64 @@ void ServerMetrics::count_response(int status) {
         m_responses[std::size_t(cls - 1)].fetch_add(1, std::memory_order_relaxed);
 }
 
-std::string ServerMetrics::prometheus_text(const Engine& engine) const {
-    const EngineCounters c = engine.counters();
-    std::string out;
-    out.reserve(8192);
-    for (const CounterSpec& spec : ENGINE_COUNTERS) {
-        const std::string name = "strata_" + std::string(spec.name) + "_total";
-        metric(out, name.c_str(), "counter", std::string(spec.help).c_str(), spec.value(c));
-    }
-
-    header(out, "strata_http_responses_total", "counter", "HTTP responses by status class.");
-    for (std::size_t i = 0; i < m_responses.size(); ++i) {
-        out += "strata_http_responses_total{code=\"" + std::to_string(i + 1) + "xx\"} " +
-               std::to_string(m_responses[i].load(std::memory_order_relaxed)) + '\n';
-    }
-
-    const auto [version, counts] =
-        engine.read([](const Scene& s) { return std::pair(s.version(), s.counts()); });
-    metric(out, "strata_scene_version", "gauge", "Scene version (applied batches).",
-           double(version));
-    metric(out, "strata_scene_meshes", "gauge", "Meshes in the scene.", double(counts.meshes));
-    metric(out, "strata_scene_instances", "gauge", "Instances in the scene.",
-           double(counts.instances));
-    metric(out, "strata_scene_triangles", "gauge", "Triangles over meshes, each counted once.",
-           double(counts.triangles));
-    header(out, "strata_accel_memory_bytes", "gauge",
-           "Bytes Embree holds for acceleration structures.");
-    out += "strata_accel_memory_bytes{level=\"blas\"} " +
-           std::to_string(engine.memory_bytes(MemoryCategory::Blas)) + '\n';
-    out += "strata_accel_memory_bytes{level=\"tlas\"} " +
-           std::to_string(engine.memory_bytes(MemoryCategory::Tlas)) + '\n';
-
-    // The incremental TLAS's tiers as the last commit left them.
-    const TlasTiers tiers = engine.last_report().tlas;
-    header(out, "strata_tlas_instances", "gauge",
-           "Instances in each tier of the TLAS after the last commit (incremental strategy: "
-           "static and dynamic; embree: all in static).");
-    out += "strata_tlas_instances{tier=\"static\"} " + std::to_string(tiers.static_instances) +
-           '\n';
-    out += "strata_tlas_instances{tier=\"dynamic\"} " +
-           std::to_string(tiers.dynamic_instances) + '\n';
-    metric(out, "strata_tlas_stale_copies", "gauge",
-           "Static-tier copies of instances edited since the static build (skipped by rays).",
-           double(tiers.stale_copies));
-    metric(out, "strata_tlas_merge_running", "gauge",
-           "1 while a background TLAS merge was building after the last commit.",
-           tiers.merge_running ? 1.0 : 0.0);
-
-    commit_seconds.write(out, "strata_commit_duration_seconds",
-                         "Wall time of commits (explicit and before renders).");
-    render_seconds.write(out, "strata_render_duration_seconds",
-                         "Wall time of renders, commit and encoding included.");
+std::array<uint64_t, 5> ServerMetrics::responses() const {
+    std::array<uint64_t, 5> out{};
+    for (std::size_t i = 0; i < out.size(); ++i)
+        out[i] = m_responses[i].load(std::memory_order_relaxed);
     return out;
 }
 
-void write_durable_metrics(std::string& out, const durable::DurableStats& stats) {
-    using durable::DurableUnit;
-    for (const durable::DurableCounterSpec& spec : durable::DURABLE_COUNTERS) {
-        std::string name = "strata_durable_" + std::string(spec.name);
-        double value = spec.value(stats);
-        if (spec.unit == DurableUnit::Milliseconds) {
-            // Prometheus wants base units.
-            name.replace(name.size() - 3, 3, "_seconds");
-            value /= 1000.0;
-        }
-        if (spec.cumulative) name += "_total";
-        metric(out, name.c_str(), spec.cumulative ? "counter" : "gauge",
-               std::string(spec.help).c_str(), value);
+const std::vector<MetricFamily>& metric_registry() {
+    static const std::vector<MetricFamily> registry = build_registry();
+    return registry;
+}
+
+bool exported(const MetricFamily& family, const MetricsSnapshot& snapshot) {
+    switch (family.part) {
+        case MetricPart::Engine:
+        case MetricPart::Server:
+            return true;
+        case MetricPart::FrontEnd:
+            return snapshot.front_end != nullptr;
+        case MetricPart::Durable:
+            return snapshot.durable.has_value();
+        case MetricPart::Replica:
+            return snapshot.replica.has_value();
+        case MetricPart::Streams:
+            return snapshot.streams.has_value();
     }
-    metric(out, "strata_durable_failed", "gauge",
-           "1 when an fsync failed and the journal refuses batches.", stats.failed ? 1.0 : 0.0);
-    const char* name = "strata_durable_fsync_duration_seconds";
-    header(out, name, "histogram", "Wall time of journal fsyncs.");
-    uint64_t cumulative = 0;
-    for (std::size_t i = 0; i < stats.fsync_buckets.size(); ++i) {
-        cumulative += stats.fsync_buckets[i];
-        const std::string le =
-            i < durable::FSYNC_BOUNDS.size() ? number(durable::FSYNC_BOUNDS[i]) : "+Inf";
-        out += std::string(name) + "_bucket{le=\"" + le + "\"} " + std::to_string(cumulative) +
+    return false;
+}
+
+std::string prometheus_text(const MetricsSnapshot& snapshot) {
+    std::string out;
+    out.reserve(16384);
+    for (const MetricFamily& f : metric_registry()) {
+        if (!exported(f, snapshot)) continue;
+        out += "# HELP " + f.name + ' ' + f.help + "\n# TYPE " + f.name + ' ' + type_name(f.type) +
                '\n';
+        if (f.type == MetricType::Histogram) {
+            write_histogram(out, f.name, f.histogram(snapshot));
+            continue;
+        }
+        for (const MetricSample& sample : f.samples(snapshot)) {
+            out += f.name;
+            if (!sample.labels.empty()) out += '{' + sample.labels + '}';
+            out += ' ' + number(sample.value) + '\n';
+        }
     }
-    out += std::string(name) + "_sum " + number(stats.fsync_seconds) + '\n';
-    out += std::string(name) + "_count " + std::to_string(cumulative) + '\n';
+    return out;
+}
+
+std::string metrics_markdown_table() {
+    static const char* const PARTS[] = {"engine",   "server",  "front end (connections)",
+                                        "`--data`", "`--log`", "streams (viewer, events)"};
+    std::string out = "| series | type | exported by | what it is |\n|---|---|---|---|\n";
+    for (const MetricFamily& f : metric_registry()) {
+        out += "| `" + f.name + "` | " + type_name(f.type) + " | " + PARTS[int(f.part)] + " | " +
+               f.help + " |\n";
+    }
+    return out;
 }
 
 }  // namespace strata::server

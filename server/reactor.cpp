@@ -15,7 +15,7 @@
 #include <spdlog/spdlog.h>
 
 #include "protocol/problem.h"
-#include "server/direct_response.h"
+#include "server/response_writer.h"
 #include "server/metrics.h"
 
 namespace strata::server {
@@ -40,29 +40,20 @@ constexpr int STREAM_SEND_BUFFER = 256 * 1024;
 /// How long accept() pauses when the process is out of file descriptors.
 constexpr std::chrono::milliseconds ACCEPT_PAUSE{100};
 
-Peer peer_of(int fd, const sockaddr_storage& addr) {
-    Peer p;
-    auto name = [](const sockaddr_storage& a, std::string& ip, int& port) {
-        char buf[INET6_ADDRSTRLEN] = {};
-        if (a.ss_family == AF_INET) {
-            const auto& v4 = reinterpret_cast<const sockaddr_in&>(a);
-            inet_ntop(AF_INET, &v4.sin_addr, buf, sizeof buf);
-            port = ntohs(v4.sin_port);
-        } else if (a.ss_family == AF_INET6) {
-            const auto& v6 = reinterpret_cast<const sockaddr_in6&>(a);
-            inet_ntop(AF_INET6, &v6.sin6_addr, buf, sizeof buf);
-            port = ntohs(v6.sin6_port);
-        }
-        ip = buf;
-        // An IPv4 client of a dual-stack socket is the same client as over IPv4.
-        if (ip.rfind("::ffff:", 0) == 0 && ip.find('.') != std::string::npos) ip.erase(0, 7);
-    };
-    name(addr, p.ip, p.port);
-    sockaddr_storage local{};
-    socklen_t len = sizeof local;
-    if (getsockname(fd, reinterpret_cast<sockaddr*>(&local), &len) == 0)
-        name(local, p.local_ip, p.local_port);
-    return p;
+/// The client's IP address, as connection limits count clients.
+std::string client_address(const sockaddr_storage& addr) {
+    char buf[INET6_ADDRSTRLEN] = {};
+    if (addr.ss_family == AF_INET) {
+        const auto& v4 = reinterpret_cast<const sockaddr_in&>(addr);
+        inet_ntop(AF_INET, &v4.sin_addr, buf, sizeof buf);
+    } else if (addr.ss_family == AF_INET6) {
+        const auto& v6 = reinterpret_cast<const sockaddr_in6&>(addr);
+        inet_ntop(AF_INET6, &v6.sin6_addr, buf, sizeof buf);
+    }
+    std::string ip = buf;
+    // An IPv4 client of a dual-stack socket is the same client as over IPv4.
+    if (ip.rfind("::ffff:", 0) == 0 && ip.find('.') != std::string::npos) ip.erase(0, 7);
+    return ip;
 }
 
 double ms_since(std::chrono::steady_clock::time_point t,
@@ -70,17 +61,22 @@ double ms_since(std::chrono::steady_clock::time_point t,
     return std::chrono::duration<double, std::milli>(now - t).count();
 }
 
+/// A failed call's error as a Status naming the call.
+Status syscall_failure(const char* call) {
+    return failure(ErrorCode::Internal, std::string(call) + ": " + std::strerror(errno));
+}
+
 }  // namespace
 
 struct Reactor::Connection {
     enum class Phase : uint8_t { Idle, Reading, Busy, Writing, Lingering, Streaming };
 
-    Connection(uint64_t id_, int fd_, Peer peer_, const ReaderConfig& config)
-        : id(id_), fd(fd_), peer(std::move(peer_)), reader(config) {}
+    Connection(uint64_t id_, int fd_, std::string client_, const ReaderConfig& config)
+        : id(id_), fd(fd_), client(std::move(client_)), reader(config) {}
 
     uint64_t id;
     int fd;
-    Peer peer;
+    std::string client;  ///< the client's IP address
     bool restricted = false;
     Phase phase = Phase::Idle;
     RequestReader reader;
@@ -89,6 +85,8 @@ struct Reactor::Connection {
     Clock::time_point read_deadline{};    ///< Reading: the whole request
     Clock::time_point started{};          ///< first byte of the current request
     std::shared_ptr<CancelToken> cancel;  ///< Busy
+    std::string method = "-";             ///< of the current request, for the access log
+    std::string path = "-";
     bool keep_alive = true;               ///< for the request a worker has
     bool peer_gone = false;
     std::string out;
@@ -114,7 +112,9 @@ Reactor::Reactor(const ServerConfig& config, ServerMetrics& metrics, Dispatch di
     m_reader_config.token = config.token;
     // The command line checked it (cli.cpp); a policy that does not parse allows no origin.
     if (auto cors = CorsPolicy::parse(config.cors_origin)) m_reader_config.cors = cors.value();
+    // Made here, not in open(): drain() may write to it from another thread at any time.
     m_wake = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+    if (m_wake < 0) m_wake_error = errno;
 }
 
 Reactor::~Reactor() {
@@ -128,51 +128,64 @@ Reactor::~Reactor() {
 
 void Reactor::drain() {
     m_drain_requested = true;
-    const uint64_t one = 1;
-    [[maybe_unused]] const ssize_t n = ::write(m_wake, &one, sizeof one);
-}
-
-void Reactor::complete(uint64_t conn, std::string response, bool close) {
-    {
-        std::lock_guard lock(m_done_mutex);
-        m_done.push_back({conn, std::move(response), close, nullptr});
-    }
     wake();
 }
 
-void Reactor::complete_stream(uint64_t conn, std::shared_ptr<StreamChannel> stream) {
+void Reactor::complete(uint64_t conn, Outcome outcome, bool close) {
     {
         std::lock_guard lock(m_done_mutex);
-        m_done.push_back({conn, {}, true, std::move(stream)});
+        m_done.push_back({conn, std::move(outcome), close});
     }
     wake();
 }
 
 void Reactor::wake() {
     const uint64_t one = 1;
-    [[maybe_unused]] const ssize_t n = ::write(m_wake, &one, sizeof one);
+    // EAGAIN: the counter is saturated, so the reactor is woken anyway.
+    if (::write(m_wake, &one, sizeof one) < 0 && errno != EAGAIN)
+        spdlog::error("waking the front end: write(eventfd): {}", std::strerror(errno));
 }
 
-void Reactor::watch(const Connection& c, uint32_t events) {
+bool Reactor::watch(const Connection& c, uint32_t events) {
     epoll_event ev{};
     ev.events = events;
     ev.data.u64 = c.id;
-    epoll_ctl(m_epoll, EPOLL_CTL_MOD, c.fd, &ev);
+    if (epoll_ctl(m_epoll, EPOLL_CTL_MOD, c.fd, &ev) == 0) return true;
+    spdlog::error("connection {} ({}): epoll_ctl(MOD): {}; closing it", c.id, c.client,
+                  std::strerror(errno));
+    return false;
 }
 
-void Reactor::run(int listen_fd) {
+Status Reactor::open(int listen_fd) {
     m_listen = listen_fd;
-    fcntl(m_listen, F_SETFL, fcntl(m_listen, F_GETFL) | O_NONBLOCK);
+    const int flags = fcntl(m_listen, F_GETFL);
+    if (flags < 0 || fcntl(m_listen, F_SETFL, flags | O_NONBLOCK) < 0)
+        return syscall_failure("fcntl(O_NONBLOCK) on the listening socket");
+    if (m_wake < 0) {
+        errno = m_wake_error;
+        return syscall_failure("eventfd");
+    }
     m_epoll = epoll_create1(EPOLL_CLOEXEC);
+    if (m_epoll < 0) return syscall_failure("epoll_create1");
     for (const auto& [fd, key] : {std::pair(m_listen, LISTEN_KEY), std::pair(m_wake, WAKE_KEY)}) {
         epoll_event ev{};
         ev.events = EPOLLIN;
         ev.data.u64 = key;
-        epoll_ctl(m_epoll, EPOLL_CTL_ADD, fd, &ev);
+        if (epoll_ctl(m_epoll, EPOLL_CTL_ADD, fd, &ev) < 0)
+            return syscall_failure("epoll_ctl(ADD) of the listening socket or the eventfd");
     }
+    return {};
+}
+
+void Reactor::run() {
+    if (m_epoll < 0) return;  // open() failed or was never called: nothing to serve
     std::vector<epoll_event> events(256);
     for (;;) {
         const int n = epoll_wait(m_epoll, events.data(), int(events.size()), int(TICK.count()));
+        if (n < 0 && errno != EINTR) {
+            spdlog::critical("epoll_wait: {}; the front end stops", std::strerror(errno));
+            break;
+        }
         const Clock::time_point now = Clock::now();
         for (int i = 0; i < n; ++i) {
             const uint64_t key = events[i].data.u64;
@@ -180,7 +193,8 @@ void Reactor::run(int listen_fd) {
                 accept_ready(now);
             } else if (key == WAKE_KEY) {
                 uint64_t count = 0;
-                [[maybe_unused]] const ssize_t r = ::read(m_wake, &count, sizeof count);
+                if (::read(m_wake, &count, sizeof count) < 0 && errno != EAGAIN)
+                    spdlog::error("reading the eventfd: {}", std::strerror(errno));
             } else if (auto it = m_connections.find(key); it != m_connections.end()) {
                 on_event(*it->second, events[i].events, now);
             }
@@ -207,43 +221,51 @@ void Reactor::accept_ready(Clock::time_point now) {
             if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
                 // Out of descriptors: stop polling the listener for a moment instead of spinning.
                 spdlog::warn("accept: {}; pausing new connections", std::strerror(errno));
-                epoll_ctl(m_epoll, EPOLL_CTL_DEL, m_listen, nullptr);
+                if (epoll_ctl(m_epoll, EPOLL_CTL_DEL, m_listen, nullptr) < 0)
+                    spdlog::error("epoll_ctl(DEL) of the listening socket: {}",
+                                  std::strerror(errno));
                 m_accept_paused = true;
                 m_accept_resume = now + ACCEPT_PAUSE;
             }
             return;
         }
-        Peer peer = peer_of(fd, addr);
-        const auto held = m_per_client.find(peer.ip);
+        std::string client = client_address(addr);
+        const auto held = m_per_client.find(client);
         const bool over =
             m_open_normal >= m_config.max_connections ||
             (held != m_per_client.end() && held->second >= m_config.max_connections_per_client);
         if (over && m_open_restricted >= HEALTH_RESERVE) {
-            ++m_counters.refused;
+            ++m_counters.connections_refused;
             ::close(fd);
             continue;
         }
         const int one = 1;
-        setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+        if (setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one) < 0)
+            spdlog::debug("setsockopt(TCP_NODELAY): {}", std::strerror(errno));
         const uint64_t id = m_next_id++;
-        auto c = std::make_unique<Connection>(id, fd, std::move(peer), m_reader_config);
-        c->restricted = over;
-        if (over) {
-            ++m_open_restricted;
-            ++m_counters.restricted;
-            c->deadline = now + RESTRICTED_TIMEOUT;
-        } else {
-            ++m_open_normal;
-            ++m_per_client[c->peer.ip];
-            c->deadline = now + std::chrono::seconds(m_config.header_timeout_s);
-        }
-        c->idle_deadline = c->deadline;
         epoll_event ev{};
         ev.events = EPOLLIN | EPOLLRDHUP;
         ev.data.u64 = id;
-        epoll_ctl(m_epoll, EPOLL_CTL_ADD, fd, &ev);
-        ++m_counters.accepted;
-        ++m_counters.open;
+        if (epoll_ctl(m_epoll, EPOLL_CTL_ADD, fd, &ev) < 0) {
+            spdlog::error("connection from {}: epoll_ctl(ADD): {}; closing it", client,
+                          std::strerror(errno));
+            ::close(fd);
+            continue;
+        }
+        auto c = std::make_unique<Connection>(id, fd, std::move(client), m_reader_config);
+        c->restricted = over;
+        if (over) {
+            ++m_open_restricted;
+            ++m_counters.connections_restricted;
+            c->deadline = now + RESTRICTED_TIMEOUT;
+        } else {
+            ++m_open_normal;
+            ++m_per_client[c->client];
+            c->deadline = now + std::chrono::seconds(m_config.header_timeout_s);
+        }
+        c->idle_deadline = c->deadline;
+        ++m_counters.connections_accepted;
+        ++m_counters.connections_open;
         m_connections.emplace(id, std::move(c));
     }
 }
@@ -260,7 +282,7 @@ void Reactor::on_event(Connection& c, uint32_t events, Clock::time_point now) {
             // request still computes is wasted.
             if (events & (EPOLLRDHUP | EPOLLHUP | EPOLLERR)) {
                 c.peer_gone = true;
-                ++m_counters.client_gone;
+                ++m_counters.clients_gone;
                 if (c.cancel) c.cancel->cancel(CancelReason::ClientGone);
             }
             return;
@@ -292,7 +314,7 @@ void Reactor::read_from(Connection& c, Clock::time_point now) {
                                    "the server holds too much unfinished request data from other "
                                    "clients (--max-buffered-mb); retry later"),
             true);
-        return answer(c, a, now);
+        return answer(c, std::move(a), now);
     }
     if (c.phase == Connection::Phase::Idle) set_reading(c, now);
     c.reader.append(m_scratch.data(), std::size_t(n));
@@ -333,32 +355,41 @@ void Reactor::advance(Connection& c, Clock::time_point now) {
                 continue;
             }
             case ReaderStep::Kind::Answer:
-                return answer(c, step.answer, now);
+                return answer(c, std::move(step.answer), now);
             case ReaderStep::Kind::Request:
-                return dispatch(c, std::move(step.request), now);
+                return dispatch(c, std::move(step.request));
         }
     }
 }
 
-void Reactor::answer(Connection& c, const DirectAnswer& a, Clock::time_point now) {
-    m_metrics.count_response(a.status);
-    spdlog::info("{} {} {} {}B {:.2f}ms", a.method, a.path, a.status, a.bytes.size(),
-                 c.phase == Connection::Phase::Reading ? ms_since(c.started, now) : 0.0);
-    const bool keep =
-        !a.close && !m_draining && !c.restricted && c.served + 1 < m_config.max_keep_alive_requests;
-    start_write(c, a.bytes, !keep, now);
+void Reactor::log_response(const Connection& c, int status, std::size_t bytes,
+                           Clock::time_point now) {
+    m_metrics.count_response(status);
+    spdlog::info("{} {} {} {}B {:.2f}ms", c.method, c.path, status, bytes,
+                 c.method == "-" ? 0.0 : ms_since(c.started, now));
 }
 
-void Reactor::dispatch(Connection& c, PreparedRequest&& request, Clock::time_point now) {
+void Reactor::answer(Connection& c, DirectAnswer&& a, Clock::time_point now) {
+    c.method = std::move(a.method);
+    c.path = std::move(a.path);
+    log_response(c, a.status, a.bytes.size(), now);
+    const bool keep =
+        !a.close && !m_draining && !c.restricted && c.served + 1 < m_config.max_keep_alive_requests;
+    start_write(c, std::move(a.bytes), !keep, now);
+}
+
+void Reactor::dispatch(Connection& c, PreparedRequest&& request) {
     c.phase = Connection::Phase::Busy;
     c.cancel = std::make_shared<CancelToken>();
     c.keep_alive =
         request.keep_alive && !m_draining && c.served + 1 < m_config.max_keep_alive_requests;
-    c.in_flight = request.wire_bytes.size();
+    c.in_flight = request.http.held_bytes();
+    c.method = request.http.method;
+    c.path = request.http.path;
     account(c);
-    watch(c, EPOLLRDHUP | EPOLLONESHOT);
-    ++m_counters.handling;
-    m_dispatch(c.id, std::move(request), c.cancel, c.peer, !c.keep_alive, now);
+    if (!watch(c, EPOLLRDHUP | EPOLLONESHOT)) return close(c.id);
+    ++m_counters.requests_in_flight;
+    m_dispatch(c.id, std::move(request), c.cancel, !c.keep_alive);
 }
 
 void Reactor::take_completions(Clock::time_point now) {
@@ -368,24 +399,25 @@ void Reactor::take_completions(Clock::time_point now) {
         done.swap(m_done);
     }
     for (Completion& d : done) {
-        --m_counters.handling;
+        --m_counters.requests_in_flight;
         auto it = m_connections.find(d.conn);
         if (it == m_connections.end()) continue;  // closed at the drain's hard deadline
         Connection& c = *it->second;
         c.cancel.reset();
         c.in_flight = 0;
         account(c);
-        if (d.stream) {
+        log_response(c, d.outcome.status, d.outcome.bytes.size(), now);
+        if (d.outcome.stream) {
             if (c.peer_gone) {
-                d.stream->detach();
+                d.outcome.stream->detach();
                 close(c.id);
                 continue;
             }
-            begin_stream(c, std::move(d.stream), now);
+            begin_stream(c, std::move(d.outcome), now);
             continue;
         }
         const bool close = d.close || !c.keep_alive || m_draining || c.peer_gone;
-        start_write(c, std::move(d.response), close, now);
+        start_write(c, std::move(d.outcome.bytes), close, now);
     }
 }
 
@@ -407,7 +439,7 @@ void Reactor::write_to(Connection& c, Clock::time_point now) {
         } else if (n < 0 && errno == EINTR) {
             continue;
         } else if (n < 0 && errno == EAGAIN) {
-            watch(c, EPOLLOUT);
+            if (!watch(c, EPOLLOUT)) close(c.id);
             return;
         } else {
             return close(c.id);
@@ -423,19 +455,19 @@ void Reactor::finish_response(Connection& c, Clock::time_point now) {
     c.phase = Connection::Phase::Idle;
     c.idle_deadline = c.deadline = now + std::chrono::seconds(m_config.keep_alive_timeout_s);
     if (c.reader.mid_request()) set_reading(c, now);  // pipelined: its bytes are already here
-    watch(c, EPOLLIN | EPOLLRDHUP);
+    if (!watch(c, EPOLLIN | EPOLLRDHUP)) return close(c.id);
     advance(c, now);
 }
 
 void Reactor::linger(Connection& c, Clock::time_point now) {
     // Closing with unread input would reset the connection, and the client could lose the answer
     // before reading it: shut the write side, then read and discard until it closes too.
-    ::shutdown(c.fd, SHUT_WR);
+    if (::shutdown(c.fd, SHUT_WR) < 0) return close(c.id);  // the peer is gone already
     c.phase = Connection::Phase::Lingering;
     c.deadline = now + LINGER_TIME;
     c.reader.discard();
     account(c);
-    watch(c, EPOLLIN | EPOLLRDHUP);
+    if (!watch(c, EPOLLIN | EPOLLRDHUP)) close(c.id);
 }
 
 void Reactor::account(Connection& c) {
@@ -450,16 +482,18 @@ void Reactor::close(uint64_t id) {
     Connection& c = *it->second;
     if (c.cancel) c.cancel->cancel(CancelReason::ClientGone);
     if (c.stream) c.stream->detach();
-    epoll_ctl(m_epoll, EPOLL_CTL_DEL, c.fd, nullptr);
+    // Closing the descriptor removes it from the epoll set anyway; a failure here is only logged.
+    if (epoll_ctl(m_epoll, EPOLL_CTL_DEL, c.fd, nullptr) < 0)
+        spdlog::debug("connection {}: epoll_ctl(DEL): {}", c.id, std::strerror(errno));
     ::close(c.fd);
     m_buffered -= c.accounted;
     if (c.restricted) {
         --m_open_restricted;
     } else {
         --m_open_normal;
-        if (--m_per_client[c.peer.ip] == 0) m_per_client.erase(c.peer.ip);
+        if (--m_per_client[c.client] == 0) m_per_client.erase(c.client);
     }
-    --m_counters.open;
+    --m_counters.connections_open;
     m_connections.erase(it);
 }
 
@@ -470,8 +504,13 @@ void Reactor::sweep(Clock::time_point now) {
         epoll_event ev{};
         ev.events = EPOLLIN;
         ev.data.u64 = LISTEN_KEY;
-        epoll_ctl(m_epoll, EPOLL_CTL_ADD, m_listen, &ev);
-        m_accept_paused = false;
+        if (epoll_ctl(m_epoll, EPOLL_CTL_ADD, m_listen, &ev) == 0) {
+            m_accept_paused = false;
+        } else {
+            spdlog::error("epoll_ctl(ADD) of the listening socket: {}; retrying",
+                          std::strerror(errno));
+            m_accept_resume = now + ACCEPT_PAUSE;
+        }
     }
     std::vector<uint64_t> expired;
     for (auto& [id, c] : m_connections) {
@@ -512,7 +551,7 @@ void Reactor::sweep(Clock::time_point now) {
                                                    : m_config.header_timeout_s) +
                        " s (--header-timeout)");
         a.bytes = problem_bytes(p, true);
-        answer(c, a, now);
+        answer(c, std::move(a), now);
     }
     // Streams whose next part waited for its pace.
     std::vector<uint64_t> paced;
@@ -559,17 +598,18 @@ bool Reactor::drain_finished(Clock::time_point now) const {
     return true;
 }
 
-void Reactor::begin_stream(Connection& c, std::shared_ptr<StreamChannel> stream,
-                           Clock::time_point now) {
+void Reactor::begin_stream(Connection& c, Outcome&& head, Clock::time_point now) {
     c.phase = Connection::Phase::Streaming;
-    c.stream = std::move(stream);
-    c.out = c.stream->head();
+    c.stream = std::move(head.stream);
+    c.out = std::move(head.bytes);
     c.out_pos = 0;
     c.close_after = true;
     c.next_part = now;
     c.deadline = now + std::chrono::seconds(m_config.write_timeout_s);
     c.watching = 0;
-    ::setsockopt(c.fd, SOL_SOCKET, SO_SNDBUF, &STREAM_SEND_BUFFER, sizeof STREAM_SEND_BUFFER);
+    if (::setsockopt(c.fd, SOL_SOCKET, SO_SNDBUF, &STREAM_SEND_BUFFER,
+                     sizeof STREAM_SEND_BUFFER) < 0)
+        spdlog::debug("setsockopt(SO_SNDBUF): {}", std::strerror(errno));
     const uint64_t id = c.id;
     c.stream->attach([this, id] {
         {
@@ -600,7 +640,7 @@ void Reactor::take_ready_streams(Clock::time_point now) {
 
 void Reactor::stream_write(Connection& c, Clock::time_point now) {
     const auto watch_for = [&](uint32_t events) {
-        if (c.watching != events) watch(c, events);
+        if (c.watching != events && !watch(c, events)) return close(c.id);
         c.watching = events;
     };
     for (;;) {

@@ -10,7 +10,7 @@
 // socket is watched only for the client leaving, which cancels a render) -> Writing -> Idle, or
 // Lingering (write side shut, unread input discarded briefly so that the client reads the answer
 // instead of a reset) -> closed. Requests pipelined on one connection are served in order.
-// A worker may answer with a stream instead (complete_stream, stream_channel.h): the connection
+// A worker may answer with a stream instead (Outcome::stream, stream_channel.h): the connection
 // then goes Busy -> Streaming, where the reactor writes the channel's parts as the producer
 // offers them, paced and bounded by the channel, until the client leaves, the producer ends the
 // stream, or the drain ends it (then the part being written finishes and the connection closes).
@@ -31,9 +31,10 @@
 #include <vector>
 
 #include "engine/core/cancel.h"
+#include "engine/core/result.h"
+#include "server/application.h"
 #include "server/front_end_counters.h"
 #include "server/request_reader.h"
-#include "server/route_table.h"
 #include "server/server_config.h"
 #include "server/stream_channel.h"
 
@@ -44,17 +45,20 @@ class ServerMetrics;
 class Reactor {
 public:
     /// Hands a request to a worker; the worker calls complete(conn, ...) with the answer.
+    /// `close`: the answer must say `Connection: close`.
     using Dispatch = std::function<void(uint64_t conn, PreparedRequest&& request,
-                                        std::shared_ptr<CancelToken> cancel, Peer peer, bool close,
-                                        std::chrono::steady_clock::time_point received)>;
+                                        std::shared_ptr<CancelToken> cancel, bool close)>;
 
     Reactor(const ServerConfig& config, ServerMetrics& metrics, Dispatch dispatch);
     ~Reactor();
     Reactor(const Reactor&) = delete;
     Reactor& operator=(const Reactor&) = delete;
 
-    /// Serves connections on the listening socket `listen_fd` until a drain has finished.
-    void run(int listen_fd);
+    /// Sets up the event loop around the listening socket `listen_fd`; an error names the call
+    /// that failed.
+    Status open(int listen_fd);
+    /// Serves connections until a drain has finished (at once when open() did not succeed).
+    void run();
     /// Starts the graceful drain. Thread-safe, idempotent, callable before run().
     void drain();
     /// True once drain() was called.
@@ -72,11 +76,9 @@ public:
     bool starting() const { return m_starting.load(); }
     /// What else /readyz asks (request_reader.h); set before run(), never after.
     void set_readiness(std::function<Readiness()> readiness) { m_readiness = std::move(readiness); }
-    /// A worker's answer for connection `conn`; `close`: close after writing it. Thread-safe.
-    void complete(uint64_t conn, std::string response, bool close);
-    /// A worker's answer that is a stream: the reactor writes `stream`'s head, then its parts.
-    /// Thread-safe.
-    void complete_stream(uint64_t conn, std::shared_ptr<StreamChannel> stream);
+    /// A worker's answer for connection `conn`; `close`: close after writing it. A stream's
+    /// head is written, then its parts. Thread-safe.
+    void complete(uint64_t conn, Outcome outcome, bool close);
 
     const FrontEndCounters& counters() const { return m_counters; }
 
@@ -88,9 +90,11 @@ private:
     void on_event(Connection& c, uint32_t events, Clock::time_point now);
     void read_from(Connection& c, Clock::time_point now);
     void advance(Connection& c, Clock::time_point now);
-    void dispatch(Connection& c, PreparedRequest&& request, Clock::time_point now);
+    void dispatch(Connection& c, PreparedRequest&& request);
     void take_completions(Clock::time_point now);
-    void answer(Connection& c, const DirectAnswer& a, Clock::time_point now);
+    void answer(Connection& c, DirectAnswer&& a, Clock::time_point now);
+    /// The access log and the response counters: every answer passes here once.
+    void log_response(const Connection& c, int status, std::size_t bytes, Clock::time_point now);
     void start_write(Connection& c, std::string bytes, bool close, Clock::time_point now);
     void write_to(Connection& c, Clock::time_point now);
     void finish_response(Connection& c, Clock::time_point now);
@@ -101,8 +105,9 @@ private:
     void sweep(Clock::time_point now);
     void begin_drain(Clock::time_point now);
     bool drain_finished(Clock::time_point now) const;
-    void watch(const Connection& c, uint32_t events);
-    void begin_stream(Connection& c, std::shared_ptr<StreamChannel> stream, Clock::time_point now);
+    /// Changes the events epoll reports for `c`; false (logged) when that failed: close it.
+    bool watch(const Connection& c, uint32_t events);
+    void begin_stream(Connection& c, Outcome&& head, Clock::time_point now);
     void stream_write(Connection& c, Clock::time_point now);
     void on_stream_event(Connection& c, uint32_t events, Clock::time_point now);
     void take_ready_streams(Clock::time_point now);
@@ -116,6 +121,7 @@ private:
 
     int m_epoll = -1;
     int m_wake = -1;  ///< eventfd: completions and drain requests
+    int m_wake_error = 0;  ///< errno of a failed eventfd(), reported by open()
     int m_listen = -1;
     bool m_accept_paused = false;
     Clock::time_point m_accept_resume{};
@@ -140,9 +146,8 @@ private:
 
     struct Completion {
         uint64_t conn;
-        std::string response;
+        Outcome outcome;
         bool close;
-        std::shared_ptr<StreamChannel> stream;  ///< set: a stream instead of `response`
     };
     std::mutex m_done_mutex;
     std::vector<Completion> m_done;

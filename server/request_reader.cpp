@@ -4,7 +4,8 @@
 
 #include "protocol/api.h"
 #include "server/auth.h"
-#include "server/direct_response.h"
+#include "server/response_writer.h"
+#include "server/route_table.h"
 
 namespace strata::server {
 
@@ -18,26 +19,6 @@ std::string starting_detail(const std::string& progress) {
            (progress.empty() ? std::string("the recovered scene's acceleration structures are "
                                            "being built")
                              : progress);
-}
-
-/// Fields the front end consumes and never passes on. Framing and connection management are
-/// decided here, once (httplib would otherwise apply its own, laxer reading of them); Range is
-/// dropped because every answer is generated content (RFC 9110 lets a server ignore it), so a
-/// request cannot multiply a frame into thousands of multipart ranges; the REMOTE_ and LOCAL_
-/// names are what httplib stores the socket addresses under, so a client must not supply them.
-constexpr std::string_view DROPPED_FIELDS[] = {
-    "content-length",   "transfer-encoding", "expect",      "range",      "if-range",
-    "connection",       "keep-alive",        "te",          "trailer",    "upgrade",
-    "proxy-connection", "remote_addr",       "remote_port", "local_addr", "local_port",
-};
-
-bool is_dropped(std::string_view name) {
-    return std::any_of(std::begin(DROPPED_FIELDS), std::end(DROPPED_FIELDS),
-                       [&](std::string_view d) { return iequals(name, d); });
-}
-
-bool has_body_semantics(std::string_view method) {
-    return method == "POST" || method == "PUT" || method == "PATCH" || method == "DELETE";
 }
 
 ProblemType problem_type_for(int status) {
@@ -110,19 +91,12 @@ ReaderStep RequestReader::preflight() {
     // the browser then refuses the real request.
     protocol::ApiResponse r;
     r.status = 204;
-    if (const auto& origin = cors_origin()) {
-        r.headers = {{"Access-Control-Allow-Origin", *origin},
-                     {"Vary", "Origin"},
-                     {"Access-Control-Allow-Methods", CORS_ALLOW_METHODS},
+    if (cors_origin()) {
+        r.headers = {{"Access-Control-Allow-Methods", CORS_ALLOW_METHODS},
                      {"Access-Control-Allow-Headers", CORS_ALLOW_HEADERS},
                      {"Access-Control-Max-Age", "600"}};
     }
-    ReaderStep step;
-    step.kind = ReaderStep::Kind::Answer;
-    const bool close = m_head.framing != BodyFraming::None || !m_head.keep_alive;
-    step.answer = {204, m_head.method, m_target.path, {}, close};
-    step.answer.bytes = response_bytes(r, close);
-    return step;
+    return answer_with(std::move(r), m_head.framing != BodyFraming::None || !m_head.keep_alive);
 }
 
 ReaderStep RequestReader::next(const ReaderSituation& situation) {
@@ -136,23 +110,54 @@ ReaderStep RequestReader::answer(int status, const std::string& detail, bool clo
     protocol::ApiResponse r = protocol::problem_response(p);
     if (status == 401) r.headers.emplace_back("WWW-Authenticate", "Bearer realm=\"strata\"");
     if (retry_after) r.headers.emplace_back("Retry-After", retry_after);
-    if (!m_head.method.empty() && cors_origin())
-        r.headers.emplace_back("Access-Control-Allow-Origin", *cors_origin());
+    return answer_with(std::move(r), close);
+}
+
+ReaderStep RequestReader::answer_with(const protocol::ApiResponse& response, bool close) {
     ReaderStep step;
     step.kind = ReaderStep::Kind::Answer;
-    step.answer.status = status;
+    step.answer.status = response.status;
+    step.answer.close = close;
+    Framing framing;
+    framing.close = close;
     if (!m_head.method.empty()) {
         step.answer.method = m_head.method;
         step.answer.path = m_target.path.empty() ? m_head.target : m_target.path;
+        framing.head_only = m_head.method == "HEAD";
+        if (const auto& origin = cors_origin()) framing.cors_origin = *origin;
     }
-    step.answer.close = close;
-    // A HEAD answer has the headers of the body it leaves out: a body would be read as the next
-    // response.
-    step.answer.bytes = response_bytes(r, close, m_head.method == "HEAD");
+    step.answer.bytes = write_response(response, framing);
     return step;
 }
 
-ReaderStep RequestReader::on_head(const ReaderSituation& situation) {
+protocol::ApiResponse RequestReader::health_answer(const ReaderSituation& situation) const {
+    const bool livez = m_target.path == "/livez";
+    Readiness extra;
+    if (!livez && situation.readiness && *situation.readiness) extra = (*situation.readiness)();
+    const bool ready = livez || (!situation.draining && !situation.starting && extra.ready);
+    if (!ready) {
+        protocol::ApiResponse r = protocol::problem_response(protocol::make_problem(
+            ProblemType::Unavailable, situation.draining   ? "the server is shutting down"
+                                      : situation.starting ? starting_detail(situation.progress)
+                                                           : extra.detail));
+        if (!situation.draining) r.headers.emplace_back("Retry-After", "1");
+        return r;
+    }
+    protocol::Json report = {{"status", livez ? "ok" : "ready"}};
+    if (!livez && !extra.section.empty()) {
+        protocol::Json& section = report[extra.section];
+        for (const auto& [name, value] : extra.numbers) {
+            // Versions and counts are whole numbers: written as integers.
+            if (value >= 0 && value < 9007199254740992.0 && value == double(int64_t(value)))
+                section[name] = int64_t(value);
+            else
+                section[name] = value;
+        }
+    }
+    return protocol::json_response(200, report);
+}
+
+std::optional<ReaderStep> RequestReader::parse_head() {
     const HttpLimits& limits = m_config.limits;
     // Empty lines between requests (some clients end a body with an extra CRLF) are no request:
     // dropped here, they neither count as one in progress nor start its deadline.
@@ -166,7 +171,7 @@ ReaderStep RequestReader::on_head(const ReaderSituation& situation) {
     const std::size_t end = find_head_end(buffered, m_scanned);
     if (end == std::string_view::npos) {
         m_scanned = buffered.size();
-        if (buffered.size() <= limits.max_head_bytes) return {};
+        if (buffered.size() <= limits.max_head_bytes) return ReaderStep{};
         if (buffered.find('\n') == std::string_view::npos &&
             buffered.size() > limits.max_target_bytes)
             return answer(414, "the request line is longer than the limit of " +
@@ -188,45 +193,12 @@ ReaderStep RequestReader::on_head(const ReaderSituation& situation) {
     auto target = parse_request_target(m_head.target);
     if (auto* e = std::get_if<HttpError>(&target)) return answer(e->status, e->detail);
     m_target = std::move(std::get<RequestTarget>(target));
+    return std::nullopt;
+}
 
-    // Step: health checks, answered here so that they never wait for a worker, whatever the
-    // load, the connection limits or the shutdown state.
+std::optional<ReaderStep> RequestReader::refuse(const ReaderSituation& situation) {
     const bool body = m_head.framing != BodyFraming::None;
-    if (is_health_path(m_target.path) && (m_head.method == "GET" || m_head.method == "HEAD")) {
-        const bool livez = m_target.path == "/livez";
-        Readiness extra;
-        if (!livez && situation.readiness && *situation.readiness)
-            extra = (*situation.readiness)();
-        const bool ready = livez || (!situation.draining && !situation.starting && extra.ready);
-        protocol::ApiResponse r;
-        if (ready) {
-            protocol::Json report = {{"status", livez ? "ok" : "ready"}};
-            if (!livez && !extra.section.empty()) {
-                protocol::Json& section = report[extra.section];
-                for (const auto& [name, value] : extra.numbers) {
-                    // Versions and counts are whole numbers: written as integers.
-                    if (value >= 0 && value < 9007199254740992.0 && value == double(int64_t(value)))
-                        section[name] = int64_t(value);
-                    else
-                        section[name] = value;
-                }
-            }
-            r = protocol::json_response(200, report);
-        } else {
-            r = protocol::problem_response(protocol::make_problem(
-                ProblemType::Unavailable, situation.draining   ? "the server is shutting down"
-                                          : situation.starting ? starting_detail(situation.progress)
-                                                               : extra.detail));
-        }
-        if (!ready && !situation.draining) r.headers.emplace_back("Retry-After", "1");
-        ReaderStep step;
-        step.kind = ReaderStep::Kind::Answer;
-        step.answer = {r.status, m_head.method, m_target.path, {}, body || !m_head.keep_alive};
-        step.answer.bytes = response_bytes(r, step.answer.close, m_head.method == "HEAD");
-        return step;
-    }
-
-    // Step: refusals that need no body. The body is left unread: the connection closes.
+    // The body is left unread: the connection closes.
     if (situation.draining) return answer(503, "the server is shutting down");
     if (situation.starting) {
         // Refused without reading a body (a connection with one unread closes); the client
@@ -249,25 +221,44 @@ ReaderStep RequestReader::on_head(const ReaderSituation& situation) {
                                  "from a browser, ?access_token=<token>)"
                                : "this server requires Authorization: Bearer <token>");
     }
-    // The token in the query is never passed on: routes would refuse an unknown parameter.
-    m_target.query.erase(std::remove_if(m_target.query.begin(), m_target.query.end(),
-                                        [](const auto& p) { return p.first == QUERY_TOKEN; }),
-                         m_target.query.end());
     if (const std::string* coding = m_head.header("Content-Encoding");
         coding && !iequals(*coding, "identity"))
         return answer(415, "Content-Encoding '" + coding->substr(0, 32) +
                                "' is not accepted: send the body uncompressed");
-    if (m_head.framing == BodyFraming::Length && m_head.content_length > limits.max_body_bytes)
+    const uint64_t max_body = m_config.limits.max_body_bytes;
+    if (m_head.framing == BodyFraming::Length && m_head.content_length > max_body)
         return answer(413, "the request body of " + std::to_string(m_head.content_length) +
-                               " bytes is larger than the limit of " +
-                               std::to_string(limits.max_body_bytes) + " bytes (--max-body-mb)");
+                               " bytes is larger than the limit of " + std::to_string(max_body) +
+                               " bytes (--max-body-mb)");
+    return std::nullopt;
+}
+
+ReaderStep RequestReader::on_head(const ReaderSituation& situation) {
+    if (std::optional<ReaderStep> early = parse_head()) return std::move(*early);
+
+    // Step: health checks, answered here so that they never wait for a worker, whatever the
+    // load, the connection limits or the shutdown state.
+    const bool body = m_head.framing != BodyFraming::None;
+    if (is_health_path(m_target.path)) {
+        if (m_head.method != "GET" && m_head.method != "HEAD")
+            return answer_with(method_not_allowed(m_head.method, m_target.path, "GET, HEAD"),
+                               body || !m_head.keep_alive);
+        return answer_with(health_answer(situation), body || !m_head.keep_alive);
+    }
+
+    // Step: refusals that need no body.
+    if (std::optional<ReaderStep> refusal = refuse(situation)) return std::move(*refusal);
+    // The token in the query is never passed on: routes would refuse an unknown parameter.
+    m_target.query.erase(std::remove_if(m_target.query.begin(), m_target.query.end(),
+                                        [](const auto& p) { return p.first == QUERY_TOKEN; }),
+                         m_target.query.end());
     if (!body) return finish_request();
 
     // Step: the body, read here in full before a worker sees the request.
     m_phase = Phase::Body;
     m_body.clear();
     m_body_left = m_head.content_length;
-    m_chunked = ChunkedDecoder(limits.max_body_bytes);
+    m_chunked = ChunkedDecoder(m_config.limits.max_body_bytes);
     if (m_head.expect_continue && m_pos == m_in.size()) {
         ReaderStep step;
         step.kind = ReaderStep::Kind::Continue;
@@ -295,39 +286,18 @@ ReaderStep RequestReader::on_body() {
 }
 
 ReaderStep RequestReader::finish_request() {
-    // httplib refuses request lines over 8 KiB, and normalising may lengthen the target (a
-    // decoded '+' in the query is re-encoded as %20).
-    constexpr std::size_t MAX_WIRE_TARGET = 8150;
-    const std::string target = httplib_target(m_target);
-    if (target.size() > MAX_WIRE_TARGET)
-        return answer(414, "the request target is too long once normalised (" +
-                               std::to_string(target.size()) + " bytes; the limit is " +
-                               std::to_string(MAX_WIRE_TARGET) + ")");
     ReaderStep step;
     step.kind = ReaderStep::Kind::Request;
     PreparedRequest& r = step.request;
-    r.method = m_head.method;
-    r.path = m_target.path;
-    r.keep_alive = m_head.keep_alive;
-    r.heavy = r.path == "/v1/render" || r.path == "/v1/commit";
-    if (const auto& origin = cors_origin()) r.cors_origin = *origin;
-    // What httplib reads: a canonical HTTP/1.1 request with a Content-Length body. httplib
-    // percent-decodes header values (a quirk of 0.11), so '%' is escaped for it to undo.
-    std::string& w = r.wire_bytes;
-    const bool with_body = has_body_semantics(r.method) && !m_body.empty();
-    w.reserve(1024 + (with_body ? m_body.size() : 0));
-    w += r.method + " " + target + " HTTP/1.1\r\n";
-    for (const HeaderField& f : m_head.headers) {
-        if (is_dropped(f.name)) continue;
-        w += f.name;
-        w += ": ";
-        for (char c : f.value) w += c == '%' ? std::string_view("%25") : std::string_view(&c, 1);
-        w += "\r\n";
-    }
-    if (with_body) w += "Content-Length: " + std::to_string(m_body.size()) + "\r\n";
-    w += "\r\n";
-    if (with_body) w += m_body;
+    if (const auto& origin = cors_origin()) r.cors_origin = *origin;  // before the headers move
+    r.http.method = m_head.method;
+    r.http.path = std::move(m_target.path);
+    for (auto& [name, value] : m_target.query) r.http.query.emplace(std::move(name), std::move(value));
+    r.http.headers = std::move(m_head.headers);
+    r.http.body = std::move(m_body);
     m_body = std::string();
+    r.keep_alive = m_head.keep_alive;
+    r.heavy = r.http.path == "/v1/render" || r.http.path == "/v1/commit";
     m_phase = Phase::Head;
     compact();
     return step;

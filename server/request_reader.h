@@ -12,8 +12,10 @@
 #include <utility>
 #include <vector>
 
+#include "protocol/api.h"
 #include "server/cors.h"
 #include "server/http_parser.h"
+#include "server/http_request.h"
 #include "server/request_target.h"
 
 namespace strata::server {
@@ -47,12 +49,11 @@ struct ReaderSituation {
 
 /// A complete request for a worker.
 struct PreparedRequest {
-    std::string method;
-    std::string path;        ///< normalised (see RequestTarget::path)
-    std::string wire_bytes;  ///< the request as httplib reads it (see request_reader.cpp)
+    HttpRequest http;
     bool keep_alive = true;
     bool heavy = false;  ///< renders and commits, which may take seconds
-    /// The request's Origin when --cors-origin allows it: its answer carries add_cors_headers.
+    /// The request's Origin when --cors-origin allows it: its answer carries the access-control
+    /// headers.
     std::string cors_origin;
 };
 
@@ -116,9 +117,19 @@ private:
     enum class Phase : uint8_t { Head, Body };
 
     ReaderStep on_head(const ReaderSituation& situation);
+    /// Takes a complete head from the buffer: nullopt when it is well-formed, else what to do
+    /// (read more, or the refusal of a malformed head).
+    std::optional<ReaderStep> parse_head();
+    /// The refusal of a well-formed head that no worker may see, if any.
+    std::optional<ReaderStep> refuse(const ReaderSituation& situation);
     ReaderStep on_body();
     ReaderStep answer(int status, const std::string& detail, bool close = true,
                       const char* retry_after = nullptr);
+    /// Writes `response` to this request (HEAD: without its body; with the access-control
+    /// headers of an allowed origin).
+    ReaderStep answer_with(const protocol::ApiResponse& response, bool close);
+    /// GET /livez or /readyz.
+    protocol::ApiResponse health_answer(const ReaderSituation& situation) const;
     ReaderStep finish_request();
     ReaderStep preflight();
     bool authorized();

@@ -145,21 +145,4 @@ std::string decode_path_segment(std::string_view segment) {
     return out;
 }
 
-std::string httplib_target(const RequestTarget& target) {
-    std::string out;
-    out.reserve(target.path.size() * 2);
-    for (char c : target.path) out += c == '%' ? std::string_view("%25") : std::string_view(&c, 1);
-    char sep = '?';
-    for (const auto& [name, value] : target.query) {
-        out += sep;
-        sep = '&';
-        for (unsigned char c : name)
-            is_unreserved(c) ? void(out += char(c)) : append_escape(out, c);
-        out += '=';
-        for (unsigned char c : value)
-            is_unreserved(c) ? void(out += char(c)) : append_escape(out, c);
-    }
-    return out;
-}
-
 }  // namespace strata::server

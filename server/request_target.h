@@ -30,9 +30,4 @@ std::variant<RequestTarget, HttpError> parse_request_target(std::string_view raw
 /// Decodes the percent-escapes of one path segment as RequestTarget::path holds it.
 std::string decode_path_segment(std::string_view segment);
 
-/// The target to hand httplib, which percent-decodes the path once more before routing and
-/// splits the query on '&' and '=': the path with every '%' escaped, so routes see
-/// RequestTarget::path, and the query re-encoded, so httplib reads exactly the decoded values.
-std::string httplib_target(const RequestTarget& target);
-
 }  // namespace strata::server

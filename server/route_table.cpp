@@ -1,90 +1,121 @@
 #include "server/route_table.h"
 
 #include <algorithm>
-#include <cstring>
 
 #include <spdlog/spdlog.h>
 
 #include "protocol/safe_text.h"
-#include "server/direct_response.h"
+#include "server/request_target.h"
 
 namespace strata::server {
 
 namespace {
 
-thread_local RequestContext* t_current = nullptr;
+using protocol::ProblemType;
 
-/// Reads the request from memory and collects the response in memory.
-class MemoryStream : public httplib::Stream {
-public:
-    MemoryStream(std::string_view in, const Peer& peer, std::string& out)
-        : m_in(in), m_peer(peer), m_out(out) {}
+bool is_parameter(std::string_view segment) {
+    return segment.size() > 2 && segment.front() == '{' && segment.back() == '}';
+}
 
-    bool is_readable() const override { return m_pos < m_in.size(); }
-    bool is_writable() const override { return true; }
-    ssize_t read(char* ptr, size_t size) override {
-        const std::size_t n = std::min(size, m_in.size() - m_pos);
-        std::memcpy(ptr, m_in.data() + m_pos, n);
-        m_pos += n;
-        return ssize_t(n);
-    }
-    ssize_t write(const char* ptr, size_t size) override {
-        m_out.append(ptr, size);
-        return ssize_t(size);
-    }
-    void get_remote_ip_and_port(std::string& ip, int& port) const override {
-        ip = m_peer.ip;
-        port = m_peer.port;
-    }
-    void get_local_ip_and_port(std::string& ip, int& port) const override {
-        ip = m_peer.local_ip;
-        port = m_peer.local_port;
-    }
-    // httplib only compares this with FD_SETSIZE (for its select() calls, which a memory stream
-    // never reaches); 0 is what its own BufferStream answers.
-    socket_t socket() const override { return 0; }
+bool is_rest_parameter(std::string_view segment) {
+    return is_parameter(segment) && segment.size() > 5 &&
+           segment.substr(segment.size() - 4) == "...}";
+}
 
-private:
-    std::string_view m_in;
-    std::size_t m_pos = 0;
-    const Peer& m_peer;
-    std::string& m_out;
-};
+/// "/a/b/c" -> {"a", "b", "c"}; "/" -> {""}.
+std::vector<std::string_view> split_path(std::string_view path) {
+    std::vector<std::string_view> out;
+    if (!path.empty() && path.front() == '/') path.remove_prefix(1);
+    for (;;) {
+        const std::size_t slash = path.find('/');
+        out.push_back(path.substr(0, slash));
+        if (slash == std::string_view::npos) return out;
+        path.remove_prefix(slash + 1);
+    }
+}
 
-/// Sets the thread's current request for the duration of a scope.
-class ContextScope {
-public:
-    explicit ContextScope(RequestContext& c) { t_current = &c; }
-    ~ContextScope() { t_current = nullptr; }
-    ContextScope(const ContextScope&) = delete;
-    ContextScope& operator=(const ContextScope&) = delete;
-};
+/// What a handler's exception becomes: logged with the request, answered without internals.
+protocol::ApiResponse internal_error(const HttpRequest& request, const char* what) {
+    spdlog::error("{} {}: unhandled exception: {}", request.method, request.path,
+                  protocol::escape_for_log(what));
+    return protocol::problem_response(protocol::make_problem(
+        ProblemType::Internal, "internal error while handling the request"));
+}
 
 }  // namespace
 
-RequestContext* current_request() {
-    return t_current;
+protocol::ApiResponse method_not_allowed(std::string_view method, std::string_view path,
+                                         const std::string& allow) {
+    protocol::ApiResponse r = protocol::problem_response(protocol::make_problem(
+        ProblemType::MethodNotAllowed, std::string(method) + " is not allowed on " +
+                                           std::string(path) + " (allowed: " + allow + ")"));
+    r.headers.emplace_back("Allow", allow);
+    return r;
 }
 
-std::string RouteTable::handle(std::string_view wire_bytes, const Peer& peer, bool close,
-                               RequestContext& context) {
-    ContextScope scope(context);
-    std::string out;
-    try {
-        MemoryStream stream(wire_bytes, peer, out);
-        bool closed = false;
-        if (process_request(stream, close, closed, nullptr) && !out.empty()) return out;
-        spdlog::error("the router produced no response for a checked request");
-    } catch (const std::exception& e) {
-        spdlog::error("exception outside the route handlers: {}",
-                      protocol::escape_for_log(e.what()));
-    } catch (...) {
-        spdlog::error("unknown exception outside the route handlers");
+void RouteTable::add(std::string method, std::string_view pattern, Handler handler) {
+    std::vector<std::string> segments;
+    for (std::string_view s : split_path(pattern)) segments.emplace_back(s);
+    auto it = std::find_if(m_routes.begin(), m_routes.end(),
+                           [&](const Route& r) { return r.segments == segments; });
+    if (it == m_routes.end()) it = m_routes.insert(m_routes.end(), Route{segments, {}, {}});
+    it->handlers.emplace_back(std::move(method), std::move(handler));
+    // Allow: the methods in alphabetical order, then HEAD when GET is served.
+    std::vector<std::string> methods;
+    for (const auto& handler_of : it->handlers) methods.push_back(handler_of.first);
+    std::sort(methods.begin(), methods.end());
+    it->allow.clear();
+    for (const std::string& m : methods) it->allow += (it->allow.empty() ? "" : ", ") + m;
+    if (std::count(methods.begin(), methods.end(), "GET")) it->allow += ", HEAD";
+}
+
+bool RouteTable::match(const Route& route, std::string_view path,
+                       std::vector<std::string>& params) {
+    const std::vector<std::string_view> parts = split_path(path);
+    params.clear();
+    for (std::size_t i = 0; i < route.segments.size(); ++i) {
+        const std::string& want = route.segments[i];
+        if (i >= parts.size()) return false;
+        if (is_rest_parameter(want)) {
+            // The rest of the path, slashes included: from this segment's start to the end.
+            const std::string_view rest =
+                path.substr(std::size_t(parts[i].data() - path.data()));
+            if (rest.empty()) return false;
+            params.push_back(decode_path_segment(rest));
+            return true;
+        }
+        if (is_parameter(want)) {
+            if (parts[i].empty()) return false;
+            params.push_back(decode_path_segment(parts[i]));
+        } else if (want != parts[i]) {
+            return false;
+        }
     }
-    context.close = true;
-    return problem_bytes(protocol::make_problem(protocol::ProblemType::Internal,
-                                                "internal error while handling the request"),
-                         true);
+    return parts.size() == route.segments.size();
+}
+
+Reply RouteTable::dispatch(HttpRequest& request, RequestContext& context) const {
+    RouteCall call{request, {}, context};
+    const auto route = std::find_if(m_routes.begin(), m_routes.end(), [&](const Route& r) {
+        return match(r, request.path, call.params);
+    });
+    if (route == m_routes.end()) {
+        // The path is the normalised target: ASCII, non-printable bytes percent-encoded.
+        return protocol::make_problem(ProblemType::NotFound,
+                                      "no route for " + request.method + " " + request.path);
+    }
+    const std::string_view method = request.method == "HEAD" ? "GET" : request.method;
+    const auto handler = std::find_if(route->handlers.begin(), route->handlers.end(),
+                                      [&](const auto& h) { return h.first == method; });
+    if (handler == route->handlers.end())
+        return method_not_allowed(request.method, request.path, route->allow);
+    try {
+        return handler->second(call);
+    } catch (const std::exception& e) {
+        return internal_error(request, e.what());
+    } catch (...) {
+        return internal_error(request, "unknown exception");
+    }
 }
 
 }  // namespace strata::server

@@ -1,59 +1,78 @@
 #pragma once
-// httplib as the router and response writer, without its socket handling.
+// The server's routes: method and path pattern to handler. A handler takes the request the front
+// end already read and checked (http_request.h) and returns a Reply: a response, or the head of
+// a stream the front end then writes. GET routes answer HEAD too (the writer leaves the body
+// out); a known path asked with another method gets 405 with Allow, an unknown one 404, and an
+// exception escaping a handler a 500 problem.
 //
-// Why: cpp-httplib 0.11 ties a worker thread to each connection for as long as the client takes
-// (its read timeout restarts with every byte), parses requests leniently, and applies Range and
-// Content-Encoding itself. Strata's front end (reactor.h) owns every socket instead: it reads and
-// checks a whole request under a total deadline without a worker, then hands the canonical bytes
-// to a RouteTable, which runs httplib's own request processing (routing, handlers, error and
-// exception handlers, response formatting, logger) over an in-memory stream. Route handlers keep
-// the plain httplib::Request/Response interface.
+// Patterns are literal segments and parameters: "/v1/scene/meshes/{id}" matches one non-empty
+// segment, "/web/{path...}" the non-empty rest of the path. Parameters reach the handler
+// percent-decoded, in pattern order.
 
-#include <chrono>
+#include <functional>
 #include <memory>
 #include <string>
 #include <string_view>
+#include <vector>
 
-#include <httplib.h>
-
-#include "engine/core/cancel.h"
+#include "protocol/api.h"
+#include "protocol/problem.h"
+#include "server/http_request.h"
 
 namespace strata::server {
 
 class StreamChannel;
 
-/// The two ends of a connection.
-struct Peer {
-    std::string ip;
-    int port = 0;
-    std::string local_ip;
-    int local_port = 0;
-};
-
-/// Per-request state a handler can reach on its worker thread (httplib's Request has no slot).
-struct RequestContext {
-    /// Cancelled when the client disconnects or the server shuts down; renders poll it (and
-    /// set their deadline on it).
-    CancelToken* cancel = nullptr;
-    /// When the front end had the whole request (queueing time counts in the access log).
-    std::chrono::steady_clock::time_point received = std::chrono::steady_clock::now();
-    /// Set by the logger when the response says `Connection: close`.
-    bool close = false;
-    /// Set by a streaming route (stream_routes.cpp): the front end writes this channel instead
-    /// of the handler's response.
+/// What a handler answers.
+struct Reply {
+    /// The response; for a stream, its status, headers and the bytes before the first part.
+    protocol::ApiResponse response;
+    /// Set: the front end writes this channel's parts after `response` (no Content-Length).
     std::shared_ptr<StreamChannel> stream;
+
+    Reply(protocol::ApiResponse r) : response(std::move(r)) {}  // NOLINT: implicit by design
+    Reply(const protocol::Problem& p) : response(protocol::problem_response(p)) {}  // NOLINT
+    static Reply streaming(protocol::ApiResponse head, std::shared_ptr<StreamChannel> channel) {
+        Reply r(std::move(head));
+        r.stream = std::move(channel);
+        return r;
+    }
 };
 
-/// The context of the request this thread is handling, or nullptr outside one.
-RequestContext* current_request();
+/// One request as a handler sees it.
+struct RouteCall {
+    HttpRequest& request;            ///< the handler may move the body out
+    std::vector<std::string> params;  ///< decoded path parameters, in pattern order
+    RequestContext& context;
+};
 
-class RouteTable : public httplib::Server {
+/// The answer to a method a known path does not serve: 405 with `Allow`.
+protocol::ApiResponse method_not_allowed(std::string_view method, std::string_view path,
+                                         const std::string& allow);
+
+class RouteTable {
 public:
-    /// Runs one request (PreparedRequest::wire_bytes) through the routes and returns the whole
-    /// response. `close`: the response says `Connection: close`. An exception that escapes
-    /// httplib's own handling becomes a 500 problem; nothing propagates.
-    std::string handle(std::string_view wire_bytes, const Peer& peer, bool close,
-                       RequestContext& context);
+    using Handler = std::function<Reply(RouteCall&)>;
+
+    /// GET (and HEAD) on `pattern`.
+    void get(std::string_view pattern, Handler handler) { add("GET", pattern, std::move(handler)); }
+    void post(std::string_view pattern, Handler handler) {
+        add("POST", pattern, std::move(handler));
+    }
+    void add(std::string method, std::string_view pattern, Handler handler);
+
+    /// Runs the handler of `request`'s method and path; never throws.
+    Reply dispatch(HttpRequest& request, RequestContext& context) const;
+
+private:
+    struct Route {
+        std::vector<std::string> segments;  ///< "{name}" and a last "{name...}" are parameters
+        std::vector<std::pair<std::string, Handler>> handlers;  ///< by method
+        std::string allow;                                      ///< "GET, HEAD, POST"
+    };
+    static bool match(const Route& route, std::string_view path, std::vector<std::string>& params);
+
+    std::vector<Route> m_routes;
 };
 
 }  // namespace strata::server

@@ -3,7 +3,6 @@
 #include "engine/core/memory_trim.h"
 
 #include "server/application.h"
-#include "server/cors.h"
 #include "server/reactor.h"
 #include "server/stream_hub.h"
 #include "server/worker_pool.h"
@@ -15,32 +14,24 @@ Server::Server(ServerConfig config, Engine& engine, durable::DurableStore* store
     m_reactor = std::make_unique<Reactor>(
         m_config, m_metrics,
         [this](uint64_t conn, PreparedRequest&& request, std::shared_ptr<CancelToken> cancel,
-               Peer peer, bool close, std::chrono::steady_clock::time_point received) {
+               bool close) {
             const bool heavy = request.heavy;
             if (heavy) ++m_api_heavy;  // viewer renders wait while API renders are queued
             m_workers->submit(heavy, [this, conn, request = std::move(request), cancel,
-                                      peer = std::move(peer), close, received] {
+                                      close, heavy]() mutable {
                 RequestContext context;
                 context.cancel = cancel.get();
-                context.received = received;
-                std::string response = m_app->handle(request.wire_bytes, peer, close, context);
-                if (request.heavy) --m_api_heavy;
-                if (context.stream) {
-                    if (!request.cors_origin.empty())
-                        context.stream->add_head_lines(cors_header_lines(request.cors_origin));
-                    m_reactor->complete_stream(conn, std::move(context.stream));
-                    return;
-                }
-                if (!request.cors_origin.empty()) add_cors_headers(response, request.cors_origin);
-                m_reactor->complete(conn, std::move(response), close || context.close);
+                const std::size_t body_bytes = request.http.body.size();
+                Outcome outcome = m_app->handle(std::move(request), context, close);
+                if (heavy) --m_api_heavy;
+                m_reactor->complete(conn, std::move(outcome), close);
                 // A large body leaves a parsed document's worth of freed memory behind.
-                if (request.wire_bytes.size() >= TRIM_THRESHOLD_BYTES) release_free_memory();
+                if (body_bytes >= TRIM_THRESHOLD_BYTES) release_free_memory();
             });
         });
     m_streams = std::make_unique<StreamHub>(m_engine, [this] { return m_api_heavy.load() > 0; });
-    m_app = std::make_unique<Application>(
-        m_config, m_engine, m_metrics, &m_reactor->counters(), [this] { return ready(); }, store,
-        m_streams.get());
+    m_app = std::make_unique<Application>(m_config, m_engine, m_metrics, &m_reactor->counters(),
+                                          store, m_streams.get());
     m_workers = std::make_unique<WorkerPool>(m_config.threads);
 }
 
@@ -54,13 +45,17 @@ Result<int> Server::bind() {
     auto listener = Listener::open(m_config.host, m_config.port, m_config.listen_backlog);
     if (!listener) return Unexpected(listener.error());
     m_listener = std::move(listener.value());
+    if (Status opened = m_reactor->open(m_listener.fd()); !opened) {
+        m_listener.close();
+        return Unexpected(opened.error());
+    }
     m_port = m_listener.port();
     return m_port;
 }
 
 void Server::listen() {
     m_listening = true;
-    if (m_listener.fd() >= 0) m_reactor->run(m_listener.fd());
+    if (m_listener.fd() >= 0) m_reactor->run();
     // No more connections queue up in the backlog while the last workers finish.
     m_listener.close();
     m_workers->shutdown();

@@ -1,7 +1,7 @@
 #pragma once
 // The HTTP server: Strata's front end (reactor.h) owns the sockets; complete, checked requests
-// run on a worker pool through the Application (httplib's router with Strata's routes, access
-// log and metrics) around one Engine.
+// run on a worker pool through the Application (Strata's route table and response writer) around
+// one Engine; the front end writes every answer and keeps the access log.
 //
 // Concurrency model. One reactor thread reads and writes every connection; --threads workers
 // run handlers, never waiting on a client. Handlers share nothing but the Engine, which is

@@ -2,10 +2,9 @@
 
 namespace strata::server {
 
-StreamChannel::StreamChannel(Mode mode, std::string head, std::chrono::milliseconds min_interval,
+StreamChannel::StreamChannel(Mode mode, std::chrono::milliseconds min_interval,
                              std::size_t max_queued_bytes)
     : m_mode(mode),
-      m_head(std::move(head)),
       m_min_interval(min_interval),
       m_max_queued_bytes(max_queued_bytes) {}
 
@@ -87,10 +86,6 @@ bool StreamChannel::ended() const {
     return m_ended;
 }
 
-void StreamChannel::add_head_lines(const std::string& lines) {
-    const std::size_t eol = m_head.find("\r\n");
-    if (eol != std::string::npos) m_head.insert(eol + 2, lines);
-}
 
 std::size_t StreamChannel::held_bytes() const {
     std::lock_guard lock(m_mutex);

@@ -24,10 +24,10 @@ public:
     enum class Mode : uint8_t { Latest, Queue };
     using Part = std::shared_ptr<const std::string>;
 
-    /// `head`: the response's status line and headers (and any bytes before the first part);
-    /// `min_interval`: the front end writes parts no more often than this.
-    StreamChannel(Mode mode, std::string head, std::chrono::milliseconds min_interval = {},
-                  std::size_t max_queued_bytes = 256 * 1024);
+    /// `min_interval`: the front end writes parts no more often than this. The response's head
+    /// is written by the front end before the first part.
+    explicit StreamChannel(Mode mode, std::chrono::milliseconds min_interval = {},
+                           std::size_t max_queued_bytes = 256 * 1024);
 
     // Producer side (any thread).
 
@@ -54,9 +54,6 @@ public:
     /// True once end() was called (pending parts are gone).
     bool ended() const;
 
-    const std::string& head() const { return m_head; }
-    /// Inserts header lines (each ending in CRLF) after the status line; before attach() only.
-    void add_head_lines(const std::string& lines);
     std::chrono::milliseconds min_interval() const { return m_min_interval; }
 
     /// Bytes held for this client: pending parts and the one being written.
@@ -68,7 +65,6 @@ public:
 
 private:
     const Mode m_mode;
-    std::string m_head;
     const std::chrono::milliseconds m_min_interval;
     const std::size_t m_max_queued_bytes;
 

@@ -65,33 +65,6 @@ std::size_t prune_watchers(std::vector<W>& watchers) {
 
 }  // namespace
 
-void write_stream_metrics(std::string& out, const StreamHubStats& s) {
-    auto line = [&](const char* name, const char* type, const char* help, uint64_t v) {
-        out += std::string("# HELP ") + name + " " + help + "\n# TYPE " + name + " " + type + "\n" +
-               name + " " + std::to_string(v) + "\n";
-    };
-    line("strata_stream_viewers", "gauge", "Open frame streams (GET /v1/stream).", s.viewers);
-    line("strata_stream_views", "gauge", "Distinct views those streams render.", s.views);
-    line("strata_stream_event_clients", "gauge", "Open event streams (GET /v1/events).",
-         s.event_clients);
-    line("strata_stream_frames_rendered_total", "counter",
-         "Viewer renders (each shared by the viewers of its view).", s.frames_rendered);
-    line("strata_stream_frames_sent_total", "counter", "Frames handed to viewers.",
-         s.frames_offered);
-    line("strata_stream_render_errors_total", "counter", "Viewer renders that failed.",
-         s.render_errors);
-    line("strata_stream_commit_events_total", "counter", "Commit events published.",
-         s.events_published);
-    line("strata_stream_commit_events_dropped_total", "counter",
-         "Commit events dropped because 1024 were already waiting for the hub's thread.",
-         s.events_dropped);
-    line("strata_stream_highlight_encodes_total", "counter",
-         "Frames encoded with a selected instance tinted (one per frame and instance).",
-         s.highlight_encodes);
-    line("strata_stream_renders_deferred_total", "counter",
-         "Times a due viewer render waited for API renders or commits.", s.deferred_for_api);
-}
-
 StreamHub::StreamHub(Engine& engine, std::function<bool()> api_busy)
     : m_engine(engine), m_api_busy(std::move(api_busy)) {
     // Commits before the hub existed are no events (the first event, hello, describes them).
@@ -104,10 +77,9 @@ StreamHub::~StreamHub() {
     join();
 }
 
-std::shared_ptr<StreamChannel> StreamHub::watch(ViewerSpec spec, std::string head) {
+std::shared_ptr<StreamChannel> StreamHub::watch(ViewerSpec spec) {
     const auto interval = std::chrono::milliseconds(int64_t(1000.0 / spec.fps));
-    auto channel =
-        std::make_shared<StreamChannel>(StreamChannel::Mode::Latest, std::move(head), interval);
+    auto channel = std::make_shared<StreamChannel>(StreamChannel::Mode::Latest, interval);
     const std::string highlight = spec.highlight;
     std::lock_guard lock(m_mutex);
     if (m_stopping) return nullptr;
@@ -131,8 +103,8 @@ std::shared_ptr<StreamChannel> StreamHub::watch(ViewerSpec spec, std::string hea
     return channel;
 }
 
-std::shared_ptr<StreamChannel> StreamHub::subscribe(std::string head) {
-    auto channel = std::make_shared<StreamChannel>(StreamChannel::Mode::Queue, std::move(head));
+std::shared_ptr<StreamChannel> StreamHub::subscribe() {
+    auto channel = std::make_shared<StreamChannel>(StreamChannel::Mode::Queue);
     std::lock_guard lock(m_mutex);
     if (m_stopping) return nullptr;
     m_event_clients.push_back(channel);
@@ -151,7 +123,7 @@ void StreamHub::on_commit(const RebuildReport& report) {
     // (the oldest go first, and the count says so).
     if (m_reports.size() >= MAX_QUEUED_REPORTS) {
         m_reports.erase(m_reports.begin());
-        ++m_stats.events_dropped;
+        ++m_stats.commit_events_dropped;
     }
     m_reports.push_back(report);
     m_poked = true;
@@ -240,7 +212,7 @@ void StreamHub::publish_events(std::vector<RebuildReport> reports, Clock::time_p
         std::lock_guard lock(m_mutex);
         prune(m_event_clients);
         clients = m_event_clients;
-        m_stats.events_published += reports.size();
+        m_stats.commit_events += reports.size();
     }
     if (clients.empty()) return;
     for (const RebuildReport& r : reports) {
@@ -297,7 +269,7 @@ bool StreamHub::render_one(Clock::time_point now) {
         }
         if (key.empty()) return false;
         if (m_api_busy && m_api_busy()) {
-            ++m_stats.deferred_for_api;
+            ++m_stats.renders_deferred;
             return false;
         }
         const View& chosen = m_views.at(key);
@@ -388,7 +360,7 @@ bool StreamHub::render_one(Clock::time_point now) {
             w.needs_frame = false;
             offers.emplace_back(w.channel, p->second);
         }
-        m_stats.frames_offered += offers.size();
+        m_stats.frames_sent += offers.size();
     }
     for (auto& [c, part] : offers) c->offer(part);
     return true;
@@ -463,7 +435,7 @@ bool StreamHub::serve_joiners() {
                 w.needs_frame = false;
                 if (part) to.push_back(w.channel);
             }
-            m_stats.frames_offered += to.size();
+            m_stats.frames_sent += to.size();
         }
         for (auto& c : to) c->offer(part.value());
     }

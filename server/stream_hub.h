@@ -63,18 +63,15 @@ struct StreamHubStats {
     uint64_t event_clients = 0;    ///< event streams open now
     uint64_t views = 0;            ///< distinct views rendered for now
     uint64_t frames_rendered = 0;  ///< viewer renders (each shared by its view's viewers)
-    uint64_t frames_offered = 0;   ///< frames handed to viewers' channels
+    uint64_t frames_sent = 0;      ///< frames handed to viewers' channels
     uint64_t render_errors = 0;
-    uint64_t events_published = 0;   ///< commit events (each sent to every event client)
-    uint64_t events_dropped = 0;     ///< commit events dropped from a full queue (oldest first)
-    uint64_t deferred_for_api = 0;   ///< times a due viewer render waited for API renders
+    uint64_t commit_events = 0;          ///< commit events (each sent to every event client)
+    uint64_t commit_events_dropped = 0;  ///< dropped from a full queue (oldest first)
+    uint64_t renders_deferred = 0;       ///< times a due viewer render waited for API renders
     uint64_t frames_dropped = 0;     ///< frames open viewers missed (a newer one replaced them)
     uint64_t highlight_encodes = 0;  ///< JPEGs encoded with a highlight (one per frame and id)
     std::size_t held_bytes = 0;      ///< frame bytes held for open viewers (pending and writing)
 };
-
-/// The stats as Prometheus text (strata_stream_*), appended to `out`.
-void write_stream_metrics(std::string& out, const StreamHubStats& stats);
 
 class StreamHub {
 public:
@@ -84,10 +81,10 @@ public:
     StreamHub(const StreamHub&) = delete;
     StreamHub& operator=(const StreamHub&) = delete;
 
-    /// A new frame stream whose response starts with `head`; null once stopped.
-    std::shared_ptr<StreamChannel> watch(ViewerSpec spec, std::string head);
-    /// A new event stream whose response starts with `head`; null once stopped.
-    std::shared_ptr<StreamChannel> subscribe(std::string head);
+    /// A new frame stream; null once stopped.
+    std::shared_ptr<StreamChannel> watch(ViewerSpec spec);
+    /// A new event stream; null once stopped.
+    std::shared_ptr<StreamChannel> subscribe();
     /// Queues a commit event (quick, any thread); commits at a version already reported are
     /// ignored.
     void on_commit(const RebuildReport& report);

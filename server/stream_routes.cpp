@@ -9,9 +9,7 @@
 #include "protocol/render_parser.h"
 #include "protocol/report_json.h"
 #include "server/context.h"
-#include "server/http_util.h"
 #include "server/route_table.h"
-#include "server/router.h"
 #include "server/stream_hub.h"
 
 namespace strata::server {
@@ -100,85 +98,84 @@ std::variant<ViewerSpec, protocol::Problem> parse_viewer(
 }
 
 /// GET only: the headers of a stream exist only as the stream starts.
-bool refuse_head(const httplib::Request& req, httplib::Response& res) {
-    if (req.method != "HEAD") return false;
-    res.set_header("Allow", "GET");
-    send_problem(res, protocol::make_problem(ProblemType::MethodNotAllowed,
-                                             "HEAD " + req.path + " is not served: use GET"));
-    return true;
+std::optional<protocol::ApiResponse> refuse_head(const HttpRequest& req) {
+    if (req.method != "HEAD") return std::nullopt;
+    protocol::ApiResponse r = protocol::problem_response(protocol::make_problem(
+        ProblemType::MethodNotAllowed, "HEAD " + req.path + " is not served: use GET"));
+    r.headers.emplace_back("Allow", "GET");
+    return r;
 }
 
-void stream_unavailable(httplib::Response& res) {
-    send_problem(res, protocol::make_problem(ProblemType::Unavailable,
-                                             "the server is shutting down; streams are closed"));
+protocol::Problem stream_unavailable() {
+    return protocol::make_problem(ProblemType::Unavailable,
+                                  "the server is shutting down; streams are closed");
 }
 
-/// Hands `channel` to the front end instead of the httplib response.
-void hand_over(httplib::Response& res, std::shared_ptr<StreamChannel> channel) {
-    res.status = 200;  // for the access log; the front end writes the channel's head
-    if (RequestContext* context = current_request()) context->stream = std::move(channel);
+/// The head of a stream: 200, `content_type`, never cached, then `preamble`.
+protocol::ApiResponse stream_head(const char* content_type, std::string preamble) {
+    protocol::ApiResponse head;
+    head.content_type = content_type;
+    head.headers.emplace_back("Cache-Control", "no-store");
+    head.body = std::move(preamble);
+    return head;
+}
+
+/// The problem of a highlight naming no instance, if it does not.
+std::optional<protocol::Problem> unknown_highlight(ServerContext& ctx, const std::string& id) {
+    if (id.empty()) return std::nullopt;
+    const bool known =
+        ctx.engine.read([&](const Scene& s) { return !s.find_instance(id).is_null(); });
+    if (known) return std::nullopt;
+    protocol::Problem p =
+        protocol::make_problem(ProblemType::NotFound, "highlight: no instance with id '" + id + "'");
+    p.pointer = "/highlight";
+    return p;
+}
+
+Reply open_frame_stream(ServerContext& ctx, RouteCall& call) {
+    if (auto refusal = refuse_head(call.request)) return std::move(*refusal);
+    auto parsed = parse_viewer(call.request.query, ctx.api_limits);
+    if (auto* p = std::get_if<protocol::Problem>(&parsed)) return *p;
+    // An unknown instance is refused at once (a typo would otherwise tint nothing, silently);
+    // one removed later simply stops being tinted.
+    if (auto p = unknown_highlight(ctx, std::get<ViewerSpec>(parsed).highlight)) return *p;
+    auto channel = ctx.streams ? ctx.streams->watch(std::move(std::get<ViewerSpec>(parsed)))
+                               : nullptr;
+    if (!channel) return stream_unavailable();
+    return Reply::streaming(
+        stream_head("multipart/x-mixed-replace; boundary=strata-frame",
+                    "--strata-frame\r\nContent-Type: image/jpeg\r\n\r\n"),
+        std::move(channel));
+}
+
+Reply open_event_stream(ServerContext& ctx, RouteCall& call) {
+    if (auto refusal = refuse_head(call.request)) return std::move(*refusal);
+    const auto& query = call.request.query;
+    if (!query.empty())
+        return bad_parameter(query.begin()->first, "GET /v1/events takes no query parameter ('" +
+                                                       query.begin()->first + "')");
+    if (!ctx.streams) return stream_unavailable();
+    // The first event says where the scene stands: its version and the last commit's report
+    // (null before the first commit).
+    const EngineCounters counters = ctx.engine.counters();
+    const uint64_t version = ctx.engine.read([](const Scene& s) { return s.version(); });
+    const protocol::Json hello = {
+        {"version", version},
+        {"report", counters.commits ? protocol::report_to_json(ctx.streams->last_commit())
+                                    : protocol::Json(nullptr)}};
+    auto channel = ctx.streams->subscribe();
+    if (!channel) return stream_unavailable();
+    return Reply::streaming(
+        stream_head("text/event-stream", "retry: 2000\n\nevent: hello\ndata: " + hello.dump() +
+                                             "\n\n"),
+        std::move(channel));
 }
 
 }  // namespace
 
-void add_stream_routes(Router& router, ServerContext& ctx) {
-    router.get("/v1/stream", [&ctx](const httplib::Request& req, httplib::Response& res) {
-        if (refuse_head(req, res)) return;
-        auto parsed = parse_viewer(req.params, ctx.api_limits);
-        if (auto* p = std::get_if<protocol::Problem>(&parsed)) return send_problem(res, *p);
-        // An unknown instance is refused at once (a typo would otherwise tint nothing, silently);
-        // one removed later simply stops being tinted.
-        if (const std::string& id = std::get<ViewerSpec>(parsed).highlight; !id.empty()) {
-            const bool known =
-                ctx.engine.read([&](const Scene& s) { return !s.find_instance(id).is_null(); });
-            if (!known) {
-                protocol::Problem p = protocol::make_problem(
-                    ProblemType::NotFound, "highlight: no instance with id '" + id + "'");
-                p.pointer = "/highlight";
-                return send_problem(res, p);
-            }
-        }
-        if (!ctx.streams || !current_request()) return stream_unavailable(res);
-        std::string head =
-            "HTTP/1.1 200 OK\r\n"
-            "Content-Type: multipart/x-mixed-replace; boundary=strata-frame\r\n"
-            "Cache-Control: no-store\r\n"
-            "Connection: close\r\n"
-            "\r\n"
-            "--strata-frame\r\n"
-            "Content-Type: image/jpeg\r\n"
-            "\r\n";
-        auto channel = ctx.streams->watch(std::move(std::get<ViewerSpec>(parsed)), std::move(head));
-        if (!channel) return stream_unavailable(res);
-        hand_over(res, std::move(channel));
-    });
-    router.get("/v1/events", [&ctx](const httplib::Request& req, httplib::Response& res) {
-        if (refuse_head(req, res)) return;
-        if (!req.params.empty())
-            return send_problem(res, bad_parameter(req.params.begin()->first,
-                                                   "GET /v1/events takes no query parameter ('" +
-                                                       req.params.begin()->first + "')"));
-        if (!ctx.streams || !current_request()) return stream_unavailable(res);
-        // The first event says where the scene stands: its version and the last commit's
-        // report (null before the first commit).
-        const EngineCounters counters = ctx.engine.counters();
-        const uint64_t version = ctx.engine.read([](const Scene& s) { return s.version(); });
-        const protocol::Json hello = {
-            {"version", version},
-            {"report", counters.commits ? protocol::report_to_json(ctx.streams->last_commit())
-                                        : protocol::Json(nullptr)}};
-        std::string head =
-            "HTTP/1.1 200 OK\r\n"
-            "Content-Type: text/event-stream\r\n"
-            "Cache-Control: no-store\r\n"
-            "Connection: close\r\n"
-            "\r\n"
-            "retry: 2000\n\nevent: hello\ndata: " +
-            hello.dump() + "\n\n";
-        auto channel = ctx.streams->subscribe(std::move(head));
-        if (!channel) return stream_unavailable(res);
-        hand_over(res, std::move(channel));
-    });
+void add_stream_routes(RouteTable& routes, ServerContext& ctx) {
+    routes.get("/v1/stream", [&ctx](RouteCall& call) { return open_frame_stream(ctx, call); });
+    routes.get("/v1/events", [&ctx](RouteCall& call) { return open_event_stream(ctx, call); });
 }
 
 }  // namespace strata::server

@@ -5,9 +5,7 @@
 #include <algorithm>
 
 #include "server/context.h"
-#include "server/http_util.h"
-#include "server/request_target.h"
-#include "server/router.h"
+#include "server/route_table.h"
 #include "server/web_assets.h"
 
 namespace strata::server {
@@ -27,28 +25,26 @@ const char* content_type_of(std::string_view path) {
     return "application/octet-stream";
 }
 
-void serve(httplib::Response& res, const std::string& path) {
+Reply serve(const std::string& path) {
     const auto& assets = web_assets();
     const auto it = std::find_if(assets.begin(), assets.end(),
                                  [&](const WebAsset& a) { return a.path == path; });
     if (it == assets.end())
-        return send_problem(res, protocol::make_problem(protocol::ProblemType::NotFound,
-                                                        "the viewer has no file '" + path + "'"));
-    res.status = 200;
+        return protocol::make_problem(protocol::ProblemType::NotFound,
+                                      "the viewer has no file '" + path + "'");
+    protocol::ApiResponse r;
+    r.content_type = content_type_of(path);
     // The files change with the binary only: revalidating is cheap, and a new build is seen.
-    res.set_header("Cache-Control", "no-cache");
-    res.set_header("X-Content-Type-Options", "nosniff");
-    res.set_content(std::string(it->bytes), content_type_of(path));
+    r.headers = {{"Cache-Control", "no-cache"}, {"X-Content-Type-Options", "nosniff"}};
+    r.body = std::string(it->bytes);
+    return r;
 }
 
 }  // namespace
 
-void add_web_routes(Router& router) {
-    router.get("/",
-               [](const httplib::Request&, httplib::Response& res) { serve(res, "index.html"); });
-    router.get("/web/(.+)", [](const httplib::Request& req, httplib::Response& res) {
-        serve(res, decode_path_segment(req.matches[1].str()));
-    });
+void add_web_routes(RouteTable& routes) {
+    routes.get("/", [](RouteCall&) { return serve("index.html"); });
+    routes.get("/web/{path...}", [](RouteCall& call) { return serve(call.params[0]); });
 }
 
 }  // namespace strata::server

@@ -616,7 +616,7 @@ ReplicaStatus Replica::status() const {
     const int64_t since = m_lag_since_ms.load();
     s.lag_seconds =
         s.lag_entries > 0 && since > 0 ? std::max<int64_t>(0, unix_ms() - since) / 1e3 : 0.0;
-    s.last_snapshot_version = std::max(s.last_snapshot_version, m_known_snapshot.load());
+    s.snapshot_version = std::max(s.snapshot_version, m_known_snapshot.load());
     return s;
 }
 

@@ -78,7 +78,7 @@ struct ReplicaStatus {
     uint64_t snapshot_loaded_version = 0;  ///< the newest Redis snapshot this replica loaded
     uint64_t snapshot_jumps = 0;  ///< scenes replaced by a newer snapshot over a trimmed gap
     uint64_t snapshots_written = 0;
-    uint64_t last_snapshot_version = 0;  ///< newest snapshot this replica knows of
+    uint64_t snapshot_version = 0;  ///< newest snapshot this replica knows of
     uint64_t entries_trimmed = 0;        ///< entries this replica's snapshots trimmed
 };
 

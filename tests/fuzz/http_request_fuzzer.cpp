@@ -58,7 +58,7 @@ struct World {
         EngineConfig ec;
         ec.budget = {200000, 200000};
         engine = std::move(Engine::create(ec).value());
-        app = std::make_unique<Application>(config, *engine, metrics, nullptr, [] { return true; });
+        app = std::make_unique<Application>(config, *engine, metrics, nullptr);
         open_reader.limits.max_body_bytes = config.max_body_bytes;
         token_reader = open_reader;
         token_reader.token = "fuzz";
@@ -113,7 +113,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const ReaderSituation situation{(mode & 0x02) != 0, (mode & 0x04) != 0};
     const std::size_t segment = std::size_t(1) << ((mode >> 4) & 0x0F);  // 1 byte to 32 KiB
     RequestReader reader((mode & 0x01) ? world.token_reader : world.open_reader);
-    const Peer peer{"127.0.0.1", 40000, "127.0.0.1", 7070};
 
     std::size_t fed = 0;
     for (int steps = 0; steps < 64; ++steps) {
@@ -130,9 +129,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             CancelToken cancel;
             RequestContext context;
             context.cancel = &cancel;
-            const std::string response =
-                world.app->handle(step.request.wire_bytes, peer, !step.request.keep_alive, context);
-            check_response(response, step.request.method == "HEAD");
+            const bool head = step.request.http.method == "HEAD";
+            const bool close = !step.request.keep_alive;
+            const Outcome outcome = world.app->handle(std::move(step.request), context, close);
+            check_response(outcome.bytes, head);
         }
     }
     return 0;

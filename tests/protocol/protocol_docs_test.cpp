@@ -21,6 +21,7 @@
 
 #include "engine/counters.h"
 #include "engine/durable/durable_stats.h"
+#include "protocol/durable_json.h"
 #include "protocol/edit_ops.h"
 #include "protocol/edit_schema.h"
 
@@ -121,13 +122,6 @@ std::string counters_table() {
                std::string(c.help) + " |\n";
     }
     return out;
-}
-
-/// The Prometheus name /metrics gives a durable number (server/metrics.cpp does the same).
-std::string durable_metric_name(const durable::DurableCounterSpec& c) {
-    std::string name = "strata_durable_" + std::string(c.name);
-    if (c.unit == durable::DurableUnit::Milliseconds) name.replace(name.size() - 3, 3, "_seconds");
-    return c.cumulative ? name + "_total" : name;
 }
 
 std::string durable_counters_table() {

@@ -276,7 +276,7 @@ TEST(StreamEndpoint, ViewerRendersWaitWhileAnApiRenderRuns) {
         const Reply api = s.get("/v1/render?width=640&height=360&spp=2");
         EXPECT_EQ(api.status, 200) << api.body;
     }
-    EXPECT_GT(s.server().streams().stats().deferred_for_api, 0u);
+    EXPECT_GT(s.server().streams().stats().renders_deferred, 0u);
     // And the stream goes on afterwards.
     EXPECT_TRUE(r.next().has_value());
 }

@@ -1,4 +1,6 @@
-#include "server/direct_response.h"
+#include "server/response_writer.h"
+
+#include "server/cors.h"
 
 namespace strata::server {
 
@@ -8,6 +10,8 @@ const char* status_reason(int status) {
             return "Continue";
         case 200:
             return "OK";
+        case 204:
+            return "No Content";
         case 400:
             return "Bad Request";
         case 401:
@@ -47,20 +51,39 @@ const char* status_reason(int status) {
     }
 }
 
-std::string response_bytes(const protocol::ApiResponse& answer, bool close, bool head_only) {
+namespace {
+
+/// Status line, Content-Type, access-control and the answer's own headers; no blank line.
+std::string head_lines(const protocol::ApiResponse& answer, std::string_view cors_origin) {
     std::string out =
         "HTTP/1.1 " + std::to_string(answer.status) + " " + status_reason(answer.status) + "\r\n";
     if (!answer.content_type.empty()) out += "Content-Type: " + answer.content_type + "\r\n";
-    out += "Content-Length: " + std::to_string(answer.body.size()) + "\r\n";
-    if (close) out += "Connection: close\r\n";
+    if (!cors_origin.empty()) out += cors_header_lines(cors_origin);
     for (const auto& [name, value] : answer.headers) out += name + ": " + value + "\r\n";
-    out += "\r\n";
-    if (!head_only) out += answer.body;
     return out;
 }
 
+}  // namespace
+
+std::string write_response(const protocol::ApiResponse& answer, const Framing& framing) {
+    std::string out = head_lines(answer, framing.cors_origin);
+    out += "Content-Length: " + std::to_string(answer.body.size()) + "\r\n";
+    if (framing.close) out += "Connection: close\r\n";
+    out += "\r\n";
+    // A HEAD answer has the headers of the body it leaves out: a body would be read as the next
+    // response.
+    if (!framing.head_only) out += answer.body;
+    return out;
+}
+
+std::string write_stream_head(const protocol::ApiResponse& head, std::string_view cors_origin) {
+    return head_lines(head, cors_origin) + "Connection: close\r\n\r\n" + head.body;
+}
+
 std::string problem_bytes(const protocol::Problem& problem, bool close) {
-    return response_bytes(protocol::problem_response(problem), close);
+    Framing framing;
+    framing.close = close;
+    return write_response(protocol::problem_response(problem), framing);
 }
 
 }  // namespace strata::server
