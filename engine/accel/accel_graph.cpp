@@ -35,9 +35,10 @@ CommitPlan AccelGraph::plan(const Scene& scene) const {
     const ChangeTracker& changes = scene.changes();
 
     // Step: meshes. Each dirty mesh gets at most one BLAS action.
-    constexpr uint32_t GEOMETRY_BITS = dirty::MeshAdded | dirty::MeshPoints | dirty::MeshTopology |
-                                       dirty::MeshRefitRequested | dirty::MeshRebuildRequested;
-    for (MeshHandle h : changes.meshes) {
+    constexpr DirtyBits<MeshDirty> GEOMETRY_BITS = MeshDirty::Added | MeshDirty::Points |
+                                                   MeshDirty::Topology | MeshDirty::RefitRequested |
+                                                   MeshDirty::RebuildRequested;
+    for (MeshHandle h : changes.meshes()) {
         const BlasRecord* built = m_blas.find(h);
         const auto rec = scene.mesh(h);
         if (!rec) {
@@ -48,7 +49,8 @@ CommitPlan AccelGraph::plan(const Scene& scene) const {
             continue;
         }
         const MeshRecord& mesh = *rec.value();
-        if ((mesh.dirty & GEOMETRY_BITS) == 0) continue;
+        const DirtyBits<MeshDirty> dirty = mesh.dirty.bits;
+        if (!dirty.has(GEOMETRY_BITS)) continue;
 
         MeshBuildEntry entry;
         entry.mesh = mesh.id;
@@ -57,15 +59,14 @@ CommitPlan AccelGraph::plan(const Scene& scene) const {
         bool rebuild = true;
         if (!built) {
             entry.reason = BuildReason::Added;
-        } else if (mesh.dirty & dirty::MeshTopology) {
+        } else if (dirty.has(MeshDirty::Topology)) {
             entry.reason = BuildReason::TopologyChanged;
-        } else if (mesh.dirty & dirty::MeshRebuildRequested) {
+        } else if (dirty.has(MeshDirty::RebuildRequested)) {
             entry.reason = BuildReason::RebuildRequested;
         } else {
             metrics = measure_mesh(mesh);
-            const BuildReason asked = (mesh.dirty & dirty::MeshPoints)
-                                          ? BuildReason::PositionsChanged
-                                          : BuildReason::RefitRequested;
+            const BuildReason asked = dirty.has(MeshDirty::Points) ? BuildReason::PositionsChanged
+                                                                   : BuildReason::RefitRequested;
             RefitDecision d =
                 decide_refit(m_config.refit_policy, mesh.build, built->baseline, *metrics, asked);
             rebuild = d.rebuild;
@@ -92,23 +93,23 @@ CommitPlan AccelGraph::plan(const Scene& scene) const {
 
     // Step: instances. Shading-only changes (material, user id) need no TLAS work, and an
     // instance added and removed within the same commit window leaves nothing to do.
-    for (InstanceHandle h : changes.instances) {
+    for (InstanceHandle h : changes.instances()) {
         const auto rec = scene.instance(h);
         if (!rec) {
             if (m_tlas->holds(h)) plan.tlas.changed.push_back(h);
-        } else if (rec.value()->dirty & dirty::INSTANCE_TLAS_BITS) {
+        } else if (rec.value()->dirty.has(INSTANCE_TLAS_BITS)) {
             plan.tlas.changed.push_back(h);
         }
     }
 
     // Step: TLAS action. An explicit rebuild request wins; otherwise any change is one update.
-    if (changes.scene_bits & dirty::TlasRebuildRequested) {
+    if (changes.has(SceneDirty::TlasRebuildRequested)) {
         report.tlas_action = TlasAction::Rebuild;
-    } else if (!plan.tlas.empty() || (changes.scene_bits & dirty::TlasUpdateRequested)) {
+    } else if (!plan.tlas.empty() || changes.has(SceneDirty::TlasUpdateRequested)) {
         report.tlas_action = TlasAction::Update;
     }
     report.tlas_instances = scene.instances().size();
-    report.world_transforms = changes.world_transforms;
+    report.world_transforms = changes.world_transforms();
     report.instances_changed = plan.tlas.changed.size() + plan.tlas.blas_changed.size();
     report.tlas.strategy = m_tlas->name();
     report.phases.plan_ms = clock.ms();

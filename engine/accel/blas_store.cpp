@@ -193,8 +193,8 @@ Status BlasStore::refit(MeshHandle h, const MeshRecord& mesh) {
     STRATA_CHECK(r && r->scene && r->generation == h.generation);
     STRATA_CHECK(r->vertex_count == mesh.positions.size());
     const int64_t bytes_before = m_device.bytes(MemoryCategory::Blas);
-    const uint32_t begin = std::min(mesh.dirty_begin, r->vertex_count);
-    const uint32_t end = std::min(mesh.dirty_end, r->vertex_count);
+    const uint32_t begin = std::min(mesh.dirty.begin, r->vertex_count);
+    const uint32_t end = std::min(mesh.dirty.end, r->vertex_count);
     if (begin < end) copy_vertices(r->geometry, mesh.positions, begin, end);
     rtcUpdateGeometryBuffer(r->geometry, RTC_BUFFER_TYPE_VERTEX, 0);
     rtcCommitGeometry(r->geometry);

@@ -97,8 +97,7 @@ void FrameState::refresh_mesh(const Scene& scene, MeshHandle h) {
         if (h.index < meshes.size() && !scene.meshes().alive_at(h.index)) meshes[h.index].reset();
         return;
     }
-    constexpr uint32_t SHADE_BITS = dirty::MeshAdded | dirty::MeshTopology | dirty::MeshAttributes;
-    if ((r->dirty & SHADE_BITS) == 0) return;
+    if (!r->dirty.bits.has(MeshDirty::Added | MeshDirty::Topology | MeshDirty::Attributes)) return;
     if (h.index >= meshes.size()) meshes.resize(h.index + 1);
     if (r->normals.empty() && r->uvs.empty()) {
         meshes[h.index].reset();
@@ -111,12 +110,12 @@ void FrameState::refresh_mesh(const Scene& scene, MeshHandle h) {
 void FrameState::sync(const Scene& scene) {
     const ChangeTracker& changes = scene.changes();
     version = scene.version();
-    if (changes.scene_bits & dirty::Camera) camera = scene.camera();
-    if (changes.scene_bits & dirty::Lighting) lighting = scene.lighting();
+    if (changes.has(SceneDirty::Camera)) camera = scene.camera();
+    if (changes.has(SceneDirty::Lighting)) lighting = scene.lighting();
     // Emitters: an emissive material changed (every instance may have gained or lost one), an
     // instance that is or was an emitter changed, or the mesh of one did.
     bool rescan = false;
-    for (MaterialHandle h : changes.materials) {
+    for (MaterialHandle h : changes.materials()) {
         if (h.index + 1 >= materials.size()) {
             materials.resize(h.index + 2);
             material_textures.resize(h.index + 2);
@@ -133,9 +132,9 @@ void FrameState::sync(const Scene& scene) {
         rescan = rescan || glm::any(glm::greaterThan(before.emission, Vec3(0.0f))) ||
                  glm::any(glm::greaterThan(after.emission, Vec3(0.0f)));
     }
-    for (MeshHandle h : changes.meshes) refresh_mesh(scene, h);
+    for (MeshHandle h : changes.meshes()) refresh_mesh(scene, h);
     bool emitters_changed = false;
-    for (InstanceHandle h : changes.instances)
+    for (InstanceHandle h : changes.instances())
         emitters_changed = refresh_instance(scene, h.index) || emitters_changed;
     if (rescan) {
         // A material's emission changed: which instances emit is read again (O(instances), and
@@ -147,13 +146,13 @@ void FrameState::sync(const Scene& scene) {
         }
         emitters_changed = true;
     }
-    for (MeshHandle h : changes.meshes) {
+    for (MeshHandle h : changes.meshes()) {
         const MeshRecord* r = scene.meshes().get(h);
-        if (!r || m_emitters == 0 || (r->dirty & (dirty::MeshPoints | dirty::MeshTopology)) == 0)
+        if (!r || m_emitters == 0 || !r->dirty.bits.has(MeshDirty::Points | MeshDirty::Topology))
             continue;
         for (InstanceHandle user : r->users) emitters_changed = emitters_changed || is_emitter(user.index);
     }
-    if (emitters_changed || (changes.scene_bits & dirty::Lights)) rebuild_lights(scene);
+    if (emitters_changed || changes.has(SceneDirty::Lights)) rebuild_lights(scene);
 }
 
 }  // namespace strata

@@ -1,87 +1,212 @@
 #pragma once
-// Hydra-style dirty bits (OpenUSD pxr/imaging/hd/changeTracker.h). An edit ORs bits into the
-// object it touches and, the first time the object goes dirty, records its handle in the
-// ChangeTracker, so the commit visits only what changed.
+// Hydra-style dirty bits (OpenUSD pxr/imaging/hd/changeTracker.h). An edit adds bits to the
+// object it touches; the ChangeTracker lists the object the first time it goes dirty, so the
+// commit visits only what changed, and holds the scene-wide bits.
 
+#include <cstddef>
 #include <cstdint>
+#include <span>
+#include <type_traits>
 #include <vector>
 
 #include "engine/core/handle.h"
 
-namespace strata::dirty {
+namespace strata {
 
-enum MeshBits : uint32_t {
-    MeshAdded = 1u << 0,             ///< new mesh: needs its first build
-    MeshPoints = 1u << 1,            ///< vertex positions moved, same topology
-    MeshTopology = 1u << 2,          ///< triangles (and maybe vertex count) replaced
-    MeshRefitRequested = 1u << 3,    ///< mark_dirty {mesh, refit}
-    MeshRebuildRequested = 1u << 4,  ///< mark_dirty {mesh, rebuild}
-    MeshAttributes = 1u << 5,        ///< normals or uvs changed: shading only, no BLAS work
+/// What changed in a mesh.
+enum class MeshDirty : uint32_t {
+    Added = 1u << 0,             ///< new mesh: needs its first build
+    Points = 1u << 1,            ///< vertex positions moved, same topology
+    Topology = 1u << 2,          ///< triangles (and maybe vertex count) replaced
+    RefitRequested = 1u << 3,    ///< mark_dirty {mesh, refit}
+    RebuildRequested = 1u << 4,  ///< mark_dirty {mesh, rebuild}
+    Attributes = 1u << 5,        ///< normals or uvs changed: shading only, no BLAS work
 };
 
-enum InstanceBits : uint32_t {
-    InstanceAdded = 1u << 0,
-    InstanceTransform = 1u << 1,
-    InstanceVisibility = 1u << 2,
-    InstanceMask = 1u << 3,
-    InstanceMaterial = 1u << 4,  ///< shading only
-    InstanceUserId = 1u << 5,    ///< shading only
+/// What changed in an instance.
+enum class InstanceDirty : uint32_t {
+    Added = 1u << 0,
+    Transform = 1u << 1,
+    Visibility = 1u << 2,
+    Mask = 1u << 3,
+    Material = 1u << 4,  ///< shading only
+    UserId = 1u << 5,    ///< shading only
 };
 
-/// A group's bits all mean the same to the flattening at the end of a batch: the world
-/// transforms and visibility of its subtree must be recomputed. They are kept apart for reports.
-enum GroupBits : uint32_t {
-    GroupAdded = 1u << 0,
-    GroupTransform = 1u << 1,
-    GroupParent = 1u << 2,
-    GroupVisibility = 1u << 3,
+/// What changed in a group. All mean the same to the flattening at the end of a batch (the
+/// world transforms and visibility of its subtree must be recomputed); they are kept apart for
+/// reports.
+enum class GroupDirty : uint32_t {
+    Added = 1u << 0,
+    Transform = 1u << 1,
+    Parent = 1u << 2,
+    Visibility = 1u << 3,
 };
 
-enum MaterialBits : uint32_t {
-    MaterialAdded = 1u << 0,
-    MaterialParams = 1u << 1,
+/// What changed in a material.
+enum class MaterialDirty : uint32_t {
+    Added = 1u << 0,
+    Params = 1u << 1,
 };
 
-/// Instance bits that change what the TLAS holds; the others only change shading.
-constexpr uint32_t INSTANCE_TLAS_BITS =
-    InstanceAdded | InstanceTransform | InstanceVisibility | InstanceMask;
-
-enum SceneBits : uint32_t {
+/// What changed in the scene as a whole.
+enum class SceneDirty : uint32_t {
     Camera = 1u << 0,
     Lighting = 1u << 1,
     TlasUpdateRequested = 1u << 2,   ///< mark_dirty {tlas, refit}
     TlasRebuildRequested = 1u << 3,  ///< mark_dirty {tlas, rebuild}
     Materials = 1u << 4,
-    Groups = 1u << 5,  ///< a group was added, changed or removed (no acceleration work by itself)
+    Groups = 1u << 5,    ///< a group was added, changed or removed (no acceleration work by itself)
+    Lights = 1u << 6,    ///< a light was added, changed or removed (shading only)
     Textures = 1u << 7,  ///< a texture was added or removed (shading only, through materials)
-    Lights = 1u << 6,  ///< a light was added, changed or removed (shading only)
 };
 
-}  // namespace strata::dirty
+/// A set of the bits of one enum above.
+template <class Bit>
+class DirtyBits {
+public:
+    constexpr DirtyBits() = default;
+    constexpr DirtyBits(Bit b) : m_bits(static_cast<uint32_t>(b)) {}  // NOLINT: a bit is a set
 
-namespace strata {
+    constexpr bool none() const { return m_bits == 0; }
+    constexpr bool any() const { return m_bits != 0; }
+    /// True when any bit of `other` is set here.
+    constexpr bool has(DirtyBits other) const { return (m_bits & other.m_bits) != 0; }
 
-/// Lists of objects touched since the last commit. Removed objects stay listed by their (now
-/// stale) handle so the acceleration layer can release what it built for them.
-struct ChangeTracker {
-    std::vector<MeshHandle> meshes;
-    std::vector<InstanceHandle> instances;
-    std::vector<MaterialHandle> materials;
-    uint32_t scene_bits = 0;
-    /// World transforms (groups and instances) recomputed by the flattening of the batches since
-    /// the last commit.
-    uint64_t world_transforms = 0;
+    constexpr DirtyBits operator|(DirtyBits o) const { return raw_set(m_bits | o.m_bits); }
+    constexpr DirtyBits operator&(DirtyBits o) const { return raw_set(m_bits & o.m_bits); }
+    constexpr DirtyBits& operator|=(DirtyBits o) {
+        m_bits |= o.m_bits;
+        return *this;
+    }
+    friend constexpr bool operator==(DirtyBits, DirtyBits) = default;
+    /// The bits as a number (for logs and test dumps).
+    constexpr uint32_t value() const { return m_bits; }
 
+private:
+    static constexpr DirtyBits raw_set(uint32_t bits) {
+        DirtyBits d;
+        d.m_bits = bits;
+        return d;
+    }
+    uint32_t m_bits = 0;
+};
+
+template <class T>
+inline constexpr bool IS_DIRTY_BIT =
+    std::is_same_v<T, MeshDirty> || std::is_same_v<T, InstanceDirty> ||
+    std::is_same_v<T, GroupDirty> || std::is_same_v<T, MaterialDirty> ||
+    std::is_same_v<T, SceneDirty>;
+
+template <class Bit>
+requires IS_DIRTY_BIT<Bit>
+constexpr DirtyBits<Bit> operator|(Bit a, Bit b) {
+    return DirtyBits<Bit>(a) | b;
+}
+
+/// Instance bits that change what the TLAS holds; the others only change shading.
+inline constexpr DirtyBits<InstanceDirty> INSTANCE_TLAS_BITS =
+    InstanceDirty::Added | InstanceDirty::Transform | InstanceDirty::Visibility |
+    InstanceDirty::Mask;
+
+/// A mesh's dirty state: its bits and the vertices [begin, end) whose positions changed.
+struct MeshDirtyState {
+    DirtyBits<MeshDirty> bits;
+    uint32_t begin = UINT32_MAX;
+    uint32_t end = 0;
+
+    friend bool operator==(const MeshDirtyState&, const MeshDirtyState&) = default;
+};
+
+/// The bits of a dirty state.
+template <class Bit>
+constexpr DirtyBits<Bit>& bits_of(DirtyBits<Bit>& state) {
+    return state;
+}
+constexpr DirtyBits<MeshDirty>& bits_of(MeshDirtyState& state) {
+    return state.bits;
+}
+
+/// The meshes, instances and materials touched since the last commit, and the scene-wide bits.
+/// Removed objects stay listed by their (now stale) handle so the acceleration layer can release
+/// what it built for them.
+class ChangeTracker {
+public:
+    /// Adds `add` to an object's `bits`, listing `h` when they were clean. `add` may be empty:
+    /// then the object is only listed (a removal, whose stale handle the commit must see).
+    template <class H, class Bit>
+    void mark(H h, DirtyBits<Bit>& bits, DirtyBits<Bit> add) {
+        if (bits.none()) list_of(h).push_back(h);
+        bits |= add;
+    }
+    /// Adds scene-wide bits.
+    void mark(DirtyBits<SceneDirty> bits) { m_scene |= bits; }
+    /// Counts world transforms the flattening recomputed.
+    void count_world_transforms(uint64_t n = 1) { m_world_transforms += n; }
+
+    std::span<const MeshHandle> meshes() const { return m_meshes; }
+    std::span<const InstanceHandle> instances() const { return m_instances; }
+    std::span<const MaterialHandle> materials() const { return m_materials; }
+    DirtyBits<SceneDirty> scene() const { return m_scene; }
+    /// True when any of `bits` is set scene-wide.
+    bool has(DirtyBits<SceneDirty> bits) const { return m_scene.has(bits); }
+    /// World transforms (groups and instances) recomputed since the last commit.
+    uint64_t world_transforms() const { return m_world_transforms; }
     bool empty() const {
-        return meshes.empty() && instances.empty() && materials.empty() && scene_bits == 0;
+        return m_meshes.empty() && m_instances.empty() && m_materials.empty() && m_scene.none();
     }
-    void reset() {
-        meshes.clear();
-        instances.clear();
-        materials.clear();
-        scene_bits = 0;
-        world_transforms = 0;
+
+    /// Where the tracker stands: lists only grow during a batch, so this is enough to go back.
+    struct Position {
+        std::size_t meshes = 0;
+        std::size_t instances = 0;
+        std::size_t materials = 0;
+        DirtyBits<SceneDirty> scene;
+    };
+    Position position() const {
+        return {m_meshes.size(), m_instances.size(), m_materials.size(), m_scene};
     }
+    /// Back to `p` (a batch rolled back). Objects listed since went dirty during the batch:
+    /// the caller cleans their bits (visit them with listed_since first).
+    void rewind(const Position& p);
+    /// What was listed after `p`.
+    std::span<const MeshHandle> meshes_since(const Position& p) const {
+        return std::span(m_meshes).subspan(p.meshes);
+    }
+    std::span<const InstanceHandle> instances_since(const Position& p) const {
+        return std::span(m_instances).subspan(p.instances);
+    }
+    std::span<const MaterialHandle> materials_since(const Position& p) const {
+        return std::span(m_materials).subspan(p.materials);
+    }
+    /// Forgets every change (a commit did the work); the objects' bits are the caller's to clean.
+    void clean();
+
+private:
+    std::vector<MeshHandle>& list_of(MeshHandle) { return m_meshes; }
+    std::vector<InstanceHandle>& list_of(InstanceHandle) { return m_instances; }
+    std::vector<MaterialHandle>& list_of(MaterialHandle) { return m_materials; }
+
+    std::vector<MeshHandle> m_meshes;
+    std::vector<InstanceHandle> m_instances;
+    std::vector<MaterialHandle> m_materials;
+    DirtyBits<SceneDirty> m_scene;
+    uint64_t m_world_transforms = 0;
 };
+
+inline void ChangeTracker::rewind(const Position& p) {
+    m_meshes.resize(p.meshes);
+    m_instances.resize(p.instances);
+    m_materials.resize(p.materials);
+    m_scene = p.scene;
+}
+
+inline void ChangeTracker::clean() {
+    m_meshes.clear();
+    m_instances.clear();
+    m_materials.clear();
+    m_scene = {};
+    m_world_transforms = 0;
+}
 
 }  // namespace strata

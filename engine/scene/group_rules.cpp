@@ -41,7 +41,7 @@ Status Scene::apply_edit(AddGroup&& e, UndoLog& undo) {
     undo.records.emplace_back(undo::Inserted<GroupHandle>{h, reused});
     children_of(parent.value()).groups.push_back(h);
     m_group_ids.emplace(std::move(e.id), h);
-    mark_group(h, dirty::GroupAdded);
+    mark(h, GroupDirty::Added, &undo);
     return {};
 }
 
@@ -66,21 +66,21 @@ Status Scene::apply_edit(UpdateGroup&& e, UndoLog& undo) {
     }
 
     save_group(h, undo);
-    uint32_t bits = 0;
+    DirtyBits<GroupDirty> bits;
     if (e.parent && !(parent == m_groups.at(h).parent)) {
         reparent_group(h, parent, undo);
-        bits |= dirty::GroupParent;
+        bits |= GroupDirty::Parent;
     }
     GroupRecord& r = m_groups.at(h);
     if (e.transform) {
         r.transform = *e.transform;
-        bits |= dirty::GroupTransform;
+        bits |= GroupDirty::Transform;
     }
     if (e.visible) {
         r.visible = *e.visible;
-        bits |= dirty::GroupVisibility;
+        bits |= GroupDirty::Visibility;
     }
-    if (bits) mark_group(h, bits);
+    if (bits.any()) mark(h, bits, &undo);
     return {};
 }
 

@@ -108,10 +108,7 @@ Result<uint64_t> Scene::apply(EditBatch&& batch,
     UndoLog undo;
     undo.camera = m_camera;
     undo.lighting = m_lighting;
-    undo.scene_bits = m_changes.scene_bits;
-    undo.changed_meshes = m_changes.meshes.size();
-    undo.changed_instances = m_changes.instances.size();
-    undo.changed_materials = m_changes.materials.size();
+    undo.changes = m_changes.position();
     undo.totals = m_totals;
     undo.world_instances = m_world_instances.size();
     undo.world_groups = m_world_groups.size();
@@ -174,47 +171,75 @@ void Scene::reset() {
 
 // Step: change tracking helpers ---------------------------------------------------------------
 
-void Scene::mark_mesh(MeshHandle h, uint32_t bits, UndoLog& undo) {
+namespace {
+
+/// Records the dirty state of object `h` when it is dirty already (see Scene::mark).
+template <class H, class Record>
+void record_dirty(H h, const Record& r, UndoLog* undo) {
+    auto state = r.dirty;
+    if (undo && bits_of(state).any())
+        undo->records.emplace_back(undo::Dirty<H, decltype(state)>{h, state});
+}
+
+/// Cleans the dirty state of every object of `handles` that still exists.
+template <class Slots, class Handles>
+void clean(Slots& slots, const Handles& handles) {
+    for (const auto h : handles) {
+        if (auto* r = slots.get(h)) r->dirty = {};
+    }
+}
+
+}  // namespace
+
+void Scene::mark(MeshHandle h, DirtyBits<MeshDirty> add, UndoLog* undo) {
     MeshRecord& r = m_meshes.at(h);
-    undo.records.emplace_back(undo::MeshDirty{h, r.dirty, r.dirty_begin, r.dirty_end});
-    if (r.dirty == 0) m_changes.meshes.push_back(h);
-    r.dirty |= bits;
+    record_dirty(h, r, undo);
+    m_changes.mark(h, r.dirty.bits, add);
 }
 
-void Scene::mark_instance(InstanceHandle h, uint32_t bits) {
+void Scene::mark(InstanceHandle h, DirtyBits<InstanceDirty> add, UndoLog* undo) {
     InstanceRecord& r = m_instances.at(h);
-    if (r.dirty == 0) m_changes.instances.push_back(h);
-    r.dirty |= bits;
+    record_dirty(h, r, undo);
+    m_changes.mark(h, r.dirty, add);
 }
 
-void Scene::mark_material(MaterialHandle h, uint32_t bits) {
+void Scene::mark(MaterialHandle h, DirtyBits<MaterialDirty> add, UndoLog* undo) {
     MaterialRecord& r = m_materials.at(h);
-    if (r.dirty == 0) m_changes.materials.push_back(h);
-    r.dirty |= bits;
-    m_changes.scene_bits |= dirty::Materials;
+    record_dirty(h, r, undo);
+    m_changes.mark(h, r.dirty, add);
+    m_changes.mark(SceneDirty::Materials);
+}
+
+void Scene::mark(GroupHandle g, DirtyBits<GroupDirty> add, UndoLog* undo) {
+    // Groups are listed for the batch's flattening, which cleans them, not for the commit.
+    GroupRecord& r = m_groups.at(g);
+    record_dirty(g, r, undo);
+    if (r.dirty.none()) m_world_groups.push_back(g);
+    r.dirty |= add;
+    m_changes.mark(SceneDirty::Groups);
+}
+
+void Scene::rewind_changes(const UndoLog& undo) {
+    clean(m_meshes, m_changes.meshes_since(undo.changes));
+    clean(m_instances, m_changes.instances_since(undo.changes));
+    clean(m_materials, m_changes.materials_since(undo.changes));
+    clean(m_groups, std::span(m_world_groups).subspan(undo.world_groups));
+    m_changes.rewind(undo.changes);
+    m_world_instances.resize(undo.world_instances);
+    m_world_groups.resize(undo.world_groups);
 }
 
 void Scene::save_instance(InstanceHandle h, UndoLog& undo) const {
     const InstanceRecord& r = m_instances.at(h);
     undo.records.emplace_back(
-        undo::InstanceState{h, r.material, r.transform, r.visible, r.mask, r.user_id, r.dirty});
+        undo::InstanceState{h, r.material, r.transform, r.visible, r.mask, r.user_id});
 }
 
 void Scene::clear_changes() {
-    for (MeshHandle h : m_changes.meshes) {
-        if (MeshRecord* r = m_meshes.get(h)) {
-            r->dirty = 0;
-            r->dirty_begin = UINT32_MAX;
-            r->dirty_end = 0;
-        }
-    }
-    for (InstanceHandle h : m_changes.instances) {
-        if (InstanceRecord* r = m_instances.get(h)) r->dirty = 0;
-    }
-    for (MaterialHandle h : m_changes.materials) {
-        if (MaterialRecord* r = m_materials.get(h)) r->dirty = 0;
-    }
-    m_changes.reset();
+    clean(m_meshes, m_changes.meshes());
+    clean(m_instances, m_changes.instances());
+    clean(m_materials, m_changes.materials());
+    m_changes.clean();
 }
 
 // Step: queries --------------------------------------------------------------------------------

@@ -32,9 +32,7 @@ struct MeshRecord {
     BuildOptions build;
     MaterialHandle material;          ///< default for its instances; null: built-in default
     CowVector<InstanceHandle> users;  ///< instances that reference this mesh
-    uint32_t dirty = 0;                 ///< dirty::MeshBits since the last commit
-    uint32_t dirty_begin = UINT32_MAX;  ///< vertices [dirty_begin, dirty_end) have new positions
-    uint32_t dirty_end = 0;
+    MeshDirtyState dirty;             ///< since the last commit
 };
 
 /// Deepest a group may sit: the groups on the path from the root to any group, itself included.
@@ -66,7 +64,7 @@ struct InstanceRecord {
     uint32_t mask = 0xFFFFFFFFu;
     uint32_t user_id = 0;
     uint32_t user_slot = 0;  ///< position in the mesh's `users`
-    uint32_t dirty = 0;      ///< dirty::InstanceBits since the last commit
+    DirtyBits<InstanceDirty> dirty;  ///< since the last commit
 };
 
 /// A scene-graph node: its transform and visibility apply to everything below it.
@@ -79,13 +77,13 @@ struct GroupRecord {
     Affine world;  ///< as for InstanceRecord::world
     bool world_visible = true;
     Children children;
-    uint32_t dirty = 0;  ///< dirty::GroupBits until the batch's flattening
+    DirtyBits<GroupDirty> dirty;  ///< until the batch's flattening
 };
 
 struct MaterialRecord {
     std::string id;
     Material material;
-    uint32_t dirty = 0;
+    DirtyBits<MaterialDirty> dirty;
     TextureHandle base_color_texture;  ///< null: none
 };
 
@@ -244,11 +242,17 @@ private:
 
     /// Plays `undo` backwards (scene_undo.cpp).
     void roll_back(UndoLog& undo);
+    /// Back to the change lists at the batch's start, cleaning what the batch listed.
+    void rewind_changes(const UndoLog& undo);
 
-    /// Dirty-bit helpers. The `undo` forms first record the object's dirty state.
-    void mark_mesh(MeshHandle h, uint32_t bits, UndoLog& undo);
-    void mark_instance(InstanceHandle h, uint32_t bits);
-    void mark_material(MaterialHandle h, uint32_t bits);
+    /// Adds `add` to an object's dirty bits (`add` empty: only lists it, as a removal needs).
+    /// An object dirty already has its dirty state recorded in `undo` first (null: the batch
+    /// stands, nothing to take back); one that was clean is listed, and a rollback cleans every
+    /// object listed since the batch began. The same for every kind.
+    void mark(MeshHandle h, DirtyBits<MeshDirty> add, UndoLog* undo);
+    void mark(InstanceHandle h, DirtyBits<InstanceDirty> add, UndoLog* undo);
+    void mark(MaterialHandle h, DirtyBits<MaterialDirty> add, UndoLog* undo);
+    void mark(GroupHandle g, DirtyBits<GroupDirty> add, UndoLog* undo);
     void save_instance(InstanceHandle h, UndoLog& undo) const;
     void remove_instance(InstanceHandle h, UndoLog& undo);
     void remove_mesh(MeshHandle h, UndoLog& undo);
@@ -268,7 +272,6 @@ private:
     void reparent_instance(InstanceHandle h, GroupHandle parent, UndoLog& undo);
     void reparent_group(GroupHandle g, GroupHandle parent, UndoLog& undo);
     void save_group(GroupHandle g, UndoLog& undo) const;
-    void mark_group(GroupHandle g, uint32_t bits);
     void mark_instance_world(InstanceHandle h) { m_world_instances.push_back(h); }
     void remove_group(GroupHandle g, UndoLog& undo);
     /// Removes `g`, the groups and the instances below it (children before parents).

@@ -101,14 +101,7 @@ void Scene::reparent_group(GroupHandle g, GroupHandle parent, UndoLog& undo) {
 
 void Scene::save_group(GroupHandle g, UndoLog& undo) const {
     const GroupRecord& r = m_groups.at(g);
-    undo.records.emplace_back(undo::GroupState{g, r.transform, r.visible, r.dirty});
-}
-
-void Scene::mark_group(GroupHandle g, uint32_t bits) {
-    GroupRecord& r = m_groups.at(g);
-    if (r.dirty == 0) m_world_groups.push_back(g);
-    r.dirty |= bits;
-    m_changes.scene_bits |= dirty::Groups;
+    undo.records.emplace_back(undo::GroupState{g, r.transform, r.visible});
 }
 
 void Scene::remove_group(GroupHandle g, UndoLog& undo) {
@@ -116,7 +109,7 @@ void Scene::remove_group(GroupHandle g, UndoLog& undo) {
     STRATA_CHECK(r.children.empty());
     detach_child(children_of(r.parent).groups, m_groups, r.child_slot);
     m_group_ids.erase(r.id);
-    m_changes.scene_bits |= dirty::Groups;
+    m_changes.mark(SceneDirty::Groups);
     undo.records.emplace_back(undo::Removed<GroupHandle, GroupRecord>{g, m_groups.take(g)});
 }
 
@@ -137,13 +130,14 @@ void Scene::refresh_instance_world(InstanceHandle h, InstanceRecord& r) {
         world = p->world * r.transform;
         visible = visible && p->world_visible;
     }
-    ++m_changes.world_transforms;
-    uint32_t bits = 0;
-    if (!(world == r.world)) bits |= dirty::InstanceTransform;
-    if (visible != r.world_visible) bits |= dirty::InstanceVisibility;
+    m_changes.count_world_transforms();
+    DirtyBits<InstanceDirty> bits;
+    if (!(world == r.world)) bits |= InstanceDirty::Transform;
+    if (visible != r.world_visible) bits |= InstanceDirty::Visibility;
     r.world = world;
     r.world_visible = visible;
-    if (bits) mark_instance(h, bits);
+    // After the batch stands: nothing to take back.
+    if (bits.any()) mark(h, bits, nullptr);
 }
 
 void Scene::flatten() {
@@ -152,10 +146,10 @@ void Scene::flatten() {
     std::vector<GroupHandle> stack;
     for (GroupHandle top : m_world_groups) {
         const GroupRecord* r = m_groups.get(top);
-        if (!r || r->dirty == 0) continue;
+        if (!r || r->dirty.none()) continue;
         bool covered = false;
         for (GroupHandle p = r->parent; !p.is_null() && !covered; p = m_groups.at(p).parent)
-            covered = m_groups.at(p).dirty != 0;
+            covered = m_groups.at(p).dirty.any();
         if (covered) continue;
         stack.push_back(top);
         while (!stack.empty()) {
@@ -168,8 +162,8 @@ void Scene::flatten() {
                 group.world = p->world * group.transform;
                 group.world_visible = group.visible && p->world_visible;
             }
-            group.dirty = 0;
-            ++m_changes.world_transforms;
+            group.dirty = {};
+            m_changes.count_world_transforms();
             for (InstanceHandle h : group.children.instances)
                 refresh_instance_world(h, m_instances.at(h));
             stack.insert(stack.end(), group.children.groups.begin(), group.children.groups.end());

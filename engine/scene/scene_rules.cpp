@@ -202,9 +202,7 @@ Status Scene::apply_edit(AddMesh&& e, UndoLog& undo) {
     const MeshHandle h = m_meshes.insert(std::move(r), &reused);
     undo.records.emplace_back(undo::Inserted<MeshHandle>{h, reused});
     m_mesh_ids.emplace(std::move(e.id), h);
-    MeshRecord& mesh = m_meshes.at(h);
-    m_changes.meshes.push_back(h);
-    mesh.dirty = dirty::MeshAdded;
+    mark(h, MeshDirty::Added, &undo);
     return {};
 }
 
@@ -242,7 +240,7 @@ Status Scene::apply_edit(UpdateMeshPositions&& e, UndoLog& undo) {
 
     // Step: normals and uvs (shading only: no BLAS work).
     if (e.normals || e.uvs) {
-        mark_mesh(h, dirty::MeshAttributes, undo);
+        mark(h, MeshDirty::Attributes, &undo);
         undo::MeshAttributes old{h, std::nullopt, std::nullopt};
         if (e.normals) {
             old.normals = r.normals;
@@ -257,7 +255,7 @@ Status Scene::apply_edit(UpdateMeshPositions&& e, UndoLog& undo) {
     if (e.positions.empty()) return {};
 
     // Step: positions (a BLAS refit at the next commit).
-    mark_mesh(h, dirty::MeshPoints, undo);
+    mark(h, MeshDirty::Points, &undo);
     if (e.positions.size() == r.positions.size()) {
         // Every vertex: replace the array, so the undo record holds the old one without a copy
         // (and a snapshot sharing it keeps reading it).
@@ -269,8 +267,8 @@ Status Scene::apply_edit(UpdateMeshPositions&& e, UndoLog& undo) {
             h, e.offset, std::vector<Vec3>(first, first + std::ptrdiff_t(e.positions.size()))});
         std::copy(e.positions.begin(), e.positions.end(), r.positions.mut().begin() + e.offset);
     }
-    r.dirty_begin = std::min(r.dirty_begin, e.offset);
-    r.dirty_end = std::max(r.dirty_end, static_cast<uint32_t>(end));
+    r.dirty.begin = std::min(r.dirty.begin, e.offset);
+    r.dirty.end = std::max(r.dirty.end, static_cast<uint32_t>(end));
     return {};
 }
 
@@ -313,7 +311,7 @@ Status Scene::apply_edit(ReplaceMeshTopology&& e, UndoLog& undo) {
     }
 
     if (e.normals || e.uvs) {
-        mark_mesh(h, dirty::MeshAttributes, undo);
+        mark(h, MeshDirty::Attributes, &undo);
         undo::MeshAttributes old{h, std::nullopt, std::nullopt};
         if (e.normals) {
             old.normals = std::move(r.normals);
@@ -325,7 +323,7 @@ Status Scene::apply_edit(ReplaceMeshTopology&& e, UndoLog& undo) {
         }
         undo.records.emplace_back(std::move(old));
     }
-    mark_mesh(h, dirty::MeshTopology, undo);
+    mark(h, MeshDirty::Topology, &undo);
     m_totals.vertices = m_totals.vertices - r.positions.size() + vertex_count;
     m_totals.triangles = m_totals.triangles - r.triangles.size() + e.triangles.size();
     undo::MeshTopology old{h, std::nullopt, r.triangles};
@@ -335,8 +333,8 @@ Status Scene::apply_edit(ReplaceMeshTopology&& e, UndoLog& undo) {
     }
     r.triangles = std::move(e.triangles);
     undo.records.emplace_back(std::move(old));
-    r.dirty_begin = 0;
-    r.dirty_end = static_cast<uint32_t>(r.positions.size());
+    r.dirty.begin = 0;
+    r.dirty.end = static_cast<uint32_t>(r.positions.size());
     return {};
 }
 
@@ -356,7 +354,7 @@ void Scene::remove_mesh(MeshHandle h, UndoLog& undo) {
     MeshRecord& r = m_meshes.at(h);
     STRATA_CHECK(r.users.empty());
     // Listed by its now stale handle, so the commit releases its BLAS.
-    if (r.dirty == 0) m_changes.meshes.push_back(h);
+    mark(h, {}, &undo);
     m_totals.vertices -= r.positions.size();
     m_totals.triangles -= r.triangles.size();
     m_mesh_ids.erase(r.id);
@@ -381,10 +379,10 @@ Status Scene::apply_edit(AddMaterial&& e, UndoLog& undo) {
 
     bool reused = false;
     const MaterialHandle h =
-        m_materials.insert(MaterialRecord{e.id, e.material, 0, texture.value()}, &reused);
+        m_materials.insert(MaterialRecord{e.id, e.material, {}, texture.value()}, &reused);
     undo.records.emplace_back(undo::Inserted<MaterialHandle>{h, reused});
     m_material_ids.emplace(std::move(e.id), h);
-    mark_material(h, dirty::MaterialAdded);
+    mark(h, MaterialDirty::Added, &undo);
     return {};
 }
 
@@ -402,17 +400,16 @@ Status Scene::apply_edit(UpdateMaterial&& e, UndoLog& undo) {
         texture = found.value();
     }
 
-    undo.records.emplace_back(
-        undo::MaterialState{h, r.material, r.dirty, r.base_color_texture});
+    undo.records.emplace_back(undo::MaterialState{h, r.material, r.base_color_texture});
     r.material = updated;
     r.base_color_texture = texture;
-    mark_material(h, dirty::MaterialParams);
+    mark(h, MaterialDirty::Params, &undo);
     return {};
 }
 
 void Scene::remove_material(MaterialHandle h, UndoLog& undo) {
+    mark(h, {}, &undo);
     MaterialRecord& r = m_materials.at(h);
-    if (r.dirty == 0) m_changes.materials.push_back(h);
     m_material_ids.erase(r.id);
     undo.records.emplace_back(
         undo::Removed<MaterialHandle, MaterialRecord>{h, m_materials.take(h)});
@@ -444,7 +441,7 @@ Status Scene::apply_edit(AddTexture&& e, UndoLog& undo) {
     const TextureHandle h = m_textures.insert(std::move(r), &reused);
     undo.records.emplace_back(undo::Inserted<TextureHandle>{h, reused});
     m_texture_ids.emplace(std::move(e.id), h);
-    m_changes.scene_bits |= dirty::Textures;
+    m_changes.mark(SceneDirty::Textures);
     return {};
 }
 
@@ -471,7 +468,7 @@ void Scene::remove_texture(TextureHandle h, UndoLog& undo) {
     TextureRecord& r = m_textures.at(h);
     m_totals.texture_bytes -= r.image->bytes();
     m_texture_ids.erase(r.id);
-    m_changes.scene_bits |= dirty::Textures;
+    m_changes.mark(SceneDirty::Textures);
     undo.records.emplace_back(undo::Removed<TextureHandle, TextureRecord>{h, m_textures.take(h)});
 }
 
@@ -510,7 +507,7 @@ Status Scene::apply_edit(AddInstance&& e, UndoLog& undo) {
     siblings.push_back(h);
     mark_instance_world(h);
     m_instance_ids.emplace(std::move(e.id), h);
-    mark_instance(h, dirty::InstanceAdded);
+    mark(h, InstanceDirty::Added, &undo);
     return {};
 }
 
@@ -535,28 +532,28 @@ Status Scene::apply_edit(UpdateInstance&& e, UndoLog& undo) {
     save_instance(h, undo);
     if (e.parent && !(parent == m_instances.at(h).parent)) reparent_instance(h, parent, undo);
     InstanceRecord& r = m_instances.at(h);
-    uint32_t bits = 0;
+    DirtyBits<InstanceDirty> bits;
     if (e.material) {
         r.material = material;
-        bits |= dirty::InstanceMaterial;
+        bits |= InstanceDirty::Material;
     }
     if (e.transform) {
         r.transform = *e.transform;
-        bits |= dirty::InstanceTransform;
+        bits |= InstanceDirty::Transform;
     }
     if (e.visible) {
         r.visible = *e.visible;
-        bits |= dirty::InstanceVisibility;
+        bits |= InstanceDirty::Visibility;
     }
     if (e.mask) {
         r.mask = *e.mask;
-        bits |= dirty::InstanceMask;
+        bits |= InstanceDirty::Mask;
     }
     if (e.user_id) {
         r.user_id = *e.user_id;
-        bits |= dirty::InstanceUserId;
+        bits |= InstanceDirty::UserId;
     }
-    if (bits) mark_instance(h, bits);
+    if (bits.any()) mark(h, bits, &undo);
     if (e.transform || e.visible) mark_instance_world(h);
     return {};
 }
@@ -568,7 +565,7 @@ Status Scene::apply_edit(SetTransform&& e, UndoLog& undo) {
 
     save_instance(h, undo);
     m_instances.at(h).transform = e.transform;
-    mark_instance(h, dirty::InstanceTransform);
+    mark(h, InstanceDirty::Transform, &undo);
     mark_instance_world(h);
     return {};
 }
@@ -591,7 +588,7 @@ void Scene::remove_instance(InstanceHandle h, UndoLog& undo) {
     users.pop_back();
     detach_child(children_of(r.parent).instances, m_instances, r.child_slot);
     // Listed by its now stale handle, so the commit takes it out of the TLAS.
-    if (r.dirty == 0) m_changes.instances.push_back(h);
+    mark(h, {}, &undo);
     m_instance_ids.erase(r.id);
     undo.records.emplace_back(
         undo::Removed<InstanceHandle, InstanceRecord>{h, m_instances.take(h)});
@@ -601,15 +598,15 @@ void Scene::remove_instance(InstanceHandle h, UndoLog& undo) {
 
 Status Scene::apply_edit(MarkDirty&& e, UndoLog& undo) {
     if (!e.mesh) {
-        m_changes.scene_bits |= e.action == DirtyAction::Refit ? dirty::TlasUpdateRequested
-                                                               : dirty::TlasRebuildRequested;
+        m_changes.mark(e.action == DirtyAction::Refit ? SceneDirty::TlasUpdateRequested
+                                                      : SceneDirty::TlasRebuildRequested);
         return {};
     }
     const MeshHandle h = find_mesh(*e.mesh);
     if (h.is_null()) return unknown("mesh", *e.mesh, "target/mesh");
-    mark_mesh(
-        h, e.action == DirtyAction::Refit ? dirty::MeshRefitRequested : dirty::MeshRebuildRequested,
-        undo);
+    mark(h,
+         e.action == DirtyAction::Refit ? MeshDirty::RefitRequested : MeshDirty::RebuildRequested,
+         &undo);
     return {};
 }
 
@@ -628,7 +625,7 @@ Status Scene::apply_edit(AddLight&& e, UndoLog& undo) {
     const LightHandle h = m_lights.insert(LightRecord{e.id, e.light}, &reused);
     undo.records.emplace_back(undo::Inserted<LightHandle>{h, reused});
     m_light_ids.emplace(std::move(e.id), h);
-    m_changes.scene_bits |= dirty::Lights;
+    m_changes.mark(SceneDirty::Lights);
     return {};
 }
 
@@ -642,7 +639,7 @@ Status Scene::apply_edit(UpdateLight&& e, UndoLog& undo) {
 
     undo.records.emplace_back(undo::LightState{h, r.light});
     r.light = updated;
-    m_changes.scene_bits |= dirty::Lights;
+    m_changes.mark(SceneDirty::Lights);
     return {};
 }
 
@@ -656,7 +653,7 @@ Status Scene::apply_edit(RemoveLight&& e, UndoLog& undo) {
 void Scene::remove_light(LightHandle h, UndoLog& undo) {
     m_light_ids.erase(m_lights.at(h).id);
     undo.records.emplace_back(undo::Removed<LightHandle, LightRecord>{h, m_lights.take(h)});
-    m_changes.scene_bits |= dirty::Lights;
+    m_changes.mark(SceneDirty::Lights);
 }
 
 // Camera and lighting are saved whole at the start of each batch (UndoLog::camera, ::lighting).
@@ -665,7 +662,7 @@ Status Scene::apply_edit(SetCamera&& e, UndoLog&) {
     apply_to(updated, e);
     if (Status s = check_camera(updated); !s) return s;
     m_camera = updated;
-    m_changes.scene_bits |= dirty::Camera;
+    m_changes.mark(SceneDirty::Camera);
     return {};
 }
 
@@ -674,7 +671,7 @@ Status Scene::apply_edit(SetLighting&& e, UndoLog&) {
     apply_to(updated, e);
     if (Status s = check_lighting(updated); !s) return s;
     m_lighting = updated;
-    m_changes.scene_bits |= dirty::Lighting;
+    m_changes.mark(SceneDirty::Lighting);
     return {};
 }
 
@@ -699,7 +696,7 @@ Status Scene::apply_edit(Clear&&, UndoLog& undo) {
     for (TextureHandle h : textures) remove_texture(h, undo);
     m_camera = Camera{};
     m_lighting = Lighting{};
-    m_changes.scene_bits |= dirty::Camera | dirty::Lighting | dirty::Materials;
+    m_changes.mark(SceneDirty::Camera | SceneDirty::Lighting | SceneDirty::Materials);
     return {};
 }
 

@@ -107,7 +107,19 @@ struct Reverser {
         GroupRecord& g = groups.at(r.handle);
         g.transform = r.transform;
         g.visible = r.visible;
-        g.dirty = r.dirty;
+    }
+
+    void operator()(undo::Dirty<MeshHandle, MeshDirtyState>& r) {
+        meshes.at(r.handle).dirty = r.state;
+    }
+    void operator()(undo::Dirty<InstanceHandle, DirtyBits<InstanceDirty>>& r) {
+        instances.at(r.handle).dirty = r.state;
+    }
+    void operator()(undo::Dirty<MaterialHandle, DirtyBits<MaterialDirty>>& r) {
+        materials.at(r.handle).dirty = r.state;
+    }
+    void operator()(undo::Dirty<GroupHandle, DirtyBits<GroupDirty>>& r) {
+        groups.at(r.handle).dirty = r.state;
     }
 
     template <class H>
@@ -141,13 +153,6 @@ struct Reverser {
         textures.undo_erase(r.handle, std::move(r.record));
     }
 
-    void operator()(undo::MeshDirty& r) {
-        MeshRecord& mesh = meshes.at(r.handle);
-        mesh.dirty = r.dirty;
-        mesh.dirty_begin = r.dirty_begin;
-        mesh.dirty_end = r.dirty_end;
-    }
-
     void operator()(undo::MeshPositions& r) {
         MeshRecord& mesh = meshes.at(r.handle);
         std::copy(r.positions.begin(), r.positions.end(), mesh.positions.mut().begin() + r.offset);
@@ -176,7 +181,6 @@ struct Reverser {
         inst.visible = r.visible;
         inst.mask = r.mask;
         inst.user_id = r.user_id;
-        inst.dirty = r.dirty;
     }
 
     void operator()(undo::Inserted<LightHandle>& r) {
@@ -194,7 +198,6 @@ struct Reverser {
     void operator()(undo::MaterialState& r) {
         MaterialRecord& m = materials.at(r.handle);
         m.material = r.material;
-        m.dirty = r.dirty;
         m.base_color_texture = r.base_color_texture;
     }
 };
@@ -208,13 +211,8 @@ void Scene::roll_back(UndoLog& undo) {
     for (auto it = undo.records.rbegin(); it != undo.records.rend(); ++it) std::visit(reverse, *it);
     m_camera = undo.camera;
     m_lighting = undo.lighting;
-    m_changes.scene_bits = undo.scene_bits;
     m_totals = undo.totals;
-    m_changes.meshes.resize(undo.changed_meshes);
-    m_changes.instances.resize(undo.changed_instances);
-    m_changes.materials.resize(undo.changed_materials);
-    m_world_instances.resize(undo.world_instances);
-    m_world_groups.resize(undo.world_groups);
+    rewind_changes(undo);
 }
 
 }  // namespace strata

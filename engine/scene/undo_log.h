@@ -31,12 +31,12 @@ struct Removed {
     Record record;
 };
 
-/// A mesh's dirty state before the batch touched it.
-struct MeshDirty {
-    MeshHandle handle;
-    uint32_t dirty = 0;
-    uint32_t dirty_begin = 0;
-    uint32_t dirty_end = 0;
+/// The dirty state of an object that was dirty already when an edit marked it again (objects
+/// that were clean are cleaned by rewinding the change lists).
+template <class H, class State>
+struct Dirty {
+    H handle;
+    State state;
 };
 
 /// Vertex positions an update overwrote: `positions` held vertices [offset, offset + size).
@@ -74,7 +74,6 @@ struct InstanceState {
     bool visible = true;
     uint32_t mask = 0;
     uint32_t user_id = 0;
-    uint32_t dirty = 0;
 };
 
 /// A group's editable state before an edit changed it.
@@ -82,7 +81,6 @@ struct GroupState {
     GroupHandle handle;
     Affine transform;
     bool visible = true;
-    uint32_t dirty = 0;
 };
 
 /// An instance or group moved from `old_parent`, where it was child number `old_slot`, to the
@@ -98,7 +96,6 @@ struct Reparented {
 struct MaterialState {
     MaterialHandle handle;
     Material material;
-    uint32_t dirty = 0;
     TextureHandle base_color_texture;
 };
 
@@ -110,18 +107,18 @@ struct LightState {
 
 }  // namespace undo
 
-using UndoRecord =
-    std::variant<undo::Inserted<MeshHandle>, undo::Inserted<InstanceHandle>,
-                 undo::Inserted<MaterialHandle>, undo::Removed<MeshHandle, MeshRecord>,
-                 undo::Removed<InstanceHandle, InstanceRecord>,
-                 undo::Removed<MaterialHandle, MaterialRecord>, undo::MeshDirty,
-                 undo::MeshPositions, undo::MeshPositionsReplaced, undo::MeshTopology,
-                 undo::MeshAttributes, undo::InstanceState, undo::MaterialState,
-                 undo::Inserted<GroupHandle>, undo::Removed<GroupHandle, GroupRecord>,
-                 undo::GroupState, undo::Reparented<InstanceHandle>, undo::Reparented<GroupHandle>,
-                 undo::Inserted<TextureHandle>, undo::Removed<TextureHandle, TextureRecord>,
-                 undo::Inserted<LightHandle>, undo::Removed<LightHandle, LightRecord>,
-                 undo::LightState>;
+using UndoRecord = std::variant<
+    undo::Inserted<MeshHandle>, undo::Inserted<InstanceHandle>, undo::Inserted<MaterialHandle>,
+    undo::Removed<MeshHandle, MeshRecord>, undo::Removed<InstanceHandle, InstanceRecord>,
+    undo::Removed<MaterialHandle, MaterialRecord>, undo::Dirty<MeshHandle, MeshDirtyState>,
+    undo::Dirty<InstanceHandle, DirtyBits<InstanceDirty>>,
+    undo::Dirty<MaterialHandle, DirtyBits<MaterialDirty>>,
+    undo::Dirty<GroupHandle, DirtyBits<GroupDirty>>, undo::MeshPositions,
+    undo::MeshPositionsReplaced, undo::MeshTopology, undo::MeshAttributes, undo::InstanceState,
+    undo::MaterialState, undo::Inserted<GroupHandle>, undo::Removed<GroupHandle, GroupRecord>,
+    undo::GroupState, undo::Reparented<InstanceHandle>, undo::Reparented<GroupHandle>,
+    undo::Inserted<TextureHandle>, undo::Removed<TextureHandle, TextureRecord>,
+    undo::Inserted<LightHandle>, undo::Removed<LightHandle, LightRecord>, undo::LightState>;
 
 /// Everything needed to take one batch back.
 struct UndoLog {
@@ -130,11 +127,8 @@ struct UndoLog {
     // their lengths are enough to restore them.
     Camera camera;
     Lighting lighting;
-    uint32_t scene_bits = 0;
     MeshTotals totals;
-    std::size_t changed_meshes = 0;
-    std::size_t changed_instances = 0;
-    std::size_t changed_materials = 0;
+    ChangeTracker::Position changes;
     std::size_t world_instances = 0;
     std::size_t world_groups = 0;
 };

@@ -83,15 +83,15 @@ TEST_F(Groups, MovingAGroupRecomputesItsSubtreeOnly) {
     EXPECT_EQ(origin("w0"), Vec3(11, 2, 0));
     EXPECT_EQ(origin("body"), Vec3(10, 0, 0));
     // wheels, w0, w1: the car, the body and the lamp are not visited.
-    EXPECT_EQ(scene.changes().world_transforms, 3u);
-    EXPECT_EQ(scene.changes().instances.size(), 2u);
+    EXPECT_EQ(scene.changes().world_transforms(), 3u);
+    EXPECT_EQ(scene.changes().instances().size(), 2u);
 }
 
 TEST_F(Groups, MovingAnOuterAndAnInnerGroupInOneBatchVisitsEachNodeOnce) {
     ASSERT_TRUE(apply(scene, move_group("wheels", {0, 3, 0}), move_group("car", {0, 0, 0})).has_value());
     EXPECT_EQ(origin("w1"), Vec3(-1, 3, 0));
     EXPECT_EQ(origin("body"), Vec3(0, 0, 0));
-    EXPECT_EQ(scene.changes().world_transforms, 5u);  // car, wheels, w0, w1, body
+    EXPECT_EQ(scene.changes().world_transforms(), 5u);  // car, wheels, w0, w1, body
 }
 
 TEST_F(Groups, AHiddenGroupHidesItsWholeSubtree) {
@@ -103,7 +103,7 @@ TEST_F(Groups, AHiddenGroupHidesItsWholeSubtree) {
     EXPECT_TRUE(inst("w0").visible);  // its own flag is unchanged
     EXPECT_FALSE(inst("body").world_visible);
     EXPECT_TRUE(inst("lamp").world_visible);
-    EXPECT_TRUE(inst("w0").dirty & dirty::InstanceVisibility);
+    EXPECT_TRUE(inst("w0").dirty.has(InstanceDirty::Visibility));
     // Showing the car again, with w0 hidden on its own, shows all but w0.
     UpdateGroup show = hide;
     show.visible = true;

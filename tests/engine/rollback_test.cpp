@@ -40,8 +40,8 @@ std::string snapshot(const Scene& s) {
         put(out, s.find_mesh(m.id));
         out << "material ";
         put(out, m.material);
-        out << "build " << int(m.build.prefer) << m.build.allow_refit << " dirty " << m.dirty
-            << " [" << m.dirty_begin << ", " << m.dirty_end << ") users ";
+        out << "build " << int(m.build.prefer) << m.build.allow_refit << " dirty "
+            << m.dirty.bits.value() << " [" << m.dirty.begin << ", " << m.dirty.end << ") users ";
         for (InstanceHandle u : m.users) put(out, u);
         out << "\n  positions ";
         for (const Vec3& p : m.positions) put(out, p);
@@ -65,7 +65,7 @@ std::string snapshot(const Scene& s) {
         put(out, r.material);
         for (float v : r.transform.m) out << v << ',';
         out << " visible " << r.visible << " mask " << r.mask << " user " << r.user_id
-            << " user_slot " << r.user_slot << " dirty " << r.dirty << "\n";
+            << " user_slot " << r.user_slot << " dirty " << r.dirty.value() << "\n";
     }
     const SlotArray<MaterialRecord, MaterialTag>& materials = s.materials();
     for (uint32_t i = 0; i < materials.slot_count(); ++i) {
@@ -79,7 +79,8 @@ std::string snapshot(const Scene& s) {
         put(out, s.find_material(r.id));
         put(out, r.material.base_color);
         put(out, r.material.emission);
-        out << r.material.roughness << ' ' << r.material.metallic << " dirty " << r.dirty << "\n";
+        out << r.material.roughness << ' ' << r.material.metallic << " dirty " << r.dirty.value()
+            << "\n";
     }
     const Camera& c = s.camera();
     out << "camera ";
@@ -91,12 +92,12 @@ std::string snapshot(const Scene& s) {
     put(out, l.sun_direction);
     put(out, l.sun_color);
     put(out, l.sky_color);
-    out << l.sky_intensity << "\nchanges bits " << s.changes().scene_bits << " meshes ";
-    for (MeshHandle h : s.changes().meshes) put(out, h);
+    out << l.sky_intensity << "\nchanges bits " << s.changes().scene().value() << " meshes ";
+    for (MeshHandle h : s.changes().meshes()) put(out, h);
     out << " instances ";
-    for (InstanceHandle h : s.changes().instances) put(out, h);
+    for (InstanceHandle h : s.changes().instances()) put(out, h);
     out << " materials ";
-    for (MaterialHandle h : s.changes().materials) put(out, h);
+    for (MaterialHandle h : s.changes().materials()) put(out, h);
     out << "\n";
     return out.str();
 }
