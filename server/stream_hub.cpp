@@ -236,107 +236,129 @@ bool StreamHub::render_one(Clock::time_point now) {
         if (m_views.empty()) return false;
     }
     const uint64_t version = scene_version();
-    std::string key;
-    ViewerSpec spec;
-    std::set<std::string> highlights;           // of the view's viewers ("" for none)
-    std::shared_ptr<const ViewFrame> previous;  // of this accumulation, with its ids
-    {
-        std::lock_guard lock(m_mutex);
-        Clock::time_point oldest = Clock::time_point::max();
-        for (auto it = m_views.begin(); it != m_views.end();) {
-            if (prune_watchers(it->second.viewers) == 0) {
-                it = m_views.erase(it);
-                continue;
-            }
-            View& v = it->second;
-            const bool stale = v.version != version;
-            // A frame without ids (an edit raced the launch meant to trace them) while a viewer
-            // highlights: one more launch traces them, even past max_samples.
-            const bool needs_ids =
-                v.frame && !v.frame->ids &&
-                std::any_of(v.viewers.begin(), v.viewers.end(),
-                            [](const Watcher& w) { return !w.highlight.empty(); });
-            const bool improvable =
-                !stale &&
-                ((v.samples < v.spec.max_samples && v.launches < v.spec.max_samples) || needs_ids);
-            const bool due = (stale || improvable) && v.failed_version != version &&
-                             now >= v.next_render && v.next_render < oldest;
-            if (due) {
-                oldest = v.next_render;
-                key = it->first;
-            }
-            ++it;
-        }
-        if (key.empty()) return false;
-        if (m_api_busy && m_api_busy()) {
-            ++m_stats.renders_deferred;
-            return false;
-        }
-        const View& chosen = m_views.at(key);
-        spec = chosen.spec;
-        for (const Watcher& w : chosen.viewers) highlights.insert(w.highlight);
-        if (chosen.frame && chosen.frame->version == version && chosen.frame->ids)
-            previous = chosen.frame;
-    }
+    std::optional<ViewPick> pick = pick_view(version, now);
+    if (!pick) return false;
 
     // Step: render (accumulating), outside the lock; the first launch of a version traces ids.
-    RenderRequest request = spec.request;
+    RenderRequest request = pick->spec.request;
     request.accumulate = true;
     request.cancel = &m_cancel;
-    if (!previous) {
+    if (!pick->previous) {
         request.format = ImageFormat::Exr;  // AOVs are listed with EXR only; nothing encodes it
         request.aovs = {Aov::InstanceId};
     }
     auto frame = m_engine.render_frame(request);
 
     // Step: tone-map once, then one JPEG per distinct highlight.
-    std::shared_ptr<ViewFrame> kept;
-    std::map<std::string, StreamChannel::Part> parts;
-    Status encoded;
-    if (!frame) {
-        encoded = Unexpected(frame.error());
-    } else {
-        auto f = std::make_shared<ViewFrame>();
-        FrameBuffers& b = frame->buffers;
-        f->width = b.width;
-        f->height = b.height;
-        f->version = frame->info.version;
-        f->samples = frame->info.samples;
-        f->rgb.resize(std::size_t(b.width) * b.height * 3);
-        tonemap_to_srgb8(b.color.data(), b.pixel_count(), request.exposure, f->rgb.data());
-        if (!b.instance_id.empty()) {
-            f->ids = std::make_shared<const std::vector<uint32_t>>(std::move(b.instance_id));
-            f->names = std::make_shared<const std::vector<std::pair<uint32_t, std::string>>>(
-                std::move(frame->names.instances));
-        } else if (previous && previous->version == f->version) {
-            f->ids = previous->ids;
-            f->names = previous->names;
-        }
-        kept = std::move(f);
-        for (const std::string& h : highlights) {
-            auto part = encode_part(*kept, h, spec.quality);
-            if (!part) {
-                encoded = Unexpected(part.error());
-                break;
-            }
-            parts[h] = std::move(part.value());
-        }
-    }
+    RenderedFrame rendered = encode_render(frame, request.exposure, *pick);
 
     // Step: hand the frame to the view's viewers.
+    offer_render(pick->key, version, now, frame, std::move(rendered));
+    return true;
+}
+
+bool StreamHub::wants_frame(const View& view, uint64_t version) {
+    const bool stale = view.version != version;
+    // A frame without ids (an edit raced the launch meant to trace them) while a viewer
+    // highlights: one more launch traces them, even past max_samples.
+    const bool needs_ids = view.frame && !view.frame->ids &&
+                           std::any_of(view.viewers.begin(), view.viewers.end(),
+                                       [](const Watcher& w) { return !w.highlight.empty(); });
+    const bool improvable =
+        !stale &&
+        ((view.samples < view.spec.max_samples && view.launches < view.spec.max_samples) ||
+         needs_ids);
+    return stale || improvable;
+}
+
+std::optional<StreamHub::ViewPick> StreamHub::pick_view(uint64_t version, Clock::time_point now) {
+    std::lock_guard lock(m_mutex);
+    std::string key;
+    Clock::time_point oldest = Clock::time_point::max();
+    for (auto it = m_views.begin(); it != m_views.end();) {
+        if (prune_watchers(it->second.viewers) == 0) {
+            it = m_views.erase(it);
+            continue;
+        }
+        const View& v = it->second;
+        const bool due = wants_frame(v, version) && v.failed_version != version &&
+                         now >= v.next_render && v.next_render < oldest;
+        if (due) {
+            oldest = v.next_render;
+            key = it->first;
+        }
+        ++it;
+    }
+    if (key.empty()) return std::nullopt;
+    if (m_api_busy && m_api_busy()) {
+        ++m_stats.renders_deferred;
+        return std::nullopt;
+    }
+    const View& chosen = m_views.at(key);
+    std::optional<ViewPick> pick(std::in_place);
+    pick->spec = chosen.spec;
+    for (const Watcher& w : chosen.viewers) pick->highlights.insert(w.highlight);
+    if (chosen.frame && chosen.frame->version == version && chosen.frame->ids)
+        pick->previous = chosen.frame;
+    pick->key = std::move(key);
+    return pick;
+}
+
+std::shared_ptr<StreamHub::ViewFrame> StreamHub::tone_map_frame(
+    Frame& frame, float exposure, const std::shared_ptr<const ViewFrame>& previous) {
+    auto f = std::make_shared<ViewFrame>();
+    FrameBuffers& b = frame.buffers;
+    f->width = b.width;
+    f->height = b.height;
+    f->version = frame.info.version;
+    f->samples = frame.info.samples;
+    f->rgb.resize(std::size_t(b.width) * b.height * 3);
+    tonemap_to_srgb8(b.color.data(), b.pixel_count(), exposure, f->rgb.data());
+    if (!b.instance_id.empty()) {
+        f->ids = std::make_shared<const std::vector<uint32_t>>(std::move(b.instance_id));
+        f->names = std::make_shared<const std::vector<std::pair<uint32_t, std::string>>>(
+            std::move(frame.names.instances));
+    } else if (previous && previous->version == f->version) {
+        f->ids = previous->ids;
+        f->names = previous->names;
+    }
+    return f;
+}
+
+StreamHub::RenderedFrame StreamHub::encode_render(Result<Frame>& frame, float exposure,
+                                                  const ViewPick& pick) {
+    RenderedFrame rendered;
+    if (!frame) {
+        rendered.status = Unexpected(frame.error());
+        return rendered;
+    }
+    rendered.frame = tone_map_frame(frame.value(), exposure, pick.previous);
+    for (const std::string& h : pick.highlights) {
+        auto part = encode_part(*rendered.frame, h, pick.spec.quality);
+        if (!part) {
+            rendered.status = Unexpected(part.error());
+            break;
+        }
+        rendered.parts[h] = std::move(part.value());
+    }
+    return rendered;
+}
+
+void StreamHub::offer_render(const std::string& key, uint64_t version, Clock::time_point now,
+                             const Result<Frame>& frame, RenderedFrame&& rendered) {
     std::vector<std::pair<std::shared_ptr<StreamChannel>, StreamChannel::Part>> offers;
     {
         std::lock_guard lock(m_mutex);
         auto it = m_views.find(key);
-        if (it == m_views.end() || m_stopping) return true;
+        if (it == m_views.end() || m_stopping) return;
         View& v = it->second;
         v.next_render = now + std::chrono::milliseconds(int64_t(1000.0 / v.spec.fps));
-        if (!encoded) {
+        if (!rendered.status) {
             // Retried once the scene changes (a camera override the new camera makes valid).
             ++m_stats.render_errors;
             v.failed_version = version;
-            spdlog::warn("viewer render failed: {}", encoded.error().message);
-            return true;
+            spdlog::warn("viewer render failed: {}", rendered.status.error().message);
+            return;
         }
         ++m_stats.frames_rendered;
         const FrameInfo& info = frame->info;
@@ -349,8 +371,8 @@ bool StreamHub::render_one(Clock::time_point now) {
         v.launches = info.version == v.version ? v.launches + 1 : 1;
         v.version = info.version;
         v.samples = info.samples;
-        v.frame = kept;
-        v.parts = std::move(parts);
+        v.frame = rendered.frame;
+        v.parts = std::move(rendered.parts);
         for (Watcher& w : v.viewers) {
             auto p = v.parts.find(w.highlight);
             if (p == v.parts.end()) {
@@ -363,7 +385,6 @@ bool StreamHub::render_one(Clock::time_point now) {
         m_stats.frames_sent += offers.size();
     }
     for (auto& [c, part] : offers) c->offer(part);
-    return true;
 }
 
 Result<StreamChannel::Part> StreamHub::encode_part(const ViewFrame& frame,

@@ -33,6 +33,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
@@ -131,6 +132,19 @@ private:
         std::shared_ptr<const ViewFrame> frame;            ///< the newest frame
         std::map<std::string, StreamChannel::Part> parts;  ///< it encoded, per highlight
     };
+    /// The view render_one picked, copied out of the lock for the render.
+    struct ViewPick {
+        std::string key;
+        ViewerSpec spec;
+        std::set<std::string> highlights;           ///< of the view's viewers ("" for none)
+        std::shared_ptr<const ViewFrame> previous;  ///< of this accumulation, with its ids
+    };
+    /// A viewer render made ready to hand out.
+    struct RenderedFrame {
+        std::shared_ptr<ViewFrame> frame;                  ///< tone-mapped; null if it failed
+        std::map<std::string, StreamChannel::Part> parts;  ///< its JPEG, per highlight
+        Status status;  ///< the render's error, or the first failed encoding's
+    };
 
     /// `frame` as one stream part for viewers highlighting `highlight`.
     Result<StreamChannel::Part> encode_part(const ViewFrame& frame, const std::string& highlight,
@@ -143,6 +157,22 @@ private:
     void publish_events(std::vector<RebuildReport> reports, Clock::time_point now);
     /// Renders the most overdue view that needs a frame; false when none did.
     bool render_one(Clock::time_point now);
+    /// Whether `view` needs a frame at scene `version`: the scene moved, or accumulation can
+    /// still improve the frame (or one more launch must trace the ids a highlight needs).
+    static bool wants_frame(const View& view, uint64_t version);
+    /// Drops the views nobody watches, then picks the most overdue view due a frame at
+    /// `version`; none when none is due or API work waits (counted as a deferred render).
+    std::optional<ViewPick> pick_view(uint64_t version, Clock::time_point now);
+    /// `frame` tone-mapped, taking its ids; without ids of its own, those of `previous` when it
+    /// is at the same version.
+    static std::shared_ptr<ViewFrame> tone_map_frame(
+        Frame& frame, float exposure, const std::shared_ptr<const ViewFrame>& previous);
+    /// Tone-maps the render's frame once, then encodes one JPEG per highlight `pick` asks for.
+    RenderedFrame encode_render(Result<Frame>& frame, float exposure, const ViewPick& pick);
+    /// Records the render of view `key` at scene `version` and offers its parts to the view's
+    /// viewers; a failed render is counted and not retried before the scene moves.
+    void offer_render(const std::string& key, uint64_t version, Clock::time_point now,
+                      const Result<Frame>& frame, RenderedFrame&& rendered);
     uint64_t scene_version() const;
 
     Engine& m_engine;

@@ -70,6 +70,19 @@ Unexpected<Error> storage(std::string message) {
     return failure(ErrorCode::Storage, std::move(message));
 }
 
+/// What is left of the time until `deadline`; none once it has passed.
+milliseconds time_left(Clock::time_point deadline) {
+    return std::max(milliseconds(0),
+                    std::chrono::duration_cast<milliseconds>(deadline - Clock::now()));
+}
+
+/// The answer to a write with If-Match `expected` when the edit log is at `head`.
+Unexpected<Error> log_moved_on(uint64_t head, uint64_t expected) {
+    return failure(
+        ErrorCode::VersionMismatch,
+        "the edit log is at version " + std::to_string(head) + ", not " + std::to_string(expected));
+}
+
 }  // namespace
 
 Replica::Replica(const ReplicaOptions& options, Engine& engine)
@@ -243,31 +256,8 @@ Status Replica::read_and_apply(RedisConnection& c) {
     auto reply =
         c.command({"XREAD", "COUNT", READ_COUNT, "BLOCK", BLOCK_MS, "STREAMS", url.stream, after});
     if (!reply) return Unexpected(reply.error());
-    if (reply.value().is_nil()) {
-        // Nothing new for a second: refresh the head (entries trimmed away show up here).
-        auto head = c.command({"GET", url.version_key()});
-        if (!head) return Unexpected(head.error());
-        uint64_t v = 0;
-        if (!head.value().is_nil() && parse_u64(head.value().str, v)) set_log_version(v);
-        if (m_log_version.load() > m_applied.load()) {
-            // The head moved but XREAD found nothing after us: the entries are gone.
-            const uint64_t applied = m_applied.load();
-            auto held = holds_entry_after(c, applied);
-            if (!held) return Unexpected(held.error());
-            if (!held.value()) {
-                if (Status s = load_snapshot(c, applied,
-                                             "the log is at version " +
-                                                 std::to_string(m_log_version.load()) +
-                                                 " but holds no entry after version " +
-                                                 std::to_string(applied) +
-                                                 " (trimmed or deleted)");
-                    !s)
-                    return s;
-                if (!m_joined && m_applied.load() >= m_join_target) mark_joined();
-            }
-        }
-        return {};
-    }
+    // Nothing new for a second: refresh the head (entries trimmed away show up here).
+    if (reply.value().is_nil()) return refresh_head(c);
     // [[stream, [[id, [field, value, ...]], ...]]]
     const RedisReply& streams = reply.value();
     if (streams.elements.empty() || streams.elements[0].elements.size() < 2) return {};
@@ -278,87 +268,125 @@ Status Replica::read_and_apply(RedisConnection& c) {
             stop_loudly("the log returned a malformed entry");
             return storage("malformed");
         }
-        uint64_t version = 0;
-        const std::string& id = e.elements[0].str;
-        const std::string* record = nullptr;
-        int64_t appended_ms = 0;
-        const auto& fields = e.elements[1].elements;
-        for (std::size_t i = 0; i + 1 < fields.size(); i += 2) {
-            if (fields[i].str == "r") record = &fields[i + 1].str;
-            if (fields[i].str == "t")
-                (void)std::from_chars(fields[i + 1].str.data(),
-                                      fields[i + 1].str.data() + fields[i + 1].str.size(),
-                                      appended_ms);
-        }
+        const StreamEntry entry = read_stream_entry(e);
         const uint64_t applied = m_applied.load();
-        if (!parse_entry_version(id, version) || record == nullptr) {
-            stop_loudly("the log entry " + id +
-                        " is not a Strata entry (no version id or no "
-                        "field 'r')");
-            return storage("poisoned");
-        }
-        if (version <= applied) {
-            stop_loudly("the log entry of version " + std::to_string(version) +
-                        " comes after this replica's version " + std::to_string(applied) +
-                        " in the stream (entries out of order)");
-            return storage("out of order");
-        }
-        if (version != applied + 1) {
+        if (Status s = check_entry_order(entry, applied); !s) return s;
+        if (entry.version != applied + 1) {
             // Trimmed before this replica read them: jump to the snapshot, then read on from it
             // (the rest of this reply is older than the snapshot's version or read again).
-            if (Status s = load_snapshot(
-                    c, applied,
-                    "the log entry of version " + std::to_string(version) +
-                        " follows this replica's version " + std::to_string(applied) +
-                        ": the entries between were trimmed before it read them");
-                !s)
-                return s;
-            if (!m_joined && m_applied.load() >= m_join_target) mark_joined();
-            return {};
+            return jump_to_snapshot(c, applied,
+                                    "the log entry of version " + std::to_string(entry.version) +
+                                        " follows this replica's version " +
+                                        std::to_string(applied) +
+                                        ": the entries between were trimmed before it read them");
         }
-        set_log_version(version);
-        if (m_lag_since_ms.load() == 0) m_lag_since_ms = appended_ms ? appended_ms : unix_ms();
+        set_log_version(entry.version);
+        if (m_lag_since_ms.load() == 0)
+            m_lag_since_ms = entry.appended_ms ? entry.appended_ms : unix_ms();
 
         // Step: check and apply the entry at exactly the version it was appended for.
-        auto decoded = decode_entry(*record);
-        if (!decoded || decoded.value().version != version) {
-            stop_loudly("poisoned log entry " + id + ": " +
-                        (decoded ? "it says version " + std::to_string(decoded.value().version)
-                                 : decoded.error().message));
-            return storage("poisoned");
-        }
-        auto batch = durable::decode_batch(decoded.value().payload);
-        if (!batch) {
-            stop_loudly("poisoned log entry " + id + ": " + batch.error().describe());
-            return storage("poisoned");
-        }
-        auto done = m_engine.apply(std::move(batch.value()), applied);
-        if (!done) {
-            stop_loudly("poisoned log entry " + id + " does not apply at version " +
-                        std::to_string(applied) + ": " + done.error().describe());
-            return storage("poisoned");
-        }
-        {
-            std::lock_guard lock(m_mutex);
-            m_applied = version;
-            ++m_counters.entries_applied;
-        }
-        m_cv.notify_all();
-        if (version >= m_log_version.load()) {
-            m_lag_since_ms = 0;
-        } else {
-            m_lag_since_ms = appended_ms ? appended_ms : m_lag_since_ms.load();
-        }
-        if (!m_joined && version >= m_join_target) mark_joined();
-        if (m_options.snapshot_every > 0 && version % m_options.snapshot_every == 0 &&
-            version > m_known_snapshot.load()) {
-            {
-                std::lock_guard lock(m_snapshot_mutex);
-                m_snapshot_due = true;
-            }
-            m_snapshot_cv.notify_one();
-        }
+        if (Status s = apply_entry(entry, applied); !s) return s;
+        record_applied(entry);
     }
+    return {};
+}
+
+Status Replica::refresh_head(RedisConnection& c) {
+    auto head = c.command({"GET", m_options.url.version_key()});
+    if (!head) return Unexpected(head.error());
+    uint64_t v = 0;
+    if (!head.value().is_nil() && parse_u64(head.value().str, v)) set_log_version(v);
+    if (m_log_version.load() <= m_applied.load()) return {};
+    // The head moved but XREAD found nothing after us: the entries are gone.
+    const uint64_t applied = m_applied.load();
+    auto held = holds_entry_after(c, applied);
+    if (!held) return Unexpected(held.error());
+    if (held.value()) return {};
+    return jump_to_snapshot(c, applied,
+                            "the log is at version " + std::to_string(m_log_version.load()) +
+                                " but holds no entry after version " + std::to_string(applied) +
+                                " (trimmed or deleted)");
+}
+
+Replica::StreamEntry Replica::read_stream_entry(const RedisReply& e) {
+    StreamEntry entry{.id = e.elements[0].str};
+    entry.has_version = parse_entry_version(entry.id, entry.version);
+    const auto& fields = e.elements[1].elements;
+    for (std::size_t i = 0; i + 1 < fields.size(); i += 2) {
+        if (fields[i].str == "r") entry.record = &fields[i + 1].str;
+        if (fields[i].str == "t")
+            (void)std::from_chars(fields[i + 1].str.data(),
+                                  fields[i + 1].str.data() + fields[i + 1].str.size(),
+                                  entry.appended_ms);
+    }
+    return entry;
+}
+
+Status Replica::check_entry_order(const StreamEntry& entry, uint64_t applied) {
+    if (!entry.has_version || entry.record == nullptr) {
+        stop_loudly("the log entry " + entry.id +
+                    " is not a Strata entry (no version id or no "
+                    "field 'r')");
+        return storage("poisoned");
+    }
+    if (entry.version <= applied) {
+        stop_loudly("the log entry of version " + std::to_string(entry.version) +
+                    " comes after this replica's version " + std::to_string(applied) +
+                    " in the stream (entries out of order)");
+        return storage("out of order");
+    }
+    return {};
+}
+
+Status Replica::apply_entry(const StreamEntry& entry, uint64_t applied) {
+    auto decoded = decode_entry(*entry.record);
+    if (!decoded || decoded.value().version != entry.version) {
+        stop_loudly("poisoned log entry " + entry.id + ": " +
+                    (decoded ? "it says version " + std::to_string(decoded.value().version)
+                             : decoded.error().message));
+        return storage("poisoned");
+    }
+    auto batch = durable::decode_batch(decoded.value().payload);
+    if (!batch) {
+        stop_loudly("poisoned log entry " + entry.id + ": " + batch.error().describe());
+        return storage("poisoned");
+    }
+    auto done = m_engine.apply(std::move(batch.value()), applied);
+    if (!done) {
+        stop_loudly("poisoned log entry " + entry.id + " does not apply at version " +
+                    std::to_string(applied) + ": " + done.error().describe());
+        return storage("poisoned");
+    }
+    return {};
+}
+
+void Replica::record_applied(const StreamEntry& entry) {
+    const uint64_t version = entry.version;
+    {
+        std::lock_guard lock(m_mutex);
+        m_applied = version;
+        ++m_counters.entries_applied;
+    }
+    m_cv.notify_all();
+    if (version >= m_log_version.load()) {
+        m_lag_since_ms = 0;
+    } else {
+        m_lag_since_ms = entry.appended_ms ? entry.appended_ms : m_lag_since_ms.load();
+    }
+    if (!m_joined && version >= m_join_target) mark_joined();
+    if (m_options.snapshot_every > 0 && version % m_options.snapshot_every == 0 &&
+        version > m_known_snapshot.load()) {
+        {
+            std::lock_guard lock(m_snapshot_mutex);
+            m_snapshot_due = true;
+        }
+        m_snapshot_cv.notify_one();
+    }
+}
+
+Status Replica::jump_to_snapshot(RedisConnection& c, uint64_t applied, const std::string& gap) {
+    if (Status s = load_snapshot(c, applied, gap); !s) return s;
+    if (!m_joined && m_applied.load() >= m_join_target) mark_joined();
     return {};
 }
 
@@ -462,23 +490,7 @@ RedisConnection* Replica::writer(Error& error) {
 
 Result<ApplyResult> Replica::append(EditBatch&& batch, std::optional<uint64_t> expected) {
     const auto deadline = Clock::now() + m_options.write_timeout;
-    auto left = [&] {
-        return std::max(milliseconds(0),
-                        std::chrono::duration_cast<milliseconds>(deadline - Clock::now()));
-    };
-    auto stopped = [&]() -> Unexpected<Error> {
-        std::lock_guard lock(m_mutex);
-        return storage("this replica has stopped following the edit log: " + m_stop_reason);
-    };
-    if (m_stopped) return stopped();
-    {
-        std::unique_lock lock(m_mutex);
-        m_cv.wait_until(lock, deadline, [&] { return m_joined || m_stopped || m_shutdown; });
-    }
-    if (m_stopped) return stopped();
-    if (!m_joined)
-        return storage("this replica has not caught up with the edit log " +
-                       m_options.url.describe() + " yet (is Redis reachable?)");
+    if (Status joined = wait_joined(deadline); !joined) return Unexpected(joined.error());
 
     // The entry is encoded once; each attempt only restamps its version.
     const std::size_t count = batch.edits.size();
@@ -487,97 +499,137 @@ Result<ApplyResult> Replica::append(EditBatch&& batch, std::optional<uint64_t> e
     for (;;) {
         // Step: the version to validate at. A client that saw a newer version (If-Match) than
         // this replica has applied waits for it first.
-        if (expected && m_applied.load() < *expected && !wait_applied(*expected, left())) {
-            if (m_stopped) return stopped();
-            return storage("this replica is at version " + std::to_string(m_applied.load()) +
-                           ", behind the If-Match version " + std::to_string(*expected) +
-                           ", and did not catch up in time");
-        }
-        const uint64_t base = m_applied.load();
-        if (expected && base != *expected)
-            return failure(ErrorCode::VersionMismatch, "the scene is at version " +
-                                                           std::to_string(base) + ", not " +
-                                                           std::to_string(*expected));
+        auto base = validation_base(expected, deadline);
+        if (!base) return Unexpected(base.error());
         // Step: validate against the local scene at `base`.
-        auto copy =
-            durable::decode_batch(std::string_view(entry).substr(durable::RECORD_HEADER_BYTES));
-        if (!copy) return Unexpected(copy.error());
-        if (Status ok = m_engine.validate(std::move(copy.value()), base); !ok) {
-            if (ok.error().code != ErrorCode::VersionMismatch) {
-                // Refused at `base`: maybe only because this replica has not applied what the
-                // log holds yet (a client writing on one replica, then on another). The answer
-                // stands only against the log's head.
-                auto head = log_head();
-                if (!head) return Unexpected(head.error());
-                if (head.value() <= base) return Unexpected(ok.error());
-                set_log_version(head.value());
-                if (expected)
-                    return failure(ErrorCode::VersionMismatch,
-                                   "the edit log is at version " + std::to_string(head.value()) +
-                                       ", not " + std::to_string(*expected));
-                if (!wait_applied(head.value(), left())) {
-                    if (m_stopped) return stopped();
-                    return storage("this replica did not catch up with the edit log (version " +
-                                   std::to_string(head.value()) + ") in time to validate");
-                }
-                continue;
-            }
-            // The reader applied an entry meanwhile: validate again at the new version.
-            if (Clock::now() >= deadline)
-                return storage("the scene kept moving: the batch could not be validated within " +
-                               std::to_string(m_options.write_timeout.count()) + " ms");
-            std::this_thread::yield();
-            continue;
-        }
+        auto valid = validate_at(entry, base.value(), expected, deadline);
+        if (!valid) return Unexpected(valid.error());
+        if (!valid.value()) continue;
         // Step: append only while the log's head is still `base`.
-        const std::string stamped = restamp_entry(entry, base + 1);
-        const std::string base_text = std::to_string(base);
-        const std::string now_text = std::to_string(unix_ms());
-        Result<RedisReply> reply = [&]() -> Result<RedisReply> {
-            std::lock_guard lock(m_writer_mutex);
-            Error error;
-            RedisConnection* c = writer(error);
-            if (!c) return Unexpected(error);
-            return c->eval(APPEND_SCRIPT, {m_options.url.stream, m_options.url.version_key()},
-                           {base_text, stamped, now_text});
-        }();
-        if (!reply) return Unexpected(reply.error());
-        const RedisReply& r = reply.value();
-        if (r.elements.size() != 2)
-            return storage("the edit log's append script answered something unexpected");
-        const uint64_t head = uint64_t(r.elements[1].integer);
-        if (r.elements[0].integer == 1) {
-            {
-                std::lock_guard lock(m_mutex);
-                ++m_counters.appends;
-            }
-            if (!wait_applied(head, left())) {
-                if (m_stopped) return stopped();
-                return storage("the batch was appended to the edit log as version " +
-                               std::to_string(head) +
-                               " but this replica has not applied it "
-                               "in time (it will; read with min_version=" +
-                               std::to_string(head) + ")");
-            }
-            return ApplyResult{head, count};
-        }
+        auto answer = append_at(entry, base.value());
+        if (!answer) return Unexpected(answer.error());
+        if (answer->appended) return await_appended(answer->head, count, deadline);
         // Step: the log moved on. With If-Match that is the client's answer; without, catch
         // up and try again.
-        {
-            std::lock_guard lock(m_mutex);
-            ++m_counters.append_conflicts;
-        }
-        set_log_version(head);
-        if (expected)
-            return failure(ErrorCode::VersionMismatch, "the edit log is at version " +
-                                                           std::to_string(head) + ", not " +
-                                                           std::to_string(*expected));
-        if (!wait_applied(head, left())) {
-            if (m_stopped) return stopped();
-            return storage("the edit log kept moving: the batch could not be appended within " +
-                           std::to_string(m_options.write_timeout.count()) + " ms");
-        }
+        if (Status s = catch_up_after_conflict(answer->head, expected, deadline); !s)
+            return Unexpected(s.error());
     }
+}
+
+Unexpected<Error> Replica::stopped_error() const {
+    std::lock_guard lock(m_mutex);
+    return storage("this replica has stopped following the edit log: " + m_stop_reason);
+}
+
+Status Replica::wait_joined(Clock::time_point deadline) {
+    if (m_stopped) return stopped_error();
+    {
+        std::unique_lock lock(m_mutex);
+        m_cv.wait_until(lock, deadline, [&] { return m_joined || m_stopped || m_shutdown; });
+    }
+    if (m_stopped) return stopped_error();
+    if (!m_joined)
+        return storage("this replica has not caught up with the edit log " +
+                       m_options.url.describe() + " yet (is Redis reachable?)");
+    return {};
+}
+
+Result<uint64_t> Replica::validation_base(std::optional<uint64_t> expected,
+                                          Clock::time_point deadline) {
+    if (expected && m_applied.load() < *expected && !wait_applied(*expected, time_left(deadline))) {
+        if (m_stopped) return stopped_error();
+        return storage("this replica is at version " + std::to_string(m_applied.load()) +
+                       ", behind the If-Match version " + std::to_string(*expected) +
+                       ", and did not catch up in time");
+    }
+    const uint64_t base = m_applied.load();
+    if (expected && base != *expected)
+        return failure(ErrorCode::VersionMismatch, "the scene is at version " +
+                                                       std::to_string(base) + ", not " +
+                                                       std::to_string(*expected));
+    return base;
+}
+
+Result<bool> Replica::validate_at(const std::string& entry, uint64_t base,
+                                  std::optional<uint64_t> expected, Clock::time_point deadline) {
+    auto copy = durable::decode_batch(std::string_view(entry).substr(durable::RECORD_HEADER_BYTES));
+    if (!copy) return Unexpected(copy.error());
+    Status ok = m_engine.validate(std::move(copy.value()), base);
+    if (ok) return true;
+    if (ok.error().code != ErrorCode::VersionMismatch) {
+        // Refused at `base`: maybe only because this replica has not applied what the log
+        // holds yet (a client writing on one replica, then on another). The answer stands
+        // only against the log's head.
+        auto head = log_head();
+        if (!head) return Unexpected(head.error());
+        if (head.value() <= base) return Unexpected(ok.error());
+        set_log_version(head.value());
+        if (expected) return log_moved_on(head.value(), *expected);
+        if (!wait_applied(head.value(), time_left(deadline))) {
+            if (m_stopped) return stopped_error();
+            return storage("this replica did not catch up with the edit log (version " +
+                           std::to_string(head.value()) + ") in time to validate");
+        }
+        return false;
+    }
+    // The reader applied an entry meanwhile: validate again at the new version.
+    if (Clock::now() >= deadline)
+        return storage("the scene kept moving: the batch could not be validated within " +
+                       std::to_string(m_options.write_timeout.count()) + " ms");
+    std::this_thread::yield();
+    return false;
+}
+
+Result<Replica::AppendAnswer> Replica::append_at(const std::string& entry, uint64_t base) {
+    const std::string stamped = restamp_entry(entry, base + 1);
+    const std::string base_text = std::to_string(base);
+    const std::string now_text = std::to_string(unix_ms());
+    Result<RedisReply> reply = [&]() -> Result<RedisReply> {
+        std::lock_guard lock(m_writer_mutex);
+        Error error;
+        RedisConnection* c = writer(error);
+        if (!c) return Unexpected(error);
+        return c->eval(APPEND_SCRIPT, {m_options.url.stream, m_options.url.version_key()},
+                       {base_text, stamped, now_text});
+    }();
+    if (!reply) return Unexpected(reply.error());
+    const RedisReply& r = reply.value();
+    if (r.elements.size() != 2)
+        return storage("the edit log's append script answered something unexpected");
+    return AppendAnswer{r.elements[0].integer == 1, uint64_t(r.elements[1].integer)};
+}
+
+Result<ApplyResult> Replica::await_appended(uint64_t version, std::size_t count,
+                                            Clock::time_point deadline) {
+    {
+        std::lock_guard lock(m_mutex);
+        ++m_counters.appends;
+    }
+    if (!wait_applied(version, time_left(deadline))) {
+        if (m_stopped) return stopped_error();
+        return storage("the batch was appended to the edit log as version " +
+                       std::to_string(version) +
+                       " but this replica has not applied it "
+                       "in time (it will; read with min_version=" +
+                       std::to_string(version) + ")");
+    }
+    return ApplyResult{version, count};
+}
+
+Status Replica::catch_up_after_conflict(uint64_t head, std::optional<uint64_t> expected,
+                                        Clock::time_point deadline) {
+    {
+        std::lock_guard lock(m_mutex);
+        ++m_counters.append_conflicts;
+    }
+    set_log_version(head);
+    if (expected) return log_moved_on(head, *expected);
+    if (!wait_applied(head, time_left(deadline))) {
+        if (m_stopped) return stopped_error();
+        return storage("the edit log kept moving: the batch could not be appended within " +
+                       std::to_string(m_options.write_timeout.count()) + " ms");
+    }
+    return {};
 }
 
 Result<uint64_t> Replica::log_head() {

@@ -1,5 +1,5 @@
 #pragma once
-// A replica: this server's engine following the shared edit log, a Redis stream (issue 16).
+// A replica: this server's engine following the shared edit log, a Redis stream.
 //
 // One writer path. Every batch reaches the engine through the reader thread, which reads the
 // stream in order (XREAD BLOCK) and applies each entry at exactly the version it was appended
@@ -48,6 +48,7 @@ class DurableStore;
 namespace strata::replica {
 
 class RedisConnection;
+struct RedisReply;
 
 struct ReplicaOptions {
     RedisUrl url;
@@ -78,7 +79,7 @@ struct ReplicaStatus {
     uint64_t snapshot_loaded_version = 0;  ///< the newest Redis snapshot this replica loaded
     uint64_t snapshot_jumps = 0;  ///< scenes replaced by a newer snapshot over a trimmed gap
     uint64_t snapshots_written = 0;
-    uint64_t snapshot_version = 0;  ///< newest snapshot this replica knows of
+    uint64_t snapshot_version = 0;       ///< newest snapshot this replica knows of
     uint64_t entries_trimmed = 0;        ///< entries this replica's snapshots trimmed
 };
 
@@ -108,12 +109,41 @@ public:
     bool ready() const { return m_joined.load() && !m_stopped.load(); }
 
 private:
+    /// One entry of an XREAD reply, as the reader follows it.
+    struct StreamEntry {
+        const std::string& id;                ///< the stream entry id, "<version>-0"
+        uint64_t version = 0;                 ///< from the id
+        bool has_version = false;             ///< the id holds a version
+        const std::string* record = nullptr;  ///< field 'r', the journal record; null if absent
+        int64_t appended_ms = 0;              ///< field 't', unix ms of the append; 0 if absent
+    };
+    /// What the conditional append answered.
+    struct AppendAnswer {
+        bool appended = false;  ///< the log's head was still the base: the entry is in
+        uint64_t head = 0;      ///< the entry's version once appended, else the log's version
+    };
+
     Replica(const ReplicaOptions& options, Engine& engine);
     void reader_loop();
     /// After a (re)connection: the log's head, the snapshot to start from.
     Status on_connect(RedisConnection& c);
     /// Reads and applies one XREAD's worth; errors lose the connection.
     Status read_and_apply(RedisConnection& c);
+    /// With nothing new to read: refreshes the log's head, and jumps to the snapshot when the
+    /// log has moved on but no longer holds the entry after the applied version.
+    Status refresh_head(RedisConnection& c);
+    /// The id and fields of XREAD entry `e` (an id and a field list, at least).
+    static StreamEntry read_stream_entry(const RedisReply& e);
+    /// Stops loudly at an entry that is not a Strata entry or does not come after `applied`.
+    Status check_entry_order(const StreamEntry& entry, uint64_t applied);
+    /// Checks `entry` and applies it to the scene at `applied`, exactly the version it was
+    /// appended for; stops loudly when it is poisoned.
+    Status apply_entry(const StreamEntry& entry, uint64_t applied);
+    /// Publishes `entry` as applied: wakes the waiters, updates the lag, joins when it was the
+    /// join target, and wakes the snapshotter when its version is due a snapshot.
+    void record_applied(const StreamEntry& entry);
+    /// load_snapshot over the gap after `applied`, then joins if that caught the replica up.
+    Status jump_to_snapshot(RedisConnection& c, uint64_t applied, const std::string& gap);
     /// Whether the log still holds the entry after version `applied`.
     Result<bool> holds_entry_after(RedisConnection& c, uint64_t applied);
     /// Loads the stored snapshot in place of the scene at `applied` (0: an empty scene joining;
@@ -125,6 +155,32 @@ private:
     void mark_joined();
     void snapshot_loop();
     Status write_snapshot();
+    /// The error a write gets from a stopped replica, saying why it stopped.
+    Unexpected<Error> stopped_error() const;
+    /// Waits until `deadline` for the reader to join the log; an error when the replica stopped
+    /// or has not joined by then.
+    Status wait_joined(std::chrono::steady_clock::time_point deadline);
+    /// The applied version to validate a write at; with `expected` (If-Match), waits for it
+    /// first, and any other version is a VersionMismatch.
+    Result<uint64_t> validation_base(std::optional<uint64_t> expected,
+                                     std::chrono::steady_clock::time_point deadline);
+    /// Validates the batch of `entry` against the local scene at `base`: true when it holds,
+    /// false to try again at a newer version the replica has applied since; an error when it
+    /// is refused against the log's head too, or time ran out.
+    Result<bool> validate_at(const std::string& entry, uint64_t base,
+                             std::optional<uint64_t> expected,
+                             std::chrono::steady_clock::time_point deadline);
+    /// Appends `entry` as version `base` + 1 only while the log's head is still `base`.
+    Result<AppendAnswer> append_at(const std::string& entry, uint64_t base);
+    /// Counts the append of `version` (`count` edits) and waits until `deadline` for the reader
+    /// to apply it.
+    Result<ApplyResult> await_appended(uint64_t version, std::size_t count,
+                                       std::chrono::steady_clock::time_point deadline);
+    /// Counts an append refused because the log is at `head`. With `expected` (If-Match) that
+    /// is the client's answer, a VersionMismatch; without, waits for the reader to catch up
+    /// with `head` so that the write can try again.
+    Status catch_up_after_conflict(uint64_t head, std::optional<uint64_t> expected,
+                                   std::chrono::steady_clock::time_point deadline);
     /// The log's last version, read on the writer connection.
     Result<uint64_t> log_head();
     /// The writer connection, made on demand; null (and `error`) while Redis is unreachable.
