@@ -6,6 +6,10 @@
 
 namespace strata::server {
 
+using protocol::make_problem;
+using protocol::Problem;
+using protocol::ProblemType;
+
 namespace {
 
 /// RFC 9110 tchar: the characters of a token (method, header name).
@@ -52,8 +56,8 @@ std::string_view next_line(std::string_view s, std::size_t& pos) {
     return line;
 }
 
-HttpError error(int status, std::string detail) {
-    return HttpError{status, std::move(detail)};
+Problem error(ProblemType type, std::string detail) {
+    return make_problem(type, std::move(detail));
 }
 
 /// Calls f(element) for each element of a comma-separated list, trimmed of OWS.
@@ -67,74 +71,81 @@ void for_each_list_element(std::string_view list, F&& f) {
     }
 }
 
-std::string quoted(std::string_view s) {
+std::string in_quotes(std::string_view s) {
     return "'" + std::string(s.substr(0, 64)) + (s.size() > 64 ? "...'" : "'");
 }
 
-std::optional<HttpError> parse_request_line(std::string_view line, const HttpLimits& limits,
-                                            RequestHead& head) {
+std::optional<Problem> parse_request_line(std::string_view line, const HttpLimits& limits,
+                                          RequestHead& head) {
     const std::size_t sp1 = line.find(' ');
     const std::size_t sp2 = sp1 == std::string_view::npos ? sp1 : line.find(' ', sp1 + 1);
     if (sp2 == std::string_view::npos || line.find(' ', sp2 + 1) != std::string_view::npos)
-        return error(400, "malformed request line (expected: METHOD SP target SP HTTP/1.1)");
+        return error(ProblemType::InvalidRequest,
+                     "malformed request line (expected: METHOD SP target SP HTTP/1.1)");
     const std::string_view method = line.substr(0, sp1);
     const std::string_view target = line.substr(sp1 + 1, sp2 - sp1 - 1);
     const std::string_view version = line.substr(sp2 + 1);
     if (method.empty() || method.size() > 32 ||
         !std::all_of(method.begin(), method.end(), [](char c) { return is_tchar(c); }))
-        return error(400, "malformed request method");
-    if (target.empty()) return error(400, "empty request target");
+        return error(ProblemType::InvalidRequest, "malformed request method");
+    if (target.empty()) return error(ProblemType::InvalidRequest, "empty request target");
     if (target.size() > limits.max_target_bytes)
-        return error(414, "the request target is " + std::to_string(target.size()) +
-                              " bytes long; the limit is " +
-                              std::to_string(limits.max_target_bytes) + " (--max-uri-bytes)");
+        return error(ProblemType::UriTooLong,
+                     "the request target is " + std::to_string(target.size()) +
+                         " bytes long; the limit is " + std::to_string(limits.max_target_bytes) +
+                         " (--max-uri-bytes)");
     for (unsigned char c : target) {
         if (c < 0x21 || c > 0x7E)
-            return error(400,
+            return error(ProblemType::InvalidRequest,
                          "the request target holds a control character, a space or a "
                          "non-ASCII byte (percent-encode it)");
     }
     if (version.size() != 8 || version.substr(0, 5) != "HTTP/" || version[6] != '.' ||
         version[5] < '0' || version[5] > '9' || version[7] < '0' || version[7] > '9')
-        return error(400, "malformed HTTP version");
+        return error(ProblemType::InvalidRequest, "malformed HTTP version");
     if (version[5] != '1')
-        return error(505, "HTTP version " + std::string(version.substr(5)) +
-                              " is not supported; this server speaks HTTP/1.1 and HTTP/1.0");
+        return error(ProblemType::HttpVersion,
+                     "HTTP version " + std::string(version.substr(5)) +
+                         " is not supported; this server speaks HTTP/1.1 and HTTP/1.0");
     static constexpr std::string_view KNOWN[] = {"GET",   "HEAD",   "POST",   "PUT",
                                                  "PATCH", "DELETE", "OPTIONS"};
     if (std::find(std::begin(KNOWN), std::end(KNOWN), method) == std::end(KNOWN))
-        return error(501, "method " + quoted(method) + " is not implemented");
+        return error(ProblemType::NotImplemented,
+                     "method " + in_quotes(method) + " is not implemented");
     head.method = std::string(method);
     head.target = std::string(target);
     head.minor_version = version[7] - '0';
     return std::nullopt;
 }
 
-std::optional<HttpError> parse_field(std::string_view line, RequestHead& head) {
+std::optional<Problem> parse_field(std::string_view line, RequestHead& head) {
     if (line.front() == ' ' || line.front() == '\t')
-        return error(400, "obsolete line folding (a header line starting with whitespace)");
+        return error(ProblemType::InvalidRequest,
+                     "obsolete line folding (a header line starting with whitespace)");
     const std::size_t colon = line.find(':');
-    if (colon == std::string_view::npos) return error(400, "a header line has no colon");
+    if (colon == std::string_view::npos)
+        return error(ProblemType::InvalidRequest, "a header line has no colon");
     const std::string_view name = line.substr(0, colon);
-    if (name.empty()) return error(400, "a header line has an empty name");
+    if (name.empty()) return error(ProblemType::InvalidRequest, "a header line has an empty name");
     for (unsigned char c : name) {
         if (!is_tchar(c))
-            return error(400, c == ' ' || c == '\t'
-                                  ? "whitespace between a header name and its colon"
-                                  : "invalid character in a header name");
+            return error(ProblemType::InvalidRequest,
+                         c == ' ' || c == '\t' ? "whitespace between a header name and its colon"
+                                               : "invalid character in a header name");
     }
     const std::string_view value = trim_ows(line.substr(colon + 1));
     for (unsigned char c : value) {
         if (!is_field_char(c))
-            return error(400, "header " + quoted(name) +
-                                  " holds a control character (NUL, CR, ...) in its value");
+            return error(ProblemType::InvalidRequest,
+                         "header " + in_quotes(name) +
+                             " holds a control character (NUL, CR, ...) in its value");
     }
     head.headers.push_back({std::string(name), std::string(value)});
     return std::nullopt;
 }
 
 /// Works out the body framing, keep-alive and Expect from the fields (RFC 9112 section 6).
-std::optional<HttpError> interpret_fields(RequestHead& head) {
+std::optional<Problem> interpret_fields(RequestHead& head) {
     static constexpr std::string_view SINGLETONS[] = {
         "host", "authorization", "content-type", "if-match", "expect", "content-encoding"};
     std::size_t hosts = 0;
@@ -147,7 +158,8 @@ std::optional<HttpError> interpret_fields(RequestHead& head) {
             if (!iequals(f.name, s)) continue;
             for (std::size_t j = 0; j < i; ++j) {
                 if (iequals(head.headers[j].name, s))
-                    return error(400, "header " + quoted(f.name) + " is given more than once");
+                    return error(ProblemType::InvalidRequest,
+                                 "header " + in_quotes(f.name) + " is given more than once");
             }
         }
         if (iequals(f.name, "host")) {
@@ -157,9 +169,10 @@ std::optional<HttpError> interpret_fields(RequestHead& head) {
             const char* end = f.value.data() + f.value.size();
             const auto [p, ec] = std::from_chars(f.value.data(), end, n);
             if (f.value.empty() || ec != std::errc() || p != end || f.value.size() > 19)
-                return error(400, "Content-Length " + quoted(f.value) + " is not a number");
+                return error(ProblemType::InvalidRequest,
+                             "Content-Length " + in_quotes(f.value) + " is not a number");
             if (has_length && n != head.content_length)
-                return error(400, "conflicting Content-Length headers");
+                return error(ProblemType::InvalidRequest, "conflicting Content-Length headers");
             has_length = true;
             head.content_length = n;
         } else if (iequals(f.name, "transfer-encoding")) {
@@ -174,22 +187,26 @@ std::optional<HttpError> interpret_fields(RequestHead& head) {
         } else if (iequals(f.name, "expect")) {
             if (!iequals(f.value, "100-continue"))
                 return error(
-                    417, "Expect: " + quoted(f.value) + " is not supported (only 100-continue is)");
+                    ProblemType::ExpectationFailed,
+                    "Expect: " + in_quotes(f.value) + " is not supported (only 100-continue is)");
             head.expect_continue = true;
         }
     }
     if (head.minor_version >= 1 && hosts == 0)
-        return error(400, "an HTTP/1.1 request needs a Host header");
+        return error(ProblemType::InvalidRequest, "an HTTP/1.1 request needs a Host header");
     if (has_te) {
         if (has_length)
-            return error(400, "Content-Length and Transfer-Encoding together (ambiguous framing)");
-        if (head.minor_version == 0) return error(400, "Transfer-Encoding in an HTTP/1.0 request");
+            return error(ProblemType::InvalidRequest,
+                         "Content-Length and Transfer-Encoding together (ambiguous framing)");
+        if (head.minor_version == 0)
+            return error(ProblemType::InvalidRequest, "Transfer-Encoding in an HTTP/1.0 request");
         std::size_t count = 0;
-        std::optional<HttpError> bad;
+        std::optional<Problem> bad;
         for_each_list_element(codings, [&](std::string_view coding) {
             if (!bad && (count++ > 0 || !iequals(coding, "chunked")))
-                bad = error(400, "unsupported transfer coding " + quoted(coding) +
-                                     " (only a single 'chunked' is accepted)");
+                bad = error(ProblemType::InvalidRequest,
+                            "unsupported transfer coding " + in_quotes(coding) +
+                                " (only a single 'chunked' is accepted)");
         });
         if (bad) return bad;
         head.framing = BodyFraming::Chunked;
@@ -227,36 +244,38 @@ std::size_t find_head_end(std::string_view buffer, std::size_t from) {
     return std::string_view::npos;
 }
 
-std::variant<RequestHead, HttpError> parse_request_head(std::string_view text,
-                                                        const HttpLimits& limits) {
+std::variant<RequestHead, Problem> parse_request_head(std::string_view text,
+                                                      const HttpLimits& limits) {
     if (text.size() > limits.max_head_bytes)
-        return error(431, "the request head is larger than " +
-                              std::to_string(limits.max_head_bytes) +
-                              " bytes (--max-header-bytes)");
+        return error(ProblemType::HeadersTooLarge, "the request head is larger than " +
+                                                       std::to_string(limits.max_head_bytes) +
+                                                       " bytes (--max-header-bytes)");
     RequestHead head;
     std::size_t pos = skip_empty_lines(text, 0);
     const std::string_view request_line = next_line(text, pos);
     if (request_line.find('\r') != std::string_view::npos)
-        return error(400, "a bare CR in the request line");
+        return error(ProblemType::InvalidRequest, "a bare CR in the request line");
     if (auto e = parse_request_line(request_line, limits, head)) return *e;
     while (pos < text.size()) {
         const std::string_view line = next_line(text, pos);
         if (line.empty()) break;
         if (line.size() > MAX_HEADER_LINE_BYTES)
-            return error(431, "a header line is longer than " +
-                                  std::to_string(MAX_HEADER_LINE_BYTES) + " bytes");
+            return error(
+                ProblemType::HeadersTooLarge,
+                "a header line is longer than " + std::to_string(MAX_HEADER_LINE_BYTES) + " bytes");
         if (head.headers.size() >= limits.max_headers)
-            return error(431, "more than " + std::to_string(limits.max_headers) +
-                                  " header fields (--max-headers)");
+            return error(ProblemType::HeadersTooLarge, "more than " +
+                                                           std::to_string(limits.max_headers) +
+                                                           " header fields (--max-headers)");
         if (auto e = parse_field(line, head)) return *e;
     }
     if (auto e = interpret_fields(head)) return *e;
     return head;
 }
 
-std::size_t ChunkedDecoder::fail(int status, std::string detail) {
+std::size_t ChunkedDecoder::fail(ProblemType type, std::string detail) {
     m_state = State::Failed;
-    m_error = HttpError{status, std::move(detail)};
+    m_error = make_problem(type, std::move(detail));
     return 0;
 }
 
@@ -278,7 +297,8 @@ std::size_t ChunkedDecoder::feed(std::string_view in, std::string& body) {
         const std::size_t lf = in.find('\n', used);
         const std::size_t take = (lf == std::string_view::npos ? in.size() : lf + 1) - used;
         if (m_line.size() + take > MAX_LINE + 2)
-            return used + fail(400, "a chunk-size or trailer line is too long");
+            return used +
+                   fail(ProblemType::InvalidRequest, "a chunk-size or trailer line is too long");
         m_line.append(in.substr(used, take));
         used += take;
         if (lf == std::string_view::npos) break;
@@ -286,9 +306,10 @@ std::size_t ChunkedDecoder::feed(std::string_view in, std::string& body) {
         line.remove_suffix(1);
         if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
         if (line.find('\r') != std::string_view::npos)
-            return used + fail(400, "a bare CR in the chunked body");
+            return used + fail(ProblemType::InvalidRequest, "a bare CR in the chunked body");
         if (m_state == State::DataEnd) {
-            if (!line.empty()) return used + fail(400, "chunk data longer than its size");
+            if (!line.empty())
+                return used + fail(ProblemType::InvalidRequest, "chunk data longer than its size");
             m_state = State::Size;
         } else if (m_state == State::Size) {
             const std::string_view digits = line.substr(0, line.find(';'));
@@ -297,13 +318,15 @@ std::size_t ChunkedDecoder::feed(std::string_view in, std::string& body) {
                 std::from_chars(digits.data(), digits.data() + digits.size(), size, 16);
             if (digits.empty() || digits.size() > 15 || ec != std::errc() ||
                 p != digits.data() + digits.size())
-                return used + fail(400, "malformed chunk size");
+                return used + fail(ProblemType::InvalidRequest, "malformed chunk size");
             for (unsigned char c : line.substr(digits.size())) {
-                if (!is_field_char(c)) return used + fail(400, "control character in a chunk");
+                if (!is_field_char(c))
+                    return used + fail(ProblemType::InvalidRequest, "control character in a chunk");
             }
             if (m_decoded + size > m_max_body)
-                return used + fail(413, "the chunked body is larger than the limit of " +
-                                            std::to_string(m_max_body) + " bytes");
+                return used +
+                       fail(ProblemType::TooLarge, "the chunked body is larger than the limit of " +
+                                                       std::to_string(m_max_body) + " bytes");
             m_decoded += size;
             m_remaining = size;
             m_state = size == 0 ? State::Trailer : State::Data;
@@ -313,8 +336,9 @@ std::size_t ChunkedDecoder::feed(std::string_view in, std::string& body) {
             m_trailer_bytes += line.size();
             RequestHead ignored;
             if (m_trailer_bytes > MAX_TRAILER_BYTES)
-                return used + fail(431, "the chunked body's trailer is too large");
-            if (auto e = parse_field(line, ignored)) return used + fail(e->status, e->detail);
+                return used + fail(ProblemType::HeadersTooLarge,
+                                   "the chunked body's trailer is too large");
+            if (auto e = parse_field(line, ignored)) return used + fail(e->type, e->detail);
         }
         m_line.clear();
     }

@@ -13,6 +13,8 @@
 #include <variant>
 #include <vector>
 
+#include "protocol/problem.h"
+
 namespace strata::server {
 
 /// Size limits on one request (ServerConfig holds the flags that set them).
@@ -26,12 +28,6 @@ struct HttpLimits {
 /// Longest header line accepted (431 beyond), as common proxies in front (nginx's 8 KiB header
 /// buffers) would.
 constexpr std::size_t MAX_HEADER_LINE_BYTES = 8192;
-
-/// Why a request is refused: the status to answer and a detail naming what was wrong.
-struct HttpError {
-    int status = 400;
-    std::string detail;
-};
 
 /// One header field as sent (the name keeps its spelling; the value is trimmed of OWS).
 struct HeaderField {
@@ -69,8 +65,8 @@ bool iequals(std::string_view a, std::string_view b);
 std::size_t find_head_end(std::string_view buffer, std::size_t from = 0);
 
 /// Parses a complete head (what find_head_end delimits).
-std::variant<RequestHead, HttpError> parse_request_head(std::string_view head,
-                                                        const HttpLimits& limits);
+std::variant<RequestHead, protocol::Problem> parse_request_head(std::string_view head,
+                                                                const HttpLimits& limits);
 
 /// Decodes a chunked body incrementally (RFC 9112 section 7.1): chunk extensions are skipped,
 /// trailer fields are read with the header rules and dropped.
@@ -84,11 +80,11 @@ public:
 
     bool done() const { return m_state == State::Done; }
     /// Set once the body is malformed (400) or larger than the limit (413).
-    const HttpError* error() const { return m_state == State::Failed ? &m_error : nullptr; }
+    const protocol::Problem* error() const { return m_state == State::Failed ? &m_error : nullptr; }
 
 private:
     enum class State : uint8_t { Size, Data, DataEnd, Trailer, Done, Failed };
-    std::size_t fail(int status, std::string detail);
+    std::size_t fail(protocol::ProblemType type, std::string detail);
 
     uint64_t m_max_body;
     State m_state = State::Size;
@@ -96,7 +92,7 @@ private:
     uint64_t m_remaining = 0;  ///< bytes left in the current chunk
     uint64_t m_decoded = 0;
     std::size_t m_trailer_bytes = 0;
-    HttpError m_error;
+    protocol::Problem m_error;
 };
 
 }  // namespace strata::server

@@ -21,35 +21,6 @@ std::string starting_detail(const std::string& progress) {
                              : progress);
 }
 
-ProblemType problem_type_for(int status) {
-    switch (status) {
-        case 401:
-            return ProblemType::Unauthorized;
-        case 408:
-            return ProblemType::RequestTimeout;
-        case 413:
-            return ProblemType::TooLarge;
-        case 414:
-            return ProblemType::UriTooLong;
-        case 415:
-            return ProblemType::UnsupportedEncoding;
-        case 417:
-            return ProblemType::ExpectationFailed;
-        case 429:
-            return ProblemType::TooManyConnections;
-        case 431:
-            return ProblemType::HeadersTooLarge;
-        case 501:
-            return ProblemType::NotImplemented;
-        case 503:
-            return ProblemType::Unavailable;
-        case 505:
-            return ProblemType::HttpVersion;
-        default:
-            return ProblemType::InvalidRequest;
-    }
-}
-
 }  // namespace
 
 bool is_health_path(std::string_view path) {
@@ -103,12 +74,16 @@ ReaderStep RequestReader::next(const ReaderSituation& situation) {
     return m_phase == Phase::Head ? on_head(situation) : on_body();
 }
 
-ReaderStep RequestReader::answer(int status, const std::string& detail, bool close,
+ReaderStep RequestReader::answer(ProblemType type, const std::string& detail, bool close,
                                  const char* retry_after) {
-    protocol::Problem p = protocol::make_problem(problem_type_for(status), detail);
-    p.status = status;
-    protocol::ApiResponse r = protocol::problem_response(p);
-    if (status == 401) r.headers.emplace_back("WWW-Authenticate", "Bearer realm=\"strata\"");
+    return refusal(protocol::make_problem(type, detail), close, retry_after);
+}
+
+ReaderStep RequestReader::refusal(const protocol::Problem& problem, bool close,
+                                  const char* retry_after) {
+    protocol::ApiResponse r = protocol::problem_response(problem);
+    if (problem.type == ProblemType::Unauthorized)
+        r.headers.emplace_back("WWW-Authenticate", "Bearer realm=\"strata\"");
     if (retry_after) r.headers.emplace_back("Retry-After", retry_after);
     return answer_with(std::move(r), close);
 }
@@ -174,12 +149,12 @@ std::optional<ReaderStep> RequestReader::parse_head() {
         if (buffered.size() <= limits.max_head_bytes) return ReaderStep{};
         if (buffered.find('\n') == std::string_view::npos &&
             buffered.size() > limits.max_target_bytes)
-            return answer(414, "the request line is longer than the limit of " +
-                                   std::to_string(limits.max_target_bytes) +
-                                   " bytes for its target (--max-uri-bytes)");
-        return answer(431, "the request head is larger than " +
-                               std::to_string(limits.max_head_bytes) +
-                               " bytes (--max-header-bytes)");
+            return answer(ProblemType::UriTooLong, "the request line is longer than the limit of " +
+                                                       std::to_string(limits.max_target_bytes) +
+                                                       " bytes for its target (--max-uri-bytes)");
+        return answer(ProblemType::HeadersTooLarge, "the request head is larger than " +
+                                                        std::to_string(limits.max_head_bytes) +
+                                                        " bytes (--max-header-bytes)");
     }
     m_scanned = 0;
     m_head = RequestHead{};
@@ -188,10 +163,10 @@ std::optional<ReaderStep> RequestReader::parse_head() {
     m_cors_origin.reset();
     auto parsed = parse_request_head(buffered.substr(0, end), limits);
     m_pos += end;
-    if (auto* e = std::get_if<HttpError>(&parsed)) return answer(e->status, e->detail);
+    if (auto* e = std::get_if<protocol::Problem>(&parsed)) return refusal(*e);
     m_head = std::move(std::get<RequestHead>(parsed));
     auto target = parse_request_target(m_head.target);
-    if (auto* e = std::get_if<HttpError>(&target)) return answer(e->status, e->detail);
+    if (auto* e = std::get_if<protocol::Problem>(&target)) return refusal(*e);
     m_target = std::move(std::get<RequestTarget>(target));
     return std::nullopt;
 }
@@ -199,14 +174,15 @@ std::optional<ReaderStep> RequestReader::parse_head() {
 std::optional<ReaderStep> RequestReader::refuse(const ReaderSituation& situation) {
     const bool body = m_head.framing != BodyFraming::None;
     // The body is left unread: the connection closes.
-    if (situation.draining) return answer(503, "the server is shutting down");
+    if (situation.draining) return answer(ProblemType::Unavailable, "the server is shutting down");
     if (situation.starting) {
         // Refused without reading a body (a connection with one unread closes); the client
         // comes back when the scene is ready.
-        return answer(503, starting_detail(situation.progress), body || !m_head.keep_alive, "1");
+        return answer(ProblemType::Unavailable, starting_detail(situation.progress),
+                      body || !m_head.keep_alive, "1");
     }
     if (situation.restricted)
-        return answer(429,
+        return answer(ProblemType::TooManyConnections,
                       "this client holds too many connections already "
                       "(--max-connections-per-client, --max-connections); only /livez and "
                       "/readyz are answered on this one");
@@ -215,21 +191,24 @@ std::optional<ReaderStep> RequestReader::refuse(const ReaderSituation& situation
         return preflight();
     if (!authorized()) {
         const std::string* auth = m_head.header("Authorization");
-        return answer(401, auth ? "the bearer token is not valid"
-                           : accepts_query_token(m_target.path)
-                               ? "this server requires Authorization: Bearer <token> (or, "
-                                 "from a browser, ?access_token=<token>)"
-                               : "this server requires Authorization: Bearer <token>");
+        return answer(ProblemType::Unauthorized,
+                      auth ? "the bearer token is not valid"
+                      : accepts_query_token(m_target.path)
+                          ? "this server requires Authorization: Bearer <token> (or, "
+                            "from a browser, ?access_token=<token>)"
+                          : "this server requires Authorization: Bearer <token>");
     }
     if (const std::string* coding = m_head.header("Content-Encoding");
         coding && !iequals(*coding, "identity"))
-        return answer(415, "Content-Encoding '" + coding->substr(0, 32) +
-                               "' is not accepted: send the body uncompressed");
+        return answer(ProblemType::UnsupportedEncoding,
+                      "Content-Encoding '" + coding->substr(0, 32) +
+                          "' is not accepted: send the body uncompressed");
     const uint64_t max_body = m_config.limits.max_body_bytes;
     if (m_head.framing == BodyFraming::Length && m_head.content_length > max_body)
-        return answer(413, "the request body of " + std::to_string(m_head.content_length) +
-                               " bytes is larger than the limit of " + std::to_string(max_body) +
-                               " bytes (--max-body-mb)");
+        return answer(ProblemType::TooLarge,
+                      "the request body of " + std::to_string(m_head.content_length) +
+                          " bytes is larger than the limit of " + std::to_string(max_body) +
+                          " bytes (--max-body-mb)");
     return std::nullopt;
 }
 
@@ -279,7 +258,7 @@ ReaderStep RequestReader::on_body() {
     } else {
         m_pos += m_chunked.feed(buffered, m_body);
         compact();
-        if (const HttpError* e = m_chunked.error()) return answer(e->status, e->detail);
+        if (const protocol::Problem* e = m_chunked.error()) return refusal(*e);
         if (!m_chunked.done()) return {};
     }
     return finish_request();
@@ -292,7 +271,8 @@ ReaderStep RequestReader::finish_request() {
     if (const auto& origin = cors_origin()) r.cors_origin = *origin;  // before the headers move
     r.http.method = m_head.method;
     r.http.path = std::move(m_target.path);
-    for (auto& [name, value] : m_target.query) r.http.query.emplace(std::move(name), std::move(value));
+    for (auto& [name, value] : m_target.query)
+        r.http.query.emplace(std::move(name), std::move(value));
     r.http.headers = std::move(m_head.headers);
     r.http.body = std::move(m_body);
     m_body = std::string();

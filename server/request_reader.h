@@ -123,8 +123,12 @@ private:
     /// The refusal of a well-formed head that no worker may see, if any.
     std::optional<ReaderStep> refuse(const ReaderSituation& situation);
     ReaderStep on_body();
-    ReaderStep answer(int status, const std::string& detail, bool close = true,
+    ReaderStep answer(protocol::ProblemType type, const std::string& detail, bool close = true,
                       const char* retry_after = nullptr);
+    /// Refuses the request with `problem` (its status), closing the connection unless not
+    /// `close`.
+    ReaderStep refusal(const protocol::Problem& problem, bool close = true,
+                       const char* retry_after = nullptr);
     /// Writes `response` to this request (HEAD: without its body; with the access-control
     /// headers of an allowed origin).
     ReaderStep answer_with(const protocol::ApiResponse& response, bool close);

@@ -6,6 +6,10 @@
 
 namespace strata::server {
 
+using protocol::make_problem;
+using protocol::Problem;
+using protocol::ProblemType;
+
 namespace {
 
 constexpr char HEX[] = "0123456789ABCDEF";
@@ -35,8 +39,8 @@ int escaped_byte(std::string_view s, std::size_t i) {
     return hi < 0 || lo < 0 ? -1 : hi * 16 + lo;
 }
 
-HttpError bad(std::string detail) {
-    return HttpError{400, std::move(detail)};
+Problem bad(std::string detail) {
+    return make_problem(ProblemType::InvalidRequest, std::move(detail));
 }
 
 /// Decodes a query name or value ('+' is a space); nullopt on a malformed escape.
@@ -58,7 +62,7 @@ std::optional<std::string> decode_query_part(std::string_view s) {
     return out;
 }
 
-std::variant<std::vector<std::pair<std::string, std::string>>, HttpError> parse_query(
+std::variant<std::vector<std::pair<std::string, std::string>>, Problem> parse_query(
     std::string_view q) {
     std::vector<std::pair<std::string, std::string>> out;
     while (!q.empty()) {
@@ -89,7 +93,7 @@ std::variant<std::vector<std::pair<std::string, std::string>>, HttpError> parse_
 
 }  // namespace
 
-std::variant<RequestTarget, HttpError> parse_request_target(std::string_view raw) {
+std::variant<RequestTarget, Problem> parse_request_target(std::string_view raw) {
     for (std::string_view scheme : {"http://", "https://"}) {
         if (raw.size() >= scheme.size() && iequals(raw.substr(0, scheme.size()), scheme)) {
             // absolute-form (RFC 9112 section 3.2.2): the authority is not ours to route on.
@@ -124,7 +128,7 @@ std::variant<RequestTarget, HttpError> parse_request_target(std::string_view raw
     }
     if (qmark != std::string_view::npos) {
         auto query = parse_query(raw.substr(qmark + 1));
-        if (auto* e = std::get_if<HttpError>(&query)) return *e;
+        if (auto* e = std::get_if<Problem>(&query)) return *e;
         target.query = std::move(std::get<0>(query));
     }
     return target;

@@ -25,7 +25,7 @@ struct RequestTarget {
 
 /// Splits and checks an origin-form ("/path?query") or absolute-form ("http://host/path")
 /// target.
-std::variant<RequestTarget, HttpError> parse_request_target(std::string_view raw);
+std::variant<RequestTarget, protocol::Problem> parse_request_target(std::string_view raw);
 
 /// Decodes the percent-escapes of one path segment as RequestTarget::path holds it.
 std::string decode_path_segment(std::string_view segment);

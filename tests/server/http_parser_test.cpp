@@ -11,18 +11,20 @@
 namespace strata::server {
 namespace {
 
+using protocol::Problem;
+
 const HttpLimits LIMITS{};
 
 RequestHead parse_ok(const std::string& head) {
     auto r = parse_request_head(head, LIMITS);
-    if (auto* e = std::get_if<HttpError>(&r)) ADD_FAILURE() << head << ": " << e->detail;
+    if (auto* e = std::get_if<Problem>(&r)) ADD_FAILURE() << head << ": " << e->detail;
     return std::holds_alternative<RequestHead>(r) ? std::get<RequestHead>(r) : RequestHead{};
 }
 
-HttpError parse_error(const std::string& head, const HttpLimits& limits = LIMITS) {
+Problem parse_error(const std::string& head, const HttpLimits& limits = LIMITS) {
     auto r = parse_request_head(head, limits);
-    EXPECT_TRUE(std::holds_alternative<HttpError>(r)) << head;
-    return std::holds_alternative<HttpError>(r) ? std::get<HttpError>(r) : HttpError{0, ""};
+    EXPECT_TRUE(std::holds_alternative<Problem>(r)) << head;
+    return std::holds_alternative<Problem>(r) ? std::get<Problem>(r) : Problem{};
 }
 
 TEST(HttpHead, AnOrdinaryRequestIsReadWithItsFraming) {
@@ -142,7 +144,7 @@ TEST(HttpHead, TheEndOfAHeadIsFoundOnceWhateverTheSplit) {
 
 /// Feeds `wire` to a decoder `step` bytes at a time; returns the body, and the error if any.
 std::string decode_chunked(const std::string& wire, std::size_t step, uint64_t max = 1 << 20,
-                           std::optional<HttpError>* error = nullptr) {
+                           std::optional<Problem>* error = nullptr) {
     ChunkedDecoder decoder(max);
     std::string body, pending;
     for (std::size_t pos = 0; pos < wire.size() && !decoder.done() && !decoder.error();
@@ -166,12 +168,12 @@ TEST(ChunkedBody, MalformedOrOversizedBodiesAreRefused) {
     for (const char* bad :
          {"z\r\nx\r\n0\r\n\r\n", "5\r\nhello!\r\n0\r\n\r\n", "-1\r\n\r\n", "ffffffffffffffffff\r\n",
           "5\r\nhello\r0\r\n\r\n", "0\r\nbad trailer\r\n\r\n", "0\r\n folded: x\r\n\r\n"}) {
-        std::optional<HttpError> e;
+        std::optional<Problem> e;
         decode_chunked(bad, 1, 1 << 20, &e);
         ASSERT_TRUE(e.has_value()) << bad;
         EXPECT_EQ(e->status, 400) << bad;
     }
-    std::optional<HttpError> e;
+    std::optional<Problem> e;
     decode_chunked("400\r\n" + std::string(1024, 'x') + "\r\n0\r\n\r\n", 100, 1000, &e);
     ASSERT_TRUE(e.has_value());
     EXPECT_EQ(e->status, 413);

@@ -8,16 +8,18 @@
 namespace strata::server {
 namespace {
 
+using protocol::Problem;
+
 RequestTarget target_ok(std::string_view raw) {
     auto t = parse_request_target(raw);
-    if (auto* e = std::get_if<HttpError>(&t)) ADD_FAILURE() << raw << ": " << e->detail;
+    if (auto* e = std::get_if<Problem>(&t)) ADD_FAILURE() << raw << ": " << e->detail;
     return std::holds_alternative<RequestTarget>(t) ? std::get<RequestTarget>(t) : RequestTarget{};
 }
 
 std::string target_error(std::string_view raw) {
     auto t = parse_request_target(raw);
-    EXPECT_TRUE(std::holds_alternative<HttpError>(t)) << raw;
-    return std::holds_alternative<HttpError>(t) ? std::get<HttpError>(t).detail : "";
+    EXPECT_TRUE(std::holds_alternative<Problem>(t)) << raw;
+    return std::holds_alternative<Problem>(t) ? std::get<Problem>(t).detail : "";
 }
 
 TEST(RequestTarget, UnreservedEscapesAreDecodedAndOthersKeptUpperCase) {
