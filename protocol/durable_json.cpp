@@ -28,7 +28,8 @@ Json durable_stats_to_json(const durable::DurableStats& s) {
 
 std::string durable_metric_name(const durable::DurableCounterSpec& spec) {
     std::string name = "strata_durable_" + std::string(spec.name);
-    if (spec.unit == durable::DurableUnit::Milliseconds) name.replace(name.size() - 3, 3, "_seconds");
+    if (spec.unit == durable::DurableUnit::Milliseconds)
+        name.replace(name.size() - 3, 3, "_seconds");
     return spec.cumulative ? name + "_total" : name;
 }
 

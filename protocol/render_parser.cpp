@@ -140,7 +140,7 @@ Parsed<Json> query_to_body(const std::multimap<std::string, std::string>& params
         const bool camera = key == "eye" || key == "target" || key == "up" || key == "fov_y_deg";
         if (key == "camera") {
             // The override's members are parameters of their own; "camera" itself would have to
-            // be an object (and used to make the members' slots throw).
+            // be an object, which a query cannot carry.
             RequestError e;
             e.message =
                 "query parameter 'camera' is not supported: give eye, target, up and "

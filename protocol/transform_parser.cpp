@@ -54,8 +54,9 @@ Affine parse_trs(FieldReader& r, const Json& v, const std::string& ptr) {
     if (rotate) rotation = Affine::rotation_euler_deg(r.vec3(*rotate, child(ptr, "rotate_deg")));
     if (quaternion) {
         const Vec4 q = r.vec4(*quaternion, child(ptr, "quaternion"));
-        // In double: a float squared length overflows at ~1.8e19 (and used to normalise to the
-        // identity). A rotation is a unit quaternion; lengths far from 1 are a client bug.
+        // In double: a float squared length overflows at ~1.8e19, and an overflowed length
+        // would normalise to the identity. A rotation is a unit quaternion; lengths far from 1
+        // are a client bug.
         const glm::dvec4 qd(q);
         const double len = std::sqrt(glm::dot(qd, qd));
         if (!(len > 0.0))

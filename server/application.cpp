@@ -20,8 +20,7 @@ Application::Application(const ServerConfig& config, Engine& engine, ServerMetri
 
 Application::~Application() = default;
 
-Outcome Application::handle(PreparedRequest&& request, RequestContext& context,
-                            bool close) const {
+Outcome Application::handle(PreparedRequest&& request, RequestContext& context, bool close) const {
     Reply reply = m_routes.dispatch(request.http, context);
     Outcome out;
     out.status = reply.response.status;

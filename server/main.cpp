@@ -119,8 +119,8 @@ server::Readiness replica_readiness(const replica::Replica* f) {
     const replica::ReplicaStatus s = f->status();
     r.ready = s.joined && !s.stopped;
     r.detail = s.stopped ? "the replica stopped following the edit log: " + s.stop_reason
-                         : "the replica is catching up with the edit log " + s.log +
-                               " (applied " + std::to_string(s.applied_version) + " of " +
+                         : "the replica is catching up with the edit log " + s.log + " (applied " +
+                               std::to_string(s.applied_version) + " of " +
                                std::to_string(s.log_version) +
                                (s.connected ? ")" : "; Redis unreachable)");
     r.section = "replica";
@@ -157,8 +157,8 @@ void log_listening(const server::CommandLine& cl, int port) {
 /// Follows the shared edit log (--log) from the `recovered` version (a snapshot jump goes
 /// through `store`, when there is one) and hands the replica to the server and to /readyz.
 std::unique_ptr<replica::Replica> follow_edit_log(const server::ServerConfig& c, Engine& engine,
-                                                  durable::DurableStore* store,
-                                                  uint64_t recovered, server::Server& http,
+                                                  durable::DurableStore* store, uint64_t recovered,
+                                                  server::Server& http,
                                                   std::atomic<replica::Replica*>& follower) {
     replica::ReplicaOptions o;
     o.url = replica::parse_redis_url(c.log_url).value();  // checked by finish_config

@@ -17,9 +17,9 @@ namespace {
 template <class S>
 class FieldReader {
 public:
-    constexpr FieldReader(uint64_t S::*f) : m_count(f) {}               // NOLINT: implicit
-    constexpr FieldReader(double S::*f) : m_real(f) {}                  // NOLINT
-    constexpr FieldReader(bool S::*f) : m_flag(f) {}                    // NOLINT
+    constexpr FieldReader(uint64_t S::*f) : m_count(f) {}                // NOLINT: implicit
+    constexpr FieldReader(double S::*f) : m_real(f) {}                   // NOLINT
+    constexpr FieldReader(bool S::*f) : m_flag(f) {}                     // NOLINT
     constexpr FieldReader(std::atomic<uint64_t> S::*f) : m_atomic(f) {}  // NOLINT
 
     double operator()(const S& s) const {
@@ -46,7 +46,7 @@ struct FieldMetric {
 };
 
 /// The field's name and reader from one token, so that the exported name cannot drift from it.
-#define STRATA_FIELD(S, field) #field, FieldReader<S>(&S::field)
+#define STRATA_FIELD(S, field) #field, FieldReader < S>(&S::field)
 
 using Replica = replica::ReplicaStatus;
 constexpr MetricType COUNTER = MetricType::Counter;
@@ -125,7 +125,9 @@ struct AnyField {
 
 template <class T, std::size_t... I>
 constexpr bool builds_from(std::index_sequence<I...>) {
-    return requires { T{(void(I), AnyField{})...}; };
+    return requires {
+        T{(void(I), AnyField{})...};
+    };
 }
 
 /// The number of fields of the aggregate `T`.
@@ -188,10 +190,9 @@ template <class S, std::size_t N, class Get>
 void add_fields(std::vector<MetricFamily>& out, const FieldMetric<S> (&table)[N],
                 const char* prefix, MetricPart part, Get get) {
     for (const FieldMetric<S>& row : table) {
-        out.push_back(scalar(prefix + std::string(row.field), std::string(row.help), row.type,
-                             part, [read = row.read, get](const MetricsSnapshot& s) {
-                                 return read(get(s));
-                             }));
+        out.push_back(
+            scalar(prefix + std::string(row.field), std::string(row.help), row.type, part,
+                   [read = row.read, get](const MetricsSnapshot& s) { return read(get(s)); }));
     }
 }
 
@@ -213,12 +214,11 @@ void add_engine_families(std::vector<MetricFamily>& out) {
           [](const MetricsSnapshot& s) { return double(s.scene.instances); });
     gauge("strata_scene_triangles", "Triangles over meshes, each counted once.",
           [](const MetricsSnapshot& s) { return double(s.scene.triangles); });
-    out.push_back(labelled("strata_accel_memory_bytes",
-                           "Bytes Embree holds for acceleration structures.", GAUGE,
-                           MetricPart::Engine, "level", {"blas", "tlas"},
-                           [](const MetricsSnapshot& s, std::size_t i) {
-                               return double(i == 0 ? s.blas_bytes : s.tlas_bytes);
-                           }));
+    out.push_back(labelled(
+        "strata_accel_memory_bytes", "Bytes Embree holds for acceleration structures.", GAUGE,
+        MetricPart::Engine, "level", {"blas", "tlas"}, [](const MetricsSnapshot& s, std::size_t i) {
+            return double(i == 0 ? s.blas_bytes : s.tlas_bytes);
+        }));
     out.push_back(labelled(
         "strata_tlas_instances",
         "Instances in each tier of the TLAS after the last commit (incremental strategy: static "
@@ -236,30 +236,31 @@ void add_engine_families(std::vector<MetricFamily>& out) {
 }
 
 void add_server_families(std::vector<MetricFamily>& out) {
-    out.push_back(labelled("strata_http_responses_total", "HTTP responses by status class.",
-                           COUNTER, MetricPart::Server, "code",
-                           {"1xx", "2xx", "3xx", "4xx", "5xx"},
-                           [](const MetricsSnapshot& s, std::size_t i) {
-                               return double(s.responses[i]);
-                           }));
-    out.push_back(histogram("strata_commit_duration_seconds",
-                            "Wall time of commits (explicit and before renders).",
-                            MetricPart::Server,
-                            [](const MetricsSnapshot& s) { return s.commit_seconds; }));
-    out.push_back(histogram("strata_render_duration_seconds",
-                            "Wall time of renders, commit and encoding included.",
-                            MetricPart::Server,
-                            [](const MetricsSnapshot& s) { return s.render_seconds; }));
+    out.push_back(
+        labelled("strata_http_responses_total", "HTTP responses by status class.", COUNTER,
+                 MetricPart::Server, "code", {"1xx", "2xx", "3xx", "4xx", "5xx"},
+                 [](const MetricsSnapshot& s, std::size_t i) { return double(s.responses[i]); }));
+    out.push_back(histogram(
+        "strata_commit_duration_seconds", "Wall time of commits (explicit and before renders).",
+        MetricPart::Server, [](const MetricsSnapshot& s) { return s.commit_seconds; }));
+    out.push_back(histogram(
+        "strata_render_duration_seconds", "Wall time of renders, commit and encoding included.",
+        MetricPart::Server, [](const MetricsSnapshot& s) { return s.render_seconds; }));
     add_fields(out, FRONT_END_METRICS, "strata_http_", MetricPart::FrontEnd,
                [](const MetricsSnapshot& s) -> const FrontEndCounters& { return *s.front_end; });
 }
 
 void add_durable_families(std::vector<MetricFamily>& out) {
     for (const durable::DurableCounterSpec& spec : durable::DURABLE_COUNTERS) {
-        MetricFamily f{protocol::durable_metric_name(spec), std::string(spec.help),
-                       spec.cumulative ? COUNTER : GAUGE, MetricPart::Durable, {}, {}};
+        MetricFamily f{protocol::durable_metric_name(spec),
+                       std::string(spec.help),
+                       spec.cumulative ? COUNTER : GAUGE,
+                       MetricPart::Durable,
+                       {},
+                       {}};
         f.samples = [&spec](const MetricsSnapshot& s) {
-            return std::vector<MetricSample>{{"", protocol::durable_metric_value(spec, *s.durable)}};
+            return std::vector<MetricSample>{
+                {"", protocol::durable_metric_value(spec, *s.durable)}};
         };
         out.push_back(std::move(f));
     }

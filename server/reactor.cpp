@@ -15,8 +15,8 @@
 #include <spdlog/spdlog.h>
 
 #include "protocol/problem.h"
-#include "server/response_writer.h"
 #include "server/metrics.h"
+#include "server/response_writer.h"
 
 namespace strata::server {
 
@@ -607,8 +607,8 @@ void Reactor::begin_stream(Connection& c, Outcome&& head, Clock::time_point now)
     c.next_part = now;
     c.deadline = now + std::chrono::seconds(m_config.write_timeout_s);
     c.watching = 0;
-    if (::setsockopt(c.fd, SOL_SOCKET, SO_SNDBUF, &STREAM_SEND_BUFFER,
-                     sizeof STREAM_SEND_BUFFER) < 0)
+    if (::setsockopt(c.fd, SOL_SOCKET, SO_SNDBUF, &STREAM_SEND_BUFFER, sizeof STREAM_SEND_BUFFER) <
+        0)
         spdlog::debug("setsockopt(SO_SNDBUF): {}", std::strerror(errno));
     const uint64_t id = c.id;
     c.stream->attach([this, id] {

@@ -38,8 +38,8 @@ std::vector<std::string_view> split_path(std::string_view path) {
 protocol::ApiResponse internal_error(const HttpRequest& request, const char* what) {
     spdlog::error("{} {}: unhandled exception: {}", request.method, request.path,
                   protocol::escape_for_log(what));
-    return protocol::problem_response(protocol::make_problem(
-        ProblemType::Internal, "internal error while handling the request"));
+    return protocol::problem_response(
+        protocol::make_problem(ProblemType::Internal, "internal error while handling the request"));
 }
 
 }  // namespace
@@ -78,8 +78,7 @@ bool RouteTable::match(const Route& route, std::string_view path,
         if (i >= parts.size()) return false;
         if (is_rest_parameter(want)) {
             // The rest of the path, slashes included: from this segment's start to the end.
-            const std::string_view rest =
-                path.substr(std::size_t(parts[i].data() - path.data()));
+            const std::string_view rest = path.substr(std::size_t(parts[i].data() - path.data()));
             if (rest.empty()) return false;
             params.push_back(decode_path_segment(rest));
             return true;

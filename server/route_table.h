@@ -41,7 +41,7 @@ struct Reply {
 
 /// One request as a handler sees it.
 struct RouteCall {
-    HttpRequest& request;            ///< the handler may move the body out
+    HttpRequest& request;             ///< the handler may move the body out
     std::vector<std::string> params;  ///< decoded path parameters, in pattern order
     RequestContext& context;
 };

@@ -54,7 +54,9 @@ std::string behind_detail(ServerContext& ctx, uint64_t wanted, uint64_t version)
                   " (replica lag: %llu entries, %.3f s behind the log at version %llu%s)",
                   static_cast<unsigned long long>(st.lag_entries), st.lag_seconds,
                   static_cast<unsigned long long>(st.log_version),
-                  st.stopped ? "; the replica has stopped" : !st.connected ? "; Redis unreachable" : "");
+                  st.stopped      ? "; the replica has stopped"
+                  : !st.connected ? "; Redis unreachable"
+                                  : "");
     return detail + lag;
 }
 
@@ -157,8 +159,8 @@ void add_write_routes(RouteTable& routes, ServerContext& ctx) {
     });
     routes.post("/v1/scene/snapshot", [&ctx](RouteCall& call) {
         HttpRequest& req = call.request;
-        return protocol::post_snapshot(ctx.engine, std::move(req.body), req.header_value("If-Match"),
-                                       ctx.batch_apply());
+        return protocol::post_snapshot(ctx.engine, std::move(req.body),
+                                       req.header_value("If-Match"), ctx.batch_apply());
     });
 }
 
@@ -195,8 +197,9 @@ void add_render_routes(RouteTable& routes, ServerContext& ctx) {
 
 void add_read_routes(RouteTable& routes, ServerContext& ctx) {
     routes.get("/v1/plan", [&ctx](RouteCall&) { return protocol::get_plan(ctx.engine); });
-    routes.get("/v1/scene",
-               after_min_version(ctx, [&ctx](RouteCall&) { return protocol::get_scene(ctx.engine); }));
+    routes.get("/v1/scene", after_min_version(ctx, [&ctx](RouteCall&) {
+                   return protocol::get_scene(ctx.engine);
+               }));
     add_scene_object_routes(routes, ctx, "meshes", protocol::SceneObject::Mesh);
     add_scene_object_routes(routes, ctx, "instances", protocol::SceneObject::Instance);
     add_scene_object_routes(routes, ctx, "materials", protocol::SceneObject::Material);

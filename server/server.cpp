@@ -17,17 +17,17 @@ Server::Server(ServerConfig config, Engine& engine, durable::DurableStore* store
                bool close) {
             const bool heavy = request.heavy;
             if (heavy) ++m_api_heavy;  // viewer renders wait while API renders are queued
-            m_workers->submit(heavy, [this, conn, request = std::move(request), cancel,
-                                      close, heavy]() mutable {
-                RequestContext context;
-                context.cancel = cancel.get();
-                const std::size_t body_bytes = request.http.body.size();
-                Outcome outcome = m_app->handle(std::move(request), context, close);
-                if (heavy) --m_api_heavy;
-                m_reactor->complete(conn, std::move(outcome), close);
-                // A large body leaves a parsed document's worth of freed memory behind.
-                if (body_bytes >= TRIM_THRESHOLD_BYTES) release_free_memory();
-            });
+            m_workers->submit(
+                heavy, [this, conn, request = std::move(request), cancel, close, heavy]() mutable {
+                    RequestContext context;
+                    context.cancel = cancel.get();
+                    const std::size_t body_bytes = request.http.body.size();
+                    Outcome outcome = m_app->handle(std::move(request), context, close);
+                    if (heavy) --m_api_heavy;
+                    m_reactor->complete(conn, std::move(outcome), close);
+                    // A large body leaves a parsed document's worth of freed memory behind.
+                    if (body_bytes >= TRIM_THRESHOLD_BYTES) release_free_memory();
+                });
         });
     m_streams = std::make_unique<StreamHub>(m_engine, [this] { return m_api_heavy.load() > 0; });
     m_app = std::make_unique<Application>(m_config, m_engine, m_metrics, &m_reactor->counters(),

@@ -144,8 +144,7 @@ Result<std::vector<RowBand>> split_bands(const RenderRequest& request, uint32_t 
     if (split < 2 || split - 1 > peer_count)
         return failure(ErrorCode::InvalidArgument,
                        "split " + std::to_string(split) + " needs " + std::to_string(split - 1) +
-                           " peers; this server has " + std::to_string(peer_count) +
-                           " (--peers)",
+                           " peers; this server has " + std::to_string(peer_count) + " (--peers)",
                        "split");
     std::vector<RowBand> bands = split_rows(request.height, split);
     if (bands.size() != split)
@@ -250,8 +249,8 @@ Status render_missing_bands(Engine& engine, const SplitPlan& plan,
     if (!all) return Unexpected(all.error());
     parts.assembly = FrameAssembly(plan.request.width, plan.request.height, plan.aovs);
     if (Status s = place_bands(parts.assembly, all.value(), plan.bands); !s) return s;
-    parts.note = " (version moved from " + std::to_string(version) + " during the split: " +
-                 "every band rendered here)";
+    parts.note = " (version moved from " + std::to_string(version) +
+                 " during the split: " + "every band rendered here)";
     parts.info = all->front().info;
     parts.camera = all->front().camera;
     std::fill(parts.labels.begin(), parts.labels.end(), "local");
@@ -383,8 +382,11 @@ Result<protocol::SplitFrame> SplitRenderer::render(const RenderRequest& request,
         return cancelled(*request.cancel);
 
     // Step: keep the peers' bands at exactly this version; render the others here.
-    SplitAssembly parts{FrameAssembly(request.width, request.height, plan.aovs), first.info,
-                        first.camera, std::vector<std::string>(split, "local"), {}};
+    SplitAssembly parts{FrameAssembly(request.width, request.height, plan.aovs),
+                        first.info,
+                        first.camera,
+                        std::vector<std::string>(split, "local"),
+                        {}};
     if (Status s = parts.assembly.place(first.buffers, plan.bands[0].y0, first.names); !s)
         return Unexpected(s.error());
     const std::vector<RowBand> missing = place_peer_bands(fetches, version, parts);

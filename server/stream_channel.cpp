@@ -4,9 +4,7 @@ namespace strata::server {
 
 StreamChannel::StreamChannel(Mode mode, std::chrono::milliseconds min_interval,
                              std::size_t max_queued_bytes)
-    : m_mode(mode),
-      m_min_interval(min_interval),
-      m_max_queued_bytes(max_queued_bytes) {}
+    : m_mode(mode), m_min_interval(min_interval), m_max_queued_bytes(max_queued_bytes) {}
 
 bool StreamChannel::offer(Part part) {
     std::function<void()> wake;
@@ -85,7 +83,6 @@ bool StreamChannel::ended() const {
     std::lock_guard lock(m_mutex);
     return m_ended;
 }
-
 
 std::size_t StreamChannel::held_bytes() const {
     std::lock_guard lock(m_mutex);

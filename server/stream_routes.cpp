@@ -126,8 +126,8 @@ std::optional<protocol::Problem> unknown_highlight(ServerContext& ctx, const std
     const bool known =
         ctx.engine.read([&](const Scene& s) { return !s.find_instance(id).is_null(); });
     if (known) return std::nullopt;
-    protocol::Problem p =
-        protocol::make_problem(ProblemType::NotFound, "highlight: no instance with id '" + id + "'");
+    protocol::Problem p = protocol::make_problem(ProblemType::NotFound,
+                                                 "highlight: no instance with id '" + id + "'");
     p.pointer = "/highlight";
     return p;
 }
@@ -139,13 +139,12 @@ Reply open_frame_stream(ServerContext& ctx, RouteCall& call) {
     // An unknown instance is refused at once (a typo would otherwise tint nothing, silently);
     // one removed later simply stops being tinted.
     if (auto p = unknown_highlight(ctx, std::get<ViewerSpec>(parsed).highlight)) return *p;
-    auto channel = ctx.streams ? ctx.streams->watch(std::move(std::get<ViewerSpec>(parsed)))
-                               : nullptr;
+    auto channel =
+        ctx.streams ? ctx.streams->watch(std::move(std::get<ViewerSpec>(parsed))) : nullptr;
     if (!channel) return stream_unavailable();
-    return Reply::streaming(
-        stream_head("multipart/x-mixed-replace; boundary=strata-frame",
-                    "--strata-frame\r\nContent-Type: image/jpeg\r\n\r\n"),
-        std::move(channel));
+    return Reply::streaming(stream_head("multipart/x-mixed-replace; boundary=strata-frame",
+                                        "--strata-frame\r\nContent-Type: image/jpeg\r\n\r\n"),
+                            std::move(channel));
 }
 
 Reply open_event_stream(ServerContext& ctx, RouteCall& call) {
@@ -165,10 +164,9 @@ Reply open_event_stream(ServerContext& ctx, RouteCall& call) {
                                     : protocol::Json(nullptr)}};
     auto channel = ctx.streams->subscribe();
     if (!channel) return stream_unavailable();
-    return Reply::streaming(
-        stream_head("text/event-stream", "retry: 2000\n\nevent: hello\ndata: " + hello.dump() +
-                                             "\n\n"),
-        std::move(channel));
+    return Reply::streaming(stream_head("text/event-stream", "retry: 2000\n\nevent: hello\ndata: " +
+                                                                 hello.dump() + "\n\n"),
+                            std::move(channel));
 }
 
 }  // namespace

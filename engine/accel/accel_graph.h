@@ -24,8 +24,8 @@ struct AccelConfig {
     TlasPolicy tlas_policy;  ///< for TlasKind::Incremental
     BuildPreference tlas_prefer = BuildPreference::FastTrace;
     /// Watertight ray/triangle tests (Embree's robust mode): a ray through a vertex or edge
-    /// shared by several triangles never slips between them. Costs about 12% of trace speed
-    /// (measured on a 1M-triangle mesh at 720p); turn off only where a rare hole is acceptable.
+    /// shared by several triangles never slips between them. It costs some trace speed (see
+    /// tests/bench/NOTES.md); turn off only where a rare hole is acceptable.
     bool watertight = true;
     std::string embree_config;  ///< Embree device configuration string
 };

@@ -1,4 +1,4 @@
-// Moving a group (issue 13): k instances below one group, in scenes of N instances (N from 10k to
+// Moving a group: k instances below one group, in scenes of N instances (N from 10k to
 // 1M, k fixed). The group move must cost what its subtree costs, not what the scene holds. Never
 // run by CTest.
 //

@@ -1,4 +1,4 @@
-// TLAS strategies against plain Embree (issue 10's table), in one run. Never run by CTest.
+// TLAS strategies against plain Embree, in one run. Never run by CTest.
 //
 //   build/tests/bench/strata_tlas_bench [--reps N] [--max-instances N] [--verbose 1]
 //       [--rows move,batch,addremove,trace,memory]

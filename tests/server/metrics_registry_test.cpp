@@ -111,8 +111,8 @@ TEST(MetricsRegistry, PartsThatDoNotExistAreLeftOut) {
     const std::string text = prometheus_text(MetricsSnapshot{});
     EXPECT_NE(text.find("strata_batches_applied_total"), std::string::npos);
     EXPECT_NE(text.find("strata_http_responses_total{code=\"2xx\"} 0\n"), std::string::npos);
-    for (const char* prefix : {"strata_http_connections", "strata_durable_", "strata_replica_",
-                               "strata_stream_"})
+    for (const char* prefix :
+         {"strata_http_connections", "strata_durable_", "strata_replica_", "strata_stream_"})
         EXPECT_EQ(text.find(prefix), std::string::npos) << prefix;
 }
 
