@@ -24,6 +24,7 @@
 #include "protocol/durable_json.h"
 #include "protocol/edit_ops.h"
 #include "protocol/edit_schema.h"
+#include "tests/generated_docs.h"
 
 namespace strata::protocol {
 namespace {
@@ -31,24 +32,9 @@ namespace {
 const std::string SCHEMA_PATH = STRATA_SOURCE_DIR "/protocol/edit-batch.schema.json";
 const std::string README_PATH = STRATA_SOURCE_DIR "/protocol/README.md";
 
-std::string read_text(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    EXPECT_TRUE(in.good()) << "cannot read " << path;
-    std::stringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
-
-bool updating() {
-    const char* update = std::getenv("STRATA_UPDATE_DOCS");
-    return update && std::string(update) == "1";
-}
-
-void write_text(const std::string& path, const std::string& text) {
-    std::ofstream out(path, std::ios::binary);
-    out << text;
-    ASSERT_TRUE(out.good()) << "cannot write " << path;
-}
+using test::read_text;
+using test::with_region;
+using test::write_text;
 
 /// GitHub's anchor of a heading: lower case, spaces to '-', other punctuation dropped.
 std::string anchor(std::string_view heading) {
@@ -136,21 +122,9 @@ std::string durable_counters_table() {
     return out;
 }
 
-/// `text` with the lines between `<!-- BEGIN GENERATED name: ... -->` and
-/// `<!-- END GENERATED name -->` replaced by `content`; nullopt when a marker is missing.
-std::optional<std::string> with_region(const std::string& text, const std::string& name,
-                                       const std::string& content) {
-    const std::size_t begin = text.find("<!-- BEGIN GENERATED " + name + ":");
-    const std::size_t end = text.find("<!-- END GENERATED " + name + " -->");
-    if (begin == std::string::npos || end == std::string::npos || end < begin) return std::nullopt;
-    const std::size_t body = text.find('\n', begin);
-    if (body == std::string::npos || body > end) return std::nullopt;
-    return text.substr(0, body + 1) + content + text.substr(end);
-}
-
 TEST(ProtocolDocs, CommittedSchemaIsTheOneTheOpTableGenerates) {
     const std::string generated = edit_batch_schema_text();
-    if (updating()) {
+    if (test::updating_docs()) {
         write_text(SCHEMA_PATH, generated);
         GTEST_SKIP() << "rewrote " << SCHEMA_PATH;
     }
@@ -166,7 +140,7 @@ TEST(ProtocolDocs, ReadmeOpsIndexAndCountersTableAreGeneratedFromTheirTables) {
     ASSERT_TRUE(updated) << "README lacks the counters markers";
     updated = with_region(*updated, "durable-counters", durable_counters_table());
     ASSERT_TRUE(updated) << "README lacks the durable-counters markers";
-    if (updating()) {
+    if (test::updating_docs()) {
         if (*updated != readme) write_text(README_PATH, *updated);
         GTEST_SKIP() << "rewrote the generated parts of " << README_PATH;
     }

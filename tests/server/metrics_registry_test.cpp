@@ -6,8 +6,6 @@
 // After adding a metric, regenerate the README's table, then read the diff:
 //   STRATA_UPDATE_DOCS=1 ctest --test-dir build -R MetricsRegistry
 
-#include <cstdlib>
-#include <fstream>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -15,20 +13,13 @@
 #include <gmock/gmock.h>
 
 #include "server/metrics.h"
+#include "tests/generated_docs.h"
 #include "tests/server/test_server.h"
 
 namespace strata::server::test {
 namespace {
 
 const std::string README_PATH = STRATA_SOURCE_DIR "/protocol/README.md";
-
-std::string read_text(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    EXPECT_TRUE(in.good()) << "cannot read " << path;
-    std::stringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
 
 /// The families a Prometheus text declares (`# TYPE name type`).
 std::set<std::string> declared_families(const std::string& text) {
@@ -52,23 +43,14 @@ MetricsSnapshot full_snapshot(const FrontEndCounters& front_end) {
 }
 
 TEST(MetricsRegistry, TheReadmeTableIsTheOneTheRegistryGenerates) {
-    const std::string text = read_text(README_PATH);
-    const std::string begin = "<!-- BEGIN GENERATED metrics:";
-    const std::string end = "<!-- END GENERATED metrics -->";
-    const std::size_t b = text.find(begin);
-    const std::size_t e = text.find(end);
-    ASSERT_NE(b, std::string::npos);
-    ASSERT_NE(e, std::string::npos);
-    const std::size_t body = text.find('\n', b) + 1;
-    const std::string generated = metrics_markdown_table();
-    const char* update = std::getenv("STRATA_UPDATE_DOCS");
-    if (update && std::string(update) == "1") {
-        std::ofstream out(README_PATH, std::ios::binary);
-        out << text.substr(0, body) + generated + text.substr(e);
-        ASSERT_TRUE(out.good());
-        return;
+    const std::string readme = strata::test::read_text(README_PATH);
+    const auto updated = strata::test::with_region(readme, "metrics", metrics_markdown_table());
+    ASSERT_TRUE(updated) << "protocol/README.md lacks the metrics markers";
+    if (strata::test::updating_docs()) {
+        if (*updated != readme) strata::test::write_text(README_PATH, *updated);
+        GTEST_SKIP() << "rewrote the metrics table of " << README_PATH;
     }
-    EXPECT_EQ(text.substr(body, e - body), generated)
+    EXPECT_TRUE(*updated == readme)
         << "protocol/README.md's metrics table is stale: run STRATA_UPDATE_DOCS=1 ctest "
            "--test-dir build -R MetricsRegistry";
 }
