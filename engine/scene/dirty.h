@@ -118,15 +118,6 @@ struct MeshDirtyState {
     friend bool operator==(const MeshDirtyState&, const MeshDirtyState&) = default;
 };
 
-/// The bits of a dirty state.
-template <class Bit>
-constexpr DirtyBits<Bit>& bits_of(DirtyBits<Bit>& state) {
-    return state;
-}
-constexpr DirtyBits<MeshDirty>& bits_of(MeshDirtyState& state) {
-    return state.bits;
-}
-
 /// The meshes, instances and materials touched since the last commit, and the scene-wide bits.
 /// Removed objects stay listed by their (now stale) handle so the acceleration layer can release
 /// what it built for them.
@@ -166,19 +157,8 @@ public:
     Position position() const {
         return {m_meshes.size(), m_instances.size(), m_materials.size(), m_scene};
     }
-    /// Back to `p` (a batch rolled back). Objects listed since went dirty during the batch:
-    /// the caller cleans their bits (visit them with listed_since first).
+    /// Back to `p` (a batch rolled back; the objects' own states are restored by the undo log).
     void rewind(const Position& p);
-    /// What was listed after `p`.
-    std::span<const MeshHandle> meshes_since(const Position& p) const {
-        return std::span(m_meshes).subspan(p.meshes);
-    }
-    std::span<const InstanceHandle> instances_since(const Position& p) const {
-        return std::span(m_instances).subspan(p.instances);
-    }
-    std::span<const MaterialHandle> materials_since(const Position& p) const {
-        return std::span(m_materials).subspan(p.materials);
-    }
     /// Forgets every change (a commit did the work); the objects' bits are the caller's to clean.
     void clean();
 

@@ -41,7 +41,7 @@ Status Scene::apply_edit(AddGroup&& e, UndoLog& undo) {
     undo.records.emplace_back(undo::Inserted<GroupHandle>{h, reused});
     children_of(parent.value()).groups.push_back(h);
     m_group_ids.emplace(std::move(e.id), h);
-    mark(h, GroupDirty::Added, &undo);
+    mark(h, GroupDirty::Added);
     return {};
 }
 
@@ -80,7 +80,7 @@ Status Scene::apply_edit(UpdateGroup&& e, UndoLog& undo) {
         r.visible = *e.visible;
         bits |= GroupDirty::Visibility;
     }
-    if (bits.any()) mark(h, bits, &undo);
+    if (bits.any()) mark(h, bits);
     return {};
 }
 

@@ -173,14 +173,6 @@ void Scene::reset() {
 
 namespace {
 
-/// Records the dirty state of object `h` when it is dirty already (see Scene::mark).
-template <class H, class Record>
-void record_dirty(H h, const Record& r, UndoLog* undo) {
-    auto state = r.dirty;
-    if (undo && bits_of(state).any())
-        undo->records.emplace_back(undo::Dirty<H, decltype(state)>{h, state});
-}
-
 /// Cleans the dirty state of every object of `handles` that still exists.
 template <class Slots, class Handles>
 void clean(Slots& slots, const Handles& handles) {
@@ -191,48 +183,35 @@ void clean(Slots& slots, const Handles& handles) {
 
 }  // namespace
 
-void Scene::mark(MeshHandle h, DirtyBits<MeshDirty> add, UndoLog* undo) {
-    MeshRecord& r = m_meshes.at(h);
-    record_dirty(h, r, undo);
-    m_changes.mark(h, r.dirty.bits, add);
+void Scene::mark(MeshHandle h, DirtyBits<MeshDirty> add) {
+    m_changes.mark(h, m_meshes.at(h).dirty.bits, add);
 }
 
-void Scene::mark(InstanceHandle h, DirtyBits<InstanceDirty> add, UndoLog* undo) {
-    InstanceRecord& r = m_instances.at(h);
-    record_dirty(h, r, undo);
-    m_changes.mark(h, r.dirty, add);
+void Scene::mark(InstanceHandle h, DirtyBits<InstanceDirty> add) {
+    m_changes.mark(h, m_instances.at(h).dirty, add);
 }
 
-void Scene::mark(MaterialHandle h, DirtyBits<MaterialDirty> add, UndoLog* undo) {
-    MaterialRecord& r = m_materials.at(h);
-    record_dirty(h, r, undo);
-    m_changes.mark(h, r.dirty, add);
+void Scene::mark(MaterialHandle h, DirtyBits<MaterialDirty> add) {
+    m_changes.mark(h, m_materials.at(h).dirty, add);
     m_changes.mark(SceneDirty::Materials);
 }
 
-void Scene::mark(GroupHandle g, DirtyBits<GroupDirty> add, UndoLog* undo) {
+void Scene::mark(GroupHandle g, DirtyBits<GroupDirty> add) {
     // Groups are listed for the batch's flattening, which cleans them, not for the commit.
     GroupRecord& r = m_groups.at(g);
-    record_dirty(g, r, undo);
     if (r.dirty.none()) m_world_groups.push_back(g);
     r.dirty |= add;
     m_changes.mark(SceneDirty::Groups);
 }
 
-void Scene::rewind_changes(const UndoLog& undo) {
-    clean(m_meshes, m_changes.meshes_since(undo.changes));
-    clean(m_instances, m_changes.instances_since(undo.changes));
-    clean(m_materials, m_changes.materials_since(undo.changes));
-    clean(m_groups, std::span(m_world_groups).subspan(undo.world_groups));
-    m_changes.rewind(undo.changes);
-    m_world_instances.resize(undo.world_instances);
-    m_world_groups.resize(undo.world_groups);
+void Scene::save_mesh(MeshHandle h, UndoLog& undo) const {
+    undo.records.emplace_back(undo::MeshDirty{h, m_meshes.at(h).dirty});
 }
 
 void Scene::save_instance(InstanceHandle h, UndoLog& undo) const {
     const InstanceRecord& r = m_instances.at(h);
     undo.records.emplace_back(
-        undo::InstanceState{h, r.material, r.transform, r.visible, r.mask, r.user_id});
+        undo::InstanceState{h, r.material, r.transform, r.visible, r.mask, r.user_id, r.dirty});
 }
 
 void Scene::clear_changes() {

@@ -242,17 +242,16 @@ private:
 
     /// Plays `undo` backwards (scene_undo.cpp).
     void roll_back(UndoLog& undo);
-    /// Back to the change lists at the batch's start, cleaning what the batch listed.
-    void rewind_changes(const UndoLog& undo);
 
     /// Adds `add` to an object's dirty bits (`add` empty: only lists it, as a removal needs).
-    /// An object dirty already has its dirty state recorded in `undo` first (null: the batch
-    /// stands, nothing to take back); one that was clean is listed, and a rollback cleans every
-    /// object listed since the batch began. The same for every kind.
-    void mark(MeshHandle h, DirtyBits<MeshDirty> add, UndoLog* undo);
-    void mark(InstanceHandle h, DirtyBits<InstanceDirty> add, UndoLog* undo);
-    void mark(MaterialHandle h, DirtyBits<MaterialDirty> add, UndoLog* undo);
-    void mark(GroupHandle g, DirtyBits<GroupDirty> add, UndoLog* undo);
+    /// Undo is the same for every kind: a rule saves an object's state, dirty state included,
+    /// before it changes the object (save_mesh, save_instance, save_group, MaterialState), and
+    /// marking records nothing; new objects need no save, removed ones are kept whole.
+    void mark(MeshHandle h, DirtyBits<MeshDirty> add);
+    void mark(InstanceHandle h, DirtyBits<InstanceDirty> add);
+    void mark(MaterialHandle h, DirtyBits<MaterialDirty> add);
+    void mark(GroupHandle g, DirtyBits<GroupDirty> add);
+    void save_mesh(MeshHandle h, UndoLog& undo) const;
     void save_instance(InstanceHandle h, UndoLog& undo) const;
     void remove_instance(InstanceHandle h, UndoLog& undo);
     void remove_mesh(MeshHandle h, UndoLog& undo);

@@ -101,7 +101,7 @@ void Scene::reparent_group(GroupHandle g, GroupHandle parent, UndoLog& undo) {
 
 void Scene::save_group(GroupHandle g, UndoLog& undo) const {
     const GroupRecord& r = m_groups.at(g);
-    undo.records.emplace_back(undo::GroupState{g, r.transform, r.visible});
+    undo.records.emplace_back(undo::GroupState{g, r.transform, r.visible, r.dirty});
 }
 
 void Scene::remove_group(GroupHandle g, UndoLog& undo) {
@@ -136,8 +136,7 @@ void Scene::refresh_instance_world(InstanceHandle h, InstanceRecord& r) {
     if (visible != r.world_visible) bits |= InstanceDirty::Visibility;
     r.world = world;
     r.world_visible = visible;
-    // After the batch stands: nothing to take back.
-    if (bits.any()) mark(h, bits, nullptr);
+    if (bits.any()) mark(h, bits);
 }
 
 void Scene::flatten() {

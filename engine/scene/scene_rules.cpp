@@ -202,7 +202,7 @@ Status Scene::apply_edit(AddMesh&& e, UndoLog& undo) {
     const MeshHandle h = m_meshes.insert(std::move(r), &reused);
     undo.records.emplace_back(undo::Inserted<MeshHandle>{h, reused});
     m_mesh_ids.emplace(std::move(e.id), h);
-    mark(h, MeshDirty::Added, &undo);
+    mark(h, MeshDirty::Added);
     return {};
 }
 
@@ -238,9 +238,10 @@ Status Scene::apply_edit(UpdateMeshPositions&& e, UndoLog& undo) {
         if (Status s = check_uvs(*e.uvs, e.offset); !s) return s;
     }
 
+    save_mesh(h, undo);
     // Step: normals and uvs (shading only: no BLAS work).
     if (e.normals || e.uvs) {
-        mark(h, MeshDirty::Attributes, &undo);
+        mark(h, MeshDirty::Attributes);
         undo::MeshAttributes old{h, std::nullopt, std::nullopt};
         if (e.normals) {
             old.normals = r.normals;
@@ -255,7 +256,7 @@ Status Scene::apply_edit(UpdateMeshPositions&& e, UndoLog& undo) {
     if (e.positions.empty()) return {};
 
     // Step: positions (a BLAS refit at the next commit).
-    mark(h, MeshDirty::Points, &undo);
+    mark(h, MeshDirty::Points);
     if (e.positions.size() == r.positions.size()) {
         // Every vertex: replace the array, so the undo record holds the old one without a copy
         // (and a snapshot sharing it keeps reading it).
@@ -310,8 +311,9 @@ Status Scene::apply_edit(ReplaceMeshTopology&& e, UndoLog& undo) {
                        "uvs");
     }
 
+    save_mesh(h, undo);
     if (e.normals || e.uvs) {
-        mark(h, MeshDirty::Attributes, &undo);
+        mark(h, MeshDirty::Attributes);
         undo::MeshAttributes old{h, std::nullopt, std::nullopt};
         if (e.normals) {
             old.normals = std::move(r.normals);
@@ -323,7 +325,7 @@ Status Scene::apply_edit(ReplaceMeshTopology&& e, UndoLog& undo) {
         }
         undo.records.emplace_back(std::move(old));
     }
-    mark(h, MeshDirty::Topology, &undo);
+    mark(h, MeshDirty::Topology);
     m_totals.vertices = m_totals.vertices - r.positions.size() + vertex_count;
     m_totals.triangles = m_totals.triangles - r.triangles.size() + e.triangles.size();
     undo::MeshTopology old{h, std::nullopt, r.triangles};
@@ -354,7 +356,7 @@ void Scene::remove_mesh(MeshHandle h, UndoLog& undo) {
     MeshRecord& r = m_meshes.at(h);
     STRATA_CHECK(r.users.empty());
     // Listed by its now stale handle, so the commit releases its BLAS.
-    mark(h, {}, &undo);
+    mark(h, {});
     m_totals.vertices -= r.positions.size();
     m_totals.triangles -= r.triangles.size();
     m_mesh_ids.erase(r.id);
@@ -382,7 +384,7 @@ Status Scene::apply_edit(AddMaterial&& e, UndoLog& undo) {
         m_materials.insert(MaterialRecord{e.id, e.material, {}, texture.value()}, &reused);
     undo.records.emplace_back(undo::Inserted<MaterialHandle>{h, reused});
     m_material_ids.emplace(std::move(e.id), h);
-    mark(h, MaterialDirty::Added, &undo);
+    mark(h, MaterialDirty::Added);
     return {};
 }
 
@@ -400,15 +402,15 @@ Status Scene::apply_edit(UpdateMaterial&& e, UndoLog& undo) {
         texture = found.value();
     }
 
-    undo.records.emplace_back(undo::MaterialState{h, r.material, r.base_color_texture});
+    undo.records.emplace_back(undo::MaterialState{h, r.material, r.dirty, r.base_color_texture});
     r.material = updated;
     r.base_color_texture = texture;
-    mark(h, MaterialDirty::Params, &undo);
+    mark(h, MaterialDirty::Params);
     return {};
 }
 
 void Scene::remove_material(MaterialHandle h, UndoLog& undo) {
-    mark(h, {}, &undo);
+    mark(h, {});
     MaterialRecord& r = m_materials.at(h);
     m_material_ids.erase(r.id);
     undo.records.emplace_back(
@@ -507,7 +509,7 @@ Status Scene::apply_edit(AddInstance&& e, UndoLog& undo) {
     siblings.push_back(h);
     mark_instance_world(h);
     m_instance_ids.emplace(std::move(e.id), h);
-    mark(h, InstanceDirty::Added, &undo);
+    mark(h, InstanceDirty::Added);
     return {};
 }
 
@@ -553,7 +555,7 @@ Status Scene::apply_edit(UpdateInstance&& e, UndoLog& undo) {
         r.user_id = *e.user_id;
         bits |= InstanceDirty::UserId;
     }
-    if (bits.any()) mark(h, bits, &undo);
+    if (bits.any()) mark(h, bits);
     if (e.transform || e.visible) mark_instance_world(h);
     return {};
 }
@@ -565,7 +567,7 @@ Status Scene::apply_edit(SetTransform&& e, UndoLog& undo) {
 
     save_instance(h, undo);
     m_instances.at(h).transform = e.transform;
-    mark(h, InstanceDirty::Transform, &undo);
+    mark(h, InstanceDirty::Transform);
     mark_instance_world(h);
     return {};
 }
@@ -588,7 +590,7 @@ void Scene::remove_instance(InstanceHandle h, UndoLog& undo) {
     users.pop_back();
     detach_child(children_of(r.parent).instances, m_instances, r.child_slot);
     // Listed by its now stale handle, so the commit takes it out of the TLAS.
-    mark(h, {}, &undo);
+    mark(h, {});
     m_instance_ids.erase(r.id);
     undo.records.emplace_back(
         undo::Removed<InstanceHandle, InstanceRecord>{h, m_instances.take(h)});
@@ -604,9 +606,9 @@ Status Scene::apply_edit(MarkDirty&& e, UndoLog& undo) {
     }
     const MeshHandle h = find_mesh(*e.mesh);
     if (h.is_null()) return unknown("mesh", *e.mesh, "target/mesh");
-    mark(h,
-         e.action == DirtyAction::Refit ? MeshDirty::RefitRequested : MeshDirty::RebuildRequested,
-         &undo);
+    save_mesh(h, undo);
+    mark(h, e.action == DirtyAction::Refit ? MeshDirty::RefitRequested
+                                           : MeshDirty::RebuildRequested);
     return {};
 }
 

@@ -107,20 +107,10 @@ struct Reverser {
         GroupRecord& g = groups.at(r.handle);
         g.transform = r.transform;
         g.visible = r.visible;
+        g.dirty = r.dirty;
     }
 
-    void operator()(undo::Dirty<MeshHandle, MeshDirtyState>& r) {
-        meshes.at(r.handle).dirty = r.state;
-    }
-    void operator()(undo::Dirty<InstanceHandle, DirtyBits<InstanceDirty>>& r) {
-        instances.at(r.handle).dirty = r.state;
-    }
-    void operator()(undo::Dirty<MaterialHandle, DirtyBits<MaterialDirty>>& r) {
-        materials.at(r.handle).dirty = r.state;
-    }
-    void operator()(undo::Dirty<GroupHandle, DirtyBits<GroupDirty>>& r) {
-        groups.at(r.handle).dirty = r.state;
-    }
+    void operator()(undo::MeshDirty& r) { meshes.at(r.handle).dirty = r.dirty; }
 
     template <class H>
     void operator()(undo::Reparented<H>& r) {
@@ -181,6 +171,7 @@ struct Reverser {
         inst.visible = r.visible;
         inst.mask = r.mask;
         inst.user_id = r.user_id;
+        inst.dirty = r.dirty;
     }
 
     void operator()(undo::Inserted<LightHandle>& r) {
@@ -198,6 +189,7 @@ struct Reverser {
     void operator()(undo::MaterialState& r) {
         MaterialRecord& m = materials.at(r.handle);
         m.material = r.material;
+        m.dirty = r.dirty;
         m.base_color_texture = r.base_color_texture;
     }
 };
@@ -212,7 +204,9 @@ void Scene::roll_back(UndoLog& undo) {
     m_camera = undo.camera;
     m_lighting = undo.lighting;
     m_totals = undo.totals;
-    rewind_changes(undo);
+    m_changes.rewind(undo.changes);
+    m_world_instances.resize(undo.world_instances);
+    m_world_groups.resize(undo.world_groups);
 }
 
 }  // namespace strata

@@ -31,12 +31,10 @@ struct Removed {
     Record record;
 };
 
-/// The dirty state of an object that was dirty already when an edit marked it again (objects
-/// that were clean are cleaned by rewinding the change lists).
-template <class H, class State>
-struct Dirty {
-    H handle;
-    State state;
+/// A mesh's dirty state before an edit changed it.
+struct MeshDirty {
+    MeshHandle handle;
+    MeshDirtyState dirty;
 };
 
 /// Vertex positions an update overwrote: `positions` held vertices [offset, offset + size).
@@ -74,6 +72,7 @@ struct InstanceState {
     bool visible = true;
     uint32_t mask = 0;
     uint32_t user_id = 0;
+    DirtyBits<InstanceDirty> dirty;
 };
 
 /// A group's editable state before an edit changed it.
@@ -81,6 +80,7 @@ struct GroupState {
     GroupHandle handle;
     Affine transform;
     bool visible = true;
+    DirtyBits<GroupDirty> dirty;
 };
 
 /// An instance or group moved from `old_parent`, where it was child number `old_slot`, to the
@@ -96,6 +96,7 @@ struct Reparented {
 struct MaterialState {
     MaterialHandle handle;
     Material material;
+    DirtyBits<MaterialDirty> dirty;
     TextureHandle base_color_texture;
 };
 
@@ -110,10 +111,7 @@ struct LightState {
 using UndoRecord = std::variant<
     undo::Inserted<MeshHandle>, undo::Inserted<InstanceHandle>, undo::Inserted<MaterialHandle>,
     undo::Removed<MeshHandle, MeshRecord>, undo::Removed<InstanceHandle, InstanceRecord>,
-    undo::Removed<MaterialHandle, MaterialRecord>, undo::Dirty<MeshHandle, MeshDirtyState>,
-    undo::Dirty<InstanceHandle, DirtyBits<InstanceDirty>>,
-    undo::Dirty<MaterialHandle, DirtyBits<MaterialDirty>>,
-    undo::Dirty<GroupHandle, DirtyBits<GroupDirty>>, undo::MeshPositions,
+    undo::Removed<MaterialHandle, MaterialRecord>, undo::MeshDirty, undo::MeshPositions,
     undo::MeshPositionsReplaced, undo::MeshTopology, undo::MeshAttributes, undo::InstanceState,
     undo::MaterialState, undo::Inserted<GroupHandle>, undo::Removed<GroupHandle, GroupRecord>,
     undo::GroupState, undo::Reparented<InstanceHandle>, undo::Reparented<GroupHandle>,
