@@ -103,7 +103,8 @@ Reply RouteTable::dispatch(HttpRequest& request, RequestContext& context) const 
         return protocol::make_problem(ProblemType::NotFound,
                                       "no route for " + request.method + " " + request.path);
     }
-    const std::string_view method = request.method == "HEAD" ? "GET" : request.method;
+    const std::string_view method =
+        request.method == "HEAD" ? std::string_view("GET") : std::string_view(request.method);
     const auto handler = std::find_if(route->handlers.begin(), route->handlers.end(),
                                       [&](const auto& h) { return h.first == method; });
     if (handler == route->handlers.end())
