@@ -70,8 +70,8 @@ void RouteTable::add(std::string method, std::string_view pattern, Handler handl
 }
 
 bool RouteTable::match(const Route& route, std::string_view path,
+                       const std::vector<std::string_view>& parts,
                        std::vector<std::string>& params) {
-    const std::vector<std::string_view> parts = split_path(path);
     params.clear();
     for (std::size_t i = 0; i < route.segments.size(); ++i) {
         const std::string& want = route.segments[i];
@@ -95,8 +95,9 @@ bool RouteTable::match(const Route& route, std::string_view path,
 
 Reply RouteTable::dispatch(HttpRequest& request, RequestContext& context) const {
     RouteCall call{request, {}, context};
+    const std::vector<std::string_view> parts = split_path(request.path);
     const auto route = std::find_if(m_routes.begin(), m_routes.end(), [&](const Route& r) {
-        return match(r, request.path, call.params);
+        return match(r, request.path, parts, call.params);
     });
     if (route == m_routes.end()) {
         // The path is the normalised target: ASCII, non-printable bytes percent-encoded.

@@ -70,7 +70,9 @@ private:
         std::vector<std::pair<std::string, Handler>> handlers;  ///< by method
         std::string allow;                                      ///< "GET, HEAD, POST"
     };
-    static bool match(const Route& route, std::string_view path, std::vector<std::string>& params);
+    /// Whether `path`, split into `parts`, matches `route`; its parameters go to `params`.
+    static bool match(const Route& route, std::string_view path,
+                      const std::vector<std::string_view>& parts, std::vector<std::string>& params);
 
     std::vector<Route> m_routes;
 };
