@@ -11,6 +11,8 @@
 #include <iterator>
 #include <string_view>
 
+#include "engine/core/stat_table.h"
+
 namespace strata {
 
 /// Counters since the engine started.
@@ -38,69 +40,44 @@ struct EngineCounters {
     double tlas_merge_seconds = 0.0;
 };
 
-/// What a counter counts, for writers that name or scale by it.
-enum class CounterUnit : uint8_t { Count, Seconds };
-
-/// One row of the table: the wire name (JSON member; Prometheus `strata_<name>_total`), a help
-/// sentence, the unit and the field.
-struct CounterSpec {
-    std::string_view name;
-    std::string_view help;
-    CounterUnit unit;
-    uint64_t EngineCounters::*count = nullptr;  ///< for CounterUnit::Count
-    double EngineCounters::*seconds = nullptr;  ///< for CounterUnit::Seconds
-
-    /// The counter's value in `c`, as a double (exact below 2^53).
-    double value(const EngineCounters& c) const {
-        return unit == CounterUnit::Count ? double(c.*count) : c.*seconds;
-    }
-};
+/// One row per field (engine/core/stat_table.h): the JSON member and the Prometheus counter
+/// `strata_<name>_total`.
+using CounterSpec = StatSpec<EngineCounters>;
 
 inline constexpr CounterSpec ENGINE_COUNTERS[] = {
-    {"batches_applied", "Edit batches applied.", CounterUnit::Count,
-     &EngineCounters::batches_applied},
-    {"batches_rejected", "Edit batches refused (invalid, or If-Match found another version).",
-     CounterUnit::Count, &EngineCounters::batches_rejected},
-    {"edits_applied", "Edits applied (in applied batches).", CounterUnit::Count,
-     &EngineCounters::edits_applied},
-    {"commits", "Commits run (explicit, and before each render).", CounterUnit::Count,
-     &EngineCounters::commits},
-    {"noop_commits", "Commits that found no acceleration-structure work.", CounterUnit::Count,
-     &EngineCounters::noop_commits},
-    {"blas_rebuilds", "BLAS builds.", CounterUnit::Count, &EngineCounters::blas_rebuilds},
-    {"blas_refits", "BLAS refits.", CounterUnit::Count, &EngineCounters::blas_refits},
-    {"tlas_updates", "TLAS updates.", CounterUnit::Count, &EngineCounters::tlas_updates},
-    {"tlas_rebuilds", "TLAS full rebuilds.", CounterUnit::Count, &EngineCounters::tlas_rebuilds},
-    {"tlas_static_rebuilds",
-     "Commits in which the incremental TLAS rebuilt its static tier itself (small scene, "
-     "dynamic tier over its limit, first build, or asked for).",
-     CounterUnit::Count, &EngineCounters::tlas_static_rebuilds},
-    {"tlas_merges", "Background TLAS merges swapped in at a commit.", CounterUnit::Count,
-     &EngineCounters::tlas_merges},
-    {"tlas_merges_cancelled",
+    {STRATA_STAT(EngineCounters, batches_applied), "Edit batches applied."},
+    {STRATA_STAT(EngineCounters, batches_rejected),
+     "Edit batches refused (invalid, or If-Match found another version)."},
+    {STRATA_STAT(EngineCounters, edits_applied), "Edits applied (in applied batches)."},
+    {STRATA_STAT(EngineCounters, commits), "Commits run (explicit, and before each render)."},
+    {STRATA_STAT(EngineCounters, noop_commits),
+     "Commits that found no acceleration-structure work."},
+    {STRATA_STAT(EngineCounters, blas_rebuilds), "BLAS builds."},
+    {STRATA_STAT(EngineCounters, blas_refits), "BLAS refits."},
+    {STRATA_STAT(EngineCounters, tlas_updates), "TLAS updates."},
+    {STRATA_STAT(EngineCounters, tlas_rebuilds), "TLAS full rebuilds."},
+    {STRATA_STAT(EngineCounters, tlas_static_rebuilds),
+     "Commits in which the incremental TLAS rebuilt its static tier itself (small scene, dynamic "
+     "tier over its limit, first build, or asked for)."},
+    {STRATA_STAT(EngineCounters, tlas_merges), "Background TLAS merges swapped in at a commit."},
+    {STRATA_STAT(EngineCounters, tlas_merges_cancelled),
      "Background TLAS merges abandoned (a BLAS they read changed, or a commit rebuilt the static "
-     "tier first).",
-     CounterUnit::Count, &EngineCounters::tlas_merges_cancelled},
-    {"primitives_built", "Triangles built into BLASes.", CounterUnit::Count,
-     &EngineCounters::primitives_built},
-    {"primitives_refit", "Triangles refit in BLASes.", CounterUnit::Count,
-     &EngineCounters::primitives_refit},
-    {"renders", "Launches that traced rays (frames rendered).", CounterUnit::Count,
-     &EngineCounters::renders},
-    {"rays_traced", "Rays traced by launches and picks: camera, shadow and bounce rays.", CounterUnit::Count,
-     &EngineCounters::rays_traced},
-    {"picks", "Picks answered (each traces one ray per pixel asked about).", CounterUnit::Count,
-     &EngineCounters::picks},
-    {"world_transforms",
+     "tier first)."},
+    {STRATA_STAT(EngineCounters, primitives_built), "Triangles built into BLASes."},
+    {STRATA_STAT(EngineCounters, primitives_refit), "Triangles refit in BLASes."},
+    {STRATA_STAT(EngineCounters, renders), "Launches that traced rays (frames rendered)."},
+    {STRATA_STAT(EngineCounters, rays_traced),
+     "Rays traced by launches and picks: camera, shadow and bounce rays."},
+    {STRATA_STAT(EngineCounters, picks),
+     "Picks answered (each traces one ray per pixel asked about)."},
+    {STRATA_STAT(EngineCounters, world_transforms),
      "World transforms recomputed (groups and instances below moved, reparented, shown or hidden "
-     "groups, and edited instances).",
-     CounterUnit::Count, &EngineCounters::world_transforms},
-    {"commit_seconds", "Wall time spent in commits.", CounterUnit::Seconds, nullptr,
-     &EngineCounters::commit_seconds},
-    {"render_seconds", "Wall time spent tracing and shading in launches.", CounterUnit::Seconds,
-     nullptr, &EngineCounters::render_seconds},
-    {"tlas_merge_seconds", "Background build time of the TLAS merges swapped in (wall).",
-     CounterUnit::Seconds, nullptr, &EngineCounters::tlas_merge_seconds},
+     "groups, and edited instances)."},
+    {STRATA_STAT(EngineCounters, commit_seconds), "Wall time spent in commits.", StatUnit::Seconds},
+    {STRATA_STAT(EngineCounters, render_seconds),
+     "Wall time spent tracing and shading in launches.", StatUnit::Seconds},
+    {STRATA_STAT(EngineCounters, tlas_merge_seconds),
+     "Background build time of the TLAS merges swapped in (wall).", StatUnit::Seconds},
 };
 
 // Every field is 8 bytes; a field without a row (or a row too many) changes one side only.

@@ -1,5 +1,7 @@
 #include "protocol/report_json.h"
 
+#include "protocol/stat_names.h"
+
 namespace strata::protocol {
 
 namespace {
@@ -59,13 +61,7 @@ Json report_to_json(const RebuildReport& r) {
 
 Json counters_to_json(const EngineCounters& c) {
     Json j = Json::object();
-    for (const CounterSpec& spec : ENGINE_COUNTERS) {
-        if (spec.unit == CounterUnit::Count) {
-            j[std::string(spec.name)] = c.*spec.count;
-        } else {
-            j[std::string(spec.name)] = spec.value(c);
-        }
-    }
+    add_stats(j, ENGINE_COUNTERS, c);
     return j;
 }
 

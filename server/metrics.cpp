@@ -5,7 +5,7 @@
 #include <string_view>
 #include <utility>
 
-#include "protocol/durable_json.h"
+#include "protocol/stat_names.h"
 
 namespace strata::server {
 
@@ -13,109 +13,101 @@ namespace {
 
 // Step: the tables of families that mirror a stats struct, one row per field.
 
-/// Reads one numeric field of `S` as a double.
-template <class S>
-class FieldReader {
-public:
-    constexpr FieldReader(uint64_t S::*f) : m_count(f) {}                // NOLINT: implicit
-    constexpr FieldReader(double S::*f) : m_real(f) {}                   // NOLINT
-    constexpr FieldReader(bool S::*f) : m_flag(f) {}                     // NOLINT
-    constexpr FieldReader(std::atomic<uint64_t> S::*f) : m_atomic(f) {}  // NOLINT
-
-    double operator()(const S& s) const {
-        if (m_count) return double(s.*m_count);
-        if (m_real) return s.*m_real;
-        if (m_flag) return s.*m_flag ? 1.0 : 0.0;
-        return double((s.*m_atomic).load(std::memory_order_relaxed));
-    }
-
-private:
-    uint64_t S::*m_count = nullptr;
-    double S::*m_real = nullptr;
-    bool S::*m_flag = nullptr;
-    std::atomic<uint64_t> S::*m_atomic = nullptr;
-};
-
-/// One field exported as one series named after it.
-template <class S>
-struct FieldMetric {
-    std::string_view field;
-    FieldReader<S> read;
-    MetricType type;
-    std::string_view help;
-};
-
-/// The field's name and reader from one token, so that the exported name cannot drift from it.
-#define STRATA_FIELD(S, field) #field, FieldReader < S>(&S::field)
-
 using Replica = replica::ReplicaStatus;
 constexpr MetricType COUNTER = MetricType::Counter;
 constexpr MetricType GAUGE = MetricType::Gauge;
+constexpr bool CUMULATIVE = true;
+constexpr bool CURRENT = false;  ///< a gauge: the value now
 
-constexpr FieldMetric<FrontEndCounters> FRONT_END_METRICS[] = {
-    {STRATA_FIELD(FrontEndCounters, connections_open), GAUGE, "Open client connections."},
-    {STRATA_FIELD(FrontEndCounters, requests_in_flight), GAUGE,
-     "Requests a worker is handling (this /metrics request included)."},
-    {STRATA_FIELD(FrontEndCounters, connections_accepted), COUNTER, "Connections accepted."},
-    {STRATA_FIELD(FrontEndCounters, connections_restricted), COUNTER,
-     "Connections over a connection limit, served health checks only."},
-    {STRATA_FIELD(FrontEndCounters, connections_refused), COUNTER,
-     "Connections closed at once, over every limit."},
-    {STRATA_FIELD(FrontEndCounters, timeouts), COUNTER,
-     "Requests that did not arrive, and answers not taken, in time."},
-    {STRATA_FIELD(FrontEndCounters, clients_gone), COUNTER,
-     "Clients that disconnected while their request was being handled (their renders stop)."},
+constexpr StatSpec<FrontEndCounters> FRONT_END_METRICS[] = {
+    {STRATA_STAT(FrontEndCounters, connections_open), "Open client connections.", StatUnit::Count,
+     CURRENT},
+    {STRATA_STAT(FrontEndCounters, requests_in_flight),
+     "Requests a worker is handling (this /metrics request included).", StatUnit::Count, CURRENT},
+    {STRATA_STAT(FrontEndCounters, connections_accepted), "Connections accepted.", StatUnit::Count,
+     CUMULATIVE},
+    {STRATA_STAT(FrontEndCounters, connections_restricted),
+     "Connections over a connection limit, served health checks only.", StatUnit::Count,
+     CUMULATIVE},
+    {STRATA_STAT(FrontEndCounters, connections_refused),
+     "Connections closed at once, over every limit.", StatUnit::Count, CUMULATIVE},
+    {STRATA_STAT(FrontEndCounters, timeouts),
+     "Requests that did not arrive, and answers not taken, in time.", StatUnit::Count, CUMULATIVE},
+    {STRATA_STAT(FrontEndCounters, clients_gone),
+     "Clients that disconnected while their request was being handled (their renders stop).",
+     StatUnit::Count, CUMULATIVE},
 };
 
-constexpr FieldMetric<StreamHubStats> STREAM_METRICS[] = {
-    {STRATA_FIELD(StreamHubStats, viewers), GAUGE, "Open frame streams (GET /v1/stream)."},
-    {STRATA_FIELD(StreamHubStats, event_clients), GAUGE, "Open event streams (GET /v1/events)."},
-    {STRATA_FIELD(StreamHubStats, views), GAUGE, "Distinct views those streams render."},
-    {STRATA_FIELD(StreamHubStats, frames_rendered), COUNTER,
-     "Viewer renders (each shared by the viewers of its view)."},
-    {STRATA_FIELD(StreamHubStats, frames_sent), COUNTER, "Frames handed to viewers."},
-    {STRATA_FIELD(StreamHubStats, render_errors), COUNTER, "Viewer renders that failed."},
-    {STRATA_FIELD(StreamHubStats, commit_events), COUNTER, "Commit events published."},
-    {STRATA_FIELD(StreamHubStats, commit_events_dropped), COUNTER,
-     "Commit events dropped because 1024 were already waiting for the hub's thread."},
-    {STRATA_FIELD(StreamHubStats, renders_deferred), COUNTER,
-     "Times a due viewer render waited for API renders or commits."},
-    {STRATA_FIELD(StreamHubStats, frames_dropped), COUNTER,
-     "Frames open viewers missed because a newer one replaced them (slow viewers)."},
-    {STRATA_FIELD(StreamHubStats, highlight_encodes), COUNTER,
-     "Frames encoded with a selected instance tinted (one per frame and instance)."},
-    {STRATA_FIELD(StreamHubStats, held_bytes), GAUGE,
-     "Frame bytes held for open viewers (pending and being written)."},
+constexpr StatSpec<StreamHubStats> STREAM_METRICS[] = {
+    {STRATA_STAT(StreamHubStats, viewers), "Open frame streams (GET /v1/stream).", StatUnit::Count,
+     CURRENT},
+    {STRATA_STAT(StreamHubStats, event_clients), "Open event streams (GET /v1/events).",
+     StatUnit::Count, CURRENT},
+    {STRATA_STAT(StreamHubStats, views), "Distinct views those streams render.", StatUnit::Count,
+     CURRENT},
+    {STRATA_STAT(StreamHubStats, frames_rendered),
+     "Viewer renders (each shared by the viewers of its view).", StatUnit::Count, CUMULATIVE},
+    {STRATA_STAT(StreamHubStats, frames_sent), "Frames handed to viewers.", StatUnit::Count,
+     CUMULATIVE},
+    {STRATA_STAT(StreamHubStats, render_errors), "Viewer renders that failed.", StatUnit::Count,
+     CUMULATIVE},
+    {STRATA_STAT(StreamHubStats, commit_events), "Commit events published.", StatUnit::Count,
+     CUMULATIVE},
+    {STRATA_STAT(StreamHubStats, commit_events_dropped),
+     "Commit events dropped because 1024 were already waiting for the hub's thread.",
+     StatUnit::Count, CUMULATIVE},
+    {STRATA_STAT(StreamHubStats, renders_deferred),
+     "Times a due viewer render waited for API renders or commits.", StatUnit::Count, CUMULATIVE},
+    {STRATA_STAT(StreamHubStats, frames_dropped),
+     "Frames open viewers missed because a newer one replaced them (slow viewers).",
+     StatUnit::Count, CUMULATIVE},
+    {STRATA_STAT(StreamHubStats, highlight_encodes),
+     "Frames encoded with a selected instance tinted (one per frame and instance).",
+     StatUnit::Count, CUMULATIVE},
+    {STRATA_STAT(StreamHubStats, held_bytes),
+     "Frame bytes held for open viewers (pending and being written).", StatUnit::Bytes, CURRENT},
 };
 
-constexpr FieldMetric<Replica> REPLICA_METRICS[] = {
-    {STRATA_FIELD(Replica, connected), GAUGE, "1 while the reader holds a connection to Redis."},
-    {STRATA_FIELD(Replica, joined), GAUGE,
-     "1 once the replica caught up with the log as it was at start (/readyz)."},
-    {STRATA_FIELD(Replica, stopped), GAUGE,
-     "1 once the replica stopped following the log (a poisoned entry, a gap); see /readyz."},
-    {STRATA_FIELD(Replica, applied_version), GAUGE, "Scene version this replica has applied."},
-    {STRATA_FIELD(Replica, log_version), GAUGE, "Newest version this replica knows the log has."},
-    {STRATA_FIELD(Replica, lag_entries), GAUGE, "Log entries this replica has not applied yet."},
-    {STRATA_FIELD(Replica, lag_seconds), GAUGE,
-     "How long the oldest unapplied log entry has waited (0 when caught up)."},
-    {STRATA_FIELD(Replica, entries_applied), COUNTER, "Log entries applied by this replica."},
-    {STRATA_FIELD(Replica, appends), COUNTER, "Batches this replica appended to the log."},
-    {STRATA_FIELD(Replica, append_conflicts), COUNTER,
-     "Appends refused because the log had moved past the validated version."},
-    {STRATA_FIELD(Replica, reconnects), COUNTER, "Reader reconnections to Redis."},
-    {STRATA_FIELD(Replica, snapshot_loaded_version), GAUGE,
-     "Version of the newest Redis snapshot this replica loaded (0: none)."},
-    {STRATA_FIELD(Replica, snapshot_jumps), COUNTER,
+constexpr StatSpec<Replica> REPLICA_METRICS[] = {
+    {STRATA_STAT(Replica, connected), "1 while the reader holds a connection to Redis.",
+     StatUnit::Count, CURRENT},
+    {STRATA_STAT(Replica, joined),
+     "1 once the replica caught up with the log as it was at start (/readyz).", StatUnit::Count,
+     CURRENT},
+    {STRATA_STAT(Replica, stopped),
+     "1 once the replica stopped following the log (a poisoned entry, a gap); see /readyz.",
+     StatUnit::Count, CURRENT},
+    {STRATA_STAT(Replica, applied_version), "Scene version this replica has applied.",
+     StatUnit::Count, CURRENT},
+    {STRATA_STAT(Replica, log_version), "Newest version this replica knows the log has.",
+     StatUnit::Count, CURRENT},
+    {STRATA_STAT(Replica, lag_entries), "Log entries this replica has not applied yet.",
+     StatUnit::Count, CURRENT},
+    {STRATA_STAT(Replica, lag_seconds),
+     "How long the oldest unapplied log entry has waited (0 when caught up).", StatUnit::Seconds,
+     CURRENT},
+    {STRATA_STAT(Replica, entries_applied), "Log entries applied by this replica.", StatUnit::Count,
+     CUMULATIVE},
+    {STRATA_STAT(Replica, appends), "Batches this replica appended to the log.", StatUnit::Count,
+     CUMULATIVE},
+    {STRATA_STAT(Replica, append_conflicts),
+     "Appends refused because the log had moved past the validated version.", StatUnit::Count,
+     CUMULATIVE},
+    {STRATA_STAT(Replica, reconnects), "Reader reconnections to Redis.", StatUnit::Count,
+     CUMULATIVE},
+    {STRATA_STAT(Replica, snapshot_loaded_version),
+     "Version of the newest Redis snapshot this replica loaded (0: none).", StatUnit::Count, CURRENT},
+    {STRATA_STAT(Replica, snapshot_jumps),
      "Times this replica replaced its scene with a newer Redis snapshot because the log entries "
-     "after its version had been trimmed."},
-    {STRATA_FIELD(Replica, snapshots_written), COUNTER, "Snapshots this replica stored in Redis."},
-    {STRATA_FIELD(Replica, snapshot_version), GAUGE, "Newest snapshot version known in Redis."},
-    {STRATA_FIELD(Replica, entries_trimmed), COUNTER,
-     "Log entries trimmed after this replica's snapshots."},
+     "after its version had been trimmed.",
+     StatUnit::Count, CUMULATIVE},
+    {STRATA_STAT(Replica, snapshots_written), "Snapshots this replica stored in Redis.",
+     StatUnit::Count, CUMULATIVE},
+    {STRATA_STAT(Replica, snapshot_version), "Newest snapshot version known in Redis.",
+     StatUnit::Count, CURRENT},
+    {STRATA_STAT(Replica, entries_trimmed), "Log entries trimmed after this replica's snapshots.",
+     StatUnit::Count, CUMULATIVE},
 };
-
-#undef STRATA_FIELD
 
 /// Converts to any field type: counts an aggregate's fields by how many it can be built from.
 struct AnyField {
@@ -185,23 +177,28 @@ MetricFamily histogram(std::string name, std::string help, MetricPart part,
     return f;
 }
 
-/// The rows of `table` as families named `prefix` + field.
+/// A family per row of `table`, named by protocol::metric_name; `get` picks the struct from a
+/// snapshot.
 template <class S, std::size_t N, class Get>
-void add_fields(std::vector<MetricFamily>& out, const FieldMetric<S> (&table)[N],
-                const char* prefix, MetricPart part, Get get) {
-    for (const FieldMetric<S>& row : table) {
-        out.push_back(
-            scalar(prefix + std::string(row.field), std::string(row.help), row.type, part,
-                   [read = row.read, get](const MetricsSnapshot& s) { return read(get(s)); }));
+void add_stats(std::vector<MetricFamily>& out, const StatSpec<S> (&table)[N], const char* prefix,
+               MetricPart part, Get get) {
+    for (const StatSpec<S>& row : table) {
+        MetricFamily f{protocol::metric_name(prefix, row),
+                       std::string(row.help),
+                       row.cumulative ? COUNTER : GAUGE,
+                       part,
+                       {},
+                       {}};
+        f.samples = [&row, get](const MetricsSnapshot& s) {
+            return std::vector<MetricSample>{{"", protocol::metric_value(row, get(s))}};
+        };
+        out.push_back(std::move(f));
     }
 }
 
 void add_engine_families(std::vector<MetricFamily>& out) {
-    for (const CounterSpec& spec : ENGINE_COUNTERS) {
-        out.push_back(scalar("strata_" + std::string(spec.name), std::string(spec.help),
-                             MetricType::Counter, MetricPart::Engine,
-                             [&spec](const MetricsSnapshot& s) { return spec.value(s.engine); }));
-    }
+    add_stats(out, ENGINE_COUNTERS, "strata_", MetricPart::Engine,
+              [](const MetricsSnapshot& s) -> const EngineCounters& { return s.engine; });
     const auto gauge = [&](const char* name, const char* help,
                            std::function<double(const MetricsSnapshot&)> value) {
         out.push_back(scalar(name, help, GAUGE, MetricPart::Engine, std::move(value)));
@@ -246,24 +243,13 @@ void add_server_families(std::vector<MetricFamily>& out) {
     out.push_back(histogram(
         "strata_render_duration_seconds", "Wall time of renders, commit and encoding included.",
         MetricPart::Server, [](const MetricsSnapshot& s) { return s.render_seconds; }));
-    add_fields(out, FRONT_END_METRICS, "strata_http_", MetricPart::FrontEnd,
-               [](const MetricsSnapshot& s) -> const FrontEndCounters& { return *s.front_end; });
+    add_stats(out, FRONT_END_METRICS, "strata_http_", MetricPart::FrontEnd,
+              [](const MetricsSnapshot& s) -> const FrontEndCounters& { return *s.front_end; });
 }
 
 void add_durable_families(std::vector<MetricFamily>& out) {
-    for (const durable::DurableCounterSpec& spec : durable::DURABLE_COUNTERS) {
-        MetricFamily f{protocol::durable_metric_name(spec),
-                       std::string(spec.help),
-                       spec.cumulative ? COUNTER : GAUGE,
-                       MetricPart::Durable,
-                       {},
-                       {}};
-        f.samples = [&spec](const MetricsSnapshot& s) {
-            return std::vector<MetricSample>{
-                {"", protocol::durable_metric_value(spec, *s.durable)}};
-        };
-        out.push_back(std::move(f));
-    }
+    add_stats(out, durable::DURABLE_COUNTERS, "strata_durable_", MetricPart::Durable,
+              [](const MetricsSnapshot& s) -> const durable::DurableStats& { return *s.durable; });
     out.push_back(scalar("strata_durable_failed",
                          "1 when an fsync failed and the journal refuses batches.", GAUGE,
                          MetricPart::Durable,
@@ -283,10 +269,10 @@ std::vector<MetricFamily> build_registry() {
     add_engine_families(out);
     add_server_families(out);
     add_durable_families(out);
-    add_fields(out, REPLICA_METRICS, "strata_replica_", MetricPart::Replica,
-               [](const MetricsSnapshot& s) -> const Replica& { return *s.replica; });
-    add_fields(out, STREAM_METRICS, "strata_stream_", MetricPart::Streams,
-               [](const MetricsSnapshot& s) -> const StreamHubStats& { return *s.streams; });
+    add_stats(out, REPLICA_METRICS, "strata_replica_", MetricPart::Replica,
+              [](const MetricsSnapshot& s) -> const Replica& { return *s.replica; });
+    add_stats(out, STREAM_METRICS, "strata_stream_", MetricPart::Streams,
+              [](const MetricsSnapshot& s) -> const StreamHubStats& { return *s.streams; });
     return out;
 }
 

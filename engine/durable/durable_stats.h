@@ -9,6 +9,8 @@
 #include <string>
 #include <string_view>
 
+#include "engine/core/stat_table.h"
+
 namespace strata::durable {
 
 /// How often the journal reaches the disk before a batch is acknowledged (--fsync).
@@ -47,61 +49,52 @@ struct DurableStats {
     // Not in the table.
     FsyncMode mode = FsyncMode::Always;
     std::string directory;
-    bool failed = false;  ///< the journal hit an fsync error and refuses batches
-    std::string failure;  ///< why
+    bool failed = false;              ///< the journal hit an fsync error and refuses batches
+    std::string failure;              ///< why
     std::string last_snapshot_error;  ///< why the newest snapshot attempt failed; empty: it did not
     std::array<uint64_t, FSYNC_BOUNDS.size() + 1> fsync_buckets{};
 };
 
-enum class DurableUnit : uint8_t { Count, Bytes, Seconds, Milliseconds };
-
-struct DurableCounterSpec {
-    std::string_view name;
-    std::string_view help;
-    DurableUnit unit;
-    bool cumulative;  ///< Prometheus counter (true) or gauge (false)
-    uint64_t DurableStats::*count = nullptr;
-    double DurableStats::*real = nullptr;
-
-    double value(const DurableStats& s) const { return count ? double(s.*count) : s.*real; }
-};
+/// One row per number (engine/core/stat_table.h): the `durability` JSON member and the Prometheus
+/// series `strata_durable_<name>` (milliseconds as `_seconds`; cumulative ones `_total`).
+using DurableCounterSpec = StatSpec<DurableStats>;
 
 inline constexpr DurableCounterSpec DURABLE_COUNTERS[] = {
-    {"journal_bytes", "Bytes in the journal segments on disk.", DurableUnit::Bytes, false,
-     &DurableStats::journal_bytes},
-    {"journal_records", "Journal records appended since start.", DurableUnit::Count, true,
-     &DurableStats::journal_records},
-    {"journal_appended_bytes", "Journal bytes appended since start.", DurableUnit::Bytes, true,
-     &DurableStats::journal_appended_bytes},
-    {"fsyncs", "fsync calls on the journal.", DurableUnit::Count, true, &DurableStats::fsyncs},
-    {"batches_per_fsync_max", "Most batches one fsync made durable (group commit).",
-     DurableUnit::Count, false, &DurableStats::batches_per_fsync_max},
-    {"snapshots_written", "Snapshots written since start.", DurableUnit::Count, true,
-     &DurableStats::snapshots_written},
-    {"snapshot_failures", "Snapshots that could not be written.", DurableUnit::Count, true,
-     &DurableStats::snapshot_failures},
-    {"last_snapshot_version", "Scene version of the newest snapshot written since start.",
-     DurableUnit::Count, false, &DurableStats::last_snapshot_version},
-    {"last_snapshot_bytes", "Size of the newest snapshot written since start.", DurableUnit::Bytes,
-     false, &DurableStats::last_snapshot_bytes},
-    {"last_snapshot_unix_ms", "When the newest snapshot was written (Unix ms; 0: none).",
-     DurableUnit::Count, false, &DurableStats::last_snapshot_unix_ms},
-    {"recovered_version", "Scene version recovered from the data directory at start.",
-     DurableUnit::Count, false, &DurableStats::recovered_version},
-    {"recovered_records", "Journal records replayed at start.", DurableUnit::Count, false,
-     &DurableStats::recovered_records},
-    {"torn_records_truncated", "Torn last records cut off the journal at start.",
-     DurableUnit::Count, false, &DurableStats::torn_records_truncated},
-    {"fsync_seconds", "Time spent in journal fsyncs.", DurableUnit::Seconds, true, nullptr,
-     &DurableStats::fsync_seconds},
-    {"last_snapshot_seconds", "Time the newest snapshot took (copy and write).",
-     DurableUnit::Seconds, false, nullptr, &DurableStats::last_snapshot_seconds},
-    {"last_snapshot_lock_ms", "Milliseconds the newest snapshot held the scene lock.",
-     DurableUnit::Milliseconds, false, nullptr, &DurableStats::last_snapshot_lock_ms},
-    {"recovery_seconds", "Time to load the snapshot and replay the journal at start.",
-     DurableUnit::Seconds, false, nullptr, &DurableStats::recovery_seconds},
-    {"rebuild_seconds", "Time to build the acceleration structures at start.", DurableUnit::Seconds,
-     false, nullptr, &DurableStats::rebuild_seconds},
+    {STRATA_STAT(DurableStats, journal_bytes), "Bytes in the journal segments on disk.",
+     StatUnit::Bytes, false},
+    {STRATA_STAT(DurableStats, journal_records), "Journal records appended since start.",
+     StatUnit::Count, true},
+    {STRATA_STAT(DurableStats, journal_appended_bytes), "Journal bytes appended since start.",
+     StatUnit::Bytes, true},
+    {STRATA_STAT(DurableStats, fsyncs), "fsync calls on the journal.", StatUnit::Count, true},
+    {STRATA_STAT(DurableStats, batches_per_fsync_max),
+     "Most batches one fsync made durable (group commit).", StatUnit::Count, false},
+    {STRATA_STAT(DurableStats, snapshots_written), "Snapshots written since start.",
+     StatUnit::Count, true},
+    {STRATA_STAT(DurableStats, snapshot_failures), "Snapshots that could not be written.",
+     StatUnit::Count, true},
+    {STRATA_STAT(DurableStats, last_snapshot_version),
+     "Scene version of the newest snapshot written since start.", StatUnit::Count, false},
+    {STRATA_STAT(DurableStats, last_snapshot_bytes),
+     "Size of the newest snapshot written since start.", StatUnit::Bytes, false},
+    {STRATA_STAT(DurableStats, last_snapshot_unix_ms),
+     "When the newest snapshot was written (Unix ms; 0: none).", StatUnit::Count, false},
+    {STRATA_STAT(DurableStats, recovered_version),
+     "Scene version recovered from the data directory at start.", StatUnit::Count, false},
+    {STRATA_STAT(DurableStats, recovered_records), "Journal records replayed at start.",
+     StatUnit::Count, false},
+    {STRATA_STAT(DurableStats, torn_records_truncated),
+     "Torn last records cut off the journal at start.", StatUnit::Count, false},
+    {STRATA_STAT(DurableStats, fsync_seconds), "Time spent in journal fsyncs.", StatUnit::Seconds,
+     true},
+    {STRATA_STAT(DurableStats, last_snapshot_seconds),
+     "Time the newest snapshot took (copy and write).", StatUnit::Seconds, false},
+    {STRATA_STAT(DurableStats, last_snapshot_lock_ms),
+     "Milliseconds the newest snapshot held the scene lock.", StatUnit::Milliseconds, false},
+    {STRATA_STAT(DurableStats, recovery_seconds),
+     "Time to load the snapshot and replay the journal at start.", StatUnit::Seconds, false},
+    {STRATA_STAT(DurableStats, rebuild_seconds),
+     "Time to build the acceleration structures at start.", StatUnit::Seconds, false},
 };
 
 }  // namespace strata::durable

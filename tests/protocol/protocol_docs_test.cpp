@@ -21,7 +21,7 @@
 
 #include "engine/counters.h"
 #include "engine/durable/durable_stats.h"
-#include "protocol/durable_json.h"
+#include "protocol/stat_names.h"
 #include "protocol/edit_ops.h"
 #include "protocol/edit_schema.h"
 #include "tests/generated_docs.h"
@@ -99,24 +99,27 @@ std::string ops_index(const std::vector<OpSection>& sections) {
     return out;
 }
 
+const char* unit_name(StatUnit u) {
+    static const char* const UNITS[] = {"count", "bytes", "seconds", "milliseconds"};
+    return UNITS[int(u)];
+}
+
 std::string counters_table() {
     std::string out =
         "| `counters` member | Prometheus counter | unit | counts |\n|---|---|---|---|\n";
     for (const CounterSpec& c : ENGINE_COUNTERS) {
-        out += "| `" + std::string(c.name) + "` | `strata_" + std::string(c.name) + "_total` | " +
-               (c.unit == CounterUnit::Seconds ? "seconds" : "count") + " | " +
-               std::string(c.help) + " |\n";
+        out += "| `" + std::string(c.name) + "` | `" + metric_name("strata_", c) + "` | " +
+               unit_name(c.unit) + " | " + std::string(c.help) + " |\n";
     }
     return out;
 }
 
 std::string durable_counters_table() {
-    static const char* const UNITS[] = {"count", "bytes", "seconds", "milliseconds"};
     std::string out = "| `durability` member | Prometheus | type | unit | what it is |\n"
                       "|---|---|---|---|---|\n";
     for (const durable::DurableCounterSpec& c : durable::DURABLE_COUNTERS) {
-        out += "| `" + std::string(c.name) + "` | `" + durable_metric_name(c) + "` | " +
-               (c.cumulative ? "counter" : "gauge") + " | " + UNITS[int(c.unit)] + " | " +
+        out += "| `" + std::string(c.name) + "` | `" + metric_name("strata_durable_", c) + "` | " +
+               (c.cumulative ? "counter" : "gauge") + " | " + unit_name(c.unit) + " | " +
                std::string(c.help) + " |\n";
     }
     return out;
