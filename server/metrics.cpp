@@ -293,6 +293,24 @@ void write_histogram(std::string& out, const std::string& name, const HistogramC
     out += name + "_count " + std::to_string(cumulative) + '\n';
 }
 
+/// Whether `snapshot` has the part `family` belongs to.
+bool exported(const MetricFamily& family, const MetricsSnapshot& snapshot) {
+    switch (family.part) {
+        case MetricPart::Engine:
+        case MetricPart::Server:
+            return true;
+        case MetricPart::FrontEnd:
+            return snapshot.front_end != nullptr;
+        case MetricPart::Durable:
+            return snapshot.durable.has_value();
+        case MetricPart::Replica:
+            return snapshot.replica.has_value();
+        case MetricPart::Streams:
+            return snapshot.streams.has_value();
+    }
+    return false;
+}
+
 }  // namespace
 
 void Histogram::observe(double seconds) {
@@ -326,22 +344,6 @@ const std::vector<MetricFamily>& metric_registry() {
     return registry;
 }
 
-bool exported(const MetricFamily& family, const MetricsSnapshot& snapshot) {
-    switch (family.part) {
-        case MetricPart::Engine:
-        case MetricPart::Server:
-            return true;
-        case MetricPart::FrontEnd:
-            return snapshot.front_end != nullptr;
-        case MetricPart::Durable:
-            return snapshot.durable.has_value();
-        case MetricPart::Replica:
-            return snapshot.replica.has_value();
-        case MetricPart::Streams:
-            return snapshot.streams.has_value();
-    }
-    return false;
-}
 
 std::string prometheus_text(const MetricsSnapshot& snapshot) {
     std::string out;

@@ -108,9 +108,6 @@ struct MetricFamily {
 /// Every family /metrics can export, in the order it writes them.
 const std::vector<MetricFamily>& metric_registry();
 
-/// Whether `snapshot` has the part `family` belongs to.
-bool exported(const MetricFamily& family, const MetricsSnapshot& snapshot);
-
 /// The whole /metrics document.
 std::string prometheus_text(const MetricsSnapshot& snapshot);
 
