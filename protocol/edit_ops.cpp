@@ -71,6 +71,11 @@ bool OpFields::read(std::string_view key, std::string& out) {
                        [&](const Json& v, const std::string& p) { return m_r.id(v, p); });
 }
 
+bool OpFields::read_text(std::string_view key, std::string& out) {
+    return read_member(*this, key, out,
+                       [&](const Json& v, const std::string& p) { return m_r.text(v, p); });
+}
+
 bool OpFields::read(std::string_view key, float& out) {
     return read_member(*this, key, out,
                        [&](const Json& v, const std::string& p) { return m_r.number(v, p); });

@@ -6,11 +6,16 @@
 // accepts, protocol/edit-batch.schema.json (edit_schema.h) and the ops index of
 // protocol/README.md (tests/protocol/protocol_docs_test.cpp).
 //
-// Adding an op: its struct in engine/scene/edits.h (with the engine's rules for it), an EditOp
-// with its parser in a family file of protocol/ops/, a `### ` section with a ```json example in
-// protocol/README.md, valid and invalid cases in tests/protocol/batches.json; then
+// Adding an op: its struct in engine/scene/edits.h and its rule in engine/scene/scene_rules.cpp
+// (check, then change, saving what it overwrites for undo: undo_log.h); its journal layout, a
+// `fields()` in engine/durable/edit_codec.cpp (append the kind to the Edit variant, never insert);
+// an EditOp with its parser in a family file of protocol/ops/; its JSON in protocol/scene_json.cpp
+// when it makes a new kind of object; a `### ` section with a ```json example in
+// protocol/README.md; valid and invalid cases in tests/protocol/batches.json; then
 // `STRATA_UPDATE_DOCS=1 ctest --test-dir build -R ProtocolDocs` regenerates the schema file and the
-// README's index.
+// README's index. An object kind's plain fields are not written in any of those places: they are
+// rows of its field table (engine/scene/object_fields.h), which the rules, undo log, codec,
+// parser, JSON writer, schema and docs all walk.
 
 #include <cstdint>
 #include <optional>
@@ -23,6 +28,7 @@
 #include "engine/core/math.h"
 #include "engine/scene/edits.h"
 #include "protocol/edit_parser.h"
+#include "protocol/edit_schema.h"
 #include "protocol/json_fields.h"
 
 namespace strata::protocol {
@@ -63,6 +69,8 @@ class OpFields;
 
 /// Turns one op object into an engine edit.
 using OpParser = Edit (*)(OpFields&);
+/// The schema properties an op takes from an object kind's field table (field_json.h).
+using OpFieldProperties = OrderedJson (*)();
 
 /// One op: the single place its name, documentation, schema and parser are written.
 struct EditOp {
@@ -75,6 +83,8 @@ struct EditOp {
     std::string_view schema;
     OpParser parse;
     EditKinds produces;  ///< every alternative `parse` may return
+    /// When set, the properties of a kind's fields, added after those of `schema`.
+    OpFieldProperties fields = nullptr;
 };
 
 /// Every op, in the order of the schema and the README.
@@ -116,6 +126,16 @@ public:
     bool read(std::string_view key, uint32_t& out);
     bool read(std::string_view key, Vec3& out);
     bool read(std::string_view key, Affine& out);
+    /// Free text (a display name), where read(std::string&) reads an id.
+    bool read_text(std::string_view key, std::string& out);
+    /// One of `choices`, stored as the enum value of its position.
+    template <class E>
+        requires std::is_enum_v<E>
+    bool read(std::string_view key, E& out, std::span<const std::string_view> choices) {
+        const Json* v = get(key);
+        if (v) out = static_cast<E>(m_r.choice(*v, pointer(key), choices));
+        return v;
+    }
     template <class T>
     bool read(std::string_view key, std::optional<T>& out) {
         T value{};

@@ -194,6 +194,13 @@ OrderedJson op_def(const EditOp& op) {
     if (const auto p = fragment.find("properties"); p != fragment.end()) {
         for (const auto& [key, value] : p->items()) properties[key] = value;
     }
+    if (op.fields) {
+        const OrderedJson fields = op.fields();
+        for (const auto& [key, value] : fields.items()) {
+            STRATA_CHECK(!properties.contains(key));
+            properties[key] = value;
+        }
+    }
     OrderedJson required = OrderedJson::array({"op"});
     if (const auto r = fragment.find("required"); r != fragment.end()) {
         for (const OrderedJson& key : *r) required.push_back(key);

@@ -164,8 +164,18 @@ bool FieldReader::reserve_shape_triangles(uint64_t triangles, const std::string&
     return false;
 }
 
+std::string FieldReader::text(const Json& v, const std::string& ptr) const {
+    if (!v.is_string()) schema_error(ptr, std::string("expected a string, got ") + type_name(v));
+    return v.get<std::string>();
+}
+
 std::size_t FieldReader::choice(const Json& v, const std::string& ptr,
                                 std::initializer_list<std::string_view> choices) const {
+    return choice(v, ptr, std::span<const std::string_view>(choices.begin(), choices.size()));
+}
+
+std::size_t FieldReader::choice(const Json& v, const std::string& ptr,
+                                std::span<const std::string_view> choices) const {
     std::string list;
     std::size_t i = 0;
     for (std::string_view c : choices) {

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <initializer_list>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -59,9 +60,13 @@ public:
 
     /// A non-empty string of at most MAX_ID_LENGTH code points.
     std::string id(const Json& v, const std::string& ptr) const;
+    /// Any string (free text: the scene checks its rules).
+    std::string text(const Json& v, const std::string& ptr) const;
     /// One of `choices`; returns its position.
     std::size_t choice(const Json& v, const std::string& ptr,
                        std::initializer_list<std::string_view> choices) const;
+    std::size_t choice(const Json& v, const std::string& ptr,
+                       std::span<const std::string_view> choices) const;
     bool boolean(const Json& v, const std::string& ptr) const;
     /// Any JSON number, as a float; a value error when it does not fit a finite float.
     float number(const Json& v, const std::string& ptr);

@@ -3,45 +3,11 @@
 #include <algorithm>
 #include <cstdint>
 
+#include "engine/core/utf8.h"
+
 namespace strata::protocol {
 
 namespace {
-
-/// Length of the well-formed UTF-8 sequence at the start of `s`, or 0 when it is not one.
-std::size_t utf8_sequence_length(std::string_view s) {
-    const auto byte = [&](std::size_t i) { return static_cast<uint8_t>(s[i]); };
-    const uint8_t b0 = byte(0);
-    if (b0 < 0x80) return 1;
-    std::size_t n = 0;
-    uint8_t lo = 0x80, hi = 0xBF;  // range of the second byte (RFC 3629 table)
-    if (b0 >= 0xC2 && b0 <= 0xDF) {
-        n = 2;
-    } else if (b0 >= 0xE0 && b0 <= 0xEF) {
-        n = 3;
-        if (b0 == 0xE0) lo = 0xA0;  // overlong
-        if (b0 == 0xED) hi = 0x9F;  // surrogates
-    } else if (b0 >= 0xF0 && b0 <= 0xF4) {
-        n = 4;
-        if (b0 == 0xF0) lo = 0x90;  // overlong
-        if (b0 == 0xF4) hi = 0x8F;  // above U+10FFFF
-    } else {
-        return 0;
-    }
-    if (s.size() < n || byte(1) < lo || byte(1) > hi) return 0;
-    for (std::size_t i = 2; i < n; ++i) {
-        if (byte(i) < 0x80 || byte(i) > 0xBF) return 0;
-    }
-    return n;
-}
-
-/// The code point of a well-formed sequence of `n` bytes.
-uint32_t code_point(std::string_view s, std::size_t n) {
-    const auto byte = [&](std::size_t i) { return uint32_t(static_cast<uint8_t>(s[i])); };
-    if (n == 1) return byte(0);
-    uint32_t cp = byte(0) & (0xFFu >> (n + 1));
-    for (std::size_t i = 1; i < n; ++i) cp = (cp << 6) | (byte(i) & 0x3F);
-    return cp;
-}
 
 void append_hex_escape(std::string& out, uint8_t b) {
     static constexpr char HEX[] = "0123456789abcdef";
@@ -51,15 +17,6 @@ void append_hex_escape(std::string& out, uint8_t b) {
 }
 
 }  // namespace
-
-bool is_valid_utf8(std::string_view text) {
-    while (!text.empty()) {
-        const std::size_t n = utf8_sequence_length(text);
-        if (n == 0) return false;
-        text.remove_prefix(n);
-    }
-    return true;
-}
 
 std::string to_valid_utf8(std::string_view text) {
     std::string out;
@@ -82,9 +39,8 @@ std::string escape_for_log(std::string_view text) {
     out.reserve(text.size());
     while (!text.empty()) {
         const std::size_t n = utf8_sequence_length(text);
-        const uint32_t cp = n ? code_point(text, n) : 0;
-        const bool control = n == 0 || cp < 0x20 || cp == 0x7F || (cp >= 0x80 && cp <= 0x9F) ||
-                             cp == 0x2028 || cp == 0x2029;
+        const uint32_t cp = n ? utf8_code_point(text, n) : 0;
+        const bool control = n == 0 || is_control_code_point(cp);
         if (control) {
             for (std::size_t i = 0; i < std::max<std::size_t>(n, 1); ++i)
                 append_hex_escape(out, static_cast<uint8_t>(text[i]));

@@ -7,13 +7,12 @@
 #include <string>
 #include <string_view>
 
+#include "engine/core/utf8.h"
 #include "protocol/json_document.h"
 
 namespace strata::protocol {
 
-/// True when `text` is well-formed UTF-8 (RFC 3629: no overlong forms, no surrogates, nothing
-/// above U+10FFFF).
-bool is_valid_utf8(std::string_view text);
+using strata::is_valid_utf8;
 
 /// `text` with each byte of an invalid UTF-8 sequence replaced by U+FFFD.
 std::string to_valid_utf8(std::string_view text);

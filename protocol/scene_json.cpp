@@ -3,6 +3,7 @@
 #include <charconv>
 
 #include "engine/image/texture_decode.h"
+#include "protocol/field_json.h"
 
 namespace strata::protocol {
 
@@ -25,13 +26,11 @@ Json floats_to_json(const float* v, std::size_t n) {
 }
 
 Json material_fields(const Material& m) {
-    return {{"base_color", vec3_to_json(m.base_color)},
-            {"roughness", shortest(m.roughness)},
-            {"metallic", shortest(m.metallic)},
-            {"emission", vec3_to_json(m.emission)},
-            {"sampler",
-             {{"wrap", texture_wrap_name(m.base_color_sampler.wrap)},
-              {"filter", texture_filter_name(m.base_color_sampler.filter)}}}};
+    Json j = {{"sampler",
+               {{"wrap", texture_wrap_name(m.base_color_sampler.wrap)},
+                {"filter", texture_filter_name(m.base_color_sampler.filter)}}}};
+    write_fields<MaterialFields>(j, m);
+    return j;
 }
 
 /// The id of a material handle, or null for the default.
@@ -46,11 +45,11 @@ Json group_ref(const Scene& s, GroupHandle h) {
     return g ? Json(g.value()->id) : Json(nullptr);
 }
 
+}  // namespace
+
 Json affine_to_json(const Affine& a) {
     return floats_to_json(a.to_rows16().data(), 16);
 }
-
-}  // namespace
 
 Json float_to_json(float f) {
     return shortest(f);
@@ -61,17 +60,15 @@ Json vec3_to_json(const Vec3& v) {
 }
 
 Json camera_to_json(const Camera& c) {
-    return {{"eye", vec3_to_json(c.eye)},
-            {"target", vec3_to_json(c.target)},
-            {"up", vec3_to_json(c.up)},
-            {"fov_y_deg", shortest(c.fov_y_deg)}};
+    Json j = Json::object();
+    write_fields<CameraFields>(j, c);
+    return j;
 }
 
 Json lighting_to_json(const Lighting& l) {
-    return {{"sun_direction", vec3_to_json(l.sun_direction)},
-            {"sun_color", vec3_to_json(l.sun_color)},
-            {"sky_color", vec3_to_json(l.sky_color)},
-            {"sky_intensity", shortest(l.sky_intensity)}};
+    Json j = Json::object();
+    write_fields<LightingFields>(j, l);
+    return j;
 }
 
 Json bounds_to_json(const Bounds3& b) {
@@ -103,7 +100,7 @@ Bounds3 mesh_bounds(const MeshRecord& m) {
 }
 
 Json mesh_json(const Scene& s, MeshHandle h, const MeshRecord& m) {
-    return Json{
+    Json j{
         {"id", m.id},
         {"index", h.index},
         {"version", s.version()},
@@ -116,38 +113,38 @@ Json mesh_json(const Scene& s, MeshHandle h, const MeshRecord& m) {
         {"build",
          {{"prefer", build_preference_name(m.build.prefer)}, {"allow_refit", m.build.allow_refit}}},
         {"bounds", bounds_to_json(mesh_bounds(m))}};
+    write_fields<MeshFields>(j, m);
+    return j;
 }
 
 Json instance_json(const Scene& s, InstanceHandle h, const InstanceRecord& i,
                    const Bounds3& mesh_local_bounds) {
-    return Json{{"id", i.id},
+    Json j{{"id", i.id},
                 {"index", h.index},
                 {"version", s.version()},
                 {"mesh", s.mesh(i.mesh).value()->id},
                 {"material", material_ref(s, i.material)},
                 {"resolved_material", material_fields(s.resolved_material(i))},
-                {"transform", affine_to_json(i.transform)},
-                {"visible", i.visible},
-                {"mask", i.mask},
-                {"user_id", i.user_id},
                 {"parent", group_ref(s, i.parent)},
                 {"world_transform", affine_to_json(i.world)},
                 {"world_visible", i.world_visible},
                 {"bounds", bounds_to_json(i.world.transform_bounds(mesh_local_bounds))}};
+    write_fields<InstanceFields>(j, i);
+    return j;
 }
 
 Json group_json(const Scene& s, GroupHandle h, const GroupRecord& g) {
-    return Json{{"id", g.id},
+    Json j{{"id", g.id},
                 {"index", h.index},
                 {"version", s.version()},
                 {"parent", group_ref(s, g.parent)},
-                {"transform", affine_to_json(g.transform)},
-                {"visible", g.visible},
                 {"world_transform", affine_to_json(g.world)},
                 {"world_visible", g.world_visible},
                 {"children",
                  {{"groups", g.children.groups.size()},
                   {"instances", g.children.instances.size()}}}};
+    write_fields<GroupFields>(j, g);
+    return j;
 }
 
 Json material_json(const Scene& s, const MaterialRecord& m) {
@@ -160,18 +157,9 @@ Json material_json(const Scene& s, const MaterialRecord& m) {
 }
 
 Json light_json(const Scene& s, const LightRecord& r) {
-    const Light& l = r.light;
-    return Json{{"id", r.id},
-                {"version", s.version()},
-                {"type", light_kind_name(l.kind)},
-                {"position", vec3_to_json(l.position)},
-                {"direction", vec3_to_json(l.direction)},
-                {"color", vec3_to_json(l.color)},
-                {"intensity", shortest(l.intensity)},
-                {"angle_deg", shortest(l.angle_deg)},
-                {"inner_angle_deg", shortest(l.inner_angle_deg)},
-                {"width", shortest(l.width)},
-                {"height", shortest(l.height)}};
+    Json j{{"id", r.id}, {"version", s.version()}};
+    write_fields<LightFields>(j, r.light);
+    return j;
 }
 
 std::optional<Json> mesh_to_json(const Scene& s, std::string_view id) {
@@ -203,13 +191,15 @@ std::optional<Json> light_to_json(const Scene& s, std::string_view id) {
 
 Json texture_json(const Scene& s, const TextureRecord& t) {
     const char* format = texture_format(*t.encoded);
-    return {{"id", t.id},
+    Json j{{"id", t.id},
             {"width", t.image->width},
             {"height", t.image->height},
             {"format", format ? format : "unknown"},
             {"encoded_bytes", t.encoded->size()},
             {"decoded_bytes", t.image->bytes()},
             {"version", s.version()}};
+    write_fields<TextureFields>(j, t);
+    return j;
 }
 
 std::optional<Json> texture_to_json(const Scene& s, std::string_view id) {

@@ -14,6 +14,8 @@ namespace strata::protocol {
 /// The shortest decimal that reads back as `f` (0.45f prints as 0.45).
 Json float_to_json(float f);
 Json vec3_to_json(const Vec3& v);
+/// 4x4 row-major, 16 numbers.
+Json affine_to_json(const Affine& a);
 Json camera_to_json(const Camera& c);
 Json lighting_to_json(const Lighting& l);
 /// {"min": [3], "max": [3]}, or null for an empty box.

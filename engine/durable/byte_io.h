@@ -2,7 +2,8 @@
 // Little-endian binary writing and bounds-checked reading for the journal and snapshot codecs.
 // Both sides are called the same way, `io(field, ...)`, so one function describes a layout for
 // encoding and decoding alike: value_fields() below for the value types inside edits (Material,
-// BuildOptions, Affine), fields() in edit_codec.cpp for each edit kind. Arrays of Vec3 and
+// BuildOptions, Affine), fields() in edit_codec.cpp for each edit kind. Objects' plain fields come
+// from their kinds' field tables (object_fields.h). Arrays of Vec3 and
 // triangles are copied as raw buffers: the host is little-endian, and a static_assert keeps it
 // that way.
 
@@ -17,6 +18,7 @@
 #include <vector>
 
 #include "engine/scene/edits.h"
+#include "engine/scene/object_fields.h"
 
 namespace strata::durable {
 
@@ -33,14 +35,28 @@ template <class Io, Kind<BuildOptions> E>
 void value_fields(Io& io, E& v) {
     io(v.prefer, v.allow_refit);
 }
+/// The first-layout (tag 0) fields of kind `K` in `v`, its record or add edit, in table order.
+template <class K, class Io, class V>
+void table_fields(Io& io, V& v) {
+    for_each_field<K>([&](const auto& row) {
+        if (row.info.tag == 0) io(field_in(row, v));
+    });
+}
+/// The first-layout fields of kind `K`'s update edit `u`, each an optional.
+template <class K, class Io, class U>
+void table_updates(Io& io, U& u) {
+    for_each_field<K>([&](const auto& row) {
+        if (row.info.tag == 0) io(u.*(row.update));
+    });
+}
+
 template <class Io, Kind<Material> E>
 void value_fields(Io& io, E& v) {
-    io(v.base_color, v.roughness, v.metallic, v.emission);
+    table_fields<MaterialFields>(io, v);
 }
 template <class Io, Kind<Light> E>
 void value_fields(Io& io, E& v) {
-    io(v.kind, v.position, v.direction, v.color, v.intensity, v.angle_deg, v.inner_angle_deg,
-       v.width, v.height);
+    table_fields<LightFields>(io, v);
 }
 template <class Io, Kind<Affine> E>
 void value_fields(Io& io, E& v) {

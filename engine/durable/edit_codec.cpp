@@ -61,7 +61,11 @@ static_assert(std::size(KIND_NAMES) == std::variant_size_v<Edit>);
 /// instance's parent group) are extensions: an edit without them is written exactly as before,
 /// so older files read the same and a file only grows the bit where it uses what is new.
 constexpr uint8_t EXTENDED = 0x80;
-static_assert(std::variant_size_v<Edit> < EXTENDED);
+/// Kind tag bit: the edit's tagged fields follow (after its extension fields, if any): fields
+/// added to a kind's table after its first layout (tag > 0 in object_fields.h), written as a
+/// count byte, then a tag byte and the value for each field that is not absent.
+constexpr uint8_t TAGGED = 0x40;
+static_assert(std::variant_size_v<Edit> < TAGGED);
 
 // Step: one layout per edit kind -----------------------------------------------------------------
 
@@ -87,15 +91,18 @@ void fields(Io& io, E& e) {
 }
 template <class Io, Kind<UpdateMaterial> E>
 void fields(Io& io, E& e) {
-    io(e.material, e.base_color, e.roughness, e.metallic, e.emission);
+    io(e.material);
+    table_updates<MaterialFields>(io, e);
 }
 template <class Io, Kind<AddInstance> E>
 void fields(Io& io, E& e) {
-    io(e.id, e.mesh, e.material, e.transform, e.visible, e.mask, e.user_id);
+    io(e.id, e.mesh, e.material);
+    table_fields<InstanceFields>(io, e);
 }
 template <class Io, Kind<UpdateInstance> E>
 void fields(Io& io, E& e) {
-    io(e.instance, e.material, e.transform, e.visible, e.mask, e.user_id);
+    io(e.instance, e.material);
+    table_updates<InstanceFields>(io, e);
 }
 template <class Io, Kind<SetTransform> E>
 void fields(Io& io, E& e) {
@@ -111,21 +118,23 @@ void fields(Io& io, E& e) {
 }
 template <class Io, Kind<SetCamera> E>
 void fields(Io& io, E& e) {
-    io(e.eye, e.target, e.up, e.fov_y_deg);
+    table_updates<CameraFields>(io, e);
 }
 template <class Io, Kind<SetLighting> E>
 void fields(Io& io, E& e) {
-    io(e.sun_direction, e.sun_color, e.sky_color, e.sky_intensity);
+    table_updates<LightingFields>(io, e);
 }
 template <class Io, Kind<Clear> E>
 void fields(Io&, E&) {}
 template <class Io, Kind<AddGroup> E>
 void fields(Io& io, E& e) {
-    io(e.id, e.parent, e.transform, e.visible);
+    io(e.id, e.parent);
+    table_fields<GroupFields>(io, e);
 }
 template <class Io, Kind<UpdateGroup> E>
 void fields(Io& io, E& e) {
-    io(e.group, e.parent, e.transform, e.visible);
+    io(e.group, e.parent);
+    table_updates<GroupFields>(io, e);
 }
 template <class Io, Kind<RemoveGroup> E>
 void fields(Io& io, E& e) {
@@ -146,8 +155,8 @@ void fields(Io& io, E& e) {
 }
 template <class Io, Kind<UpdateLight> E>
 void fields(Io& io, E& e) {
-    io(e.light, e.kind, e.position, e.direction, e.color, e.intensity, e.angle_deg,
-       e.inner_angle_deg, e.width, e.height);
+    io(e.light);
+    table_updates<LightFields>(io, e);
 }
 template <class Io, Kind<RemoveLight> E>
 void fields(Io& io, E& e) {
@@ -238,6 +247,137 @@ bool has_extension(const UpdateMaterial& e) {
     return e.base_color_texture.has_value() || e.wrap.has_value() || e.filter.has_value();
 }
 
+// Step: tagged fields, for the edits that carry a kind's table --------------------------------
+
+/// The kind whose fields an edit carries and where: the kind's add value (`update` false) or
+/// its update edit. `Kind` is void for edits that carry no table.
+template <class E>
+struct Carries {
+    using Kind = void;
+};
+template <class K, bool U>
+struct CarriesKind {
+    using Kind = K;
+    static constexpr bool update = U;
+};
+template <>
+struct Carries<AddMesh> : CarriesKind<MeshFields, false> {};
+template <>
+struct Carries<AddTexture> : CarriesKind<TextureFields, false> {};
+template <>
+struct Carries<AddMaterial> : CarriesKind<MaterialFields, false> {};
+template <>
+struct Carries<UpdateMaterial> : CarriesKind<MaterialFields, true> {};
+template <>
+struct Carries<AddInstance> : CarriesKind<InstanceFields, false> {};
+template <>
+struct Carries<UpdateInstance> : CarriesKind<InstanceFields, true> {};
+template <>
+struct Carries<AddGroup> : CarriesKind<GroupFields, false> {};
+template <>
+struct Carries<UpdateGroup> : CarriesKind<GroupFields, true> {};
+template <>
+struct Carries<AddLight> : CarriesKind<LightFields, false> {};
+template <>
+struct Carries<UpdateLight> : CarriesKind<LightFields, true> {};
+template <>
+struct Carries<SetCamera> : CarriesKind<CameraFields, true> {};
+template <>
+struct Carries<SetLighting> : CarriesKind<LightingFields, true> {};
+
+/// Where the carried fields live in the edit: the edit itself, or the value an add holds.
+template <class E>
+auto& carried(E& e) {
+    if constexpr (Kind<E, AddMaterial>)
+        return e.material;
+    else if constexpr (Kind<E, AddLight>)
+        return e.light;
+    else
+        return e;
+}
+
+/// Whether a tagged field is there: an update's when set, an add's when not its default.
+template <class Row, class V>
+bool tagged_present(const Row& row, const V& v, bool update) {
+    using K = typename Row::Kind;
+    if constexpr (requires { (v.*(row.update)).has_value(); }) {
+        if (update) return (v.*(row.update)).has_value();
+    }
+    if constexpr (std::is_same_v<V, typename K::Add>) {
+        static const typename K::Add defaults{};
+        return !(v.*(row.add) == defaults.*(row.add));
+    }
+    return false;
+}
+
+template <class E>
+std::size_t tagged_count(const E& e) {
+    using C = Carries<E>;
+    if constexpr (std::is_void_v<typename C::Kind>) {
+        return 0;
+    } else {
+        std::size_t n = 0;
+        for_each_field<typename C::Kind>([&](const auto& row) {
+            if (row.info.tag != 0 && tagged_present(row, carried(e), C::update)) ++n;
+        });
+        return n;
+    }
+}
+
+template <class E>
+void write_tagged(ByteWriter& w, const E& e) {
+    using C = Carries<E>;
+    if constexpr (!std::is_void_v<typename C::Kind>) {
+        w(uint8_t(tagged_count(e)));
+        const auto& v = carried(e);
+        for_each_field<typename C::Kind>([&](const auto& row) {
+            if (row.info.tag == 0 || !tagged_present(row, v, C::update)) return;
+            w(row.info.tag);
+            if constexpr (C::update)
+                w(*(v.*(row.update)));
+            else
+                w(v.*(row.add));
+        });
+    }
+}
+
+template <class E>
+void read_tagged(ByteReader& r, E& e) {
+    using C = Carries<E>;
+    if constexpr (std::is_void_v<typename C::Kind>) {
+        r.fail("tagged fields on an edit that has none");
+    } else {
+        uint8_t count = 0;
+        r(count);
+        if (r.ok() && count == 0) r.fail("an empty tagged section");
+        uint64_t seen = 0;
+        auto& v = carried(e);
+        for (uint8_t i = 0; i < count && r.ok(); ++i) {
+            uint8_t tag = 0;
+            r(tag);
+            if (!r.ok()) return;
+            bool known = false;
+            for_each_field<typename C::Kind>([&](const auto& row) {
+                if (row.info.tag == 0 || row.info.tag != tag) return;
+                known = true;
+                if constexpr (C::update) {
+                    (v.*(row.update)).emplace();
+                    r(*(v.*(row.update)));
+                } else {
+                    r(v.*(row.add));
+                    // Not a form any writer produces (and it would re-encode differently).
+                    if (r.ok() && !tagged_present(row, v, false))
+                        r.fail("tagged field " + std::to_string(tag) + " holds its default");
+                }
+            });
+            if (!known) return r.fail("unknown field tag " + std::to_string(tag));
+            if (seen & (uint64_t{1} << tag))
+                return r.fail("field tag " + std::to_string(tag) + " twice");
+            seen |= uint64_t{1} << tag;
+        }
+    }
+}
+
 /// A default-constructed edit of kind `tag` (tag < variant size).
 template <std::size_t... I>
 Edit make_edit(std::size_t tag, std::index_sequence<I...>) {
@@ -254,9 +394,11 @@ void encode_batch(const EditBatch& batch, std::string& out) {
         std::visit(
             [&](const auto& e) {
                 const bool extended = has_extension(e);
-                w(uint8_t(edit.index() | (extended ? EXTENDED : 0)));
+                const bool tagged = tagged_count(e) != 0;
+                w(uint8_t(edit.index() | (extended ? EXTENDED : 0) | (tagged ? TAGGED : 0)));
                 fields(w, e);
                 if (extended) extension(w, e);
+                if (tagged) write_tagged(w, e);
             },
             edit);
     }
@@ -273,7 +415,8 @@ Status decode_each(std::string_view bytes, const std::function<Status(Edit&&)>& 
         r(tag);
         if (!r.ok()) break;
         const bool extended = (tag & EXTENDED) != 0;
-        tag &= uint8_t(~EXTENDED);
+        const bool tagged = (tag & TAGGED) != 0;
+        tag &= uint8_t(~(EXTENDED | TAGGED));
         if (tag >= std::variant_size_v<Edit>) {
             r.fail("unknown edit kind " + std::to_string(tag));
             break;
@@ -288,6 +431,7 @@ Status decode_each(std::string_view bytes, const std::function<Status(Edit&&)>& 
                 // "absent", is not a form any writer produces (and would re-encode differently).
                 if (r.ok() && extended && !has_extension(e))
                     r.fail("extension bit on an edit with no extension fields");
+                if (tagged) read_tagged(r, e);
             },
             edit);
         if (!r.ok()) {

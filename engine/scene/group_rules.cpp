@@ -4,21 +4,11 @@
 // whole batch passed (scene_graph.cpp).
 
 #include "engine/scene/child_list.h"
+#include "engine/scene/object_fields.h"
 #include "engine/scene/scene.h"
 #include "engine/scene/undo_log.h"
 
 namespace strata {
-
-namespace {
-
-Status check_group_transform(const Affine& t) {
-    if (const char* why = transform_problem(t))
-        return failure(t.is_finite() ? ErrorCode::DegenerateTransform : ErrorCode::NotFinite, why,
-                       "transform");
-    return {};
-}
-
-}  // namespace
 
 Status Scene::apply_edit(AddGroup&& e, UndoLog& undo) {
     if (e.id.empty()) return failure(ErrorCode::InvalidArgument, "group id is empty", "id");
@@ -27,13 +17,12 @@ Status Scene::apply_edit(AddGroup&& e, UndoLog& undo) {
     auto parent = find_parent(e.parent, "parent");
     if (!parent) return Unexpected(parent.error());
     if (Status s = check_group_move(GroupHandle{}, parent.value()); !s) return s;
-    if (Status s = check_group_transform(e.transform); !s) return s;
+    if (Status s = check_fields<GroupFields>(e); !s) return s;
 
     GroupRecord r;
     r.id = e.id;
     r.parent = parent.value();
-    r.transform = e.transform;
-    r.visible = e.visible;
+    copy_added<GroupFields>(r, e);
     std::vector<GroupHandle>& siblings = children_of(r.parent).groups;
     r.child_slot = static_cast<uint32_t>(siblings.size());
     bool reused = false;
@@ -61,9 +50,7 @@ Status Scene::apply_edit(UpdateGroup&& e, UndoLog& undo) {
                            "parent");
         if (Status s = check_group_move(h, parent); !s) return s;
     }
-    if (e.transform) {
-        if (Status s = check_group_transform(*e.transform); !s) return s;
-    }
+    if (Status s = check_update<GroupFields>(e); !s) return s;
 
     save_group(h, undo);
     DirtyBits<GroupDirty> bits;
@@ -71,15 +58,7 @@ Status Scene::apply_edit(UpdateGroup&& e, UndoLog& undo) {
         reparent_group(h, parent, undo);
         bits |= GroupDirty::Parent;
     }
-    GroupRecord& r = m_groups.at(h);
-    if (e.transform) {
-        r.transform = *e.transform;
-        bits |= GroupDirty::Transform;
-    }
-    if (e.visible) {
-        r.visible = *e.visible;
-        bits |= GroupDirty::Visibility;
-    }
+    bits |= apply_update<GroupFields>(m_groups.at(h), e);
     if (bits.any()) mark(h, bits);
     return {};
 }

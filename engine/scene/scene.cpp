@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "engine/scene/object_fields.h"
 #include "engine/scene/undo_log.h"
 
 namespace strata {
@@ -21,36 +22,19 @@ Error stale(const char* kind) {
 }  // namespace
 
 void apply_to(Camera& c, const SetCamera& e) {
-    if (e.eye) c.eye = *e.eye;
-    if (e.target) c.target = *e.target;
-    if (e.up) c.up = *e.up;
-    if (e.fov_y_deg) c.fov_y_deg = *e.fov_y_deg;
+    apply_update<CameraFields>(c, e);
 }
 
 void apply_to(Lighting& l, const SetLighting& e) {
-    if (e.sun_direction) l.sun_direction = *e.sun_direction;
-    if (e.sun_color) l.sun_color = *e.sun_color;
-    if (e.sky_color) l.sky_color = *e.sky_color;
-    if (e.sky_intensity) l.sky_intensity = *e.sky_intensity;
+    apply_update<LightingFields>(l, e);
 }
 
 void apply_to(Light& l, const UpdateLight& e) {
-    if (e.kind) l.kind = *e.kind;
-    if (e.position) l.position = *e.position;
-    if (e.direction) l.direction = *e.direction;
-    if (e.color) l.color = *e.color;
-    if (e.intensity) l.intensity = *e.intensity;
-    if (e.angle_deg) l.angle_deg = *e.angle_deg;
-    if (e.inner_angle_deg) l.inner_angle_deg = *e.inner_angle_deg;
-    if (e.width) l.width = *e.width;
-    if (e.height) l.height = *e.height;
+    apply_update<LightFields>(l, e);
 }
 
 void apply_to(Material& m, const UpdateMaterial& e) {
-    if (e.base_color) m.base_color = *e.base_color;
-    if (e.roughness) m.roughness = *e.roughness;
-    if (e.metallic) m.metallic = *e.metallic;
-    if (e.emission) m.emission = *e.emission;
+    apply_update<MaterialFields>(m, e);
     if (e.wrap) m.base_color_sampler.wrap = *e.wrap;
     if (e.filter) m.base_color_sampler.filter = *e.filter;
 }
@@ -211,7 +195,7 @@ void Scene::save_mesh(MeshHandle h, UndoLog& undo) const {
 void Scene::save_instance(InstanceHandle h, UndoLog& undo) const {
     const InstanceRecord& r = m_instances.at(h);
     undo.records.emplace_back(
-        undo::InstanceState{h, r.material, r.transform, r.visible, r.mask, r.user_id, r.dirty});
+        undo::InstanceState{h, r.material, save_fields<InstanceFields>(r), r.dirty});
 }
 
 void Scene::clear_changes() {
@@ -261,7 +245,9 @@ EditBatch SceneImage::to_batch() const {
     EditBatch b;
     // Textures before the materials that name them.
     textures.for_each([&](TextureHandle, const TextureRecord& t) {
-        b.edits.emplace_back(AddTexture{t.id, *t.encoded});
+        AddTexture e{t.id, *t.encoded};
+        copy_to_add<TextureFields>(e, t);
+        b.edits.emplace_back(std::move(e));
     });
     materials.for_each([&](MaterialHandle, const MaterialRecord& m) {
         AddMaterial e{m.id, m.material};
@@ -278,6 +264,7 @@ EditBatch SceneImage::to_batch() const {
         e.uvs = m.uvs;
         e.build = m.build;
         if (const MaterialRecord* mat = materials.get(m.material)) e.material = mat->id;
+        copy_to_add<MeshFields>(e, m);
         b.edits.emplace_back(std::move(e));
     });
     // Groups parents first (depth-first from the root), so each names a group already added.
@@ -288,8 +275,7 @@ EditBatch SceneImage::to_batch() const {
         AddGroup e;
         e.id = g.id;
         if (!g.parent.is_null()) e.parent = groups.at(g.parent).id;
-        e.transform = g.transform;
-        e.visible = g.visible;
+        copy_to_add<GroupFields>(e, g);
         b.edits.emplace_back(std::move(e));
         stack.insert(stack.end(), g.children.groups.rbegin(), g.children.groups.rend());
     }
@@ -298,18 +284,14 @@ EditBatch SceneImage::to_batch() const {
         e.id = i.id;
         e.mesh = meshes.at(i.mesh).id;
         if (const MaterialRecord* mat = materials.get(i.material)) e.material = mat->id;
-        e.transform = i.transform;
-        e.visible = i.visible;
-        e.mask = i.mask;
-        e.user_id = i.user_id;
+        copy_to_add<InstanceFields>(e, i);
         if (!i.parent.is_null()) e.parent = groups.at(i.parent).id;
         b.edits.emplace_back(std::move(e));
     });
     lights.for_each(
         [&](LightHandle, const LightRecord& l) { b.edits.emplace_back(AddLight{l.id, l.light}); });
-    b.edits.emplace_back(SetCamera{camera.eye, camera.target, camera.up, camera.fov_y_deg});
-    b.edits.emplace_back(SetLighting{lighting.sun_direction, lighting.sun_color,
-                                     lighting.sky_color, lighting.sky_intensity});
+    b.edits.emplace_back(update_to<CameraFields>(camera));
+    b.edits.emplace_back(update_to<LightingFields>(lighting));
     return b;
 }
 

@@ -101,7 +101,7 @@ void Scene::reparent_group(GroupHandle g, GroupHandle parent, UndoLog& undo) {
 
 void Scene::save_group(GroupHandle g, UndoLog& undo) const {
     const GroupRecord& r = m_groups.at(g);
-    undo.records.emplace_back(undo::GroupState{g, r.transform, r.visible, r.dirty});
+    undo.records.emplace_back(undo::GroupState{g, save_fields<GroupFields>(r), r.dirty});
 }
 
 void Scene::remove_group(GroupHandle g, UndoLog& undo) {

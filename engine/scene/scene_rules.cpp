@@ -9,6 +9,7 @@
 
 #include "engine/image/texture_decode.h"
 #include "engine/scene/child_list.h"
+#include "engine/scene/object_fields.h"
 #include "engine/scene/scene.h"
 #include "engine/scene/undo_log.h"
 
@@ -152,14 +153,6 @@ void patch_attribute(std::vector<T>& dst, std::vector<T>&& values, uint32_t offs
     }
 }
 
-Status check_transform(const Affine& t, const char* field) {
-    if (const char* why = transform_problem(t)) {
-        const bool finite = t.is_finite();
-        return failure(finite ? ErrorCode::DegenerateTransform : ErrorCode::NotFinite, why, field);
-    }
-    return {};
-}
-
 }  // namespace
 
 // Step: mesh ops ---------------------------------------------------------------------------------
@@ -187,6 +180,7 @@ Status Scene::apply_edit(AddMesh&& e, UndoLog& undo) {
         material = find_material(*e.material);
         if (material.is_null()) return unknown("material", *e.material, "material");
     }
+    if (Status s = check_fields<MeshFields>(e); !s) return s;
 
     m_totals.vertices += e.positions.size();
     m_totals.triangles += e.triangles.size();
@@ -198,6 +192,7 @@ Status Scene::apply_edit(AddMesh&& e, UndoLog& undo) {
     r.uvs = std::move(e.uvs);
     r.build = e.build;
     r.material = material;
+    copy_added<MeshFields>(r, e);
     bool reused = false;
     const MeshHandle h = m_meshes.insert(std::move(r), &reused);
     undo.records.emplace_back(undo::Inserted<MeshHandle>{h, reused});
@@ -421,6 +416,7 @@ void Scene::remove_material(MaterialHandle h, UndoLog& undo) {
 
 Status Scene::apply_edit(AddTexture&& e, UndoLog& undo) {
     if (Status s = check_new_id(e.id, !find_texture(e.id).is_null(), "texture"); !s) return s;
+    if (Status s = check_fields<TextureFields>(e); !s) return s;
     // What is left of the budget bounds the decode: a huge image is refused from its header,
     // before its texels are allocated.
     TextureLimits limits;
@@ -439,6 +435,7 @@ Status Scene::apply_edit(AddTexture&& e, UndoLog& undo) {
     r.id = e.id;
     r.image = std::make_shared<const TextureImage>(std::move(image).value());
     r.encoded = std::make_shared<const std::string>(std::move(e.data));
+    copy_added<TextureFields>(r, e);
     bool reused = false;
     const TextureHandle h = m_textures.insert(std::move(r), &reused);
     undo.records.emplace_back(undo::Inserted<TextureHandle>{h, reused});
@@ -485,7 +482,7 @@ Status Scene::apply_edit(AddInstance&& e, UndoLog& undo) {
         material = find_material(*e.material);
         if (material.is_null()) return unknown("material", *e.material, "material");
     }
-    if (Status s = check_transform(e.transform, "transform"); !s) return s;
+    if (Status s = check_fields<InstanceFields>(e); !s) return s;
     auto parent = find_parent(e.parent, "parent");
     if (!parent) return Unexpected(parent.error());
 
@@ -494,10 +491,7 @@ Status Scene::apply_edit(AddInstance&& e, UndoLog& undo) {
     r.id = e.id;
     r.mesh = mesh_handle;
     r.material = material;
-    r.transform = e.transform;
-    r.visible = e.visible;
-    r.mask = e.mask;
-    r.user_id = e.user_id;
+    copy_added<InstanceFields>(r, e);
     r.user_slot = static_cast<uint32_t>(mesh.users.size());
     r.parent = parent.value();
     std::vector<InstanceHandle>& siblings = children_of(r.parent).instances;
@@ -521,9 +515,7 @@ Status Scene::apply_edit(UpdateInstance&& e, UndoLog& undo) {
         material = find_material(**e.material);
         if (material.is_null()) return unknown("material", **e.material, "material");
     }
-    if (e.transform) {
-        if (Status s = check_transform(*e.transform, "transform"); !s) return s;
-    }
+    if (Status s = check_update<InstanceFields>(e); !s) return s;
     GroupHandle parent;
     if (e.parent) {
         auto found = find_parent(*e.parent, "parent");
@@ -534,36 +526,22 @@ Status Scene::apply_edit(UpdateInstance&& e, UndoLog& undo) {
     save_instance(h, undo);
     if (e.parent && !(parent == m_instances.at(h).parent)) reparent_instance(h, parent, undo);
     InstanceRecord& r = m_instances.at(h);
-    DirtyBits<InstanceDirty> bits;
+    DirtyBits<InstanceDirty> bits = apply_update<InstanceFields>(r, e);
     if (e.material) {
         r.material = material;
         bits |= InstanceDirty::Material;
     }
-    if (e.transform) {
-        r.transform = *e.transform;
-        bits |= InstanceDirty::Transform;
-    }
-    if (e.visible) {
-        r.visible = *e.visible;
-        bits |= InstanceDirty::Visibility;
-    }
-    if (e.mask) {
-        r.mask = *e.mask;
-        bits |= InstanceDirty::Mask;
-    }
-    if (e.user_id) {
-        r.user_id = *e.user_id;
-        bits |= InstanceDirty::UserId;
-    }
     if (bits.any()) mark(h, bits);
-    if (e.transform || e.visible) mark_instance_world(h);
+    if ((bits & (InstanceDirty::Transform | InstanceDirty::Visibility)).any())
+        mark_instance_world(h);
     return {};
 }
 
 Status Scene::apply_edit(SetTransform&& e, UndoLog& undo) {
     const InstanceHandle h = find_instance(e.instance);
     if (h.is_null()) return unknown("instance", e.instance, "instance");
-    if (Status s = check_transform(e.transform, "transform"); !s) return s;
+    static const FieldInfo& TRANSFORM = field_info<InstanceFields>("transform");
+    if (Status s = check_value(TRANSFORM, e.transform); !s) return s;
 
     save_instance(h, undo);
     m_instances.at(h).transform = e.transform;

@@ -105,8 +105,7 @@ struct Reverser {
 
     void operator()(undo::GroupState& r) {
         GroupRecord& g = groups.at(r.handle);
-        g.transform = r.transform;
-        g.visible = r.visible;
+        restore_fields<GroupFields>(g, std::move(r.fields));
         g.dirty = r.dirty;
     }
 
@@ -167,10 +166,7 @@ struct Reverser {
     void operator()(undo::InstanceState& r) {
         InstanceRecord& inst = instances.at(r.handle);
         inst.material = r.material;
-        inst.transform = r.transform;
-        inst.visible = r.visible;
-        inst.mask = r.mask;
-        inst.user_id = r.user_id;
+        restore_fields<InstanceFields>(inst, std::move(r.fields));
         inst.dirty = r.dirty;
     }
 

@@ -11,6 +11,7 @@
 #include <variant>
 #include <vector>
 
+#include "engine/scene/object_fields.h"
 #include "engine/scene/scene.h"
 
 namespace strata {
@@ -68,18 +69,14 @@ struct MeshAttributes {
 struct InstanceState {
     InstanceHandle handle;
     MaterialHandle material;
-    Affine transform;
-    bool visible = true;
-    uint32_t mask = 0;
-    uint32_t user_id = 0;
+    FieldValues<InstanceFields> fields;
     DirtyBits<InstanceDirty> dirty;
 };
 
 /// A group's editable state before an edit changed it.
 struct GroupState {
     GroupHandle handle;
-    Affine transform;
-    bool visible = true;
+    FieldValues<GroupFields> fields;
     DirtyBits<GroupDirty> dirty;
 };
 

@@ -1,6 +1,7 @@
 // Group ops: add_group, update_group, remove_group. Groups form the scene graph: an instance or a
 // group under a group moves, shows and hides with it.
 
+#include "protocol/field_json.h"
 #include "protocol/ops/families.h"
 
 namespace strata::protocol::ops {
@@ -19,8 +20,7 @@ Edit parse_add_group(OpFields& f) {
     std::optional<std::optional<std::string>> parent;
     read_parent(f, parent);
     if (parent) e.parent = *parent;
-    f.read("transform", e.transform);
-    f.read("visible", e.visible);
+    read_added<GroupFields>(f, e);
     return e;
 }
 
@@ -28,8 +28,7 @@ Edit parse_update_group(OpFields& f) {
     UpdateGroup e;
     e.group = f.id("group");
     read_parent(f, e.parent);
-    f.read("transform", e.transform);
-    f.read("visible", e.visible);
+    read_updates<GroupFields>(f, e);
     return e;
 }
 
@@ -48,14 +47,12 @@ constexpr EditOp OPS[] = {
   "type": "object",
   "properties": {
     "id": {"$ref": "#/$defs/id"},
-    "parent": {"oneOf": [{"$ref": "#/$defs/id"}, {"type": "null"}]},
-    "transform": {"$ref": "#/$defs/transform"},
-    "visible": {"type": "boolean"}
+    "parent": {"oneOf": [{"$ref": "#/$defs/id"}, {"type": "null"}]}
   },
   "required": ["id"],
   "additionalProperties": false
 })json",
-     parse_add_group, edit_kinds<AddGroup>()},
+     parse_add_group, edit_kinds<AddGroup>(), field_properties<GroupFields, true>},
     {"update_group",
      "Changes a group's parent (null: the root), transform or visibility; its whole subtree "
      "follows.",
@@ -63,14 +60,13 @@ constexpr EditOp OPS[] = {
   "type": "object",
   "properties": {
     "group": {"$ref": "#/$defs/id"},
-    "parent": {"oneOf": [{"$ref": "#/$defs/id"}, {"type": "null"}]},
-    "transform": {"$ref": "#/$defs/transform"},
-    "visible": {"type": "boolean"}
+    "parent": {"oneOf": [{"$ref": "#/$defs/id"}, {"type": "null"}]}
   },
   "required": ["group"],
   "additionalProperties": false
 })json",
-     parse_update_group, edit_kinds<UpdateGroup>()},
+     parse_update_group, edit_kinds<UpdateGroup>(),
+     field_properties<GroupFields, false>},
     {"remove_group",
      "Removes a group; refused while it has children unless `recursive`, which removes the whole "
      "subtree, instances included.",

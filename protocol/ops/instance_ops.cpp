@@ -1,27 +1,18 @@
 // Instance ops: add_instance, update_instance, set_transform, remove_instance.
 
+#include "protocol/field_json.h"
 #include "protocol/ops/families.h"
 
 namespace strata::protocol::ops {
 
 namespace {
 
-/// The members add_instance and update_instance share besides `material` (plain values in one,
-/// optionals in the other).
-template <class E>
-void read_instance_values(OpFields& f, E& e) {
-    f.read("transform", e.transform);
-    f.read("visible", e.visible);
-    f.read("mask", e.mask);
-    f.read("user_id", e.user_id);
-}
-
 Edit parse_add_instance(OpFields& f) {
     AddInstance e;
     e.id = f.id("id");
     e.mesh = f.id("mesh");
     f.read("material", e.material);
-    read_instance_values(f, e);
+    read_added<InstanceFields>(f, e);
     std::optional<std::optional<std::string>> parent;
     read_parent(f, parent);
     if (parent) e.parent = *parent;
@@ -36,7 +27,7 @@ Edit parse_update_instance(OpFields& f) {
         e.material =
             m->is_null() ? std::optional<std::string>() : f.reader().id(*m, f.pointer("material"));
     }
-    read_instance_values(f, e);
+    read_updates<InstanceFields>(f, e);
     read_parent(f, e.parent);
     return e;
 }
@@ -73,16 +64,12 @@ constexpr EditOp OPS[] = {
     "id": {"$ref": "#/$defs/id"},
     "mesh": {"$ref": "#/$defs/id"},
     "material": {"$ref": "#/$defs/id"},
-    "transform": {"$ref": "#/$defs/transform"},
-    "visible": {"type": "boolean"},
-    "mask": {"$ref": "#/$defs/u32"},
-    "user_id": {"$ref": "#/$defs/u32"},
     "parent": {"oneOf": [{"$ref": "#/$defs/id"}, {"type": "null"}]}
   },
   "required": ["id", "mesh"],
   "additionalProperties": false
 })json",
-     parse_add_instance, edit_kinds<AddInstance>()},
+     parse_add_instance, edit_kinds<AddInstance>(), field_properties<InstanceFields, true>},
     {"update_instance",
      "Changes some of an instance's fields; material null reverts to the mesh's default, parent "
      "null moves it to the root.",
@@ -91,16 +78,13 @@ constexpr EditOp OPS[] = {
   "properties": {
     "instance": {"$ref": "#/$defs/id"},
     "material": {"oneOf": [{"$ref": "#/$defs/id"}, {"type": "null"}]},
-    "transform": {"$ref": "#/$defs/transform"},
-    "visible": {"type": "boolean"},
-    "mask": {"$ref": "#/$defs/u32"},
-    "user_id": {"$ref": "#/$defs/u32"},
     "parent": {"oneOf": [{"$ref": "#/$defs/id"}, {"type": "null"}]}
   },
   "required": ["instance"],
   "additionalProperties": false
 })json",
-     parse_update_instance, edit_kinds<UpdateInstance>()},
+     parse_update_instance, edit_kinds<UpdateInstance>(),
+     field_properties<InstanceFields, false>},
     {"set_transform", "Replaces the transform of an instance, or of a group (`group` in place of `instance`).",
      R"json({
   "type": "object",

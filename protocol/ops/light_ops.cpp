@@ -1,40 +1,23 @@
 // Light ops: add_light, update_light, remove_light.
 
+#include "protocol/field_json.h"
 #include "protocol/ops/families.h"
 
 namespace strata::protocol::ops {
 
 namespace {
 
-/// The values both ops carry; `L` is a whole Light (add) or an UpdateLight of optionals.
-template <class L>
-void read_light_values(OpFields& f, L& l) {
-    if (const Json* type = f.get("type")) {
-        const std::size_t k =
-            f.reader().choice(*type, f.pointer("type"), {"point", "spot", "rect"});
-        l.kind = static_cast<LightKind>(k);
-    }
-    f.read("position", l.position);
-    f.read("direction", l.direction);
-    f.read("color", l.color);
-    f.read("intensity", l.intensity);
-    f.read("angle_deg", l.angle_deg);
-    f.read("inner_angle_deg", l.inner_angle_deg);
-    f.read("width", l.width);
-    f.read("height", l.height);
-}
-
 Edit parse_add_light(OpFields& f) {
     AddLight e;
     e.id = f.id("id");
-    read_light_values(f, e.light);
+    read_added<LightFields>(f, e.light);
     return e;
 }
 
 Edit parse_update_light(OpFields& f) {
     UpdateLight e;
     e.light = f.id("light");
-    read_light_values(f, e);
+    read_updates<LightFields>(f, e);
     return e;
 }
 
@@ -48,40 +31,23 @@ constexpr EditOp OPS[] = {
      R"json({
   "type": "object",
   "properties": {
-    "id": {"$ref": "#/$defs/id"},
-    "type": {"enum": ["point", "spot", "rect"]},
-    "position": {"$ref": "#/$defs/vec3"},
-    "direction": {"$ref": "#/$defs/vec3"},
-    "color": {"$ref": "#/$defs/vec3"},
-    "intensity": {"type": "number"},
-    "angle_deg": {"type": "number"},
-    "inner_angle_deg": {"type": "number"},
-    "width": {"type": "number"},
-    "height": {"type": "number"}
+    "id": {"$ref": "#/$defs/id"}
   },
   "required": ["id"],
   "additionalProperties": false
 })json",
-     parse_add_light, edit_kinds<AddLight>()},
+     parse_add_light, edit_kinds<AddLight>(), field_properties<LightFields, true>},
     {"update_light", "Changes some of a light's values (its type too); the others keep theirs.",
      R"json({
   "type": "object",
   "properties": {
-    "light": {"$ref": "#/$defs/id"},
-    "type": {"enum": ["point", "spot", "rect"]},
-    "position": {"$ref": "#/$defs/vec3"},
-    "direction": {"$ref": "#/$defs/vec3"},
-    "color": {"$ref": "#/$defs/vec3"},
-    "intensity": {"type": "number"},
-    "angle_deg": {"type": "number"},
-    "inner_angle_deg": {"type": "number"},
-    "width": {"type": "number"},
-    "height": {"type": "number"}
+    "light": {"$ref": "#/$defs/id"}
   },
   "required": ["light"],
   "additionalProperties": false
 })json",
-     parse_update_light, edit_kinds<UpdateLight>()},
+     parse_update_light, edit_kinds<UpdateLight>(),
+     field_properties<LightFields, false>},
     {"remove_light", "Removes a light.",
      R"json({
   "type": "object",

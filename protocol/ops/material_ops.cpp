@@ -1,20 +1,12 @@
 // Material ops: add_material, update_material (with a base-colour texture and its sampler).
 
 #include "protocol/edit_schema.h"
+#include "protocol/field_json.h"
 #include "protocol/ops/families.h"
 
 namespace strata::protocol::ops {
 
 namespace {
-
-/// The values both ops carry; `M` is a whole Material (add) or an UpdateMaterial of optionals.
-template <class M>
-void read_material_values(OpFields& f, M& m) {
-    f.read("base_color", m.base_color);
-    f.read("roughness", m.roughness);
-    f.read("metallic", m.metallic);
-    f.read("emission", m.emission);
-}
 
 /// The `sampler` object: `wrap` and `filter`, each optional.
 void read_sampler(OpFields& f, std::optional<TextureWrap>& wrap,
@@ -34,7 +26,7 @@ void read_sampler(OpFields& f, std::optional<TextureWrap>& wrap,
 Edit parse_add_material(OpFields& f) {
     AddMaterial e;
     e.id = f.id("id");
-    read_material_values(f, e.material);
+    read_added<MaterialFields>(f, e.material);
     f.read("base_color_texture", e.base_color_texture);
     std::optional<TextureWrap> wrap;
     std::optional<TextureFilter> filter;
@@ -47,7 +39,7 @@ Edit parse_add_material(OpFields& f) {
 Edit parse_update_material(OpFields& f) {
     UpdateMaterial e;
     e.material = f.id("material");
-    read_material_values(f, e);
+    read_updates<MaterialFields>(f, e);
     if (const Json* t = f.get("base_color_texture"))
         e.base_color_texture = t->is_null() ? std::optional<std::string>()
                                             : f.reader().id(*t, f.pointer("base_color_texture"));
@@ -63,33 +55,26 @@ constexpr EditOp OPS[] = {
   "type": "object",
   "properties": {
     "id": {"$ref": "#/$defs/id"},
-    "base_color": {"$ref": "#/$defs/vec3"},
-    "roughness": {"type": "number"},
-    "metallic": {"type": "number"},
-    "emission": {"$ref": "#/$defs/vec3"},
     "base_color_texture": {"$ref": "#/$defs/id"},
     "sampler": {"$ref": "#/$defs/sampler"}
   },
   "required": ["id"],
   "additionalProperties": false
 })json",
-     parse_add_material, edit_kinds<AddMaterial>()},
+     parse_add_material, edit_kinds<AddMaterial>(), field_properties<MaterialFields, true>},
     {"update_material", "Changes some of a material's values; the others keep theirs.",
      R"json({
   "type": "object",
   "properties": {
     "material": {"$ref": "#/$defs/id"},
-    "base_color": {"$ref": "#/$defs/vec3"},
-    "roughness": {"type": "number"},
-    "metallic": {"type": "number"},
-    "emission": {"$ref": "#/$defs/vec3"},
     "base_color_texture": {"oneOf": [{"$ref": "#/$defs/id"}, {"type": "null"}]},
     "sampler": {"$ref": "#/$defs/sampler"}
   },
   "required": ["material"],
   "additionalProperties": false
 })json",
-     parse_update_material, edit_kinds<UpdateMaterial>()},
+     parse_update_material, edit_kinds<UpdateMaterial>(),
+     field_properties<MaterialFields, false>},
 };
 
 }  // namespace

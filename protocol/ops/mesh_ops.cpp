@@ -3,6 +3,7 @@
 
 #include "engine/scene/shapes.h"
 #include "protocol/edit_schema.h"
+#include "protocol/field_json.h"
 #include "protocol/ops/families.h"
 
 namespace strata::protocol::ops {
@@ -147,6 +148,7 @@ Edit parse_add_mesh(OpFields& f) {
     if (auto uvs = read_uvs(f)) e.uvs = std::move(*uvs);
     if (const Json* b = f.get("build")) e.build = read_build(r, *b, f.pointer("build"));
     f.read("material", e.material);
+    read_added<MeshFields>(f, e);
     return e;
 }
 
@@ -224,7 +226,7 @@ constexpr EditOp OPS[] = {
     }
   ]
 })json",
-     parse_add_mesh, edit_kinds<AddMesh>()},
+     parse_add_mesh, edit_kinds<AddMesh>(), field_properties<MeshFields, true>},
     {"update_mesh",
      "New positions, normals or uvs for a vertex range (offset in vertices), or with indices a "
      "topology change.",

@@ -1,6 +1,7 @@
 // Scene-wide ops: mark_dirty, set_camera, set_lighting, clear.
 
 #include "protocol/edit_schema.h"
+#include "protocol/field_json.h"
 #include "protocol/ops/families.h"
 
 namespace strata::protocol::ops {
@@ -28,19 +29,13 @@ Edit parse_mark_dirty(OpFields& f) {
 
 Edit parse_set_camera(OpFields& f) {
     SetCamera e;
-    f.read("eye", e.eye);
-    f.read("target", e.target);
-    f.read("up", e.up);
-    f.read("fov_y_deg", e.fov_y_deg);
+    read_updates<CameraFields>(f, e);
     return e;
 }
 
 Edit parse_set_lighting(OpFields& f) {
     SetLighting e;
-    f.read("sun_direction", e.sun_direction);
-    f.read("sun_color", e.sun_color);
-    f.read("sky_color", e.sky_color);
-    f.read("sky_intensity", e.sky_intensity);
+    read_updates<LightingFields>(f, e);
     return e;
 }
 
@@ -74,28 +69,17 @@ constexpr EditOp OPS[] = {
     {"set_camera", "Changes some of the camera's eye, target, up and vertical field of view.",
      R"json({
   "type": "object",
-  "properties": {
-    "eye": {"$ref": "#/$defs/vec3"},
-    "target": {"$ref": "#/$defs/vec3"},
-    "up": {"$ref": "#/$defs/vec3"},
-    "fov_y_deg": {"type": "number"}
-  },
   "additionalProperties": false
 })json",
-     parse_set_camera, edit_kinds<SetCamera>()},
+     parse_set_camera, edit_kinds<SetCamera>(), field_properties<CameraFields, false>},
     {"set_lighting",
      "Changes some of the sun's direction and colour and the sky's colour and intensity.",
      R"json({
   "type": "object",
-  "properties": {
-    "sun_direction": {"$ref": "#/$defs/vec3"},
-    "sun_color": {"$ref": "#/$defs/vec3"},
-    "sky_color": {"$ref": "#/$defs/vec3"},
-    "sky_intensity": {"type": "number"}
-  },
   "additionalProperties": false
 })json",
-     parse_set_lighting, edit_kinds<SetLighting>()},
+     parse_set_lighting, edit_kinds<SetLighting>(),
+     field_properties<LightingFields, false>},
     {"clear", "Removes every mesh, instance, material, texture, group and light and resets camera and lighting.",
      R"json({"type": "object", "additionalProperties": false})json", parse_clear,
      edit_kinds<Clear>()},

@@ -1,6 +1,7 @@
 // Texture ops: add_texture, remove_texture. The image travels as base64 PNG or JPEG bytes; the
 // engine decodes it when the edit is applied (engine/image/texture_decode.h).
 
+#include "protocol/field_json.h"
 #include "protocol/ops/families.h"
 
 namespace strata::protocol::ops {
@@ -11,6 +12,7 @@ Edit parse_add_texture(OpFields& f) {
     AddTexture e;
     e.id = f.id("id");
     e.data = f.reader().bytes_b64(f.at("data"), f.pointer("data"));
+    read_added<TextureFields>(f, e);
     return e;
 }
 
@@ -33,7 +35,7 @@ constexpr EditOp OPS[] = {
   "required": ["id", "data"],
   "additionalProperties": false
 })json",
-     parse_add_texture, edit_kinds<AddTexture>()},
+     parse_add_texture, edit_kinds<AddTexture>(), field_properties<TextureFields, true>},
     {"remove_texture", "Removes a texture; refused (in-use) while a material refers to it.",
      R"json({
   "type": "object",

@@ -24,6 +24,7 @@
 #include "protocol/stat_names.h"
 #include "protocol/edit_ops.h"
 #include "protocol/edit_schema.h"
+#include "protocol/field_json.h"
 #include "tests/generated_docs.h"
 
 namespace strata::protocol {
@@ -125,6 +126,16 @@ std::string durable_counters_table() {
     return out;
 }
 
+/// Each object kind's fields, as the README's op sections show them.
+std::vector<std::pair<std::string, std::string>> field_tables() {
+    return {{"material", fields_markdown<MaterialFields>()},
+            {"instance", fields_markdown<InstanceFields>()},
+            {"group", fields_markdown<GroupFields>()},
+            {"light", fields_markdown<LightFields>()},
+            {"camera", fields_markdown<CameraFields>()},
+            {"lighting", fields_markdown<LightingFields>()}};
+}
+
 TEST(ProtocolDocs, CommittedSchemaIsTheOneTheOpTableGenerates) {
     const std::string generated = edit_batch_schema_text();
     if (test::updating_docs()) {
@@ -143,6 +154,10 @@ TEST(ProtocolDocs, ReadmeOpsIndexAndCountersTableAreGeneratedFromTheirTables) {
     ASSERT_TRUE(updated) << "README lacks the counters markers";
     updated = with_region(*updated, "durable-counters", durable_counters_table());
     ASSERT_TRUE(updated) << "README lacks the durable-counters markers";
+    for (const auto& [kind, table] : field_tables()) {
+        updated = with_region(*updated, "fields-" + kind, table);
+        ASSERT_TRUE(updated) << "README lacks the fields-" << kind << " markers";
+    }
     if (test::updating_docs()) {
         if (*updated != readme) write_text(README_PATH, *updated);
         GTEST_SKIP() << "rewrote the generated parts of " << README_PATH;

@@ -1,0 +1,79 @@
+#include "engine/scene/field_table.h"
+
+#include <cmath>
+#include <cstdio>
+
+#include "engine/core/utf8.h"
+
+namespace strata {
+
+namespace {
+
+/// A bound as people write it: 90, 0.5, 1e12.
+std::string number_text(double v) {
+    char buf[32];
+    if (std::abs(v) >= 1e6 && std::abs(v) == std::floor(std::abs(v))) {
+        const int exponent = int(std::floor(std::log10(std::abs(v))));
+        const double mantissa = v / std::pow(10.0, exponent);
+        if (mantissa == std::floor(mantissa)) {
+            std::snprintf(buf, sizeof buf, "%ge%d", mantissa, exponent);
+            return buf;
+        }
+    }
+    std::snprintf(buf, sizeof buf, "%.10g", v);
+    return buf;
+}
+
+Status refuse(ErrorCode code, const FieldInfo& info, const std::string& why) {
+    return failure(code, std::string(info.name) + " " + why, std::string(info.name));
+}
+
+}  // namespace
+
+std::string limits_phrase(const Limits& l) {
+    return (l.has_lo() && l.has_hi() ? "in " : "") + limits_text(l);
+}
+
+std::string limits_text(const Limits& l) {
+    if (!l.has_hi()) return std::string(l.lo_open ? "> " : ">= ") + number_text(l.lo);
+    if (!l.has_lo()) return std::string(l.hi_open ? "< " : "<= ") + number_text(l.hi);
+    return std::string(l.lo_open ? "(" : "[") + number_text(l.lo) + ", " + number_text(l.hi) +
+           (l.hi_open ? ")" : "]");
+}
+
+Status check_value(const FieldInfo& info, float v) {
+    if (!std::isfinite(v)) return refuse(ErrorCode::NotFinite, info, "is NaN or infinite");
+    if (!info.limits.contains(v))
+        return refuse(ErrorCode::InvalidArgument, info, "must be " + limits_phrase(info.limits));
+    return {};
+}
+
+Status check_value(const FieldInfo& info, const Vec3& v) {
+    if (!is_finite(v))
+        return refuse(ErrorCode::NotFinite, info, "has a NaN or infinite component");
+    for (int i = 0; i < 3; ++i) {
+        if (!info.limits.contains(v[i]))
+            return refuse(ErrorCode::InvalidArgument, info,
+                          "components must be " + limits_phrase(info.limits));
+    }
+    return {};
+}
+
+Status check_value(const FieldInfo& info, const std::string& v) {
+    const double max = info.limits.has_hi() ? info.limits.hi : double(MAX_NAME_BYTES);
+    if (const char* why = text_problem(v, std::size_t(max)))
+        return refuse(ErrorCode::InvalidArgument, info,
+                      std::string(why) + (v.size() > max ? " (at most " + number_text(max) +
+                                                               " bytes)"
+                                                         : ""));
+    return {};
+}
+
+Status check_value(const FieldInfo& info, const Affine& t) {
+    if (const char* why = transform_problem(t))
+        return failure(t.is_finite() ? ErrorCode::DegenerateTransform : ErrorCode::NotFinite, why,
+                       std::string(info.name));
+    return {};
+}
+
+}  // namespace strata

@@ -1,0 +1,258 @@
+#pragma once
+// An object kind's plain fields, each declared once: a row names the field on the wire, says what
+// it means, bounds it, and points at where it lives in the kind's record (what the scene holds),
+// in its add edit and, as an optional, in its update edit, with the dirty bit a change sets. The
+// rules, the undo log, the journal and snapshot codec, the wire parser, the JSON writer and the
+// schema and docs generators all walk these tables (object_fields.h holds them), so a new field is
+// a row plus its members.
+//
+// A kind is a struct naming its Record, Add and Update types (NoUpdate when it has no update op)
+// and its Dirty enum, with `static constexpr auto table()` returning a tuple of Field rows.
+//
+// Not in the tables: fields that name other objects (resolved by the rules against the scene)
+// and nested objects (a material's sampler, a mesh's build options, a mesh's arrays), which have
+// rules of their own next to their op.
+
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <tuple>
+#include <type_traits>
+
+#include "engine/core/check.h"
+#include "engine/core/math.h"
+#include "engine/core/result.h"
+#include "engine/scene/dirty.h"
+
+namespace strata {
+
+/// Bounds of a number, of each component of a vector, or of a text's length in bytes.
+struct Limits {
+    double lo = -std::numeric_limits<double>::infinity();
+    double hi = std::numeric_limits<double>::infinity();
+    bool lo_open = false;
+    bool hi_open = false;
+
+    constexpr bool has_lo() const { return lo > -std::numeric_limits<double>::infinity(); }
+    constexpr bool has_hi() const { return hi < std::numeric_limits<double>::infinity(); }
+    /// False for NaN.
+    constexpr bool contains(double v) const {
+        return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
+    }
+};
+
+/// [lo, hi]
+constexpr Limits closed(double lo, double hi) {
+    return {lo, hi, false, false};
+}
+/// >= lo
+constexpr Limits at_least(double lo) {
+    return {lo, std::numeric_limits<double>::infinity(), false, false};
+}
+/// (lo, hi]
+constexpr Limits above_up_to(double lo, double hi) {
+    return {lo, hi, true, false};
+}
+/// (lo, hi)
+constexpr Limits open(double lo, double hi) {
+    return {lo, hi, true, true};
+}
+
+/// The limits as the docs and messages write them: "[0, 1]", "(0, 90]", ">= 0".
+std::string limits_text(const Limits& l);
+/// As a message says it: "in [0, 1]", ">= 0".
+std::string limits_phrase(const Limits& l);
+
+/// The longest display name, in bytes.
+constexpr std::size_t MAX_NAME_BYTES = 1024;
+
+/// What a row says about its field, besides its C++ type and place.
+struct FieldInfo {
+    std::string_view name;  ///< the member on the wire, in JSON and in error fields
+    std::string_view doc;   ///< one line for the schema and the docs
+    /// Numbers: the value; vectors: each component; text: the length in bytes.
+    Limits limits = {};
+    /// Enums: the wire name of each value, in the order of the enum.
+    std::span<const std::string_view> choices = {};
+    /// 0: part of the kind's first journal layout, in table order; n > 0: a field added later,
+    /// written in the edit's tagged section under number n (edit_codec.cpp).
+    uint8_t tag = 0;
+};
+
+/// The update edit of a kind that has none.
+struct NoUpdate {};
+
+/// One row. `K` is the kind, `T` the field's value type.
+template <class K, class T>
+struct Field {
+    using Kind = K;
+    using Type = T;
+    FieldInfo info;
+    T K::Record::*record;
+    T K::Add::*add;
+    std::optional<T> K::Update::*update;  ///< null when the kind has no update op
+    typename K::Dirty dirty;               ///< what an update of it marks; 0: nothing
+};
+
+/// A row of kind `K`; T is deduced from the member pointers.
+template <class K, class T>
+constexpr Field<K, T> field(FieldInfo info, T K::Record::*record, T K::Add::*add,
+                            std::optional<T> K::Update::*update, typename K::Dirty dirty) {
+    return {info, record, add, update, dirty};
+}
+
+/// The three places of member `m` in a kind whose record, add and update edits all name it `m`.
+#define STRATA_FIELD_OF(K, m) &K::Record::m, &K::Add::m, &K::Update::m
+
+/// Kind `K`'s table, built once.
+template <class K>
+inline constexpr auto FIELDS = K::table();
+
+/// Calls `fn(row)` for every row of kind `K`, in table order.
+template <class K, class Fn>
+constexpr void for_each_field(Fn&& fn) {
+    std::apply([&](const auto&... row) { (fn(row), ...); }, FIELDS<K>);
+}
+
+/// The field of `row` in `v`, which is the kind's Record or its Add.
+template <class Row, class V>
+constexpr auto& field_in(const Row& row, V& v) {
+    using K = typename Row::Kind;
+    if constexpr (std::is_same_v<std::remove_const_t<V>, typename K::Record>)
+        return v.*(row.record);
+    else
+        return v.*(row.add);
+}
+
+/// The row of kind `K` named `name` (a name no row has is a bug in Strata: checked).
+template <class K>
+const FieldInfo& field_info(std::string_view name) {
+    const FieldInfo* found = nullptr;
+    for_each_field<K>([&](const auto& row) {
+        if (row.info.name == name) found = &row.info;
+    });
+    STRATA_CHECK(found != nullptr);
+    return *found;
+}
+
+/// The values of every field of a record: what the undo log keeps before an update.
+template <class Rows>
+struct ValuesOf;
+template <class... Rows>
+struct ValuesOf<std::tuple<Rows...>> {
+    using type = std::tuple<typename Rows::Type...>;
+};
+template <class K>
+using FieldValues = typename ValuesOf<std::remove_const_t<decltype(FIELDS<K>)>>::type;
+
+template <class K>
+FieldValues<K> save_fields(const typename K::Record& r) {
+    return std::apply([&](const auto&... row) { return FieldValues<K>{r.*(row.record)...}; },
+                      FIELDS<K>);
+}
+
+template <class K>
+void restore_fields(typename K::Record& r, FieldValues<K>&& saved) {
+    std::apply(
+        [&](const auto&... row) {
+            std::apply([&](auto&... value) { ((r.*(row.record) = std::move(value)), ...); },
+                       saved);
+        },
+        FIELDS<K>);
+}
+
+/// Copies every field of an add edit into a new record.
+template <class K>
+void copy_added(typename K::Record& r, typename K::Add& a) {
+    for_each_field<K>([&](const auto& row) { r.*(row.record) = std::move(a.*(row.add)); });
+}
+
+/// The fields of a record as an add edit has them (for the batch that rebuilds a scene).
+template <class K>
+void copy_to_add(typename K::Add& a, const typename K::Record& r) {
+    for_each_field<K>([&](const auto& row) { a.*(row.add) = r.*(row.record); });
+}
+
+/// Copies the fields an update sets onto a record; returns the dirty bits of what it set.
+template <class K>
+DirtyBits<typename K::Dirty> apply_update(typename K::Record& r, const typename K::Update& u) {
+    DirtyBits<typename K::Dirty> bits;
+    for_each_field<K>([&](const auto& row) {
+        if (!row.update) return;
+        if (const auto& set = u.*(row.update)) {
+            r.*(row.record) = *set;
+            bits |= row.dirty;
+        }
+    });
+    return bits;
+}
+
+/// An update that sets every field to the record's value (for the batch that rebuilds a scene).
+template <class K>
+typename K::Update update_to(const typename K::Record& r) {
+    typename K::Update u{};
+    for_each_field<K>([&](const auto& row) {
+        if (row.update) u.*(row.update) = r.*(row.record);
+    });
+    return u;
+}
+
+/// True when the update sets any field whose row marks one of `bits`.
+template <class K>
+bool update_sets(const typename K::Update& u, DirtyBits<typename K::Dirty> bits) {
+    bool any = false;
+    for_each_field<K>([&](const auto& row) {
+        if (row.update && (u.*(row.update)).has_value() && (bits & row.dirty).any()) any = true;
+    });
+    return any;
+}
+
+// Step: value checks -------------------------------------------------------------------------
+
+/// Checks one value against its row: numbers and vector components finite and within the
+/// limits, text well-formed and short enough, transforms invertible. The error names the field.
+Status check_value(const FieldInfo& info, float v);
+Status check_value(const FieldInfo& info, const Vec3& v);
+Status check_value(const FieldInfo& info, const std::string& v);
+Status check_value(const FieldInfo& info, const Affine& v);
+inline Status check_value(const FieldInfo&, bool) {
+    return {};
+}
+inline Status check_value(const FieldInfo&, uint32_t) {
+    return {};
+}
+template <class E>
+    requires std::is_enum_v<E>
+Status check_value(const FieldInfo& info, E v) {
+    if (static_cast<std::size_t>(v) < info.choices.size()) return {};
+    return failure(ErrorCode::InvalidArgument,
+                   std::string(info.name) + " is not one of its " +
+                       std::to_string(info.choices.size()) + " values",
+                   std::string(info.name));
+}
+
+/// Checks every field of `v` (the kind's Record or Add); the first refusal comes back.
+template <class K, class V>
+Status check_fields(const V& v) {
+    Status result;
+    for_each_field<K>([&](const auto& row) {
+        if (result) result = check_value(row.info, field_in(row, v));
+    });
+    return result;
+}
+
+/// Checks the fields an update sets.
+template <class K>
+Status check_update(const typename K::Update& u) {
+    Status result;
+    for_each_field<K>([&](const auto& row) {
+        if (!result || !row.update) return;
+        if (const auto& set = u.*(row.update)) result = check_value(row.info, *set);
+    });
+    return result;
+}
+
+}  // namespace strata

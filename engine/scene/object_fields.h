@@ -1,0 +1,216 @@
+#pragma once
+// The field table of every object kind (field_table.h says what a row holds and who reads it).
+//
+// Adding a field: its member in the kind's record, add edit and update edit (types.h, edits.h,
+// scene.h) and a row here with the next free `tag` of its kind. Rows with tag 0 are the kinds'
+// first journal layout: their order is that layout and never changes.
+
+#include <string_view>
+
+#include "engine/core/math.h"
+#include "engine/scene/field_table.h"
+#include "engine/scene/scene.h"
+
+namespace strata {
+
+inline constexpr std::string_view NAME_DOC =
+    "A display name: free text for listings, picks and the viewer (not unique, not an id).";
+
+/// What a change to a field marked `dirty` costs the next commit, as the docs say it (the
+/// least-work tests hold the engine to it).
+constexpr std::string_view commit_cost(InstanceDirty dirty) {
+    return (INSTANCE_TLAS_BITS & dirty).any() ? "TLAS update" : "no BVH work";
+}
+constexpr std::string_view commit_cost(GroupDirty dirty) {
+    return dirty == GroupDirty{} ? "no BVH work" : "TLAS update of the instances below";
+}
+template <class D>
+constexpr std::string_view commit_cost(D) {
+    return "no BVH work";
+}
+
+inline constexpr Limits COORDINATE = closed(-MAX_COORDINATE, MAX_COORDINATE);
+inline constexpr Limits UNIT = closed(0.0, 1.0);
+inline constexpr Limits NON_NEGATIVE = at_least(0.0);
+
+struct LightFields {
+    using Record = Light;
+    using Add = Light;
+    using Update = UpdateLight;
+    using Dirty = SceneDirty;
+    static constexpr std::string_view KIND = "light";
+    static constexpr std::string_view TYPES[] = {"point", "spot", "rect"};
+    static constexpr auto table();
+};
+
+constexpr auto LightFields::table() {
+    using K = LightFields;
+    constexpr SceneDirty L = SceneDirty::Lights;
+    return std::tuple{
+        field<K>({"type", "point, spot or rect.", {}, TYPES}, &Light::kind, &Light::kind,
+                 &UpdateLight::kind, L),
+        field<K>({"position", "Where a point or spot light is, or a rect light's centre.",
+                  COORDINATE},
+                 STRATA_FIELD_OF(K, position), L),
+        field<K>({"direction", "A spot light's axis, a rect light's normal (any length but zero)."},
+                 STRATA_FIELD_OF(K, direction), L),
+        field<K>({"color", "Linear RGB, multiplied by the intensity.", NON_NEGATIVE},
+                 STRATA_FIELD_OF(K, color), L),
+        field<K>({"intensity",
+                  "Point and spot: irradiance intensity * color / d^2 at distance d; rect: "
+                  "radiance intensity * color from its front side.",
+                  closed(0.0, 1e12)},
+                 STRATA_FIELD_OF(K, intensity), L),
+        field<K>({"angle_deg", "A spot light's half-angle.", above_up_to(0.0, 90.0)},
+                 STRATA_FIELD_OF(K, angle_deg), L),
+        field<K>({"inner_angle_deg",
+                  "A spot light's full-intensity half-angle (at most angle_deg): the light fades "
+                  "to 0 between it and angle_deg.",
+                  closed(0.0, 90.0)},
+                 STRATA_FIELD_OF(K, inner_angle_deg), L),
+        field<K>({"width", "A rect light's width.", above_up_to(0.0, 1e6)},
+                 STRATA_FIELD_OF(K, width), L),
+        field<K>({"height", "A rect light's height.", above_up_to(0.0, 1e6)},
+                 STRATA_FIELD_OF(K, height), L),
+    };
+}
+
+struct MaterialFields {
+    using Record = Material;
+    using Add = Material;
+    using Update = UpdateMaterial;
+    using Dirty = MaterialDirty;
+    static constexpr std::string_view KIND = "material";
+    static constexpr auto table();
+};
+
+constexpr auto MaterialFields::table() {
+    using K = MaterialFields;
+    constexpr MaterialDirty P = MaterialDirty::Params;
+    return std::tuple{
+        field<K>({"base_color", "Linear RGB albedo; a base_color_texture multiplies it.", UNIT},
+                 STRATA_FIELD_OF(K, base_color), P),
+        field<K>({"roughness", "0: a mirror, 1: fully rough.", UNIT},
+                 STRATA_FIELD_OF(K, roughness), P),
+        field<K>({"metallic", "0: dielectric, 1: metal.", UNIT}, STRATA_FIELD_OF(K, metallic),
+                 P),
+        field<K>({"emission", "Emitted radiance, linear RGB.", NON_NEGATIVE},
+                 STRATA_FIELD_OF(K, emission), P),
+    };
+}
+
+struct InstanceFields {
+    using Record = InstanceRecord;
+    using Add = AddInstance;
+    using Update = UpdateInstance;
+    using Dirty = InstanceDirty;
+    static constexpr std::string_view KIND = "instance";
+    static constexpr auto table();
+};
+
+constexpr auto InstanceFields::table() {
+    using K = InstanceFields;
+    return std::tuple{
+        field<K>({"transform", "Object to parent space (to world space at the root)."},
+                 STRATA_FIELD_OF(K, transform), InstanceDirty::Transform),
+        field<K>({"visible", "Its own flag; hidden too while a group above it is hidden."},
+                 STRATA_FIELD_OF(K, visible), InstanceDirty::Visibility),
+        field<K>({"mask", "Embree's 32-bit geometry mask, set on the instance in the TLAS."},
+                 STRATA_FIELD_OF(K, mask), InstanceDirty::Mask),
+        field<K>({"user_id", "A 32-bit value of the client's, reported by picks and the user_id AOV."},
+                 STRATA_FIELD_OF(K, user_id), InstanceDirty::UserId),
+    };
+}
+
+struct GroupFields {
+    using Record = GroupRecord;
+    using Add = AddGroup;
+    using Update = UpdateGroup;
+    using Dirty = GroupDirty;
+    static constexpr std::string_view KIND = "group";
+    static constexpr auto table();
+};
+
+constexpr auto GroupFields::table() {
+    using K = GroupFields;
+    return std::tuple{
+        field<K>({"transform", "Applies to everything below the group."},
+                 STRATA_FIELD_OF(K, transform), GroupDirty::Transform),
+        field<K>({"visible", "false hides everything below the group."},
+                 STRATA_FIELD_OF(K, visible), GroupDirty::Visibility),
+    };
+}
+
+struct MeshFields {
+    using Record = MeshRecord;
+    using Add = AddMesh;
+    using Update = NoUpdate;
+    using Dirty = MeshDirty;
+    static constexpr std::string_view KIND = "mesh";
+    static constexpr auto table();
+};
+
+constexpr auto MeshFields::table() {
+    return std::tuple<>{};
+}
+
+struct TextureFields {
+    using Record = TextureRecord;
+    using Add = AddTexture;
+    using Update = NoUpdate;
+    using Dirty = SceneDirty;
+    static constexpr std::string_view KIND = "texture";
+    static constexpr auto table();
+};
+
+constexpr auto TextureFields::table() {
+    return std::tuple<>{};
+}
+
+struct CameraFields {
+    using Record = Camera;
+    using Add = Camera;
+    using Update = SetCamera;
+    using Dirty = SceneDirty;
+    static constexpr std::string_view KIND = "camera";
+    static constexpr auto table();
+};
+
+constexpr auto CameraFields::table() {
+    using K = CameraFields;
+    constexpr SceneDirty C = SceneDirty::Camera;
+    return std::tuple{
+        field<K>({"eye", "Where the camera is.", COORDINATE}, STRATA_FIELD_OF(K, eye), C),
+        field<K>({"target", "The point it looks at (not the eye).", COORDINATE},
+                 STRATA_FIELD_OF(K, target), C),
+        field<K>({"up", "Up on the image (not along the view)."}, STRATA_FIELD_OF(K, up), C),
+        field<K>({"fov_y_deg", "Vertical field of view.", open(0.0, 180.0)},
+                 STRATA_FIELD_OF(K, fov_y_deg), C),
+    };
+}
+
+struct LightingFields {
+    using Record = Lighting;
+    using Add = Lighting;
+    using Update = SetLighting;
+    using Dirty = SceneDirty;
+    static constexpr std::string_view KIND = "lighting";
+    static constexpr auto table();
+};
+
+constexpr auto LightingFields::table() {
+    using K = LightingFields;
+    constexpr SceneDirty L = SceneDirty::Lighting;
+    return std::tuple{
+        field<K>({"sun_direction", "From the scene toward the sun (any length but zero)."},
+                 STRATA_FIELD_OF(K, sun_direction), L),
+        field<K>({"sun_color", "The sun's irradiance, linear RGB.", NON_NEGATIVE},
+                 STRATA_FIELD_OF(K, sun_color), L),
+        field<K>({"sky_color", "The uniform sky's radiance, linear RGB.", NON_NEGATIVE},
+                 STRATA_FIELD_OF(K, sky_color), L),
+        field<K>({"sky_intensity", "Multiplies sky_color.", NON_NEGATIVE},
+                 STRATA_FIELD_OF(K, sky_intensity), L),
+    };
+}
+
+}  // namespace strata
