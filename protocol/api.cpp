@@ -39,7 +39,7 @@ constexpr std::size_t MAX_REPORT_HEADER = 60 * 1024;
 /// header keeps its counts but lists only the first entries of `rebuilt`, `refit` and
 /// `released`, and says so with `"entries_truncated": true`.
 std::string report_header(const RebuildReport& report) {
-    std::string text = report_to_json(report).dump();
+    std::string text = dump_json(report_to_json(report));
     std::size_t keep = std::max({report.rebuilt.size(), report.refit.size(), report.released.size()});
     while (text.size() > MAX_REPORT_HEADER && keep > 0) {
         keep /= 2;
@@ -49,7 +49,7 @@ std::string report_header(const RebuildReport& report) {
         shorter.released.resize(std::min(keep, shorter.released.size()));
         Json j = report_to_json(shorter);
         j["entries_truncated"] = true;
-        text = j.dump();
+        text = dump_json(j);
     }
     return text;
 }

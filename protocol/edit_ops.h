@@ -130,7 +130,7 @@ public:
     bool read_text(std::string_view key, std::string& out);
     /// One of `choices`, stored as the enum value of its position.
     template <class E>
-        requires std::is_enum_v<E>
+    requires std::is_enum_v<E>
     bool read(std::string_view key, E& out, std::span<const std::string_view> choices) {
         const Json* v = get(key);
         if (v) out = static_cast<E>(m_r.choice(*v, pointer(key), choices));

@@ -23,7 +23,10 @@ constexpr std::string_view ENVELOPE = R"json({
 /// MAX_PLANE_SUBDIVISIONS (tests/protocol/edit_ops_test.cpp holds them equal).
 constexpr std::string_view SHARED_DEFS = R"json({
   "id": {"type": "string", "minLength": 1, "maxLength": 256,
-         "pattern": "^[^\\u0000-\\u001F\\u007F-\\u009F]*$"},
+         "pattern": "^[^\\u0000-\\u001F\\u007F-\\u009F\\u2028\\u2029]*$"},
+  "text": {"type": "string", "maxLength": 1024,
+           "pattern": "^[^\\u0000-\\u001F\\u007F-\\u009F\\u2028\\u2029]*$",
+           "description": "free text: UTF-8 without control characters, at most 1024 bytes"},
   "u32": {"type": "integer", "minimum": 0, "maximum": 4294967295},
   "vec3": {"type": "array", "items": {"type": "number"}, "minItems": 3, "maxItems": 3},
   "vec4": {"type": "array", "items": {"type": "number"}, "minItems": 4, "maxItems": 4},

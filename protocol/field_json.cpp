@@ -123,9 +123,10 @@ std::string field_row(const FieldInfo& info, const OrderedJson& schema, std::str
         type = schema.value("type", "");
     }
     if (info.limits.has_lo() || info.limits.has_hi()) range = limits_text(info.limits);
-    const std::string fallback = schema.contains("default") ? "`" + docs_value(schema["default"]) + "`"
-                                 : type == "transform"      ? "identity"
-                                                            : "";
+    const std::string fallback = schema.contains("default")
+                                     ? "`" + docs_value(schema["default"]) + "`"
+                                 : type == "transform" ? "identity"
+                                                       : "";
     return "| `" + std::string(info.name) + "` | " + type + " | " + fallback + " | " + range +
            " | " + std::string(cost) + " | " + std::string(info.doc) + " |\n";
 }

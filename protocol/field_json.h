@@ -40,7 +40,7 @@ Json field_json(const FieldInfo& info, const Affine& v);
 Json field_json(const FieldInfo& info, const std::string& v);
 Json choice_json(const FieldInfo& info, std::size_t v);
 template <class E>
-    requires std::is_enum_v<E>
+requires std::is_enum_v<E>
 Json field_json(const FieldInfo& info, E v) {
     return choice_json(info, static_cast<std::size_t>(v));
 }
@@ -54,7 +54,7 @@ OrderedJson field_schema(const FieldInfo& info, const Affine* fallback);
 OrderedJson field_schema(const FieldInfo& info, const std::string* fallback);
 OrderedJson choice_schema(const FieldInfo& info, const std::size_t* fallback);
 template <class E>
-    requires std::is_enum_v<E>
+requires std::is_enum_v<E>
 OrderedJson field_schema(const FieldInfo& info, const E* fallback) {
     const std::size_t v = fallback ? static_cast<std::size_t>(*fallback) : 0;
     return choice_schema(info, fallback ? &v : nullptr);
@@ -85,6 +85,23 @@ void write_fields(Json& j, const typename K::Record& r) {
     });
 }
 
+/// Adds the label fields (FieldInfo::label) among saved values `values` to the JSON object `j`.
+template <class K>
+void write_labels(Json& j, const FieldValues<K>& values) {
+    std::apply(
+        [&](const auto&... row) {
+            std::apply(
+                [&](const auto&... v) {
+                    ((row.info.label
+                          ? void(j[std::string(row.info.name)] = detail::field_json(row.info, v))
+                          : void()),
+                     ...);
+                },
+                values);
+        },
+        FIELDS<K>);
+}
+
 /// The schema `properties` of kind `K`'s fields, with their defaults in an add op (`Added`),
 /// without in an update op (where absent means unchanged).
 template <class K, bool Added>
@@ -102,7 +119,8 @@ OrderedJson field_properties() {
 template <class K>
 std::string fields_markdown() {
     std::string out =
-        "| field | type | default | range | a change costs | meaning |\n|---|---|---|---|---|---|\n";
+        "| field | type | default | range | a change costs | meaning "
+        "|\n|---|---|---|---|---|---|\n";
     const typename K::Add defaults{};
     for_each_field<K>([&](const auto& row) {
         out += detail::field_row(row.info, detail::field_schema(row.info, &(defaults.*(row.add))),

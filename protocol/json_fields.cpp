@@ -6,6 +6,7 @@
 #include <limits>
 #include <utility>
 
+#include "engine/core/utf8.h"
 #include "protocol/base64.h"
 
 namespace strata::protocol {
@@ -32,24 +33,6 @@ const char* type_name(const Json& v) {
         default:
             return "value";
     }
-}
-
-std::size_t utf8_length(std::string_view s) {
-    std::size_t n = 0;
-    for (unsigned char c : s) n += (c & 0xC0) != 0x80;
-    return n;
-}
-
-/// C0 controls, DEL and C1 controls (U+0080 to U+009F, encoded C2 80 to C2 9F): ids end up in
-/// URLs, logs and terminals, where these only cause trouble.
-bool has_control_character(std::string_view s) {
-    for (std::size_t i = 0; i < s.size(); ++i) {
-        const auto c = static_cast<unsigned char>(s[i]);
-        if (c < 0x20 || c == 0x7F) return true;
-        if (c == 0xC2 && i + 1 < s.size() && static_cast<unsigned char>(s[i + 1]) <= 0x9F)
-            return true;
-    }
-    return false;
 }
 
 bool fits_float(double d) {
@@ -145,11 +128,7 @@ std::string FieldReader::id(const Json& v, const std::string& ptr) const {
     if (!v.is_string())
         schema_error(ptr, std::string("expected an id string, got ") + type_name(v));
     const auto& s = v.get_ref<const std::string&>();
-    if (s.empty()) schema_error(ptr, "id must not be empty");
-    if (utf8_length(s) > MAX_ID_LENGTH)
-        schema_error(ptr, "id is longer than " + std::to_string(MAX_ID_LENGTH) + " characters");
-    if (has_control_character(s))
-        schema_error(ptr, "id holds a control character (U+0000 to U+001F, U+007F to U+009F)");
+    if (const char* why = id_problem(s)) schema_error(ptr, std::string("id ") + why);
     return s;
 }
 

@@ -13,13 +13,14 @@
 #include <string_view>
 #include <vector>
 
+#include "engine/core/utf8.h"
 #include "engine/scene/types.h"
 #include "protocol/json_document.h"
 
 namespace strata::protocol {
 
 /// Longest id, in Unicode code points (the schema's maxLength).
-constexpr std::size_t MAX_ID_LENGTH = 256;
+constexpr std::size_t MAX_ID_LENGTH = MAX_ID_CODE_POINTS;
 
 /// The members an object may have and those it must have, in schema order (read from a JSON
 /// Schema object's `properties` and `required`: see edit_schema.h).

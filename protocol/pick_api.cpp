@@ -1,6 +1,7 @@
 // GET and POST /v1/pick: one ray per asked pixel of the committed scene, no frame.
 
 #include "protocol/api.h"
+#include "protocol/field_json.h"
 #include "protocol/pick_parser.h"
 #include "protocol/scene_json.h"
 
@@ -10,14 +11,15 @@ namespace {
 
 Json hit_to_json(const std::optional<PickHit>& hit) {
     if (!hit) return nullptr;
-    return {{"instance", hit->instance},
-            {"mesh", hit->mesh},
-            {"group_path", hit->group_path},
-            {"primitive", hit->primitive},
-            {"distance", float_to_json(hit->distance)},
-            {"position", vec3_to_json(hit->position)},
-            {"normal", vec3_to_json(hit->normal)},
-            {"user_id", hit->user_id}};
+    Json j = {{"instance", hit->instance},
+              {"mesh", hit->mesh},
+              {"group_path", hit->group_path},
+              {"primitive", hit->primitive},
+              {"distance", float_to_json(hit->distance)},
+              {"position", vec3_to_json(hit->position)},
+              {"normal", vec3_to_json(hit->normal)}};
+    write_labels<InstanceFields>(j, hit->fields);
+    return j;
 }
 
 /// Picks; `answer` turns the result into the body.

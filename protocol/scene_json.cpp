@@ -120,29 +120,28 @@ Json mesh_json(const Scene& s, MeshHandle h, const MeshRecord& m) {
 Json instance_json(const Scene& s, InstanceHandle h, const InstanceRecord& i,
                    const Bounds3& mesh_local_bounds) {
     Json j{{"id", i.id},
-                {"index", h.index},
-                {"version", s.version()},
-                {"mesh", s.mesh(i.mesh).value()->id},
-                {"material", material_ref(s, i.material)},
-                {"resolved_material", material_fields(s.resolved_material(i))},
-                {"parent", group_ref(s, i.parent)},
-                {"world_transform", affine_to_json(i.world)},
-                {"world_visible", i.world_visible},
-                {"bounds", bounds_to_json(i.world.transform_bounds(mesh_local_bounds))}};
+           {"index", h.index},
+           {"version", s.version()},
+           {"mesh", s.mesh(i.mesh).value()->id},
+           {"material", material_ref(s, i.material)},
+           {"resolved_material", material_fields(s.resolved_material(i))},
+           {"parent", group_ref(s, i.parent)},
+           {"world_transform", affine_to_json(i.world)},
+           {"world_visible", i.world_visible},
+           {"bounds", bounds_to_json(i.world.transform_bounds(mesh_local_bounds))}};
     write_fields<InstanceFields>(j, i);
     return j;
 }
 
 Json group_json(const Scene& s, GroupHandle h, const GroupRecord& g) {
     Json j{{"id", g.id},
-                {"index", h.index},
-                {"version", s.version()},
-                {"parent", group_ref(s, g.parent)},
-                {"world_transform", affine_to_json(g.world)},
-                {"world_visible", g.world_visible},
-                {"children",
-                 {{"groups", g.children.groups.size()},
-                  {"instances", g.children.instances.size()}}}};
+           {"index", h.index},
+           {"version", s.version()},
+           {"parent", group_ref(s, g.parent)},
+           {"world_transform", affine_to_json(g.world)},
+           {"world_visible", g.world_visible},
+           {"children",
+            {{"groups", g.children.groups.size()}, {"instances", g.children.instances.size()}}}};
     write_fields<GroupFields>(j, g);
     return j;
 }
@@ -192,12 +191,12 @@ std::optional<Json> light_to_json(const Scene& s, std::string_view id) {
 Json texture_json(const Scene& s, const TextureRecord& t) {
     const char* format = texture_format(*t.encoded);
     Json j{{"id", t.id},
-            {"width", t.image->width},
-            {"height", t.image->height},
-            {"format", format ? format : "unknown"},
-            {"encoded_bytes", t.encoded->size()},
-            {"decoded_bytes", t.image->bytes()},
-            {"version", s.version()}};
+           {"width", t.image->width},
+           {"height", t.image->height},
+           {"format", format ? format : "unknown"},
+           {"encoded_bytes", t.encoded->size()},
+           {"decoded_bytes", t.image->bytes()},
+           {"version", s.version()}};
     write_fields<TextureFields>(j, t);
     return j;
 }

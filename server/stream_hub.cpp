@@ -10,6 +10,7 @@
 #include "engine/image/tonemap.h"
 #include "protocol/json_document.h"
 #include "protocol/report_json.h"
+#include "protocol/safe_text.h"
 
 namespace strata::server {
 
@@ -219,7 +220,8 @@ void StreamHub::publish_events(std::vector<RebuildReport> reports, Clock::time_p
         const protocol::Json data = {{"version", r.version},
                                      {"report", protocol::report_to_json(r)}};
         auto event = std::make_shared<const std::string>(
-            "id: " + std::to_string(r.version) + "\nevent: commit\ndata: " + data.dump() + "\n\n");
+            "id: " + std::to_string(r.version) + "\nevent: commit\ndata: " +
+            protocol::dump_json(data) + "\n\n");
         for (auto& c : clients) c->offer(event);
     }
     if (now >= m_next_heartbeat) {

@@ -8,6 +8,7 @@
 #include "engine/render/accumulator.h"
 #include "protocol/render_parser.h"
 #include "protocol/report_json.h"
+#include "protocol/safe_text.h"
 #include "server/context.h"
 #include "server/route_table.h"
 #include "server/stream_hub.h"
@@ -165,7 +166,8 @@ Reply open_event_stream(ServerContext& ctx, RouteCall& call) {
     auto channel = ctx.streams->subscribe();
     if (!channel) return stream_unavailable();
     return Reply::streaming(stream_head("text/event-stream", "retry: 2000\n\nevent: hello\ndata: " +
-                                                                 hello.dump() + "\n\n"),
+                                                                 protocol::dump_json(hello) +
+                                                                 "\n\n"),
                             std::move(channel));
 }
 

@@ -88,6 +88,7 @@ export class Inspector {
     };
     row('kind', d.kind);
     row('id', d.id).id = 'sel-id';
+    if (d.name) row('name', d.name).id = 'sel-name';
     if (d.kind === 'instance') {
       row('mesh', d.mesh);
       row('material', d.material === null ? '(mesh default)' : d.material);

@@ -38,9 +38,13 @@ export class ScenePanel {
     const q = new URLSearchParams({ limit: PAGE });
     if (s.cursor) q.set('cursor', s.cursor);
     const { doc } = await api(`/v1/scene/${s.kind}?` + q);
+    // A display name, when the object has one, comes before its id.
+    const named = (i) => (i.name ? `${i.name}  ·  ` : '') + i.id;
     s.items.push(...doc.items.map((i) => s.kind === 'groups'
-      ? { kind: 'group', id: i.id, label: `${i.id}  ·  group${i.world_visible ? '' : '  (hidden)'}` }
-      : { kind: 'instance', id: i.id, label: `${i.id}  ·  ${i.mesh}${i.world_visible ? '' : '  (hidden)'}` }));
+      ? { kind: 'group', id: i.id, name: i.name || '',
+          label: `${named(i)}  ·  group${i.world_visible ? '' : '  (hidden)'}` }
+      : { kind: 'instance', id: i.id, name: i.name || '',
+          label: `${named(i)}  ·  ${i.mesh}${i.world_visible ? '' : '  (hidden)'}` }));
     s.cursor = doc.next_cursor;
     if (!s.cursor && s.kind === 'groups') {
       s.kind = 'instances';
@@ -104,7 +108,7 @@ export class ScenePanel {
     const needle = this.search.value.trim().toLowerCase();
     this.list.replaceChildren();
     for (const item of this.items) {
-      if (needle && !item.id.toLowerCase().includes(needle)) continue;
+      if (needle && !`${item.id} ${item.name}`.toLowerCase().includes(needle)) continue;
       const li = document.createElement('li');
       li.dataset.id = item.id;
       li.dataset.kind = item.kind;

@@ -46,8 +46,20 @@ bool is_valid_utf8(std::string_view text) {
 }
 
 bool is_control_code_point(uint32_t cp) {
-    return cp < 0x20 || cp == 0x7F || (cp >= 0x80 && cp <= 0x9F) || cp == 0x2028 ||
-           cp == 0x2029;
+    return cp < 0x20 || cp == 0x7F || (cp >= 0x80 && cp <= 0x9F) || cp == 0x2028 || cp == 0x2029;
+}
+
+std::size_t utf8_length(std::string_view text) {
+    std::size_t n = 0;
+    for (unsigned char c : text) n += (c & 0xC0) != 0x80;
+    return n;
+}
+
+const char* id_problem(std::string_view id) {
+    if (id.empty()) return "is empty";
+    if (const char* why = text_problem(id, 4 * MAX_ID_CODE_POINTS)) return why;
+    if (utf8_length(id) > MAX_ID_CODE_POINTS) return "is longer than 256 characters";
+    return nullptr;
 }
 
 const char* text_problem(std::string_view text, std::size_t max_bytes) {

@@ -24,6 +24,17 @@ bool is_valid_utf8(std::string_view text);
 /// text forge a line in a log or a header.
 bool is_control_code_point(uint32_t cp);
 
+/// Code points in well-formed UTF-8 text.
+std::size_t utf8_length(std::string_view text);
+
+/// Longest id, in code points.
+constexpr std::size_t MAX_ID_CODE_POINTS = 256;
+
+/// Why `id` cannot name an object ("is empty", "is longer than 256 characters", "is not valid
+/// UTF-8", "holds a control character"), or nullptr when it can. Ids end up in URLs, logs,
+/// headers and JSON; this rule holds for every way an object comes in.
+const char* id_problem(std::string_view id);
+
 /// Why `text` is not acceptable scene text of at most `max_bytes` bytes ("is not valid UTF-8",
 /// "holds a control character", "is longer than N bytes"), or nullptr when it is.
 const char* text_problem(std::string_view text, std::size_t max_bytes);

@@ -69,6 +69,7 @@ std::vector<std::optional<PickHit>> pick_pixels(const TlasStrategy& tlas, const 
         hit.position = rays.eye() + ray.tfar * dir;
         hit.normal = n;
         hit.user_id = inst.user_id;
+        hit.fields = save_fields<InstanceFields>(inst);
         hit.group_path = scene.group_path(inst.parent);
         out.emplace_back(std::move(hit));
     }

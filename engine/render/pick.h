@@ -12,6 +12,7 @@
 #include "engine/core/result.h"
 #include "engine/render/frame_state.h"
 #include "engine/scene/edits.h"
+#include "engine/scene/object_fields.h"
 
 namespace strata {
 
@@ -41,6 +42,8 @@ struct PickHit {
     Vec3 position{0.0f};     ///< world space
     Vec3 normal{0.0f};       ///< world-space geometric normal, unit length, facing the camera
     uint32_t user_id = 0;
+    /// The instance's fields (object_fields.h); picks report those its table marks as labels.
+    FieldValues<InstanceFields> fields;
 };
 
 struct PickResult {

@@ -21,6 +21,7 @@ struct AddMesh {
     std::optional<std::string> material;  ///< default material of the mesh's instances
     std::vector<Vec3> normals = {};       ///< per-vertex shading normals; empty: none
     std::vector<Vec2> uvs = {};           ///< per-vertex texture coordinates; empty: none
+    std::string name = {};                ///< display name (object_fields.h)
 };
 
 /// New vertex data for vertices [offset, offset + n): positions (empty: unchanged) and, when set,
@@ -66,6 +67,7 @@ struct UpdateMaterial {
     std::optional<std::optional<std::string>> base_color_texture = std::nullopt;
     std::optional<TextureWrap> wrap = std::nullopt;
     std::optional<TextureFilter> filter = std::nullopt;
+    std::optional<std::string> name = std::nullopt;
 };
 
 /// A texture from PNG or JPEG bytes (the format is read from the bytes). Decoded when the edit is
@@ -73,6 +75,7 @@ struct UpdateMaterial {
 struct AddTexture {
     std::string id;
     std::string data;
+    std::string name = {};  ///< display name (object_fields.h)
 };
 
 /// Removes a texture; refused while a material refers to it.
@@ -89,6 +92,7 @@ struct AddInstance {
     uint32_t mask = 0xFFFFFFFFu;
     uint32_t user_id = 0;
     std::optional<std::string> parent;  ///< a group id; nullopt: the root
+    std::string name = {};              ///< display name (object_fields.h)
 };
 
 struct UpdateInstance {
@@ -101,6 +105,7 @@ struct UpdateInstance {
     std::optional<uint32_t> user_id;
     /// Set: a group id moves the instance under that group; set to nullopt: to the root.
     std::optional<std::optional<std::string>> parent;
+    std::optional<std::string> name = std::nullopt;
 };
 
 struct SetTransform {
@@ -147,6 +152,7 @@ struct AddGroup {
     std::optional<std::string> parent;  ///< a group id; nullopt: the root
     Affine transform;
     bool visible = true;
+    std::string name = {};  ///< display name (object_fields.h)
 };
 
 /// Changes some of a group's fields.
@@ -156,6 +162,7 @@ struct UpdateGroup {
     std::optional<std::optional<std::string>> parent;
     std::optional<Affine> transform;
     std::optional<bool> visible;
+    std::optional<std::string> name = std::nullopt;
 };
 
 /// Removes a group; refused while it has children unless `recursive`, which removes the whole
@@ -183,6 +190,7 @@ struct UpdateLight {
     std::optional<float> inner_angle_deg;
     std::optional<float> width;
     std::optional<float> height;
+    std::optional<std::string> name = std::nullopt;
 };
 
 struct RemoveLight {

@@ -49,8 +49,7 @@ Status check_value(const FieldInfo& info, float v) {
 }
 
 Status check_value(const FieldInfo& info, const Vec3& v) {
-    if (!is_finite(v))
-        return refuse(ErrorCode::NotFinite, info, "has a NaN or infinite component");
+    if (!is_finite(v)) return refuse(ErrorCode::NotFinite, info, "has a NaN or infinite component");
     for (int i = 0; i < 3; ++i) {
         if (!info.limits.contains(v[i]))
             return refuse(ErrorCode::InvalidArgument, info,
@@ -62,10 +61,9 @@ Status check_value(const FieldInfo& info, const Vec3& v) {
 Status check_value(const FieldInfo& info, const std::string& v) {
     const double max = info.limits.has_hi() ? info.limits.hi : double(MAX_NAME_BYTES);
     if (const char* why = text_problem(v, std::size_t(max)))
-        return refuse(ErrorCode::InvalidArgument, info,
-                      std::string(why) + (v.size() > max ? " (at most " + number_text(max) +
-                                                               " bytes)"
-                                                         : ""));
+        return refuse(
+            ErrorCode::InvalidArgument, info,
+            std::string(why) + (v.size() > max ? " (at most " + number_text(max) + " bytes)" : ""));
     return {};
 }
 

@@ -80,6 +80,8 @@ struct FieldInfo {
     /// 0: part of the kind's first journal layout, in table order; n > 0: a field added later,
     /// written in the edit's tagged section under number n (edit_codec.cpp).
     uint8_t tag = 0;
+    /// Identifies the object to a person or a client (a name, a user id): picks report it too.
+    bool label = false;
 };
 
 /// The update edit of a kind that has none.
@@ -94,13 +96,14 @@ struct Field {
     T K::Record::*record;
     T K::Add::*add;
     std::optional<T> K::Update::*update;  ///< null when the kind has no update op
-    typename K::Dirty dirty;               ///< what an update of it marks; 0: nothing
+    typename K::Dirty dirty;              ///< what an update of it marks; 0: nothing
 };
 
 /// A row of kind `K`; T is deduced from the member pointers.
 template <class K, class T>
 constexpr Field<K, T> field(FieldInfo info, T K::Record::*record, T K::Add::*add,
-                            std::optional<T> K::Update::*update, typename K::Dirty dirty) {
+                            std::type_identity_t<std::optional<T> K::Update::*> update,
+                            typename K::Dirty dirty) {
     return {info, record, add, update, dirty};
 }
 
@@ -158,8 +161,7 @@ template <class K>
 void restore_fields(typename K::Record& r, FieldValues<K>&& saved) {
     std::apply(
         [&](const auto&... row) {
-            std::apply([&](auto&... value) { ((r.*(row.record) = std::move(value)), ...); },
-                       saved);
+            std::apply([&](auto&... value) { ((r.*(row.record) = std::move(value)), ...); }, saved);
         },
         FIELDS<K>);
 }
@@ -225,7 +227,7 @@ inline Status check_value(const FieldInfo&, uint32_t) {
     return {};
 }
 template <class E>
-    requires std::is_enum_v<E>
+requires std::is_enum_v<E>
 Status check_value(const FieldInfo& info, E v) {
     if (static_cast<std::size_t>(v) < info.choices.size()) return {};
     return failure(ErrorCode::InvalidArgument,

@@ -11,9 +11,7 @@
 namespace strata {
 
 Status Scene::apply_edit(AddGroup&& e, UndoLog& undo) {
-    if (e.id.empty()) return failure(ErrorCode::InvalidArgument, "group id is empty", "id");
-    if (!find_group(e.id).is_null())
-        return failure(ErrorCode::DuplicateId, "group '" + e.id + "' already exists", "id");
+    if (Status s = check_new_id(e.id, !find_group(e.id).is_null(), "group"); !s) return s;
     auto parent = find_parent(e.parent, "parent");
     if (!parent) return Unexpected(parent.error());
     if (Status s = check_group_move(GroupHandle{}, parent.value()); !s) return s;

@@ -49,9 +49,9 @@ constexpr auto LightFields::table() {
     return std::tuple{
         field<K>({"type", "point, spot or rect.", {}, TYPES}, &Light::kind, &Light::kind,
                  &UpdateLight::kind, L),
-        field<K>({"position", "Where a point or spot light is, or a rect light's centre.",
-                  COORDINATE},
-                 STRATA_FIELD_OF(K, position), L),
+        field<K>(
+            {"position", "Where a point or spot light is, or a rect light's centre.", COORDINATE},
+            STRATA_FIELD_OF(K, position), L),
         field<K>({"direction", "A spot light's axis, a rect light's normal (any length but zero)."},
                  STRATA_FIELD_OF(K, direction), L),
         field<K>({"color", "Linear RGB, multiplied by the intensity.", NON_NEGATIVE},
@@ -72,6 +72,7 @@ constexpr auto LightFields::table() {
                  STRATA_FIELD_OF(K, width), L),
         field<K>({"height", "A rect light's height.", above_up_to(0.0, 1e6)},
                  STRATA_FIELD_OF(K, height), L),
+        field<K>({"name", NAME_DOC, {}, {}, 1, true}, STRATA_FIELD_OF(K, name), SceneDirty{}),
     };
 }
 
@@ -90,12 +91,12 @@ constexpr auto MaterialFields::table() {
     return std::tuple{
         field<K>({"base_color", "Linear RGB albedo; a base_color_texture multiplies it.", UNIT},
                  STRATA_FIELD_OF(K, base_color), P),
-        field<K>({"roughness", "0: a mirror, 1: fully rough.", UNIT},
-                 STRATA_FIELD_OF(K, roughness), P),
-        field<K>({"metallic", "0: dielectric, 1: metal.", UNIT}, STRATA_FIELD_OF(K, metallic),
+        field<K>({"roughness", "0: a mirror, 1: fully rough.", UNIT}, STRATA_FIELD_OF(K, roughness),
                  P),
+        field<K>({"metallic", "0: dielectric, 1: metal.", UNIT}, STRATA_FIELD_OF(K, metallic), P),
         field<K>({"emission", "Emitted radiance, linear RGB.", NON_NEGATIVE},
                  STRATA_FIELD_OF(K, emission), P),
+        field<K>({"name", NAME_DOC, {}, {}, 1, true}, STRATA_FIELD_OF(K, name), MaterialDirty{}),
     };
 }
 
@@ -117,8 +118,14 @@ constexpr auto InstanceFields::table() {
                  STRATA_FIELD_OF(K, visible), InstanceDirty::Visibility),
         field<K>({"mask", "Embree's 32-bit geometry mask, set on the instance in the TLAS."},
                  STRATA_FIELD_OF(K, mask), InstanceDirty::Mask),
-        field<K>({"user_id", "A 32-bit value of the client's, reported by picks and the user_id AOV."},
+        field<K>({"user_id",
+                  "The client's 32-bit value, reported by picks and its AOV.",
+                  {},
+                  {},
+                  0,
+                  true},
                  STRATA_FIELD_OF(K, user_id), InstanceDirty::UserId),
+        field<K>({"name", NAME_DOC, {}, {}, 1, true}, STRATA_FIELD_OF(K, name), InstanceDirty{}),
     };
 }
 
@@ -138,6 +145,7 @@ constexpr auto GroupFields::table() {
                  STRATA_FIELD_OF(K, transform), GroupDirty::Transform),
         field<K>({"visible", "false hides everything below the group."},
                  STRATA_FIELD_OF(K, visible), GroupDirty::Visibility),
+        field<K>({"name", NAME_DOC, {}, {}, 1, true}, STRATA_FIELD_OF(K, name), GroupDirty{}),
     };
 }
 
@@ -151,7 +159,11 @@ struct MeshFields {
 };
 
 constexpr auto MeshFields::table() {
-    return std::tuple<>{};
+    using K = MeshFields;
+    return std::tuple{
+        field<K>({"name", NAME_DOC, {}, {}, 1, true}, &MeshRecord::name, &AddMesh::name, nullptr,
+                 MeshDirty{}),
+    };
 }
 
 struct TextureFields {
@@ -164,7 +176,11 @@ struct TextureFields {
 };
 
 constexpr auto TextureFields::table() {
-    return std::tuple<>{};
+    using K = TextureFields;
+    return std::tuple{
+        field<K>({"name", NAME_DOC, {}, {}, 1, true}, &TextureRecord::name, &AddTexture::name,
+                 nullptr, SceneDirty{}),
+    };
 }
 
 struct CameraFields {

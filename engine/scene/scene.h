@@ -33,6 +33,7 @@ struct MeshRecord {
     MaterialHandle material;          ///< default for its instances; null: built-in default
     CowVector<InstanceHandle> users;  ///< instances that reference this mesh
     MeshDirtyState dirty;             ///< since the last commit
+    std::string name = {};            ///< display name (object_fields.h)
 };
 
 /// Deepest a group may sit: the groups on the path from the root to any group, itself included.
@@ -65,6 +66,7 @@ struct InstanceRecord {
     uint32_t user_id = 0;
     uint32_t user_slot = 0;  ///< position in the mesh's `users`
     DirtyBits<InstanceDirty> dirty;  ///< since the last commit
+    std::string name = {};           ///< display name (object_fields.h)
 };
 
 /// A scene-graph node: its transform and visibility apply to everything below it.
@@ -78,6 +80,7 @@ struct GroupRecord {
     bool world_visible = true;
     Children children;
     DirtyBits<GroupDirty> dirty;  ///< until the batch's flattening
+    std::string name = {};        ///< display name (object_fields.h)
 };
 
 struct MaterialRecord {
@@ -94,12 +97,17 @@ struct TextureRecord {
     std::shared_ptr<const TextureImage> image;
     /// The PNG or JPEG bytes it was decoded from: what a snapshot writes.
     std::shared_ptr<const std::string> encoded;
+    std::string name = {};  ///< display name (object_fields.h)
 };
 
 struct LightRecord {
     std::string id;
     Light light;
 };
+
+/// Checks the id of an object about to be added (the id rule of engine/core/utf8.h, then that no
+/// object of its kind has it); the error names field `id`.
+Status check_new_id(const std::string& id, bool taken, const char* kind);
 
 /// Most lights a scene may hold (TooLarge beyond): launches copy and sample the whole list.
 constexpr std::size_t MAX_LIGHTS = 4096;

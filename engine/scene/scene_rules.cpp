@@ -7,6 +7,7 @@
 #include <cmath>
 #include <string>
 
+#include "engine/core/utf8.h"
 #include "engine/image/texture_decode.h"
 #include "engine/scene/child_list.h"
 #include "engine/scene/object_fields.h"
@@ -20,14 +21,18 @@ namespace {
 /// Largest mesh the engine accepts; beyond this Embree's 32-bit primitive ids run out of room.
 constexpr std::size_t MAX_MESH_ELEMENTS = std::size_t(1) << 28;
 
+}  // namespace
+
 Status check_new_id(const std::string& id, bool taken, const char* kind) {
-    if (id.empty())
-        return failure(ErrorCode::InvalidArgument, std::string(kind) + " id is empty", "id");
+    if (const char* why = id_problem(id))
+        return failure(ErrorCode::InvalidArgument, std::string(kind) + " id " + why, "id");
     if (taken)
         return failure(ErrorCode::DuplicateId, std::string(kind) + " '" + id + "' already exists",
                        "id");
     return {};
 }
+
+namespace {
 
 Status unknown(const char* kind, const std::string& id, const char* field) {
     return failure(ErrorCode::UnknownId, std::string("unknown ") + kind + " '" + id + "'", field);

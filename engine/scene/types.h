@@ -51,6 +51,7 @@ struct Material {
     float metallic = 0.0f;
     Vec3 emission{0.0f};
     TextureSampler base_color_sampler = {};
+    std::string name = {};  ///< display name (object_fields.h)
 
     friend bool operator==(const Material&, const Material&) = default;
 };
@@ -97,6 +98,7 @@ struct Light {
     float inner_angle_deg = 25.0f;  ///< spot: full intensity inside, fading to 0 at angle_deg
     float width = 1.0f;             ///< rect
     float height = 1.0f;            ///< rect
+    std::string name = {};          ///< display name (object_fields.h)
 
     friend bool operator==(const Light&, const Light&) = default;
 };

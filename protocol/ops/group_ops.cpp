@@ -65,8 +65,7 @@ constexpr EditOp OPS[] = {
   "required": ["group"],
   "additionalProperties": false
 })json",
-     parse_update_group, edit_kinds<UpdateGroup>(),
-     field_properties<GroupFields, false>},
+     parse_update_group, edit_kinds<UpdateGroup>(), field_properties<GroupFields, false>},
     {"remove_group",
      "Removes a group; refused while it has children unless `recursive`, which removes the whole "
      "subtree, instances included.",

@@ -83,9 +83,9 @@ constexpr EditOp OPS[] = {
   "required": ["instance"],
   "additionalProperties": false
 })json",
-     parse_update_instance, edit_kinds<UpdateInstance>(),
-     field_properties<InstanceFields, false>},
-    {"set_transform", "Replaces the transform of an instance, or of a group (`group` in place of `instance`).",
+     parse_update_instance, edit_kinds<UpdateInstance>(), field_properties<InstanceFields, false>},
+    {"set_transform",
+     "Replaces the transform of an instance, or of a group (`group` in place of `instance`).",
      R"json({
   "type": "object",
   "properties": {

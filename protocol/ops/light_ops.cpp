@@ -46,8 +46,7 @@ constexpr EditOp OPS[] = {
   "required": ["light"],
   "additionalProperties": false
 })json",
-     parse_update_light, edit_kinds<UpdateLight>(),
-     field_properties<LightFields, false>},
+     parse_update_light, edit_kinds<UpdateLight>(), field_properties<LightFields, false>},
     {"remove_light", "Removes a light.",
      R"json({
   "type": "object",

@@ -73,8 +73,7 @@ constexpr EditOp OPS[] = {
   "required": ["material"],
   "additionalProperties": false
 })json",
-     parse_update_material, edit_kinds<UpdateMaterial>(),
-     field_properties<MaterialFields, false>},
+     parse_update_material, edit_kinds<UpdateMaterial>(), field_properties<MaterialFields, false>},
 };
 
 }  // namespace

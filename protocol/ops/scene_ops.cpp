@@ -78,9 +78,10 @@ constexpr EditOp OPS[] = {
   "type": "object",
   "additionalProperties": false
 })json",
-     parse_set_lighting, edit_kinds<SetLighting>(),
-     field_properties<LightingFields, false>},
-    {"clear", "Removes every mesh, instance, material, texture, group and light and resets camera and lighting.",
+     parse_set_lighting, edit_kinds<SetLighting>(), field_properties<LightingFields, false>},
+    {"clear",
+     "Removes every mesh, instance, material, texture, group and light and resets camera and "
+     "lighting.",
      R"json({"type": "object", "additionalProperties": false})json", parse_clear,
      edit_kinds<Clear>()},
 };

@@ -249,15 +249,18 @@ class ViewerSelectionAndEdits(ViewerInChromium):
         item = "#scene-list li[data-kind=\"instance\"][data-id=\"newcomer\"]"
         self.assertFalse(self.browser.evaluate(f"!!document.querySelector('{item}')"))
         request(self.server, "POST", "/v1/edits", {"edits": [
-            {"op": "add_instance", "id": "newcomer", "mesh": "crate",
+            {"op": "add_instance", "id": "newcomer", "mesh": "crate", "name": "Crate on the shelf",
              "transform": {"translate": [0, 3, -3]}}]})
         self.browser.wait_for(f"!!document.querySelector('{item}')", timeout=5)
+        # Its display name leads the entry, and the inspector shows it once selected.
+        self.assertTrue(self.browser.evaluate(
+            f"document.querySelector('{item}').textContent.startsWith('Crate on the shelf')"))
         # The selection stays marked across the new listing.
         self.assertTrue(self.browser.evaluate(
             "document.querySelector('#scene-list li[data-id=\"ball\"]').classList.contains('selected')"))
         # A search typed before the change still filters the new list.
         self.browser.evaluate(
-            "(() => { const f = document.getElementById('scene-search'); f.value = 'newcomer';"
+            "(() => { const f = document.getElementById('scene-search'); f.value = 'on the shelf';"
             " f.dispatchEvent(new Event('input')); return true; })()")
         request(self.server, "POST", "/v1/edits", {"edits": [
             {"op": "update_instance", "instance": "newcomer", "visible": False}]})
@@ -265,6 +268,10 @@ class ViewerSelectionAndEdits(ViewerInChromium):
                               f" document.querySelector('{item}').textContent.includes('hidden')",
                               timeout=5)
         self.assertEqual(self.browser.evaluate("document.querySelectorAll('#scene-list li').length"), 1)
+        self.select_from_panel("instance", "newcomer")
+        self.browser.wait_for("document.getElementById('sel-name') &&"
+                              " document.getElementById('sel-name').textContent =="
+                              " 'Crate on the shelf'")
         request(self.server, "POST", "/v1/edits", {"edits": [
             {"op": "remove_instance", "instance": "newcomer"}]})
         self.browser.wait_for(f"!document.querySelector('{item}')", timeout=5)

@@ -8,6 +8,7 @@
 #include "engine/durable/crc32c.h"
 #include "engine/durable/edit_codec.h"
 #include "engine/durable/journal_format.h"
+#include "tests/engine/durable_test_util.h"
 #include "tests/engine/random_edits.h"
 
 namespace strata {
@@ -15,11 +16,7 @@ namespace {
 
 using durable::crc32c;
 
-std::string encoded(const EditBatch& b) {
-    std::string out;
-    durable::encode_batch(b, out);
-    return out;
-}
+using test::encoded;
 
 EditBatch every_kind() {
     EditBatch b;

@@ -21,11 +21,7 @@
 namespace strata {
 namespace {
 
-std::string encoded(const EditBatch& b) {
-    std::string out;
-    durable::encode_batch(b, out);
-    return out;
-}
+using test::encoded;
 
 struct Item {
     int value = 0;

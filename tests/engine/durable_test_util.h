@@ -12,9 +12,17 @@
 
 #include <gtest/gtest.h>
 
+#include "engine/durable/edit_codec.h"
 #include "engine/engine.h"
 
 namespace strata::test {
+
+/// A batch in the journal's and snapshots' binary form.
+inline std::string encoded(const EditBatch& b) {
+    std::string out;
+    durable::encode_batch(b, out);
+    return out;
+}
 
 /// A fresh directory under $TMPDIR, removed with everything in it at the end of the test.
 class TempDir {

@@ -9,34 +9,12 @@
 #include <gtest/gtest.h>
 
 #include "engine/scene/object_fields.h"
+#include "tests/changed_values.h"
 
 namespace strata {
 namespace {
 
-/// A value other than `v` (limits are not this helper's business).
-float changed(float v) {
-    return v + 0.5f;
-}
-Vec3 changed(const Vec3& v) {
-    return v + Vec3(0.25f);
-}
-bool changed(bool v) {
-    return !v;
-}
-uint32_t changed(uint32_t v) {
-    return v + 1;
-}
-Affine changed(const Affine& v) {
-    return Affine::translation({1, 2, 3}) * v;
-}
-std::string changed(const std::string& v) {
-    return v + "x";
-}
-template <class E>
-    requires std::is_enum_v<E>
-E changed(E v) {
-    return static_cast<E>((static_cast<int>(v) + 1) % 3);
-}
+using test::changed;
 
 template <class K>
 void expect_consistent_table() {

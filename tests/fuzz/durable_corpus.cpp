@@ -5,8 +5,9 @@
 //
 // Journal seeds: every edit kind alone as a record payload, a batch of all of them, a segment
 // file of several records, and the same segment torn in its last record. Snapshot seeds: the
-// snapshot of a small scene (every record type, non-default fields), an empty scene's, and the
-// bare payload of the first (which the fuzzer wraps in a header).
+// snapshot of a small scene (every record type, non-default fields), an empty scene's, the bare
+// payload of the first (which the fuzzer wraps in a header), one whose ids break the id rule and
+// one of ten thousand clears.
 
 #include <cstdio>
 #include <fstream>
@@ -40,6 +41,7 @@ std::vector<Edit> every_kind() {
     i.visible = false;
     i.mask = 6;
     i.user_id = 77;
+    i.name = "first crate";  // a tagged field
     edits.emplace_back(i);
     UpdateInstance u;
     u.instance = "a";
@@ -116,5 +118,22 @@ int main(int argc, char** argv) {
     ok &= write(snapshot + "/scene.snap", durable::encode_snapshot(state, scene.version()));
     ok &= write(snapshot + "/empty.snap", durable::encode_snapshot(Scene().to_batch(), 0));
     ok &= write(snapshot + "/scene-payload", fuzz::encoded(state));
+
+    // Step: snapshots only the rules can refuse: ids and names that break the text rule, and a
+    // payload of many one-byte clears.
+    EditBatch bad_ids;
+    bad_ids.edits.push_back(kinds[0]);
+    AddMesh bad_mesh = std::get<AddMesh>(kinds[1]);
+    bad_mesh.id = "m\xff";
+    bad_ids.edits.push_back(bad_mesh);
+    AddInstance bad_instance = std::get<AddInstance>(kinds[5]);
+    bad_instance.id = "i\r\n";
+    bad_instance.mesh = "m\xff";
+    bad_instance.name = "esc\x1b[2J";
+    bad_ids.edits.push_back(bad_instance);
+    ok &= write(snapshot + "/bad-ids.snap", durable::encode_snapshot(bad_ids, 3));
+    EditBatch clears;
+    clears.edits.assign(10000, Clear{});
+    ok &= write(snapshot + "/many-clears.snap", durable::encode_snapshot(clears, 1));
     return ok ? 0 : 1;
 }

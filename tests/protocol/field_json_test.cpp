@@ -7,33 +7,12 @@
 
 #include "protocol/edit_parser.h"
 #include "protocol/field_json.h"
+#include "tests/changed_values.h"
 
 namespace strata::protocol {
 namespace {
 
-float changed(float v) {
-    return v + 0.5f;
-}
-Vec3 changed(const Vec3& v) {
-    return v + Vec3(0.25f);
-}
-bool changed(bool v) {
-    return !v;
-}
-uint32_t changed(uint32_t v) {
-    return v + 7;
-}
-Affine changed(const Affine& v) {
-    return Affine::translation({1, 2, 3}) * v;
-}
-std::string changed(const std::string& v) {
-    return v + "x";
-}
-template <class E>
-    requires std::is_enum_v<E>
-E changed(E v) {
-    return static_cast<E>((static_cast<int>(v) + 1) % 3);
-}
+using test::changed;
 
 /// Record `K` with every field changed, written as JSON into `op` and parsed back as one edit.
 template <class K>
@@ -43,8 +22,8 @@ std::pair<typename K::Record, Edit> round_trip(Json op) {
     write_fields<K>(op, r);
     Json body = {{"edits", Json::array({op})}};
     auto parsed = parse_edit_batch(body);
-    EXPECT_TRUE(parsed.has_value()) << body.dump() << ": "
-                                    << (parsed ? "" : parsed.error().message);
+    EXPECT_TRUE(parsed.has_value())
+        << body.dump() << ": " << (parsed ? "" : parsed.error().message);
     if (!parsed) return {r, Edit{}};
     return {r, parsed.value().batch.edits.at(0)};
 }

@@ -6,6 +6,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "engine/durable/journal_format.h"
+#include "engine/engine.h"
+#include "engine/scene/shapes.h"
 #include "protocol/api.h"
 #include "protocol/edit_parser.h"
 #include "protocol/safe_text.h"
@@ -82,6 +85,47 @@ TEST(Shapes, TheShapesOfOneBatchGenerateABoundedNumberOfTriangles) {
     EXPECT_EQ(problem_from(r.error()).status, 413);
     // Four spheres were generated, not eight (a correctness bound, not a benchmark).
     EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(30));
+}
+
+}  // namespace
+}  // namespace strata::protocol
+
+namespace strata::protocol {
+namespace {
+
+/// A snapshot file with a valid checksum around `scene`: only the rules can refuse it.
+std::string snapshot_of(EditBatch scene) {
+    return durable::encode_snapshot(scene, 7);
+}
+
+TEST(Ids, ASnapshotWhoseIdsBreakTheIdRuleIsRefusedAndChangesNothing) {
+    auto engine = std::move(Engine::create().value());
+    ASSERT_TRUE(engine->apply(EditBatch{{add_mesh_edit("ball", make_sphere(1.0f, 8), {})}})
+                    .has_value());
+    for (const std::string bad : {std::string("m\xff"), std::string("cr\rlf\n"),
+                                  std::string("esc\x1b[2J"), std::string("\xe2\x80\xa8"),
+                                  std::string(1 << 20, 'x'), std::string()}) {
+        SCOPED_TRACE(bad.size() > 20 ? "a 1 MB id" : bad);
+        EditBatch scene;
+        scene.edits.push_back(add_mesh_edit(bad, make_sphere(1.0f, 8), {}));
+        const ApiResponse r = post_snapshot(*engine, snapshot_of(std::move(scene)), std::nullopt);
+        EXPECT_EQ(r.status, 422) << r.body;
+        const Json problem = Json::parse(r.body);  // the problem itself is valid JSON
+        EXPECT_THAT(problem["detail"].get<std::string>(), ::testing::HasSubstr("mesh id"));
+        EXPECT_EQ(engine->read([](const Scene& s) { return s.version(); }), 1u);
+        EXPECT_FALSE(engine->read([](const Scene& s) { return s.find_mesh("ball").is_null(); }));
+    }
+    // An instance named by a stored id that breaks the rule cannot exist either: the lookup of
+    // a reference never finds one, and the answer stays valid JSON.
+    EditBatch scene;
+    scene.edits.push_back(add_mesh_edit("ball", make_sphere(1.0f, 8), {}));
+    AddInstance i;
+    i.id = "ok";
+    i.mesh = "m\xff";
+    scene.edits.push_back(i);
+    const ApiResponse r = post_snapshot(*engine, snapshot_of(std::move(scene)), std::nullopt);
+    EXPECT_EQ(r.status, 422) << r.body;
+    EXPECT_NO_THROW((void)Json::parse(r.body));
 }
 
 }  // namespace

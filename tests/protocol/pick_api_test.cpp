@@ -20,6 +20,7 @@ protected:
         a.id = "/World/Ball";
         a.mesh = "ball";
         a.user_id = 42;
+        a.name = "The ball";
         batch.edits.push_back(a);
         SetCamera c;
         c.eye = Vec3(0.0f, 0.0f, 5.0f);
@@ -43,6 +44,8 @@ TEST_F(PickApi, GetAnswersTheHitUnderOnePixelWithClientIds) {
     EXPECT_EQ(hit["instance"], "/World/Ball");
     EXPECT_EQ(hit["mesh"], "ball");
     EXPECT_EQ(hit["user_id"], 42);
+    EXPECT_EQ(hit["name"], "The ball") << "the table's label fields come with a hit";
+    EXPECT_FALSE(hit.contains("transform")) << "and only those";
     EXPECT_NEAR(hit["distance"].get<double>(), 4.0, 0.01);
     EXPECT_NEAR(hit["normal"][2].get<double>(), 1.0, 0.01);
     EXPECT_NEAR(hit["position"][2].get<double>(), 1.0, 0.01);

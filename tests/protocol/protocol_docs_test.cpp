@@ -21,10 +21,10 @@
 
 #include "engine/counters.h"
 #include "engine/durable/durable_stats.h"
-#include "protocol/stat_names.h"
 #include "protocol/edit_ops.h"
 #include "protocol/edit_schema.h"
 #include "protocol/field_json.h"
+#include "protocol/stat_names.h"
 #include "tests/generated_docs.h"
 
 namespace strata::protocol {
@@ -128,7 +128,9 @@ std::string durable_counters_table() {
 
 /// Each object kind's fields, as the README's op sections show them.
 std::vector<std::pair<std::string, std::string>> field_tables() {
-    return {{"material", fields_markdown<MaterialFields>()},
+    return {{"mesh", fields_markdown<MeshFields>()},
+            {"texture", fields_markdown<TextureFields>()},
+            {"material", fields_markdown<MaterialFields>()},
             {"instance", fields_markdown<InstanceFields>()},
             {"group", fields_markdown<GroupFields>()},
             {"light", fields_markdown<LightFields>()},

@@ -10,6 +10,7 @@ import json
 import socket
 import shutil
 import signal
+import struct
 import tempfile
 import threading
 import time
@@ -263,6 +264,31 @@ class Replicas(unittest.TestCase):
             self.assertIn(f"does not apply at version {n}", detail)
             self.assertIn("nope", detail)
             self.assertEqual(durable_scene.check(s, n), "")
+
+    def test_an_entry_whose_id_is_not_utf8_stops_the_replicas_loudly_and_they_keep_serving(self):
+        servers = self.replicas(2)
+        n = self.stream_batches(servers, 0, 2)
+        # A well-formed add_light (kind tag 17) whose id is not UTF-8: before the engine held
+        # every way in to the id rule, every replica applied it and then aborted writing JSON.
+        light = struct.pack("<B3f3f3f5f", 0, 0, 3, 0, 0, -1, 0, 1, 1, 1, 10, 30, 25, 1, 1)
+        payload = ((1).to_bytes(4, "little") + bytes([17]) + (2).to_bytes(4, "little") + b"m\xff"
+                   + light)
+        self.redis.command("XADD", self.stream, f"{n + 1}-0", "v", str(n + 1), "t", "0",
+                           "r", log_entry(payload, n + 1))
+        self.redis.command("SET", self.stream + ":version", str(n + 1))
+        for s in servers:
+            deadline = time.monotonic() + 10
+            while time.monotonic() < deadline and s.call("GET", "/readyz")[0] == 200:
+                time.sleep(0.05)
+            status, _, body = s.call("GET", "/readyz")
+            self.assertEqual(status, 503)
+            detail = json.loads(body)["detail"]
+            self.assertIn(f"does not apply at version {n}", detail)
+            self.assertIn("light id is not valid UTF-8", detail)
+            # The process lives and serves the last version it applied.
+            self.assertEqual(durable_scene.check(s, n), "")
+            self.assertEqual(s.call("GET", RENDER)[0], 200)
+            self.assertIsNone(s.process.poll())
 
     def test_min_version_waits_for_the_replica_and_names_the_lag_when_it_cannot(self):
         a, b = self.replicas(2, "--min-version-wait-ms", "400")

@@ -1,0 +1,37 @@
+#pragma once
+// For field-table tests: a value of each field type other than the one given, so a test can
+// change every field of a kind without naming any (limits are not this helper's business).
+
+#include <string>
+#include <type_traits>
+
+#include "engine/core/math.h"
+
+namespace strata::test {
+
+inline float changed(float v) {
+    return v + 0.5f;
+}
+inline Vec3 changed(const Vec3& v) {
+    return v + Vec3(0.25f);
+}
+inline bool changed(bool v) {
+    return !v;
+}
+inline uint32_t changed(uint32_t v) {
+    return v + 7;
+}
+inline Affine changed(const Affine& v) {
+    return Affine::translation({1, 2, 3}) * v;
+}
+inline std::string changed(const std::string& v) {
+    return v + "x";
+}
+/// The next value of a three-valued enum.
+template <class E>
+requires std::is_enum_v<E>
+E changed(E v) {
+    return static_cast<E>((static_cast<int>(v) + 1) % 3);
+}
+
+}  // namespace strata::test
