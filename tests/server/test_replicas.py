@@ -94,6 +94,15 @@ class Replicas(unittest.TestCase):
         for frame in frames:
             self.assertEqual(frame, frames[0], "frames differ between replicas")
 
+    def stopped_detail(self, server):
+        """Waits (10 s at most) for `server` to stop following the log; its /readyz detail."""
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline and server.call("GET", "/readyz")[0] == 200:
+            time.sleep(0.05)
+        status, _, body = server.call("GET", "/readyz")
+        self.assertEqual(status, 503)
+        return json.loads(body)["detail"]
+
     def stream_batches(self, servers, first, count):
         for n in range(first, first + count):
             s = servers[n % len(servers)]
@@ -206,12 +215,7 @@ class Replicas(unittest.TestCase):
                            + b"\x00\x00\x00\x00")
         self.redis.command("SET", self.stream + ":version", str(n + 1))
         for s in servers:
-            deadline = time.monotonic() + 10
-            while time.monotonic() < deadline and s.call("GET", "/readyz")[0] == 200:
-                time.sleep(0.05)
-            status, _, body = s.call("GET", "/readyz")
-            self.assertEqual(status, 503)
-            self.assertIn("poisoned", json.loads(body)["detail"])
+            self.assertIn("poisoned", self.stopped_detail(s))
             self.assertIn("strata_replica_stopped 1", s.call("GET", "/metrics")[2].decode())
             self.assertIn("replica stopped", s.log())
             # Reads of the last applied version still work; writes are refused.
@@ -255,12 +259,7 @@ class Replicas(unittest.TestCase):
                            "r", log_entry(payload, n + 1))
         self.redis.command("SET", self.stream + ":version", str(n + 1))
         for s in servers:
-            deadline = time.monotonic() + 10
-            while time.monotonic() < deadline and s.call("GET", "/readyz")[0] == 200:
-                time.sleep(0.05)
-            status, _, body = s.call("GET", "/readyz")
-            self.assertEqual(status, 503)
-            detail = json.loads(body)["detail"]
+            detail = self.stopped_detail(s)
             self.assertIn(f"does not apply at version {n}", detail)
             self.assertIn("nope", detail)
             self.assertEqual(durable_scene.check(s, n), "")
@@ -277,12 +276,7 @@ class Replicas(unittest.TestCase):
                            "r", log_entry(payload, n + 1))
         self.redis.command("SET", self.stream + ":version", str(n + 1))
         for s in servers:
-            deadline = time.monotonic() + 10
-            while time.monotonic() < deadline and s.call("GET", "/readyz")[0] == 200:
-                time.sleep(0.05)
-            status, _, body = s.call("GET", "/readyz")
-            self.assertEqual(status, 503)
-            detail = json.loads(body)["detail"]
+            detail = self.stopped_detail(s)
             self.assertIn(f"does not apply at version {n}", detail)
             self.assertIn("light id is not valid UTF-8", detail)
             # The process lives and serves the last version it applied.
