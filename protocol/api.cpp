@@ -1,5 +1,6 @@
 #include "protocol/api.h"
 
+#include <cctype>
 #include <charconv>
 #include <chrono>
 
@@ -131,6 +132,20 @@ std::string_view ApiResponse::header(std::string_view name) const {
 ApiResponse with_etag(ApiResponse r, uint64_t version) {
     r.headers.emplace_back("ETag", etag(version));
     return r;
+}
+
+std::optional<Problem> json_body_type_problem(std::optional<std::string_view> content_type) {
+    if (!content_type) return std::nullopt;
+    std::string type(content_type->substr(0, content_type->find(';')));
+    while (!type.empty() && (type.back() == ' ' || type.back() == '\t')) type.pop_back();
+    while (!type.empty() && (type.front() == ' ' || type.front() == '\t')) type.erase(0, 1);
+    for (char& c : type) c = char(std::tolower(static_cast<unsigned char>(c)));
+    if (type.empty() || type == "application/json" || type.ends_with("+json") ||
+        type == "text/plain" || type == "application/x-www-form-urlencoded")
+        return std::nullopt;
+    return make_problem(ProblemType::UnsupportedMedia,
+                        "this endpoint reads a JSON body; Content-Type '" + escape_for_log(type) +
+                            "' is not one it reads (send application/json)");
 }
 
 ApiResponse json_response(int status, const Json& body) {

@@ -48,6 +48,12 @@ ApiResponse json_response(int status, const Json& body);
 /// An application/problem+json answer with the problem's status (ends with a newline too).
 ApiResponse problem_response(const Problem& problem);
 
+/// For the endpoints whose body is JSON (edits, render, pick): nullopt when `content_type` may
+/// carry JSON (absent, application/json, any +json type, and text/plain and
+/// application/x-www-form-urlencoded, which curl and browsers send for a bare body); otherwise a
+/// 415 unsupported-media-type naming it (multipart/form-data, images, ...).
+std::optional<Problem> json_body_type_problem(std::optional<std::string_view> content_type);
+
 /// The entity tag of a scene version: "N" with the quotes.
 std::string etag(uint64_t version);
 /// `r` with the ETag of `version`.

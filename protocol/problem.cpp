@@ -34,6 +34,7 @@ constexpr TypeInfo TYPES[] = {
     {"request-timeout", "Request timeout", 408},
     {"uri-too-long", "URI too long", 414},
     {"unsupported-encoding", "Unsupported content encoding", 415},
+    {"unsupported-media-type", "Unsupported media type", 415},
     {"expectation-failed", "Expectation failed", 417},
     {"too-many-connections", "Too many connections", 429},
     {"headers-too-large", "Request header fields too large", 431},

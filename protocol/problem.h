@@ -38,6 +38,7 @@ enum class ProblemType : uint8_t {
     RequestTimeout,       ///< 408 the request did not arrive in time (headers or body)
     UriTooLong,           ///< 414 the request target is longer than the limit
     UnsupportedEncoding,  ///< 415 a Content-Encoding the server does not decode
+    UnsupportedMedia,     ///< 415 a body type the endpoint does not read (multipart, ...)
     ExpectationFailed,    ///< 417 an Expect other than 100-continue
     TooManyConnections,   ///< 429 this client already holds its share of connections
     HeadersTooLarge,      ///< 431 too many header fields, or too many bytes of them

@@ -1,7 +1,7 @@
 #include "protocol/render_parser.h"
 
-#include <cerrno>
-#include <cstdlib>
+#include <charconv>
+#include <string_view>
 
 #include "protocol/json_fields.h"
 
@@ -90,16 +90,39 @@ RenderRequest read_render(FieldReader& r, const Json& v, uint32_t* split) {
     return q;
 }
 
+/// True when `t` is a decimal number as JSON writes one (RFC 8259, leading zeros allowed): no
+/// sign but '-', no spaces, no hexadecimal, no "inf" or "nan".
+bool is_decimal_number(std::string_view t) {
+    std::size_t i = 0;
+    const auto digits = [&] {
+        const std::size_t start = i;
+        while (i < t.size() && t[i] >= '0' && t[i] <= '9') ++i;
+        return i > start;
+    };
+    if (i < t.size() && t[i] == '-') ++i;
+    if (!digits()) return false;
+    if (i < t.size() && t[i] == '.') {
+        ++i;
+        if (!digits()) return false;
+    }
+    if (i < t.size() && (t[i] == 'e' || t[i] == 'E')) {
+        ++i;
+        if (i < t.size() && (t[i] == '+' || t[i] == '-')) ++i;
+        if (!digits()) return false;
+    }
+    return i == t.size();
+}
+
 /// A query value as the JSON it stands for: a number, a boolean or (failing both) a string, so
-/// the body reader reports type errors for queries too.
+/// the body reader reports type errors for queries too. Numbers are decimal only: `0x10` and
+/// ` 16` are strings, hence type errors.
 Json scalar_from_text(const std::string& text) {
     if (text == "true") return true;
     if (text == "false") return false;
-    if (!text.empty()) {
-        errno = 0;
-        char* end = nullptr;
-        const double d = std::strtod(text.c_str(), &end);
-        if (*end == '\0' && errno != ERANGE) {
+    if (is_decimal_number(text)) {
+        double d = 0;
+        const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), d);
+        if (ec == std::errc() && end == text.data() + text.size()) {
             // Range first: converting a double beyond uint64_t is undefined behaviour.
             if (d >= 0 && d < 1.8e19 && d == double(uint64_t(d))) return uint64_t(d);
             return d;

@@ -109,6 +109,17 @@ RouteTable::Handler after_min_version(ServerContext& ctx, Handler handler) {
     };
 }
 
+/// A POST route whose body is JSON: other body types are 415 before the handler runs.
+template <class Handler>
+RouteTable::Handler json_body(Handler handler) {
+    return [handler = std::move(handler)](RouteCall& call) -> Reply {
+        if (auto problem =
+                protocol::json_body_type_problem(call.request.header_value("Content-Type")))
+            return *problem;
+        return handler(call);
+    };
+}
+
 void add_scene_object_routes(RouteTable& routes, ServerContext& ctx, const char* collection,
                              protocol::SceneObject kind) {
     const std::string path = std::string("/v1/scene/") + collection;
@@ -143,11 +154,12 @@ MetricsSnapshot metrics_snapshot(const ServerContext& ctx) {
 }
 
 void add_write_routes(RouteTable& routes, ServerContext& ctx) {
-    routes.post("/v1/edits", [&ctx](RouteCall& call) {
-        HttpRequest& req = call.request;
-        return protocol::post_edits(ctx.engine, std::move(req.body), req.header_value("If-Match"),
-                                    ctx.api_limits, ctx.batch_apply());
-    });
+    routes.post("/v1/edits", json_body([&ctx](RouteCall& call) {
+                    HttpRequest& req = call.request;
+                    return protocol::post_edits(ctx.engine, std::move(req.body),
+                                                req.header_value("If-Match"), ctx.api_limits,
+                                                ctx.batch_apply());
+                }));
     routes.post("/v1/assets", [&ctx](RouteCall& call) {
         HttpRequest& req = call.request;
         return protocol::post_assets(ctx.engine, std::move(req.body), req.query,
@@ -165,12 +177,12 @@ void add_write_routes(RouteTable& routes, ServerContext& ctx) {
 }
 
 void add_render_routes(RouteTable& routes, ServerContext& ctx) {
-    routes.post("/v1/render", after_min_version(ctx, [&ctx](RouteCall& call) {
+    routes.post("/v1/render", json_body(after_min_version(ctx, [&ctx](RouteCall& call) {
                     return rendered(ctx, [&] {
                         return protocol::post_render(ctx.engine, call.request.body, ctx.api_limits,
                                                      call.context.cancel, ctx.split());
                     });
-                }));
+                })));
     routes.get("/v1/render", [&ctx](RouteCall& call) -> Reply {
         if (call.request.method == "HEAD") {
             // Its headers (ETag, size, rebuild summary) exist only once the frame is rendered.
@@ -190,9 +202,9 @@ void add_render_routes(RouteTable& routes, ServerContext& ctx) {
     routes.get("/v1/pick", after_min_version(ctx, [&ctx](RouteCall& call) {
                    return protocol::get_pick(ctx.engine, call.request.query);
                }));
-    routes.post("/v1/pick", after_min_version(ctx, [&ctx](RouteCall& call) {
+    routes.post("/v1/pick", json_body(after_min_version(ctx, [&ctx](RouteCall& call) {
                     return protocol::post_pick(ctx.engine, call.request.body, ctx.api_limits);
-                }));
+                })));
 }
 
 void add_read_routes(RouteTable& routes, ServerContext& ctx) {

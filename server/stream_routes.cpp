@@ -133,6 +133,18 @@ std::optional<protocol::Problem> unknown_highlight(ServerContext& ctx, const std
     return p;
 }
 
+/// The problem of a camera override the scene's camera cannot be completed into a usable one.
+std::optional<protocol::Problem> unusable_camera(ServerContext& ctx, const RenderRequest& r) {
+    if (!r.camera) return std::nullopt;
+    const Status usable = ctx.engine.read([&](const Scene& s) -> Status {
+        auto camera = resolve_camera(r.camera, s.camera());
+        if (!camera) return Unexpected(camera.error());
+        return {};
+    });
+    if (usable) return std::nullopt;
+    return protocol::problem_from(usable.error());
+}
+
 Reply open_frame_stream(ServerContext& ctx, RouteCall& call) {
     if (auto refusal = refuse_head(call.request)) return std::move(*refusal);
     auto parsed = parse_viewer(call.request.query, ctx.api_limits);
@@ -140,6 +152,9 @@ Reply open_frame_stream(ServerContext& ctx, RouteCall& call) {
     // An unknown instance is refused at once (a typo would otherwise tint nothing, silently);
     // one removed later simply stops being tinted.
     if (auto p = unknown_highlight(ctx, std::get<ViewerSpec>(parsed).highlight)) return *p;
+    // So is a camera no frame can be rendered with: answered now, not by a stream that starts
+    // and then sends nothing.
+    if (auto p = unusable_camera(ctx, std::get<ViewerSpec>(parsed).request)) return *p;
     auto channel =
         ctx.streams ? ctx.streams->watch(std::move(std::get<ViewerSpec>(parsed))) : nullptr;
     if (!channel) return stream_unavailable();

@@ -55,8 +55,22 @@ std::size_t utf8_length(std::string_view text) {
     return n;
 }
 
+namespace {
+
+/// Bytes of printable ASCII at the start of `text`: the common case, checked a byte at a time
+/// without decoding.
+std::size_t printable_ascii_prefix(std::string_view text) {
+    std::size_t i = 0;
+    while (i < text.size() && static_cast<unsigned char>(text[i]) - 0x20u < 0x5Fu) ++i;
+    return i;
+}
+
+}  // namespace
+
 const char* id_problem(std::string_view id) {
     if (id.empty()) return "is empty";
+    if (printable_ascii_prefix(id) == id.size())
+        return id.size() > MAX_ID_CODE_POINTS ? "is longer than 256 characters" : nullptr;
     if (const char* why = text_problem(id, 4 * MAX_ID_CODE_POINTS)) return why;
     if (utf8_length(id) > MAX_ID_CODE_POINTS) return "is longer than 256 characters";
     return nullptr;
@@ -64,6 +78,7 @@ const char* id_problem(std::string_view id) {
 
 const char* text_problem(std::string_view text, std::size_t max_bytes) {
     if (text.size() > max_bytes) return "is too long";
+    text.remove_prefix(printable_ascii_prefix(text));
     while (!text.empty()) {
         const std::size_t n = utf8_sequence_length(text);
         if (n == 0) return "is not valid UTF-8";

@@ -41,14 +41,12 @@ std::string limits_text(const Limits& l) {
            (l.hi_open ? ")" : "]");
 }
 
-Status check_value(const FieldInfo& info, float v) {
+Status refuse_number(const FieldInfo& info, float v) {
     if (!std::isfinite(v)) return refuse(ErrorCode::NotFinite, info, "is NaN or infinite");
-    if (!info.limits.contains(v))
-        return refuse(ErrorCode::InvalidArgument, info, "must be " + limits_phrase(info.limits));
-    return {};
+    return refuse(ErrorCode::InvalidArgument, info, "must be " + limits_phrase(info.limits));
 }
 
-Status check_value(const FieldInfo& info, const Vec3& v) {
+Status refuse_vector(const FieldInfo& info, const Vec3& v) {
     if (!is_finite(v)) return refuse(ErrorCode::NotFinite, info, "has a NaN or infinite component");
     for (int i = 0; i < 3; ++i) {
         if (!info.limits.contains(v[i]))
@@ -58,7 +56,7 @@ Status check_value(const FieldInfo& info, const Vec3& v) {
     return {};
 }
 
-Status check_value(const FieldInfo& info, const std::string& v) {
+Status check_text(const FieldInfo& info, const std::string& v) {
     const double max = info.limits.has_hi() ? info.limits.hi : double(MAX_NAME_BYTES);
     if (const char* why = text_problem(v, std::size_t(max)))
         return refuse(

@@ -13,6 +13,7 @@
 // and nested objects (a material's sampler, a mesh's build options, a mesh's arrays), which have
 // rules of their own next to their op.
 
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <optional>
@@ -216,9 +217,24 @@ bool update_sets(const typename K::Update& u, DirtyBits<typename K::Dirty> bits)
 
 /// Checks one value against its row: numbers and vector components finite and within the
 /// limits, text well-formed and short enough, transforms invertible. The error names the field.
-Status check_value(const FieldInfo& info, float v);
-Status check_value(const FieldInfo& info, const Vec3& v);
-Status check_value(const FieldInfo& info, const std::string& v);
+Status refuse_number(const FieldInfo& info, float v);
+Status refuse_vector(const FieldInfo& info, const Vec3& v);
+inline Status check_value(const FieldInfo& info, float v) {
+    if (std::isfinite(v) && info.limits.contains(v)) return {};
+    return refuse_number(info, v);
+}
+inline Status check_value(const FieldInfo& info, const Vec3& v) {
+    if (is_finite(v) && info.limits.contains(v.x) && info.limits.contains(v.y) &&
+        info.limits.contains(v.z))
+        return {};
+    return refuse_vector(info, v);
+}
+Status check_text(const FieldInfo& info, const std::string& v);
+/// Text: the empty text (no name) is the common case, checked inline.
+inline Status check_value(const FieldInfo& info, const std::string& v) {
+    if (v.empty()) return {};
+    return check_text(info, v);
+}
 Status check_value(const FieldInfo& info, const Affine& v);
 inline Status check_value(const FieldInfo&, bool) {
     return {};
@@ -236,13 +252,44 @@ Status check_value(const FieldInfo& info, E v) {
                    std::string(info.name));
 }
 
+/// Whether a value keeps its row's rule: the accepted case, with no Status built (this runs for
+/// every field of every edit). check_value() says why when it does not.
+inline bool value_ok(const FieldInfo& info, float v) {
+    return std::isfinite(v) && info.limits.contains(v);
+}
+inline bool value_ok(const FieldInfo& info, const Vec3& v) {
+    return is_finite(v) && info.limits.contains(v.x) && info.limits.contains(v.y) &&
+           info.limits.contains(v.z);
+}
+inline bool value_ok(const FieldInfo& info, const std::string& v) {
+    return v.empty() || check_text(info, v).has_value();
+}
+inline bool value_ok(const FieldInfo&, const Affine& v) {
+    return transform_problem(v) == nullptr;
+}
+inline bool value_ok(const FieldInfo&, bool) {
+    return true;
+}
+inline bool value_ok(const FieldInfo&, uint32_t) {
+    return true;
+}
+template <class E>
+requires std::is_enum_v<E>
+bool value_ok(const FieldInfo& info, E v) {
+    return static_cast<std::size_t>(v) < info.choices.size();
+}
+
 /// Checks every field of `v` (the kind's Record or Add); the first refusal comes back.
 template <class K, class V>
 Status check_fields(const V& v) {
     Status result;
-    for_each_field<K>([&](const auto& row) {
-        if (result) result = check_value(row.info, field_in(row, v));
-    });
+    std::apply(
+        [&](const auto&... row) {
+            (void)((value_ok(row.info, field_in(row, v)) ||
+                    (result = check_value(row.info, field_in(row, v)), false)) &&
+                   ...);
+        },
+        FIELDS<K>);
     return result;
 }
 
@@ -250,10 +297,17 @@ Status check_fields(const V& v) {
 template <class K>
 Status check_update(const typename K::Update& u) {
     Status result;
-    for_each_field<K>([&](const auto& row) {
-        if (!result || !row.update) return;
-        if (const auto& set = u.*(row.update)) result = check_value(row.info, *set);
-    });
+    const auto ok = [&](const auto& row) {
+        if constexpr (std::is_same_v<typename K::Update, NoUpdate>) {
+            return true;
+        } else {
+            const auto& set = u.*(row.update);
+            if (!set || value_ok(row.info, *set)) return true;
+            result = check_value(row.info, *set);
+            return false;
+        }
+    };
+    std::apply([&](const auto&... row) { (void)(ok(row) && ...); }, FIELDS<K>);
     return result;
 }
 

@@ -402,8 +402,9 @@ Status Scene::apply_edit(UpdateMaterial&& e, UndoLog& undo) {
         texture = found.value();
     }
 
-    undo.records.emplace_back(undo::MaterialState{h, r.material, r.dirty, r.base_color_texture});
-    r.material = updated;
+    undo.records.emplace_back(
+        undo::MaterialState{h, std::move(r.material), r.dirty, r.base_color_texture});
+    r.material = std::move(updated);
     r.base_color_texture = texture;
     mark(h, MaterialDirty::Params);
     return {};
@@ -548,8 +549,9 @@ Status Scene::apply_edit(SetTransform&& e, UndoLog& undo) {
     static const FieldInfo& TRANSFORM = field_info<InstanceFields>("transform");
     if (Status s = check_value(TRANSFORM, e.transform); !s) return s;
 
-    save_instance(h, undo);
-    m_instances.at(h).transform = e.transform;
+    InstanceRecord& r = m_instances.at(h);
+    undo.records.emplace_back(undo::InstanceTransform{h, r.transform, r.dirty});
+    r.transform = e.transform;
     mark(h, InstanceDirty::Transform);
     mark_instance_world(h);
     return {};
@@ -622,8 +624,8 @@ Status Scene::apply_edit(UpdateLight&& e, UndoLog& undo) {
     apply_to(updated, e);
     if (Status s = check_light(updated); !s) return s;
 
-    undo.records.emplace_back(undo::LightState{h, r.light});
-    r.light = updated;
+    undo.records.emplace_back(undo::LightState{h, std::move(r.light)});
+    r.light = std::move(updated);
     m_changes.mark(SceneDirty::Lights);
     return {};
 }

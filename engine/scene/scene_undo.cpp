@@ -163,6 +163,12 @@ struct Reverser {
         if (r.uvs) mesh.uvs = std::move(*r.uvs);
     }
 
+    void operator()(undo::InstanceTransform& r) {
+        InstanceRecord& inst = instances.at(r.handle);
+        inst.transform = r.transform;
+        inst.dirty = r.dirty;
+    }
+
     void operator()(undo::InstanceState& r) {
         InstanceRecord& inst = instances.at(r.handle);
         inst.material = r.material;

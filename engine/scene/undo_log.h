@@ -73,6 +73,14 @@ struct InstanceState {
     DirtyBits<InstanceDirty> dirty;
 };
 
+/// An instance's transform before set_transform replaced it (the hot path of moving instances:
+/// it saves only what that op overwrites).
+struct InstanceTransform {
+    InstanceHandle handle;
+    Affine transform;
+    DirtyBits<InstanceDirty> dirty;
+};
+
 /// A group's editable state before an edit changed it.
 struct GroupState {
     GroupHandle handle;
@@ -110,10 +118,11 @@ using UndoRecord = std::variant<
     undo::Removed<MeshHandle, MeshRecord>, undo::Removed<InstanceHandle, InstanceRecord>,
     undo::Removed<MaterialHandle, MaterialRecord>, undo::MeshDirty, undo::MeshPositions,
     undo::MeshPositionsReplaced, undo::MeshTopology, undo::MeshAttributes, undo::InstanceState,
-    undo::MaterialState, undo::Inserted<GroupHandle>, undo::Removed<GroupHandle, GroupRecord>,
-    undo::GroupState, undo::Reparented<InstanceHandle>, undo::Reparented<GroupHandle>,
-    undo::Inserted<TextureHandle>, undo::Removed<TextureHandle, TextureRecord>,
-    undo::Inserted<LightHandle>, undo::Removed<LightHandle, LightRecord>, undo::LightState>;
+    undo::InstanceTransform, undo::MaterialState, undo::Inserted<GroupHandle>,
+    undo::Removed<GroupHandle, GroupRecord>, undo::GroupState, undo::Reparented<InstanceHandle>,
+    undo::Reparented<GroupHandle>, undo::Inserted<TextureHandle>,
+    undo::Removed<TextureHandle, TextureRecord>, undo::Inserted<LightHandle>,
+    undo::Removed<LightHandle, LightRecord>, undo::LightState>;
 
 /// Everything needed to take one batch back.
 struct UndoLog {

@@ -101,8 +101,8 @@ TEST(Names, ARenameIsUndoneWithItsBatch) {
 }
 
 TEST(Names, ANameBreakingTheTextRuleIsRefusedOnEveryWayIn) {
-    for (const std::string bad : {std::string("m\xff"), std::string("two\nlines"),
-                                  std::string("esc\x1b[31m"), std::string(1025, 'x')}) {
+    for (const std::string& bad : {std::string("m\xff"), std::string("two\nlines"),
+                                   std::string("esc\x1b[31m"), std::string(1025, 'x')}) {
         SCOPED_TRACE(bad.size() > 20 ? "long name" : bad);
         // Straight into apply, as the JSON parser hands it on.
         Scene s;

@@ -102,9 +102,9 @@ TEST(Ids, ASnapshotWhoseIdsBreakTheIdRuleIsRefusedAndChangesNothing) {
     auto engine = std::move(Engine::create().value());
     ASSERT_TRUE(engine->apply(EditBatch{{add_mesh_edit("ball", make_sphere(1.0f, 8), {})}})
                     .has_value());
-    for (const std::string bad : {std::string("m\xff"), std::string("cr\rlf\n"),
-                                  std::string("esc\x1b[2J"), std::string("\xe2\x80\xa8"),
-                                  std::string(1 << 20, 'x'), std::string()}) {
+    for (const std::string& bad :
+         {std::string("m\xff"), std::string("cr\rlf\n"), std::string("esc\x1b[2J"),
+          std::string("\xe2\x80\xa8"), std::string(1 << 20, 'x'), std::string()}) {
         SCOPED_TRACE(bad.size() > 20 ? "a 1 MB id" : bad);
         EditBatch scene;
         scene.edits.push_back(add_mesh_edit(bad, make_sphere(1.0f, 8), {}));
@@ -125,7 +125,7 @@ TEST(Ids, ASnapshotWhoseIdsBreakTheIdRuleIsRefusedAndChangesNothing) {
     scene.edits.push_back(i);
     const ApiResponse r = post_snapshot(*engine, snapshot_of(std::move(scene)), std::nullopt);
     EXPECT_EQ(r.status, 422) << r.body;
-    EXPECT_NO_THROW((void)Json::parse(r.body));
+    EXPECT_TRUE(Json::accept(r.body)) << "the problem is valid JSON";
 }
 
 }  // namespace

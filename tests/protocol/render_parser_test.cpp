@@ -61,6 +61,24 @@ TEST(RenderParser, ErrorsPointAtTheMemberOrParameter) {
     EXPECT_EQ(parse_render_query({{"eye", "1,2"}}).error().pointer, "/camera/eye");
 }
 
+TEST(RenderParser, QueryNumbersAreDecimalOnly) {
+    for (const char* text : {"0x10", " 16", "16 ", "+16", "inf", "nan", "1e", "1.", ".5", "--1"}) {
+        auto r = parse_render_query({{"width", text}});
+        ASSERT_FALSE(r.has_value()) << "'" << text << "'";
+        EXPECT_EQ(r.error().pointer, "/width") << text;
+        EXPECT_EQ(r.error().kind, RequestErrorKind::Schema) << text;
+    }
+    for (const char* text : {"16", "016", "1.6e1", "16.0"}) {
+        auto r = parse_render_query({{"width", text}});
+        ASSERT_TRUE(r.has_value()) << "'" << text << "': " << r.error().message;
+        EXPECT_EQ(r.value().width, 16u) << text;
+    }
+    auto eye = parse_render_query({{"eye", "1,-2.5,3e-1"}});
+    ASSERT_TRUE(eye.has_value()) << eye.error().message;
+    EXPECT_EQ(eye.value().camera->eye, Vec3(1, -2.5f, 0.3f));
+    EXPECT_FALSE(parse_render_query({{"eye", "1,0x2,3"}}).has_value());
+}
+
 TEST(RenderParser, QueriesTheFuzzerFoundAreRefusedCleanly) {
     // "camera" as a parameter made the eye's slot index into a string (a type_error, so a 500).
     auto camera = parse_render_query({{"camera", "exr"}, {"eye", "1,1,0"}});

@@ -384,6 +384,12 @@ TEST(StreamEndpoint, BadParametersAreRefusedWithAProblemNamingThem) {
     expect_problem(s.get("/v1/stream?band=0,4"), 400, "invalid-request", "/band");
     expect_problem(s.get("/v1/stream?split=2"), 400, "invalid-request", "/split");
     expect_problem(s.get("/v1/stream?highlight=no-such-instance"), 404, "not-found", "/highlight");
+    // A camera no frame can be rendered with is refused before the stream starts, not answered
+    // 200 and then left silent.
+    expect_problem(s.get("/v1/stream?eye=3e38,0,0&target=-3e38,0,0"), 422, "invalid-value",
+                   "/camera/eye");
+    expect_problem(s.get("/v1/stream?eye=0,2,8&target=0,2,8"), 422, "invalid-value",
+                   "/camera/target");
 }
 
 /// A stream part decoded to packed RGB. Fast upsampling: a pixel's chroma comes from its own

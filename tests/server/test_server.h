@@ -75,6 +75,12 @@ public:
         auto c = client();
         return to_reply(c.Post(path.c_str(), h, body, "application/json"));
     }
+    /// POST with the body typed `content_type`.
+    Reply post_as(const std::string& path, const std::string& body,
+                  const std::string& content_type) const {
+        auto c = client();
+        return to_reply(c.Post(path.c_str(), body, content_type.c_str()));
+    }
     Reply post(const std::string& path, const Json& body, const httplib::Headers& h = {}) const {
         return post(path, body.dump(), h);
     }
