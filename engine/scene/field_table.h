@@ -203,16 +203,6 @@ typename K::Update update_to(const typename K::Record& r) {
     return u;
 }
 
-/// True when the update sets any field whose row marks one of `bits`.
-template <class K>
-bool update_sets(const typename K::Update& u, DirtyBits<typename K::Dirty> bits) {
-    bool any = false;
-    for_each_field<K>([&](const auto& row) {
-        if (row.update && (u.*(row.update)).has_value() && (bits & row.dirty).any()) any = true;
-    });
-    return any;
-}
-
 // Step: value checks -------------------------------------------------------------------------
 
 /// Checks one value against its row: numbers and vector components finite and within the

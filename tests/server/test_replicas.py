@@ -94,6 +94,12 @@ class Replicas(unittest.TestCase):
         for frame in frames:
             self.assertEqual(frame, frames[0], "frames differ between replicas")
 
+    def append_entry(self, record, version):
+        """Appends `record` to the log as the entry of `version`, as a writer would."""
+        self.redis.command("XADD", self.stream, f"{version}-0", "v", str(version), "t", "0",
+                           "r", record)
+        self.redis.command("SET", self.stream + ":version", str(version))
+
     def stopped_detail(self, server):
         """Waits (10 s at most) for `server` to stop following the log; its /readyz detail."""
         deadline = time.monotonic() + 10
@@ -210,10 +216,8 @@ class Replicas(unittest.TestCase):
         servers = self.replicas(2)
         n = self.stream_batches(servers, 0, 3)
         # An entry no Strata server wrote: a bad checksum.
-        self.redis.command("XADD", self.stream, f"{n + 1}-0", "v", str(n + 1), "t", "0",
-                           "r", b"\x04\x00\x00\x00\xde\xad\xbe\xef" + (n + 1).to_bytes(8, "little")
-                           + b"\x00\x00\x00\x00")
-        self.redis.command("SET", self.stream + ":version", str(n + 1))
+        self.append_entry(b"\x04\x00\x00\x00\xde\xad\xbe\xef" + (n + 1).to_bytes(8, "little")
+                          + b"\x00\x00\x00\x00", n + 1)
         for s in servers:
             self.assertIn("poisoned", self.stopped_detail(s))
             self.assertIn("strata_replica_stopped 1", s.call("GET", "/metrics")[2].decode())
@@ -255,9 +259,7 @@ class Replicas(unittest.TestCase):
         # Checksum and encoding are fine (one remove_instance, kind tag 9), but the instance does
         # not exist: applying it would fail on every replica.
         payload = (1).to_bytes(4, "little") + bytes([9]) + (4).to_bytes(4, "little") + b"nope"
-        self.redis.command("XADD", self.stream, f"{n + 1}-0", "v", str(n + 1), "t", "0",
-                           "r", log_entry(payload, n + 1))
-        self.redis.command("SET", self.stream + ":version", str(n + 1))
+        self.append_entry(log_entry(payload, n + 1), n + 1)
         for s in servers:
             detail = self.stopped_detail(s)
             self.assertIn(f"does not apply at version {n}", detail)
@@ -272,9 +274,7 @@ class Replicas(unittest.TestCase):
         light = struct.pack("<B3f3f3f5f", 0, 0, 3, 0, 0, -1, 0, 1, 1, 1, 10, 30, 25, 1, 1)
         payload = ((1).to_bytes(4, "little") + bytes([17]) + (2).to_bytes(4, "little") + b"m\xff"
                    + light)
-        self.redis.command("XADD", self.stream, f"{n + 1}-0", "v", str(n + 1), "t", "0",
-                           "r", log_entry(payload, n + 1))
-        self.redis.command("SET", self.stream + ":version", str(n + 1))
+        self.append_entry(log_entry(payload, n + 1), n + 1)
         for s in servers:
             detail = self.stopped_detail(s)
             self.assertIn(f"does not apply at version {n}", detail)
