@@ -4,6 +4,7 @@
 #include "engine/core/timer.h"
 #include "engine/durable/edit_codec.h"
 #include "engine/durable/journal.h"
+#include "engine/image/texture_decode.h"
 #include "engine/render/frame_encode.h"
 
 namespace strata {
@@ -28,6 +29,23 @@ bool releases_mesh_data(const EditBatch& batch) {
     return false;
 }
 
+/// Decodes the batch's textures before the scene lock is taken, so that a large image holds up
+/// no read; the decodes of one batch stay within the texture budget together. An image over the
+/// budget is left to the rule, which refuses it from its header with the exact room left.
+void decode_textures_ahead(EditBatch& batch, uint64_t budget) {
+    uint64_t left = budget;
+    for (Edit& edit : batch.edits) {
+        auto* e = std::get_if<AddTexture>(&edit);
+        if (!e || e->decoded) continue;
+        TextureLimits limits;
+        limits.max_bytes = left;
+        Result<TextureImage> image = decode_texture(e->data, limits);
+        if (!image && image.error().code == ErrorCode::TooLarge) continue;
+        if (image) left -= std::min(left, image->bytes());
+        e->decoded = std::make_shared<DecodedTexture>(DecodedTexture{std::move(image)});
+    }
+}
+
 }  // namespace
 
 Result<ApplyResult> Engine::apply(EditBatch&& batch) {
@@ -36,6 +54,7 @@ Result<ApplyResult> Engine::apply(EditBatch&& batch) {
 
 Result<ApplyResult> Engine::apply(EditBatch&& batch, std::optional<uint64_t> expected_version) {
     const std::size_t count = batch.edits.size();
+    decode_textures_ahead(batch, m_config.budget.max_texture_bytes);
     const bool frees_meshes = releases_mesh_data(batch);
     // The record is encoded before the apply moves the arrays out, and outside the lock.
     std::optional<durable::PendingRecord> record;
@@ -47,13 +66,16 @@ Result<ApplyResult> Engine::apply(EditBatch&& batch, std::optional<uint64_t> exp
             return failure(ErrorCode::VersionMismatch,
                            "the scene is at version " + std::to_string(m_scene.version()) +
                                ", not " + std::to_string(*expected_version));
-        if (!m_journal) return m_scene.apply(std::move(batch));
-        return m_scene.apply(std::move(batch), [&](uint64_t next) -> Status {
-            auto position = m_journal->append(*record, next);
-            if (!position) return Unexpected(position.error());
-            journal_position = position.value();
-            return {};
-        });
+        Result<uint64_t> applied =
+            !m_journal ? m_scene.apply(std::move(batch))
+                       : m_scene.apply(std::move(batch), [&](uint64_t next) -> Status {
+                             auto position = m_journal->append(*record, next);
+                             if (!position) return Unexpected(position.error());
+                             journal_position = position.value();
+                             return {};
+                         });
+        publish_version();
+        return applied;
     }();
     // Group commit: the fsync happens here, outside the scene lock.
     if (version && m_journal) {
@@ -74,6 +96,7 @@ Result<ApplyResult> Engine::apply(EditBatch&& batch, std::optional<uint64_t> exp
 }
 
 Status Engine::validate(EditBatch&& batch, uint64_t version) {
+    decode_textures_ahead(batch, m_config.budget.max_texture_bytes);
     std::unique_lock lock(m_scene_mutex);
     if (version != m_scene.version())
         return failure(ErrorCode::VersionMismatch,
@@ -96,6 +119,7 @@ Status Engine::restore(EditBatch&& scene, uint64_t version) {
     auto applied = m_scene.apply(std::move(scene));
     if (!applied) return Unexpected(applied.error());
     m_scene.restore_version(version);
+    publish_version();
     return {};
 }
 
@@ -116,6 +140,7 @@ Status Engine::restore_snapshot(std::string_view payload, uint64_t version) {
         return failure(ErrorCode::Internal, "restore needs an empty engine");
     Status s = load_snapshot(m_scene, payload, version);
     if (!s) m_scene.reset();
+    publish_version();
     return s;
 }
 
@@ -164,6 +189,7 @@ Result<SnapshotReplace> Engine::replace_with_snapshot(std::string_view payload, 
         }
         graph->set_refit_policy(m_accel->refit_policy());
         std::swap(m_scene, fresh);
+        publish_version();
         {
             std::lock_guard accel_lock(m_accel_mutex);
             std::swap(m_accel, graph);

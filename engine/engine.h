@@ -11,6 +11,7 @@
 //     state, which only a commit changes. Each render therefore sees exactly one version.
 //   Lock order is always launch, then scene.
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -146,6 +147,10 @@ public:
         return result;
     }
 
+    /// The scene's version, as the last apply, restore or replace left it. Takes no lock, so a
+    /// thread that must never wait for a long batch (the front end's event loop) can poll it.
+    uint64_t version() const { return m_version.load(std::memory_order_acquire); }
+
     /// Runs `f(const Scene&)` under the scene's read lock.
     template <class F>
     auto read(F&& f) const {
@@ -189,6 +194,9 @@ private:
     mutable std::mutex m_launch_mutex;
     mutable std::shared_mutex m_scene_mutex;
     Scene m_scene;
+    std::atomic<uint64_t> m_version{0};  ///< m_scene's version, stored under m_scene_mutex
+    /// Publishes m_scene's version to version(); called with m_scene_mutex held exclusively.
+    void publish_version() { m_version.store(m_scene.version(), std::memory_order_release); }
     /// Replaced only by replace_with_snapshot(), under the launch, scene and accel locks.
     std::unique_ptr<AccelGraph> m_accel;
     mutable std::mutex m_accel_mutex;  ///< lets memory_bytes() read m_accel during a replace

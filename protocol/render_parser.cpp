@@ -38,8 +38,7 @@ RenderRequest read_render(FieldReader& r, const Json& v, uint32_t* split) {
     u32("height", q.height, MAX_RENDER_SIDE);
     u32("spp", q.spp, MAX_RENDER_SPP);
     if (const Json* f = FieldReader::member(v, "format"))
-        q.format =
-            *parse_image_format(r.choice(*f, "/format", {"png", "exr"}) == 0 ? "png" : "exr");
+        q.format = ImageFormat(r.choice(*f, "/format", {"png", "exr", "npz"}));
     if (const Json* f = FieldReader::member(v, "compression")) {
         static constexpr std::string_view NAMES[] = {"none", "zip", "piz"};
         q.compression =

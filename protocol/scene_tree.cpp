@@ -7,6 +7,7 @@
 #include <unordered_map>
 
 #include "protocol/api.h"
+#include "protocol/field_json.h"
 #include "protocol/scene_json.h"
 
 namespace strata::protocol {
@@ -188,6 +189,7 @@ ApiResponse get_scene_tree(const Engine& engine,
                           {"world_visible", g.world_visible},
                           {"group_count", g.children.groups.size()},
                           {"instance_count", g.children.instances.size()}};
+                write_labels<GroupFields>(node, save_fields<GroupFields>(g));
                 if (levels > 0) node.update(self(self, h, levels - 1));
                 groups.push_back(std::move(node));
             }
@@ -198,10 +200,12 @@ ApiResponse get_scene_tree(const Engine& engine,
                 }
                 ++nodes;
                 const InstanceRecord& i = *s.instance(h).value();
-                instances.push_back(Json{{"id", i.id},
-                                         {"mesh", s.mesh(i.mesh).value()->id},
-                                         {"visible", i.visible},
-                                         {"world_visible", i.world_visible}});
+                Json node{{"id", i.id},
+                          {"mesh", s.mesh(i.mesh).value()->id},
+                          {"visible", i.visible},
+                          {"world_visible", i.world_visible}};
+                write_labels<InstanceFields>(node, save_fields<InstanceFields>(i));
+                instances.push_back(std::move(node));
             }
             return Json{{"groups", std::move(groups)}, {"instances", std::move(instances)}};
         };

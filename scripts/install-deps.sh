@@ -25,12 +25,13 @@ runtime_pkgs=(
 build_pkgs=(
     build-essential cmake ninja-build pkg-config git ca-certificates curl
     libembree-dev libglm-dev libopenexr-dev nlohmann-json3-dev libcpp-httplib-dev libtbb-dev
-    libgtest-dev libgmock-dev libbenchmark-dev libpng-dev libturbojpeg0-dev
+    libgtest-dev libgmock-dev libbenchmark-dev libpng-dev zlib1g-dev libturbojpeg0-dev
     libtinygltf-dev libtinyobjloader-dev libcli11-dev libspdlog-dev
     libhiredis-dev redis-server  # the shared edit log (server/replica) and its tests
     nginx  # test_compose_topology.py runs docker/nginx-replicas.conf as its child process
     clang libclang-rt-14-dev
     python3 python3-jsonschema python3-numpy python3-yaml
+    python3-venv python3-pip  # pip install ./clients/python (test_install.py)
     chromium python3-websocket  # browser tests of the viewer (ctest -L browser, DevTools protocol)
     assimp-testmodels mmdebstrap
     mount  # scripts/check-docker.sh mounts inside its root; minimal Debian roots lack it

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# Installs the offline Dockerfile linter that scripts/check-docker.sh runs: npm's
-# dockerfile-utils, exactly as pinned in docker/lint/package-lock.json, into
-# docker/lint/node_modules (gitignored; never a global install). Node.js and npm come from Debian's nodejs and npm packages
-# when npm is missing. Idempotent; installing Debian packages needs root (or sudo).
+# Installs the offline linters, exactly as pinned in docker/lint/package-lock.json, into
+# docker/lint/node_modules (gitignored; never a global install): npm's dockerfile-utils, which
+# scripts/check-docker.sh runs on docker/Dockerfile, and @seriousme/openapi-schema-validator, which
+# tests/protocol/check_openapi.py runs on GET /v1/openapi.json. Node.js and npm come from Debian's
+# nodejs and npm packages when npm is missing. Idempotent; installing Debian packages needs root
+# (or sudo).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -16,13 +18,19 @@ if ! command -v npm >/dev/null; then
 fi
 
 lint=docker/lint
-wanted="$(node -p "require('./$lint/package-lock.json')
-                    .packages['node_modules/dockerfile-utils'].version")"
-installed="$(node -p "try { require('./$lint/node_modules/dockerfile-utils/package.json').version }
-                      catch (e) { '' }")"
-if [ "$installed" = "$wanted" ]; then
-    echo "install-lint-tools: dockerfile-utils $wanted present"
+# Every package pinned in the lockfile's top level must be installed at its pinned version.
+missing="$(node -e "
+    const lock = require('./$lint/package-lock.json');
+    for (const name of Object.keys(lock.packages[''].dependencies)) {
+        const wanted = lock.packages['node_modules/' + name].version;
+        let installed = '';
+        try { installed = require('./$lint/node_modules/' + name + '/package.json').version; }
+        catch (e) {}
+        if (installed !== wanted) console.log(name + '@' + wanted);
+    }")"
+if [ -z "$missing" ]; then
+    echo "install-lint-tools: the pinned linters are present"
 else
-    echo "install-lint-tools: installing dockerfile-utils $wanted into $lint/node_modules"
+    echo "install-lint-tools: installing" $missing "into $lint/node_modules"
     npm ci --prefix "$lint" --ignore-scripts --no-audit --no-fund --loglevel=error
 fi

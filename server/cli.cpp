@@ -74,8 +74,16 @@ void add_replication_options(CLI::App& app, ServerConfig& c) {
         ->check(CLI::Range(100, 600000));
     app.add_option("--min-version-wait-ms", c.min_version_wait_ms,
                    "Longest a read with min_version (or X-Strata-Min-Version) waits for this "
-                   "server to reach that version (503 beyond)")
+                   "server to reach that version (503 beyond). The front end holds waiting "
+                   "reads, not a worker")
         ->check(CLI::Range(0, 600000));
+    app.add_option("--max-waiting-reads", c.max_waiting_reads,
+                   "Reads waiting for their min_version at once, over all clients (one more is "
+                   "answered 503 with Retry-After)")
+        ->check(CLI::Range(std::size_t(1), std::size_t(1) << 20));
+    app.add_option("--max-waiting-reads-per-client", c.max_waiting_reads_per_client,
+                   "Reads waiting for their min_version at once from one client IP address")
+        ->check(CLI::Range(std::size_t(1), std::size_t(1) << 20));
     app.add_option("--peers", c.peers,
                    "Other servers holding the same scene (replicas of the same --log), as "
                    "comma-separated http://host:port: GET /v1/render?split=N renders horizontal "
@@ -185,7 +193,13 @@ void add_access_options(CLI::App& app, CommandLine& cl) {
 
 /// The scene the server starts with and how its top-level acceleration structure is kept.
 void add_scene_options(CLI::App& app, ServerConfig& c) {
-    app.add_flag("--demo", c.demo, "Start with the demo scene");
+    app.add_flag("--demo", c.demo,
+                 "Start with the demo scene (ignored when the data directory or the edit log "
+                 "holds a scene)");
+    app.add_flag("--demo-reset", c.demo_reset,
+                 "Start with the demo scene in place of whatever the data directory or the edit "
+                 "log holds: one batch (clear, then the demo) applied as the next version, so the "
+                 "old scene stays in the journal's history");
     app.add_option("--tlas", c.tlas,
                    "TLAS strategy: incremental (a commit costs what its instance edits touch) or "
                    "embree (Embree rebuilds its whole instance BVH on any change; the reference)")

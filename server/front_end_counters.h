@@ -17,6 +17,8 @@ struct FrontEndCounters {
     std::atomic<uint64_t> connections_refused{0};  ///< closed at once: over every limit
     std::atomic<uint64_t> timeouts{0};             ///< 408s and abandoned writes
     std::atomic<uint64_t> clients_gone{0};  ///< clients that left while a worker had their request
+    std::atomic<uint64_t> reads_waiting{0};  ///< held until the scene reaches their min_version
+    std::atomic<uint64_t> waits_refused{0};  ///< 503s: too many reads waiting already
 };
 
 }  // namespace strata::server

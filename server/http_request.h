@@ -2,6 +2,7 @@
 // A request as the front end hands it to a worker: read in full and checked (request_reader.h),
 // its target normalised and its query decoded (request_target.h).
 
+#include <cstdint>
 #include <map>
 #include <optional>
 #include <string>
@@ -30,6 +31,14 @@ struct HttpRequest {
     const std::string* header(std::string_view name) const;
     /// The same as an optional copy.
     std::optional<std::string> header_value(std::string_view name) const;
+    /// What `min_version` (query, first) or X-Strata-Min-Version (header) asks for.
+    struct MinVersion {
+        std::string text;     ///< as sent
+        bool valid = false;   ///< a whole number
+        uint64_t version = 0;  ///< when valid
+    };
+    /// Nullopt when the request asks for no version.
+    std::optional<MinVersion> min_version() const;
     /// Bytes held by this request (what the front end counts against --max-buffered-mb).
     std::size_t held_bytes() const;
 };

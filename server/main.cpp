@@ -132,16 +132,21 @@ server::Readiness replica_readiness(const replica::Replica* f) {
     return r;
 }
 
-/// Starts the graceful shutdown of `http` at the first SIGINT or SIGTERM.
+/// Starts the graceful shutdown of `http` at the first SIGINT or SIGTERM. The process exits
+/// --shutdown-grace plus two seconds later at the latest (in-flight renders are stopped at the
+/// grace, the front end closes a second later, the rest is the journal and threads finishing).
 void stop_on_signal(server::ShutdownSignals& signals, server::Server& http,
                     const server::ServerConfig& c) {
-    signals.start([&http, &c](int signo) {
-        spdlog::info(
-            "{} received: finishing in-flight requests (renders still running after {} "
-            "s are stopped; a second signal exits at once)",
-            signo == SIGINT ? "SIGINT" : "SIGTERM", c.shutdown_grace_s);
-        http.stop();
-    });
+    const auto exit_after = std::chrono::seconds(c.shutdown_grace_s + 2);
+    signals.start(
+        [&http, &c](int signo) {
+            spdlog::info(
+                "{} received: finishing in-flight requests (renders still running after {} s "
+                "are stopped; a second signal exits at once)",
+                signo == SIGINT ? "SIGINT" : "SIGTERM", c.shutdown_grace_s);
+            http.stop();
+        },
+        exit_after);
 }
 
 /// Logs where the server listens, how clients authenticate and where the viewer is.
@@ -172,31 +177,40 @@ std::unique_ptr<replica::Replica> follow_edit_log(const server::ServerConfig& c,
     return follow;
 }
 
-/// The demo scene's batch; a logged reason when it cannot be built.
-Result<EditBatch> demo_scene() {
+/// The demo scene's batch, after a `clear` when `reset`; a logged reason when it cannot be
+/// built.
+Result<EditBatch> demo_scene(bool reset) {
     auto batch = demo::scene_with_models();
-    if (!batch) spdlog::critical("demo scene not built: {}", batch.error().describe());
+    if (!batch) {
+        spdlog::critical("demo scene not built: {}", batch.error().describe());
+        return batch;
+    }
+    if (reset) batch->edits.insert(batch->edits.begin(), Clear{});
     return batch;
 }
 
-/// Appends the demo scene to an empty edit log only: one replica's demo wins, the others find
-/// it there. False when the demo scene cannot be built.
-bool append_demo_scene(replica::Replica& follow) {
-    auto batch = demo_scene();
+/// Appends the demo scene to an empty edit log only (one replica's demo wins, the others find
+/// it there), or with `reset` after whatever the log holds. False when the demo scene cannot be
+/// built.
+bool append_demo_scene(replica::Replica& follow, bool reset) {
+    auto batch = demo_scene(reset);
     if (!batch) return false;
-    auto applied = follow.append(std::move(batch.value()), uint64_t{0});
+    auto applied = follow.append(std::move(batch.value()),
+                                 reset ? std::nullopt : std::optional<uint64_t>(0));
     if (applied)
         spdlog::info("demo scene appended to the edit log (version {})", applied.value().version);
     else if (applied.error().code == ErrorCode::VersionMismatch)
-        spdlog::info("--demo ignored: the edit log holds a scene already");
+        spdlog::info("--demo ignored: the edit log holds a scene already (--demo-reset "
+                     "replaces it)");
     else
         spdlog::warn("demo scene not appended: {}", applied.error().message);
     return true;
 }
 
-/// Applies the demo scene to the engine. False when it cannot be built or the engine rejects it.
-bool apply_demo_scene(Engine& engine) {
-    auto batch = demo_scene();
+/// Applies the demo scene to the engine (after a `clear` when `reset`). False when it cannot be
+/// built or the engine rejects it.
+bool apply_demo_scene(Engine& engine, bool reset) {
+    auto batch = demo_scene(reset);
     if (!batch) return false;
     auto applied = engine.apply(std::move(batch.value()));
     if (!applied) {
@@ -208,14 +222,18 @@ bool apply_demo_scene(Engine& engine) {
 }
 
 /// Starts with the demo scene (--demo): through the edit log when following one, else in the
-/// engine unless the data directory recovered a scene. False when the server cannot go on.
-bool load_demo_scene(replica::Replica* follow, Engine& engine, uint64_t recovered) {
-    if (follow) return append_demo_scene(*follow);
-    if (recovered != 0) {
-        spdlog::info("--demo ignored: the data directory holds a scene (version {})", recovered);
+/// engine unless the data directory recovered a scene; with `reset` (--demo-reset) in place of
+/// any scene. False when the server cannot go on.
+bool load_demo_scene(replica::Replica* follow, Engine& engine, uint64_t recovered, bool reset) {
+    if (follow) return append_demo_scene(*follow, reset);
+    if (recovered != 0 && !reset) {
+        spdlog::info(
+            "--demo ignored: the data directory holds a scene (version {}); --demo-reset "
+            "replaces it with the demo",
+            recovered);
         return true;
     }
-    return apply_demo_scene(engine);
+    return apply_demo_scene(engine, reset);
 }
 
 /// Builds the acceleration structures of the scene recovered at version `recovered`, before
@@ -272,7 +290,8 @@ int serve(server::CommandLine& cl) {
     std::unique_ptr<replica::Replica> follow;
     if (!cl.config.log_url.empty())
         follow = follow_edit_log(cl.config, *engine, store.get(), recovered, http, follower);
-    if (cl.config.demo && !load_demo_scene(follow.get(), *engine, recovered)) {
+    const bool demo = cl.config.demo || cl.config.demo_reset;
+    if (demo && !load_demo_scene(follow.get(), *engine, recovered, cl.config.demo_reset)) {
         stop_serving();
         return 1;
     }

@@ -36,6 +36,12 @@ constexpr StatSpec<FrontEndCounters> FRONT_END_METRICS[] = {
     {STRATA_STAT(FrontEndCounters, clients_gone),
      "Clients that disconnected while their request was being handled (their renders stop).",
      StatUnit::Count, CUMULATIVE},
+    {STRATA_STAT(FrontEndCounters, reads_waiting),
+     "Reads the front end holds until the scene reaches their min_version.", StatUnit::Count,
+     CURRENT},
+    {STRATA_STAT(FrontEndCounters, waits_refused),
+     "Reads with a min_version answered 503 because too many were waiting already.",
+     StatUnit::Count, CUMULATIVE},
 };
 
 constexpr StatSpec<StreamHubStats> STREAM_METRICS[] = {

@@ -11,6 +11,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <optional>
 
 #include <spdlog/spdlog.h>
 
@@ -37,6 +38,8 @@ constexpr std::chrono::milliseconds TICK{20};
 /// channel (one pending, replaced by newer ones), not in the kernel: without a cap, send-buffer
 /// autotuning would queue megabytes of stale frames per viewer.
 constexpr int STREAM_SEND_BUFFER = 256 * 1024;
+/// How often waiting reads look at the scene's version.
+constexpr std::chrono::milliseconds WAIT_POLL{2};
 /// How long accept() pauses when the process is out of file descriptors.
 constexpr std::chrono::milliseconds ACCEPT_PAUSE{100};
 
@@ -69,7 +72,7 @@ Status syscall_failure(const char* call) {
 }  // namespace
 
 struct Reactor::Connection {
-    enum class Phase : uint8_t { Idle, Reading, Busy, Writing, Lingering, Streaming };
+    enum class Phase : uint8_t { Idle, Reading, Waiting, Busy, Writing, Lingering, Streaming };
 
     Connection(uint64_t id_, int fd_, std::string client_, const ReaderConfig& config)
         : id(id_), fd(fd_), client(std::move(client_)), reader(config) {}
@@ -80,11 +83,13 @@ struct Reactor::Connection {
     bool restricted = false;
     Phase phase = Phase::Idle;
     RequestReader reader;
-    Clock::time_point deadline{};         ///< Idle, Writing, Lingering; Reading: headers
+    Clock::time_point deadline{};  ///< Idle, Waiting, Writing, Lingering; Reading: headers
     Clock::time_point idle_deadline{};    ///< an Idle connection's (blank lines: no later)
     Clock::time_point read_deadline{};    ///< Reading: the whole request
     Clock::time_point started{};          ///< first byte of the current request
     std::shared_ptr<CancelToken> cancel;  ///< Busy
+    std::optional<PreparedRequest> parked;  ///< Waiting: the request, until its version arrives
+    uint64_t wanted = 0;                    ///< Waiting: its min_version
     std::string method = "-";             ///< of the current request, for the access log
     std::string path = "-";
     bool keep_alive = true;               ///< for the request a worker has
@@ -181,7 +186,8 @@ void Reactor::run() {
     if (m_epoll < 0) return;  // open() failed or was never called: nothing to serve
     std::vector<epoll_event> events(256);
     for (;;) {
-        const int n = epoll_wait(m_epoll, events.data(), int(events.size()), int(TICK.count()));
+        const int timeout = int((m_waiting.empty() ? TICK : WAIT_POLL).count());
+        const int n = epoll_wait(m_epoll, events.data(), int(events.size()), timeout);
         if (n < 0 && errno != EINTR) {
             spdlog::critical("epoll_wait: {}; the front end stops", std::strerror(errno));
             break;
@@ -202,6 +208,7 @@ void Reactor::run() {
         take_completions(now);
         take_ready_streams(now);
         if (m_drain_requested && !m_draining) begin_drain(now);
+        release_waiters(now);
         if (now - m_last_sweep >= TICK) sweep(now);
         if (m_draining && drain_finished(now)) break;
     }
@@ -276,6 +283,13 @@ void Reactor::on_event(Connection& c, uint32_t events, Clock::time_point now) {
         case Phase::Idle:
         case Phase::Reading:
             read_from(c, now);
+            return;
+        case Phase::Waiting:
+            // Watched with EPOLLONESHOT for the client leaving: nobody is left to answer.
+            if (events & (EPOLLRDHUP | EPOLLHUP | EPOLLERR)) {
+                ++m_counters.clients_gone;
+                close(c.id);
+            }
             return;
         case Phase::Busy:
             // Watched with EPOLLONESHOT for this alone: the client hung up, so whatever its
@@ -357,7 +371,7 @@ void Reactor::advance(Connection& c, Clock::time_point now) {
             case ReaderStep::Kind::Answer:
                 return answer(c, std::move(step.answer), now);
             case ReaderStep::Kind::Request:
-                return dispatch(c, std::move(step.request));
+                return dispatch_or_wait(c, std::move(step.request), now);
         }
     }
 }
@@ -390,6 +404,79 @@ void Reactor::dispatch(Connection& c, PreparedRequest&& request) {
     if (!watch(c, EPOLLRDHUP | EPOLLONESHOT)) return close(c.id);
     ++m_counters.requests_in_flight;
     m_dispatch(c.id, std::move(request), c.cancel, !c.keep_alive);
+}
+
+void Reactor::dispatch_or_wait(Connection& c, PreparedRequest&& request, Clock::time_point now) {
+    const std::optional<HttpRequest::MinVersion> asked = request.http.min_version();
+    // A malformed value is the route's 400; a reached one, or no wait allowed, runs at once.
+    if (!asked || !asked->valid || !m_version || m_draining || m_config.min_version_wait_ms == 0 ||
+        m_version() >= asked->version)
+        return dispatch(c, std::move(request));
+    const auto mine = m_waiting_per_client.find(c.client);
+    const std::size_t held = mine == m_waiting_per_client.end() ? 0 : mine->second;
+    if (m_waiting_total >= m_config.max_waiting_reads ||
+        held >= m_config.max_waiting_reads_per_client) {
+        ++m_counters.waits_refused;
+        protocol::ApiResponse refusal =
+            protocol::problem_response(protocol::make_problem(
+                protocol::ProblemType::Unavailable,
+                "too many reads are waiting for a min_version already (" +
+                    std::to_string(held) + " from this client, " +
+                    std::to_string(m_waiting_total) + " in all; --max-waiting-reads-per-client " +
+                    std::to_string(m_config.max_waiting_reads_per_client) +
+                    ", --max-waiting-reads " + std::to_string(m_config.max_waiting_reads) + ")"));
+        refusal.headers.emplace_back("Retry-After", "1");
+        DirectAnswer a;
+        a.status = refusal.status;
+        a.method = request.http.method;
+        a.path = request.http.path;
+        a.close = !request.keep_alive;
+        a.bytes = write_response(refusal, Framing{a.close, request.http.method == "HEAD",
+                                                  request.cors_origin});
+        return answer(c, std::move(a), now);
+    }
+    c.phase = Connection::Phase::Waiting;
+    c.wanted = asked->version;
+    c.deadline = now + std::chrono::milliseconds(m_config.min_version_wait_ms);
+    c.in_flight = request.http.held_bytes();
+    account(c);
+    c.parked = std::move(request);
+    ++m_waiting_per_client[c.client];
+    ++m_waiting_total;
+    ++m_counters.reads_waiting;
+    m_waiting.push_back(c.id);
+    if (!watch(c, EPOLLRDHUP | EPOLLONESHOT)) close(c.id);
+}
+
+void Reactor::stop_waiting(Connection& c) {
+    if (c.phase != Connection::Phase::Waiting) return;
+    if (auto it = m_waiting_per_client.find(c.client);
+        it != m_waiting_per_client.end() && --it->second == 0)
+        m_waiting_per_client.erase(it);
+    --m_waiting_total;
+    --m_counters.reads_waiting;
+}
+
+void Reactor::release_waiters(Clock::time_point now) {
+    if (m_waiting.empty()) return;
+    const uint64_t version = m_version();
+    std::vector<uint64_t> still;
+    for (uint64_t id : m_waiting) {
+        auto it = m_connections.find(id);
+        if (it == m_connections.end()) continue;  // closed: the client left
+        Connection& c = *it->second;
+        if (c.phase != Connection::Phase::Waiting) continue;
+        if (version < c.wanted && now < c.deadline && !m_draining) {
+            still.push_back(id);
+            continue;
+        }
+        // A worker answers now: the version arrived, or it says how far behind the scene is.
+        stop_waiting(c);
+        PreparedRequest request = std::move(*c.parked);
+        c.parked.reset();
+        dispatch(c, std::move(request));
+    }
+    m_waiting.swap(still);
 }
 
 void Reactor::take_completions(Clock::time_point now) {
@@ -480,6 +567,7 @@ void Reactor::close(uint64_t id) {
     auto it = m_connections.find(id);
     if (it == m_connections.end()) return;
     Connection& c = *it->second;
+    stop_waiting(c);
     if (c.cancel) c.cancel->cancel(CancelReason::ClientGone);
     if (c.stream) c.stream->detach();
     // Closing the descriptor removes it from the epoll set anyway; a failure here is only logged.
@@ -514,6 +602,7 @@ void Reactor::sweep(Clock::time_point now) {
     }
     std::vector<uint64_t> expired;
     for (auto& [id, c] : m_connections) {
+        if (c->phase == Phase::Waiting) continue;  // release_waiters() ends the wait
         if (c->phase == Phase::Busy) {
             if (m_draining && now >= m_grace_deadline && c->cancel)
                 c->cancel->cancel(CancelReason::Shutdown);
@@ -591,8 +680,8 @@ void Reactor::begin_drain(Clock::time_point now) {
 bool Reactor::drain_finished(Clock::time_point now) const {
     if (now >= m_hard_deadline) return true;
     for (const auto& [id, c] : m_connections) {
-        if (c->phase == Connection::Phase::Busy || c->phase == Connection::Phase::Writing ||
-            c->phase == Connection::Phase::Streaming)
+        if (c->phase == Connection::Phase::Waiting || c->phase == Connection::Phase::Busy ||
+            c->phase == Connection::Phase::Writing || c->phase == Connection::Phase::Streaming)
             return false;
     }
     return true;

@@ -6,10 +6,14 @@
 // busy only while a handler runs: slow, idle or hostile clients cost a file descriptor and their
 // buffered bytes (also capped), never a thread.
 //
-// Connection life: Idle (between requests) -> Reading -> Busy (a worker has the request; the
-// socket is watched only for the client leaving, which cancels a render) -> Writing -> Idle, or
+// Connection life: Idle (between requests) -> Reading -> [Waiting] -> Busy (a worker has the
+// request; the socket is watched only for the client leaving, which cancels a render) ->
+// Writing -> Idle, or
 // Lingering (write side shut, unread input discarded briefly so that the client reads the answer
 // instead of a reset) -> closed. Requests pipelined on one connection are served in order.
+// Waiting: a request asking for a min_version the scene has not reached is held here, not on
+// a worker, until the version arrives or --min-version-wait-ms passes (then a worker answers,
+// 503 when still behind); at most --max-waiting-reads in all and per client, one more gets 503.
 // A worker may answer with a stream instead (Outcome::stream, stream_channel.h): the connection
 // then goes Busy -> Streaming, where the reactor writes the channel's parts as the producer
 // offers them, paced and bounded by the channel, until the client leaves, the producer ends the
@@ -74,6 +78,9 @@ public:
         m_starting.store(starting);
     }
     bool starting() const { return m_starting.load(); }
+    /// The scene's version, for requests waiting for a min_version; called on the reactor
+    /// thread, so it must not block. Set before run(), never after.
+    void set_version_source(std::function<uint64_t()> version) { m_version = std::move(version); }
     /// What else /readyz asks (request_reader.h); set before run(), never after.
     void set_readiness(std::function<Readiness()> readiness) { m_readiness = std::move(readiness); }
     /// A worker's answer for connection `conn`; `close`: close after writing it. A stream's
@@ -91,6 +98,12 @@ private:
     void read_from(Connection& c, Clock::time_point now);
     void advance(Connection& c, Clock::time_point now);
     void dispatch(Connection& c, PreparedRequest&& request);
+    /// Dispatches `request`, or holds it (Waiting) while the scene is behind its min_version.
+    void dispatch_or_wait(Connection& c, PreparedRequest&& request, Clock::time_point now);
+    /// Dispatches the waiting requests whose version arrived or whose wait is over.
+    void release_waiters(Clock::time_point now);
+    /// Forgets `c` as a waiter (its counts), when it is one.
+    void stop_waiting(Connection& c);
     void take_completions(Clock::time_point now);
     void answer(Connection& c, DirectAnswer&& a, Clock::time_point now);
     /// The access log and the response counters: every answer passes here once.
@@ -139,6 +152,10 @@ private:
     std::mutex m_progress_mutex;
     std::function<std::string()> m_progress;  ///< what starting is doing; guarded by the mutex
     std::function<Readiness()> m_readiness;   ///< set before run()
+    std::function<uint64_t()> m_version;      ///< set before run()
+    std::vector<uint64_t> m_waiting;          ///< Waiting connections, oldest first
+    std::size_t m_waiting_total = 0;
+    std::unordered_map<std::string, std::size_t> m_waiting_per_client;
     bool m_draining = false;
     Clock::time_point m_grace_deadline{};
     Clock::time_point m_hard_deadline{};

@@ -53,20 +53,36 @@ protocol::ApiResponse method_not_allowed(std::string_view method, std::string_vi
     return r;
 }
 
-void RouteTable::add(std::string method, std::string_view pattern, Handler handler) {
+void RouteTable::add(std::string method, std::string_view pattern, Endpoint e) {
     std::vector<std::string> segments;
     for (std::string_view s : split_path(pattern)) segments.emplace_back(s);
     auto it = std::find_if(m_routes.begin(), m_routes.end(),
                            [&](const Route& r) { return r.segments == segments; });
-    if (it == m_routes.end()) it = m_routes.insert(m_routes.end(), Route{segments, {}, {}});
-    it->handlers.emplace_back(std::move(method), std::move(handler));
+    if (it == m_routes.end())
+        it = m_routes.insert(m_routes.end(), Route{std::string(pattern), segments, {}, {}});
+    it->handlers.push_back({std::move(method), std::move(e.doc), std::move(e.handler)});
     // Allow: the methods in alphabetical order, then HEAD when GET is served.
     std::vector<std::string> methods;
-    for (const auto& handler_of : it->handlers) methods.push_back(handler_of.first);
+    for (const Method& m : it->handlers) methods.push_back(m.method);
     std::sort(methods.begin(), methods.end());
     it->allow.clear();
     for (const std::string& m : methods) it->allow += (it->allow.empty() ? "" : ", ") + m;
     if (std::count(methods.begin(), methods.end(), "GET")) it->allow += ", HEAD";
+}
+
+void RouteTable::describe(std::string method, std::string_view pattern, protocol::RouteDoc doc) {
+    m_described.push_back(
+        {std::string(pattern), {}, {{std::move(method), std::move(doc), {}}}, {}});
+}
+
+std::vector<protocol::RouteListing> RouteTable::listing() const {
+    std::vector<protocol::RouteListing> out;
+    for (const auto* routes : {&m_routes, &m_described}) {
+        for (const Route& r : *routes) {
+            for (const Method& m : r.handlers) out.push_back({m.method, r.pattern, &m.doc});
+        }
+    }
+    return out;
 }
 
 bool RouteTable::match(const Route& route, std::string_view path,
@@ -107,11 +123,11 @@ Reply RouteTable::dispatch(HttpRequest& request, RequestContext& context) const 
     const std::string_view method =
         request.method == "HEAD" ? std::string_view("GET") : std::string_view(request.method);
     const auto handler = std::find_if(route->handlers.begin(), route->handlers.end(),
-                                      [&](const auto& h) { return h.first == method; });
+                                      [&](const Method& h) { return h.method == method; });
     if (handler == route->handlers.end())
         return method_not_allowed(request.method, request.path, route->allow);
     try {
-        return handler->second(call);
+        return handler->handler(call);
     } catch (const std::exception& e) {
         return internal_error(request, e.what());
     } catch (...) {

@@ -1,9 +1,9 @@
 // Every /v1 route and /metrics: thin adapters over protocol/api.h, which does the work for the
 // server and for `strata play --embedded` alike. What stays here is HTTP: reading the request,
-// and the server's own logs and metrics.
+// and the server's own logs and metrics. Each route is registered with its description
+// (protocol/openapi.h), which GET /v1/openapi.json serves.
 
-#include <charconv>
-#include <thread>
+#include <mutex>
 
 #include <spdlog/spdlog.h>
 
@@ -15,12 +15,40 @@
 #include "server/replica/replica.h"
 #include "server/route_table.h"
 #include "server/stream_hub.h"
+#include "strata/version.h"
 
 namespace strata::server {
 
 namespace {
 
 using Query = std::multimap<std::string, std::string>;
+using protocol::ok_json;
+using protocol::ParamDoc;
+using protocol::problem;
+using protocol::ResponseDoc;
+using protocol::RouteDoc;
+
+const char* const U64 = R"({"type": "integer", "minimum": 0})";
+const char* const BOOLEAN = R"({"type": "boolean"})";
+
+/// If-Match on the write endpoints (protocol/api.h, parse_if_match).
+ParamDoc if_match() {
+    return {.name = "If-Match",
+            .in = "header",
+            .description =
+                "apply only if the scene is at this version: \"N\" (or N); absent or *: "
+                "unconditionally; W/\"N\" never matches"};
+}
+ResponseDoc version_mismatch() {
+    return problem(412,
+                   "If-Match names another version (nothing changed); the ETag is the "
+                   "current version",
+                   {"ETag"});
+}
+ResponseDoc not_applied() {
+    return problem(503,
+                   "the journal or the edit log could not take the batch: nothing was applied");
+}
 
 /// An API answer whose commit, if it ran one, is logged and measured.
 protocol::ApiResponse committed(ServerContext& ctx, protocol::ApiResponse&& answer,
@@ -61,76 +89,147 @@ std::string behind_detail(ServerContext& ctx, uint64_t wanted, uint64_t version)
 }
 
 /// Read-your-writes across replicas: a read with `min_version` (query) or X-Strata-Min-Version
-/// (header) waits, at most --min-version-wait-ms, until this server has applied that version.
-/// Takes min_version out of the request's query; returns the refusal when the value is
-/// malformed (400) or the version was not reached in time (503; the detail names the lag).
-std::optional<protocol::ApiResponse> await_min_version(ServerContext& ctx, HttpRequest& req) {
-    std::optional<std::string> text;
-    if (auto it = req.query.find("min_version"); it != req.query.end()) {
-        text = it->second;
-        req.query.erase(it);
-    }
-    if (!text) text = req.header_value("X-Strata-Min-Version");
-    if (!text) return std::nullopt;
-    uint64_t wanted = 0;
-    const auto [end, ec] = std::from_chars(text->data(), text->data() + text->size(), wanted);
-    if (ec != std::errc() || end != text->data() + text->size() || text->empty()) {
+/// (header) runs once this server has applied that version. The front end holds the request
+/// until then, at most --min-version-wait-ms (reactor.h), so a worker only checks: a malformed
+/// value is 400, a version still not reached 503 whose detail names the lag. Takes min_version
+/// out of the request's query.
+std::optional<protocol::ApiResponse> check_min_version(ServerContext& ctx, HttpRequest& req) {
+    const std::optional<HttpRequest::MinVersion> asked = req.min_version();
+    req.query.erase("min_version");
+    if (!asked) return std::nullopt;
+    if (!asked->valid) {
         protocol::Problem p = protocol::make_problem(
             protocol::ProblemType::InvalidRequest,
-            "min_version must be a scene version (a whole number), not '" + text->substr(0, 40) +
-                "'");
+            "min_version must be a scene version (a whole number), not '" +
+                asked->text.substr(0, 40) + "'");
         p.pointer = "min_version";
         return protocol::problem_response(p);
     }
-    const auto timeout = std::chrono::milliseconds(ctx.config.min_version_wait_ms);
-    auto version = [&] { return ctx.engine.read([](const Scene& s) { return s.version(); }); };
-    bool reached = false;
-    if (ctx.replica) {
-        reached = ctx.replica->wait_applied(wanted, timeout);
-    } else {
-        // Without a log only this server's own writes move the version: poll for them.
-        const auto deadline = std::chrono::steady_clock::now() + timeout;
-        while (!(reached = version() >= wanted) && std::chrono::steady_clock::now() < deadline)
-            std::this_thread::sleep_for(std::chrono::milliseconds(2));
-    }
-    if (reached) return std::nullopt;
+    const uint64_t version = ctx.engine.version();
+    if (version >= asked->version) return std::nullopt;
     protocol::ApiResponse r = protocol::problem_response(protocol::make_problem(
-        protocol::ProblemType::Unavailable, behind_detail(ctx, wanted, version())));
+        protocol::ProblemType::Unavailable, behind_detail(ctx, asked->version, version)));
     r.headers.emplace_back("Retry-After", "1");
     return r;
 }
 
-/// A GET route whose handler runs once `min_version`, if asked for, is reached.
-template <class Handler>
-RouteTable::Handler after_min_version(ServerContext& ctx, Handler handler) {
-    return [&ctx, handler = std::move(handler)](RouteCall& call) -> Reply {
-        if (auto refusal = await_min_version(ctx, call.request)) return std::move(*refusal);
+/// What check_min_version adds to a route's description.
+void describe_min_version(RouteDoc& doc) {
+    const char* what =
+        "read once this server has applied this scene version (read your own "
+        "write on another replica); waits at most --min-version-wait-ms";
+    doc.parameters.push_back({.name = "min_version", .description = what, .schema = U64});
+    doc.parameters.push_back(
+        {.name = "X-Strata-Min-Version", .in = "header", .description = what, .schema = U64});
+    doc.responses.push_back(problem(400, "min_version is not a whole number"));
+    doc.responses.push_back(
+        problem(503,
+                "the server did not reach min_version in time (the detail names the lag), or too "
+                "many reads wait for theirs (--max-waiting-reads)",
+                {"Retry-After"}));
+}
+
+/// A route whose handler runs once `min_version`, if asked for, is reached.
+Endpoint after_min_version(ServerContext& ctx, Endpoint e) {
+    describe_min_version(e.doc);
+    e.handler = [&ctx, handler = std::move(e.handler)](RouteCall& call) -> Reply {
+        if (auto refusal = check_min_version(ctx, call.request)) return std::move(*refusal);
         return handler(call);
     };
+    return e;
 }
 
 /// A POST route whose body is JSON: other body types are 415 before the handler runs.
-template <class Handler>
-RouteTable::Handler json_body(Handler handler) {
-    return [handler = std::move(handler)](RouteCall& call) -> Reply {
+Endpoint json_body(Endpoint e) {
+    e.doc.responses.push_back(problem(
+        415,
+        "a Content-Type that cannot carry JSON (multipart/form-data, an image, ...); none, "
+        "any JSON type, text/plain and application/x-www-form-urlencoded are read as JSON"));
+    e.handler = [handler = std::move(e.handler)](RouteCall& call) -> Reply {
         if (auto problem =
                 protocol::json_body_type_problem(call.request.header_value("Content-Type")))
             return *problem;
         return handler(call);
     };
+    return e;
 }
 
-void add_scene_object_routes(RouteTable& routes, ServerContext& ctx, const char* collection,
-                             protocol::SceneObject kind) {
-    const std::string path = std::string("/v1/scene/") + collection;
-    routes.get(path, after_min_version(ctx, [&ctx, kind](RouteCall& call) {
-                   return protocol::get_scene_list(ctx.engine, kind, call.request.query);
-               }));
+/// A collection of scene objects: its path, the schema of its documents and the filters its
+/// listing takes besides limit and cursor (scene_list.cpp).
+struct Collection {
+    const char* path;
+    protocol::SceneObject kind;
+    const char* schema;
+    std::vector<ParamDoc> filters;
+};
+
+ParamDoc parent_filter() {
+    return {.name = "parent",
+            .description =
+                "only the direct children of this group; empty (parent=) for those "
+                "at the root"};
+}
+
+std::vector<Collection> collections() {
+    using protocol::SceneObject;
+    return {{"meshes", SceneObject::Mesh, "Mesh", {}},
+            {"instances",
+             SceneObject::Instance,
+             "Instance",
+             {{.name = "mesh", .description = "only the instances of this mesh"},
+              {.name = "visible",
+               .description = "only the instances whose own flag is (not) set",
+               .schema = BOOLEAN},
+              parent_filter()}},
+            {"materials", SceneObject::Material, "Material", {}},
+            {"groups", SceneObject::Group, "Group", {parent_filter()}},
+            {"lights", SceneObject::Light, "Light", {}},
+            {"textures", SceneObject::Texture, "Texture", {}}};
+}
+
+/// limit and cursor, as every listing takes them.
+std::vector<ParamDoc> page_parameters() {
+    return {{.name = "limit",
+             .description = "items per page (default 100)",
+             .schema = R"({"type": "integer", "minimum": 1, "maximum": 10000, "default": 100})"},
+            {.name = "cursor",
+             .description = "the next_cursor of the previous page: opaque, valid for its "
+                            "collection only"}};
+}
+
+void add_scene_object_routes(RouteTable& routes, ServerContext& ctx, const Collection& c) {
+    const std::string path = std::string("/v1/scene/") + c.path;
+    const std::string one = std::string(c.schema);
+    std::vector<ParamDoc> parameters = page_parameters();
+    parameters.insert(parameters.end(), c.filters.begin(), c.filters.end());
+    std::vector<ResponseDoc> answers = {
+        ok_json(one + "Page", "one page, every item read at the page's version"),
+        problem(400, "an unknown, repeated or malformed parameter (the pointer names it)")};
+    if (!c.filters.empty())
+        answers.push_back(
+            problem(404, "a filter names no object (the pointer names it)", {"ETag"}));
+    const protocol::SceneObject kind = c.kind;
+    routes.get(path, after_min_version(
+                         ctx, {{.summary = "List the " + std::string(c.path) + ", a page at a time",
+                                .tag = "scene",
+                                .parameters = std::move(parameters),
+                                .responses = std::move(answers)},
+                               [&ctx, kind](RouteCall& call) {
+                                   return protocol::get_scene_list(ctx.engine, kind,
+                                                                   call.request.query);
+                               }}));
     // The path keeps reserved characters percent-encoded (request_target.h): an id holding '/'
     // arrives as one segment, decoded by the route table.
-    routes.get(path + "/{id}", after_min_version(ctx, [&ctx, kind](RouteCall& call) {
-                   return protocol::get_scene_object(ctx.engine, kind, call.params[0]);
-               }));
+    routes.get(
+        path + "/{id}",
+        after_min_version(
+            ctx, {{.summary = "One " + one + " document",
+                   .tag = "scene",
+                   .responses = {ok_json(one, "its state at the version in the ETag"),
+                                 problem(404, "no object of this kind has the id", {"ETag"})}},
+                  [&ctx, kind](RouteCall& call) {
+                      return protocol::get_scene_object(ctx.engine, kind, call.params[0]);
+                  }}));
 }
 
 /// What GET /metrics reads: the numbers of every part of the server that exists.
@@ -154,98 +253,360 @@ MetricsSnapshot metrics_snapshot(const ServerContext& ctx) {
 }
 
 void add_write_routes(RouteTable& routes, ServerContext& ctx) {
-    routes.post("/v1/edits", json_body([&ctx](RouteCall& call) {
-                    HttpRequest& req = call.request;
-                    return protocol::post_edits(ctx.engine, std::move(req.body),
-                                                req.header_value("If-Match"), ctx.api_limits,
-                                                ctx.batch_apply());
-                }));
-    routes.post("/v1/assets", [&ctx](RouteCall& call) {
-        HttpRequest& req = call.request;
-        return protocol::post_assets(ctx.engine, std::move(req.body), req.query,
-                                     req.header_value("Content-Type"), req.header_value("If-Match"),
-                                     ctx.api_limits, ctx.batch_apply());
-    });
-    routes.post("/v1/commit", [&ctx](RouteCall&) {
-        return committed(ctx, protocol::post_commit(ctx.engine), "commit");
-    });
-    routes.post("/v1/scene/snapshot", [&ctx](RouteCall& call) {
-        HttpRequest& req = call.request;
-        return protocol::post_snapshot(ctx.engine, std::move(req.body),
-                                       req.header_value("If-Match"), ctx.batch_apply());
+    routes.post(
+        "/v1/edits",
+        json_body({{.summary = "Apply an edit batch, atomically",
+                    .description = "The batch is validated whole against the scene, each edit as "
+                                   "the earlier ones leave it, before anything is applied; the "
+                                   "version then grows by one. Edits only mark what changed: no "
+                                   "acceleration structure is touched until the next commit.",
+                    .tag = "edits",
+                    .parameters = {if_match()},
+                    .body = "EditBatch",
+                    .body_required = true,
+                    .responses = {ok_json("EditResult", "applied: the new version and the edits"),
+                                  problem(400,
+                                          "the body is not JSON or does not match the "
+                                          "schema (pointer names where)"),
+                                  version_mismatch(),
+                                  problem(413,
+                                          "an array over --max-array-elements, a mesh over "
+                                          "2^28 vertices or triangles, a texture or a scene "
+                                          "over its budget (--max-scene-*, --max-texture-mb)"),
+                                  problem(422,
+                                          "the batch matches the schema but cannot be "
+                                          "applied (edit_index and pointer name the edit)"),
+                                  not_applied()}},
+                   [&ctx](RouteCall& call) {
+                       HttpRequest& req = call.request;
+                       return protocol::post_edits(ctx.engine, std::move(req.body),
+                                                   req.header_value("If-Match"), ctx.api_limits,
+                                                   ctx.batch_apply());
+                   }}));
+    routes.post("/v1/commit",
+                {{.summary = "Commit: bring the acceleration structures in line with the scene",
+                  .description = "The least work, like a launch without rays; no body.",
+                  .tag = "edits",
+                  .responses = {ok_json("Report",
+                                        "the rebuild report of the commit it ran; the "
+                                        "ETag is the committed version")}},
+                 [&ctx](RouteCall&) {
+                     return committed(ctx, protocol::post_commit(ctx.engine), "commit");
+                 }});
+}
+
+void add_import_routes(RouteTable& routes, ServerContext& ctx) {
+    const auto text = [](const char* name, const char* doc) -> ParamDoc {
+        return {.name = name, .description = doc};
+    };
+    routes.post(
+        "/v1/assets",
+        {{.summary = "Import a model file (glTF, OBJ, PLY, or a tar archive with its side files)",
+          .description = "As one batch: atomic, journaled and versioned like POST /v1/edits. The "
+                         "format comes from ?format=, else the Content-Type, else ?name='s "
+                         "extension.",
+          .tag = "edits",
+          .parameters = {{.name = "format",
+                          .description = "the file's format; tar: an archive of one model and "
+                                         "the files it names",
+                          .schema = R"({"enum": ["glb", "gltf", "obj", "ply", "tar"]})"},
+                         text("name", "the file's name: for problems and the default prefix"),
+                         text("prefix", "every id created starts with it (default: name's stem)"),
+                         text("parent", "the group the asset's group joins (default: the root)"),
+                         {.name = "instance",
+                          .description = "false: meshes and materials only",
+                          .schema = R"({"type": "boolean", "default": true})"},
+                         if_match()},
+          .body_media = {"model/gltf-binary", "model/gltf+json", "model/obj", "application/ply",
+                         "application/x-tar", "application/octet-stream"},
+          .body_required = true,
+          .responses = {ok_json("AssetResult", "imported: the ids it created and the new version"),
+                        problem(400, "an unknown format or a malformed query parameter"),
+                        version_mismatch(),
+                        problem(413, "the model takes the scene over its budget"),
+                        problem(422,
+                                "the file is malformed or uses what Strata does not import "
+                                "(file and element say where)"),
+                        not_applied()}},
+         [&ctx](RouteCall& call) {
+             HttpRequest& req = call.request;
+             return protocol::post_assets(
+                 ctx.engine, std::move(req.body), req.query, req.header_value("Content-Type"),
+                 req.header_value("If-Match"), ctx.api_limits, ctx.batch_apply());
+         }});
+}
+
+void add_snapshot_routes(RouteTable& routes, ServerContext& ctx) {
+    routes.get("/v1/scene/snapshot",
+               after_min_version(
+                   ctx, {{.summary = "The whole scene as a snapshot file",
+                          .description = "The data directory's snapshot format, taken under one "
+                                         "read lock.",
+                          .tag = "scene",
+                          .responses = {{.status = 200,
+                                         .description = "the snapshot; its ETag is the version "
+                                                        "it holds",
+                                         .media = {protocol::SNAPSHOT_CONTENT_TYPE},
+                                         .headers = {"ETag", "Content-Disposition"}}}},
+                         [&ctx](RouteCall&) { return protocol::get_snapshot(ctx.engine); }}));
+    routes.post(
+        "/v1/scene/snapshot",
+        {{.summary = "Replace the scene with a snapshot's, atomically",
+          .description = "One batch (a clear, then the snapshot's objects): a new version, "
+                         "journaled like any batch; the snapshot's own version is not reused.",
+          .tag = "edits",
+          .parameters = {if_match()},
+          .body_media = {protocol::SNAPSHOT_CONTENT_TYPE},
+          .body_required = true,
+          .responses = {ok_json("SnapshotResult", "loaded: the new version"),
+                        problem(400, "the body is not a whole, undamaged snapshot"),
+                        version_mismatch(), problem(413, "the snapshot's scene is over the budget"),
+                        problem(422, "the snapshot's scene cannot be loaded"), not_applied()}},
+         [&ctx](RouteCall& call) {
+             HttpRequest& req = call.request;
+             return protocol::post_snapshot(ctx.engine, std::move(req.body),
+                                            req.header_value("If-Match"), ctx.batch_apply());
+         }});
+}
+
+/// What POST and GET /v1/render answer.
+std::vector<ResponseDoc> render_answers() {
+    return {{.status = 200,
+             .description = "the frame; its ETag is the version it shows",
+             .media = {"image/png", "image/x-exr", "application/x-npz"},
+             .headers = {"ETag", "X-Strata-Rebuild", "X-Strata-Report", "X-Strata-Samples",
+                         "Cache-Control", "X-Strata-Split"}},
+            problem(400, "a member or parameter does not match the schema, or is unknown"),
+            problem(413, "width * height over --max-pixels (pointer /width)"),
+            problem(422,
+                    "a value the renderer cannot use (an AOV with PNG, a band outside the "
+                    "frame, a split without --peers, a camera with up along the view)"),
+            problem(503,
+                    "the render ran past --render-timeout (deadline-exceeded), or the "
+                    "server is shutting down")};
+}
+
+Reply get_render(ServerContext& ctx, RouteCall& call) {
+    if (call.request.method == "HEAD") {
+        // Its headers (ETag, size, rebuild summary) exist only once the frame is rendered.
+        protocol::ApiResponse r = protocol::problem_response(protocol::make_problem(
+            protocol::ProblemType::MethodNotAllowed,
+            "HEAD /v1/render would have to render the frame to know its headers; use GET or "
+            "POST"));
+        r.headers.emplace_back("Allow", "GET, POST");
+        return r;
+    }
+    if (auto refusal = check_min_version(ctx, call.request)) return std::move(*refusal);
+    return rendered(ctx, [&] {
+        return protocol::get_render(ctx.engine, call.request.query, ctx.api_limits,
+                                    call.context.cancel, ctx.split());
     });
 }
 
 void add_render_routes(RouteTable& routes, ServerContext& ctx) {
-    routes.post("/v1/render", json_body(after_min_version(ctx, [&ctx](RouteCall& call) {
-                    return rendered(ctx, [&] {
-                        return protocol::post_render(ctx.engine, call.request.body, ctx.api_limits,
-                                                     call.context.cancel, ctx.split());
-                    });
-                })));
-    routes.get("/v1/render", [&ctx](RouteCall& call) -> Reply {
-        if (call.request.method == "HEAD") {
-            // Its headers (ETag, size, rebuild summary) exist only once the frame is rendered.
-            protocol::ApiResponse r = protocol::problem_response(protocol::make_problem(
-                protocol::ProblemType::MethodNotAllowed,
-                "HEAD /v1/render would have to render the frame to know its headers; use GET or "
-                "POST"));
-            r.headers.emplace_back("Allow", "GET, POST");
-            return r;
-        }
-        if (auto refusal = await_min_version(ctx, call.request)) return std::move(*refusal);
-        return rendered(ctx, [&] {
-            return protocol::get_render(ctx.engine, call.request.query, ctx.api_limits,
-                                        call.context.cancel, ctx.split());
-        });
-    });
-    routes.get("/v1/pick", after_min_version(ctx, [&ctx](RouteCall& call) {
-                   return protocol::get_pick(ctx.engine, call.request.query);
-               }));
-    routes.post("/v1/pick", json_body(after_min_version(ctx, [&ctx](RouteCall& call) {
-                    return protocol::post_pick(ctx.engine, call.request.body, ctx.api_limits);
-                })));
+    const char* commits =
+        "Commits pending edits (as POST /v1/commit), traces and encodes one "
+        "frame; an empty body means every default.";
+    routes.post("/v1/render", json_body(after_min_version(
+                                  ctx, {{.summary = "Render one frame",
+                                         .description = commits,
+                                         .tag = "render",
+                                         .body = "RenderRequest",
+                                         .responses = render_answers()},
+                                        [&ctx](RouteCall& call) {
+                                            return rendered(ctx, [&] {
+                                                return protocol::post_render(
+                                                    ctx.engine, call.request.body, ctx.api_limits,
+                                                    call.context.cancel, ctx.split());
+                                            });
+                                        }})));
+    RouteDoc get = {.summary = "Render one frame, asked for in the query",
+                    .description =
+                        "The members of POST /v1/render's body as parameters: the "
+                        "camera override's as eye, target, up and fov_y_deg, lists "
+                        "comma-separated. HEAD is 405: the headers exist only once "
+                        "the frame is rendered.",
+                    .tag = "render",
+                    .parameters = protocol::query_parameters("RenderRequest"),
+                    .responses = render_answers(),
+                    .query_token = true};
+    get.responses.push_back(problem(405, "HEAD: use GET or POST", {"Allow"}));
+    describe_min_version(get);
+    routes.get("/v1/render",
+               {std::move(get), [&ctx](RouteCall& call) { return get_render(ctx, call); }});
 }
 
-void add_read_routes(RouteTable& routes, ServerContext& ctx) {
-    routes.get("/v1/plan", [&ctx](RouteCall&) { return protocol::get_plan(ctx.engine); });
-    routes.get("/v1/scene", after_min_version(ctx, [&ctx](RouteCall&) {
-                   return protocol::get_scene(ctx.engine);
-               }));
-    add_scene_object_routes(routes, ctx, "meshes", protocol::SceneObject::Mesh);
-    add_scene_object_routes(routes, ctx, "instances", protocol::SceneObject::Instance);
-    add_scene_object_routes(routes, ctx, "materials", protocol::SceneObject::Material);
-    add_scene_object_routes(routes, ctx, "groups", protocol::SceneObject::Group);
-    add_scene_object_routes(routes, ctx, "lights", protocol::SceneObject::Light);
-    add_scene_object_routes(routes, ctx, "textures", protocol::SceneObject::Texture);
-    routes.get("/v1/scene/groups/{id}/children", [&ctx](RouteCall& call) {
-        return protocol::get_group_children(ctx.engine, call.params[0], call.request.query);
-    });
-    routes.get("/v1/scene/tree", [&ctx](RouteCall& call) {
-        return protocol::get_scene_tree(ctx.engine, call.request.query);
-    });
-    routes.get("/v1/scene/snapshot", after_min_version(ctx, [&ctx](RouteCall&) {
-                   return protocol::get_snapshot(ctx.engine);
-               }));
-    routes.get("/v1/stats", [&ctx](RouteCall&) {
-        if (!ctx.store) return protocol::get_stats(ctx.engine);
-        const durable::DurableStats durable = ctx.store->stats();
-        return protocol::get_stats(ctx.engine, &durable);
-    });
-    routes.get("/metrics", [&ctx](RouteCall&) {
-        protocol::ApiResponse r;
-        r.content_type = "text/plain; version=0.0.4; charset=utf-8";
-        r.body = prometheus_text(metrics_snapshot(ctx));
-        return r;
-    });
+void add_pick_routes(RouteTable& routes, ServerContext& ctx) {
+    const char* rays =
+        "One ray through each pixel's centre, exactly the ray a render of the "
+        "same size and camera traces there; pending edits are committed first.";
+    const auto answers = [](const char* schema) -> std::vector<ResponseDoc> {
+        return {ok_json(schema,
+                        "what lies under the pixels (null: nothing), at the version "
+                        "the rays saw"),
+                problem(400, "a member or parameter does not match the schema"),
+                problem(422, "a pixel outside the image, or an unusable camera")};
+    };
+    routes.get("/v1/pick", after_min_version(
+                               ctx, {{.summary = "What lies under one pixel",
+                                      .description = rays,
+                                      .tag = "render",
+                                      .parameters = protocol::query_parameters("PickQuery"),
+                                      .responses = answers("PickResult")},
+                                     [&ctx](RouteCall& call) {
+                                         return protocol::get_pick(ctx.engine, call.request.query);
+                                     }}));
+    routes.post("/v1/pick", json_body(after_min_version(
+                                ctx, {{.summary = "What lies under each of a list of pixels",
+                                       .description = rays,
+                                       .tag = "render",
+                                       .body = "PickRequest",
+                                       .body_required = true,
+                                       .responses = answers("PickResults")},
+                                      [&ctx](RouteCall& call) {
+                                          return protocol::post_pick(ctx.engine, call.request.body,
+                                                                     ctx.api_limits);
+                                      }})));
+}
+
+void add_scene_routes(RouteTable& routes, ServerContext& ctx) {
+    routes.get("/v1/plan", {{.summary = "What the next commit would do, without doing it",
+                             .tag = "edits",
+                             .responses = {ok_json("Report",
+                                                   "a planned report (no time members); its ETag "
+                                                   "is the version planned")}},
+                            [&ctx](RouteCall&) { return protocol::get_plan(ctx.engine); }});
+    routes.get(
+        "/v1/scene",
+        after_min_version(ctx, {{.summary = "The scene: version, counts, bounds, camera "
+                                            "and lighting",
+                                 .tag = "scene",
+                                 .responses = {ok_json("Scene", "the summary")}},
+                                [&ctx](RouteCall&) { return protocol::get_scene(ctx.engine); }}));
+    for (const Collection& c : collections()) add_scene_object_routes(routes, ctx, c);
+}
+
+void add_graph_routes(RouteTable& routes, ServerContext& ctx) {
+    const ResponseDoc bad = problem(400, "an unknown, repeated or malformed parameter");
+    routes.get("/v1/scene/groups/{id}/children",
+               {{.summary = "A group's direct children, a page at a time: groups, then instances",
+                 .tag = "scene",
+                 .parameters = page_parameters(),
+                 .responses = {ok_json("ChildrenPage", "one page, each item with its kind"), bad,
+                               problem(404, "no group has the id", {"ETag"})}},
+                [&ctx](RouteCall& call) {
+                    return protocol::get_group_children(ctx.engine, call.params[0],
+                                                        call.request.query);
+                }});
+    const std::string depth = R"({"type": "integer", "minimum": 0, "maximum": )" +
+                              std::to_string(MAX_GROUP_DEPTH) + R"(, "default": 1})";
+    routes.get("/v1/scene/tree",
+               {{.summary = "The scene graph nested a few levels deep, for outline panels",
+                 .tag = "scene",
+                 .parameters =
+                     {{.name = "depth", .description = "levels of groups nested", .schema = depth},
+                      {.name = "max_nodes",
+                       .description = "most nodes in the answer (truncated says whether it "
+                                      "cut the tree short)",
+                       .schema = R"({"type": "integer", "minimum": 1, "maximum": 10000, )"
+                                 R"("default": 1000})"},
+                      {.name = "group", .description = "start at this group, not the root"}},
+                 .responses = {ok_json("SceneTree", "the tree"), bad,
+                               problem(404, "group= names no group", {"ETag"})}},
+                [&ctx](RouteCall& call) {
+                    return protocol::get_scene_tree(ctx.engine, call.request.query);
+                }});
+}
+
+void add_status_routes(RouteTable& routes, ServerContext& ctx) {
+    routes.get("/v1/stats", {{.summary = "Cumulative counters, the last commit's report, memory "
+                                         "and durability",
+                              .tag = "status",
+                              .responses = {ok_json("Stats",
+                                                    "the numbers, at the current "
+                                                    "version")}},
+                             [&ctx](RouteCall&) {
+                                 if (!ctx.store) return protocol::get_stats(ctx.engine);
+                                 const durable::DurableStats durable = ctx.store->stats();
+                                 return protocol::get_stats(ctx.engine, &durable);
+                             }});
+    routes.get("/metrics", {{.summary = "Prometheus metrics (text format 0.0.4)",
+                             .tag = "status",
+                             .responses = {{.status = 200,
+                                            .description = "every series of the registry",
+                                            .media = {"text/plain"}}}},
+                            [&ctx](RouteCall&) {
+                                protocol::ApiResponse r;
+                                r.content_type = "text/plain; version=0.0.4; charset=utf-8";
+                                r.body = prometheus_text(metrics_snapshot(ctx));
+                                return r;
+                            }});
+}
+
+/// GET /v1/openapi.json: the description of every route of `routes`, generated at the first
+/// request (every route is registered by then) and kept.
+void add_description_route(RouteTable& routes) {
+    struct Cached {
+        std::once_flag once;
+        std::string text;
+    };
+    auto cached = std::make_shared<Cached>();
+    routes.get("/v1/openapi.json",
+               {{.summary = "This API's OpenAPI 3.1 description",
+                 .tag = "status",
+                 .responses = {{.status = 200,
+                                .description = "the description, generated from the route "
+                                               "table",
+                                .media = {"application/json"}}}},
+                [&routes, cached](RouteCall&) {
+                    std::call_once(cached->once, [&] {
+                        cached->text =
+                            protocol::openapi_document(routes.listing(), VERSION).dump() + "\n";
+                    });
+                    protocol::ApiResponse r;
+                    r.content_type = "application/json";
+                    r.body = cached->text;
+                    return r;
+                }});
+}
+
+/// /livez and /readyz, which the front end answers before the table (request_reader.cpp).
+void describe_health_routes(RouteTable& routes) {
+    const char* never =
+        "Answered by the front end without a worker, on connections beyond the "
+        "connection limits too; no token needed.";
+    routes.describe("GET", "/livez",
+                    {.summary = "Liveness: 200 while the process serves HTTP",
+                     .description = never,
+                     .tag = "status",
+                     .responses = {ok_json("Health", "{\"status\": \"ok\"}", {})},
+                     .open = true});
+    routes.describe(
+        "GET", "/readyz",
+        {.summary = "Readiness: 200 once the scene is loaded and its structures built",
+         .description = never,
+         .tag = "status",
+         .responses = {ok_json("Health", "ready (with --log, the replica's numbers)", {}),
+                       problem(503,
+                               "starting (the detail says how far recovery got), shutting "
+                               "down, or a replica that has not caught up or stopped",
+                               {"Retry-After"})},
+         .open = true});
 }
 
 }  // namespace
 
 void add_api_routes(RouteTable& routes, ServerContext& ctx) {
     add_write_routes(routes, ctx);
+    add_import_routes(routes, ctx);
+    add_snapshot_routes(routes, ctx);
     add_render_routes(routes, ctx);
-    add_read_routes(routes, ctx);
+    add_pick_routes(routes, ctx);
+    add_scene_routes(routes, ctx);
+    add_graph_routes(routes, ctx);
+    add_status_routes(routes, ctx);
+    add_description_route(routes);
+    describe_health_routes(routes);
 }
 
 }  // namespace strata::server

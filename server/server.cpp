@@ -29,6 +29,7 @@ Server::Server(ServerConfig config, Engine& engine, durable::DurableStore* store
                     if (body_bytes >= TRIM_THRESHOLD_BYTES) release_free_memory();
                 });
         });
+    m_reactor->set_version_source([&engine] { return engine.version(); });
     m_streams = std::make_unique<StreamHub>(m_engine, [this] { return m_api_heavy.load() > 0; });
     m_app = std::make_unique<Application>(m_config, m_engine, m_metrics, &m_reactor->counters(),
                                           store, m_streams.get());

@@ -55,6 +55,10 @@ struct ServerConfig {
     uint64_t log_snapshot_every = 1000;  ///< versions between snapshots stored in Redis; 0: none
     int log_write_timeout_ms = 5000;  ///< longest a write waits to be appended and applied
     int min_version_wait_ms = 5000;   ///< longest a read waits for its min_version
+    /// Reads waiting for their min_version (held by the front end, not a worker): in all, and
+    /// per client IP address. One more is answered 503 at once.
+    std::size_t max_waiting_reads = 256;
+    std::size_t max_waiting_reads_per_client = 16;
 
     // Frames across replicas (split_render.h).
     std::string peers;            ///< comma-separated http://host:port; empty: no split renders
@@ -63,7 +67,8 @@ struct ServerConfig {
     std::string token;  ///< bearer token; empty: no authentication
     /// Origins allowed cross-origin access (cors.h): "", "*" or a comma-separated list.
     std::string cors_origin;
-    bool demo = false;  ///< start with the demo scene
+    bool demo = false;        ///< start with the demo scene
+    bool demo_reset = false;  ///< ... in place of the scene the data directory or log holds
 };
 
 }  // namespace strata::server

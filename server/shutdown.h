@@ -4,10 +4,13 @@
 //
 //   - The first SIGINT or SIGTERM starts the graceful shutdown (on_signal).
 //   - A second one ends the process at once, for an operator who does not want to wait.
+//   - So does the watchdog, when the graceful shutdown has not ended the process in time: a
+//     thread stuck on a lock or a peer cannot keep a stopping server alive.
 //   - SIGHUP is logged and ignored: the server keeps no log files to reopen, and a hang-up of
 //     the terminal that started it must not take its scenes down.
 
 #include <atomic>
+#include <chrono>
 #include <functional>
 #include <thread>
 
@@ -24,8 +27,9 @@ public:
     ShutdownSignals& operator=(const ShutdownSignals&) = delete;
 
     /// Starts the waiter: `on_signal(signo)` runs once, on the waiter thread, at the first
-    /// SIGINT or SIGTERM; a second one calls _exit(128 + signo).
-    void start(std::function<void(int)> on_signal);
+    /// SIGINT or SIGTERM; a second one calls _exit(128 + signo), and so does `exit_after`
+    /// passing after the first without the process having exited.
+    void start(std::function<void(int)> on_signal, std::chrono::milliseconds exit_after);
 
 private:
     std::thread m_waiter;

@@ -22,6 +22,8 @@ using protocol::ProblemType;
 /// Bounds of the stream-only parameters.
 constexpr double MAX_STREAM_FPS = 60.0;
 constexpr uint32_t MAX_STREAM_SAMPLES = 4096;
+/// GET /v1/render's parameters a stream refuses: its frames are JPEG, accumulating.
+constexpr const char* RENDER_ONLY[] = {"format", "aovs", "compression", "accumulate", "band"};
 
 protocol::Problem bad_parameter(const std::string& name, const std::string& detail) {
     protocol::Problem p = protocol::make_problem(ProblemType::InvalidRequest, detail);
@@ -69,7 +71,7 @@ std::variant<ViewerSpec, protocol::Problem> parse_viewer(
             return bad_parameter("highlight",
                                  "query parameter 'highlight' must name an instance, not ''");
     }
-    for (const char* fixed : {"format", "aovs", "compression", "accumulate", "band"}) {
+    for (const char* fixed : RENDER_ONLY) {
         if (params.count(fixed))
             return bad_parameter(fixed, std::string("query parameter '") + fixed +
                                             "' does not apply to /v1/stream: frames are JPEG, "
@@ -186,11 +188,84 @@ Reply open_event_stream(ServerContext& ctx, RouteCall& call) {
                             std::move(channel));
 }
 
+/// GET /v1/stream's parameters: the render's that apply (filter on by default), then its own.
+std::vector<protocol::ParamDoc> frame_stream_parameters() {
+    // split is no stream's either (an unknown parameter); filter is documented below.
+    std::vector<std::string> leave_out(std::begin(RENDER_ONLY), std::end(RENDER_ONLY));
+    leave_out.insert(leave_out.end(), {"split", "filter"});
+    std::vector<protocol::ParamDoc> params = protocol::query_parameters("RenderRequest", leave_out);
+    using J = protocol::OrderedJson;
+    const auto bounded = [](const char* type, J lo, J hi, J fallback) {
+        return J{{"type", type}, {"minimum", lo}, {"maximum", hi}, {"default", fallback}}.dump();
+    };
+    params.push_back({.name = "filter",
+                      .description = "the edge-aware filter, on by default here; none shows the "
+                                     "raw samples",
+                      .schema = R"({"enum": ["none", "atrous"], "default": "atrous"})"});
+    params.push_back({.name = "fps",
+                      .description = "most frames per second sent to this client",
+                      .schema = bounded("number", 0.1, MAX_STREAM_FPS, ViewerSpec{}.fps)});
+    params.push_back({.name = "quality",
+                      .description = "JPEG quality",
+                      .schema = bounded("integer", 1, 100, ViewerSpec{}.quality)});
+    params.push_back(
+        {.name = "max_samples",
+         .description = "accumulation stops improving a frame at this many samples",
+         .schema = bounded("integer", 1, MAX_STREAM_SAMPLES, ViewerSpec{}.max_samples)});
+    params.push_back({.name = "highlight",
+                      .description = "an instance id: its pixels tinted and outlined in every "
+                                     "frame of this stream"});
+    params.push_back({.name = "client",
+                      .description = "ignored: makes a viewer's URL its own (browsers share one "
+                                     "in-flight image between equal URLs)"});
+    return params;
+}
+
 }  // namespace
 
 void add_stream_routes(RouteTable& routes, ServerContext& ctx) {
-    routes.get("/v1/stream", [&ctx](RouteCall& call) { return open_frame_stream(ctx, call); });
-    routes.get("/v1/events", [&ctx](RouteCall& call) { return open_event_stream(ctx, call); });
+    using protocol::problem;
+    const protocol::ResponseDoc head = problem(405,
+                                               "HEAD: a stream's headers exist only as it "
+                                               "starts; use GET",
+                                               {"Allow"});
+    const protocol::ResponseDoc closed = problem(503, "the server is shutting down");
+    routes.get(
+        "/v1/stream",
+        {{.summary = "Live JPEG frames of the scene (multipart/x-mixed-replace)",
+          .description = "Each part a JPEG whose comment says `strata version=V samples=S`; a "
+                         "new frame when the version changes or accumulation improves it. An "
+                         "<img src> shows it.",
+          .tag = "stream",
+          .parameters = frame_stream_parameters(),
+          .responses = {{.status = 200,
+                         .description = "the stream, until the client leaves or the server "
+                                        "shuts down",
+                         .media = {"multipart/x-mixed-replace"},
+                         .headers = {"Cache-Control"}},
+                        problem(400, "a parameter that does not apply, or a malformed one"),
+                        problem(404, "highlight names no instance (pointer /highlight)"),
+                        head,
+                        problem(413, "more pixels than a stream renders"),
+                        problem(422, "a value the renderer cannot use"),
+                        closed},
+          .query_token = true},
+         [&ctx](RouteCall& call) { return open_frame_stream(ctx, call); }});
+    routes.get(
+        "/v1/events",
+        {{.summary = "Commit events (Server-Sent Events)",
+          .description = "A hello event, then one commit event per commit that brought edits "
+                         "in; each event's data is a CommitEvent document.",
+          .tag = "stream",
+          .responses = {{.status = 200,
+                         .description = "the event stream",
+                         .media = {"text/event-stream"},
+                         .headers = {"Cache-Control"}},
+                        problem(400, "any query parameter"),
+                        head,
+                        closed},
+          .query_token = true},
+         [&ctx](RouteCall& call) { return open_event_stream(ctx, call); }});
 }
 
 }  // namespace strata::server

@@ -43,8 +43,25 @@ Reply serve(const std::string& path) {
 }  // namespace
 
 void add_web_routes(RouteTable& routes) {
-    routes.get("/", [](RouteCall&) { return serve("index.html"); });
-    routes.get("/web/{path...}", [](RouteCall& call) { return serve(call.params[0]); });
+    const protocol::ResponseDoc missing = protocol::problem(404, "the viewer has no such file");
+    routes.get("/",
+               {{.summary = "The live viewer",
+                 .tag = "viewer",
+                 .responses = {{.status = 200, .description = "its page", .media = {"text/html"}},
+                               missing},
+                 .open = true},
+                [](RouteCall&) { return serve("index.html"); }});
+    routes.get(
+        "/web/{path...}",
+        {{.summary = "The viewer's files",
+          .tag = "viewer",
+          .responses = {{.status = 200,
+                         .description = "the file",
+                         .media = {"text/javascript", "text/css", "text/html", "image/svg+xml",
+                                   "image/png", "application/json", "application/octet-stream"}},
+                        missing},
+          .open = true},
+         [](RouteCall& call) { return serve(call.params[0]); }});
 }
 
 }  // namespace strata::server

@@ -1,6 +1,7 @@
 #include "clients/cli/commands.h"
 
 #include "clients/cli/asset_pack.h"
+#include "clients/cli/image_files.h"
 
 #include <algorithm>
 #include <cstdio>
@@ -38,10 +39,6 @@ int print_report(const Console& c, const Transport& t, const char* what, const R
     return OK;
 }
 
-bool ends_with(const std::string& s, const std::string& tail) {
-    return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
-}
-
 void entries(std::string& out, const Json& list, const char* what) {
     if (!list.is_array()) return;
     for (const Json& e : list) {
@@ -74,7 +71,7 @@ std::optional<Json> json_answer(const Console& c, const Transport& t, const std:
     return doc;
 }
 
-std::string format_report(const Json& r) {
+std::string report_summary(const Json& r) {
     const Json tlas = r.value("tlas", Json::object());
     std::string out = std::string(r.value("planned", false) ? "plan for v" : "commit v") +
                       std::to_string(r.value("version", uint64_t(0))) + ": tlas " +
@@ -86,6 +83,11 @@ std::string format_report(const Json& r) {
                       " primitives built, " +
                       std::to_string(r.value("primitives_refit", uint64_t(0))) + " refit";
     if (r.contains("ms")) out += ", " + fixed(r["ms"].get<double>()) + " ms";
+    return out;
+}
+
+std::string format_report(const Json& r) {
+    std::string out = report_summary(r);
     entries(out, r.value("rebuilt", Json::array()), "rebuilt ");
     entries(out, r.value("refit", Json::array()), "refit   ");
     entries(out, r.value("released", Json::array()), "released");
@@ -121,14 +123,22 @@ int run_edit(Transport& t, const Console& c, const std::string& file,
     return OK;
 }
 
+Json camera_json(const CameraOverride& o) {
+    Json camera = Json::object();
+    if (!o.eye.empty()) camera["eye"] = o.eye;
+    if (!o.target.empty()) camera["target"] = o.target;
+    if (!o.up.empty()) camera["up"] = o.up;
+    if (o.fov_y_deg) camera["fov_y_deg"] = *o.fov_y_deg;
+    return camera;
+}
+
 std::optional<std::string> render_body(const RenderArgs& a, std::string& error) {
     Json body = Json::object();
     if (a.width) body["width"] = *a.width;
     if (a.height) body["height"] = *a.height;
     if (a.spp) body["spp"] = *a.spp;
-    const std::string by_name = ends_with(a.out, ".exr")   ? "exr"
-                                : ends_with(a.out, ".png") ? "png"
-                                                           : "";
+    const char* named = format_of_file_name(a.out);
+    const std::string by_name = named ? named : "";
     if (a.format && !by_name.empty() && *a.format != by_name) {
         error = "--format " + *a.format + " does not match the file name '" + a.out + "'";
         return std::nullopt;
@@ -142,11 +152,9 @@ std::optional<std::string> render_body(const RenderArgs& a, std::string& error) 
     if (!a.aovs.empty()) body["aovs"] = a.aovs;
     if (a.exposure) body["exposure"] = *a.exposure;
     if (a.accumulate) body["accumulate"] = true;
-    Json camera = Json::object();
-    if (!a.eye.empty()) camera["eye"] = a.eye;
-    if (!a.target.empty()) camera["target"] = a.target;
-    if (!a.up.empty()) camera["up"] = a.up;
-    if (a.fov_y_deg) camera["fov_y_deg"] = *a.fov_y_deg;
+    if (a.filter) body["filter"] = *a.filter;
+    if (a.split) body["split"] = *a.split;
+    const Json camera = camera_json(a.camera);
     if (!camera.empty()) body["camera"] = camera;
     return body.dump();
 }
@@ -214,14 +222,6 @@ int run_stats(Transport& t, const Console& c) {
     }
     const Json last = doc->value("last_report", Json());
     c.out << "last " << (last.is_object() ? format_report(last) : "commit: none yet") << '\n';
-    return OK;
-}
-
-int run_scene(Transport& t, const Console& c) {
-    int code = OK;
-    const auto doc = json_answer(c, t, "scene", t.scene(), code);
-    if (!doc) return code;
-    c.out << (c.json ? doc->dump() : doc->dump(2)) << '\n';
     return OK;
 }
 

@@ -29,6 +29,14 @@ std::optional<Json> json_answer(const Console& c, const Transport& t, const std:
 int run_edit(Transport& t, const Console& c, const std::string& file,
              const std::optional<std::string>& if_match);
 
+/// A camera for one render or pick only; members left empty come from the scene camera.
+struct CameraOverride {
+    std::vector<double> eye, target, up;  ///< 3 numbers each, or empty
+    std::optional<double> fov_y_deg;
+};
+/// The request's "camera" member for `camera`; an empty object when nothing is overridden.
+Json camera_json(const CameraOverride& camera);
+
 /// Everything `strata render` can ask for; unset members are left to the server's defaults.
 struct RenderArgs {
     std::string out;  ///< where to save the image; its extension picks the format
@@ -37,8 +45,9 @@ struct RenderArgs {
     std::vector<std::string> aovs;
     std::optional<double> exposure;
     bool accumulate = false;
-    std::vector<double> eye, target, up;  ///< camera override: 3 numbers each, or empty
-    std::optional<double> fov_y_deg;
+    std::optional<std::string> filter;  ///< "atrous" or "none"
+    std::optional<uint32_t> split;      ///< bands over this server and its peers
+    CameraOverride camera;
 };
 /// The POST /v1/render body for `args` (format from the file name unless given); nullopt and a
 /// message when the arguments contradict each other.
@@ -49,8 +58,10 @@ int run_render(Transport& t, const Console& c, const RenderArgs& args);
 /// `strata commit` and `strata plan`.
 int run_commit(Transport& t, const Console& c);
 int run_plan(Transport& t, const Console& c);
-/// `strata stats` and `strata scene`.
+/// `strata stats`.
 int run_stats(Transport& t, const Console& c);
+/// `strata scene`: a summary of GET /v1/scene and GET /v1/stats, one line per fact (the whole
+/// GET /v1/scene document with --json).
 int run_scene(Transport& t, const Console& c);
 
 /// The collections `strata scene list` can walk: meshes, instances, materials, groups.
@@ -81,8 +92,10 @@ int run_scene_tree(Transport& t, const Console& c, const SceneTreeArgs& args);
 struct PickArgs {
     uint32_t x = 0, y = 0;
     uint32_t width = 0, height = 0;
+    CameraOverride camera;
 };
-/// `strata pick X Y --width W --height H`: what lies under that pixel of a W x H frame.
+/// `strata pick X Y --width W --height H`: what lies under that pixel of a W x H frame, seen from
+/// the scene camera or from `camera`.
 int run_pick(Transport& t, const Console& c, const PickArgs& args);
 /// `strata snapshot save FILE`: the server's scene into a snapshot file (- for stdout); the file
 /// is written whole or not at all (a temporary file renamed).
@@ -105,5 +118,7 @@ int run_snapshot_load(Transport& t, const Console& c, const std::string& file);
 /// A rebuild report for people: a summary line, then one line per rebuilt, refit or released
 /// mesh.
 std::string format_report(const Json& report);
+/// format_report's summary line alone: version, TLAS action, rebuilds, refits, primitives, ms.
+std::string report_summary(const Json& report);
 
 }  // namespace strata::cli

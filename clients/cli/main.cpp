@@ -5,8 +5,11 @@
 
 #include <unistd.h>
 
+#include <functional>
 #include <iostream>
 #include <memory>
+#include <utility>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -74,9 +77,198 @@ int play_script(const PlayArgs& a, const HttpOptions& http, bool json) {
     return exit_code(play(script.value(), *transport, options, *observer).verdict);
 }
 
+/// What a one-shot subcommand runs against the server once the command line is parsed.
+using Action = std::function<int(Transport&, const Console&)>;
+/// The one-shot subcommands and their actions; a subcommand comes before its parent, so that the
+/// first parsed one is the one the user named.
+using Actions = std::vector<std::pair<CLI::App*, Action>>;
+
 /// A "x,y,z" option as three numbers.
 CLI::Option* add_vec3(CLI::App* app, const char* name, std::vector<double>& v, const char* help) {
     return app->add_option(name, v, help)->delimiter(',')->expected(3);
+}
+
+/// --eye, --target, --up and --fov: a camera for this one request.
+void add_camera_options(CLI::App* app, CameraOverride& camera) {
+    add_vec3(app, "--eye", camera.eye, "Camera override: eye position x,y,z");
+    add_vec3(app, "--target", camera.target, "Camera override: target x,y,z");
+    add_vec3(app, "--up", camera.up, "Camera override: up vector x,y,z");
+    app->add_option("--fov", camera.fov_y_deg, "Camera override: vertical field of view");
+}
+
+void add_global_options(CLI::App& app, HttpOptions& http, bool& json) {
+    app.add_option("--server", http.url, "Server URL, scheme://host[:port]")
+        ->envname("STRATA_SERVER")
+        ->capture_default_str();
+    app.add_option("--token", http.token, "Bearer token for a server started with --token-file")
+        ->envname("STRATA_TOKEN");
+    app.add_option("--timeout", http.timeout_s, "Seconds to wait for the server")
+        ->check(CLI::Range(1, 86400))
+        ->capture_default_str();
+    app.add_flag("--json", json, "Print answers as JSON (one object per line for play)");
+    app.set_version_flag("--version", std::string("strata ") + strata::VERSION,
+                         "Print the version and exit");
+}
+
+CLI::App* add_play(CLI::App& app, PlayArgs& play) {
+    CLI::App* cmd = app.add_subcommand(
+        "play", "Play a script (JSON Lines, protocol/scripts.md) and check its expectations");
+    cmd->add_option("script", play.script, "Script file, or - for standard input")->required();
+    cmd->add_flag("--embedded", play.embedded,
+                  "Play against an in-process engine instead of a server");
+    cmd->add_flag("--demo", play.demo, "With --embedded: start from the demo scene");
+    cmd->add_flag("--budgets", play.budgets,
+                  "Also check the time budget max_ms (max_primitives_built is always checked)");
+    cmd->add_option("--max-repeat", play.max_repeat,
+                    "Play at most N iterations of each repeat step (quick checks)")
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--out-dir", play.out_dir,
+                    "Directory for the frames of relative \"out\" paths (default: .)");
+    cmd->add_flag("-q,--quiet", play.quiet, "No per-step table, only the verdict");
+    cmd->add_flag("--no-progress", play.no_progress, "No progress bar");
+    return cmd;
+}
+
+void add_edit(CLI::App& app, Actions& actions) {
+    struct Args {
+        std::string file, if_match;
+    };
+    auto a = std::make_shared<Args>();
+    CLI::App* cmd = app.add_subcommand("edit", "Apply a batch of edits from a file");
+    cmd->add_option("file", a->file, "JSON file: {\"edits\": [...]} or [...]; - for stdin")
+        ->required();
+    cmd->add_option("--if-match", a->if_match, "Apply only at this scene version");
+    actions.emplace_back(cmd, [a](Transport& t, const Console& c) {
+        return run_edit(t, c, a->file,
+                        a->if_match.empty() ? std::nullopt : std::optional(a->if_match));
+    });
+}
+
+void add_render(CLI::App& app, Actions& actions) {
+    auto a = std::make_shared<RenderArgs>();
+    CLI::App* cmd = app.add_subcommand("render", "Render a frame and save it");
+    cmd->add_option("-o,--out", a->out, "Output file (.png, .exr or .npz)")->required();
+    cmd->add_option("--width", a->width, "Width in pixels");
+    cmd->add_option("--height", a->height, "Height in pixels");
+    cmd->add_option("--spp", a->spp, "Samples per pixel");
+    cmd->add_option("--format", a->format, "png, exr or npz (default: from --out)")
+        ->check(CLI::IsMember({"png", "exr", "npz"}));
+    cmd->add_option("--aovs", a->aovs,
+                    "EXR layers or NPZ arrays, comma-separated (depth,normal,...)")
+        ->delimiter(',');
+    cmd->add_option("--compression", a->compression, "EXR compression: none, zip, piz");
+    cmd->add_option("--exposure", a->exposure, "Exposure in EV stops");
+    cmd->add_flag("--accumulate", a->accumulate,
+                  "Accumulate samples while the scene does not change");
+    cmd->add_option("--filter", a->filter, "Denoise: atrous or none (default: none)")
+        ->check(CLI::IsMember({"atrous", "none"}));
+    cmd->add_option("--split", a->split,
+                    "Render in N horizontal bands on this server and its --peers (1 to 16)")
+        ->check(CLI::Range(1, 16));
+    add_camera_options(cmd, a->camera);
+    actions.emplace_back(cmd, [a](Transport& t, const Console& c) { return run_render(t, c, *a); });
+}
+
+/// commit, plan and stats: no arguments of their own.
+void add_reports(CLI::App& app, Actions& actions) {
+    actions.emplace_back(app.add_subcommand("commit", "Run a commit and print its report"),
+                         run_commit);
+    actions.emplace_back(app.add_subcommand("plan", "Print what the next commit would do"),
+                         run_plan);
+    actions.emplace_back(app.add_subcommand("stats", "Print counters and the last report"),
+                         run_stats);
+}
+
+void add_scene_list(CLI::App* scene, Actions& actions) {
+    auto a = std::make_shared<SceneListArgs>();
+    CLI::App* cmd = scene->add_subcommand(
+        "list", "List meshes, instances, materials, groups, lights or textures, one per line");
+    cmd->add_option("collection", a->collection,
+                    "meshes, instances, materials, groups, lights or textures")
+        ->required()
+        ->check(CLI::IsMember(scene_collections()));
+    cmd->add_option("--page-size", a->page_size, "Objects per request (1 to 10000)")
+        ->check(CLI::Range(1, 10000));
+    cmd->add_option("--max", a->max_items, "Stop after this many objects");
+    cmd->add_option("--mesh", a->mesh, "Instances: only those of this mesh");
+    cmd->add_option("--visible", a->visible, "Instances: only visible (true) or hidden");
+    cmd->add_option("--parent", a->parent,
+                    "Instances, groups: only children of this group (\"\" for the root)");
+    actions.emplace_back(cmd,
+                         [a](Transport& t, const Console& c) { return run_scene_list(t, c, *a); });
+}
+
+/// scene, with list, get and tree under it.
+void add_scene(CLI::App& app, Actions& actions) {
+    CLI::App* scene =
+        app.add_subcommand("scene", "Print the scene summary (the whole document with --json)");
+    scene->require_subcommand(0, 1);
+    add_scene_list(scene, actions);
+    auto get = std::make_shared<std::pair<std::string, std::string>>();
+    CLI::App* get_cmd = scene->add_subcommand("get", "Print one object's document");
+    get_cmd->add_option("kind", get->first, "mesh, instance, material, group, light or texture")
+        ->required()
+        ->check(CLI::IsMember({"mesh", "instance", "material", "group", "light", "texture"}));
+    get_cmd->add_option("id", get->second, "The object's id")->required();
+    actions.emplace_back(get_cmd, [get](Transport& t, const Console& c) {
+        return run_scene_get(t, c, get->first, get->second);
+    });
+    auto tree = std::make_shared<SceneTreeArgs>();
+    CLI::App* tree_cmd = scene->add_subcommand("tree", "Print the scene graph as an outline");
+    tree_cmd->add_option("--depth", tree->depth, "Group levels to expand (0 to 64)")
+        ->check(CLI::Range(0, 64));
+    tree_cmd->add_option("--max-nodes", tree->max_nodes, "Most nodes to print (1 to 10000)")
+        ->check(CLI::Range(1, 10000));
+    tree_cmd->add_option("--group", tree->group, "Only the subtree of this group");
+    actions.emplace_back(
+        tree_cmd, [tree](Transport& t, const Console& c) { return run_scene_tree(t, c, *tree); });
+    actions.emplace_back(scene, run_scene);
+}
+
+void add_pick(CLI::App& app, Actions& actions) {
+    auto a = std::make_shared<PickArgs>();
+    CLI::App* cmd = app.add_subcommand("pick", "Print what lies under one pixel");
+    cmd->add_option("x", a->x, "Column, 0 at the left")->required();
+    cmd->add_option("y", a->y, "Row, 0 at the top")->required();
+    cmd->add_option("--width", a->width, "Width of the frame the pixel belongs to")->required();
+    cmd->add_option("--height", a->height, "Height of that frame")->required();
+    add_camera_options(cmd, a->camera);
+    actions.emplace_back(cmd, [a](Transport& t, const Console& c) { return run_pick(t, c, *a); });
+}
+
+void add_snapshot(CLI::App& app, Actions& actions) {
+    auto file = std::make_shared<std::string>();
+    CLI::App* cmd =
+        app.add_subcommand("snapshot", "Save the server's scene to a file, or load one into it");
+    cmd->require_subcommand(1);
+    CLI::App* save = cmd->add_subcommand(
+        "save", "Save the whole scene (GET /v1/scene/snapshot) to FILE (- for stdout)");
+    save->add_option("file", *file, "Snapshot file to write")->required();
+    CLI::App* load = cmd->add_subcommand(
+        "load", "Replace the server's scene with FILE's (POST /v1/scene/snapshot; - for stdin)");
+    load->add_option("file", *file, "Snapshot file to read")->required();
+    actions.emplace_back(
+        save, [file](Transport& t, const Console& c) { return run_snapshot_save(t, c, *file); });
+    actions.emplace_back(
+        load, [file](Transport& t, const Console& c) { return run_snapshot_load(t, c, *file); });
+}
+
+void add_import(CLI::App& app, Actions& actions) {
+    auto a = std::make_shared<ImportArgs>();
+    CLI::App* cmd =
+        app.add_subcommand("import", "Import a glTF, OBJ or PLY file (POST /v1/assets)");
+    cmd->add_option("file", a->file, "Model file (.glb, .gltf, .obj, .ply)")->required();
+    cmd->add_option("--prefix", a->prefix,
+                    "Id prefix of what it creates (default: the file name's stem)");
+    cmd->add_option("--parent", a->parent,
+                    "Group to put the asset's group under (default: the root)");
+    cmd->add_option("--format", a->format, "glb, gltf, obj or ply (default: from the extension)");
+    auto no_instance = std::make_shared<bool>(false);
+    cmd->add_flag("--no-instance", *no_instance, "Create meshes and materials only");
+    actions.emplace_back(cmd, [a, no_instance](Transport& t, const Console& c) {
+        a->instance = !*no_instance;
+        return run_import(t, c, *a);
+    });
 }
 
 }  // namespace
@@ -89,128 +281,17 @@ int main(int argc, char** argv) {
     app.fallthrough();
     HttpOptions http;
     bool json = false;
-    app.add_option("--server", http.url, "Server URL, scheme://host[:port]")
-        ->envname("STRATA_SERVER")
-        ->capture_default_str();
-    app.add_option("--token", http.token, "Bearer token for a server started with --token-file")
-        ->envname("STRATA_TOKEN");
-    app.add_option("--timeout", http.timeout_s, "Seconds to wait for the server")
-        ->check(CLI::Range(1, 86400))
-        ->capture_default_str();
-    app.add_flag("--json", json, "Print answers as JSON (one object per line for play)");
-    app.set_version_flag("--version", std::string("strata ") + strata::VERSION,
-                         "Print the version and exit");
-
+    add_global_options(app, http, json);
     PlayArgs play;
-    CLI::App* play_cmd = app.add_subcommand(
-        "play", "Play a script (JSON Lines, protocol/scripts.md) and check its expectations");
-    play_cmd->add_option("script", play.script, "Script file, or - for standard input")->required();
-    play_cmd->add_flag("--embedded", play.embedded,
-                       "Play against an in-process engine instead of a server");
-    play_cmd->add_flag("--demo", play.demo, "With --embedded: start from the demo scene");
-    play_cmd->add_flag(
-        "--budgets", play.budgets,
-        "Also check the time budget max_ms (max_primitives_built is always checked)");
-    play_cmd
-        ->add_option("--max-repeat", play.max_repeat,
-                     "Play at most N iterations of each repeat step (quick checks)")
-        ->check(CLI::PositiveNumber);
-    play_cmd->add_option("--out-dir", play.out_dir,
-                         "Directory for the frames of relative \"out\" paths (default: .)");
-    play_cmd->add_flag("-q,--quiet", play.quiet, "No per-step table, only the verdict");
-    play_cmd->add_flag("--no-progress", play.no_progress, "No progress bar");
-
-    std::string edit_file;
-    std::string if_match;
-    CLI::App* edit_cmd = app.add_subcommand("edit", "Apply a batch of edits from a file");
-    edit_cmd->add_option("file", edit_file, "JSON file: {\"edits\": [...]} or [...]; - for stdin")
-        ->required();
-    edit_cmd->add_option("--if-match", if_match, "Apply only at this scene version");
-
-    RenderArgs render;
-    CLI::App* render_cmd = app.add_subcommand("render", "Render a frame and save it");
-    render_cmd->add_option("-o,--out", render.out, "Output file (.png or .exr)")->required();
-    render_cmd->add_option("--width", render.width, "Width in pixels");
-    render_cmd->add_option("--height", render.height, "Height in pixels");
-    render_cmd->add_option("--spp", render.spp, "Samples per pixel");
-    render_cmd->add_option("--format", render.format, "png or exr (default: from --out)")
-        ->check(CLI::IsMember({"png", "exr"}));
-    render_cmd->add_option("--aovs", render.aovs, "EXR layers, comma-separated (depth,normal,...)")
-        ->delimiter(',');
-    render_cmd->add_option("--compression", render.compression, "EXR compression: none, zip, piz");
-    render_cmd->add_option("--exposure", render.exposure, "Exposure in EV stops");
-    render_cmd->add_flag("--accumulate", render.accumulate,
-                         "Accumulate samples while the scene does not change");
-    add_vec3(render_cmd, "--eye", render.eye, "Camera override: eye position x,y,z");
-    add_vec3(render_cmd, "--target", render.target, "Camera override: target x,y,z");
-    add_vec3(render_cmd, "--up", render.up, "Camera override: up vector x,y,z");
-    render_cmd->add_option("--fov", render.fov_y_deg, "Camera override: vertical field of view");
-
-    CLI::App* commit_cmd = app.add_subcommand("commit", "Run a commit and print its report");
-    CLI::App* plan_cmd = app.add_subcommand("plan", "Print what the next commit would do");
-    CLI::App* stats_cmd = app.add_subcommand("stats", "Print counters and the last report");
-    CLI::App* scene_cmd = app.add_subcommand("scene", "Print the scene summary");
-    scene_cmd->require_subcommand(0, 1);
-    SceneListArgs list;
-    CLI::App* list_cmd = scene_cmd->add_subcommand(
-        "list", "List meshes, instances, materials, groups, lights or textures, one per line");
-    list_cmd
-        ->add_option("collection", list.collection,
-                     "meshes, instances, materials, groups, lights or textures")
-        ->required()
-        ->check(CLI::IsMember(scene_collections()));
-    list_cmd->add_option("--page-size", list.page_size, "Objects per request (1 to 10000)")
-        ->check(CLI::Range(1, 10000));
-    list_cmd->add_option("--max", list.max_items, "Stop after this many objects");
-    list_cmd->add_option("--mesh", list.mesh, "Instances: only those of this mesh");
-    list_cmd->add_option("--visible", list.visible, "Instances: only visible (true) or hidden");
-    list_cmd->add_option("--parent", list.parent,
-                         "Instances, groups: only children of this group (\"\" for the root)");
-    std::string get_kind, get_id;
-    CLI::App* get_cmd = scene_cmd->add_subcommand("get", "Print one object's document");
-    get_cmd->add_option("kind", get_kind, "mesh, instance, material, group, light or texture")
-        ->required()
-        ->check(CLI::IsMember({"mesh", "instance", "material", "group", "light", "texture"}));
-    get_cmd->add_option("id", get_id, "The object's id")->required();
-    SceneTreeArgs tree;
-    CLI::App* tree_cmd = scene_cmd->add_subcommand("tree", "Print the scene graph as an outline");
-    tree_cmd->add_option("--depth", tree.depth, "Group levels to expand (0 to 64)")
-        ->check(CLI::Range(0, 64));
-    tree_cmd->add_option("--max-nodes", tree.max_nodes, "Most nodes to print (1 to 10000)")
-        ->check(CLI::Range(1, 10000));
-    tree_cmd->add_option("--group", tree.group, "Only the subtree of this group");
-    PickArgs pick;
-    CLI::App* pick_cmd = app.add_subcommand("pick", "Print what lies under one pixel");
-    pick_cmd->add_option("x", pick.x, "Column, 0 at the left")->required();
-    pick_cmd->add_option("y", pick.y, "Row, 0 at the top")->required();
-    pick_cmd->add_option("--width", pick.width, "Width of the frame the pixel belongs to")
-        ->required();
-    pick_cmd->add_option("--height", pick.height, "Height of that frame")->required();
-
-    std::string snapshot_file;
-    CLI::App* snapshot_cmd =
-        app.add_subcommand("snapshot", "Save the server's scene to a file, or load one into it");
-    snapshot_cmd->require_subcommand(1);
-    CLI::App* snapshot_save = snapshot_cmd->add_subcommand(
-        "save", "Save the whole scene (GET /v1/scene/snapshot) to FILE (- for stdout)");
-    snapshot_save->add_option("file", snapshot_file, "Snapshot file to write")->required();
-    CLI::App* snapshot_load = snapshot_cmd->add_subcommand(
-        "load", "Replace the server's scene with FILE's (POST /v1/scene/snapshot; - for stdin)");
-    snapshot_load->add_option("file", snapshot_file, "Snapshot file to read")->required();
-
-    ImportArgs import_args;
-    CLI::App* import_cmd =
-        app.add_subcommand("import", "Import a glTF, OBJ or PLY file (POST /v1/assets)");
-    import_cmd->add_option("file", import_args.file, "Model file (.glb, .gltf, .obj, .ply)")
-        ->required();
-    import_cmd->add_option("--prefix", import_args.prefix,
-                           "Id prefix of what it creates (default: the file name's stem)");
-    import_cmd->add_option("--parent", import_args.parent,
-                           "Group to put the asset's group under (default: the root)");
-    import_cmd->add_option("--format", import_args.format,
-                           "glb, gltf, obj or ply (default: from the extension)");
-    bool no_instance = false;
-    import_cmd->add_flag("--no-instance", no_instance, "Create meshes and materials only");
+    CLI::App* play_cmd = add_play(app, play);
+    Actions actions;
+    add_edit(app, actions);
+    add_render(app, actions);
+    add_reports(app, actions);
+    add_scene(app, actions);
+    add_pick(app, actions);
+    add_snapshot(app, actions);
+    add_import(app, actions);
 
     try {
         app.parse(argc, argv);
@@ -229,25 +310,8 @@ int main(int argc, char** argv) {
         std::cerr << "strata: " << transport.error().message << '\n';
         return USAGE;
     }
-    Transport& t = *transport.value();
     const Console console{std::cout, std::cerr, json};
-    if (edit_cmd->parsed())
-        return run_edit(t, console, edit_file,
-                        if_match.empty() ? std::nullopt : std::optional(if_match));
-    if (render_cmd->parsed()) return run_render(t, console, render);
-    if (commit_cmd->parsed()) return run_commit(t, console);
-    if (plan_cmd->parsed()) return run_plan(t, console);
-    if (stats_cmd->parsed()) return run_stats(t, console);
-    if (list_cmd->parsed()) return run_scene_list(t, console, list);
-    if (get_cmd->parsed()) return run_scene_get(t, console, get_kind, get_id);
-    if (tree_cmd->parsed()) return run_scene_tree(t, console, tree);
-    if (scene_cmd->parsed()) return run_scene(t, console);
-    if (pick_cmd->parsed()) return run_pick(t, console, pick);
-    if (snapshot_save->parsed()) return run_snapshot_save(t, console, snapshot_file);
-    if (snapshot_load->parsed()) return run_snapshot_load(t, console, snapshot_file);
-    if (import_cmd->parsed()) {
-        import_args.instance = !no_instance;
-        return run_import(t, console, import_args);
-    }
+    for (const auto& [cmd, action] : actions)
+        if (cmd->parsed()) return action(*transport.value(), console);
     return USAGE;
 }

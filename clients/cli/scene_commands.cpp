@@ -1,8 +1,11 @@
-// `strata scene list`, `strata scene get`, `strata scene tree` and `strata pick`: reading the
-// scene object by object or as an outline, and asking what lies under a pixel.
+// `strata scene`, `strata scene list`, `strata scene get`, `strata scene tree` and `strata pick`:
+// reading the scene as a summary, object by object or as an outline, and asking what lies under a
+// pixel.
 
 #include "clients/cli/commands.h"
 
+#include <cstdio>
+#include <iterator>
 #include <ostream>
 
 namespace strata::cli {
@@ -43,7 +46,71 @@ std::string item_line(const std::string& collection, const Json& item) {
     return line;
 }
 
+/// "0,4.5,11" for a JSON array of numbers: the way --eye and --target take them.
+std::string numbers(const Json& list) {
+    std::string out;
+    for (const Json& v : list) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%g", v.is_number() ? v.get<double>() : 0.0);
+        out += (out.empty() ? "" : ",") + std::string(buf);
+    }
+    return out.empty() ? "?" : out;
+}
+
+/// A size for people: "812 bytes", "4.4 KiB", "4.8 MiB".
+std::string size_text(uint64_t bytes) {
+    if (bytes < 1024) return std::to_string(bytes) + " bytes";
+    static const char* const UNITS[] = {"KiB", "MiB", "GiB", "TiB"};
+    double value = double(bytes) / 1024;
+    std::size_t unit = 0;
+    for (; value >= 1024 && unit + 1 < std::size(UNITS); ++unit) value /= 1024;
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.1f %s", value, UNITS[unit]);
+    return buf;
+}
+
+/// `strata scene` for people: one "label  value" line per fact, from GET /v1/scene and the
+/// memory and last report of GET /v1/stats.
+std::string scene_summary(const Json& scene, const Json& stats) {
+    std::string out;
+    auto line = [&out](const std::string& label, const std::string& value) {
+        out += label + std::string(label.size() < 11 ? 11 - label.size() : 1, ' ') + value + '\n';
+    };
+    const Json counts = scene.value("counts", Json::object());
+    auto count = [&counts](const std::string& name) {
+        return std::to_string(counts.value(name, uint64_t(0)));
+    };
+    line("version", std::to_string(scene.value("version", uint64_t(0))));
+    for (const std::string& collection : scene_collections()) line(collection, count(collection));
+    line("triangles", count("triangles") + " in meshes, " + count("instanced_triangles") +
+                          " in visible instances");
+    const Json memory = stats.value("memory_bytes", Json::object());
+    line("memory", "blas " + size_text(memory.value("blas", uint64_t(0))) + ", tlas " +
+                       size_text(memory.value("tlas", uint64_t(0))));
+    const Json camera = scene.value("camera", Json::object());
+    line("camera", "eye " + numbers(camera.value("eye", Json::array())) + "  target " +
+                       numbers(camera.value("target", Json::array())) + "  fov " +
+                       numbers(Json::array({camera.value("fov_y_deg", 0.0)})));
+    const Json last = stats.value("last_report", Json());
+    line("last", last.is_object() ? report_summary(last) : "no commit yet");
+    return out;
+}
+
 }  // namespace
+
+int run_scene(Transport& t, const Console& c) {
+    int code = OK;
+    const auto scene = json_answer(c, t, "scene", t.scene(), code);
+    if (!scene) return code;
+    if (c.json) {
+        c.out << scene->dump() << '\n';
+        return OK;
+    }
+    const auto stats = json_answer(c, t, "stats", t.stats(), code);
+    if (!stats) return code;
+    c.out << scene_summary(*scene, *stats);
+    return OK;
+}
 
 const std::vector<std::string>& scene_collections() {
     static const std::vector<std::string> names = {"meshes", "instances", "materials", "groups",
@@ -98,7 +165,8 @@ int run_scene_get(Transport& t, const Console& c, const std::string& kind, const
         c.out << (c.json ? doc->dump() : doc->dump(2)) << '\n';
         return OK;
     }
-    c.err << "strata: unknown object kind '" << kind << "': mesh, instance, material or group\n";
+    c.err << "strata: unknown object kind '" << kind
+          << "': mesh, instance, material, group, light or texture\n";
     return BAD_INPUT;
 }
 
@@ -144,6 +212,8 @@ int run_pick(Transport& t, const Console& c, const PickArgs& args) {
     Json body = {{"width", args.width},
                  {"height", args.height},
                  {"pixels", Json::array({Json::array({args.x, args.y})})}};
+    const Json camera = camera_json(args.camera);
+    if (!camera.empty()) body["camera"] = camera;
     int code = OK;
     const auto doc = json_answer(c, t, "pick", t.pick(body.dump()), code);
     if (!doc) return code;

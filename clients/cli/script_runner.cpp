@@ -1,5 +1,7 @@
 #include "clients/cli/script_runner.h"
 
+#include "clients/cli/image_files.h"
+
 #include <algorithm>
 #include <cctype>
 #include <chrono>
@@ -21,15 +23,6 @@ constexpr int LIST_PAGE_SIZE = 10000;
 
 /// Ends the play: thrown by the player, caught once in play().
 struct Stop {};
-
-bool ends_with(const std::string& s, const char* suffix) {
-    const std::string_view tail(suffix);
-    if (s.size() < tail.size()) return false;
-    for (std::size_t i = 0; i < tail.size(); ++i)
-        if (std::tolower(static_cast<unsigned char>(s[s.size() - tail.size() + i])) != tail[i])
-            return false;
-    return true;
-}
 
 uint64_t repeat_count(uint64_t count, const PlayOptions& options) {
     return options.max_repeat ? std::min(count, *options.max_repeat) : count;
@@ -133,9 +126,7 @@ private:
         if (s.out) {
             const std::string out = value_of(s, s.out->render(m_vars));
             // The file name says the format unless the request does.
-            const char* by_name = ends_with(out, ".exr")   ? "exr"
-                                  : ends_with(out, ".png") ? "png"
-                                                           : nullptr;
+            const char* by_name = format_of_file_name(out);
             if (by_name && !body.contains("format")) body["format"] = by_name;
             if (by_name && body["format"] != by_name)
                 fail_script(s, "\"out\" is '" + out + "' but the request asks for format " +

@@ -12,6 +12,8 @@ const $ = (id) => document.getElementById(id);
 
 /// Page parameters: ?width=&height= fix the frame size (else it fits the window), and
 /// ?fps=, ?quality=, ?max_samples= are passed to the stream (a slow link or a slow server).
+/// ?still shows one rendered frame (?spp=, default 16) and opens nothing endless, so that a
+/// headless browser's page load ends: screenshots and thumbnails.
 const page = new URLSearchParams(location.search);
 const pageNumber = (name, fallback) => {
   const v = Number(page.get(name));
@@ -47,18 +49,32 @@ function status(text) {
 let streamTimer = null;
 let streamCount = 0;
 const clientId = Math.random().toString(36).slice(2, 10);
+/// The camera override as query parameters (none: the scene camera).
+function cameraParams(camera) {
+  if (!camera) return {};
+  return {
+    eye: camera.eye.map((v) => v.toFixed(4)).join(','),
+    target: camera.target.map((v) => v.toFixed(4)).join(','),
+    up: camera.up.map((v) => v.toFixed(4)).join(','),
+    fov_y_deg: camera.fov_y_deg.toFixed(3),
+  };
+}
+
+/// Shows `url` in the frame at the frame size.
+function showFrame(url) {
+  const [w, h] = state.size;
+  const img = $('frame');
+  img.width = w;
+  img.height = h;
+  img.src = url;
+}
+
 function openStream(camera) {
   const [w, h] = state.size;
   const params = {
     width: w, height: h, quality: pageNumber('quality', 80), fps: pageNumber('fps', 20),
-    max_samples: pageNumber('max_samples', 32),
+    max_samples: pageNumber('max_samples', 32), ...cameraParams(camera),
   };
-  if (camera) {
-    params.eye = camera.eye.map((v) => v.toFixed(4)).join(',');
-    params.target = camera.target.map((v) => v.toFixed(4)).join(',');
-    params.up = camera.up.map((v) => v.toFixed(4)).join(',');
-    params.fov_y_deg = camera.fov_y_deg.toFixed(3);
-  }
   // The selected instance is tinted by the server, pixel by pixel, from the frame's instance ids.
   if (state.selected && state.selected.kind === 'instance') params.highlight = state.selected.id;
   const key = JSON.stringify(params);
@@ -68,10 +84,25 @@ function openStream(camera) {
   params.client = `${clientId}-${++streamCount}`;
   const url = withToken('/v1/stream', params);
   state.streamUrl = url;
+  showFrame(url);
+}
+
+/// ?still: one frame from GET /v1/render. Once it is shown, the title names its version and
+/// <body data-still="ready"> (or "failed") tells a script the page is done.
+function renderStill(camera) {
+  const [w, h] = state.size;
   const img = $('frame');
-  img.width = w;
-  img.height = h;
-  img.src = url;
+  img.addEventListener('load', () => {
+    document.title = `Strata · version ${state.version} (still)`;
+    document.body.dataset.still = 'ready';
+  }, { once: true });
+  img.addEventListener('error', () => {
+    document.body.dataset.still = 'failed';
+    message('The frame could not be rendered.');
+  }, { once: true });
+  showFrame(withToken('/v1/render', {
+    width: w, height: h, spp: pageNumber('spp', 16), ...cameraParams(camera),
+  }));
 }
 
 /// Throttles stream reopening while the camera is being dragged.
@@ -79,7 +110,8 @@ function cameraChanged(camera) {
   $('follow').classList.toggle('on', camera === null);
   clearTimeout(streamTimer);
   streamTimer = setTimeout(() => {
-    openStream(camera);
+    if (page.has('still')) renderStill(camera);
+    else openStream(camera);
     drawSelection();
   }, camera ? 60 : 0);
   drawSelection();
@@ -279,8 +311,12 @@ async function start() {
     return;
   }
   fitSize();
-  openStream(controls.camera);
-  openEvents();
+  if (page.has('still')) {
+    renderStill(controls.camera);
+  } else {
+    openStream(controls.camera);
+    openEvents();
+  }
   scenePanel.load();
 }
 

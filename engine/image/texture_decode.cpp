@@ -30,9 +30,53 @@ const std::array<uint16_t, 256>& srgb_table() {
     return table;
 }
 
-/// Checks the header's size against the limits, before anything is allocated for the texels.
-Status check_size(uint32_t width, uint32_t height, const TextureLimits& limits,
-                  const char* format) {
+uint32_t big_endian32(const uint8_t* p) {
+    return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3];
+}
+
+/// PNG: the signature, then chunks (length, type, data, CRC) up to and including IEND.
+std::size_t png_length(const uint8_t* p, std::size_t n) {
+    std::size_t at = 8;
+    while (at + 12 <= n) {
+        const uint64_t length = big_endian32(p + at);
+        const bool last = std::memcmp(p + at + 4, "IEND", 4) == 0;
+        if (length > n - at - 12) return 0;
+        at += 12 + std::size_t(length);
+        if (last) return at;
+    }
+    return 0;
+}
+
+/// JPEG: SOI, then segments; after each start-of-scan, entropy-coded data in which 0xFF is
+/// followed by 0x00 (a stuffed byte) or a restart marker, up to the next marker; EOI ends it.
+std::size_t jpeg_length(const uint8_t* p, std::size_t n) {
+    std::size_t at = 2;
+    while (at + 1 < n) {
+        if (p[at] != 0xFF) return 0;
+        const uint8_t marker = p[at + 1];
+        if (marker == 0xFF) {  // fill byte
+            ++at;
+            continue;
+        }
+        at += 2;
+        if (marker == 0xD9) return at;                                    // EOI
+        if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD7)) continue;  // no length
+        if (at + 2 > n) return 0;
+        const std::size_t length = std::size_t(p[at]) << 8 | p[at + 1];
+        if (length < 2 || length > n - at) return 0;
+        at += length;
+        if (marker != 0xDA) continue;
+        while (at + 1 < n && !(p[at] == 0xFF && p[at + 1] != 0x00 &&
+                               !(p[at + 1] >= 0xD0 && p[at + 1] <= 0xD7)))
+            ++at;
+    }
+    return 0;
+}
+
+}  // namespace
+
+Status check_texture_size(uint32_t width, uint32_t height, const TextureLimits& limits,
+                          const char* format) {
     if (width == 0 || height == 0)
         return failure(ErrorCode::InvalidArgument,
                        std::string(format) + " image has no pixels (" + std::to_string(width) +
@@ -54,6 +98,8 @@ Status check_size(uint32_t width, uint32_t height, const TextureLimits& limits,
                        FIELD);
     return {};
 }
+
+namespace {
 
 /// 8-bit sRGB RGB rows to the linear texels of `out` (sized here).
 void to_linear(const uint8_t* rgb, TextureImage& out) {
@@ -111,7 +157,7 @@ Result<TextureImage> decode_png_texture(std::string_view bytes, const TextureLim
     png_set_user_limits(s->png, 0x7fffffff, 0x7fffffff);
     png_set_chunk_malloc_max(s->png, 8u << 20);
     png_read_info(s->png, s->info);
-    size_ok = check_size(png_get_image_width(s->png, s->info),
+    size_ok = check_texture_size(png_get_image_width(s->png, s->info),
                          png_get_image_height(s->png, s->info), limits, "PNG");
     if (!size_ok) return Unexpected(size_ok.error());
     png_set_expand(s->png);
@@ -167,7 +213,7 @@ Result<TextureImage> decode_jpeg_texture(std::string_view bytes, const TextureLi
     if (width <= 0 || height <= 0)
         return failure(ErrorCode::InvalidArgument, "corrupt JPEG: the header gives no image size",
                        FIELD);
-    if (Status s = check_size(uint32_t(width), uint32_t(height), limits, "JPEG"); !s)
+    if (Status s = check_texture_size(uint32_t(width), uint32_t(height), limits, "JPEG"); !s)
         return Unexpected(s.error());
     if (colorspace == TJCS_CMYK || colorspace == TJCS_YCCK)
         return failure(ErrorCode::InvalidArgument, "JPEG image is CMYK; only RGB and greyscale",
@@ -199,6 +245,13 @@ Result<TextureImage> decode_jpeg_texture(std::string_view bytes, const TextureLi
 
 uint16_t srgb8_to_linear16(uint8_t code) {
     return srgb_table()[code];
+}
+
+std::size_t image_length(std::string_view bytes) {
+    const auto* p = reinterpret_cast<const uint8_t*>(bytes.data());
+    const char* format = texture_format(bytes);
+    if (!format) return 0;
+    return format[0] == 'p' ? png_length(p, bytes.size()) : jpeg_length(p, bytes.size());
 }
 
 const char* texture_format(std::string_view bytes) {

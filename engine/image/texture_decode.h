@@ -5,6 +5,7 @@
 // and OBJ base-colour textures are) and converted to linear once, here. Alpha is dropped;
 // greyscale and palette images become RGB.
 
+#include <cstddef>
 #include <cstdint>
 #include <string_view>
 
@@ -24,6 +25,22 @@ struct TextureLimits {
 
 /// Which decoder the bytes call for: "png", "jpeg", or nullptr for neither.
 const char* texture_format(std::string_view bytes);
+
+/// The length of the PNG (through its IEND chunk) or JPEG (through its EOI marker) at the start
+/// of `bytes`, found by walking its chunks or segments without decoding; 0 when it has no end
+/// there (truncated, or neither format). Whatever follows is not part of the image.
+std::size_t image_length(std::string_view bytes);
+
+/// Checks a decoded image's size against `limits` (what decode_texture checks from the header),
+/// for an image decoded earlier with wider limits. `format`: "PNG" or "JPEG".
+Status check_texture_size(uint32_t width, uint32_t height, const TextureLimits& limits,
+                          const char* format);
+
+/// An image decoded ahead of the rule that stores it (AddTexture::decoded), with the limits the
+/// decode could know then: the rule checks what is left of the budget again.
+struct DecodedTexture {
+    Result<TextureImage> image;
+};
 
 /// Decodes a PNG or JPEG. Errors (field "data"): InvalidArgument for bytes that are neither or
 /// are corrupt (the message says what the decoder found), TooLarge for an image over `limits`.

@@ -47,7 +47,7 @@ struct Frame {
 /// the HTTP response body.
 struct EncodedFrame {
     std::string bytes;
-    std::string content_type;  ///< "image/png" or "image/x-exr"
+    std::string content_type;  ///< "image/png", "image/x-exr" or "application/x-npz"
     FrameInfo info;
     double encode_ms = 0.0;
 };

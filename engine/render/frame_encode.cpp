@@ -3,6 +3,7 @@
 #include <new>
 
 #include "engine/core/timer.h"
+#include "engine/image/npz.h"
 #include "engine/image/png.h"
 #include "engine/image/tonemap.h"
 #include "engine/render/camera_rays.h"
@@ -26,6 +27,49 @@ void add_vec3(std::vector<ExrChannel>& out, const std::vector<Vec3>& buffer, con
 
 void add_uint(std::vector<ExrChannel>& out, const std::vector<uint32_t>& buffer, Aov aov) {
     out.push_back(ExrChannel{aov_name(aov), ExrPixel::Uint, nullptr, buffer.data(), 1});
+}
+
+std::string_view bytes_of(const void* data, std::size_t n) {
+    return {static_cast<const char*>(data), n};
+}
+
+/// The frame as numpy arrays: what exr_channels writes, one array per AOV, full precision, and
+/// each ID manifest table as `<aov>.ids` (uint32) beside `<aov>.names` (unicode).
+Result<std::string> encode_arrays(const FrameBuffers& f, const ExrAttributes& attributes) {
+    const std::size_t h = f.height, w = f.width, n = f.pixel_count();
+    std::vector<NpyArray> arrays;
+    auto vec3 = [&](const char* name, const std::vector<Vec3>& b) {
+        arrays.push_back({name, "<f4", {h, w, 3}, bytes_of(b.data(), n * sizeof(Vec3))});
+    };
+    auto u32 = [&](Aov aov, const std::vector<uint32_t>& b) {
+        arrays.push_back({aov_name(aov), "<u4", {h, w}, bytes_of(b.data(), n * 4)});
+    };
+    vec3("beauty", f.color);
+    if (f.aovs.has(Aov::Albedo)) vec3("albedo", f.albedo);
+    if (f.aovs.has(Aov::Normal)) vec3("normal", f.normal);
+    if (f.aovs.has(Aov::Depth))
+        arrays.push_back({"depth", "<f4", {h, w}, bytes_of(f.depth.data(), n * 4)});
+    if (f.aovs.has(Aov::Position)) vec3("position", f.position);
+    if (f.aovs.has(Aov::InstanceId)) u32(Aov::InstanceId, f.instance_id);
+    if (f.aovs.has(Aov::PrimitiveId)) u32(Aov::PrimitiveId, f.primitive_id);
+    if (f.aovs.has(Aov::MeshId)) u32(Aov::MeshId, f.mesh_id);
+    if (f.aovs.has(Aov::UserId)) u32(Aov::UserId, f.user_id);
+    // The manifests' storage outlives `arrays`, which borrows it.
+    std::vector<std::vector<uint32_t>> ids(attributes.ids.size()), names(attributes.ids.size());
+    for (std::size_t t = 0; t < attributes.ids.size(); ++t) {
+        const ExrIdTable& table = attributes.ids[t];
+        std::vector<std::string> texts;
+        for (const auto& [id, text] : table.entries) {
+            ids[t].push_back(id);
+            texts.push_back(text);
+        }
+        const std::string dtype = utf32_array(texts, names[t]);
+        const std::size_t count = table.entries.size();
+        arrays.push_back({table.channel + ".ids", "<u4", {count}, bytes_of(ids[t].data(), count * 4)});
+        arrays.push_back({table.channel + ".names", dtype, {count},
+                          bytes_of(names[t].data(), names[t].size() * 4)});
+    }
+    return encode_npz(arrays);
 }
 
 }  // namespace
@@ -73,6 +117,11 @@ Result<EncodedFrame> encode_frame(const FrameBuffers& buffers, const RenderReque
         if (!exr) return Unexpected(exr.error());
         out.bytes = std::move(exr.value());
         out.content_type = "image/x-exr";
+    } else if (request.format == ImageFormat::Npz) {
+        auto npz = encode_arrays(buffers, attributes);
+        if (!npz) return Unexpected(npz.error());
+        out.bytes = std::move(npz.value());
+        out.content_type = "application/x-npz";
     } else {
         try {
             std::vector<uint8_t> rgb(buffers.pixel_count() * 3);

@@ -21,6 +21,11 @@
 // worldToNDC for the frame's camera (camera_rays.h) and, with instance_id or mesh_id, an ID
 // manifest naming every slot the channels hold with its client id (component "instance" or
 // "mesh", lifetime frame: a freed slot may name another object in a later frame).
+//
+// NPZ (npz.h): the same content for numpy alone, linear and at full precision: `beauty`,
+// `albedo`, `normal`, `position` float32 (height, width, 3), `depth` float32 (height, width), the
+// id AOVs uint32 (height, width) under their AOV names, and each ID manifest as `<aov>.ids`
+// (uint32) beside `<aov>.names` (unicode): the client id of value ids[k] is names[k].
 
 #include <cstdint>
 #include <vector>
@@ -33,8 +38,8 @@
 
 namespace strata {
 
-/// Encodes `buffers` in `request`'s format with its exposure, AOVs and compression, and (EXR only)
-/// `attributes`; the result carries the encoding time (its `info` is the caller's to fill in).
+/// Encodes `buffers` in `request`'s format with its exposure, AOVs and compression, and (EXR and
+/// NPZ) `attributes`; the result carries the encoding time (its `info` is the caller's to fill in).
 Result<EncodedFrame> encode_frame(const FrameBuffers& buffers, const RenderRequest& request,
                                   const ExrAttributes& attributes = {});
 

@@ -7,7 +7,7 @@ namespace strata {
 
 namespace {
 
-constexpr const char* FORMAT_NAMES[] = {"png", "exr"};
+constexpr const char* FORMAT_NAMES[] = {"png", "exr", "npz"};
 constexpr const char* COMPRESSION_NAMES[] = {"none", "zip", "piz"};
 constexpr const char* AOV_NAMES[] = {"color",       "albedo",       "normal",  "depth",  "position",
                                      "instance_id", "primitive_id", "mesh_id", "user_id"};
@@ -64,7 +64,7 @@ Status check_render_request(const RenderRequest& r) {
         if (r.format == ImageFormat::Png && r.aovs[i] != Aov::Color)
             return failure(ErrorCode::InvalidArgument,
                            std::string("AOV '") + aov_name(r.aovs[i]) +
-                               "' needs format exr; a PNG carries only the color image",
+                               "' needs format exr or npz; a PNG carries only the color image",
                            "aovs/" + std::to_string(i));
     }
     if (r.band) {

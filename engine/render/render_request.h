@@ -16,7 +16,9 @@
 
 namespace strata {
 
-enum class ImageFormat : uint8_t { Png, Exr };
+/// PNG: the tone-mapped beauty image. EXR: linear, with AOVs. NPZ: the same arrays as numpy
+/// reads them (frame_encode.h).
+enum class ImageFormat : uint8_t { Png, Exr, Npz };
 
 /// Arbitrary output variables a frame can carry besides the beauty image.
 enum class Aov : uint8_t {
@@ -31,7 +33,7 @@ enum class Aov : uint8_t {
     UserId
 };
 
-/// Wire names: "png"/"exr", "none"/"zip"/"piz", "color", "albedo", "normal", "depth", "position",
+/// Wire names: "png"/"exr"/"npz", "none"/"zip"/"piz", "color", "albedo", "normal", "depth", "position",
 /// "instance_id", "primitive_id", "mesh_id", "user_id".
 const char* image_format_name(ImageFormat f);
 const char* exr_compression_name(ExrCompression c);

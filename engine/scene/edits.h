@@ -4,6 +4,7 @@
 // client-facing string ids; the scene maps ids to handles.
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <variant>
@@ -12,6 +13,8 @@
 #include "engine/scene/types.h"
 
 namespace strata {
+
+struct DecodedTexture;  // engine/image/texture_decode.h
 
 struct AddMesh {
     std::string id;
@@ -76,6 +79,9 @@ struct AddTexture {
     std::string id;
     std::string data;
     std::string name = {};  ///< display name (object_fields.h)
+    /// `data` decoded ahead, outside the scene lock (Engine::apply); never on the wire. The rule
+    /// decodes `data` itself when this is empty.
+    std::shared_ptr<DecodedTexture> decoded = {};
 };
 
 /// Removes a texture; refused while a material refers to it.

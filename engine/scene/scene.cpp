@@ -120,6 +120,10 @@ Result<uint64_t> Scene::apply(EditBatch&& batch,
         roll_back(undo);
         return Unexpected(std::move(e));
     }
+    if (Status s = check_world_transforms(); !s) {
+        roll_back(undo);
+        return Unexpected(std::move(s).error());
+    }
     if (before_done) {
         if (Status s = before_done(m_version + 1); !s) {
             roll_back(undo);
@@ -140,6 +144,7 @@ Status Scene::load(Edit&& edit) {
 }
 
 Status Scene::finish_load(uint64_t version) {
+    if (Status s = check_world_transforms(); !s) return s;
     flatten();  // the world transforms of everything loaded
     if (over_budget(m_totals, m_budget))
         return failure(ErrorCode::TooLarge, budget_message(m_totals, m_budget));

@@ -287,6 +287,12 @@ private:
     /// (Hydra's transform flattening, incremental): runs once per applied batch, costs what the
     /// batch dirtied, and marks the instances whose world changed for the TLAS.
     void flatten();
+    /// What flatten() is about to compose, checked first and changing nothing: every world
+    /// transform the batch's dirty groups and instances will get must be finite (each local
+    /// one is, but a chain of groups can multiply past float range). The error names the chain.
+    Status check_world_transforms() const;
+    /// "'a' > 'b' > 'c'": the groups from the root down to `g`.
+    std::string group_chain(GroupHandle g) const;
     /// Recomputes one instance's world from its parent's; marks it when it changed.
     void refresh_instance_world(InstanceHandle h, InstanceRecord& r);
 

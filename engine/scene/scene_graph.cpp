@@ -139,6 +139,66 @@ void Scene::refresh_instance_world(InstanceHandle h, InstanceRecord& r) {
     if (bits.any()) mark(h, bits);
 }
 
+std::string Scene::group_chain(GroupHandle g) const {
+    std::vector<const std::string*> ids;
+    for (; !g.is_null(); g = m_groups.at(g).parent) ids.push_back(&m_groups.at(g).id);
+    std::string chain;
+    for (auto it = ids.rbegin(); it != ids.rend(); ++it)
+        chain += (chain.empty() ? "'" : " > '") + **it + "'";
+    return chain;
+}
+
+Status Scene::check_world_transforms() const {
+    // An instance's world must pass the rule a root instance's transform passes (rays in its
+    // space stay finite and invertible); a group's world must be finite to compose. The same
+    // walk as flatten(), composing into locals: a dirty subtree top-down, each group carrying
+    // its new world, then the single instances outside dirty subtrees.
+    auto refuse = [&](GroupHandle g, const std::string& what, const char* why) {
+        return failure(why ? ErrorCode::DegenerateTransform : ErrorCode::NotFinite,
+                       what + "'s world transform " +
+                           (why ? std::string("breaks the transform rule (") + why + ")"
+                                : std::string("is not finite")) +
+                           " through the group chain " + group_chain(g));
+    };
+    auto check_instance = [&](GroupHandle g, const Affine& parent_world,
+                              const InstanceRecord& i) -> Status {
+        const Affine world = parent_world * i.transform;
+        if (const char* why = transform_problem(world))
+            return refuse(g, "instance '" + i.id + "'", world.is_finite() ? why : nullptr);
+        return {};
+    };
+    auto under_dirty = [&](GroupHandle p) {
+        for (; !p.is_null(); p = m_groups.at(p).parent)
+            if (m_groups.at(p).dirty.any()) return true;
+        return false;
+    };
+    std::vector<std::pair<GroupHandle, Affine>> stack;
+    for (GroupHandle top : m_world_groups) {
+        const GroupRecord* r = m_groups.get(top);
+        if (!r || r->dirty.none() || under_dirty(r->parent)) continue;
+        const GroupRecord* parent = m_groups.get(r->parent);
+        stack.emplace_back(top, parent ? parent->world * r->transform : r->transform);
+        while (!stack.empty()) {
+            const auto [g, world] = stack.back();
+            stack.pop_back();
+            const GroupRecord& group = m_groups.at(g);
+            if (!world.is_finite()) return refuse(g, "group '" + group.id + "'", nullptr);
+            for (InstanceHandle h : group.children.instances) {
+                if (Status s = check_instance(g, world, m_instances.at(h)); !s) return s;
+            }
+            for (GroupHandle c : group.children.groups)
+                stack.emplace_back(c, world * m_groups.at(c).transform);
+        }
+    }
+    for (InstanceHandle h : m_world_instances) {
+        const InstanceRecord* i = m_instances.get(h);
+        const GroupRecord* parent = i ? m_groups.get(i->parent) : nullptr;
+        if (!parent || under_dirty(i->parent)) continue;
+        if (Status s = check_instance(i->parent, parent->world, *i); !s) return s;
+    }
+    return {};
+}
+
 void Scene::flatten() {
     // Step: dirty subtrees. A dirty group under another dirty group is done by the upper one;
     // every group a subtree walk visits is cleaned, so no group is visited twice.

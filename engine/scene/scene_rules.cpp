@@ -429,12 +429,21 @@ Status Scene::apply_edit(AddTexture&& e, UndoLog& undo) {
     limits.max_bytes = m_budget.max_texture_bytes > m_totals.texture_bytes
                            ? m_budget.max_texture_bytes - m_totals.texture_bytes
                            : 0;
-    auto image = decode_texture(e.data, limits);
+    Result<TextureImage> image =
+        e.decoded ? std::move(e.decoded->image) : decode_texture(e.data, limits);
+    if (image && e.decoded) {
+        const char* format = std::string_view(texture_format(e.data)) == "png" ? "PNG" : "JPEG";
+        if (Status s = check_texture_size(image->width, image->height, limits, format); !s)
+            image = Unexpected(std::move(s).error());
+    }
     if (!image) {
         Error err = std::move(image).error();
         err.message = "texture '" + e.id + "': " + err.message;
         return Unexpected(std::move(err));
     }
+    // Only the image's own bytes are kept: whatever follows its end is not part of it.
+    if (const std::size_t length = image_length(e.data); length > 0 && length < e.data.size())
+        e.data = e.data.substr(0, length);
 
     m_totals.texture_bytes += image.value().bytes();
     TextureRecord r;

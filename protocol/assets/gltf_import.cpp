@@ -287,6 +287,12 @@ private:
                                   "image " + std::to_string(source) + " does not exist");
         if (auto it = m_images.find(source); it != m_images.end()) return it->second;
         const tinygltf::Image& image = m_model.images[std::size_t(source)];
+        // Images that share a buffer view share one texture: a file naming one view from many
+        // images must not multiply its bytes.
+        if (auto it = m_views.find(image.bufferView); image.bufferView >= 0 && it != m_views.end()) {
+            m_images.emplace(source, it->second);
+            return it->second;
+        }
         AssetTexture t;
         t.name = image.name;
         t.mime_type = image.mimeType;
@@ -310,6 +316,7 @@ private:
         const int index = int(m_asset.textures.size());
         m_asset.textures.push_back(std::move(t));
         m_images.emplace(source, index);
+        if (image.bufferView >= 0) m_views.emplace(image.bufferView, index);
         return index;
     }
 
@@ -564,6 +571,7 @@ private:
     Asset m_asset;
     std::map<int, std::vector<int>> m_meshes;  ///< glTF mesh -> asset meshes
     std::map<int, int> m_images;               ///< glTF image -> asset texture
+    std::map<int, int> m_views;                ///< buffer view holding an image -> asset texture
     uint64_t m_vertices = 0;
     uint64_t m_triangles = 0;
 };

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <sstream>
+#include <string_view>
 #include <unordered_map>
 
 #include <tiny_obj_loader.h>
@@ -75,18 +77,95 @@ struct VertexKeyHash {
     }
 };
 
+/// What the text declares, counted before tinyobjloader holds all of it in memory.
+struct Declared {
+    uint64_t positions = 0;
+    uint64_t triangles = 0;
+};
+
+/// A face, line or point element's index ("12", "-3", "4/5/6", "7//8") fits tinyobjloader's int;
+/// false names the first part that does not (it would wrap silently).
+bool indices_fit(std::string_view element, std::string_view& bad) {
+    std::size_t i = 0;
+    while (i <= element.size()) {
+        const std::size_t end = std::min(element.find('/', i), element.size());
+        std::string_view part = element.substr(i, end - i);
+        if (!part.empty() && (part[0] == '-' || part[0] == '+')) part.remove_prefix(1);
+        while (!part.empty() && part[0] == '0') part.remove_prefix(1);
+        if (part.size() > 10 || (part.size() == 10 && part > "2147483647")) {
+            bad = element.substr(i, end - i);
+            return false;
+        }
+        i = end + 1;
+    }
+    return true;
+}
+
+/// Step 0: one pass over the text. Counts vertex positions and the triangles that faces declare
+/// against the budget, and refuses an index that does not fit an int, all before parsing: an
+/// over-budget file is refused without the memory that parsing it would take.
+Imported<Declared> prescan(std::string_view text, const ErrorSink& sink,
+                           const ImportLimits& limits) {
+    Declared d;
+    std::size_t line_no = 0;
+    auto over = [&](uint64_t room, const char* declared, const char* unit) {
+        return sink.too_large("line " + std::to_string(line_no),
+                              "the file declares more than " + std::to_string(room) + " " +
+                                  declared + "; the scene has room for " + std::to_string(room) +
+                                  " " + unit);
+    };
+    for (std::size_t pos = 0; pos < text.size();) {
+        const std::size_t eol = std::min(text.find('\n', pos), text.size());
+        std::string_view line = text.substr(pos, eol - pos);
+        pos = eol + 1;
+        ++line_no;
+        const std::size_t first = line.find_first_not_of(" \t");
+        if (first == std::string_view::npos || first + 1 >= line.size()) continue;
+        line.remove_prefix(first);
+        if (line[1] != ' ' && line[1] != '\t') continue;
+        const char key = line[0];
+        if (key == 'v') {
+            if (++d.positions > limits.max_vertices)
+                return over(limits.max_vertices, "vertex positions", "vertices (max_scene_vertices)");
+            continue;
+        }
+        if (key != 'f' && key != 'l' && key != 'p') continue;
+        uint64_t corners = 0;
+        std::size_t i = 1;
+        while (i < line.size()) {
+            while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
+            const std::size_t start = i;
+            while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') ++i;
+            if (i == start) break;
+            std::string_view bad;
+            if (!indices_fit(line.substr(start, i - start), bad))
+                return sink.invalid("line " + std::to_string(line_no),
+                                    "index " + std::string(bad.substr(0, 40)) +
+                                        " is out of range (indices are at most 2147483647)");
+            ++corners;
+        }
+        if (key == 'f' && corners >= 3) d.triangles += corners - 2;
+        if (d.triangles > limits.max_triangles)
+            return over(limits.max_triangles, "triangles", "triangles (max_scene_triangles)");
+    }
+    return d;
+}
+
 }  // namespace
 
 Imported<Asset> import_obj(std::span<const uint8_t> bytes, const std::string& file,
                            const SideFiles& side_files, const ImportLimits& limits) {
     const ErrorSink sink(file);
+    const std::string_view text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+    if (auto declared = prescan(text, sink, limits); !declared)
+        return Unexpected(std::move(declared).error());
     // Step 1: parse, the MTL from the upload only, polygons kept whole (tinyobjloader's own
     // triangulation reads vertices before anything checked the indices).
     tinyobj::attrib_t attrib;
     std::vector<tinyobj::shape_t> shapes;
     std::vector<tinyobj::material_t> mtl;
     std::string warn, err;
-    std::istringstream in(std::string(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+    std::istringstream in{std::string(text)};
     UploadMaterialReader reader(side_files);
     bool ok = false;
     try {
@@ -101,7 +180,8 @@ Imported<Asset> import_obj(std::span<const uint8_t> bytes, const std::string& fi
         asset.warnings.push_back("mtllib '" + name +
                                  "' is not part of the upload; its materials are left out");
 
-    // Step 2: materials.
+    // Step 2: materials. Materials naming the same image share one texture.
+    std::map<const std::string*, int> texture_of_file;
     for (std::size_t i = 0; i < mtl.size(); ++i) {
         const tinyobj::material_t& m = mtl[i];
         AssetMaterial out;
@@ -113,17 +193,23 @@ Imported<Asset> import_obj(std::span<const uint8_t> bytes, const std::string& fi
             out.material.emission[c] =
                 std::isfinite(m.emission[c]) ? std::clamp(m.emission[c], 0.0f, 1e4f) : 0.0f;
         if (!m.diffuse_texname.empty()) {
-            AssetTexture t;
-            t.name = m.diffuse_texname;
-            t.uri = m.diffuse_texname;
-            t.mime_type = mime_of(m.diffuse_texname);
             const std::string& folder = i < reader.folders.size() ? reader.folders[i] : "";
             const std::string* image =
                 folder.empty() ? nullptr : find_side_file(side_files, folder + m.diffuse_texname);
             if (!image) image = find_side_file(side_files, m.diffuse_texname);
-            if (image) t.bytes.assign(image->begin(), image->end());
-            out.base_color_texture = int(asset.textures.size());
-            asset.textures.push_back(std::move(t));
+            if (auto shared = texture_of_file.find(image);
+                image && shared != texture_of_file.end()) {
+                out.base_color_texture = shared->second;
+            } else {
+                AssetTexture t;
+                t.name = m.diffuse_texname;
+                t.uri = m.diffuse_texname;
+                t.mime_type = mime_of(m.diffuse_texname);
+                if (image) t.bytes.assign(image->begin(), image->end());
+                out.base_color_texture = int(asset.textures.size());
+                if (image) texture_of_file.emplace(image, out.base_color_texture);
+                asset.textures.push_back(std::move(t));
+            }
         }
         asset.materials.push_back(std::move(out));
     }

@@ -37,6 +37,15 @@ redis.call('SET', KEYS[2], string.format('%d', v))
 return {1, v}
 )lua";
 
+// The log's version key and the id of its newest entry, read at once (the append script writes
+// both at once): {version or nil, id or nil}.
+const std::string LOG_HEAD_SCRIPT = R"lua(
+local newest = redis.call('XREVRANGE', KEYS[1], '+', '-', 'COUNT', 1)
+local id = false
+if #newest > 0 then id = newest[1][1] end
+return {redis.call('GET', KEYS[2]), id}
+)lua";
+
 // Stores snapshot ARGV[2] of version ARGV[1] when newer than the stored one, then trims the
 // stream below the snapshot it replaced. Returns {stored 0/1, the stored version, trimmed}.
 const std::string SNAPSHOT_SCRIPT = R"lua(
@@ -207,14 +216,9 @@ void Replica::reader_loop() {
 Status Replica::on_connect(RedisConnection& c) {
     const RedisUrl& url = m_options.url;
     // Step: the log's head, and the snapshot an empty replica starts from.
-    auto head = c.command({"GET", url.version_key()});
+    auto head = read_log_head(c);
     if (!head) return Unexpected(head.error());
-    uint64_t log_version = 0;
-    if (!head.value().is_nil() && !parse_u64(head.value().str, log_version)) {
-        stop_loudly("the key " + url.version_key() + " does not hold a version ('" +
-                    head.value().str.substr(0, 40) + "')");
-        return storage("bad version key");
-    }
+    const uint64_t log_version = head.value();
     auto snap_version = c.command({"HGET", url.snapshot_key(), "version"});
     if (!snap_version) return Unexpected(snap_version.error());
     uint64_t snapshot = 0;
@@ -222,12 +226,6 @@ Status Replica::on_connect(RedisConnection& c) {
     m_known_snapshot = std::max(m_known_snapshot.load(), snapshot);
 
     const uint64_t applied = m_applied.load();
-    if (log_version < applied) {
-        stop_loudly("the log ends at version " + std::to_string(log_version) +
-                    ", behind this replica's version " + std::to_string(applied) +
-                    " (was Redis reset, or did it lose acknowledged entries?)");
-        return storage("log behind the replica");
-    }
     // Step: an empty replica starts from the snapshot; one holding a scene jumps to it only when
     // the entries after its version were trimmed away.
     if (applied == 0 && snapshot > 0) {
@@ -292,10 +290,9 @@ Status Replica::read_and_apply(RedisConnection& c) {
 }
 
 Status Replica::refresh_head(RedisConnection& c) {
-    auto head = c.command({"GET", m_options.url.version_key()});
+    auto head = read_log_head(c);
     if (!head) return Unexpected(head.error());
-    uint64_t v = 0;
-    if (!head.value().is_nil() && parse_u64(head.value().str, v)) set_log_version(v);
+    set_log_version(head.value());
     if (m_log_version.load() <= m_applied.load()) return {};
     // The head moved but XREAD found nothing after us: the entries are gone.
     const uint64_t applied = m_applied.load();
@@ -388,6 +385,43 @@ Status Replica::jump_to_snapshot(RedisConnection& c, uint64_t applied, const std
     if (Status s = load_snapshot(c, applied, gap); !s) return s;
     if (!m_joined && m_applied.load() >= m_join_target) mark_joined();
     return {};
+}
+
+Result<uint64_t> Replica::read_log_head(RedisConnection& c) {
+    const RedisUrl& url = m_options.url;
+    auto reply = c.eval(LOG_HEAD_SCRIPT, {url.stream, url.version_key()}, {});
+    if (!reply) return Unexpected(reply.error());
+    const RedisReply& r = reply.value();
+    if (r.elements.size() != 2) return storage("the edit log's head script answered something unexpected");
+    const RedisReply& key = r.elements[0];
+    const RedisReply& newest = r.elements[1];
+    uint64_t head = 0;
+    if (!key.is_nil() && !parse_u64(key.str, head)) {
+        stop_loudly("the key " + url.version_key() + " does not hold a version ('" +
+                    key.str.substr(0, 40) + "')");
+        return stopped_error();
+    }
+    if (Status s = check_not_behind(head); !s) return Unexpected(s.error());
+    // The newest entry is always the head's: trimming removes only older ones.
+    const std::string expected = head == 0 ? std::string() : entry_id(head);
+    const std::string found = newest.is_nil() ? std::string() : newest.str;
+    if (found != expected) {
+        stop_loudly("the edit log was rewritten: " + url.version_key() + " says version " +
+                    std::to_string(head) + " but the stream's newest entry is " +
+                    (found.empty() ? std::string("missing (the stream was emptied or deleted)")
+                                   : "'" + found.substr(0, 40) + "'"));
+        return stopped_error();
+    }
+    return head;
+}
+
+Status Replica::check_not_behind(uint64_t head) {
+    const uint64_t applied = m_applied.load();
+    if (head >= applied) return {};
+    stop_loudly("the edit log ends at version " + std::to_string(head) +
+                ", behind this replica's version " + std::to_string(applied) +
+                " (was Redis reset, or did it lose acknowledged entries?)");
+    return stopped_error();
 }
 
 Result<bool> Replica::holds_entry_after(RedisConnection& c, uint64_t applied) {
@@ -497,6 +531,12 @@ Result<ApplyResult> Replica::append(EditBatch&& batch, std::optional<uint64_t> e
     std::string entry = encode_entry(batch, 0);
     batch = {};
     for (;;) {
+        // Step: every try within the write deadline; a stopped replica or a shutdown ends it.
+        if (m_stopped) return stopped_error();
+        if (m_shutdown) return storage("the server is shutting down");
+        if (Clock::now() >= deadline)
+            return storage("the batch could not be appended to the edit log within " +
+                           std::to_string(m_options.write_timeout.count()) + " ms");
         // Step: the version to validate at. A client that saw a newer version (If-Match) than
         // this replica has applied waits for it first.
         auto base = validation_base(expected, deadline);
@@ -562,6 +602,7 @@ Result<bool> Replica::validate_at(const std::string& entry, uint64_t base,
         // only against the log's head.
         auto head = log_head();
         if (!head) return Unexpected(head.error());
+        if (Status s = check_not_behind(head.value()); !s) return Unexpected(s.error());
         if (head.value() <= base) return Unexpected(ok.error());
         set_log_version(head.value());
         if (expected) return log_moved_on(head.value(), *expected);
@@ -594,9 +635,14 @@ Result<Replica::AppendAnswer> Replica::append_at(const std::string& entry, uint6
     }();
     if (!reply) return Unexpected(reply.error());
     const RedisReply& r = reply.value();
-    if (r.elements.size() != 2)
+    if (r.elements.size() != 2 || r.elements[1].integer < 0)
         return storage("the edit log's append script answered something unexpected");
-    return AppendAnswer{r.elements[0].integer == 1, uint64_t(r.elements[1].integer)};
+    const AppendAnswer answer{r.elements[0].integer == 1, uint64_t(r.elements[1].integer)};
+    // Refused at a head behind this replica: the log lost what this replica applied.
+    if (!answer.appended) {
+        if (Status s = check_not_behind(answer.head); !s) return Unexpected(s.error());
+    }
+    return answer;
 }
 
 Result<ApplyResult> Replica::await_appended(uint64_t version, std::size_t count,

@@ -11,7 +11,10 @@
 // Failures. An entry that fails its checksum or does not apply (a poisoned entry), a gap in the
 // versions that no snapshot bridges, or a log that ends before this replica's version stop the
 // replica loudly: it applies nothing more, /readyz answers 503 with the reason, writes 503, and
-// the reason is logged and exported. Redis unreachable: writes fail with a Storage error (503),
+// the reason is logged and exported. So does a log that was reset or rewritten under it (its
+// version key behind this replica's version or gone, its newest entry not the head's), found
+// by the reader within a second or by the next write at once. A write never retries past the
+// write deadline. Redis unreachable: writes fail with a Storage error (503),
 // reads and renders of the applied version go on, and the reader reconnects with backoff (50 ms
 // doubling to 2 s) and catches up.
 //
@@ -99,10 +102,6 @@ public:
     /// unreachable, a stopped replica or a timeout: a Storage error saying which.
     Result<ApplyResult> append(EditBatch&& batch, std::optional<uint64_t> expected);
 
-    /// Waits until the applied version is at least `version`; false on timeout or when the
-    /// replica stopped.
-    bool wait_applied(uint64_t version, std::chrono::milliseconds timeout);
-
     uint64_t applied_version() const { return m_applied.load(); }
     ReplicaStatus status() const;
     /// Ready to serve: joined, not stopped.
@@ -144,6 +143,12 @@ private:
     void record_applied(const StreamEntry& entry);
     /// load_snapshot over the gap after `applied`, then joins if that caught the replica up.
     Status jump_to_snapshot(RedisConnection& c, uint64_t applied, const std::string& gap);
+    /// The log's head version. Stops loudly when the log was reset or rewritten: its version
+    /// key is not a number or behind this replica, or its newest entry is not the head's.
+    Result<uint64_t> read_log_head(RedisConnection& c);
+    /// Stops loudly when the log's `head` is behind the applied version (Redis was reset or
+    /// lost entries this replica applied).
+    Status check_not_behind(uint64_t head);
     /// Whether the log still holds the entry after version `applied`.
     Result<bool> holds_entry_after(RedisConnection& c, uint64_t applied);
     /// Loads the stored snapshot in place of the scene at `applied` (0: an empty scene joining;
@@ -186,6 +191,9 @@ private:
     /// The writer connection, made on demand; null (and `error`) while Redis is unreachable.
     RedisConnection* writer(Error& error);
     bool sleep_for(std::chrono::milliseconds d);  ///< false once shutting down
+    /// Waits until the applied version is at least `version`; false on timeout or when the
+    /// replica stopped.
+    bool wait_applied(uint64_t version, std::chrono::milliseconds timeout);
 
     const ReplicaOptions m_options;
     Engine& m_engine;

@@ -5,6 +5,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
+#include "engine/image/png.h"
+#include "protocol/base64.h"
 #include "tests/assets/asset_test_util.h"
 
 namespace strata::assets::test {
@@ -106,6 +110,29 @@ TEST(GltfImport, EmbeddedAndBinaryBoxesImportWithTheirTexture) {
         EXPECT_EQ(a.value().materials[0].base_color_texture, 0) << path;
         EXPECT_EQ(a.value().meshes[0].uvs.size(), a.value().meshes[0].positions.size()) << path;
     }
+}
+
+TEST(GltfImport, ImagesThatShareABufferViewShareOneTexture) {
+    // Fifty images naming one buffer view used to hold fifty copies of its bytes.
+    const uint8_t rgb[] = {200, 100, 50};
+    const std::string png = encode_png(rgb, 1, 1, 3).value();
+    auto doc = nlohmann::json::parse(triangle_gltf(R"([{"mesh": 0}])", R"(, "material": 0)"));
+    doc["buffers"].push_back({{"byteLength", png.size()},
+                              {"uri", "data:application/octet-stream;base64," +
+                                          protocol::encode_base64(png)}});
+    doc["bufferViews"].push_back({{"buffer", 1}, {"byteOffset", 0}, {"byteLength", png.size()}});
+    for (int i = 0; i < 50; ++i) {
+        doc["images"].push_back({{"bufferView", 2}, {"mimeType", "image/png"}});
+        doc["textures"].push_back({{"source", i}});
+        doc["materials"].push_back(
+            {{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", i}}}}}});
+    }
+    auto a = import_text(AssetFormat::Gltf, doc.dump());
+    ASSERT_TRUE(a.has_value()) << a.error().describe();
+    ASSERT_EQ(a.value().textures.size(), 1u);
+    EXPECT_EQ(a.value().textures[0].bytes.size(), png.size());
+    ASSERT_EQ(a.value().materials.size(), 50u);
+    for (const AssetMaterial& m : a.value().materials) EXPECT_EQ(m.base_color_texture, 0);
 }
 
 TEST(GltfImport, AnIndexOutsideTheVerticesIsRefusedNamingTheAccessor) {

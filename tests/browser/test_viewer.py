@@ -7,13 +7,17 @@ to $STRATA_SCREENSHOT_DIR (build/browser-screenshots in CTest), kept as CI artif
 import json
 import os
 import statistics
+import subprocess
 import sys
+import tempfile
 import time
 import unittest
 import urllib.request
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "python"))
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "..", "clients", "python"))
 from strata_process import ServerProcess  # noqa: E402
+from strata_client.png import decode_png  # noqa: E402
 
 from cdp import Browser, find_chromium  # noqa: E402
 
@@ -180,6 +184,62 @@ class ViewerWithoutToken(ViewerInChromium):
         text = self.browser.evaluate("document.getElementById('last-report').textContent")
         self.assertIn("TLAS:", text)
         self.shot("cost-panel")
+
+
+class ViewerTreeAndStill(ViewerInChromium):
+    def test_1_the_scene_panel_is_a_tree_of_groups_that_fold(self):
+        self.open_viewer()
+        spot = "#scene-list > li.group[data-id=\"spot\"]"
+        child = spot + " > ul > li"
+        self.browser.wait_for(f"!!document.querySelector('{child}')", timeout=10)
+        # Root instances sit at the top level beside the group; spot's own are nested in it.
+        self.assertTrue(self.browser.evaluate(
+            "!!document.querySelector('#scene-list > li.instance[data-id=\"ball\"]')"))
+        nested = self.browser.evaluate(f"document.querySelectorAll('{child}').length")
+        self.assertGreater(nested, 0)
+        self.browser.evaluate(f"document.querySelector('{spot} > .fold').click()")
+        self.browser.wait_for(f"!document.querySelector('{child}')", timeout=5)
+        self.browser.evaluate(f"document.querySelector('{spot} > .fold').click()")
+        self.browser.wait_for(f"document.querySelectorAll('{child}').length == {nested}", timeout=5)
+        # A click on a nested entry selects it, not the group around it.
+        ident = self.browser.evaluate(f"document.querySelector('{child}').dataset.id")
+        kind = self.browser.evaluate(f"document.querySelector('{child}').dataset.kind")
+        self.browser.evaluate(f"document.querySelector('{child}').click()")
+        self.assertEqual(self.browser.wait_for(
+            f"document.getElementById('inspector').dataset.{kind}", timeout=5), ident)
+        self.shot("tree")
+
+    def test_2_still_mode_renders_one_frame_and_opens_nothing_endless(self):
+        self.browser.navigate(self.server.url + "/?still&width=320&height=180&spp=4")
+        self.assertEqual(self.browser.wait_for("document.body.dataset.still", timeout=30), "ready")
+        lum = luminance(self.browser.evaluate(SAMPLE))
+        self.assertGreater(statistics.mean(lum), 10.0, "the still frame is black")
+        urls = self.browser.evaluate(
+            "performance.getEntriesByType('resource').map((e) => e.name).join(' ')")
+        self.assertIn("/v1/render?", urls)
+        self.assertNotIn("/v1/stream", urls)
+        self.assertNotIn("/v1/events", urls)
+        self.assertIn("(still)", self.browser.evaluate("document.title"))
+
+    def test_3_the_screenshot_recipe_of_the_viewer_readme_works(self):
+        # clients/web/README.md: a headless chromium's own --screenshot, which waits for the
+        # page load to end (an endless stream would never let it).
+        with tempfile.TemporaryDirectory() as folder:
+            path = os.path.join(folder, "still.png")
+            run = subprocess.run(
+                [find_chromium(), "--headless=new", "--no-sandbox", "--disable-gpu",
+                 "--disable-dev-shm-usage", f"--user-data-dir={folder}/profile",
+                 f"--screenshot={path}", "--window-size=1000,700", "--virtual-time-budget=30000",
+                 self.server.url + "/?still&width=640&height=360"],
+                capture_output=True, timeout=120)
+            self.assertEqual(run.returncode, 0, run.stderr[-2000:])
+            with open(path, "rb") as f:
+                width, height, channels, pixels = decode_png(f.read())
+        self.assertEqual((width, height), (1000, 700))
+        # The frame sits at the left of the page below the header: not all dark there.
+        row = 150 * width * channels
+        stripe = pixels[row:row + 500 * channels]
+        self.assertGreater(max(stripe), 60, "the screenshot shows no frame")
 
 
 class ViewerWithToken(ViewerInChromium):

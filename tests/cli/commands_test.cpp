@@ -12,6 +12,7 @@
 #include "clients/cli/commands.h"
 #include "clients/cli/http_transport.h"
 #include "engine/image/png.h"
+#include "tests/cli/fake_transport.h"
 #include "tests/server/test_server.h"
 
 namespace strata::cli {
@@ -104,6 +105,10 @@ TEST_F(Commands, StatsAndScenePrintTheServersState) {
     EXPECT_NE(out.str().find("last commit: none yet"), std::string::npos);
     EXPECT_NE(out.str().find("  batches_applied    0\n"), std::string::npos) << out.str();
     out.str("");
+    EXPECT_EQ(run_scene(*transport, console()), 0) << err.str();
+    EXPECT_EQ(out.str().rfind("version    0\nmeshes     0\n", 0), 0u) << out.str();
+    EXPECT_NE(out.str().find("\nlast       no commit yet\n"), std::string::npos) << out.str();
+    out.str("");
     EXPECT_EQ(run_scene(*transport, console(true)), 0);
     EXPECT_EQ(Json::parse(out.str())["version"], 0);
 }
@@ -113,7 +118,7 @@ TEST_F(Commands, RenderWritesTheImageAndSaysWhatItsCommitDid) {
     args.out = file.string() + ".png";
     args.width = 40;
     args.height = 20;
-    args.eye = {0, 2, 6};
+    args.camera.eye = {0, 2, 6};
     EXPECT_EQ(run_render(*transport, console(), args), 0) << err.str();
     std::ifstream png(args.out, std::ios::binary);
     std::string bytes((std::istreambuf_iterator<char>(png)), {});
@@ -143,14 +148,16 @@ TEST(RenderBody, PassesEveryOptionAndTakesTheFormatFromTheFileName) {
     a.compression = "piz";
     a.exposure = -1;
     a.accumulate = true;
-    a.eye = {1, 2, 3};
-    a.fov_y_deg = 30;
+    a.filter = "atrous";
+    a.split = 3;
+    a.camera.eye = {1, 2, 3};
+    a.camera.fov_y_deg = 30;
     std::string error;
     const auto body = render_body(a, error);
     ASSERT_TRUE(body.has_value()) << error;
     EXPECT_EQ(Json::parse(*body), Json::parse(R"({"width": 320, "spp": 16, "format": "exr",
         "aovs": ["depth", "normal"], "compression": "piz", "exposure": -1, "accumulate": true,
-        "camera": {"eye": [1, 2, 3], "fov_y_deg": 30}})"));
+        "filter": "atrous", "split": 3, "camera": {"eye": [1, 2, 3], "fov_y_deg": 30}})"));
     a.format = "png";
     EXPECT_FALSE(render_body(a, error).has_value());
     EXPECT_NE(error.find("does not match"), std::string::npos);
@@ -316,6 +323,94 @@ TEST(AssetPack, LongNamesWrittenByOurTarWriterAreReadBackByGnuTar) {
     EXPECT_EQ(pclose(pipe), 0);
     std::filesystem::remove(scratch);
     EXPECT_EQ(listing, "a.obj\n" + long_name + "\n" + longer + "\n");
+}
+
+}  // namespace
+}  // namespace strata::cli
+
+namespace strata::cli {
+namespace {
+
+/// The subcommands against the fake transport: the exact requests they send and lines they print.
+class FakeCommands : public ::testing::Test {
+protected:
+    Console console(bool json = false) { return Console{out, err, json}; }
+
+    test::FakeTransport fake;
+    std::ostringstream out, err;
+};
+
+TEST_F(FakeCommands, RenderSendsFilterAndSplit) {
+    RenderArgs args;
+    args.out = (std::filesystem::temp_directory_path() / "strata-fake-render.png").string();
+    args.height = 90;
+    args.filter = "none";
+    args.split = 2;
+    ASSERT_EQ(run_render(fake, console(), args), 0) << err.str();
+    std::filesystem::remove(args.out);
+    ASSERT_EQ(fake.render_bodies.size(), 1u);
+    EXPECT_EQ(fake.render_bodies[0],
+              Json::parse(R"({"height": 90, "format": "png", "filter": "none", "split": 2})"));
+}
+
+TEST_F(FakeCommands, PickSendsTheCameraOverrideOnlyWhenGiven) {
+    PickArgs args;
+    args.x = 3;
+    args.y = 4;
+    args.width = 64;
+    args.height = 48;
+    ASSERT_EQ(run_pick(fake, console(), args), 0) << err.str();
+    args.camera.target = {0, 1, 0};
+    args.camera.fov_y_deg = 20;
+    ASSERT_EQ(run_pick(fake, console(), args), 0) << err.str();
+    ASSERT_EQ(fake.pick_bodies.size(), 2u);
+    EXPECT_EQ(fake.pick_bodies[0],
+              Json::parse(R"({"width": 64, "height": 48, "pixels": [[3, 4]]})"));
+    EXPECT_EQ(fake.pick_bodies[1]["camera"],
+              Json::parse(R"({"target": [0, 1, 0], "fov_y_deg": 20})"));
+    EXPECT_EQ(out.str(), "nothing at (3, 4) at version 0\nnothing at (3, 4) at version 0\n");
+}
+
+TEST_F(FakeCommands, SceneSummarisesTheSceneAndStatsDocumentsInElevenLines) {
+    fake.scene_doc = Json::parse(R"({"version": 7,
+        "counts": {"meshes": 6, "instances": 19, "materials": 8, "groups": 1, "lights": 2,
+                   "textures": 1, "triangles": 39388, "instanced_triangles": 94852},
+        "bounds": {"min": [-200, 0, -200], "max": [200, 4.8, 200]},
+        "camera": {"eye": [0, 4, 11], "target": [0, 1, 0.5], "up": [0, 1, 0], "fov_y_deg": 45},
+        "lighting": {"sun_direction": [0.55, 0.6, 0.4], "sky_intensity": 0.9}})");
+    fake.memory_bytes = {{"blas", 5077468}, {"tlas", 4480}};
+    fake.last = Json::parse(R"({"version": 7, "planned": false,
+        "tlas": {"action": "update", "instances": 19}, "blas_rebuilds": 6, "blas_refits": 0,
+        "primitives_built": 39388, "primitives_refit": 0, "ms": 26.021661,
+        "rebuilt": [{"mesh": "ball", "reason": "added", "primitives": 25280}]})");
+    ASSERT_EQ(run_scene(fake, console()), 0) << err.str();
+    const std::string printed =
+        "version    7\n"
+        "meshes     6\n"
+        "instances  19\n"
+        "materials  8\n"
+        "groups     1\n"
+        "lights     2\n"
+        "textures   1\n"
+        "triangles  39388 in meshes, 94852 in visible instances\n"
+        "memory     blas 4.8 MiB, tlas 4.4 KiB\n"
+        "camera     eye 0,4,11  target 0,1,0.5  fov 45\n"
+        "last       commit v7: tlas update (19 instances), 6 rebuilds, 0 refits, 39388 "
+        "primitives built, 0 refit, 26.022 ms\n";
+    EXPECT_EQ(out.str(), printed);
+    // clients/cli/README.md shows these lines as what `strata scene` prints.
+    std::ifstream readme(STRATA_SOURCE_DIR "/clients/cli/README.md");
+    const std::string text((std::istreambuf_iterator<char>(readme)), {});
+    EXPECT_NE(text.find("```\n" + printed + "```\n"), std::string::npos)
+        << "clients/cli/README.md does not show:\n"
+        << printed;
+}
+
+TEST_F(FakeCommands, SceneWithJsonPrintsTheWholeDocumentAndAsksForNoStats) {
+    fake.scene_doc = {{"version", 3}, {"counts", {{"meshes", 1}}}, {"bounds", nullptr}};
+    ASSERT_EQ(run_scene(fake, console(true)), 0) << err.str();
+    EXPECT_EQ(Json::parse(out.str()), fake.scene_doc);
+    EXPECT_EQ(fake.stats_calls, 0);
 }
 
 }  // namespace

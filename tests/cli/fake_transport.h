@@ -1,7 +1,8 @@
 #pragma once
 // A Transport that records requests and answers like a tiny, predictable server: every batch
 // moves the version by one; commits report the TLAS action queued for them ("none" by default);
-// picks answer `pick_hit` for every pixel; listings page through `listed` two items at a time.
+// picks answer `pick_hit` for every pixel; listings page through `listed` two items at a time;
+// the scene and stats documents are the canned ones a test sets.
 
 #include <deque>
 #include <map>
@@ -42,9 +43,13 @@ public:
     }
     Reply stats() override {
         ++stats_calls;
-        return json(200, {{"version", version}, {"last_report", last}});
+        Json doc = {{"version", version}, {"last_report", last}};
+        if (!memory_bytes.is_null()) doc["memory_bytes"] = memory_bytes;
+        return json(200, doc);
     }
-    Reply scene() override { return json(200, {{"version", version}}); }
+    Reply scene() override {
+        return json(200, scene_doc.is_null() ? Json{{"version", version}} : scene_doc);
+    }
     Reply scene_list(const std::string& collection,
                      const std::multimap<std::string, std::string>& query) override {
         list_queries.emplace_back(collection, query);
@@ -103,6 +108,8 @@ public:
     std::vector<std::string> listed;  ///< the ids every listing answers
     std::vector<std::pair<std::string, std::multimap<std::string, std::string>>> list_queries;
     Json last;
+    Json scene_doc = nullptr;     ///< what GET /v1/scene answers (null: just the version)
+    Json memory_bytes = nullptr;  ///< the stats' memory_bytes (null: left out)
     Reply refusal;
 
 private:

@@ -157,6 +157,78 @@ TEST_F(Groups, NestingBeyondTheDepthLimitIsRefused) {
     EXPECT_TRUE(apply(scene, reparent_group("car", "g61")).has_value());
 }
 
+/// `levels` nested groups "s0" > "s1" > ..., each scaled by `factor`, under `parent`.
+EditBatch scaled_chain(uint32_t levels, float factor, std::optional<std::string> parent = {}) {
+    EditBatch chain;
+    for (uint32_t d = 0; d < levels; ++d) {
+        AddGroup g = group_edit("s" + std::to_string(d), parent);
+        g.transform = Affine::scaling(Vec3(factor));
+        chain.edits.emplace_back(std::move(g));
+        parent = "s" + std::to_string(d);
+    }
+    return chain;
+}
+
+TEST_F(Groups, AWorldTransformBeyondFloatRangeIsRefusedNamingTheChain) {
+    // Each group's own scale is fine; eight of 1e6 compose to 1e48, past float's 3.4e38.
+    EditBatch chain = scaled_chain(8, 1e6f);
+    chain.edits.emplace_back(child_instance("far", "s7"));
+    const std::size_t edits_before = scene.to_batch().edits.size();
+    auto r = scene.apply(std::move(chain));
+    ASSERT_FALSE(r.has_value());
+    EXPECT_EQ(r.error().code, ErrorCode::NotFinite);
+    EXPECT_NE(r.error().message.find("'s0' > 's1' > 's2'"), std::string::npos) << r.error().message;
+    EXPECT_TRUE(scene.find_group("s0").is_null());
+    EXPECT_EQ(scene.to_batch().edits.size(), edits_before);
+    EXPECT_TRUE(scene.changes().empty());
+}
+
+TEST_F(Groups, AnInstancesWorldTransformKeepsTheRuleOfARootInstancesTransform) {
+    // Two groups of 5e5 (a finite 2.5e11 world) hold an instance scaled back to 5e5: allowed.
+    EditBatch chain = scaled_chain(2, 5e5f);
+    AddInstance deep = child_instance("deep", "s1");
+    deep.transform = Affine::scaling(Vec3(2e-6f));
+    chain.edits.emplace_back(std::move(deep));
+    auto held = scene.apply(std::move(chain));
+    ASSERT_TRUE(held.has_value()) << held.error().describe();
+    scene.clear_changes();
+    // Unscaled, its world would scale by 2.5e11, which no root instance may: refused.
+    UpdateInstance unscaled;
+    unscaled.instance = "deep";
+    unscaled.transform = Affine::identity();
+    auto r = apply(scene, unscaled);
+    ASSERT_FALSE(r.has_value());
+    EXPECT_EQ(r.error().code, ErrorCode::DegenerateTransform);
+    EXPECT_NE(r.error().message.find("instance 'deep'"), std::string::npos) << r.error().message;
+    EXPECT_NE(r.error().message.find("'s0' > 's1'"), std::string::npos) << r.error().message;
+    EXPECT_NE(r.error().message.find("beyond 1e6"), std::string::npos) << r.error().message;
+    EXPECT_TRUE(scene.changes().empty());
+    // Moved 1e4 along x inside a 2.5e11 chain, it would sit at 2.5e15, where no ray is traced.
+    UpdateInstance offset;
+    offset.instance = "deep";
+    offset.transform = Affine::translation(Vec3(1e4f, 0.0f, 0.0f)) * Affine::scaling(Vec3(2e-6f));
+    auto moved = apply(scene, offset);
+    ASSERT_FALSE(moved.has_value());
+    EXPECT_NE(moved.error().message.find("beyond 1e15"), std::string::npos) << moved.error().message;
+    // Scaling the chain down in the same batch makes the unscaled instance fine.
+    UpdateGroup shrink;
+    shrink.group = "s0";
+    shrink.transform = Affine::scaling(Vec3(2e-6f));
+    ASSERT_TRUE(apply(scene, shrink, unscaled).has_value());
+    EXPECT_NEAR(inst("deep").world.transform_point(Vec3(1.0f, 0.0f, 0.0f)).x, 1.0f, 1e-4f);
+}
+
+TEST_F(Groups, ASnapshotWhoseWorldTransformsOverflowDoesNotLoad) {
+    EditBatch chain = scaled_chain(8, 1e6f);
+    chain.edits.emplace_back(child_instance("far", "s7"));
+    Scene loaded;
+    ASSERT_TRUE(loaded.load(mesh_edit("box", make_box(Vec3(1.0f)))));
+    for (Edit& e : chain.edits) ASSERT_TRUE(loaded.load(std::move(e)));
+    Status s = loaded.finish_load(7);
+    ASSERT_FALSE(s);
+    EXPECT_EQ(s.error().code, ErrorCode::NotFinite);
+}
+
 TEST_F(Groups, RemovingAGroupWithChildrenNeedsRecursive) {
     auto r = apply(scene, RemoveGroup{"car", false});
     ASSERT_FALSE(r.has_value());

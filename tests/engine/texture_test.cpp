@@ -400,5 +400,66 @@ TEST(TextureRender, UnbindingTheTextureBringsBackThePlainBaseColour) {
     expect_near(f.buffers.albedo[16 * 32 + 16], Vec3(0.25f, 0.5f, 0.75f));
 }
 
+// Step: the image's own bytes -------------------------------------------------------------------
+
+TEST(ImageLength, PngAndJpegEndWhereTheirLastChunkOrMarkerEnds) {
+    const std::string png = test::four_colour_png();
+    const std::string jpeg = test::jpeg_bytes(4, 4, 200, 100, 50);
+    EXPECT_EQ(image_length(png), png.size());
+    EXPECT_EQ(image_length(jpeg), jpeg.size());
+    EXPECT_EQ(image_length(png + std::string(1000, 'x')), png.size());
+    EXPECT_EQ(image_length(jpeg + "\xFF\xD9trailing"), jpeg.size());
+    // Truncated, or neither format: no end.
+    EXPECT_EQ(image_length(png.substr(0, png.size() - 1)), 0u);
+    EXPECT_EQ(image_length(jpeg.substr(0, jpeg.size() - 2)), 0u);
+    EXPECT_EQ(image_length("GIF89a"), 0u);
+    // An EOI inside a segment (an EXIF thumbnail) is not the image's end.
+    const std::string exif = std::string("Exif\0\0\xFF\xD8\xFF\xD9", 10);
+    std::string with_thumbnail = jpeg.substr(0, 2) + "\xFF\xE1" + char(0) +
+                                 char(exif.size() + 2) + exif + jpeg.substr(2);
+    EXPECT_EQ(image_length(with_thumbnail), with_thumbnail.size());
+    EXPECT_TRUE(decode_texture(with_thumbnail, {}).has_value());
+}
+
+TEST(TextureRules, OnlyTheImagesOwnBytesAreKept) {
+    // 1 MB after IEND used to be kept with every copy of the texture.
+    auto engine = test::make_engine();
+    const std::string png = test::four_colour_png();
+    const std::string jpeg = test::jpeg_bytes(4, 4, 200, 100, 50);
+    apply_ok(*engine, texture_edit("p", png + std::string(1 << 20, '\0')),
+             texture_edit("j", jpeg + std::string(1 << 20, 'x')));
+    engine->read([&](const Scene& s) {
+        EXPECT_EQ(*s.texture(s.find_texture("p")).value()->encoded, png);
+        EXPECT_EQ(*s.texture(s.find_texture("j")).value()->encoded, jpeg);
+    });
+}
+
+TEST(TextureRules, AnImageDecodedAheadIsTakenAsItIsAndCheckedAgainstTheBudgetLeft) {
+    // Engine::apply decodes outside the scene lock; the rule then uses that image, not `data`.
+    Scene scene;
+    AddTexture ahead = texture_edit("ahead");
+    ahead.decoded = std::make_shared<DecodedTexture>(
+        DecodedTexture{decode_texture(test::png_bytes(3, 1, {1, 2, 3, 4, 5, 6, 7, 8, 9}), {})});
+    ASSERT_TRUE(scene.apply(batch(std::move(ahead))).has_value());
+    EXPECT_EQ(scene.texture(scene.find_texture("ahead")).value()->image->width, 3u);
+    // An image decoded with wider limits still meets the budget left when the rule runs.
+    SceneBudget budget;
+    budget.max_texture_bytes = 3 * TEXTURE_BYTES_PER_TEXEL + 10;
+    scene.set_budget(budget);
+    AddTexture big = texture_edit("big");
+    big.decoded = std::make_shared<DecodedTexture>(DecodedTexture{decode_texture(big.data, {})});
+    auto r = scene.apply(batch(std::move(big)));
+    ASSERT_FALSE(r.has_value());
+    EXPECT_EQ(r.error().code, ErrorCode::TooLarge);
+    EXPECT_THAT(r.error().message, HasSubstr("texture 'big': PNG image is 2x2"));
+    EXPECT_THAT(r.error().message, HasSubstr("10 bytes left in the texture budget"));
+    // Through the engine, whose apply decodes ahead, the answers are the same as the rule's.
+    auto engine = test::make_engine();
+    const Error e = refused(*engine, batch(texture_edit("ok"),
+                                           texture_edit("bad", test::four_colour_png().substr(0, 30))));
+    EXPECT_EQ(e.edit_index, 1u);
+    EXPECT_THAT(e.message, HasSubstr("texture 'bad': corrupt PNG"));
+}
+
 }  // namespace
 }  // namespace strata

@@ -128,5 +128,25 @@ TEST(Ids, ASnapshotWhoseIdsBreakTheIdRuleIsRefusedAndChangesNothing) {
     EXPECT_TRUE(Json::accept(r.body)) << "the problem is valid JSON";
 }
 
+TEST(Groups, NestedScalesThatOverflowAWorldTransformAre422NamingTheChain) {
+    // 64 nested groups scaled 1e6 each: every local transform is valid, their product is not.
+    auto engine = std::move(Engine::create().value());
+    std::string edits = R"({"op": "add_mesh", "id": "ball", "shape": {"type": "sphere"}})";
+    for (int d = 0; d < 64; ++d) {
+        edits += R"(, {"op": "add_group", "id": "g)" + std::to_string(d) + "\"" +
+                 (d ? R"(, "parent": "g)" + std::to_string(d - 1) + "\"" : std::string()) +
+                 R"(, "transform": {"scale": [1e6, 1e6, 1e6]}})";
+    }
+    edits += R"(, {"op": "add_instance", "id": "i", "mesh": "ball", "parent": "g63"})";
+    const ApiResponse r = post_edits(*engine, R"({"edits": [)" + edits + "]}", std::nullopt, {});
+    EXPECT_EQ(r.status, 422) << r.body;
+    const Json problem = Json::parse(r.body);
+    EXPECT_THAT(problem["detail"].get<std::string>(),
+                ::testing::HasSubstr("through the group chain 'g0' > 'g1' > 'g2'"));
+    EXPECT_EQ(engine->read([](const Scene& s) { return s.version(); }), 0u);
+    // The scene answers valid JSON with no null transforms (nothing was applied).
+    EXPECT_EQ(get_scene(*engine).status, 200);
+}
+
 }  // namespace
 }  // namespace strata::protocol

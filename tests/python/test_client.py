@@ -19,7 +19,9 @@ SCENE = [
 ]
 
 
-class ClientTest(unittest.TestCase):
+class SceneTestCase(unittest.TestCase):
+    """One server for the class; each test starts from SCENE with a fresh blocking client."""
+
     @classmethod
     def setUpClass(cls):
         cls.server = ServerProcess(SERVER)
@@ -35,6 +37,9 @@ class ClientTest(unittest.TestCase):
 
     def tearDown(self):
         self.client.close()
+
+
+class ClientTest(SceneTestCase):
 
     def test_edit_returns_the_new_version_and_commit_the_report(self):
         report = self.client.commit()
@@ -116,8 +121,29 @@ class ClientTest(unittest.TestCase):
         centre, corner = frame[16, 24].astype(int), frame[0, 0].astype(int)
         self.assertGreater(centre[0], centre[2])
         self.assertGreater(corner[2], corner[0])
-        with self.assertRaises(NotImplementedError):
+        with self.assertRaises(ValueError):
             self.client.render_array(8, 8, fmt="exr")
+        linear = self.client.render_array(48, 32, fmt="npz")
+        self.assertEqual((linear.shape, linear.dtype), ((32, 48, 3), np.float32))
+        self.assertGreater(linear[16, 24, 0], linear[16, 24, 2])
+
+    def test_render_arrays_gives_the_aovs_and_the_client_ids_behind_ids(self):
+        import numpy as np
+        from strata_client import MISS, FrameArrays
+        frame = self.client.render_arrays(48, 32, aovs=["depth", "instance_id", "mesh_id"])
+        self.assertIsInstance(frame, FrameArrays)
+        self.assertEqual(frame.info.version, self.version)
+        self.assertEqual(frame["depth"].shape, (32, 48))
+        self.assertEqual(frame["instance_id"].dtype, np.uint32)
+        self.assertIn("beauty", frame)
+        self.assertEqual(frame.client_id("instance_id", frame["instance_id"][16, 24]), "b0")
+        self.assertEqual(frame.client_id("mesh_id", frame["mesh_id"][16, 24]), "ball")
+        self.assertIsNone(frame.client_id("instance_id", MISS))
+        ids = frame.client_ids("instance_id")
+        self.assertEqual(ids.shape, (32, 48))
+        self.assertEqual(ids[16, 24], "b0")
+        self.assertIsNone(ids[0, 0])
+        self.assertEqual(set(ids.flatten().tolist()), {"b0", None})
 
     def test_stats_and_scene(self):
         self.client.commit()
@@ -167,9 +193,8 @@ class ClientTest(unittest.TestCase):
         self.assertEqual(caught.exception.pointer, "/pixels/0")
 
     def test_import_asset_uploads_a_model_and_answers_its_ids(self):
-        spot = os.path.join(os.environ.get("STRATA_MODELS_DIR", ""), "spot.obj")
-        if not os.path.exists(spot):
-            self.skipTest(spot + " missing")
+        spot = os.path.join(os.environ["STRATA_MODELS_DIR"], "spot.obj")
+        self.assertTrue(os.path.exists(spot), spot + " missing")
         answer = self.client.import_asset(spot, prefix="cow")
         self.assertEqual(answer["version"], self.version + 1)
         self.assertEqual(answer["meshes"], ["cow.mesh0"])

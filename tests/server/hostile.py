@@ -49,7 +49,9 @@ class Server(ServerProcess):
 
     # Well-behaved requests, through urllib.
     def call(self, method: str, path: str, body=None, headers=None, timeout: float = 30.0):
-        """(status, headers, body bytes); a problem answer is returned, not raised."""
+        """(status, headers, body bytes); a problem answer is returned, not raised. The answer
+        is held to the server's OpenAPI description on its way in (strata_process.py): an
+        undocumented status or a body that does not match its schema fails the test."""
         data = body if isinstance(body, (bytes, type(None))) else json.dumps(body).encode()
         req = urllib.request.Request(f"http://127.0.0.1:{self.port}{path}", data=data,
                                      method=method, headers=headers or {})

@@ -83,6 +83,29 @@ class DataDirectory(unittest.TestCase):
         self.assertIn("strata_durable_journal_bytes ", metrics)
         self.assertIn("strata_durable_fsync_duration_seconds_bucket", metrics)
 
+    def test_demo_reset_brings_the_demo_back_over_a_recovered_scene_as_the_next_version(self):
+        def instance_ids(server):
+            page = server.json("GET", "/v1/scene/instances?limit=10000")[1]
+            return sorted(i["id"] for i in page["items"])
+        s = self.server("--demo")
+        demo = instance_ids(s)
+        self.assertTrue(demo)
+        self.assertEqual(s.json("POST", "/v1/edits", {"edits": [{"op": "clear"}]})[0], 200)
+        cleared = s.version()
+        s.stop()
+        # --demo leaves a recovered scene alone (the user's work), and says how to reset it.
+        s = self.server("--demo")
+        self.assertEqual((s.version(), instance_ids(s)), (cleared, []))
+        self.assertIn("--demo-reset replaces it", s.log())
+        s.stop()
+        s = self.server("--demo-reset")
+        self.assertEqual(s.version(), cleared + 1)
+        self.assertEqual(instance_ids(s), demo)
+        s.kill()
+        # The reset is one journaled version like any other.
+        s = self.server()
+        self.assertEqual((s.version(), instance_ids(s)), (cleared + 1, demo))
+
     def test_an_imported_asset_is_journaled_and_survives_a_kill(self):
         s = self.server()
         ply = (b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"

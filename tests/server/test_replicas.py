@@ -284,6 +284,137 @@ class Replicas(unittest.TestCase):
             self.assertEqual(s.call("GET", RENDER)[0], 200)
             self.assertIsNone(s.process.poll())
 
+    def assert_reset_refuses_writes_and_stops(self, reset, reason):
+        """Two replicas at version 3; `reset()` rewrites the log under them. Writes answer 503
+        within the write deadline naming `reason`, /readyz reports it, reads go on, and SIGTERM
+        ends the process within the grace period."""
+        servers = self.replicas(2, "--log-write-timeout-ms", "1500", "--shutdown-grace", "1")
+        n = self.stream_batches(servers, 0, 3)
+        reset()
+        a, b = servers
+        # Eight writers at once (as many as the workers): each is answered within the deadline,
+        # and a read between them is not held up.
+        answers = []
+
+        def write(k):
+            started = time.monotonic()
+            status, answer = a.json("POST", "/v1/edits", durable_scene.batch(n + k))
+            answers.append((status, answer, time.monotonic() - started))
+
+        writers = [threading.Thread(target=write, args=(k,)) for k in range(8)]
+        for t in writers:
+            t.start()
+        started = time.monotonic()
+        self.assertEqual(a.call("GET", "/v1/scene")[0], 200)
+        self.assertLess(time.monotonic() - started, 1.5)
+        for t in writers:
+            t.join()
+        for status, answer, seconds in answers:
+            self.assertEqual(status, 503, answer)
+            self.assertIn(reason, answer["detail"])
+            self.assertLess(seconds, 3.0)
+        for s in servers:
+            self.assertIn(reason, self.stopped_detail(s))
+            self.assertEqual(durable_scene.check(s, n), "")
+            self.assertEqual(s.json("POST", "/v1/edits", durable_scene.batch(n))[0], 503)
+        # SIGTERM ends a stopped replica within its grace (1 s) plus the watchdog's 2 s.
+        started = time.monotonic()
+        b.signal(signal.SIGTERM)
+        self.assertIsNotNone(b.wait(4.0), "SIGTERM did not end the replica")
+        self.assertLess(time.monotonic() - started, 4.0)
+
+    def test_a_flushed_redis_stops_the_replicas_and_writes_answer_503_in_time(self):
+        self.assert_reset_refuses_writes_and_stops(
+            lambda: self.redis.command("FLUSHALL"), "behind this replica's version 3")
+
+    def test_a_version_key_set_back_stops_the_replicas(self):
+        self.assert_reset_refuses_writes_and_stops(
+            lambda: self.redis.command("SET", self.stream + ":version", "1"),
+            "behind this replica's version 3")
+
+    def test_an_emptied_stream_stops_the_replicas(self):
+        def empty():
+            self.redis.command("XTRIM", self.stream, "MAXLEN", "0")
+        servers = self.replicas(2)
+        n = self.stream_batches(servers, 0, 3)
+        empty()
+        for s in servers:
+            detail = self.stopped_detail(s)
+            self.assertIn("the edit log was rewritten", detail)
+            self.assertIn("the stream was emptied", detail)
+            self.assertEqual(durable_scene.check(s, n), "")
+        status, answer = servers[0].json("POST", "/v1/edits", durable_scene.batch(n))
+        self.assertEqual(status, 503)
+        self.assertIn("stopped following the edit log", answer["detail"])
+
+    def test_reads_waiting_for_a_far_version_hold_no_worker(self):
+        # Two workers; sixteen clients loop on reads of a version that never comes. Before,
+        # each held a worker for the whole wait and normal reads queued behind them.
+        s = Server(["--log", self.redis.url(self.stream), "--threads", "2",
+                    "--min-version-wait-ms", "3000", "--max-waiting-reads-per-client", "32"])
+        self.addCleanup(s.stop)
+        n = self.stream_batches([s], 0, 1)
+        stop = threading.Event()
+        waited = []
+
+        def waiter():
+            while not stop.is_set():
+                status, _, body = s.call("GET", f"/v1/scene?min_version={n + 1000}")
+                waited.append(status)
+
+        loops = [threading.Thread(target=waiter) for _ in range(16)]
+        for t in loops:
+            t.start()
+        time.sleep(0.3)
+        try:
+            for _ in range(10):
+                started = time.monotonic()
+                self.assertEqual(s.call("GET", "/v1/scene")[0], 200)
+                self.assertEqual(s.call("GET", RENDER)[0], 200)
+                self.assertLess(time.monotonic() - started, 1.0)
+            metrics = s.call("GET", "/metrics")[2].decode()
+            waiting = [line for line in metrics.splitlines()
+                       if line.startswith("strata_http_reads_waiting ")]
+            self.assertGreaterEqual(float(waiting[0].split()[1]), 12, waiting)
+            # A waiting read is answered as soon as its version arrives (written elsewhere).
+            got = []
+            reader = threading.Thread(
+                target=lambda: got.append(s.call("GET", f"/v1/scene?min_version={n + 1}")))
+            reader.start()
+            time.sleep(0.2)
+            self.assertEqual(s.json("POST", "/v1/edits", durable_scene.batch(n))[0], 200)
+            reader.join(2.0)
+            self.assertEqual(got[0][0], 200)
+            self.assertEqual(json.loads(got[0][2])["version"], n + 1)
+        finally:
+            stop.set()
+            for t in loops:
+                t.join()
+        self.assertEqual(set(waited), {503})
+
+    def test_waiting_reads_are_capped_per_client(self):
+        s = self.replica("--min-version-wait-ms", "2000", "--max-waiting-reads-per-client", "3")
+        results = []
+
+        def wait_far():
+            results.append(s.call("GET", "/v1/scene?min_version=99"))
+
+        held = [threading.Thread(target=wait_far) for _ in range(3)]
+        for t in held:
+            t.start()
+        time.sleep(0.3)
+        status, headers, body = s.call("GET", "/v1/scene?min_version=99")
+        self.assertEqual(status, 503)
+        self.assertIn("too many reads are waiting", json.loads(body)["detail"])
+        self.assertEqual(headers.get("Retry-After"), "1")
+        self.assertEqual(s.call("GET", "/v1/scene")[0], 200)
+        for t in held:
+            t.join()
+        self.assertEqual([r[0] for r in results], [503, 503, 503])
+        for r in results:
+            self.assertIn("behind min_version 99", json.loads(r[2])["detail"])
+        self.assertIn("strata_http_waits_refused_total 1", s.call("GET", "/metrics")[2].decode())
+
     def test_min_version_waits_for_the_replica_and_names_the_lag_when_it_cannot(self):
         a, b = self.replicas(2, "--min-version-wait-ms", "400")
         status, answer = a.json("POST", "/v1/edits", durable_scene.batch(0))

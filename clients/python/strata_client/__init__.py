@@ -1,16 +1,34 @@
-"""Python client for strata-server: standard library only (numpy only for Client.render_array).
+"""Python client for strata-server: standard library only (numpy only for render_array
+and render_arrays).
 
     from strata_client import Client, ProblemError
 
     with Client("http://127.0.0.1:7070") as strata:
         version = strata.edit([{"op": "set_camera", "eye": [0, 3, 10]}])
-        report = strata.commit()
+        report = strata.commit()              # a RebuildReport: report.tlas.action
         png = strata.render(640, 360)
 
-See clients/python/README.md and protocol/README.md.
+AsyncClient has the same methods as coroutines. See clients/python/README.md and
+protocol/README.md.
 """
 
-from strata_client.client import Client, ProblemError, RenderInfo
+from strata_client._version import __version__
+from strata_client.aio import AsyncClient
+from strata_client.arrays import MISS, FrameArrays
+from strata_client.client import Client
+from strata_client.errors import (BadRequestError, NotFoundError, ProblemError,
+                                  TooLargeError, TooManyConnectionsError, UnauthorizedError,
+                                  UnavailableError, UnprocessableError, VersionMismatchError)
 from strata_client.png import decode_png
+from strata_client.results import (BlasEntry, CommitPhases, Frame, Hit, ImportResult,
+                                   MemoryBytes, Page, Problem, RebuildReport, RenderInfo,
+                                   TlasMerge, TlasReport)
 
-__all__ = ["Client", "ProblemError", "RenderInfo", "decode_png"]
+__all__ = [
+    "__version__", "Client", "AsyncClient", "decode_png",
+    "ProblemError", "BadRequestError", "UnauthorizedError", "NotFoundError",
+    "VersionMismatchError", "TooLargeError", "UnprocessableError", "TooManyConnectionsError",
+    "UnavailableError",
+    "Problem", "RebuildReport", "TlasReport", "TlasMerge", "BlasEntry", "MemoryBytes",
+    "CommitPhases", "RenderInfo", "Frame", "Hit", "ImportResult", "Page", "FrameArrays", "MISS",
+]

@@ -1,67 +1,24 @@
-"""The HTTP client: one keep-alive connection, JSON in and out, problem documents as exceptions."""
+"""The blocking client: one keep-alive http.client connection, typed results, problem documents
+as exceptions."""
 
 import http.client
-import json
-import os
-import urllib.parse
-from typing import Any, Dict, Iterable, Iterator, List, Optional, Tuple, Union
+from typing import Any, Dict, Iterable, Iterator, List, Optional, Tuple, TypeVar
 
-from strata_client.asset_pack import pack_asset
-from strata_client.png import decode_png
+from strata_client import _api
+from strata_client._api import IfMatch
+from strata_client.errors import ProblemError
+from strata_client.arrays import FrameArrays, frame_arrays
+from strata_client.png import png_to_array
+from strata_client.results import Frame, Hit, ImportResult, Page, RebuildReport, RenderInfo
 
+__all__ = ["Client", "ProblemError", "RenderInfo"]
 
-class ProblemError(Exception):
-    """A request Strata refused, carrying its problem document (RFC 9457, protocol/README.md).
+T = TypeVar("T")
 
-    Attributes: status (HTTP status), title, detail, edit_index (the offending edit's position
-    in the batch, or None), pointer (a JSON pointer into the request, or None), type (the
-    problem type URI), etag (the ETag header, e.g. the current version after a 412), body (the
-    whole document as a dict, or the raw text for answers that are not problem documents).
-    """
-
-    def __init__(self, status: int, title: str, detail: str = "", edit_index: Optional[int] = None,
-                 pointer: Optional[str] = None, type: str = "", etag: Optional[str] = None,
-                 body: Any = None):
-        self.status = status
-        self.title = title
-        self.detail = detail
-        self.edit_index = edit_index
-        self.pointer = pointer
-        self.type = type
-        self.etag = etag
-        self.body = body
-        super().__init__(str(self))
-
-    def __str__(self) -> str:
-        text = f"{self.status} {self.title}"
-        if self.detail:
-            text += f": {self.detail}"
-        return text
-
-
-class RenderInfo:
-    """What the last render answered besides the image: the version the frame shows, the
-    one-line summary of its commit (X-Strata-Rebuild), that commit's full rebuild report
-    (X-Strata-Report, a dict; None if absent) and the content type."""
-
-    def __init__(self, version: Optional[int], rebuild: str, content_type: str,
-                 report: Optional[Dict[str, Any]] = None):
-        self.version = version
-        self.rebuild = rebuild
-        self.content_type = content_type
-        self.report = report
-
-    def __repr__(self) -> str:
-        return f"RenderInfo(version={self.version!r}, rebuild={self.rebuild!r})"
-
-
-def _etag_version(tag: Optional[str]) -> Optional[int]:
-    if not tag:
-        return None
-    tag = tag.strip()
-    if len(tag) >= 2 and tag[0] == '"' and tag[-1] == '"':
-        tag = tag[1:-1]
-    return int(tag) if tag.isdigit() else None
+# Failures of a kept-alive connection the server closed while it was idle: they happen before
+# the server reads the request, so sending it again applies nothing twice.
+_STALE_CONNECTION = (http.client.RemoteDisconnected, BrokenPipeError, ConnectionResetError,
+                     http.client.CannotSendRequest)
 
 
 class Client:
@@ -75,18 +32,12 @@ class Client:
 
     def __init__(self, url: str = "http://127.0.0.1:7070", token: Optional[str] = None,
                  timeout: float = 300.0):
-        parts = urllib.parse.urlsplit(url)
-        if parts.scheme not in ("http", "https") or not parts.hostname:
-            raise ValueError(f"server URL {url!r} must be http://host[:port] or https://host[:port]")
-        if parts.path not in ("", "/") or parts.query or parts.fragment:
-            raise ValueError(f"server URL {url!r} must not have a path")
-        self.url = f"{parts.scheme}://{parts.netloc}"
-        self._https = parts.scheme == "https"
-        self._host = parts.hostname
-        self._port = parts.port
+        self._endpoint = _api.parse_url(url)
+        self.url = self._endpoint.url
         self._token = token
         self._timeout = timeout
         self._conn: Optional[http.client.HTTPConnection] = None
+        #: What the last render answered besides the image.
         self.last_render: Optional[RenderInfo] = None
 
     # -- connection -----------------------------------------------------------------------------
@@ -94,7 +45,7 @@ class Client:
     def __enter__(self) -> "Client":
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()
 
     def close(self) -> None:
@@ -105,32 +56,21 @@ class Client:
 
     def _connection(self) -> http.client.HTTPConnection:
         if self._conn is None:
-            cls = http.client.HTTPSConnection if self._https else http.client.HTTPConnection
-            self._conn = cls(self._host, self._port, timeout=self._timeout)
+            e = self._endpoint
+            cls = http.client.HTTPSConnection if e.https else http.client.HTTPConnection
+            self._conn = cls(e.host, e.port, timeout=self._timeout)
         return self._conn
 
-    def _request(self, method: str, path: str, body: Optional[bytes] = None,
-                 headers: Optional[Dict[str, str]] = None):
-        """Sends one request; returns (status, headers, body bytes).
-
-        A connection the server closed while idle is reopened and the request sent again once:
-        that failure happens before the server reads the request, so nothing is applied twice.
-        """
-        send_headers = {"Accept": "application/json"}
-        if body is not None:
-            send_headers["Content-Type"] = "application/json"
-        if self._token:
-            send_headers["Authorization"] = f"Bearer {self._token}"
-        send_headers.update(headers or {})
+    def _send(self, request: _api.Request) -> _api.Response:
+        """Sends one request and reads the whole answer; a connection the server closed while
+        idle is reopened and the request sent again once."""
+        headers = _api.request_headers(request, self._token)
         for attempt in (0, 1):
             reused = self._conn is not None
             conn = self._connection()
             try:
-                conn.request(method, path, body=body, headers=send_headers)
-                response = conn.getresponse()
-                data = response.read()
-            except (http.client.RemoteDisconnected, BrokenPipeError, ConnectionResetError,
-                    http.client.CannotSendRequest):
+                answer = self._exchange(conn, request, headers)
+            except _STALE_CONNECTION:
                 self.close()
                 if reused and attempt == 0:
                     continue
@@ -138,52 +78,48 @@ class Client:
             except (OSError, http.client.HTTPException):
                 self.close()
                 raise
-            if response.getheader("Connection", "").lower() == "close":
+            if answer.headers.get("connection", "").lower() == "close":
                 self.close()
-            return response.status, response, data
+            return answer
         raise AssertionError("unreachable")
 
-    def _json(self, method: str, path: str, body: Any = None,
-              headers: Optional[Dict[str, str]] = None) -> Dict[str, Any]:
-        payload = None if body is None else json.dumps(body).encode("utf-8")
-        status, response, data = self._request(method, path, payload, headers)
-        if not 200 <= status < 300:
-            raise self._problem(status, response, data)
-        return json.loads(data)
-
     @staticmethod
-    def _problem(status: int, response, data: bytes) -> ProblemError:
-        etag = response.getheader("ETag")
+    def _exchange(conn: http.client.HTTPConnection, request: _api.Request,
+                  headers: Dict[str, str]) -> _api.Response:
         try:
-            doc = json.loads(data)
-        except ValueError:
-            doc = None
-        if isinstance(doc, dict) and "title" in doc:
-            return ProblemError(doc.get("status", status), doc.get("title", ""),
-                                doc.get("detail", ""), doc.get("edit_index"), doc.get("pointer"),
-                                doc.get("type", ""), etag, doc)
-        text = data[:200].decode("utf-8", "replace")
-        return ProblemError(status, f"HTTP {status}", text, etag=etag, body=text)
+            conn.request(request.method, request.target, body=request.body, headers=headers)
+        except (BrokenPipeError, ConnectionResetError) as send_error:
+            # The server may have answered and closed before reading the whole body (a 413 for
+            # a body over its limit): that answer is the result. None: the connection was stale.
+            try:
+                response = conn.getresponse()
+            except (OSError, http.client.HTTPException):
+                raise send_error from None
+        else:
+            response = conn.getresponse()
+        data = response.read()
+        return _api.Response(response.status,
+                             {k.lower(): v for k, v in response.getheaders()}, data)
+
+    def _call(self, call: "_api.Call[T]") -> T:
+        return call.result(self._send(call.request))
 
     # -- endpoints ------------------------------------------------------------------------------
 
-    def edit(self, edits: Iterable[Dict[str, Any]], if_match: Union[int, str, None] = None) -> int:
+    def edit(self, edits: Iterable[Dict[str, Any]], if_match: IfMatch = None) -> int:
         """Applies a batch (POST /v1/edits); returns the new scene version.
 
         `if_match`: apply only at this version (an int, or an entity tag such as '"7"' or '*');
-        otherwise ProblemError with status 412 and the current version in `etag`.
+        otherwise VersionMismatchError (412) with the current version in `current_version`.
         """
-        headers = {}
-        if if_match is not None:
-            headers["If-Match"] = f'"{if_match}"' if isinstance(if_match, int) else if_match
-        return self._json("POST", "/v1/edits", {"edits": list(edits)}, headers)["version"]
+        return self._call(_api.edit(edits, if_match))
 
     def import_asset(self, path: str, prefix: Optional[str] = None, fmt: Optional[str] = None,
                      instance: bool = True, parent: Optional[str] = None,
-                     if_match: Union[int, str, None] = None) -> Dict[str, Any]:
+                     if_match: IfMatch = None) -> ImportResult:
         """Imports a glTF (.glb or .gltf), OBJ or PLY file (POST /v1/assets) as one batch;
-        returns the answer: {"version", "applied", "format", "textures", "meshes", "materials",
-        "groups", "instances", "warnings"} (and "model" when it went as an archive).
+        returns the answer: version, applied, format, the ids created (meshes, materials,
+        groups, instances, textures), warnings, and model when it went as an archive.
 
         An .obj that names MTL files (and the map_Kd images they name), or a .gltf with external
         buffers or images, is sent as a tar archive of them all, built in memory (asset_pack.py);
@@ -192,107 +128,83 @@ class Client:
 
         `prefix` starts every id it creates (default: the file name's stem); `fmt` is glb, gltf,
         obj or ply (default: from the extension); `instance=False` creates meshes and materials
-        only; `parent` names the group the asset's own group joins (default: the root). A file Strata cannot read raises ProblemError 422 whose body names the "file" and
-        the "element" at fault.
+        only; `parent` names the group the asset's own group joins (default: the root). A file
+        Strata cannot read raises UnprocessableError (422) whose body names the "file" and the
+        "element" at fault.
         """
-        if fmt is None:
-            packed = pack_asset(path)
-            data = packed.data
-        else:
-            with open(path, "rb") as f:
-                data = f.read()
-            packed = None
-        query = {"name": os.path.basename(path)}
-        if packed is not None and packed.archive:
-            query = {"name": os.path.splitext(os.path.basename(path))[0] + ".tar", "format": "tar"}
-        if prefix is not None:
-            query["prefix"] = prefix
-        if fmt is not None:
-            query["format"] = fmt
-        if not instance:
-            query["instance"] = "false"
-        if parent is not None:
-            query["parent"] = parent
-        headers = {"Content-Type": "application/octet-stream"}
-        if if_match is not None:
-            headers["If-Match"] = f'"{if_match}"' if isinstance(if_match, int) else if_match
-        target = "/v1/assets?" + urllib.parse.urlencode(query, quote_via=urllib.parse.quote)
-        status, response, body = self._request("POST", target, data, headers)
-        if not 200 <= status < 300:
-            raise self._problem(status, response, body)
-        return json.loads(body)
+        return self._call(_api.import_asset(path, prefix, fmt, instance, parent, if_match))
 
-    def commit(self) -> Dict[str, Any]:
+    def commit(self) -> RebuildReport:
         """Runs a commit (POST /v1/commit); returns its rebuild report."""
-        status, response, data = self._request("POST", "/v1/commit", b"")
-        if not 200 <= status < 300:
-            raise self._problem(status, response, data)
-        return json.loads(data)
+        return self._call(_api.commit())
 
-    def plan(self) -> Dict[str, Any]:
-        """What the next commit would do (GET /v1/plan), as a report with "planned": true."""
-        return self._json("GET", "/v1/plan")
+    def plan(self) -> RebuildReport:
+        """What the next commit would do (GET /v1/plan), as a report with planned true."""
+        return self._call(_api.plan())
 
-    def render(self, width: int = 640, height: int = 360, fmt: str = "png", **opts: Any) -> bytes:
-        """Renders a frame (POST /v1/render); returns the encoded image.
+    def render_frame(self, width: int = 640, height: int = 360, fmt: str = "png",
+                     **opts: Any) -> Frame:
+        """Renders a frame (POST /v1/render); returns the encoded image with its RenderInfo.
 
         Every other request member passes through `opts`: spp, aovs, compression, accumulate,
-        exposure, filter ("none" or "atrous"), camera={"eye": [...], "target": [...], "up": [...],
-        "fov_y_deg": ...}.
-        `last_render` then holds the version the frame shows and its commit's summary.
+        exposure, filter ("none" or "atrous"), split, camera={"eye": [...], "target": [...],
+        "up": [...], "fov_y_deg": ...}. Also sets `last_render`.
         """
-        body = {"width": width, "height": height, "format": fmt}
-        body.update(opts)
-        status, response, data = self._request("POST", "/v1/render",
-                                               json.dumps(body).encode("utf-8"))
-        if not 200 <= status < 300:
-            raise self._problem(status, response, data)
-        report_text = response.getheader("X-Strata-Report")
-        self.last_render = RenderInfo(_etag_version(response.getheader("ETag")),
-                                      response.getheader("X-Strata-Rebuild", ""),
-                                      response.getheader("Content-Type", ""),
-                                      json.loads(report_text) if report_text else None)
-        return data
+        frame = self._call(_api.render(width, height, fmt, opts))
+        self.last_render = frame.info
+        return frame
 
-    def render_array(self, width: int = 640, height: int = 360, **opts: Any):
-        """Renders a PNG frame and returns it as a numpy array of shape (height, width, channels),
-        dtype uint8. numpy is imported here, only when this is called. EXR is not decoded here:
-        use render(fmt="exr") and an EXR reader."""
+    def render(self, width: int = 640, height: int = 360, fmt: str = "png",
+               **opts: Any) -> bytes:
+        """render_frame(), returning the encoded image only; `last_render` holds the rest."""
+        return self.render_frame(width, height, fmt, **opts).image
+
+    def render_array(self, width: int = 640, height: int = 360, **opts: Any) -> Any:
+        """The frame as one numpy array (height, width, channels): with fmt="png" (the default)
+        the tone-mapped image as uint8, with fmt="npz" the linear beauty as float32. numpy is
+        imported only when this is called; render_arrays() gives the AOVs too."""
         fmt = opts.pop("fmt", "png")
+        if fmt == "npz":
+            return self.render_arrays(width, height, **opts)["beauty"]
         if fmt != "png":
-            raise NotImplementedError("render_array decodes PNG only; use render(fmt='exr') "
-                                      "and an EXR reader such as OpenEXR")
-        import numpy as np  # lazily: the rest of the client needs only the standard library
+            raise ValueError("render_array reads png or npz frames; for the AOVs of an EXR "
+                             "frame as arrays, use render_arrays()")
+        return png_to_array(self.render(width, height, "png", **opts))
 
-        w, h, channels, pixels = decode_png(self.render(width, height, "png", **opts))
-        return np.frombuffer(pixels, dtype=np.uint8).reshape(h, w, channels)
+    def render_arrays(self, width: int = 640, height: int = 360, **opts: Any) -> FrameArrays:
+        """The frame and its AOVs (`aovs=["depth", "instance_id"]`) as numpy arrays, linear and
+        at full precision (format npz), with the client ids behind the id AOVs."""
+        frame = self.render_frame(width, height, "npz", **opts)
+        return frame_arrays(frame)
 
     def stats(self) -> Dict[str, Any]:
         """Counters, the last report and memory (GET /v1/stats)."""
-        return self._json("GET", "/v1/stats")
+        return self._call(_api.stats())
 
     def scene(self, kind: Optional[str] = None, id: Optional[str] = None) -> Dict[str, Any]:
-        """The scene summary (GET /v1/scene), or one object's state with kind "meshes",
-        "instances", "materials", "groups", "lights" or "textures" and its id (GET /v1/scene/{kind}/{id})."""
-        if kind is None:
-            return self._json("GET", "/v1/scene")
-        if kind not in ("meshes", "instances", "materials", "groups", "lights",
-                        "textures") or not id:
-            raise ValueError("scene(kind, id): kind is 'meshes', 'instances', 'materials', "
-                             "'groups', 'lights' or 'textures'")
-        return self._json("GET", f"/v1/scene/{kind}/{urllib.parse.quote(id, safe='')}")
+        """The scene summary (GET /v1/scene), or one object's document with kind "meshes",
+        "instances", "materials", "groups", "lights" or "textures" and its id
+        (GET /v1/scene/{kind}/{id})."""
+        return self._call(_api.scene(kind, id))
 
-    def _list(self, collection: str, page_size: int, **filters: Any) -> Iterator[Dict[str, Any]]:
-        query = {"limit": str(page_size)}
-        for key, value in filters.items():
-            if value is not None:
-                query[key] = ("true" if value else "false") if isinstance(value, bool) else value
+    def page(self, collection: str, limit: int = 100, cursor: Optional[str] = None, *,
+             group: Optional[str] = None, mesh: Optional[str] = None,
+             visible: Optional[bool] = None, parent: Optional[str] = None) -> Page:
+        """One page of a listing (GET /v1/scene/{collection}): collection is one of
+        scene()'s kinds, or "children" with `group`. `cursor` is the previous page's
+        next_cursor; `mesh` and `visible` filter instances, `parent` instances and groups."""
+        return self._call(_api.page(collection, limit, cursor, group,
+                                    {"mesh": mesh, "visible": visible, "parent": parent}))
+
+    def _walk(self, collection: str, page_size: int, group: Optional[str] = None,
+              **filters: Any) -> Iterator[Dict[str, Any]]:
+        cursor: Optional[str] = None
         while True:
-            page = self._json("GET", f"/v1/scene/{collection}?{urllib.parse.urlencode(query)}")
-            yield from page["items"]
-            if page.get("next_cursor") is None:
+            page = self.page(collection, page_size, cursor, group=group, **filters)
+            yield from page.items
+            if page.next_cursor is None:
                 return
-            query["cursor"] = page["next_cursor"]
+            cursor = page.next_cursor
 
     def instances(self, page_size: int = 1000, mesh: Optional[str] = None,
                   visible: Optional[bool] = None,
@@ -300,58 +212,50 @@ class Client:
         """Every instance (GET /v1/scene/instances, following cursors page by page), optionally
         only those of one mesh, only (in)visible ones, or only the children of group `parent`
         ("" for the root). Each item is the document scene("instances", id) returns."""
-        return self._list("instances", page_size, mesh=mesh, visible=visible, parent=parent)
+        return self._walk("instances", page_size, mesh=mesh, visible=visible, parent=parent)
 
     def groups(self, page_size: int = 1000,
                parent: Optional[str] = None) -> Iterator[Dict[str, Any]]:
         """Every group (GET /v1/scene/groups, following cursors), optionally only the children
         of group `parent` ("" for the root)."""
-        return self._list("groups", page_size, parent=parent)
+        return self._walk("groups", page_size, parent=parent)
 
     def children(self, group: str, page_size: int = 1000) -> Iterator[Dict[str, Any]]:
         """A group's direct children (GET /v1/scene/groups/{id}/children, following cursors):
         its groups, then its instances, each document with "kind" "group" or "instance"."""
-        return self._list(f"groups/{urllib.parse.quote(group, safe='')}/children", page_size)
+        return self._walk("children", page_size, group=group)
 
     def tree(self, depth: int = 1, group: Optional[str] = None,
              max_nodes: Optional[int] = None) -> Dict[str, Any]:
         """The scene graph nested `depth` levels deep from the root or from `group`
         (GET /v1/scene/tree): {"groups": [...], "instances": [...], "truncated": bool, ...}."""
-        query: Dict[str, str] = {"depth": str(depth)}
-        if group is not None:
-            query["group"] = group
-        if max_nodes is not None:
-            query["max_nodes"] = str(max_nodes)
-        return self._json("GET", f"/v1/scene/tree?{urllib.parse.urlencode(query)}")
+        return self._call(_api.tree(depth, group, max_nodes))
 
     def meshes(self, page_size: int = 1000) -> Iterator[Dict[str, Any]]:
         """Every mesh (GET /v1/scene/meshes, following cursors)."""
-        return self._list("meshes", page_size)
+        return self._walk("meshes", page_size)
 
     def materials(self, page_size: int = 1000) -> Iterator[Dict[str, Any]]:
         """Every material (GET /v1/scene/materials, following cursors)."""
-        return self._list("materials", page_size)
+        return self._walk("materials", page_size)
 
     def textures(self, page_size: int = 1000) -> Iterator[Dict[str, Any]]:
         """Every texture (GET /v1/scene/textures, following cursors): id, width, height, format,
         encoded_bytes, decoded_bytes."""
-        return self._list("textures", page_size)
+        return self._walk("textures", page_size)
+
     def lights(self, page_size: int = 1000) -> Iterator[Dict[str, Any]]:
         """Every point, spot and rect light (GET /v1/scene/lights, following cursors)."""
-        return self._list("lights", page_size)
+        return self._walk("lights", page_size)
 
     def pick(self, x: int, y: int, width: int, height: int,
-             camera: Optional[Dict[str, Any]] = None) -> Optional[Dict[str, Any]]:
-        """What lies under pixel (x, y) of a width x height frame (POST /v1/pick): a dict with
-        instance, mesh, group_path, primitive, distance, position, normal and user_id, or
-        None."""
+             camera: Optional[Dict[str, Any]] = None) -> Optional[Hit]:
+        """What lies under pixel (x, y) of a width x height frame (POST /v1/pick), seen from
+        the scene camera or from `camera` (the render's override): a Hit, or None."""
         return self.pick_many([(x, y)], width, height, camera)[0]
 
     def pick_many(self, pixels: Iterable[Tuple[int, int]], width: int, height: int,
-                  camera: Optional[Dict[str, Any]] = None) -> List[Optional[Dict[str, Any]]]:
+                  camera: Optional[Dict[str, Any]] = None) -> List[Optional[Hit]]:
         """pick() for many pixels at once (at most 10000), one ray each, all at one version."""
-        body: Dict[str, Any] = {"width": width, "height": height,
-                                "pixels": [[int(px), int(py)] for px, py in pixels]}
-        if camera is not None:
-            body["camera"] = camera
-        return self._json("POST", "/v1/pick", body)["hits"]
+        return self._call(_api.pick_many(pixels, width, height, camera))
+

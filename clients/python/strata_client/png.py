@@ -3,7 +3,7 @@ interlaced, every filter type. That covers what strata-server encodes (8-bit RGB
 
 import struct
 import zlib
-from typing import Tuple
+from typing import Any, Tuple
 
 _SIGNATURE = b"\x89PNG\r\n\x1a\n"
 _CHANNELS = {0: 1, 2: 3, 4: 2, 6: 4}  # PNG colour type -> samples per pixel
@@ -83,3 +83,12 @@ def decode_png(data: bytes) -> Tuple[int, int, int, bytearray]:
         pixels[y * stride:(y + 1) * stride] = row
         prev = row
     return width, height, channels, pixels
+
+
+def png_to_array(png: bytes) -> Any:
+    """A PNG as a numpy uint8 array of shape (height, width, channels); imports numpy, only
+    when called (the rest of the client needs the standard library only)."""
+    import numpy as np
+
+    width, height, channels, pixels = decode_png(png)
+    return np.frombuffer(pixels, dtype=np.uint8).reshape(height, width, channels)

@@ -1,0 +1,236 @@
+"""The endpoints, without I/O: each function builds a request and says how to read its answer.
+
+Client (blocking, http.client) and AsyncClient (asyncio) send the same Call objects, so both
+speak the protocol the same way and give the same typed results.
+"""
+
+import json
+import os
+import urllib.parse
+from dataclasses import dataclass, field
+from typing import Any, Callable, Dict, Generic, Iterable, List, Optional, Tuple, TypeVar, Union
+
+from strata_client._version import __version__
+from strata_client.asset_pack import pack_asset
+from strata_client.errors import etag_version, problem_error
+from strata_client.results import Frame, Hit, ImportResult, Page, RebuildReport, RenderInfo
+
+T = TypeVar("T")
+
+USER_AGENT = f"strata-client-python/{__version__}"
+
+SCENE_KINDS = ("meshes", "instances", "materials", "groups", "lights", "textures")
+
+#: An If-Match precondition: a version, or an entity tag such as '"7"' or '*'.
+IfMatch = Union[int, str, None]
+
+
+@dataclass
+class Request:
+    """One HTTP request; `target` is the path and query."""
+
+    method: str
+    target: str
+    body: Optional[bytes] = None
+    headers: Dict[str, str] = field(default_factory=dict)
+
+
+@dataclass
+class Response:
+    """One HTTP answer, header names in lower case."""
+
+    status: int
+    headers: Dict[str, str]
+    body: bytes
+
+
+@dataclass
+class Call(Generic[T]):
+    """A request and how to read a 2xx answer to it."""
+
+    request: Request
+    read: Callable[[Response], T]
+
+    def result(self, response: Response) -> T:
+        """The typed result, or the ProblemError the answer carries."""
+        if not 200 <= response.status < 300:
+            raise problem_error(response.status, response.headers, response.body)
+        return self.read(response)
+
+
+@dataclass(frozen=True)
+class Endpoint:
+    """Where a client connects: scheme, host and port of a server URL that has no path."""
+
+    scheme: str
+    host: str
+    port: Optional[int]
+    netloc: str
+
+    @property
+    def url(self) -> str:
+        return f"{self.scheme}://{self.netloc}"
+
+    @property
+    def https(self) -> bool:
+        return self.scheme == "https"
+
+
+def parse_url(url: str) -> Endpoint:
+    """Checks a server URL: scheme://host[:port], http or https, no path, query or fragment."""
+    parts = urllib.parse.urlsplit(url)
+    if parts.scheme not in ("http", "https") or not parts.hostname:
+        raise ValueError(f"server URL {url!r} must be http://host[:port] or https://host[:port]")
+    if parts.path not in ("", "/") or parts.query or parts.fragment:
+        raise ValueError(f"server URL {url!r} must not have a path")
+    return Endpoint(parts.scheme, parts.hostname, parts.port, parts.netloc)
+
+
+def request_headers(request: Request, token: Optional[str]) -> Dict[str, str]:
+    """The headers every request carries, then the request's own."""
+    headers = {"Accept": "application/json", "User-Agent": USER_AGENT}
+    if request.body is not None:
+        headers["Content-Type"] = "application/json"
+    if token:
+        headers["Authorization"] = f"Bearer {token}"
+    headers.update(request.headers)
+    return headers
+
+
+def _json_body(value: Any) -> bytes:
+    return json.dumps(value).encode("utf-8")
+
+
+def _read_json(response: Response) -> Any:
+    return json.loads(response.body)
+
+
+def _if_match(if_match: IfMatch) -> Dict[str, str]:
+    if if_match is None:
+        return {}
+    return {"If-Match": f'"{if_match}"' if isinstance(if_match, int) else if_match}
+
+
+def _quote(segment: str) -> str:
+    return urllib.parse.quote(segment, safe="")
+
+
+# -- endpoints --------------------------------------------------------------------------------
+
+def edit(edits: Iterable[Dict[str, Any]], if_match: IfMatch = None) -> Call[int]:
+    body = _json_body({"edits": list(edits)})
+    return Call(Request("POST", "/v1/edits", body, _if_match(if_match)),
+                lambda r: int(_read_json(r)["version"]))
+
+
+def import_asset(path: str, prefix: Optional[str] = None, fmt: Optional[str] = None,
+                 instance: bool = True, parent: Optional[str] = None,
+                 if_match: IfMatch = None) -> Call[ImportResult]:
+    """Reads the file (and its side files) now: FileNotFoundError or ValueError before sending."""
+    archive = False
+    if fmt is None:
+        packed = pack_asset(path)
+        data, archive = packed.data, packed.archive
+    else:
+        with open(path, "rb") as f:
+            data = f.read()
+    query = {"name": os.path.basename(path)}
+    if archive:
+        query = {"name": os.path.splitext(os.path.basename(path))[0] + ".tar", "format": "tar"}
+    if prefix is not None:
+        query["prefix"] = prefix
+    if fmt is not None:
+        query["format"] = fmt
+    if not instance:
+        query["instance"] = "false"
+    if parent is not None:
+        query["parent"] = parent
+    headers = {"Content-Type": "application/octet-stream"}
+    headers.update(_if_match(if_match))
+    target = "/v1/assets?" + urllib.parse.urlencode(query, quote_via=urllib.parse.quote)
+    return Call(Request("POST", target, data, headers),
+                lambda r: ImportResult.from_json(_read_json(r)))
+
+
+def commit() -> Call[RebuildReport]:
+    return Call(Request("POST", "/v1/commit", b""),
+                lambda r: RebuildReport.from_json(_read_json(r)))
+
+
+def plan() -> Call[RebuildReport]:
+    return Call(Request("GET", "/v1/plan"), lambda r: RebuildReport.from_json(_read_json(r)))
+
+
+def _render_info(response: Response) -> RenderInfo:
+    report = response.headers.get("x-strata-report")
+    samples = response.headers.get("x-strata-samples", "")
+    return RenderInfo(etag_version(response.headers.get("etag")),
+                      response.headers.get("x-strata-rebuild", ""),
+                      response.headers.get("content-type", ""),
+                      RebuildReport.from_json(json.loads(report)) if report else None,
+                      int(samples) if samples.isdigit() else None,
+                      response.headers.get("x-strata-split"))
+
+
+def render(width: int, height: int, fmt: str, opts: Dict[str, Any]) -> Call[Frame]:
+    body: Dict[str, Any] = {"width": width, "height": height, "format": fmt}
+    body.update(opts)
+    return Call(Request("POST", "/v1/render", _json_body(body)),
+                lambda r: Frame(r.body, _render_info(r)))
+
+
+def stats() -> Call[Dict[str, Any]]:
+    return Call(Request("GET", "/v1/stats"), _read_json)
+
+
+def scene(kind: Optional[str], id: Optional[str]) -> Call[Dict[str, Any]]:
+    if kind is None:
+        return Call(Request("GET", "/v1/scene"), _read_json)
+    if kind not in SCENE_KINDS or not id:
+        raise ValueError("scene(kind, id): kind is one of " + ", ".join(map(repr, SCENE_KINDS))
+                         + " and id is not empty")
+    return Call(Request("GET", f"/v1/scene/{kind}/{_quote(id)}"), _read_json)
+
+
+def page(collection: str, limit: int, cursor: Optional[str], group: Optional[str],
+         filters: Dict[str, Any]) -> Call[Page]:
+    """A page of a collection, or of a group's children (collection "children", `group`)."""
+    if collection == "children":
+        if not group:
+            raise ValueError("page('children', group=...): name the group")
+        path = f"/v1/scene/groups/{_quote(group)}/children"
+    elif collection in SCENE_KINDS:
+        path = f"/v1/scene/{collection}"
+    else:
+        raise ValueError("page(collection): collection is one of "
+                         + ", ".join(map(repr, SCENE_KINDS + ("children",))))
+    query = {"limit": str(limit)}
+    for key, value in filters.items():
+        if value is not None:
+            query[key] = ("true" if value else "false") if isinstance(value, bool) else str(value)
+    if cursor is not None:
+        query["cursor"] = cursor
+    return Call(Request("GET", f"{path}?{urllib.parse.urlencode(query)}"),
+                lambda r: Page.from_json(_read_json(r)))
+
+
+def tree(depth: int, group: Optional[str], max_nodes: Optional[int]) -> Call[Dict[str, Any]]:
+    query = {"depth": str(depth)}
+    if group is not None:
+        query["group"] = group
+    if max_nodes is not None:
+        query["max_nodes"] = str(max_nodes)
+    return Call(Request("GET", f"/v1/scene/tree?{urllib.parse.urlencode(query)}"), _read_json)
+
+
+def _hits(response: Response) -> List[Optional[Hit]]:
+    return [None if h is None else Hit.from_json(h) for h in _read_json(response)["hits"]]
+
+
+def pick_many(pixels: Iterable[Tuple[int, int]], width: int, height: int,
+              camera: Optional[Dict[str, Any]]) -> Call[List[Optional[Hit]]]:
+    body: Dict[str, Any] = {"width": width, "height": height,
+                            "pixels": [[int(px), int(py)] for px, py in pixels]}
+    if camera is not None:
+        body["camera"] = camera
+    return Call(Request("POST", "/v1/pick", _json_body(body)), _hits)
