@@ -172,8 +172,8 @@ void add_render_limit_options(CLI::App& app, ServerConfig& c) {
                    "Most vertices over the scene's meshes (an edit batch beyond it: 413)")
         ->check(CLI::Range(uint64_t(1), uint64_t(1) << 32));
     app.add_option("--max-texture-mb", c.max_texture_mb,
-                   "Most decoded texture memory in MiB, 6 bytes a texel (add_texture beyond it: "
-                   "413)")
+                   "Most texture memory in MiB: decoded texels (6 bytes each) and the image "
+                   "files kept with them (add_texture beyond it: 413)")
         ->check(CLI::Range(uint64_t(1), uint64_t(1) << 20));
 }
 

@@ -13,7 +13,8 @@ namespace strata {
 struct SceneBudget {
     uint64_t max_triangles = uint64_t(1) << 24;
     uint64_t max_vertices = uint64_t(1) << 24;
-    /// Decoded texture memory (6 bytes a texel, engine/image/texture.h) over all textures.
+    /// Texture memory over all textures: decoded texels (6 bytes each, engine/image/texture.h)
+    /// and the image files they were decoded from.
     uint64_t max_texture_bytes = uint64_t(256) << 20;
 };
 
@@ -21,7 +22,7 @@ struct SceneBudget {
 struct MeshTotals {
     uint64_t vertices = 0;
     uint64_t triangles = 0;
-    uint64_t texture_bytes = 0;  ///< decoded texels of every texture
+    uint64_t texture_bytes = 0;  ///< decoded texels and image files of every texture
 
     bool grew_from(const MeshTotals& before) const {
         return vertices > before.vertices || triangles > before.triangles ||

@@ -423,12 +423,14 @@ void Scene::remove_material(MaterialHandle h, UndoLog& undo) {
 Status Scene::apply_edit(AddTexture&& e, UndoLog& undo) {
     if (Status s = check_new_id(e.id, !find_texture(e.id).is_null(), "texture"); !s) return s;
     if (Status s = check_fields<TextureFields>(e); !s) return s;
-    // What is left of the budget bounds the decode: a huge image is refused from its header,
-    // before its texels are allocated.
+    // A texture costs its texels and its file (only the image's own bytes: whatever follows its
+    // end is dropped). What is left of the budget after the file bounds the decode: a huge image
+    // is refused from its header, before its texels are allocated.
+    const std::size_t own = image_length(e.data);
+    const uint64_t encoded = own > 0 ? own : e.data.size();
+    const uint64_t used = m_totals.texture_bytes + encoded;
     TextureLimits limits;
-    limits.max_bytes = m_budget.max_texture_bytes > m_totals.texture_bytes
-                           ? m_budget.max_texture_bytes - m_totals.texture_bytes
-                           : 0;
+    limits.max_bytes = m_budget.max_texture_bytes > used ? m_budget.max_texture_bytes - used : 0;
     Result<TextureImage> image =
         e.decoded ? std::move(e.decoded->image) : decode_texture(e.data, limits);
     if (image && e.decoded) {
@@ -441,11 +443,9 @@ Status Scene::apply_edit(AddTexture&& e, UndoLog& undo) {
         err.message = "texture '" + e.id + "': " + err.message;
         return Unexpected(std::move(err));
     }
-    // Only the image's own bytes are kept: whatever follows its end is not part of it.
-    if (const std::size_t length = image_length(e.data); length > 0 && length < e.data.size())
-        e.data = e.data.substr(0, length);
+    if (own > 0 && own < e.data.size()) e.data = e.data.substr(0, own);
 
-    m_totals.texture_bytes += image.value().bytes();
+    m_totals.texture_bytes += image.value().bytes() + e.data.size();
     TextureRecord r;
     r.id = e.id;
     r.image = std::make_shared<const TextureImage>(std::move(image).value());
@@ -480,7 +480,7 @@ Status Scene::apply_edit(RemoveTexture&& e, UndoLog& undo) {
 
 void Scene::remove_texture(TextureHandle h, UndoLog& undo) {
     TextureRecord& r = m_textures.at(h);
-    m_totals.texture_bytes -= r.image->bytes();
+    m_totals.texture_bytes -= r.image->bytes() + r.encoded->size();
     m_texture_ids.erase(r.id);
     m_changes.mark(SceneDirty::Textures);
     undo.records.emplace_back(undo::Removed<TextureHandle, TextureRecord>{h, m_textures.take(h)});

@@ -183,7 +183,8 @@ TEST(TextureRules, AMaterialNamesATextureThatExists) {
         EXPECT_EQ(t->image->width, 2u);
         const MaterialRecord* m = s.material(s.find_material("m")).value();
         EXPECT_EQ(m->base_color_texture, s.find_texture("checker"));
-        EXPECT_EQ(s.mesh_totals().texture_bytes, 4u * TEXTURE_BYTES_PER_TEXEL);
+        EXPECT_EQ(s.mesh_totals().texture_bytes,
+                  4u * TEXTURE_BYTES_PER_TEXEL + test::four_colour_png().size());
         EXPECT_EQ(s.counts().textures, 1u);
     });
     const Error e = refused(*engine, batch(textured_material("m2", "nope")));
@@ -205,7 +206,8 @@ TEST(TextureRules, ACorruptImageIsRefusedNamingTheTextureAndChangesNothing) {
     engine->read([](const Scene& s) {
         EXPECT_TRUE(s.find_texture("ok").is_null());
         EXPECT_EQ(s.textures().size(), 1u);
-        EXPECT_EQ(s.mesh_totals().texture_bytes, 4u * TEXTURE_BYTES_PER_TEXEL);
+        EXPECT_EQ(s.mesh_totals().texture_bytes,
+                  4u * TEXTURE_BYTES_PER_TEXEL + test::four_colour_png().size());
     });
 }
 
@@ -271,10 +273,11 @@ TEST(TextureRules, ClearRemovesTexturesToo) {
 }
 
 TEST(TextureRules, TexturesCountAgainstTheTextureBudget) {
+    // A texture costs its texels (4 of 6 bytes: 24) and its file: four fit, a fifth does not.
+    const uint64_t one = 4 * TEXTURE_BYTES_PER_TEXEL + test::four_colour_png().size();
     EngineConfig config;
-    config.budget.max_texture_bytes = 100;
+    config.budget.max_texture_bytes = 4 * one + one / 2;
     auto engine = std::move(Engine::create(config).value());
-    // 4 texels are 24 bytes: four textures fit, a fifth does not.
     apply_ok(*engine, texture_edit("a"), texture_edit("b"), texture_edit("c"), texture_edit("d"));
     const Error e = refused(*engine, batch(texture_edit("e")));
     EXPECT_EQ(e.code, ErrorCode::TooLarge);
@@ -421,8 +424,8 @@ TEST(ImageLength, PngAndJpegEndWhereTheirLastChunkOrMarkerEnds) {
     EXPECT_TRUE(decode_texture(with_thumbnail, {}).has_value());
 }
 
-TEST(TextureRules, OnlyTheImagesOwnBytesAreKept) {
-    // 1 MB after IEND used to be kept with every copy of the texture.
+TEST(TextureRules, OnlyTheImagesOwnBytesAreKeptAndTheFileCountsAgainstTheBudget) {
+    // 1 MB after IEND used to be kept with every copy of the texture, and uncounted.
     auto engine = test::make_engine();
     const std::string png = test::four_colour_png();
     const std::string jpeg = test::jpeg_bytes(4, 4, 200, 100, 50);
@@ -431,7 +434,16 @@ TEST(TextureRules, OnlyTheImagesOwnBytesAreKept) {
     engine->read([&](const Scene& s) {
         EXPECT_EQ(*s.texture(s.find_texture("p")).value()->encoded, png);
         EXPECT_EQ(*s.texture(s.find_texture("j")).value()->encoded, jpeg);
+        EXPECT_EQ(s.mesh_totals().texture_bytes,
+                  (4 + 16) * TEXTURE_BYTES_PER_TEXEL + png.size() + jpeg.size());
     });
+    // A file larger than the budget left is refused before its texels are decoded.
+    EngineConfig config;
+    config.budget.max_texture_bytes = 4 * TEXTURE_BYTES_PER_TEXEL + png.size() - 1;
+    auto small = std::move(Engine::create(config).value());
+    const Error e = refused(*small, batch(texture_edit("p", png)));
+    EXPECT_EQ(e.code, ErrorCode::TooLarge);
+    EXPECT_THAT(e.message, HasSubstr("bytes left in the texture budget"));
 }
 
 TEST(TextureRules, AnImageDecodedAheadIsTakenAsItIsAndCheckedAgainstTheBudgetLeft) {
@@ -443,8 +455,11 @@ TEST(TextureRules, AnImageDecodedAheadIsTakenAsItIsAndCheckedAgainstTheBudgetLef
     ASSERT_TRUE(scene.apply(batch(std::move(ahead))).has_value());
     EXPECT_EQ(scene.texture(scene.find_texture("ahead")).value()->image->width, 3u);
     // An image decoded with wider limits still meets the budget left when the rule runs.
+    // "ahead" costs its 3 texels and its file; "big" brings a file of the same size, so 10
+    // bytes are left for its texels.
+    const uint64_t file = test::four_colour_png().size();
     SceneBudget budget;
-    budget.max_texture_bytes = 3 * TEXTURE_BYTES_PER_TEXEL + 10;
+    budget.max_texture_bytes = 3 * TEXTURE_BYTES_PER_TEXEL + 2 * file + 10;
     scene.set_budget(budget);
     AddTexture big = texture_edit("big");
     big.decoded = std::make_shared<DecodedTexture>(DecodedTexture{decode_texture(big.data, {})});

@@ -74,7 +74,8 @@ TEST_F(Textures, ACorruptImageIs422NamingTheTextureAndTheDecodersReason) {
 
 TEST(TexturesBudget, AnImageOverTheTextureBudgetIs413FromItsHeader) {
     EngineConfig engine;
-    engine.budget.max_texture_bytes = 30;  // one 2x2 texture (24 bytes), not two
+    // One 2x2 texture (24 bytes of texels and its file), not two.
+    engine.budget.max_texture_bytes = 24 + png_2x2().size() + 10;
     TestServer srv({}, false, engine);
     ASSERT_EQ(srv.edits({add_texture("a", png_2x2())}).status, 200);
     const Reply r = srv.edits({add_texture("b", png_2x2())});
