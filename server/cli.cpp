@@ -162,6 +162,10 @@ void add_render_limit_options(CLI::App& app, ServerConfig& c) {
     app.add_option("--render-timeout", c.render_timeout_s,
                    "Seconds a render may run before it is stopped (503 deadline-exceeded)")
         ->check(CLI::Range(1, 86400));
+    app.add_option("--max-stream-mb", c.max_stream_mb,
+                   "MiB the views of open frame streams (GET /v1/stream) may hold together, 8 "
+                   "bytes a pixel each; a stream that would open a view beyond it gets 503")
+        ->check(CLI::Range(std::size_t(1), std::size_t(1) << 20));
     app.add_option("--shutdown-grace", c.shutdown_grace_s,
                    "Seconds in-flight requests get after SIGTERM before renders are stopped")
         ->check(CLI::Range(0, 3600));

@@ -72,6 +72,12 @@ constexpr StatSpec<StreamHubStats> STREAM_METRICS[] = {
      StatUnit::Count, CUMULATIVE},
     {STRATA_STAT(StreamHubStats, held_bytes),
      "Frame bytes held for open viewers (pending and being written).", StatUnit::Bytes, CURRENT},
+    {STRATA_STAT(StreamHubStats, view_bytes),
+     "Memory the views of open frame streams hold (frame, instance ids, JPEGs).", StatUnit::Bytes,
+     CURRENT},
+    {STRATA_STAT(StreamHubStats, views_refused),
+     "Frame streams refused because their new view was over --max-stream-mb.", StatUnit::Count,
+     CUMULATIVE},
 };
 
 constexpr StatSpec<Replica> REPLICA_METRICS[] = {

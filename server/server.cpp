@@ -30,7 +30,8 @@ Server::Server(ServerConfig config, Engine& engine, durable::DurableStore* store
                 });
         });
     m_reactor->set_version_source([&engine] { return engine.version(); });
-    m_streams = std::make_unique<StreamHub>(m_engine, [this] { return m_api_heavy.load() > 0; });
+    m_streams = std::make_unique<StreamHub>(
+        m_engine, [this] { return m_api_heavy.load() > 0; }, m_config.max_stream_mb << 20);
     m_app = std::make_unique<Application>(m_config, m_engine, m_metrics, &m_reactor->counters(),
                                           store, m_streams.get());
     m_workers = std::make_unique<WorkerPool>(m_config.threads);

@@ -37,6 +37,7 @@ struct ServerConfig {
     std::size_t max_buffered_bytes = 1024ull << 20;  ///< unfinished request data in memory
     int listen_backlog = 1024;
     int render_timeout_s = 60;  ///< a render running longer is stopped (503)
+    std::size_t max_stream_mb = 1024;  ///< what the views of open frame streams hold together
     int shutdown_grace_s = 3;   ///< SIGTERM: in-flight requests get this long, then renders stop
 
     // The scene budget (engine/scene/budget.h), checked when a batch is validated.

@@ -66,8 +66,12 @@ std::size_t prune_watchers(std::vector<W>& watchers) {
 
 }  // namespace
 
-StreamHub::StreamHub(Engine& engine, std::function<bool()> api_busy)
-    : m_engine(engine), m_api_busy(std::move(api_busy)) {
+std::size_t view_bytes(const ViewerSpec& spec) {
+    return std::size_t(spec.request.width) * spec.request.height * 8;
+}
+
+StreamHub::StreamHub(Engine& engine, std::function<bool()> api_busy, std::size_t max_view_bytes)
+    : m_engine(engine), m_api_busy(std::move(api_busy)), m_max_view_bytes(max_view_bytes) {
     // Commits before the hub existed are no events (the first event, hello, describes them).
     m_reported_version = m_engine.last_report().version;
     m_engine.set_commit_listener([this](const RebuildReport& r) { on_commit(r); });
@@ -78,12 +82,34 @@ StreamHub::~StreamHub() {
     join();
 }
 
-std::shared_ptr<StreamChannel> StreamHub::watch(ViewerSpec spec) {
+Result<std::shared_ptr<StreamChannel>> StreamHub::watch(ViewerSpec spec) {
     const auto interval = std::chrono::milliseconds(int64_t(1000.0 / spec.fps));
     auto channel = std::make_shared<StreamChannel>(StreamChannel::Mode::Latest, interval);
     const std::string highlight = spec.highlight;
     std::lock_guard lock(m_mutex);
-    if (m_stopping) return nullptr;
+    if (m_stopping) return std::shared_ptr<StreamChannel>();
+    if (!m_views.count(spec.key)) {
+        // A new view: the views streams still watch, and this one, within the budget.
+        std::size_t held = 0;
+        for (auto it = m_views.begin(); it != m_views.end();) {
+            if (prune_watchers(it->second.viewers) == 0) {
+                it = m_views.erase(it);
+                continue;
+            }
+            held += view_bytes(it->second.spec);
+            ++it;
+        }
+        if (held + view_bytes(spec) > m_max_view_bytes) {
+            ++m_stats.views_refused;
+            return failure(ErrorCode::TooLarge,
+                           "a new view of " + std::to_string(spec.request.width) + "x" +
+                               std::to_string(spec.request.height) + " would take the open " +
+                               "streams' views to " + std::to_string((held + view_bytes(spec)) >> 20) +
+                               " MiB, over --max-stream-mb (" +
+                               std::to_string(m_max_view_bytes >> 20) +
+                               " MiB): watch a smaller frame, or the view of a stream already open");
+        }
+    }
     View& view = m_views[spec.key];
     if (view.viewers.empty()) {
         view.spec = std::move(spec);
@@ -160,6 +186,7 @@ StreamHubStats StreamHub::stats() const {
     StreamHubStats s = m_stats;
     s.viewers = 0;
     for (const auto& [key, view] : m_views) {
+        s.view_bytes += view_bytes(view.spec);
         for (const auto& w : view.viewers) {
             const auto& c = w.channel;
             if (c->gone()) continue;

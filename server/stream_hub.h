@@ -72,18 +72,27 @@ struct StreamHubStats {
     uint64_t frames_dropped = 0;     ///< frames open viewers missed (a newer one replaced them)
     uint64_t highlight_encodes = 0;  ///< JPEGs encoded with a highlight (one per frame and id)
     std::size_t held_bytes = 0;      ///< frame bytes held for open viewers (pending and writing)
+    std::size_t view_bytes = 0;      ///< what the open views hold (view_bytes of each)
+    uint64_t views_refused = 0;      ///< streams refused: their view was over the budget
 };
+
+/// The memory a view of `spec` holds at its frame size: the tone-mapped frame (3 bytes a
+/// pixel), its instance ids (4) and its JPEGs (about 1).
+std::size_t view_bytes(const ViewerSpec& spec);
 
 class StreamHub {
 public:
-    /// `api_busy`: true while an API render or commit is queued or running.
-    StreamHub(Engine& engine, std::function<bool()> api_busy);
+    /// `api_busy`: true while an API render or commit is queued or running. `max_view_bytes`:
+    /// the memory the views of open streams may hold together (view_bytes each).
+    StreamHub(Engine& engine, std::function<bool()> api_busy,
+              std::size_t max_view_bytes = std::size_t(1) << 30);
     ~StreamHub();
     StreamHub(const StreamHub&) = delete;
     StreamHub& operator=(const StreamHub&) = delete;
 
-    /// A new frame stream; null once stopped.
-    std::shared_ptr<StreamChannel> watch(ViewerSpec spec);
+    /// A new frame stream; null once stopped. A view no stream watches yet is refused
+    /// (TooLarge) when its memory would take the views over the hub's budget.
+    Result<std::shared_ptr<StreamChannel>> watch(ViewerSpec spec);
     /// A new event stream; null once stopped.
     std::shared_ptr<StreamChannel> subscribe();
     /// Queues a commit event (quick, any thread); commits at a version already reported are
@@ -177,6 +186,7 @@ private:
 
     Engine& m_engine;
     std::function<bool()> m_api_busy;
+    const std::size_t m_max_view_bytes;
     CancelToken m_cancel;  ///< the hub's renders; cancelled by stop()
 
     mutable std::mutex m_mutex;

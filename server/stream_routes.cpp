@@ -157,8 +157,15 @@ Reply open_frame_stream(ServerContext& ctx, RouteCall& call) {
     // So is a camera no frame can be rendered with: answered now, not by a stream that starts
     // and then sends nothing.
     if (auto p = unusable_camera(ctx, std::get<ViewerSpec>(parsed).request)) return *p;
-    auto channel =
-        ctx.streams ? ctx.streams->watch(std::move(std::get<ViewerSpec>(parsed))) : nullptr;
+    if (!ctx.streams) return stream_unavailable();
+    auto watched = ctx.streams->watch(std::move(std::get<ViewerSpec>(parsed)));
+    if (!watched) {
+        protocol::ApiResponse r = protocol::problem_response(
+            protocol::make_problem(ProblemType::Unavailable, watched.error().message));
+        r.headers.emplace_back("Retry-After", "5");
+        return r;
+    }
+    std::shared_ptr<StreamChannel> channel = std::move(watched.value());
     if (!channel) return stream_unavailable();
     return Reply::streaming(stream_head("multipart/x-mixed-replace; boundary=strata-frame",
                                         "--strata-frame\r\nContent-Type: image/jpeg\r\n\r\n"),

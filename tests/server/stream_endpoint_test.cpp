@@ -266,6 +266,37 @@ TEST(StreamEndpoint, ViewersOfTheSameViewShareOneRenderPerVersion) {
     EXPECT_EQ(s.server().streams().stats().views, 2u);
 }
 
+TEST(StreamEndpoint, NewViewsBeyondTheMemoryBudgetAre503AndViewersOfAnOpenViewJoinIt) {
+    // 1 MiB: a 320x200 view takes 320 * 200 * 8 = 512000 bytes, so two views fit, not three.
+    ServerConfig config;
+    config.max_stream_mb = 1;
+    TestServer s(config, true);
+    const std::string a_query = "width=320&height=200&max_samples=1&fps=30";
+    const std::string b_query = "width=320&height=199&max_samples=1&fps=30";
+    auto a = std::make_unique<FrameReader>(s.port(), a_query);
+    FrameReader b(s.port(), b_query);
+    ASSERT_FALSE(a->head().empty());
+    ASSERT_FALSE(b.head().empty());
+    RawClient c(s.port());
+    c.send_get("/v1/stream?width=320&height=198&max_samples=1");
+    ASSERT_TRUE(c.wait_for("\r\n\r\n").has_value());
+    ASSERT_TRUE(c.wait_for("}").has_value());
+    EXPECT_EQ(c.in().substr(0, 12), "HTTP/1.1 503");
+    EXPECT_NE(c.in().find("Retry-After: 5"), std::string::npos);
+    EXPECT_NE(c.in().find("--max-stream-mb"), std::string::npos) << c.in();
+    EXPECT_EQ(s.server().streams().stats().views_refused, 1u);
+    EXPECT_EQ(s.server().streams().stats().view_bytes, 320u * 200 * 8 + 320u * 199 * 8);
+    // Another viewer of an open view shares its memory: welcome.
+    FrameReader a2(s.port(), a_query);
+    ASSERT_FALSE(a2.head().empty());
+    // Once the first view's viewers leave, its memory is free for another view.
+    a.reset();
+    a2.client().close();
+    ASSERT_TRUE(eventually([&] { return s.server().streams().stats().viewers == 1; }, 5000ms));
+    FrameReader d(s.port(), "width=320&height=198&max_samples=1&fps=30");
+    EXPECT_FALSE(d.head().empty());
+}
+
 TEST(StreamEndpoint, ViewerRendersWaitWhileAnApiRenderRuns) {
     TestServer s({}, true);
     // A view that always has more samples to add: the hub renders as often as it may.
