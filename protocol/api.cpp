@@ -196,7 +196,7 @@ ApiResponse post_edits(Engine& engine, std::string body, std::optional<std::stri
     const auto condition = if_match ? parse_if_match(*if_match, problem) : IfMatch{};
     if (!condition) return problem_response(problem);
 
-    auto parsed = parse_edit_batch(body, limits.json);
+    auto parsed = parse_edit_batch(body, limits.json, limits.max_batch_edits);
     body = {};  // the DOM and the batch hold what is needed; free the text early
     if (!parsed) return problem_response(problem_from(parsed.error()));
     ParsedBatch& batch = parsed.value();

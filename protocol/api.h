@@ -28,6 +28,8 @@ struct ApiLimits {
     int render_timeout_s = 0;  ///< a render running longer stops (--render-timeout); 0: none
     /// The engine's scene budget (--max-scene-*): imports size their reads by the room left.
     SceneBudget budget;
+    /// Most edits in one batch, JSON or snapshot (--max-batch-edits).
+    std::size_t max_batch_edits = std::size_t(1) << 20;
 };
 
 /// One endpoint's answer, ready for any transport.
@@ -135,9 +137,12 @@ ApiResponse get_snapshot(const Engine& engine);
 /// POST /v1/scene/snapshot: replaces the scene with the snapshot's, atomically, as one batch
 /// (a Clear, then the snapshot's edits): a new version, journaled like any batch. The snapshot's
 /// own version is not reused. `if_match` as for post_edits.
+/// A snapshot of more than `max_edits` edits is 413, refused from its count before any edit is
+/// decoded.
 ApiResponse post_snapshot(Engine& engine, std::string body,
                           std::optional<std::string_view> if_match,
-                          const BatchApply* apply = nullptr);
+                          const BatchApply* apply = nullptr,
+                          std::size_t max_edits = std::size_t(1) << 20);
 
 /// POST /v1/assets: imports one model file, the body, as ONE batch: atomic, journaled and
 /// counted like POST /v1/edits, If-Match honoured (assets_api.cpp). The format comes from

@@ -58,9 +58,20 @@ Parsed<ParsedBatch> parse_edit_batch(const Json& body) {
     return out;
 }
 
-Parsed<ParsedBatch> parse_edit_batch(std::string_view text, const JsonLimits& limits) {
+Parsed<ParsedBatch> parse_edit_batch(std::string_view text, const JsonLimits& limits,
+                                     std::size_t max_edits) {
     auto doc = parse_json(text, limits);
     if (!doc) return Unexpected(doc.error());
+    if (const auto it = doc->find("edits");
+        doc->is_object() && it != doc->end() && it->is_array() && it->size() > max_edits) {
+        RequestError e;
+        e.kind = RequestErrorKind::TooLarge;
+        e.code = ErrorCode::TooLarge;
+        e.message = "the batch holds " + std::to_string(it->size()) + " edits, more than " +
+                    std::to_string(max_edits) + " (--max-batch-edits): split it";
+        e.pointer = "/edits";
+        return Unexpected(std::move(e));
+    }
     return parse_edit_batch(doc.value());
 }
 

@@ -35,9 +35,15 @@ struct ParsedBatch {
 constexpr uint32_t MAX_SPHERE_SEGMENTS = 2048;
 constexpr uint32_t MAX_PLANE_SUBDIVISIONS = 1024;
 
+/// Most edits one batch may hold, by default (--max-batch-edits): a batch's edits are 250 bytes
+/// each in memory, beside their JSON or snapshot bytes.
+constexpr std::size_t DEFAULT_MAX_BATCH_EDITS = std::size_t(1) << 20;
+
 /// Parses a batch document.
 Parsed<ParsedBatch> parse_edit_batch(const Json& body);
-/// Parses a batch from request text.
-Parsed<ParsedBatch> parse_edit_batch(std::string_view text, const JsonLimits& limits);
+/// Parses a batch from request text; one of more than `max_edits` edits is TooLarge at /edits,
+/// refused before any edit is built.
+Parsed<ParsedBatch> parse_edit_batch(std::string_view text, const JsonLimits& limits,
+                                     std::size_t max_edits = DEFAULT_MAX_BATCH_EDITS);
 
 }  // namespace strata::protocol

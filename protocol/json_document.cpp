@@ -67,8 +67,18 @@ private:
 
     // Step: values -------------------------------------------------------------------------------
 
+    /// Counts one DOM value against the document's budget.
+    bool count_value() {
+        if (++m_values <= m_limits.max_values) return true;
+        return fail("the JSON document holds more than the limit of " +
+                        std::to_string(m_limits.max_values) +
+                        " values (--max-json-values): split it into smaller requests",
+                    RequestErrorKind::TooLarge);
+    }
+
     bool value(Json& out) {
         if (m_p == m_end) return fail("unexpected end of input");
+        if (!count_value()) return false;
         switch (*m_p) {
             case '{':
                 return object(out);
@@ -177,6 +187,7 @@ private:
                 }
                 items.emplace_back();
                 double d;
+                if (numeric && !count_value()) return false;
                 if (!(numeric ? number(items.back(), d) : value(items.back()))) return false;
                 all_numbers = all_numbers && numeric;
                 if (all_numbers && items.size() == PACK_THRESHOLD) {
@@ -412,6 +423,7 @@ private:
     const char* m_end;
     const JsonLimits& m_limits;
     std::size_t m_depth = 0;
+    std::size_t m_values = 0;  ///< DOM values so far (packed numbers not counted)
     std::optional<RequestError> m_error;
 };
 

@@ -24,6 +24,9 @@ using Json = nlohmann::json;
 struct JsonLimits {
     std::size_t max_depth = 64;                 ///< nested arrays and objects
     std::size_t max_array_elements = 1u << 26;  ///< elements in any one array
+    /// Values in the whole document, packed numbers not counted: what bounds the DOM's memory
+    /// (about 100 bytes a value) whatever the body's shape.
+    std::size_t max_values = 1u << 20;
 };
 
 /// Arrays of at least this many numbers are packed.

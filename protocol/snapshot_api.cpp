@@ -1,6 +1,8 @@
 // GET and POST /v1/scene/snapshot: a scene moved between servers, or kept in version control, as
 // the same file format the data directory's snapshots use.
 
+#include <cstring>
+
 #include "engine/durable/journal_format.h"
 #include "protocol/api.h"
 
@@ -22,10 +24,22 @@ ApiResponse get_snapshot(const Engine& engine) {
 }
 
 ApiResponse post_snapshot(Engine& engine, std::string body,
-                          std::optional<std::string_view> if_match, const BatchApply* apply) {
+                          std::optional<std::string_view> if_match, const BatchApply* apply,
+                          std::size_t max_edits) {
     Problem problem;
     const auto condition = if_match ? parse_if_match(*if_match, problem) : IfMatch{};
     if (!condition) return problem_response(problem);
+    // The payload starts with its edit count (engine/durable/edit_codec.h): a snapshot of too
+    // many edits is refused before one is decoded.
+    if (auto view = durable::open_snapshot(body); view && view->payload.size() >= 4) {
+        uint32_t count = 0;
+        std::memcpy(&count, view->payload.data(), sizeof count);
+        if (count > max_edits)
+            return problem_response(make_problem(
+                ProblemType::TooLarge, "the snapshot holds " + std::to_string(count) +
+                                           " edits, more than " + std::to_string(max_edits) +
+                                           " (--max-batch-edits): the scene was not loaded"));
+    }
     auto snapshot = durable::decode_snapshot(body);
     body = {};
     if (!snapshot)

@@ -52,10 +52,12 @@ void Application::install_routes(const FrontEndCounters* front_end, StreamHub* s
     m_context = std::make_unique<ServerContext>(ServerContext{
         m_engine, m_config, m_metrics,
         protocol::ApiLimits{
-            protocol::JsonLimits{m_config.max_json_depth, m_config.max_array_elements},
+            protocol::JsonLimits{m_config.max_json_depth, m_config.max_array_elements,
+                                 m_config.max_json_values},
             m_config.max_pixels, m_config.render_timeout_s,
             SceneBudget{m_config.max_scene_triangles, m_config.max_scene_vertices,
-                        m_config.max_texture_mb << 20}},
+                        m_config.max_texture_mb << 20},
+            m_config.max_batch_edits},
         front_end, nullptr, nullptr, {}, streams, {}});
     if (!m_config.peers.empty()) {
         // finish_config checked the list.

@@ -110,6 +110,13 @@ void add_request_limit_options(CLI::App& app, ServerConfig& c, std::size_t& max_
     app.add_option("--max-array-elements", c.max_array_elements,
                    "Most elements in one JSON array (413 beyond)")
         ->check(CLI::Range(std::size_t(16), std::size_t(1) << 30));
+    app.add_option("--max-json-values", c.max_json_values,
+                   "Most values in one JSON document, long arrays of numbers not counted: what "
+                   "bounds a request's parsed memory, about 100 bytes a value (413 beyond)")
+        ->check(CLI::Range(std::size_t(1024), std::size_t(1) << 30));
+    app.add_option("--max-batch-edits", c.max_batch_edits,
+                   "Most edits in one batch, POST /v1/edits or a snapshot upload (413 beyond)")
+        ->check(CLI::Range(std::size_t(1), std::size_t(1) << 30));
 }
 
 /// What one connection, and all of them together, may take: timeouts, head sizes, counts and

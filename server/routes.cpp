@@ -360,12 +360,15 @@ void add_snapshot_routes(RouteTable& routes, ServerContext& ctx) {
           .body_required = true,
           .responses = {ok_json("SnapshotResult", "loaded: the new version"),
                         problem(400, "the body is not a whole, undamaged snapshot"),
-                        version_mismatch(), problem(413, "the snapshot's scene is over the budget"),
+                        version_mismatch(),
+                        problem(413, "the snapshot's scene is over the budget, or holds more "
+                                     "edits than --max-batch-edits"),
                         problem(422, "the snapshot's scene cannot be loaded"), not_applied()}},
          [&ctx](RouteCall& call) {
              HttpRequest& req = call.request;
              return protocol::post_snapshot(ctx.engine, std::move(req.body),
-                                            req.header_value("If-Match"), ctx.batch_apply());
+                                            req.header_value("If-Match"), ctx.batch_apply(),
+                                            ctx.api_limits.max_batch_edits);
          }});
 }
 

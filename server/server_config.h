@@ -22,6 +22,8 @@ struct ServerConfig {
     uint64_t max_pixels = 16ull << 20;  ///< width * height of one render
     std::size_t max_json_depth = 64;
     std::size_t max_array_elements = 1u << 26;
+    std::size_t max_json_values = 1u << 20;   ///< values in one JSON document (its DOM's size)
+    std::size_t max_batch_edits = 1u << 20;   ///< edits in one batch, JSON or snapshot
 
     // The front end (reactor.h): every limit on what one client can hold.
     int header_timeout_s = 10;     ///< request line and headers, from the request's first byte

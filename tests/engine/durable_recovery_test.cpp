@@ -274,10 +274,12 @@ TEST(Durability, TexturesAndMaterialBindingsSurviveARestartFromJournalAndFromSna
     {
         Server s = start(options_for(dir));
         test::apply_ok(*s.engine, AddTexture{"checker", test::four_colour_png()}, m);
-        test::apply_ok(*s.engine, AddTexture{"photo", test::jpeg_bytes(8, 4, 200, 100, 50)},
-                       rebind, RemoveTexture{"checker"});
+        const std::string photo = test::jpeg_bytes(8, 4, 200, 100, 50);
+        test::apply_ok(*s.engine, AddTexture{"photo", photo}, rebind, RemoveTexture{"checker"});
         before = state(*s.engine);
-        ASSERT_EQ(before, "photo:8x4;m->photo wrap clamp filter nearest bytes 192");
+        // 32 texels of 6 bytes, and the file.
+        ASSERT_EQ(before, "photo:8x4;m->photo wrap clamp filter nearest bytes " +
+                              std::to_string(192 + photo.size()));
     }
     {
         Server s = start(options_for(dir));

@@ -128,6 +128,53 @@ TEST(Ids, ASnapshotWhoseIdsBreakTheIdRuleIsRefusedAndChangesNothing) {
     EXPECT_TRUE(Json::accept(r.body)) << "the problem is valid JSON";
 }
 
+TEST(Budgets, AJsonDocumentOverItsValueBudgetIsRefusedWhileParsing) {
+    JsonLimits limits;
+    limits.max_values = 100;
+    // Long number arrays are packed, not counted: a mesh's 3000 coordinates fit.
+    std::string numbers = "[0";
+    for (int i = 1; i < 3000; ++i) numbers += ",1";
+    EXPECT_TRUE(parse_json(R"({"positions": )" + numbers + "]}", limits).has_value());
+    // Objects, strings and short arrays are: 60 clears are 120 values.
+    std::string clears = R"({"edits": [{"op": "clear"})";
+    for (int i = 1; i < 60; ++i) clears += R"(, {"op": "clear"})";
+    auto r = parse_json(clears + "]}", limits);
+    ASSERT_FALSE(r.has_value());
+    EXPECT_EQ(r.error().kind, RequestErrorKind::TooLarge);
+    EXPECT_EQ(problem_from(r.error()).status, 413);
+    EXPECT_THAT(r.error().message, ::testing::HasSubstr("--max-json-values"));
+}
+
+TEST(Budgets, ABatchOverTheEditCountIsRefusedBeforeItsEditsAreBuilt) {
+    std::string clears = R"({"edits": [{"op": "clear"})";
+    for (int i = 1; i < 5; ++i) clears += R"(, {"op": "clear"})";
+    clears += "]}";
+    EXPECT_TRUE(parse_edit_batch(clears, {}, 5).has_value());
+    auto r = parse_edit_batch(clears, {}, 4);
+    ASSERT_FALSE(r.has_value());
+    EXPECT_EQ(r.error().pointer, "/edits");
+    EXPECT_EQ(problem_from(r.error()).status, 413);
+    EXPECT_THAT(r.error().message, ::testing::HasSubstr("5 edits, more than 4 (--max-batch-edits)"));
+    // Through the endpoint, with the limit from ApiLimits.
+    auto engine = std::move(Engine::create().value());
+    ApiLimits limits;
+    limits.max_batch_edits = 4;
+    EXPECT_EQ(post_edits(*engine, clears, std::nullopt, limits).status, 413);
+    EXPECT_EQ(engine->read([](const Scene& s) { return s.version(); }), 0u);
+}
+
+TEST(Budgets, ASnapshotOfManyEditsIsRefusedFromItsCount) {
+    // 100,000 one-byte clears: a small file that would decode into 25 MB of edits.
+    EditBatch clears;
+    clears.edits.assign(100000, Clear{});
+    const std::string file = snapshot_of(std::move(clears));
+    auto engine = std::move(Engine::create().value());
+    const ApiResponse r = post_snapshot(*engine, file, std::nullopt, nullptr, 1000);
+    EXPECT_EQ(r.status, 413) << r.body;
+    EXPECT_THAT(r.body, ::testing::HasSubstr("100000 edits, more than 1000"));
+    EXPECT_EQ(post_snapshot(*engine, file, std::nullopt, nullptr, 100000).status, 200);
+}
+
 TEST(Groups, NestedScalesThatOverflowAWorldTransformAre422NamingTheChain) {
     // 64 nested groups scaled 1e6 each: every local transform is valid, their product is not.
     auto engine = std::move(Engine::create().value());

@@ -39,22 +39,26 @@ class VersionTest(unittest.TestCase):
         self.assertEqual(pyproject["build-system"]["requires"], [])
         self.assertEqual(pyproject["build-system"]["backend-path"], ["_build"])
 
+def make_venv(folder):
+    """A fresh venv in `folder` (Debian's packages visible, as the README's); its python and an
+    environment that keeps pip off every index, configuration and PYTHONPATH."""
+    venv = os.path.join(folder, "venv")
+    env = {k: v for k, v in os.environ.items() if not k.startswith("PIP_") and k != "PYTHONPATH"}
+    env["PIP_CONFIG_FILE"] = os.devnull
+    subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", venv],
+                   check=True, env=env)
+    return os.path.join(venv, "bin", "python"), env
+
+
 class InstallTest(unittest.TestCase):
     """What README.md's install commands do, with pip kept off every index and link."""
 
     def test_pip_installs_it_offline_into_a_venv(self):
         with tempfile.TemporaryDirectory() as tmp:
-            # A copy: setuptools builds in the source folder (build/, *.egg-info).
+            # A copy, so that the test also proves the folder is all a build needs.
             source = os.path.join(tmp, "python")
-            shutil.copytree(PACKAGE_DIR, source, ignore=shutil.ignore_patterns(
-                "__pycache__", "build", "*.egg-info"))
-            venv = os.path.join(tmp, "venv")
-            env = {k: v for k, v in os.environ.items()
-                   if not k.startswith("PIP_") and k != "PYTHONPATH"}
-            env["PIP_CONFIG_FILE"] = os.devnull
-            subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", venv],
-                           check=True, env=env)
-            python = os.path.join(venv, "bin", "python")
+            shutil.copytree(PACKAGE_DIR, source, ignore=shutil.ignore_patterns("__pycache__"))
+            python, env = make_venv(tmp)
             # What the README says, build isolation included; no index, no network.
             pip = subprocess.run([python, "-m", "pip", "install", "--no-index", "--no-cache-dir",
                                   source], env=env, capture_output=True, text=True)
@@ -79,13 +83,7 @@ class InstallTest(unittest.TestCase):
 
     def test_an_editable_install_imports_the_source_folder(self):
         with tempfile.TemporaryDirectory() as tmp:
-            venv = os.path.join(tmp, "venv")
-            env = {k: v for k, v in os.environ.items()
-                   if not k.startswith("PIP_") and k != "PYTHONPATH"}
-            env["PIP_CONFIG_FILE"] = os.devnull
-            subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", venv],
-                           check=True, env=env)
-            python = os.path.join(venv, "bin", "python")
+            python, env = make_venv(tmp)
             pip = subprocess.run([python, "-m", "pip", "install", "--no-index", "--no-cache-dir",
                                   "-e", PACKAGE_DIR], env=env, capture_output=True, text=True)
             self.assertEqual(pip.returncode, 0, pip.stdout + pip.stderr)
