@@ -19,8 +19,7 @@ public:
     explicit UploadMaterialReader(const SideFiles& files) : m_files(files) {}
 
     bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
-                    std::map<std::string, int>* ids, std::string* warn,
-                    std::string* err) override {
+                    std::map<std::string, int>* ids, std::string* warn, std::string* err) override {
         const std::string* file = find_side_file(m_files, name);
         if (!file) {
             missing.push_back(name);
@@ -126,7 +125,8 @@ Imported<Declared> prescan(std::string_view text, const ErrorSink& sink,
         const char key = line[0];
         if (key == 'v') {
             if (++d.positions > limits.max_vertices)
-                return over(limits.max_vertices, "vertex positions", "vertices (max_scene_vertices)");
+                return over(limits.max_vertices, "vertex positions",
+                            "vertices (max_scene_vertices)");
             continue;
         }
         if (key != 'f' && key != 'l' && key != 'p') continue;
@@ -151,39 +151,41 @@ Imported<Declared> prescan(std::string_view text, const ErrorSink& sink,
     return d;
 }
 
-}  // namespace
-
-Imported<Asset> import_obj(std::span<const uint8_t> bytes, const std::string& file,
-                           const SideFiles& side_files, const ImportLimits& limits) {
-    const ErrorSink sink(file);
-    const std::string_view text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
-    if (auto declared = prescan(text, sink, limits); !declared)
-        return Unexpected(std::move(declared).error());
-    // Step 1: parse, the MTL from the upload only, polygons kept whole (tinyobjloader's own
-    // triangulation reads vertices before anything checked the indices).
+/// What tinyobjloader read: the OBJ's arrays, its shapes and the MTL's materials.
+struct ObjFile {
     tinyobj::attrib_t attrib;
     std::vector<tinyobj::shape_t> shapes;
     std::vector<tinyobj::material_t> mtl;
+    std::vector<std::string> folders;  ///< each material's MTL folder in the upload
+    std::vector<std::string> missing;  ///< mtllibs the upload does not hold
+};
+
+/// Step 1: parse, the MTL from the upload only, polygons kept whole (tinyobjloader's own
+/// triangulation reads vertices before anything checked the indices).
+Imported<ObjFile> parse_obj(std::string_view text, const SideFiles& side_files,
+                            const ErrorSink& sink) {
+    ObjFile obj;
     std::string warn, err;
     std::istringstream in{std::string(text)};
     UploadMaterialReader reader(side_files);
     bool ok = false;
     try {
-        ok = tinyobj::LoadObj(&attrib, &shapes, &mtl, &warn, &err, &in, &reader,
+        ok = tinyobj::LoadObj(&obj.attrib, &obj.shapes, &obj.mtl, &warn, &err, &in, &reader,
                               /*triangulate=*/false, /*default_vcols_fallback=*/false);
     } catch (const std::exception& e) {
         return sink.invalid("", std::string("not a valid OBJ file: ") + e.what());
     }
     if (!ok) return sink.invalid("", "not a valid OBJ file: " + err.substr(0, err.find('\n')));
-    Asset asset;
-    for (const std::string& name : reader.missing)
-        asset.warnings.push_back("mtllib '" + name +
-                                 "' is not part of the upload; its materials are left out");
+    obj.folders = std::move(reader.folders);
+    obj.missing = std::move(reader.missing);
+    return obj;
+}
 
-    // Step 2: materials. Materials naming the same image share one texture.
+/// Step 2: materials. Materials naming the same image share one texture.
+void read_materials(const ObjFile& obj, const SideFiles& side_files, Asset& asset) {
     std::map<const std::string*, int> texture_of_file;
-    for (std::size_t i = 0; i < mtl.size(); ++i) {
-        const tinyobj::material_t& m = mtl[i];
+    for (std::size_t i = 0; i < obj.mtl.size(); ++i) {
+        const tinyobj::material_t& m = obj.mtl[i];
         AssetMaterial out;
         out.name = m.name;
         out.material.base_color = {unit(m.diffuse[0]), unit(m.diffuse[1]), unit(m.diffuse[2])};
@@ -193,7 +195,7 @@ Imported<Asset> import_obj(std::span<const uint8_t> bytes, const std::string& fi
             out.material.emission[c] =
                 std::isfinite(m.emission[c]) ? std::clamp(m.emission[c], 0.0f, 1e4f) : 0.0f;
         if (!m.diffuse_texname.empty()) {
-            const std::string& folder = i < reader.folders.size() ? reader.folders[i] : "";
+            const std::string& folder = i < obj.folders.size() ? obj.folders[i] : "";
             const std::string* image =
                 folder.empty() ? nullptr : find_side_file(side_files, folder + m.diffuse_texname);
             if (!image) image = find_side_file(side_files, m.diffuse_texname);
@@ -213,38 +215,61 @@ Imported<Asset> import_obj(std::span<const uint8_t> bytes, const std::string& fi
         }
         asset.materials.push_back(std::move(out));
     }
+}
 
-    // Step 3: count triangles against the budget before building anything.
-    const std::size_t n_positions = attrib.vertices.size() / 3;
-    const std::size_t n_normals = attrib.normals.size() / 3;
-    const std::size_t n_uvs = attrib.texcoords.size() / 2;
+/// Step 3: counts triangles against the budget before building anything.
+Imported<void> count_faces(const ObjFile& obj, const ImportLimits& limits, const ErrorSink& sink) {
     uint64_t triangles = 0;
-    for (std::size_t s = 0; s < shapes.size(); ++s) {
-        const tinyobj::mesh_t& m = shapes[s].mesh;
+    for (std::size_t s = 0; s < obj.shapes.size(); ++s) {
+        const tinyobj::mesh_t& m = obj.shapes[s].mesh;
         std::size_t corners = 0;
         for (unsigned char fv : m.num_face_vertices) {
             corners += fv;
             if (fv >= 3) triangles += fv - 2u;
         }
         if (corners != m.indices.size() || m.material_ids.size() != m.num_face_vertices.size())
-            return sink.unsupported("shape " + std::to_string(s) + " ('" + shapes[s].name + "')",
-                                    "a face has more than 255 corners");
+            return sink.unsupported(
+                "shape " + std::to_string(s) + " ('" + obj.shapes[s].name + "')",
+                "a face has more than 255 corners");
     }
-    if (triangles == 0)
-        return sink.invalid("", "has no faces (points and lines are not imported)");
+    if (triangles == 0) return sink.invalid("", "has no faces (points and lines are not imported)");
     if (triangles > limits.max_triangles)
         return sink.too_large("", "the asset holds " + std::to_string(triangles) +
                                       " triangles; the scene has room for " +
                                       std::to_string(limits.max_triangles) +
                                       " (max_scene_triangles)");
+    return {};
+}
 
-    // Step 4: one mesh per material; corners with the same (v, vt, vn) share a vertex.
+/// Corners with the same (v, vt, vn) of one mesh, and the vertex each became.
+using Weld = std::unordered_map<VertexKey, uint32_t, VertexKeyHash>;
+
+/// Checks corner `idx` of face `f` of shape `s` against the arrays it indexes.
+Imported<void> check_corner(const ObjFile& obj, const tinyobj::index_t& idx, std::size_t s,
+                            std::size_t f, const ErrorSink& sink) {
+    const std::size_t n_positions = obj.attrib.vertices.size() / 3;
+    const std::size_t n_normals = obj.attrib.normals.size() / 3;
+    const std::size_t n_uvs = obj.attrib.texcoords.size() / 2;
+    auto outside = [&](const char* what, int index, std::size_t count, const char* of) {
+        return sink.invalid("shape " + std::to_string(s) + " face " + std::to_string(f),
+                            std::string(what) + " index " + std::to_string(index + 1) +
+                                " is outside the " + std::to_string(count) + " " + of);
+    };
+    if (idx.vertex_index < 0 || std::size_t(idx.vertex_index) >= n_positions)
+        return outside("vertex", idx.vertex_index, n_positions, "vertices");
+    if (idx.normal_index >= 0 && std::size_t(idx.normal_index) >= n_normals)
+        return outside("normal", idx.normal_index, n_normals, "normals");
+    if (idx.texcoord_index >= 0 && std::size_t(idx.texcoord_index) >= n_uvs)
+        return outside("texture coordinate", idx.texcoord_index, n_uvs, "texture coordinates");
+    return {};
+}
+
+/// Step 4: one mesh per material; corners with the same (v, vt, vn) share a vertex.
+Imported<void> build_meshes(const ObjFile& obj, const ErrorSink& sink, Asset& asset,
+                            AssetNode& root, std::vector<Weld>& welds) {
     std::map<int, int> mesh_of_material;
-    std::vector<std::unordered_map<VertexKey, uint32_t, VertexKeyHash>> welds;
-    AssetNode root;
-    root.name = file;
-    for (std::size_t s = 0; s < shapes.size(); ++s) {
-        const tinyobj::mesh_t& m = shapes[s].mesh;
+    for (std::size_t s = 0; s < obj.shapes.size(); ++s) {
+        const tinyobj::mesh_t& m = obj.shapes[s].mesh;
         std::size_t corner = 0;
         for (std::size_t f = 0; f < m.num_face_vertices.size(); ++f) {
             const unsigned fv = m.num_face_vertices[f];
@@ -252,54 +277,45 @@ Imported<Asset> import_obj(std::span<const uint8_t> bytes, const std::string& fi
             corner += fv;
             if (fv < 3) continue;
             int material = m.material_ids[f];
-            if (material < -1 || material >= int(mtl.size())) material = -1;
+            if (material < -1 || material >= int(obj.mtl.size())) material = -1;
             auto [it, added] = mesh_of_material.emplace(material, int(asset.meshes.size()));
             if (added) {
                 AssetMesh mesh;
                 mesh.material = material;
-                mesh.name = material >= 0 ? mtl[std::size_t(material)].name : shapes[s].name;
+                mesh.name =
+                    material >= 0 ? obj.mtl[std::size_t(material)].name : obj.shapes[s].name;
                 asset.meshes.push_back(std::move(mesh));
                 welds.emplace_back();
                 root.meshes.push_back(it->second);
             }
             AssetMesh& mesh = asset.meshes[std::size_t(it->second)];
-            auto& weld = welds[std::size_t(it->second)];
+            Weld& weld = welds[std::size_t(it->second)];
             uint32_t ids[256];
             for (unsigned k = 0; k < fv; ++k) {
                 const tinyobj::index_t& idx = m.indices[first + k];
-                const std::string where = "shape " + std::to_string(s) + " face " +
-                                          std::to_string(f);
-                if (idx.vertex_index < 0 || std::size_t(idx.vertex_index) >= n_positions)
-                    return sink.invalid(where, "vertex index " +
-                                                   std::to_string(idx.vertex_index + 1) +
-                                                   " is outside the " +
-                                                   std::to_string(n_positions) + " vertices");
-                if (idx.normal_index >= 0 && std::size_t(idx.normal_index) >= n_normals)
-                    return sink.invalid(where, "normal index " +
-                                                   std::to_string(idx.normal_index + 1) +
-                                                   " is outside the " + std::to_string(n_normals) +
-                                                   " normals");
-                if (idx.texcoord_index >= 0 && std::size_t(idx.texcoord_index) >= n_uvs)
-                    return sink.invalid(where, "texture coordinate index " +
-                                                   std::to_string(idx.texcoord_index + 1) +
-                                                   " is outside the " + std::to_string(n_uvs) +
-                                                   " texture coordinates");
+                if (auto ok = check_corner(obj, idx, s, f, sink); !ok) return ok;
                 const VertexKey key{idx.vertex_index, idx.texcoord_index, idx.normal_index};
                 auto [w, fresh] = weld.emplace(key, uint32_t(mesh.positions.size()));
                 if (fresh) {
                     const std::size_t v = std::size_t(idx.vertex_index) * 3;
-                    mesh.positions.push_back({attrib.vertices[v], attrib.vertices[v + 1],
-                                              attrib.vertices[v + 2]});
+                    const std::vector<float>& p = obj.attrib.vertices;
+                    mesh.positions.push_back({p[v], p[v + 1], p[v + 2]});
                 }
                 ids[k] = w->second;
             }
-            for (unsigned k = 1; k + 1 < fv; ++k) mesh.triangles.push_back({ids[0], ids[k], ids[k + 1]});
+            for (unsigned k = 1; k + 1 < fv; ++k)
+                mesh.triangles.push_back({ids[0], ids[k], ids[k + 1]});
         }
     }
-    // Step 5: normals and uvs where every corner of a mesh has them (OBJ allows mixing).
+    return {};
+}
+
+/// Step 5: normals and uvs where every corner of a mesh has them (OBJ allows mixing).
+void attach_attributes(const ObjFile& obj, const std::vector<Weld>& welds, Asset& asset) {
+    const tinyobj::attrib_t& a = obj.attrib;
     for (std::size_t i = 0; i < asset.meshes.size(); ++i) {
         AssetMesh& mesh = asset.meshes[i];
-        bool all_n = n_normals > 0, all_t = n_uvs > 0;
+        bool all_n = !a.normals.empty(), all_t = !a.texcoords.empty();
         std::vector<const VertexKey*> by_vertex(mesh.positions.size());
         for (const auto& [key, v] : welds[i]) {
             by_vertex[v] = &key;
@@ -309,20 +325,43 @@ Imported<Asset> import_obj(std::span<const uint8_t> bytes, const std::string& fi
         for (const VertexKey* key : by_vertex) {
             if (all_n) {
                 const std::size_t n = std::size_t(key->vn) * 3;
-                mesh.normals.push_back(
-                    {attrib.normals[n], attrib.normals[n + 1], attrib.normals[n + 2]});
+                mesh.normals.push_back({a.normals[n], a.normals[n + 1], a.normals[n + 2]});
             }
             if (all_t) {
                 const std::size_t t = std::size_t(key->vt) * 2;
                 // OBJ's v grows upward from the image's bottom row; the engine's (glTF's) grows
                 // downward from the top row.
-                mesh.uvs.push_back({attrib.texcoords[t], 1.0f - attrib.texcoords[t + 1]});
+                mesh.uvs.push_back({a.texcoords[t], 1.0f - a.texcoords[t + 1]});
             }
         }
     }
+}
+
+}  // namespace
+
+Imported<Asset> import_obj(std::span<const uint8_t> bytes, const std::string& file,
+                           const SideFiles& side_files, const ImportLimits& limits) {
+    const ErrorSink sink(file);
+    const std::string_view text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+    if (auto declared = prescan(text, sink, limits); !declared)
+        return Unexpected(std::move(declared).error());
+    auto obj = parse_obj(text, side_files, sink);
+    if (!obj) return Unexpected(std::move(obj).error());
+    Asset asset;
+    for (const std::string& name : obj->missing)
+        asset.warnings.push_back("mtllib '" + name +
+                                 "' is not part of the upload; its materials are left out");
+    read_materials(*obj, side_files, asset);
+    if (auto s = count_faces(*obj, limits, sink); !s) return Unexpected(std::move(s).error());
+    AssetNode root;
+    root.name = file;
+    std::vector<Weld> welds;
+    if (auto s = build_meshes(*obj, sink, asset, root, welds); !s)
+        return Unexpected(std::move(s).error());
+    attach_attributes(*obj, welds, asset);
     asset.nodes.push_back(std::move(root));
-    if (auto ok2 = check_budget(asset, limits, sink); !ok2) return Unexpected(ok2.error());
-    if (auto ok2 = validate_asset(asset, sink); !ok2) return Unexpected(ok2.error());
+    if (auto ok = check_budget(asset, limits, sink); !ok) return Unexpected(ok.error());
+    if (auto ok = validate_asset(asset, sink); !ok) return Unexpected(ok.error());
     return asset;
 }
 
