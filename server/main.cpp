@@ -168,6 +168,7 @@ std::unique_ptr<replica::Replica> follow_edit_log(const server::ServerConfig& c,
     replica::ReplicaOptions o;
     o.url = replica::parse_redis_url(c.log_url).value();  // checked by finish_config
     o.snapshot_every = c.log_snapshot_every;
+    o.max_batch_edits = c.max_batch_edits;
     o.write_timeout = std::chrono::milliseconds(c.log_write_timeout_ms);
     o.store = store;
     auto follow = replica::Replica::start(o, engine);

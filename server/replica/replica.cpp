@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cstring>
 
 #include <spdlog/spdlog.h>
 
@@ -343,7 +344,18 @@ Status Replica::apply_entry(const StreamEntry& entry, uint64_t applied) {
                              : decoded.error().message));
         return storage("poisoned");
     }
-    auto batch = durable::decode_batch(decoded.value().payload);
+    // The count first: an entry of more edits than a batch may hold is refused before one is
+    // decoded (a few bytes an edit could ask for gigabytes).
+    const std::string_view payload = decoded.value().payload;
+    uint32_t count = 0;
+    if (payload.size() >= sizeof count) std::memcpy(&count, payload.data(), sizeof count);
+    if (count > m_options.max_batch_edits) {
+        stop_loudly("log entry " + entry.id + " holds " + std::to_string(count) +
+                    " edits, more than a batch may hold (--max-batch-edits " +
+                    std::to_string(m_options.max_batch_edits) + ")");
+        return storage("too many edits");
+    }
+    auto batch = durable::decode_batch(payload);
     if (!batch) {
         stop_loudly("poisoned log entry " + entry.id + ": " + batch.error().describe());
         return storage("poisoned");

@@ -59,6 +59,8 @@ struct ReplicaOptions {
     std::chrono::milliseconds write_timeout{5000};
     /// Versions between snapshots stored in Redis; 0: this replica writes none.
     uint64_t snapshot_every = 1000;
+    /// Most edits an entry may hold (--max-batch-edits): a larger one stops the replica.
+    std::size_t max_batch_edits = std::size_t(1) << 20;
     /// The server's data directory (--data), if any: a snapshot jump goes through it, so that
     /// the directory holds the snapshot's version afterwards. Must outlive the replica.
     durable::DurableStore* store = nullptr;

@@ -19,6 +19,7 @@ import unittest
 import zlib
 
 from hostile import Server
+from journal_bytes import clears, snapshot_file
 
 MIB = 1 << 20
 
@@ -49,21 +50,6 @@ def png(width, height, seed=1):
     header = struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)
     return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) +
             chunk(b"IDAT", zlib.compress(bytes(rows), 1)) + chunk(b"IEND", b""))
-
-
-_CRC32C = []
-for n in range(256):
-    c = n
-    for _ in range(8):
-        c = (c >> 1) ^ (0x82F63B78 if c & 1 else 0)
-    _CRC32C.append(c)
-
-
-def crc32c(data):
-    crc = 0xFFFFFFFF
-    for byte in data:
-        crc = _CRC32C[(crc ^ byte) & 0xFF] ^ (crc >> 8)
-    return crc ^ 0xFFFFFFFF
 
 
 class PeakMemory(unittest.TestCase):
@@ -162,11 +148,7 @@ class PeakMemory(unittest.TestCase):
 
     def test_a_snapshot_of_millions_of_clears_is_refused_from_its_count(self):
         s = self.server()
-        count = 5_000_000
-        payload = struct.pack("<I", count) + bytes([13]) * count  # 13: clear
-        header = (b"STRATAS1" + struct.pack("<II", 1, crc32c(payload)) +
-                  struct.pack("<QQ", 7, len(payload)))
-        body = header + payload
+        body = snapshot_file(clears(5_000_000), 7)
         status, _, answer = self.assert_bounded(s, len(body), lambda: s.call(
             "POST", "/v1/scene/snapshot", body,
             {"Content-Type": "application/vnd.strata.snapshot"}))

@@ -18,6 +18,7 @@ import unittest
 import uuid
 
 import durable_scene
+from journal_bytes import clears, crc32c, log_entry
 from hostile import Server
 from redis_fixture import REDIS_SERVER, RedisProcess, free_ports
 
@@ -32,23 +33,6 @@ SPLIT_RENDERS = [
 # Filtered from 2 samples on, the filter reads each pixel's measured noise, which bands do not
 # carry: the coordinator renders such a frame whole and says so.
 SPLIT_WHOLE_RENDER = f"/v1/render?{SPLIT_VIEW}&filter=atrous&exposure=0.5"
-
-
-
-def crc32c(data: bytes) -> int:
-    crc = 0xFFFFFFFF
-    for byte in data:
-        crc ^= byte
-        for _ in range(8):
-            crc = (crc >> 1) ^ (0x82F63B78 if crc & 1 else 0)
-    return crc ^ 0xFFFFFFFF
-
-
-def log_entry(payload: bytes, version: int) -> bytes:
-    """A well-formed log entry (engine/durable/journal_format.h's record) around `payload`."""
-    v = version.to_bytes(8, "little")
-    return (len(payload).to_bytes(4, "little") + crc32c(payload + v).to_bytes(4, "little") + v
-            + payload)
 
 
 @unittest.skipIf(REDIS_SERVER is None,
@@ -414,6 +398,17 @@ class Replicas(unittest.TestCase):
         for r in results:
             self.assertIn("behind min_version 99", json.loads(r[2])["detail"])
         self.assertIn("strata_http_waits_refused_total 1", s.call("GET", "/metrics")[2].decode())
+
+    def test_an_entry_of_more_edits_than_a_batch_may_hold_stops_the_replicas_before_decoding(self):
+        servers = self.replicas(2, "--max-batch-edits", "1000")
+        n = self.stream_batches(servers, 0, 2)
+        # 5 MB of one-byte clears: 5M edits, 1.2 GB once decoded.
+        self.append_entry(log_entry(clears(5_000_000), n + 1), n + 1)
+        for s in servers:
+            detail = self.stopped_detail(s)
+            self.assertIn("holds 5000000 edits, more than a batch may hold", detail)
+            self.assertEqual(durable_scene.check(s, n), "")
+            self.assertLess(s.rss_mb(), 400)
 
     def test_min_version_waits_for_the_replica_and_names_the_lag_when_it_cannot(self):
         a, b = self.replicas(2, "--min-version-wait-ms", "400")
