@@ -185,7 +185,8 @@ ApiResponse post_assets(Engine& engine, std::string body,
         const SceneBudget& b = api_limits.budget;
         const MeshTotals& t = s.mesh_totals();
         limits.max_vertices = b.max_vertices > t.vertices ? b.max_vertices - t.vertices : 0;
-        limits.max_triangles = b.max_triangles > t.triangles ? b.max_triangles - t.triangles : 0;
+        const uint64_t used = t.budget_triangles();
+        limits.max_triangles = b.max_triangles > used ? b.max_triangles - used : 0;
     });
 
     // Step 2: import (an archive: its one model with the archive's other files as side files),

@@ -3,18 +3,21 @@
 namespace strata {
 
 std::string budget_message(const MeshTotals& totals, const SceneBudget& budget) {
-    if (totals.texture_bytes > budget.max_texture_bytes &&
-        totals.triangles <= budget.max_triangles && totals.vertices <= budget.max_vertices)
+    const bool triangles = totals.budget_triangles() > budget.max_triangles;
+    if (totals.texture_bytes > budget.max_texture_bytes && !triangles &&
+        totals.vertices <= budget.max_vertices)
         return "the scene's textures would take " + std::to_string(totals.texture_bytes) +
                " bytes (texels and image files), over its budget of " +
-               std::to_string(budget.max_texture_bytes) +
-               " (max_texture_mb)";
-    const bool triangles = totals.triangles > budget.max_triangles;
-    return "the scene would hold " +
-           std::to_string(triangles ? totals.triangles : totals.vertices) +
-           (triangles ? " triangles" : " vertices") + ", over its budget of " +
-           std::to_string(triangles ? budget.max_triangles : budget.max_vertices) +
-           (triangles ? " (max_scene_triangles)" : " (max_scene_vertices)");
+               std::to_string(budget.max_texture_bytes) + " (max_texture_mb)";
+    if (!triangles)
+        return "the scene would hold " + std::to_string(totals.vertices) +
+               " vertices, over its budget of " + std::to_string(budget.max_vertices) +
+               " (max_scene_vertices)";
+    return "the scene would hold " + std::to_string(totals.triangles) + " triangles in " +
+           std::to_string(totals.meshes) + " meshes, which count " +
+           std::to_string(totals.budget_triangles()) + " with each mesh's overhead of " +
+           std::to_string(MESH_OVERHEAD_TRIANGLES) + ", over its budget of " +
+           std::to_string(budget.max_triangles) + " (max_scene_triangles)";
 }
 
 }  // namespace strata

@@ -9,6 +9,11 @@
 
 namespace strata {
 
+/// What one mesh costs beyond its triangles, counted as triangles against max_triangles: its
+/// records, its BLAS's fixed part and its Embree geometry take about what this many triangles
+/// do, so that many tiny meshes cannot hold more memory than the triangle budget allows.
+inline constexpr uint64_t MESH_OVERHEAD_TRIANGLES = 128;
+
 /// Totals a scene may hold, over its meshes (instances share their mesh's BLAS and cost none).
 struct SceneBudget {
     uint64_t max_triangles = uint64_t(1) << 24;
@@ -23,16 +28,20 @@ struct MeshTotals {
     uint64_t vertices = 0;
     uint64_t triangles = 0;
     uint64_t texture_bytes = 0;  ///< decoded texels and image files of every texture
+    uint64_t meshes = 0;
 
+    /// Triangles as the budget counts them: each mesh's, plus each mesh's overhead.
+    uint64_t budget_triangles() const { return triangles + meshes * MESH_OVERHEAD_TRIANGLES; }
     bool grew_from(const MeshTotals& before) const {
-        return vertices > before.vertices || triangles > before.triangles ||
+        return vertices > before.vertices || budget_triangles() > before.budget_triangles() ||
                texture_bytes > before.texture_bytes;
     }
 };
 
 /// True when `totals` exceed `budget`.
 inline bool over_budget(const MeshTotals& totals, const SceneBudget& budget) {
-    return totals.triangles > budget.max_triangles || totals.vertices > budget.max_vertices ||
+    return totals.budget_triangles() > budget.max_triangles ||
+           totals.vertices > budget.max_vertices ||
            totals.texture_bytes > budget.max_texture_bytes;
 }
 

@@ -189,6 +189,7 @@ Status Scene::apply_edit(AddMesh&& e, UndoLog& undo) {
 
     m_totals.vertices += e.positions.size();
     m_totals.triangles += e.triangles.size();
+    ++m_totals.meshes;
     MeshRecord r;
     r.id = e.id;
     r.positions = std::move(e.positions);
@@ -359,6 +360,7 @@ void Scene::remove_mesh(MeshHandle h, UndoLog& undo) {
     mark(h, {});
     m_totals.vertices -= r.positions.size();
     m_totals.triangles -= r.triangles.size();
+    --m_totals.meshes;
     m_mesh_ids.erase(r.id);
     undo.records.emplace_back(undo::Removed<MeshHandle, MeshRecord>{h, m_meshes.take(h)});
 }

@@ -2,6 +2,8 @@
 
 #include <cctype>
 
+#include "engine/scene/budget.h"
+
 namespace strata::assets {
 
 namespace {
@@ -73,7 +75,8 @@ std::string AssetError::describe() const {
 Expected<void, AssetError> check_budget(const Asset& asset, const ImportLimits& limits,
                                         const ErrorSink& sink) {
     const uint64_t v = asset.vertex_count();
-    const uint64_t t = asset.triangle_count();
+    // Each mesh also costs MESH_OVERHEAD_TRIANGLES of the budget (budget.h).
+    const uint64_t t = asset.triangle_count() + asset.meshes.size() * MESH_OVERHEAD_TRIANGLES;
     if (v > limits.max_vertices)
         return sink.too_large("", "the asset holds " + std::to_string(v) +
                                       " vertices; the scene has room for " +
@@ -81,7 +84,9 @@ Expected<void, AssetError> check_budget(const Asset& asset, const ImportLimits& 
                                       " (max_scene_vertices)");
     if (t > limits.max_triangles)
         return sink.too_large("", "the asset holds " + std::to_string(t) +
-                                      " triangles; the scene has room for " +
+                                      " triangles, each of its meshes counted with " +
+                                      std::to_string(MESH_OVERHEAD_TRIANGLES) +
+                                      " more; the scene has room for " +
                                       std::to_string(limits.max_triangles) +
                                       " (max_scene_triangles)");
     if (asset.nodes.size() > limits.max_nodes)

@@ -7,6 +7,7 @@
 #include <limits>
 #include <map>
 
+#include "engine/scene/budget.h"
 #include "protocol/assets/tinygltf_config.h"
 
 namespace strata::assets {
@@ -393,11 +394,14 @@ private:
         if (n_indices % 3 != 0 || n_indices == 0)
             return m_sink.invalid(where, std::to_string(n_indices) +
                                              " indices do not make whole triangles");
-        m_triangles += n_indices / 3;
+        // Each primitive becomes a mesh, which also costs MESH_OVERHEAD_TRIANGLES (budget.h).
+        m_triangles += n_indices / 3 + MESH_OVERHEAD_TRIANGLES;
         if (m_triangles > m_limits.max_triangles)
             return m_sink.too_large(where, "the asset holds at least " +
                                                std::to_string(m_triangles) +
-                                               " triangles; the scene has room for " +
+                                               " triangles, each mesh counted with " +
+                                               std::to_string(MESH_OVERHEAD_TRIANGLES) +
+                                               " more; the scene has room for " +
                                                std::to_string(m_limits.max_triangles) +
                                                " (max_scene_triangles)");
         mesh.triangles.resize(n_indices / 3);

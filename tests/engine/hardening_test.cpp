@@ -84,6 +84,24 @@ TEST(SceneBudget, ABatchBeyondTheTriangleBudgetIsRefusedAndNamesTheEdit) {
     EXPECT_EQ(engine->read([](const Scene& s) { return s.counts().meshes; }), 1u);
 }
 
+TEST(SceneBudget, EachMeshCostsItsOverheadSoManyTinyMeshesAreRefused) {
+    // Ten boxes of 12 triangles: 120 triangles and ten overheads fit; an eleventh does not.
+    auto engine = engine_with_budget(10 * (12 + MESH_OVERHEAD_TRIANGLES) + 50, 1u << 20);
+    EditBatch ten;
+    for (int i = 0; i < 10; ++i)
+        ten.edits.emplace_back(mesh_edit("box" + std::to_string(i), make_box(Vec3(1.0f))));
+    ASSERT_TRUE(engine->apply(std::move(ten)).has_value());
+    EditBatch eleventh;
+    eleventh.edits.emplace_back(mesh_edit("box10", make_box(Vec3(1.0f))));
+    auto r = engine->apply(std::move(eleventh));
+    ASSERT_FALSE(r.has_value());
+    EXPECT_EQ(r.error().code, ErrorCode::TooLarge);
+    EXPECT_THAT(r.error().message, ::testing::HasSubstr("132 triangles in 11 meshes"));
+    EXPECT_THAT(r.error().message, ::testing::HasSubstr("max_scene_triangles"));
+    // Removing a mesh gives its overhead back.
+    apply_ok(*engine, RemoveMesh{"box0"}, mesh_edit("box10", make_box(Vec3(1.0f))));
+}
+
 TEST(SceneBudget, ReplacingAMeshCountsOnlyWhatRemains) {
     auto engine = engine_with_budget(10000, 1u << 20);
     apply_ok(*engine, mesh_edit("a", sphere_of(6000)));
