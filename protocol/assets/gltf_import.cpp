@@ -51,30 +51,51 @@ bool keep_encoded_image(tinygltf::Image* image, const int, std::string*, std::st
     return true;
 }
 
-/// Deepest nesting of `[`/`{` in JSON text, strings skipped; stops counting past `limit`.
-uint32_t json_depth(std::string_view text, uint32_t limit) {
-    uint32_t depth = 0, deepest = 0;
+/// What one pass over the JSON text finds before tinygltf builds its model of it.
+struct JsonShape {
+    uint32_t deepest = 0;     ///< deepest nesting of `[`/`{` (counting stops past the limit)
+    uint64_t primitives = 0;  ///< objects in every "primitives" array
+};
+
+/// The nesting and the primitives of JSON text, strings skipped; stops past `depth_limit`.
+JsonShape json_shape(std::string_view text, uint32_t depth_limit) {
+    JsonShape shape;
+    uint32_t depth = 0;
+    uint32_t primitives_at = 0;   // the depth inside a "primitives" array; 0: none open
+    bool primitives_key = false;  // the last string was the key "primitives"
+    std::size_t string_start = 0;
     bool in_string = false;
     for (std::size_t i = 0; i < text.size(); ++i) {
         const char c = text[i];
         if (in_string) {
-            if (c == '\\')
+            if (c == '\\') {
                 ++i;
-            else if (c == '"')
+            } else if (c == '"') {
                 in_string = false;
-        } else if (c == '"') {
+                primitives_key = text.substr(string_start, i - string_start) == "primitives";
+            }
+            continue;
+        }
+        if (c == '"') {
             in_string = true;
+            string_start = i + 1;
         } else if (c == '[' || c == '{') {
-            deepest = std::max(deepest, ++depth);
-            if (deepest > limit) return deepest;
+            if (c == '{' && depth == primitives_at && primitives_at != 0) ++shape.primitives;
+            shape.deepest = std::max(shape.deepest, ++depth);
+            if (c == '[' && primitives_key && primitives_at == 0) primitives_at = depth;
+            primitives_key = false;
+            if (shape.deepest > depth_limit) return shape;
         } else if ((c == ']' || c == '}') && depth > 0) {
+            if (depth == primitives_at) primitives_at = 0;
             --depth;
+        } else if (c != ':' && c != ' ' && c != '\n' && c != '\r' && c != '\t') {
+            primitives_key = false;
         }
     }
-    return deepest;
+    return shape;
 }
 
-/// The JSON chunk of a .glb, for the depth check (the container is checked again by tinygltf).
+/// The JSON chunk of a .glb, for json_shape (the container is checked again by tinygltf).
 std::string_view glb_json(std::span<const uint8_t> bytes) {
     if (bytes.size() < 20) return {};
     uint32_t length = 0;
@@ -597,9 +618,19 @@ Imported<Asset> import_gltf(std::span<const uint8_t> bytes, bool binary, const s
     const std::string_view json =
         binary ? glb_json(bytes)
                : std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size());
-    if (json_depth(json, limits.max_json_depth) > limits.max_json_depth)
+    const JsonShape shape = json_shape(json, limits.max_json_depth);
+    if (shape.deepest > limits.max_json_depth)
         return sink.invalid("", "JSON nested deeper than " +
                                     std::to_string(limits.max_json_depth) + " levels");
+    // Each primitive becomes a mesh, which costs MESH_OVERHEAD_TRIANGLES of the budget at
+    // least: too many are refused before tinygltf holds a model of every one.
+    if (shape.primitives * MESH_OVERHEAD_TRIANGLES > limits.max_triangles)
+        return sink.too_large("", "the file declares " + std::to_string(shape.primitives) +
+                                      " primitives, each mesh counted with " +
+                                      std::to_string(MESH_OVERHEAD_TRIANGLES) +
+                                      " triangles at least; the scene has room for " +
+                                      std::to_string(limits.max_triangles) +
+                                      " (max_scene_triangles)");
     // Step 2: parse with the filesystem closed: external files come from the side files only.
     tinygltf::TinyGLTF loader;
     loader.SetFsCallbacks({&any_file_exists, &keep_path, &read_side_file, &refuse_write,

@@ -135,6 +135,25 @@ TEST(GltfImport, ImagesThatShareABufferViewShareOneTexture) {
     for (const AssetMaterial& m : a.value().materials) EXPECT_EQ(m.base_color_texture, 0);
 }
 
+TEST(GltfImport, TooManyPrimitivesForTheBudgetAreRefusedBeforeTinygltfReadsThem) {
+    // 1,000 primitives count 128 triangles each at least: a budget of 10,000 cannot hold them.
+    auto doc = nlohmann::json::parse(triangle_gltf(R"([{"mesh": 0}])"));
+    const nlohmann::json primitive = doc["meshes"][0]["primitives"][0];
+    for (int i = 1; i < 1000; ++i) doc["meshes"][0]["primitives"].push_back(primitive);
+    doc["extras"] = {{"note", "primitives"}, {"list", {"primitives", 1}}};  // not primitives
+    ImportLimits limits;
+    limits.max_triangles = 10000;
+    auto a = import_text(AssetFormat::Gltf, doc.dump(), {}, limits);
+    ASSERT_FALSE(a.has_value());
+    EXPECT_EQ(a.error().kind, AssetError::Kind::TooLarge);
+    EXPECT_THAT(a.error().message, HasSubstr("declares 1000 primitives"));
+    // Within the budget, the same file imports, one mesh per primitive.
+    limits.max_triangles = 1000 * (1 + 128);
+    auto b = import_text(AssetFormat::Gltf, doc.dump(), {}, limits);
+    ASSERT_TRUE(b.has_value()) << b.error().describe();
+    EXPECT_EQ(b.value().meshes.size(), 1000u);
+}
+
 TEST(GltfImport, AnIndexOutsideTheVerticesIsRefusedNamingTheAccessor) {
     std::string doc = triangle_gltf(R"([{"mesh": 0}])");
     // The index buffer view is 6 bytes; a count of 6 runs past it.

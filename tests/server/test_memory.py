@@ -5,7 +5,7 @@ refusal, when there is one, arrives before that bound is crossed.
 
   - an OBJ over the scene budget (counted from its lines before it is parsed)
   - a GLB whose images all name one buffer view (one texture, not one per image)
-  - a glTF of 20,000 tiny primitives (each mesh's overhead counted against the budget)
+  - a glTF of 100,000 tiny primitives (each mesh's overhead counted, before tinygltf parses)
   - add_texture with a PNG followed by megabytes of junk, three times (only the PNG is kept)
   - a JSON batch of millions of clears (refused while parsing, --max-json-values)
   - a snapshot of millions of one-byte clears (refused from its count, --max-batch-edits)
@@ -121,16 +121,16 @@ class PeakMemory(unittest.TestCase):
         self.assertEqual(status, 200, answer[:300])
         self.assertEqual(len(json.loads(answer)["textures"]), 1)
 
-    def test_many_tiny_gltf_primitives_are_refused_at_the_first_over_the_budget(self):
-        # 20,000 one-triangle primitives sharing two accessors: 1 MB of JSON that used to become
-        # 20,000 meshes of about 9.6 KB each. Each mesh now counts 128 triangles more, so the
-        # importer stops at the 776th. (tinygltf's own model of the file, about 1 KB a
-        # primitive, is still built first.)
+    def test_many_tiny_gltf_primitives_are_refused_before_they_are_parsed(self):
+        # 100,000 one-triangle primitives sharing two accessors: 4.5 MB of JSON that used to
+        # become 100,000 meshes of about 9.6 KB each, after tinygltf's own model of them (about
+        # 1 KB each). Each mesh now counts 128 triangles more, and the importer counts the
+        # primitives in the text before tinygltf reads it.
         s = self.server("--max-scene-triangles", "100000")
         positions = struct.pack("<9f", 0, 0, 0, 1, 0, 0, 0, 1, 0)
         indices = struct.pack("<3H", 0, 1, 2) + b"\0\0"
         data = base64.b64encode(positions + indices).decode()
-        count = 20_000
+        count = 100_000
         doc = {
             "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
             "nodes": [{"mesh": 0}],
@@ -149,7 +149,7 @@ class PeakMemory(unittest.TestCase):
             "POST", "/v1/assets?format=gltf&prefix=tiny", body,
             {"Content-Type": "model/gltf+json"}))
         self.assertEqual(status, 413, answer[:300])
-        self.assertIn("each mesh counted with 128 more", json.loads(answer)["detail"])
+        self.assertIn("declares 100000 primitives", json.loads(answer)["detail"])
 
     def test_bytes_after_a_pngs_end_are_not_kept(self):
         s = self.server()
