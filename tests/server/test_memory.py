@@ -3,7 +3,8 @@ that issue 29 found is sent to a fresh strata-server, and the server's peak resi
 (VmHWM) may grow by at most BOUND(body) = 4 x the body + 96 MiB over what it held idle; the
 refusal, when there is one, arrives before that bound is crossed.
 
-  - an OBJ over the scene budget (counted from its lines before it is parsed)
+  - an OBJ over the scene budget (counted from its lines before it is parsed), and four at once
+  - an MTL naming one image fifty times (one texture)
   - a GLB whose images all name one buffer view (one texture, not one per image)
   - a glTF of 100,000 tiny primitives (each mesh's overhead counted, before tinygltf parses)
   - add_texture with a PNG followed by megabytes of junk, three times (only the PNG is kept)
@@ -13,9 +14,12 @@ refusal, when there is one, arrives before that bound is crossed.
 """
 
 import base64
+import io
 import json
 import struct
 import sys
+import tarfile
+import threading
 import unittest
 import zlib
 
@@ -83,6 +87,47 @@ class PeakMemory(unittest.TestCase):
             "POST", "/v1/assets?format=obj&prefix=big", body, {"Content-Type": "model/obj"}))
         self.assertEqual(status, 413, answer[:300])
         self.assertIn("max_scene_triangles", json.loads(answer)["detail"])
+
+    def test_four_concurrent_over_budget_objs_are_each_refused_from_their_lines(self):
+        s = self.server("--max-scene-triangles", "100000")
+        body = b"v 0 0 0\nv 1 0 0\nv 0 1 0\n" + b"f 1 2 3\n" * 2_000_000
+        answers = []
+
+        def upload(n):
+            answers.append(s.call("POST", f"/v1/assets?format=obj&prefix=big{n}", body,
+                                  {"Content-Type": "model/obj"}))
+
+        def all_four():
+            uploads = [threading.Thread(target=upload, args=(n,)) for n in range(4)]
+            for t in uploads:
+                t.start()
+            for t in uploads:
+                t.join()
+
+        self.assert_bounded(s, 4 * len(body), all_four)
+        self.assertEqual([a[0] for a in answers], [413] * 4)
+
+    def test_an_mtl_naming_one_image_fifty_times_holds_one_texture(self):
+        s = self.server()
+        image = png(512, 512)
+        obj = b"mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"
+        mtl = b""
+        for n in range(50):
+            mtl += f"newmtl m{n}\nmap_Kd big.png\n".encode()
+            obj += f"usemtl m{n}\nf 1 2 3\n".encode()
+        archive = io.BytesIO()
+        with tarfile.open(fileobj=archive, mode="w") as tar:
+            for name, data in (("model.obj", obj), ("m.mtl", mtl), ("big.png", image)):
+                info = tarfile.TarInfo(name)
+                info.size = len(data)
+                tar.addfile(info, io.BytesIO(data))
+        body = archive.getvalue()
+        decoded = 512 * 512 * 6
+        status, _, answer = self.assert_bounded(s, len(body) + decoded, lambda: s.call(
+            "POST", "/v1/assets?name=model.tar&prefix=mtl", body,
+            {"Content-Type": "application/x-tar"}))
+        self.assertEqual(status, 200, answer[:300])
+        self.assertEqual(len(json.loads(answer)["textures"]), 1)
 
     def test_a_glb_whose_images_share_one_buffer_view_holds_one_texture(self):
         s = self.server()
