@@ -14,10 +14,12 @@ std::string budget_message(const MeshTotals& totals, const SceneBudget& budget) 
                " vertices, over its budget of " + std::to_string(budget.max_vertices) +
                " (max_scene_vertices)";
     return "the scene would hold " + std::to_string(totals.triangles) + " triangles in " +
-           std::to_string(totals.meshes) + " meshes, which count " +
-           std::to_string(totals.budget_triangles()) + " with each mesh's overhead of " +
-           std::to_string(MESH_OVERHEAD_TRIANGLES) + ", over its budget of " +
-           std::to_string(budget.max_triangles) + " (max_scene_triangles)";
+           std::to_string(totals.meshes) + " meshes, and " + std::to_string(totals.groups) +
+           " groups, which count " + std::to_string(totals.budget_triangles()) +
+           " with each mesh's overhead of " + std::to_string(MESH_OVERHEAD_TRIANGLES) +
+           " and each group's of " + std::to_string(GROUP_OVERHEAD_TRIANGLES) +
+           ", over its budget of " + std::to_string(budget.max_triangles) +
+           " (max_scene_triangles)";
 }
 
 }  // namespace strata

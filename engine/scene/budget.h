@@ -13,6 +13,8 @@ namespace strata {
 /// records, its BLAS's fixed part and its Embree geometry take about what this many triangles
 /// do, so that many tiny meshes cannot hold more memory than the triangle budget allows.
 inline constexpr uint64_t MESH_OVERHEAD_TRIANGLES = 128;
+/// The same for a group (its record, id, child lists and world transform).
+inline constexpr uint64_t GROUP_OVERHEAD_TRIANGLES = 4;
 
 /// Totals a scene may hold, over its meshes (instances share their mesh's BLAS and cost none).
 struct SceneBudget {
@@ -29,9 +31,12 @@ struct MeshTotals {
     uint64_t triangles = 0;
     uint64_t texture_bytes = 0;  ///< decoded texels and image files of every texture
     uint64_t meshes = 0;
+    uint64_t groups = 0;
 
-    /// Triangles as the budget counts them: each mesh's, plus each mesh's overhead.
-    uint64_t budget_triangles() const { return triangles + meshes * MESH_OVERHEAD_TRIANGLES; }
+    /// Triangles as the budget counts them: each mesh's, plus each mesh's and group's overhead.
+    uint64_t budget_triangles() const {
+        return triangles + meshes * MESH_OVERHEAD_TRIANGLES + groups * GROUP_OVERHEAD_TRIANGLES;
+    }
     bool grew_from(const MeshTotals& before) const {
         return vertices > before.vertices || budget_triangles() > before.budget_triangles() ||
                texture_bytes > before.texture_bytes;

@@ -26,6 +26,7 @@ Status Scene::apply_edit(AddGroup&& e, UndoLog& undo) {
     bool reused = false;
     const GroupHandle h = m_groups.insert(std::move(r), &reused);
     undo.records.emplace_back(undo::Inserted<GroupHandle>{h, reused});
+    ++m_totals.groups;
     children_of(parent.value()).groups.push_back(h);
     m_group_ids.emplace(std::move(e.id), h);
     mark(h, GroupDirty::Added);

@@ -96,10 +96,32 @@ TEST(SceneBudget, EachMeshCostsItsOverheadSoManyTinyMeshesAreRefused) {
     auto r = engine->apply(std::move(eleventh));
     ASSERT_FALSE(r.has_value());
     EXPECT_EQ(r.error().code, ErrorCode::TooLarge);
-    EXPECT_THAT(r.error().message, ::testing::HasSubstr("132 triangles in 11 meshes"));
+    EXPECT_THAT(r.error().message, ::testing::HasSubstr("132 triangles in 11 meshes, and 0 groups"));
     EXPECT_THAT(r.error().message, ::testing::HasSubstr("max_scene_triangles"));
     // Removing a mesh gives its overhead back.
     apply_ok(*engine, RemoveMesh{"box0"}, mesh_edit("box10", make_box(Vec3(1.0f))));
+}
+
+TEST(SceneBudget, GroupsCostTheirOverheadToo) {
+    auto engine = engine_with_budget(100 * GROUP_OVERHEAD_TRIANGLES, 1u << 20);
+    auto group = [](int i) {
+        AddGroup g;
+        g.id = "g" + std::to_string(i);
+        return g;
+    };
+    EditBatch hundred;
+    for (int i = 0; i < 100; ++i) hundred.edits.emplace_back(group(i));
+    ASSERT_TRUE(engine->apply(std::move(hundred)).has_value());
+    EditBatch more;
+    more.edits.emplace_back(group(100));
+    auto r = engine->apply(std::move(more));
+    ASSERT_FALSE(r.has_value());
+    EXPECT_EQ(r.error().code, ErrorCode::TooLarge);
+    EXPECT_THAT(r.error().message, ::testing::HasSubstr("and 101 groups"));
+    // A removed group gives its overhead back, and so does clear.
+    apply_ok(*engine, RemoveGroup{"g0", false}, group(100));
+    apply_ok(*engine, Clear{});
+    EXPECT_EQ(engine->read([](const Scene& s) { return s.mesh_totals().budget_triangles(); }), 0u);
 }
 
 TEST(SceneBudget, ReplacingAMeshCountsOnlyWhatRemains) {
