@@ -80,6 +80,14 @@ class PeakMemory(unittest.TestCase):
         self.assertTrue(server.alive())
         return answer
 
+    def assert_imports_one_texture(self, server, query, body, content_type):
+        """Imports `body` (its one 512x512 image named many times) within the bound, which
+        allows the image's decoded texels once, and checks one texture came of it."""
+        status, _, answer = self.assert_bounded(server, len(body) + 512 * 512 * 6, lambda: server.call(
+            "POST", "/v1/assets?" + query, body, {"Content-Type": content_type}))
+        self.assertEqual(status, 200, answer[:300])
+        self.assertEqual(len(json.loads(answer)["textures"]), 1)
+
     def test_an_obj_over_the_budget_is_refused_from_its_lines(self):
         s = self.server("--max-scene-triangles", "100000")
         body = b"v 0 0 0\nv 1 0 0\nv 0 1 0\n" + b"f 1 2 3\n" * 2_000_000
@@ -122,12 +130,7 @@ class PeakMemory(unittest.TestCase):
                 info.size = len(data)
                 tar.addfile(info, io.BytesIO(data))
         body = archive.getvalue()
-        decoded = 512 * 512 * 6
-        status, _, answer = self.assert_bounded(s, len(body) + decoded, lambda: s.call(
-            "POST", "/v1/assets?name=model.tar&prefix=mtl", body,
-            {"Content-Type": "application/x-tar"}))
-        self.assertEqual(status, 200, answer[:300])
-        self.assertEqual(len(json.loads(answer)["textures"]), 1)
+        self.assert_imports_one_texture(s, "name=model.tar&prefix=mtl", body, "application/x-tar")
 
     def test_a_glb_whose_images_share_one_buffer_view_holds_one_texture(self):
         s = self.server()
@@ -159,12 +162,7 @@ class PeakMemory(unittest.TestCase):
         glb = (struct.pack("<III", 0x46546C67, 2, 12 + 8 + len(text) + 8 + len(binary)) +
                struct.pack("<II", len(text), 0x4E4F534A) + text +
                struct.pack("<II", len(binary), 0x004E4942) + binary)
-        decoded = 512 * 512 * 6
-        status, _, answer = self.assert_bounded(s, len(glb) + decoded, lambda: s.call(
-            "POST", "/v1/assets?format=glb&prefix=shared", glb,
-            {"Content-Type": "model/gltf-binary"}))
-        self.assertEqual(status, 200, answer[:300])
-        self.assertEqual(len(json.loads(answer)["textures"]), 1)
+        self.assert_imports_one_texture(s, "format=glb&prefix=shared", glb, "model/gltf-binary")
 
     def test_many_tiny_gltf_primitives_are_refused_before_they_are_parsed(self):
         # 100,000 one-triangle primitives sharing two accessors: 4.5 MB of JSON that used to
