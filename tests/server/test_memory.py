@@ -83,8 +83,9 @@ class PeakMemory(unittest.TestCase):
     def assert_imports_one_texture(self, server, query, body, content_type):
         """Imports `body` (its one 512x512 image named many times) within the bound, which
         allows the image's decoded texels once, and checks one texture came of it."""
-        status, _, answer = self.assert_bounded(server, len(body) + 512 * 512 * 6, lambda: server.call(
-            "POST", "/v1/assets?" + query, body, {"Content-Type": content_type}))
+        status, _, answer = self.assert_bounded(
+            server, len(body) + 512 * 512 * 6,
+            lambda: server.call("POST", "/v1/assets?" + query, body, {"Content-Type": content_type}))
         self.assertEqual(status, 200, answer[:300])
         self.assertEqual(len(json.loads(answer)["textures"]), 1)
 
