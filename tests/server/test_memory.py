@@ -85,7 +85,8 @@ class PeakMemory(unittest.TestCase):
         allows the image's decoded texels once, and checks one texture came of it."""
         status, _, answer = self.assert_bounded(
             server, len(body) + 512 * 512 * 6,
-            lambda: server.call("POST", "/v1/assets?" + query, body, {"Content-Type": content_type}))
+            lambda: server.call("POST", "/v1/assets?" + query, body,
+                                {"Content-Type": content_type}))
         self.assertEqual(status, 200, answer[:300])
         self.assertEqual(len(json.loads(answer)["textures"]), 1)
 
