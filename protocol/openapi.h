@@ -5,9 +5,11 @@
 // table), the object kinds' field tables, the problem types, the statistics tables
 // (openapi_schemas.cpp). Nothing here knows the server's types.
 //
-// The document is checked three ways: an OpenAPI 3.1 validator lints it (tests/protocol,
-// check_openapi.py), the process-level HTTP suites validate every JSON answer they get against
-// it (tests/python/strata_process.py), and tests/protocol/openapi_test.cpp checks that every
+// The document is checked four ways: an OpenAPI 3.1 validator lints it (tests/protocol,
+// check_openapi.py); every answer the HTTP suites get is validated against it (the process suites
+// and Python clients as it arrives, tests/python/strata_process.py; the in-process C++ suites from
+// a record, tests/server/check_answers.py); the JSON answers protocol/README.md shows are too
+// (tests/protocol/check_readme_answers.py); and tests/protocol/openapi_test.cpp checks that every
 // reference resolves.
 
 #include <string>

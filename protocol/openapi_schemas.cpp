@@ -115,7 +115,8 @@ J problem_schema() {
                          {"then",
                           {{"properties",
                             {{"title", {{"const", problem_title(t)}}},
-                             {"status", {{"const", problem_status(t)}}}}}}}});
+                             {"status", {{"const", problem_status(t)}}}}}}},
+                         {"description", problem_when(t)}});
     }
     J s = object({{"type", {{"enum", std::move(uris)}}},
                   {"title", string()},
@@ -338,22 +339,38 @@ J render_request_schema() {
                     {"minItems", 2},
                     {"maxItems", 2},
                     {"description",
-                     "[y0, rows]: only these rows of the frame (what a splitting "
-                     "server asks its peers for)"}};
+                     "`[y0, rows]`: render only these rows of the frame (internal: what a "
+                     "splitting server asks its peers for)"}};
     J props = {
-        {"width", merged(side, {{"default", d.width}})},
-        {"height", merged(side, {{"default", d.height}})},
-        {"format", merged(names_of(ImageFormat::Npz, image_format_name), {{"default", "png"}})},
-        {"spp", merged(integer(1, MAX_RENDER_SPP), {{"default", d.spp}})},
-        {"aovs", described(array_of(aov), "extra EXR layers or NPZ arrays")},
-        {"compression",
-         merged(names_of(ExrCompression::Piz, exr_compression_name), {{"default", "zip"}})},
-        {"accumulate", described(boolean(), "add these samples to the previous render's")},
-        {"exposure", {{"type", "number"}, {"minimum", -64}, {"maximum", 64}, {"default", 0}}},
-        {"filter", {{"enum", {"none", "atrous"}}, {"default", "none"}}},
-        {"camera", ref("CameraOverride")},
+        {"width", described(merged(side, {{"default", d.width}}),
+                            "pixels; `width * height` at most `--max-pixels` (413)")},
+        {"height", described(merged(side, {{"default", d.height}}), "pixels")},
+        {"format",
+         described(merged(names_of(ImageFormat::Npz, image_format_name), {{"default", "png"}}),
+                   "`npz`: NumPy arrays, one per AOV")},
+        {"spp",
+         described(merged(integer(1, MAX_RENDER_SPP), {{"default", d.spp}}), "samples per pixel")},
+        {"aovs", described(merged(array_of(aov), {{"default", J::array()}}),
+                           "extra EXR layers or NPZ arrays")},
+        {"compression", described(merged(names_of(ExrCompression::Piz, exr_compression_name),
+                                         {{"default", "zip"}}),
+                                  "EXR compression")},
+        {"accumulate", described(merged(boolean(), {{"default", false}}),
+                                 "keep accumulating samples while the scene and camera do not "
+                                 "change")},
+        {"exposure",
+         described({{"type", "number"}, {"minimum", -64}, {"maximum", 64}, {"default", 0}},
+                   "EV stops applied before tone mapping")},
+        {"filter", described({{"enum", {"none", "atrous"}}, {"default", "none"}},
+                             "`atrous`: smooth the colour with an edge-aware à-trous filter "
+                             "guided by albedo, normal and depth")},
+        {"camera", described(ref("CameraOverride"),
+                             "override for this frame only: any of `eye`, `target`, `up`, "
+                             "`fov_y_deg`; members left out come from the scene camera")},
         {"band", band},
-        {"split", merged(integer(1, MAX_RENDER_SPLIT), {{"default", 1}})}};
+        {"split", described(merged(integer(1, MAX_RENDER_SPLIT), {{"default", 1}}),
+                            "render the frame in this many horizontal bands on this server "
+                            "and its `--peers`")}};
     J s = object(std::move(props));
     s.erase("required");
     return s;

@@ -64,6 +64,8 @@ std::string problem_type_uri(ProblemType t);
 const char* problem_title(ProblemType t);
 /// The HTTP status that goes with the type.
 int problem_status(ProblemType t);
+/// What gets this type as an answer (Markdown), for the docs and the OpenAPI description.
+const char* problem_when(ProblemType t);
 
 /// A problem of `type` with its default status.
 Problem make_problem(ProblemType type, std::string detail);

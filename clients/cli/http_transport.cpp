@@ -78,23 +78,29 @@ Outcome<std::unique_ptr<HttpTransport>> HttpTransport::create(const HttpOptions&
     client->set_read_timeout(options.timeout_s, 0);
     client->set_write_timeout(options.timeout_s, 0);
     if (!options.token.empty()) client->set_bearer_token_auth(options.token);
-    return std::unique_ptr<HttpTransport>(new HttpTransport(url.value(), std::move(client)));
+    return std::unique_ptr<HttpTransport>(
+        new HttpTransport(url.value(), std::move(client), options.on_answer));
 }
 
-HttpTransport::HttpTransport(std::string url, std::unique_ptr<httplib::Client> client)
-    : m_url(std::move(url)), m_client(std::move(client)) {}
+HttpTransport::HttpTransport(std::string url, std::unique_ptr<httplib::Client> client,
+                             decltype(HttpOptions::on_answer) on_answer)
+    : m_url(std::move(url)), m_client(std::move(client)), m_on_answer(std::move(on_answer)) {}
 
 HttpTransport::~HttpTransport() = default;
 
 Reply HttpTransport::get(const char* path) {
-    return to_reply(m_client->Get(path), m_url);
+    Reply reply = to_reply(m_client->Get(path), m_url);
+    if (m_on_answer) m_on_answer("GET", path, reply);
+    return reply;
 }
 
 Reply HttpTransport::post(const char* path, const std::string& body, const std::string& if_match,
                           const char* content_type) {
     httplib::Headers headers;
     if (!if_match.empty()) headers.emplace("If-Match", if_match);
-    return to_reply(m_client->Post(path, headers, body, content_type), m_url);
+    Reply reply = to_reply(m_client->Post(path, headers, body, content_type), m_url);
+    if (m_on_answer) m_on_answer("POST", path, reply);
+    return reply;
 }
 
 Reply HttpTransport::edits(std::string body, const std::optional<std::string>& if_match) {

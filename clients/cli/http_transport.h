@@ -1,6 +1,7 @@
 #pragma once
 // The protocol over HTTP with cpp-httplib: one keep-alive connection, bearer token, timeouts.
 
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -18,6 +19,9 @@ struct HttpOptions {
     std::string url = "http://127.0.0.1:7070";  ///< scheme://host[:port], no path
     std::string token;                          ///< bearer token; empty: none
     int timeout_s = 300;                        ///< connect, read and write timeout
+    /// Called with each request's method and target and the answer it got (tests record them).
+    std::function<void(const char* method, const std::string& target, const Reply& reply)>
+        on_answer;
 };
 
 class HttpTransport final : public Transport {
@@ -43,13 +47,15 @@ public:
     std::string describe() const override { return m_url; }
 
 private:
-    HttpTransport(std::string url, std::unique_ptr<httplib::Client> client);
+    HttpTransport(std::string url, std::unique_ptr<httplib::Client> client,
+                  decltype(HttpOptions::on_answer) on_answer);
     Reply get(const char* path);
     Reply post(const char* path, const std::string& body, const std::string& if_match,
                const char* content_type = "application/json");
 
     std::string m_url;
     std::unique_ptr<httplib::Client> m_client;
+    decltype(HttpOptions::on_answer) m_on_answer;
 };
 
 }  // namespace strata::cli

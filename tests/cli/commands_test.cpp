@@ -13,6 +13,7 @@
 #include "clients/cli/http_transport.h"
 #include "engine/image/png.h"
 #include "tests/cli/fake_transport.h"
+#include "tests/cli/server_transport.h"
 #include "tests/server/test_server.h"
 
 namespace strata::cli {
@@ -23,7 +24,7 @@ using server::test::TestServer;
 class Commands : public ::testing::Test {
 protected:
     void SetUp() override {
-        auto t = HttpTransport::create({"http://127.0.0.1:" + std::to_string(srv.port()), "", 60});
+        auto t = HttpTransport::create(test::options_for(srv));
         ASSERT_TRUE(t.has_value());
         transport = std::move(t.value());
         file = std::filesystem::temp_directory_path() /
@@ -196,7 +197,7 @@ namespace {
 class ImportCommand : public ::testing::Test {
 protected:
     void SetUp() override {
-        auto t = HttpTransport::create({"http://127.0.0.1:" + std::to_string(srv.port()), "", 60});
+        auto t = HttpTransport::create(test::options_for(srv));
         ASSERT_TRUE(t.has_value());
         transport = std::move(t.value());
         dir = std::filesystem::temp_directory_path() /

@@ -8,6 +8,7 @@
 #include "clients/cli/embedded_transport.h"
 #include "clients/cli/http_transport.h"
 #include "clients/cli/script_runner.h"
+#include "tests/cli/server_transport.h"
 #include "tests/server/test_server.h"
 
 namespace strata::cli {
@@ -45,7 +46,7 @@ void expect_same(const Reply& http, const Reply& embedded, const std::string& wh
 class Transports : public ::testing::Test {
 protected:
     void SetUp() override {
-        auto h = HttpTransport::create({"http://127.0.0.1:" + std::to_string(srv.port()), "", 60});
+        auto h = HttpTransport::create(test::options_for(srv));
         ASSERT_TRUE(h.has_value()) << h.error().message;
         http = std::move(h.value());
         auto e = EmbeddedTransport::create(false);
@@ -195,15 +196,15 @@ TEST_F(Transports, PickAndListStepsPlayToTheSameVerdictThroughBoth) {
 TEST(HttpTransport, RefusesUrlsItCannotUse) {
     for (const char* url : {"localhost:7070", "ftp://host", "http://", "http://host/v1",
                             "http://host:port", "http://host:123456"}) {
-        auto t = HttpTransport::create({url, "", 1});
+        auto t = HttpTransport::create({url, "", 1, {}});
         EXPECT_FALSE(t.has_value()) << url;
     }
-    EXPECT_TRUE(HttpTransport::create({"http://127.0.0.1:7070/", "", 1}).has_value());
-    EXPECT_TRUE(HttpTransport::create({"https://strata.example:8443", "", 1}).has_value());
+    EXPECT_TRUE(HttpTransport::create({"http://127.0.0.1:7070/", "", 1, {}}).has_value());
+    EXPECT_TRUE(HttpTransport::create({"https://strata.example:8443", "", 1, {}}).has_value());
 }
 
 TEST(HttpTransport, AnUnreachableServerIsAnAnswerWithoutStatusThatSaysWhy) {
-    auto t = HttpTransport::create({"http://127.0.0.1:1", "", 2});
+    auto t = HttpTransport::create({"http://127.0.0.1:1", "", 2, {}});
     ASSERT_TRUE(t.has_value());
     const Reply r = t.value()->commit();
     EXPECT_EQ(r.status, 0);
@@ -216,9 +217,9 @@ TEST(HttpTransport, SendsTheBearerToken) {
     config.token = "s3cret";
     TestServer srv(config);
     const std::string url = "http://127.0.0.1:" + std::to_string(srv.port());
-    EXPECT_EQ(HttpTransport::create({url, "", 5}).value()->stats().status, 401);
-    EXPECT_EQ(HttpTransport::create({url, "wrong", 5}).value()->stats().status, 401);
-    EXPECT_EQ(HttpTransport::create({url, "s3cret", 5}).value()->stats().status, 200);
+    EXPECT_EQ(HttpTransport::create({url, "", 5, {}}).value()->stats().status, 401);
+    EXPECT_EQ(HttpTransport::create({url, "wrong", 5, {}}).value()->stats().status, 401);
+    EXPECT_EQ(HttpTransport::create({url, "s3cret", 5, {}}).value()->stats().status, 200);
 }
 
 }  // namespace

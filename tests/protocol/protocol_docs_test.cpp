@@ -24,6 +24,8 @@
 #include "protocol/edit_ops.h"
 #include "protocol/edit_schema.h"
 #include "protocol/field_json.h"
+#include "protocol/openapi.h"
+#include "protocol/problem.h"
 #include "protocol/stat_names.h"
 #include "tests/generated_docs.h"
 
@@ -116,12 +118,64 @@ std::string counters_table() {
 }
 
 std::string durable_counters_table() {
-    std::string out = "| `durability` member | Prometheus | type | unit | what it is |\n"
-                      "|---|---|---|---|---|\n";
+    std::string out =
+        "| `durability` member | Prometheus | type | unit | what it is |\n"
+        "|---|---|---|---|---|\n";
     for (const durable::DurableCounterSpec& c : durable::DURABLE_COUNTERS) {
         out += "| `" + std::string(c.name) + "` | `" + metric_name("strata_durable_", c) + "` | " +
                (c.cumulative ? "counter" : "gauge") + " | " + unit_name(c.unit) + " | " +
                std::string(c.help) + " |\n";
+    }
+    return out;
+}
+
+/// Every problem type by status: the README's table of them is the OpenAPI `Problem` schema's.
+std::string problem_types_table() {
+    std::vector<ProblemType> types;
+    for (int i = 0; i <= int(ProblemType::Internal); ++i) types.push_back(ProblemType(i));
+    std::stable_sort(types.begin(), types.end(), [](ProblemType a, ProblemType b) {
+        return problem_status(a) < problem_status(b);
+    });
+    std::string out =
+        "| status | `type` (after `https://strata.dev/problems/`) | when |\n"
+        "|---|---|---|\n";
+    for (ProblemType t : types) {
+        const std::string uri = problem_type_uri(t);
+        out += "| " + std::to_string(problem_status(t)) + " | `" + uri.substr(uri.rfind('/') + 1) +
+               "` | " + problem_when(t) + " |\n";
+    }
+    return out;
+}
+
+/// A member's values in words, from its schema: "integer, [1, 65536]", "`png`, `exr`", ...
+std::string values_of(const OrderedJson& s) {
+    const auto range = [&s] {
+        return "[" + s["minimum"].dump() + ", " + s["maximum"].dump() + "]";
+    };
+    if (s.contains("enum")) {
+        std::string out;
+        for (const auto& v : s["enum"])
+            out += (out.empty() ? "`" : ", `") + v.get<std::string>() + "`";
+        return out;
+    }
+    if (s.contains("$ref")) {
+        const std::string ref = s["$ref"];
+        return "`" + ref.substr(ref.rfind('/') + 1) + "` object";
+    }
+    const std::string type = s.value("type", "");
+    if (type == "array" && s.contains("items")) return "list of " + values_of(s["items"]);
+    if (type == "array") return "array of " + std::to_string(s.value("minItems", 0)) + " integers";
+    if (s.contains("minimum")) return type + ", " + range();
+    return type;
+}
+
+/// An object schema's members as a table: member, default, values, what it does.
+std::string members_table(const OrderedJson& schema) {
+    std::string out = "| member | default | values | |\n|---|---|---|---|\n";
+    for (const auto& [name, member] : schema["properties"].items()) {
+        out += "| `" + name + "` | " +
+               (member.contains("default") ? "`" + member["default"].dump() + "`" : "") + " | " +
+               values_of(member) + " | " + member.value("description", "") + " |\n";
     }
     return out;
 }
@@ -156,6 +210,11 @@ TEST(ProtocolDocs, ReadmeOpsIndexAndCountersTableAreGeneratedFromTheirTables) {
     ASSERT_TRUE(updated) << "README lacks the counters markers";
     updated = with_region(*updated, "durable-counters", durable_counters_table());
     ASSERT_TRUE(updated) << "README lacks the durable-counters markers";
+    updated = with_region(*updated, "problem-types", problem_types_table());
+    ASSERT_TRUE(updated) << "README lacks the problem-types markers";
+    updated = with_region(*updated, "render-request",
+                          members_table(component_schemas().at("RenderRequest")));
+    ASSERT_TRUE(updated) << "README lacks the render-request markers";
     for (const auto& [kind, table] : field_tables()) {
         updated = with_region(*updated, "fields-" + kind, table);
         ASSERT_TRUE(updated) << "README lacks the fields-" << kind << " markers";

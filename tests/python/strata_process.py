@@ -12,7 +12,8 @@ so tests/server/hostile.py's Server.call; the Python client; the readiness polls
 server's own OpenAPI description (GET /v1/openapi.json, fetched once per server): its status must
 be documented for the route, its media type too, and a JSON body must match the documented
 schema (Debian's python3-jsonschema, Draft 2020-12, which OpenAPI 3.1 uses). A mismatch raises
-AssertionError where the answer arrives, failing the test. Streams (/v1/stream, /v1/events) are
+AssertionError where the answer arrives, failing the test. The asyncio client's answers
+(strata_client._aio_http, when it is on the path) are checked the same way. Streams (/v1/stream, /v1/events) are
 checked by status and media type only, their bodies left unread.
 """
 
@@ -158,6 +159,33 @@ def _check_http_client_answers() -> None:
     cls._strata_checked = True
 
 
+def _check_async_client_answers() -> None:
+    """Wraps the asyncio client's connection (clients/python, strata_client._aio_http) the same
+    way, when that client is importable: each answer from a running ServerProcess is checked as
+    it arrives."""
+    try:
+        from strata_client import _aio_http
+    except ImportError:
+        return  # the suites that use it put it on the path
+    cls = _aio_http.Connection
+    if getattr(cls, "_strata_checked", False):
+        return
+    exchange = cls.exchange
+
+    async def checked_exchange(self, method, target, headers, body):
+        response = await exchange(self, method, target, headers, body)
+        peer = self._writer.get_extra_info("peername") or ("", 0)
+        server = _RUNNING.get(peer[1]) if peer[0] in ("127.0.0.1", "::1") else None
+        if server is not None and not target.startswith("/v1/openapi.json"):
+            auth = {k: v for k, v in headers.items() if k.lower() == "authorization"}
+            server.check_answer(method, target, response.status, dict(response.headers),
+                                response.body, auth)
+        return response
+
+    cls.exchange = checked_exchange
+    cls._strata_checked = True
+
+
 class ServerProcess:
     """A strata-server child process. `args` are extra flags (e.g. ["--demo"])."""
 
@@ -186,6 +214,7 @@ class ServerProcess:
         self.port = int(self.url.rsplit(":", 1)[1])
         self._openapi: Optional[OpenApiCheck] = None
         _check_http_client_answers()
+        _check_async_client_answers()
         _RUNNING[self.port] = self
         if wait_ready:
             self._wait_until_ready(timeout)

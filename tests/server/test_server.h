@@ -13,6 +13,7 @@
 #include "engine/scene/demo_scene.h"
 #include "protocol/json_document.h"
 #include "server/server.h"
+#include "tests/server/answer_log.h"
 
 namespace strata::server::test {
 
@@ -54,6 +55,12 @@ public:
         EXPECT_TRUE(port.has_value());
         m_port = port.has_value() ? port.value() : 0;
         m_thread = std::thread([this] { m_server->listen(); });
+        if (auto log = AnswerLog::from_environment()) {
+            httplib::Headers auth;
+            if (!config.token.empty()) auth.emplace("Authorization", "Bearer " + config.token);
+            log->description(get("/v1/openapi.json", auth).body);  // before the log is on
+            m_answers = std::move(log);
+        }
     }
     ~TestServer() {
         m_server->stop();
@@ -64,8 +71,15 @@ public:
         httplib::Client c("127.0.0.1", m_port);
         c.set_read_timeout(30, 0);
         c.set_write_timeout(30, 0);
+        if (m_answers) {
+            c.set_logger([log = m_answers](const httplib::Request& q, const httplib::Response& a) {
+                log->answer(q.method, q.path, a.status, a.get_header_value("Content-Type"), a.body);
+            });
+        }
         return c;
     }
+    /// Where the answers this server gives go when they are recorded (null: they are not).
+    std::shared_ptr<AnswerLog> answers() const { return m_answers; }
     Reply get(const std::string& path, const httplib::Headers& h = {}) const {
         auto c = client();
         return to_reply(c.Get(path.c_str(), h));
@@ -106,6 +120,7 @@ private:
     std::unique_ptr<Server> m_server;
     std::thread m_thread;
     int m_port = 0;
+    std::shared_ptr<AnswerLog> m_answers;
 };
 
 /// A one-triangle mesh edit.
