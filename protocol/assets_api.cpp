@@ -36,9 +36,8 @@ Problem asset_problem(const AssetError& e) {
 
 /// A default prefix from a file name: its stem, with characters outside [A-Za-z0-9_-] as '_'.
 std::string prefix_from_name(std::string_view name) {
-    name = name.substr(name.find_last_of("/\\") == std::string_view::npos
-                           ? 0
-                           : name.find_last_of("/\\") + 1);
+    name = name.substr(
+        name.find_last_of("/\\") == std::string_view::npos ? 0 : name.find_last_of("/\\") + 1);
     if (const auto dot = name.rfind('.'); dot != std::string_view::npos && dot > 0)
         name = name.substr(0, dot);
     std::string out;
@@ -48,9 +47,8 @@ std::string prefix_from_name(std::string_view name) {
 }
 
 bool has_control(std::string_view s) {
-    return std::any_of(s.begin(), s.end(), [](char c) {
-        return static_cast<unsigned char>(c) < 0x20 || c == 0x7f;
-    });
+    return std::any_of(s.begin(), s.end(),
+                       [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; });
 }
 
 std::string lower(std::string_view s) {
@@ -79,48 +77,55 @@ struct AssetQuery {
     bool instance = true;
 };
 
-std::optional<AssetQuery> parse_query(const std::multimap<std::string, std::string>& query,
-                                      std::optional<std::string_view> content_type,
-                                      Problem& problem) {
+using Query = std::multimap<std::string, std::string>;
+
+std::optional<std::string> value_of(const Query& query, const char* key) {
+    const auto it = query.find(key);
+    return it == query.end() ? std::nullopt : std::optional(it->second);
+}
+
+/// Each parameter known and given at most once.
+bool check_keys(const Query& query, Problem& problem) {
     for (const auto& [key, value] : query) {
         if (key != "format" && key != "name" && key != "prefix" && key != "instance" &&
             key != "parent") {
             problem = bad_query(
                 key, "unknown parameter (expected format, name, prefix, parent, instance)");
-            return std::nullopt;
+            return false;
         }
         if (query.count(key) > 1) {
             problem = bad_query(key, "given more than once");
-            return std::nullopt;
+            return false;
         }
     }
-    auto get = [&](const char* key) -> std::optional<std::string> {
-        const auto it = query.find(key);
-        return it == query.end() ? std::nullopt : std::optional(it->second);
-    };
-    AssetQuery q;
-    // Step 1: the format: ?format= wins, then the Content-Type, then the name's extension.
-    // A tar archive (?format=tar, application/x-tar, a name ending in .tar) holds the model and
-    // its side files; the model's format then comes from its extension inside the archive.
+    return true;
+}
+
+/// Step 1: the format: ?format= wins, then the Content-Type, then the name's extension. A tar
+/// archive (?format=tar, application/x-tar, a name ending in .tar) holds the model and its side
+/// files; the model's format then comes from its extension inside the archive.
+bool parse_format(const Query& query, std::optional<std::string_view> content_type, AssetQuery& q,
+                  Problem& problem) {
     std::optional<AssetFormat> format;
-    if (auto f = get("format")) {
+    if (auto f = value_of(query, "format")) {
         q.archive = lower(*f) == "tar";
         format = assets::format_from_name(*f);
         if (!format && !q.archive) {
-            problem = bad_query("format", "'" + to_valid_utf8(*f) +
-                                              "' is not one of glb, gltf, obj, ply, tar");
-            return std::nullopt;
+            problem = bad_query(
+                "format", "'" + to_valid_utf8(*f) + "' is not one of glb, gltf, obj, ply, tar");
+            return false;
         }
     }
     if (!format && !q.archive && content_type) {
         format = assets::format_from_media_type(*content_type);
         q.archive = !format && is_tar_media_type(*content_type);
     }
-    q.name = get("name").value_or("");
+    q.name = value_of(query, "name").value_or("");
     if (!is_valid_utf8(q.name) || has_control(q.name) || q.name.size() > 256) {
-        problem = bad_query("name", "must be valid UTF-8 without control characters, at most "
-                                    "256 bytes");
-        return std::nullopt;
+        problem = bad_query("name",
+                            "must be valid UTF-8 without control characters, at most "
+                            "256 bytes");
+        return false;
     }
     if (!format && !q.archive && q.name.find('.') != std::string::npos) {
         format = assets::format_from_name(q.name.substr(q.name.rfind('.') + 1));
@@ -132,36 +137,51 @@ std::optional<AssetQuery> parse_query(const std::multimap<std::string, std::stri
             "the file's format is unknown: give ?format=glb|gltf|obj|ply|tar, or a Content-Type "
             "of model/gltf-binary, model/gltf+json, model/obj, application/ply or "
             "application/x-tar");
-        return std::nullopt;
+        return false;
     }
     if (format) q.format = *format;
     if (q.name.empty())
         q.name = q.archive ? "upload.tar" : std::string("upload.") + assets::format_name(q.format);
-    // Step 2: the id prefix (an archive's default is its model's stem, set once it is found)
-    // and the instance flag.
-    q.prefix = get("prefix").value_or(q.archive ? "" : prefix_from_name(q.name));
+    return true;
+}
+
+/// Step 2: the id prefix (an archive's default is its model's stem, set once it is found), the
+/// parent group and the instance flag.
+bool parse_placement(const Query& query, AssetQuery& q, Problem& problem) {
+    const std::optional<std::string> prefix = value_of(query, "prefix");
+    q.prefix = prefix.value_or(q.archive ? "" : prefix_from_name(q.name));
     if (q.prefix.empty() && !q.archive) q.prefix = assets::format_name(q.format);
     if (q.prefix.size() > MAX_PREFIX || !is_valid_utf8(q.prefix) || has_control(q.prefix) ||
-        (q.prefix.empty() && get("prefix"))) {
+        (q.prefix.empty() && prefix)) {
         problem = bad_query("prefix", "must be 1 to " + std::to_string(MAX_PREFIX) +
                                           " bytes of UTF-8 without control characters");
-        return std::nullopt;
+        return false;
     }
-    if (auto parent = get("parent")) {
+    if (auto parent = value_of(query, "parent")) {
         if (parent->empty() || parent->size() > 256 || !is_valid_utf8(*parent) ||
             has_control(*parent)) {
             problem = bad_query("parent", "must be a group id");
-            return std::nullopt;
+            return false;
         }
         q.parent = *parent;
     }
-    if (auto inst = get("instance")) {
+    if (auto inst = value_of(query, "instance")) {
         if (*inst != "true" && *inst != "false") {
             problem = bad_query("instance", "expected true or false");
-            return std::nullopt;
+            return false;
         }
         q.instance = *inst == "true";
     }
+    return true;
+}
+
+std::optional<AssetQuery> parse_query(const Query& query,
+                                      std::optional<std::string_view> content_type,
+                                      Problem& problem) {
+    AssetQuery q;
+    if (!check_keys(query, problem) || !parse_format(query, content_type, q, problem) ||
+        !parse_placement(query, q, problem))
+        return std::nullopt;
     return q;
 }
 
@@ -239,12 +259,15 @@ ApiResponse post_assets(Engine& engine, std::string body,
         return problem_response(p);
     }
     const ApplyResult& done = applied.value();
-    Json answer = {{"version", done.version},  {"applied", edits},
-                         {"format", assets::format_name(q->format)},
-                         {"textures", out.textures}, {"meshes", out.meshes},
-                         {"materials", out.materials},
-                         {"groups", out.groups},     {"instances", out.instances},
-                         {"warnings", out.warnings}};
+    Json answer = {{"version", done.version},
+                   {"applied", edits},
+                   {"format", assets::format_name(q->format)},
+                   {"textures", out.textures},
+                   {"meshes", out.meshes},
+                   {"materials", out.materials},
+                   {"groups", out.groups},
+                   {"instances", out.instances},
+                   {"warnings", out.warnings}};
     if (model) answer["model"] = *model;
     return with_etag(json_response(200, answer), done.version);
 }

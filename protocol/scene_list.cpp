@@ -27,8 +27,8 @@ constexpr const char* COLLECTIONS[] = {"meshes", "instances", "materials",
 struct ListQuery {
     uint32_t limit = DEFAULT_PAGE;
     uint32_t first_slot = 0;
-    std::optional<std::string> mesh;  ///< instances: only those of this mesh
-    std::optional<bool> visible;      ///< instances: only (in)visible ones
+    std::optional<std::string> mesh;    ///< instances: only those of this mesh
+    std::optional<bool> visible;        ///< instances: only (in)visible ones
     std::optional<std::string> parent;  ///< instances, groups: only children of (empty: root)
 };
 
@@ -95,8 +95,8 @@ std::optional<ListQuery> parse_list_query(SceneObject kind,
         } else if (graph && key == "parent") {
             q.parent = text;
         } else {
-            problem = bad_query(key, "unknown query parameter '" + key + "': " +
-                                         COLLECTIONS[int(kind)] + " take " +
+            problem = bad_query(key, "unknown query parameter '" + key +
+                                         "': " + COLLECTIONS[int(kind)] + " take " +
                                          (instances ? "limit, cursor, mesh, visible and parent"
                                           : graph   ? "limit, cursor and parent"
                                                     : "limit and cursor"));
@@ -150,6 +150,74 @@ Problem no_group(const std::string& id, const char* parameter) {
     return p;
 }
 
+/// Where a listing walks: every slot, or a group's children (`only`, sorted slots); and whether
+/// it keeps only the objects at the root (`parent=`).
+struct Walk {
+    std::vector<uint32_t> children;
+    bool by_parent = false;
+    bool root_only = false;
+    const std::vector<uint32_t>* only() const { return by_parent ? &children : nullptr; }
+};
+
+/// The page of a kind other than instances.
+Json kind_page(SceneObject kind, const Scene& s, const ListQuery& q, const Walk& walk) {
+    switch (kind) {
+        case SceneObject::Mesh:
+            return page(
+                kind, s.meshes(), q, [](const MeshRecord&) { return true; },
+                [&](MeshHandle h, const MeshRecord& m) { return mesh_json(s, h, m); });
+        case SceneObject::Material:
+            return page(
+                kind, s.materials(), q, [](const MaterialRecord&) { return true; },
+                [&](MaterialHandle, const MaterialRecord& m) { return material_json(s, m); });
+        case SceneObject::Light:
+            return page(
+                kind, s.lights(), q, [](const LightRecord&) { return true; },
+                [&](LightHandle, const LightRecord& l) { return light_json(s, l); });
+        case SceneObject::Texture:
+            return page(
+                kind, s.textures(), q, [](const TextureRecord&) { return true; },
+                [&](TextureHandle, const TextureRecord& t) { return texture_json(s, t); });
+        case SceneObject::Group:
+        case SceneObject::Instance:
+            break;
+    }
+    return page(
+        kind, s.groups(), q,
+        [&](const GroupRecord& g) { return !walk.root_only || g.parent.is_null(); },
+        [&](GroupHandle h, const GroupRecord& g) { return group_json(s, h, g); }, walk.only());
+}
+
+/// The page of instances, filtered by mesh, visibility and parent; nullopt when the mesh filter
+/// names no mesh (`missing` says so).
+std::optional<Json> instance_page(const Scene& s, const ListQuery& q, const Walk& walk,
+                                  std::optional<Problem>& missing) {
+    MeshHandle mesh;
+    if (q.mesh) {
+        mesh = s.find_mesh(*q.mesh);
+        if (!s.mesh(mesh)) {
+            Problem p = make_problem(ProblemType::NotFound, "no mesh with id '" + *q.mesh + "'");
+            p.pointer = "/mesh";
+            missing = p;
+            return std::nullopt;
+        }
+    }
+    // Object-space bounds once per mesh, not once per instance.
+    std::unordered_map<uint32_t, Bounds3> bounds;
+    return page(
+        SceneObject::Instance, s.instances(), q,
+        [&](const InstanceRecord& i) {
+            return (!q.mesh || i.mesh == mesh) && (!q.visible || i.visible == *q.visible) &&
+                   (!walk.root_only || i.parent.is_null());
+        },
+        [&](InstanceHandle h, const InstanceRecord& i) {
+            auto [it, fresh] = bounds.try_emplace(i.mesh.index);
+            if (fresh) it->second = mesh_bounds(*s.mesh(i.mesh).value());
+            return instance_json(s, h, i, it->second);
+        },
+        walk.only());
+}
+
 }  // namespace
 
 ApiResponse get_scene_list(const Engine& engine, SceneObject kind,
@@ -161,80 +229,21 @@ ApiResponse get_scene_list(const Engine& engine, SceneObject kind,
     std::optional<Problem> missing;
     auto [doc, version] = engine.read([&](const Scene& s) -> std::pair<Json, uint64_t> {
         // parent=: a group's children (sorted slots), or the root's (a filtered walk).
-        GroupHandle parent;
-        std::vector<uint32_t> children;
+        Walk walk;
+        walk.root_only = q->parent && q->parent->empty();
         if (q->parent && !q->parent->empty()) {
-            parent = s.find_group(*q->parent);
+            const GroupHandle parent = s.find_group(*q->parent);
             if (!s.group(parent)) {
                 missing = no_group(*q->parent, "parent");
                 return {nullptr, s.version()};
             }
-            children = kind == SceneObject::Group ? sorted_slots(s.children(parent).groups)
-                                                  : sorted_slots(s.children(parent).instances);
+            walk.by_parent = true;
+            walk.children = kind == SceneObject::Group ? sorted_slots(s.children(parent).groups)
+                                                       : sorted_slots(s.children(parent).instances);
         }
-        const std::vector<uint32_t>* only = parent.is_null() ? nullptr : &children;
-        const bool root_only = q->parent && q->parent->empty();
-        switch (kind) {
-            case SceneObject::Mesh:
-                return {page(
-                            kind, s.meshes(), *q, [](const MeshRecord&) { return true; },
-                            [&](MeshHandle h, const MeshRecord& m) { return mesh_json(s, h, m); }),
-                        s.version()};
-            case SceneObject::Material:
-                return {page(
-                            kind, s.materials(), *q, [](const MaterialRecord&) { return true; },
-                            [&](MaterialHandle, const MaterialRecord& m) {
-                                return material_json(s, m);
-                            }),
-                        s.version()};
-            case SceneObject::Light:
-                return {page(
-                            kind, s.lights(), *q, [](const LightRecord&) { return true; },
-                            [&](LightHandle, const LightRecord& l) { return light_json(s, l); }),
-                        s.version()};
-            case SceneObject::Texture:
-                return {page(
-                            kind, s.textures(), *q, [](const TextureRecord&) { return true; },
-                            [&](TextureHandle, const TextureRecord& t) {
-                                return texture_json(s, t);
-                            }),
-                        s.version()};
-            case SceneObject::Group:
-                return {page(
-                            kind, s.groups(), *q,
-                            [&](const GroupRecord& g) { return !root_only || g.parent.is_null(); },
-                            [&](GroupHandle h, const GroupRecord& g) { return group_json(s, h, g); },
-                            only),
-                        s.version()};
-            case SceneObject::Instance:
-                break;
-        }
-        MeshHandle mesh;
-        if (q->mesh) {
-            mesh = s.find_mesh(*q->mesh);
-            if (!s.mesh(mesh)) {
-                Problem p = make_problem(ProblemType::NotFound, "no mesh with id '" + *q->mesh + "'");
-                p.pointer = "/mesh";
-                missing = p;
-                return {nullptr, s.version()};
-            }
-        }
-        // Object-space bounds once per mesh, not once per instance.
-        std::unordered_map<uint32_t, Bounds3> bounds;
-        return {page(
-                    kind, s.instances(), *q,
-                    [&](const InstanceRecord& i) {
-                        return (!q->mesh || i.mesh == mesh) &&
-                               (!q->visible || i.visible == *q->visible) &&
-                               (!root_only || i.parent.is_null());
-                    },
-                    [&](InstanceHandle h, const InstanceRecord& i) {
-                        auto [it, fresh] = bounds.try_emplace(i.mesh.index);
-                        if (fresh) it->second = mesh_bounds(*s.mesh(i.mesh).value());
-                        return instance_json(s, h, i, it->second);
-                    },
-                    only),
-                s.version()};
+        if (kind != SceneObject::Instance) return {kind_page(kind, s, *q, walk), s.version()};
+        std::optional<Json> items = instance_page(s, *q, walk, missing);
+        return {items ? std::move(*items) : Json(nullptr), s.version()};
     });
     if (missing) return with_etag(problem_response(*missing), version);
     doc["version"] = version;

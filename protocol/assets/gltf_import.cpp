@@ -1,9 +1,9 @@
 #include "protocol/assets/gltf_import.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <exception>
-#include <cmath>
 #include <limits>
 #include <map>
 
@@ -201,12 +201,12 @@ private:
         if (a.sparse.isSparse)
             return m_sink.unsupported(where, "sparse accessors are not supported");
         if (a.bufferView < 0 || std::size_t(a.bufferView) >= m_model.bufferViews.size())
-            return m_sink.invalid(where, "bufferView " + std::to_string(a.bufferView) +
-                                             " does not exist");
+            return m_sink.invalid(where,
+                                  "bufferView " + std::to_string(a.bufferView) + " does not exist");
         const tinygltf::BufferView& view = m_model.bufferViews[std::size_t(a.bufferView)];
         if (view.buffer < 0 || std::size_t(view.buffer) >= m_model.buffers.size())
-            return m_sink.invalid(where, "buffer " + std::to_string(view.buffer) +
-                                             " does not exist");
+            return m_sink.invalid(where,
+                                  "buffer " + std::to_string(view.buffer) + " does not exist");
         const std::vector<unsigned char>& data = m_model.buffers[std::size_t(view.buffer)].data;
         if (view.byteOffset > data.size() || view.byteLength > data.size() - view.byteOffset)
             return m_sink.invalid(where, "its buffer view lies outside buffer " +
@@ -219,8 +219,8 @@ private:
         const std::size_t element = std::size_t(size) * std::size_t(width);
         const std::size_t stride = view.byteStride ? view.byteStride : element;
         if (stride < element)
-            return m_sink.invalid(where, "byteStride " + std::to_string(stride) +
-                                             " is smaller than one element");
+            return m_sink.invalid(
+                where, "byteStride " + std::to_string(stride) + " is smaller than one element");
         AccessorView out;
         out.count = a.count;
         out.stride = stride;
@@ -234,8 +234,8 @@ private:
             (a.count - 1) > (room - a.byteOffset - element) / stride)
             return m_sink.invalid(where, std::to_string(a.count) + " elements from byte " +
                                              std::to_string(a.byteOffset) +
-                                             " run past its buffer view (" +
-                                             std::to_string(room) + " bytes)");
+                                             " run past its buffer view (" + std::to_string(room) +
+                                             " bytes)");
         out.base = data.data() + view.byteOffset + a.byteOffset;
         return out;
     }
@@ -248,14 +248,14 @@ private:
             AssetMaterial m;
             m.name = gm.name;
             for (double v : pbr.baseColorFactor)
-                if (!std::isfinite(v)) return m_sink.invalid(where, "baseColorFactor is not finite");
+                if (!std::isfinite(v))
+                    return m_sink.invalid(where, "baseColorFactor is not finite");
             for (double v : gm.emissiveFactor)
                 if (!std::isfinite(v)) return m_sink.invalid(where, "emissiveFactor is not finite");
             if (!std::isfinite(pbr.metallicFactor) || !std::isfinite(pbr.roughnessFactor))
                 return m_sink.invalid(where, "metallicFactor or roughnessFactor is not finite");
             if (pbr.baseColorFactor.size() >= 3)
-                m.material.base_color = {unit(pbr.baseColorFactor[0]),
-                                         unit(pbr.baseColorFactor[1]),
+                m.material.base_color = {unit(pbr.baseColorFactor[0]), unit(pbr.baseColorFactor[1]),
                                          unit(pbr.baseColorFactor[2])};
             m.material.metallic = unit(pbr.metallicFactor);
             m.material.roughness = unit(pbr.roughnessFactor);
@@ -286,9 +286,9 @@ private:
         if (s < 0 || std::size_t(s) >= m_model.samplers.size()) return out;  // glTF: repeat, linear
         const tinygltf::Sampler& sampler = m_model.samplers[std::size_t(s)];
         auto wrap = [](int mode) {
-            return mode == TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE      ? TextureWrap::Clamp
+            return mode == TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE     ? TextureWrap::Clamp
                    : mode == TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT ? TextureWrap::Mirror
-                                                                    : TextureWrap::Repeat;
+                                                                   : TextureWrap::Repeat;
         };
         out.wrap = wrap(sampler.wrapS);
         if (wrap(sampler.wrapT) != out.wrap)
@@ -311,7 +311,8 @@ private:
         const tinygltf::Image& image = m_model.images[std::size_t(source)];
         // Images that share a buffer view share one texture: a file naming one view from many
         // images must not multiply its bytes.
-        if (auto it = m_views.find(image.bufferView); image.bufferView >= 0 && it != m_views.end()) {
+        if (auto it = m_views.find(image.bufferView);
+            image.bufferView >= 0 && it != m_views.end()) {
             m_images.emplace(source, it->second);
             return it->second;
         }
@@ -322,8 +323,8 @@ private:
         if (image.bufferView >= 0) {
             const std::string at = "images[" + std::to_string(source) + "]";
             if (std::size_t(image.bufferView) >= m_model.bufferViews.size())
-                return m_sink.invalid(at, "bufferView " + std::to_string(image.bufferView) +
-                                              " does not exist");
+                return m_sink.invalid(
+                    at, "bufferView " + std::to_string(image.bufferView) + " does not exist");
             const tinygltf::BufferView& view = m_model.bufferViews[std::size_t(image.bufferView)];
             if (view.buffer < 0 || std::size_t(view.buffer) >= m_model.buffers.size())
                 return m_sink.invalid(at, "its buffer view names no buffer");
@@ -347,8 +348,7 @@ private:
         if (auto it = m_meshes.find(i); it != m_meshes.end()) return it->second;
         if (i < 0 || std::size_t(i) >= m_model.meshes.size())
             return m_sink.invalid("meshes", "mesh " + std::to_string(i) + " does not exist (" +
-                                                std::to_string(m_model.meshes.size()) +
-                                                " meshes)");
+                                                std::to_string(m_model.meshes.size()) + " meshes)");
         const tinygltf::Mesh& gm = m_model.meshes[std::size_t(i)];
         std::vector<int> out;
         for (std::size_t p = 0; p < gm.primitives.size(); ++p) {
@@ -376,8 +376,8 @@ private:
         AssetMesh mesh;
         mesh.material = prim.material;
         if (prim.material >= int(m_model.materials.size()))
-            return m_sink.invalid(where, "material " + std::to_string(prim.material) +
-                                             " does not exist");
+            return m_sink.invalid(where,
+                                  "material " + std::to_string(prim.material) + " does not exist");
         // Step 1: positions, against the budget left before allocating.
         const auto pos_it = prim.attributes.find("POSITION");
         if (pos_it == prim.attributes.end())
@@ -391,16 +391,32 @@ private:
         if (pv.count == 0) return m_sink.invalid(where + ".attributes.POSITION", "has no vertices");
         m_vertices += pv.count;
         if (m_vertices > m_limits.max_vertices)
-            return m_sink.too_large(where, "the asset holds at least " +
-                                               std::to_string(m_vertices) +
-                                               " vertices; the scene has room for " +
-                                               std::to_string(m_limits.max_vertices) +
-                                               " (max_scene_vertices)");
+            return m_sink.too_large(
+                where, "the asset holds at least " + std::to_string(m_vertices) +
+                           " vertices; the scene has room for " +
+                           std::to_string(m_limits.max_vertices) + " (max_scene_vertices)");
         mesh.positions.resize(pv.count);
         for (std::size_t v = 0; v < pv.count; ++v)
             mesh.positions[v] = {pv.get(v, 0), pv.get(v, 1), pv.get(v, 2)};
         // Step 2: triangles, every index checked.
-        std::size_t n_indices = pv.count;
+        if (auto ok = read_triangles(prim, where, pv.count, mesh); !ok)
+            return Unexpected(ok.error());
+        // Step 3: optional attributes, one per vertex.
+        if (auto ok = read_attribute(prim, "NORMAL", where, pv.count, 3, mesh); !ok)
+            return Unexpected(ok.error());
+        if (auto ok = read_attribute(prim, "TEXCOORD_0", where, pv.count, 2, mesh); !ok)
+            return Unexpected(ok.error());
+        if (auto ok = read_attribute(prim, "COLOR_0", where, pv.count, 3, mesh); !ok)
+            return Unexpected(ok.error());
+        return mesh;
+    }
+
+    /// The primitive's triangles (its indices, or its vertices in order), every index checked,
+    /// against the budget left.
+    Expected<void, AssetError> read_triangles(const tinygltf::Primitive& prim,
+                                              const std::string& where, std::size_t vertices,
+                                              AssetMesh& mesh) {
+        std::size_t n_indices = vertices;
         AccessorView iv;
         if (prim.indices >= 0) {
             auto idx = accessor(prim.indices, where + ".indices");
@@ -413,39 +429,31 @@ private:
             n_indices = iv.count;
         }
         if (n_indices % 3 != 0 || n_indices == 0)
-            return m_sink.invalid(where, std::to_string(n_indices) +
-                                             " indices do not make whole triangles");
+            return m_sink.invalid(
+                where, std::to_string(n_indices) + " indices do not make whole triangles");
         // Each primitive becomes a mesh, which also costs MESH_OVERHEAD_TRIANGLES (budget.h).
         m_triangles += n_indices / 3 + MESH_OVERHEAD_TRIANGLES;
         if (m_triangles > m_limits.max_triangles)
-            return m_sink.too_large(where, "the asset holds at least " +
-                                               std::to_string(m_triangles) +
-                                               " triangles, each mesh counted with " +
-                                               std::to_string(MESH_OVERHEAD_TRIANGLES) +
-                                               " more; the scene has room for " +
-                                               std::to_string(m_limits.max_triangles) +
-                                               " (max_scene_triangles)");
+            return m_sink.too_large(
+                where, "the asset holds at least " + std::to_string(m_triangles) +
+                           " triangles, each mesh counted with " +
+                           std::to_string(MESH_OVERHEAD_TRIANGLES) +
+                           " more; the scene has room for " +
+                           std::to_string(m_limits.max_triangles) + " (max_scene_triangles)");
         mesh.triangles.resize(n_indices / 3);
         for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
             for (int k = 0; k < 3; ++k) {
                 const std::size_t at = 3 * t + std::size_t(k);
                 const uint32_t v = prim.indices >= 0 ? iv.index(at) : uint32_t(at);
-                if (v >= pv.count)
+                if (v >= vertices)
                     return m_sink.invalid(where + ".indices",
                                           "index " + std::to_string(at) + " is " +
                                               std::to_string(v) + ", outside the " +
-                                              std::to_string(pv.count) + " vertices");
+                                              std::to_string(vertices) + " vertices");
                 mesh.triangles[t][k] = v;
             }
         }
-        // Step 3: optional attributes, one per vertex.
-        if (auto ok = read_attribute(prim, "NORMAL", where, pv.count, 3, mesh); !ok)
-            return Unexpected(ok.error());
-        if (auto ok = read_attribute(prim, "TEXCOORD_0", where, pv.count, 2, mesh); !ok)
-            return Unexpected(ok.error());
-        if (auto ok = read_attribute(prim, "COLOR_0", where, pv.count, 3, mesh); !ok)
-            return Unexpected(ok.error());
-        return mesh;
+        return {};
     }
 
     Expected<void, AssetError> read_attribute(const tinygltf::Primitive& prim, const char* name,
@@ -561,8 +569,9 @@ private:
                                           std::to_string(count) + " nodes)");
             const std::string where = "nodes[" + std::to_string(g) + "]";
             if (seen[std::size_t(g)])
-                return m_sink.invalid(where, "is reached twice (a cycle, or a node with two "
-                                             "parents)");
+                return m_sink.invalid(where,
+                                      "is reached twice (a cycle, or a node with two "
+                                      "parents)");
             seen[std::size_t(g)] = true;
             const tinygltf::Node& n = m_model.nodes[std::size_t(g)];
             AssetNode node;
@@ -620,8 +629,8 @@ Imported<Asset> import_gltf(std::span<const uint8_t> bytes, bool binary, const s
                : std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size());
     const JsonShape shape = json_shape(json, limits.max_json_depth);
     if (shape.deepest > limits.max_json_depth)
-        return sink.invalid("", "JSON nested deeper than " +
-                                    std::to_string(limits.max_json_depth) + " levels");
+        return sink.invalid(
+            "", "JSON nested deeper than " + std::to_string(limits.max_json_depth) + " levels");
     // Each primitive becomes a mesh, which costs MESH_OVERHEAD_TRIANGLES of the budget at
     // least: too many are refused before tinygltf holds a model of every one.
     if (shape.primitives * MESH_OVERHEAD_TRIANGLES > limits.max_triangles)
@@ -655,9 +664,9 @@ Imported<Asset> import_gltf(std::span<const uint8_t> bytes, bool binary, const s
         return sink.invalid("", "not valid glTF: " + first_line(err.empty() ? warn : err));
     }
     if (!model.extensionsRequired.empty())
-        return sink.unsupported("extensionsRequired", "extension " +
-                                                          model.extensionsRequired.front() +
-                                                          " is not supported");
+        return sink.unsupported(
+            "extensionsRequired",
+            "extension " + model.extensionsRequired.front() + " is not supported");
     // Step 3: the model into the intermediate form, every reference checked.
     return GltfReader(model, sink, limits).read();
 }

@@ -129,8 +129,9 @@ Imported<PlyHeader> read_header(std::string_view text, const ErrorSink& sink) {
                 p.type = *t;
                 p.name = words[2];
             } else {
-                return sink.invalid(where, "expected 'property <type> <name>' or 'property list "
-                                           "<count type> <type> <name>'");
+                return sink.invalid(where,
+                                    "expected 'property <type> <name>' or 'property list "
+                                    "<count type> <type> <name>'");
             }
             h.elements.back().properties.push_back(std::move(p));
         } else {
@@ -256,6 +257,169 @@ VertexSlots vertex_slots(const PlyElement& e) {
     return s;
 }
 
+/// What one element's rows feed: the vertex attributes, or the face list.
+struct ElementPlan {
+    std::string where;  ///< "element face"
+    bool is_vertex = false;
+    bool is_face = false;
+    VertexSlots slots;
+    int face_list = -1;  ///< the face element's vertex_indices property
+};
+
+/// Reads a PLY body element by element into one mesh.
+class PlyBody {
+public:
+    PlyBody(const PlyHeader& header, std::span<const uint8_t> bytes, const std::string& file,
+            const ImportLimits& limits)
+        : m_in(bytes.subspan(header.body), header.encoding), m_sink(file), m_limits(limits) {
+        m_mesh.name = file;
+    }
+
+    /// Step 1: the declared count must fit the bytes that follow (each element takes at least
+    /// one byte per property) and, for vertices and faces, the budget.
+    Imported<ElementPlan> plan(const PlyElement& e) {
+        ElementPlan plan{.where = "element " + e.name,
+                         .is_vertex = e.name == "vertex",
+                         .is_face = e.name == "face"};
+        const std::string& where = plan.where;
+        if (e.count > 0 && e.properties.empty()) return m_sink.invalid(where, "has no properties");
+        if (e.count > m_in.remaining())
+            return m_sink.invalid(
+                where, "declares " + std::to_string(e.count) + " elements, more than the " +
+                           std::to_string(m_in.remaining()) + " bytes that follow");
+        if (plan.is_vertex) {
+            if (m_have_vertices) return m_sink.invalid(where, "a second vertex element");
+            m_have_vertices = true;
+            plan.slots = vertex_slots(e);
+            if (plan.slots.x < 0 || plan.slots.y < 0 || plan.slots.z < 0)
+                return m_sink.invalid(where, "has no x, y and z properties");
+            if (e.count > m_limits.max_vertices)
+                return m_sink.too_large(
+                    where, std::to_string(e.count) + " vertices; the scene has room for " +
+                               std::to_string(m_limits.max_vertices) + " (max_scene_vertices)");
+            m_mesh.positions.reserve(e.count);
+        }
+        if (plan.is_face) {
+            for (std::size_t i = 0; i < e.properties.size(); ++i)
+                if (e.properties[i].list && (e.properties[i].name == "vertex_indices" ||
+                                             e.properties[i].name == "vertex_index"))
+                    plan.face_list = int(i);
+            if (plan.face_list < 0) return m_sink.invalid(where, "has no vertex_indices list");
+            if (!is_integral(e.properties[std::size_t(plan.face_list)].type))
+                return m_sink.invalid(where, "vertex_indices must be integers");
+            if (e.count > m_limits.max_triangles)
+                return m_sink.too_large(where, std::to_string(e.count) +
+                                                   " faces; the scene has room for " +
+                                                   std::to_string(m_limits.max_triangles) +
+                                                   " triangles (max_scene_triangles)");
+            m_mesh.triangles.reserve(e.count);
+        }
+        return plan;
+    }
+
+    /// Step 2: every row, every property read (so that binary offsets stay right).
+    Imported<void> read(const PlyElement& e, const ElementPlan& plan) {
+        for (uint64_t i = 0; i < e.count; ++i) {
+            const std::string at = plan.where + " " + std::to_string(i);
+            if (auto ok = read_row(e, plan, at); !ok) return ok;
+            if (plan.is_vertex) add_vertex(plan.slots);
+            if (plan.is_face && m_corners.size() < 3) ++m_skipped_faces;
+            if (plan.is_face && m_corners.size() >= 3) {
+                for (std::size_t c = 1; c + 1 < m_corners.size(); ++c)
+                    m_mesh.triangles.push_back({m_corners[0], m_corners[c], m_corners[c + 1]});
+                if (m_mesh.triangles.size() > m_limits.max_triangles)
+                    return m_sink.too_large(plan.where, "more than " +
+                                                            std::to_string(m_limits.max_triangles) +
+                                                            " triangles (max_scene_triangles)");
+            }
+        }
+        return {};
+    }
+
+    /// Step 3: the mesh as an asset of one node, its optional attributes checked.
+    Imported<Asset> finish() {
+        if (!m_have_vertices) return m_sink.invalid("header", "has no vertex element");
+        if (m_mesh.triangles.empty())
+            return m_sink.invalid("element face", "no faces: point clouds are not imported");
+        Asset asset;
+        if (m_skipped_faces)
+            asset.warnings.push_back(std::to_string(m_skipped_faces) +
+                                     " faces with fewer than 3 corners skipped");
+        // Non-finite optional attributes are dropped rather than refusing the whole file.
+        if (!std::all_of(m_mesh.normals.begin(), m_mesh.normals.end(),
+                         [](const Vec3& n) { return is_finite(n); })) {
+            m_mesh.normals.clear();
+            asset.warnings.push_back("normals dropped: some are not finite");
+        }
+        AssetNode root;
+        root.name = m_mesh.name;
+        root.meshes = {0};
+        asset.meshes.push_back(std::move(m_mesh));
+        asset.nodes.push_back(std::move(root));
+        if (auto ok = check_budget(asset, m_limits, m_sink); !ok) return Unexpected(ok.error());
+        if (auto ok = validate_asset(asset, m_sink); !ok) return Unexpected(ok.error());
+        return asset;
+    }
+
+private:
+    /// One row's properties into m_row (scalars) and m_corners (the face list).
+    Imported<void> read_row(const PlyElement& e, const ElementPlan& plan, const std::string& at) {
+        for (std::size_t k = 0; k < e.properties.size(); ++k) {
+            const PlyProperty& p = e.properties[k];
+            double value = 0.0;
+            if (!p.list) {
+                if (!m_in.read(p.type, value))
+                    return m_sink.invalid(at,
+                                          "property " + p.name + ": missing or malformed value");
+                if (k < std::size(m_row)) m_row[k] = value;
+                continue;
+            }
+            double n = 0.0;
+            if (!m_in.read(p.count_type, n) || n < 0 || n > MAX_FACE_CORNERS)
+                return m_sink.invalid(at, "property " + p.name + ": bad list length");
+            const bool keep = plan.is_face && int(k) == plan.face_list;
+            if (keep) m_corners.clear();
+            for (uint32_t c = 0; c < uint32_t(n); ++c) {
+                if (!m_in.read(p.type, value))
+                    return m_sink.invalid(at,
+                                          "property " + p.name + ": missing or malformed value");
+                if (!keep) continue;
+                if (value < 0 || value >= double(m_mesh.positions.size()))
+                    return m_sink.invalid(at, "vertex index " + std::to_string(int64_t(value)) +
+                                                  " is outside the " +
+                                                  std::to_string(m_mesh.positions.size()) +
+                                                  " vertices read before it");
+                m_corners.push_back(uint32_t(value));
+            }
+        }
+        return {};
+    }
+
+    void add_vertex(const VertexSlots& slots) {
+        auto get = [&](int slot) {
+            return slot >= 0 && std::size_t(slot) < std::size(m_row) ? float(m_row[slot]) : 0.0f;
+        };
+        m_mesh.positions.push_back({get(slots.x), get(slots.y), get(slots.z)});
+        if (slots.nx >= 0 && slots.ny >= 0 && slots.nz >= 0)
+            m_mesh.normals.push_back({get(slots.nx), get(slots.ny), get(slots.nz)});
+        if (slots.r >= 0 && slots.g >= 0 && slots.b >= 0)
+            m_mesh.colors.push_back(
+                glm::clamp(Vec3(get(slots.r), get(slots.g), get(slots.b)) * slots.color_scale,
+                           Vec3(0.0f), Vec3(1.0f)));
+        // PLY's v, like OBJ's, grows upward; the engine's grows downward.
+        if (slots.u >= 0 && slots.v >= 0) m_mesh.uvs.push_back({get(slots.u), 1.0f - get(slots.v)});
+    }
+
+    ValueReader m_in;
+    ErrorSink m_sink;
+    const ImportLimits& m_limits;
+    AssetMesh m_mesh;
+    bool m_have_vertices = false;
+    uint64_t m_skipped_faces = 0;
+    double m_row[64] = {};
+    std::vector<uint32_t> m_corners;
+};
+
 }  // namespace
 
 Imported<Asset> import_ply(std::span<const uint8_t> bytes, const std::string& file,
@@ -264,141 +428,13 @@ Imported<Asset> import_ply(std::span<const uint8_t> bytes, const std::string& fi
     auto parsed = read_header(
         std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()), sink);
     if (!parsed) return Unexpected(parsed.error());
-    const PlyHeader& header = parsed.value();
-    ValueReader in(bytes.subspan(header.body), header.encoding);
-
-    Asset asset;
-    AssetMesh mesh;
-    mesh.name = file;
-    bool have_vertices = false;
-    uint64_t skipped_faces = 0;
-    for (const PlyElement& e : header.elements) {
-        const std::string where = "element " + e.name;
-        // Step 1: the declared count must fit the bytes that follow (each element takes at
-        // least one byte per property) and, for vertices and faces, the budget.
-        if (e.count > 0 && e.properties.empty())
-            return sink.invalid(where, "has no properties");
-        if (e.count > in.remaining())
-            return sink.invalid(where, "declares " + std::to_string(e.count) +
-                                           " elements, more than the " +
-                                           std::to_string(in.remaining()) + " bytes that follow");
-        const bool is_vertex = e.name == "vertex";
-        const bool is_face = e.name == "face";
-        VertexSlots slots;
-        int face_list = -1;
-        if (is_vertex) {
-            if (have_vertices) return sink.invalid(where, "a second vertex element");
-            have_vertices = true;
-            slots = vertex_slots(e);
-            if (slots.x < 0 || slots.y < 0 || slots.z < 0)
-                return sink.invalid(where, "has no x, y and z properties");
-            if (e.count > limits.max_vertices)
-                return sink.too_large(where, std::to_string(e.count) +
-                                                 " vertices; the scene has room for " +
-                                                 std::to_string(limits.max_vertices) +
-                                                 " (max_scene_vertices)");
-            mesh.positions.reserve(e.count);
-        }
-        if (is_face) {
-            for (std::size_t i = 0; i < e.properties.size(); ++i)
-                if (e.properties[i].list && (e.properties[i].name == "vertex_indices" ||
-                                             e.properties[i].name == "vertex_index"))
-                    face_list = int(i);
-            if (face_list < 0)
-                return sink.invalid(where, "has no vertex_indices list");
-            if (!is_integral(e.properties[std::size_t(face_list)].type))
-                return sink.invalid(where, "vertex_indices must be integers");
-            if (e.count > limits.max_triangles)
-                return sink.too_large(where, std::to_string(e.count) +
-                                                 " faces; the scene has room for " +
-                                                 std::to_string(limits.max_triangles) +
-                                                 " triangles (max_scene_triangles)");
-            mesh.triangles.reserve(e.count);
-        }
-        // Step 2: every element, every property read (so that binary offsets stay right).
-        double row[64];
-        std::vector<uint32_t> corners;
-        for (uint64_t i = 0; i < e.count; ++i) {
-            const std::string at = where + " " + std::to_string(i);
-            for (std::size_t k = 0; k < e.properties.size(); ++k) {
-                const PlyProperty& p = e.properties[k];
-                double value = 0.0;
-                if (!p.list) {
-                    if (!in.read(p.type, value))
-                        return sink.invalid(at, "property " + p.name +
-                                                    ": missing or malformed value");
-                    if (k < std::size(row)) row[k] = value;
-                    continue;
-                }
-                double n = 0.0;
-                if (!in.read(p.count_type, n) || n < 0 || n > MAX_FACE_CORNERS)
-                    return sink.invalid(at, "property " + p.name + ": bad list length");
-                const bool keep = is_face && int(k) == face_list;
-                if (keep) corners.clear();
-                for (uint32_t c = 0; c < uint32_t(n); ++c) {
-                    if (!in.read(p.type, value))
-                        return sink.invalid(at, "property " + p.name +
-                                                    ": missing or malformed value");
-                    if (!keep) continue;
-                    if (value < 0 || value >= double(mesh.positions.size()))
-                        return sink.invalid(at, "vertex index " + std::to_string(int64_t(value)) +
-                                                    " is outside the " +
-                                                    std::to_string(mesh.positions.size()) +
-                                                    " vertices read before it");
-                    corners.push_back(uint32_t(value));
-                }
-            }
-            if (is_vertex) {
-                auto get = [&](int slot) {
-                    return slot >= 0 && std::size_t(slot) < std::size(row) ? float(row[slot])
-                                                                            : 0.0f;
-                };
-                mesh.positions.push_back({get(slots.x), get(slots.y), get(slots.z)});
-                if (slots.nx >= 0 && slots.ny >= 0 && slots.nz >= 0)
-                    mesh.normals.push_back({get(slots.nx), get(slots.ny), get(slots.nz)});
-                if (slots.r >= 0 && slots.g >= 0 && slots.b >= 0)
-                    mesh.colors.push_back(glm::clamp(
-                        Vec3(get(slots.r), get(slots.g), get(slots.b)) * slots.color_scale,
-                        Vec3(0.0f), Vec3(1.0f)));
-                // PLY's v, like OBJ's, grows upward; the engine's grows downward.
-                if (slots.u >= 0 && slots.v >= 0)
-                    mesh.uvs.push_back({get(slots.u), 1.0f - get(slots.v)});
-            }
-            if (is_face) {
-                if (corners.size() < 3) {
-                    ++skipped_faces;
-                    continue;
-                }
-                for (std::size_t c = 1; c + 1 < corners.size(); ++c)
-                    mesh.triangles.push_back({corners[0], corners[c], corners[c + 1]});
-                if (mesh.triangles.size() > limits.max_triangles)
-                    return sink.too_large(where, "more than " +
-                                                     std::to_string(limits.max_triangles) +
-                                                     " triangles (max_scene_triangles)");
-            }
-        }
+    PlyBody body(parsed.value(), bytes, file, limits);
+    for (const PlyElement& e : parsed.value().elements) {
+        auto plan = body.plan(e);
+        if (!plan) return Unexpected(plan.error());
+        if (auto ok = body.read(e, plan.value()); !ok) return Unexpected(ok.error());
     }
-    if (!have_vertices) return sink.invalid("header", "has no vertex element");
-    if (mesh.triangles.empty())
-        return sink.invalid("element face", "no faces: point clouds are not imported");
-    if (skipped_faces)
-        asset.warnings.push_back(std::to_string(skipped_faces) +
-                                 " faces with fewer than 3 corners skipped");
-    // Non-finite optional attributes are dropped rather than refusing the whole file.
-    for (const Vec3& n : mesh.normals)
-        if (!is_finite(n)) {
-            mesh.normals.clear();
-            asset.warnings.push_back("normals dropped: some are not finite");
-            break;
-        }
-    asset.meshes.push_back(std::move(mesh));
-    AssetNode root;
-    root.name = file;
-    root.meshes = {0};
-    asset.nodes.push_back(std::move(root));
-    if (auto ok = check_budget(asset, limits, sink); !ok) return Unexpected(ok.error());
-    if (auto ok = validate_asset(asset, sink); !ok) return Unexpected(ok.error());
-    return asset;
+    return body.finish();
 }
 
 }  // namespace strata::assets

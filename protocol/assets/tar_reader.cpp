@@ -139,136 +139,199 @@ std::string printable_name(std::string_view name) {
     return out;
 }
 
-Imported<std::vector<TarEntry>> read_tar(std::span<const uint8_t> body, const std::string& archive,
-                                         const TarLimits& limits) {
-    const ErrorSink sink(archive);
-    std::vector<TarEntry> entries;
-    std::set<std::string, std::less<>> seen;
-    std::optional<std::string> long_name;  // GNU 'L' or pax "path", for the next header
-    uint64_t offset = 0, headers = 0, total = 0;
-    const uint64_t size = body.size();
-    for (;;) {
-        const std::string at = "header at byte " + std::to_string(offset);
-        // Step 1: one header block, or the end-of-archive block.
-        if (offset == size)
-            return sink.invalid(at,
-                                "the archive ends without its end-of-archive block "
-                                "(truncated?)");
-        if (size - offset < BLOCK)
-            return sink.invalid(at, "the archive ends inside a header (truncated?)");
-        const uint8_t* h = body.data() + offset;
-        if (all_zero(h)) {
-            if (long_name)
-                return sink.invalid(at, "a long name ('" + printable_name(*long_name) +
-                                            "') with no entry after it");
-            break;
+namespace {
+
+/// One header and the data it announces.
+struct TarHeader {
+    const uint8_t* block = nullptr;
+    char type = '0';
+    std::string at;        ///< "header at byte N"
+    std::string raw_name;  ///< as stored (prefix, long name and all)
+    std::string where;     ///< the entry's label, or `at` while it has no name
+    uint64_t size = 0;
+    uint64_t offset = 0;  ///< of the header block
+    std::span<const uint8_t> data;
+};
+
+/// What a header's type means for the walk.
+enum class Step : uint8_t { Keep, Skip, End };
+
+/// Walks an archive's headers in order.
+class TarWalk {
+public:
+    TarWalk(std::span<const uint8_t> body, const std::string& archive, const TarLimits& limits)
+        : m_body(body), m_sink(archive), m_limits(limits) {}
+
+    Imported<std::vector<TarEntry>> run() {
+        for (;;) {
+            TarHeader h;
+            auto step = next_header(h);
+            if (!step) return Unexpected(step.error());
+            if (step.value() == Step::End) break;
+            if (step = by_type(h); !step) return Unexpected(step.error());
+            if (step.value() == Step::Skip) continue;
+            if (auto ok = keep(h); !ok) return Unexpected(ok.error());
         }
-        if (++headers > limits.max_entries)
-            return sink.too_large(
-                at, "more than " + std::to_string(limits.max_entries) + " entries in one archive");
-        // Step 2: the checksum, the magic and the size, each against the body.
-        const auto stored = number(h, CHECKSUM);
-        const auto [unsigned_sum, signed_sum] = header_sums(h);
-        if (!stored)
-            return sink.invalid(at,
-                                "its checksum field is not an octal number (not a tar "
-                                "archive?)");
-        if (int64_t(*stored) != unsigned_sum && int64_t(*stored) != signed_sum)
-            return sink.invalid(at, "header checksum mismatch: it says " + std::to_string(*stored) +
-                                        ", the header sums to " + std::to_string(unsigned_sum) +
-                                        " (damaged, or not a tar archive)");
-        const std::string_view magic = text(h, {MAGIC.offset, 5});
-        if (magic != "ustar")
-            return sink.invalid(at,
-                                "not a ustar header (only POSIX ustar, pax and GNU tar "
-                                "archives are read)");
-        const char type = char(h[TYPEFLAG]);
-        std::string raw_name(text(h, NAME));
-        // POSIX ustar ("ustar\0") splits long names into prefix and name; GNU ("ustar ") uses
-        // that space for other fields and writes long names as 'L' entries instead.
-        if (h[MAGIC.offset + 5] == 0) {
-            if (const std::string_view prefix = text(h, PREFIX); !prefix.empty())
-                raw_name = std::string(prefix) + "/" + raw_name;
+        return std::move(m_entries);
+    }
+
+private:
+    /// Step 1: one header block, or the end-of-archive block; then its checksum, magic and
+    /// size, each against the body.
+    Imported<Step> next_header(TarHeader& h) {
+        const uint64_t size = m_body.size();
+        h.offset = m_offset;
+        h.at = "header at byte " + std::to_string(m_offset);
+        const std::string& at = h.at;
+        if (m_offset == size)
+            return m_sink.invalid(at,
+                                  "the archive ends without its end-of-archive block "
+                                  "(truncated?)");
+        if (size - m_offset < BLOCK)
+            return m_sink.invalid(at, "the archive ends inside a header (truncated?)");
+        h.block = m_body.data() + m_offset;
+        if (all_zero(h.block)) {
+            if (m_long_name)
+                return m_sink.invalid(at, "a long name ('" + printable_name(*m_long_name) +
+                                              "') with no entry after it");
+            return Step::End;
         }
-        if (long_name && type != 'L' && type != 'x' && type != 'g')
-            raw_name = *std::exchange(long_name, {});
-        const std::string where = raw_name.empty() ? at : entry_label(raw_name);
-        const auto entry_size = number(h, SIZE);
-        if (!entry_size) return sink.invalid(where, "its size field is not an octal number");
-        const uint64_t data_offset = offset + BLOCK;
+        if (++m_headers > m_limits.max_entries)
+            return m_sink.too_large(at, "more than " + std::to_string(m_limits.max_entries) +
+                                            " entries in one archive");
+        if (auto ok = check_header(h); !ok) return Unexpected(ok.error());
+        const auto entry_size = number(h.block, SIZE);
+        if (!entry_size) return m_sink.invalid(h.where, "its size field is not an octal number");
+        const uint64_t data_offset = m_offset + BLOCK;
         const uint64_t left = size - data_offset;
         if (*entry_size > left)
-            return sink.invalid(where, "its size (" + std::to_string(*entry_size) +
-                                           " bytes) runs past the end of the archive (" +
-                                           std::to_string(left) + " bytes left; truncated?)");
+            return m_sink.invalid(h.where, "its size (" + std::to_string(*entry_size) +
+                                               " bytes) runs past the end of the archive (" +
+                                               std::to_string(left) + " bytes left; truncated?)");
         const uint64_t padded = (*entry_size + BLOCK - 1) / BLOCK * BLOCK;
         if (padded > left)
-            return sink.invalid(where, "the archive ends inside its last block (truncated?)");
-        const std::span<const uint8_t> data = body.subspan(data_offset, *entry_size);
-        const std::string_view data_text(reinterpret_cast<const char*>(data.data()), data.size());
-        offset = data_offset + padded;
+            return m_sink.invalid(h.where, "the archive ends inside its last block (truncated?)");
+        h.size = *entry_size;
+        h.data = m_body.subspan(data_offset, *entry_size);
+        m_offset = data_offset + padded;
+        return Step::Keep;
+    }
 
-        // Step 3: by type: regular files are kept, directories and global headers skipped,
-        // long names remembered for the next header, links and devices refused.
-        switch (type) {
+    /// The checksum and the magic; the entry's type and name.
+    Imported<void> check_header(TarHeader& h) {
+        const auto stored = number(h.block, CHECKSUM);
+        const auto [unsigned_sum, signed_sum] = header_sums(h.block);
+        if (!stored)
+            return m_sink.invalid(h.at,
+                                  "its checksum field is not an octal number (not a tar "
+                                  "archive?)");
+        if (int64_t(*stored) != unsigned_sum && int64_t(*stored) != signed_sum)
+            return m_sink.invalid(h.at, "header checksum mismatch: it says " +
+                                            std::to_string(*stored) + ", the header sums to " +
+                                            std::to_string(unsigned_sum) +
+                                            " (damaged, or not a tar archive)");
+        if (text(h.block, {MAGIC.offset, 5}) != "ustar")
+            return m_sink.invalid(h.at,
+                                  "not a ustar header (only POSIX ustar, pax and GNU tar "
+                                  "archives are read)");
+        h.type = char(h.block[TYPEFLAG]);
+        h.raw_name = std::string(text(h.block, NAME));
+        // POSIX ustar ("ustar\0") splits long names into prefix and name; GNU ("ustar ") uses
+        // that space for other fields and writes long names as 'L' entries instead.
+        if (h.block[MAGIC.offset + 5] == 0) {
+            if (const std::string_view prefix = text(h.block, PREFIX); !prefix.empty())
+                h.raw_name = std::string(prefix) + "/" + h.raw_name;
+        }
+        if (m_long_name && h.type != 'L' && h.type != 'x' && h.type != 'g')
+            h.raw_name = *std::exchange(m_long_name, {});
+        h.where = h.raw_name.empty() ? h.at : entry_label(h.raw_name);
+        return {};
+    }
+
+    /// Step 2: by type: regular files are kept, directories and global headers skipped, long
+    /// names remembered for the next header, links and devices refused.
+    Imported<Step> by_type(const TarHeader& h) {
+        switch (h.type) {
             case '0':
             case '\0':
             case '7':
-                break;
+                return Step::Keep;
             case '5':
             case 'g':
-                continue;
+                return Step::Skip;
             case 'L':
-            case 'x': {
-                if (*entry_size > MAX_META_BYTES)
-                    return sink.invalid(at, "a long name or pax header of more than " +
-                                                std::to_string(MAX_META_BYTES) + " bytes");
-                if (type == 'L') {
-                    long_name = std::string(data_text.substr(0, data_text.find('\0')));
-                    continue;
-                }
-                bool size_record = false;
-                auto path = pax_path(data_text, size_record);
-                if (!path) return sink.invalid(at, "a malformed pax extended header");
-                if (size_record)
-                    return sink.unsupported(at,
-                                            "a pax 'size' record (entries over 8 GiB) is "
-                                            "not read");
-                if (!path->empty()) long_name = std::move(*path);
-                continue;
-            }
+            case 'x':
+                return long_name(h);
             case '1':
             case '2':
             case 'K':
-                return sink.unsupported(
-                    where, std::string(type == '1' ? "is a hard link" : "is a symbolic link") +
-                               (type == 'K' ? std::string()
-                                            : " to '" + printable_name(text(h, LINKNAME)) + "'") +
-                               ": links are refused; archive the file itself (tar -h)");
+                return m_sink.unsupported(
+                    h.where,
+                    std::string(h.type == '1' ? "is a hard link" : "is a symbolic link") +
+                        (h.type == 'K' ? std::string()
+                                       : " to '" + printable_name(text(h.block, LINKNAME)) + "'") +
+                        ": links are refused; archive the file itself (tar -h)");
             case '3':
             case '4':
             case '6':
-                return sink.unsupported(
-                    where, type == '6' ? "is a FIFO: refused" : "is a device file: refused");
+                return m_sink.unsupported(
+                    h.where, h.type == '6' ? "is a FIFO: refused" : "is a device file: refused");
             default:
-                return sink.unsupported(where, "has entry type '" +
-                                                   printable_name(std::string_view(&type, 1)) +
-                                                   "': only regular files and directories are "
-                                                   "read");
+                return m_sink.unsupported(
+                    h.where, "has entry type '" + printable_name(std::string_view(&h.type, 1)) +
+                                 "': only regular files and directories "
+                                 "are read");
         }
-        // Step 4: a regular file: its name normalised and unique, its size counted.
-        NormalName name = normalize_entry_name(raw_name);
-        if (!name.refusal.empty()) return sink.invalid(where, name.refusal);
-        if (!seen.insert(name.path).second)
-            return sink.invalid(entry_label(name.path), "appears twice in the archive");
-        total += *entry_size;
-        if (total > limits.max_total_bytes)
-            return sink.too_large(entry_label(name.path),
-                                  "the archive's files add up to more than " +
-                                      std::to_string(limits.max_total_bytes) + " bytes");
-        entries.push_back({std::move(name.path), data, data_offset - BLOCK});
     }
-    return entries;
+
+    /// A GNU long name ('L') or a pax extended header ('x'): the next entry's name.
+    Imported<Step> long_name(const TarHeader& h) {
+        const std::string_view data(reinterpret_cast<const char*>(h.data.data()), h.data.size());
+        if (h.size > MAX_META_BYTES)
+            return m_sink.invalid(h.at, "a long name or pax header of more than " +
+                                            std::to_string(MAX_META_BYTES) + " bytes");
+        if (h.type == 'L') {
+            m_long_name = std::string(data.substr(0, data.find('\0')));
+            return Step::Skip;
+        }
+        bool size_record = false;
+        auto path = pax_path(data, size_record);
+        if (!path) return m_sink.invalid(h.at, "a malformed pax extended header");
+        if (size_record)
+            return m_sink.unsupported(h.at, "a pax 'size' record (entries over 8 GiB) is not read");
+        if (!path->empty()) m_long_name = std::move(*path);
+        return Step::Skip;
+    }
+
+    /// Step 3: a regular file: its name normalised and unique, its size counted.
+    Imported<void> keep(const TarHeader& h) {
+        NormalName name = normalize_entry_name(h.raw_name);
+        if (!name.refusal.empty()) return m_sink.invalid(h.where, name.refusal);
+        if (!m_seen.insert(name.path).second)
+            return m_sink.invalid(entry_label(name.path), "appears twice in the archive");
+        m_total += h.size;
+        if (m_total > m_limits.max_total_bytes)
+            return m_sink.too_large(entry_label(name.path),
+                                    "the archive's files add up to more than " +
+                                        std::to_string(m_limits.max_total_bytes) + " bytes");
+        m_entries.push_back({std::move(name.path), h.data, h.offset});
+        return {};
+    }
+
+    std::span<const uint8_t> m_body;
+    ErrorSink m_sink;
+    const TarLimits& m_limits;
+    std::vector<TarEntry> m_entries;
+    std::set<std::string, std::less<>> m_seen;
+    std::optional<std::string> m_long_name;  // GNU 'L' or pax "path", for the next header
+    uint64_t m_offset = 0, m_headers = 0, m_total = 0;
+};
+
+}  // namespace
+
+Imported<std::vector<TarEntry>> read_tar(std::span<const uint8_t> body, const std::string& archive,
+                                         const TarLimits& limits) {
+    return TarWalk(body, archive, limits).run();
 }
 
 }  // namespace strata::assets
