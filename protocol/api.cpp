@@ -41,7 +41,8 @@ constexpr std::size_t MAX_REPORT_HEADER = 60 * 1024;
 /// `released`, and says so with `"entries_truncated": true`.
 std::string report_header(const RebuildReport& report) {
     std::string text = dump_json(report_to_json(report));
-    std::size_t keep = std::max({report.rebuilt.size(), report.refit.size(), report.released.size()});
+    std::size_t keep =
+        std::max({report.rebuilt.size(), report.refit.size(), report.released.size()});
     while (text.size() > MAX_REPORT_HEADER && keep > 0) {
         keep /= 2;
         RebuildReport shorter = report;
@@ -198,7 +199,7 @@ ApiResponse post_edits(Engine& engine, std::string body, std::optional<std::stri
 
     auto parsed = parse_edit_batch(body, limits.json, limits.max_batch_edits);
     body = {};  // the DOM and the batch hold what is needed; free the text early
-    if (!parsed) return problem_response(problem_from(parsed.error()));
+    if (!parsed) return problem_response(parsed.error());
     ParsedBatch& batch = parsed.value();
 
     auto applied = apply ? (*apply)(std::move(batch.batch), condition->version)
@@ -239,10 +240,10 @@ ApiResponse post_render(Engine& engine, std::string_view body, const ApiLimits& 
                         CancelToken* cancel, const SplitRender* split_render) {
     // An empty body means every default, like GET without a query.
     auto doc = body.empty() ? Parsed<Json>(Json::object()) : parse_json(body, limits.json);
-    if (!doc) return problem_response(problem_from(doc.error()));
+    if (!doc) return problem_response(doc.error());
     uint32_t split = 1;
     auto spec = parse_render_body(doc.value(), &split);
-    if (!spec) return problem_response(problem_from(spec.error()));
+    if (!spec) return problem_response(spec.error());
     return render(engine, spec.value(), limits, cancel, split, split_render);
 }
 
@@ -251,7 +252,7 @@ ApiResponse get_render(Engine& engine, const std::multimap<std::string, std::str
                        const SplitRender* split_render) {
     uint32_t split = 1;
     auto spec = parse_render_query(query, &split);
-    if (!spec) return problem_response(problem_from(spec.error()));
+    if (!spec) return problem_response(spec.error());
     return render(engine, spec.value(), limits, cancel, split, split_render);
 }
 
@@ -262,8 +263,8 @@ ApiResponse get_scene(const Engine& engine) {
 
 ApiResponse get_scene_object(const Engine& engine, SceneObject kind, std::string_view id) {
     using ToJson = std::optional<Json> (*)(const Scene&, std::string_view);
-    static constexpr ToJson TO_JSON[] = {mesh_to_json, instance_to_json, material_to_json,
-                                         group_to_json, light_to_json, texture_to_json};
+    static constexpr ToJson TO_JSON[] = {mesh_to_json,  instance_to_json, material_to_json,
+                                         group_to_json, light_to_json,    texture_to_json};
     static constexpr const char* NAMES[] = {"mesh",  "instance", "material",
                                             "group", "light",    "texture"};
     // One read lock: the document and its version belong together.

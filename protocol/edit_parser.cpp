@@ -30,7 +30,7 @@ Edit parse_edit(FieldReader& r, const Json& v, const std::string& ptr, EditSourc
 }
 
 /// Parses the whole batch; throws the first schema error, returns the first value error.
-std::optional<RequestError> parse_into(const Json& body, ParsedBatch& out) {
+std::optional<Problem> parse_into(const Json& body, ParsedBatch& out) {
     static const MemberRule BATCH = schema_members("");
     FieldReader r;
     r.expect_object(body, "", BATCH);
@@ -53,7 +53,7 @@ Parsed<ParsedBatch> parse_edit_batch(const Json& body) {
     try {
         if (auto value_error = parse_into(body, out)) return Unexpected(std::move(*value_error));
     } catch (const RequestFailure& f) {
-        return Unexpected(f.error());
+        return Unexpected(f.problem());
     }
     return out;
 }
@@ -64,13 +64,12 @@ Parsed<ParsedBatch> parse_edit_batch(std::string_view text, const JsonLimits& li
     if (!doc) return Unexpected(doc.error());
     if (const auto it = doc->find("edits");
         doc->is_object() && it != doc->end() && it->is_array() && it->size() > max_edits) {
-        RequestError e;
-        e.kind = RequestErrorKind::TooLarge;
-        e.code = ErrorCode::TooLarge;
-        e.message = "the batch holds " + std::to_string(it->size()) + " edits, more than " +
-                    std::to_string(max_edits) + " (--max-batch-edits): split it";
-        e.pointer = "/edits";
-        return Unexpected(std::move(e));
+        Problem p =
+            make_problem(ProblemType::TooLarge,
+                         "the batch holds " + std::to_string(it->size()) + " edits, more than " +
+                             std::to_string(max_edits) + " (--max-batch-edits): split it");
+        p.pointer = "/edits";
+        return Unexpected(std::move(p));
     }
     return parse_edit_batch(doc.value());
 }

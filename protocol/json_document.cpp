@@ -36,20 +36,17 @@ public:
         return root;
     }
 
-    RequestError take_error() { return std::move(*m_error); }
+    Problem take_error() { return std::move(*m_error); }
 
 private:
     // Step: errors and whitespace ----------------------------------------------------------------
 
-    bool fail(const std::string& what, RequestErrorKind kind = RequestErrorKind::Syntax) {
+    bool fail(const std::string& what, ProblemType type = ProblemType::MalformedJson) {
         if (!m_error) {
-            RequestError e;
-            e.kind = kind;
-            e.message =
-                kind == RequestErrorKind::Syntax
-                    ? "malformed JSON at byte " + std::to_string(m_p - m_begin) + ": " + what
-                    : what;
-            m_error = std::move(e);
+            m_error = make_problem(
+                type, type == ProblemType::MalformedJson
+                          ? "malformed JSON at byte " + std::to_string(m_p - m_begin) + ": " + what
+                          : what);
         }
         return false;
     }
@@ -73,7 +70,7 @@ private:
         return fail("the JSON document holds more than the limit of " +
                         std::to_string(m_limits.max_values) +
                         " values (--max-json-values): split it into smaller requests",
-                    RequestErrorKind::TooLarge);
+                    ProblemType::TooLarge);
     }
 
     bool value(Json& out) {
@@ -115,7 +112,7 @@ private:
         if (++m_depth > m_limits.max_depth)
             return fail(
                 "JSON nesting is deeper than the limit of " + std::to_string(m_limits.max_depth),
-                RequestErrorKind::TooDeep);
+                ProblemType::NestingTooDeep);
         return true;
     }
 
@@ -170,7 +167,7 @@ private:
             if (++count > m_limits.max_array_elements)
                 return fail("an array has more than the limit of " +
                                 std::to_string(m_limits.max_array_elements) + " elements",
-                            RequestErrorKind::TooLarge);
+                            ProblemType::TooLarge);
             const bool numeric = m_p != m_end && (*m_p == '-' || is_digit(*m_p));
             if (packing && numeric) {
                 double d;
@@ -424,7 +421,7 @@ private:
     const JsonLimits& m_limits;
     std::size_t m_depth = 0;
     std::size_t m_values = 0;  ///< DOM values so far (packed numbers not counted)
-    std::optional<RequestError> m_error;
+    std::optional<Problem> m_error;
 };
 
 }  // namespace

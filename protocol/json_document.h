@@ -14,7 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "protocol/request_error.h"
+#include "protocol/problem.h"
 
 namespace strata::protocol {
 

@@ -62,22 +62,11 @@ std::string child(const std::string& ptr, std::size_t index) {
 
 void FieldReader::record_value_error(std::string pointer, std::string message, ErrorCode code) {
     if (m_value_error) return;
-    RequestError e;
-    e.kind = RequestErrorKind::Value;
-    e.code = code;
-    e.message = std::move(message);
-    e.pointer = std::move(pointer);
-    e.edit_index = m_edit_index;
-    m_value_error = std::move(e);
+    m_value_error = problem_at(problem_type_of(code), std::move(pointer), message, m_edit_index);
 }
 
 void FieldReader::schema_error(const std::string& ptr, std::string message) const {
-    RequestError e;
-    e.kind = RequestErrorKind::Schema;
-    e.message = std::move(message);
-    e.pointer = ptr;
-    e.edit_index = m_edit_index;
-    throw RequestFailure(std::move(e));
+    throw RequestFailure(problem_at(ProblemType::InvalidRequest, ptr, message, m_edit_index));
 }
 
 bool MemberRule::allows(std::string_view key) const {

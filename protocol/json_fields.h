@@ -43,7 +43,7 @@ public:
     std::size_t edit_index() const { return m_edit_index; }
 
     /// The first value error recorded, if any.
-    const std::optional<RequestError>& value_error() const { return m_value_error; }
+    const std::optional<Problem>& value_error() const { return m_value_error; }
     /// Records a value error unless one is already recorded.
     void record_value_error(std::string pointer, std::string message,
                             ErrorCode code = ErrorCode::InvalidArgument);
@@ -117,7 +117,7 @@ private:
     std::string base64_bytes(const Json& v, const std::string& ptr, std::size_t unit);
 
     std::size_t m_edit_index = Error::NO_INDEX;
-    std::optional<RequestError> m_value_error;
+    std::optional<Problem> m_value_error;
     uint64_t m_shape_triangles = 0;
 };
 

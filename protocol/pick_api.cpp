@@ -25,7 +25,7 @@ Json hit_to_json(const std::optional<PickHit>& hit) {
 /// Picks; `answer` turns the result into the body.
 template <class Answer>
 ApiResponse pick(Engine& engine, const Parsed<PickRequest>& request, Answer&& answer) {
-    if (!request) return problem_response(problem_from(request.error()));
+    if (!request) return problem_response(request.error());
     auto picked = engine.pick(request.value());
     if (!picked) return problem_response(problem_from(picked.error()));
     return with_etag(json_response(200, answer(picked.value())), picked.value().version);
@@ -41,7 +41,7 @@ ApiResponse get_pick(Engine& engine, const std::multimap<std::string, std::strin
 
 ApiResponse post_pick(Engine& engine, std::string_view body, const ApiLimits& limits) {
     auto doc = parse_json(body, limits.json);
-    if (!doc) return problem_response(problem_from(doc.error()));
+    if (!doc) return problem_response(doc.error());
     return pick(engine, parse_pick_body(doc.value()), [](const PickResult& r) {
         Json hits = Json::array();
         for (const auto& h : r.hits) hits.push_back(hit_to_json(h));

@@ -53,7 +53,7 @@ Parsed<PickRequest> read_with(const Json& body, Read&& read) {
         if (r.value_error()) return Unexpected(*r.value_error());
         return q;
     } catch (const RequestFailure& f) {
-        return Unexpected(f.error());
+        return Unexpected(f.problem());
     }
 }
 

@@ -7,7 +7,7 @@
 
 #include "engine/render/pick.h"
 #include "protocol/json_document.h"
-#include "protocol/request_error.h"
+#include "protocol/problem.h"
 
 namespace strata::protocol {
 

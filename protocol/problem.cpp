@@ -1,5 +1,8 @@
 #include "protocol/problem.h"
 
+#include "protocol/edit_parser.h"
+#include "protocol/json_document.h"
+
 namespace strata::protocol {
 
 namespace {
@@ -92,7 +95,7 @@ constexpr TypeInfo TYPES[] = {
 };
 static_assert(std::size(TYPES) == std::size_t(ProblemType::Internal) + 1);
 
-ProblemType type_of(ErrorCode code) {
+ProblemType type_of_code(ErrorCode code) {
     switch (code) {
         case ErrorCode::InvalidArgument:
             return ProblemType::InvalidValue;
@@ -164,35 +167,20 @@ Problem make_problem(ProblemType type, std::string detail) {
     return p;
 }
 
-Problem problem_from(const RequestError& e) {
-    ProblemType type = ProblemType::InvalidRequest;
-    switch (e.kind) {
-        case RequestErrorKind::Syntax:
-            type = ProblemType::MalformedJson;
-            break;
-        case RequestErrorKind::TooDeep:
-            type = ProblemType::NestingTooDeep;
-            break;
-        case RequestErrorKind::TooLarge:
-            type = ProblemType::TooLarge;
-            break;
-        case RequestErrorKind::Schema:
-            type = ProblemType::InvalidRequest;
-            break;
-        case RequestErrorKind::Value:
-            type = type_of(e.code);
-            break;
-    }
-    Problem p = make_problem(type, e.message);
-    p.edit_index = e.edit_index;
-    if (e.kind == RequestErrorKind::Schema || e.kind == RequestErrorKind::Value)
-        p.pointer = e.pointer;
-    if (!e.pointer.empty() && p.pointer) p.detail = e.pointer + ": " + e.message;
+Problem problem_at(ProblemType type, std::string pointer, const std::string& what,
+                   std::size_t edit_index) {
+    Problem p = make_problem(type, pointer.empty() ? what : pointer + ": " + what);
+    p.pointer = std::move(pointer);
+    p.edit_index = edit_index;
     return p;
 }
 
+ProblemType problem_type_of(ErrorCode code) {
+    return type_of_code(code);
+}
+
 Problem problem_from_batch_error(const Error& e, const std::vector<EditSource>& sources) {
-    Problem p = make_problem(type_of(e.code), e.message);
+    Problem p = make_problem(type_of_code(e.code), e.message);
     if (e.edit_index == Error::NO_INDEX) return p;
     p.edit_index = e.edit_index;
     const EditSource* src = e.edit_index < sources.size() ? &sources[e.edit_index] : nullptr;
@@ -203,7 +191,7 @@ Problem problem_from_batch_error(const Error& e, const std::vector<EditSource>& 
 }
 
 Problem problem_from(const Error& e) {
-    Problem p = make_problem(type_of(e.code), e.message);
+    Problem p = make_problem(type_of_code(e.code), e.message);
     if (!e.field.empty()) {
         p.pointer = "/" + e.field;
         p.detail = *p.pointer + ": " + e.message;
@@ -221,6 +209,21 @@ Json problem_to_json(const Problem& p) {
     if (p.file) j["file"] = *p.file;
     if (p.element) j["element"] = *p.element;
     return j;
+}
+
+std::string escape_pointer_token(std::string_view token) {
+    std::string out;
+    out.reserve(token.size());
+    for (char c : token) {
+        if (c == '~') {
+            out += "~0";
+        } else if (c == '/') {
+            out += "~1";
+        } else {
+            out += c;
+        }
+    }
+    return out;
 }
 
 }  // namespace strata::protocol

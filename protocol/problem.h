@@ -1,17 +1,26 @@
 #pragma once
-// Problem details (RFC 9457) for every error the protocol can name. A Problem carries its HTTP
-// status as the `status` member the RFC defines; nothing here depends on an HTTP library.
+// Problem details (RFC 9457): the one vocabulary of errors at the protocol boundary. The parsers
+// answer with a Problem (Parsed<T>), the API with a problem document; engine Errors and importer
+// AssetErrors become Problems here, once. A Problem carries its HTTP status as the `status`
+// member the RFC defines; nothing here depends on an HTTP library.
 
 #include <cstddef>
+#include <cstdint>
+#include <exception>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "engine/core/result.h"
-#include "protocol/edit_parser.h"
-#include "protocol/json_document.h"
 
 namespace strata::protocol {
+
+using Json = nlohmann::json;
+struct EditSource;
 
 /// Every problem type Strata answers with; each has a stable URI, a title and a status.
 enum class ProblemType : uint8_t {
@@ -69,8 +78,12 @@ const char* problem_when(ProblemType t);
 
 /// A problem of `type` with its default status.
 Problem make_problem(ProblemType type, std::string detail);
-/// A parser error.
-Problem problem_from(const RequestError& e);
+/// A problem about one place of the request: `pointer` (JSON pointer into the body; "" is the
+/// whole body), and a detail that names it first ("/edits/3/positions: expected an array").
+Problem problem_at(ProblemType type, std::string pointer, const std::string& what,
+                   std::size_t edit_index = Error::NO_INDEX);
+/// The problem type of an engine error code (unknown-id for UnknownId, ...).
+ProblemType problem_type_of(ErrorCode code);
 /// An engine error for an edit batch: `edit_index` and `field` become `/edits/<i>/<field>`,
 /// renamed to the wire member the edit used (positions_b64, shape, ...).
 Problem problem_from_batch_error(const Error& e, const std::vector<EditSource>& sources);
@@ -79,5 +92,24 @@ Problem problem_from(const Error& e);
 
 /// The problem as an application/problem+json document.
 Json problem_to_json(const Problem& p);
+
+/// Either a parsed value or the problem with the request.
+template <class T>
+using Parsed = Expected<T, Problem>;
+
+/// Thrown inside the parsers only, so that deeply nested readers stay short; every public parse
+/// function catches it and returns the Problem as a value.
+class RequestFailure : public std::exception {
+public:
+    explicit RequestFailure(Problem p) : m_problem(std::move(p)) {}
+    const char* what() const noexcept override { return m_problem.detail.c_str(); }
+    const Problem& problem() const { return m_problem; }
+
+private:
+    Problem m_problem;
+};
+
+/// Escapes one JSON pointer reference token ('~' -> "~0", '/' -> "~1").
+std::string escape_pointer_token(std::string_view token);
 
 }  // namespace strata::protocol

@@ -152,7 +152,7 @@ Parsed<RenderRequest> parse_render_body(const Json& body, uint32_t* split) {
         if (r.value_error()) return Unexpected(*r.value_error());
         return q;
     } catch (const RequestFailure& f) {
-        return Unexpected(f.error());
+        return Unexpected(f.problem());
     }
 }
 
@@ -163,19 +163,16 @@ Parsed<Json> query_to_body(const std::multimap<std::string, std::string>& params
         if (key == "camera") {
             // The override's members are parameters of their own; "camera" itself would have to
             // be an object, which a query cannot carry.
-            RequestError e;
-            e.message =
-                "query parameter 'camera' is not supported: give eye, target, up and "
-                "fov_y_deg as parameters of their own";
-            e.pointer = "/camera";
-            return Unexpected(std::move(e));
+            return Unexpected(problem_at(ProblemType::InvalidRequest, "/camera",
+                                         "query parameter 'camera' is not supported: give eye, "
+                                         "target, up and fov_y_deg as parameters of their own"));
         }
         Json& slot = camera ? body["camera"][key] : body[key];
         if (!slot.is_null()) {
-            RequestError e;
-            e.message = "query parameter '" + key + "' is given more than once";
-            e.pointer = camera ? "/camera/" + key : "/" + escape_pointer_token(key);
-            return Unexpected(std::move(e));
+            return Unexpected(
+                problem_at(ProblemType::InvalidRequest,
+                           camera ? "/camera/" + key : "/" + escape_pointer_token(key),
+                           "query parameter '" + key + "' is given more than once"));
         }
         if (key == "aovs") {
             slot = text.empty() ? Json::array() : list_from_text(text, false);

@@ -10,7 +10,7 @@
 #include "engine/render/render_request.h"
 #include "engine/scene/edits.h"
 #include "protocol/json_document.h"
-#include "protocol/request_error.h"
+#include "protocol/problem.h"
 
 namespace strata::protocol {
 
@@ -18,7 +18,6 @@ namespace strata::protocol {
 constexpr uint32_t MAX_RENDER_SIDE = 65536;
 /// Most processes one frame is split across (`split`).
 constexpr uint32_t MAX_RENDER_SPLIT = 16;
-
 
 class FieldReader;
 

@@ -85,7 +85,7 @@ std::variant<ViewerSpec, protocol::Problem> parse_viewer(
     spec.key = "q=" + std::to_string(spec.quality) + "&s=" + std::to_string(spec.max_samples);
     for (const auto& [name, value] : params) spec.key += "&" + name + "=" + value;
     auto request = protocol::parse_render_query(params);
-    if (!request) return protocol::problem_from(request.error());
+    if (!request) return request.error();
     spec.request = std::move(request.value());
     const uint64_t pixels = uint64_t(spec.request.width) * spec.request.height;
     if (pixels > std::min<uint64_t>(limits.max_pixels, MAX_ACCUMULATE_PIXELS)) {

@@ -4,8 +4,8 @@
 // compiler has it. Only the members the code base uses are here: construction from a value or
 // from Unexpected, has_value / operator bool, value, error, operator* / operator->, value_or.
 //
-// Aliases name its uses: Result<T> and Status (engine errors), Parsed<T> (protocol request
-// errors), Outcome<T> (command-line failures).
+// Aliases name its uses: Result<T> and Status (engine errors), Parsed<T> (protocol problems,
+// RFC 9457), Outcome<T> (command-line failures).
 
 #include <type_traits>
 #include <utility>

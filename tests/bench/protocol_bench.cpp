@@ -61,7 +61,7 @@ void parse_only(benchmark::State& state, const std::string& text) {
     for (auto _ : state) {
         auto parsed = protocol::parse_edit_batch(text, {});
         if (!parsed) {
-            state.SkipWithError(parsed.error().message.c_str());
+            state.SkipWithError(parsed.error().detail.c_str());
             break;
         }
         benchmark::DoNotOptimize(parsed);
@@ -80,7 +80,7 @@ void parse_and_apply(benchmark::State& state, const std::string& text) {
     for (auto _ : state) {
         auto parsed = protocol::parse_edit_batch(text, {});
         if (!parsed) {
-            state.SkipWithError(parsed.error().message.c_str());
+            state.SkipWithError(parsed.error().detail.c_str());
             break;
         }
         auto applied = engine->apply(std::move(parsed.value().batch));

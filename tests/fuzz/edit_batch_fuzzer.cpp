@@ -106,25 +106,25 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             FUZZ_CHECK(nlohmann_accepts);
             if (!has_packed(doc.value())) FUZZ_CHECK(doc.value() == Json::parse(text));
         }
-    } else if (doc.error().kind == RequestErrorKind::Syntax &&
-               doc.error().message.find("duplicate key") == std::string::npos) {
+    } else if (doc.error().type == ProblemType::MalformedJson &&
+               doc.error().detail.find("duplicate key") == std::string::npos) {
         FUZZ_CHECK(!nlohmann_accepts);
     }
     if (!doc.has_value()) {
-        (void)problem_to_json(problem_from(doc.error()));
+        (void)problem_to_json(doc.error());
         return 0;
     }
 
     // Step: a parse error points into the edit it blames.
     auto batch = parse_edit_batch(doc.value());
     if (!batch.has_value()) {
-        const RequestError& e = batch.error();
-        FUZZ_CHECK(e.kind == RequestErrorKind::Schema || e.kind == RequestErrorKind::Value);
+        const Problem& e = batch.error();
+        FUZZ_CHECK(e.type == ProblemType::InvalidRequest || e.status == 422);
         if (e.edit_index != strata::Error::NO_INDEX) {
             const std::string edit = "/edits/" + std::to_string(e.edit_index);
             FUZZ_CHECK(e.pointer == edit || e.pointer.starts_with(edit + "/"));
         }
-        (void)problem_to_json(problem_from(e));
+        (void)problem_to_json(e);
         return 0;
     }
 

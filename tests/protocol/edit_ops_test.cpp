@@ -14,10 +14,10 @@ namespace {
 
 constexpr EditKinds ALL_KINDS = (EditKinds{1} << std::variant_size_v<Edit>)-1;
 
-RequestError fails(const Json& edit) {
+Problem fails(const Json& edit) {
     auto r = parse_edit_batch(Json{{"edits", Json::array({edit})}});
     EXPECT_FALSE(r.has_value()) << edit.dump();
-    return r.has_value() ? RequestError{} : r.error();
+    return r.has_value() ? Problem{} : r.error();
 }
 
 TEST(EditOps, EveryEntryHasANameADocAParserAndKindsOfEdit) {
@@ -86,10 +86,10 @@ TEST(EditOps, EachOpAcceptsExactlyTheMembersItsSchemaDeclares) {
             declared.push_back(key);
         EXPECT_EQ(members.allowed, declared);
 
-        const RequestError e = fails({{"op", std::string(op.name)}, {"not_a_member", 1}});
-        EXPECT_EQ(e.kind, RequestErrorKind::Schema);
+        const Problem e = fails({{"op", std::string(op.name)}, {"not_a_member", 1}});
+        EXPECT_EQ(e.type, ProblemType::InvalidRequest);
         EXPECT_EQ(e.pointer, "/edits/0/not_a_member");
-        for (const std::string& key : declared) EXPECT_THAT(e.message, ::testing::HasSubstr(key));
+        for (const std::string& key : declared) EXPECT_THAT(e.detail, ::testing::HasSubstr(key));
     }
 }
 
@@ -103,20 +103,20 @@ TEST(EditOps, EachRequiredMemberOfTheSchemaIsRequiredByTheParser) {
             Json edit = {{"op", std::string(op.name)}};
             for (const std::string& other : edit_op_members(op).required)
                 if (other != key && other != "op") edit[other] = Json::array({Json::object()});
-            const RequestError e = fails(edit);
-            EXPECT_EQ(e.pointer, "/edits/0/" + key) << e.message;
-            EXPECT_THAT(e.message, ::testing::HasSubstr("missing required member '" + key + "'"));
+            const Problem e = fails(edit);
+            EXPECT_EQ(e.pointer, "/edits/0/" + key) << e.detail;
+            EXPECT_THAT(e.detail, ::testing::HasSubstr("missing required member '" + key + "'"));
         }
     }
 }
 
 TEST(EditOps, UnknownOpsAreRefusedWithTheListOfOps) {
-    const RequestError e = fails({{"op", "add_meshes"}});
+    const Problem e = fails({{"op", "add_meshes"}});
     EXPECT_EQ(e.pointer, "/edits/0/op");
     std::string list;
     for (const EditOp& op : edit_ops()) list += (list.empty() ? "" : ", ") + std::string(op.name);
-    EXPECT_THAT(e.message, ::testing::HasSubstr("unknown op 'add_meshes' (ops: " + list + ")"));
-    EXPECT_THAT(fails({{"op", 3}}).message, ::testing::HasSubstr("(ops: " + list + ")"));
+    EXPECT_THAT(e.detail, ::testing::HasSubstr("unknown op 'add_meshes' (ops: " + list + ")"));
+    EXPECT_THAT(fails({{"op", 3}}).detail, ::testing::HasSubstr("(ops: " + list + ")"));
 }
 
 TEST(EditSchema, LimitsAreTheParserConstants) {
@@ -152,11 +152,11 @@ TEST(EditSchema, NestedObjectsTakeTheirMembersFromTheSchema) {
     EXPECT_EQ(schema_members("/$defs/build").allowed,
               (std::vector<std::string>{"prefer", "allow_refit"}));
     EXPECT_EQ(schema_members("").required, std::vector<std::string>{"edits"});
-    const RequestError e = fails({{"op", "add_mesh"},
-                                  {"id", "m"},
-                                  {"shape", {{"type", "box"}, {"size", 1}, {"radius", 2}}}});
+    const Problem e = fails({{"op", "add_mesh"},
+                             {"id", "m"},
+                             {"shape", {{"type", "box"}, {"size", 1}, {"radius", 2}}}});
     EXPECT_EQ(e.pointer, "/edits/0/shape/radius");
-    EXPECT_THAT(e.message, ::testing::HasSubstr("(allowed: type, size)"));
+    EXPECT_THAT(e.detail, ::testing::HasSubstr("(allowed: type, size)"));
 }
 
 }  // namespace

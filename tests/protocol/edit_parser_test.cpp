@@ -16,7 +16,7 @@ namespace {
 
 ParsedBatch parse_ok(const std::string& text) {
     auto r = parse_edit_batch(text, {});
-    EXPECT_TRUE(r.has_value()) << text << ": " << (r.has_value() ? "" : r.error().message);
+    EXPECT_TRUE(r.has_value()) << text << ": " << (r.has_value() ? "" : r.error().detail);
     return r.has_value() ? std::move(r.value()) : ParsedBatch{};
 }
 
@@ -28,10 +28,10 @@ T one(const std::string& edit) {
     return std::get<T>(b.batch.edits.at(0));
 }
 
-RequestError fails(const std::string& edits) {
+Problem fails(const std::string& edits) {
     auto r = parse_edit_batch("{\"edits\": [" + edits + "]}", {});
     EXPECT_FALSE(r.has_value()) << edits;
-    return r.has_value() ? RequestError{} : r.error();
+    return r.has_value() ? Problem{} : r.error();
 }
 
 std::string b64(const void* data, std::size_t n) {
@@ -209,20 +209,19 @@ TEST(EditParser, MaterialCameraLightingAndSceneOps) {
 TEST(EditParser, EveryOpHasAParserAndAnEngineStruct) {
     std::vector<std::string_view> names;
     for (const EditOp& op : edit_ops()) names.push_back(op.name);
-    EXPECT_THAT(names, ::testing::ElementsAre("add_mesh", "update_mesh", "remove_mesh",
-                                              "add_texture", "remove_texture", "add_material",
-                                              "update_material", "add_instance",
-                                              "update_instance", "set_transform", "remove_instance",
-                                              "add_group", "update_group", "remove_group",
-                                              "add_light", "update_light", "remove_light",
-                                              "mark_dirty", "set_camera", "set_lighting", "clear"));
+    EXPECT_THAT(names, ::testing::ElementsAre(
+                           "add_mesh", "update_mesh", "remove_mesh", "add_texture",
+                           "remove_texture", "add_material", "update_material", "add_instance",
+                           "update_instance", "set_transform", "remove_instance", "add_group",
+                           "update_group", "remove_group", "add_light", "update_light",
+                           "remove_light", "mark_dirty", "set_camera", "set_lighting", "clear"));
 }
 
 TEST(EditParser, NumbersBeyondFloatRangeAreNotFiniteWithTheirPointer) {
-    const RequestError e =
+    const Problem e =
         fails(R"({"op":"clear"}, {"op":"update_mesh","mesh":"m","positions":[0,1e999,0]})");
-    EXPECT_EQ(e.kind, RequestErrorKind::Value);
-    EXPECT_EQ(e.code, ErrorCode::NotFinite);
+    EXPECT_EQ(e.status, 422);
+    EXPECT_EQ(e.type, ProblemType::NotFinite);
     EXPECT_EQ(e.edit_index, 1u);
     EXPECT_EQ(e.pointer, "/edits/1/positions/1");
     EXPECT_EQ(fails(R"({"op":"set_camera","fov_y_deg":1e39})").pointer, "/edits/0/fov_y_deg");
@@ -230,25 +229,25 @@ TEST(EditParser, NumbersBeyondFloatRangeAreNotFiniteWithTheirPointer) {
 
 TEST(EditParser, Base64PositionsWithNaNAreNotFinite) {
     const float p[3] = {0, std::nanf(""), 0};
-    const RequestError e =
+    const Problem e =
         fails(R"({"op":"update_mesh","mesh":"m","positions_b64":")" + b64(p, sizeof p) + "\"}");
-    EXPECT_EQ(e.code, ErrorCode::NotFinite);
+    EXPECT_EQ(e.type, ProblemType::NotFinite);
     EXPECT_EQ(e.pointer, "/edits/0/positions_b64");
 }
 
 TEST(EditParser, ASchemaErrorAnywhereWinsOverAnEarlierValueError) {
-    const RequestError e =
+    const Problem e =
         fails(R"({"op":"update_mesh","mesh":"m","positions":[1e999,0,0]}, {"op":"nope"})");
-    EXPECT_EQ(e.kind, RequestErrorKind::Schema);
+    EXPECT_EQ(e.type, ProblemType::InvalidRequest);
     EXPECT_EQ(e.pointer, "/edits/1/op");
     EXPECT_EQ(e.edit_index, 1u);
 }
 
 TEST(EditParser, UnknownMembersNameTheMemberAndWhatIsAllowed) {
-    const RequestError e = fails(R"({"op":"set_transform","instance":"i","transfrom":[]})");
+    const Problem e = fails(R"({"op":"set_transform","instance":"i","transfrom":[]})");
     EXPECT_EQ(e.pointer, "/edits/0/transfrom");
-    EXPECT_THAT(e.message, ::testing::HasSubstr("unknown member 'transfrom'"));
-    EXPECT_THAT(e.message, ::testing::HasSubstr("transform"));
+    EXPECT_THAT(e.detail, ::testing::HasSubstr("unknown member 'transfrom'"));
+    EXPECT_THAT(e.detail, ::testing::HasSubstr("transform"));
 }
 
 TEST(EditParser, EngineErrorsPointAtTheWireMemberTheEditUsed) {
@@ -268,8 +267,7 @@ TEST(EditParser, EngineErrorsPointAtTheWireMemberTheEditUsed) {
 }
 
 TEST(EditParser, ProblemDocumentsCarryTheRfc9457MembersAndOurs) {
-    const Json j =
-        problem_to_json(problem_from(fails(R"({"op":"add_material","id":"m","roughness":"x"})")));
+    const Json j = problem_to_json(fails(R"({"op":"add_material","id":"m","roughness":"x"})"));
     EXPECT_EQ(j["type"], "https://strata.dev/problems/invalid-request");
     EXPECT_EQ(j["title"], "Invalid request");
     EXPECT_EQ(j["status"], 400);

@@ -22,8 +22,7 @@ std::pair<typename K::Record, Edit> round_trip(Json op) {
     write_fields<K>(op, r);
     Json body = {{"edits", Json::array({op})}};
     auto parsed = parse_edit_batch(body);
-    EXPECT_TRUE(parsed.has_value())
-        << body.dump() << ": " << (parsed ? "" : parsed.error().message);
+    EXPECT_TRUE(parsed.has_value()) << body.dump() << ": " << (parsed ? "" : parsed.error().detail);
     if (!parsed) return {r, Edit{}};
     return {r, parsed.value().batch.edits.at(0)};
 }

@@ -9,14 +9,14 @@ namespace {
 
 Json parse_ok(std::string_view text, const JsonLimits& limits = {}) {
     auto r = parse_json(text, limits);
-    EXPECT_TRUE(r.has_value()) << text << ": " << (r.has_value() ? "" : r.error().message);
+    EXPECT_TRUE(r.has_value()) << text << ": " << (r.has_value() ? "" : r.error().detail);
     return r.has_value() ? r.value() : Json();
 }
 
-RequestError parse_fails(std::string_view text, const JsonLimits& limits = {}) {
+Problem parse_fails(std::string_view text, const JsonLimits& limits = {}) {
     auto r = parse_json(text, limits);
     EXPECT_FALSE(r.has_value()) << text;
-    return r.has_value() ? RequestError{} : r.error();
+    return r.has_value() ? Problem{} : r.error();
 }
 
 TEST(JsonDocument, ReadsEveryKindOfValueLikeNlohmann) {
@@ -69,19 +69,19 @@ TEST(JsonDocument, RefusesWhatStrictJsonRefuses) {
                            "{\"a\" 1}",
                            "\"unterminated"};
     for (const char* t : texts) {
-        EXPECT_EQ(parse_fails(t).kind, RequestErrorKind::Syntax) << t;
+        EXPECT_EQ(parse_fails(t).type, ProblemType::MalformedJson) << t;
         EXPECT_FALSE(Json::accept(t)) << t;
     }
 }
 
 TEST(JsonDocument, NamesTheByteWhereItStopped) {
-    EXPECT_NE(parse_fails("[1, 2, x]").message.find("byte 7"), std::string::npos);
+    EXPECT_NE(parse_fails("[1, 2, x]").detail.find("byte 7"), std::string::npos);
 }
 
 TEST(JsonDocument, RefusesDuplicateKeys) {
-    const RequestError e = parse_fails(R"({"edits": [], "edits": []})");
-    EXPECT_EQ(e.kind, RequestErrorKind::Syntax);
-    EXPECT_NE(e.message.find("duplicate key 'edits'"), std::string::npos);
+    const Problem e = parse_fails(R"({"edits": [], "edits": []})");
+    EXPECT_EQ(e.type, ProblemType::MalformedJson);
+    EXPECT_NE(e.detail.find("duplicate key 'edits'"), std::string::npos);
 }
 
 TEST(JsonDocument, OverflowingNumbersBecomeInfinityAndUnderflowingOnesZero) {
@@ -95,8 +95,8 @@ TEST(JsonDocument, EnforcesTheDepthLimit) {
     JsonLimits limits;
     limits.max_depth = 4;
     parse_ok("[[[[1]]]]", limits);
-    EXPECT_EQ(parse_fails("[[[[[1]]]]]", limits).kind, RequestErrorKind::TooDeep);
-    EXPECT_EQ(parse_fails(std::string(100000, '['), {}).kind, RequestErrorKind::TooDeep);
+    EXPECT_EQ(parse_fails("[[[[[1]]]]]", limits).type, ProblemType::NestingTooDeep);
+    EXPECT_EQ(parse_fails(std::string(100000, '['), {}).type, ProblemType::NestingTooDeep);
 }
 
 TEST(JsonDocument, EnforcesTheArrayLimitOnPackedAndPlainArrays) {
@@ -104,8 +104,8 @@ TEST(JsonDocument, EnforcesTheArrayLimitOnPackedAndPlainArrays) {
     limits.max_array_elements = 100;
     std::string numbers = "[0", strings = "[\"a\"";
     for (int i = 1; i < 101; ++i) numbers += ",1", strings += ",\"a\"";
-    EXPECT_EQ(parse_fails(numbers + "]", limits).kind, RequestErrorKind::TooLarge);
-    EXPECT_EQ(parse_fails(strings + "]", limits).kind, RequestErrorKind::TooLarge);
+    EXPECT_EQ(parse_fails(numbers + "]", limits).type, ProblemType::TooLarge);
+    EXPECT_EQ(parse_fails(strings + "]", limits).type, ProblemType::TooLarge);
 }
 
 TEST(JsonDocument, PacksLongNumericArraysAndKeepsShortOnesAsNodes) {

@@ -233,7 +233,7 @@ TEST(ProtocolDocs, EveryOpHasAReadmeSectionWhoseExamplesParseAsThatOp) {
     for (const OpSection& section : sections) {
         for (const std::string& line : section.examples) {
             auto parsed = parse_edit_batch("{\"edits\": [" + line + "]}", {});
-            ASSERT_TRUE(parsed.has_value()) << line << ": " << parsed.error().message;
+            ASSERT_TRUE(parsed.has_value()) << line << ": " << parsed.error().detail;
             const std::string name = parse_json(line).value()["op"].get<std::string>();
             EXPECT_TRUE(names(section.heading, name)) << line << " is under " << section.heading;
             const EditOp* op = find_edit_op(name);

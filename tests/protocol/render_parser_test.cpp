@@ -11,7 +11,7 @@ TEST(RenderParser, ReadsEveryOptionOfTheBody) {
         parse_render_body(Json::parse(R"({"width": 320, "height": 200, "format": "exr", "spp": 16,
         "aovs": ["albedo", "depth"], "compression": "piz", "accumulate": true, "exposure": -1.5,
         "camera": {"eye": [0, 1, 5], "fov_y_deg": 30}})"));
-    ASSERT_TRUE(r.has_value()) << r.error().message;
+    ASSERT_TRUE(r.has_value()) << r.error().detail;
     const RenderRequest& q = r.value();
     EXPECT_EQ(q.width, 320u);
     EXPECT_EQ(q.height, 200u);
@@ -40,7 +40,7 @@ TEST(RenderParser, TheQueryStringCarriesTheSameOptions) {
         {"aovs", "normal,depth"}, {"accumulate", "false"}, {"exposure", "0.5"}, {"eye", "1,2,3"},
         {"fov_y_deg", "60"},      {"compression", "zip"}};
     auto r = parse_render_query(params);
-    ASSERT_TRUE(r.has_value()) << r.error().message;
+    ASSERT_TRUE(r.has_value()) << r.error().detail;
     EXPECT_EQ(r.value().width, 64u);
     EXPECT_EQ(r.value().spp, 4u);
     EXPECT_THAT(r.value().aovs, ::testing::ElementsAre(Aov::Normal, Aov::Depth));
@@ -66,15 +66,15 @@ TEST(RenderParser, QueryNumbersAreDecimalOnly) {
         auto r = parse_render_query({{"width", text}});
         ASSERT_FALSE(r.has_value()) << "'" << text << "'";
         EXPECT_EQ(r.error().pointer, "/width") << text;
-        EXPECT_EQ(r.error().kind, RequestErrorKind::Schema) << text;
+        EXPECT_EQ(r.error().type, ProblemType::InvalidRequest) << text;
     }
     for (const char* text : {"16", "016", "1.6e1", "16.0"}) {
         auto r = parse_render_query({{"width", text}});
-        ASSERT_TRUE(r.has_value()) << "'" << text << "': " << r.error().message;
+        ASSERT_TRUE(r.has_value()) << "'" << text << "': " << r.error().detail;
         EXPECT_EQ(r.value().width, 16u) << text;
     }
     auto eye = parse_render_query({{"eye", "1,-2.5,3e-1"}});
-    ASSERT_TRUE(eye.has_value()) << eye.error().message;
+    ASSERT_TRUE(eye.has_value()) << eye.error().detail;
     EXPECT_EQ(eye.value().camera->eye, Vec3(1, -2.5f, 0.3f));
     EXPECT_FALSE(parse_render_query({{"eye", "1,0x2,3"}}).has_value());
 }
@@ -102,18 +102,18 @@ TEST(RenderParser, ACameraOverrideKeepsOnlyTheFieldsItNames) {
 
 TEST(RenderParser, BandAndSplitAreReadFromTheBodyAndTheQuery) {
     uint32_t split = 0;
-    auto body = parse_render_body(Json::parse(R"({"height": 100, "band": [8, 12], "split": 1})"),
-                                  &split);
-    ASSERT_TRUE(body.has_value()) << body.error().message;
+    auto body =
+        parse_render_body(Json::parse(R"({"height": 100, "band": [8, 12], "split": 1})"), &split);
+    ASSERT_TRUE(body.has_value()) << body.error().detail;
     ASSERT_TRUE(body.value().band.has_value());
     EXPECT_EQ(*body.value().band, (RowBand{8, 12}));
     EXPECT_EQ(split, 1u);
     auto query = parse_render_query({{"height", "90"}, {"split", "3"}}, &split);
-    ASSERT_TRUE(query.has_value()) << query.error().message;
+    ASSERT_TRUE(query.has_value()) << query.error().detail;
     EXPECT_EQ(split, 3u);
     EXPECT_FALSE(query.value().band.has_value());
     auto band = parse_render_query({{"band", "0,7"}, {"format", "exr"}}, &split);
-    ASSERT_TRUE(band.has_value()) << band.error().message;
+    ASSERT_TRUE(band.has_value()) << band.error().detail;
     EXPECT_EQ(*band.value().band, (RowBand{0, 7}));
     EXPECT_EQ(split, 1u);  // absent: a plain render
 }
@@ -140,7 +140,7 @@ TEST(RenderParser, BadBandsAndSplitsAreRefusedNamingTheParameter) {
     EXPECT_EQ(pointer({{"split", "8"}, {"height", "8"}}), "(accepted)");
     auto refused = parse_render_query({{"split", "2"}, {"band", "0,4"}}, &split);
     ASSERT_FALSE(refused.has_value());
-    EXPECT_THAT(refused.error().message, ::testing::HasSubstr("band"));
+    EXPECT_THAT(refused.error().detail, ::testing::HasSubstr("band"));
     // A caller that cannot split (GET /v1/stream) does not know the member at all.
     auto unknown = parse_render_query({{"split", "2"}});
     ASSERT_FALSE(unknown.has_value());

@@ -172,8 +172,10 @@ protected:
         b.edits.emplace_back(AddGroup{"car", std::nullopt, Affine::translation({0, 0, 5}), true});
         b.edits.emplace_back(AddGroup{"wheels", std::string("car"), Affine::identity(), false});
         b.edits.emplace_back(AddGroup{"wheels2", std::string("car"), Affine::identity(), true});
-        for (const auto& [id, parent] : {std::pair("/World/i4", "car"), {"/World/i2", "wheels"},
-                                         {"/World/i0", "wheels"}, {"/World/i1", "wheels2"}}) {
+        for (const auto& [id, parent] : {std::pair("/World/i4", "car"),
+                                         {"/World/i2", "wheels"},
+                                         {"/World/i0", "wheels"},
+                                         {"/World/i1", "wheels2"}}) {
             UpdateInstance u;
             u.instance = id;
             u.parent = std::optional<std::string>(parent);
@@ -190,7 +192,8 @@ protected:
 };
 
 TEST_F(SceneListGroups, GroupsListAndFilterByParent) {
-    EXPECT_EQ(walk(SceneObject::Group, {}, 1), (std::vector<std::string>{"car", "wheels", "wheels2"}));
+    EXPECT_EQ(walk(SceneObject::Group, {}, 1),
+              (std::vector<std::string>{"car", "wheels", "wheels2"}));
     EXPECT_EQ(walk(SceneObject::Group, {{"parent", ""}}, 1), (std::vector<std::string>{"car"}));
     EXPECT_EQ(walk(SceneObject::Group, {{"parent", "car"}}, 1),
               (std::vector<std::string>{"wheels", "wheels2"}));
@@ -223,7 +226,8 @@ TEST_F(SceneListGroups, ChildrenPageThroughGroupsThenInstances) {
         q.erase("cursor");
         q.emplace("cursor", p["next_cursor"].get<std::string>());
     }
-    EXPECT_EQ(seen, (std::vector<std::string>{"group:wheels", "group:wheels2", "instance:/World/i4"}));
+    EXPECT_EQ(seen,
+              (std::vector<std::string>{"group:wheels", "group:wheels2", "instance:/World/i4"}));
     EXPECT_EQ(children("nope", {}, 404)["status"], 404);
     EXPECT_EQ(children("car", {{"cursor", "instances-1"}}, 400)["pointer"], "/cursor");
     EXPECT_EQ(children("car", {{"depth", "1"}}, 400)["pointer"], "/depth");

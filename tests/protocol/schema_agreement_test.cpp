@@ -15,9 +15,10 @@ namespace {
 
 /// The structural verdict alone (what the JSON Schema decides): the parser's schema error, or
 /// nullopt when the batch has none (a value error may remain).
-std::optional<RequestError> check_edit_batch_structure(const Json& body) {
+std::optional<Problem> check_edit_batch_structure(const Json& body) {
     auto parsed = parse_edit_batch(body);
-    if (parsed.has_value() || parsed.error().kind != RequestErrorKind::Schema) return std::nullopt;
+    if (parsed.has_value() || parsed.error().type != ProblemType::InvalidRequest)
+        return std::nullopt;
     return parsed.error();
 }
 
@@ -41,10 +42,10 @@ TEST(SchemaAgreement, ParserGivesTheTableVerdicts) {
         ASSERT_TRUE(body.has_value()) << name;
         const auto problem = check_edit_batch_structure(body.value());
         EXPECT_EQ(!problem.has_value(), c["valid"].get<bool>())
-            << name << (problem ? ": " + problem->message : std::string());
+            << name << (problem ? ": " + problem->detail : std::string());
         if (problem && c.contains("pointer")) {
             EXPECT_EQ(problem->pointer, c["pointer"].get<std::string>())
-                << name << ": " << problem->message;
+                << name << ": " << problem->detail;
         }
     }
 }
@@ -55,7 +56,7 @@ TEST(SchemaAgreement, StructurallyValidCasesWithANoteFailWithAValueError) {
         if (!c.contains("note")) continue;
         auto parsed = parse_edit_batch(c["batch"].dump(), {});
         ASSERT_FALSE(parsed.has_value()) << c["name"];
-        EXPECT_EQ(parsed.error().kind, RequestErrorKind::Value) << c["name"];
+        EXPECT_EQ(parsed.error().status, 422) << c["name"];
     }
 }
 

@@ -46,7 +46,7 @@ TEST(TransformParser, OverflowingNumbersAreNotFiniteAtTheirPointer) {
     FieldReader r;
     parse_transform(r, Json::parse(R"({"translate": [0, 1e39, 0]})"), "/t");
     ASSERT_TRUE(r.value_error().has_value());
-    EXPECT_EQ(r.value_error()->code, ErrorCode::NotFinite);
+    EXPECT_EQ(r.value_error()->type, ProblemType::NotFinite);
     EXPECT_EQ(r.value_error()->pointer, "/t/translate/1");
 }
 
@@ -57,7 +57,7 @@ TEST(TransformParser, AQuaternionFarFromUnitLengthIsAValueError) {
         parse_transform(r, Json::parse(std::string(R"({"quaternion": )") + q + "}"), "/t");
         ASSERT_TRUE(r.value_error().has_value()) << q;
         EXPECT_EQ(r.value_error()->pointer, "/t/quaternion") << q;
-        EXPECT_NE(r.value_error()->message.find("unit quaternion"), std::string::npos) << q;
+        EXPECT_NE(r.value_error()->detail.find("unit quaternion"), std::string::npos) << q;
     }
     FieldReader ok;
     parse_transform(ok, Json::parse(R"({"quaternion": [0, 0, 2, 2]})"), "/t");

@@ -59,7 +59,7 @@ TEST(SplitRender, TheBandQueryReadsBackAsTheBandRequestBitForBit) {
     r.camera->fov_y_deg = 33.3f;
     const RowBand band{64, 70};
     auto parsed = protocol::parse_render_query(query_params(band_query(r, band)));
-    ASSERT_TRUE(parsed.has_value()) << parsed.error().message;
+    ASSERT_TRUE(parsed.has_value()) << parsed.error().detail;
     const RenderRequest want = band_request(r, band);
     const RenderRequest& got = parsed.value();
     EXPECT_EQ(got.width, want.width);
