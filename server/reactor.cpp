@@ -5,7 +5,6 @@
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <sys/epoll.h>
-#include <sys/eventfd.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -83,16 +82,14 @@ struct Reactor::Connection {
     bool restricted = false;
     Phase phase = Phase::Idle;
     RequestReader reader;
-    Clock::time_point deadline{};  ///< Idle, Waiting, Writing, Lingering; Reading: headers
+    Clock::time_point deadline{};         ///< Idle, Waiting, Writing, Lingering; Reading: headers
     Clock::time_point idle_deadline{};    ///< an Idle connection's (blank lines: no later)
     Clock::time_point read_deadline{};    ///< Reading: the whole request
     Clock::time_point started{};          ///< first byte of the current request
     std::shared_ptr<CancelToken> cancel;  ///< Busy
-    std::optional<PreparedRequest> parked;  ///< Waiting: the request, until its version arrives
-    uint64_t wanted = 0;                    ///< Waiting: its min_version
     std::string method = "-";             ///< of the current request, for the access log
     std::string path = "-";
-    bool keep_alive = true;               ///< for the request a worker has
+    bool keep_alive = true;  ///< for the request a worker has
     bool peer_gone = false;
     std::string out;
     std::size_t out_pos = 0;
@@ -109,7 +106,12 @@ struct Reactor::Connection {
 };
 
 Reactor::Reactor(const ServerConfig& config, ServerMetrics& metrics, Dispatch dispatch)
-    : m_config(config), m_metrics(metrics), m_dispatch(std::move(dispatch)), m_scratch(64 * 1024) {
+    : m_config(config),
+      m_metrics(metrics),
+      m_dispatch(std::move(dispatch)),
+      m_admission(config.max_connections, config.max_connections_per_client),
+      m_scratch(64 * 1024),
+      m_waiting(config.max_waiting_reads, config.max_waiting_reads_per_client) {
     m_reader_config.limits.max_head_bytes = config.max_header_bytes;
     m_reader_config.limits.max_headers = config.max_headers;
     m_reader_config.limits.max_target_bytes = config.max_uri_bytes;
@@ -117,9 +119,6 @@ Reactor::Reactor(const ServerConfig& config, ServerMetrics& metrics, Dispatch di
     m_reader_config.token = config.token;
     // The command line checked it (cli.cpp); a policy that does not parse allows no origin.
     if (auto cors = CorsPolicy::parse(config.cors_origin)) m_reader_config.cors = cors.value();
-    // Made here, not in open(): drain() may write to it from another thread at any time.
-    m_wake = eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
-    if (m_wake < 0) m_wake_error = errno;
 }
 
 Reactor::~Reactor() {
@@ -127,28 +126,16 @@ Reactor::~Reactor() {
         if (c->stream) c->stream->detach();
         ::close(c->fd);
     }
-    if (m_wake >= 0) ::close(m_wake);
     if (m_epoll >= 0) ::close(m_epoll);
 }
 
 void Reactor::drain() {
     m_drain_requested = true;
-    wake();
+    m_inbox.wake();
 }
 
 void Reactor::complete(uint64_t conn, Outcome outcome, bool close) {
-    {
-        std::lock_guard lock(m_done_mutex);
-        m_done.push_back({conn, std::move(outcome), close});
-    }
-    wake();
-}
-
-void Reactor::wake() {
-    const uint64_t one = 1;
-    // EAGAIN: the counter is saturated, so the reactor is woken anyway.
-    if (::write(m_wake, &one, sizeof one) < 0 && errno != EAGAIN)
-        spdlog::error("waking the front end: write(eventfd): {}", std::strerror(errno));
+    m_inbox.post({conn, std::move(outcome), close});
 }
 
 bool Reactor::watch(const Connection& c, uint32_t events) {
@@ -166,13 +153,11 @@ Status Reactor::open(int listen_fd) {
     const int flags = fcntl(m_listen, F_GETFL);
     if (flags < 0 || fcntl(m_listen, F_SETFL, flags | O_NONBLOCK) < 0)
         return syscall_failure("fcntl(O_NONBLOCK) on the listening socket");
-    if (m_wake < 0) {
-        errno = m_wake_error;
-        return syscall_failure("eventfd");
-    }
+    const Result<int> wake = m_inbox.fd();
+    if (!wake) return Unexpected(wake.error());
     m_epoll = epoll_create1(EPOLL_CLOEXEC);
     if (m_epoll < 0) return syscall_failure("epoll_create1");
-    for (const auto& [fd, key] : {std::pair(m_listen, LISTEN_KEY), std::pair(m_wake, WAKE_KEY)}) {
+    for (const auto& [fd, key] : {std::pair(m_listen, LISTEN_KEY), std::pair(*wake, WAKE_KEY)}) {
         epoll_event ev{};
         ev.events = EPOLLIN;
         ev.data.u64 = key;
@@ -198,9 +183,7 @@ void Reactor::run() {
             if (key == LISTEN_KEY) {
                 accept_ready(now);
             } else if (key == WAKE_KEY) {
-                uint64_t count = 0;
-                if (::read(m_wake, &count, sizeof count) < 0 && errno != EAGAIN)
-                    spdlog::error("reading the eventfd: {}", std::strerror(errno));
+                m_inbox.clear_wake();
             } else if (auto it = m_connections.find(key); it != m_connections.end()) {
                 on_event(*it->second, events[i].events, now);
             }
@@ -237,10 +220,7 @@ void Reactor::accept_ready(Clock::time_point now) {
             return;
         }
         std::string client = client_address(addr);
-        const auto held = m_per_client.find(client);
-        const bool over =
-            m_open_normal >= m_config.max_connections ||
-            (held != m_per_client.end() && held->second >= m_config.max_connections_per_client);
+        const bool over = !m_admission.admits(client);
         if (over && m_open_restricted >= HEALTH_RESERVE) {
             ++m_counters.connections_refused;
             ::close(fd);
@@ -266,8 +246,7 @@ void Reactor::accept_ready(Clock::time_point now) {
             ++m_counters.connections_restricted;
             c->deadline = now + RESTRICTED_TIMEOUT;
         } else {
-            ++m_open_normal;
-            ++m_per_client[c->client];
+            m_admission.take(c->client);
             c->deadline = now + std::chrono::seconds(m_config.header_timeout_s);
         }
         c->idle_deadline = c->deadline;
@@ -412,80 +391,42 @@ void Reactor::dispatch_or_wait(Connection& c, PreparedRequest&& request, Clock::
     if (!asked || !asked->valid || !m_version || m_draining || m_config.min_version_wait_ms == 0 ||
         m_version() >= asked->version)
         return dispatch(c, std::move(request));
-    const auto mine = m_waiting_per_client.find(c.client);
-    const std::size_t held = mine == m_waiting_per_client.end() ? 0 : mine->second;
-    if (m_waiting_total >= m_config.max_waiting_reads ||
-        held >= m_config.max_waiting_reads_per_client) {
+    if (!m_waiting.admits(c.client)) {
         ++m_counters.waits_refused;
-        protocol::ApiResponse refusal =
-            protocol::problem_response(protocol::make_problem(
-                protocol::ProblemType::Unavailable,
-                "too many reads are waiting for a min_version already (" +
-                    std::to_string(held) + " from this client, " +
-                    std::to_string(m_waiting_total) + " in all; --max-waiting-reads-per-client " +
-                    std::to_string(m_config.max_waiting_reads_per_client) +
-                    ", --max-waiting-reads " + std::to_string(m_config.max_waiting_reads) + ")"));
+        protocol::ApiResponse refusal = protocol::problem_response(protocol::make_problem(
+            protocol::ProblemType::Unavailable, m_waiting.refusal(c.client)));
         refusal.headers.emplace_back("Retry-After", "1");
         DirectAnswer a;
         a.status = refusal.status;
         a.method = request.http.method;
         a.path = request.http.path;
         a.close = !request.keep_alive;
-        a.bytes = write_response(refusal, Framing{a.close, request.http.method == "HEAD",
-                                                  request.cors_origin});
+        a.bytes = write_response(
+            refusal, Framing{a.close, request.http.method == "HEAD", request.cors_origin});
         return answer(c, std::move(a), now);
     }
     c.phase = Connection::Phase::Waiting;
-    c.wanted = asked->version;
-    c.deadline = now + std::chrono::milliseconds(m_config.min_version_wait_ms);
     c.in_flight = request.http.held_bytes();
     account(c);
-    c.parked = std::move(request);
-    ++m_waiting_per_client[c.client];
-    ++m_waiting_total;
     ++m_counters.reads_waiting;
-    m_waiting.push_back(c.id);
+    m_waiting.park({c.id, c.client, asked->version,
+                    now + std::chrono::milliseconds(m_config.min_version_wait_ms),
+                    std::move(request)});
     if (!watch(c, EPOLLRDHUP | EPOLLONESHOT)) close(c.id);
-}
-
-void Reactor::stop_waiting(Connection& c) {
-    if (c.phase != Connection::Phase::Waiting) return;
-    if (auto it = m_waiting_per_client.find(c.client);
-        it != m_waiting_per_client.end() && --it->second == 0)
-        m_waiting_per_client.erase(it);
-    --m_waiting_total;
-    --m_counters.reads_waiting;
 }
 
 void Reactor::release_waiters(Clock::time_point now) {
     if (m_waiting.empty()) return;
-    const uint64_t version = m_version();
-    std::vector<uint64_t> still;
-    for (uint64_t id : m_waiting) {
-        auto it = m_connections.find(id);
-        if (it == m_connections.end()) continue;  // closed: the client left
-        Connection& c = *it->second;
-        if (c.phase != Connection::Phase::Waiting) continue;
-        if (version < c.wanted && now < c.deadline && !m_draining) {
-            still.push_back(id);
-            continue;
-        }
+    for (WaitingReads::Waiter& w : m_waiting.take_due(m_version(), now, m_draining)) {
+        --m_counters.reads_waiting;
         // A worker answers now: the version arrived, or it says how far behind the scene is.
-        stop_waiting(c);
-        PreparedRequest request = std::move(*c.parked);
-        c.parked.reset();
-        dispatch(c, std::move(request));
+        auto it = m_connections.find(w.conn);
+        if (it != m_connections.end()) dispatch(*it->second, std::move(w.request));
     }
-    m_waiting.swap(still);
 }
 
 void Reactor::take_completions(Clock::time_point now) {
-    std::vector<Completion> done;
-    {
-        std::lock_guard lock(m_done_mutex);
-        done.swap(m_done);
-    }
-    for (Completion& d : done) {
+    for (ReactorInbox::Completion& d : m_inbox.take_completions()) {
         --m_counters.requests_in_flight;
         auto it = m_connections.find(d.conn);
         if (it == m_connections.end()) continue;  // closed at the drain's hard deadline
@@ -567,7 +508,10 @@ void Reactor::close(uint64_t id) {
     auto it = m_connections.find(id);
     if (it == m_connections.end()) return;
     Connection& c = *it->second;
-    stop_waiting(c);
+    if (c.phase == Connection::Phase::Waiting) {
+        m_waiting.forget(c.id);
+        --m_counters.reads_waiting;
+    }
     if (c.cancel) c.cancel->cancel(CancelReason::ClientGone);
     if (c.stream) c.stream->detach();
     // Closing the descriptor removes it from the epoll set anyway; a failure here is only logged.
@@ -578,8 +522,7 @@ void Reactor::close(uint64_t id) {
     if (c.restricted) {
         --m_open_restricted;
     } else {
-        --m_open_normal;
-        if (--m_per_client[c.client] == 0) m_per_client.erase(c.client);
+        m_admission.give_back(c.client);
     }
     --m_counters.connections_open;
     m_connections.erase(it);
@@ -700,24 +643,13 @@ void Reactor::begin_stream(Connection& c, Outcome&& head, Clock::time_point now)
         0)
         spdlog::debug("setsockopt(SO_SNDBUF): {}", std::strerror(errno));
     const uint64_t id = c.id;
-    c.stream->attach([this, id] {
-        {
-            std::lock_guard lock(m_done_mutex);
-            m_ready_streams.push_back(id);
-        }
-        wake();
-    });
+    c.stream->attach([this, id] { m_inbox.post_stream(id); });
     if (m_draining) c.stream->end();
     stream_write(c, now);
 }
 
 void Reactor::take_ready_streams(Clock::time_point now) {
-    std::vector<uint64_t> ready;
-    {
-        std::lock_guard lock(m_done_mutex);
-        ready.swap(m_ready_streams);
-    }
-    for (uint64_t id : ready) {
+    for (uint64_t id : m_inbox.take_streams()) {
         auto it = m_connections.find(id);
         if (it == m_connections.end()) continue;
         Connection& c = *it->second;

@@ -37,10 +37,13 @@
 #include "engine/core/cancel.h"
 #include "engine/core/result.h"
 #include "server/application.h"
+#include "server/client_quota.h"
 #include "server/front_end_counters.h"
+#include "server/reactor_inbox.h"
 #include "server/request_reader.h"
 #include "server/server_config.h"
 #include "server/stream_channel.h"
+#include "server/waiting_reads.h"
 
 namespace strata::server {
 
@@ -102,8 +105,6 @@ private:
     void dispatch_or_wait(Connection& c, PreparedRequest&& request, Clock::time_point now);
     /// Dispatches the waiting requests whose version arrived or whose wait is over.
     void release_waiters(Clock::time_point now);
-    /// Forgets `c` as a waiter (its counts), when it is one.
-    void stop_waiting(Connection& c);
     void take_completions(Clock::time_point now);
     void answer(Connection& c, DirectAnswer&& a, Clock::time_point now);
     /// The access log and the response counters: every answer passes here once.
@@ -124,7 +125,6 @@ private:
     void stream_write(Connection& c, Clock::time_point now);
     void on_stream_event(Connection& c, uint32_t events, Clock::time_point now);
     void take_ready_streams(Clock::time_point now);
-    void wake();
 
     const ServerConfig& m_config;
     ReaderConfig m_reader_config;
@@ -132,16 +132,14 @@ private:
     Dispatch m_dispatch;
     FrontEndCounters m_counters;
 
+    ReactorInbox m_inbox;
     int m_epoll = -1;
-    int m_wake = -1;  ///< eventfd: completions and drain requests
-    int m_wake_error = 0;  ///< errno of a failed eventfd(), reported by open()
     int m_listen = -1;
     bool m_accept_paused = false;
     Clock::time_point m_accept_resume{};
 
     std::unordered_map<uint64_t, std::unique_ptr<Connection>> m_connections;
-    std::unordered_map<std::string, std::size_t> m_per_client;  ///< open, unrestricted
-    std::size_t m_open_normal = 0;
+    ClientQuota m_admission;  ///< open, unrestricted connections
     std::size_t m_open_restricted = 0;
     std::size_t m_buffered = 0;  ///< request bytes held over all connections
     uint64_t m_next_id = 2;      ///< 0 and 1 are the listening socket and the eventfd
@@ -153,22 +151,11 @@ private:
     std::function<std::string()> m_progress;  ///< what starting is doing; guarded by the mutex
     std::function<Readiness()> m_readiness;   ///< set before run()
     std::function<uint64_t()> m_version;      ///< set before run()
-    std::vector<uint64_t> m_waiting;          ///< Waiting connections, oldest first
-    std::size_t m_waiting_total = 0;
-    std::unordered_map<std::string, std::size_t> m_waiting_per_client;
+    WaitingReads m_waiting;
     bool m_draining = false;
     Clock::time_point m_grace_deadline{};
     Clock::time_point m_hard_deadline{};
     Clock::time_point m_last_sweep{};
-
-    struct Completion {
-        uint64_t conn;
-        Outcome outcome;
-        bool close;
-    };
-    std::mutex m_done_mutex;
-    std::vector<Completion> m_done;
-    std::vector<uint64_t> m_ready_streams;  ///< streams offered a part; guarded by m_done_mutex
 };
 
 }  // namespace strata::server

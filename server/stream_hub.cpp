@@ -21,11 +21,6 @@ namespace {
 constexpr std::chrono::milliseconds IDLE_WAIT{10};
 /// The same with no stream open (commits wake the thread themselves).
 constexpr std::chrono::milliseconds QUIET_WAIT{250};
-/// Event streams get a comment this often, so that proxies and the front end notice a client
-/// that left even when nothing is committed.
-constexpr std::chrono::seconds HEARTBEAT{15};
-/// Commit events waiting for the hub's thread, at most.
-constexpr std::size_t MAX_QUEUED_REPORTS = 1024;
 
 /// One frame: the JPEG, then the next boundary and the next part's headers at once. A browser
 /// shows a part only once the next part's headers arrive (Chromium finishes an image part
@@ -47,15 +42,7 @@ std::string frame_part(const std::string& jpeg, uint64_t version, uint32_t sampl
     return part;
 }
 
-/// Drops the channels whose client left; returns how many remain.
-std::size_t prune(std::vector<std::shared_ptr<StreamChannel>>& channels) {
-    channels.erase(
-        std::remove_if(channels.begin(), channels.end(), [](const auto& c) { return c->gone(); }),
-        channels.end());
-    return channels.size();
-}
-
-/// The same for a view's watchers.
+/// Drops a view's watchers whose client left; returns how many remain.
 template <class W>
 std::size_t prune_watchers(std::vector<W>& watchers) {
     watchers.erase(std::remove_if(watchers.begin(), watchers.end(),
@@ -71,9 +58,11 @@ std::size_t view_bytes(const ViewerSpec& spec) {
 }
 
 StreamHub::StreamHub(Engine& engine, std::function<bool()> api_busy, std::size_t max_view_bytes)
-    : m_engine(engine), m_api_busy(std::move(api_busy)), m_max_view_bytes(max_view_bytes) {
-    // Commits before the hub existed are no events (the first event, hello, describes them).
-    m_reported_version = m_engine.last_report().version;
+    : m_engine(engine),
+      m_api_busy(std::move(api_busy)),
+      m_max_view_bytes(max_view_bytes),
+      // Commits before the hub existed are no events (the first event, hello, describes them).
+      m_events(engine.last_report().version, [this] { poke(); }) {
     m_engine.set_commit_listener([this](const RebuildReport& r) { on_commit(r); });
     m_thread = std::thread([this] { run(); });
 }
@@ -101,13 +90,13 @@ Result<std::shared_ptr<StreamChannel>> StreamHub::watch(ViewerSpec spec) {
         }
         if (held + view_bytes(spec) > m_max_view_bytes) {
             ++m_stats.views_refused;
-            return failure(ErrorCode::TooLarge,
-                           "a new view of " + std::to_string(spec.request.width) + "x" +
-                               std::to_string(spec.request.height) + " would take the open " +
-                               "streams' views to " + std::to_string((held + view_bytes(spec)) >> 20) +
-                               " MiB, over --max-stream-mb (" +
-                               std::to_string(m_max_view_bytes >> 20) +
-                               " MiB): watch a smaller frame, or the view of a stream already open");
+            return failure(
+                ErrorCode::TooLarge,
+                "a new view of " + std::to_string(spec.request.width) + "x" +
+                    std::to_string(spec.request.height) + " would take the open " +
+                    "streams' views to " + std::to_string((held + view_bytes(spec)) >> 20) +
+                    " MiB, over --max-stream-mb (" + std::to_string(m_max_view_bytes >> 20) +
+                    " MiB): watch a smaller frame, or the view of a stream already open");
         }
     }
     View& view = m_views[spec.key];
@@ -130,31 +119,18 @@ Result<std::shared_ptr<StreamChannel>> StreamHub::watch(ViewerSpec spec) {
     return channel;
 }
 
-std::shared_ptr<StreamChannel> StreamHub::subscribe() {
-    auto channel = std::make_shared<StreamChannel>(StreamChannel::Mode::Queue);
+void StreamHub::poke() {
     std::lock_guard lock(m_mutex);
-    if (m_stopping) return nullptr;
-    m_event_clients.push_back(channel);
-    m_poked = true;  // from the quiet pace to the busy one
+    m_poked = true;
     m_wake.notify_one();
-    return channel;
+}
+
+std::shared_ptr<StreamChannel> StreamHub::subscribe() {
+    return m_events.subscribe();
 }
 
 void StreamHub::on_commit(const RebuildReport& report) {
-    std::lock_guard lock(m_mutex);
-    if (m_stopping || report.version <= m_reported_version) return;
-    m_reported_version = report.version;
-    m_last_commit = report;
-    if (m_event_clients.empty()) return;  // a new client's hello carries the last one
-    // A render of the hub's own can take seconds while clients commit: the queue is bounded
-    // (the oldest go first, and the count says so).
-    if (m_reports.size() >= MAX_QUEUED_REPORTS) {
-        m_reports.erase(m_reports.begin());
-        ++m_stats.commit_events_dropped;
-    }
-    m_reports.push_back(report);
-    m_poked = true;
-    m_wake.notify_one();
+    m_events.on_commit(report);
 }
 
 void StreamHub::stop() {
@@ -167,10 +143,9 @@ void StreamHub::stop() {
         m_stopping = true;
         for (auto& [key, view] : m_views)
             for (auto& w : view.viewers) all.push_back(w.channel);
-        all.insert(all.end(), m_event_clients.begin(), m_event_clients.end());
         m_views.clear();
-        m_event_clients.clear();
     }
+    m_events.stop();
     m_cancel.cancel(CancelReason::Shutdown);
     m_wake.notify_all();
     for (auto& c : all) c->end();
@@ -196,17 +171,15 @@ StreamHubStats StreamHub::stats() const {
         }
     }
     s.views = m_views.size();
-    s.event_clients = 0;
-    for (const auto& c : m_event_clients) s.event_clients += c->gone() ? 0 : 1;
+    const CommitEvents::Stats events = m_events.stats();
+    s.event_clients = events.clients;
+    s.commit_events = events.events;
+    s.commit_events_dropped = events.events_dropped;
     return s;
 }
 
 RebuildReport StreamHub::last_commit() const {
-    {
-        std::lock_guard lock(m_mutex);
-        if (m_last_commit) return *m_last_commit;
-    }
-    return m_engine.last_report();
+    return m_events.last_commit().value_or(m_engine.last_report());
 }
 
 uint64_t StreamHub::scene_version() const {
@@ -216,45 +189,19 @@ uint64_t StreamHub::scene_version() const {
 void StreamHub::run() {
     std::unique_lock lock(m_mutex);
     while (!m_stopping) {
-        const bool quiet = m_views.empty() && m_event_clients.empty();
+        const bool quiet = m_views.empty() && !m_events.has_clients();
         m_wake.wait_for(lock, quiet ? QUIET_WAIT : IDLE_WAIT,
                         [&] { return m_stopping || m_poked; });
         m_poked = false;
         if (m_stopping) break;
-        std::vector<RebuildReport> reports;
-        reports.swap(m_reports);
         lock.unlock();
         const Clock::time_point now = Clock::now();
-        publish_events(std::move(reports), now);
+        m_events.publish(now);
         // Renders one view at a time, so that events go out between frames.
         const bool served = serve_joiners();
         const bool rendered = render_one(now) || served;
         lock.lock();
         if (rendered) m_poked = true;  // another view may be due as well
-    }
-}
-
-void StreamHub::publish_events(std::vector<RebuildReport> reports, Clock::time_point now) {
-    std::vector<std::shared_ptr<StreamChannel>> clients;
-    {
-        std::lock_guard lock(m_mutex);
-        prune(m_event_clients);
-        clients = m_event_clients;
-        m_stats.commit_events += reports.size();
-    }
-    if (clients.empty()) return;
-    for (const RebuildReport& r : reports) {
-        const protocol::Json data = {{"version", r.version},
-                                     {"report", protocol::report_to_json(r)}};
-        auto event = std::make_shared<const std::string>(
-            "id: " + std::to_string(r.version) + "\nevent: commit\ndata: " +
-            protocol::dump_json(data) + "\n\n");
-        for (auto& c : clients) c->offer(event);
-    }
-    if (now >= m_next_heartbeat) {
-        m_next_heartbeat = now + HEARTBEAT;
-        auto ping = std::make_shared<const std::string>(": keep-alive\n\n");
-        for (auto& c : clients) c->offer(ping);
     }
 }
 
@@ -376,6 +323,7 @@ StreamHub::RenderedFrame StreamHub::encode_render(Result<Frame>& frame, float ex
 void StreamHub::offer_render(const std::string& key, uint64_t version, Clock::time_point now,
                              const Result<Frame>& frame, RenderedFrame&& rendered) {
     std::vector<std::pair<std::shared_ptr<StreamChannel>, StreamChannel::Part>> offers;
+    std::optional<RebuildReport> committed;  // the render's own commit is an event too
     {
         std::lock_guard lock(m_mutex);
         auto it = m_views.find(key);
@@ -391,12 +339,7 @@ void StreamHub::offer_render(const std::string& key, uint64_t version, Clock::ti
         }
         ++m_stats.frames_rendered;
         const FrameInfo& info = frame->info;
-        if (info.report.version > m_reported_version) {
-            m_reported_version = info.report.version;
-            m_last_commit = info.report;
-            m_reports.push_back(info.report);
-            m_poked = true;
-        }
+        committed = info.report;
         v.launches = info.version == v.version ? v.launches + 1 : 1;
         v.version = info.version;
         v.samples = info.samples;
@@ -413,6 +356,7 @@ void StreamHub::offer_render(const std::string& key, uint64_t version, Clock::ti
         }
         m_stats.frames_sent += offers.size();
     }
+    if (committed) m_events.on_commit(*committed);
     for (auto& [c, part] : offers) c->offer(part);
 }
 

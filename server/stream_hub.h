@@ -20,10 +20,8 @@
 // selection shows at once, without a render, even when accumulation has ended. An instance the
 // frame does not show (removed since, hidden, off screen) tints nothing.
 //
-// Events. Each commit that brought edits in becomes one `commit` event with its version and
-// rebuild report, whoever caused it (the hub's renders, POST /v1/commit, API renders, picks): the
-// hub is the engine's commit listener, which queues the report and wakes the hub's thread, so
-// commits in quick succession are each reported, in order.
+// Events. The hub is the engine's commit listener and runs the publishing of commit events
+// (commit_events.h) on its thread, between frames; its own renders' commits are events too.
 
 #include <chrono>
 #include <condition_variable>
@@ -40,6 +38,7 @@
 
 #include "engine/core/cancel.h"
 #include "engine/engine.h"
+#include "server/commit_events.h"
 #include "server/stream_channel.h"
 
 namespace strata::server {
@@ -69,11 +68,11 @@ struct StreamHubStats {
     uint64_t commit_events = 0;          ///< commit events (each sent to every event client)
     uint64_t commit_events_dropped = 0;  ///< dropped from a full queue (oldest first)
     uint64_t renders_deferred = 0;       ///< times a due viewer render waited for API renders
-    uint64_t frames_dropped = 0;     ///< frames open viewers missed (a newer one replaced them)
-    uint64_t highlight_encodes = 0;  ///< JPEGs encoded with a highlight (one per frame and id)
-    std::size_t held_bytes = 0;      ///< frame bytes held for open viewers (pending and writing)
-    std::size_t view_bytes = 0;      ///< what the open views hold (view_bytes of each)
-    uint64_t views_refused = 0;      ///< streams refused: their view was over the budget
+    uint64_t frames_dropped = 0;         ///< frames open viewers missed (a newer one replaced them)
+    uint64_t highlight_encodes = 0;      ///< JPEGs encoded with a highlight (one per frame and id)
+    std::size_t held_bytes = 0;  ///< frame bytes held for open viewers (pending and writing)
+    std::size_t view_bytes = 0;  ///< what the open views hold (view_bytes of each)
+    uint64_t views_refused = 0;  ///< streams refused: their view was over the budget
 };
 
 /// The memory a view of `spec` holds at its frame size: the tone-mapped frame (3 bytes a
@@ -163,7 +162,8 @@ private:
     bool serve_joiners();
 
     void run();
-    void publish_events(std::vector<RebuildReport> reports, Clock::time_point now);
+    /// Wakes the hub's thread (a new stream, a commit event to send).
+    void poke();
     /// Renders the most overdue view that needs a frame; false when none did.
     bool render_one(Clock::time_point now);
     /// Whether `view` needs a frame at scene `version`: the scene moved, or accumulation can
@@ -194,11 +194,7 @@ private:
     bool m_stopping = false;
     bool m_poked = false;
     std::map<std::string, View> m_views;
-    std::vector<std::shared_ptr<StreamChannel>> m_event_clients;
-    std::vector<RebuildReport> m_reports;
-    uint64_t m_reported_version = 0;  ///< of the newest commit event
-    std::optional<RebuildReport> m_last_commit;
-    Clock::time_point m_next_heartbeat{};
+    CommitEvents m_events;
     StreamHubStats m_stats;
     std::thread m_thread;
 };
