@@ -13,7 +13,6 @@ namespace strata::protocol {
 
 namespace {
 
-using assets::AssetError;
 using assets::AssetFormat;
 
 /// Longest prefix: ids must stay under MAX_ID_LENGTH with ".material12345.3" appended.
@@ -22,15 +21,6 @@ constexpr std::size_t MAX_PREFIX = 200;
 Problem bad_query(const std::string& param, const std::string& why) {
     Problem p = make_problem(ProblemType::InvalidRequest, param + ": " + why);
     p.pointer = "/" + param;
-    return p;
-}
-
-Problem asset_problem(const AssetError& e) {
-    Problem p = make_problem(
-        e.kind == AssetError::Kind::TooLarge ? ProblemType::TooLarge : ProblemType::InvalidAsset,
-        e.describe());
-    p.file = e.file;
-    if (!e.element.empty()) p.element = e.element;
     return p;
 }
 
@@ -229,7 +219,7 @@ ApiResponse post_assets(Engine& engine, std::string body,
         asset = assets::import_asset(q->format, bytes, q->name, limits);
     }
     body = {};
-    if (!asset) return problem_response(asset_problem(asset.error()));
+    if (!asset) return problem_response(asset.error());
     assets::AssetBatch out =
         assets::asset_to_batch(std::move(asset.value()), {q->prefix, q->instance, q->parent});
     const std::size_t edits = out.batch.edits.size();

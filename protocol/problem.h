@@ -1,8 +1,10 @@
 #pragma once
 // Problem details (RFC 9457): the one vocabulary of errors at the protocol boundary. The parsers
-// answer with a Problem (Parsed<T>), the API with a problem document; engine Errors and importer
-// AssetErrors become Problems here, once. A Problem carries its HTTP status as the `status`
-// member the RFC defines; nothing here depends on an HTTP library.
+// (Parsed<T>) and the importers (assets::Imported<T>) answer with a Problem, the API with its
+// document; engine Errors become Problems here, once. A Problem carries its HTTP status as the
+// `status` member the RFC defines; nothing here depends on an HTTP library. The types and
+// constructors (problem_types.cpp) need nothing beyond the engine's result types; the
+// conversions and the JSON document (problem.cpp) are the protocol's.
 
 #include <cstddef>
 #include <cstdint>

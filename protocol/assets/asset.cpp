@@ -66,41 +66,41 @@ uint64_t Asset::triangle_count() const {
     return n;
 }
 
-std::string AssetError::describe() const {
-    std::string out = file;
-    if (!element.empty()) out += ": " + element;
-    return out + ": " + message;
+Unexpected<protocol::Problem> ErrorSink::make(protocol::ProblemType type, std::string element,
+                                              const std::string& message) const {
+    protocol::Problem p = protocol::make_problem(
+        type, m_file + (element.empty() ? "" : ": " + element) + ": " + message);
+    p.file = m_file;
+    if (!element.empty()) p.element = std::move(element);
+    return Unexpected(std::move(p));
 }
 
-Expected<void, AssetError> check_budget(const Asset& asset, const ImportLimits& limits,
-                                        const ErrorSink& sink) {
+Imported<void> check_budget(const Asset& asset, const ImportLimits& limits, const ErrorSink& sink) {
     const uint64_t v = asset.vertex_count();
     // Each mesh also costs MESH_OVERHEAD_TRIANGLES of the budget (budget.h).
     const uint64_t t = asset.triangle_count() + asset.meshes.size() * MESH_OVERHEAD_TRIANGLES;
     if (v > limits.max_vertices)
-        return sink.too_large("", "the asset holds " + std::to_string(v) +
-                                      " vertices; the scene has room for " +
-                                      std::to_string(limits.max_vertices) +
-                                      " (max_scene_vertices)");
+        return sink.too_large(
+            "", "the asset holds " + std::to_string(v) + " vertices; the scene has room for " +
+                    std::to_string(limits.max_vertices) + " (max_scene_vertices)");
     if (t > limits.max_triangles)
-        return sink.too_large("", "the asset holds " + std::to_string(t) +
-                                      " triangles, each of its meshes counted with " +
-                                      std::to_string(MESH_OVERHEAD_TRIANGLES) +
-                                      " more; the scene has room for " +
-                                      std::to_string(limits.max_triangles) +
-                                      " (max_scene_triangles)");
+        return sink.too_large(
+            "", "the asset holds " + std::to_string(t) +
+                    " triangles, each of its meshes counted with " +
+                    std::to_string(MESH_OVERHEAD_TRIANGLES) + " more; the scene has room for " +
+                    std::to_string(limits.max_triangles) + " (max_scene_triangles)");
     if (asset.nodes.size() > limits.max_nodes)
         return sink.too_large("", "the asset holds " + std::to_string(asset.nodes.size()) +
                                       " nodes; at most " + std::to_string(limits.max_nodes));
     return {};
 }
 
-Expected<void, AssetError> validate_asset(const Asset& asset, const ErrorSink& sink) {
+Imported<void> validate_asset(const Asset& asset, const ErrorSink& sink) {
     // Step 1: meshes, their attributes and their triangles.
     for (std::size_t i = 0; i < asset.meshes.size(); ++i) {
         const AssetMesh& m = asset.meshes[i];
-        const std::string where = "mesh " + std::to_string(i) +
-                                  (m.name.empty() ? "" : " ('" + m.name + "')");
+        const std::string where =
+            "mesh " + std::to_string(i) + (m.name.empty() ? "" : " ('" + m.name + "')");
         const std::size_t n = m.positions.size();
         if (n == 0 || m.triangles.empty())
             return sink.invalid(where, "has no vertices or no triangles");
@@ -108,8 +108,8 @@ Expected<void, AssetError> validate_asset(const Asset& asset, const ErrorSink& s
         for (std::size_t v = 0; v < n; ++v)
             if (!is_finite(m.positions[v]) ||
                 glm::any(glm::greaterThan(glm::abs(m.positions[v]), Vec3(float(MAX_COORDINATE)))))
-                return sink.invalid(where, "position " + std::to_string(v) +
-                                               " is not finite or lies beyond 1e15");
+                return sink.invalid(
+                    where, "position " + std::to_string(v) + " is not finite or lies beyond 1e15");
         for (std::size_t t = 0; t < m.triangles.size(); ++t) {
             const Triangle& tri = m.triangles[t];
             for (int k = 0; k < 3; ++k)
@@ -119,14 +119,14 @@ Expected<void, AssetError> validate_asset(const Asset& asset, const ErrorSink& s
                                                    std::to_string(n));
         }
         if (!m.normals.empty() && m.normals.size() != n)
-            return sink.invalid(where, "has " + std::to_string(m.normals.size()) +
-                                           " normals for " + std::to_string(n) + " vertices");
+            return sink.invalid(where, "has " + std::to_string(m.normals.size()) + " normals for " +
+                                           std::to_string(n) + " vertices");
         if (!m.uvs.empty() && m.uvs.size() != n)
             return sink.invalid(where, "has " + std::to_string(m.uvs.size()) + " uvs for " +
                                            std::to_string(n) + " vertices");
         if (!m.colors.empty() && m.colors.size() != n)
-            return sink.invalid(where, "has " + std::to_string(m.colors.size()) +
-                                           " colors for " + std::to_string(n) + " vertices");
+            return sink.invalid(where, "has " + std::to_string(m.colors.size()) + " colors for " +
+                                           std::to_string(n) + " vertices");
         if (m.material < -1 || m.material >= int(asset.materials.size()))
             return sink.invalid(where, "refers to material " + std::to_string(m.material) +
                                            " of only " + std::to_string(asset.materials.size()));
@@ -134,8 +134,8 @@ Expected<void, AssetError> validate_asset(const Asset& asset, const ErrorSink& s
     // Step 2: materials, each within the engine's ranges.
     for (std::size_t i = 0; i < asset.materials.size(); ++i) {
         const AssetMaterial& m = asset.materials[i];
-        const std::string where = "material " + std::to_string(i) +
-                                  (m.name.empty() ? "" : " ('" + m.name + "')");
+        const std::string where =
+            "material " + std::to_string(i) + (m.name.empty() ? "" : " ('" + m.name + "')");
         if (Status s = check_material(m.material); !s)
             return sink.invalid(where, s.error().field + ": " + s.error().message);
         if (m.base_color_texture < -1 || m.base_color_texture >= int(asset.textures.size()))
@@ -145,11 +145,11 @@ Expected<void, AssetError> validate_asset(const Asset& asset, const ErrorSink& s
     // Step 3: the node tree, parents first, and the world transforms it produces.
     for (std::size_t i = 0; i < asset.nodes.size(); ++i) {
         const AssetNode& node = asset.nodes[i];
-        const std::string where = "node " + std::to_string(i) +
-                                  (node.name.empty() ? "" : " ('" + node.name + "')");
+        const std::string where =
+            "node " + std::to_string(i) + (node.name.empty() ? "" : " ('" + node.name + "')");
         if (node.parent < -1 || node.parent >= int(i))
-            return sink.invalid(where, "its parent " + std::to_string(node.parent) +
-                                           " does not come before it");
+            return sink.invalid(
+                where, "its parent " + std::to_string(node.parent) + " does not come before it");
         if (!node.local.is_finite()) return sink.invalid(where, "transform is not finite");
         for (int mesh : node.meshes)
             if (mesh < 0 || mesh >= int(asset.meshes.size()))

@@ -15,6 +15,7 @@
 #include "engine/core/expected.h"
 #include "engine/core/math.h"
 #include "engine/scene/types.h"
+#include "protocol/problem.h"
 
 namespace strata::assets {
 
@@ -77,24 +78,12 @@ struct Asset {
     uint64_t triangle_count() const;
 };
 
-/// Why a file cannot be imported: the file, the element inside it and what is wrong.
-struct AssetError {
-    enum class Kind : uint8_t {
-        Invalid,      ///< malformed or inconsistent (422)
-        Unsupported,  ///< valid, but uses something Strata does not import (422)
-        TooLarge,     ///< more than the scene's budget allows (413)
-    };
-    Kind kind = Kind::Invalid;
-    std::string file;     ///< the upload's name ("bunny.obj", or the format when unnamed)
-    std::string element;  ///< "accessors[3]", "line 12", "element face 7", ...; "" for the whole
-    std::string message;
-
-    /// "bunny.obj: line 12: face index 900 is outside the 500 vertices".
-    std::string describe() const;
-};
-
+/// Why a file cannot be imported: a Problem (protocol/problem.h) of type invalid-asset (malformed,
+/// or uses what Strata does not import) or too-large (more than the scene's budget allows), whose
+/// `file` and `element` ("accessors[3]", "line 12", ...; none for the whole file) say where, and
+/// whose detail reads "bunny.obj: line 12: face index 900 is outside the 500 vertices".
 template <class T>
-using Imported = Expected<T, AssetError>;
+using Imported = Expected<T, protocol::Problem>;
 
 /// What an importer may allocate: the room left in the scene budget (checked before reading
 /// counts a header declares, so a tiny file cannot ask for gigabytes).
@@ -110,30 +99,32 @@ class ErrorSink {
 public:
     explicit ErrorSink(std::string file) : m_file(std::move(file)) {}
     const std::string& file() const { return m_file; }
-    Unexpected<AssetError> invalid(std::string element, std::string message) const {
-        return make(AssetError::Kind::Invalid, std::move(element), std::move(message));
+    /// Malformed or inconsistent.
+    Unexpected<protocol::Problem> invalid(std::string element, const std::string& message) const {
+        return make(protocol::ProblemType::InvalidAsset, std::move(element), message);
     }
-    Unexpected<AssetError> unsupported(std::string element, std::string message) const {
-        return make(AssetError::Kind::Unsupported, std::move(element), std::move(message));
+    /// Valid, but uses something Strata does not import.
+    Unexpected<protocol::Problem> unsupported(std::string element,
+                                              const std::string& message) const {
+        return make(protocol::ProblemType::InvalidAsset, std::move(element), message);
     }
-    Unexpected<AssetError> too_large(std::string element, std::string message) const {
-        return make(AssetError::Kind::TooLarge, std::move(element), std::move(message));
+    /// More than the scene's budget allows.
+    Unexpected<protocol::Problem> too_large(std::string element, const std::string& message) const {
+        return make(protocol::ProblemType::TooLarge, std::move(element), message);
     }
 
 private:
-    Unexpected<AssetError> make(AssetError::Kind k, std::string element, std::string msg) const {
-        return Unexpected(AssetError{k, m_file, std::move(element), std::move(msg)});
-    }
+    Unexpected<protocol::Problem> make(protocol::ProblemType type, std::string element,
+                                       const std::string& message) const;
     std::string m_file;
 };
 
 /// Checks an asset's counts against `limits` (TooLarge naming the count and the limit).
-Expected<void, AssetError> check_budget(const Asset& asset, const ImportLimits& limits,
-                                        const ErrorSink& sink);
+Imported<void> check_budget(const Asset& asset, const ImportLimits& limits, const ErrorSink& sink);
 
 /// Checks every index, every number and every reference of an asset an importer produced:
 /// triangles inside their mesh, finite positions, material, texture, mesh and parent indices in
 /// range, parents before children. Importers call it last; a failure names the element.
-Expected<void, AssetError> validate_asset(const Asset& asset, const ErrorSink& sink);
+Imported<void> validate_asset(const Asset& asset, const ErrorSink& sink);
 
 }  // namespace strata::assets

@@ -240,7 +240,7 @@ private:
         return out;
     }
 
-    Expected<void, AssetError> read_materials() {
+    Imported<void> read_materials() {
         for (std::size_t i = 0; i < m_model.materials.size(); ++i) {
             const tinygltf::Material& gm = m_model.materials[i];
             const std::string where = "materials[" + std::to_string(i) + "]";
@@ -413,9 +413,8 @@ private:
 
     /// The primitive's triangles (its indices, or its vertices in order), every index checked,
     /// against the budget left.
-    Expected<void, AssetError> read_triangles(const tinygltf::Primitive& prim,
-                                              const std::string& where, std::size_t vertices,
-                                              AssetMesh& mesh) {
+    Imported<void> read_triangles(const tinygltf::Primitive& prim, const std::string& where,
+                                  std::size_t vertices, AssetMesh& mesh) {
         std::size_t n_indices = vertices;
         AccessorView iv;
         if (prim.indices >= 0) {
@@ -456,9 +455,9 @@ private:
         return {};
     }
 
-    Expected<void, AssetError> read_attribute(const tinygltf::Primitive& prim, const char* name,
-                                              const std::string& where, std::size_t vertices,
-                                              int width, AssetMesh& mesh) {
+    Imported<void> read_attribute(const tinygltf::Primitive& prim, const char* name,
+                                  const std::string& where, std::size_t vertices, int width,
+                                  AssetMesh& mesh) {
         const auto it = prim.attributes.find(name);
         if (it == prim.attributes.end()) return {};
         const std::string use = where + ".attributes." + name;
@@ -524,7 +523,7 @@ private:
 
     /// The scene's node trees, parents first; each node reached once (cycles and shared
     /// children are refused).
-    Expected<void, AssetError> read_nodes() {
+    Imported<void> read_nodes() {
         const std::size_t count = m_model.nodes.size();
         if (count > m_limits.max_nodes)
             return m_sink.too_large("nodes", std::to_string(count) + " nodes; at most " +

@@ -82,7 +82,7 @@ Result<EditBatch> scene_with_models() {
     const std::string_view obj = demo_file("spot.obj");
     const auto bytes = std::span(reinterpret_cast<const uint8_t*>(obj.data()), obj.size());
     auto asset = assets::import_asset(assets::AssetFormat::Obj, bytes, "spot.obj", {});
-    if (!asset) return failure(ErrorCode::Internal, asset.error().describe());
+    if (!asset) return failure(ErrorCode::Internal, asset.error().detail);
 
     // The file has texture coordinates but no normals, and no material: smooth-shade it and
     // give it a coat (its texture is not part of the file).

@@ -36,7 +36,7 @@ TEST(ArchiveImport, AnObjFindsItsMtlAndTextureRelativeToItsFolder) {
     const std::string archive = run_tar(dir.path(), "", "quad");
     ASSERT_FALSE(archive.empty());
     auto r = import(archive);
-    ASSERT_TRUE(r.has_value()) << r.error().describe();
+    ASSERT_TRUE(r.has_value()) << r.error().detail;
     EXPECT_EQ(r.value().model, "quad/models/quad.obj");
     EXPECT_EQ(r.value().format, AssetFormat::Obj);
     const Asset& a = r.value().asset;
@@ -51,7 +51,7 @@ TEST(ArchiveImport, AnObjFindsItsMtlAndTextureRelativeToItsFolder) {
 TEST(ArchiveImport, AMissingSideFileIsAWarningNotAFailure) {
     const std::string archive = tar_file("quad.obj", QUAD_OBJ) + tar_end();
     auto r = import(archive);
-    ASSERT_TRUE(r.has_value()) << r.error().describe();
+    ASSERT_TRUE(r.has_value()) << r.error().detail;
     ASSERT_EQ(r.value().asset.warnings.size(), 1u);
     EXPECT_THAT(r.value().asset.warnings[0], HasSubstr("'../materials/quad.mtl'"));
 }
@@ -63,7 +63,7 @@ TEST(ArchiveImport, AReferenceCannotClimbOutOfTheArchive) {
                                          "v 0 1 0\nf 1 2 3\n") +
                                 tar_file("quad.mtl", "newmtl a\nKd 1 0 0\n") + tar_end();
     auto r = import(archive);
-    ASSERT_TRUE(r.has_value()) << r.error().describe();
+    ASSERT_TRUE(r.has_value()) << r.error().detail;
     EXPECT_TRUE(r.value().asset.materials.empty());
     EXPECT_EQ(r.value().asset.warnings.size(), 1u);
 }
@@ -76,7 +76,7 @@ TEST(ArchiveImport, AGltfReadsItsExternalBufferAndImageFromTheArchive) {
                                         "CesiumLogoFlat.png");
     ASSERT_FALSE(archive.empty());
     auto r = import(archive);
-    ASSERT_TRUE(r.has_value()) << r.error().describe();
+    ASSERT_TRUE(r.has_value()) << r.error().detail;
     EXPECT_EQ(r.value().model, "box/BoxTextured.gltf");
     EXPECT_EQ(r.value().format, AssetFormat::Gltf);
     const Asset& a = r.value().asset;
@@ -101,7 +101,7 @@ TEST(ArchiveImport, AGltfWithoutItsBufferNamesTheArchiveTheModelAndTheFile) {
     auto r = import(tar_file("BoxTextured.gltf", gltf) + tar_end());
     ASSERT_FALSE(r.has_value());
     EXPECT_EQ(r.error().file, "quad.tar: BoxTextured.gltf");
-    EXPECT_THAT(r.error().message,
+    EXPECT_THAT(r.error().detail,
                 HasSubstr("'BoxTextured0.bin' refused: it is not part of the upload"));
 }
 
@@ -109,15 +109,15 @@ TEST(ArchiveImport, AnArchiveWithoutAModelIsRefused) {
     auto r = import(tar_file("a.png", "x") + tar_file("b.mtl", "y") + tar_end());
     ASSERT_FALSE(r.has_value());
     EXPECT_EQ(r.error().file, "quad.tar");
-    EXPECT_THAT(r.error().message, HasSubstr("holds no model"));
-    EXPECT_THAT(import(tar_end()).error().message, HasSubstr("it is empty"));
+    EXPECT_THAT(r.error().detail, HasSubstr("holds no model"));
+    EXPECT_THAT(import(tar_end()).error().detail, HasSubstr("it is empty"));
 }
 
 TEST(ArchiveImport, AnArchiveWithTwoModelsIsRefusedNamingBoth) {
     auto r =
         import(tar_file("a/one.obj", "v 0 0 0\n") + tar_file("b/two.PLY", "ply\n") + tar_end());
     ASSERT_FALSE(r.has_value());
-    EXPECT_THAT(r.error().message, HasSubstr("holds 2 models ('a/one.obj', 'b/two.PLY')"));
+    EXPECT_THAT(r.error().detail, HasSubstr("holds 2 models ('a/one.obj', 'b/two.PLY')"));
 }
 
 TEST(ArchiveImport, AnImporterErrorNamesTheArchiveAndTheModel) {

@@ -23,11 +23,11 @@ std::unique_ptr<Engine> make_engine() {
 
 TEST(AssetBatch, ASharedGltfMeshIsOneSceneMeshWithSeveralInstances) {
     const std::string path = std::string(STRATA_ASSIMP_MODELS_DIR) +
-                              "/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb";
+                             "/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb";
     const std::string glb = read_file(path);
     if (glb.empty()) GTEST_SKIP() << path << " missing: install assimp-testmodels";
     auto asset = import_asset(AssetFormat::Glb, bytes_of(glb), "2CylinderEngine.glb", {});
-    ASSERT_TRUE(asset.has_value()) << asset.error().describe();
+    ASSERT_TRUE(asset.has_value()) << asset.error().detail;
     AssetBatch b = asset_to_batch(std::move(asset.value()), {"engine", true});
     EXPECT_EQ(b.meshes.size(), 34u);
     EXPECT_EQ(b.instances.size(), 115u);
@@ -47,7 +47,8 @@ TEST(AssetBatch, ASharedGltfMeshIsOneSceneMeshWithSeveralInstances) {
         EXPECT_EQ(c.meshes, 34u);
         EXPECT_EQ(c.instances, 115u);
         std::size_t most = 0;
-        s.meshes().for_each([&](auto, const MeshRecord& m) { most = std::max(most, m.users.size()); });
+        s.meshes().for_each(
+            [&](auto, const MeshRecord& m) { most = std::max(most, m.users.size()); });
         EXPECT_EQ(most, 20u);
         EXPECT_GT(c.instanced_triangles, c.triangles);
         EXPECT_EQ(c.groups, b_groups);
@@ -59,7 +60,7 @@ TEST(AssetBatch, TheNodeTreeBecomesGroupsAndInstancesGetTheComposedWorldTransfor
       {"children": [1], "translation": [10, 0, 0]},
       {"mesh": 0, "translation": [0, 5, 0], "scale": [3, 3, 3]}])";
     auto asset = import_text(AssetFormat::Gltf, triangle_gltf(nodes));
-    ASSERT_TRUE(asset.has_value()) << asset.error().describe();
+    ASSERT_TRUE(asset.has_value()) << asset.error().detail;
     AssetBatch b = asset_to_batch(std::move(asset.value()), {"t", true, "holder"});
     ASSERT_EQ(b.groups, (std::vector<std::string>{"t", "t.group0"}));
     ASSERT_EQ(b.instances, std::vector<std::string>{"t.node1"});
@@ -91,7 +92,7 @@ TEST(AssetBatch, ATreeDeeperThanTheScenesGroupsIsFlattenedToWorldTransforms) {
                  "}";
     nodes += "]";
     auto asset = import_text(AssetFormat::Gltf, triangle_gltf(nodes));
-    ASSERT_TRUE(asset.has_value()) << asset.error().describe();
+    ASSERT_TRUE(asset.has_value()) << asset.error().detail;
     AssetBatch b = asset_to_batch(std::move(asset.value()), {"deep", true});
     EXPECT_EQ(b.groups, std::vector<std::string>{"deep"});
     EXPECT_THAT(b.warnings, Contains(HasSubstr("flattened")));
@@ -105,9 +106,9 @@ TEST(AssetBatch, ATreeDeeperThanTheScenesGroupsIsFlattenedToWorldTransforms) {
 }
 
 TEST(AssetBatch, ANodeTheSceneCannotPlaceIsLeftOutWithAWarning) {
-    auto asset = import_text(AssetFormat::Gltf,
-                             triangle_gltf(R"([{"mesh": 0, "scale": [0, 0, 0]}])"));
-    ASSERT_TRUE(asset.has_value()) << asset.error().describe();
+    auto asset =
+        import_text(AssetFormat::Gltf, triangle_gltf(R"([{"mesh": 0, "scale": [0, 0, 0]}])"));
+    ASSERT_TRUE(asset.has_value()) << asset.error().detail;
     AssetBatch b = asset_to_batch(std::move(asset.value()), {"z", true});
     EXPECT_TRUE(b.instances.empty());
     EXPECT_EQ(b.meshes.size(), 1u);
@@ -116,9 +117,9 @@ TEST(AssetBatch, ANodeTheSceneCannotPlaceIsLeftOutWithAWarning) {
 }
 
 TEST(AssetBatch, ZeroNormalsAreDroppedForTheirMeshWithAWarning) {
-    auto asset = import_text(AssetFormat::Obj,
-                             "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nf 1//1 2//1 3//1\n");
-    ASSERT_TRUE(asset.has_value()) << asset.error().describe();
+    auto asset =
+        import_text(AssetFormat::Obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nf 1//1 2//1 3//1\n");
+    ASSERT_TRUE(asset.has_value()) << asset.error().detail;
     AssetBatch b = asset_to_batch(std::move(asset.value()), {"zn", true});
     EXPECT_THAT(b.warnings, Contains(HasSubstr("normals dropped")));
     auto engine = make_engine();
@@ -160,7 +161,7 @@ TEST(AssetBatch, NormalsUvsAndTheEmbeddedTextureReachTheScene) {
                                       "/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb");
     if (glb.empty()) GTEST_SKIP() << "assimp-testmodels missing";
     auto asset = import_asset(AssetFormat::Glb, bytes_of(glb), "box.glb", {});
-    ASSERT_TRUE(asset.has_value()) << asset.error().describe();
+    ASSERT_TRUE(asset.has_value()) << asset.error().detail;
     AssetBatch b = asset_to_batch(std::move(asset.value()), {"box", true});
     EXPECT_EQ(b.textures, std::vector<std::string>{"box.texture0"});
     // Normals, uvs and the texture reach the scene; the material names the texture.
@@ -187,7 +188,8 @@ TEST(AssetBatch, TexturesWithoutBytesOrInAnotherFormatAreLeftOutWithAWarning) {
     AssetBatch b = asset_to_batch(std::move(asset), {"t", false});
     EXPECT_TRUE(b.textures.empty());
     EXPECT_THAT(b.warnings, Contains(HasSubstr("not part of the upload ('logo.png')")));
-    EXPECT_THAT(b.warnings, Contains(HasSubstr("only PNG and JPEG images are decoded (it is image/webp)")));
+    EXPECT_THAT(b.warnings,
+                Contains(HasSubstr("only PNG and JPEG images are decoded (it is image/webp)")));
     auto engine = make_engine();
     ASSERT_TRUE(engine->apply(std::move(b.batch)).has_value());
     engine->read([](const Scene& s) {

@@ -107,8 +107,8 @@ TEST(DemoModels, TheDemoSceneHoldsSpotSmoothShadedOnTheGroundClearOfEverythingEl
         ASSERT_TRUE(meshes.count(i->mesh)) << i->mesh;
         Box box;
         for (const Vec3& p : meshes[i->mesh]->positions) box.add(i->transform.transform_point(p));
-        const auto inside =
-            std::count_if(world.begin(), world.end(), [&](const Vec3& p) { return box.contains(p); });
+        const auto inside = std::count_if(world.begin(), world.end(),
+                                          [&](const Vec3& p) { return box.contains(p); });
         EXPECT_EQ(inside, 0) << "Spot overlaps " << i->id;
     }
 

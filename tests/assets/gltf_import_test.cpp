@@ -19,14 +19,13 @@ using ::testing::HasSubstr;
 const std::string MODELS = STRATA_ASSIMP_MODELS_DIR;
 
 /// Skips the test without Debian's assimp-testmodels.
-#define REQUIRE_TESTMODELS()                                              \
+#define REQUIRE_TESTMODELS()                                                          \
     if (read_file(MODELS + "/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb").empty()) \
     GTEST_SKIP() << MODELS << " missing: install assimp-testmodels"
 
 Imported<Asset> import_path(const std::string& relative) {
     const std::string text = read_file(MODELS + "/" + relative);
-    if (text.empty())
-        return Unexpected(AssetError{AssetError::Kind::Invalid, relative, "", "cannot read"});
+    if (text.empty()) return ErrorSink(relative).invalid("", "cannot read");
     const auto format = relative.ends_with(".glb") ? AssetFormat::Glb : AssetFormat::Gltf;
     return import_asset(format, bytes_of(text), relative, {});
 }
@@ -34,7 +33,7 @@ Imported<Asset> import_path(const std::string& relative) {
 TEST(GltfImport, TwoCylinderEngineSharesEachMeshBetweenTheNodesThatUseIt) {
     REQUIRE_TESTMODELS();
     auto a = import_path("glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb");
-    ASSERT_TRUE(a.has_value()) << a.error().describe();
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
     const Asset& asset = a.value();
     // Counted independently from the file's JSON: 82 nodes reachable from the scene, 67 of them
     // with a mesh, 29 distinct meshes of 34 primitives in all, 34 materials.
@@ -58,15 +57,14 @@ TEST(GltfImport, NodeTransformsAreReadAsTrsOrColumnMajorMatrices) {
       {"children": [1], "translation": [1, 2, 3], "scale": [2, 2, 2]},
       {"mesh": 0, "rotation": [0, 0, 0.7071068, 0.7071068]},
       {"mesh": 0, "matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0, 5,6,7,1]}])";
-    auto a = import_text(AssetFormat::Gltf,
-                         triangle_gltf(nodes, "", R"([{"nodes": [0, 2]}])"));
-    ASSERT_TRUE(a.has_value()) << a.error().describe();
+    auto a = import_text(AssetFormat::Gltf, triangle_gltf(nodes, "", R"([{"nodes": [0, 2]}])"));
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
     const Asset& asset = a.value();
     ASSERT_EQ(asset.meshes.size(), 1u);  // one glTF mesh, used twice
     ASSERT_EQ(asset.nodes.size(), 3u);
     EXPECT_EQ(asset.nodes[1].parent, 0);
-    const Vec3 p = asset.nodes[0].local.transform_point(
-        asset.nodes[1].local.transform_point(Vec3(1, 0, 0)));
+    const Vec3 p =
+        asset.nodes[0].local.transform_point(asset.nodes[1].local.transform_point(Vec3(1, 0, 0)));
     EXPECT_NEAR(p.x, 1.0f, 1e-5f);  // rotated 90 degrees about z, scaled by 2, moved
     EXPECT_NEAR(p.y, 4.0f, 1e-5f);
     EXPECT_NEAR(p.z, 3.0f, 1e-5f);
@@ -77,24 +75,24 @@ TEST(GltfImport, NodeTransformsAreReadAsTrsOrColumnMajorMatrices) {
 TEST(GltfImport, ModesOtherThanTrianglesAreRefusedNamingThePrimitive) {
     auto a = import_text(AssetFormat::Gltf, triangle_gltf(R"([{"mesh": 0}])", R"(, "mode": 1)"));
     ASSERT_FALSE(a.has_value());
-    EXPECT_EQ(a.error().kind, AssetError::Kind::Unsupported);
+    EXPECT_EQ(a.error().type, protocol::ProblemType::InvalidAsset);
     EXPECT_EQ(a.error().element, "meshes[0].primitives[0]");
-    EXPECT_THAT(a.error().message, HasSubstr("LINES"));
+    EXPECT_THAT(a.error().detail, HasSubstr("LINES"));
 }
 
 TEST(GltfImport, AnExternalBufferIsRefusedAndNeverRead) {
     REQUIRE_TESTMODELS();
     auto a = import_path("glTF2/BoxTextured-glTF/BoxTextured.gltf");
     ASSERT_FALSE(a.has_value());
-    EXPECT_EQ(a.error().kind, AssetError::Kind::Unsupported);
-    EXPECT_THAT(a.error().message, HasSubstr("external file"));
+    EXPECT_EQ(a.error().type, protocol::ProblemType::InvalidAsset);
+    EXPECT_THAT(a.error().detail, HasSubstr("external file"));
     // Even a path that exists on this machine is not read.
     std::string doc = triangle_gltf(R"([{"mesh": 0}])");
     doc.replace(doc.find("data:"), doc.find('"', doc.find("data:")) - doc.find("data:"),
                 "/etc/hostname");
     auto b = import_text(AssetFormat::Gltf, doc);
     ASSERT_FALSE(b.has_value());
-    EXPECT_THAT(b.error().message, HasSubstr("refused"));
+    EXPECT_THAT(b.error().detail, HasSubstr("refused"));
 }
 
 TEST(GltfImport, EmbeddedAndBinaryBoxesImportWithTheirTexture) {
@@ -102,7 +100,7 @@ TEST(GltfImport, EmbeddedAndBinaryBoxesImportWithTheirTexture) {
     for (const char* path : {"glTF2/BoxTextured-glTF-Embedded/BoxTextured.gltf",
                              "glTF2/BoxTextured-glTF-Binary/BoxTextured.glb"}) {
         auto a = import_path(path);
-        ASSERT_TRUE(a.has_value()) << a.error().describe();
+        ASSERT_TRUE(a.has_value()) << a.error().detail;
         ASSERT_EQ(a.value().meshes.size(), 1u) << path;
         EXPECT_EQ(a.value().meshes[0].triangles.size(), 12u) << path;
         ASSERT_EQ(a.value().textures.size(), 1u) << path;
@@ -117,9 +115,9 @@ TEST(GltfImport, ImagesThatShareABufferViewShareOneTexture) {
     const uint8_t rgb[] = {200, 100, 50};
     const std::string png = encode_png(rgb, 1, 1, 3).value();
     auto doc = nlohmann::json::parse(triangle_gltf(R"([{"mesh": 0}])", R"(, "material": 0)"));
-    doc["buffers"].push_back({{"byteLength", png.size()},
-                              {"uri", "data:application/octet-stream;base64," +
-                                          protocol::encode_base64(png)}});
+    doc["buffers"].push_back(
+        {{"byteLength", png.size()},
+         {"uri", "data:application/octet-stream;base64," + protocol::encode_base64(png)}});
     doc["bufferViews"].push_back({{"buffer", 1}, {"byteOffset", 0}, {"byteLength", png.size()}});
     for (int i = 0; i < 50; ++i) {
         doc["images"].push_back({{"bufferView", 2}, {"mimeType", "image/png"}});
@@ -128,7 +126,7 @@ TEST(GltfImport, ImagesThatShareABufferViewShareOneTexture) {
             {{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", i}}}}}});
     }
     auto a = import_text(AssetFormat::Gltf, doc.dump());
-    ASSERT_TRUE(a.has_value()) << a.error().describe();
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
     ASSERT_EQ(a.value().textures.size(), 1u);
     EXPECT_EQ(a.value().textures[0].bytes.size(), png.size());
     ASSERT_EQ(a.value().materials.size(), 50u);
@@ -145,12 +143,12 @@ TEST(GltfImport, TooManyPrimitivesForTheBudgetAreRefusedBeforeTinygltfReadsThem)
     limits.max_triangles = 10000;
     auto a = import_text(AssetFormat::Gltf, doc.dump(), {}, limits);
     ASSERT_FALSE(a.has_value());
-    EXPECT_EQ(a.error().kind, AssetError::Kind::TooLarge);
-    EXPECT_THAT(a.error().message, HasSubstr("declares 1000 primitives"));
+    EXPECT_EQ(a.error().type, protocol::ProblemType::TooLarge);
+    EXPECT_THAT(a.error().detail, HasSubstr("declares 1000 primitives"));
     // Within the budget, the same file imports, one mesh per primitive.
     limits.max_triangles = 1000 * (1 + 128);
     auto b = import_text(AssetFormat::Gltf, doc.dump(), {}, limits);
-    ASSERT_TRUE(b.has_value()) << b.error().describe();
+    ASSERT_TRUE(b.has_value()) << b.error().detail;
     EXPECT_EQ(b.value().meshes.size(), 1000u);
 }
 
@@ -161,18 +159,17 @@ TEST(GltfImport, AnIndexOutsideTheVerticesIsRefusedNamingTheAccessor) {
     auto a = import_text(AssetFormat::Gltf, doc);
     ASSERT_FALSE(a.has_value());
     EXPECT_EQ(a.error().element, "meshes[0].primitives[0].indices (accessors[1])");
-    EXPECT_THAT(a.error().message, HasSubstr("run past its buffer view"));
+    EXPECT_THAT(a.error().detail, HasSubstr("run past its buffer view"));
 }
 
 TEST(GltfImport, CyclesAndNodesWithTwoParentsAreRefused) {
     auto cycle = import_text(AssetFormat::Gltf,
                              triangle_gltf(R"([{"children": [1]}, {"children": [0], "mesh": 0}])"));
     ASSERT_FALSE(cycle.has_value());
-    EXPECT_THAT(cycle.error().message, HasSubstr("reached twice"));
+    EXPECT_THAT(cycle.error().detail, HasSubstr("reached twice"));
     auto shared = import_text(
-        AssetFormat::Gltf,
-        triangle_gltf(R"([{"children": [2]}, {"children": [2]}, {"mesh": 0}])", "",
-                      R"([{"nodes": [0, 1]}])"));
+        AssetFormat::Gltf, triangle_gltf(R"([{"children": [2]}, {"children": [2]}, {"mesh": 0}])",
+                                         "", R"([{"nodes": [0, 1]}])"));
     ASSERT_FALSE(shared.has_value());
     EXPECT_EQ(shared.error().element, "nodes[2]");
 }
@@ -182,7 +179,7 @@ TEST(GltfImport, DeeplyNestedJsonIsRefusedBeforeParsing) {
                              std::string(5000, '[') + std::string(5000, ']') + "}";
     auto a = import_text(AssetFormat::Gltf, deep);
     ASSERT_FALSE(a.has_value());
-    EXPECT_THAT(a.error().message, HasSubstr("nested deeper"));
+    EXPECT_THAT(a.error().detail, HasSubstr("nested deeper"));
 }
 
 TEST(GltfImport, AssimpsBrokenFilesAreRefusedWithTheirReason) {
@@ -197,8 +194,8 @@ TEST(GltfImport, AssimpsBrokenFilesAreRefusedWithTheirReason) {
         auto a = import_path(path);
         ASSERT_FALSE(a.has_value()) << path;
         EXPECT_EQ(a.error().file, path);
-        EXPECT_FALSE(a.error().message.empty());
-        EXPECT_THAT(a.error().describe(), HasSubstr(words)) << a.error().describe();
+        EXPECT_FALSE(a.error().detail.empty());
+        EXPECT_THAT(a.error().detail, HasSubstr(words)) << a.error().detail;
     }
 }
 

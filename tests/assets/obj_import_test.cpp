@@ -19,13 +19,13 @@ using ::testing::HasSubstr;
 Imported<Asset> import_model(const std::string& name) {
     const std::string path = std::string(STRATA_MODELS_DIR) + "/" + name;
     const std::string text = read_file(path);
-    if (text.empty()) return Unexpected(AssetError{AssetError::Kind::Invalid, path, "", "missing"});
+    if (text.empty()) return ErrorSink(path).invalid("", "missing");
     return import_asset(AssetFormat::Obj, bytes_of(text), name, {});
 }
 
 TEST(ObjImport, TheStanfordBunnyIsOneMeshOfAllItsTriangles) {
     auto a = import_model("stanford-bunny.obj");
-    ASSERT_TRUE(a.has_value()) << a.error().describe();
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
     ASSERT_EQ(a.value().meshes.size(), 1u);
     EXPECT_EQ(a.value().meshes[0].triangles.size(), 69451u);  // SOURCES.md
     EXPECT_EQ(a.value().nodes.size(), 1u);
@@ -34,7 +34,7 @@ TEST(ObjImport, TheStanfordBunnyIsOneMeshOfAllItsTriangles) {
 
 TEST(ObjImport, SpotKeepsItsTrianglesAndTextureCoordinates) {
     auto a = import_model("spot.obj");
-    ASSERT_TRUE(a.has_value()) << a.error().describe();
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
     ASSERT_EQ(a.value().meshes.size(), 1u);
     const AssetMesh& m = a.value().meshes[0];
     EXPECT_EQ(m.triangles.size(), 5856u);
@@ -73,12 +73,12 @@ map_Kd shiny.png
 
 TEST(ObjImport, MaterialsComeFromTheUploadedMtlWithKdKsNsAndMapKdMapped) {
     auto a = import_text(AssetFormat::Obj, CUBE_FACES, {{"cube.mtl", CUBE_MTL}});
-    ASSERT_TRUE(a.has_value()) << a.error().describe();
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
     const Asset& asset = a.value();
     ASSERT_EQ(asset.materials.size(), 2u);
     EXPECT_EQ(asset.materials[0].name, "red");
     EXPECT_EQ(asset.materials[0].material.base_color, Vec3(1.0f, 0.2f, 0.1f));  // clamped
-    EXPECT_EQ(asset.materials[0].material.roughness, 1.0f);  // no specular: fully rough
+    EXPECT_EQ(asset.materials[0].material.roughness, 1.0f);   // no specular: fully rough
     EXPECT_LT(asset.materials[1].material.roughness, 0.25f);  // Ns 1000: glossy
     EXPECT_EQ(asset.materials[1].material.emission, Vec3(0.5f, 0, 0));
     ASSERT_EQ(asset.materials[1].base_color_texture, 0);
@@ -102,9 +102,9 @@ TEST(ObjImport, MaterialsComeFromTheUploadedMtlWithKdKsNsAndMapKdMapped) {
 TEST(ObjImport, AMapKdImageThatCameWithTheUploadBecomesTheMaterialsTexture) {
     const uint8_t rgb[] = {200, 100, 50};
     const std::string png = encode_png(rgb, 1, 1, 3).value();
-    auto a = import_text(AssetFormat::Obj, CUBE_FACES,
-                         {{"cube.mtl", CUBE_MTL}, {"shiny.png", png}});
-    ASSERT_TRUE(a.has_value()) << a.error().describe();
+    auto a =
+        import_text(AssetFormat::Obj, CUBE_FACES, {{"cube.mtl", CUBE_MTL}, {"shiny.png", png}});
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
     EXPECT_EQ(a.value().textures.at(0).bytes.size(), png.size());
     // OBJ's v grows upward: "vt 1 1" is the top-right corner, (1, 0) for the engine.
     EXPECT_EQ(a.value().meshes[0].uvs.size(), a.value().meshes[0].positions.size());
@@ -130,7 +130,7 @@ TEST(ObjImport, MaterialsNamingTheSameImageShareOneTexture) {
     mtl += "newmtl other\nmap_Kd other.png\n";
     auto a = import_text(AssetFormat::Obj, CUBE_FACES,
                          {{"cube.mtl", mtl}, {"shiny.png", png}, {"other.png", png}});
-    ASSERT_TRUE(a.has_value()) << a.error().describe();
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
     ASSERT_EQ(a.value().textures.size(), 2u);
     for (std::size_t i = 0; i < 50; ++i) EXPECT_EQ(a.value().materials[i].base_color_texture, 0);
     EXPECT_EQ(a.value().materials[50].base_color_texture, 1);
@@ -140,7 +140,7 @@ TEST(ObjImport, AnMtllibOutsideTheUploadIsNeverReadAndIsNamedInTheWarnings) {
     std::string obj = CUBE_FACES;
     obj.replace(0, 15, "mtllib /etc/passwd");
     auto a = import_text(AssetFormat::Obj, obj);
-    ASSERT_TRUE(a.has_value()) << a.error().describe();
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
     EXPECT_TRUE(a.value().materials.empty());
     ASSERT_FALSE(a.value().warnings.empty());
     EXPECT_THAT(a.value().warnings[0], HasSubstr("/etc/passwd"));
@@ -151,16 +151,17 @@ TEST(ObjImport, AFaceIndexOutsideTheVerticesIsRefusedNamingTheFace) {
     auto a = import_text(AssetFormat::Obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 9\n");
     ASSERT_FALSE(a.has_value());
     EXPECT_EQ(a.error().element, "shape 0 face 1");
-    EXPECT_THAT(a.error().message, HasSubstr("vertex index 9"));
-    auto b = import_text(AssetFormat::Obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//2 3//1\n");
+    EXPECT_THAT(a.error().detail, HasSubstr("vertex index 9"));
+    auto b =
+        import_text(AssetFormat::Obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//2 3//1\n");
     ASSERT_FALSE(b.has_value());
-    EXPECT_THAT(b.error().message, HasSubstr("normal index 2"));
+    EXPECT_THAT(b.error().detail, HasSubstr("normal index 2"));
 }
 
 TEST(ObjImport, PointsAndLinesAloneAreRefusedAsHavingNoFaces) {
     auto a = import_text(AssetFormat::Obj, "v 0 0 0\nv 1 0 0\nl 1 2\np 1\n");
     ASSERT_FALSE(a.has_value());
-    EXPECT_THAT(a.error().message, HasSubstr("no faces"));
+    EXPECT_THAT(a.error().detail, HasSubstr("no faces"));
 }
 
 TEST(ObjImport, TooManyTrianglesForTheSceneIsTooLarge) {
@@ -168,21 +169,22 @@ TEST(ObjImport, TooManyTrianglesForTheSceneIsTooLarge) {
     limits.max_triangles = 1;
     auto a = import_text(AssetFormat::Obj, CUBE_FACES, {}, limits);
     ASSERT_FALSE(a.has_value());
-    EXPECT_EQ(a.error().kind, AssetError::Kind::TooLarge);
+    EXPECT_EQ(a.error().type, protocol::ProblemType::TooLarge);
 }
 
 TEST(ObjImport, AnIndexThatOverflowsAnIntIsRefusedNamingItsLine) {
     // tinyobjloader reads indices into an int: these would wrap to small, valid-looking ones.
-    for (const char* face : {"f 1 2 99999999999999999999", "f 1 2 2147483648", "f 1/1/1 2 -2147483649",
-                             "f 1 2 3/00000000004294967297", "l 1 18446744073709551617"}) {
-        auto a = import_text(AssetFormat::Obj, std::string("v 0 0 0\nv 1 0 0\nv 0 1 0\n") + face +
-                                                   "\nf 1 2 3\n");
+    for (const char* face :
+         {"f 1 2 99999999999999999999", "f 1 2 2147483648", "f 1/1/1 2 -2147483649",
+          "f 1 2 3/00000000004294967297", "l 1 18446744073709551617"}) {
+        auto a = import_text(AssetFormat::Obj,
+                             std::string("v 0 0 0\nv 1 0 0\nv 0 1 0\n") + face + "\nf 1 2 3\n");
         ASSERT_FALSE(a.has_value()) << face;
         EXPECT_EQ(a.error().element, "line 4") << face;
-        EXPECT_THAT(a.error().message, HasSubstr("out of range")) << face;
+        EXPECT_THAT(a.error().detail, HasSubstr("out of range")) << face;
     }
     auto fits = import_text(AssetFormat::Obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 0000003\n");
-    EXPECT_TRUE(fits.has_value()) << fits.error().describe();
+    EXPECT_TRUE(fits.has_value()) << fits.error().detail;
 }
 
 TEST(ObjImport, DeclaredElementsOverTheBudgetAreRefusedBeforeParsing) {
@@ -195,9 +197,9 @@ TEST(ObjImport, DeclaredElementsOverTheBudgetAreRefusedBeforeParsing) {
     for (int i = 0; i < 1001; ++i) faces += "f 1 2 3\n";
     auto a = import_text(AssetFormat::Obj, faces, {}, limits);
     ASSERT_FALSE(a.has_value());
-    EXPECT_EQ(a.error().kind, AssetError::Kind::TooLarge);
+    EXPECT_EQ(a.error().type, protocol::ProblemType::TooLarge);
     EXPECT_EQ(a.error().element, "line 1001");
-    EXPECT_THAT(a.error().message, HasSubstr("max_scene_triangles"));
+    EXPECT_THAT(a.error().detail, HasSubstr("max_scene_triangles"));
     // A quad counts two triangles.
     std::string quads;
     for (int i = 0; i < 501; ++i) quads += "f 1 2 3 4\n";
@@ -209,9 +211,9 @@ TEST(ObjImport, DeclaredElementsOverTheBudgetAreRefusedBeforeParsing) {
     for (int i = 0; i < 1001; ++i) positions += "v 0 0 0\n";
     auto v = import_text(AssetFormat::Obj, positions + "f 1 2 3\n", {}, limits);
     ASSERT_FALSE(v.has_value());
-    EXPECT_EQ(v.error().kind, AssetError::Kind::TooLarge);
+    EXPECT_EQ(v.error().type, protocol::ProblemType::TooLarge);
     EXPECT_EQ(v.error().element, "line 1001");
-    EXPECT_THAT(v.error().message, HasSubstr("max_scene_vertices"));
+    EXPECT_THAT(v.error().detail, HasSubstr("max_scene_vertices"));
 }
 
 }  // namespace

@@ -43,8 +43,11 @@ end_header
 std::string quad_binary(bool big) {
     std::string header = QUAD_ASCII.substr(0, QUAD_ASCII.find("end_header\n") + 11);
     header.replace(header.find("ascii"), 5, big ? "binary_big_endian" : "binary_little_endian");
-    const float v[5][6] = {{0, 0, 0, 0, 0, 1}, {1, 0, 0, 0, 0, 1}, {1, 1, 0, 0, 0, 1},
-                           {0, 1, 0, 0, 0, 1}, {2, 2, 2, 0, 0, 1}};
+    const float v[5][6] = {{0, 0, 0, 0, 0, 1},
+                           {1, 0, 0, 0, 0, 1},
+                           {1, 1, 0, 0, 0, 1},
+                           {0, 1, 0, 0, 0, 1},
+                           {2, 2, 2, 0, 0, 1}};
     const uint8_t c[5][3] = {{255, 0, 0}, {0, 255, 0}, {0, 0, 255}, {255, 255, 255}, {0, 0, 0}};
     auto put = [&](std::string& out, const void* p, std::size_t n) {
         std::string b(static_cast<const char*>(p), n);
@@ -83,26 +86,27 @@ void expect_quad_mesh(const Asset& a) {
 
 TEST(PlyImport, AsciiQuadsAreFanTriangulatedWithNormalsAndColours) {
     auto a = import_text(AssetFormat::Ply, QUAD_ASCII);
-    ASSERT_TRUE(a.has_value()) << a.error().describe();
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
     expect_quad_mesh(a.value());
 }
 
 TEST(PlyImport, BinaryLittleAndBigEndianGiveTheSameMeshAsAscii) {
     for (bool big : {false, true}) {
         auto a = import_text(AssetFormat::Ply, quad_binary(big));
-        ASSERT_TRUE(a.has_value()) << a.error().describe();
+        ASSERT_TRUE(a.has_value()) << a.error().detail;
         expect_quad_mesh(a.value());
     }
 }
 
 TEST(PlyImport, TextureCoordinatesAreReadUnderEitherName) {
-    const std::string ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
-                            "property float y\nproperty float z\nproperty float s\n"
-                            "property float t\nelement face 1\n"
-                            "property list uchar uint vertex_index\nend_header\n"
-                            "0 0 0 0 0\n1 0 0 1 0\n0 1 0 0 1\n3 0 1 2\n";
+    const std::string ply =
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+        "property float y\nproperty float z\nproperty float s\n"
+        "property float t\nelement face 1\n"
+        "property list uchar uint vertex_index\nend_header\n"
+        "0 0 0 0 0\n1 0 0 1 0\n0 1 0 0 1\n3 0 1 2\n";
     auto a = import_text(AssetFormat::Ply, ply);
-    ASSERT_TRUE(a.has_value()) << a.error().describe();
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
     ASSERT_EQ(a.value().meshes[0].uvs.size(), 3u);
     // PLY's v grows upward; the engine's downward from the image's top row.
     EXPECT_EQ(a.value().meshes[0].uvs[2], glm::vec2(0, 0));
@@ -110,66 +114,67 @@ TEST(PlyImport, TextureCoordinatesAreReadUnderEitherName) {
 }
 
 /// The error of importing `text`, which must fail.
-AssetError refusal(const std::string& text, const ImportLimits& limits = {}) {
+protocol::Problem refusal(const std::string& text, const ImportLimits& limits = {}) {
     auto a = import_text(AssetFormat::Ply, text, {}, limits);
     EXPECT_FALSE(a.has_value());
-    return a.has_value() ? AssetError{} : a.error();
+    return a.has_value() ? protocol::Problem{} : a.error();
 }
 
 TEST(PlyImport, AFaceIndexOutsideTheVerticesIsRefusedNamingTheFace) {
     std::string ply = QUAD_ASCII;
     ply.replace(ply.find("3 1 4 2"), 7, "3 1 5 2");
-    const AssetError e = refusal(ply);
-    EXPECT_EQ(e.kind, AssetError::Kind::Invalid);
+    const protocol::Problem e = refusal(ply);
+    EXPECT_EQ(e.type, protocol::ProblemType::InvalidAsset);
     EXPECT_EQ(e.file, "test.ply");
     EXPECT_EQ(e.element, "element face 1");
-    EXPECT_THAT(e.message, HasSubstr("vertex index 5"));
+    EXPECT_THAT(e.detail, HasSubstr("vertex index 5"));
 }
 
 TEST(PlyImport, ATruncatedBinaryBodyIsRefused) {
     const std::string ply = quad_binary(false);
     for (std::size_t cut : {std::size_t(1), std::size_t(7), std::size_t(40)}) {
-        const AssetError e = refusal(ply.substr(0, ply.size() - cut));
-        EXPECT_THAT(e.element, HasSubstr("element")) << e.describe();
-        EXPECT_THAT(e.message, HasSubstr("missing or malformed")) << e.describe();
+        const protocol::Problem e = refusal(ply.substr(0, ply.size() - cut));
+        EXPECT_THAT(e.element.value_or(""), HasSubstr("element")) << e.detail;
+        EXPECT_THAT(e.detail, HasSubstr("missing or malformed")) << e.detail;
     }
 }
 
 TEST(PlyImport, AHugeDeclaredCountIsRefusedBeforeAnythingIsAllocated) {
     std::string ply = QUAD_ASCII;
     ply.replace(ply.find("vertex 5"), 8, "vertex 4000000000");
-    EXPECT_THAT(refusal(ply).message, HasSubstr("more than the"));
+    EXPECT_THAT(refusal(ply).detail, HasSubstr("more than the"));
     // Within the bytes that follow but over the scene's room: TooLarge.
     ImportLimits small;
     small.max_vertices = 4;
-    const AssetError e = refusal(QUAD_ASCII, small);
-    EXPECT_EQ(e.kind, AssetError::Kind::TooLarge);
-    EXPECT_THAT(e.message, HasSubstr("max_scene_vertices"));
+    const protocol::Problem e = refusal(QUAD_ASCII, small);
+    EXPECT_EQ(e.type, protocol::ProblemType::TooLarge);
+    EXPECT_THAT(e.detail, HasSubstr("max_scene_vertices"));
 }
 
 TEST(PlyImport, BrokenHeadersAreRefusedNamingTheLine) {
     EXPECT_EQ(refusal("ply\nformat ascii 1.0\nelement vertex 1\n").element, "header");
-    EXPECT_THAT(refusal("plx\nformat ascii 1.0\nend_header\n").message, HasSubstr("'ply'"));
-    EXPECT_EQ(refusal("ply\nformat ascii 2.0\nend_header\n").kind,
-              AssetError::Kind::Unsupported);
+    EXPECT_THAT(refusal("plx\nformat ascii 1.0\nend_header\n").detail, HasSubstr("'ply'"));
+    EXPECT_EQ(refusal("ply\nformat ascii 2.0\nend_header\n").type,
+              protocol::ProblemType::InvalidAsset);
     EXPECT_EQ(refusal("ply\nformat ascii 1.0\nproperty float x\nend_header\n").element,
               "header line 3");
     EXPECT_THAT(refusal("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
                         "end_header\n1\n")
-                    .message,
+                    .detail,
                 HasSubstr("x, y and z"));
 }
 
 TEST(PlyImport, APointCloudIsRefusedAsHavingNoFaces) {
-    const std::string ply = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\n"
-                            "property float y\nproperty float z\nend_header\n0 0 0\n1 1 1\n";
-    EXPECT_THAT(refusal(ply).message, HasSubstr("no faces"));
+    const std::string ply =
+        "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\n"
+        "property float y\nproperty float z\nend_header\n0 0 0\n1 1 1\n";
+    EXPECT_THAT(refusal(ply).detail, HasSubstr("no faces"));
 }
 
 TEST(PlyImport, NonFinitePositionsAreRefused) {
     std::string ply = QUAD_ASCII;
     ply.replace(ply.find("2 2 2 0 0 1"), 5, "2 nan 2");
-    EXPECT_THAT(refusal(ply).message, HasSubstr("not finite"));
+    EXPECT_THAT(refusal(ply).detail, HasSubstr("not finite"));
 }
 
 }  // namespace

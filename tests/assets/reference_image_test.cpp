@@ -8,7 +8,6 @@
 //   STRATA_UPDATE_REFERENCE=1 ctest --test-dir build -R AssetReferenceImage
 // A mismatch writes the frame it got to <name>_actual.png in the working directory.
 
-
 #include <gtest/gtest.h>
 
 #include "protocol/assets/archive_import.h"
@@ -26,7 +25,7 @@ constexpr uint32_t WIDTH = 240, HEIGHT = 180, SPP = 8;
 /// Frames an imported asset and compares the frame with data/<name>.png. Returns the ids of the
 /// textures the import created.
 std::vector<std::string> check_reference(Imported<Asset> asset, const std::string& name) {
-    EXPECT_TRUE(asset.has_value()) << asset.error().describe();
+    EXPECT_TRUE(asset.has_value()) << asset.error().detail;
     if (!asset) return {};
     AssetBatch b = asset_to_batch(std::move(asset.value()), {name, true});
     const std::vector<std::string> textures = b.textures;
@@ -43,8 +42,7 @@ std::vector<std::string> check_reference(Imported<Asset> asset, const std::strin
     EXPECT_TRUE(engine->apply(std::move(view)).has_value());
     const EncodedFrame image = strata::test::render_ok(
         *engine, strata::test::request(WIDTH, HEIGHT, SPP, {}, ImageFormat::Png));
-    strata::test::expect_matches_reference(STRATA_ASSET_TEST_DATA_DIR, name, image, WIDTH,
-                                           HEIGHT);
+    strata::test::expect_matches_reference(STRATA_ASSET_TEST_DATA_DIR, name, image, WIDTH, HEIGHT);
     return textures;
 }
 
@@ -87,9 +85,8 @@ TEST(AssetReferenceImage, BoxTexturedFromATarOfItsGltfBinAndPngShowsItsExternalT
         run_tar(folder, "", "BoxTextured.gltf BoxTextured0.bin CesiumLogoFlat.png");
     ASSERT_FALSE(archive.empty()) << folder << " missing, or tar failed";
     auto imported = import_archive(bytes_of(archive), "box_textured_gltf.tar", {});
-    ASSERT_TRUE(imported.has_value()) << imported.error().describe();
-    const auto textures =
-        check_reference(std::move(imported.value().asset), "box_textured_gltf");
+    ASSERT_TRUE(imported.has_value()) << imported.error().detail;
+    const auto textures = check_reference(std::move(imported.value().asset), "box_textured_gltf");
     EXPECT_EQ(textures, std::vector<std::string>{"box_textured_gltf.texture0"});
 }
 

@@ -38,7 +38,7 @@ TEST(AssimpTestModels, EveryFileImportsOrIsRefusedCleanly) {
         if (!asset) {
             ++refused;
             EXPECT_EQ(asset.error().file, name);
-            EXPECT_FALSE(asset.error().message.empty());
+            EXPECT_FALSE(asset.error().detail.empty());
             continue;
         }
         AssetBatch b = asset_to_batch(std::move(asset.value()), {"t", true});
@@ -62,7 +62,8 @@ TEST(AssimpTestModels, TheEmptyAndOutOfRangeFilesOfTheInvalidFolderAreRefused) {
     // walk above covers it (it imports, with the built-in material).
     for (const char* name : {"empty.obj", "empty.ply", "malformed.obj"}) {
         const std::string bytes = read_file((dir / name).string());
-        const auto format = std::string(name).ends_with(".ply") ? AssetFormat::Ply : AssetFormat::Obj;
+        const auto format =
+            std::string(name).ends_with(".ply") ? AssetFormat::Ply : AssetFormat::Obj;
         auto a = import_asset(format, bytes_of(bytes), name, {});
         EXPECT_FALSE(a.has_value()) << name;
         if (!a.has_value()) {

@@ -150,7 +150,7 @@ int main(int argc, char** argv) {
         assets::AssetFormat::Glb,
         std::span(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size()), "engine", {});
     if (!asset) {
-        std::fprintf(stderr, "%s: %s\n", path.c_str(), asset.error().describe().c_str());
+        std::fprintf(stderr, "%s: %s\n", path.c_str(), asset.error().detail.c_str());
         return 1;
     }
     assets::AssetBatch b = assets::asset_to_batch(std::move(asset.value()), {"engine", true});

@@ -24,14 +24,16 @@ namespace {
 using namespace strata;
 using namespace strata::assets;
 
-[[noreturn]] void fail(const char* what) { fuzz::fail("archive fuzzer", what); }
+[[noreturn]] void fail(const char* what) {
+    fuzz::fail("archive fuzzer", what);
+}
 
 void check_entries(std::span<const uint8_t> body) {
     TarLimits limits;
     limits.max_entries = 256;
     auto entries = read_tar(body, "fuzz.tar", limits);
     if (!entries) {
-        if (entries.error().file != "fuzz.tar" || entries.error().message.empty())
+        if (entries.error().file != "fuzz.tar" || entries.error().detail.empty())
             fail("a tar refusal without its archive or message");
         return;
     }
@@ -60,7 +62,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
     tar_limits.max_entries = 256;
     auto archived = import_archive(body, "fuzz.tar", limits, tar_limits);
     if (!archived) {
-        if (archived.error().file.rfind("fuzz.tar", 0) != 0 || archived.error().message.empty())
+        if (archived.error().file.value_or("").rfind("fuzz.tar", 0) != 0 ||
+            archived.error().detail.empty())
             fail("a refusal without its archive or message");
         return 0;
     }

@@ -23,7 +23,9 @@ namespace {
 using namespace strata;
 using namespace strata::assets;
 
-[[noreturn]] void fail(const char* what) { fuzz::fail("asset fuzzer", what); }
+[[noreturn]] void fail(const char* what) {
+    fuzz::fail("asset fuzzer", what);
+}
 
 AssetFormat format_of(const uint8_t* data, std::size_t size) {
 #if defined(STRATA_FUZZ_GLTF)
@@ -48,7 +50,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
     const SideFiles side = {{"fuzz.mtl", "newmtl a\nKd 0.5 0.5 0.5\nmap_Kd a.png\n"}};
     auto asset = import_asset(format_of(data, size), {data, size}, "fuzz", limits, side);
     if (!asset) {
-        if (asset.error().file != "fuzz" || asset.error().message.empty())
+        if (asset.error().file != "fuzz" || asset.error().detail.empty())
             fail("a refusal without its file or message");
         return 0;
     }
