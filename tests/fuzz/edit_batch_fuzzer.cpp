@@ -122,7 +122,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         FUZZ_CHECK(e.type == ProblemType::InvalidRequest || e.status == 422);
         if (e.edit_index != strata::Error::NO_INDEX) {
             const std::string edit = "/edits/" + std::to_string(e.edit_index);
-            FUZZ_CHECK(e.pointer == edit || e.pointer.starts_with(edit + "/"));
+            FUZZ_CHECK(e.pointer == edit || e.pointer.value_or("").starts_with(edit + "/"));
         }
         (void)problem_to_json(e);
         return 0;

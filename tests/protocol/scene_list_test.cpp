@@ -114,7 +114,9 @@ TEST_F(SceneList, ObjectsThatExistThroughoutAppearOnceWhileOthersComeAndGo) {
             a.mesh = "ball";
             churn.edits.push_back(a);
         }
-        if (round < 5) ASSERT_TRUE(engine->apply(std::move(churn)).has_value());
+        if (round < 5) {
+            ASSERT_TRUE(engine->apply(std::move(churn)).has_value());
+        }
         ++round;
         if (p["next_cursor"].is_null()) break;
         q.erase("cursor");
@@ -125,7 +127,9 @@ TEST_F(SceneList, ObjectsThatExistThroughoutAppearOnceWhileOthersComeAndGo) {
     // Never removed during the walk: i10 ... i23, odd i1 ... i9, and i24.
     for (int i = 0; i < 30; ++i) {
         const bool removed = (i % 2 == 0 && i < 10) || i >= 25;
-        if (!removed) EXPECT_TRUE(unique.count("/World/i" + std::to_string(i))) << i;
+        if (!removed) {
+            EXPECT_TRUE(unique.count("/World/i" + std::to_string(i))) << i;
+        }
     }
 }
 

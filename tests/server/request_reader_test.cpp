@@ -82,10 +82,11 @@ TEST(RequestReader, OtherMethodsOnHealthPathsAre405WithAllow) {
 
 TEST(RequestReader, HealthChecksAreAnsweredHereEvenWhenDrainingOrRestricted) {
     Reader r;
-    ReaderStep live = r.feed("GET /livez HTTP/1.1\r\nHost: a\r\n\r\n", {true, true});
+    ReaderStep live =
+        r.feed("GET /livez HTTP/1.1\r\nHost: a\r\n\r\n", {.draining = true, .restricted = true});
     ASSERT_EQ(live.kind, Kind::Answer);
     EXPECT_EQ(live.answer.status, 200);
-    ReaderStep ready = r.feed("GET /readyz HTTP/1.1\r\nHost: a\r\n\r\n", {true, false});
+    ReaderStep ready = r.feed("GET /readyz HTTP/1.1\r\nHost: a\r\n\r\n", {.draining = true});
     ASSERT_EQ(ready.kind, Kind::Answer);
     EXPECT_EQ(ready.answer.status, 503);
     EXPECT_FALSE(ready.answer.close);
@@ -143,8 +144,8 @@ TEST(RequestReader, WhileStartingReadyzSaysHowFarAndEverythingButLivezIsRefusedW
     EXPECT_THAT(scene.answer.bytes, HasSubstr("Retry-After: 1\r\n"));
     EXPECT_THAT(scene.answer.bytes, HasSubstr("replaying the journal"));
     // A body is left unread: that connection closes.
-    ReaderStep edit = r.feed(
-        "POST /v1/edits HTTP/1.1\r\nHost: a\r\nContent-Length: 2\r\n\r\n", starting);
+    ReaderStep edit =
+        r.feed("POST /v1/edits HTTP/1.1\r\nHost: a\r\nContent-Length: 2\r\n\r\n", starting);
     EXPECT_EQ(edit.answer.status, 503);
     EXPECT_TRUE(edit.answer.close);
 }
@@ -194,12 +195,14 @@ TEST(RequestReader, RefusalsComeBeforeTheBodyIsRead) {
     }
     {
         Reader r(c);
-        EXPECT_EQ(r.feed("GET /v1/scene HTTP/1.1\r\nHost: a\r\n" + auth + "\r\n", {true, false})
-                      .answer.status,
-                  503);
+        EXPECT_EQ(
+            r.feed("GET /v1/scene HTTP/1.1\r\nHost: a\r\n" + auth + "\r\n", {.draining = true})
+                .answer.status,
+            503);
         Reader restricted(c);
         EXPECT_EQ(
-            restricted.feed("GET /v1/scene HTTP/1.1\r\nHost: a\r\n" + auth + "\r\n", {false, true})
+            restricted
+                .feed("GET /v1/scene HTTP/1.1\r\nHost: a\r\n" + auth + "\r\n", {.restricted = true})
                 .answer.status,
             429);
     }
