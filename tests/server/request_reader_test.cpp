@@ -9,6 +9,14 @@
 namespace strata::server {
 namespace {
 
+/// A reader's situation: draining, or over a connection limit.
+ReaderSituation situation(bool draining, bool restricted) {
+    ReaderSituation s;
+    s.draining = draining;
+    s.restricted = restricted;
+    return s;
+}
+
 using Kind = ReaderStep::Kind;
 using ::testing::HasSubstr;
 using ::testing::Not;
@@ -82,11 +90,10 @@ TEST(RequestReader, OtherMethodsOnHealthPathsAre405WithAllow) {
 
 TEST(RequestReader, HealthChecksAreAnsweredHereEvenWhenDrainingOrRestricted) {
     Reader r;
-    ReaderStep live =
-        r.feed("GET /livez HTTP/1.1\r\nHost: a\r\n\r\n", {.draining = true, .restricted = true});
+    ReaderStep live = r.feed("GET /livez HTTP/1.1\r\nHost: a\r\n\r\n", situation(true, true));
     ASSERT_EQ(live.kind, Kind::Answer);
     EXPECT_EQ(live.answer.status, 200);
-    ReaderStep ready = r.feed("GET /readyz HTTP/1.1\r\nHost: a\r\n\r\n", {.draining = true});
+    ReaderStep ready = r.feed("GET /readyz HTTP/1.1\r\nHost: a\r\n\r\n", situation(true, false));
     ASSERT_EQ(ready.kind, Kind::Answer);
     EXPECT_EQ(ready.answer.status, 503);
     EXPECT_FALSE(ready.answer.close);
@@ -196,15 +203,15 @@ TEST(RequestReader, RefusalsComeBeforeTheBodyIsRead) {
     {
         Reader r(c);
         EXPECT_EQ(
-            r.feed("GET /v1/scene HTTP/1.1\r\nHost: a\r\n" + auth + "\r\n", {.draining = true})
+            r.feed("GET /v1/scene HTTP/1.1\r\nHost: a\r\n" + auth + "\r\n", situation(true, false))
                 .answer.status,
             503);
         Reader restricted(c);
-        EXPECT_EQ(
-            restricted
-                .feed("GET /v1/scene HTTP/1.1\r\nHost: a\r\n" + auth + "\r\n", {.restricted = true})
-                .answer.status,
-            429);
+        EXPECT_EQ(restricted
+                      .feed("GET /v1/scene HTTP/1.1\r\nHost: a\r\n" + auth + "\r\n",
+                            situation(false, true))
+                      .answer.status,
+                  429);
     }
 }
 
