@@ -57,7 +57,14 @@ struct PlyHeader {
     PlyEncoding encoding = PlyEncoding::Ascii;
     std::vector<PlyElement> elements;
     std::size_t body = 0;  ///< offset of the first byte after end_header
+    /// Lines skipped (no keyword PLY knows, as old writers put free text without `comment`):
+    /// the first MAX_SKIPPED_NAMED named, all counted.
+    std::vector<std::string> skipped;
+    std::size_t skipped_count = 0;
 };
+
+/// Skipped header lines named in warnings, at most (a 64 KiB header could hold thousands).
+constexpr std::size_t MAX_SKIPPED_NAMED = 8;
 
 std::vector<std::string_view> split(std::string_view line) {
     std::vector<std::string_view> out;
@@ -135,7 +142,11 @@ Imported<PlyHeader> read_header(std::string_view text, const ErrorSink& sink) {
             }
             h.elements.back().properties.push_back(std::move(p));
         } else {
-            return sink.invalid(where, "unknown keyword '" + std::string(words[0]) + "'");
+            // Blender 2.4x wrote "Created by Blender3D ..." without `comment`; assimp and Blender
+            // read such files, and so do we, saying so.
+            if (h.skipped_count++ < MAX_SKIPPED_NAMED)
+                h.skipped.push_back(where + " skipped: unknown keyword '" +
+                                    std::string(words[0].substr(0, 40)) + "'");
         }
     }
     if (!format_seen) return sink.invalid("header", "has no format line");
@@ -273,14 +284,19 @@ public:
             const ImportLimits& limits)
         : m_in(bytes.subspan(header.body), header.encoding), m_sink(file), m_limits(limits) {
         m_mesh.name = file;
+        m_warnings = header.skipped;
+        if (header.skipped_count > header.skipped.size())
+            m_warnings.push_back(std::to_string(header.skipped_count - header.skipped.size()) +
+                                 " more header lines with unknown keywords skipped");
     }
 
     /// Step 1: the declared count must fit the bytes that follow (each element takes at least
     /// one byte per property) and, for vertices and faces, the budget.
     Imported<ElementPlan> plan(const PlyElement& e) {
-        ElementPlan plan{.where = "element " + e.name,
-                         .is_vertex = e.name == "vertex",
-                         .is_face = e.name == "face"};
+        ElementPlan plan;
+        plan.where = "element " + e.name;
+        plan.is_vertex = e.name == "vertex";
+        plan.is_face = e.name == "face";
         const std::string& where = plan.where;
         if (e.count > 0 && e.properties.empty()) return m_sink.invalid(where, "has no properties");
         if (e.count > m_in.remaining())
@@ -342,6 +358,7 @@ public:
         if (m_mesh.triangles.empty())
             return m_sink.invalid("element face", "no faces: point clouds are not imported");
         Asset asset;
+        asset.warnings = std::move(m_warnings);
         if (m_skipped_faces)
             asset.warnings.push_back(std::to_string(m_skipped_faces) +
                                      " faces with fewer than 3 corners skipped");
@@ -418,6 +435,7 @@ private:
     uint64_t m_skipped_faces = 0;
     double m_row[64] = {};
     std::vector<uint32_t> m_corners;
+    std::vector<std::string> m_warnings;  ///< the header's, then the body's
 };
 
 }  // namespace

@@ -164,6 +164,37 @@ TEST(PlyImport, BrokenHeadersAreRefusedNamingTheLine) {
                 HasSubstr("x, y and z"));
 }
 
+TEST(PlyImport, HeaderLinesWithUnknownKeywordsAreSkippedWithAWarning) {
+    // As Blender 2.47 wrote them (assimp-testmodels' PLY/Wuson.ply): free text without `comment`.
+    std::string ply = QUAD_ASCII;
+    ply.insert(ply.find("element vertex"),
+               "Created by Blender3D 247 - www.blender.org, source file: ''\n");
+    auto a = import_text(AssetFormat::Ply, ply);
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
+    expect_quad_mesh(a.value());
+    ASSERT_EQ(a.value().warnings.size(), 1u);
+    EXPECT_EQ(a.value().warnings[0], "header line 4 skipped: unknown keyword 'Created'");
+    // Many such lines: the first few named, the rest counted.
+    std::string noisy = QUAD_ASCII;
+    std::string lines;
+    for (int i = 0; i < 100; ++i) lines += "junk " + std::to_string(i) + "\n";
+    noisy.insert(noisy.find("element vertex"), lines);
+    auto b = import_text(AssetFormat::Ply, noisy);
+    ASSERT_TRUE(b.has_value()) << b.error().detail;
+    ASSERT_EQ(b.value().warnings.size(), 9u);
+    EXPECT_EQ(b.value().warnings.back(), "92 more header lines with unknown keywords skipped");
+}
+
+TEST(PlyImport, BlendersOldHeaderImports) {
+    const std::string text = read_file(std::string(STRATA_ASSIMP_MODELS_DIR) + "/PLY/Wuson.ply");
+    if (text.empty()) GTEST_SKIP() << "assimp-testmodels missing";
+    auto a = import_text(AssetFormat::Ply, text);
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
+    EXPECT_EQ(a.value().meshes.at(0).positions.size(), 11184u);
+    EXPECT_GE(a.value().meshes.at(0).triangles.size(), 3732u);
+    EXPECT_THAT(a.value().warnings[0], HasSubstr("unknown keyword 'Created'"));
+}
+
 TEST(PlyImport, APointCloudIsRefusedAsHavingNoFaces) {
     const std::string ply =
         "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\n"
