@@ -7,6 +7,8 @@
 #include <limits>
 #include <map>
 
+#include <nlohmann/json.hpp>
+
 #include "engine/scene/budget.h"
 #include "protocol/assets/tinygltf_config.h"
 
@@ -609,6 +611,83 @@ private:
     uint64_t m_triangles = 0;
 };
 
+/// What a glTF says of itself before anything is read: its `asset.version` and the extensions it
+/// requires. Read with nlohmann's SAX parser (no document is built); "" and none when absent.
+struct GltfPreamble {
+    std::string version;
+    std::vector<std::string> required;
+};
+
+/// The SAX events of the top-level `asset.version` and `extensionsRequired`; the rest is skipped.
+class PreambleReader : public nlohmann::json_sax<nlohmann::json> {
+public:
+    explicit PreambleReader(GltfPreamble& out) : m_out(out) {}
+    bool null() override { return true; }
+    bool boolean(bool) override { return true; }
+    bool number_integer(number_integer_t) override { return true; }
+    bool number_unsigned(number_unsigned_t) override { return true; }
+    bool number_float(number_float_t, const string_t&) override { return true; }
+    bool binary(binary_t&) override { return true; }
+    bool string(string_t& value) override {
+        if (m_depth == 2 && m_top == "asset" && m_key == "version")
+            m_out.version = value.substr(0, 16);
+        if (m_depth == 2 && m_top == "extensionsRequired" && m_out.required.size() < 16)
+            m_out.required.push_back(value.substr(0, 64));
+        return true;
+    }
+    bool start_object(std::size_t) override { return enter(); }
+    bool start_array(std::size_t) override { return enter(); }
+    bool end_object() override { return leave(); }
+    bool end_array() override { return leave(); }
+    bool key(string_t& key) override {
+        if (m_depth == 1) m_top = key;
+        if (m_depth == 2) m_key = key;
+        return true;
+    }
+    bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override {
+        return false;  // tinygltf reports it
+    }
+
+private:
+    bool enter() {
+        ++m_depth;
+        if (m_depth == 2) m_key.clear();
+        return true;
+    }
+    bool leave() {
+        if (--m_depth == 1) m_key.clear();
+        return true;
+    }
+    GltfPreamble& m_out;
+    int m_depth = 0;
+    std::string m_top;  ///< the top-level member being read
+    std::string m_key;  ///< the member of `asset` being read
+};
+
+GltfPreamble gltf_preamble(std::string_view json) {
+    GltfPreamble out;
+    PreambleReader reader(out);
+    (void)nlohmann::json::sax_parse(json, &reader, nlohmann::json::input_format_t::json, false);
+    return out;
+}
+
+/// Refuses what tinygltf would misreport: glTF 1.0 ("asset object not found") and required
+/// extensions such as Draco compression ("invalid bufferView").
+Imported<void> check_preamble(const GltfPreamble& p, const ErrorSink& sink) {
+    if (!p.version.empty() && p.version.rfind("2.", 0) != 0)
+        return sink.unsupported("asset.version",
+                                "glTF " + p.version +
+                                    " is not supported; only glTF 2.0 is imported (convert the "
+                                    "file, for example with gltf-pipeline or Blender)");
+    if (p.required.empty()) return {};
+    std::string names;
+    for (const std::string& e : p.required) names += (names.empty() ? "" : ", ") + e;
+    return sink.unsupported("extensionsRequired",
+                            "the file requires " + names +
+                                ", which Strata does not import (a required extension cannot "
+                                "be ignored)");
+}
+
 /// tinygltf's message, one line, without its trailing newline.
 std::string first_line(const std::string& text) {
     std::string out = text.substr(0, text.find('\n'));
@@ -639,7 +718,9 @@ Imported<Asset> import_gltf(std::span<const uint8_t> bytes, bool binary, const s
                                       " triangles at least; the scene has room for " +
                                       std::to_string(limits.max_triangles) +
                                       " (max_scene_triangles)");
-    // Step 2: parse with the filesystem closed: external files come from the side files only.
+    // Step 2: a version and required extensions this importer reads.
+    if (auto ok = check_preamble(gltf_preamble(json), sink); !ok) return Unexpected(ok.error());
+    // Step 3: parse with the filesystem closed: external files come from the side files only.
     tinygltf::TinyGLTF loader;
     loader.SetFsCallbacks({&any_file_exists, &keep_path, &read_side_file, &refuse_write,
                            const_cast<SideFiles*>(&side_files)});
@@ -662,11 +743,7 @@ Imported<Asset> import_gltf(std::span<const uint8_t> bytes, bool binary, const s
             return sink.unsupported("buffers", first_line(err));
         return sink.invalid("", "not valid glTF: " + first_line(err.empty() ? warn : err));
     }
-    if (!model.extensionsRequired.empty())
-        return sink.unsupported(
-            "extensionsRequired",
-            "extension " + model.extensionsRequired.front() + " is not supported");
-    // Step 3: the model into the intermediate form, every reference checked.
+    // Step 4: the model into the intermediate form, every reference checked.
     return GltfReader(model, sink, limits).read();
 }
 

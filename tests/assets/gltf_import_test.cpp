@@ -80,6 +80,35 @@ TEST(GltfImport, ModesOtherThanTrianglesAreRefusedNamingThePrimitive) {
     EXPECT_THAT(a.error().detail, HasSubstr("LINES"));
 }
 
+TEST(GltfImport, RequiredExtensionsAreRefusedByNameBeforeTheFileIsRead) {
+    auto doc = nlohmann::json::parse(triangle_gltf(R"([{"mesh": 0}])"));
+    doc["extensionsUsed"] = {"EXT_meshopt_compression", "KHR_mesh_quantization"};
+    doc["extensionsRequired"] = {"EXT_meshopt_compression", "KHR_mesh_quantization"};
+    auto a = import_text(AssetFormat::Gltf, doc.dump());
+    ASSERT_FALSE(a.has_value());
+    EXPECT_EQ(a.error().type, protocol::ProblemType::InvalidAsset);
+    EXPECT_EQ(a.error().element, "extensionsRequired");
+    EXPECT_THAT(a.error().detail,
+                HasSubstr("requires EXT_meshopt_compression, KHR_mesh_quantization, which Strata "
+                          "does not import"));
+    // Only used, not required: imported.
+    doc.erase("extensionsRequired");
+    EXPECT_TRUE(import_text(AssetFormat::Gltf, doc.dump()).has_value());
+}
+
+TEST(GltfImport, GltfOneAndDracoCompressionAreRefusedSayingSo) {
+    REQUIRE_TESTMODELS();
+    auto one = import_path("glTF/TwoBoxes/TwoBoxes.gltf");
+    ASSERT_FALSE(one.has_value());
+    EXPECT_EQ(one.error().element, "asset.version");
+    EXPECT_THAT(one.error().detail, HasSubstr("glTF 1.0 is not supported; only glTF 2.0"));
+    // Its buffer is an external file, so the version must be what is refused first.
+    auto draco = import_path("glTF2/draco/2CylinderEngine.gltf");
+    ASSERT_FALSE(draco.has_value());
+    EXPECT_EQ(draco.error().element, "extensionsRequired");
+    EXPECT_THAT(draco.error().detail, HasSubstr("requires KHR_draco_mesh_compression"));
+}
+
 TEST(GltfImport, AnExternalBufferIsRefusedAndNeverRead) {
     REQUIRE_TESTMODELS();
     auto a = import_path("glTF2/BoxTextured-glTF/BoxTextured.gltf");
