@@ -184,6 +184,7 @@ public:
         : m_model(model), m_sink(sink), m_limits(limits) {}
 
     Imported<Asset> read() {
+        warn_unread_features();
         if (auto ok = read_materials(); !ok) return Unexpected(ok.error());
         if (auto ok = read_nodes(); !ok) return Unexpected(ok.error());
         if (auto ok = check_budget(m_asset, m_limits, m_sink); !ok) return Unexpected(ok.error());
@@ -261,9 +262,12 @@ private:
                                          unit(pbr.baseColorFactor[2])};
             m.material.metallic = unit(pbr.metallicFactor);
             m.material.roughness = unit(pbr.roughnessFactor);
-            if (gm.emissiveFactor.size() >= 3)
+            // An emissive factor is kept only without its texture: alone, the factor would make
+            // the whole surface glow where the texture lights only parts of it.
+            if (gm.emissiveFactor.size() >= 3 && gm.emissiveTexture.index < 0)
                 m.material.emission = {unit(gm.emissiveFactor[0]), unit(gm.emissiveFactor[1]),
                                        unit(gm.emissiveFactor[2])};
+            warn_unread_material(gm, where);
             const int texture = pbr.baseColorTexture.index;
             if (texture >= 0) {
                 auto t = read_texture(texture, where + ".baseColorTexture");
@@ -592,6 +596,42 @@ private:
                 stack.emplace_back(*c, self);
         }
         return {};
+    }
+
+    /// What the file holds that no Strata object can carry: named in warnings, never dropped
+    /// in silence.
+    void warn_unread_features() {
+        const auto count = [&](std::size_t n, const char* what) {
+            if (n > 0) warn_once(std::to_string(n) + " " + what + " not imported");
+        };
+        count(m_model.animations.size(), "animations");
+        count(m_model.skins.size(), "skins");
+        count(m_model.cameras.size(), "cameras");
+        std::string unread;
+        for (const std::string& e : m_model.extensionsUsed)
+            unread += (unread.empty() ? "" : ", ") + e;
+        if (!unread.empty()) warn_once("extensionsUsed: " + unread + " not imported (ignored)");
+    }
+
+    /// The parts of material `gm` the engine's material has no place for.
+    void warn_unread_material(const tinygltf::Material& gm, const std::string& where) {
+        const auto texture = [&](int index, const char* what, const char* consequence) {
+            if (index >= 0) warn_once(where + "." + what + " not imported" + consequence);
+        };
+        texture(gm.emissiveTexture.index, "emissiveTexture",
+                ": the surface does not glow (its emissiveFactor is dropped with it)");
+        texture(gm.normalTexture.index, "normalTexture", " (normal map)");
+        texture(gm.occlusionTexture.index, "occlusionTexture", "");
+        texture(gm.pbrMetallicRoughness.metallicRoughnessTexture.index,
+                "pbrMetallicRoughness.metallicRoughnessTexture", ": the factors alone are used");
+        if (!gm.alphaMode.empty() && gm.alphaMode != "OPAQUE")
+            warn_once(where + ".alphaMode " + gm.alphaMode +
+                      " not imported: the surface is opaque");
+        for (const auto& [name, value] : gm.extensions)
+            warn_once(where + ".extensions." + name + " not imported");
+        for (const auto& [name, value] : gm.pbrMetallicRoughness.baseColorTexture.extensions)
+            warn_once(where + ".pbrMetallicRoughness.baseColorTexture.extensions." + name +
+                      " not imported");
     }
 
     void warn_once(const std::string& what) {

@@ -140,3 +140,40 @@ TEST(SideFiles, ReferencesAreNormalisedBeforeTheLookup) {
 
 }  // namespace
 }  // namespace strata::assets::test
+
+namespace strata::assets::test {
+namespace {
+
+/// The first warning that contains `text`, or "" when none does.
+std::string warning_with(const Asset& a, const std::string& text) {
+    for (const std::string& w : a.warnings)
+        if (w.find(text) != std::string::npos) return w;
+    return {};
+}
+
+TEST(ArchiveImport, WhatAGltfHoldsAndStrataCannotCarryIsNamedNeverDropped) {
+    const std::string folder = STRATA_ASSIMP_MODELS_DIR "/glTF2/ClearCoat-glTF";
+    if (read_file(folder + "/ClearCoatTest.gltf").empty()) GTEST_SKIP() << folder << " missing";
+    auto r = import(run_tar(folder, "", "."));
+    ASSERT_TRUE(r.has_value()) << r.error().detail;
+    const Asset& a = r.value().asset;
+    EXPECT_NE(warning_with(a, "extensionsUsed: KHR_materials_clearcoat not imported"), "");
+    EXPECT_NE(warning_with(a, "materials[1].extensions.KHR_materials_clearcoat not imported"), "");
+    EXPECT_NE(warning_with(a, "materials[9].normalTexture not imported (normal map)"), "");
+    EXPECT_NE(warning_with(a, "materials[5].alphaMode BLEND not imported"), "");
+    EXPECT_NE(warning_with(a, "materials[18].emissiveTexture not imported"), "");
+    // The label plates: a white emissive factor with a texture of the label. Without the texture
+    // the factor would make each plate a glowing white rectangle (an area light): both go.
+    ASSERT_GT(a.materials.size(), 18u);
+    EXPECT_EQ(a.materials[18].material.emission, Vec3(0.0f));
+
+    const std::string transform = STRATA_ASSIMP_MODELS_DIR "/glTF2/textureTransform";
+    auto t = import(run_tar(transform, "", "."));
+    ASSERT_TRUE(t.has_value()) << t.error().detail;
+    EXPECT_NE(warning_with(t.value().asset, "extensionsUsed: KHR_texture_transform"), "");
+    EXPECT_NE(warning_with(t.value().asset, "baseColorTexture.extensions.KHR_texture_transform"),
+              "");
+}
+
+}  // namespace
+}  // namespace strata::assets::test
