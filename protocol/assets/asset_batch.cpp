@@ -3,12 +3,29 @@
 #include <algorithm>
 #include <cmath>
 
+#include "engine/core/utf8.h"
 #include "engine/image/texture_decode.h"
+#include "engine/scene/field_table.h"
 #include "engine/scene/scene.h"
 
 namespace strata::assets {
 
 namespace {
+
+/// A name from the file as a display name the scene accepts: bytes that are not UTF-8 become
+/// U+FFFD, control characters spaces, and it is cut (on a character) at MAX_NAME_BYTES.
+std::string display_name(std::string_view raw) {
+    std::string out;
+    while (!raw.empty()) {
+        const std::size_t n = utf8_sequence_length(raw);
+        std::string_view piece = n == 0 ? std::string_view("\xEF\xBF\xBD") : raw.substr(0, n);
+        if (n > 0 && is_control_code_point(utf8_code_point(raw, n))) piece = " ";
+        if (out.size() + piece.size() > MAX_NAME_BYTES) break;
+        out += piece;
+        raw.remove_prefix(n == 0 ? 1 : n);
+    }
+    return out;
+}
 
 std::string label(const std::string& kind, std::size_t i, const std::string& name) {
     return kind + " " + std::to_string(i) + (name.empty() ? "" : " ('" + name + "')");
@@ -52,12 +69,13 @@ std::vector<std::string> add_textures(std::vector<AssetTexture>& textures, const
         }
         AddTexture e;
         e.id = p + ".texture" + std::to_string(i);
+        e.name = display_name(t.name);
         e.data.assign(t.bytes.begin(), t.bytes.end());
         t.bytes = {};
         if (!texture_format(e.data)) {
-            out.warnings.push_back(what + " left out: only PNG and JPEG images are decoded" +
-                                   (t.mime_type.empty() ? std::string()
-                                                        : " (it is " + t.mime_type + ")"));
+            out.warnings.push_back(
+                what + " left out: only PNG and JPEG images are decoded" +
+                (t.mime_type.empty() ? std::string() : " (it is " + t.mime_type + ")"));
             continue;
         }
         texture_ids[i] = e.id;
@@ -76,6 +94,7 @@ void add_materials(const std::vector<AssetMaterial>& materials,
         AddMaterial e;
         e.id = p + ".material" + std::to_string(i);
         e.material = materials[i].material;
+        e.material.name = display_name(materials[i].name);
         const int texture = materials[i].base_color_texture;
         if (texture >= 0 && !texture_ids[std::size_t(texture)].empty())
             e.base_color_texture = texture_ids[std::size_t(texture)];
@@ -93,6 +112,7 @@ void add_meshes(std::vector<AssetMesh>& meshes, const std::string& p, AssetBatch
         colors = colors || !m.colors.empty();
         AddMesh e;
         e.id = p + ".mesh" + std::to_string(i);
+        e.name = display_name(m.name);
         e.positions = std::move(m.positions);
         e.triangles = std::move(m.triangles);
         if (usable_normals(m.normals)) {
@@ -144,6 +164,7 @@ void add_instances(const AssetNode& node, const std::string& id, const Affine& t
     for (std::size_t k = 0; k < node.meshes.size(); ++k) {
         AddInstance e;
         e.id = id + (node.meshes.size() > 1 ? "." + std::to_string(k) : "");
+        e.name = display_name(node.name);
         e.mesh = out.meshes[std::size_t(node.meshes[k])];
         e.transform = transform;
         e.parent = parent;
@@ -158,9 +179,9 @@ void add_instances(const AssetNode& node, const std::string& id, const Affine& t
 void add_nodes(const std::vector<AssetNode>& nodes, const std::vector<bool>& has_children,
                bool flatten, const std::string& p, AssetBatch& out) {
     const std::size_t n = nodes.size();
-    std::vector<bool> placed(n, false);      // false: left out (with its subtree)
-    std::vector<std::string> group_of(n);    // the group a node's children join
-    std::vector<Affine> world(n);            // only used when flattening
+    std::vector<bool> placed(n, false);    // false: left out (with its subtree)
+    std::vector<std::string> group_of(n);  // the group a node's children join
+    std::vector<Affine> world(n);          // only used when flattening
     for (std::size_t i = 0; i < n; ++i) {
         const AssetNode& node = nodes[i];
         const int parent = node.parent;
@@ -182,6 +203,7 @@ void add_nodes(const std::vector<AssetNode>& nodes, const std::vector<bool>& has
         if (has_children[i] && !flatten) {
             AddGroup g;
             g.id = p + ".group" + std::to_string(i);
+            g.name = display_name(node.name);
             g.parent = parent_group;
             g.transform = node.local;
             group_of[i] = g.id;

@@ -28,7 +28,7 @@ TEST(AssetBatch, ASharedGltfMeshIsOneSceneMeshWithSeveralInstances) {
     if (glb.empty()) GTEST_SKIP() << path << " missing: install assimp-testmodels";
     auto asset = import_asset(AssetFormat::Glb, bytes_of(glb), "2CylinderEngine.glb", {});
     ASSERT_TRUE(asset.has_value()) << asset.error().detail;
-    AssetBatch b = asset_to_batch(std::move(asset.value()), {"engine", true});
+    AssetBatch b = asset_to_batch(std::move(asset.value()), {"engine", true, {}});
     EXPECT_EQ(b.meshes.size(), 34u);
     EXPECT_EQ(b.instances.size(), 115u);
     EXPECT_EQ(b.materials.size(), 34u);
@@ -93,7 +93,7 @@ TEST(AssetBatch, ATreeDeeperThanTheScenesGroupsIsFlattenedToWorldTransforms) {
     nodes += "]";
     auto asset = import_text(AssetFormat::Gltf, triangle_gltf(nodes));
     ASSERT_TRUE(asset.has_value()) << asset.error().detail;
-    AssetBatch b = asset_to_batch(std::move(asset.value()), {"deep", true});
+    AssetBatch b = asset_to_batch(std::move(asset.value()), {"deep", true, {}});
     EXPECT_EQ(b.groups, std::vector<std::string>{"deep"});
     EXPECT_THAT(b.warnings, Contains(HasSubstr("flattened")));
     auto engine = make_engine();
@@ -109,7 +109,7 @@ TEST(AssetBatch, ANodeTheSceneCannotPlaceIsLeftOutWithAWarning) {
     auto asset =
         import_text(AssetFormat::Gltf, triangle_gltf(R"([{"mesh": 0, "scale": [0, 0, 0]}])"));
     ASSERT_TRUE(asset.has_value()) << asset.error().detail;
-    AssetBatch b = asset_to_batch(std::move(asset.value()), {"z", true});
+    AssetBatch b = asset_to_batch(std::move(asset.value()), {"z", true, {}});
     EXPECT_TRUE(b.instances.empty());
     EXPECT_EQ(b.meshes.size(), 1u);
     ASSERT_FALSE(b.warnings.empty());
@@ -120,7 +120,7 @@ TEST(AssetBatch, ZeroNormalsAreDroppedForTheirMeshWithAWarning) {
     auto asset =
         import_text(AssetFormat::Obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 0\nf 1//1 2//1 3//1\n");
     ASSERT_TRUE(asset.has_value()) << asset.error().detail;
-    AssetBatch b = asset_to_batch(std::move(asset.value()), {"zn", true});
+    AssetBatch b = asset_to_batch(std::move(asset.value()), {"zn", true, {}});
     EXPECT_THAT(b.warnings, Contains(HasSubstr("normals dropped")));
     auto engine = make_engine();
     ASSERT_TRUE(engine->apply(std::move(b.batch)).has_value());
@@ -129,7 +129,7 @@ TEST(AssetBatch, ZeroNormalsAreDroppedForTheirMeshWithAWarning) {
 TEST(AssetBatch, WithoutInstancingOnlyMeshesAndMaterialsAreCreated) {
     auto asset = import_text(AssetFormat::Gltf, triangle_gltf(R"([{"mesh": 0}])"));
     ASSERT_TRUE(asset.has_value());
-    AssetBatch b = asset_to_batch(std::move(asset.value()), {"m", false});
+    AssetBatch b = asset_to_batch(std::move(asset.value()), {"m", false, {}});
     EXPECT_EQ(b.meshes, std::vector<std::string>{"m.mesh0"});
     EXPECT_TRUE(b.instances.empty());
     EXPECT_EQ(b.batch.edits.size(), 1u);
@@ -140,7 +140,7 @@ TEST(AssetBatch, ImportingTwiceUnderOnePrefixIsRefusedAndChangesNothing) {
     for (int round = 0; round < 2; ++round) {
         auto asset = import_text(AssetFormat::Obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
         ASSERT_TRUE(asset.has_value());
-        AssetBatch b = asset_to_batch(std::move(asset.value()), {"dup", true});
+        AssetBatch b = asset_to_batch(std::move(asset.value()), {"dup", true, {}});
         auto applied = engine->apply(std::move(b.batch));
         if (round == 0) {
             ASSERT_TRUE(applied.has_value());
@@ -162,7 +162,7 @@ TEST(AssetBatch, NormalsUvsAndTheEmbeddedTextureReachTheScene) {
     if (glb.empty()) GTEST_SKIP() << "assimp-testmodels missing";
     auto asset = import_asset(AssetFormat::Glb, bytes_of(glb), "box.glb", {});
     ASSERT_TRUE(asset.has_value()) << asset.error().detail;
-    AssetBatch b = asset_to_batch(std::move(asset.value()), {"box", true});
+    AssetBatch b = asset_to_batch(std::move(asset.value()), {"box", true, {}});
     EXPECT_EQ(b.textures, std::vector<std::string>{"box.texture0"});
     // Normals, uvs and the texture reach the scene; the material names the texture.
     auto engine = make_engine();
@@ -185,7 +185,7 @@ TEST(AssetBatch, TexturesWithoutBytesOrInAnotherFormatAreLeftOutWithAWarning) {
     asset.textures.push_back(AssetTexture{"web", "image/webp", {'R', 'I', 'F', 'F'}, ""});
     asset.materials.push_back(AssetMaterial{"a", Material{}, 0});
     asset.materials.push_back(AssetMaterial{"b", Material{}, 1});
-    AssetBatch b = asset_to_batch(std::move(asset), {"t", false});
+    AssetBatch b = asset_to_batch(std::move(asset), {"t", false, {}});
     EXPECT_TRUE(b.textures.empty());
     EXPECT_THAT(b.warnings, Contains(HasSubstr("not part of the upload ('logo.png')")));
     EXPECT_THAT(b.warnings,
@@ -203,13 +203,51 @@ TEST(AssetBatch, ADamagedEmbeddedImageRefusesTheWholeImportNamingTheTexture) {
     const std::string png = "\x89PNG\r\n\x1a\n-not-really";
     asset.textures.push_back(AssetTexture{"logo", "image/png", {png.begin(), png.end()}, ""});
     asset.materials.push_back(AssetMaterial{"a", Material{}, 0});
-    AssetBatch b = asset_to_batch(std::move(asset), {"t", false});
+    AssetBatch b = asset_to_batch(std::move(asset), {"t", false, {}});
     ASSERT_EQ(b.textures.size(), 1u);
     auto engine = make_engine();
     auto applied = engine->apply(std::move(b.batch));
     ASSERT_FALSE(applied.has_value());
     EXPECT_THAT(applied.error().message, HasSubstr("texture 't.texture0': corrupt PNG"));
     EXPECT_EQ(engine->read([](const Scene& s) { return s.materials().size(); }), 0u);
+}
+
+}  // namespace
+}  // namespace strata::assets::test
+
+namespace strata::assets::test {
+namespace {
+
+TEST(AssetBatch, NamesFromTheFileBecomeDisplayNamesTheSceneAccepts) {
+    Asset a;
+    AssetMesh mesh;
+    mesh.name = "Wheel\x01mesh";  // a control character
+    mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    mesh.triangles = {{0, 1, 2}};
+    mesh.material = 0;
+    a.meshes.push_back(mesh);
+    AssetMaterial material;
+    material.name = "Paint \xff\xfe";  // not UTF-8
+    a.materials.push_back(material);
+    AssetNode root;
+    root.name = "Car";
+    AssetNode leaf;
+    leaf.name = std::string(3000, 'x');  // longer than a display name may be
+    leaf.parent = 0;
+    leaf.meshes = {0};
+    a.nodes = {root, leaf};
+    AssetBatch b = asset_to_batch(std::move(a), {"car", true, {}});
+    auto engine = make_engine();
+    auto applied = engine->apply(std::move(b.batch));
+    ASSERT_TRUE(applied.has_value()) << applied.error().describe();
+    engine->read([&](const Scene& s) {
+        EXPECT_EQ(s.mesh(s.find_mesh("car.mesh0")).value()->name, "Wheel mesh");
+        EXPECT_EQ(s.material(s.find_material("car.material0")).value()->material.name,
+                  "Paint \xEF\xBF\xBD\xEF\xBF\xBD");
+        EXPECT_EQ(s.group(s.find_group("car.group0")).value()->name, "Car");
+        const std::string& leaf_name = s.instance(s.find_instance("car.node1")).value()->name;
+        EXPECT_EQ(leaf_name, std::string(MAX_NAME_BYTES, 'x'));
+    });
 }
 
 }  // namespace
