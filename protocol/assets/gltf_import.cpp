@@ -54,6 +54,9 @@ bool keep_encoded_image(tinygltf::Image* image, const int, std::string*, std::st
 }
 
 /// What one pass over the JSON text finds before tinygltf builds its model of it.
+/// The most warnings an import lists; the rest are counted.
+constexpr std::size_t MAX_WARNINGS = 64;
+
 struct JsonShape {
     uint32_t deepest = 0;     ///< deepest nesting of `[`/`{` (counting stops past the limit)
     uint64_t primitives = 0;  ///< objects in every "primitives" array
@@ -189,6 +192,9 @@ public:
         if (auto ok = read_nodes(); !ok) return Unexpected(ok.error());
         if (auto ok = check_budget(m_asset, m_limits, m_sink); !ok) return Unexpected(ok.error());
         if (auto ok = validate_asset(m_asset, m_sink); !ok) return Unexpected(ok.error());
+        if (m_unlisted_warnings > 0)
+            m_asset.warnings.push_back(std::to_string(m_unlisted_warnings) +
+                                       " more warnings not listed");
         return std::move(m_asset);
     }
 
@@ -608,8 +614,11 @@ private:
         count(m_model.skins.size(), "skins");
         count(m_model.cameras.size(), "cameras");
         std::string unread;
-        for (const std::string& e : m_model.extensionsUsed)
-            unread += (unread.empty() ? "" : ", ") + e;
+        const std::size_t listed = std::min<std::size_t>(m_model.extensionsUsed.size(), 16);
+        for (std::size_t i = 0; i < listed; ++i)
+            unread += (unread.empty() ? "" : ", ") + m_model.extensionsUsed[i].substr(0, 64);
+        if (m_model.extensionsUsed.size() > listed)
+            unread += " and " + std::to_string(m_model.extensionsUsed.size() - listed) + " more";
         if (!unread.empty()) warn_once("extensionsUsed: " + unread + " not imported (ignored)");
     }
 
@@ -634,10 +643,17 @@ private:
                       " not imported");
     }
 
+    /// Adds a warning unless it was given already; past MAX_WARNINGS they are only counted (a
+    /// file of thousands of materials must not make the answer, or this search, huge).
     void warn_once(const std::string& what) {
-        if (std::find(m_asset.warnings.begin(), m_asset.warnings.end(), what) ==
+        if (std::find(m_asset.warnings.begin(), m_asset.warnings.end(), what) !=
             m_asset.warnings.end())
-            m_asset.warnings.push_back(what);
+            return;
+        if (m_asset.warnings.size() >= MAX_WARNINGS) {
+            ++m_unlisted_warnings;
+            return;
+        }
+        m_asset.warnings.push_back(what);
     }
 
     const tinygltf::Model& m_model;
@@ -649,6 +665,7 @@ private:
     std::map<int, int> m_views;                ///< buffer view holding an image -> asset texture
     uint64_t m_vertices = 0;
     uint64_t m_triangles = 0;
+    std::size_t m_unlisted_warnings = 0;  ///< past MAX_WARNINGS
 };
 
 /// What a glTF says of itself before anything is read: its `asset.version` and the extensions it

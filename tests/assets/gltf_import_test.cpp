@@ -96,6 +96,17 @@ TEST(GltfImport, RequiredExtensionsAreRefusedByNameBeforeTheFileIsRead) {
     EXPECT_TRUE(import_text(AssetFormat::Gltf, doc.dump()).has_value());
 }
 
+TEST(GltfImport, ThousandsOfUnreadFeaturesGiveABoundedListOfWarnings) {
+    auto doc = nlohmann::json::parse(triangle_gltf(R"([{"mesh": 0}])"));
+    for (int i = 0; i < 200; ++i) doc["materials"].push_back({{"alphaMode", "BLEND"}});
+    auto a = import_text(AssetFormat::Gltf, doc.dump());
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
+    const std::vector<std::string>& w = a.value().warnings;
+    ASSERT_EQ(w.size(), 65u);
+    EXPECT_EQ(w[0], "materials[0].alphaMode BLEND not imported: the surface is opaque");
+    EXPECT_EQ(w.back(), "136 more warnings not listed");
+}
+
 TEST(GltfImport, GltfOneAndDracoCompressionAreRefusedSayingSo) {
     REQUIRE_TESTMODELS();
     auto one = import_path("glTF/TwoBoxes/TwoBoxes.gltf");
