@@ -78,6 +78,44 @@ std::vector<std::string_view> split(std::string_view line) {
     return out;
 }
 
+using Words = std::vector<std::string_view>;
+
+/// A `format <encoding> 1.0` line.
+Imported<PlyEncoding> read_format(const Words& words, const std::string& where,
+                                  const ErrorSink& sink) {
+    if (words.size() != 3 || words[2] != "1.0")
+        return sink.unsupported(where, "expected 'format <encoding> 1.0'");
+    if (words[1] == "ascii") return PlyEncoding::Ascii;
+    if (words[1] == "binary_little_endian") return PlyEncoding::Little;
+    if (words[1] == "binary_big_endian") return PlyEncoding::Big;
+    return sink.unsupported(where, "unknown encoding '" + std::string(words[1]) + "'");
+}
+
+/// A `property <type> <name>` or `property list <count type> <type> <name>` line.
+Imported<PlyProperty> read_property(const Words& words, const std::string& where,
+                                    const ErrorSink& sink) {
+    PlyProperty p;
+    if (words.size() == 5 && words[1] == "list") {
+        const auto ct = type_named(words[2]);
+        const auto vt = type_named(words[3]);
+        if (!ct || !vt || !is_integral(*ct)) return sink.invalid(where, "bad list property types");
+        p.list = true;
+        p.count_type = *ct;
+        p.type = *vt;
+        p.name = words[4];
+        return p;
+    }
+    if (words.size() != 3)
+        return sink.invalid(where,
+                            "expected 'property <type> <name>' or 'property list "
+                            "<count type> <type> <name>'");
+    const auto t = type_named(words[1]);
+    if (!t) return sink.invalid(where, "unknown type '" + std::string(words[1]) + "'");
+    p.type = *t;
+    p.name = words[2];
+    return p;
+}
+
 Imported<PlyHeader> read_header(std::string_view text, const ErrorSink& sink) {
     PlyHeader h;
     std::size_t pos = 0;
@@ -90,7 +128,7 @@ Imported<PlyHeader> read_header(std::string_view text, const ErrorSink& sink) {
         const std::string_view line = text.substr(pos, nl - pos);
         pos = nl + 1;
         ++line_no;
-        const auto words = split(line);
+        const Words words = split(line);
         const std::string where = "header line " + std::to_string(line_no);
         if (line_no == 1) {
             if (words.size() != 1 || words[0] != "ply")
@@ -100,16 +138,9 @@ Imported<PlyHeader> read_header(std::string_view text, const ErrorSink& sink) {
         if (words.empty() || words[0] == "comment" || words[0] == "obj_info") continue;
         if (words[0] == "end_header") break;
         if (words[0] == "format") {
-            if (words.size() != 3 || words[2] != "1.0")
-                return sink.unsupported(where, "expected 'format <encoding> 1.0'");
-            if (words[1] == "ascii")
-                h.encoding = PlyEncoding::Ascii;
-            else if (words[1] == "binary_little_endian")
-                h.encoding = PlyEncoding::Little;
-            else if (words[1] == "binary_big_endian")
-                h.encoding = PlyEncoding::Big;
-            else
-                return sink.unsupported(where, "unknown encoding '" + std::string(words[1]) + "'");
+            auto encoding = read_format(words, where, sink);
+            if (!encoding) return Unexpected(encoding.error());
+            h.encoding = encoding.value();
             format_seen = true;
         } else if (words[0] == "element") {
             uint64_t count = 0;
@@ -120,33 +151,14 @@ Imported<PlyHeader> read_header(std::string_view text, const ErrorSink& sink) {
             h.elements.push_back({std::string(words[1]), count, {}});
         } else if (words[0] == "property") {
             if (h.elements.empty()) return sink.invalid(where, "a property before any element");
-            PlyProperty p;
-            if (words.size() == 5 && words[1] == "list") {
-                const auto ct = type_named(words[2]);
-                const auto vt = type_named(words[3]);
-                if (!ct || !vt || !is_integral(*ct))
-                    return sink.invalid(where, "bad list property types");
-                p.list = true;
-                p.count_type = *ct;
-                p.type = *vt;
-                p.name = words[4];
-            } else if (words.size() == 3) {
-                const auto t = type_named(words[1]);
-                if (!t) return sink.invalid(where, "unknown type '" + std::string(words[1]) + "'");
-                p.type = *t;
-                p.name = words[2];
-            } else {
-                return sink.invalid(where,
-                                    "expected 'property <type> <name>' or 'property list "
-                                    "<count type> <type> <name>'");
-            }
-            h.elements.back().properties.push_back(std::move(p));
-        } else {
+            auto property = read_property(words, where, sink);
+            if (!property) return Unexpected(property.error());
+            h.elements.back().properties.push_back(std::move(property.value()));
+        } else if (h.skipped_count++ < MAX_SKIPPED_NAMED) {
             // Blender 2.4x wrote "Created by Blender3D ..." without `comment`; assimp and Blender
             // read such files, and so do we, saying so.
-            if (h.skipped_count++ < MAX_SKIPPED_NAMED)
-                h.skipped.push_back(where + " skipped: unknown keyword '" +
-                                    std::string(words[0].substr(0, 40)) + "'");
+            h.skipped.push_back(where + " skipped: unknown keyword '" +
+                                std::string(words[0].substr(0, 40)) + "'");
         }
     }
     if (!format_seen) return sink.invalid("header", "has no format line");
