@@ -31,6 +31,8 @@ struct EngineCounters {
     uint64_t tlas_merges_cancelled = 0;
     uint64_t primitives_built = 0;
     uint64_t primitives_refit = 0;
+    uint64_t clusters_rebuilt = 0;
+    uint64_t clusters_refit = 0;
     uint64_t renders = 0;
     uint64_t rays_traced = 0;
     uint64_t picks = 0;
@@ -65,6 +67,9 @@ inline constexpr CounterSpec ENGINE_COUNTERS[] = {
      "tier first)."},
     {STRATA_STAT(EngineCounters, primitives_built), "Triangles built into BLASes."},
     {STRATA_STAT(EngineCounters, primitives_refit), "Triangles refit in BLASes."},
+    {STRATA_STAT(EngineCounters, clusters_rebuilt),
+     "Clusters of clustered BLASes built or rebuilt (whole builds count all their clusters)."},
+    {STRATA_STAT(EngineCounters, clusters_refit), "Clusters of clustered BLASes refit."},
     {STRATA_STAT(EngineCounters, renders), "Launches that traced rays (frames rendered)."},
     {STRATA_STAT(EngineCounters, rays_traced),
      "Rays traced by launches and picks: camera, shadow and bounce rays."},

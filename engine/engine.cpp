@@ -252,6 +252,8 @@ Result<RebuildReport> Engine::commit_locked(std::unique_lock<std::shared_mutex>*
     c.tlas_rebuilds += report.tlas_action == TlasAction::Rebuild;
     c.primitives_built += report.primitives_built;
     c.primitives_refit += report.primitives_refit;
+    c.clusters_rebuilt += report.clusters_rebuilt;
+    c.clusters_refit += report.clusters_refit;
     c.world_transforms += report.world_transforms;
     c.tlas_static_rebuilds += report.tlas.static_rebuild[0] != '\0';
     c.tlas_merges += report.tlas.merge_swapped;

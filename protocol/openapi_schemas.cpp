@@ -139,9 +139,13 @@ J report_entry_schema() {
     return object({{"mesh", ref("id")},
                    {"reason", reason},
                    {"primitives", count()},
+                   {"clusters", described(count(), "clusters of a clustered BLAS (absent: one "
+                                                   "geometry for the whole mesh)")},
+                   {"clusters_refit", described(count(), "clusters this commit refit")},
+                   {"clusters_rebuilt", described(count(), "clusters this commit built")},
                    {"detail", described(string(), "the refit policy's measured drift")},
                    {"ms", number()}},
-                  {"detail", "ms"});
+                  {"clusters", "clusters_refit", "clusters_rebuilt", "detail", "ms"});
 }
 
 J tlas_report_schema() {
@@ -179,6 +183,8 @@ J report_schema() {
                   {"released", array_of(ref("id"))},
                   {"primitives_built", count()},
                   {"primitives_refit", count()},
+                  {"clusters_rebuilt", count()},
+                  {"clusters_refit", count()},
                   {"world_transforms", count()},
                   {"instances_changed", count()},
                   {"memory_bytes", object({{"blas", count()}, {"tlas", count()}})},

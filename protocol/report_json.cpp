@@ -12,6 +12,11 @@ Json entries_to_json(const std::vector<MeshBuildEntry>& entries, bool planned) {
         Json j = {{"mesh", e.mesh},
                   {"reason", build_reason_name(e.reason)},
                   {"primitives", e.primitives}};
+        if (e.clusters != 0) {
+            j["clusters"] = e.clusters;
+            j["clusters_refit"] = e.clusters_refit;
+            j["clusters_rebuilt"] = e.clusters_rebuilt;
+        }
         if (!e.detail.empty()) j["detail"] = e.detail;
         if (!planned) j["ms"] = e.ms;
         out.push_back(std::move(j));
@@ -46,6 +51,8 @@ Json report_to_json(const RebuildReport& r) {
               {"released", r.released},
               {"primitives_built", r.primitives_built},
               {"primitives_refit", r.primitives_refit},
+              {"clusters_rebuilt", r.clusters_rebuilt},
+              {"clusters_refit", r.clusters_refit},
               {"world_transforms", r.world_transforms},
               {"instances_changed", r.instances_changed},
               {"memory_bytes", {{"blas", r.memory_blas_bytes}, {"tlas", r.memory_tlas_bytes}}}};

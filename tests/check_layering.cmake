@@ -7,6 +7,7 @@ set(EMBREE_ALLOWED
     engine/accel/embree_device.cpp
     engine/accel/blas_store.cpp
     engine/accel/embree_tlas.cpp
+    engine/accel/clustered_blas.cpp
     engine/accel/embree_trace.h
     engine/accel/incremental_tlas.cpp
     engine/accel/tlas_merge.cpp)

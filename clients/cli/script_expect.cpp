@@ -24,6 +24,8 @@ constexpr CountSource COUNT_FIELDS[] = {
     {"blas_refits", nullptr, "blas_refits"},
     {"primitives_built", nullptr, "primitives_built"},
     {"primitives_refit", nullptr, "primitives_refit"},
+    {"clusters_rebuilt", nullptr, "clusters_rebuilt"},
+    {"clusters_refit", nullptr, "clusters_refit"},
 };
 
 /// The fields of a pick or list step's expectation and where its answer keeps them.

@@ -4,7 +4,8 @@
 //
 //   counts    version, tlas_instances, tlas_static_instances, tlas_dynamic_instances,
 //             tlas_stale_copies, blas_rebuilds, blas_refits, primitives_built,
-//             primitives_refit: a number (exact) or {"min": a, "max": b} (either bound optional)
+//             primitives_refit, clusters_rebuilt, clusters_refit: a number (exact) or
+//             {"min": a, "max": b} (either bound optional)
 //   tlas      the TLAS action: "none", "update" or "rebuild"
 //   meshes    rebuilt, refit, released: the exact set of mesh ids, as an array (["a", "b"]) or,
 //             for rebuilt and refit, as an object that also pins each reason

@@ -15,7 +15,7 @@ Result<std::unique_ptr<AccelGraph>> AccelGraph::create(const AccelConfig& config
 AccelGraph::AccelGraph(const AccelConfig& config, std::unique_ptr<EmbreeDevice> device)
     : m_config(config),
       m_device(std::move(device)),
-      m_blas(*m_device, config.watertight, config.tlas == TlasKind::Incremental),
+      m_blas(*m_device, config.watertight, config.tlas == TlasKind::Incremental, config.clusters),
       m_tlas(config.tlas == TlasKind::Incremental
                  ? make_incremental_tlas(*m_device, config.tlas_prefer, config.watertight,
                                          config.tlas_policy)
@@ -56,30 +56,67 @@ CommitPlan AccelGraph::plan(const Scene& scene) const {
         entry.mesh = mesh.id;
         entry.primitives = mesh.triangles.size();
         std::optional<MeshMetrics> metrics;
+        ClusterWork clusters;
         bool rebuild = true;
+        // A rebuilt BLAS keeps its kind; a big whole one turns clustered at its first local edit.
+        bool clustered = built && built->clusters && m_blas.may_cluster(mesh);
         if (!built) {
             entry.reason = BuildReason::Added;
         } else if (dirty.has(MeshDirty::Topology)) {
             entry.reason = BuildReason::TopologyChanged;
         } else if (dirty.has(MeshDirty::RebuildRequested)) {
             entry.reason = BuildReason::RebuildRequested;
+        } else if (!built->clusters && m_blas.may_cluster(mesh) &&
+                   dirty.has(MeshDirty::Points) &&
+                   m_config.clusters.local(mesh.dirty.points.count(), mesh.positions.size())) {
+            entry.reason = BuildReason::Clustered;
+            entry.detail = std::to_string(mesh.dirty.points.count()) + " of " +
+                           std::to_string(mesh.positions.size()) +
+                           " vertices moved: rebuilt as clusters, so local edits refit only the "
+                           "clusters they touch";
+            clustered = true;
         } else {
-            metrics = measure_mesh(mesh);
             const BuildReason asked = dirty.has(MeshDirty::Points) ? BuildReason::PositionsChanged
                                                                    : BuildReason::RefitRequested;
-            RefitDecision d =
-                decide_refit(m_config.refit_policy, mesh.build, built->baseline, *metrics, asked);
+            RefitDecision d;
+            if (built->clusters) {
+                // A clustered BLAS measures only the clusters the edit touches.
+                clusters = built->clusters->plan(mesh, m_config.refit_policy, asked);
+                d = clusters.whole;
+            } else {
+                metrics = measure_mesh(mesh);
+                d = decide_refit(m_config.refit_policy, mesh.build, built->baseline, *metrics,
+                                 asked);
+            }
             rebuild = d.rebuild;
             entry.reason = d.reason;
             entry.detail = std::move(d.detail);
         }
         if (rebuild) {
+            // A clustered build's cluster count is known once its layout is: see execute().
             plan.rebuild.push_back(h);
             plan.rebuild_metrics.push_back(metrics);
+            plan.rebuild_clustered.push_back(clustered);
             report.rebuilt.push_back(std::move(entry));
             report.primitives_built += mesh.triangles.size();
+        } else if (built->clusters) {
+            entry.clusters = built->clusters->cluster_count();
+            entry.clusters_refit = uint32_t(clusters.refit.size());
+            entry.clusters_rebuilt = uint32_t(clusters.rebuild.size());
+            entry.primitives = clusters.refit_triangles + clusters.rebuild_triangles;
+            if (!clusters.rebuild.empty())
+                entry.detail += "; " + std::to_string(clusters.rebuild.size()) +
+                                " clusters rebuilt past the refit policy's limits";
+            report.clusters_refit += entry.clusters_refit;
+            report.clusters_rebuilt += entry.clusters_rebuilt;
+            report.primitives_refit += clusters.refit_triangles;
+            report.primitives_built += clusters.rebuild_triangles;
+            plan.refit.push_back(h);
+            plan.refit_clusters.push_back(std::move(clusters));
+            report.refit.push_back(std::move(entry));
         } else {
             plan.refit.push_back(h);
+            plan.refit_clusters.emplace_back();
             report.refit.push_back(std::move(entry));
             report.primitives_refit += mesh.triangles.size();
         }
@@ -139,13 +176,21 @@ Result<RebuildReport> AccelGraph::execute(const Scene& scene, CommitPlan&& plan)
             const MeshRecord& mesh = *scene.mesh(plan.rebuild[i]).value();
             const MeshMetrics metrics =
                 plan.rebuild_metrics[i] ? *plan.rebuild_metrics[i] : measure_mesh(mesh);
-            if (Status s = m_blas.build(plan.rebuild[i], mesh, metrics); !s)
+            if (Status s = m_blas.build(plan.rebuild[i], mesh, metrics, plan.rebuild_clustered[i]);
+                !s)
                 return Unexpected(s.error());
-            report.rebuilt[i].ms = clock.ms();
+            MeshBuildEntry& entry = report.rebuilt[i];
+            entry.ms = clock.ms();
+            if (const ClusteredBlas* c = m_blas.find(plan.rebuild[i])->clusters.get()) {
+                entry.clusters = entry.clusters_rebuilt = c->cluster_count();
+                report.clusters_rebuilt += entry.clusters;
+            }
         }
         for (std::size_t i = 0; i < plan.refit.size(); ++i) {
             Stopwatch clock;
-            if (Status s = m_blas.refit(plan.refit[i], *scene.mesh(plan.refit[i]).value()); !s)
+            if (Status s = m_blas.refit(plan.refit[i], *scene.mesh(plan.refit[i]).value(),
+                                        &plan.refit_clusters[i]);
+                !s)
                 return Unexpected(s.error());
             report.refit[i].ms = clock.ms();
         }

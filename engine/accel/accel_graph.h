@@ -28,6 +28,7 @@ struct AccelConfig {
     /// tests/bench/NOTES.md); turn off only where a rare hole is acceptable.
     bool watertight = true;
     std::string embree_config;  ///< Embree device configuration string
+    ClusterPolicy clusters;     ///< which meshes get a clustered BLAS
 };
 
 /// A planned commit. The handle vectors run parallel to the report's entry lists.
@@ -35,7 +36,9 @@ struct CommitPlan {
     RebuildReport report;
     std::vector<MeshHandle> rebuild;
     std::vector<std::optional<MeshMetrics>> rebuild_metrics;  ///< measured while planning, if so
+    std::vector<bool> rebuild_clustered;  ///< parallel to `rebuild`: build as clusters
     std::vector<MeshHandle> refit;
+    std::vector<ClusterWork> refit_clusters;  ///< parallel to `refit`; empty for whole meshes
     std::vector<MeshHandle> release;
     TlasDelta tlas;
 };

@@ -92,7 +92,8 @@ RTCSceneTy* BlasStore::scene(uint32_t slot) const {
 
 void BlasStore::release_record(BlasRecord& r, bool account) {
     const int64_t before = m_device.bytes(MemoryCategory::Blas);
-    rtcReleaseGeometry(r.geometry);
+    r.clusters.reset();
+    if (r.geometry) rtcReleaseGeometry(r.geometry);
     rtcReleaseScene(r.scene);
     // A TLAS copy that still references the BLAS (a stale static-tier copy of a removed instance)
     // keeps Embree from freeing it now; it is freed with that copy, in the TLAS's memory phase,
@@ -106,12 +107,14 @@ void BlasStore::release_record(BlasRecord& r, bool account) {
 void BlasStore::release_slot(uint32_t slot, bool account) {
     BlasRecord& r = m_records[slot];
     if (!r.scene) return;
+    if (r.clusters) --m_clustered;
     release_record(r, account);
 }
 
 void BlasStore::retire_slot(uint32_t slot) {
     BlasRecord& r = m_records[slot];
     if (!r.scene) return;
+    if (r.clusters) --m_clustered;
     m_retired.push_back(std::move(r));
     r = BlasRecord{};
 }
@@ -127,7 +130,8 @@ bool BlasStore::release(MeshHandle h) {
     return true;
 }
 
-Status BlasStore::build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics& metrics) {
+Status BlasStore::build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics& metrics,
+                        bool clustered) {
     if (h.index >= m_records.size()) m_records.resize(h.index + 1);
     BlasRecord& r = m_records[h.index];
     if (r.scene && (r.generation != h.generation || !(r.options == mesh.build)))
@@ -138,7 +142,7 @@ Status BlasStore::build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics&
     RTCDevice device = m_device.get();
     const int64_t bytes_before = m_device.bytes(MemoryCategory::Blas);
 
-    // Step: create the scene and geometry the first time this mesh is built.
+    // Step: create the scene the first time this mesh is built.
     if (!r.scene) {
         const SceneSetup setup = setup_for(mesh.build);
         r.scene = rtcNewScene(device);
@@ -146,35 +150,19 @@ Status BlasStore::build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics&
         const int robust = m_watertight ? RTC_SCENE_FLAG_ROBUST : 0;
         const int filter = m_context_filter ? RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION : 0;
         rtcSetSceneFlags(r.scene, RTCSceneFlags(setup.flags | robust | filter));
-        r.geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        rtcSetGeometryBuildQuality(r.geometry, setup.geometry_quality);
-        rtcAttachGeometryByID(r.scene, r.geometry, 0);
         r.mesh_id = mesh.id;
         r.generation = h.generation;
         r.options = mesh.build;
         r.vertex_count = r.triangle_count = 0;
     }
 
-    // Step: (re)allocate buffers when sizes change, then upload everything.
-    if (r.vertex_count != vertex_count) {
-        rtcSetNewGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                sizeof(Vec3), vertex_count);
-    }
-    if (r.triangle_count != triangle_count) {
-        rtcSetNewGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                sizeof(Triangle), triangle_count);
-    }
+    // Step: the geometry (whole or clustered), uploaded, then the scene's BVH.
+    set_layout(r, mesh, clustered && may_cluster(mesh));
     if (Status s = m_device.status("allocating BLAS buffers"); !s) {
         release_slot(h.index);
         return s;
     }
-    copy_vertices(r.geometry, mesh.positions, 0, vertex_count);
-    copy_triangles(r.geometry, mesh.triangles);
-    // Marking the index buffer modified moves the geometry's topology version, which is what
-    // makes a REFIT-quality geometry rebuild instead of refit.
-    rtcUpdateGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_VERTEX, 0);
-    rtcUpdateGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_INDEX, 0);
-    rtcCommitGeometry(r.geometry);
+    if (!r.clusters) upload_whole(r, mesh, vertex_count, triangle_count);
     rtcCommitScene(r.scene);
 
     r.vertex_count = vertex_count;
@@ -188,16 +176,72 @@ Status BlasStore::build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics&
     return {};
 }
 
-Status BlasStore::refit(MeshHandle h, const MeshRecord& mesh) {
+void BlasStore::set_layout(BlasRecord& r, const MeshRecord& mesh, bool clustered) {
+    // A rebuild starts from new clusters: the layout follows the positions and triangles now.
+    if (r.clusters) {
+        r.clusters.reset();
+        --m_clustered;
+    }
+    if (!clustered) {
+        if (!r.geometry) {
+            r.geometry = rtcNewGeometry(m_device.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
+            rtcSetGeometryBuildQuality(r.geometry, setup_for(r.options).geometry_quality);
+            rtcAttachGeometryByID(r.scene, r.geometry, 0);
+            r.vertex_count = r.triangle_count = 0;
+        }
+        return;
+    }
+    if (r.geometry) {
+        rtcDetachGeometry(r.scene, 0);
+        rtcReleaseGeometry(r.geometry);
+        r.geometry = nullptr;
+    }
+    r.clusters = std::make_unique<ClusteredBlas>(
+        m_device.get(), r.scene, mesh, m_cluster_policy.cluster_size(mesh.triangles.size()),
+        setup_for(r.options).geometry_quality);
+    ++m_clustered;
+}
+
+void BlasStore::upload_whole(BlasRecord& r, const MeshRecord& mesh, uint32_t vertex_count,
+                             uint32_t triangle_count) {
+    // (Re)allocate buffers when sizes change, then upload everything.
+    if (r.vertex_count != vertex_count) {
+        rtcSetNewGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                sizeof(Vec3), vertex_count);
+    }
+    if (r.triangle_count != triangle_count) {
+        rtcSetNewGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                sizeof(Triangle), triangle_count);
+    }
+    if (!rtcGetGeometryBufferData(r.geometry, RTC_BUFFER_TYPE_VERTEX, 0) ||
+        !rtcGetGeometryBufferData(r.geometry, RTC_BUFFER_TYPE_INDEX, 0))
+        return;  // allocation failed: the device reports it
+    copy_vertices(r.geometry, mesh.positions, 0, vertex_count);
+    copy_triangles(r.geometry, mesh.triangles);
+    // Marking the index buffer modified moves the geometry's topology version, which is what
+    // makes a REFIT-quality geometry rebuild instead of refit.
+    rtcUpdateGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_VERTEX, 0);
+    rtcUpdateGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_INDEX, 0);
+    rtcCommitGeometry(r.geometry);
+}
+
+Status BlasStore::refit(MeshHandle h, const MeshRecord& mesh, const ClusterWork* work) {
     BlasRecord* r = h.index < m_records.size() ? &m_records[h.index] : nullptr;
     STRATA_CHECK(r && r->scene && r->generation == h.generation);
     STRATA_CHECK(r->vertex_count == mesh.positions.size());
     const int64_t bytes_before = m_device.bytes(MemoryCategory::Blas);
-    const uint32_t begin = std::min(mesh.dirty.begin, r->vertex_count);
-    const uint32_t end = std::min(mesh.dirty.end, r->vertex_count);
-    if (begin < end) copy_vertices(r->geometry, mesh.positions, begin, end);
-    rtcUpdateGeometryBuffer(r->geometry, RTC_BUFFER_TYPE_VERTEX, 0);
-    rtcCommitGeometry(r->geometry);
+    if (r->clusters) {
+        STRATA_CHECK(work != nullptr);
+        r->clusters->refit(mesh, *work);
+    } else {
+        for (const VertexRanges::Range& range : mesh.dirty.points.ranges()) {
+            const uint32_t begin = std::min(range.begin, r->vertex_count);
+            const uint32_t end = std::min(range.end, r->vertex_count);
+            if (begin < end) copy_vertices(r->geometry, mesh.positions, begin, end);
+        }
+        rtcUpdateGeometryBuffer(r->geometry, RTC_BUFFER_TYPE_VERTEX, 0);
+        rtcCommitGeometry(r->geometry);
+    }
     rtcCommitScene(r->scene);
     ++r->baseline.refits_since_build;
     r->bytes += m_device.bytes(MemoryCategory::Blas) - bytes_before;

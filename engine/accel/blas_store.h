@@ -10,11 +10,19 @@
 //   true         either       LOW, DYNAMIC          REFIT             SAH, then refit in place
 //   false        fast_trace   HIGH                  HIGH              SAH with spatial splits
 //   false        fast_build   LOW, DYNAMIC          LOW               Morton
+//
+// A big mesh that allows refit is clustered (ClusterPolicy, clustered_blas.h): its BLAS scene
+// holds one REFIT-quality geometry per cluster instead of one for the whole mesh, so a vertex
+// edit refits the clusters it touches. Hits on it report a cluster and a triangle within it;
+// mesh_triangle() maps them back to the mesh's own numbering.
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "engine/accel/cluster_layout.h"
+#include "engine/accel/clustered_blas.h"
 #include "engine/accel/embree_device.h"
 #include "engine/accel/refit_policy.h"
 #include "engine/core/handle.h"
@@ -30,7 +38,8 @@ namespace strata {
 struct BlasRecord {
     std::string mesh_id;  ///< kept for reports after the mesh itself is removed
     RTCSceneTy* scene = nullptr;
-    RTCGeometryTy* geometry = nullptr;
+    RTCGeometryTy* geometry = nullptr;             ///< the whole mesh; null when clustered
+    std::unique_ptr<ClusteredBlas> clusters;       ///< the clusters; null when not clustered
     uint32_t generation = 0;  ///< generation of the mesh handle it was built for
     uint32_t vertex_count = 0;
     uint32_t triangle_count = 0;
@@ -44,8 +53,12 @@ public:
     /// `watertight` adds Embree's robust flag to every BLAS (see AccelConfig::watertight);
     /// `context_filter` lets an intersect context's filter see their hits (the incremental TLAS
     /// skips stale instance copies that way).
-    BlasStore(EmbreeDevice& device, bool watertight, bool context_filter = false)
-        : m_device(device), m_watertight(watertight), m_context_filter(context_filter) {}
+    BlasStore(EmbreeDevice& device, bool watertight, bool context_filter = false,
+              const ClusterPolicy& clusters = {})
+        : m_device(device),
+          m_watertight(watertight),
+          m_context_filter(context_filter),
+          m_cluster_policy(clusters) {}
     ~BlasStore();
     BlasStore(const BlasStore&) = delete;
     BlasStore& operator=(const BlasStore&) = delete;
@@ -55,11 +68,27 @@ public:
     /// The Embree scene of the BLAS in `slot`, or nullptr.
     RTCSceneTy* scene(uint32_t slot) const;
 
-    /// Builds (or rebuilds from scratch) the BLAS of `mesh` from its current data. A BLAS left in
-    /// the slot by an older mesh is released first.
-    Status build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics& metrics);
-    /// Refits the BLAS of `mesh` after uploading its dirty vertex range.
-    Status refit(MeshHandle h, const MeshRecord& mesh);
+    /// Builds (or rebuilds from scratch) the BLAS of `mesh` from its current data, as clusters
+    /// when `clustered` (which may_cluster must allow). A BLAS left in the slot by an older mesh
+    /// is released first.
+    Status build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics& metrics,
+                 bool clustered = false);
+    /// Refits the BLAS of `mesh` after uploading its dirty vertex ranges; a clustered BLAS
+    /// refits (and rebuilds) the clusters `work` names.
+    Status refit(MeshHandle h, const MeshRecord& mesh, const ClusterWork* work = nullptr);
+
+    /// Whether `mesh` may have a clustered BLAS (big enough, and refit allowed).
+    bool may_cluster(const MeshRecord& mesh) const {
+        return mesh.build.allow_refit && m_cluster_policy.clusters(mesh.triangles.size());
+    }
+    const ClusterPolicy& cluster_policy() const { return m_cluster_policy; }
+    /// True when some live BLAS is clustered: hits need mesh_triangle().
+    bool any_clustered() const { return m_clustered != 0; }
+    /// The mesh's own triangle index of a hit on BLAS `slot` (geomID `geom`, primID `prim`).
+    uint32_t mesh_triangle(uint32_t slot, uint32_t geom, uint32_t prim) const {
+        const ClusteredBlas* c = slot < m_records.size() ? m_records[slot].clusters.get() : nullptr;
+        return c ? c->mesh_triangle(geom, prim) : prim;
+    }
     /// Frees the BLAS in the slot of `h` if it belongs to `h`; returns whether it did.
     bool release(MeshHandle h);
     /// Frees the BLASes build() replaced in a slot (a new mesh in a removed mesh's slot, new
@@ -72,10 +101,18 @@ private:
     void release_slot(uint32_t slot, bool account = true);
     void release_record(BlasRecord& r, bool account);
     void retire_slot(uint32_t slot);
+    /// Swaps the record's geometry for clusters of `mesh`, or back (the scene object stays, so
+    /// instances keep referencing it).
+    void set_layout(BlasRecord& r, const MeshRecord& mesh, bool clustered);
+    /// Uploads the whole mesh into the record's single geometry and commits it.
+    void upload_whole(BlasRecord& r, const MeshRecord& mesh, uint32_t vertex_count,
+                      uint32_t triangle_count);
 
     EmbreeDevice& m_device;
     bool m_watertight;
     bool m_context_filter;
+    ClusterPolicy m_cluster_policy;
+    uint32_t m_clustered = 0;  ///< records in m_records with clusters
     std::vector<BlasRecord> m_records;  ///< indexed by mesh slot
     std::vector<BlasRecord> m_retired;  ///< replaced by build(), freed by release_retired()
 };

@@ -75,12 +75,12 @@ public:
         return m_device.status("rebuilding the TLAS");
     }
 
-    void intersect1(RayHit1& ray, bool coherent) const override {
+    void trace1(RayHit1& ray, bool coherent) const override {
         RTCIntersectContext ctx = make_context(coherent);
         rtcIntersect1(m_scene, &ctx, reinterpret_cast<RTCRayHit*>(&ray));
     }
 
-    void intersect16(const ValidMask16& valid, RayHit16& rays, bool coherent) const override {
+    void trace16(const ValidMask16& valid, RayHit16& rays, bool coherent) const override {
         RTCIntersectContext ctx = make_context(coherent);
         deactivate_unused_lanes(valid, rays);
         rtcIntersect16(valid.lanes, m_scene, &ctx, reinterpret_cast<RTCRayHit16*>(&rays));
@@ -127,6 +127,7 @@ private:
         if (t.geometry && t.generation != h.generation) release_slot(h.index);
         RTCScene blas_scene = blas.scene(r.mesh.index);
         STRATA_CHECK(blas_scene != nullptr);
+        note_blas(blas, h.index, r.mesh.index);
         if (!t.geometry) {
             t.geometry = rtcNewGeometry(m_device.get(), RTC_GEOMETRY_TYPE_INSTANCE);
             t.generation = h.generation;

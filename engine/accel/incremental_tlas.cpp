@@ -200,7 +200,7 @@ public:
         reap_retired(true);
     }
 
-    void intersect1(RayHit1& ray, bool coherent) const override {
+    void trace1(RayHit1& ray, bool coherent) const override {
         StaleContext context{make_context(coherent), m_stale.data()};
         if (m_stale_count) context.ctx.filter = skip_stale;
         rtcIntersect1(m_static, &context.ctx, reinterpret_cast<RTCRayHit*>(&ray));
@@ -218,7 +218,7 @@ public:
         }
     }
 
-    void intersect16(const ValidMask16& valid, RayHit16& rays, bool coherent) const override {
+    void trace16(const ValidMask16& valid, RayHit16& rays, bool coherent) const override {
         deactivate_unused_lanes(valid, rays);
         StaleContext context{make_context(coherent), m_stale.data()};
         if (m_stale_count) context.ctx.filter = skip_stale;
@@ -367,6 +367,7 @@ private:
     void put_dynamic(uint32_t slot, const InstanceRecord& r, const BlasStore& blas) {
         RTCScene blas_scene = blas.scene(r.mesh.index);
         STRATA_CHECK(blas_scene != nullptr);
+        note_blas(blas, slot, r.mesh.index);
         Slot& s = m_slots[slot];
         if (s.dyn < 0) {
             DynEntry e;
@@ -465,6 +466,7 @@ private:
         }
         RTCScene blas_scene = blas.scene(r.mesh.index);
         STRATA_CHECK(blas_scene != nullptr);
+        note_blas(blas, h.index, r.mesh.index);
         RTCGeometry g = static_geometry(h.index);
         if (!g) {
             g = rtcNewGeometry(m_device.get(), RTC_GEOMETRY_TYPE_INSTANCE);

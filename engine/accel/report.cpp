@@ -22,6 +22,7 @@ const char* build_reason_name(BuildReason r) {
         case BuildReason::BoundsGrowth: return "bounds_growth";
         case BuildReason::TriangleGrowth: return "triangle_growth";
         case BuildReason::RefitLimit: return "refit_limit";
+        case BuildReason::Clustered: return "clustered";
         case BuildReason::PositionsChanged: return "positions_changed";
         case BuildReason::RefitRequested: return "refit_requested";
     }

@@ -20,6 +20,7 @@ enum class BuildReason : uint8_t {
     BoundsGrowth,      ///< rebuild: refit policy, mesh bounds grew too much since the last build
     TriangleGrowth,    ///< rebuild: refit policy, triangles stretched too much since the build
     RefitLimit,        ///< rebuild: refit policy, too many refits since the last build
+    Clustered,         ///< rebuild: a big mesh's first local edit; rebuilt as clusters
     PositionsChanged,  ///< refit: vertex positions moved
     RefitRequested,    ///< refit: mark_dirty {mesh, refit}
 };
@@ -32,8 +33,13 @@ struct MeshBuildEntry {
     std::string mesh;  ///< client id
     BuildReason reason = BuildReason::Added;
     std::string detail;  ///< human-readable: the measured drift against its limit, etc.
-    uint64_t primitives = 0;
+    uint64_t primitives = 0;  ///< triangles built or refit (a clustered refit: its clusters')
     double ms = 0.0;
+    /// Clusters of a clustered BLAS (0: one geometry for the whole mesh; see clustered_blas.h),
+    /// and how many of them this commit refit and rebuilt.
+    uint32_t clusters = 0;
+    uint32_t clusters_refit = 0;
+    uint32_t clusters_rebuilt = 0;
 };
 
 /// Phase wall times of one commit, in milliseconds.
@@ -59,6 +65,8 @@ struct RebuildReport {
     uint32_t blas_refits = 0;
     uint64_t primitives_built = 0;
     uint64_t primitives_refit = 0;
+    uint64_t clusters_rebuilt = 0;  ///< clusters of clustered BLASes built or rebuilt
+    uint64_t clusters_refit = 0;    ///< clusters of clustered BLASes refit
     /// World transforms (groups and instances) recomputed by the flattening of the batches this
     /// commit covers: what group moves cost before the TLAS.
     uint64_t world_transforms = 0;

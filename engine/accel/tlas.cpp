@@ -1,5 +1,7 @@
 #include "engine/accel/tlas.h"
 
+#include "engine/accel/blas_store.h"
+
 namespace strata {
 
 const char* tlas_kind_name(TlasKind k) {
@@ -10,6 +12,27 @@ std::optional<TlasKind> parse_tlas_kind(std::string_view name) {
     if (name == "incremental") return TlasKind::Incremental;
     if (name == "embree") return TlasKind::Embree;
     return std::nullopt;
+}
+
+}  // namespace strata
+
+namespace strata {
+
+bool TlasStrategy::blas_clustered() const { return m_blas->any_clustered(); }
+
+void TlasStrategy::to_mesh_triangles(RayHit1& ray) const {
+    if (ray.inst_id == INVALID_ID) return;
+    ray.prim_id = m_blas->mesh_triangle(m_instance_mesh[ray.inst_id], ray.geom_id, ray.prim_id);
+    ray.geom_id = 0;
+}
+
+void TlasStrategy::to_mesh_triangles(const ValidMask16& valid, RayHit16& rays) const {
+    for (uint32_t i = 0; i < 16; ++i) {
+        if (!valid.lanes[i] || rays.inst_id[i] == INVALID_ID) continue;
+        rays.prim_id[i] =
+            m_blas->mesh_triangle(m_instance_mesh[rays.inst_id[i]], rays.geom_id[i], rays.prim_id[i]);
+        rays.geom_id[i] = 0;
+    }
 }
 
 }  // namespace strata

@@ -98,12 +98,39 @@ public:
     /// Waits for background work to finish (tests and benchmarks).
     virtual void wait_for_background() {}
 
-    /// Closest hit for one ray (inst_id = instance slot).
-    virtual void intersect1(RayHit1& ray, bool coherent) const = 0;
-    /// Closest hits for the active lanes of a packet.
-    virtual void intersect16(const ValidMask16& valid, RayHit16& rays, bool coherent) const = 0;
+    /// Closest hit for one ray: inst_id is the instance slot, prim_id the triangle in the
+    /// mesh's own numbering (also for clustered BLASes), geom_id 0.
+    void intersect1(RayHit1& ray, bool coherent) const {
+        trace1(ray, coherent);
+        if (m_blas && blas_clustered()) to_mesh_triangles(ray);
+    }
+    /// Closest hits for the active lanes of a packet, numbered as intersect1's.
+    void intersect16(const ValidMask16& valid, RayHit16& rays, bool coherent) const {
+        trace16(valid, rays, coherent);
+        if (m_blas && blas_clustered()) to_mesh_triangles(valid, rays);
+    }
     /// Any hit for a packet of shadow rays: tfar becomes -inf on a hit.
     virtual void occluded16(const ValidMask16& valid, Ray16& rays) const = 0;
+
+protected:
+    virtual void trace1(RayHit1& ray, bool coherent) const = 0;
+    virtual void trace16(const ValidMask16& valid, RayHit16& rays, bool coherent) const = 0;
+
+    /// Records which mesh's BLAS the instance in `slot` references (every strategy calls it
+    /// when it points an instance at a BLAS), so hits on clustered BLASes can be renumbered.
+    void note_blas(const BlasStore& blas, uint32_t slot, uint32_t mesh_slot) {
+        m_blas = &blas;
+        if (slot >= m_instance_mesh.size()) m_instance_mesh.resize(slot + 1, 0);
+        m_instance_mesh[slot] = mesh_slot;
+    }
+
+private:
+    bool blas_clustered() const;
+    void to_mesh_triangles(RayHit1& ray) const;
+    void to_mesh_triangles(const ValidMask16& valid, RayHit16& rays) const;
+
+    const BlasStore* m_blas = nullptr;
+    std::vector<uint32_t> m_instance_mesh;  ///< by instance slot: the mesh slot of its BLAS
 };
 
 /// The Embree top-level scene over instance geometries attached by slot id.

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "engine/core/handle.h"
+#include "engine/scene/vertex_ranges.h"
 
 namespace strata {
 
@@ -109,11 +110,10 @@ inline constexpr DirtyBits<InstanceDirty> INSTANCE_TLAS_BITS =
     InstanceDirty::Added | InstanceDirty::Transform | InstanceDirty::Visibility |
     InstanceDirty::Mask;
 
-/// A mesh's dirty state: its bits and the vertices [begin, end) whose positions changed.
+/// A mesh's dirty state: its bits and the vertices whose positions changed.
 struct MeshDirtyState {
     DirtyBits<MeshDirty> bits;
-    uint32_t begin = UINT32_MAX;
-    uint32_t end = 0;
+    VertexRanges points;
 
     friend bool operator==(const MeshDirtyState&, const MeshDirtyState&) = default;
 };

@@ -269,8 +269,7 @@ Status Scene::apply_edit(UpdateMeshPositions&& e, UndoLog& undo) {
             h, e.offset, std::vector<Vec3>(first, first + std::ptrdiff_t(e.positions.size()))});
         std::copy(e.positions.begin(), e.positions.end(), r.positions.mut().begin() + e.offset);
     }
-    r.dirty.begin = std::min(r.dirty.begin, e.offset);
-    r.dirty.end = std::max(r.dirty.end, static_cast<uint32_t>(end));
+    r.dirty.points.add(e.offset, static_cast<uint32_t>(end));
     return {};
 }
 
@@ -336,8 +335,8 @@ Status Scene::apply_edit(ReplaceMeshTopology&& e, UndoLog& undo) {
     }
     r.triangles = std::move(e.triangles);
     undo.records.emplace_back(std::move(old));
-    r.dirty.begin = 0;
-    r.dirty.end = static_cast<uint32_t>(r.positions.size());
+    r.dirty.points.clear();
+    r.dirty.points.add(0, static_cast<uint32_t>(r.positions.size()));
     return {};
 }
 

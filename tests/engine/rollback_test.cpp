@@ -41,7 +41,10 @@ std::string snapshot(const Scene& s) {
         out << "material ";
         put(out, m.material);
         out << "build " << int(m.build.prefer) << m.build.allow_refit << " dirty "
-            << m.dirty.bits.value() << " [" << m.dirty.begin << ", " << m.dirty.end << ") users ";
+            << m.dirty.bits.value();
+        for (const VertexRanges::Range& r : m.dirty.points.ranges())
+            out << " [" << r.begin << ", " << r.end << ")";
+        out << " users ";
         for (InstanceHandle u : m.users) put(out, u);
         out << "\n  positions ";
         for (const Vec3& p : m.positions) put(out, p);

@@ -47,6 +47,24 @@ TEST(ReportJson, HasEveryContractMember) {
     EXPECT_EQ(j["ms"], 2.0);
 }
 
+TEST(ReportJson, AClusteredEntrySaysItsClustersAndAWholeOneDoesNot) {
+    RebuildReport r = sample(false);
+    MeshBuildEntry& e = r.refit[0];
+    e.clusters = 553;
+    e.clusters_refit = 16;
+    e.clusters_rebuilt = 1;
+    r.clusters_refit = 16;
+    r.clusters_rebuilt = 1;
+    const Json j = report_to_json(r);
+    EXPECT_EQ(j["refit"][0]["clusters"], 553);
+    EXPECT_EQ(j["refit"][0]["clusters_refit"], 16);
+    EXPECT_EQ(j["refit"][0]["clusters_rebuilt"], 1);
+    EXPECT_EQ(j["clusters_refit"], 16);
+    EXPECT_EQ(j["clusters_rebuilt"], 1);
+    EXPECT_FALSE(j["rebuilt"][0].contains("clusters"));
+    EXPECT_FALSE(j["rebuilt"][0].contains("clusters_refit"));
+}
+
 TEST(ReportJson, TheTlasMemberShowsTheIncrementalTiersAndTheMerge) {
     RebuildReport r = sample(false);
     r.tlas.strategy = "incremental";

@@ -55,13 +55,19 @@ def _list_of(kind: Type[J]) -> Callable[[List[Mapping[str, Any]]], List[J]]:
 
 @dataclass(frozen=True, eq=False)
 class BlasEntry(JsonObject):
-    """One BLAS a commit rebuilt or refit: the mesh, why, its primitives and milliseconds."""
+    """One BLAS a commit rebuilt or refit: the mesh, why, its primitives and milliseconds.
+
+    A clustered BLAS also says how many clusters it has and how many this commit refit and
+    rebuilt (None for a BLAS built whole)."""
 
     mesh: str
     reason: str
     primitives: int = 0
     ms: Optional[float] = None
     detail: Optional[str] = None
+    clusters: Optional[int] = None
+    clusters_refit: Optional[int] = None
+    clusters_rebuilt: Optional[int] = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -124,6 +130,8 @@ class RebuildReport(JsonObject):
     released: List[str] = field(default_factory=list)
     primitives_built: int = 0
     primitives_refit: int = 0
+    clusters_rebuilt: int = 0
+    clusters_refit: int = 0
     world_transforms: int = 0
     instances_changed: int = 0
     memory_bytes: Optional[MemoryBytes] = _member(MemoryBytes.from_json, default=None)

@@ -1,0 +1,78 @@
+#pragma once
+// The Embree side of a clustered BLAS: one triangle geometry per cluster of a ClusterLayout, all
+// in the mesh's BLAS scene, sharing one vertex buffer and slices of one index buffer. The scene
+// has build quality LOW, so Embree's two-level builder rebuilds (or refits) only the clusters
+// whose geometry was committed since the last scene commit, then the BVH over the clusters:
+// deforming k clusters costs their refits plus that top level, not the whole mesh.
+//
+// A hit reports the cluster as its geomID and the triangle within the cluster as its primID;
+// mesh_triangle() turns the pair back into the mesh's own triangle index.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "engine/accel/cluster_layout.h"
+#include "engine/accel/refit_policy.h"
+#include "engine/scene/scene.h"
+
+struct RTCDeviceTy;
+struct RTCSceneTy;
+struct RTCGeometryTy;
+struct RTCBufferTy;
+
+namespace strata {
+
+/// What a commit does to a clustered BLAS whose positions changed: planned without touching
+/// Embree, carried out by ClusteredBlas::refit.
+struct ClusterWork {
+    /// The drift of the clusters taken together calls for a new layout: rebuild the whole BLAS.
+    bool rebuild_all = false;
+    RefitDecision whole;               ///< the decision over all clusters (reason, detail)
+    std::vector<uint32_t> refit;       ///< clusters refit in place
+    std::vector<uint32_t> rebuild;     ///< clusters whose own BVH is rebuilt (their drift)
+    std::vector<ClusterMetrics> refit_metrics;    ///< parallel to `refit`, measured at planning
+    std::vector<ClusterMetrics> rebuild_metrics;  ///< parallel to `rebuild`
+    uint64_t refit_triangles = 0;
+    uint64_t rebuild_triangles = 0;
+};
+
+class ClusteredBlas {
+public:
+    /// Creates the cluster geometries of `mesh` in `scene` (uncommitted: the caller commits the
+    /// scene). `geometry_quality` is an RTCBuildQuality.
+    ClusteredBlas(RTCDeviceTy* device, RTCSceneTy* scene, const MeshRecord& mesh,
+                  uint32_t cluster_size, int geometry_quality);
+    /// Detaches and releases the cluster geometries and buffers.
+    ~ClusteredBlas();
+    ClusteredBlas(const ClusteredBlas&) = delete;
+    ClusteredBlas& operator=(const ClusteredBlas&) = delete;
+
+    const ClusterLayout& layout() const { return m_layout; }
+    uint32_t cluster_count() const { return m_layout.cluster_count(); }
+    /// The mesh's own triangle index of a hit on triangle `prim` of cluster `geom`.
+    uint32_t mesh_triangle(uint32_t geom, uint32_t prim) const {
+        return m_layout.mesh_triangle(geom, prim);
+    }
+
+    /// Which clusters a commit of `mesh`'s current positions refits or rebuilds. `asked` is
+    /// PositionsChanged (the clusters its dirty vertices touch) or RefitRequested (all of them).
+    ClusterWork plan(const MeshRecord& mesh, const RefitPolicy& policy, BuildReason asked) const;
+    /// Uploads the dirty vertices and commits the clusters of `work` (the caller commits the
+    /// scene).
+    void refit(const MeshRecord& mesh, const ClusterWork& work);
+
+    /// Bytes held outside Embree (layout and metrics).
+    std::size_t bytes() const;
+
+private:
+    RTCSceneTy* m_scene;
+    ClusterLayout m_layout;
+    RTCBufferTy* m_vertices = nullptr;
+    RTCBufferTy* m_indices = nullptr;
+    std::vector<RTCGeometryTy*> m_geometries;  ///< by cluster, attached by cluster index
+    std::vector<ClusterMetrics> m_metrics;     ///< now
+    std::vector<BuildBaseline> m_baselines;    ///< at each cluster's last build
+};
+
+}  // namespace strata
