@@ -289,6 +289,18 @@ std::vector<Triangle> FieldReader::indices(const Json& v, const std::string& ptr
     return out;
 }
 
+std::vector<uint32_t> FieldReader::vertex_ids(const Json& v, const std::string& ptr) {
+    const std::size_t n = array_size(v, ptr, "a flat array of integers");
+    std::vector<uint32_t> out(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const double d = array_number(v, i, ptr);
+        if (!(d >= 0.0 && d <= 4294967295.0) || std::floor(d) != d)
+            schema_error(child(ptr, i), "expected an integer in [0, 4294967295]");
+        out[i] = static_cast<uint32_t>(d);
+    }
+    return out;
+}
+
 std::string FieldReader::base64_bytes(const Json& v, const std::string& ptr, std::size_t unit) {
     if (!v.is_string())
         schema_error(ptr, std::string("expected a base64 string, got ") + type_name(v));
@@ -342,6 +354,13 @@ std::vector<Triangle> FieldReader::indices_b64(const Json& v, const std::string&
     for (std::size_t i = 0; i < out.size(); ++i) {
         for (int k = 0; k < 3; ++k) out[i][k] = load_le<uint32_t>(bytes.data() + i * 12 + k * 4);
     }
+    return out;
+}
+
+std::vector<uint32_t> FieldReader::vertex_ids_b64(const Json& v, const std::string& ptr) {
+    const std::string bytes = base64_bytes(v, ptr, 4);
+    std::vector<uint32_t> out(bytes.size() / 4);
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = load_le<uint32_t>(bytes.data() + i * 4);
     return out;
 }
 

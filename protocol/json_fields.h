@@ -94,6 +94,10 @@ public:
     std::vector<Vec2> uvs_b64(const Json& v, const std::string& ptr);
     /// Base64 little-endian uint32 triples.
     std::vector<Triangle> indices_b64(const Json& v, const std::string& ptr);
+    /// Vertex indices: a flat array of non-negative 32-bit integers, or base64 little-endian
+    /// uint32s.
+    std::vector<uint32_t> vertex_ids(const Json& v, const std::string& ptr);
+    std::vector<uint32_t> vertex_ids_b64(const Json& v, const std::string& ptr);
 
     [[noreturn]] void schema_error(const std::string& ptr, std::string message) const;
 

@@ -19,6 +19,7 @@ std::string wire_field(const std::string& field, const EditSource* src) {
     }
     if (head == "normals" && src->normals_b64) return "normals_b64";
     if (head == "uvs" && src->uvs_b64) return "uvs_b64";
+    if (head == "vertices" && src->vertices_b64) return "vertices_b64";
     return field;
 }
 

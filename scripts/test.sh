@@ -36,7 +36,7 @@ STRATA_TARGETS=strata_engine_tsan_tests scripts/build.sh build-tsan \
     -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSTRATA_TSAN=ON -DSTRATA_BUILD_BENCHMARKS=OFF
 TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/tests/engine/tsan.supp" \
     timeout 900 build-tsan/tests/engine/strata_engine_tsan_tests \
-    --gtest_filter='IncrementalTlas.*:Differential.ThousandsOfInstancesMatchAFreshBuildThroughMerges*'
+    --gtest_filter='IncrementalTlas.*:Differential.ThousandsOfInstancesMatchAFreshBuildThroughMerges*:ClusteredBlas.RendersDuringLocalEdits*'
 
 step "fuzzing: edit batches, HTTP requests, journal, snapshots, assets, textures (build-fuzz/)"
 scripts/run-fuzz.sh

@@ -72,8 +72,8 @@ CommitPlan AccelGraph::plan(const Scene& scene) const {
             entry.reason = BuildReason::Clustered;
             entry.detail = std::to_string(mesh.dirty.points.count()) + " of " +
                            std::to_string(mesh.positions.size()) +
-                           " vertices moved: rebuilt as clusters, so local edits refit only the "
-                           "clusters they touch";
+                           " vertices in edited ranges: rebuilt as clusters, so local edits refit "
+                           "only the clusters they touch";
             clustered = true;
         } else {
             const BuildReason asked = dirty.has(MeshDirty::Points) ? BuildReason::PositionsChanged

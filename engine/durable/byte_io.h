@@ -115,7 +115,7 @@ private:
     template <class T>
     void put_other(const std::vector<T>& v) {
         static_assert(std::is_same_v<T, Vec3> || std::is_same_v<T, Vec2> ||
-                      std::is_same_v<T, Triangle>);
+                      std::is_same_v<T, Triangle> || std::is_same_v<T, uint32_t>);
         put(uint64_t(v.size()));
         raw(v.data(), v.size() * sizeof(T));
     }

@@ -27,7 +27,7 @@ static_assert(TAG_IS<0, AddMesh> && TAG_IS<1, UpdateMeshPositions> &&
                   TAG_IS<15, UpdateGroup> && TAG_IS<16, RemoveGroup> && TAG_IS<17, AddLight> &&
                   TAG_IS<18, UpdateLight> && TAG_IS<19, RemoveLight> &&
                   TAG_IS<20, AddTexture> && TAG_IS<21, RemoveTexture> &&
-                  std::variant_size_v<Edit> == 22,
+                  TAG_IS<22, UpdateMeshVertices> && std::variant_size_v<Edit> == 23,
               "journal kind tags are the Edit variant's indices: append new kinds at the end");
 
 
@@ -53,7 +53,8 @@ constexpr const char* KIND_NAMES[] = {"add_mesh",
                                       "update_light",
                                       "remove_light",
                                       "add_texture",
-                                      "remove_texture"};
+                                      "remove_texture",
+                                      "update_mesh_vertices"};
 static_assert(std::size(KIND_NAMES) == std::variant_size_v<Edit>);
 
 /// Kind tag bit: the edit's extension fields follow its base layout. Fields added to a kind after
@@ -76,6 +77,10 @@ void fields(Io& io, E& e) {
 template <class Io, Kind<UpdateMeshPositions> E>
 void fields(Io& io, E& e) {
     io(e.mesh, e.offset, e.positions);
+}
+template <class Io, Kind<UpdateMeshVertices> E>
+void fields(Io& io, E& e) {
+    io(e.mesh, e.vertices, e.positions);
 }
 template <class Io, Kind<ReplaceMeshTopology> E>
 void fields(Io& io, E& e) {

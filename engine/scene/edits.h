@@ -39,6 +39,15 @@ struct UpdateMeshPositions {
     std::optional<std::vector<Vec2>> uvs = std::nullopt;
 };
 
+/// New positions for listed vertices: vertex `vertices[i]` takes `positions[i]` (a vertex listed
+/// twice takes its last position). Scattered edits, a brush stroke, in one edit: the commit
+/// refits what the listed vertices touch (one cluster each, on a clustered BLAS).
+struct UpdateMeshVertices {
+    std::string mesh;
+    std::vector<uint32_t> vertices;
+    std::vector<Vec3> positions;
+};
+
 /// New triangles, and optionally a whole new vertex array (which may change the vertex count),
 /// with whole new normals and uvs when set (empty: removed). A vertex count change must bring
 /// new normals (uvs) for a mesh that has them.
@@ -207,7 +216,7 @@ using Edit = std::variant<AddMesh, UpdateMeshPositions, ReplaceMeshTopology, Rem
                           AddMaterial, UpdateMaterial, AddInstance, UpdateInstance, SetTransform,
                           RemoveInstance, MarkDirty, SetCamera, SetLighting, Clear, AddGroup,
                           UpdateGroup, RemoveGroup, AddLight, UpdateLight, RemoveLight,
-                          AddTexture, RemoveTexture>;
+                          AddTexture, RemoveTexture, UpdateMeshVertices>;
 
 /// Copies the fields an edit sets onto a full value; unset fields keep theirs.
 void apply_to(Camera& c, const SetCamera& e);

@@ -227,6 +227,7 @@ private:
     // recording in `undo` what the change overwrote (scene_rules.cpp).
     Status apply_edit(AddMesh&& e, UndoLog& undo);
     Status apply_edit(UpdateMeshPositions&& e, UndoLog& undo);
+    Status apply_edit(UpdateMeshVertices&& e, UndoLog& undo);
     Status apply_edit(ReplaceMeshTopology&& e, UndoLog& undo);
     Status apply_edit(RemoveMesh&& e, UndoLog& undo);
     Status apply_edit(AddMaterial&& e, UndoLog& undo);

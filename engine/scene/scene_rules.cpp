@@ -273,6 +273,48 @@ Status Scene::apply_edit(UpdateMeshPositions&& e, UndoLog& undo) {
     return {};
 }
 
+Status Scene::apply_edit(UpdateMeshVertices&& e, UndoLog& undo) {
+    const MeshHandle h = find_mesh(e.mesh);
+    if (h.is_null()) return unknown("mesh", e.mesh, "mesh");
+    MeshRecord& r = m_meshes.at(h);
+    if (e.vertices.empty()) return failure(ErrorCode::InvalidArgument, "no vertices given", "vertices");
+    if (e.positions.size() != e.vertices.size())
+        return failure(ErrorCode::InvalidArgument,
+                       "vertices lists " + std::to_string(e.vertices.size()) +
+                           " vertices but positions has " + std::to_string(e.positions.size()),
+                       "positions");
+    for (std::size_t i = 0; i < e.vertices.size(); ++i) {
+        if (e.vertices[i] >= r.positions.size())
+            return failure(ErrorCode::OutOfRange,
+                           "vertex " + std::to_string(e.vertices[i]) + " is outside mesh '" +
+                               e.mesh + "' which has " + std::to_string(r.positions.size()) +
+                               " vertices",
+                           "vertices/" + std::to_string(i));
+    }
+    if (Status s = check_positions(e.positions, "positions"); !s) return s;
+
+    save_mesh(h, undo);
+    mark(h, MeshDirty::Points);
+    std::vector<Vec3>& positions = r.positions.mut();
+    undo::MeshVertexPositions old{h, e.vertices, {}};
+    old.positions.reserve(e.vertices.size());
+    for (std::size_t i = 0; i < e.vertices.size(); ++i) {
+        old.positions.push_back(positions[e.vertices[i]]);
+        positions[e.vertices[i]] = e.positions[i];
+    }
+    undo.records.emplace_back(std::move(old));
+    // Step: the dirty ranges, one per run of consecutive vertices.
+    std::vector<uint32_t> sorted = std::move(e.vertices);
+    std::sort(sorted.begin(), sorted.end());
+    for (std::size_t i = 0; i < sorted.size();) {
+        std::size_t j = i + 1;
+        while (j < sorted.size() && sorted[j] <= sorted[j - 1] + 1) ++j;
+        r.dirty.points.add(sorted[i], sorted[j - 1] + 1);
+        i = j;
+    }
+    return {};
+}
+
 Status Scene::apply_edit(ReplaceMeshTopology&& e, UndoLog& undo) {
     const MeshHandle h = find_mesh(e.mesh);
     if (h.is_null()) return unknown("mesh", e.mesh, "mesh");

@@ -147,6 +147,11 @@ struct Reverser {
         std::copy(r.positions.begin(), r.positions.end(), mesh.positions.mut().begin() + r.offset);
     }
 
+    void operator()(undo::MeshVertexPositions& r) {
+        std::vector<Vec3>& positions = meshes.at(r.handle).positions.mut();
+        for (std::size_t i = r.vertices.size(); i-- > 0;) positions[r.vertices[i]] = r.positions[i];
+    }
+
     void operator()(undo::MeshPositionsReplaced& r) {
         meshes.at(r.handle).positions = std::move(r.positions);
     }

@@ -45,6 +45,14 @@ struct MeshPositions {
     std::vector<Vec3> positions;
 };
 
+/// Vertex positions an update of listed vertices overwrote, in the order it wrote them (undone
+/// in reverse, so a vertex listed twice gets its first old value back).
+struct MeshVertexPositions {
+    MeshHandle handle;
+    std::vector<uint32_t> vertices;
+    std::vector<Vec3> positions;
+};
+
 /// The whole vertex array an update replaced (shared with the scene's snapshots, never copied).
 struct MeshPositionsReplaced {
     MeshHandle handle;
@@ -122,7 +130,7 @@ using UndoRecord = std::variant<
     undo::Removed<GroupHandle, GroupRecord>, undo::GroupState, undo::Reparented<InstanceHandle>,
     undo::Reparented<GroupHandle>, undo::Inserted<TextureHandle>,
     undo::Removed<TextureHandle, TextureRecord>, undo::Inserted<LightHandle>,
-    undo::Removed<LightHandle, LightRecord>, undo::LightState>;
+    undo::Removed<LightHandle, LightRecord>, undo::LightState, undo::MeshVertexPositions>;
 
 /// Everything needed to take one batch back.
 struct UndoLog {

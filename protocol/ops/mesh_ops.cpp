@@ -49,6 +49,11 @@ std::optional<std::vector<Vec2>> read_uvs(OpFields& f) {
                       &EditSource::uvs_b64);
 }
 
+std::optional<std::vector<uint32_t>> read_vertices(OpFields& f) {
+    return read_array(f, "vertices", "vertices_b64", &FieldReader::vertex_ids,
+                      &FieldReader::vertex_ids_b64, &EditSource::vertices_b64);
+}
+
 /// `[n, n]` of integers in [1, hi].
 std::pair<uint32_t, uint32_t> read_pair(FieldReader& r, const Json& v, const std::string& ptr,
                                         uint32_t hi) {
@@ -159,6 +164,24 @@ Edit parse_update_mesh(OpFields& f) {
     auto indices = read_indices(f);
     auto normals = read_normals(f);
     auto uvs = read_uvs(f);
+    auto vertices = read_vertices(f);
+    if (vertices) {
+        // Positions for listed vertices (a brush stroke): positions only, no offset.
+        for (const char* other : {"offset", "indices", "indices_b64", "normals", "normals_b64",
+                                  "uvs", "uvs_b64"}) {
+            if (f.get(other))
+                r.schema_error(f.pointer(other),
+                               std::string(other) + " does not go with vertices (positions only)");
+        }
+        if (!positions)
+            r.schema_error(f.pointer("positions"),
+                           "update_mesh with vertices needs positions or positions_b64");
+        UpdateMeshVertices e;
+        e.mesh = std::move(mesh);
+        e.vertices = std::move(*vertices);
+        e.positions = std::move(*positions);
+        return e;
+    }
     if (indices) {
         // A topology change: new triangles and optionally a whole new vertex array.
         if (f.get("offset"))
@@ -228,8 +251,8 @@ constexpr EditOp OPS[] = {
 })json",
      parse_add_mesh, edit_kinds<AddMesh>(), field_properties<MeshFields, true>},
     {"update_mesh",
-     "New positions, normals or uvs for a vertex range (offset in vertices), or with indices a "
-     "topology change.",
+     "New positions, normals or uvs for a vertex range (offset in vertices), new positions for "
+     "listed vertices (vertices), or with indices a topology change.",
      R"json({
   "type": "object",
   "properties": {
@@ -242,7 +265,10 @@ constexpr EditOp OPS[] = {
     "normals_b64": {"$ref": "#/$defs/base64"},
     "uvs": {"$ref": "#/$defs/uvs"},
     "uvs_b64": {"$ref": "#/$defs/base64"},
-    "offset": {"$ref": "#/$defs/u32"}
+    "offset": {"$ref": "#/$defs/u32"},
+    "vertices": {"type": "array", "items": {"$ref": "#/$defs/u32"},
+                 "description": "vertex indices: positions[i] goes to vertex vertices[i]"},
+    "vertices_b64": {"$ref": "#/$defs/base64"}
   },
   "required": ["mesh"],
   "additionalProperties": false,
@@ -252,16 +278,26 @@ constexpr EditOp OPS[] = {
       {"required": ["indices", "indices_b64"]},
       {"required": ["normals", "normals_b64"]},
       {"required": ["uvs", "uvs_b64"]},
+      {"required": ["vertices", "vertices_b64"]},
       {"required": ["indices", "offset"]},
       {"required": ["indices_b64", "offset"]}
     ]
+  },
+  "if": {"anyOf": [{"required": ["vertices"]}, {"required": ["vertices_b64"]}]},
+  "then": {
+    "anyOf": [{"required": ["positions"]}, {"required": ["positions_b64"]}],
+    "not": {"anyOf": [{"required": ["offset"]}, {"required": ["indices"]},
+                      {"required": ["indices_b64"]}, {"required": ["normals"]},
+                      {"required": ["normals_b64"]}, {"required": ["uvs"]},
+                      {"required": ["uvs_b64"]}]}
   },
   "anyOf": [{"required": ["positions"]}, {"required": ["positions_b64"]},
             {"required": ["indices"]}, {"required": ["indices_b64"]},
             {"required": ["normals"]}, {"required": ["normals_b64"]},
             {"required": ["uvs"]}, {"required": ["uvs_b64"]}]
 })json",
-     parse_update_mesh, edit_kinds<UpdateMeshPositions, ReplaceMeshTopology>()},
+     parse_update_mesh,
+     edit_kinds<UpdateMeshPositions, UpdateMeshVertices, ReplaceMeshTopology>()},
     {"remove_mesh", "Removes a mesh that no instance uses.",
      R"json({
   "type": "object",

@@ -48,6 +48,7 @@ EditBatch every_kind() {
     b.edits.emplace_back(MarkDirty{std::nullopt, DirtyAction::Refit});
     b.edits.emplace_back(SetCamera{Vec3(1), std::nullopt, std::nullopt, 30.0f});
     b.edits.emplace_back(SetLighting{std::nullopt, Vec3(2), std::nullopt, 0.5f});
+    b.edits.emplace_back(UpdateMeshVertices{"tri", {2, 0, 2}, {{0, 3, 0}, {0, 0, 1}, {0, 4, 0}}});
     b.edits.emplace_back(RemoveInstance{"a"});
     b.edits.emplace_back(RemoveMesh{"tri"});
     b.edits.emplace_back(Clear{});
@@ -190,6 +191,9 @@ TEST(EditCodec, EveryEditKindRoundTripsByteForByte) {
     const auto& upd = std::get<UpdateInstance>(back->edits[6]);
     ASSERT_TRUE(upd.material.has_value());
     EXPECT_FALSE(upd.material->has_value());
+    const auto& listed = std::get<UpdateMeshVertices>(back->edits[11]);
+    EXPECT_EQ(listed.vertices, (std::vector<uint32_t>{2, 0, 2}));
+    EXPECT_EQ(listed.positions[2], Vec3(0, 4, 0));
 }
 
 TEST(EditCodec, GroupEditsAndParentsRoundTrip) {

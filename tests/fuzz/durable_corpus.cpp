@@ -32,6 +32,7 @@ std::vector<Edit> every_kind() {
     edits.emplace_back(AddMaterial{"red", Material{{1, 0, 0}, 0.25f, 0.5f, {0, 0, 0}}});
     edits.emplace_back(std::move(m));
     edits.emplace_back(UpdateMeshPositions{"tri", 1, {{2, 0, 0}}});
+    edits.emplace_back(UpdateMeshVertices{"tri", {3, 0}, {{2, 1, 0}, {0, 0, 1}}});
     edits.emplace_back(ReplaceMeshTopology{"tri", std::nullopt, {{0, 2, 1}}});
     edits.emplace_back(UpdateMaterial{"red", Vec3(0.5f), std::nullopt, 0.1f, std::nullopt});
     AddInstance i;

@@ -73,7 +73,7 @@ TEST(EditOps, EveryEditAlternativeIsProducedBySomeOp) {
     for (std::size_t i = 0; i < std::variant_size_v<Edit>; ++i)
         EXPECT_TRUE(produced & (EditKinds{1} << i)) << "no op produces Edit alternative " << i;
     EXPECT_EQ(find_edit_op("update_mesh")->produces,
-              (edit_kinds<UpdateMeshPositions, ReplaceMeshTopology>()));
+              (edit_kinds<UpdateMeshPositions, UpdateMeshVertices, ReplaceMeshTopology>()));
 }
 
 TEST(EditOps, EachOpAcceptsExactlyTheMembersItsSchemaDeclares) {
