@@ -26,6 +26,96 @@ AccelGraph::~AccelGraph() {
     m_tlas.reset();
 }
 
+namespace {
+
+/// What a commit does with one dirty mesh's BLAS, and why.
+struct MeshAction {
+    bool rebuild = true;
+    bool clustered = false;  ///< a rebuild builds clusters
+    MeshBuildEntry entry;
+    std::optional<MeshMetrics> metrics;  ///< measured while deciding (whole meshes)
+    ClusterWork clusters;                ///< a clustered refit's clusters
+};
+
+/// Decides the BLAS work for `mesh` (dirty with geometry bits), built as `built` (or not yet).
+MeshAction decide(const MeshRecord& mesh, const BlasRecord* built, const BlasStore& blas,
+                  const AccelConfig& config) {
+    const DirtyBits<MeshDirty> dirty = mesh.dirty.bits;
+    MeshAction a;
+    a.entry.mesh = mesh.id;
+    a.entry.primitives = mesh.triangles.size();
+    // A rebuilt BLAS keeps its kind; a big whole one turns clustered at its first local edit.
+    a.clustered = built && built->clusters && blas.may_cluster(mesh);
+    if (!built) {
+        a.entry.reason = BuildReason::Added;
+    } else if (dirty.has(MeshDirty::Topology)) {
+        a.entry.reason = BuildReason::TopologyChanged;
+    } else if (dirty.has(MeshDirty::RebuildRequested)) {
+        a.entry.reason = BuildReason::RebuildRequested;
+    } else if (!built->clusters && blas.may_cluster(mesh) && dirty.has(MeshDirty::Points) &&
+               config.clusters.local(mesh.dirty.points.count(), mesh.positions.size())) {
+        a.entry.reason = BuildReason::Clustered;
+        a.entry.detail = std::to_string(mesh.dirty.points.count()) + " of " +
+                         std::to_string(mesh.positions.size()) +
+                         " vertices in edited ranges: rebuilt as clusters, so local edits refit "
+                         "only the clusters they touch";
+        a.clustered = true;
+    } else {
+        const BuildReason asked = dirty.has(MeshDirty::Points) ? BuildReason::PositionsChanged
+                                                               : BuildReason::RefitRequested;
+        RefitDecision d;
+        if (built->clusters) {
+            // A clustered BLAS measures only the clusters the edit touches.
+            a.clusters = built->clusters->plan(mesh, config.refit_policy, asked);
+            d = a.clusters.whole;
+        } else {
+            a.metrics = measure_mesh(mesh);
+            d = decide_refit(config.refit_policy, mesh.build, built->baseline, *a.metrics, asked);
+        }
+        a.rebuild = d.rebuild;
+        a.entry.reason = d.reason;
+        a.entry.detail = std::move(d.detail);
+    }
+    return a;
+}
+
+/// Adds `a` for mesh `h` to the plan and its report.
+void record(MeshHandle h, const MeshRecord& mesh, const BlasRecord* built, MeshAction&& a,
+            CommitPlan& plan) {
+    RebuildReport& report = plan.report;
+    if (a.rebuild) {
+        // A clustered build's cluster count is known once its layout is: see execute().
+        plan.rebuild.push_back(h);
+        plan.rebuild_metrics.push_back(a.metrics);
+        plan.rebuild_clustered.push_back(a.clustered);
+        report.rebuilt.push_back(std::move(a.entry));
+        report.primitives_built += mesh.triangles.size();
+        return;
+    }
+    MeshBuildEntry& entry = a.entry;
+    if (built->clusters) {
+        const ClusterWork& work = a.clusters;
+        entry.clusters = built->clusters->cluster_count();
+        entry.clusters_refit = uint32_t(work.refit.size());
+        entry.clusters_rebuilt = uint32_t(work.rebuild.size());
+        entry.primitives = work.refit_triangles + work.rebuild_triangles;
+        if (!work.rebuild.empty())
+            entry.detail += "; " + std::to_string(work.rebuild.size()) +
+                            " clusters rebuilt past the refit policy's limits";
+        report.clusters_refit += entry.clusters_refit;
+        report.clusters_rebuilt += entry.clusters_rebuilt;
+        report.primitives_refit += work.refit_triangles;
+        report.primitives_built += work.rebuild_triangles;
+    } else {
+        report.primitives_refit += mesh.triangles.size();
+    }
+    plan.refit.push_back(h);
+    plan.refit_clusters.push_back(std::move(a.clusters));
+    report.refit.push_back(std::move(entry));
+}
+
+}  // namespace
+
 CommitPlan AccelGraph::plan(const Scene& scene) const {
     Stopwatch clock;
     CommitPlan plan;
@@ -49,77 +139,8 @@ CommitPlan AccelGraph::plan(const Scene& scene) const {
             continue;
         }
         const MeshRecord& mesh = *rec.value();
-        const DirtyBits<MeshDirty> dirty = mesh.dirty.bits;
-        if (!dirty.has(GEOMETRY_BITS)) continue;
-
-        MeshBuildEntry entry;
-        entry.mesh = mesh.id;
-        entry.primitives = mesh.triangles.size();
-        std::optional<MeshMetrics> metrics;
-        ClusterWork clusters;
-        bool rebuild = true;
-        // A rebuilt BLAS keeps its kind; a big whole one turns clustered at its first local edit.
-        bool clustered = built && built->clusters && m_blas.may_cluster(mesh);
-        if (!built) {
-            entry.reason = BuildReason::Added;
-        } else if (dirty.has(MeshDirty::Topology)) {
-            entry.reason = BuildReason::TopologyChanged;
-        } else if (dirty.has(MeshDirty::RebuildRequested)) {
-            entry.reason = BuildReason::RebuildRequested;
-        } else if (!built->clusters && m_blas.may_cluster(mesh) &&
-                   dirty.has(MeshDirty::Points) &&
-                   m_config.clusters.local(mesh.dirty.points.count(), mesh.positions.size())) {
-            entry.reason = BuildReason::Clustered;
-            entry.detail = std::to_string(mesh.dirty.points.count()) + " of " +
-                           std::to_string(mesh.positions.size()) +
-                           " vertices in edited ranges: rebuilt as clusters, so local edits refit "
-                           "only the clusters they touch";
-            clustered = true;
-        } else {
-            const BuildReason asked = dirty.has(MeshDirty::Points) ? BuildReason::PositionsChanged
-                                                                   : BuildReason::RefitRequested;
-            RefitDecision d;
-            if (built->clusters) {
-                // A clustered BLAS measures only the clusters the edit touches.
-                clusters = built->clusters->plan(mesh, m_config.refit_policy, asked);
-                d = clusters.whole;
-            } else {
-                metrics = measure_mesh(mesh);
-                d = decide_refit(m_config.refit_policy, mesh.build, built->baseline, *metrics,
-                                 asked);
-            }
-            rebuild = d.rebuild;
-            entry.reason = d.reason;
-            entry.detail = std::move(d.detail);
-        }
-        if (rebuild) {
-            // A clustered build's cluster count is known once its layout is: see execute().
-            plan.rebuild.push_back(h);
-            plan.rebuild_metrics.push_back(metrics);
-            plan.rebuild_clustered.push_back(clustered);
-            report.rebuilt.push_back(std::move(entry));
-            report.primitives_built += mesh.triangles.size();
-        } else if (built->clusters) {
-            entry.clusters = built->clusters->cluster_count();
-            entry.clusters_refit = uint32_t(clusters.refit.size());
-            entry.clusters_rebuilt = uint32_t(clusters.rebuild.size());
-            entry.primitives = clusters.refit_triangles + clusters.rebuild_triangles;
-            if (!clusters.rebuild.empty())
-                entry.detail += "; " + std::to_string(clusters.rebuild.size()) +
-                                " clusters rebuilt past the refit policy's limits";
-            report.clusters_refit += entry.clusters_refit;
-            report.clusters_rebuilt += entry.clusters_rebuilt;
-            report.primitives_refit += clusters.refit_triangles;
-            report.primitives_built += clusters.rebuild_triangles;
-            plan.refit.push_back(h);
-            plan.refit_clusters.push_back(std::move(clusters));
-            report.refit.push_back(std::move(entry));
-        } else {
-            plan.refit.push_back(h);
-            plan.refit_clusters.emplace_back();
-            report.refit.push_back(std::move(entry));
-            report.primitives_refit += mesh.triangles.size();
-        }
+        if (!mesh.dirty.bits.has(GEOMETRY_BITS)) continue;
+        record(h, mesh, built, decide(mesh, built, m_blas, m_config), plan);
         // Instances of a changed BLAS must have their bounds re-read by the TLAS.
         for (InstanceHandle user : mesh.users) {
             if (m_tlas->holds(user)) plan.tlas.blas_changed.push_back(user);
