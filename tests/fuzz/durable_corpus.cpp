@@ -32,7 +32,6 @@ std::vector<Edit> every_kind() {
     edits.emplace_back(AddMaterial{"red", Material{{1, 0, 0}, 0.25f, 0.5f, {0, 0, 0}}});
     edits.emplace_back(std::move(m));
     edits.emplace_back(UpdateMeshPositions{"tri", 1, {{2, 0, 0}}});
-    edits.emplace_back(UpdateMeshVertices{"tri", {3, 0}, {{2, 1, 0}, {0, 0, 1}}});
     edits.emplace_back(ReplaceMeshTopology{"tri", std::nullopt, {{0, 2, 1}}});
     edits.emplace_back(UpdateMaterial{"red", Vec3(0.5f), std::nullopt, 0.1f, std::nullopt});
     AddInstance i;
@@ -53,6 +52,7 @@ std::vector<Edit> every_kind() {
     edits.emplace_back(MarkDirty{std::string("tri"), DirtyAction::Refit});
     edits.emplace_back(SetCamera{Vec3(1), std::nullopt, std::nullopt, 30.0f});
     edits.emplace_back(SetLighting{std::nullopt, Vec3(2), std::nullopt, 0.5f});
+    edits.emplace_back(UpdateMeshVertices{"tri", {3, 0}, {{2, 1, 0}, {0, 0, 1}}});
     edits.emplace_back(RemoveInstance{"a"});
     edits.emplace_back(RemoveMesh{"tri"});
     edits.emplace_back(Clear{});
