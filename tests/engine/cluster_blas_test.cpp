@@ -147,6 +147,25 @@ EditBatch batch_of(std::vector<Edit> edits) {
     return b;
 }
 
+/// An engine (clusters from 1,024 triangles) holding mesh "g", a 100x100-quad bumpy grid
+/// (101x101 vertices, 20,000 triangles), instanced once and committed.
+struct GridScene {
+    std::unique_ptr<Engine> engine;
+    std::vector<Vec3> positions;  ///< the grid's vertices, as the engine holds them
+    RebuildReport added;          ///< the first commit's report
+};
+
+GridScene committed_grid(uint32_t seed) {
+    GridScene g;
+    g.engine = make(clustered_config(1024));
+    MeshData grid = bumpy_grid(100, 100, seed);
+    g.positions = grid.positions;
+    test::apply_ok(*g.engine, test::mesh_edit("g", std::move(grid)),
+                   test::instance_edit("i", "g"));
+    g.added = test::commit_ok(*g.engine);
+    return g;
+}
+
 TEST(UpdateMeshVertices, MovesTheListedVerticesAndIsAtomicAndUndoable) {
     auto engine = make(clustered_config(1024));
     MeshData grid = bumpy_grid(10, 10, 8);
@@ -190,11 +209,7 @@ TEST(UpdateMeshVertices, MovesTheListedVerticesAndIsAtomicAndUndoable) {
 }
 
 TEST(UpdateMeshVertices, ABrushStrokeRefitsOnlyTheClustersAlongIt) {
-    auto engine = make(clustered_config(1024));
-    MeshData grid = bumpy_grid(100, 100, 9);
-    std::vector<Vec3> positions = grid.positions;
-    test::apply_ok(*engine, test::mesh_edit("g", std::move(grid)), test::instance_edit("i", "g"));
-    test::commit_ok(*engine);
+    auto [engine, positions, added] = committed_grid(9);
     // A diagonal stroke of 30 vertices: 30 ranges, in one edit.
     UpdateMeshVertices stroke;
     stroke.mesh = "g";
@@ -234,11 +249,7 @@ EditBatch dent(std::vector<Vec3>& positions, uint32_t rows, float depth) {
 }
 
 TEST(ClusteredBlas, TheFirstLocalEditClustersABigMeshAndLaterOnesRefitOnlyWhatTheyTouch) {
-    auto engine = make(clustered_config(1024));
-    MeshData grid = bumpy_grid(100, 100, 3);  // 20,000 triangles, clusters of at most 282
-    std::vector<Vec3> positions = grid.positions;
-    test::apply_ok(*engine, test::mesh_edit("g", std::move(grid)), test::instance_edit("i", "g"));
-    const RebuildReport added = test::commit_ok(*engine);
+    auto [engine, positions, added] = committed_grid(3);  // clusters of at most 282 triangles
     ASSERT_EQ(added.rebuilt.size(), 1u);
     EXPECT_EQ(added.rebuilt[0].clusters, 0u) << "built whole until edited locally";
 
@@ -272,14 +283,11 @@ TEST(ClusteredBlas, TheFirstLocalEditClustersABigMeshAndLaterOnesRefitOnlyWhatTh
 }
 
 TEST(ClusteredBlas, AMeshMovedWholeStaysWhole) {
-    auto engine = make(clustered_config(1024));
-    MeshData grid = bumpy_grid(100, 100, 3);
+    auto [engine, positions, added] = committed_grid(3);
     UpdateMeshPositions all;
     all.mesh = "g";
-    all.positions = grid.positions;
+    all.positions = positions;
     for (Vec3& p : all.positions) p.y += 0.01f;
-    test::apply_ok(*engine, test::mesh_edit("g", std::move(grid)), test::instance_edit("i", "g"));
-    test::commit_ok(*engine);
     ASSERT_TRUE(engine->apply(batch_of({all})).has_value());
     const RebuildReport r = test::commit_ok(*engine);
     ASSERT_EQ(r.refit.size(), 1u) << r.summary();
@@ -288,11 +296,7 @@ TEST(ClusteredBlas, AMeshMovedWholeStaysWhole) {
 }
 
 TEST(ClusteredBlas, AStretchedClusterIsRebuiltAndAnExplodedMeshReclustered) {
-    auto engine = make(clustered_config(1024));
-    MeshData grid = bumpy_grid(100, 100, 4);
-    std::vector<Vec3> positions = grid.positions;
-    test::apply_ok(*engine, test::mesh_edit("g", std::move(grid)), test::instance_edit("i", "g"));
-    test::commit_ok(*engine);
+    auto [engine, positions, added] = committed_grid(4);
     ASSERT_TRUE(engine->apply(dent(positions, 1, 0.01f)).has_value());
     ASSERT_EQ(test::commit_ok(*engine).clusters_rebuilt > 0, true) << "clustered";
 
