@@ -68,8 +68,17 @@ export function describe(r) {
   const tlas = r.tlas || {};
   lines.push(`TLAS: ${tlas.action || '?'} over ${tlas.instances ?? '?'} instances (${tlas.strategy || '?'})`);
   lines.push(`BLAS: ${r.blas_rebuilds} rebuilt (${r.primitives_built} primitives), ${r.blas_refits} refit (${r.primitives_refit} primitives)`);
-  for (const e of r.rebuilt || []) lines.push(`  rebuilt ${e.mesh}: ${e.reason}, ${e.primitives} primitives`);
-  for (const e of r.refit || []) lines.push(`  refit ${e.mesh}: ${e.primitives} primitives`);
+  for (const e of r.rebuilt || []) {
+    const clusters = e.clusters ? ` as ${e.clusters} clusters` : '';
+    lines.push(`  rebuilt ${e.mesh}: ${e.reason}, ${e.primitives} primitives${clusters}`);
+  }
+  for (const e of r.refit || []) {
+    // A clustered BLAS refits (and may rebuild) only the clusters the edit touched.
+    const clusters = e.clusters
+      ? ` in ${e.clusters_refit} of ${e.clusters} clusters` + (e.clusters_rebuilt ? `, ${e.clusters_rebuilt} rebuilt` : '')
+      : '';
+    lines.push(`  refit ${e.mesh}: ${e.primitives} primitives${clusters}`);
+  }
   if (r.instances_changed) lines.push(`instances changed: ${r.instances_changed}`);
   if (r.world_transforms) lines.push(`world transforms recomputed: ${r.world_transforms}`);
   if (r.phases) {
