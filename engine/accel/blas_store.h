@@ -81,7 +81,6 @@ public:
     bool may_cluster(const MeshRecord& mesh) const {
         return mesh.build.allow_refit && m_cluster_policy.clusters(mesh.triangles.size());
     }
-    const ClusterPolicy& cluster_policy() const { return m_cluster_policy; }
     /// True when some live BLAS is clustered: hits need mesh_triangle().
     bool any_clustered() const { return m_clustered != 0; }
     /// The mesh's own triangle index of a hit on BLAS `slot` (geomID `geom`, primID `prim`).

@@ -189,9 +189,4 @@ ClusterMetrics ClusterLayout::measure(uint32_t c, std::span<const Vec3> position
     return m;
 }
 
-std::size_t ClusterLayout::bytes() const {
-    return (m_first.capacity() + m_order.capacity() + m_vertex_offsets.capacity() + m_vertex_clusters.capacity()) *
-           sizeof(uint32_t);
-}
-
 }  // namespace strata

@@ -64,8 +64,6 @@ public:
     /// Position in sorted order of cluster `c`'s first triangle, and its triangle count.
     uint32_t first(uint32_t c) const { return m_first[c]; }
     uint32_t size(uint32_t c) const { return m_first[c + 1] - m_first[c]; }
-    /// The mesh's own index of the triangle at sorted position `k`.
-    uint32_t triangle(uint32_t k) const { return m_order[k]; }
     /// The mesh's own index of triangle `prim` of cluster `cluster` (a hit's ids).
     uint32_t mesh_triangle(uint32_t cluster, uint32_t prim) const {
         return m_order[first(cluster) + prim];
@@ -84,9 +82,6 @@ public:
     /// write_sorted wrote), so the cluster's triangles are read in one run.
     ClusterMetrics measure(uint32_t c, std::span<const Vec3> positions,
                            const Triangle* sorted) const;
-
-    /// Bytes the layout holds.
-    std::size_t bytes() const;
 
 private:
     /// Fills m_first from the sorted (code << 32 | triangle) keys.

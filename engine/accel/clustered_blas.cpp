@@ -137,10 +137,7 @@ ClusterWork ClusteredBlas::plan(const MeshRecord& mesh, const RefitPolicy& polic
     }
     work.whole = decide_refit(policy, mesh.build, BuildBaseline{sums.built, 0}, sums.now, asked);
     work.whole.detail = "clusters' " + work.whole.detail;
-    if (work.whole.rebuild) {
-        work.rebuild_all = true;
-        return work;
-    }
+    if (work.whole.rebuild) return work;
 
     // Step: each touched cluster against its own baseline, as a mesh would be.
     for (std::size_t i = 0; i < touched.size(); ++i) {
@@ -179,12 +176,6 @@ void ClusteredBlas::refit(const MeshRecord& mesh, const ClusterWork& work) {
         m_metrics[c] = work.rebuild_metrics[i];
         m_baselines[c] = {as_mesh_metrics(m_metrics[c]), 0};
     }
-}
-
-std::size_t ClusteredBlas::bytes() const {
-    return m_layout.bytes() + m_geometries.capacity() * sizeof(RTCGeometry) +
-           m_metrics.capacity() * sizeof(ClusterMetrics) +
-           m_baselines.capacity() * sizeof(BuildBaseline);
 }
 
 }  // namespace strata

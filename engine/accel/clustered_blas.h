@@ -26,9 +26,9 @@ namespace strata {
 /// What a commit does to a clustered BLAS whose positions changed: planned without touching
 /// Embree, carried out by ClusteredBlas::refit.
 struct ClusterWork {
-    /// The drift of the clusters taken together calls for a new layout: rebuild the whole BLAS.
-    bool rebuild_all = false;
-    RefitDecision whole;               ///< the decision over all clusters (reason, detail)
+    /// The decision over all clusters: `whole.rebuild` when their drift taken together calls for
+    /// a new layout (the whole BLAS is rebuilt), with its reason and detail.
+    RefitDecision whole;
     std::vector<uint32_t> refit;       ///< clusters refit in place
     std::vector<uint32_t> rebuild;     ///< clusters whose own BVH is rebuilt (their drift)
     std::vector<ClusterMetrics> refit_metrics;    ///< parallel to `refit`, measured at planning
@@ -48,7 +48,6 @@ public:
     ClusteredBlas(const ClusteredBlas&) = delete;
     ClusteredBlas& operator=(const ClusteredBlas&) = delete;
 
-    const ClusterLayout& layout() const { return m_layout; }
     uint32_t cluster_count() const { return m_layout.cluster_count(); }
     /// The mesh's own triangle index of a hit on triangle `prim` of cluster `geom`.
     uint32_t mesh_triangle(uint32_t geom, uint32_t prim) const {
@@ -61,9 +60,6 @@ public:
     /// Uploads the dirty vertices and commits the clusters of `work` (the caller commits the
     /// scene).
     void refit(const MeshRecord& mesh, const ClusterWork& work);
-
-    /// Bytes held outside Embree (layout and metrics).
-    std::size_t bytes() const;
 
 private:
     RTCSceneTy* m_scene;
