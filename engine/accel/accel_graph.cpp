@@ -114,6 +114,33 @@ void record(MeshHandle h, const MeshRecord& mesh, const BlasRecord* built, MeshA
     report.refit.push_back(std::move(entry));
 }
 
+/// Carries out the plan's BLAS builds and refits, one mesh at a time (each Embree build is
+/// parallel inside), timing each into `report`.
+Status build_and_refit(const Scene& scene, BlasStore& blas, CommitPlan& plan,
+                       RebuildReport& report) {
+    for (std::size_t i = 0; i < plan.rebuild.size(); ++i) {
+        Stopwatch clock;
+        const MeshRecord& mesh = *scene.mesh(plan.rebuild[i]).value();
+        const MeshMetrics metrics =
+            plan.rebuild_metrics[i] ? *plan.rebuild_metrics[i] : measure_mesh(mesh);
+        if (Status s = blas.build(plan.rebuild[i], mesh, metrics, plan.rebuild_clustered[i]); !s)
+            return s;
+        MeshBuildEntry& entry = report.rebuilt[i];
+        entry.ms = clock.ms();
+        if (const ClusteredBlas* c = blas.find(plan.rebuild[i])->clusters.get()) {
+            entry.clusters = entry.clusters_rebuilt = c->cluster_count();
+            report.clusters_rebuilt += entry.clusters;
+        }
+    }
+    for (std::size_t i = 0; i < plan.refit.size(); ++i) {
+        Stopwatch clock;
+        const MeshRecord& mesh = *scene.mesh(plan.refit[i]).value();
+        if (Status s = blas.refit(plan.refit[i], mesh, &plan.refit_clusters[i]); !s) return s;
+        report.refit[i].ms = clock.ms();
+    }
+    return {};
+}
+
 }  // namespace
 
 CommitPlan AccelGraph::plan(const Scene& scene) const {
@@ -192,29 +219,8 @@ Result<RebuildReport> AccelGraph::execute(const Scene& scene, CommitPlan&& plan)
     }
     {
         MemoryScope memory(*m_device, MemoryCategory::Blas);
-        for (std::size_t i = 0; i < plan.rebuild.size(); ++i) {
-            Stopwatch clock;
-            const MeshRecord& mesh = *scene.mesh(plan.rebuild[i]).value();
-            const MeshMetrics metrics =
-                plan.rebuild_metrics[i] ? *plan.rebuild_metrics[i] : measure_mesh(mesh);
-            if (Status s = m_blas.build(plan.rebuild[i], mesh, metrics, plan.rebuild_clustered[i]);
-                !s)
-                return Unexpected(s.error());
-            MeshBuildEntry& entry = report.rebuilt[i];
-            entry.ms = clock.ms();
-            if (const ClusteredBlas* c = m_blas.find(plan.rebuild[i])->clusters.get()) {
-                entry.clusters = entry.clusters_rebuilt = c->cluster_count();
-                report.clusters_rebuilt += entry.clusters;
-            }
-        }
-        for (std::size_t i = 0; i < plan.refit.size(); ++i) {
-            Stopwatch clock;
-            if (Status s = m_blas.refit(plan.refit[i], *scene.mesh(plan.refit[i]).value(),
-                                        &plan.refit_clusters[i]);
-                !s)
-                return Unexpected(s.error());
-            report.refit[i].ms = clock.ms();
-        }
+        if (Status s = build_and_refit(scene, m_blas, plan, report); !s)
+            return Unexpected(s.error());
     }
     report.phases.blas_ms = blas_clock.ms();
 
