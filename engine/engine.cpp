@@ -54,6 +54,9 @@ Result<ApplyResult> Engine::apply(EditBatch&& batch) {
 
 Result<ApplyResult> Engine::apply(EditBatch&& batch, std::optional<uint64_t> expected_version) {
     const std::size_t count = batch.edits.size();
+    if (batch.info.time_ms == 0) batch.info.time_ms = unix_ms();
+    const BatchInfo info = batch.info;
+    auto ops = count_ops(batch);
     decode_textures_ahead(batch, m_config.budget.max_texture_bytes);
     const bool frees_meshes = releases_mesh_data(batch);
     // The record is encoded before the apply moves the arrays out, and outside the lock.
@@ -66,14 +69,17 @@ Result<ApplyResult> Engine::apply(EditBatch&& batch, std::optional<uint64_t> exp
             return failure(ErrorCode::VersionMismatch,
                            "the scene is at version " + std::to_string(m_scene.version()) +
                                ", not " + std::to_string(*expected_version));
-        Result<uint64_t> applied =
-            !m_journal ? m_scene.apply(std::move(batch))
-                       : m_scene.apply(std::move(batch), [&](uint64_t next) -> Status {
-                             auto position = m_journal->append(*record, next);
-                             if (!position) return Unexpected(position.error());
-                             journal_position = position.value();
-                             return {};
-                         });
+        const auto journal = [&](uint64_t next) -> Status {
+            auto position = m_journal->append(*record, next);
+            if (!position) return Unexpected(position.error());
+            journal_position = position.value();
+            return {};
+        };
+        EditBatch inverse;
+        Result<uint64_t> applied = m_scene.apply(
+            std::move(batch), m_journal ? std::function<Status(uint64_t)>(journal) : nullptr,
+            m_config.history.max_undo ? &inverse : nullptr);
+        if (applied) m_history.record(applied.value(), info, std::move(ops), std::move(inverse));
         publish_version();
         return applied;
     }();
@@ -93,6 +99,34 @@ Result<ApplyResult> Engine::apply(EditBatch&& batch, std::optional<uint64_t> exp
     }
     if (frees_meshes) release_free_memory();
     return ApplyResult{version.value(), count};
+}
+
+Result<EditBatch> Engine::undo_batch(uint64_t version) const {
+    std::shared_lock lock(m_scene_mutex);
+    if (version != m_scene.version())
+        return failure(ErrorCode::VersionMismatch,
+                       "the scene is at version " + std::to_string(m_scene.version()) + ", not " +
+                           std::to_string(version));
+    if (auto batch = m_history.undo_batch()) return std::move(*batch);
+    return failure(ErrorCode::NothingToUndo,
+                   "nothing to undo: no batch since the start, the newest snapshot or the "
+                   "history's limits is left to take back");
+}
+
+Result<EditBatch> Engine::redo_batch(uint64_t version) const {
+    std::shared_lock lock(m_scene_mutex);
+    if (version != m_scene.version())
+        return failure(ErrorCode::VersionMismatch,
+                       "the scene is at version " + std::to_string(m_scene.version()) + ", not " +
+                           std::to_string(version));
+    if (auto batch = m_history.redo_batch()) return std::move(*batch);
+    return failure(ErrorCode::NothingToUndo,
+                   "nothing to redo: no undo since the last edit");
+}
+
+HistoryPage Engine::history(std::size_t limit, uint64_t before) const {
+    std::shared_lock lock(m_scene_mutex);
+    return m_history.page(limit, before);
 }
 
 Status Engine::validate(EditBatch&& batch, uint64_t version) {
@@ -189,6 +223,7 @@ Result<SnapshotReplace> Engine::replace_with_snapshot(std::string_view payload, 
         }
         graph->set_refit_policy(m_accel->refit_policy());
         std::swap(m_scene, fresh);
+        m_history.clear();
         publish_version();
         {
             std::lock_guard accel_lock(m_accel_mutex);

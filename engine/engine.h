@@ -30,6 +30,7 @@
 #include "engine/render/primary.h"
 #include "engine/render/render_request.h"
 #include "engine/render/renderer.h"
+#include "engine/scene/edit_history.h"
 
 namespace strata {
 
@@ -40,6 +41,7 @@ class Journal;
 struct EngineConfig {
     AccelConfig accel;
     SceneBudget budget;  ///< checked when a batch is applied (a TooLarge error beyond)
+    HistoryLimits history;  ///< the undo history's bounds (edit_history.h)
 };
 
 /// Result of an applied batch.
@@ -67,6 +69,14 @@ public:
     /// the apply happen under one lock, so no other batch can land in between. A mismatch is a
     /// VersionMismatch error and leaves the scene untouched.
     Result<ApplyResult> apply(EditBatch&& batch, std::optional<uint64_t> expected_version);
+
+    /// The batch that undoes (redoes) the newest batch on the undo (redo) stack
+    /// (edit_history.h), for the scene at `version`: apply it with that expected version. A
+    /// NothingToUndo error when the stack is empty, VersionMismatch when the scene is elsewhere.
+    Result<EditBatch> undo_batch(uint64_t version) const;
+    Result<EditBatch> redo_batch(uint64_t version) const;
+    /// A page of the history (EditHistory::page).
+    HistoryPage history(std::size_t limit, uint64_t before) const;
 
     /// Checks `batch` against the scene at `version` without keeping it: every rule runs, then
     /// the changes are rolled back (no version bump, no journal record, nothing counted). A
@@ -183,7 +193,7 @@ public:
 
 private:
     Engine(const EngineConfig& config, std::unique_ptr<AccelGraph> accel)
-        : m_config(config), m_accel(std::move(accel)) {}
+        : m_config(config), m_accel(std::move(accel)), m_history(config.history) {}
     /// The commit, with the launch mutex held. With `keep_scene_lock`, the scene's exclusive
     /// lock is handed to the caller instead of released (the caller then reads the scene at
     /// exactly the committed version).
@@ -201,6 +211,7 @@ private:
     std::unique_ptr<AccelGraph> m_accel;
     mutable std::mutex m_accel_mutex;  ///< lets memory_bytes() read m_accel during a replace
     durable::Journal* m_journal = nullptr;
+    EditHistory m_history;  ///< guarded by m_scene_mutex, like the scene whose versions it lists
     FrameState m_frame;
     Renderer m_renderer;  ///< guarded by the launch mutex (it holds the accumulation state)
 

@@ -78,6 +78,15 @@ using BatchApply = std::function<Result<ApplyResult>(EditBatch&&, std::optional<
 /// consumed (freed once parsed).
 ApiResponse post_edits(Engine& engine, std::string body, std::optional<std::string_view> if_match,
                        const ApiLimits& limits, const BatchApply* apply = nullptr);
+/// POST /v1/undo (POST /v1/redo when `redo`): applies the inverse of the newest batch on the
+/// undo (redo) stack as a new version, journaled and counted like POST /v1/edits (history_api.cpp).
+/// With If-Match only at that version; without, a writer landing meanwhile makes it try again on
+/// the newer scene. An empty stack is a 409 (nothing-to-undo).
+ApiResponse post_undo(Engine& engine, bool redo, std::optional<std::string_view> if_match,
+                      const BatchApply* apply = nullptr);
+/// GET /v1/history?limit&cursor: the versions the history holds, newest first, and the stacks.
+ApiResponse get_history(const Engine& engine,
+                        const std::multimap<std::string, std::string>& query);
 /// POST /v1/commit.
 ApiResponse post_commit(Engine& engine);
 /// GET /v1/plan.

@@ -34,6 +34,8 @@ std::optional<Problem> parse_into(const Json& body, ParsedBatch& out) {
     static const MemberRule BATCH = schema_members("");
     FieldReader r;
     r.expect_object(body, "", BATCH);
+    if (const Json* message = FieldReader::member(body, "message"))
+        out.batch.info.message = r.text(*message, "/message");
     const Json& edits = r.required(body, "", "edits");
     if (!edits.is_array()) r.schema_error("/edits", "expected an array of edits");
     out.batch.edits.reserve(edits.size());

@@ -14,7 +14,10 @@ constexpr std::string_view ENVELOPE = R"json({
   "title": "Strata edit batch",
   "description": "The body of POST /v1/edits. Structural rules only: value rules (finite float32 numbers, array lengths that are multiples of 3, decoded base64 lengths that are multiples of 12 bytes, a 4x4 transform's last row 0 0 0 1) and rules against the scene (ids that exist, ...) answer 422 and are described in protocol/README.md.",
   "type": "object",
-  "properties": {"edits": {"type": "array", "items": {"$ref": "#/$defs/edit"}}},
+  "properties": {
+    "edits": {"type": "array", "items": {"$ref": "#/$defs/edit"}},
+    "message": {"$ref": "#/$defs/text", "description": "a note kept with the version in GET /v1/history"}
+  },
   "required": ["edits"],
   "additionalProperties": false
 })json";

@@ -423,6 +423,27 @@ void pick_schemas(J& out) {
 
 void write_result_schemas(J& out) {
     out["EditResult"] = object({{"version", count()}, {"applied", count()}});
+    out["UndoResult"] =
+        object({{"version", count()}, {"undone", count()}, {"applied", count()}});
+    out["RedoResult"] =
+        object({{"version", count()}, {"redone", count()}, {"applied", count()}});
+    const J stack = object({{"depth", count()}, {"next", or_null(count())}});
+    const J entry = object({{"version", count()},
+                            {"time", described(string(), "RFC 3339, UTC, milliseconds")},
+                            {"kind", {{"enum", J::array({"edit", "undo", "redo"})}}},
+                            {"target", described(count(), "undo, redo: the version taken back or redone")},
+                            {"message", described(string(), "the batch's message, when it had one")},
+                            {"edits", count()},
+                            {"ops", {{"type", "object"}, {"additionalProperties", count()}}},
+                            {"undoable", described(boolean(), "on the undo stack now")}},
+                           {"target", "message"});
+    out["History"] = object({{"version", count()},
+                             {"oldest", or_null(count())},
+                             {"undo", stack},
+                             {"redo", stack},
+                             {"held_bytes", count()},
+                             {"entries", array_of(entry)},
+                             {"next_cursor", or_null(string())}});
     out["SnapshotResult"] =
         object({{"version", count()}, {"applied", count()}, {"snapshot_version", count()}});
     const J ids = array_of(ref("id"));

@@ -26,6 +26,8 @@ std::string wire_field(const std::string& field, const EditSource* src) {
 }  // namespace
 
 Problem problem_from_batch_error(const Error& e, const std::vector<EditSource>& sources) {
+    // The batch's own members (its message) are named by field alone.
+    if (e.edit_index == Error::NO_INDEX && e.field == "message") return problem_from(e);
     Problem p = make_problem(problem_type_of(e.code), e.message);
     if (e.edit_index == Error::NO_INDEX) return p;
     p.edit_index = e.edit_index;

@@ -56,6 +56,10 @@ constexpr TypeInfo TYPES[] = {
      "`POST /v1/assets`: the file is malformed or uses what Strata does not import (its "
      "`file` and `element` members say where)"},
     {"version-mismatch", "Scene version mismatch", 412, "`If-Match` names another version"},
+    {"nothing-to-undo", "Nothing to undo", 409,
+     "`POST /v1/undo` with no batch left to take back (none since the start, the newest "
+     "snapshot or the history's limits), or `POST /v1/redo` with nothing undone since the last "
+     "edit"},
     {"not-found", "Not found", 404,
      "unknown route, or an unknown id in the URL of `GET /v1/scene/...`"},
     {"method-not-allowed", "Method not allowed", 405,
@@ -150,6 +154,8 @@ ProblemType problem_type_of(ErrorCode code) {
             return ProblemType::TooLarge;
         case ErrorCode::VersionMismatch:
             return ProblemType::VersionMismatch;
+        case ErrorCode::NothingToUndo:
+            return ProblemType::NothingToUndo;
         case ErrorCode::Cancelled:
         case ErrorCode::Storage:  // the journal could not take the batch: nothing was applied
             return ProblemType::Unavailable;

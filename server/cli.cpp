@@ -186,6 +186,13 @@ void add_render_limit_options(CLI::App& app, ServerConfig& c) {
                    "Most texture memory in MiB: decoded texels (6 bytes each) and the image "
                    "files kept with them (add_texture beyond it: 413)")
         ->check(CLI::Range(uint64_t(1), uint64_t(1) << 20));
+    app.add_option("--undo-depth", c.undo_depth,
+                   "Batches POST /v1/undo can take back in a row (and redo); 0 turns undo off")
+        ->check(CLI::Range(std::size_t(0), std::size_t(100000)));
+    app.add_option("--undo-mb", c.undo_mb,
+                   "MiB the undo and redo stacks may hold; a batch whose inverse is larger "
+                   "(a clear of a big scene) cannot be undone, nor anything before it")
+        ->check(CLI::Range(uint64_t(1), uint64_t(1) << 20));
 }
 
 /// Who may call the API: the bearer token, the loopback rule's override and CORS origins.

@@ -99,6 +99,8 @@ void prepare_process(server::ServerConfig& c) {
 std::unique_ptr<Engine> create_engine(const server::ServerConfig& c) {
     EngineConfig engine_config;
     engine_config.budget = {c.max_scene_triangles, c.max_scene_vertices, c.max_texture_mb << 20};
+    engine_config.history.max_undo = c.undo_depth;
+    engine_config.history.max_bytes = c.undo_mb << 20;
     engine_config.accel.tlas = *parse_tlas_kind(c.tlas);  // checked by the parser
     engine_config.accel.tlas_policy.max_dynamic_fraction = c.tlas_max_dynamic_fraction;
     engine_config.accel.tlas_policy.min_instances = c.tlas_min_instances;

@@ -252,6 +252,52 @@ MetricsSnapshot metrics_snapshot(const ServerContext& ctx) {
     return s;
 }
 
+void add_history_routes(RouteTable& routes, ServerContext& ctx) {
+    for (const bool redo : {false, true}) {
+        routes.post(
+            redo ? "/v1/redo" : "/v1/undo",
+            {{.summary = redo ? "Redo the newest undone batch" : "Undo the newest batch",
+              .description =
+                  redo ? "Applies the batch that the newest undo took back, again, as a new "
+                         "version. Possible until a new edit lands (which empties the redo "
+                         "stack); no body."
+                       : "Applies the inverse of the newest batch on the undo stack as a new "
+                         "version: journaled, counted and replicated like POST /v1/edits, and "
+                         "kept across restarts back to the newest snapshot. Repeat to go further "
+                         "back (at most --undo-depth batches). No body.",
+              .tag = "edits",
+              .parameters = {if_match()},
+              .responses = {ok_json(redo ? "RedoResult" : "UndoResult",
+                                    "applied: the new version and the version taken back"),
+                            version_mismatch(),
+                            problem(409, redo ? "nothing undone since the last edit"
+                                              : "no batch left to take back"),
+                            problem(413, "the inverse would take the scene over a budget "
+                                         "lowered since"),
+                            problem(422, "the inverse no longer applies"),
+                            not_applied()}},
+             [&ctx, redo](RouteCall& call) {
+                 return protocol::post_undo(ctx.engine, redo,
+                                            call.request.header_value("If-Match"),
+                                            ctx.batch_apply());
+             }});
+    }
+    routes.get(
+        "/v1/history",
+        {{.summary = "The versions of the scene, newest first, and the undo and redo stacks",
+          .tag = "edits",
+          .parameters =
+              {{.name = "limit",
+                .description = "most entries in the page",
+                .schema = R"({"type": "integer", "minimum": 1, "maximum": 1000, "default": 50})"},
+               {.name = "cursor", .description = "the next_cursor of the previous page"}},
+          .responses = {ok_json("History", "one page"),
+                        problem(400, "a malformed or unknown query parameter")}},
+         [&ctx](RouteCall& call) {
+             return protocol::get_history(ctx.engine, call.request.query);
+         }});
+}
+
 void add_write_routes(RouteTable& routes, ServerContext& ctx) {
     routes.post(
         "/v1/edits",
@@ -283,6 +329,7 @@ void add_write_routes(RouteTable& routes, ServerContext& ctx) {
                                                    req.header_value("If-Match"), ctx.api_limits,
                                                    ctx.batch_apply());
                    }}));
+    add_history_routes(routes, ctx);
     routes.post("/v1/commit",
                 {{.summary = "Commit: bring the acceleration structures in line with the scene",
                   .description = "The least work, like a launch without rays; no body.",

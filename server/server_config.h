@@ -47,6 +47,10 @@ struct ServerConfig {
     uint64_t max_scene_vertices = 1ull << 24;
     uint64_t max_texture_mb = 256;  ///< decoded texels over all textures, in MiB
 
+    // The undo history (engine/scene/edit_history.h).
+    std::size_t undo_depth = 100;  ///< batches on each of the undo and redo stacks; 0: no undo
+    uint64_t undo_mb = 256;        ///< MiB the inverse batches of both stacks may hold
+
     // The TLAS strategy (engine/accel/tlas.h) and the incremental strategy's policy.
     std::string tlas = "incremental";  ///< "incremental" or "embree"
     double tlas_max_dynamic_fraction = 0.10;

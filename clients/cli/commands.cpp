@@ -13,10 +13,6 @@ namespace strata::cli {
 
 namespace {
 
-constexpr int OK = 0;
-constexpr int BAD_INPUT = 2;
-constexpr int REFUSED = 3;
-
 std::string fixed(double v) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "%.3f", v);

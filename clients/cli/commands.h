@@ -1,5 +1,6 @@
 #pragma once
-// The one-shot subcommands of `strata`: edit, render, commit, plan, stats and scene. Each sends
+// The one-shot subcommands of `strata`: edit, undo, redo, history, render, commit, plan, stats
+// and scene. Each sends
 // one request, prints the answer for people (or as JSON with --json) and returns the exit code:
 // 0 done, 2 bad input, 3 Strata refused the request or could not be reached.
 
@@ -13,6 +14,11 @@
 #include "clients/cli/transport.h"
 
 namespace strata::cli {
+
+/// Exit codes: done, bad input, Strata refused the request or could not be reached.
+inline constexpr int OK = 0;
+inline constexpr int BAD_INPUT = 2;
+inline constexpr int REFUSED = 3;
 
 /// Where output goes.
 struct Console {
@@ -54,6 +60,17 @@ struct RenderArgs {
 std::optional<std::string> render_body(const RenderArgs& args, std::string& error);
 /// `strata render -o FILE ...`.
 int run_render(Transport& t, const Console& c, const RenderArgs& args);
+
+/// `strata undo` and `strata redo` (history_commands.cpp).
+int run_undo(Transport& t, const Console& c, bool redo, const std::optional<std::string>& if_match);
+
+struct HistoryArgs {
+    uint32_t page_size = 100;           ///< versions per request
+    std::optional<uint64_t> max_items;  ///< stop after this many
+};
+/// `strata history`: the versions the server holds, newest first, one line each (one JSON
+/// document per line with --json), following cursors.
+int run_history(Transport& t, const Console& c, const HistoryArgs& args);
 
 /// `strata commit` and `strata plan`.
 int run_commit(Transport& t, const Console& c);

@@ -49,6 +49,15 @@ Reply EmbeddedTransport::edits(std::string body, const std::optional<std::string
         if_match ? std::optional<std::string_view>(*if_match) : std::nullopt, LIMITS));
 }
 
+Reply EmbeddedTransport::undo(bool redo, const std::optional<std::string>& if_match) {
+    return to_reply(protocol::post_undo(
+        *m_engine, redo, if_match ? std::optional<std::string_view>(*if_match) : std::nullopt));
+}
+
+Reply EmbeddedTransport::history(const std::multimap<std::string, std::string>& query) {
+    return to_reply(protocol::get_history(*m_engine, query));
+}
+
 Reply EmbeddedTransport::commit() {
     return to_reply(protocol::post_commit(*m_engine));
 }

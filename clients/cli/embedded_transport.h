@@ -24,6 +24,8 @@ public:
     ~EmbeddedTransport() override;
 
     Reply edits(std::string body, const std::optional<std::string>& if_match) override;
+    Reply undo(bool redo, const std::optional<std::string>& if_match) override;
+    Reply history(const std::multimap<std::string, std::string>& query) override;
     Reply commit() override;
     Reply plan() override;
     Reply render(const std::string& body) override;

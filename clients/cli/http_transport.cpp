@@ -62,6 +62,16 @@ Reply to_reply(const httplib::Result& r, const std::string& url) {
     return out;
 }
 
+/// `path` with `query` appended, keys and values percent-encoded.
+std::string with_query(std::string path, const std::multimap<std::string, std::string>& query) {
+    char sep = '?';
+    for (const auto& [key, value] : query) {
+        path += sep + percent_encode(key) + "=" + percent_encode(value);
+        sep = '&';
+    }
+    return path;
+}
+
 }  // namespace
 
 Outcome<std::unique_ptr<HttpTransport>> HttpTransport::create(const HttpOptions& options) {
@@ -107,6 +117,14 @@ Reply HttpTransport::edits(std::string body, const std::optional<std::string>& i
     return post("/v1/edits", body, if_match.value_or(""));
 }
 
+Reply HttpTransport::undo(bool redo, const std::optional<std::string>& if_match) {
+    return post(redo ? "/v1/redo" : "/v1/undo", "", if_match.value_or(""));
+}
+
+Reply HttpTransport::history(const std::multimap<std::string, std::string>& query) {
+    return get(with_query("/v1/history", query).c_str());
+}
+
 Reply HttpTransport::commit() {
     return post("/v1/commit", "", "");
 }
@@ -129,13 +147,7 @@ Reply HttpTransport::scene() {
 
 Reply HttpTransport::scene_list(const std::string& collection,
                                 const std::multimap<std::string, std::string>& query) {
-    std::string path = "/v1/scene/" + percent_encode(collection);
-    char sep = '?';
-    for (const auto& [key, value] : query) {
-        path += sep + percent_encode(key) + "=" + percent_encode(value);
-        sep = '&';
-    }
-    return get(path.c_str());
+    return get(with_query("/v1/scene/" + percent_encode(collection), query).c_str());
 }
 
 Reply HttpTransport::scene_object(const std::string& collection, const std::string& id) {
@@ -156,14 +168,8 @@ Reply HttpTransport::put_snapshot(std::string bytes) {
 
 Reply HttpTransport::import_asset(std::string bytes,
                                   const std::multimap<std::string, std::string>& query) {
-    std::string path = "/v1/assets";
-    char sep = '?';
-    for (const auto& [key, value] : query) {
-        path += sep + percent_encode(key) + "=" + percent_encode(value);
-        sep = '&';
-    }
     // The format travels in the query (?format= or the name's extension).
-    return post(path.c_str(), bytes, "", "application/octet-stream");
+    return post(with_query("/v1/assets", query).c_str(), bytes, "", "application/octet-stream");
 }
 
 }  // namespace strata::cli

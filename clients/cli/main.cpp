@@ -144,6 +144,26 @@ void add_edit(CLI::App& app, Actions& actions) {
     });
 }
 
+void add_history(CLI::App& app, Actions& actions) {
+    for (const bool redo : {false, true}) {
+        auto if_match = std::make_shared<std::string>();
+        CLI::App* cmd = app.add_subcommand(
+            redo ? "redo" : "undo",
+            redo ? "Apply again the batch the newest undo took back" : "Take back the newest batch");
+        cmd->add_option("--if-match", *if_match, "Only at this scene version");
+        actions.emplace_back(cmd, [if_match, redo](Transport& t, const Console& c) {
+            return run_undo(t, c, redo,
+                            if_match->empty() ? std::nullopt : std::optional(*if_match));
+        });
+    }
+    auto a = std::make_shared<HistoryArgs>();
+    CLI::App* cmd = app.add_subcommand("history", "List the scene's versions, newest first");
+    cmd->add_option("--page-size", a->page_size, "Versions per request (1 to 1000)")
+        ->check(CLI::Range(1, 1000));
+    cmd->add_option("--max", a->max_items, "Stop after this many versions");
+    actions.emplace_back(cmd, [a](Transport& t, const Console& c) { return run_history(t, c, *a); });
+}
+
 void add_render(CLI::App& app, Actions& actions) {
     auto a = std::make_shared<RenderArgs>();
     CLI::App* cmd = app.add_subcommand("render", "Render a frame and save it");
@@ -286,6 +306,7 @@ int main(int argc, char** argv) {
     CLI::App* play_cmd = add_play(app, play);
     Actions actions;
     add_edit(app, actions);
+    add_history(app, actions);
     add_render(app, actions);
     add_reports(app, actions);
     add_scene(app, actions);

@@ -12,9 +12,6 @@ namespace strata::cli {
 
 namespace {
 
-constexpr int OK = 0;
-constexpr int BAD_INPUT = 2;
-
 /// One line per listed object for people: its id, then what tells it apart.
 std::string item_line(const std::string& collection, const Json& item) {
     std::string line = item.value("id", std::string("?"));

@@ -46,6 +46,10 @@ public:
 
     /// POST /v1/edits with `body` ({"edits": [...]}), conditional on `if_match` when given.
     virtual Reply edits(std::string body, const std::optional<std::string>& if_match) = 0;
+    /// POST /v1/undo (POST /v1/redo when `redo`), conditional on `if_match` when given.
+    virtual Reply undo(bool redo, const std::optional<std::string>& if_match) = 0;
+    /// GET /v1/history with `query` (limit, cursor).
+    virtual Reply history(const std::multimap<std::string, std::string>& query) = 0;
     /// POST /v1/commit.
     virtual Reply commit() = 0;
     /// GET /v1/plan.

@@ -58,6 +58,12 @@ export function edit(edits, version) {
   return api('/v1/edits', { method: 'POST', body: { edits }, ifMatch: version });
 }
 
+/// Takes back the newest batch on the undo stack (POST /v1/undo), or with `redo` applies the
+/// newest undone one again (POST /v1/redo), conditional on `version` (If-Match) when given.
+export function undo(redo, version) {
+  return api(redo ? '/v1/redo' : '/v1/undo', { method: 'POST', ifMatch: version });
+}
+
 export function enc(id) {
   return encodeURIComponent(id);
 }

@@ -1,10 +1,12 @@
 // The Strata viewer: the live frame stream (GET /v1/stream), a per-viewer camera, picking and
-// selection, edits through /v1/edits with If-Match, the scene list, and the commit-cost panel fed
-// by GET /v1/events. Plain ES modules, no build step; served by strata-server at GET /.
+// selection, edits through /v1/edits with If-Match, undo and redo (Ctrl+Z, Ctrl+Shift+Z or
+// Ctrl+Y, and the history panel's buttons), the scene list, the history and the commit-cost
+// panel fed by GET /v1/events. Plain ES modules, no build step; served by strata-server at GET /.
 
-import { api, edit, enc, setToken, token, withToken, ApiError } from './api.js';
+import { api, edit, enc, setToken, token, undo, withToken, ApiError } from './api.js';
 import { CameraControl } from './camera.js';
 import { CostPanel } from './cost.js';
+import { HistoryPanel } from './history.js';
 import { Inspector } from './inspector.js';
 import { ScenePanel } from './scene_panel.js';
 
@@ -28,7 +30,7 @@ const state = {
   selected: null,       // the selected instance's or group's document (kind: 'instance' | 'group')
   frameVersion: null,   // version of the newest frame shown
   streamUrl: '',
-  listedVersion: null,  // the version the scene panel was last listed for
+  listedVersion: null,  // the version the scene and history panels were last listed for
   listTimer: 0,
 };
 window.strata = state;
@@ -135,7 +137,9 @@ function drawSelection() {
 async function refreshScene() {
   const { doc } = await api('/v1/scene');
   state.sceneCamera = doc.camera;
-  state.version = doc.version;
+  // Never back: an answer overtaken by the viewer's own newer edit or undo must not make the
+  // next undo's If-Match name the older version.
+  state.version = Math.max(doc.version, state.version ?? 0);
   status(`version ${doc.version} · ${doc.counts.instances} instances · ${doc.counts.triangles} triangles`);
   return doc;
 }
@@ -209,8 +213,9 @@ async function select(id, hit, kind = 'instance') {
 
 /// Reloads the selection (after a commit: another client may have changed it). While the user
 /// is typing into the inspector (`force` unset), the fields keep their values: the apply that
-/// follows is checked against the version they were read at.
-async function reloadSelection(force = false) {
+/// follows is checked against the version they were read at. `removedBy` says who removed it
+/// when it is gone.
+async function reloadSelection(force = false, removedBy = 'another client') {
   if (!state.selected) return;
   const { id, kind } = state.selected;
   try {
@@ -223,7 +228,7 @@ async function reloadSelection(force = false) {
     inspector.show(doc);
   } catch (e) {
     if (e instanceof ApiError && e.status === 404) {
-      message(`The selected ${kind} '${id}' was removed by another client.`, 'info');
+      message(`The selected ${kind} '${id}' was removed by ${removedBy}.`, 'info');
       select(null);
     }
   }
@@ -236,6 +241,7 @@ async function applyEdit(edits, basedOn) {
     const { doc } = await edit(edits, basedOn);
     message(`Applied (version ${doc.version}).`, 'info');
     state.version = doc.version;
+    sceneMoved(doc.version);
     await reloadSelection(true);
     return true;
   } catch (e) {
@@ -252,6 +258,71 @@ async function applyEdit(edits, basedOn) {
   }
 }
 
+// Step: undo and redo, of the whole scene's newest batch (anyone's), with If-Match on the version
+// the viewer shows: what is taken back is what the user sees, or nothing (a 412 says so, and the
+// next press acts on the version it names). Presses queue: each is sent once the one before has
+// answered, at the version that one made (a held key undoes step by step).
+let undoQueue = Promise.resolve();
+function undoRedo(redo) {
+  undoQueue = undoQueue.then(() => undoRedoNow(redo));
+  return undoQueue;
+}
+
+async function undoRedoNow(redo) {
+  const word = redo ? 'Redo' : 'Undo';
+  const basedOn = state.version;
+  try {
+    const { doc } = await undo(redo, basedOn);
+    const target = redo ? doc.redone : doc.undone;
+    message(`${redo ? 'Redone' : 'Undone'}: version ${target}'s batch (now version ${doc.version}).`, 'info');
+    state.version = doc.version;
+    sceneMoved(doc.version);
+    if (page.has('still')) renderStill(controls.camera);
+    refreshScene().catch(() => {});
+    reloadSelection(true, `the ${word.toLowerCase()} of version ${target}`);
+  } catch (e) {
+    if (e instanceof ApiError && e.status === 409) {
+      message(redo ? 'Nothing to redo.' : 'Nothing to undo.', 'info');
+    } else if (e instanceof ApiError && e.status === 412) {
+      message(`${word} not applied: the scene changed since version ${basedOn} (now version ${e.etag}): ` +
+              `another client edited it. Press again to ${word.toLowerCase()} the newest batch.`, 'conflict');
+      if (e.etag !== null) state.version = e.etag;
+      historyPanel.refresh();
+    } else {
+      message(`${word} refused: ` + e.message);
+    }
+  }
+}
+
+/// Whether a key goes to a field the user types into (its own Ctrl+Z undoes the typing).
+function typing(target) {
+  if (!target || !target.tagName) return false;
+  if (target.isContentEditable || target.tagName === 'TEXTAREA' || target.tagName === 'SELECT') return true;
+  return target.tagName === 'INPUT' &&
+    !['checkbox', 'radio', 'color', 'range', 'button', 'submit', 'reset'].includes(target.type);
+}
+
+document.addEventListener('keydown', (e) => {
+  if (!(e.ctrlKey || e.metaKey) || e.altKey || typing(e.target)) return;
+  const k = e.key.toLowerCase();
+  if (k === 'z') undoRedo(e.shiftKey);
+  else if (k === 'y' && !e.shiftKey) undoRedo(true);
+  else return;
+  e.preventDefault();
+});
+
+/// The scene is at `version` now: list the scene and the history again (at most every 300 ms)
+/// when it is new to them (a no-work commit keeps its version).
+function sceneMoved(version) {
+  if (version === state.listedVersion) return;
+  state.listedVersion = version;
+  clearTimeout(state.listTimer);
+  state.listTimer = setTimeout(() => {
+    scenePanel.refresh();
+    historyPanel.refresh();
+  }, 300);
+}
+
 // Step: commit events, for the cost panel and to notice other clients' edits.
 let events = null;
 function openEvents() {
@@ -264,13 +335,7 @@ function openEvents() {
   events.addEventListener('commit', async (e) => {
     const d = JSON.parse(e.data);
     costPanel.add(d.report);
-    if (d.version !== state.listedVersion) {
-      // The scene changed (a no-work commit keeps its version): list it again, at most every
-      // 300 ms.
-      state.listedVersion = d.version;
-      clearTimeout(state.listTimer);
-      state.listTimer = setTimeout(() => scenePanel.refresh(), 300);
-    }
+    sceneMoved(d.version);
     await refreshScene().catch(() => {});
     if (!controls.camera) drawSelection();
     if (state.selected) reloadSelection();
@@ -318,6 +383,7 @@ async function start() {
     openEvents();
   }
   scenePanel.load();
+  historyPanel.refresh();
 }
 
 const controls = new CameraControl($('view'), {
@@ -332,6 +398,10 @@ const scenePanel = new ScenePanel($('scene-list'), $('scene-search'), $('scene-m
   onSelect: (id, kind) => select(id, null, kind),
 });
 const costPanel = new CostPanel($('cost-chart'), $('last-report'));
+const historyPanel = new HistoryPanel($('history-list'), $('history-stacks'), $('history-undo'),
+                                      $('history-redo'), {
+  onUndo: () => undoRedo(false), onRedo: () => undoRedo(true),
+});
 
 $('follow').addEventListener('click', () => controls.follow());
 $('follow').classList.add('on');
@@ -357,4 +427,5 @@ $('frame').addEventListener('error', () => {
 state.select = select;
 state.pickAt = pickAt;
 state.controls = controls;
+state.undoRedo = undoRedo;
 start();

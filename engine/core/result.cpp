@@ -16,6 +16,7 @@ const char* error_code_name(ErrorCode code) {
         case ErrorCode::StaleHandle: return "stale_handle";
         case ErrorCode::TooLarge: return "too_large";
         case ErrorCode::VersionMismatch: return "version_mismatch";
+        case ErrorCode::NothingToUndo: return "nothing_to_undo";
         case ErrorCode::Cancelled: return "cancelled";
         case ErrorCode::Storage: return "storage";
         case ErrorCode::Internal: return "internal";

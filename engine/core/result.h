@@ -23,6 +23,7 @@ enum class ErrorCode {
     StaleHandle,          ///< a handle whose object was removed
     TooLarge,             ///< a request exceeds a configured limit
     VersionMismatch,      ///< a conditional apply found the scene at another version
+    NothingToUndo,        ///< undo or redo with an empty stack (edit_history.h)
     Cancelled,            ///< a launch stopped early (CancelToken: deadline, client gone, shutdown)
     Storage,              ///< the data directory could not be written or read (journal, snapshot)
     Internal,             ///< a failure inside Embree or the engine itself

@@ -1,8 +1,16 @@
 #pragma once
 
 #include <chrono>
+#include <cstdint>
 
 namespace strata {
+
+/// Milliseconds since the Unix epoch (wall clock: for timestamps, never for durations).
+inline int64_t unix_ms() {
+    return std::chrono::duration_cast<std::chrono::milliseconds>(
+               std::chrono::system_clock::now().time_since_epoch())
+        .count();
+}
 
 /// Wall-clock stopwatch in milliseconds.
 class Stopwatch {

@@ -70,6 +70,8 @@ template <>
 constexpr uint8_t ENUM_MAX<LightKind> = 2;
 template <>
 constexpr uint8_t ENUM_MAX<TextureWrap> = 2;
+template <>
+constexpr uint8_t ENUM_MAX<BatchKind> = 2;
 
 /// True for the types that have a value_fields() layout.
 template <class Io, class T>

@@ -27,7 +27,8 @@ static_assert(TAG_IS<0, AddMesh> && TAG_IS<1, UpdateMeshPositions> &&
                   TAG_IS<15, UpdateGroup> && TAG_IS<16, RemoveGroup> && TAG_IS<17, AddLight> &&
                   TAG_IS<18, UpdateLight> && TAG_IS<19, RemoveLight> &&
                   TAG_IS<20, AddTexture> && TAG_IS<21, RemoveTexture> &&
-                  TAG_IS<22, UpdateMeshVertices> && std::variant_size_v<Edit> == 23,
+                  TAG_IS<22, UpdateMeshVertices> && TAG_IS<23, RemoveMaterial> &&
+                  std::variant_size_v<Edit> == 24,
               "journal kind tags are the Edit variant's indices: append new kinds at the end");
 
 
@@ -54,7 +55,8 @@ constexpr const char* KIND_NAMES[] = {"add_mesh",
                                       "remove_light",
                                       "add_texture",
                                       "remove_texture",
-                                      "update_mesh_vertices"};
+                                      "update_mesh_vertices",
+                                      "remove_material"};
 static_assert(std::size(KIND_NAMES) == std::variant_size_v<Edit>);
 
 /// Kind tag bit: the edit's extension fields follow its base layout. Fields added to a kind after
@@ -93,6 +95,10 @@ void fields(Io& io, E& e) {
 template <class Io, Kind<AddMaterial> E>
 void fields(Io& io, E& e) {
     io(e.id, e.material);
+}
+template <class Io, Kind<RemoveMaterial> E>
+void fields(Io& io, E& e) {
+    io(e.material);
 }
 template <class Io, Kind<UpdateMaterial> E>
 void fields(Io& io, E& e) {
@@ -383,6 +389,14 @@ void read_tagged(ByteReader& r, E& e) {
     }
 }
 
+/// Edit count bit: the batch's info (its kind, time and message) follows the count.
+constexpr uint32_t WITH_INFO = 0x80000000u;
+
+template <class Io, Kind<BatchInfo> E>
+void info_fields(Io& io, E& info) {
+    io(info.kind, info.target, info.time_ms, info.message);
+}
+
 /// A default-constructed edit of kind `tag` (tag < variant size).
 template <std::size_t... I>
 Edit make_edit(std::size_t tag, std::index_sequence<I...>) {
@@ -392,9 +406,15 @@ Edit make_edit(std::size_t tag, std::index_sequence<I...>) {
 
 }  // namespace
 
+const char* edit_kind_name(std::size_t index) {
+    return index < std::size(KIND_NAMES) ? KIND_NAMES[index] : "unknown";
+}
+
 void encode_batch(const EditBatch& batch, std::string& out) {
     ByteWriter w(out);
-    w(uint32_t(batch.edits.size()));
+    const bool with_info = !batch.info.empty();
+    w(uint32_t(batch.edits.size()) | (with_info ? WITH_INFO : 0));
+    if (with_info) info_fields(w, batch.info);
     for (const Edit& edit : batch.edits) {
         std::visit(
             [&](const auto& e) {
@@ -409,10 +429,21 @@ void encode_batch(const EditBatch& batch, std::string& out) {
     }
 }
 
-Status decode_each(std::string_view bytes, const std::function<Status(Edit&&)>& sink) {
+Status decode_each(std::string_view bytes, const std::function<Status(Edit&&)>& sink,
+                   BatchInfo* info) {
     ByteReader r(bytes);
     uint32_t count = 0;
     r(count);
+    if (r.ok() && (count & WITH_INFO) != 0) {
+        count &= ~WITH_INFO;
+        BatchInfo read;
+        info_fields(r, read);
+        // Not a form any writer produces (and it would re-encode differently).
+        if (r.ok() && read.empty()) r.fail("an empty batch info");
+        if (r.ok() && read.message.size() > MAX_BATCH_MESSAGE_BYTES)
+            r.fail("a batch message of " + std::to_string(read.message.size()) + " bytes");
+        if (info) *info = std::move(read);
+    }
     // Every edit takes at least its tag byte: a count beyond that is corruption.
     if (r.ok() && count > r.remaining()) r.fail("edit count " + std::to_string(count));
     for (uint32_t i = 0; i < count && r.ok(); ++i) {
@@ -461,12 +492,16 @@ Result<EditBatch> decode_batch(std::string_view bytes) {
     if (bytes.size() >= 4) {
         uint32_t count = 0;
         std::memcpy(&count, bytes.data(), sizeof count);
+        count &= ~WITH_INFO;
         if (count <= bytes.size()) batch.edits.reserve(count);
     }
-    Status s = decode_each(bytes, [&](Edit&& e) -> Status {
-        batch.edits.push_back(std::move(e));
-        return {};
-    });
+    Status s = decode_each(
+        bytes,
+        [&](Edit&& e) -> Status {
+            batch.edits.push_back(std::move(e));
+            return {};
+        },
+        &batch.info);
     if (!s) return Unexpected(std::move(s).error());
     return batch;
 }

@@ -69,6 +69,11 @@ struct AddMaterial {
     std::optional<std::string> base_color_texture = std::nullopt;  ///< a texture id
 };
 
+/// Removes a material; refused while a mesh (as its default) or an instance uses it.
+struct RemoveMaterial {
+    std::string material;
+};
+
 struct UpdateMaterial {
     std::string material;
     std::optional<Vec3> base_color;
@@ -216,7 +221,7 @@ using Edit = std::variant<AddMesh, UpdateMeshPositions, ReplaceMeshTopology, Rem
                           AddMaterial, UpdateMaterial, AddInstance, UpdateInstance, SetTransform,
                           RemoveInstance, MarkDirty, SetCamera, SetLighting, Clear, AddGroup,
                           UpdateGroup, RemoveGroup, AddLight, UpdateLight, RemoveLight,
-                          AddTexture, RemoveTexture, UpdateMeshVertices>;
+                          AddTexture, RemoveTexture, UpdateMeshVertices, RemoveMaterial>;
 
 /// Copies the fields an edit sets onto a full value; unset fields keep theirs.
 void apply_to(Camera& c, const SetCamera& e);
@@ -224,9 +229,29 @@ void apply_to(Lighting& l, const SetLighting& e);
 void apply_to(Material& m, const UpdateMaterial& e);
 void apply_to(Light& l, const UpdateLight& e);
 
+/// What a batch is in the scene's history (engine/scene/edit_history.h): a client's edits, or the
+/// undo or redo of an earlier batch.
+enum class BatchKind : uint8_t { Edits, Undo, Redo };
+
+/// Longest message a batch may carry, in bytes.
+constexpr std::size_t MAX_BATCH_MESSAGE_BYTES = 1024;
+
+/// A batch's place in the history: journaled with it, never applied to the scene.
+struct BatchInfo {
+    BatchKind kind = BatchKind::Edits;
+    uint64_t target = 0;  ///< Undo and Redo: the version whose batch this takes back or redoes
+    int64_t time_ms = 0;  ///< when it was applied (Unix ms); 0: stamped by Engine::apply
+    std::string message;  ///< the client's note (text, at most MAX_BATCH_MESSAGE_BYTES)
+
+    bool empty() const {
+        return kind == BatchKind::Edits && target == 0 && time_ms == 0 && message.empty();
+    }
+};
+
 /// Edits applied atomically: all or none.
 struct EditBatch {
     std::vector<Edit> edits;
+    BatchInfo info = {};
 };
 
 }  // namespace strata

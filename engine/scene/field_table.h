@@ -167,6 +167,18 @@ void restore_fields(typename K::Record& r, FieldValues<K>&& saved) {
         FIELDS<K>);
 }
 
+/// An update that sets every field back to saved values (the inverse of an update: undo history).
+template <class K>
+typename K::Update update_from(FieldValues<K>&& saved) {
+    typename K::Update u{};
+    std::apply(
+        [&](const auto&... row) {
+            std::apply([&](auto&... value) { ((u.*(row.update) = std::move(value)), ...); }, saved);
+        },
+        FIELDS<K>);
+    return u;
+}
+
 /// Copies every field of an add edit into a new record.
 template <class K>
 void copy_added(typename K::Record& r, typename K::Add& a) {

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "engine/core/utf8.h"
+#include "engine/scene/inverse_batch.h"
 #include "engine/scene/object_fields.h"
 #include "engine/scene/undo_log.h"
 
@@ -88,7 +90,15 @@ Material Scene::resolved_material(const InstanceRecord& inst) const {
 }
 
 Result<uint64_t> Scene::apply(EditBatch&& batch,
-                             const std::function<Status(uint64_t)>& before_done) {
+                             const std::function<Status(uint64_t)>& before_done,
+                             EditBatch* inverse) {
+    if (const char* why = text_problem(batch.info.message, MAX_BATCH_MESSAGE_BYTES))
+        return failure(ErrorCode::InvalidArgument,
+                       std::string("the batch's message ") + why +
+                           (batch.info.message.size() > MAX_BATCH_MESSAGE_BYTES
+                                ? " (at most " + std::to_string(MAX_BATCH_MESSAGE_BYTES) + " bytes)"
+                                : std::string()),
+                       "message");
     UndoLog undo;
     undo.camera = m_camera;
     undo.lighting = m_lighting;
@@ -132,6 +142,7 @@ Result<uint64_t> Scene::apply(EditBatch&& batch,
     }
     // The batch stands: bring the world transforms it dirtied up to date (cannot fail).
     flatten();
+    if (inverse) *inverse = inverse_batch(std::move(undo), *this);
     return ++m_version;
 }
 

@@ -155,8 +155,11 @@ public:
     ///
     /// `before_done`, when given, runs once every edit passed, with the version the batch is
     /// about to produce (the journal writes its record there); its error undoes the batch too.
+    ///
+    /// `inverse`, when given, receives the batch that takes this one back (inverse_batch.h).
     Result<uint64_t> apply(EditBatch&& batch,
-                           const std::function<Status(uint64_t)>& before_done = nullptr);
+                           const std::function<Status(uint64_t)>& before_done = nullptr,
+                           EditBatch* inverse = nullptr);
 
     /// Recovery only: the version a restored snapshot had (the scene must be freshly loaded).
     void restore_version(uint64_t version) { m_version = version; }
@@ -232,6 +235,7 @@ private:
     Status apply_edit(RemoveMesh&& e, UndoLog& undo);
     Status apply_edit(AddMaterial&& e, UndoLog& undo);
     Status apply_edit(UpdateMaterial&& e, UndoLog& undo);
+    Status apply_edit(RemoveMaterial&& e, UndoLog& undo);
     Status apply_edit(AddInstance&& e, UndoLog& undo);
     Status apply_edit(UpdateInstance&& e, UndoLog& undo);
     Status apply_edit(SetTransform&& e, UndoLog& undo);

@@ -453,6 +453,30 @@ Status Scene::apply_edit(UpdateMaterial&& e, UndoLog& undo) {
     return {};
 }
 
+Status Scene::apply_edit(RemoveMaterial&& e, UndoLog& undo) {
+    const MaterialHandle h = find_material(e.material);
+    if (h.is_null()) return unknown("material", e.material, "material");
+    // A scan keeps no user lists to maintain and undo; removing a material is rare.
+    std::size_t users = 0;
+    std::string first;
+    const auto count = [&](const char* kind, const std::string& id) {
+        if (users++ == 0) first = std::string(kind) + " '" + id + "'";
+    };
+    m_meshes.for_each([&](MeshHandle, const MeshRecord& m) {
+        if (m.material == h) count("mesh", m.id);
+    });
+    m_instances.for_each([&](InstanceHandle, const InstanceRecord& i) {
+        if (i.material == h) count("instance", i.id);
+    });
+    if (users > 0)
+        return failure(ErrorCode::InUse,
+                       "material '" + e.material + "' is still used by " + std::to_string(users) +
+                           " mesh(es) or instance(s), e.g. " + first,
+                       "material");
+    remove_material(h, undo);
+    return {};
+}
+
 void Scene::remove_material(MaterialHandle h, UndoLog& undo) {
     mark(h, {});
     MaterialRecord& r = m_materials.at(h);

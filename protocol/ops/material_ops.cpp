@@ -1,4 +1,5 @@
-// Material ops: add_material, update_material (with a base-colour texture and its sampler).
+// Material ops: add_material, update_material (with a base-colour texture and its sampler),
+// remove_material.
 
 #include "protocol/edit_schema.h"
 #include "protocol/field_json.h"
@@ -47,6 +48,12 @@ Edit parse_update_material(OpFields& f) {
     return e;
 }
 
+Edit parse_remove_material(OpFields& f) {
+    RemoveMaterial e;
+    e.material = f.id("material");
+    return e;
+}
+
 constexpr EditOp OPS[] = {
     {"add_material",
      "A new material: base colour (optionally times a texture), roughness, metallic and "
@@ -74,6 +81,18 @@ constexpr EditOp OPS[] = {
   "additionalProperties": false
 })json",
      parse_update_material, edit_kinds<UpdateMaterial>(), field_properties<MaterialFields, false>},
+    {"remove_material",
+     "Removes a material; refused (in-use) while a mesh has it as its default or an instance "
+     "overrides with it.",
+     R"json({
+  "type": "object",
+  "properties": {
+    "material": {"$ref": "#/$defs/id"}
+  },
+  "required": ["material"],
+  "additionalProperties": false
+})json",
+     parse_remove_material, edit_kinds<RemoveMaterial>()},
 };
 
 }  // namespace

@@ -126,6 +126,18 @@ class Browser:
                                                    "buttons": 1 if kind == "mousePressed" else 0,
                                                    "clickCount": 1})
 
+    def key(self, key, modifiers=()):
+        """One press of a letter key (down, then up) to the focused element, with `modifiers`
+        among "alt", "ctrl", "meta" and "shift": key("z", ["ctrl"]) is Ctrl+Z. As for a shortcut,
+        no character is typed."""
+        bits = {"alt": 1, "ctrl": 2, "meta": 4, "shift": 8}
+        shown = key.upper() if "shift" in modifiers else key.lower()
+        for kind in ("rawKeyDown", "keyUp"):
+            self.send("Input.dispatchKeyEvent", {
+                "type": kind, "key": shown, "code": "Key" + key.upper(),
+                "windowsVirtualKeyCode": ord(key.upper()),
+                "modifiers": sum(bits[m] for m in modifiers)})
+
     def touch(self, kind, points):
         """One touch event ("touchStart", "touchMove", "touchEnd") with `points` [(x, y), ...]
         in page coordinates (touchEnd: the points still down)."""

@@ -10,7 +10,11 @@ chromium against a real strata-server --demo (each class its own server):
   (412): the page says so clearly, applies nothing, reloads the current values, and a second
   apply succeeds;
 - a one-finger drag orbits and a two-finger pinch zooms the viewer's camera (CDP touch events);
-- the scene panel lists the scene again when another client adds, hides or removes an instance.
+- the scene panel lists the scene again when another client adds, hides or removes an instance;
+- Ctrl+Z undoes and Ctrl+Shift+Z and Ctrl+Y redo (CDP key events; POST /v1/undo and /v1/redo,
+  checked through GET /v1/scene), but not while typing in a field; nothing left to redo is said as
+  such; the history panel lists each version with its kind and message, and its buttons undo and
+  redo.
 """
 
 import base64
@@ -19,6 +23,7 @@ import os
 import sys
 import time
 import unittest
+import urllib.error
 
 from test_viewer import ViewerInChromium, request  # noqa: E402
 
@@ -275,6 +280,98 @@ class ViewerSelectionAndEdits(ViewerInChromium):
         request(self.server, "POST", "/v1/edits", {"edits": [
             {"op": "remove_instance", "instance": "newcomer"}]})
         self.browser.wait_for(f"!document.querySelector('{item}')", timeout=5)
+
+    def test_6_ctrl_z_undoes_ctrl_shift_z_and_ctrl_y_redo_and_the_history_lists_them(self):
+        self.open_viewer()
+
+        def entry(version):
+            return f"#history-list li[data-version=\"{version}\"]"
+
+        def exists():
+            try:
+                request(self.server, "GET", "/v1/scene/instances/undo-me")
+                return True
+            except urllib.error.HTTPError as e:
+                if e.code != 404:
+                    raise
+                return False
+
+        def version():
+            return request(self.server, "GET", "/v1/scene")["version"]
+
+        def press(key, modifiers, expect):
+            """A key press that should bring the scene to version `expect`; waits until the
+            server and the viewer are both there."""
+            self.browser.key(key, modifiers)
+            deadline = time.monotonic() + 5
+            while time.monotonic() < deadline and version() != expect:
+                time.sleep(0.05)
+            self.assertEqual(version(), expect, f"{'+'.join(modifiers)}+{key}")
+            self.browser.wait_for(f"window.strata.version == {expect}", timeout=5)
+
+        added = request(self.server, "POST", "/v1/edits", {
+            "message": "a crate to take back",
+            "edits": [{"op": "add_instance", "id": "undo-me", "mesh": "crate",
+                       "transform": {"translate": [0, 3, -3]}}]})["version"]
+        # The viewer sees the version (its undo applies only at the version it shows), and the
+        # history panel lists it with its message and ops, on the undo stack.
+        self.browser.wait_for(f"window.strata.version == {added}", timeout=10)
+        self.browser.wait_for(f"!!document.querySelector('{entry(added)}')", timeout=5)
+        text = self.browser.evaluate(f"document.querySelector('{entry(added)}').textContent")
+        self.assertIn(f"v{added} · edit · a crate to take back", text)
+        self.assertIn("add_instance", text)
+        self.assertTrue(self.browser.evaluate(
+            f"document.querySelector('{entry(added)}').classList.contains('undoable')"))
+        self.browser.evaluate("document.activeElement.blur(), true")
+
+        press("z", ["ctrl"], added + 1)
+        self.assertFalse(exists(), "Ctrl+Z did not take the added instance back")
+        self.browser.wait_for("document.getElementById('message').textContent == "
+                              f"'Undone: version {added}\\'s batch (now version {added + 1}).'")
+        self.browser.wait_for(f"!!document.querySelector('{entry(added + 1)}')", timeout=5)
+        self.assertIn(f"undo of v{added}", self.browser.evaluate(
+            f"document.querySelector('{entry(added + 1)}').textContent"))
+        self.assertFalse(self.browser.evaluate(
+            f"document.querySelector('{entry(added)}').classList.contains('undoable')"))
+        self.shot("undone")
+
+        press("z", ["ctrl", "shift"], added + 2)
+        self.assertTrue(exists(), "Ctrl+Shift+Z did not bring the instance back")
+        self.assertIn("Redone", self.browser.evaluate("document.getElementById('message').textContent"))
+        press("z", ["ctrl"], added + 3)
+        self.assertFalse(exists())
+        press("y", ["ctrl"], added + 4)
+        self.assertTrue(exists(), "Ctrl+Y did not bring the instance back")
+        # Nothing left to redo: said as such, and nothing applied.
+        self.browser.key("z", ["ctrl", "shift"])
+        self.browser.wait_for("document.getElementById('message').textContent == 'Nothing to redo.'")
+        self.assertEqual(version(), added + 4)
+
+        # In a text field, Ctrl+Z is the field's own.
+        self.browser.evaluate("document.getElementById('scene-search').focus(), true")
+        self.browser.key("z", ["ctrl"])
+        time.sleep(0.5)
+        self.assertEqual(version(), added + 4)
+        self.browser.evaluate("document.activeElement.blur(), true")
+
+        # The panel's buttons do what the keys do.
+        self.browser.wait_for(f"document.getElementById('history-list').dataset.version == '{added + 4}'"
+                              " && !document.getElementById('history-undo').disabled", timeout=5)
+        self.assertTrue(self.browser.evaluate("document.getElementById('history-redo').disabled"))
+        self.browser.evaluate("document.getElementById('history-undo').click()")
+        self.browser.wait_for(f"window.strata.version == {added + 5}", timeout=5)
+        self.assertFalse(exists())
+        self.browser.wait_for("!document.getElementById('history-redo').disabled", timeout=5)
+        self.browser.evaluate("document.getElementById('history-redo').click()")
+        self.browser.wait_for(f"window.strata.version == {added + 6}", timeout=5)
+        self.assertTrue(exists())
+        self.browser.wait_for(f"!!document.querySelector('{entry(added + 6)}')", timeout=5)
+        listed = self.browser.evaluate(
+            "document.querySelectorAll('#history-list li[data-version]').length")
+        self.assertTrue(7 <= listed <= 20, listed)  # the newest 20 at most
+        self.assertIn(f"redo of v{added + 4}", self.browser.evaluate(
+            f"document.querySelector('{entry(added + 6)}').textContent"))
+        self.shot("history")
 
 
 if __name__ == "__main__":

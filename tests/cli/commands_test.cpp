@@ -53,6 +53,36 @@ TEST_F(Commands, EditAppliesAFileAndPrintsTheVersion) {
               (Json{{"version", 2}, {"applied", 1}}));
 }
 
+TEST_F(Commands, UndoRedoAndHistoryWalkTheVersions) {
+    write(R"({"message": "a ball", "edits": [
+              {"op": "add_mesh", "id": "ball", "shape": {"type": "sphere", "segments": 8}},
+              {"op": "add_instance", "id": "b0", "mesh": "ball"}]})");
+    ASSERT_EQ(run_edit(*transport, console(), file.string(), std::nullopt), 0);
+    write(R"([{"op": "remove_instance", "instance": "b0"}])");
+    ASSERT_EQ(run_edit(*transport, console(), file.string(), std::nullopt), 0);
+    out.str("");
+    EXPECT_EQ(run_undo(*transport, console(), false, std::nullopt), 0);
+    EXPECT_EQ(out.str(), "v3: undid v2 (1 edits applied)\n");
+    EXPECT_EQ(run_undo(*transport, console(), false, std::string("\"3\"")), 0);
+    EXPECT_EQ(run_undo(*transport, console(), true, std::nullopt), 0);
+    EXPECT_EQ(transport->scene_object("instances", "b0").status, 200);
+    out.str("");
+    EXPECT_EQ(run_history(*transport, console(), HistoryArgs{2, std::nullopt}), 0);
+    const std::string h = out.str();
+    EXPECT_NE(h.find("v5  redo of v1  "), std::string::npos) << h;
+    EXPECT_NE(h.find("v4  undo of v1  "), std::string::npos) << h;
+    EXPECT_NE(h.find("v1  edit  "), std::string::npos) << h;
+    EXPECT_NE(h.find("2 edits: add_instance 1, add_mesh 1  \"a ball\""), std::string::npos) << h;
+    EXPECT_EQ(std::count(h.begin(), h.end(), '\n'), 5) << h;
+    // Redoing v1 left the undo of v2 to redo.
+    EXPECT_NE(err.str().find("version 5, 1 to undo, 1 to redo"), std::string::npos) << err.str();
+    EXPECT_EQ(run_undo(*transport, console(), true, std::nullopt), 0);
+    EXPECT_EQ(transport->scene_object("instances", "b0").status, 404);
+    // Nothing left to redo: a 409 problem, exit code 3.
+    EXPECT_EQ(run_undo(*transport, console(), true, std::nullopt), 3);
+    EXPECT_NE(err.str().find("nothing-to-undo"), std::string::npos) << err.str();
+}
+
 TEST_F(Commands, ARefusedEditShowsTheProblemFieldsAndExitsWithThree) {
     write(R"([{"op": "add_instance", "id": "x", "mesh": "rock"}])");
     EXPECT_EQ(run_edit(*transport, console(), file.string(), std::nullopt), 3);

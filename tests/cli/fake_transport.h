@@ -24,6 +24,11 @@ public:
         ++version;
         return json(200, {{"version", version}, {"applied", doc["edits"].size()}});
     }
+    // Undo and history are tested against a real server (commands_test.cpp).
+    Reply undo(bool, const std::optional<std::string>&) override { return json(501, {}); }
+    Reply history(const std::multimap<std::string, std::string>&) override {
+        return json(501, {});
+    }
     Reply commit() override {
         ++commits;
         last = next_report(false);

@@ -92,6 +92,8 @@ TEST_F(ScriptRunner, RenderExpectationsReadTheReportThatCameWithTheFrame) {
 TEST_F(ScriptRunner, ARenderAnswerWithoutItsReportIsARequestFailure) {
     struct NoReport final : public Transport {
         Reply edits(std::string, const std::optional<std::string>&) override { return {}; }
+        Reply undo(bool, const std::optional<std::string>&) override { return {}; }
+        Reply history(const std::multimap<std::string, std::string>&) override { return {}; }
         Reply commit() override { return {}; }
         Reply plan() override { return {}; }
         Reply render(const std::string&) override {

@@ -51,6 +51,7 @@ EditBatch every_kind() {
     b.edits.emplace_back(UpdateMeshVertices{"tri", {2, 0, 2}, {{0, 3, 0}, {0, 0, 1}, {0, 4, 0}}});
     b.edits.emplace_back(RemoveInstance{"a"});
     b.edits.emplace_back(RemoveMesh{"tri"});
+    b.edits.emplace_back(RemoveMaterial{"red"});
     b.edits.emplace_back(Clear{});
     return b;
 }
@@ -287,10 +288,14 @@ TEST(EditCodec, EveryTruncationIsAnErrorNotACrash) {
 
 TEST(EditCodec, AHugeCorruptCountIsRefusedBeforeAllocating) {
     std::string bytes = encoded(every_kind());
-    bytes[0] = bytes[1] = bytes[2] = bytes[3] = char(0xFF);
+    // The top bit says the batch's info follows (edit_codec.h): the largest count is below it.
+    bytes[0] = bytes[1] = bytes[2] = char(0xFF);
+    bytes[3] = char(0x7F);
     auto back = durable::decode_batch(bytes);
     ASSERT_FALSE(back.has_value());
     EXPECT_NE(back.error().message.find("edit count"), std::string::npos) << back.error().message;
+    bytes[3] = char(0xFF);
+    EXPECT_FALSE(durable::decode_batch(bytes).has_value());
 }
 
 TEST(EditCodec, AnUnknownKindIsNamed) {

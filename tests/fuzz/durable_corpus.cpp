@@ -55,6 +55,7 @@ std::vector<Edit> every_kind() {
     edits.emplace_back(UpdateMeshVertices{"tri", {3, 0}, {{2, 1, 0}, {0, 0, 1}}});
     edits.emplace_back(RemoveInstance{"a"});
     edits.emplace_back(RemoveMesh{"tri"});
+    edits.emplace_back(RemoveMaterial{"red"});
     edits.emplace_back(Clear{});
     return edits;
 }
@@ -97,6 +98,9 @@ int main(int argc, char** argv) {
     EditBatch first, second;
     first.edits.assign(kinds.begin(), kinds.begin() + 6);
     second.edits.push_back(kinds[7]);
+    // The history's info on a record (an undo of version 42, with a message).
+    second.info = BatchInfo{BatchKind::Undo, 42, 1795000000000, "undo the crate"};
+    ok &= write(journal + "/payload-info", fuzz::encoded(second));
     const std::string segment =
         durable::segment_header(41) + record(first, 42) + record(second, 43) + record(all, 44);
     ok &= write(journal + "/segment", segment);

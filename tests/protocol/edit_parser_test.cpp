@@ -193,6 +193,7 @@ TEST(EditParser, MaterialCameraLightingAndSceneOps) {
     EXPECT_EQ(one<AddTexture>(R"({"op":"add_texture","id":"t","data":"iVBORw=="})").data,
               std::string("\x89PNG", 4));
     EXPECT_EQ(one<RemoveTexture>(R"({"op":"remove_texture","texture":"t"})").texture, "t");
+    EXPECT_EQ(one<RemoveMaterial>(R"({"op":"remove_material","material":"m"})").material, "m");
     const auto bound = one<AddMaterial>(
         R"({"op":"add_material","id":"m","base_color_texture":"t","sampler":{"wrap":"clamp"}})");
     EXPECT_EQ(bound.base_color_texture, std::optional<std::string>("t"));
@@ -211,7 +212,8 @@ TEST(EditParser, EveryOpHasAParserAndAnEngineStruct) {
     for (const EditOp& op : edit_ops()) names.push_back(op.name);
     EXPECT_THAT(names, ::testing::ElementsAre(
                            "add_mesh", "update_mesh", "remove_mesh", "add_texture",
-                           "remove_texture", "add_material", "update_material", "add_instance",
+                           "remove_texture", "add_material", "update_material",
+                           "remove_material", "add_instance",
                            "update_instance", "set_transform", "remove_instance", "add_group",
                            "update_group", "remove_group", "add_light", "update_light",
                            "remove_light", "mark_dirty", "set_camera", "set_lighting", "clear"));

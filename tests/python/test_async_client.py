@@ -10,9 +10,10 @@ import time
 import unittest
 from unittest import mock
 
-from strata_client import (AsyncClient, Client, Frame, Hit, ImportResult, NotFoundError, Page,
-                           ProblemError, RebuildReport, TooLargeError, UnauthorizedError,
-                           UnprocessableError, VersionMismatchError)
+from strata_client import (AsyncClient, Client, Frame, History, Hit, ImportResult, NotFoundError,
+                           NothingToUndoError, Page, ProblemError, RebuildReport, TooLargeError,
+                           UnauthorizedError, UndoResult, UnprocessableError,
+                           VersionMismatchError)
 from strata_client import _aio_http
 from strata_process import ServerProcess
 from test_client import SCENE, SERVER
@@ -137,6 +138,34 @@ class AsyncClientTest(unittest.IsolatedAsyncioTestCase):
             await self.client.scene("cameras", "main")
         # A problem leaves the connection usable.
         self.assertEqual(await self.client.edit([]), self.version + 1)
+
+    async def test_undo_redo_and_history_answer_what_the_blocking_client_answers(self):
+        added = await self.client.edit([{"op": "add_instance", "id": "b1", "mesh": "ball"}],
+                                       message="b1")
+        undone = await self.client.undo(if_match=added)
+        self.assertIsInstance(undone, UndoResult)
+        self.assertEqual((undone.version, undone.target, undone.applied), (added + 1, added, 1))
+        with self.assertRaises(NotFoundError):
+            await self.client.scene("instances", "b1")
+        redone = await self.client.redo()
+        self.assertEqual((redone.version, redone.target), (added + 2, added))
+        self.assertEqual((await self.client.scene("instances", "b1"))["mesh"], "ball")
+        history = await self.client.history(limit=3)
+        self.assertIsInstance(history, History)
+        self.assertEqual([(e.kind, e.target, e.message, e.undoable) for e in history.entries],
+                         [("redo", added, None, True), ("undo", added, None, False),
+                          ("edit", None, "b1", False)])
+        self.assertEqual(history.next_cursor, str(added))
+        with Client(self.server.url) as blocking:
+            self.assertEqual(history, blocking.history(limit=3))
+        versions = [e.version async for e in self.client.history_entries(page_size=2)]
+        self.assertEqual(versions[:4], [added + 2, added + 1, added, self.version])
+        self.assertEqual(versions, sorted(set(versions), reverse=True))
+        with self.assertRaises(NothingToUndoError):
+            await self.client.redo()
+        with self.assertRaises(VersionMismatchError) as caught:
+            await self.client.undo(if_match=added)
+        self.assertEqual(caught.exception.current_version, added + 2)
 
     async def test_concurrent_requests_share_a_few_kept_alive_connections(self):
         async with AsyncClient(self.server.url, max_connections=3) as client:

@@ -121,6 +121,49 @@ class DataDirectory(unittest.TestCase):
         self.assertEqual(s.json("GET", "/v1/scene/meshes/quad.mesh0")[1], before)
         self.assertEqual(s.json("GET", "/v1/scene/instances/quad.node0")[0], 200)
 
+    def test_undo_and_redo_survive_kills(self):
+        def state(server):
+            meshes = server.json("GET", "/v1/scene/meshes?limit=10000")[1]["items"]
+            instances = server.json("GET", "/v1/scene/instances?limit=10000")[1]["items"]
+            for i in instances:
+                del i["version"]  # the version it was read at
+            return (sorted(m["id"] for m in meshes),
+                    sorted(instances, key=lambda i: i["id"]))
+
+        def step(server, op, version, target):
+            status, answer = server.json("POST", "/v1/" + op, None)
+            self.assertEqual(status, 200, answer)
+            key = "undone" if op == "undo" else "redone"
+            self.assertEqual((answer["version"], answer[key]), (version, target))
+
+        s = self.server()
+        states = {}
+        for n in range(6):
+            stream(s, n, 1)
+            states[n + 1] = state(s)
+        step(s, "undo", 7, 6)
+        self.assertEqual(state(s), states[5])
+        s.kill()
+        # The stacks come back from the journal: the next undo takes back v5, not the undo.
+        s = self.server()
+        self.assertEqual(state(s), states[5])
+        step(s, "undo", 8, 5)
+        self.assertEqual(state(s), states[4])
+        step(s, "redo", 9, 5)
+        self.assertEqual(state(s), states[5])
+        s.kill()
+        s = self.server()
+        step(s, "redo", 10, 6)
+        self.assertEqual(state(s), states[6])
+        status, answer = s.json("POST", "/v1/redo", None)
+        self.assertEqual(status, 409, answer)
+        self.assertTrue(answer["type"].endswith("/nothing-to-undo"), answer)
+        history = s.json("GET", "/v1/history?limit=5")[1]
+        self.assertEqual([(e["version"], e["kind"], e.get("target")) for e in history["entries"]],
+                         [(10, "redo", 6), (9, "redo", 5), (8, "undo", 5), (7, "undo", 6),
+                          (6, "edit", None)])
+        self.assertEqual(history["undo"], {"depth": 6, "next": 10})
+
     def test_a_torn_last_record_is_truncated_and_logged(self):
         self.fill(6)
         seg = segments(self.data)[-1]

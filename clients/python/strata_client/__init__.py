@@ -7,6 +7,7 @@ and render_arrays).
         version = strata.edit([{"op": "set_camera", "eye": [0, 3, 10]}])
         report = strata.commit()              # a RebuildReport: report.tlas.action
         png = strata.render(640, 360)
+        strata.undo()                         # takes the edit back, as a new version
 
 AsyncClient has the same methods as coroutines. See clients/python/README.md and
 protocol/README.md.
@@ -16,19 +17,21 @@ from strata_client._version import __version__
 from strata_client.aio import AsyncClient
 from strata_client.arrays import MISS, FrameArrays
 from strata_client.client import Client
-from strata_client.errors import (BadRequestError, NotFoundError, ProblemError,
-                                  TooLargeError, TooManyConnectionsError, UnauthorizedError,
-                                  UnavailableError, UnprocessableError, VersionMismatchError)
+from strata_client.errors import (BadRequestError, NotFoundError, NothingToUndoError,
+                                  ProblemError, TooLargeError, TooManyConnectionsError,
+                                  UnauthorizedError, UnavailableError, UnprocessableError,
+                                  VersionMismatchError)
 from strata_client.png import decode_png
-from strata_client.results import (BlasEntry, CommitPhases, Frame, Hit, ImportResult,
-                                   MemoryBytes, Page, Problem, RebuildReport, RenderInfo,
-                                   TlasMerge, TlasReport)
+from strata_client.results import (BlasEntry, CommitPhases, Frame, History, HistoryEntry,
+                                   HistoryStack, Hit, ImportResult, MemoryBytes, Page, Problem,
+                                   RebuildReport, RenderInfo, TlasMerge, TlasReport, UndoResult)
 
 __all__ = [
     "__version__", "Client", "AsyncClient", "decode_png",
     "ProblemError", "BadRequestError", "UnauthorizedError", "NotFoundError",
-    "VersionMismatchError", "TooLargeError", "UnprocessableError", "TooManyConnectionsError",
-    "UnavailableError",
+    "NothingToUndoError", "VersionMismatchError", "TooLargeError", "UnprocessableError",
+    "TooManyConnectionsError", "UnavailableError",
     "Problem", "RebuildReport", "TlasReport", "TlasMerge", "BlasEntry", "MemoryBytes",
-    "CommitPhases", "RenderInfo", "Frame", "Hit", "ImportResult", "Page", "FrameArrays", "MISS",
+    "CommitPhases", "RenderInfo", "Frame", "Hit", "ImportResult", "Page", "UndoResult",
+    "History", "HistoryEntry", "HistoryStack", "FrameArrays", "MISS",
 ]

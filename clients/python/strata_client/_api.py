@@ -13,7 +13,8 @@ from typing import Any, Callable, Dict, Generic, Iterable, List, Optional, Tuple
 from strata_client._version import __version__
 from strata_client.asset_pack import pack_asset
 from strata_client.errors import etag_version, problem_error
-from strata_client.results import Frame, Hit, ImportResult, Page, RebuildReport, RenderInfo
+from strata_client.results import (Frame, History, Hit, ImportResult, Page, RebuildReport,
+                                   RenderInfo, UndoResult)
 
 T = TypeVar("T")
 
@@ -117,10 +118,29 @@ def _quote(segment: str) -> str:
 
 # -- endpoints --------------------------------------------------------------------------------
 
-def edit(edits: Iterable[Dict[str, Any]], if_match: IfMatch = None) -> Call[int]:
-    body = _json_body({"edits": list(edits)})
-    return Call(Request("POST", "/v1/edits", body, _if_match(if_match)),
+def edit(edits: Iterable[Dict[str, Any]], if_match: IfMatch = None,
+         message: Optional[str] = None) -> Call[int]:
+    batch: Dict[str, Any] = {"edits": list(edits)}
+    if message is not None:
+        batch["message"] = message
+    return Call(Request("POST", "/v1/edits", _json_body(batch), _if_match(if_match)),
                 lambda r: int(_read_json(r)["version"]))
+
+
+def undo(redo: bool, if_match: IfMatch = None) -> Call[UndoResult]:
+    """POST /v1/undo, or POST /v1/redo with `redo`."""
+    return Call(Request("POST", "/v1/redo" if redo else "/v1/undo", b"", _if_match(if_match)),
+                lambda r: UndoResult.from_json(_read_json(r)))
+
+
+def history(limit: Optional[int], cursor: Optional[str]) -> Call[History]:
+    query = {}
+    if limit is not None:
+        query["limit"] = str(limit)
+    if cursor is not None:
+        query["cursor"] = cursor
+    target = "/v1/history" + ("?" + urllib.parse.urlencode(query) if query else "")
+    return Call(Request("GET", target), lambda r: History.from_json(_read_json(r)))
 
 
 def import_asset(path: str, prefix: Optional[str] = None, fmt: Optional[str] = None,

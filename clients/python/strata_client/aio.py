@@ -17,7 +17,8 @@ from strata_client._aio_http import Connection, RemoteDisconnected
 from strata_client._api import IfMatch
 from strata_client.arrays import FrameArrays, frame_arrays
 from strata_client.png import png_to_array
-from strata_client.results import Frame, Hit, ImportResult, Page, RebuildReport, RenderInfo
+from strata_client.results import (Frame, History, HistoryEntry, Hit, ImportResult, Page,
+                                   RebuildReport, RenderInfo, UndoResult)
 
 __all__ = ["AsyncClient"]
 
@@ -99,9 +100,35 @@ class AsyncClient:
 
     # -- endpoints: the same as Client's (see its docstrings) ----------------------------------
 
-    async def edit(self, edits: Iterable[Dict[str, Any]], if_match: IfMatch = None) -> int:
-        """Applies a batch (POST /v1/edits); returns the new scene version."""
-        return await self._call(_api.edit(edits, if_match))
+    async def edit(self, edits: Iterable[Dict[str, Any]], if_match: IfMatch = None,
+                   message: Optional[str] = None) -> int:
+        """Applies a batch (POST /v1/edits), with `message` kept in the history; returns the
+        new scene version."""
+        return await self._call(_api.edit(edits, if_match, message))
+
+    async def undo(self, if_match: IfMatch = None) -> UndoResult:
+        """Takes back the newest batch on the undo stack (POST /v1/undo), as Client.undo."""
+        return await self._call(_api.undo(False, if_match))
+
+    async def redo(self, if_match: IfMatch = None) -> UndoResult:
+        """Applies again the batch the newest undo took back (POST /v1/redo), as Client.redo."""
+        return await self._call(_api.undo(True, if_match))
+
+    async def history(self, limit: Optional[int] = None,
+                      cursor: Optional[str] = None) -> History:
+        """One page of the scene's versions, newest first (GET /v1/history), as Client.history."""
+        return await self._call(_api.history(limit, cursor))
+
+    async def history_entries(self, page_size: int = 1000) -> AsyncIterator[HistoryEntry]:
+        """Every version the history holds, newest first, following cursors (`async for`)."""
+        cursor: Optional[str] = None
+        while True:
+            page = await self.history(page_size, cursor)
+            for entry in page.entries:
+                yield entry
+            if page.next_cursor is None:
+                return
+            cursor = page.next_cursor
 
     async def import_asset(self, path: str, prefix: Optional[str] = None,
                            fmt: Optional[str] = None, instance: bool = True,

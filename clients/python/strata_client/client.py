@@ -9,7 +9,8 @@ from strata_client._api import IfMatch
 from strata_client.errors import ProblemError
 from strata_client.arrays import FrameArrays, frame_arrays
 from strata_client.png import png_to_array
-from strata_client.results import Frame, Hit, ImportResult, Page, RebuildReport, RenderInfo
+from strata_client.results import (Frame, History, HistoryEntry, Hit, ImportResult, Page,
+                                   RebuildReport, RenderInfo, UndoResult)
 
 __all__ = ["Client", "ProblemError", "RenderInfo"]
 
@@ -106,13 +107,50 @@ class Client:
 
     # -- endpoints ------------------------------------------------------------------------------
 
-    def edit(self, edits: Iterable[Dict[str, Any]], if_match: IfMatch = None) -> int:
+    def edit(self, edits: Iterable[Dict[str, Any]], if_match: IfMatch = None,
+             message: Optional[str] = None) -> int:
         """Applies a batch (POST /v1/edits); returns the new scene version.
 
         `if_match`: apply only at this version (an int, or an entity tag such as '"7"' or '*');
         otherwise VersionMismatchError (412) with the current version in `current_version`.
+        `message`: a note kept with the new version in history() (UTF-8, at most 1024 bytes, no
+        control characters).
         """
-        return self._call(_api.edit(edits, if_match))
+        return self._call(_api.edit(edits, if_match, message))
+
+    def undo(self, if_match: IfMatch = None) -> UndoResult:
+        """Takes back the newest batch on the undo stack (POST /v1/undo): its inverse is applied
+        as a new version. Returns the new `version`, the version taken back (`target`, also
+        `undone`) and `applied`. Repeat to go further back.
+
+        NothingToUndoError (409) when the undo stack is empty; `if_match` as for edit().
+        """
+        return self._call(_api.undo(False, if_match))
+
+    def redo(self, if_match: IfMatch = None) -> UndoResult:
+        """Applies again the batch the newest undo took back (POST /v1/redo), as a new version;
+        `target` (also `redone`) is the version redone. A new edit empties the redo stack:
+        NothingToUndoError (409) then, and when nothing was undone. `if_match` as for edit().
+        """
+        return self._call(_api.undo(True, if_match))
+
+    def history(self, limit: Optional[int] = None, cursor: Optional[str] = None) -> History:
+        """One page of the scene's versions, newest first (GET /v1/history): `entries`
+        (HistoryEntry: version, time, kind, target, message, edits, ops, undoable), the
+        `undo` and `redo` stacks, and `next_cursor` for the next, older page (None on the last).
+        `limit`: 1 to 1000 entries (the server's default: 50)."""
+        return self._call(_api.history(limit, cursor))
+
+    def history_entries(self, page_size: int = 1000) -> Iterator[HistoryEntry]:
+        """Every version the history holds, newest first (GET /v1/history, following cursors).
+        A version made while iterating is not listed; the rest are, each once."""
+        cursor: Optional[str] = None
+        while True:
+            page = self.history(page_size, cursor)
+            yield from page.entries
+            if page.next_cursor is None:
+                return
+            cursor = page.next_cursor
 
     def import_asset(self, path: str, prefix: Optional[str] = None, fmt: Optional[str] = None,
                      instance: bool = True, parent: Optional[str] = None,

@@ -75,6 +75,15 @@ class VersionMismatchError(ProblemError):
         return etag_version(self.etag)
 
 
+class NothingToUndoError(ProblemError):
+    """409: POST /v1/undo with no batch left to take back, or POST /v1/redo with nothing undone
+    since the last edit; `current_version` is the scene's version now."""
+
+    @property
+    def current_version(self) -> Optional[int]:
+        return etag_version(self.etag)
+
+
 class TooLargeError(ProblemError):
     """413: a body, array, frame or scene over one of the server's limits."""
 
@@ -96,6 +105,7 @@ _BY_STATUS: Dict[int, Type[ProblemError]] = {
     400: BadRequestError,
     401: UnauthorizedError,
     404: NotFoundError,
+    409: NothingToUndoError,
     412: VersionMismatchError,
     413: TooLargeError,
     422: UnprocessableError,

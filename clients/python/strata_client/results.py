@@ -6,6 +6,7 @@ read the same value, `json.dumps(report)` still works, and members a newer serve
 in the dict (the protocol only ever adds members). Treat them as read-only.
 """
 
+import datetime as _dt
 from dataclasses import dataclass, field, fields
 from typing import Any, Callable, Dict, List, Mapping, Optional, Type, TypeVar
 
@@ -170,6 +171,73 @@ class ImportResult(JsonObject):
     textures: List[str] = field(default_factory=list)
     warnings: List[str] = field(default_factory=list)
     model: Optional[str] = None
+
+
+
+@dataclass(frozen=True, eq=False)
+class UndoResult(JsonObject):
+    """The answer to POST /v1/undo (`undone`) or POST /v1/redo (`redone`): the new version, the
+    version whose batch it took back or applied again (`target`, either way), and how many edits
+    it applied."""
+
+    version: int
+    applied: int
+    undone: Optional[int] = None
+    redone: Optional[int] = None
+
+    @property
+    def target(self) -> int:
+        """The version whose batch this undo took back, or this redo applied again."""
+        target = self.undone if self.undone is not None else self.redone
+        if target is None:
+            raise ValueError("UndoResult: the answer has neither undone nor redone")
+        return target
+
+
+@dataclass(frozen=True, eq=False)
+class HistoryStack(JsonObject):
+    """The undo or the redo stack: how many batches it holds and the version the next undo
+    (redo) takes back (applies again), None when it is empty."""
+
+    depth: int
+    next: Optional[int] = None
+
+
+@dataclass(frozen=True, eq=False)
+class HistoryEntry(JsonObject):
+    """One version of the scene: when it was made (`time`, RFC 3339 UTC), by what (`kind`
+    "edit", "undo" or "redo"; `target` the version an undo or redo took back or applied again),
+    its batch's `message`, how many edits it had and of which ops (`ops`, op name to count), and
+    whether it is on the undo stack now (`undoable`)."""
+
+    version: int
+    time: str
+    kind: str
+    edits: int
+    undoable: bool
+    ops: Dict[str, int] = field(default_factory=dict)
+    target: Optional[int] = None
+    message: Optional[str] = None
+
+    @property
+    def datetime(self) -> _dt.datetime:
+        """`time` as an aware datetime in UTC."""
+        return _dt.datetime.fromisoformat(self.time.replace("Z", "+00:00"))
+
+
+@dataclass(frozen=True, eq=False)
+class History(JsonObject):
+    """One page of GET /v1/history: the scene's versions newest first (`entries`), the cursor of
+    the next, older page (None on the last), the current `version`, the `oldest` version the
+    history holds, the `undo` and `redo` stacks and the bytes they hold."""
+
+    version: int
+    undo: HistoryStack = _member(HistoryStack.from_json)
+    redo: HistoryStack = _member(HistoryStack.from_json)
+    entries: List[HistoryEntry] = _member(_list_of(HistoryEntry), default_factory=list)
+    oldest: Optional[int] = None
+    held_bytes: int = 0
+    next_cursor: Optional[str] = None
 
 
 @dataclass

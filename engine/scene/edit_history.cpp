@@ -1,0 +1,182 @@
+// The scene's history and its undo and redo stacks (edit_history.h).
+
+#include "engine/scene/edit_history.h"
+
+#include <algorithm>
+#include <array>
+#include <unordered_set>
+
+namespace strata {
+
+namespace {
+
+template <class T>
+uint64_t bytes_of(const std::vector<T>& v) {
+    return v.size() * sizeof(T);
+}
+template <class T>
+uint64_t bytes_of(const std::optional<std::vector<T>>& v) {
+    return v ? bytes_of(*v) : 0;
+}
+
+/// The heap bytes of one edit beyond its struct: its arrays and its encoded image.
+struct ArrayBytes {
+    uint64_t operator()(const AddMesh& e) const {
+        return bytes_of(e.positions) + bytes_of(e.triangles) + bytes_of(e.normals) +
+               bytes_of(e.uvs);
+    }
+    uint64_t operator()(const UpdateMeshPositions& e) const {
+        return bytes_of(e.positions) + bytes_of(e.normals) + bytes_of(e.uvs);
+    }
+    uint64_t operator()(const UpdateMeshVertices& e) const {
+        return bytes_of(e.vertices) + bytes_of(e.positions);
+    }
+    uint64_t operator()(const ReplaceMeshTopology& e) const {
+        return bytes_of(e.positions) + bytes_of(e.triangles) + bytes_of(e.normals) +
+               bytes_of(e.uvs);
+    }
+    uint64_t operator()(const AddTexture& e) const { return e.data.size(); }
+    template <class E>
+    uint64_t operator()(const E&) const {
+        return 0;
+    }
+};
+
+}  // namespace
+
+std::vector<std::pair<uint8_t, uint32_t>> count_ops(const EditBatch& batch) {
+    std::array<uint32_t, std::variant_size_v<Edit>> counts{};
+    for (const Edit& e : batch.edits) ++counts[e.index()];
+    std::vector<std::pair<uint8_t, uint32_t>> out;
+    for (std::size_t i = 0; i < counts.size(); ++i)
+        if (counts[i]) out.emplace_back(uint8_t(i), counts[i]);
+    return out;
+}
+
+uint64_t approx_bytes(const EditBatch& batch) {
+    // Ids and names are short; a fixed allowance per edit covers them.
+    constexpr uint64_t PER_EDIT = sizeof(Edit) + 64;
+    uint64_t bytes = sizeof(EditBatch) + batch.info.message.size();
+    for (const Edit& e : batch.edits) bytes += PER_EDIT + std::visit(ArrayBytes{}, e);
+    return bytes;
+}
+
+void EditHistory::record(uint64_t version, const BatchInfo& info,
+                         std::vector<std::pair<uint8_t, uint32_t>> ops, EditBatch&& inverse) {
+    HistoryEntry entry{version, info, 0, std::move(ops)};
+    for (const auto& [kind, n] : entry.ops) entry.edits += n;
+    m_entries.push_back(std::move(entry));
+    while (m_entries.size() > m_limits.max_entries) m_entries.pop_front();
+
+    Step step{version, std::move(inverse), 0};
+    step.bytes = approx_bytes(step.batch);
+    switch (info.kind) {
+        case BatchKind::Edits:
+            for (const Step& s : m_redo) m_bytes -= s.bytes;
+            m_redo.clear();
+            push_undo(std::move(step));
+            break;
+        case BatchKind::Undo:
+            // A history that starts later (a replica that began from a snapshot) may lack the
+            // target: the undo then only adds its redo.
+            if (!m_undo.empty() && m_undo.back().version == info.target) {
+                m_bytes -= m_undo.back().bytes;
+                m_undo.pop_back();
+            }
+            step.version = info.target;
+            push_redo(std::move(step));
+            break;
+        case BatchKind::Redo:
+            if (!m_redo.empty() && m_redo.back().version == info.target) {
+                m_bytes -= m_redo.back().bytes;
+                m_redo.pop_back();
+            }
+            push_undo(std::move(step));
+            break;
+    }
+}
+
+void EditHistory::push_undo(Step&& step) {
+    if (m_limits.max_undo == 0 || step.bytes > m_limits.max_bytes) {
+        // Too big to keep: nothing before it can be undone either.
+        for (const Step& s : m_undo) m_bytes -= s.bytes;
+        m_undo.clear();
+        return;
+    }
+    m_bytes += step.bytes;
+    m_undo.push_back(std::move(step));
+    trim();
+}
+
+void EditHistory::push_redo(Step&& step) {
+    if (m_limits.max_undo == 0 || step.bytes > m_limits.max_bytes) {
+        // A redo stack is redone newest first: what lies below a missing step cannot be reached.
+        for (const Step& s : m_redo) m_bytes -= s.bytes;
+        m_redo.clear();
+        return;
+    }
+    m_bytes += step.bytes;
+    m_redo.push_back(std::move(step));
+    trim();
+}
+
+void EditHistory::trim() {
+    while (m_undo.size() > m_limits.max_undo ||
+           (m_bytes > m_limits.max_bytes && m_undo.size() > 1)) {
+        m_bytes -= m_undo.front().bytes;
+        m_undo.pop_front();
+    }
+    while (m_redo.size() > m_limits.max_undo || (m_bytes > m_limits.max_bytes && !m_redo.empty())) {
+        m_bytes -= m_redo.front().bytes;
+        m_redo.pop_front();
+    }
+}
+
+std::optional<EditBatch> EditHistory::tagged(const std::deque<Step>& stack, BatchKind kind) {
+    if (stack.empty()) return std::nullopt;
+    EditBatch batch;
+    batch.edits = stack.back().batch.edits;
+    batch.info.kind = kind;
+    batch.info.target = stack.back().version;
+    return batch;
+}
+
+std::optional<EditBatch> EditHistory::undo_batch() const {
+    return tagged(m_undo, BatchKind::Undo);
+}
+
+std::optional<EditBatch> EditHistory::redo_batch() const {
+    return tagged(m_redo, BatchKind::Redo);
+}
+
+HistoryPage EditHistory::page(std::size_t limit, uint64_t before) const {
+    HistoryPage page;
+    page.oldest = m_entries.empty() ? 0 : m_entries.front().version;
+    page.undo_depth = m_undo.size();
+    page.redo_depth = m_redo.size();
+    page.next_undo = m_undo.empty() ? 0 : m_undo.back().version;
+    page.next_redo = m_redo.empty() ? 0 : m_redo.back().version;
+    page.held_bytes = m_bytes;
+    std::unordered_set<uint64_t> on_stack;
+    for (const Step& s : m_undo) on_stack.insert(s.version);
+    // Versions grow along the deque: start at the newest entry older than `before`.
+    auto end = m_entries.end();
+    if (before != 0)
+        end = std::lower_bound(m_entries.begin(), m_entries.end(), before,
+                               [](const HistoryEntry& e, uint64_t v) { return e.version < v; });
+    for (auto it = end; it != m_entries.begin() && page.entries.size() < limit;) {
+        --it;
+        page.entries.push_back(*it);
+        page.undoable.push_back(on_stack.count(it->version) != 0);
+    }
+    return page;
+}
+
+void EditHistory::clear() {
+    m_entries.clear();
+    m_undo.clear();
+    m_redo.clear();
+    m_bytes = 0;
+}
+
+}  // namespace strata

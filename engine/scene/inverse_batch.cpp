@@ -1,0 +1,289 @@
+// The inverse of an applied batch (inverse_batch.h): its undo log played backwards as edits.
+
+#include "engine/scene/inverse_batch.h"
+
+#include <algorithm>
+#include <string>
+#include <type_traits>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "engine/scene/scene.h"
+#include "engine/scene/undo_log.h"
+
+namespace strata {
+
+namespace {
+
+template <class H>
+uint64_t key(H h) {
+    return uint64_t(h.index) << 32 | h.generation;
+}
+
+/// A copy-on-write array's values, moved out when nothing else shares them.
+template <class T>
+std::vector<T> take(CowVector<T>& v) {
+    if (v.empty()) return {};
+    return std::move(v.mut());
+}
+
+/// Turns undo records into edits. Handles become ids: a live object's from the scene, one the
+/// batch removed from its record in the log (an object the batch added and removed again is in
+/// both, and only the log still knows its id).
+class Inverter {
+public:
+    explicit Inverter(const Scene& scene) : m_scene(scene) {}
+
+    /// Learns the ids of the objects `log` removed.
+    void note_removed(const std::vector<UndoRecord>& records) {
+        for (const UndoRecord& r : records) {
+            std::visit(
+                [&](const auto& x) {
+                    if constexpr (requires { x.record.id; })
+                        removed<decltype(x.handle)>().emplace(key(x.handle), x.record.id);
+                },
+                r);
+        }
+    }
+
+    /// The inverse of `records` (in reverse order), appended to `out`.
+    void invert(std::vector<UndoRecord>& records, EditBatch& out) {
+        m_out = &out;
+        for (std::size_t i = records.size(); i-- > 0;) {
+            // A topology change saved its normals and uvs in the record just before it: they go
+            // back with the topology (a vertex count change needs them in the same edit).
+            auto* topology = std::get_if<undo::MeshTopology>(&records[i]);
+            auto* attributes = i > 0 ? std::get_if<undo::MeshAttributes>(&records[i - 1]) : nullptr;
+            if (topology && attributes && attributes->handle == topology->handle) {
+                invert_topology(*topology, attributes);
+                --i;
+                continue;
+            }
+            std::visit([&](auto& x) { (*this)(x); }, records[i]);
+        }
+    }
+
+    template <class H>
+    void operator()(undo::Inserted<H>& r) {
+        std::string id = id_of(r.handle);
+        if constexpr (std::is_same_v<H, MeshHandle>)
+            emit(RemoveMesh{std::move(id)});
+        else if constexpr (std::is_same_v<H, InstanceHandle>)
+            emit(RemoveInstance{std::move(id)});
+        else if constexpr (std::is_same_v<H, MaterialHandle>)
+            emit(RemoveMaterial{std::move(id)});
+        else if constexpr (std::is_same_v<H, GroupHandle>)
+            emit(RemoveGroup{std::move(id), false});
+        else if constexpr (std::is_same_v<H, TextureHandle>)
+            emit(RemoveTexture{std::move(id)});
+        else
+            emit(RemoveLight{std::move(id)});
+    }
+
+    void operator()(undo::Removed<MeshHandle, MeshRecord>& r) {
+        MeshRecord& m = r.record;
+        AddMesh e;
+        e.id = m.id;
+        e.positions = take(m.positions);
+        e.triangles = take(m.triangles);
+        e.build = m.build;
+        e.material = id_or_none(m.material);
+        e.normals = std::move(m.normals);
+        e.uvs = std::move(m.uvs);
+        copy_to_add<MeshFields>(e, m);
+        emit(std::move(e));
+    }
+
+    void operator()(undo::Removed<InstanceHandle, InstanceRecord>& r) {
+        const InstanceRecord& i = r.record;
+        AddInstance e;
+        e.id = i.id;
+        e.mesh = id_of(i.mesh);
+        e.material = id_or_none(i.material);
+        e.parent = id_or_none(i.parent);
+        copy_to_add<InstanceFields>(e, i);
+        emit(std::move(e));
+    }
+
+    void operator()(undo::Removed<MaterialHandle, MaterialRecord>& r) {
+        emit(AddMaterial{r.record.id, std::move(r.record.material),
+                         id_or_none(r.record.base_color_texture)});
+    }
+
+    void operator()(undo::Removed<GroupHandle, GroupRecord>& r) {
+        AddGroup e;
+        e.id = r.record.id;
+        e.parent = id_or_none(r.record.parent);
+        copy_to_add<GroupFields>(e, r.record);
+        emit(std::move(e));
+    }
+
+    void operator()(undo::Removed<TextureHandle, TextureRecord>& r) {
+        AddTexture e{r.record.id, *r.record.encoded};
+        copy_to_add<TextureFields>(e, r.record);
+        emit(std::move(e));
+    }
+
+    void operator()(undo::Removed<LightHandle, LightRecord>& r) {
+        emit(AddLight{r.record.id, std::move(r.record.light)});
+    }
+
+    void operator()(undo::MeshDirty&) {}  // dirty bits are not scene state
+
+    void operator()(undo::MeshPositions& r) {
+        emit(UpdateMeshPositions{id_of(r.handle), r.offset, std::move(r.positions)});
+    }
+
+    void operator()(undo::MeshVertexPositions& r) {
+        // The forward edit wrote in list order, so a vertex listed twice holds its first old
+        // value in the earlier entry; reversed, that entry comes last and wins.
+        std::reverse(r.vertices.begin(), r.vertices.end());
+        std::reverse(r.positions.begin(), r.positions.end());
+        emit(UpdateMeshVertices{id_of(r.handle), std::move(r.vertices), std::move(r.positions)});
+    }
+
+    void operator()(undo::MeshPositionsReplaced& r) {
+        emit(UpdateMeshPositions{id_of(r.handle), 0, take(r.positions)});
+    }
+
+    void operator()(undo::MeshTopology& r) { invert_topology(r, nullptr); }
+
+    void operator()(undo::MeshAttributes& r) {
+        // The saved arrays are whole, so they go back whole (offset 0; [] removes them again).
+        emit(UpdateMeshPositions{id_of(r.handle), 0, {}, std::move(r.normals), std::move(r.uvs)});
+    }
+
+    void operator()(undo::InstanceState& r) {
+        UpdateInstance e = update_from<InstanceFields>(std::move(r.fields));
+        e.instance = id_of(r.handle);
+        e.material.emplace(id_or_none(r.material));
+        emit(std::move(e));
+    }
+
+    void operator()(undo::InstanceTransform& r) {
+        emit(SetTransform{id_of(r.handle), r.transform});
+    }
+
+    void operator()(undo::GroupState& r) {
+        UpdateGroup e = update_from<GroupFields>(std::move(r.fields));
+        e.group = id_of(r.handle);
+        emit(std::move(e));
+    }
+
+    void operator()(undo::Reparented<InstanceHandle>& r) {
+        UpdateInstance e;
+        e.instance = id_of(r.handle);
+        e.parent.emplace(id_or_none(r.old_parent));
+        emit(std::move(e));
+    }
+
+    void operator()(undo::Reparented<GroupHandle>& r) {
+        UpdateGroup e;
+        e.group = id_of(r.handle);
+        e.parent.emplace(id_or_none(r.old_parent));
+        emit(std::move(e));
+    }
+
+    void operator()(undo::MaterialState& r) {
+        UpdateMaterial e = update_to<MaterialFields>(r.material);
+        e.material = id_of(r.handle);
+        e.base_color_texture.emplace(id_or_none(r.base_color_texture));
+        e.wrap = r.material.base_color_sampler.wrap;
+        e.filter = r.material.base_color_sampler.filter;
+        emit(std::move(e));
+    }
+
+    void operator()(undo::LightState& r) {
+        UpdateLight e = update_to<LightFields>(r.light);
+        e.light = id_of(r.handle);
+        emit(std::move(e));
+    }
+
+private:
+    void emit(Edit&& e) { m_out->edits.push_back(std::move(e)); }
+
+    void invert_topology(undo::MeshTopology& r, undo::MeshAttributes* attributes) {
+        ReplaceMeshTopology e;
+        e.mesh = id_of(r.handle);
+        if (r.positions) e.positions = take(*r.positions);
+        e.triangles = take(r.triangles);
+        if (attributes) {
+            e.normals = std::move(attributes->normals);
+            e.uvs = std::move(attributes->uvs);
+        }
+        emit(std::move(e));
+    }
+
+    template <class H>
+    std::unordered_map<uint64_t, std::string>& removed() {
+        if constexpr (std::is_same_v<H, MeshHandle>)
+            return m_meshes;
+        else if constexpr (std::is_same_v<H, InstanceHandle>)
+            return m_instances;
+        else if constexpr (std::is_same_v<H, MaterialHandle>)
+            return m_materials;
+        else if constexpr (std::is_same_v<H, GroupHandle>)
+            return m_groups;
+        else if constexpr (std::is_same_v<H, TextureHandle>)
+            return m_textures;
+        else
+            return m_lights;
+    }
+
+    template <class H>
+    const std::string* live_id(H h) const {
+        const auto id = [](const auto* record) { return record ? &record->id : nullptr; };
+        if constexpr (std::is_same_v<H, MeshHandle>)
+            return id(m_scene.meshes().get(h));
+        else if constexpr (std::is_same_v<H, InstanceHandle>)
+            return id(m_scene.instances().get(h));
+        else if constexpr (std::is_same_v<H, MaterialHandle>)
+            return id(m_scene.materials().get(h));
+        else if constexpr (std::is_same_v<H, GroupHandle>)
+            return id(m_scene.groups().get(h));
+        else if constexpr (std::is_same_v<H, TextureHandle>)
+            return id(m_scene.textures().get(h));
+        else
+            return id(m_scene.lights().get(h));
+    }
+
+    template <class H>
+    std::string id_of(H h) {
+        if (const std::string* live = live_id(h)) return *live;
+        const auto& ids = removed<H>();
+        const auto it = ids.find(key(h));
+        STRATA_CHECK(it != ids.end());
+        return it->second;
+    }
+
+    /// Null handles (the root, "the mesh's default material", "no texture") become nullopt.
+    template <class H>
+    std::optional<std::string> id_or_none(H h) {
+        if (h.is_null()) return std::nullopt;
+        return id_of(h);
+    }
+
+    const Scene& m_scene;
+    EditBatch* m_out = nullptr;
+    std::unordered_map<uint64_t, std::string> m_meshes, m_instances, m_materials, m_groups,
+        m_textures, m_lights;
+};
+
+}  // namespace
+
+EditBatch inverse_batch(UndoLog&& log, const Scene& scene) {
+    EditBatch out;
+    out.edits.reserve(log.records.size() + 2);
+    Inverter inverter(scene);
+    inverter.note_removed(log.records);
+    inverter.invert(log.records, out);
+    // Camera and lighting were saved whole at the start of the batch.
+    if (!(scene.camera() == log.camera))
+        out.edits.emplace_back(update_to<CameraFields>(log.camera));
+    if (!(scene.lighting() == log.lighting))
+        out.edits.emplace_back(update_to<LightingFields>(log.lighting));
+    return out;
+}
+
+}  // namespace strata

@@ -1,0 +1,161 @@
+// POST /v1/undo, POST /v1/redo and GET /v1/history: the scene's history (engine/scene/
+// edit_history.h) over HTTP.
+
+#include <charconv>
+#include <ctime>
+
+#include "engine/durable/edit_codec.h"
+#include "protocol/api.h"
+
+namespace strata::protocol {
+
+namespace {
+
+constexpr uint32_t DEFAULT_PAGE = 50;
+constexpr uint32_t MAX_PAGE = 1000;
+/// Tries of an undo without If-Match when other writers keep landing between reading the stack
+/// and applying: each try takes back whatever is newest then.
+constexpr int UNCONDITIONAL_TRIES = 20;
+
+const char* kind_name(BatchKind k) {
+    switch (k) {
+        case BatchKind::Undo:
+            return "undo";
+        case BatchKind::Redo:
+            return "redo";
+        case BatchKind::Edits:
+            break;
+    }
+    return "edit";
+}
+
+/// RFC 3339 UTC with milliseconds: "2026-11-27T17:02:03.456Z".
+std::string rfc3339(int64_t ms) {
+    const std::time_t seconds = std::time_t(ms / 1000);
+    std::tm utc{};
+    gmtime_r(&seconds, &utc);
+    char text[40];
+    const std::size_t n = std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%S", &utc);
+    char millis[8];
+    std::snprintf(millis, sizeof millis, ".%03dZ", int(ms % 1000));
+    return std::string(text, n) + millis;
+}
+
+Json entry_json(const HistoryEntry& e, bool undoable) {
+    Json ops = Json::object();
+    for (const auto& [kind, n] : e.ops) ops[durable::edit_kind_name(kind)] = n;
+    Json j = {{"version", e.version},           {"time", rfc3339(e.info.time_ms)},
+              {"kind", kind_name(e.info.kind)}, {"edits", e.edits},
+              {"ops", std::move(ops)},          {"undoable", undoable}};
+    if (e.info.kind != BatchKind::Edits) j["target"] = e.info.target;
+    if (!e.info.message.empty()) j["message"] = e.info.message;
+    return j;
+}
+
+Problem bad_query(const std::string& parameter, std::string message) {
+    Problem p = make_problem(ProblemType::InvalidRequest, std::move(message));
+    p.pointer = "/" + parameter;
+    return p;
+}
+
+/// A whole-string unsigned integer within [lo, hi].
+std::optional<uint64_t> parse_count(const std::string& text, uint64_t lo, uint64_t hi) {
+    uint64_t n = 0;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), n);
+    if (text.empty() || ec != std::errc() || end != text.data() + text.size() || n < lo || n > hi)
+        return std::nullopt;
+    return n;
+}
+
+}  // namespace
+
+ApiResponse post_undo(Engine& engine, bool redo, std::optional<std::string_view> if_match,
+                      const BatchApply* apply) {
+    Problem problem;
+    const auto condition = if_match ? parse_if_match(*if_match, problem) : IfMatch{};
+    if (!condition) return problem_response(problem);
+
+    uint64_t target = 0;
+    Result<ApplyResult> applied = failure(ErrorCode::Internal, "not tried");
+    for (int attempt = 1;; ++attempt) {
+        const uint64_t at = condition->version.value_or(engine.version());
+        auto batch = redo ? engine.redo_batch(at) : engine.undo_batch(at);
+        if (batch) {
+            target = batch.value().info.target;
+            applied = apply ? (*apply)(std::move(batch.value()), at)
+                            : engine.apply(std::move(batch.value()), at);
+        } else {
+            applied = Unexpected(std::move(batch).error());
+        }
+        const bool raced = !applied && applied.error().code == ErrorCode::VersionMismatch;
+        if (!raced || condition->version || attempt == UNCONDITIONAL_TRIES) break;
+    }
+    if (!applied) {
+        const Error& e = applied.error();
+        if (e.code == ErrorCode::VersionMismatch)
+            return with_etag(problem_response(make_problem(ProblemType::VersionMismatch,
+                                                           "If-Match: " + e.message)),
+                             engine.version());
+        if (e.code == ErrorCode::NothingToUndo)
+            return with_etag(problem_response(make_problem(ProblemType::NothingToUndo, e.message)),
+                             engine.version());
+        // The inverse was valid when it was made; the scene's rules (a budget lowered since a
+        // restart) may refuse it now.
+        Problem p = problem_from(e);
+        p.detail = std::string(redo ? "the redo of version " : "the undo of version ") +
+                   std::to_string(target) + " no longer applies: " + e.describe();
+        p.pointer.reset();
+        p.edit_index = Error::NO_INDEX;
+        return problem_response(p);
+    }
+    const ApplyResult& done = applied.value();
+    return with_etag(json_response(200, {{"version", done.version},
+                                         {redo ? "redone" : "undone", target},
+                                         {"applied", done.applied}}),
+                     done.version);
+}
+
+ApiResponse get_history(const Engine& engine,
+                        const std::multimap<std::string, std::string>& query) {
+    uint32_t limit = DEFAULT_PAGE;
+    uint64_t before = 0;
+    for (const auto& [key, text] : query) {
+        if (query.count(key) > 1)
+            return problem_response(
+                bad_query(key, "query parameter '" + key + "' is given more than once"));
+        if (key == "limit") {
+            const auto n = parse_count(text, 1, MAX_PAGE);
+            if (!n)
+                return problem_response(bad_query(
+                    key, "limit must be an integer from 1 to " + std::to_string(MAX_PAGE)));
+            limit = uint32_t(*n);
+        } else if (key == "cursor") {
+            const auto n = parse_count(text, 1, UINT64_MAX);
+            if (!n)
+                return problem_response(bad_query(
+                    key, "cursor must be a positive integer: a next_cursor of an earlier page"));
+            before = *n;
+        } else {
+            return problem_response(
+                bad_query(key, "unknown query parameter '" + key + "' (known: limit, cursor)"));
+        }
+    }
+    const uint64_t version = engine.version();
+    const HistoryPage page = engine.history(limit, before);
+    Json entries = Json::array();
+    for (std::size_t i = 0; i < page.entries.size(); ++i)
+        entries.push_back(entry_json(page.entries[i], page.undoable[i]));
+    const auto next_or_null = [](uint64_t v) { return v ? Json(v) : Json(nullptr); };
+    Json body = {{"version", version},
+                 {"oldest", next_or_null(page.oldest)},
+                 {"undo", {{"depth", page.undo_depth}, {"next", next_or_null(page.next_undo)}}},
+                 {"redo", {{"depth", page.redo_depth}, {"next", next_or_null(page.next_redo)}}},
+                 {"held_bytes", page.held_bytes},
+                 {"entries", std::move(entries)}};
+    const bool more = !page.entries.empty() && page.entries.size() == limit &&
+                      page.entries.back().version > page.oldest;
+    body["next_cursor"] = more ? Json(std::to_string(page.entries.back().version)) : Json(nullptr);
+    return with_etag(json_response(200, body), version);
+}
+
+}  // namespace strata::protocol

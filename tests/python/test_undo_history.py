@@ -1,0 +1,197 @@
+"""Undo, redo and the history (POST /v1/undo, POST /v1/redo, GET /v1/history) through the
+blocking client against a real strata-server: each undo and redo is a new version whose scene is
+the one before (after) the batch it takes back (applies again), the history lists every version
+with its kind, target, message, ops and whether it is on the undo stack, pages by cursor, and the
+problems are typed: NothingToUndoError (409) on an empty stack, VersionMismatchError (412) on a
+stale If-Match. Each test starts its own server, so its history starts empty at version 0."""
+
+import datetime
+import unittest
+
+from strata_client import (BadRequestError, Client, History, HistoryEntry, HistoryStack,
+                           NothingToUndoError, ProblemError, UndoResult, VersionMismatchError)
+from strata_process import ServerProcess
+from test_client import SERVER
+
+BALL = [
+    {"op": "add_mesh", "id": "ball", "shape": {"type": "sphere", "segments": 16}},
+    {"op": "add_instance", "id": "b0", "mesh": "ball"},
+]
+SECOND = [{"op": "add_instance", "id": "b1", "mesh": "ball",
+           "transform": {"translate": [2, 0, 0]}}]
+MOVE = [{"op": "set_transform", "instance": "b0", "transform": {"translate": [0, 3, 0]}}]
+
+
+class UndoHistoryTest(unittest.TestCase):
+
+    def setUp(self):
+        self.server = ServerProcess(SERVER)
+        self.client = Client(self.server.url)
+
+    def tearDown(self):
+        self.client.close()
+        self.server.stop()
+
+    def instance_ids(self):
+        return sorted(i["id"] for i in self.client.instances())
+
+    def b0_y(self):
+        return self.client.scene("instances", "b0")["transform"][7]
+
+    def three_batches(self):
+        """Versions 1 (BALL, with a message), 2 (SECOND) and 3 (MOVE)."""
+        versions = (self.client.edit(BALL, message="a ball"), self.client.edit(SECOND),
+                    self.client.edit(MOVE))
+        self.assertEqual(versions, (1, 2, 3))
+        self.assertEqual(self.b0_y(), 3)
+        return versions
+
+    def test_undo_and_redo_are_new_versions_that_take_batches_back_and_apply_them_again(self):
+        _, second, move = self.three_batches()
+        undone = self.client.undo()
+        self.assertIsInstance(undone, UndoResult)
+        self.assertEqual((undone.version, undone.target, undone.undone, undone.applied),
+                         (4, move, move, 1))
+        self.assertIsNone(undone.redone)
+        self.assertEqual(undone, {"version": 4, "undone": move, "applied": 1})
+        self.assertEqual(self.b0_y(), 0)
+        self.assertEqual(self.instance_ids(), ["b0", "b1"])
+
+        undone = self.client.undo()
+        self.assertEqual((undone.version, undone.target), (5, second))
+        self.assertEqual(self.instance_ids(), ["b0"])
+        self.assertEqual(self.client.scene()["version"], 5)
+        with self.assertRaises(ProblemError) as caught:
+            self.client.scene("instances", "b1")
+        self.assertEqual(caught.exception.status, 404)
+
+        redone = self.client.redo()
+        self.assertEqual((redone.version, redone.target, redone.redone), (6, second, second))
+        self.assertIsNone(redone.undone)
+        self.assertEqual(self.instance_ids(), ["b0", "b1"])
+        self.assertEqual(self.client.scene("instances", "b1")["transform"][3], 2)
+        self.assertEqual(self.b0_y(), 0)  # the move stays taken back: next on the redo stack
+
+        # What the history says now, newest first.
+        history = self.client.history()
+        self.assertIsInstance(history, History)
+        self.assertEqual((history.version, history.oldest, history.next_cursor), (6, 1, None))
+        self.assertIsInstance(history.undo, HistoryStack)
+        self.assertEqual((history.undo.depth, history.undo.next), (2, 6))
+        self.assertEqual((history.redo.depth, history.redo.next), (1, move))
+        self.assertGreater(history.held_bytes, 0)
+        entries = history.entries
+        self.assertTrue(all(isinstance(e, HistoryEntry) for e in entries))
+        self.assertEqual([(e.version, e.kind, e.target, e.undoable) for e in entries],
+                         [(6, "redo", second, True), (5, "undo", second, False),
+                          (4, "undo", move, False), (3, "edit", None, False),
+                          (2, "edit", None, False), (1, "edit", None, True)])
+        self.assertEqual([e.message for e in entries], [None] * 5 + ["a ball"])
+        self.assertNotIn("message", entries[0])  # absent members stay absent in the dict view
+        self.assertNotIn("target", entries[-1])
+        self.assertEqual(entries[-1].ops, {"add_mesh": 1, "add_instance": 1})
+        self.assertEqual(entries[-1].edits, 2)
+        self.assertEqual(entries[-2].ops, {"add_instance": 1})
+        self.assertEqual(entries[1].ops, {"remove_instance": 1})
+        self.assertEqual(entries[0].ops, {"add_instance": 1})
+        self.assertEqual(history["entries"][0]["kind"], "redo")
+        for entry in entries:
+            self.assertEqual(entry.datetime.tzinfo, datetime.timezone.utc)
+            self.assertTrue(entry.time.endswith("Z"), entry.time)
+        now = datetime.datetime.now(datetime.timezone.utc)
+        self.assertLess(abs((now - entries[0].datetime).total_seconds()), 120)
+        self.assertLessEqual(entries[-1].datetime, entries[0].datetime)
+
+        # The rest of the stacks: undo takes back the redo, then the first batch; then nothing.
+        self.assertEqual(self.client.undo().target, 6)
+        self.assertEqual(self.instance_ids(), ["b0"])
+        self.assertEqual(self.client.undo().target, 1)
+        self.assertEqual(self.instance_ids(), [])
+        self.assertEqual(self.client.scene()["counts"]["meshes"], 0)
+        with self.assertRaises(NothingToUndoError) as caught:
+            self.client.undo()
+        p = caught.exception
+        self.assertEqual((p.status, p.problem_type, p.current_version), (409, "nothing-to-undo", 8))
+        self.assertEqual(self.client.scene()["version"], 8)  # nothing applied
+        self.assertEqual(self.client.history(limit=1).undo.depth, 0)
+
+    def test_a_new_edit_empties_the_redo_stack(self):
+        self.three_batches()
+        self.client.undo()
+        self.client.undo()
+        self.assertEqual(self.client.history(limit=1).redo.depth, 2)
+        self.assertEqual(self.client.edit([{"op": "update_instance", "instance": "b0",
+                                            "visible": False}]), 6)
+        history = self.client.history(limit=1)
+        self.assertEqual((history.redo.depth, history.redo.next), (0, None))
+        with self.assertRaises(NothingToUndoError) as caught:
+            self.client.redo()
+        self.assertEqual(caught.exception.current_version, 6)
+        self.assertEqual(self.instance_ids(), ["b0"])
+        # Nothing redone yet on a fresh server either.
+        with ServerProcess(SERVER) as fresh, Client(fresh.url) as client:
+            with self.assertRaises(NothingToUndoError):
+                client.redo()
+            with self.assertRaises(NothingToUndoError):
+                client.undo()
+
+    def test_if_match_undoes_only_the_version_it_names(self):
+        self.three_batches()
+        with self.assertRaises(VersionMismatchError) as caught:
+            self.client.undo(if_match=2)
+        self.assertEqual(caught.exception.current_version, 3)
+        self.assertEqual(self.b0_y(), 3)  # nothing applied
+        self.assertEqual(self.client.undo(if_match=3).version, 4)
+        with self.assertRaises(VersionMismatchError) as caught:
+            self.client.redo(if_match=3)
+        self.assertEqual(caught.exception.current_version, 4)
+        self.assertEqual(self.client.redo(if_match='"4"').target, 3)
+        self.assertEqual(self.b0_y(), 3)
+        self.assertEqual(self.client.undo(if_match="*").target, 5)
+
+    def test_history_pages_by_cursor_and_the_iterator_follows_them(self):
+        self.three_batches()
+        self.client.undo()
+        self.client.undo()
+        self.client.redo()
+        self.client.edit([], message="empty, but kept")  # version 7
+        first = self.client.history(limit=2)
+        self.assertEqual([e.version for e in first.entries], [7, 6])
+        self.assertEqual(first.entries[0].message, "empty, but kept")
+        self.assertEqual((first.entries[0].edits, first.entries[0].ops), (0, {}))
+        self.assertIsNotNone(first.next_cursor)
+        pages = [first.entries]
+        cursor = first.next_cursor
+        while cursor is not None:
+            page = self.client.history(limit=2, cursor=cursor)
+            self.assertEqual(page.version, 7)
+            pages.append(page.entries)
+            cursor = page.next_cursor
+        self.assertEqual([[e.version for e in p] for p in pages], [[7, 6], [5, 4], [3, 2], [1]])
+        everything = list(self.client.history_entries(page_size=3))
+        self.assertEqual([e.version for e in everything], [7, 6, 5, 4, 3, 2, 1])
+        self.assertEqual(everything, self.client.history(limit=1000).entries)
+        # A version made after a page was read does not shift the next page.
+        self.client.edit(MOVE)
+        self.assertEqual([e.version for e in self.client.history(2, first.next_cursor).entries],
+                         [5, 4])
+        for query in ({"limit": 0}, {"limit": 1001}, {"cursor": "x"}, {"cursor": "0"}):
+            with self.subTest(query=query), self.assertRaises(BadRequestError):
+                self.client.history(**query)
+
+    def test_a_message_is_text_of_at_most_1024_bytes(self):
+        self.client.edit(BALL, message="ü" * 512)  # 1024 bytes of UTF-8
+        self.assertEqual(self.client.history().entries[0].message, "ü" * 512)
+        for message in ("x" * 1025, "ü" * 513, "two\nlines", "tab\there", "\x7f", "\u2028"):
+            with self.subTest(message=message[:12]):
+                with self.assertRaises(ProblemError) as caught:
+                    self.client.edit(MOVE, message=message)
+                self.assertIn(caught.exception.status, (400, 422))
+                self.assertIn("message", caught.exception.detail)
+        self.assertEqual(self.client.scene()["version"], 1)  # nothing applied
+        self.client.edit(MOVE, message="")
+        self.assertNotIn("message", self.client.history(limit=1).entries[0])
+
+
+if __name__ == "__main__":
+    unittest.main()
