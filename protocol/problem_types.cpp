@@ -61,7 +61,8 @@ constexpr TypeInfo TYPES[] = {
      "snapshot or the history's limits), or `POST /v1/redo` with nothing undone since the last "
      "edit"},
     {"not-found", "Not found", 404,
-     "unknown route, or an unknown id in the URL of `GET /v1/scene/...`"},
+     "unknown route, an unknown id in the URL of `GET /v1/scene/...`, or an `at_version` the "
+     "server does not hold"},
     {"method-not-allowed", "Method not allowed", 405,
      "the path exists for other methods (see the `Allow` header); `HEAD /v1/render`, "
      "which would have to render to know its headers"},

@@ -59,6 +59,7 @@ void Application::install_routes(const FrontEndCounters* front_end, StreamHub* s
                         m_config.max_texture_mb << 20},
             m_config.max_batch_edits},
         front_end, nullptr, nullptr, {}, streams, {}});
+    m_context->past = std::make_unique<PastScenes>(engine_config(m_config));
     if (!m_config.peers.empty()) {
         // finish_config checked the list.
         auto peers = parse_peers(m_config.peers);

@@ -4,6 +4,7 @@
 #include "engine/engine.h"
 #include "protocol/api.h"
 #include "server/metrics.h"
+#include "server/past_scenes.h"
 #include "server/server_config.h"
 
 namespace strata::durable {
@@ -30,6 +31,8 @@ struct ServerContext {
     StreamHub* streams = nullptr;                 ///< /v1/stream and /v1/events; null: 503
     /// Renders `split=N` frames with --peers (split_render.h); empty without peers.
     protocol::SplitRender split_render;
+    /// Older versions for `at_version` reads, loaded from `store` (past_scenes.h).
+    std::unique_ptr<PastScenes> past = nullptr;
 
     /// Where write endpoints send batches: the log's append with --log, else the engine.
     const protocol::BatchApply* batch_apply() const { return replica ? &append_to_log : nullptr; }

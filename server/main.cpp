@@ -14,6 +14,7 @@
 #include "server/cli.h"
 #include "server/healthcheck.h"
 #include "server/log_sink.h"
+#include "server/past_scenes.h"
 #include "server/replica/replica.h"
 #include "server/server.h"
 #include "server/shutdown.h"
@@ -97,15 +98,7 @@ void prepare_process(server::ServerConfig& c) {
 /// The engine with the scene budget and TLAS strategy of `c`; null (and a logged reason) when
 /// it cannot start.
 std::unique_ptr<Engine> create_engine(const server::ServerConfig& c) {
-    EngineConfig engine_config;
-    engine_config.budget = {c.max_scene_triangles, c.max_scene_vertices, c.max_texture_mb << 20};
-    engine_config.history.max_undo = c.undo_depth;
-    engine_config.history.max_bytes = c.undo_mb << 20;
-    engine_config.accel.tlas = *parse_tlas_kind(c.tlas);  // checked by the parser
-    engine_config.accel.tlas_policy.max_dynamic_fraction = c.tlas_max_dynamic_fraction;
-    engine_config.accel.tlas_policy.min_instances = c.tlas_min_instances;
-    engine_config.accel.tlas_policy.background_merge = c.tlas_background_merge;
-    auto engine = Engine::create(engine_config);
+    auto engine = Engine::create(server::engine_config(c));
     if (!engine) {
         spdlog::critical("cannot start the engine: {}", engine.error().describe());
         return nullptr;

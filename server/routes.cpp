@@ -3,6 +3,7 @@
 // and the server's own logs and metrics. Each route is registered with its description
 // (protocol/openapi.h), which GET /v1/openapi.json serves.
 
+#include <charconv>
 #include <mutex>
 
 #include <spdlog/spdlog.h>
@@ -62,10 +63,13 @@ protocol::ApiResponse committed(ServerContext& ctx, protocol::ApiResponse&& answ
 
 /// Renders with `render`, observing the duration of successful renders (commit, tracing and
 /// encoding).
+/// A past version's engine (`at_version`) is not the server's: its first build is not logged or
+/// measured as the scene's commit.
 template <class Render>
-protocol::ApiResponse rendered(ServerContext& ctx, Render&& render) {
+protocol::ApiResponse rendered(ServerContext& ctx, const Engine& engine, Render&& render) {
     Stopwatch clock;
     protocol::ApiResponse answer = render();
+    if (&engine != &ctx.engine) return answer;
     if (answer.status == 200) ctx.metrics.render_seconds.observe(clock.ms() / 1000.0);
     return committed(ctx, std::move(answer), "render");
 }
@@ -127,6 +131,54 @@ void describe_min_version(RouteDoc& doc) {
                 "the server did not reach min_version in time (the detail names the lag), or too "
                 "many reads wait for theirs (--max-waiting-reads)",
                 {"Retry-After"}));
+}
+
+/// A read of the scene at `at_version` (taken out of the query), or of the live scene without
+/// it: `handler` gets the engine at that version (past_scenes.h).
+using EngineHandler = std::function<Reply(Engine&, RouteCall&)>;
+Endpoint at_version(ServerContext& ctx, RouteDoc doc, EngineHandler handler) {
+    doc.parameters.push_back(
+        {.name = "at_version",
+         .description = "read the scene as it was at this version: loaded from the data "
+                        "directory's newest snapshot before it and its journal (the first "
+                        "request of a version pays that load and a full build; the last two "
+                        "versions asked for stay loaded)",
+         .schema = U64});
+    doc.responses.push_back(
+        problem(404, "at_version names a version that does not exist or that the data directory "
+                     "no longer holds, or the server runs without --data"));
+    return {std::move(doc), [&ctx, handler = std::move(handler)](RouteCall& call) -> Reply {
+                auto& query = call.request.query;
+                const auto it = query.find("at_version");
+                if (it == query.end()) return handler(ctx.engine, call);
+                uint64_t version = 0;
+                const std::string& text = it->second;
+                const auto [end, ec] =
+                    std::from_chars(text.data(), text.data() + text.size(), version);
+                if (query.count("at_version") > 1 || text.empty() || ec != std::errc() ||
+                    end != text.data() + text.size()) {
+                    protocol::Problem p = protocol::make_problem(
+                        protocol::ProblemType::InvalidRequest,
+                        "at_version must be one scene version (a whole number), not '" +
+                            text.substr(0, 40) + "'");
+                    p.pointer = "/at_version";
+                    return p;
+                }
+                query.erase("at_version");
+                auto engine = ctx.past->at(ctx.engine, ctx.store, version);
+                if (!engine) {
+                    const Error& e = engine.error();
+                    const bool missing = e.code == ErrorCode::OutOfRange ||
+                                         e.code == ErrorCode::InvalidArgument;
+                    protocol::Problem p =
+                        missing ? protocol::make_problem(protocol::ProblemType::NotFound,
+                                                         "at_version: " + e.message)
+                                : protocol::problem_from(e);
+                    if (missing) p.pointer = "/at_version";
+                    return p;
+                }
+                return handler(*engine.value(), call);
+            }};
 }
 
 /// A route whose handler runs once `min_version`, if asked for, is reached.
@@ -220,16 +272,19 @@ void add_scene_object_routes(RouteTable& routes, ServerContext& ctx, const Colle
                                }}));
     // The path keeps reserved characters percent-encoded (request_target.h): an id holding '/'
     // arrives as one segment, decoded by the route table.
-    routes.get(
-        path + "/{id}",
-        after_min_version(
-            ctx, {{.summary = "One " + one + " document",
-                   .tag = "scene",
-                   .responses = {ok_json(one, "its state at the version in the ETag"),
-                                 problem(404, "no object of this kind has the id", {"ETag"})}},
-                  [&ctx, kind](RouteCall& call) {
-                      return protocol::get_scene_object(ctx.engine, kind, call.params[0]);
-                  }}));
+    routes.get(path + "/{id}",
+               after_min_version(
+                   ctx, at_version(ctx,
+                                   {.summary = "One " + one + " document",
+                                    .tag = "scene",
+                                    .responses = {ok_json(one, "its state at the version in the "
+                                                               "ETag"),
+                                                  problem(404, "no object of this kind has the id",
+                                                          {"ETag"})}},
+                                   [kind](Engine& engine, RouteCall& call) {
+                                       return protocol::get_scene_object(engine, kind,
+                                                                         call.params[0]);
+                                   })));
 }
 
 /// What GET /metrics reads: the numbers of every part of the server that exists.
@@ -386,16 +441,19 @@ void add_import_routes(RouteTable& routes, ServerContext& ctx) {
 void add_snapshot_routes(RouteTable& routes, ServerContext& ctx) {
     routes.get("/v1/scene/snapshot",
                after_min_version(
-                   ctx, {{.summary = "The whole scene as a snapshot file",
-                          .description = "The data directory's snapshot format, taken under one "
-                                         "read lock.",
-                          .tag = "scene",
-                          .responses = {{.status = 200,
-                                         .description = "the snapshot; its ETag is the version "
-                                                        "it holds",
-                                         .media = {protocol::SNAPSHOT_CONTENT_TYPE},
-                                         .headers = {"ETag", "Content-Disposition"}}}},
-                         [&ctx](RouteCall&) { return protocol::get_snapshot(ctx.engine); }}));
+                   ctx, at_version(ctx,
+                                   {.summary = "The whole scene as a snapshot file",
+                                    .description = "The data directory's snapshot format, taken "
+                                                   "under one read lock.",
+                                    .tag = "scene",
+                                    .responses = {{.status = 200,
+                                                   .description = "the snapshot; its ETag is the "
+                                                                  "version it holds",
+                                                   .media = {protocol::SNAPSHOT_CONTENT_TYPE},
+                                                   .headers = {"ETag", "Content-Disposition"}}}},
+                                   [](Engine& engine, RouteCall&) {
+                                       return protocol::get_snapshot(engine);
+                                   })));
     routes.post(
         "/v1/scene/snapshot",
         {{.summary = "Replace the scene with a snapshot's, atomically",
@@ -436,7 +494,7 @@ std::vector<ResponseDoc> render_answers() {
                     "server is shutting down")};
 }
 
-Reply get_render(ServerContext& ctx, RouteCall& call) {
+Reply get_render(ServerContext& ctx, Engine& engine, RouteCall& call) {
     if (call.request.method == "HEAD") {
         // Its headers (ETag, size, rebuild summary) exist only once the frame is rendered.
         protocol::ApiResponse r = protocol::problem_response(protocol::make_problem(
@@ -446,9 +504,8 @@ Reply get_render(ServerContext& ctx, RouteCall& call) {
         r.headers.emplace_back("Allow", "GET, POST");
         return r;
     }
-    if (auto refusal = check_min_version(ctx, call.request)) return std::move(*refusal);
-    return rendered(ctx, [&] {
-        return protocol::get_render(ctx.engine, call.request.query, ctx.api_limits,
+    return rendered(ctx, engine, [&] {
+        return protocol::get_render(engine, call.request.query, ctx.api_limits,
                                     call.context.cancel, ctx.split());
     });
 }
@@ -457,19 +514,21 @@ void add_render_routes(RouteTable& routes, ServerContext& ctx) {
     const char* commits =
         "Commits pending edits (as POST /v1/commit), traces and encodes one "
         "frame; an empty body means every default.";
-    routes.post("/v1/render", json_body(after_min_version(
-                                  ctx, {{.summary = "Render one frame",
-                                         .description = commits,
-                                         .tag = "render",
-                                         .body = "RenderRequest",
-                                         .responses = render_answers()},
-                                        [&ctx](RouteCall& call) {
-                                            return rendered(ctx, [&] {
-                                                return protocol::post_render(
-                                                    ctx.engine, call.request.body, ctx.api_limits,
-                                                    call.context.cancel, ctx.split());
-                                            });
-                                        }})));
+    routes.post("/v1/render",
+                json_body(after_min_version(
+                    ctx, at_version(ctx,
+                                    {.summary = "Render one frame",
+                                     .description = commits,
+                                     .tag = "render",
+                                     .body = "RenderRequest",
+                                     .responses = render_answers()},
+                                    [&ctx](Engine& engine, RouteCall& call) {
+                                        return rendered(ctx, engine, [&] {
+                                            return protocol::post_render(
+                                                engine, call.request.body, ctx.api_limits,
+                                                call.context.cancel, ctx.split());
+                                        });
+                                    }))));
     RouteDoc get = {.summary = "Render one frame, asked for in the query",
                     .description =
                         "The members of POST /v1/render's body as parameters: the "
@@ -481,9 +540,11 @@ void add_render_routes(RouteTable& routes, ServerContext& ctx) {
                     .responses = render_answers(),
                     .query_token = true};
     get.responses.push_back(problem(405, "HEAD: use GET or POST", {"Allow"}));
-    describe_min_version(get);
     routes.get("/v1/render",
-               {std::move(get), [&ctx](RouteCall& call) { return get_render(ctx, call); }});
+               after_min_version(ctx, at_version(ctx, std::move(get),
+                                                 [&ctx](Engine& engine, RouteCall& call) {
+                                                     return get_render(ctx, engine, call);
+                                                 })));
 }
 
 void add_pick_routes(RouteTable& routes, ServerContext& ctx) {
@@ -528,11 +589,12 @@ void add_scene_routes(RouteTable& routes, ServerContext& ctx) {
                             [&ctx](RouteCall&) { return protocol::get_plan(ctx.engine); }});
     routes.get(
         "/v1/scene",
-        after_min_version(ctx, {{.summary = "The scene: version, counts, bounds, camera "
-                                            "and lighting",
-                                 .tag = "scene",
-                                 .responses = {ok_json("Scene", "the summary")}},
-                                [&ctx](RouteCall&) { return protocol::get_scene(ctx.engine); }}));
+        after_min_version(
+            ctx, at_version(ctx,
+                            {.summary = "The scene: version, counts, bounds, camera and lighting",
+                             .tag = "scene",
+                             .responses = {ok_json("Scene", "the summary")}},
+                            [](Engine& engine, RouteCall&) { return protocol::get_scene(engine); })));
     for (const Collection& c : collections()) add_scene_object_routes(routes, ctx, c);
 }
 

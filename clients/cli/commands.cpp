@@ -221,8 +221,9 @@ int run_stats(Transport& t, const Console& c) {
     return OK;
 }
 
-int run_snapshot_save(Transport& t, const Console& c, const std::string& file) {
-    const Reply reply = t.get_snapshot();
+int run_snapshot_save(Transport& t, const Console& c, const std::string& file,
+                      std::optional<uint64_t> at_version) {
+    const Reply reply = t.get_snapshot(at_version);
     if (!reply.ok()) return refused(c, t, "snapshot save", reply);
     if (file == "-") {
         c.out.write(reply.body.data(), std::streamsize(reply.body.size()));

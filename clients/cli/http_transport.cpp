@@ -158,7 +158,9 @@ Reply HttpTransport::pick(const std::string& body) {
     return post("/v1/pick", body, "");
 }
 
-Reply HttpTransport::get_snapshot() {
+Reply HttpTransport::get_snapshot(std::optional<uint64_t> at_version) {
+    if (at_version)
+        return get(("/v1/scene/snapshot?at_version=" + std::to_string(*at_version)).c_str());
     return get("/v1/scene/snapshot");
 }
 

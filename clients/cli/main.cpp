@@ -258,17 +258,23 @@ void add_pick(CLI::App& app, Actions& actions) {
 
 void add_snapshot(CLI::App& app, Actions& actions) {
     auto file = std::make_shared<std::string>();
+    auto version = std::make_shared<std::optional<uint64_t>>();
     CLI::App* cmd =
         app.add_subcommand("snapshot", "Save the server's scene to a file, or load one into it");
     cmd->require_subcommand(1);
     CLI::App* save = cmd->add_subcommand(
         "save", "Save the whole scene (GET /v1/scene/snapshot) to FILE (- for stdout)");
     save->add_option("file", *file, "Snapshot file to write")->required();
+    save->add_option("--version,--at-version", *version,
+                     "The scene as it was at this version (the server's data directory must "
+                     "still hold it)");
     CLI::App* load = cmd->add_subcommand(
         "load", "Replace the server's scene with FILE's (POST /v1/scene/snapshot; - for stdin)");
     load->add_option("file", *file, "Snapshot file to read")->required();
     actions.emplace_back(
-        save, [file](Transport& t, const Console& c) { return run_snapshot_save(t, c, *file); });
+        save, [file, version](Transport& t, const Console& c) {
+            return run_snapshot_save(t, c, *file, *version);
+        });
     actions.emplace_back(
         load, [file](Transport& t, const Console& c) { return run_snapshot_load(t, c, *file); });
 }

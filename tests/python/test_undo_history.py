@@ -6,10 +6,12 @@ problems are typed: NothingToUndoError (409) on an empty stack, VersionMismatchE
 stale If-Match. Each test starts its own server, so its history starts empty at version 0."""
 
 import datetime
+import tempfile
 import unittest
 
 from strata_client import (BadRequestError, Client, History, HistoryEntry, HistoryStack,
-                           NothingToUndoError, ProblemError, UndoResult, VersionMismatchError)
+                           NotFoundError, NothingToUndoError, ProblemError, UndoResult,
+                           VersionMismatchError)
 from strata_process import ServerProcess
 from test_client import SERVER
 
@@ -191,6 +193,34 @@ class UndoHistoryTest(unittest.TestCase):
         self.assertEqual(self.client.scene()["version"], 1)  # nothing applied
         self.client.edit(MOVE, message="")
         self.assertNotIn("message", self.client.history(limit=1).entries[0])
+
+
+class PastVersionTest(unittest.TestCase):
+    """at_version through the client: the scene and frames as they were, from --data."""
+
+    def setUp(self):
+        self.data = tempfile.TemporaryDirectory(prefix="strata-past-")
+        self.server = ServerProcess(SERVER, ["--data", self.data.name])
+        self.client = Client(self.server.url)
+
+    def tearDown(self):
+        self.client.close()
+        self.server.stop()
+        self.data.cleanup()
+
+    def test_scene_and_frames_at_a_past_version(self):
+        self.client.edit(BALL)
+        frame = self.client.render(48, 32, spp=1)
+        self.client.edit(MOVE)
+        self.assertEqual(self.client.scene("instances", "b0")["transform"][7], 3)
+        self.assertEqual(self.client.scene("instances", "b0", at_version=1)["transform"][7], 0)
+        self.assertEqual(self.client.scene(at_version=1)["version"], 1)
+        self.assertEqual(self.client.render(48, 32, spp=1, at_version=1), frame)
+        self.assertEqual(self.client.last_render.version, 1)
+        with self.assertRaises(NotFoundError):
+            self.client.scene(at_version=9)
+        with self.assertRaises(ValueError):
+            self.client.scene(at_version=-1)
 
 
 if __name__ == "__main__":

@@ -164,6 +164,64 @@ class DataDirectory(unittest.TestCase):
                           (6, "edit", None)])
         self.assertEqual(history["undo"], {"depth": 6, "next": 10})
 
+    def test_past_versions_read_and_render_as_they_were(self):
+        s = self.server()
+        stream(s, 0, 4)
+        frame = "/v1/render?width=48&height=32&spp=2"
+        status, headers, live_png = s.call("GET", frame)
+        self.assertEqual((status, headers["ETag"]), (200, '"4"'))
+        scene4 = s.json("GET", "/v1/scene")[1]
+        live_snapshot = s.call("GET", "/v1/scene/snapshot")[2]
+        stream(s, 4, 3)
+        self.assertEqual(s.version(), 7)
+
+        status, headers, past_png = s.call("GET", frame + "&at_version=4")
+        self.assertEqual((status, headers["ETag"]), (200, '"4"'), past_png[:200])
+        self.assertEqual(past_png, live_png, "the frame rendered live at version 4")
+        status, _, posted = s.call("POST", "/v1/render?at_version=4",
+                                   {"width": 48, "height": 32, "spp": 2})
+        self.assertEqual((status, posted), (200, live_png))
+        self.assertEqual(s.json("GET", "/v1/scene?at_version=4")[1], scene4)
+        self.assertEqual(s.call("GET", "/v1/scene/instances/inst-2?at_version=4")[0], 200)
+        self.assertEqual(s.call("GET", "/v1/scene/instances/inst-6?at_version=4")[0], 404)
+        self.assertEqual(s.call("GET", "/v1/scene/snapshot?at_version=4")[2], live_snapshot)
+        path = os.path.join(self.data, "..", os.path.basename(self.data) + "-v4.strata")
+        self.addCleanup(lambda: os.path.exists(path) and os.remove(path))
+        save = subprocess.run([CLI, "--server", s.url, "snapshot", "save", "--version", "4", path],
+                              capture_output=True, text=True)
+        self.assertEqual(save.returncode, 0, save.stderr)
+        with open(path, "rb") as f:
+            self.assertEqual(f.read(), live_snapshot)
+
+        # What does not exist, or is not a version, is said so; the live scene never moved.
+        status, answer = s.json("GET", "/v1/scene?at_version=99")
+        self.assertEqual((status, answer.get("pointer")), (404, "/at_version"), answer)
+        self.assertIn("does not exist yet", answer["detail"])
+        self.assertEqual(s.json("GET", "/v1/scene?at_version=x")[0], 400)
+        self.assertEqual(s.version(), 7)
+        self.assertEqual(durable_scene.check(s, 7), "")
+        # A snapshot moves the history it reaches forward: what it covers is gone.
+        s.stop()
+        s = self.server("--snapshot-threshold-kb", "1")
+        stream(s, 7, 3)
+        first_segment = os.path.join(self.data, "journal-%020d.log" % 0)
+        deadline = time.monotonic() + 30
+        while os.path.exists(first_segment):  # a snapshot's clean-up removes what it covers
+            self.assertLess(time.monotonic(), deadline, "no snapshot was written")
+            time.sleep(0.05)
+        status, answer = s.json("GET", "/v1/scene?at_version=2")
+        self.assertEqual(status, 404, answer)
+        self.assertIn("older than the data directory keeps", answer["detail"])
+
+    def test_without_a_data_directory_past_versions_are_404(self):
+        s = Server([])
+        self.addCleanup(s.stop)
+        stream(s, 0, 2)
+        status, answer = s.json("GET", "/v1/scene?at_version=1")
+        self.assertEqual(status, 404, answer)
+        self.assertIn("without --data", answer["detail"])
+        self.assertEqual(s.json("GET", "/v1/scene?at_version=2")[0], 200, "the live version")
+
     def test_a_torn_last_record_is_truncated_and_logged(self):
         self.fill(6)
         seg = segments(self.data)[-1]

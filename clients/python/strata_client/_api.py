@@ -192,10 +192,21 @@ def _render_info(response: Response) -> RenderInfo:
                       response.headers.get("x-strata-split"))
 
 
+def _at_version(path: str, at_version: Optional[int]) -> str:
+    """`path` asking for the scene as it was at `at_version` (None: the live scene)."""
+    if at_version is None:
+        return path
+    if isinstance(at_version, bool) or not isinstance(at_version, int) or at_version < 0:
+        raise ValueError("at_version is a scene version: a whole number >= 0")
+    return f"{path}?at_version={at_version}"
+
+
 def render(width: int, height: int, fmt: str, opts: Dict[str, Any]) -> Call[Frame]:
+    opts = dict(opts)
+    at_version = opts.pop("at_version", None)
     body: Dict[str, Any] = {"width": width, "height": height, "format": fmt}
     body.update(opts)
-    return Call(Request("POST", "/v1/render", _json_body(body)),
+    return Call(Request("POST", _at_version("/v1/render", at_version), _json_body(body)),
                 lambda r: Frame(r.body, _render_info(r)))
 
 
@@ -203,13 +214,15 @@ def stats() -> Call[Dict[str, Any]]:
     return Call(Request("GET", "/v1/stats"), _read_json)
 
 
-def scene(kind: Optional[str], id: Optional[str]) -> Call[Dict[str, Any]]:
+def scene(kind: Optional[str], id: Optional[str],
+          at_version: Optional[int] = None) -> Call[Dict[str, Any]]:
     if kind is None:
-        return Call(Request("GET", "/v1/scene"), _read_json)
+        return Call(Request("GET", _at_version("/v1/scene", at_version)), _read_json)
     if kind not in SCENE_KINDS or not id:
         raise ValueError("scene(kind, id): kind is one of " + ", ".join(map(repr, SCENE_KINDS))
                          + " and id is not empty")
-    return Call(Request("GET", f"/v1/scene/{kind}/{_quote(id)}"), _read_json)
+    return Call(Request("GET", _at_version(f"/v1/scene/{kind}/{_quote(id)}", at_version)),
+                _read_json)
 
 
 def page(collection: str, limit: int, cursor: Optional[str], group: Optional[str],

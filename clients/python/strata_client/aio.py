@@ -179,10 +179,11 @@ class AsyncClient:
         """Counters, the last report and memory (GET /v1/stats)."""
         return await self._call(_api.stats())
 
-    async def scene(self, kind: Optional[str] = None,
-                    id: Optional[str] = None) -> Dict[str, Any]:
-        """The scene summary, or one object's document (GET /v1/scene[/{kind}/{id}])."""
-        return await self._call(_api.scene(kind, id))
+    async def scene(self, kind: Optional[str] = None, id: Optional[str] = None, *,
+                    at_version: Optional[int] = None) -> Dict[str, Any]:
+        """The scene summary, or one object's document (GET /v1/scene[/{kind}/{id}]); with
+        `at_version`, as it was at that version."""
+        return await self._call(_api.scene(kind, id, at_version))
 
     async def page(self, collection: str, limit: int = 100, cursor: Optional[str] = None, *,
                    group: Optional[str] = None, mesh: Optional[str] = None,

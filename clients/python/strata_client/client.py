@@ -186,7 +186,9 @@ class Client:
 
         Every other request member passes through `opts`: spp, aovs, compression, accumulate,
         exposure, filter ("none" or "atrous"), split, camera={"eye": [...], "target": [...],
-        "up": [...], "fov_y_deg": ...}. Also sets `last_render`.
+        "up": [...], "fov_y_deg": ...}. `at_version=N` renders the scene as it was at version N
+        (from the server's data directory; NotFoundError when it holds no such version). Also
+        sets `last_render`.
         """
         frame = self._call(_api.render(width, height, fmt, opts))
         self.last_render = frame.info
@@ -219,11 +221,12 @@ class Client:
         """Counters, the last report and memory (GET /v1/stats)."""
         return self._call(_api.stats())
 
-    def scene(self, kind: Optional[str] = None, id: Optional[str] = None) -> Dict[str, Any]:
+    def scene(self, kind: Optional[str] = None, id: Optional[str] = None, *,
+              at_version: Optional[int] = None) -> Dict[str, Any]:
         """The scene summary (GET /v1/scene), or one object's document with kind "meshes",
         "instances", "materials", "groups", "lights" or "textures" and its id
-        (GET /v1/scene/{kind}/{id})."""
-        return self._call(_api.scene(kind, id))
+        (GET /v1/scene/{kind}/{id}); with `at_version`, as it was at that version."""
+        return self._call(_api.scene(kind, id, at_version))
 
     def page(self, collection: str, limit: int = 100, cursor: Optional[str] = None, *,
              group: Optional[str] = None, mesh: Optional[str] = None,

@@ -1,0 +1,58 @@
+// Past versions of the scene for at_version reads and renders (past_scenes.h).
+
+#include "server/past_scenes.h"
+
+#include <spdlog/spdlog.h>
+
+#include "engine/durable/durable_store.h"
+#include "engine/durable/past_version.h"
+#include "server/server_config.h"
+
+namespace strata::server {
+
+EngineConfig engine_config(const ServerConfig& c) {
+    EngineConfig config;
+    config.budget = {c.max_scene_triangles, c.max_scene_vertices, c.max_texture_mb << 20};
+    config.history.max_undo = c.undo_depth;
+    config.history.max_bytes = c.undo_mb << 20;
+    config.accel.tlas = *parse_tlas_kind(c.tlas);  // checked by the command line's parser
+    config.accel.tlas_policy.max_dynamic_fraction = c.tlas_max_dynamic_fraction;
+    config.accel.tlas_policy.min_instances = c.tlas_min_instances;
+    config.accel.tlas_policy.background_merge = c.tlas_background_merge;
+    return config;
+}
+
+Result<std::shared_ptr<Engine>> PastScenes::at(Engine& live, durable::DurableStore* store,
+                                               uint64_t version) {
+    const uint64_t now = live.version();
+    if (version == now) return std::shared_ptr<Engine>(&live, [](Engine*) {});
+    if (version > now)
+        return failure(ErrorCode::OutOfRange, "version " + std::to_string(version) +
+                                                  " does not exist yet (the scene is at " +
+                                                  std::to_string(now) + ")");
+    if (!store)
+        return failure(ErrorCode::InvalidArgument,
+                       "past versions are read from the data directory: this server runs "
+                       "without --data");
+    std::lock_guard lock(m_mutex);
+    for (auto it = m_loaded.begin(); it != m_loaded.end(); ++it) {
+        if (it->first != version) continue;
+        auto found = std::move(*it);
+        m_loaded.erase(it);
+        m_loaded.push_back(found);
+        return found.second;
+    }
+    durable::PastVersionLoad load;
+    auto engine = durable::load_past_version(store->directory(), version, m_config, &load);
+    if (!engine) return Unexpected(engine.error());
+    spdlog::info("loaded version {} for at_version reads: snapshot {}, {} records replayed from "
+                 "{} journal bytes in {:.1f} ms",
+                 version, load.snapshot_version, load.records_replayed, load.journal_bytes,
+                 load.load_ms);
+    std::shared_ptr<Engine> shared(std::move(engine.value()));
+    m_loaded.emplace_back(version, shared);
+    while (m_loaded.size() > m_keep) m_loaded.pop_front();
+    return shared;
+}
+
+}  // namespace strata::server
