@@ -45,10 +45,10 @@ Result<std::shared_ptr<Engine>> PastScenes::at(Engine& live, durable::DurableSto
     durable::PastVersionLoad load;
     auto engine = durable::load_past_version(store->directory(), version, m_config, &load);
     if (!engine) return Unexpected(engine.error());
-    spdlog::info("loaded version {} for at_version reads: snapshot {}, {} records replayed from "
-                 "{} journal bytes in {:.1f} ms",
-                 version, load.snapshot_version, load.records_replayed, load.journal_bytes,
-                 load.load_ms);
+    spdlog::info(
+        "loaded version {} for at_version reads: snapshot {}, {} records replayed from "
+        "{} journal bytes in {:.1f} ms",
+        version, load.snapshot_version, load.records_replayed, load.journal_bytes, load.load_ms);
     std::shared_ptr<Engine> shared(std::move(engine.value()));
     m_loaded.emplace_back(version, shared);
     while (m_loaded.size() > m_keep) m_loaded.pop_front();

@@ -24,8 +24,10 @@ Status list_directory(const std::string& dir, Named& snapshots, Named& segments)
     if (!names) return Unexpected(names.error());
     for (const std::string& name : names.value()) {
         uint64_t n = 0;
-        if (parse_snapshot_name(name, n)) snapshots.emplace_back(n, join_path(dir, name));
-        else if (parse_segment_name(name, n)) segments.emplace_back(n, join_path(dir, name));
+        if (parse_snapshot_name(name, n))
+            snapshots.emplace_back(n, join_path(dir, name));
+        else if (parse_segment_name(name, n))
+            segments.emplace_back(n, join_path(dir, name));
     }
     std::sort(snapshots.begin(), snapshots.end());
     std::sort(segments.begin(), segments.end());
@@ -96,8 +98,7 @@ Result<std::unique_ptr<Engine>> try_load(const std::string& dir, uint64_t versio
             if (r.version != current + 1)
                 return Unexpected(damaged(path, "record at offset " + std::to_string(r.offset) +
                                                     " has version " + std::to_string(r.version) +
-                                                    ", expected " +
-                                                    std::to_string(current + 1)));
+                                                    ", expected " + std::to_string(current + 1)));
             auto batch = decode_batch(r.payload);
             if (!batch) return Unexpected(damaged(path, batch.error().message));
             auto applied = engine->apply(std::move(batch.value()));

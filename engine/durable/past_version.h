@@ -26,7 +26,7 @@ namespace strata::durable {
 struct PastVersionLoad {
     uint64_t snapshot_version = 0;  ///< the snapshot it started from (0: none)
     uint64_t records_replayed = 0;
-    uint64_t journal_bytes = 0;     ///< of the segments it read
+    uint64_t journal_bytes = 0;  ///< of the segments it read
     double load_ms = 0.0;
 };
 
