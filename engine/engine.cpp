@@ -101,27 +101,32 @@ Result<ApplyResult> Engine::apply(EditBatch&& batch, std::optional<uint64_t> exp
     return ApplyResult{version.value(), count};
 }
 
+namespace {
+
+/// The undo (redo) batch of `history` for a scene at `scene_version`, asked for at `version`.
+Result<EditBatch> history_batch(const EditHistory& history, bool redo, uint64_t scene_version,
+                                uint64_t version) {
+    if (version != scene_version)
+        return failure(ErrorCode::VersionMismatch, "the scene is at version " +
+                                                       std::to_string(scene_version) + ", not " +
+                                                       std::to_string(version));
+    if (auto batch = redo ? history.redo_batch() : history.undo_batch()) return std::move(*batch);
+    return failure(ErrorCode::NothingToUndo,
+                   redo ? "nothing to redo: no undo since the last edit"
+                        : "nothing to undo: no batch since the start, the newest snapshot or the "
+                          "history's limits is left to take back");
+}
+
+}  // namespace
+
 Result<EditBatch> Engine::undo_batch(uint64_t version) const {
     std::shared_lock lock(m_scene_mutex);
-    if (version != m_scene.version())
-        return failure(ErrorCode::VersionMismatch,
-                       "the scene is at version " + std::to_string(m_scene.version()) + ", not " +
-                           std::to_string(version));
-    if (auto batch = m_history.undo_batch()) return std::move(*batch);
-    return failure(ErrorCode::NothingToUndo,
-                   "nothing to undo: no batch since the start, the newest snapshot or the "
-                   "history's limits is left to take back");
+    return history_batch(m_history, false, m_scene.version(), version);
 }
 
 Result<EditBatch> Engine::redo_batch(uint64_t version) const {
     std::shared_lock lock(m_scene_mutex);
-    if (version != m_scene.version())
-        return failure(ErrorCode::VersionMismatch,
-                       "the scene is at version " + std::to_string(m_scene.version()) + ", not " +
-                           std::to_string(version));
-    if (auto batch = m_history.redo_batch()) return std::move(*batch);
-    return failure(ErrorCode::NothingToUndo,
-                   "nothing to redo: no undo since the last edit");
+    return history_batch(m_history, true, m_scene.version(), version);
 }
 
 HistoryPage Engine::history(std::size_t limit, uint64_t before) const {

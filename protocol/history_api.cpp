@@ -99,6 +99,8 @@ ApiResponse post_undo(Engine& engine, bool redo, std::optional<std::string_view>
         if (e.code == ErrorCode::NothingToUndo)
             return with_etag(problem_response(make_problem(ProblemType::NothingToUndo, e.message)),
                              engine.version());
+        // The journal or the edit log could not take it: nothing was applied (503).
+        if (e.code == ErrorCode::Storage) return problem_response(problem_from(e));
         // The inverse was valid when it was made; the scene's rules (a budget lowered since a
         // restart) may refuse it now.
         Problem p = problem_from(e);

@@ -64,6 +64,30 @@ export function undo(redo, version) {
   return api(redo ? '/v1/redo' : '/v1/undo', { method: 'POST', ifMatch: version });
 }
 
+/// `run` (async) wrapped so that calls while it runs coalesce into one more run after it: what
+/// the last call asked for is what ends up shown, and a burst of calls costs two runs.
+export function coalesced(run) {
+  let running = false;
+  let again = false;
+  const call = async () => {
+    if (running) {
+      again = true;
+      return;
+    }
+    running = true;
+    try {
+      await run();
+    } finally {
+      running = false;
+      if (again) {
+        again = false;
+        call();
+      }
+    }
+  };
+  return call;
+}
+
 export function enc(id) {
   return encodeURIComponent(id);
 }

@@ -4,7 +4,7 @@
 // whenever the viewer sees the scene's version change. Every entry is an <li data-version
 // data-kind>, marked `undoable` while it is on the undo stack.
 
-import { api } from './api.js';
+import { api, coalesced } from './api.js';
 
 /// Versions listed.
 const SHOWN = 20;
@@ -28,18 +28,14 @@ export class HistoryPanel {
     this.undoButton = undoButton;
     this.redoButton = redoButton;
     this.doc = null;  // GET /v1/history's answer
+    this.refresh = coalesced(() => this.load());
     undoButton.addEventListener('click', () => onUndo());
     redoButton.addEventListener('click', () => onRedo());
   }
 
-  /// Fetches the newest versions again; calls during a refresh coalesce into one more, so the
-  /// last call's answer is the one shown.
-  async refresh() {
-    if (this.refreshing) {
-      this.again = true;
-      return;
-    }
-    this.refreshing = true;
+  /// Fetches the newest versions again (refresh(): calls during one coalesce into one more, so
+  /// the last call's answer is the one shown).
+  async load() {
     try {
       const { doc } = await api(`/v1/history?limit=${SHOWN}`);
       this.doc = doc;
@@ -48,12 +44,6 @@ export class HistoryPanel {
       this.doc = null;
       this.list.replaceChildren(this.note('Cannot read the history: ' + e.message));
       this.undoButton.disabled = this.redoButton.disabled = true;
-    } finally {
-      this.refreshing = false;
-      if (this.again) {
-        this.again = false;
-        this.refresh();
-      }
     }
   }
 

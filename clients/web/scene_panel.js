@@ -4,7 +4,7 @@
 // display name as pages arrive. Both are fetched again after each commit that changed the scene;
 // a click selects. Every entry is an <li data-kind data-id>.
 
-import { api } from './api.js';
+import { api, coalesced } from './api.js';
 
 const PAGE = 200;
 /// Nodes of the tree fetched at once; a larger scene says so and the listings page the rest.
@@ -27,6 +27,7 @@ export class ScenePanel {
     this.folded = new Set();  // ids of the groups shown folded
     this.selected = null;
     this.selectedKind = null;
+    this.refresh = coalesced(() => this.load());
     let timer = null;
     search.addEventListener('input', () => {
       clearTimeout(timer);
@@ -87,13 +88,8 @@ export class ScenePanel {
 
   /// Lists the scene again after a commit (another client may have added, removed or hidden
   /// something), as far as the pages shown so far reached; the old list stays until the new one
-  /// is complete. Calls during a refresh coalesce into one more.
-  async refresh() {
-    if (this.refreshing) {
-      this.again = true;
-      return;
-    }
-    this.refreshing = true;
+  /// is complete (refresh(): calls during one coalesce into one more).
+  async load() {
     try {
       const want = Math.max(this.items.length, PAGE);
       const s = { items: [], cursor: null, kind: 'groups' };
@@ -106,12 +102,6 @@ export class ScenePanel {
       this.render();
     } catch (e) {
       // Keep the list shown; the next commit tries again.
-    } finally {
-      this.refreshing = false;
-      if (this.again) {
-        this.again = false;
-        this.refresh();
-      }
     }
   }
 

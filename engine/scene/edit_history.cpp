@@ -96,28 +96,31 @@ void EditHistory::record(uint64_t version, const BatchInfo& info,
     }
 }
 
-void EditHistory::push_undo(Step&& step) {
-    if (m_limits.max_undo == 0 || step.bytes > m_limits.max_bytes) {
-        // Too big to keep: nothing before it can be undone either.
-        for (const Step& s : m_undo) m_bytes -= s.bytes;
-        m_undo.clear();
-        return;
+namespace {
+
+/// Pushes `step` on `stack`, counting its bytes in `bytes`; false when it is too big to keep.
+/// A stack is taken from the top: what lies below a step that is not kept cannot be reached, so
+/// the whole stack goes then.
+template <class Stack, class Step>
+bool push_step(Stack& stack, Step&& step, const HistoryLimits& limits, uint64_t& bytes) {
+    if (limits.max_undo == 0 || step.bytes > limits.max_bytes) {
+        for (const auto& s : stack) bytes -= s.bytes;
+        stack.clear();
+        return false;
     }
-    m_bytes += step.bytes;
-    m_undo.push_back(std::move(step));
-    trim();
+    bytes += step.bytes;
+    stack.push_back(std::forward<Step>(step));
+    return true;
+}
+
+}  // namespace
+
+void EditHistory::push_undo(Step&& step) {
+    if (push_step(m_undo, std::move(step), m_limits, m_bytes)) trim();
 }
 
 void EditHistory::push_redo(Step&& step) {
-    if (m_limits.max_undo == 0 || step.bytes > m_limits.max_bytes) {
-        // A redo stack is redone newest first: what lies below a missing step cannot be reached.
-        for (const Step& s : m_redo) m_bytes -= s.bytes;
-        m_redo.clear();
-        return;
-    }
-    m_bytes += step.bytes;
-    m_redo.push_back(std::move(step));
-    trim();
+    if (push_step(m_redo, std::move(step), m_limits, m_bytes)) trim();
 }
 
 void EditHistory::trim() {
