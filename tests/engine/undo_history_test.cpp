@@ -236,6 +236,42 @@ TEST(EditHistory, UndoAndRedoWalkTheVersions) {
     EXPECT_EQ(none.error().code, ErrorCode::NothingToUndo);
 }
 
+TEST(EditHistory, AnUndoCostsWhatItsInverseChanges) {
+    auto engine = engine_with();
+    ASSERT_TRUE(
+        engine
+            ->apply(batch_of({test::mesh_edit("ball", make_sphere(1.0f, 16)),
+                              instance("a", "ball", std::nullopt, Affine::identity()),
+                              instance("b", "ball", std::nullopt, Affine::translation({3, 0, 0}))}))
+            .has_value());
+    ASSERT_TRUE(engine->commit().has_value());
+    const auto undo_and_commit = [&] {
+        EXPECT_TRUE(undo(*engine).has_value());
+        auto report = engine->commit();
+        EXPECT_TRUE(report.has_value());
+        return report.value();
+    };
+
+    // A move taken back: a TLAS update of one instance, no BLAS work.
+    ASSERT_TRUE(
+        engine->apply(batch_of({SetTransform{"a", Affine::translation({0, 2, 0})}})).has_value());
+    ASSERT_TRUE(engine->commit().has_value());
+    RebuildReport moved_back = undo_and_commit();
+    EXPECT_EQ(moved_back.tlas_action, TlasAction::Update) << moved_back.summary();
+    EXPECT_EQ(moved_back.instances_changed, 1u);
+    EXPECT_TRUE(moved_back.rebuilt.empty() && moved_back.refit.empty()) << moved_back.summary();
+
+    // A few vertices taken back: a refit of that mesh, no rebuild.
+    ASSERT_TRUE(
+        engine->apply(batch_of({UpdateMeshVertices{"ball", {5, 6}, {Vec3(0.1f), Vec3(0.2f)}}}))
+            .has_value());
+    ASSERT_TRUE(engine->commit().has_value());
+    RebuildReport dented_back = undo_and_commit();
+    EXPECT_TRUE(dented_back.rebuilt.empty()) << dented_back.summary();
+    ASSERT_EQ(dented_back.refit.size(), 1u) << dented_back.summary();
+    EXPECT_EQ(dented_back.refit[0].mesh, "ball");
+}
+
 TEST(EditHistory, StaleVersionIsRefused) {
     auto engine = engine_with();
     ASSERT_TRUE(engine->apply(batch_of({test::mesh_edit("m", make_box(Vec3(1)))})).has_value());
