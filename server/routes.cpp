@@ -262,14 +262,16 @@ void add_scene_object_routes(RouteTable& routes, ServerContext& ctx, const Colle
             problem(404, "a filter names no object (the pointer names it)", {"ETag"}));
     const protocol::SceneObject kind = c.kind;
     routes.get(path, after_min_version(
-                         ctx, {{.summary = "List the " + std::string(c.path) + ", a page at a time",
-                                .tag = "scene",
-                                .parameters = std::move(parameters),
-                                .responses = std::move(answers)},
-                               [&ctx, kind](RouteCall& call) {
-                                   return protocol::get_scene_list(ctx.engine, kind,
-                                                                   call.request.query);
-                               }}));
+                         ctx, at_version(ctx,
+                                         {.summary = "List the " + std::string(c.path) +
+                                                     ", a page at a time",
+                                          .tag = "scene",
+                                          .parameters = std::move(parameters),
+                                          .responses = std::move(answers)},
+                                         [kind](Engine& engine, RouteCall& call) {
+                                             return protocol::get_scene_list(engine, kind,
+                                                                             call.request.query);
+                                         })));
     // The path keeps reserved characters percent-encoded (request_target.h): an id holding '/'
     // arrives as one segment, decoded by the route table.
     routes.get(path + "/{id}",
@@ -559,25 +561,29 @@ void add_pick_routes(RouteTable& routes, ServerContext& ctx) {
                 problem(422, "a pixel outside the image, or an unusable camera")};
     };
     routes.get("/v1/pick", after_min_version(
-                               ctx, {{.summary = "What lies under one pixel",
-                                      .description = rays,
-                                      .tag = "render",
-                                      .parameters = protocol::query_parameters("PickQuery"),
-                                      .responses = answers("PickResult")},
-                                     [&ctx](RouteCall& call) {
-                                         return protocol::get_pick(ctx.engine, call.request.query);
-                                     }}));
-    routes.post("/v1/pick", json_body(after_min_version(
-                                ctx, {{.summary = "What lies under each of a list of pixels",
-                                       .description = rays,
-                                       .tag = "render",
-                                       .body = "PickRequest",
-                                       .body_required = true,
-                                       .responses = answers("PickResults")},
-                                      [&ctx](RouteCall& call) {
-                                          return protocol::post_pick(ctx.engine, call.request.body,
-                                                                     ctx.api_limits);
-                                      }})));
+                               ctx, at_version(ctx,
+                                               {.summary = "What lies under one pixel",
+                                                .description = rays,
+                                                .tag = "render",
+                                                .parameters = protocol::query_parameters("PickQuery"),
+                                                .responses = answers("PickResult")},
+                                               [](Engine& engine, RouteCall& call) {
+                                                   return protocol::get_pick(engine,
+                                                                             call.request.query);
+                                               })));
+    routes.post("/v1/pick",
+                json_body(after_min_version(
+                    ctx, at_version(ctx,
+                                    {.summary = "What lies under each of a list of pixels",
+                                     .description = rays,
+                                     .tag = "render",
+                                     .body = "PickRequest",
+                                     .body_required = true,
+                                     .responses = answers("PickResults")},
+                                    [&ctx](Engine& engine, RouteCall& call) {
+                                        return protocol::post_pick(engine, call.request.body,
+                                                                   ctx.api_limits);
+                                    }))));
 }
 
 void add_scene_routes(RouteTable& routes, ServerContext& ctx) {
@@ -601,33 +607,39 @@ void add_scene_routes(RouteTable& routes, ServerContext& ctx) {
 void add_graph_routes(RouteTable& routes, ServerContext& ctx) {
     const ResponseDoc bad = problem(400, "an unknown, repeated or malformed parameter");
     routes.get("/v1/scene/groups/{id}/children",
-               {{.summary = "A group's direct children, a page at a time: groups, then instances",
-                 .tag = "scene",
-                 .parameters = page_parameters(),
-                 .responses = {ok_json("ChildrenPage", "one page, each item with its kind"), bad,
-                               problem(404, "no group has the id", {"ETag"})}},
-                [&ctx](RouteCall& call) {
-                    return protocol::get_group_children(ctx.engine, call.params[0],
-                                                        call.request.query);
-                }});
+               at_version(ctx,
+                          {.summary = "A group's direct children, a page at a time: groups, then "
+                                      "instances",
+                           .tag = "scene",
+                           .parameters = page_parameters(),
+                           .responses = {ok_json("ChildrenPage", "one page, each item with its "
+                                                                 "kind"),
+                                         bad, problem(404, "no group has the id", {"ETag"})}},
+                          [](Engine& engine, RouteCall& call) {
+                              return protocol::get_group_children(engine, call.params[0],
+                                                                  call.request.query);
+                          }));
     const std::string depth = R"({"type": "integer", "minimum": 0, "maximum": )" +
                               std::to_string(MAX_GROUP_DEPTH) + R"(, "default": 1})";
     routes.get("/v1/scene/tree",
-               {{.summary = "The scene graph nested a few levels deep, for outline panels",
-                 .tag = "scene",
-                 .parameters =
-                     {{.name = "depth", .description = "levels of groups nested", .schema = depth},
-                      {.name = "max_nodes",
-                       .description = "most nodes in the answer (truncated says whether it "
-                                      "cut the tree short)",
-                       .schema = R"({"type": "integer", "minimum": 1, "maximum": 10000, )"
-                                 R"("default": 1000})"},
-                      {.name = "group", .description = "start at this group, not the root"}},
-                 .responses = {ok_json("SceneTree", "the tree"), bad,
-                               problem(404, "group= names no group", {"ETag"})}},
-                [&ctx](RouteCall& call) {
-                    return protocol::get_scene_tree(ctx.engine, call.request.query);
-                }});
+               at_version(ctx,
+                          {.summary = "The scene graph nested a few levels deep, for outline panels",
+                           .tag = "scene",
+                           .parameters = {{.name = "depth",
+                                           .description = "levels of groups nested",
+                                           .schema = depth},
+                                          {.name = "max_nodes",
+                                           .description = "most nodes in the answer (truncated "
+                                                          "says whether it cut the tree short)",
+                                           .schema = R"({"type": "integer", "minimum": 1, )"
+                                                     R"("maximum": 10000, "default": 1000})"},
+                                          {.name = "group",
+                                           .description = "start at this group, not the root"}},
+                           .responses = {ok_json("SceneTree", "the tree"), bad,
+                                         problem(404, "group= names no group", {"ETag"})}},
+                          [](Engine& engine, RouteCall& call) {
+                              return protocol::get_scene_tree(engine, call.request.query);
+                          }));
 }
 
 void add_status_routes(RouteTable& routes, ServerContext& ctx) {

@@ -184,6 +184,12 @@ class DataDirectory(unittest.TestCase):
         self.assertEqual(s.json("GET", "/v1/scene?at_version=4")[1], scene4)
         self.assertEqual(s.call("GET", "/v1/scene/instances/inst-2?at_version=4")[0], 200)
         self.assertEqual(s.call("GET", "/v1/scene/instances/inst-6?at_version=4")[0], 404)
+        listed = s.json("GET", "/v1/scene/instances?limit=100&at_version=4")[1]
+        self.assertEqual(sorted(i["id"] for i in listed["items"]),
+                         ["inst-0", "inst-1", "inst-2", "inst-3"])
+        self.assertEqual(s.json("GET", "/v1/scene/tree?at_version=4")[1]["version"], 4)
+        picked = s.json("GET", "/v1/pick?x=24&y=16&width=48&height=32&at_version=4")[1]
+        self.assertEqual(picked["version"], 4)
         self.assertEqual(s.call("GET", "/v1/scene/snapshot?at_version=4")[2], live_snapshot)
         path = os.path.join(self.data, "..", os.path.basename(self.data) + "-v4.strata")
         self.addCleanup(lambda: os.path.exists(path) and os.remove(path))
