@@ -50,6 +50,11 @@ void add_durability_options(CLI::App& app, ServerConfig& c) {
                    "Journal growth, in KiB, after which a snapshot is written in the background "
                    "and the journal before it removed")
         ->check(CLI::Range(uint64_t(1), uint64_t(1) << 30));
+    app.add_option("--keep-history-mb", c.keep_history_mb,
+                   "MiB of older snapshots and journal a snapshot leaves in the data directory, "
+                   "so that at_version reads and renders reach further back (0: it removes "
+                   "everything it covers)")
+        ->check(CLI::Range(uint64_t(0), uint64_t(1) << 30));
     app.add_flag("--recover-truncate", c.recover_truncate,
                  "At start, if the journal or a snapshot is damaged before its end, keep what "
                  "precedes the damage, set the rest aside (*.damaged) and start, instead of "

@@ -59,6 +59,7 @@ std::unique_ptr<durable::DurableStore> open_data_dir(const server::ServerConfig&
     o.recovery.truncate_damage = c.recover_truncate;
     o.recovery.progress = &progress;
     o.snapshot_threshold_bytes = c.snapshot_threshold_kb << 10;
+    o.keep_history_bytes = c.keep_history_mb << 20;
     o.on_snapshot_failure = [](const std::string& why) { spdlog::error("{}", why); };
     Stopwatch clock;
     auto store = durable::DurableStore::open(o, engine);

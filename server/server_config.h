@@ -17,6 +17,7 @@ struct ServerConfig {
     std::string fsync = "always";       ///< always | batch | off
     int fsync_interval_ms = 100;        ///< batch: longest a written batch waits for its fsync
     uint64_t snapshot_threshold_kb = 64 * 1024;  ///< journal growth that triggers a snapshot
+    uint64_t keep_history_mb = 0;  ///< older snapshots and journal kept for at_version reads
     bool recover_truncate = false;      ///< start past damage, setting the rest aside
     std::size_t max_body_bytes = 256ull << 20;
     uint64_t max_pixels = 16ull << 20;  ///< width * height of one render

@@ -83,7 +83,9 @@ Result<std::unique_ptr<DurableStore>> DurableStore::open(const StoreOptions& opt
 
     // Step: the scene as the directory left it.
     Stopwatch clock;
-    auto recovered = recover(dir, engine, options.recovery);
+    RecoveryOptions recovery = options.recovery;
+    recovery.keep_covered = options.keep_history_bytes > 0;  // kept on purpose (history_start)
+    auto recovered = recover(dir, engine, recovery);
     if (!recovered) return Unexpected(recovered.error());
     store->m_recovery = std::move(recovered.value());
     store->m_stats.recovery_seconds = clock.ms() / 1000.0;
@@ -188,15 +190,53 @@ Status DurableStore::write_snapshot() {
 }
 
 void DurableStore::remove_covered(uint64_t version) {
-    m_journal->drop_segments_before(version);
+    const uint64_t keep_from = history_start(version);
+    m_journal->drop_segments_before(keep_from);
     if (auto names = list_files(m_options.dir)) {
         for (const std::string& name : names.value()) {
             uint64_t v = 0;
-            if (parse_snapshot_name(name, v) && v < version)
+            if (parse_snapshot_name(name, v) && v < keep_from)
                 ::unlink(join_path(m_options.dir, name).c_str());
         }
         (void)sync_directory(m_options.dir);
     }
+}
+
+uint64_t DurableStore::history_start(uint64_t version) const {
+    if (m_options.keep_history_bytes == 0) return version;
+    // Step: the files on disk with their sizes, snapshots older than `version` newest first.
+    std::vector<std::pair<uint64_t, uint64_t>> snapshots, segments;  // (version or base, bytes)
+    auto names = list_files(m_options.dir);
+    if (!names) return version;
+    for (const std::string& name : names.value()) {
+        uint64_t v = 0;
+        const bool snapshot = parse_snapshot_name(name, v);
+        if (!snapshot && !parse_segment_name(name, v)) continue;
+        std::error_code ec;
+        const uint64_t bytes = std::filesystem::file_size(join_path(m_options.dir, name), ec);
+        if (ec) continue;
+        if (snapshot && v < version) snapshots.emplace_back(v, bytes);
+        if (!snapshot) segments.emplace_back(v, bytes);
+    }
+    std::sort(segments.begin(), segments.end());
+    // A journal that still starts at version 0 starts from the empty scene: a snapshot of none.
+    if (!segments.empty() && segments.front().first == 0) snapshots.emplace_back(0, 0);
+    std::sort(snapshots.rbegin(), snapshots.rend());
+    // Step: the oldest snapshot whose files, and the segments after it up to `version`, fit the
+    // budget. A segment is needed from S when the next one starts after S.
+    uint64_t start = version;
+    uint64_t snapshot_bytes = 0;
+    for (const auto& [s, bytes] : snapshots) {
+        snapshot_bytes += bytes;
+        uint64_t total = snapshot_bytes;
+        for (std::size_t i = 0; i < segments.size(); ++i) {
+            const bool covered = i + 1 < segments.size() && segments[i + 1].first <= s;
+            if (!covered && segments[i].first < version) total += segments[i].second;
+        }
+        if (total > m_options.keep_history_bytes) break;
+        start = s;
+    }
+    return start;
 }
 
 Result<SnapshotReplace> DurableStore::replace_scene(std::string_view snapshot) {

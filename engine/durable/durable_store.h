@@ -38,6 +38,10 @@ struct StoreOptions {
     JournalOptions journal;
     RecoveryOptions recovery;
     uint64_t snapshot_threshold_bytes = 64ull << 20;
+    /// Bytes of older snapshots and journal segments kept after a snapshot covers them, so that
+    /// past versions (past_version.h) reach further back: the oldest go first beyond it. 0: a
+    /// snapshot removes everything it covers.
+    uint64_t keep_history_bytes = 0;
     uint64_t snapshot_retry_ms = 1000;  ///< first retry after a failed background snapshot
     /// Told why a snapshot failed (the server logs it). Runs on the snapshot's thread.
     std::function<void(const std::string&)> on_snapshot_failure;
@@ -78,8 +82,12 @@ private:
     DurableStore(const StoreOptions& options, Engine& engine);
     void snapshot_loop();
     Status write_snapshot();
-    /// After a durable snapshot of `version`: removes the segments and snapshots it covers.
+    /// After a durable snapshot of `version`: removes the segments and snapshots it covers, but
+    /// those history_start() keeps.
     void remove_covered(uint64_t version);
+    /// The oldest version whose snapshot, with the segments after it up to `version`, fits
+    /// keep_history_bytes (`version` itself when nothing older fits or nothing is kept).
+    uint64_t history_start(uint64_t version) const;
 
     StoreOptions m_options;
     Engine& m_engine;

@@ -126,6 +126,12 @@ Result<RecoveryResult> recover(const std::string& dir, Engine& engine,
     std::size_t first = 0;
     while (first + 1 < segments.size() && segments[first + 1].first <= current) ++first;
     for (std::size_t i = 0; i < first; ++i) {
+        if (options.keep_covered) {
+            std::error_code ec;
+            const auto size = std::filesystem::file_size(segments[i].second, ec);
+            out.segments.push_back({segments[i].first, segments[i].second, ec ? 0 : size});
+            continue;
+        }
         ::unlink(segments[i].second.c_str());
         out.notes.push_back("removed " + segments[i].second + " (covered by the snapshot)");
     }

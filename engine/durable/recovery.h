@@ -37,6 +37,10 @@ struct RecoveryOptions {
     /// Damage before the end: keep what precedes it, set the rest aside (`.damaged` files) and
     /// start, instead of refusing to (--recover-truncate).
     bool truncate_damage = false;
+    /// Segments the loaded snapshot covers are kept (not replayed, not removed) and listed in
+    /// RecoveryResult::segments: a store that keeps history for past versions (StoreOptions::
+    /// keep_history_bytes) left them on purpose.
+    bool keep_covered = false;
 };
 
 struct RecoveryResult {

@@ -468,7 +468,9 @@ TEST(PastVersion, EveryVersionTheDirectoryHoldsLoadsAsItWasWithoutTouchingIt) {
             ASSERT_TRUE(past.has_value()) << past.error().describe();
             EXPECT_EQ(canonical(*past.value()), states[2]);
         }
-        if (i == 5) ASSERT_TRUE(s.store->snapshot_now().has_value());
+        if (i == 5) {
+            ASSERT_TRUE(s.store->snapshot_now().has_value());
+        }
     }
     const auto files_before = std::distance(std::filesystem::directory_iterator(dir.path()),
                                             std::filesystem::directory_iterator());
@@ -513,6 +515,43 @@ TEST(PastVersion, ADamagedRecordOnTheWayIsAStorageErrorNamingTheFile) {
     ASSERT_FALSE(past.has_value());
     EXPECT_EQ(past.error().code, ErrorCode::Storage);
     EXPECT_NE(past.error().message.find(segment), std::string::npos) << past.error().message;
+}
+
+TEST(PastVersion, KeptHistoryReachesBehindSnapshotsAndSurvivesARestart) {
+    TempDir dir;
+    durable::StoreOptions o = options_for(dir);
+    o.keep_history_bytes = 64 << 20;
+    std::map<uint64_t, std::vector<std::string>> states;
+    test::RandomEdits edits(23);
+    {
+        Server s = start(o);
+        for (int i = 0; i < 12; ++i) {
+            const uint64_t v = apply_random(*s.engine, edits, 1, i == 0);
+            states[v] = canonical(*s.engine);
+            if (i == 3 || i == 7) {
+                ASSERT_TRUE(s.store->snapshot_now().has_value());
+            }
+        }
+    }
+    {
+        // Recovery starts from the newest snapshot and leaves the older files where they are.
+        Server s = start(o);
+        EXPECT_EQ(canonical(*s.engine), states[12]);
+        EXPECT_EQ(s.store->recovery().snapshot_version, 8u);
+        for (uint64_t v = 1; v <= 12; ++v) {
+            auto past = durable::load_past_version(dir.path(), v, EngineConfig{});
+            ASSERT_TRUE(past.has_value()) << v << ": " << past.error().describe();
+            EXPECT_EQ(canonical(*past.value()), states[v]) << v;
+        }
+    }
+    // A budget that holds nothing older: the next snapshot removes what it covers.
+    o.keep_history_bytes = 1;
+    Server s = start(o);
+    apply_random(*s.engine, edits, 1, false);
+    ASSERT_TRUE(s.store->snapshot_now().has_value());
+    auto gone = durable::load_past_version(dir.path(), 9, EngineConfig{});
+    ASSERT_FALSE(gone.has_value());
+    EXPECT_EQ(gone.error().code, ErrorCode::OutOfRange);
 }
 
 }  // namespace
