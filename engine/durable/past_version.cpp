@@ -46,6 +46,34 @@ Error damaged(const std::string& path, const std::string& why) {
     return make_error(ErrorCode::Storage, path + ": " + why);
 }
 
+/// Applies the records of one segment (`bytes`, read from `path`) that follow `current`, up to
+/// `version`, to `engine`; `current` follows them.
+Status replay(const std::string& path, std::string_view bytes, uint64_t version, Engine& engine,
+              uint64_t& current, PastVersionLoad& load) {
+    const SegmentScan scan = scan_segment(bytes);
+    if (scan.base > current)
+        return Unexpected(damaged(path, "it starts after version " + std::to_string(scan.base) +
+                                            ", past the scene's " + std::to_string(current)));
+    for (const ScannedRecord& r : scan.records) {
+        if (r.version <= current) continue;
+        if (r.version > version) break;
+        if (r.version != current + 1)
+            return Unexpected(damaged(path, "record at offset " + std::to_string(r.offset) +
+                                                " has version " + std::to_string(r.version) +
+                                                ", expected " + std::to_string(current + 1)));
+        auto batch = decode_batch(r.payload);
+        if (!batch) return Unexpected(damaged(path, batch.error().message));
+        auto applied = engine.apply(std::move(batch.value()));
+        if (!applied) return Unexpected(damaged(path, applied.error().describe()));
+        current = applied->version;
+        ++load.records_replayed;
+    }
+    // A torn tail is a record being written now: only what precedes it is needed.
+    if (scan.tail == SegmentScan::Tail::Corrupt && current < version)
+        return Unexpected(damaged(path, scan.problem));
+    return {};
+}
+
 /// One try at loading `version`; `vanished` says a listed file went away meanwhile.
 Result<std::unique_ptr<Engine>> try_load(const std::string& dir, uint64_t version,
                                          const EngineConfig& config, PastVersionLoad& load,
@@ -84,31 +112,12 @@ Result<std::unique_ptr<Engine>> try_load(const std::string& dir, uint64_t versio
     // before the current version holds nothing needed.
     for (std::size_t i = 0; i < segments.size() && current < version; ++i) {
         if (i + 1 < segments.size() && segments[i + 1].first <= current) continue;
-        const std::string& path = segments[i].second;
-        auto bytes = read_listed(path, vanished);
+        auto bytes = read_listed(segments[i].second, vanished);
         if (!bytes) return Unexpected(bytes.error());
         load.journal_bytes += bytes->size();
-        const SegmentScan scan = scan_segment(bytes.value());
-        if (scan.base > current)
-            return Unexpected(damaged(path, "it starts after version " + std::to_string(scan.base) +
-                                                ", past the scene's " + std::to_string(current)));
-        for (const ScannedRecord& r : scan.records) {
-            if (r.version <= current) continue;
-            if (r.version > version) break;
-            if (r.version != current + 1)
-                return Unexpected(damaged(path, "record at offset " + std::to_string(r.offset) +
-                                                    " has version " + std::to_string(r.version) +
-                                                    ", expected " + std::to_string(current + 1)));
-            auto batch = decode_batch(r.payload);
-            if (!batch) return Unexpected(damaged(path, batch.error().message));
-            auto applied = engine->apply(std::move(batch.value()));
-            if (!applied) return Unexpected(damaged(path, applied.error().describe()));
-            current = applied->version;
-            ++load.records_replayed;
-        }
-        // A torn tail is a record being written now: only what precedes it is needed.
-        if (scan.tail == SegmentScan::Tail::Corrupt && current < version)
-            return Unexpected(damaged(path, scan.problem));
+        if (Status s = replay(segments[i].second, bytes.value(), version, *engine, current, load);
+            !s)
+            return Unexpected(s.error());
     }
     if (current != version)
         return failure(ErrorCode::OutOfRange, "version " + std::to_string(version) +
