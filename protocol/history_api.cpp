@@ -2,7 +2,9 @@
 // edit_history.h) over HTTP.
 
 #include <charconv>
+#include <chrono>
 #include <ctime>
+#include <thread>
 
 #include "engine/durable/edit_codec.h"
 #include "protocol/api.h"
@@ -14,7 +16,8 @@ namespace {
 constexpr uint32_t DEFAULT_PAGE = 50;
 constexpr uint32_t MAX_PAGE = 1000;
 /// Tries of an undo without If-Match when other writers keep landing between reading the stack
-/// and applying: each try takes back whatever is newest then.
+/// and applying (or a replica has not applied the shared log's newest entries yet): each try
+/// takes back whatever is newest then.
 constexpr int UNCONDITIONAL_TRIES = 20;
 
 const char* kind_name(BatchKind k) {
@@ -89,6 +92,9 @@ ApiResponse post_undo(Engine& engine, bool redo, std::optional<std::string_view>
         }
         const bool raced = !applied && applied.error().code == ErrorCode::VersionMismatch;
         if (!raced || condition->version || attempt == UNCONDITIONAL_TRIES) break;
+        // A replica may be a few entries behind the shared log: give it time to catch up
+        // (about 0.2 s over all tries).
+        std::this_thread::sleep_for(std::chrono::milliseconds(attempt));
     }
     if (!applied) {
         const Error& e = applied.error();

@@ -3,6 +3,7 @@
 
 #include <cstring>
 
+#include "engine/durable/edit_codec.h"
 #include "engine/durable/journal_format.h"
 #include "protocol/api.h"
 
@@ -31,10 +32,8 @@ ApiResponse post_snapshot(Engine& engine, std::string body,
     if (!condition) return problem_response(problem);
     // The payload starts with its edit count (engine/durable/edit_codec.h): a snapshot of too
     // many edits is refused before one is decoded.
-    if (auto view = durable::open_snapshot(body); view && view->payload.size() >= 4) {
-        uint32_t count = 0;
-        std::memcpy(&count, view->payload.data(), sizeof count);
-        if (count > max_edits)
+    if (auto view = durable::open_snapshot(body)) {
+        if (const uint32_t count = durable::edit_count(view->payload); count > max_edits)
             return problem_response(make_problem(
                 ProblemType::TooLarge, "the snapshot holds " + std::to_string(count) +
                                            " edits, more than " + std::to_string(max_edits) +

@@ -341,18 +341,21 @@ void add_history_routes(RouteTable& routes, ServerContext& ctx) {
     }
     routes.get(
         "/v1/history",
-        {{.summary = "The versions of the scene, newest first, and the undo and redo stacks",
-          .tag = "edits",
-          .parameters =
-              {{.name = "limit",
-                .description = "most entries in the page",
-                .schema = R"({"type": "integer", "minimum": 1, "maximum": 1000, "default": 50})"},
-               {.name = "cursor", .description = "the next_cursor of the previous page"}},
-          .responses = {ok_json("History", "one page"),
-                        problem(400, "a malformed or unknown query parameter")}},
-         [&ctx](RouteCall& call) {
-             return protocol::get_history(ctx.engine, call.request.query);
-         }});
+        after_min_version(
+            ctx,
+            {{.summary = "The versions of the scene, newest first, and the undo and redo stacks",
+              .tag = "edits",
+              .parameters = {{.name = "limit",
+                              .description = "most entries in the page",
+                              .schema = R"({"type": "integer", "minimum": 1, "maximum": 1000, )"
+                                        R"("default": 50})"},
+                             {.name = "cursor",
+                              .description = "the next_cursor of the previous page"}},
+              .responses = {ok_json("History", "one page"),
+                            problem(400, "a malformed or unknown query parameter")}},
+             [&ctx](RouteCall& call) {
+                 return protocol::get_history(ctx.engine, call.request.query);
+             }}));
 }
 
 void add_write_routes(RouteTable& routes, ServerContext& ctx) {

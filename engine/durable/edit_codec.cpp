@@ -410,6 +410,12 @@ const char* edit_kind_name(std::size_t index) {
     return index < std::size(KIND_NAMES) ? KIND_NAMES[index] : "unknown";
 }
 
+uint32_t edit_count(std::string_view bytes) {
+    uint32_t count = 0;
+    if (bytes.size() >= sizeof count) std::memcpy(&count, bytes.data(), sizeof count);
+    return count & ~WITH_INFO;
+}
+
 void encode_batch(const EditBatch& batch, std::string& out) {
     ByteWriter w(out);
     const bool with_info = !batch.info.empty();
@@ -489,12 +495,8 @@ Status decode_each(std::string_view bytes, const std::function<Status(Edit&&)>& 
 Result<EditBatch> decode_batch(std::string_view bytes) {
     EditBatch batch;
     // The count is a hint only (decode_each checks it against the bytes left).
-    if (bytes.size() >= 4) {
-        uint32_t count = 0;
-        std::memcpy(&count, bytes.data(), sizeof count);
-        count &= ~WITH_INFO;
-        if (count <= bytes.size()) batch.edits.reserve(count);
-    }
+    if (const uint32_t count = edit_count(bytes); count <= bytes.size())
+        batch.edits.reserve(count);
     Status s = decode_each(
         bytes,
         [&](Edit&& e) -> Status {

@@ -16,6 +16,10 @@ namespace strata::durable {
 /// The wire name of edit kind `index` (the Edit variant's index): "add_mesh", "set_transform"...
 const char* edit_kind_name(std::size_t index);
 
+/// The number of edits a batch's bytes announce, read from its count alone (0 when the bytes are
+/// too short): what a reader checks against its limit before decoding anything.
+uint32_t edit_count(std::string_view bytes);
+
 /// Appends the batch's binary form to `out`.
 void encode_batch(const EditBatch& batch, std::string& out);
 

@@ -218,9 +218,7 @@ Status LogReader::apply_entry(const StreamEntry& entry, uint64_t applied) {
     // The count first: an entry of more edits than a batch may hold is refused before one is
     // decoded (a few bytes an edit could ask for gigabytes).
     const std::string_view payload = decoded.value().payload;
-    uint32_t count = 0;
-    if (payload.size() >= sizeof count) std::memcpy(&count, payload.data(), sizeof count);
-    if (count > m_options.max_batch_edits) {
+    if (const uint32_t count = durable::edit_count(payload); count > m_options.max_batch_edits) {
         m_state.stop_loudly("log entry " + entry.id + " holds " + std::to_string(count) +
                             " edits, more than a batch may hold (--max-batch-edits " +
                             std::to_string(m_options.max_batch_edits) + ")");

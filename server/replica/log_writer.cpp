@@ -2,6 +2,7 @@
 
 #include <thread>
 
+#include "engine/core/timer.h"
 #include "engine/durable/edit_codec.h"
 #include "engine/durable/journal_format.h"
 #include "server/replica/log_entry.h"
@@ -66,8 +67,10 @@ Result<ApplyResult> LogWriter::append(EditBatch&& batch, std::optional<uint64_t>
     const auto deadline = Clock::now() + m_options.write_timeout;
     if (Status joined = m_state.wait_joined(deadline); !joined) return Unexpected(joined.error());
 
-    // The entry is encoded once; each attempt only restamps its version.
+    // The entry is encoded once; each attempt only restamps its version. Its time is the
+    // writer's, so every replica's history shows the same one.
     const std::size_t count = batch.edits.size();
+    if (batch.info.time_ms == 0) batch.info.time_ms = unix_ms();
     std::string entry = encode_entry(batch, 0);
     batch = {};
     for (;;) {

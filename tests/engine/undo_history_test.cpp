@@ -330,6 +330,7 @@ TEST(EditHistory, BatchInfoSurvivesTheCodec) {
     durable::encode_batch(b, bytes);
     auto back = durable::decode_batch(bytes);
     ASSERT_TRUE(back.has_value()) << back.error().describe();
+    EXPECT_EQ(durable::edit_count(bytes), 1u);  // the count, without the info bit
     EXPECT_EQ(back.value().info.kind, BatchKind::Redo);
     EXPECT_EQ(back.value().info.target, 41u);
     EXPECT_EQ(back.value().info.time_ms, 1795000000123);

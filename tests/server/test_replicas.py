@@ -109,6 +109,43 @@ class Replicas(unittest.TestCase):
             self.assertEqual(durable_scene.check(s, 24), "")
         self.assertEqual(self.redis.command("XLEN", self.stream), 24)
 
+    def test_undo_and_redo_on_any_replica_take_back_the_newest_batch_of_the_log(self):
+        a, b = self.replicas(2)
+
+        def instances(server, version):
+            status, _, body = self.at(server, version, "/v1/scene/instances?limit=1000")
+            self.assertEqual(status, 200, body)
+            items = json.loads(body)["items"]
+            for i in items:
+                del i["version"]
+            return sorted(items, key=lambda i: i["id"])
+
+        states = {}
+        for n in range(6):
+            self.stream_batches([a, b], n, 1)
+            states[n + 1] = instances(a, n + 1)
+        # b undoes what a wrote last (version 6), a then undoes version 5: both follow one log,
+        # so both hold the same stacks.
+        status, answer = b.json("POST", "/v1/undo", None)
+        self.assertEqual((status, answer.get("undone")), (200, 6), answer)
+        status, answer = a.json("POST", "/v1/undo", None)
+        self.assertEqual((status, answer.get("undone")), (200, 5), answer)
+        status, answer = b.json("POST", "/v1/redo", None)
+        self.assertEqual((status, answer.get("redone"), answer.get("version")), (200, 5, 9),
+                         answer)
+        for s in (a, b):
+            self.assertEqual(instances(s, 9), states[5])
+        self.assert_converged([a, b], 9)
+        histories = [self.at(s, 9, "/v1/history?limit=4")[2] for s in (a, b)]
+        entries = [[(e["version"], e["kind"], e.get("target")) for e in json.loads(h)["entries"]]
+                   for h in histories]
+        self.assertEqual(entries[0], [(9, "redo", 5), (8, "undo", 5), (7, "undo", 6),
+                                      (6, "edit", None)])
+        self.assertEqual(entries[0], entries[1])
+        # The times are the writers': every replica shows the same ones.
+        times = [[e["time"] for e in json.loads(h)["entries"]] for h in histories]
+        self.assertEqual(times[0], times[1])
+
     def test_a_batch_that_depends_on_a_write_just_made_on_another_replica_is_accepted(self):
         a, b = self.replicas(2)
         for n in range(0, 40, 4):
