@@ -84,6 +84,8 @@ ApiResponse post_edits(Engine& engine, std::string body, std::optional<std::stri
 /// the newer scene. An empty stack is a 409 (nothing-to-undo).
 ApiResponse post_undo(Engine& engine, bool redo, std::optional<std::string_view> if_match,
                       const BatchApply* apply = nullptr);
+/// The wire name of a history entry's kind: "edit", "undo" or "redo".
+const char* batch_kind_name(BatchKind kind);
 /// GET /v1/history?limit&cursor: the versions the history holds, newest first, and the stacks.
 ApiResponse get_history(const Engine& engine,
                         const std::multimap<std::string, std::string>& query);

@@ -20,18 +20,6 @@ constexpr uint32_t MAX_PAGE = 1000;
 /// takes back whatever is newest then.
 constexpr int UNCONDITIONAL_TRIES = 20;
 
-const char* kind_name(BatchKind k) {
-    switch (k) {
-        case BatchKind::Undo:
-            return "undo";
-        case BatchKind::Redo:
-            return "redo";
-        case BatchKind::Edits:
-            break;
-    }
-    return "edit";
-}
-
 /// RFC 3339 UTC with milliseconds: "2026-11-27T17:02:03.456Z".
 std::string rfc3339(int64_t ms) {
     const std::time_t seconds = std::time_t(ms / 1000);
@@ -48,7 +36,7 @@ Json entry_json(const HistoryEntry& e, bool undoable) {
     Json ops = Json::object();
     for (const auto& [kind, n] : e.ops) ops[durable::edit_kind_name(kind)] = n;
     Json j = {{"version", e.version},           {"time", rfc3339(e.info.time_ms)},
-              {"kind", kind_name(e.info.kind)}, {"edits", e.edits},
+              {"kind", batch_kind_name(e.info.kind)}, {"edits", e.edits},
               {"ops", std::move(ops)},          {"undoable", undoable}};
     if (e.info.kind != BatchKind::Edits) j["target"] = e.info.target;
     if (!e.info.message.empty()) j["message"] = e.info.message;
@@ -71,6 +59,18 @@ std::optional<uint64_t> parse_count(const std::string& text, uint64_t lo, uint64
 }
 
 }  // namespace
+
+const char* batch_kind_name(BatchKind kind) {
+    switch (kind) {
+        case BatchKind::Undo:
+            return "undo";
+        case BatchKind::Redo:
+            return "redo";
+        case BatchKind::Edits:
+            break;
+    }
+    return "edit";
+}
 
 ApiResponse post_undo(Engine& engine, bool redo, std::optional<std::string_view> if_match,
                       const BatchApply* apply) {

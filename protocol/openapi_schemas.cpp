@@ -12,6 +12,7 @@
 #include "engine/durable/durable_stats.h"
 #include "engine/render/pick.h"
 #include "engine/render/render_request.h"
+#include "protocol/api.h"
 #include "protocol/assets/asset.h"
 #include "protocol/field_json.h"
 #include "protocol/openapi.h"
@@ -430,7 +431,7 @@ void write_result_schemas(J& out) {
     const J stack = object({{"depth", count()}, {"next", or_null(count())}});
     const J entry = object({{"version", count()},
                             {"time", described(string(), "RFC 3339, UTC, milliseconds")},
-                            {"kind", {{"enum", J::array({"edit", "undo", "redo"})}}},
+                            {"kind", names_of(BatchKind::Redo, batch_kind_name)},
                             {"target", described(count(), "undo, redo: the version taken back or redone")},
                             {"message", described(string(), "the batch's message, when it had one")},
                             {"edits", count()},
