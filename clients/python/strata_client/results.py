@@ -173,7 +173,6 @@ class ImportResult(JsonObject):
     model: Optional[str] = None
 
 
-
 @dataclass(frozen=True, eq=False)
 class UndoResult(JsonObject):
     """The answer to POST /v1/undo (`undone`) or POST /v1/redo (`redone`): the new version, the
