@@ -191,6 +191,11 @@ Endpoint after_min_version(ServerContext& ctx, Endpoint e) {
     return e;
 }
 
+/// A read of the scene that waits for `min_version` and may ask for `at_version`.
+Endpoint versioned_read(ServerContext& ctx, RouteDoc doc, EngineHandler handler) {
+    return after_min_version(ctx, at_version(ctx, std::move(doc), std::move(handler)));
+}
+
 /// A POST route whose body is JSON: other body types are 415 before the handler runs.
 Endpoint json_body(Endpoint e) {
     e.doc.responses.push_back(problem(
@@ -261,32 +266,29 @@ void add_scene_object_routes(RouteTable& routes, ServerContext& ctx, const Colle
         answers.push_back(
             problem(404, "a filter names no object (the pointer names it)", {"ETag"}));
     const protocol::SceneObject kind = c.kind;
-    routes.get(path, after_min_version(
-                         ctx, at_version(ctx,
-                                         {.summary = "List the " + std::string(c.path) +
-                                                     ", a page at a time",
-                                          .tag = "scene",
-                                          .parameters = std::move(parameters),
-                                          .responses = std::move(answers)},
-                                         [kind](Engine& engine, RouteCall& call) {
-                                             return protocol::get_scene_list(engine, kind,
-                                                                             call.request.query);
-                                         })));
+    routes.get(path,
+               versioned_read(ctx,
+                              {.summary = "List the " + std::string(c.path) + ", a page at a time",
+                               .tag = "scene",
+                               .parameters = std::move(parameters),
+                               .responses = std::move(answers)},
+                              [kind](Engine& engine, RouteCall& call) {
+                                  return protocol::get_scene_list(engine, kind, call.request.query);
+                              }));
     // The path keeps reserved characters percent-encoded (request_target.h): an id holding '/'
     // arrives as one segment, decoded by the route table.
-    routes.get(path + "/{id}",
-               after_min_version(
-                   ctx, at_version(ctx,
-                                   {.summary = "One " + one + " document",
-                                    .tag = "scene",
-                                    .responses = {ok_json(one, "its state at the version in the "
-                                                               "ETag"),
-                                                  problem(404, "no object of this kind has the id",
-                                                          {"ETag"})}},
-                                   [kind](Engine& engine, RouteCall& call) {
-                                       return protocol::get_scene_object(engine, kind,
-                                                                         call.params[0]);
-                                   })));
+    routes.get(
+        path + "/{id}",
+        versioned_read(ctx,
+                       {.summary = "One " + one + " document",
+                        .tag = "scene",
+                        .responses = {ok_json(one,
+                                              "its state at the version in the "
+                                              "ETag"),
+                                      problem(404, "no object of this kind has the id", {"ETag"})}},
+                       [kind](Engine& engine, RouteCall& call) {
+                           return protocol::get_scene_object(engine, kind, call.params[0]);
+                       }));
 }
 
 /// What GET /metrics reads: the numbers of every part of the server that exists.
@@ -444,21 +446,19 @@ void add_import_routes(RouteTable& routes, ServerContext& ctx) {
 }
 
 void add_snapshot_routes(RouteTable& routes, ServerContext& ctx) {
-    routes.get("/v1/scene/snapshot",
-               after_min_version(
-                   ctx, at_version(ctx,
-                                   {.summary = "The whole scene as a snapshot file",
-                                    .description = "The data directory's snapshot format, taken "
-                                                   "under one read lock.",
-                                    .tag = "scene",
-                                    .responses = {{.status = 200,
-                                                   .description = "the snapshot; its ETag is the "
-                                                                  "version it holds",
-                                                   .media = {protocol::SNAPSHOT_CONTENT_TYPE},
-                                                   .headers = {"ETag", "Content-Disposition"}}}},
-                                   [](Engine& engine, RouteCall&) {
-                                       return protocol::get_snapshot(engine);
-                                   })));
+    routes.get(
+        "/v1/scene/snapshot",
+        versioned_read(ctx,
+                       {.summary = "The whole scene as a snapshot file",
+                        .description = "The data directory's snapshot format, taken "
+                                       "under one read lock.",
+                        .tag = "scene",
+                        .responses = {{.status = 200,
+                                       .description = "the snapshot; its ETag is the "
+                                                      "version it holds",
+                                       .media = {protocol::SNAPSHOT_CONTENT_TYPE},
+                                       .headers = {"ETag", "Content-Disposition"}}}},
+                       [](Engine& engine, RouteCall&) { return protocol::get_snapshot(engine); }));
     routes.post(
         "/v1/scene/snapshot",
         {{.summary = "Replace the scene with a snapshot's, atomically",
@@ -520,20 +520,19 @@ void add_render_routes(RouteTable& routes, ServerContext& ctx) {
         "Commits pending edits (as POST /v1/commit), traces and encodes one "
         "frame; an empty body means every default.";
     routes.post("/v1/render",
-                json_body(after_min_version(
-                    ctx, at_version(ctx,
-                                    {.summary = "Render one frame",
-                                     .description = commits,
-                                     .tag = "render",
-                                     .body = "RenderRequest",
-                                     .responses = render_answers()},
-                                    [&ctx](Engine& engine, RouteCall& call) {
-                                        return rendered(ctx, engine, [&] {
-                                            return protocol::post_render(
-                                                engine, call.request.body, ctx.api_limits,
-                                                call.context.cancel, ctx.split());
-                                        });
-                                    }))));
+                json_body(versioned_read(ctx,
+                                         {.summary = "Render one frame",
+                                          .description = commits,
+                                          .tag = "render",
+                                          .body = "RenderRequest",
+                                          .responses = render_answers()},
+                                         [&ctx](Engine& engine, RouteCall& call) {
+                                             return rendered(ctx, engine, [&] {
+                                                 return protocol::post_render(
+                                                     engine, call.request.body, ctx.api_limits,
+                                                     call.context.cancel, ctx.split());
+                                             });
+                                         })));
     RouteDoc get = {.summary = "Render one frame, asked for in the query",
                     .description =
                         "The members of POST /v1/render's body as parameters: the "
@@ -546,10 +545,9 @@ void add_render_routes(RouteTable& routes, ServerContext& ctx) {
                     .query_token = true};
     get.responses.push_back(problem(405, "HEAD: use GET or POST", {"Allow"}));
     routes.get("/v1/render",
-               after_min_version(ctx, at_version(ctx, std::move(get),
-                                                 [&ctx](Engine& engine, RouteCall& call) {
-                                                     return get_render(ctx, engine, call);
-                                                 })));
+               versioned_read(ctx, std::move(get), [&ctx](Engine& engine, RouteCall& call) {
+                   return get_render(ctx, engine, call);
+               }));
 }
 
 void add_pick_routes(RouteTable& routes, ServerContext& ctx) {
@@ -563,30 +561,27 @@ void add_pick_routes(RouteTable& routes, ServerContext& ctx) {
                 problem(400, "a member or parameter does not match the schema"),
                 problem(422, "a pixel outside the image, or an unusable camera")};
     };
-    routes.get("/v1/pick", after_min_version(
-                               ctx, at_version(ctx,
-                                               {.summary = "What lies under one pixel",
-                                                .description = rays,
-                                                .tag = "render",
-                                                .parameters = protocol::query_parameters("PickQuery"),
-                                                .responses = answers("PickResult")},
-                                               [](Engine& engine, RouteCall& call) {
-                                                   return protocol::get_pick(engine,
-                                                                             call.request.query);
-                                               })));
+    routes.get("/v1/pick", versioned_read(ctx,
+                                          {.summary = "What lies under one pixel",
+                                           .description = rays,
+                                           .tag = "render",
+                                           .parameters = protocol::query_parameters("PickQuery"),
+                                           .responses = answers("PickResult")},
+                                          [](Engine& engine, RouteCall& call) {
+                                              return protocol::get_pick(engine, call.request.query);
+                                          }));
     routes.post("/v1/pick",
-                json_body(after_min_version(
-                    ctx, at_version(ctx,
-                                    {.summary = "What lies under each of a list of pixels",
-                                     .description = rays,
-                                     .tag = "render",
-                                     .body = "PickRequest",
-                                     .body_required = true,
-                                     .responses = answers("PickResults")},
-                                    [&ctx](Engine& engine, RouteCall& call) {
-                                        return protocol::post_pick(engine, call.request.body,
-                                                                   ctx.api_limits);
-                                    }))));
+                json_body(versioned_read(ctx,
+                                         {.summary = "What lies under each of a list of pixels",
+                                          .description = rays,
+                                          .tag = "render",
+                                          .body = "PickRequest",
+                                          .body_required = true,
+                                          .responses = answers("PickResults")},
+                                         [&ctx](Engine& engine, RouteCall& call) {
+                                             return protocol::post_pick(engine, call.request.body,
+                                                                        ctx.api_limits);
+                                         })));
 }
 
 void add_scene_routes(RouteTable& routes, ServerContext& ctx) {
@@ -598,12 +593,11 @@ void add_scene_routes(RouteTable& routes, ServerContext& ctx) {
                             [&ctx](RouteCall&) { return protocol::get_plan(ctx.engine); }});
     routes.get(
         "/v1/scene",
-        after_min_version(
-            ctx, at_version(ctx,
-                            {.summary = "The scene: version, counts, bounds, camera and lighting",
-                             .tag = "scene",
-                             .responses = {ok_json("Scene", "the summary")}},
-                            [](Engine& engine, RouteCall&) { return protocol::get_scene(engine); })));
+        versioned_read(ctx,
+                       {.summary = "The scene: version, counts, bounds, camera and lighting",
+                        .tag = "scene",
+                        .responses = {ok_json("Scene", "the summary")}},
+                       [](Engine& engine, RouteCall&) { return protocol::get_scene(engine); }));
     for (const Collection& c : collections()) add_scene_object_routes(routes, ctx, c);
 }
 
