@@ -444,15 +444,7 @@ TEST(Durability, EveryFsyncModeKeepsWhatAGracefulStopWrote) {
     }
 }
 
-/// A scene's objects and fields without slots, handles or order: its rebuilding batch, one
-/// encoded edit per object, sorted.
-std::vector<std::string> canonical(const Engine& engine) {
-    std::vector<std::string> out;
-    for (Edit& e : engine.read([](const Scene& s) { return s.to_batch(); }).edits)
-        out.push_back(test::encoded(EditBatch{{std::move(e)}}));
-    std::sort(out.begin(), out.end());
-    return out;
-}
+using test::state_of;
 
 TEST(PastVersion, EveryVersionTheDirectoryHoldsLoadsAsItWasWithoutTouchingIt) {
     TempDir dir;
@@ -461,12 +453,12 @@ TEST(PastVersion, EveryVersionTheDirectoryHoldsLoadsAsItWasWithoutTouchingIt) {
     std::map<uint64_t, std::vector<std::string>> states;
     for (int i = 0; i < 12; ++i) {
         const uint64_t v = apply_random(*s.engine, edits, 1, i == 0);
-        states[v] = canonical(*s.engine);
+        states[v] = state_of(*s.engine);
         if (i == 3) {
             // Before any snapshot, the journal reaches back to the empty scene.
             auto past = durable::load_past_version(dir.path(), 2, EngineConfig{});
             ASSERT_TRUE(past.has_value()) << past.error().describe();
-            EXPECT_EQ(canonical(*past.value()), states[2]);
+            EXPECT_EQ(state_of(*past.value()), states[2]);
         }
         if (i == 5) {
             ASSERT_TRUE(s.store->snapshot_now().has_value());
@@ -485,7 +477,7 @@ TEST(PastVersion, EveryVersionTheDirectoryHoldsLoadsAsItWasWithoutTouchingIt) {
         }
         ASSERT_TRUE(past.has_value()) << v << ": " << past.error().describe();
         EXPECT_EQ(past.value()->version(), v);
-        EXPECT_EQ(canonical(*past.value()), states[v]) << v;
+        EXPECT_EQ(state_of(*past.value()), states[v]) << v;
         EXPECT_EQ(load.snapshot_version, 6u);
         EXPECT_EQ(load.records_replayed, v - 6);
         // It renders: its first commit builds everything.
@@ -495,7 +487,7 @@ TEST(PastVersion, EveryVersionTheDirectoryHoldsLoadsAsItWasWithoutTouchingIt) {
     EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()),
                             std::filesystem::directory_iterator()),
               files_before);
-    EXPECT_EQ(canonical(*s.engine), states[12]);
+    EXPECT_EQ(state_of(*s.engine), states[12]);
     EXPECT_TRUE(s.engine->apply(edits.next_batch(3)).has_value());
 }
 
@@ -527,7 +519,7 @@ TEST(PastVersion, KeptHistoryReachesBehindSnapshotsAndSurvivesARestart) {
         Server s = start(o);
         for (int i = 0; i < 12; ++i) {
             const uint64_t v = apply_random(*s.engine, edits, 1, i == 0);
-            states[v] = canonical(*s.engine);
+            states[v] = state_of(*s.engine);
             if (i == 3 || i == 7) {
                 ASSERT_TRUE(s.store->snapshot_now().has_value());
             }
@@ -536,12 +528,12 @@ TEST(PastVersion, KeptHistoryReachesBehindSnapshotsAndSurvivesARestart) {
     {
         // Recovery starts from the newest snapshot and leaves the older files where they are.
         Server s = start(o);
-        EXPECT_EQ(canonical(*s.engine), states[12]);
+        EXPECT_EQ(state_of(*s.engine), states[12]);
         EXPECT_EQ(s.store->recovery().snapshot_version, 8u);
         for (uint64_t v = 1; v <= 12; ++v) {
             auto past = durable::load_past_version(dir.path(), v, EngineConfig{});
             ASSERT_TRUE(past.has_value()) << v << ": " << past.error().describe();
-            EXPECT_EQ(canonical(*past.value()), states[v]) << v;
+            EXPECT_EQ(state_of(*past.value()), states[v]) << v;
         }
     }
     // A budget that holds nothing older: the next snapshot removes what it covers.

@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -22,6 +23,18 @@ inline std::string encoded(const EditBatch& b) {
     std::string out;
     durable::encode_batch(b, out);
     return out;
+}
+
+/// A scene's objects and fields without slots, handles or child order: its rebuilding batch, one
+/// encoded edit per object, sorted. Two scenes with equal states hold the same objects.
+inline std::vector<std::string> state_of(const Scene& s) {
+    std::vector<std::string> out;
+    for (Edit& e : s.to_batch().edits) out.push_back(encoded(EditBatch{{std::move(e)}}));
+    std::sort(out.begin(), out.end());
+    return out;
+}
+inline std::vector<std::string> state_of(const Engine& e) {
+    return e.read([](const Scene& s) { return state_of(s); });
 }
 
 /// A fresh directory under $TMPDIR, removed with everything in it at the end of the test.

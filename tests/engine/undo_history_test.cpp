@@ -13,24 +13,14 @@
 #include "engine/engine.h"
 #include "engine/scene/edit_history.h"
 #include "engine/scene/shapes.h"
+#include "tests/engine/durable_test_util.h"
 #include "tests/engine/random_edits.h"
 #include "tests/engine/test_util.h"
 
 namespace strata {
 namespace {
 
-/// The scene's state without slots, handles or child order: its rebuilding batch, one encoded
-/// edit per object, sorted.
-std::vector<std::string> state_of(const Scene& s) {
-    std::vector<std::string> out;
-    for (Edit& e : s.to_batch().edits) {
-        std::string bytes;
-        durable::encode_batch(EditBatch{{std::move(e)}}, bytes);
-        out.push_back(std::move(bytes));
-    }
-    std::sort(out.begin(), out.end());
-    return out;
-}
+using test::state_of;
 
 /// Applies `batch` to `scene` with its inverse, then the inverse, and checks the state came back.
 void expect_inverse_restores(Scene& scene, EditBatch batch, const std::string& what) {
@@ -178,10 +168,6 @@ std::unique_ptr<Engine> engine_with(HistoryLimits limits = {}) {
     auto engine = Engine::create(config);
     EXPECT_TRUE(engine.has_value());
     return std::move(engine.value());
-}
-
-std::vector<std::string> state_of(const Engine& e) {
-    return e.read([](const Scene& s) { return state_of(s); });
 }
 
 Result<ApplyResult> undo(Engine& e, bool redo = false) {
