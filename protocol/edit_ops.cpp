@@ -14,6 +14,7 @@ std::span<const EditOp> edit_ops() {
         std::vector<EditOp> all;
         for (std::span<const EditOp> family :
              {ops::mesh_ops(), ops::texture_ops(), ops::material_ops(), ops::instance_ops(),
+              ops::bulk_instance_ops(),
               ops::group_ops(), ops::light_ops(), ops::scene_ops()})
             all.insert(all.end(), family.begin(), family.end());
         return all;

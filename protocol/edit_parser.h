@@ -24,6 +24,9 @@ struct EditSource {
     bool uvs_b64 = false;
     bool vertices_b64 = false;
     bool shape = false;
+    bool ids_range = false;  ///< bulk ids given as a numbered range
+    bool transforms_b64 = false;
+    bool transforms_flat = false;  ///< bulk transforms as flat numbers, 12 per item
 };
 
 /// A parsed batch and, parallel to its edits, where their arrays came from.

@@ -58,6 +58,40 @@ constexpr std::string_view SHARED_DEFS = R"json({
     "pattern": "^(?:[A-Za-z0-9+/]{4})*(?:[A-Za-z0-9+/]{2}==|[A-Za-z0-9+/]{3}=)?$",
     "description": "RFC 4648 base64 of little-endian float32 (positions, normals) or uint32 (indices) triples, or float32 pairs (uvs)"
   },
+  "transforms_base64": {
+    "type": "string",
+    "pattern": "^(?:[A-Za-z0-9+/]{4})*(?:[A-Za-z0-9+/]{2}==|[A-Za-z0-9+/]{3}=)?$",
+    "description": "RFC 4648 base64 of little-endian float32 3x4 row-major transforms, 48 bytes per item"
+  },
+  "bulk_ids": {
+    "oneOf": [
+      {"type": "array", "items": {"$ref": "#/$defs/id"}},
+      {
+        "type": "object",
+        "properties": {
+          "prefix": {"type": "string"},
+          "first": {"type": "integer", "minimum": 0, "maximum": 9007199254740992},
+          "count": {"type": "integer", "minimum": 0, "maximum": 16777216}
+        },
+        "required": ["count"],
+        "additionalProperties": false,
+        "description": "prefix followed by the decimal numbers first .. first + count - 1"
+      }
+    ],
+    "description": "the ids of a bulk edit's items, at most 16777216"
+  },
+  "bulk_transforms": {
+    "oneOf": [
+      {"type": "array", "items": {"type": "number"},
+       "description": "flat: 12 numbers per item, each a 3x4 row-major transform"},
+      {"type": "array", "items": {"$ref": "#/$defs/transform"}, "minItems": 1,
+       "description": "one transform per item"}
+    ]
+  },
+  "id_or_ids": {
+    "oneOf": [{"$ref": "#/$defs/id"}, {"type": "array", "items": {"$ref": "#/$defs/id"}}],
+    "description": "one id for every item, or one per item"
+  },
   "image_base64": {
     "type": "string",
     "pattern": "^(?:[A-Za-z0-9+/]{4})*(?:[A-Za-z0-9+/]{2}==|[A-Za-z0-9+/]{3}=)?$",

@@ -332,6 +332,16 @@ std::vector<Vec3> FieldReader::positions_b64(const Json& v, const std::string& p
     return out;
 }
 
+std::vector<Affine> FieldReader::transforms_b64(const Json& v, const std::string& ptr) {
+    const std::string bytes = base64_bytes(v, ptr, sizeof(Affine));
+    std::vector<Affine> out(bytes.size() / sizeof(Affine));
+    for (std::size_t i = 0; i < out.size(); ++i) {
+        for (std::size_t k = 0; k < 12; ++k)
+            out[i].m[k] = load_le<float>(bytes.data() + i * sizeof(Affine) + k * 4);
+    }
+    return out;
+}
+
 std::vector<Vec3> FieldReader::normals_b64(const Json& v, const std::string& ptr) {
     return positions_b64(v, ptr);
 }

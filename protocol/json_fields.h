@@ -98,6 +98,9 @@ public:
     /// uint32s.
     std::vector<uint32_t> vertex_ids(const Json& v, const std::string& ptr);
     std::vector<uint32_t> vertex_ids_b64(const Json& v, const std::string& ptr);
+    /// Base64 little-endian float32 3x4 row-major transforms, 48 bytes each (the scene checks
+    /// their values).
+    std::vector<Affine> transforms_b64(const Json& v, const std::string& ptr);
 
     [[noreturn]] void schema_error(const std::string& ptr, std::string message) const;
 

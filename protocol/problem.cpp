@@ -20,6 +20,10 @@ std::string wire_field(const std::string& field, const EditSource* src) {
     if (head == "normals" && src->normals_b64) return "normals_b64";
     if (head == "uvs" && src->uvs_b64) return "uvs_b64";
     if (head == "vertices" && src->vertices_b64) return "vertices_b64";
+    // A bulk edit's item in a packed form: the member (the message names the item).
+    if (head == "ids" && src->ids_range) return "ids";
+    if (head == "transforms" && src->transforms_b64) return "transforms_b64";
+    if (head == "transforms" && src->transforms_flat) return "transforms";
     return field;
 }
 

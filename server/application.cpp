@@ -55,8 +55,7 @@ void Application::install_routes(const FrontEndCounters* front_end, StreamHub* s
             protocol::JsonLimits{m_config.max_json_depth, m_config.max_array_elements,
                                  m_config.max_json_values},
             m_config.max_pixels, m_config.render_timeout_s,
-            SceneBudget{m_config.max_scene_triangles, m_config.max_scene_vertices,
-                        m_config.max_texture_mb << 20},
+            scene_budget(m_config),
             m_config.max_batch_edits},
         front_end, nullptr, nullptr, {}, streams, {}});
     m_context->past = std::make_unique<PastScenes>(engine_config(m_config));

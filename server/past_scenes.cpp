@@ -10,9 +10,14 @@
 
 namespace strata::server {
 
+SceneBudget scene_budget(const ServerConfig& c) {
+    return {c.max_scene_triangles, c.max_scene_vertices, c.max_texture_mb << 20,
+            c.max_scene_instances};
+}
+
 EngineConfig engine_config(const ServerConfig& c) {
     EngineConfig config;
-    config.budget = {c.max_scene_triangles, c.max_scene_vertices, c.max_texture_mb << 20};
+    config.budget = scene_budget(c);
     config.history.max_undo = c.undo_depth;
     config.history.max_bytes = c.undo_mb << 20;
     config.accel.tlas = *parse_tlas_kind(c.tlas);  // checked by the command line's parser

@@ -21,6 +21,8 @@ struct ServerConfig;
 
 /// The engine configuration of `c`: the scene budget, undo bounds and TLAS strategy.
 EngineConfig engine_config(const ServerConfig& c);
+/// The scene budget the flags set (--max-scene-triangles, ...).
+SceneBudget scene_budget(const ServerConfig& c);
 
 class PastScenes {
 public:

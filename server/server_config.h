@@ -47,6 +47,7 @@ struct ServerConfig {
     uint64_t max_scene_triangles = 1ull << 24;
     uint64_t max_scene_vertices = 1ull << 24;
     uint64_t max_texture_mb = 256;  ///< decoded texels over all textures, in MiB
+    uint64_t max_scene_instances = 1ull << 24;
 
     // The undo history (engine/scene/edit_history.h).
     std::size_t undo_depth = 100;  ///< batches on each of the undo and redo stacks; 0: no undo

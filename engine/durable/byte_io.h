@@ -116,10 +116,15 @@ private:
     }
     template <class T>
     void put_other(const std::vector<T>& v) {
-        static_assert(std::is_same_v<T, Vec3> || std::is_same_v<T, Vec2> ||
-                      std::is_same_v<T, Triangle> || std::is_same_v<T, uint32_t>);
         put(uint64_t(v.size()));
-        raw(v.data(), v.size() * sizeof(T));
+        if constexpr (std::is_same_v<T, std::string>) {
+            for (const std::string& x : v) put(x);
+        } else {
+            static_assert(std::is_same_v<T, Vec3> || std::is_same_v<T, Vec2> ||
+                          std::is_same_v<T, Triangle> || std::is_same_v<T, uint32_t> ||
+                          std::is_same_v<T, Affine>);
+            raw(v.data(), v.size() * sizeof(T));
+        }
     }
     template <class T>
     void put_other(const std::optional<T>& v) {
@@ -198,10 +203,17 @@ private:
         uint64_t n = 0;
         get(n);
         if (!ok()) return;
-        // Checked before allocating: a corrupt count must not ask for terabytes.
-        if (n > remaining() / sizeof(T)) return fail("array of " + std::to_string(n) + " elements");
+        // Checked before allocating: a corrupt count must not ask for terabytes (a string takes
+        // at least its length's 4 bytes).
+        constexpr std::size_t least = std::is_same_v<T, std::string> ? sizeof(uint32_t) : sizeof(T);
+        if (n > remaining() / least) return fail("array of " + std::to_string(n) + " elements");
         v.resize(n);
-        raw(v.data(), n * sizeof(T));
+        if constexpr (std::is_same_v<T, std::string>) {
+            for (std::string& x : v) get(x);
+        } else {
+            static_assert(std::is_trivially_copyable_v<T>);
+            raw(v.data(), n * sizeof(T));
+        }
     }
     template <class T>
     void get_other(std::optional<T>& v) {

@@ -28,7 +28,8 @@ static_assert(TAG_IS<0, AddMesh> && TAG_IS<1, UpdateMeshPositions> &&
                   TAG_IS<18, UpdateLight> && TAG_IS<19, RemoveLight> &&
                   TAG_IS<20, AddTexture> && TAG_IS<21, RemoveTexture> &&
                   TAG_IS<22, UpdateMeshVertices> && TAG_IS<23, RemoveMaterial> &&
-                  std::variant_size_v<Edit> == 24,
+                  TAG_IS<24, AddInstances> && TAG_IS<25, UpdateInstances> &&
+                  TAG_IS<26, RemoveInstances> && std::variant_size_v<Edit> == 27,
               "journal kind tags are the Edit variant's indices: append new kinds at the end");
 
 
@@ -56,7 +57,10 @@ constexpr const char* KIND_NAMES[] = {"add_mesh",
                                       "add_texture",
                                       "remove_texture",
                                       "update_mesh_vertices",
-                                      "remove_material"};
+                                      "remove_material",
+                                      "add_instances",
+                                      "update_instances",
+                                      "remove_instances"};
 static_assert(std::size(KIND_NAMES) == std::variant_size_v<Edit>);
 
 /// Kind tag bit: the edit's extension fields follow its base layout. Fields added to a kind after
@@ -122,6 +126,26 @@ void fields(Io& io, E& e) {
 template <class Io, Kind<RemoveInstance> E>
 void fields(Io& io, E& e) {
     io(e.instance);
+}
+/// Bulk edits store their arrays as they came: the id list or range, then one value or one per
+/// item.
+template <class Io, Kind<BulkIds> E>
+void ids_fields(Io& io, E& ids) {
+    io(ids.list, ids.prefix, ids.first, ids.count);
+}
+template <class Io, Kind<AddInstances> E>
+void fields(Io& io, E& e) {
+    ids_fields(io, e.ids);
+    io(e.meshes, e.materials, e.transforms, e.parent, e.visible);
+}
+template <class Io, Kind<UpdateInstances> E>
+void fields(Io& io, E& e) {
+    ids_fields(io, e.ids);
+    io(e.transforms, e.visible);
+}
+template <class Io, Kind<RemoveInstances> E>
+void fields(Io& io, E& e) {
+    ids_fields(io, e.ids);
 }
 template <class Io, Kind<MarkDirty> E>
 void fields(Io& io, E& e) {

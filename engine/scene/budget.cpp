@@ -3,6 +3,10 @@
 namespace strata {
 
 std::string budget_message(const MeshTotals& totals, const SceneBudget& budget) {
+    if (totals.instances > budget.max_instances)
+        return "the scene would hold " + std::to_string(totals.instances) +
+               " instances, over its budget of " + std::to_string(budget.max_instances) +
+               " (max_scene_instances)";
     const bool triangles = totals.budget_triangles() > budget.max_triangles;
     if (totals.texture_bytes > budget.max_texture_bytes && !triangles &&
         totals.vertices <= budget.max_vertices)

@@ -23,15 +23,18 @@ struct SceneBudget {
     /// Texture memory over all textures: decoded texels (6 bytes each, engine/image/texture.h)
     /// and the image files they were decoded from.
     uint64_t max_texture_bytes = uint64_t(256) << 20;
+    /// Instances in all (each costs a few hundred bytes beside its mesh).
+    uint64_t max_instances = uint64_t(1) << 24;
 };
 
-/// What the scene's meshes hold, each mesh counted once.
+/// What the scene holds: its meshes' totals (each mesh counted once), and its instances.
 struct MeshTotals {
     uint64_t vertices = 0;
     uint64_t triangles = 0;
     uint64_t texture_bytes = 0;  ///< decoded texels and image files of every texture
     uint64_t meshes = 0;
     uint64_t groups = 0;
+    uint64_t instances = 0;
 
     /// Triangles as the budget counts them: each mesh's, plus each mesh's and group's overhead.
     uint64_t budget_triangles() const {
@@ -39,7 +42,7 @@ struct MeshTotals {
     }
     bool grew_from(const MeshTotals& before) const {
         return vertices > before.vertices || budget_triangles() > before.budget_triangles() ||
-               texture_bytes > before.texture_bytes;
+               texture_bytes > before.texture_bytes || instances > before.instances;
     }
 };
 
@@ -47,7 +50,8 @@ struct MeshTotals {
 inline bool over_budget(const MeshTotals& totals, const SceneBudget& budget) {
     return totals.budget_triangles() > budget.max_triangles ||
            totals.vertices > budget.max_vertices ||
-           totals.texture_bytes > budget.max_texture_bytes;
+           totals.texture_bytes > budget.max_texture_bytes ||
+           totals.instances > budget.max_instances;
 }
 
 /// "the scene would hold N triangles, over its budget of M (max_scene_triangles)".

@@ -19,6 +19,15 @@ uint64_t bytes_of(const std::optional<std::vector<T>>& v) {
     return v ? bytes_of(*v) : 0;
 }
 
+uint64_t strings_bytes(const std::vector<std::string>& v) {
+    uint64_t bytes = bytes_of(v);
+    for (const std::string& s : v) bytes += s.capacity() > 15 ? s.capacity() : 0;
+    return bytes;
+}
+uint64_t ids_bytes(const BulkIds& ids) {
+    return strings_bytes(ids.list) + ids.prefix.size();
+}
+
 /// The heap bytes of one edit beyond its struct: its arrays and its encoded image.
 struct ArrayBytes {
     uint64_t operator()(const AddMesh& e) const {
@@ -36,6 +45,14 @@ struct ArrayBytes {
                bytes_of(e.uvs);
     }
     uint64_t operator()(const AddTexture& e) const { return e.data.size(); }
+    uint64_t operator()(const AddInstances& e) const {
+        return ids_bytes(e.ids) + bytes_of(e.transforms) + strings_bytes(e.meshes) +
+               strings_bytes(e.materials);
+    }
+    uint64_t operator()(const UpdateInstances& e) const {
+        return ids_bytes(e.ids) + bytes_of(e.transforms);
+    }
+    uint64_t operator()(const RemoveInstances& e) const { return ids_bytes(e.ids); }
     template <class E>
     uint64_t operator()(const E&) const {
         return 0;

@@ -137,6 +137,52 @@ struct RemoveInstance {
     std::string instance;
 };
 
+/// Most items one bulk edit may carry (TooLarge beyond).
+constexpr uint64_t MAX_BULK_ITEMS = uint64_t(1) << 24;
+
+/// The ids of a bulk edit's items: a list, or a numbered range, `prefix` followed by the decimal
+/// numbers `first` .. `first + count - 1` ("tree-", 0, 3: tree-0, tree-1, tree-2). One form only:
+/// a list with a non-zero count is refused. No items (an empty list, count 0) is allowed and does
+/// nothing.
+struct BulkIds {
+    std::vector<std::string> list;
+    std::string prefix;
+    uint64_t first = 0;
+    uint64_t count = 0;
+
+    std::size_t size() const { return list.empty() ? static_cast<std::size_t>(count) : list.size(); }
+    /// The id of item `i` (< size()).
+    std::string at(std::size_t i) const {
+        return list.empty() ? prefix + std::to_string(first + i) : list[i];
+    }
+};
+
+/// Many new instances in one edit (bulk instancing: forests, crowds, particles). Item i takes
+/// `ids.at(i)`, mesh `meshes[i]` (or `meshes[0]` when it holds one), material `materials[i]`
+/// (one: all; none: the mesh's default) and `transforms[i]` (none: identity). Checked and applied
+/// as the same number of add_instance edits would be; an error names its item.
+struct AddInstances {
+    BulkIds ids;
+    std::vector<std::string> meshes;
+    std::vector<std::string> materials = {};
+    std::vector<Affine> transforms = {};
+    std::optional<std::string> parent = std::nullopt;  ///< a group id; nullopt: the root
+    bool visible = true;
+};
+
+/// New transforms and/or visibility for many instances: item i takes `transforms[i]` (empty:
+/// unchanged) and `visible` (nullopt: unchanged).
+struct UpdateInstances {
+    BulkIds ids;
+    std::vector<Affine> transforms = {};
+    std::optional<bool> visible = std::nullopt;
+};
+
+/// Removes many instances.
+struct RemoveInstances {
+    BulkIds ids;
+};
+
 enum class DirtyAction : uint8_t { Refit, Rebuild };
 
 /// Asks the next commit to refit or rebuild one mesh's BLAS, or to update or rebuild the TLAS.
@@ -221,7 +267,8 @@ using Edit = std::variant<AddMesh, UpdateMeshPositions, ReplaceMeshTopology, Rem
                           AddMaterial, UpdateMaterial, AddInstance, UpdateInstance, SetTransform,
                           RemoveInstance, MarkDirty, SetCamera, SetLighting, Clear, AddGroup,
                           UpdateGroup, RemoveGroup, AddLight, UpdateLight, RemoveLight,
-                          AddTexture, RemoveTexture, UpdateMeshVertices, RemoveMaterial>;
+                          AddTexture, RemoveTexture, UpdateMeshVertices, RemoveMaterial,
+                          AddInstances, UpdateInstances, RemoveInstances>;
 
 /// Copies the fields an edit sets onto a full value; unset fields keep theirs.
 void apply_to(Camera& c, const SetCamera& e);

@@ -70,7 +70,7 @@ public:
         if constexpr (std::is_same_v<H, MeshHandle>)
             emit(RemoveMesh{std::move(id)});
         else if constexpr (std::is_same_v<H, InstanceHandle>)
-            emit(RemoveInstance{std::move(id)});
+            emit_remove_instance(std::move(id));
         else if constexpr (std::is_same_v<H, MaterialHandle>)
             emit(RemoveMaterial{std::move(id)});
         else if constexpr (std::is_same_v<H, GroupHandle>)
@@ -162,7 +162,7 @@ public:
     }
 
     void operator()(undo::InstanceTransform& r) {
-        emit(SetTransform{id_of(r.handle), r.transform});
+        emit_transform(id_of(r.handle), r.transform);
     }
 
     void operator()(undo::GroupState& r) {
@@ -202,6 +202,38 @@ public:
 
 private:
     void emit(Edit&& e) { m_out->edits.push_back(std::move(e)); }
+
+    // Runs of instance removals and of moves become one bulk edit each, with the same effect (a
+    // bulk edit applies its items in order): a million-instance add is taken back by one
+    // remove_instances, not by a million remove_instance edits.
+    void emit_remove_instance(std::string&& id) {
+        Edit* last = m_out->edits.empty() ? nullptr : &m_out->edits.back();
+        if (auto* bulk = last ? std::get_if<RemoveInstances>(last) : nullptr;
+            bulk && bulk->ids.list.size() < MAX_BULK_ITEMS) {
+            bulk->ids.list.push_back(std::move(id));
+        } else if (auto* one = last ? std::get_if<RemoveInstance>(last) : nullptr) {
+            RemoveInstances e;
+            e.ids.list = {std::move(one->instance), std::move(id)};
+            *last = std::move(e);
+        } else {
+            emit(RemoveInstance{std::move(id)});
+        }
+    }
+    void emit_transform(std::string&& id, const Affine& t) {
+        Edit* last = m_out->edits.empty() ? nullptr : &m_out->edits.back();
+        if (auto* bulk = last ? std::get_if<UpdateInstances>(last) : nullptr;
+            bulk && bulk->ids.list.size() < MAX_BULK_ITEMS) {
+            bulk->ids.list.push_back(std::move(id));
+            bulk->transforms.push_back(t);
+        } else if (auto* one = last ? std::get_if<SetTransform>(last) : nullptr) {
+            UpdateInstances e;
+            e.ids.list = {std::move(one->instance), std::move(id)};
+            e.transforms = {one->transform, t};
+            *last = std::move(e);
+        } else {
+            emit(SetTransform{std::move(id), t});
+        }
+    }
 
     void invert_topology(undo::MeshTopology& r, undo::MeshAttributes* attributes) {
         ReplaceMeshTopology e;

@@ -252,6 +252,10 @@ private:
     Status apply_edit(RemoveLight&& e, UndoLog& undo);
     Status apply_edit(AddTexture&& e, UndoLog& undo);
     Status apply_edit(RemoveTexture&& e, UndoLog& undo);
+    // Bulk instance ops (bulk_rules.cpp): each item checked as its single edit would be.
+    Status apply_edit(AddInstances&& e, UndoLog& undo);
+    Status apply_edit(UpdateInstances&& e, UndoLog& undo);
+    Status apply_edit(RemoveInstances&& e, UndoLog& undo);
 
     /// Plays `undo` backwards (scene_undo.cpp).
     void roll_back(UndoLog& undo);
@@ -266,6 +270,8 @@ private:
     void mark(GroupHandle g, DirtyBits<GroupDirty> add);
     void save_mesh(MeshHandle h, UndoLog& undo) const;
     void save_instance(InstanceHandle h, UndoLog& undo) const;
+    /// Adds a checked instance under its id: `r` holds everything but its id and back indices.
+    void insert_instance(InstanceRecord&& r, std::string&& id, UndoLog& undo);
     void remove_instance(InstanceHandle h, UndoLog& undo);
     void remove_mesh(MeshHandle h, UndoLog& undo);
     void remove_material(MaterialHandle h, UndoLog& undo);

@@ -568,14 +568,19 @@ Status Scene::apply_edit(AddInstance&& e, UndoLog& undo) {
     auto parent = find_parent(e.parent, "parent");
     if (!parent) return Unexpected(parent.error());
 
-    MeshRecord& mesh = m_meshes.at(mesh_handle);
     InstanceRecord r;
-    r.id = e.id;
     r.mesh = mesh_handle;
     r.material = material;
     copy_added<InstanceFields>(r, e);
-    r.user_slot = static_cast<uint32_t>(mesh.users.size());
     r.parent = parent.value();
+    insert_instance(std::move(r), std::move(e.id), undo);
+    return {};
+}
+
+void Scene::insert_instance(InstanceRecord&& r, std::string&& id, UndoLog& undo) {
+    MeshRecord& mesh = m_meshes.at(r.mesh);
+    r.id = id;
+    r.user_slot = static_cast<uint32_t>(mesh.users.size());
     std::vector<InstanceHandle>& siblings = children_of(r.parent).instances;
     r.child_slot = static_cast<uint32_t>(siblings.size());
     bool reused = false;
@@ -584,9 +589,9 @@ Status Scene::apply_edit(AddInstance&& e, UndoLog& undo) {
     mesh.users.mut().push_back(h);
     siblings.push_back(h);
     mark_instance_world(h);
-    m_instance_ids.emplace(std::move(e.id), h);
+    m_instance_ids.emplace(std::move(id), h);
+    ++m_totals.instances;
     mark(h, InstanceDirty::Added);
-    return {};
 }
 
 Status Scene::apply_edit(UpdateInstance&& e, UndoLog& undo) {
@@ -653,6 +658,7 @@ void Scene::remove_instance(InstanceHandle h, UndoLog& undo) {
     // Listed by its now stale handle, so the commit takes it out of the TLAS.
     mark(h, {});
     m_instance_ids.erase(r.id);
+    --m_totals.instances;
     undo.records.emplace_back(
         undo::Removed<InstanceHandle, InstanceRecord>{h, m_instances.take(h)});
 }

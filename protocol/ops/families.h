@@ -16,6 +16,8 @@ std::span<const EditOp> material_ops();
 std::span<const EditOp> texture_ops();
 /// add_instance, update_instance, set_transform, remove_instance (instance_ops.cpp).
 std::span<const EditOp> instance_ops();
+/// add_instances, update_instances, remove_instances (bulk_instance_ops.cpp).
+std::span<const EditOp> bulk_instance_ops();
 /// add_group, update_group, remove_group (group_ops.cpp).
 std::span<const EditOp> group_ops();
 

@@ -67,6 +67,10 @@ strata::Scene seed_scene() {
     inst.mesh = "tri";
     b.edits.emplace_back(std::move(inst));
     strata::Scene scene;
+    // Bulk edits name up to 2^24 instances in a few bytes: keep the fuzzed scenes small.
+    strata::SceneBudget budget;
+    budget.max_instances = 4096;
+    scene.set_budget(budget);
     if (!scene.apply(std::move(b))) std::abort();
     scene.clear_changes();
     return scene;

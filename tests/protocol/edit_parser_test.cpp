@@ -214,9 +214,47 @@ TEST(EditParser, EveryOpHasAParserAndAnEngineStruct) {
                            "add_mesh", "update_mesh", "remove_mesh", "add_texture",
                            "remove_texture", "add_material", "update_material",
                            "remove_material", "add_instance",
-                           "update_instance", "set_transform", "remove_instance", "add_group",
+                           "update_instance", "set_transform", "remove_instance",
+                           "add_instances", "update_instances", "remove_instances", "add_group",
                            "update_group", "remove_group", "add_light", "update_light",
                            "remove_light", "mark_dirty", "set_camera", "set_lighting", "clear"));
+}
+
+TEST(EditParser, BulkInstanceOpsReadEveryFormOfIdsAndTransforms) {
+    const auto add = one<AddInstances>(
+        R"({"op":"add_instances","ids":{"prefix":"t-","first":7,"count":2},"mesh":"m",)"
+        R"("material":["a","b"],"transforms":[1,0,0,1, 0,1,0,2, 0,0,1,3, 2,0,0,0, 0,2,0,0, 0,0,2,0],)"
+        R"("parent":"g","visible":false})");
+    EXPECT_EQ(add.ids.at(1), "t-8");
+    EXPECT_EQ(add.meshes, std::vector<std::string>{"m"});
+    EXPECT_EQ(add.materials, (std::vector<std::string>{"a", "b"}));
+    ASSERT_EQ(add.transforms.size(), 2u);
+    EXPECT_EQ(add.transforms[0].m[7], 2.0f);
+    EXPECT_EQ(add.transforms[1].m[5], 2.0f);
+    EXPECT_EQ(add.parent, std::optional<std::string>("g"));
+    EXPECT_FALSE(add.visible);
+
+    // Base64 of the identity and a translation by x = 2.
+    const auto update = one<UpdateInstances>(
+        R"({"op":"update_instances","ids":["a","b"],"transforms_b64":")"
+        R"(AACAPwAAAAAAAAAAAAAAAAAAAAAAAIA/AAAAAAAAAAAAAAAAAAAAAAAAgD8AAAAAAACAPwAAAAAAAAAAAAAAQAAA)"
+        R"(AAAAAIA/AAAAAAAAAAAAAAAAAAAAAAAAgD8AAAAA"})");
+    ASSERT_EQ(update.transforms.size(), 2u);
+    EXPECT_EQ(update.transforms[1].m[3], 2.0f);
+    EXPECT_FALSE(update.visible.has_value());
+    const auto objects = one<UpdateInstances>(
+        R"({"op":"update_instances","ids":["a"],"transforms":[{"translate":[1,2,3]}],"visible":true})");
+    EXPECT_EQ(objects.transforms[0].m[11], 3.0f);
+    EXPECT_EQ(objects.visible, std::optional<bool>(true));
+    EXPECT_EQ(one<RemoveInstances>(R"({"op":"remove_instances","ids":["x","y"]})").ids.list.size(), 2u);
+
+    // Value errors: 422 with the member's pointer.
+    const Problem b64 = fails(R"({"op":"update_instances","ids":["a"],"transforms_b64":"AAAA"})");
+    EXPECT_EQ(b64.status, 422);
+    EXPECT_EQ(b64.pointer, "/edits/0/transforms_b64");
+    const Problem flat = fails(R"({"op":"update_instances","ids":["a"],"transforms":[1,2,3]})");
+    EXPECT_EQ(flat.status, 422);
+    EXPECT_EQ(flat.pointer, "/edits/0/transforms");
 }
 
 TEST(EditParser, NumbersBeyondFloatRangeAreNotFiniteWithTheirPointer) {

@@ -1,0 +1,378 @@
+// Bulk instance edits (edits.h: AddInstances, UpdateInstances, RemoveInstances): the same scene
+// and the same hits as the single edits they stand for, the same rules item by item with errors
+// that name the item, atomic refusal, compact inverses and a journal layout that reads back.
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "engine/durable/edit_codec.h"
+#include "engine/engine.h"
+#include "engine/scene/shapes.h"
+#include "tests/engine/durable_test_util.h"
+#include "tests/engine/test_util.h"
+
+namespace strata {
+namespace {
+
+using test::state_of;
+
+EditBatch batch_of(std::vector<Edit> edits) {
+    return EditBatch{std::move(edits)};
+}
+
+/// Two meshes, two materials and a group, in `engine`.
+void base_scene(Engine& engine) {
+    AddGroup park{"park", std::nullopt, Affine::translation({0, 0, -2}), true};
+    test::apply_ok(engine, test::mesh_edit("ball", make_sphere(0.4f, 12)),
+                   test::mesh_edit("box", make_box(Vec3(0.3f))),
+                   AddMaterial{"red", Material{Vec3(0.9f, 0.1f, 0.1f), 0.5f, 0.0f, Vec3(0.0f)}},
+                   AddMaterial{"blue", Material{Vec3(0.1f, 0.1f, 0.9f), 0.5f, 0.0f, Vec3(0.0f)}},
+                   park, SetCamera{Vec3(0, 0, 12), Vec3(0), std::nullopt, 60.0f});
+}
+
+Affine random_place(std::mt19937& rng) {
+    std::uniform_real_distribution<float> at(-4.0f, 4.0f);
+    std::uniform_real_distribution<float> turn(0.0f, 180.0f);
+    return Affine::translation({at(rng), at(rng), at(rng)}) *
+           Affine::rotation_euler_deg({turn(rng), turn(rng), 0.0f});
+}
+
+/// The single edits a bulk edit stands for.
+std::vector<Edit> singles(const AddInstances& e) {
+    std::vector<Edit> out;
+    for (std::size_t i = 0; i < e.ids.size(); ++i) {
+        AddInstance a;
+        a.id = e.ids.at(i);
+        a.mesh = e.meshes.size() == 1 ? e.meshes[0] : e.meshes[i];
+        if (!e.materials.empty())
+            a.material = e.materials.size() == 1 ? e.materials[0] : e.materials[i];
+        if (!e.transforms.empty()) a.transform = e.transforms[i];
+        a.visible = e.visible;
+        a.parent = e.parent;
+        out.emplace_back(std::move(a));
+    }
+    return out;
+}
+std::vector<Edit> singles(const UpdateInstances& e) {
+    std::vector<Edit> out;
+    for (std::size_t i = 0; i < e.ids.size(); ++i) {
+        UpdateInstance u;
+        u.instance = e.ids.at(i);
+        if (!e.transforms.empty()) u.transform = e.transforms[i];
+        u.visible = e.visible;
+        out.emplace_back(std::move(u));
+    }
+    return out;
+}
+std::vector<Edit> singles(const RemoveInstances& e) {
+    std::vector<Edit> out;
+    for (std::size_t i = 0; i < e.ids.size(); ++i) out.emplace_back(RemoveInstance{e.ids.at(i)});
+    return out;
+}
+
+/// Applies `bulk` to one engine and its single edits to the other, commits both, and checks
+/// the scenes and their hits agree.
+template <class Bulk>
+void apply_both(Engine& bulk_engine, Engine& single_engine, const Bulk& bulk,
+                const std::string& what) {
+    auto a = bulk_engine.apply(batch_of({bulk}));
+    ASSERT_TRUE(a.has_value()) << what << ": " << a.error().describe();
+    auto b = single_engine.apply(batch_of(singles(bulk)));
+    ASSERT_TRUE(b.has_value()) << what << ": " << b.error().describe();
+    test::commit_ok(bulk_engine);
+    test::commit_ok(single_engine);
+    EXPECT_TRUE(state_of(bulk_engine) == state_of(single_engine)) << what;
+    EXPECT_TRUE(test::hits(bulk_engine) == test::hits(single_engine)) << what;
+}
+
+TEST(BulkInstances, SameSceneAndHitsAsSingleEdits) {
+    auto bulk_engine = test::make_engine();
+    auto single_engine = test::make_engine();
+    base_scene(*bulk_engine);
+    base_scene(*single_engine);
+    std::mt19937 rng(7);
+
+    AddInstances trees;  // a numbered range, one mesh and material for all
+    trees.ids.prefix = "tree-";
+    trees.ids.first = 10;
+    trees.ids.count = 300;
+    trees.meshes = {"ball"};
+    trees.materials = {"red"};
+    for (int i = 0; i < 300; ++i) trees.transforms.push_back(random_place(rng));
+    apply_both(*bulk_engine, *single_engine, trees, "add a range");
+
+    AddInstances rocks;  // listed ids, a mesh and a material per item, under a group
+    for (int i = 0; i < 50; ++i) {
+        rocks.ids.list.push_back("rock/" + std::to_string(i));
+        rocks.meshes.push_back(i % 2 ? "ball" : "box");
+        rocks.materials.push_back(i % 3 ? "blue" : "red");
+        rocks.transforms.push_back(random_place(rng));
+    }
+    rocks.parent = "park";
+    apply_both(*bulk_engine, *single_engine, rocks, "add a list under a group");
+
+    AddInstances hidden;  // identity transforms, hidden, the mesh's default material
+    hidden.ids.prefix = "h";
+    hidden.ids.count = 5;
+    hidden.meshes = {"box"};
+    hidden.visible = false;
+    apply_both(*bulk_engine, *single_engine, hidden, "add hidden");
+
+    UpdateInstances move;  // every third tree moves
+    for (int i = 10; i < 310; i += 3) {
+        move.ids.list.push_back("tree-" + std::to_string(i));
+        move.transforms.push_back(random_place(rng));
+    }
+    apply_both(*bulk_engine, *single_engine, move, "move a list");
+
+    UpdateInstances hide;  // a range hides
+    hide.ids.prefix = "tree-";
+    hide.ids.first = 100;
+    hide.ids.count = 80;
+    hide.visible = false;
+    apply_both(*bulk_engine, *single_engine, hide, "hide a range");
+
+    UpdateInstances show_and_move;  // both at once, hidden ones shown again
+    show_and_move.ids.prefix = "h";
+    show_and_move.ids.count = 5;
+    show_and_move.visible = true;
+    for (int i = 0; i < 5; ++i) show_and_move.transforms.push_back(random_place(rng));
+    apply_both(*bulk_engine, *single_engine, show_and_move, "show and move");
+
+    RemoveInstances cut;
+    cut.ids.prefix = "tree-";
+    cut.ids.first = 200;
+    cut.ids.count = 110;
+    apply_both(*bulk_engine, *single_engine, cut, "remove a range");
+    RemoveInstances cut_list;
+    for (int i = 0; i < 50; i += 2) cut_list.ids.list.push_back("rock/" + std::to_string(i));
+    apply_both(*bulk_engine, *single_engine, cut_list, "remove a list");
+}
+
+/// A bulk edit refused with `code` at `field` whose message names `item`; the scene unchanged.
+void expect_refused(Engine& engine, Edit edit, ErrorCode code, const std::string& field,
+                    const std::string& in_message) {
+    const std::vector<std::string> before = state_of(engine);
+    const uint64_t version = engine.read([](const Scene& s) { return s.version(); });
+    auto r = engine.apply(batch_of({test::instance_edit("first", "ball"), std::move(edit)}));
+    ASSERT_FALSE(r.has_value()) << field;
+    EXPECT_EQ(r.error().code, code) << r.error().describe();
+    EXPECT_EQ(r.error().edit_index, 1u);
+    EXPECT_EQ(r.error().field, field) << r.error().describe();
+    EXPECT_NE(r.error().message.find(in_message), std::string::npos) << r.error().describe();
+    EXPECT_TRUE(state_of(engine) == before) << field;
+    EXPECT_EQ(engine.read([](const Scene& s) { return s.version(); }), version);
+}
+
+TEST(BulkInstances, RefusedItemIsNamedAndChangesNothing) {
+    auto engine = test::make_engine();
+    base_scene(*engine);
+    AddInstances ok;
+    ok.ids.prefix = "t";
+    ok.ids.count = 10;
+    ok.meshes = {"ball"};
+    test::apply_ok(*engine, ok);
+
+    const auto adds = [](std::vector<std::string> ids) {
+        AddInstances e;
+        e.ids.list = std::move(ids);
+        e.meshes = {"ball"};
+        return e;
+    };
+    AddInstances twice = adds({"x", "y", "x"});
+    expect_refused(*engine, twice, ErrorCode::DuplicateId, "ids/2", "item 2 ('x')");
+    AddInstances taken = adds({"x", "t3"});
+    expect_refused(*engine, taken, ErrorCode::DuplicateId, "ids/1", "'t3' already exists");
+    AddInstances bad_id = adds({"x", ""});
+    expect_refused(*engine, bad_id, ErrorCode::InvalidArgument, "ids/1", "item 1");
+    AddInstances mesh_each = adds({"x", "y", "z"});
+    mesh_each.meshes = {"ball", "box", "cone"};
+    expect_refused(*engine, mesh_each, ErrorCode::UnknownId, "mesh/2", "unknown mesh 'cone'");
+    AddInstances no_mesh = adds({"x"});
+    no_mesh.meshes = {"cone"};
+    expect_refused(*engine, no_mesh, ErrorCode::UnknownId, "mesh", "unknown mesh 'cone'");
+    AddInstances material_each = adds({"x", "y"});
+    material_each.materials = {"red", "green"};
+    expect_refused(*engine, material_each, ErrorCode::UnknownId, "material/1", "'green'");
+    AddInstances nan = adds({"x", "y"});
+    nan.transforms = {Affine::identity(), Affine::identity()};
+    nan.transforms[1].m[3] = std::numeric_limits<float>::quiet_NaN();
+    expect_refused(*engine, nan, ErrorCode::NotFinite, "transforms/1", "item 1 ('y')");
+    AddInstances flat = adds({"x", "y"});
+    flat.transforms = {Affine::identity(), Affine::scaling({1, 0, 1})};
+    expect_refused(*engine, flat, ErrorCode::DegenerateTransform, "transforms/1", "item 1");
+    AddInstances short_list = adds({"x", "y", "z"});
+    short_list.transforms = {Affine::identity()};
+    expect_refused(*engine, short_list, ErrorCode::InvalidArgument, "transforms",
+                   "1 values for 3 ids");
+    AddInstances both = adds({"x"});
+    both.ids.count = 3;
+    expect_refused(*engine, both, ErrorCode::InvalidArgument, "ids", "not both");
+    AddInstances huge;
+    huge.ids.count = MAX_BULK_ITEMS + 1;
+    huge.meshes = {"ball"};
+    expect_refused(*engine, huge, ErrorCode::TooLarge, "ids", "over the limit");
+    AddInstances wraps;
+    wraps.ids.first = std::numeric_limits<uint64_t>::max() - 1;
+    wraps.ids.count = 3;
+    wraps.meshes = {"ball"};
+    expect_refused(*engine, wraps, ErrorCode::OutOfRange, "ids", "2^64");
+    AddInstances orphan = adds({"x"});
+    orphan.parent = "nowhere";
+    expect_refused(*engine, orphan, ErrorCode::UnknownId, "parent", "nowhere");
+
+    UpdateInstances unknown;
+    unknown.ids.prefix = "t";
+    unknown.ids.first = 5;
+    unknown.ids.count = 10;  // t10 .. t14 do not exist
+    unknown.visible = false;
+    expect_refused(*engine, unknown, ErrorCode::UnknownId, "ids/5", "item 5 ('t10')");
+    UpdateInstances nothing;
+    nothing.ids.list = {"t1"};
+    expect_refused(*engine, nothing, ErrorCode::InvalidArgument, "", "nothing to change");
+    RemoveInstances gone;
+    gone.ids.list = {"t1", "t1"};
+    expect_refused(*engine, gone, ErrorCode::UnknownId, "ids/1", "item 1 ('t1')");
+}
+
+TEST(BulkInstances, EmptyBulkEditsDoNothing) {
+    auto engine = test::make_engine();
+    base_scene(*engine);
+    test::commit_ok(*engine);
+    const std::vector<std::string> before = state_of(*engine);
+    AddInstances none;
+    none.meshes = {"ball"};
+    RemoveInstances none_removed;
+    test::apply_ok(*engine, none, none_removed);
+    EXPECT_TRUE(state_of(*engine) == before);
+    EXPECT_TRUE(test::commit_ok(*engine).no_accel_work());
+}
+
+TEST(BulkInstances, InstanceBudgetRefusesTheBatch) {
+    EngineConfig config;
+    config.budget.max_instances = 100;
+    auto made = Engine::create(config);
+    ASSERT_TRUE(made.has_value());
+    Engine& engine = *made.value();
+    base_scene(engine);
+    AddInstances many;
+    many.ids.prefix = "i";
+    many.ids.count = 101;
+    many.meshes = {"ball"};
+    auto r = engine.apply(batch_of({many}));
+    ASSERT_FALSE(r.has_value());
+    EXPECT_EQ(r.error().code, ErrorCode::TooLarge);
+    EXPECT_NE(r.error().message.find("max_scene_instances"), std::string::npos);
+    many.ids.count = 100;
+    test::apply_ok(engine, many);
+    // A removal and an add in one batch stay within it.
+    RemoveInstances one;
+    one.ids.list = {"i0"};
+    test::apply_ok(engine, one, test::instance_edit("other", "ball"));
+}
+
+TEST(BulkInstances, MovesAreATlasUpdateOnly) {
+    auto engine = test::make_engine();
+    base_scene(*engine);
+    AddInstances trees;
+    trees.ids.prefix = "t";
+    trees.ids.count = 1000;
+    trees.meshes = {"ball"};
+    test::apply_ok(*engine, trees);
+    test::commit_ok(*engine);
+    UpdateInstances move;
+    move.ids.prefix = "t";
+    move.ids.first = 100;
+    move.ids.count = 10;
+    move.transforms.assign(10, Affine::translation({1, 2, 3}));
+    test::apply_ok(*engine, move);
+    const RebuildReport report = test::commit_ok(*engine);
+    EXPECT_TRUE(report.rebuilt.empty());
+    EXPECT_TRUE(report.refit.empty());
+    EXPECT_EQ(report.instances_changed, 10u);
+}
+
+TEST(BulkInstances, InverseIsOneBulkEditAndRestores) {
+    auto engine = test::make_engine();
+    base_scene(*engine);
+    Scene scene;
+    ASSERT_TRUE(scene.apply(engine->read([](const Scene& s) { return s.to_batch(); })).has_value());
+    const std::vector<std::string> empty = state_of(scene);
+
+    AddInstances trees;
+    trees.ids.prefix = "t";
+    trees.ids.count = 500;
+    trees.meshes = {"ball"};
+    trees.transforms.assign(500, Affine::translation({0, 1, 0}));
+    EditBatch inverse;
+    ASSERT_TRUE(scene.apply(batch_of({trees}), nullptr, &inverse).has_value());
+    ASSERT_EQ(inverse.edits.size(), 1u);
+    ASSERT_TRUE(std::holds_alternative<RemoveInstances>(inverse.edits[0]));
+    EXPECT_EQ(std::get<RemoveInstances>(inverse.edits[0]).ids.size(), 500u);
+    const std::vector<std::string> planted = state_of(scene);
+
+    UpdateInstances move;
+    move.ids.prefix = "t";
+    move.ids.count = 500;
+    move.transforms.assign(500, Affine::translation({5, 0, 0}));
+    EditBatch move_back;
+    ASSERT_TRUE(scene.apply(batch_of({move}), nullptr, &move_back).has_value());
+    ASSERT_EQ(move_back.edits.size(), 1u);
+    ASSERT_TRUE(std::holds_alternative<UpdateInstances>(move_back.edits[0]));
+    ASSERT_TRUE(scene.apply(std::move(move_back)).has_value());
+    EXPECT_TRUE(state_of(scene) == planted);
+
+    RemoveInstances cut;
+    cut.ids.prefix = "t";
+    cut.ids.count = 500;
+    EditBatch put_back;
+    ASSERT_TRUE(scene.apply(batch_of({cut}), nullptr, &put_back).has_value());
+    ASSERT_TRUE(scene.apply(std::move(put_back)).has_value());
+    EXPECT_TRUE(state_of(scene) == planted);
+
+    ASSERT_TRUE(scene.apply(std::move(inverse)).has_value());
+    EXPECT_TRUE(state_of(scene) == empty);
+}
+
+TEST(BulkInstances, JournalLayoutReadsBack) {
+    AddInstances add;
+    add.ids.list = {"a", "b"};
+    add.meshes = {"m1", "m2"};
+    add.materials = {"red"};
+    add.transforms = {Affine::translation({1, 2, 3}), Affine::scaling({2, 2, 2})};
+    add.parent = "g";
+    add.visible = false;
+    UpdateInstances update;
+    update.ids.prefix = "tree-";
+    update.ids.first = 40;
+    update.ids.count = 2;
+    update.transforms = {Affine::identity(), Affine::translation({0, 0, 1})};
+    update.visible = true;
+    RemoveInstances remove;
+    remove.ids.prefix = "r";
+    remove.ids.count = 1u << 20;
+    const std::string bytes = test::encoded(batch_of({add, update, remove}));
+    auto back = durable::decode_batch(bytes);
+    ASSERT_TRUE(back.has_value()) << back.error().describe();
+    EXPECT_EQ(test::encoded(back.value()), bytes);
+    const auto& a = std::get<AddInstances>(back.value().edits[0]);
+    EXPECT_EQ(a.ids.list, add.ids.list);
+    EXPECT_EQ(a.meshes, add.meshes);
+    EXPECT_EQ(a.transforms[1].m, add.transforms[1].m);
+    EXPECT_EQ(a.parent, add.parent);
+    EXPECT_FALSE(a.visible);
+    EXPECT_EQ(std::get<UpdateInstances>(back.value().edits[1]).ids.at(1), "tree-41");
+    // A range of a million ids is a few bytes, not a million strings.
+    EXPECT_LT(bytes.size(), 400u);
+    // Truncated anywhere: an error, never a crash.
+    for (std::size_t cut = 0; cut < bytes.size(); ++cut)
+        EXPECT_FALSE(durable::decode_batch(std::string_view(bytes).substr(0, cut)).has_value());
+}
+
+}  // namespace
+}  // namespace strata
