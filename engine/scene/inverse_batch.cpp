@@ -103,7 +103,7 @@ public:
         e.material = id_or_none(i.material);
         e.parent = id_or_none(i.parent);
         copy_to_add<InstanceFields>(e, i);
-        emit(std::move(e));
+        emit_add_instance(std::move(e));
     }
 
     void operator()(undo::Removed<MaterialHandle, MaterialRecord>& r) {
@@ -233,6 +233,53 @@ private:
         } else {
             emit(SetTransform{std::move(id), t});
         }
+    }
+
+    /// Whether `e` can join a bulk add whose items have `parent`, `visible` and (`with_material`)
+    /// a material: only the fields a bulk add carries per edit or per item may differ.
+    static bool joins(const AddInstance& e, const std::optional<std::string>& parent, bool visible,
+                      bool with_material) {
+        static const AddInstance defaults{};
+        return e.parent == parent && e.visible == visible &&
+               e.material.has_value() == with_material && e.mask == defaults.mask &&
+               e.user_id == defaults.user_id && e.name.empty();
+    }
+    /// Appends one item to a per-item array that may still hold one value for its `n` items.
+    static void push_item(std::vector<std::string>& v, std::size_t n, std::string&& value) {
+        if (v.size() == 1) {
+            if (v[0] == value) return;
+            v.assign(n, v[0]);
+        }
+        v.push_back(std::move(value));
+    }
+    static AddInstances bulk_of(AddInstance&& e) {
+        AddInstances bulk;
+        bulk.ids.list.push_back(std::move(e.id));
+        bulk.meshes.push_back(std::move(e.mesh));
+        if (e.material) bulk.materials.push_back(std::move(*e.material));
+        bulk.transforms.push_back(e.transform);
+        bulk.parent = std::move(e.parent);
+        bulk.visible = e.visible;
+        return bulk;
+    }
+    /// Runs of instances added back (a bulk removal taken back) become one bulk add where their
+    /// fields allow it.
+    void emit_add_instance(AddInstance&& e) {
+        Edit* last = m_out->edits.empty() ? nullptr : &m_out->edits.back();
+        if (auto* one = last ? std::get_if<AddInstance>(last) : nullptr;
+            one && joins(*one, e.parent, e.visible, e.material.has_value()) &&
+            joins(e, one->parent, one->visible, one->material.has_value())) {
+            *last = bulk_of(std::move(*one));
+        }
+        auto* bulk = last ? std::get_if<AddInstances>(last) : nullptr;
+        if (!bulk || bulk->ids.list.size() >= MAX_BULK_ITEMS ||
+            !joins(e, bulk->parent, bulk->visible, !bulk->materials.empty()))
+            return emit(std::move(e));
+        const std::size_t n = bulk->ids.list.size();
+        bulk->ids.list.push_back(std::move(e.id));
+        push_item(bulk->meshes, n, std::move(e.mesh));
+        if (e.material) push_item(bulk->materials, n, std::move(*e.material));
+        bulk->transforms.push_back(e.transform);
     }
 
     void invert_topology(undo::MeshTopology& r, undo::MeshAttributes* attributes) {

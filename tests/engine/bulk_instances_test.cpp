@@ -332,8 +332,32 @@ TEST(BulkInstances, InverseIsOneBulkEditAndRestores) {
     cut.ids.count = 500;
     EditBatch put_back;
     ASSERT_TRUE(scene.apply(batch_of({cut}), nullptr, &put_back).has_value());
+    ASSERT_EQ(put_back.edits.size(), 1u);
+    ASSERT_TRUE(std::holds_alternative<AddInstances>(put_back.edits[0]));
+    EXPECT_EQ(std::get<AddInstances>(put_back.edits[0]).meshes.size(), 1u);
     ASSERT_TRUE(scene.apply(std::move(put_back)).has_value());
     EXPECT_TRUE(state_of(scene) == planted);
+
+    // Instances whose fields a bulk add cannot carry come back one by one, between bulk runs.
+    UpdateInstance masked;
+    masked.instance = "t7";
+    masked.mask = 2;
+    UpdateInstance named;
+    named.instance = "t300";
+    named.name = "a named tree";
+    AddInstance other = test::instance_edit("box-1", "box", Vec3(1, 2, 3));
+    other.material = "red";
+    ASSERT_TRUE(scene.apply(batch_of({masked, named, other})).has_value());
+    const std::vector<std::string> mixed = state_of(scene);
+    RemoveInstances cut_mixed;
+    cut_mixed.ids.list = {"t0", "t7", "box-1", "t1", "t300", "t2"};
+    ASSERT_TRUE(scene.apply(batch_of({cut_mixed}), nullptr, &put_back).has_value());
+    EXPECT_GT(put_back.edits.size(), 1u);
+    ASSERT_TRUE(scene.apply(std::move(put_back)).has_value());
+    EXPECT_TRUE(state_of(scene) == mixed);
+    RemoveInstances cut_extra;
+    cut_extra.ids.list = {"box-1"};
+    ASSERT_TRUE(scene.apply(batch_of({cut_extra})).has_value());
 
     ASSERT_TRUE(scene.apply(std::move(inverse)).has_value());
     EXPECT_TRUE(state_of(scene) == empty);

@@ -40,7 +40,7 @@ class ReadmeExamplesTest(unittest.TestCase):
     def run_examples(self, server_args: List[str], runs: int) -> None:
         with open(README, encoding="utf-8") as f:
             found = examples(f.read())
-        self.assertEqual(len(found), 3)  # the quick start, asyncio and undo examples
+        self.assertEqual(len(found), 4)  # the quick start, asyncio, undo and bulk examples
         with ServerProcess(SERVER, server_args) as server, tempfile.TemporaryDirectory() as cwd:
             for code, expected in found:
                 self.assertIn(README_URL, code)
