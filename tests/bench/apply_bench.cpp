@@ -1,8 +1,10 @@
 // Cost of applying one large edit batch (Google Benchmark; never run by CTest): the scene's
 // checks and bookkeeping for 100,000 edits, without any commit. Batches are built outside the
 // timed region. `Reject*` batches fail at their last edit, so they pay every check plus undoing
-// what the batch had applied. The argument of the accepted kinds is 1 when the apply also makes
-// the batch's inverse, as the engine does for its undo history (inverse_batch.h), 0 when not.
+// what the batch had applied. `Bulk*` apply the same adds and moves as one bulk edit
+// (add_instances, update_instances). The argument of the accepted kinds is 1 when the apply also
+// makes the batch's inverse, as the engine does for its undo history (inverse_batch.h), 0 when
+// not.
 //
 //   build/tests/bench/strata_apply_bench --benchmark_repetitions=7 --benchmark_report_aggregates_only=true
 
@@ -151,6 +153,61 @@ void BM_MixedEdits(benchmark::State& state) {
     state.SetItemsProcessed(state.iterations() * EDITS);
 }
 BENCHMARK(BM_MixedEdits)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+/// The same 100,000 adds as adds(first), as one add_instances: a numbered range of ids, the
+/// mesh and material once, the transforms packed.
+EditBatch bulk_adds(int first) {
+    AddInstances e;
+    e.ids.prefix = "instance-";
+    e.ids.first = uint64_t(first);
+    e.ids.count = EDITS;
+    e.meshes = {"pebble"};
+    e.materials = {"stone"};
+    for (int i = 0; i < EDITS; ++i) e.transforms.push_back(place(i, 1.0f));
+    EditBatch b;
+    b.edits.emplace_back(std::move(e));
+    return b;
+}
+
+/// The same 100,000 moves as moves(frame), as one update_instances.
+EditBatch bulk_moves(int frame) {
+    UpdateInstances e;
+    e.ids.prefix = "instance-";
+    e.ids.count = EDITS;
+    for (int i = 0; i < EDITS; ++i) e.transforms.push_back(place(i, float(frame % 5)));
+    EditBatch b;
+    b.edits.emplace_back(std::move(e));
+    return b;
+}
+
+void BM_BulkAddInstances(benchmark::State& state) {
+    for (auto _ : state) {
+        state.PauseTiming();
+        Scene scene = populated(0);
+        EditBatch b = bulk_adds(0);
+        state.ResumeTiming();
+        apply_timed(state, scene, std::move(b), true);
+        state.PauseTiming();
+        scene = Scene();
+        state.ResumeTiming();
+    }
+    state.SetItemsProcessed(state.iterations() * EDITS);
+}
+BENCHMARK(BM_BulkAddInstances)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+void BM_BulkMoveInstances(benchmark::State& state) {
+    Scene scene = populated(EDITS);
+    int frame = 0;
+    for (auto _ : state) {
+        state.PauseTiming();
+        EditBatch b = bulk_moves(++frame);
+        scene.clear_changes();
+        state.ResumeTiming();
+        apply_timed(state, scene, std::move(b), true);
+    }
+    state.SetItemsProcessed(state.iterations() * EDITS);
+}
+BENCHMARK(BM_BulkMoveInstances)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 void BM_RejectAddInstances(benchmark::State& state) {
     Scene scene = populated(0);

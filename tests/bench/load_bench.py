@@ -4,6 +4,7 @@ resident memory per instance, with bulk ops against one add_instance edit per in
 run by CTest.
 
     tests/bench/load_bench.py [BUILD_DIR] [--instances N] [--runs R] [--chunk C]
+                              [--modes single,bulk] [--moves K]
 
 Each run starts a fresh strata-server, adds one 224-triangle sphere (commits it, renders once),
 then times, from the first edit request to the end of the first 64x36 frame:
@@ -14,7 +15,9 @@ then times, from the first edit request to the end of the first 64x36 frame:
 Request bodies are built before the clock starts (client-side generation excluded). Resident
 memory (VmRSS of the server) is read after the sphere's frame, after the edits (the scene) and
 after the frame (the TLAS too); bytes per instance are the growth divided by N. Each figure is
-the median over R runs (default 3); modes alternate within a run. Needs numpy.
+the median over R runs (default 3); modes alternate within a run. With --moves K, K commits that
+each move one instance (set_transform) follow the first frame, and the commits' own times (the
+report's `ms`) are summarised as p50 and p99. Needs numpy.
 """
 
 import argparse
@@ -85,7 +88,24 @@ def rss_bytes(pid):
     raise RuntimeError("no VmRSS")
 
 
-def load(binary, bodies, n):
+def percentile(values, p):
+    ordered = sorted(values)
+    return ordered[min(len(ordered) - 1, int(round(p / 100 * (len(ordered) - 1))))]
+
+
+def move_one(conn, n, k):
+    """K commits each moving one instance; the commits' report times (ms)."""
+    times = []
+    for j in range(k):
+        target = (j * 7919) % n
+        edit = {"edits": [{"op": "set_transform", "instance": f"b{target}",
+                           "transform": {"translate": [j % 50, 3, 0]}}]}
+        post(conn, "/v1/edits", json.dumps(edit).encode())
+        times.append(json.loads(post(conn, "/v1/commit", b"{}"))["ms"])
+    return times
+
+
+def load(binary, bodies, n, moves):
     server = ServerProcess(binary, ["--max-body-mb", "512"])
     try:
         conn = http.client.HTTPConnection("127.0.0.1", server.port, timeout=600)
@@ -100,10 +120,15 @@ def load(binary, bodies, n):
         post(conn, "/v1/render", b'{"width": 64, "height": 36}')
         total = time.perf_counter() - t0
         frame = rss_bytes(server.process.pid)
+        result = {"edits_s": t_edits, "first_frame_s": total,
+                  "scene_bytes_per_instance": (scene - base) / n,
+                  "bytes_per_instance": (frame - base) / n}
+        if moves:
+            times = move_one(conn, n, moves)
+            result["move_one_p50_ms"] = percentile(times, 50)
+            result["move_one_p99_ms"] = percentile(times, 99)
         conn.close()
-        return {"edits_s": t_edits, "first_frame_s": total,
-                "scene_bytes_per_instance": (scene - base) / n,
-                "bytes_per_instance": (frame - base) / n}
+        return result
     finally:
         server.stop()
 
@@ -114,25 +139,31 @@ def main():
     p.add_argument("--instances", type=int, default=1_000_000)
     p.add_argument("--runs", type=int, default=3)
     p.add_argument("--chunk", type=int, default=250_000)
+    p.add_argument("--modes", default="single,bulk")
+    p.add_argument("--moves", type=int, default=0)
     a = p.parse_args()
     binary = os.path.join(a.build, "server", "strata-server")
     xs = transforms(a.instances)
-    modes = {"single": single_bodies(xs), "bulk": bulk_bodies(xs, a.chunk)}
+    make = {"single": single_bodies, "bulk": lambda x: bulk_bodies(x, a.chunk)}
+    modes = {m: make[m](xs) for m in a.modes.split(",")}
     results = {m: [] for m in modes}
     for run in range(a.runs):
         for mode, bodies in modes.items():
-            r = load(binary, bodies, a.instances)
+            r = load(binary, bodies, a.instances, a.moves)
             results[mode].append(r)
             print(f"run {run} {mode}: " + ", ".join(f"{k} {v:.3f}" for k, v in r.items()),
                   flush=True)
     print(f"\n{a.instances} instances, {os.cpu_count()} cpus, median of {a.runs} runs")
     print("| mode | edits (s) | first request to first frame (s) | scene bytes/instance "
-          "| bytes/instance after the frame |")
-    print("|---|---|---|---|---|")
+          "| bytes/instance after the frame | move one: p50 / p99 commit (ms) |")
+    print("|---|---|---|---|---|---|")
     for mode, rs in results.items():
         med = {k: statistics.median(r[k] for r in rs) for k in rs[0]}
+        moves = (f"{med['move_one_p50_ms']:.2f} / {med['move_one_p99_ms']:.2f}"
+                 if "move_one_p50_ms" in med else "")
         print(f"| {mode} | {med['edits_s']:.2f} | {med['first_frame_s']:.2f} | "
-              f"{med['scene_bytes_per_instance']:.0f} | {med['bytes_per_instance']:.0f} |")
+              f"{med['scene_bytes_per_instance']:.0f} | {med['bytes_per_instance']:.0f} | "
+              f"{moves} |")
 
 
 if __name__ == "__main__":

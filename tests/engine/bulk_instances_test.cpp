@@ -313,7 +313,12 @@ TEST(BulkInstances, InverseIsOneBulkEditAndRestores) {
     ASSERT_TRUE(scene.apply(batch_of({trees}), nullptr, &inverse).has_value());
     ASSERT_EQ(inverse.edits.size(), 1u);
     ASSERT_TRUE(std::holds_alternative<RemoveInstances>(inverse.edits[0]));
-    EXPECT_EQ(std::get<RemoveInstances>(inverse.edits[0]).ids.size(), 500u);
+    const BulkIds& undone = std::get<RemoveInstances>(inverse.edits[0]).ids;
+    EXPECT_EQ(undone.size(), 500u);
+    // The ids are a numbered range: the inverse keeps the range, not 500 strings.
+    EXPECT_TRUE(undone.list.empty());
+    EXPECT_EQ(undone.prefix, "t");
+    EXPECT_EQ(undone.first, 0u);
     const std::vector<std::string> planted = state_of(scene);
 
     UpdateInstances move;
@@ -361,6 +366,47 @@ TEST(BulkInstances, InverseIsOneBulkEditAndRestores) {
 
     ASSERT_TRUE(scene.apply(std::move(inverse)).has_value());
     EXPECT_TRUE(state_of(scene) == empty);
+}
+
+TEST(BulkInstances, OnlyExactNumberedRangesBecomeRanges) {
+    auto engine = test::make_engine();
+    base_scene(*engine);
+    Scene scene;
+    ASSERT_TRUE(scene.apply(engine->read([](const Scene& s) { return s.to_batch(); })).has_value());
+    const std::vector<std::string> before = state_of(scene);
+    const std::vector<std::vector<std::string>> lists = {
+        {"p1", "p01", "p2"},      // a leading zero: not the canonical spelling of a number
+        {"p1", "p3", "p4"},       // a gap
+        {"p1", "q2", "p3"},       // another prefix
+        {"p", "p1", "p2"},        // no number
+        {"p7", "p5", "p6", "p8"}  // any order: the range p5 .. p8
+    };
+    for (const auto& ids : lists) {
+        AddInstances add;
+        add.ids.list = ids;
+        add.meshes = {"ball"};
+        for (std::size_t i = 0; i < ids.size(); ++i)
+            add.transforms.push_back(Affine::translation({float(i), 0, 0}));
+        EditBatch inverse;
+        ASSERT_TRUE(scene.apply(batch_of({add}), nullptr, &inverse).has_value());
+        ASSERT_EQ(inverse.edits.size(), 1u);
+        const BulkIds& undo = std::get<RemoveInstances>(inverse.edits[0]).ids;
+        EXPECT_EQ(undo.list.empty(), ids.front() == "p7") << ids.front();
+        EXPECT_EQ(undo.size(), ids.size());
+
+        // And the moves' inverse keeps each transform with its own instance.
+        const std::vector<std::string> placed = state_of(scene);
+        UpdateInstances move;
+        move.ids.list = ids;
+        move.transforms.assign(ids.size(), Affine::translation({0, 9, 0}));
+        EditBatch move_back;
+        ASSERT_TRUE(scene.apply(batch_of({move}), nullptr, &move_back).has_value());
+        ASSERT_TRUE(scene.apply(std::move(move_back)).has_value());
+        EXPECT_TRUE(state_of(scene) == placed) << ids.front();
+
+        ASSERT_TRUE(scene.apply(std::move(inverse)).has_value());
+        EXPECT_TRUE(state_of(scene) == before) << ids.front();
+    }
 }
 
 TEST(BulkInstances, JournalLayoutReadsBack) {
