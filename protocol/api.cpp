@@ -281,13 +281,21 @@ ApiResponse get_scene_object(const Engine& engine, SceneObject kind, std::string
 ApiResponse get_stats(const Engine& engine, const durable::DurableStats* durable) {
     const EngineCounters counters = engine.counters();
     const RebuildReport last = engine.last_report();
-    const uint64_t version = scene_version(engine);
-    const Json doc = {{"version", version},
-                      {"counters", counters_to_json(counters)},
-                      {"last_report", counters.commits ? report_to_json(last) : Json(nullptr)},
-                      {"memory_bytes",
-                       {{"blas", engine.memory_bytes(MemoryCategory::Blas)},
-                        {"tlas", engine.memory_bytes(MemoryCategory::Tlas)}}}};
+    const auto [version, instances, instance_bytes] = engine.read([](const Scene& s) {
+        return std::tuple(s.version(), uint64_t(s.instances().size()), s.instance_bytes());
+    });
+    const int64_t tlas = engine.memory_bytes(MemoryCategory::Tlas);
+    const Json doc = {
+        {"version", version},
+        {"counters", counters_to_json(counters)},
+        {"last_report", counters.commits ? report_to_json(last) : Json(nullptr)},
+        {"memory_bytes",
+         {{"blas", engine.memory_bytes(MemoryCategory::Blas)},
+          {"tlas", tlas},
+          {"instances", instance_bytes},
+          {"per_instance", instances ? Json((instance_bytes + uint64_t(std::max<int64_t>(tlas, 0))) /
+                                            instances)
+                                     : Json(nullptr)}}}};
     Json out = doc;
     out["durability"] = durable ? durable_stats_to_json(*durable) : Json(nullptr);
     return with_etag(json_response(200, out), version);

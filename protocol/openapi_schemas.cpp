@@ -227,7 +227,16 @@ J stats_schema() {
     return object({{"version", count()},
                    {"counters", object(stat_properties(ENGINE_COUNTERS))},
                    {"last_report", or_null(ref("Report"))},
-                   {"memory_bytes", object({{"blas", count()}, {"tlas", count()}})},
+                   {"memory_bytes",
+                    object({{"blas", count()},
+                            {"tlas", count()},
+                            {"instances", described(count(), "bytes the scene holds for its "
+                                                             "instances: records, ids, id map, "
+                                                             "lists")},
+                            {"per_instance",
+                             described(or_null(count()),
+                                       "(instances + tlas) / instance count; null without "
+                                       "instances")}})},
                    {"durability", or_null(ref("Durability"))}});
 }
 

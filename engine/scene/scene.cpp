@@ -223,6 +223,31 @@ void Scene::clear_changes() {
 
 // Step: queries --------------------------------------------------------------------------------
 
+namespace {
+
+/// Heap bytes of a string beyond its small-string buffer (rounded to the allocator's 16 bytes).
+uint64_t heap_bytes(const std::string& s) {
+    return s.capacity() > 15 ? (s.capacity() + 1 + 15) / 16 * 16 : 0;
+}
+
+}  // namespace
+
+uint64_t Scene::instance_bytes() const {
+    using Slots = SlotArray<InstanceRecord, InstanceTag>;
+    const uint64_t slots = (uint64_t(m_instances.slot_count()) + Slots::CHUNK - 1) /
+                           Slots::CHUNK * Slots::CHUNK;
+    uint64_t bytes = slots * (sizeof(InstanceRecord) + sizeof(uint32_t) + sizeof(uint8_t));
+    // An unordered_map node: the next pointer, the key and value, the cached hash.
+    constexpr uint64_t NODE =
+        (sizeof(void*) + sizeof(std::pair<const std::string, InstanceHandle>) + sizeof(std::size_t) +
+         15) / 16 * 16;
+    bytes += m_instance_ids.size() * NODE + m_instance_ids.bucket_count() * sizeof(void*);
+    m_instances.for_each([&](InstanceHandle, const InstanceRecord& r) {
+        bytes += 2 * heap_bytes(r.id) + heap_bytes(r.name);  // the id: in the record and the map
+    });
+    return bytes + m_instances.size() * 2 * sizeof(InstanceHandle);  // users and children
+}
+
 SceneCounts Scene::counts() const {
     SceneCounts c;
     c.meshes = m_meshes.size();

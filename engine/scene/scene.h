@@ -212,6 +212,11 @@ public:
     Material resolved_material(const InstanceRecord& inst) const;
 
     SceneCounts counts() const;
+    /// Bytes the scene holds for its instances, from sizes and capacities: their slots, the heap
+    /// parts of their id and name strings, the id map's nodes and buckets, and their entries in
+    /// the mesh-user and child lists. O(instances). The TLAS and the commit's per-slot tables are
+    /// not counted (Engine::memory_bytes has the TLAS).
+    uint64_t instance_bytes() const;
     /// World-space bounds over visible instances (computed on demand, O(vertices)).
     Bounds3 world_bounds() const;
 

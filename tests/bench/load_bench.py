@@ -14,7 +14,8 @@ then times, from the first edit request to the end of the first 64x36 frame:
     transforms as base64 float32 3x4 rows).
 Request bodies are built before the clock starts (client-side generation excluded). Resident
 memory (VmRSS of the server) is read after the sphere's frame, after the edits (the scene) and
-after the frame (the TLAS too); bytes per instance are the growth divided by N. Each figure is
+after the frame (the TLAS too); bytes per instance are the growth divided by N, beside what
+/v1/stats estimates (`memory_bytes.per_instance`). Each figure is
 the median over R runs (default 3); modes alternate within a run. With --moves K, K commits that
 each move one instance (set_transform) follow the first frame, and the commits' own times (the
 report's `ms`) are summarised as p50 and p99. Needs numpy.
@@ -120,9 +121,12 @@ def load(binary, bodies, n, moves):
         post(conn, "/v1/render", b'{"width": 64, "height": 36}')
         total = time.perf_counter() - t0
         frame = rss_bytes(server.process.pid)
+        conn.request("GET", "/v1/stats")
+        stats = json.loads(conn.getresponse().read())
         result = {"edits_s": t_edits, "first_frame_s": total,
                   "scene_bytes_per_instance": (scene - base) / n,
-                  "bytes_per_instance": (frame - base) / n}
+                  "bytes_per_instance": (frame - base) / n,
+                  "stats_per_instance": stats["memory_bytes"]["per_instance"]}
         if moves:
             times = move_one(conn, n, moves)
             result["move_one_p50_ms"] = percentile(times, 50)
@@ -155,15 +159,16 @@ def main():
                   flush=True)
     print(f"\n{a.instances} instances, {os.cpu_count()} cpus, median of {a.runs} runs")
     print("| mode | edits (s) | first request to first frame (s) | scene bytes/instance "
-          "| bytes/instance after the frame | move one: p50 / p99 commit (ms) |")
-    print("|---|---|---|---|---|---|")
+          "| bytes/instance after the frame | /v1/stats per_instance "
+          "| move one: p50 / p99 commit (ms) |")
+    print("|---|---|---|---|---|---|---|")
     for mode, rs in results.items():
         med = {k: statistics.median(r[k] for r in rs) for k in rs[0]}
         moves = (f"{med['move_one_p50_ms']:.2f} / {med['move_one_p99_ms']:.2f}"
                  if "move_one_p50_ms" in med else "")
         print(f"| {mode} | {med['edits_s']:.2f} | {med['first_frame_s']:.2f} | "
               f"{med['scene_bytes_per_instance']:.0f} | {med['bytes_per_instance']:.0f} | "
-              f"{moves} |")
+              f"{med['stats_per_instance']:.0f} | {moves} |")
 
 
 if __name__ == "__main__":

@@ -74,8 +74,16 @@ class BulkInstancesTest(unittest.TestCase):
         self.assertEqual(report.blas_rebuilds, 0)
         self.assertEqual(report.blas_refits, 0)
 
+        # What the instances cost: the scene's share grows with them, and per_instance is it
+        # plus the TLAS, per instance.
+        memory = self.client.stats()["memory_bytes"]
+        self.assertGreater(memory["instances"], N * 200)
+        self.assertEqual(memory["per_instance"], (memory["instances"] + memory["tlas"]) // N)
+
         self.client.edit([bulk.remove_instances(bulk.id_range("r", N // 2))])
         self.assertEqual(self.count(), N - N // 2)
+        self.client.edit([bulk.remove_instances(bulk.id_range("r", N - N // 2, first=N // 2))])
+        self.assertIsNone(self.client.stats()["memory_bytes"]["per_instance"])
 
     def test_rows_and_arrays_pack_the_same(self):
         xs = grid(3, y=2.5)
