@@ -13,6 +13,7 @@
 #include "engine/durable/edit_codec.h"
 #include "engine/engine.h"
 #include "engine/scene/shapes.h"
+#include "tests/engine/bulk_singles.h"
 #include "tests/engine/durable_test_util.h"
 #include "tests/engine/test_util.h"
 
@@ -42,39 +43,6 @@ Affine random_place(std::mt19937& rng) {
            Affine::rotation_euler_deg({turn(rng), turn(rng), 0.0f});
 }
 
-/// The single edits a bulk edit stands for.
-std::vector<Edit> singles(const AddInstances& e) {
-    std::vector<Edit> out;
-    for (std::size_t i = 0; i < e.ids.size(); ++i) {
-        AddInstance a;
-        a.id = e.ids.at(i);
-        a.mesh = e.meshes.size() == 1 ? e.meshes[0] : e.meshes[i];
-        if (!e.materials.empty())
-            a.material = e.materials.size() == 1 ? e.materials[0] : e.materials[i];
-        if (!e.transforms.empty()) a.transform = e.transforms[i];
-        a.visible = e.visible;
-        a.parent = e.parent;
-        out.emplace_back(std::move(a));
-    }
-    return out;
-}
-std::vector<Edit> singles(const UpdateInstances& e) {
-    std::vector<Edit> out;
-    for (std::size_t i = 0; i < e.ids.size(); ++i) {
-        UpdateInstance u;
-        u.instance = e.ids.at(i);
-        if (!e.transforms.empty()) u.transform = e.transforms[i];
-        u.visible = e.visible;
-        out.emplace_back(std::move(u));
-    }
-    return out;
-}
-std::vector<Edit> singles(const RemoveInstances& e) {
-    std::vector<Edit> out;
-    for (std::size_t i = 0; i < e.ids.size(); ++i) out.emplace_back(RemoveInstance{e.ids.at(i)});
-    return out;
-}
-
 /// Applies `bulk` to one engine and its single edits to the other, commits both, and checks
 /// the scenes and their hits agree.
 template <class Bulk>
@@ -82,7 +50,7 @@ void apply_both(Engine& bulk_engine, Engine& single_engine, const Bulk& bulk,
                 const std::string& what) {
     auto a = bulk_engine.apply(batch_of({bulk}));
     ASSERT_TRUE(a.has_value()) << what << ": " << a.error().describe();
-    auto b = single_engine.apply(batch_of(singles(bulk)));
+    auto b = single_engine.apply(batch_of(test::singles(bulk)));
     ASSERT_TRUE(b.has_value()) << what << ": " << b.error().describe();
     test::commit_ok(bulk_engine);
     test::commit_ok(single_engine);
@@ -152,6 +120,96 @@ TEST(BulkInstances, SameSceneAndHitsAsSingleEdits) {
     RemoveInstances cut_list;
     for (int i = 0; i < 50; i += 2) cut_list.ids.list.push_back("rock/" + std::to_string(i));
     apply_both(*bulk_engine, *single_engine, cut_list, "remove a list");
+}
+
+/// Random bulk adds, moves, hides, shows and removals over a pool of numbered ids, some of which
+/// name missing instances or repeat: each batch must be accepted or refused as its single edits
+/// are, and leave the same scene and the same hits.
+TEST(BulkInstances, RandomBulkBatchesMatchTheirSingleEdits) {
+    auto bulk_engine = test::make_engine();
+    auto single_engine = test::make_engine();
+    base_scene(*bulk_engine);
+    base_scene(*single_engine);
+    std::mt19937 rng(2026);
+    const auto pick = [&](int n) { return int(rng() % uint32_t(n)); };
+    uint64_t next = 0;  // adds mostly take fresh numbers; one in six reuses some
+    const auto some_ids = [&](BulkIds& ids, bool fresh) {
+        const uint64_t count = uint64_t(1 + pick(40));
+        if (fresh && pick(6)) {
+            ids.prefix = "p";
+            ids.first = next;
+            ids.count = count;
+            next += count;
+        } else if (pick(2)) {
+            ids.prefix = "p";
+            ids.first = uint64_t(pick(int(next) + 1));
+            ids.count = count / 4 + 1;
+        } else {
+            for (int k = 1 + pick(8); k > 0; --k)
+                ids.list.push_back("p" + std::to_string(pick(int(next) + 5)));
+        }
+    };
+    int accepted = 0;
+    for (int round = 0; round < 60; ++round) {
+        std::vector<Edit> edits;
+        for (int k = 1 + pick(2); k > 0; --k) {
+            switch (pick(4)) {
+                case 0: {
+                    AddInstances e;
+                    some_ids(e.ids, true);
+                    const std::size_t n = e.ids.size();
+                    if (pick(2)) {
+                        e.meshes = {pick(2) ? "ball" : "box"};
+                    } else {
+                        for (std::size_t i = 0; i < n; ++i) e.meshes.push_back(pick(2) ? "ball" : "box");
+                    }
+                    if (pick(2)) e.materials = {pick(2) ? "red" : "blue"};
+                    if (pick(3)) {
+                        for (std::size_t i = 0; i < n; ++i) e.transforms.push_back(random_place(rng));
+                    }
+                    if (pick(4) == 0) e.parent = "park";
+                    e.visible = pick(5) != 0;
+                    edits.emplace_back(std::move(e));
+                    break;
+                }
+                case 1:
+                case 2: {
+                    UpdateInstances e;
+                    some_ids(e.ids, false);
+                    if (pick(3)) {
+                        for (std::size_t i = 0; i < e.ids.size(); ++i)
+                            e.transforms.push_back(random_place(rng));
+                    }
+                    if (e.transforms.empty() || pick(2)) e.visible = pick(2) != 0;
+                    edits.emplace_back(std::move(e));
+                    break;
+                }
+                default: {
+                    RemoveInstances e;
+                    some_ids(e.ids, false);
+                    edits.emplace_back(std::move(e));
+                }
+            }
+        }
+        auto twin = test::with_singles(edits);
+        ASSERT_TRUE(twin.has_value());
+        auto a = bulk_engine->apply(batch_of(std::move(edits)));
+        auto b = single_engine->apply(batch_of(std::move(*twin)));
+        ASSERT_EQ(a.has_value(), b.has_value())
+            << "round " << round << ": " << (a ? b.error().describe() : a.error().describe());
+        if (!a) {
+            EXPECT_EQ(a.error().code, b.error().code) << round;
+            continue;
+        }
+        ++accepted;
+        if (round % 10 == 9) {
+            test::commit_ok(*bulk_engine);
+            test::commit_ok(*single_engine);
+            EXPECT_TRUE(test::hits(*bulk_engine) == test::hits(*single_engine)) << round;
+        }
+        EXPECT_TRUE(state_of(*bulk_engine) == state_of(*single_engine)) << round;
+    }
+    EXPECT_GT(accepted, 10);  // the batches must not all be refused
 }
 
 /// A bulk edit refused with `code` at `field` whose message names `item`; the scene unchanged.

@@ -6,19 +6,28 @@
 //     numbers that overflow, which it keeps as infinity), and reads the same values;
 //   - a parse error names a place inside the edit it blames;
 //   - a parsed batch goes through the engine's rules on a small scene; a refused batch leaves
-//     that scene as it was, and its error maps to a problem.
+//     that scene as it was, and its error maps to a problem;
+//   - a batch with bulk instance edits is accepted or refused as the same batch with their
+//     single edits is, and leaves the same objects.
 // Build and run: scripts/run-fuzz.sh.
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
+#include <string>
 #include <string_view>
+#include <variant>
+#include <vector>
 
+#include "engine/durable/edit_codec.h"
 #include "engine/scene/scene.h"
 #include "protocol/edit_parser.h"
 #include "protocol/problem.h"
+#include "tests/engine/bulk_singles.h"
 
 namespace {
 
@@ -74,6 +83,29 @@ strata::Scene seed_scene() {
     if (!scene.apply(std::move(b))) std::abort();
     scene.clear_changes();
     return scene;
+}
+
+/// A scene's objects, each encoded, sorted: equal for equal scenes whatever their slots.
+std::vector<std::string> state_of(const strata::Scene& s) {
+    std::vector<std::string> out;
+    for (strata::Edit& e : s.to_batch().edits) {
+        strata::EditBatch one;
+        one.edits.push_back(std::move(e));
+        out.emplace_back();
+        strata::durable::encode_batch(one, out.back());
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+bool has_bulk(const std::vector<strata::Edit>& edits) {
+    for (const strata::Edit& e : edits) {
+        if (std::holds_alternative<strata::AddInstances>(e) ||
+            std::holds_alternative<strata::UpdateInstances>(e) ||
+            std::holds_alternative<strata::RemoveInstances>(e))
+            return true;
+    }
+    return false;
 }
 
 /// Aborts (a crash libFuzzer reports) with the line of the broken expectation.
@@ -134,14 +166,25 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
 
     // Step: the engine's rules on what the parser produced, against a small scene; a refused
     // batch must leave that scene exactly as it was.
+    // Bulk edits also go through their single edits, on a second scene: both must be accepted
+    // or refused together, and leave the same objects.
+    std::optional<std::vector<strata::Edit>> twin;
+    if (has_bulk(batch.value().batch.edits)) twin = strata::test::with_singles(batch.value().batch.edits);
     strata::Scene scene = seed_scene();
     const uint64_t before = scene.version();
     const std::size_t before_edits = scene.to_batch().edits.size();
-    if (auto applied = scene.apply(std::move(batch.value().batch)); !applied) {
+    auto applied = scene.apply(std::move(batch.value().batch));
+    if (!applied) {
         (void)problem_to_json(problem_from_batch_error(applied.error(), batch.value().sources));
         FUZZ_CHECK(scene.version() == before);
         FUZZ_CHECK(scene.to_batch().edits.size() == before_edits);
         FUZZ_CHECK(scene.changes().empty());
+    }
+    if (twin) {
+        strata::Scene singles = seed_scene();
+        const bool singles_applied = singles.apply(strata::EditBatch{std::move(*twin)}).has_value();
+        FUZZ_CHECK(singles_applied == applied.has_value());
+        if (singles_applied) FUZZ_CHECK(state_of(singles) == state_of(scene));
     }
     return 0;
 }
