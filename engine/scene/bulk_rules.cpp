@@ -30,6 +30,12 @@ Status for_item(Status s, std::size_t i, const std::string& id, std::string fiel
     return Unexpected(std::move(e));
 }
 
+/// Item i names no instance.
+Status unknown_item(std::size_t i, const std::string& id) {
+    return for_item(failure(ErrorCode::UnknownId, "unknown instance '" + id + "'"), i, id,
+                    item_field("ids", i));
+}
+
 Status check_ids(const BulkIds& ids) {
     if (!ids.list.empty() && ids.count != 0)
         return failure(ErrorCode::InvalidArgument, "give a list of ids or a range, not both",
@@ -128,9 +134,7 @@ Status Scene::apply_edit(UpdateInstances&& e, UndoLog& undo) {
     for (std::size_t i = 0; i < n; ++i) {
         const std::string id = e.ids.at(i);
         const InstanceHandle h = find_instance(id);
-        if (h.is_null())
-            return for_item(failure(ErrorCode::UnknownId, "unknown instance '" + id + "'"), i, id,
-                            item_field("ids", i));
+        if (h.is_null()) return unknown_item(i, id);
         if (!e.transforms.empty()) {
             if (Status s = check_value(TRANSFORM, e.transforms[i]); !s)
                 return for_item(std::move(s), i, id, item_field("transforms", i));
@@ -162,9 +166,7 @@ Status Scene::apply_edit(RemoveInstances&& e, UndoLog& undo) {
     for (std::size_t i = 0; i < n; ++i) {
         const std::string id = e.ids.at(i);
         const InstanceHandle h = find_instance(id);
-        if (h.is_null())
-            return for_item(failure(ErrorCode::UnknownId, "unknown instance '" + id + "'"), i, id,
-                            item_field("ids", i));
+        if (h.is_null()) return unknown_item(i, id);
         remove_instance(h, undo);
     }
     return {};
