@@ -145,6 +145,59 @@ TEST(Durability, ASnapshotPlusTheJournalAfterItRestoresTheScene) {
     EXPECT_TRUE(test::hits(*s.engine) == before);
 }
 
+TEST(Durability, BulkInstanceEditsSurviveARestartFromJournalAndFromSnapshot) {
+    TempDir dir;
+    test::Hits before;
+    std::vector<std::string> state;
+    uint64_t version = 0;
+    {
+        Server s = start(options_for(dir));
+        test::apply_ok(*s.engine, test::mesh_edit("ball", make_sphere(0.3f, 10)),
+                       AddGroup{"row", std::nullopt, Affine::translation({0, -1, 0}), true},
+                       SetCamera{Vec3(0, 4, 14), Vec3(0), std::nullopt, 60.0f});
+        AddInstances add;
+        add.ids.prefix = "b";
+        add.ids.count = 400;
+        add.meshes = {"ball"};
+        for (int i = 0; i < 400; ++i)
+            add.transforms.push_back(Affine::translation({float(i % 20 - 10), 0, float(i / 20 - 10)}));
+        test::apply_ok(*s.engine, add);
+        UpdateInstances lift;
+        lift.ids.list = {"b3", "b77", "b250"};
+        lift.transforms.assign(3, Affine::translation({0, 2, 0}));
+        test::apply_ok(*s.engine, lift);
+        ASSERT_TRUE(s.store->snapshot_now().has_value());
+        AddInstances more;
+        more.ids.list = {"r0", "r1"};
+        more.meshes = {"ball", "ball"};
+        more.parent = "row";
+        RemoveInstances cut;
+        cut.ids.prefix = "b";
+        cut.ids.first = 100;
+        cut.ids.count = 50;
+        UpdateInstances hide;
+        hide.ids.prefix = "b";
+        hide.ids.first = 300;
+        hide.ids.count = 10;
+        hide.visible = false;
+        version = test::apply_ok(*s.engine, more, cut, hide);
+        before = test::hits(*s.engine);
+        state = test::state_of(*s.engine);
+    }
+    Server s = start(options_for(dir));
+    EXPECT_TRUE(s.store->recovery().loaded_snapshot);
+    EXPECT_EQ(s.store->recovery().records_replayed, 1u);
+    EXPECT_EQ(test::version_of(*s.engine), version);
+    EXPECT_TRUE(test::state_of(*s.engine) == state);
+    EXPECT_TRUE(test::hits(*s.engine) == before);
+    // The undo stack came back with the journal: the last batch is taken back in one undo.
+    auto undo = s.engine->undo_batch(version);
+    ASSERT_TRUE(undo.has_value()) << undo.error().describe();
+    ASSERT_TRUE(s.engine->apply(std::move(undo.value()), version).has_value());
+    EXPECT_EQ(s.engine->read([](const Scene& sc) { return sc.instances().size(); }), 400u);
+    EXPECT_FALSE(s.engine->read([](const Scene& sc) { return sc.find_instance("b120").is_null(); }));
+}
+
 TEST(Durability, GroupsAndParentsSurviveARestartThroughTheJournalAndASnapshot) {
     TempDir dir;
     test::Hits before;
