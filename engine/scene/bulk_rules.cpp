@@ -98,6 +98,8 @@ Status Scene::apply_edit(AddInstances&& e, UndoLog& undo) {
                            "material");
     }
     m_instance_ids.reserve(m_instance_ids.size() + n);
+    undo.records.reserve(undo.records.size() + n);
+    m_world_instances.reserve(m_world_instances.size() + n);
     for (std::size_t i = 0; i < n; ++i) {
         std::string id = e.ids.at(i);
         if (Status s = check_new_id(id, !find_instance(id).is_null(), "instance"); !s)
@@ -131,6 +133,7 @@ Status Scene::apply_edit(UpdateInstances&& e, UndoLog& undo) {
     if (e.transforms.empty() && !e.visible)
         return failure(ErrorCode::InvalidArgument, "nothing to change: give transforms or visible");
     static const FieldInfo& TRANSFORM = field_info<InstanceFields>("transform");
+    undo.records.reserve(undo.records.size() + n);
     for (std::size_t i = 0; i < n; ++i) {
         const std::string id = e.ids.at(i);
         const InstanceHandle h = find_instance(id);
