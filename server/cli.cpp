@@ -188,7 +188,8 @@ void add_render_limit_options(CLI::App& app, ServerConfig& c) {
                    "Most vertices over the scene's meshes (an edit batch beyond it: 413)")
         ->check(CLI::Range(uint64_t(1), uint64_t(1) << 32));
     app.add_option("--max-scene-instances", c.max_scene_instances,
-                   "Most instances in the scene (an edit batch beyond it: 413)")
+                   "Most instances in the scene, about 1 KB of memory each (an edit batch "
+                   "beyond it: 413)")
         ->check(CLI::Range(uint64_t(1), uint64_t(1) << 32));
     app.add_option("--max-texture-mb", c.max_texture_mb,
                    "Most texture memory in MiB: decoded texels (6 bytes each) and the image "

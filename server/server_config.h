@@ -47,7 +47,9 @@ struct ServerConfig {
     uint64_t max_scene_triangles = 1ull << 24;
     uint64_t max_scene_vertices = 1ull << 24;
     uint64_t max_texture_mb = 256;  ///< decoded texels over all textures, in MiB
-    uint64_t max_scene_instances = 1ull << 24;
+    /// About 1 KB of memory each (tests/bench/NOTES.md): 8 GB at the default, so that one bulk
+    /// edit of a few bytes cannot take more memory than a modest machine has.
+    uint64_t max_scene_instances = 1ull << 23;
 
     // The undo history (engine/scene/edit_history.h).
     std::size_t undo_depth = 100;  ///< batches on each of the undo and redo stacks; 0: no undo

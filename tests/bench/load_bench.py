@@ -107,7 +107,8 @@ def move_one(conn, n, k):
 
 
 def load(binary, bodies, n, moves):
-    server = ServerProcess(binary, ["--max-body-mb", "512"])
+    server = ServerProcess(binary, ["--max-body-mb", "512",
+                                    "--max-scene-instances", str(max(n + 1, 1 << 23))])
     try:
         conn = http.client.HTTPConnection("127.0.0.1", server.port, timeout=600)
         post(conn, "/v1/edits", json.dumps(MESH).encode())

@@ -7,7 +7,7 @@ import unittest
 
 import numpy
 
-from strata_client import Client, UnprocessableError, bulk
+from strata_client import Client, TooLargeError, UnprocessableError, bulk
 from strata_process import ServerProcess
 from test_client import SERVER
 
@@ -114,6 +114,17 @@ class BulkInstancesTest(unittest.TestCase):
         self.assertEqual(caught.exception.pointer, "/edits/0/mesh/1")
         self.assertEqual(self.client.scene()["version"], version)
         self.assertEqual(self.count(), 2)
+
+    def test_a_range_past_the_instance_budget_is_refused_before_anything_is_built(self):
+        with ServerProcess(SERVER, ["--max-scene-instances", "1000"]) as small, \
+                Client(small.url) as client:
+            client.edit([{"op": "add_mesh", "id": "rock", "shape": {"type": "box"}}])
+            with self.assertRaises(TooLargeError) as caught:
+                client.edit([bulk.add_instances(bulk.id_range("r", 16_777_216), "rock")])
+            self.assertEqual(caught.exception.pointer, "/edits/0/ids")
+            self.assertIn("max_scene_instances", caught.exception.detail)
+            client.edit([bulk.add_instances(bulk.id_range("r", 1000), "rock")])
+            self.assertEqual(client.scene()["counts"]["instances"], 1000)
 
     def test_one_undo_takes_a_bulk_add_back(self):
         self.client.edit([bulk.add_instances(bulk.id_range("u", 5000), "rock",
