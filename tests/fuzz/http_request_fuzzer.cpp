@@ -51,12 +51,13 @@ struct World {
     World() {
         spdlog::set_level(spdlog::level::off);
         // Small limits keep every input fast: renders of at most 16x16 that stop after a
-        // second, a scene budget of 200k triangles, 64 KiB bodies.
+        // second, a scene budget of 200k triangles and 4096 instances, 64 KiB bodies.
         config.max_pixels = 256;
+        config.max_scene_instances = 4096;
         config.render_timeout_s = 1;
         config.max_body_bytes = 64 << 10;
         EngineConfig ec;
-        ec.budget = {200000, 200000};
+        ec.budget = {200000, 200000, uint64_t(256) << 20, 4096};
         engine = std::move(Engine::create(ec).value());
         app = std::make_unique<Application>(config, *engine, metrics, nullptr);
         open_reader.limits.max_body_bytes = config.max_body_bytes;

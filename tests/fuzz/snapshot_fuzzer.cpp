@@ -50,13 +50,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     FUZZ_CHECK(fuzz::encoded(decoded->scene) == view->payload);
 
     // Step: import (one atomic batch) against restore (edit by edit, no undo log).
-    Scene imported;
+    Scene imported = fuzz::fuzz_scene();
     const bool import_ok = imported.apply(std::move(decoded->scene)).has_value();
     if (!import_ok) {
         FUZZ_CHECK(imported.version() == 0);
         FUZZ_CHECK(imported.changes().empty());
     }
-    Scene restored;
+    Scene restored = fuzz::fuzz_scene();
     Status loaded = durable::decode_each(view->payload,
                                          [&](Edit&& e) { return restored.load(std::move(e)); });
     if (loaded) loaded = restored.finish_load(1);
