@@ -69,7 +69,7 @@ constexpr std::string_view SHARED_DEFS = R"json({
       {
         "type": "object",
         "properties": {
-          "prefix": {"type": "string"},
+          "prefix": {"type": "string", "maxLength": 256},
           "first": {"type": "integer", "minimum": 0, "maximum": 9007199254740992},
           "count": {"type": "integer", "minimum": 0, "maximum": 16777216}
         },

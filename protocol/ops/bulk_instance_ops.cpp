@@ -5,6 +5,7 @@
 
 #include <algorithm>
 
+#include "engine/core/utf8.h"
 #include "protocol/json_document.h"
 #include "protocol/ops/families.h"
 #include "protocol/transform_parser.h"
@@ -22,7 +23,14 @@ BulkIds read_ids(OpFields& f) {
     if (v.is_object()) {
         r.expect_object(v, ptr, MemberRule{{"prefix", "first", "count"}, {"count"}});
         f.source().ids_range = true;
-        if (const Json* p = FieldReader::member(v, "prefix")) ids.prefix = r.text(*p, child(ptr, "prefix"));
+        if (const Json* p = FieldReader::member(v, "prefix")) {
+            ids.prefix = r.text(*p, child(ptr, "prefix"));
+            // No id can be longer; refused before any id is made from it.
+            if (utf8_length(ids.prefix) > MAX_ID_LENGTH)
+                r.schema_error(child(ptr, "prefix"), "prefix is longer than an id may be (" +
+                                                         std::to_string(MAX_ID_LENGTH) +
+                                                         " code points)");
+        }
         if (const Json* first = FieldReader::member(v, "first"))
             ids.first = r.integer(*first, child(ptr, "first"), 0, uint64_t(1) << 53);
         ids.count = r.integer(v.at("count"), child(ptr, "count"), 0, MAX_BULK_ITEMS);
