@@ -135,6 +135,12 @@ Edit parse_add_mesh(OpFields& f) {
         }
         f.source().shape = true;
         MeshData data = read_shape(r, *shape, f.pointer("shape"));
+        // A sphere is smooth: its normals point away from its centre (the origin). Boxes and
+        // planes keep their faces' own normals (sharp edges). Normals given in the op win.
+        if (shape->at("type") == "sphere") {
+            e.normals.reserve(data.positions.size());
+            for (const Vec3& p : data.positions) e.normals.push_back(glm::normalize(p));
+        }
         e.positions = std::move(data.positions);
         e.triangles = std::move(data.triangles);
     } else {

@@ -88,6 +88,24 @@ TEST(EditParser, ShapesUseTheEngineGeneratorsWithDefaults) {
     EXPECT_EQ(plane.positions.back(), Vec3(2.0f, 0.0f, 1.0f));
 }
 
+TEST(EditParser, SpheresAreSmoothAndBoxesAndPlanesFlat) {
+    const auto sphere = one<AddMesh>(
+        R"({"op":"add_mesh","id":"s","shape":{"type":"sphere","radius":2.5,"segments":12}})");
+    ASSERT_EQ(sphere.normals.size(), sphere.positions.size());
+    for (std::size_t i = 0; i < sphere.positions.size(); ++i) {
+        EXPECT_NEAR(glm::length(sphere.normals[i]), 1.0f, 1e-5f);
+        EXPECT_NEAR(glm::dot(sphere.normals[i], sphere.positions[i]), 2.5f, 1e-4f);
+    }
+    EXPECT_TRUE(one<AddMesh>(R"({"op":"add_mesh","id":"b","shape":{"type":"box"}})")
+                    .normals.empty());
+    EXPECT_TRUE(one<AddMesh>(R"({"op":"add_mesh","id":"p","shape":{"type":"plane"}})")
+                    .normals.empty());
+    // Normals given beside the shape replace the sphere's.
+    const auto given = one<AddMesh>(
+        R"({"op":"add_mesh","id":"s","shape":{"type":"sphere","segments":3},"normals":[0,1,0]})");
+    EXPECT_EQ(given.normals, std::vector<Vec3>{Vec3(0, 1, 0)});
+}
+
 TEST(EditParser, UpdateMeshIsAPositionsUpdateOrATopologyChange) {
     const auto move = one<UpdateMeshPositions>(
         R"({"op":"update_mesh","mesh":"m","positions":[1,2,3],"offset":7})");
