@@ -60,7 +60,8 @@ void read_id_or_ids(OpFields& f, std::string_view key, std::vector<std::string>&
     for (std::size_t i = 0; i < v->size(); ++i) out.push_back(f.reader().id((*v)[i], child(ptr, i)));
 }
 
-/// `transforms` (an array of transforms, any form) or `transforms_b64` (float32 3x4 rows).
+/// `transforms` (flat numbers, 12 per item, or an array of transforms in any form) or
+/// `transforms_b64` (float32 3x4 rows).
 std::vector<Affine> read_transforms(OpFields& f) {
     FieldReader& r = f.reader();
     const Json* list = f.get("transforms");
