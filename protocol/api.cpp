@@ -285,6 +285,7 @@ ApiResponse get_stats(const Engine& engine, const durable::DurableStats* durable
         return std::tuple(s.version(), uint64_t(s.instances().size()), s.instance_bytes());
     });
     const int64_t tlas = engine.memory_bytes(MemoryCategory::Tlas);
+    const uint64_t per_instance_bytes = instance_bytes + uint64_t(std::max<int64_t>(tlas, 0));
     const Json doc = {
         {"version", version},
         {"counters", counters_to_json(counters)},
@@ -293,9 +294,7 @@ ApiResponse get_stats(const Engine& engine, const durable::DurableStats* durable
          {{"blas", engine.memory_bytes(MemoryCategory::Blas)},
           {"tlas", tlas},
           {"instances", instance_bytes},
-          {"per_instance", instances ? Json((instance_bytes + uint64_t(std::max<int64_t>(tlas, 0))) /
-                                            instances)
-                                     : Json(nullptr)}}}};
+          {"per_instance", instances ? Json(per_instance_bytes / instances) : Json(nullptr)}}}};
     Json out = doc;
     out["durability"] = durable ? durable_stats_to_json(*durable) : Json(nullptr);
     return with_etag(json_response(200, out), version);

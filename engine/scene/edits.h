@@ -150,7 +150,9 @@ struct BulkIds {
     uint64_t first = 0;
     uint64_t count = 0;
 
-    std::size_t size() const { return list.empty() ? static_cast<std::size_t>(count) : list.size(); }
+    std::size_t size() const {
+        return list.empty() ? static_cast<std::size_t>(count) : list.size();
+    }
     /// The id of item `i` (< size()).
     std::string at(std::size_t i) const {
         return list.empty() ? prefix + std::to_string(first + i) : list[i];

@@ -238,9 +238,8 @@ uint64_t Scene::instance_bytes() const {
                            Slots::CHUNK * Slots::CHUNK;
     uint64_t bytes = slots * (sizeof(InstanceRecord) + sizeof(uint32_t) + sizeof(uint8_t));
     // An unordered_map node: the next pointer, the key and value, the cached hash.
-    constexpr uint64_t NODE =
-        (sizeof(void*) + sizeof(std::pair<const std::string, InstanceHandle>) + sizeof(std::size_t) +
-         15) / 16 * 16;
+    using Node = std::pair<const std::string, InstanceHandle>;
+    constexpr uint64_t NODE = (sizeof(void*) + sizeof(Node) + sizeof(std::size_t) + 15) / 16 * 16;
     bytes += m_instance_ids.size() * NODE + m_instance_ids.bucket_count() * sizeof(void*);
     m_instances.for_each([&](InstanceHandle, const InstanceRecord& r) {
         bytes += 2 * heap_bytes(r.id) + heap_bytes(r.name);  // the id: in the record and the map

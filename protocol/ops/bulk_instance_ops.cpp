@@ -57,7 +57,8 @@ void read_id_or_ids(OpFields& f, std::string_view key, std::vector<std::string>&
         return;
     }
     out.reserve(v->size());
-    for (std::size_t i = 0; i < v->size(); ++i) out.push_back(f.reader().id((*v)[i], child(ptr, i)));
+    for (std::size_t i = 0; i < v->size(); ++i)
+        out.push_back(f.reader().id((*v)[i], child(ptr, i)));
 }
 
 /// `transforms` (flat numbers, 12 per item, or an array of transforms in any form) or
@@ -77,15 +78,17 @@ std::vector<Affine> read_transforms(OpFields& f) {
     const std::string ptr = f.pointer("transforms");
     // Flat numbers, 12 per item (3x4 row-major): long arrays of numbers are packed as they are
     // parsed and cost no JSON values.
-    if (is_packed_numbers(*list) || (list->is_array() && !list->empty() && (*list)[0].is_number())) {
+    const bool flat =
+        is_packed_numbers(*list) || (list->is_array() && !list->empty() && (*list)[0].is_number());
+    if (flat) {
         f.source().transforms_flat = true;
-        const std::vector<float> flat = r.floats(*list, ptr);
-        if (flat.size() % 12 != 0)
-            r.record_value_error(ptr, "transforms has " + std::to_string(flat.size()) +
-                                          " numbers, not a multiple of 12 (3x4 row-major per item)");
-        out.resize(flat.size() / 12);
+        const std::vector<float> numbers = r.floats(*list, ptr);
+        if (numbers.size() % 12 != 0)
+            r.record_value_error(ptr, "transforms has " + std::to_string(numbers.size()) +
+                                          " numbers, not a multiple of 12 (3x4 row-major each)");
+        out.resize(numbers.size() / 12);
         for (std::size_t i = 0; i < out.size(); ++i)
-            std::copy_n(flat.begin() + std::ptrdiff_t(12 * i), 12, out[i].m.begin());
+            std::copy_n(numbers.begin() + std::ptrdiff_t(12 * i), 12, out[i].m.begin());
         return out;
     }
     if (!list->is_array()) r.schema_error(ptr, "expected an array of transforms");

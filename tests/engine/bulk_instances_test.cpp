@@ -161,11 +161,13 @@ TEST(BulkInstances, RandomBulkBatchesMatchTheirSingleEdits) {
                     if (pick(2)) {
                         e.meshes = {pick(2) ? "ball" : "box"};
                     } else {
-                        for (std::size_t i = 0; i < n; ++i) e.meshes.push_back(pick(2) ? "ball" : "box");
+                        for (std::size_t i = 0; i < n; ++i)
+                            e.meshes.push_back(pick(2) ? "ball" : "box");
                     }
                     if (pick(2)) e.materials = {pick(2) ? "red" : "blue"};
                     if (pick(3)) {
-                        for (std::size_t i = 0; i < n; ++i) e.transforms.push_back(random_place(rng));
+                        for (std::size_t i = 0; i < n; ++i)
+                            e.transforms.push_back(random_place(rng));
                     }
                     if (pick(4) == 0) e.parent = "park";
                     e.visible = pick(5) != 0;

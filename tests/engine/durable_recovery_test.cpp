@@ -160,7 +160,8 @@ TEST(Durability, BulkInstanceEditsSurviveARestartFromJournalAndFromSnapshot) {
         add.ids.count = 400;
         add.meshes = {"ball"};
         for (int i = 0; i < 400; ++i)
-            add.transforms.push_back(Affine::translation({float(i % 20 - 10), 0, float(i / 20 - 10)}));
+            add.transforms.push_back(
+                Affine::translation({float(i % 20 - 10), 0, float(i / 20 - 10)}));
         test::apply_ok(*s.engine, add);
         UpdateInstances lift;
         lift.ids.list = {"b3", "b77", "b250"};
