@@ -140,6 +140,25 @@ ApiResponse post_pick(Engine& engine, std::string_view body, const ApiLimits& li
 /// GET /v1/stats; `durable`, when the server has a data directory, adds its "durability" member.
 ApiResponse get_stats(const Engine& engine, const durable::DurableStats* durable = nullptr);
 
+/// Longest scene name, in bytes.
+inline constexpr std::size_t MAX_SCENE_NAME_BYTES = 64;
+/// What a scene name may be, for error messages and the docs.
+inline constexpr const char* SCENE_NAME_RULE =
+    "1 to 64 characters: lowercase letters, digits, '-' and '_', starting with a letter or digit";
+/// True for a name that SCENE_NAME_RULE allows (it is also a safe directory name).
+bool valid_scene_name(std::string_view name);
+/// PUT /v1/scenes/{scene}'s body: `{"budget": {"max_triangles", "max_vertices",
+/// "max_instances", "max_texture_mb"}}`, every member optional. What it leaves out is
+/// `ceiling`'s (the server's per-scene flags); a value above the ceiling is a 422 naming the
+/// flag. An empty body is the ceiling itself.
+Parsed<SceneBudget> parse_scene_settings(std::string_view body, const SceneBudget& ceiling,
+                                         const JsonLimits& limits);
+/// The settings as parse_scene_settings reads them back (the file a named scene keeps them in).
+Json scene_settings_json(const SceneBudget& budget);
+/// One scene as GET /v1/scenes lists it: name, version, totals, memory, budget.
+Json scene_summary_json(std::string_view name, const Engine& engine, const SceneBudget& budget,
+                        bool durable);
+
 /// The content type of snapshot files (GET and POST /v1/scene/snapshot).
 inline constexpr const char* SNAPSHOT_CONTENT_TYPE = "application/vnd.strata.snapshot";
 /// GET /v1/scene/snapshot: the whole scene as a snapshot file (engine/durable/journal_format.h),

@@ -483,6 +483,32 @@ void misc_schemas(J& out) {
                   "The data of a GET /v1/events event (hello and commit).");
 }
 
+// ---- named scenes (scenes_api.cpp) ----
+
+void scene_directory_schemas(J& out) {
+    const J limits = {{"max_triangles", count()},
+                      {"max_vertices", count()},
+                      {"max_instances", count()},
+                      {"max_texture_mb", count()}};
+    out["SceneSettings"] = described(
+        object({{"budget", object(limits, {"max_triangles", "max_vertices", "max_instances",
+                                           "max_texture_mb"})}},
+               {"budget"}),
+        "PUT /v1/scenes/{scene}'s body (optional): budget limits at most the server's flags; "
+        "those left out are the flags'");
+    out["SceneSummary"] =
+        object({{"name", string()},
+                {"version", count()},
+                {"meshes", count()},
+                {"instances", count()},
+                {"triangles", count()},
+                {"vertices", count()},
+                {"memory_bytes", object({{"blas", count()}, {"tlas", count()}})},
+                {"durable", described(boolean(), "kept in the data directory")},
+                {"budget", object(limits)}});
+    out["SceneList"] = object({{"scenes", array_of(ref("SceneSummary"))}});
+}
+
 /// Every "$ref": "#/$defs/x" of the edit-batch schema's fragments as "#/components/schemas/x".
 void rewrite_refs(J& j) {
     if (j.is_object()) {
@@ -543,6 +569,7 @@ J build_components() {
     pick_schemas(out);
     write_result_schemas(out);
     misc_schemas(out);
+    scene_directory_schemas(out);
     rewrite_refs(out);
     return out;
 }

@@ -42,6 +42,7 @@ enum class ProblemType : uint8_t {
     InvalidAsset,         ///< 422 an uploaded model file is malformed or uses what Strata lacks
     VersionMismatch,      ///< 412 If-Match names another version
     NothingToUndo,        ///< 409 undo or redo with nothing left to take back or redo
+    SceneConflict,        ///< 409 a named scene cannot be deleted or made again just now
     NotFound,             ///< 404 no such route or object
     MethodNotAllowed,     ///< 405 the route exists for other methods
     Unauthorized,         ///< 401 missing or wrong bearer token

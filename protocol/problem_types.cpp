@@ -60,6 +60,9 @@ constexpr TypeInfo TYPES[] = {
      "`POST /v1/undo` with no batch left to take back (none since the start, the newest "
      "snapshot or the history's limits), or `POST /v1/redo` with nothing undone since the last "
      "edit"},
+    {"scene-conflict", "Scene conflict", 409,
+     "`DELETE /v1/scenes/default` (the default scene is never deleted: send `clear`), or "
+     "`PUT /v1/scenes/{scene}` while an earlier scene of that name is still being deleted"},
     {"not-found", "Not found", 404,
      "unknown route, an unknown id in the URL of `GET /v1/scene/...`, or an `at_version` the "
      "server does not hold"},

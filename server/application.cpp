@@ -3,8 +3,11 @@
 #include <spdlog/spdlog.h>
 
 #include "server/context.h"
+#include "server/named_scenes.h"
 #include "server/replica/replica.h"
+#include "server/request_target.h"
 #include "server/response_writer.h"
+#include "server/scene_path.h"
 #include "server/split_render.h"
 #include "server/stream_channel.h"
 
@@ -12,8 +15,10 @@ namespace strata::server {
 
 Application::Application(const ServerConfig& config, Engine& engine, ServerMetrics& metrics,
                          const FrontEndCounters* front_end, durable::DurableStore* store,
-                         StreamHub* streams)
+                         StreamHub* streams, std::function<bool()> api_busy)
     : m_config(config), m_engine(engine), m_metrics(metrics) {
+    m_scenes = std::make_unique<SceneDirectory>(
+        SceneShared{config, metrics, front_end, std::move(api_busy)});
     install_routes(front_end, streams);
     m_context->store = store;
 }
@@ -21,7 +26,7 @@ Application::Application(const ServerConfig& config, Engine& engine, ServerMetri
 Application::~Application() = default;
 
 Outcome Application::handle(PreparedRequest&& request, RequestContext& context, bool close) const {
-    Reply reply = m_routes.dispatch(request.http, context);
+    Reply reply = dispatch(request.http, context);
     Outcome out;
     out.status = reply.response.status;
     if (reply.stream) {
@@ -37,6 +42,25 @@ Outcome Application::handle(PreparedRequest&& request, RequestContext& context, 
     return out;
 }
 
+Reply Application::dispatch(HttpRequest& request, RequestContext& context) const {
+    const std::optional<ScenePath> scoped = scene_path(request.path);
+    if (!scoped) return m_routes.dispatch(request, context);
+    const std::string name = decode_path_segment(scoped->scene);
+    std::shared_ptr<HostedScene> scene;  // held while its route runs
+    const RouteTable* routes = &m_routes;
+    if (name != "default") {
+        scene = m_scenes->find(name);
+        if (!scene) return unknown_scene(name);
+        routes = &scene->routes();
+    }
+    // What only the unprefixed paths serve: the directory of scenes, the API's description.
+    if (!scene_route(scoped->route))
+        return protocol::make_problem(protocol::ProblemType::NotFound,
+                                      "no route for " + request.method + " " + request.path);
+    request.path = scoped->route;
+    return routes->dispatch(request, context);
+}
+
 void Application::attach_store(durable::DurableStore* store) {
     m_context->store = store;
 }
@@ -50,14 +74,8 @@ void Application::attach_replica(replica::Replica* replica) {
 
 void Application::install_routes(const FrontEndCounters* front_end, StreamHub* streams) {
     m_context = std::make_unique<ServerContext>(ServerContext{
-        m_engine, m_config, m_metrics,
-        protocol::ApiLimits{
-            protocol::JsonLimits{m_config.max_json_depth, m_config.max_array_elements,
-                                 m_config.max_json_values},
-            m_config.max_pixels, m_config.render_timeout_s,
-            scene_budget(m_config),
-            m_config.max_batch_edits},
-        front_end, nullptr, nullptr, {}, streams, {}});
+        m_engine, m_config, m_metrics, api_limits(m_config), front_end, nullptr, nullptr, {},
+        streams, {}});
     m_context->past = std::make_unique<PastScenes>(engine_config(m_config));
     if (!m_config.peers.empty()) {
         // finish_config checked the list.
@@ -75,7 +93,9 @@ void Application::install_routes(const FrontEndCounters* front_end, StreamHub* s
     }
     add_api_routes(m_routes, *m_context);
     add_stream_routes(m_routes, *m_context);
+    add_scene_directory_routes(m_routes, *m_context, *m_scenes);
     add_web_routes(m_routes);
+    describe_scene_routes(m_routes);
 }
 
 }  // namespace strata::server

@@ -24,6 +24,7 @@ namespace strata::server {
 
 struct FrontEndCounters;
 struct ServerContext;
+class SceneDirectory;
 class StreamChannel;
 class StreamHub;
 
@@ -40,9 +41,10 @@ class Application {
 public:
     /// `front_end`, when given, adds the connection counters to /metrics. All must outlive the
     /// application.
+    /// `api_busy` tells named scenes' viewer renders to wait (Server: API renders queued).
     Application(const ServerConfig& config, Engine& engine, ServerMetrics& metrics,
                 const FrontEndCounters* front_end, durable::DurableStore* store = nullptr,
-                StreamHub* streams = nullptr);
+                StreamHub* streams = nullptr, std::function<bool()> api_busy = {});
     ~Application();
     Application(const Application&) = delete;
     Application& operator=(const Application&) = delete;
@@ -55,14 +57,19 @@ public:
     void attach_store(durable::DurableStore* store);
     /// The shared edit log for the routes (set while the front end refuses requests).
     void attach_replica(replica::Replica* replica);
+    /// The named scenes beside the default one (named_scenes.h).
+    SceneDirectory& scenes() { return *m_scenes; }
 
 private:
     void install_routes(const FrontEndCounters* front_end, StreamHub* streams);
+    /// The route table of the request's scene runs it: /v1/scenes/NAME/REST as /v1/REST.
+    Reply dispatch(HttpRequest& request, RequestContext& context) const;
 
     const ServerConfig& m_config;
     Engine& m_engine;
     ServerMetrics& m_metrics;
     std::unique_ptr<ServerContext> m_context;  ///< declared before m_routes: handlers refer to it
+    std::unique_ptr<SceneDirectory> m_scenes;  ///< the default scene's routes list and make them
     RouteTable m_routes;
 };
 

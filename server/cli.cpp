@@ -195,6 +195,10 @@ void add_render_limit_options(CLI::App& app, ServerConfig& c) {
                    "Most texture memory in MiB: decoded texels (6 bytes each) and the image "
                    "files kept with them (add_texture beyond it: 413)")
         ->check(CLI::Range(uint64_t(1), uint64_t(1) << 20));
+    app.add_option("--max-scenes", c.max_scenes,
+                   "Most named scenes (PUT /v1/scenes/NAME) beside the default one; each has "
+                   "the --max-scene-* budget, or a smaller one of its own (beyond it: 413)")
+        ->check(CLI::Range(std::size_t(0), std::size_t(4096)));
     app.add_option("--undo-depth", c.undo_depth,
                    "Batches POST /v1/undo can take back in a row (and redo); 0 turns undo off")
         ->check(CLI::Range(std::size_t(0), std::size_t(100000)));

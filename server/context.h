@@ -52,4 +52,17 @@ void add_stream_routes(RouteTable& routes, ServerContext& ctx);
 /// GET / and /web/...: the viewer's files (web_routes.cpp).
 void add_web_routes(RouteTable& routes);
 
+class SceneDirectory;
+/// GET /v1/scenes and GET, PUT and DELETE /v1/scenes/{scene} (scene_directory_routes.cpp);
+/// `ctx` is the default scene's.
+void add_scene_directory_routes(RouteTable& routes, ServerContext& ctx, SceneDirectory& scenes);
+/// Lists every /v1 route again under /v1/scenes/{scene}/, for the OpenAPI description; after
+/// every route is added.
+void describe_scene_routes(RouteTable& routes);
+/// Whether a named scene serves `route` ("/v1/render": yes; "/v1/scenes", "/v1/openapi.json":
+/// only the unprefixed path does).
+bool scene_route(std::string_view route);
+/// The 404 for a scene that does not exist.
+protocol::Problem unknown_scene(std::string_view name);
+
 }  // namespace strata::server

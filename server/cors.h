@@ -35,7 +35,7 @@ private:
 std::string cors_header_lines(std::string_view allowed_origin);
 
 /// Methods and request headers a preflight allows.
-inline constexpr const char* CORS_ALLOW_METHODS = "GET, HEAD, POST, OPTIONS";
+inline constexpr const char* CORS_ALLOW_METHODS = "GET, HEAD, POST, PUT, DELETE, OPTIONS";
 inline constexpr const char* CORS_ALLOW_HEADERS = "Authorization, Content-Type, If-Match";
 
 }  // namespace strata::server

@@ -14,6 +14,7 @@
 #include "server/cli.h"
 #include "server/healthcheck.h"
 #include "server/log_sink.h"
+#include "server/named_scenes.h"
 #include "server/past_scenes.h"
 #include "server/replica/replica.h"
 #include "server/server.h"
@@ -36,12 +37,6 @@ rlim_t raise_file_limit() {
     return lim.rlim_cur;
 }
 
-durable::FsyncMode fsync_mode(const std::string& name) {
-    if (name == "batch") return durable::FsyncMode::Batch;
-    if (name == "off") return durable::FsyncMode::Off;
-    return durable::FsyncMode::Always;
-}
-
 /// Locks and recovers --data into `engine`; null (and a logged reason) when it cannot.
 std::unique_ptr<durable::DurableStore> open_data_dir(const server::ServerConfig& c,
                                                      Engine& engine,
@@ -52,15 +47,8 @@ std::unique_ptr<durable::DurableStore> open_data_dir(const server::ServerConfig&
         spdlog::warn("no --data directory: the scene lives in memory only and is lost on exit");
         return nullptr;
     }
-    durable::StoreOptions o;
-    o.dir = c.data_dir;
-    o.journal.mode = fsync_mode(c.fsync);
-    o.journal.fsync_interval_ms = c.fsync_interval_ms;
-    o.recovery.truncate_damage = c.recover_truncate;
+    durable::StoreOptions o = server::store_options(c, c.data_dir);
     o.recovery.progress = &progress;
-    o.snapshot_threshold_bytes = c.snapshot_threshold_kb << 10;
-    o.keep_history_bytes = c.keep_history_mb << 20;
-    o.on_snapshot_failure = [](const std::string& why) { spdlog::error("{}", why); };
     Stopwatch clock;
     auto store = durable::DurableStore::open(o, engine);
     if (!store) {
@@ -281,6 +269,11 @@ int serve(server::CommandLine& cl) {
         return 1;
     }
     http.attach_store(store.get());
+    if (Status scenes = http.recover_scenes(); !scenes) {
+        spdlog::critical("cannot recover the named scenes: {}", scenes.error().message);
+        stop_serving();
+        return 1;
+    }
     const uint64_t recovered = engine->read([](const Scene& s) { return s.version(); });
     // Step: the shared edit log. The replica follows it from the recovered version (an empty
     // scene first loads the log's snapshot); every batch reaches the engine through it.

@@ -15,6 +15,11 @@ SceneBudget scene_budget(const ServerConfig& c) {
             c.max_scene_instances};
 }
 
+protocol::ApiLimits api_limits(const ServerConfig& c) {
+    return {protocol::JsonLimits{c.max_json_depth, c.max_array_elements, c.max_json_values},
+            c.max_pixels, c.render_timeout_s, scene_budget(c), c.max_batch_edits};
+}
+
 EngineConfig engine_config(const ServerConfig& c) {
     EngineConfig config;
     config.budget = scene_budget(c);

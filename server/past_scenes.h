@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "engine/engine.h"
+#include "protocol/api.h"
 
 namespace strata::durable {
 class DurableStore;
@@ -23,6 +24,8 @@ struct ServerConfig;
 EngineConfig engine_config(const ServerConfig& c);
 /// The scene budget the flags set (--max-scene-triangles, ...).
 SceneBudget scene_budget(const ServerConfig& c);
+/// The request limits the flags set (--max-json-depth, --max-pixels, ...).
+protocol::ApiLimits api_limits(const ServerConfig& c);
 
 class PastScenes {
 public:

@@ -17,6 +17,7 @@
 #include "protocol/problem.h"
 #include "server/metrics.h"
 #include "server/response_writer.h"
+#include "server/scene_path.h"
 
 namespace strata::server {
 
@@ -387,9 +388,10 @@ void Reactor::dispatch(Connection& c, PreparedRequest&& request) {
 
 void Reactor::dispatch_or_wait(Connection& c, PreparedRequest&& request, Clock::time_point now) {
     const std::optional<HttpRequest::MinVersion> asked = request.http.min_version();
-    // A malformed value is the route's 400; a reached one, or no wait allowed, runs at once.
+    // A malformed value is the route's 400; a reached one, or no wait allowed, runs at once. The
+    // version followed here is the default scene's; a named scene's route checks its own.
     if (!asked || !asked->valid || !m_version || m_draining || m_config.min_version_wait_ms == 0 ||
-        m_version() >= asked->version)
+        scene_path(request.http.path) || m_version() >= asked->version)
         return dispatch(c, std::move(request));
     if (!m_waiting.admits(c.client)) {
         ++m_counters.waits_refused;

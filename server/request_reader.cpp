@@ -6,6 +6,7 @@
 #include "server/auth.h"
 #include "server/response_writer.h"
 #include "server/route_table.h"
+#include "server/scene_path.h"
 
 namespace strata::server {
 
@@ -32,7 +33,8 @@ bool is_public_path(std::string_view path) {
 }
 
 bool accepts_query_token(std::string_view path) {
-    return path == "/v1/stream" || path == "/v1/events" || path == "/v1/render";
+    const std::string route = route_of(path);
+    return route == "/v1/stream" || route == "/v1/events" || route == "/v1/render";
 }
 
 const std::optional<std::string>& RequestReader::cors_origin() {
@@ -277,7 +279,8 @@ ReaderStep RequestReader::finish_request() {
     r.http.body = std::move(m_body);
     m_body = std::string();
     r.keep_alive = m_head.keep_alive;
-    r.heavy = r.http.path == "/v1/render" || r.http.path == "/v1/commit";
+    const std::string route = route_of(r.http.path);
+    r.heavy = route == "/v1/render" || route == "/v1/commit";
     m_phase = Phase::Head;
     compact();
     return step;

@@ -3,6 +3,7 @@
 #include "engine/core/memory_trim.h"
 
 #include "server/application.h"
+#include "server/named_scenes.h"
 #include "server/reactor.h"
 #include "server/stream_hub.h"
 #include "server/worker_pool.h"
@@ -33,7 +34,8 @@ Server::Server(ServerConfig config, Engine& engine, durable::DurableStore* store
     m_streams = std::make_unique<StreamHub>(
         m_engine, [this] { return m_api_heavy.load() > 0; }, m_config.max_stream_mb << 20);
     m_app = std::make_unique<Application>(m_config, m_engine, m_metrics, &m_reactor->counters(),
-                                          store, m_streams.get());
+                                          store, m_streams.get(),
+                                          [this] { return m_api_heavy.load() > 0; });
     m_workers = std::make_unique<WorkerPool>(m_config.threads);
 }
 
@@ -67,7 +69,12 @@ void Server::listen() {
 
 void Server::stop() {
     m_streams->stop();
+    m_app->scenes().stop_streams();
     m_reactor->drain();
+}
+
+Status Server::recover_scenes() {
+    return m_app->scenes().recover();
 }
 
 void Server::attach_replica(replica::Replica* replica) {

@@ -61,6 +61,8 @@ public:
     void set_starting(bool starting, std::function<std::string()> progress = {});
     /// The data directory, once recovered (while starting; before that, routes see none).
     void attach_store(durable::DurableStore* store);
+    /// Recovers the named scenes under --data/scenes (while starting, after attach_store).
+    Status recover_scenes();
     /// The shared edit log (while starting, like attach_store).
     void attach_replica(replica::Replica* replica);
     /// What /readyz asks beyond starting and draining (a replica's state). Before listen() only.

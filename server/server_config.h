@@ -51,6 +51,9 @@ struct ServerConfig {
     /// edit of a few bytes cannot take more memory than a modest machine has.
     uint64_t max_scene_instances = 1ull << 23;
 
+    // Named scenes (named_scenes.h), beside the default one.
+    std::size_t max_scenes = 64;
+
     // The undo history (engine/scene/edit_history.h).
     std::size_t undo_depth = 100;  ///< batches on each of the undo and redo stacks; 0: no undo
     uint64_t undo_mb = 256;        ///< MiB the inverse batches of both stacks may hold

@@ -19,20 +19,23 @@ from strata_client.aio import AsyncClient
 from strata_client.arrays import MISS, FrameArrays
 from strata_client.client import Client
 from strata_client.errors import (BadRequestError, NotFoundError, NothingToUndoError,
-                                  ProblemError, TooLargeError, TooManyConnectionsError,
+                                  ProblemError, SceneConflictError, TooLargeError,
+                                  TooManyConnectionsError,
                                   UnauthorizedError, UnavailableError, UnprocessableError,
                                   VersionMismatchError)
 from strata_client.png import decode_png
 from strata_client.results import (BlasEntry, CommitPhases, Frame, History, HistoryEntry,
                                    HistoryStack, Hit, ImportResult, MemoryBytes, Page, Problem,
-                                   RebuildReport, RenderInfo, TlasMerge, TlasReport, UndoResult)
+                                   RebuildReport, RenderInfo, SceneBudget, SceneSummary,
+                                   TlasMerge, TlasReport, UndoResult)
 
 __all__ = [
     "__version__", "bulk", "Client", "AsyncClient", "decode_png",
     "ProblemError", "BadRequestError", "UnauthorizedError", "NotFoundError",
     "NothingToUndoError", "VersionMismatchError", "TooLargeError", "UnprocessableError",
-    "TooManyConnectionsError", "UnavailableError",
+    "TooManyConnectionsError", "UnavailableError", "SceneConflictError",
     "Problem", "RebuildReport", "TlasReport", "TlasMerge", "BlasEntry", "MemoryBytes",
     "CommitPhases", "RenderInfo", "Frame", "Hit", "ImportResult", "Page", "UndoResult",
-    "History", "HistoryEntry", "HistoryStack", "FrameArrays", "MISS",
+    "History", "HistoryEntry", "HistoryStack", "FrameArrays", "MISS", "SceneSummary",
+    "SceneBudget",
 ]

@@ -6,6 +6,7 @@ speak the protocol the same way and give the same typed results.
 
 import json
 import os
+import re
 import urllib.parse
 from dataclasses import dataclass, field
 from typing import Any, Callable, Dict, Generic, Iterable, List, Optional, Tuple, TypeVar, Union
@@ -14,7 +15,7 @@ from strata_client._version import __version__
 from strata_client.asset_pack import pack_asset
 from strata_client.errors import etag_version, problem_error
 from strata_client.results import (Frame, History, Hit, ImportResult, Page, RebuildReport,
-                                   RenderInfo, UndoResult)
+                                   RenderInfo, SceneSummary, UndoResult)
 
 T = TypeVar("T")
 
@@ -116,7 +117,51 @@ def _quote(segment: str) -> str:
     return urllib.parse.quote(segment, safe="")
 
 
+_SCENE_NAME = re.compile(r"[a-z0-9][a-z0-9_-]{0,63}")
+
+
+def check_scene_name(name: str) -> str:
+    """`name` when it is a scene name (1 to 64 of a-z, 0-9, '-' and '_', starting with a letter
+    or digit); ValueError otherwise."""
+    if not isinstance(name, str) or not _SCENE_NAME.fullmatch(name):
+        raise ValueError(f"{name!r} is not a scene name: 1 to 64 characters, lowercase letters, "
+                         "digits, '-' and '_', starting with a letter or digit")
+    return name
+
+
+def in_scene(call: "Call[T]", scene: Optional[str]) -> "Call[T]":
+    """`call` sent to the named scene `scene` (/v1/X as /v1/scenes/{scene}/X); unchanged for
+    None and for the directory of scenes itself."""
+    target = call.request.target
+    if scene is None or not target.startswith("/v1/") or target.startswith("/v1/scenes"):
+        return call
+    request = Request(call.request.method, f"/v1/scenes/{scene}/" + target[4:],
+                      call.request.body, call.request.headers)
+    return Call(request, call.read)
+
+
 # -- endpoints --------------------------------------------------------------------------------
+
+def scenes() -> Call[List[SceneSummary]]:
+    return Call(Request("GET", "/v1/scenes"),
+                lambda r: [SceneSummary.from_json(s) for s in _read_json(r)["scenes"]])
+
+
+def scene_summary(name: str) -> Call[SceneSummary]:
+    return Call(Request("GET", f"/v1/scenes/{check_scene_name(name)}"),
+                lambda r: SceneSummary.from_json(_read_json(r)))
+
+
+def create_scene(name: str, budget: Dict[str, Optional[int]]) -> Call[SceneSummary]:
+    limits = {k: v for k, v in budget.items() if v is not None}
+    body = _json_body({"budget": limits}) if limits else b""
+    return Call(Request("PUT", f"/v1/scenes/{check_scene_name(name)}", body),
+                lambda r: SceneSummary.from_json(_read_json(r)))
+
+
+def delete_scene(name: str) -> Call[None]:
+    return Call(Request("DELETE", f"/v1/scenes/{check_scene_name(name)}"), lambda r: None)
+
 
 def edit(edits: Iterable[Dict[str, Any]], if_match: IfMatch = None,
          message: Optional[str] = None) -> Call[int]:

@@ -18,7 +18,7 @@ from strata_client._api import IfMatch
 from strata_client.arrays import FrameArrays, frame_arrays
 from strata_client.png import png_to_array
 from strata_client.results import (Frame, History, HistoryEntry, Hit, ImportResult, Page,
-                                   RebuildReport, RenderInfo, UndoResult)
+                                   RebuildReport, RenderInfo, SceneSummary, UndoResult)
 
 __all__ = ["AsyncClient"]
 
@@ -36,13 +36,15 @@ class AsyncClient:
     """
 
     def __init__(self, url: str = "http://127.0.0.1:7070", token: Optional[str] = None,
-                 timeout: float = 300.0, max_connections: int = 4):
+                 timeout: float = 300.0, max_connections: int = 4, scene: Optional[str] = None):
         if max_connections < 1:
             raise ValueError("max_connections must be at least 1")
         self._endpoint = _api.parse_url(url)
         self.url = self._endpoint.url
         self._token = token
         self._timeout = timeout
+        #: The named scene this client works on (as Client's `scene`); None: the default one.
+        self.scene_name = None if scene is None else _api.check_scene_name(scene)
         self._max_connections = max_connections
         self._idle: List[Connection] = []
         # Made on first use, inside the running loop (before Python 3.10 a semaphore binds to
@@ -96,7 +98,36 @@ class AsyncClient:
         raise AssertionError("unreachable")
 
     async def _call(self, call: "_api.Call[T]") -> T:
+        call = _api.in_scene(call, self.scene_name)
         return call.result(await self._send(call.request))
+
+    # -- scenes: the same as Client's ---------------------------------------------------------
+
+    async def scenes(self) -> List[SceneSummary]:
+        """Every scene on the server, the default one first (GET /v1/scenes)."""
+        return await self._call(_api.scenes())
+
+    async def scene_summary(self, name: str) -> SceneSummary:
+        """One scene's summary (GET /v1/scenes/{name})."""
+        return await self._call(_api.scene_summary(name))
+
+    async def create_scene(self, name: str, max_triangles: Optional[int] = None,
+                           max_vertices: Optional[int] = None,
+                           max_instances: Optional[int] = None,
+                           max_texture_mb: Optional[int] = None) -> SceneSummary:
+        """Creates or finds the named scene (PUT /v1/scenes/{name}), as Client.create_scene."""
+        return await self._call(_api.create_scene(name, {
+            "max_triangles": max_triangles, "max_vertices": max_vertices,
+            "max_instances": max_instances, "max_texture_mb": max_texture_mb}))
+
+    async def delete_scene(self, name: str) -> None:
+        """Deletes the named scene (DELETE /v1/scenes/{name})."""
+        await self._call(_api.delete_scene(name))
+
+    def for_scene(self, name: Optional[str]) -> "AsyncClient":
+        """A new AsyncClient on the same server and token, working on scene `name`."""
+        return AsyncClient(self.url, self._token, self._timeout, self._max_connections,
+                           scene=name)
 
     # -- endpoints: the same as Client's (see its docstrings) ----------------------------------
 

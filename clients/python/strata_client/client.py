@@ -10,7 +10,7 @@ from strata_client.errors import ProblemError
 from strata_client.arrays import FrameArrays, frame_arrays
 from strata_client.png import png_to_array
 from strata_client.results import (Frame, History, HistoryEntry, Hit, ImportResult, Page,
-                                   RebuildReport, RenderInfo, UndoResult)
+                                   RebuildReport, RenderInfo, SceneSummary, UndoResult)
 
 __all__ = ["Client", "ProblemError", "RenderInfo"]
 
@@ -29,14 +29,19 @@ class Client:
     with --token-file. One HTTP/1.1 connection is kept alive across requests and reopened when
     the server has closed it (an idle keep-alive connection, a restart). Usable as a context
     manager; close() releases the connection. Not thread-safe: use one Client per thread.
+
+    `scene`: every scene endpoint (edits, renders, history, ...) works on that named scene
+    (/v1/scenes/{scene}/...) instead of the default one; see create_scene().
     """
 
     def __init__(self, url: str = "http://127.0.0.1:7070", token: Optional[str] = None,
-                 timeout: float = 300.0):
+                 timeout: float = 300.0, scene: Optional[str] = None):
         self._endpoint = _api.parse_url(url)
         self.url = self._endpoint.url
         self._token = token
         self._timeout = timeout
+        #: The named scene this client works on; None: the default scene.
+        self.scene_name = None if scene is None else _api.check_scene_name(scene)
         self._conn: Optional[http.client.HTTPConnection] = None
         #: What the last render answered besides the image.
         self.last_render: Optional[RenderInfo] = None
@@ -103,7 +108,39 @@ class Client:
                              {k.lower(): v for k, v in response.getheaders()}, data)
 
     def _call(self, call: "_api.Call[T]") -> T:
+        call = _api.in_scene(call, self.scene_name)
         return call.result(self._send(call.request))
+
+    # -- scenes ---------------------------------------------------------------------------------
+
+    def scenes(self) -> List[SceneSummary]:
+        """Every scene on the server, the default one first (GET /v1/scenes)."""
+        return self._call(_api.scenes())
+
+    def scene_summary(self, name: str) -> SceneSummary:
+        """One scene's version, totals, memory and budget (GET /v1/scenes/{name})."""
+        return self._call(_api.scene_summary(name))
+
+    def create_scene(self, name: str, max_triangles: Optional[int] = None,
+                     max_vertices: Optional[int] = None, max_instances: Optional[int] = None,
+                     max_texture_mb: Optional[int] = None) -> SceneSummary:
+        """Creates the named scene, empty (PUT /v1/scenes/{name}), or finds it when it exists.
+        The limits lower its budget below the server's --max-scene-* flags (UnprocessableError
+        above them); SceneConflictError when it exists with another budget. Work in it with
+        for_scene(name), or a Client made with scene=name."""
+        return self._call(_api.create_scene(name, {
+            "max_triangles": max_triangles, "max_vertices": max_vertices,
+            "max_instances": max_instances, "max_texture_mb": max_texture_mb}))
+
+    def delete_scene(self, name: str) -> None:
+        """Deletes the named scene with its history and files (DELETE /v1/scenes/{name});
+        NotFoundError when there is none, SceneConflictError for "default"."""
+        self._call(_api.delete_scene(name))
+
+    def for_scene(self, name: Optional[str]) -> "Client":
+        """A new Client on the same server and token, working on scene `name` (None: the
+        default scene)."""
+        return Client(self.url, self._token, self._timeout, scene=name)
 
     # -- endpoints ------------------------------------------------------------------------------
 

@@ -84,6 +84,11 @@ class NothingToUndoError(ProblemError):
         return etag_version(self.etag)
 
 
+class SceneConflictError(ProblemError):
+    """409 scene-conflict: deleting the default scene, creating a scene that exists with another
+    budget, or one whose earlier namesake is still being deleted."""
+
+
 class TooLargeError(ProblemError):
     """413: a body, array, frame or scene over one of the server's limits."""
 
@@ -132,6 +137,8 @@ def problem_error(status: int, headers: Mapping[str, str], data: bytes) -> Probl
         doc = json.loads(data)
     except ValueError:
         doc = None
+    if isinstance(doc, dict) and str(doc.get("type", "")).endswith("/scene-conflict"):
+        cls = SceneConflictError
     if isinstance(doc, dict) and "title" in doc:
         return cls(doc.get("status", status), doc.get("title", ""), doc.get("detail", ""),
                    doc.get("edit_index"), doc.get("pointer"), doc.get("type", ""), etag, doc,

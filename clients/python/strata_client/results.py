@@ -105,6 +105,32 @@ class MemoryBytes(JsonObject):
 
 
 @dataclass(frozen=True, eq=False)
+class SceneBudget(JsonObject):
+    """What a scene may hold: triangles, vertices, instances and texture MiB."""
+
+    max_triangles: int
+    max_vertices: int
+    max_instances: int
+    max_texture_mb: int
+
+
+@dataclass(frozen=True, eq=False)
+class SceneSummary(JsonObject):
+    """One scene of GET /v1/scenes: its name, version, totals, acceleration memory, whether
+    it is kept in the data directory, and its budget."""
+
+    name: str
+    version: int
+    meshes: int
+    instances: int
+    triangles: int
+    vertices: int
+    memory_bytes: MemoryBytes = _member(MemoryBytes.from_json)
+    durable: bool = False
+    budget: SceneBudget = _member(SceneBudget.from_json, default=None)
+
+
+@dataclass(frozen=True, eq=False)
 class CommitPhases(JsonObject):
     """Milliseconds of a commit's parts."""
 

@@ -1,0 +1,266 @@
+// Named scenes: the directory of engines beside the default scene (named_scenes.h).
+
+#include "server/named_scenes.h"
+
+#include <filesystem>
+
+#include <spdlog/spdlog.h>
+
+#include "engine/core/memory_trim.h"
+#include "engine/durable/durable_store.h"
+#include "engine/durable/file_io.h"
+#include "protocol/api.h"
+#include "server/context.h"
+#include "server/stream_hub.h"
+
+namespace strata::server {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* SETTINGS_FILE = "scene.json";
+
+protocol::Problem storage_problem(const std::string& what) {
+    return protocol::make_problem(protocol::ProblemType::Unavailable, what);
+}
+
+/// Each of `budget`'s limits, lowered to `ceiling`'s where it is above.
+SceneBudget clamp(SceneBudget budget, const SceneBudget& ceiling) {
+    budget.max_triangles = std::min(budget.max_triangles, ceiling.max_triangles);
+    budget.max_vertices = std::min(budget.max_vertices, ceiling.max_vertices);
+    budget.max_instances = std::min(budget.max_instances, ceiling.max_instances);
+    budget.max_texture_bytes = std::min(budget.max_texture_bytes, ceiling.max_texture_bytes);
+    return budget;
+}
+
+bool same_budget(const SceneBudget& a, const SceneBudget& b) {
+    return a.max_triangles == b.max_triangles && a.max_vertices == b.max_vertices &&
+           a.max_instances == b.max_instances && a.max_texture_bytes == b.max_texture_bytes;
+}
+
+/// Removes `dir` and what it holds; a failure is logged (nothing else depends on it).
+void remove_tree(const std::string& dir) {
+    std::error_code ec;
+    fs::remove_all(dir, ec);
+    if (ec) spdlog::warn("could not remove {}: {}", dir, ec.message());
+}
+
+}  // namespace
+
+durable::StoreOptions store_options(const ServerConfig& c, const std::string& dir) {
+    durable::StoreOptions o;
+    o.dir = dir;
+    o.journal.mode = c.fsync == "batch" ? durable::FsyncMode::Batch
+                     : c.fsync == "off" ? durable::FsyncMode::Off
+                                        : durable::FsyncMode::Always;
+    o.journal.fsync_interval_ms = c.fsync_interval_ms;
+    o.recovery.truncate_damage = c.recover_truncate;
+    o.snapshot_threshold_bytes = c.snapshot_threshold_kb << 10;
+    o.keep_history_bytes = c.keep_history_mb << 20;
+    o.on_snapshot_failure = [](const std::string& why) { spdlog::error("{}", why); };
+    return o;
+}
+
+HostedScene::~HostedScene() {
+    m_streams.reset();  // joins its thread, which renders with the engine
+    m_context.reset();
+    m_store.reset();  // the journal's last fsync, before the engine goes
+    m_engine.reset();
+    if (!m_trash.empty()) remove_tree(m_trash);
+    if (m_on_gone) m_on_gone();
+    release_free_memory();
+}
+
+SceneDirectory::SceneDirectory(SceneShared shared) : m_shared(std::move(shared)) {}
+
+SceneDirectory::~SceneDirectory() {
+    stop_streams();
+}
+
+std::string SceneDirectory::root() const {
+    const std::string& data = m_shared.config.data_dir;
+    return data.empty() ? std::string() : durable::join_path(data, "scenes");
+}
+
+SceneBudget SceneDirectory::default_budget() const {
+    return scene_budget(m_shared.config);
+}
+
+Result<std::shared_ptr<HostedScene>> SceneDirectory::open(const std::string& name,
+                                                          const SceneBudget& budget,
+                                                          const std::string& dir) {
+    std::shared_ptr<HostedScene> scene(new HostedScene());
+    scene->m_name = name;
+    scene->m_budget = budget;
+    EngineConfig config = engine_config(m_shared.config);
+    config.budget = budget;
+    auto engine = Engine::create(config);
+    if (!engine) return Unexpected(engine.error());
+    scene->m_engine = std::move(engine.value());
+    if (!dir.empty()) {
+        auto store = durable::DurableStore::open(store_options(m_shared.config, dir),
+                                                 *scene->m_engine);
+        if (!store) return Unexpected(store.error());
+        scene->m_store = std::move(store.value());
+    }
+    scene->m_streams = std::make_unique<StreamHub>(*scene->m_engine, m_shared.api_busy,
+                                                   m_shared.config.max_stream_mb << 20);
+    scene->m_context = std::make_unique<ServerContext>(ServerContext{
+        *scene->m_engine, m_shared.config, m_shared.metrics, api_limits(m_shared.config),
+        m_shared.front_end, scene->m_store.get(), nullptr, {}, scene->m_streams.get(), {}});
+    scene->m_context->api_limits.budget = budget;
+    scene->m_context->past = std::make_unique<PastScenes>(config);
+    add_api_routes(scene->m_routes, *scene->m_context);
+    add_stream_routes(scene->m_routes, *scene->m_context);
+    return scene;
+}
+
+Status SceneDirectory::recover() {
+    const std::string dir = root();
+    std::error_code ec;
+    if (dir.empty() || !fs::is_directory(dir, ec)) return {};
+    for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
+        const std::string name = entry.path().filename().string();
+        if (name.rfind(".deleted-", 0) == 0 || name.rfind(".new-", 0) == 0) {
+            spdlog::info("removing {} (left by a scene deletion or creation that did not end)",
+                         entry.path().string());
+            remove_tree(entry.path().string());
+            continue;
+        }
+        if (!protocol::valid_scene_name(name) || name == "default" || !entry.is_directory()) {
+            spdlog::warn("{}: not a scene (scene names are {}); left alone",
+                         entry.path().string(), protocol::SCENE_NAME_RULE);
+            continue;
+        }
+        const std::string path = entry.path().string();
+        auto text = durable::read_whole_file(durable::join_path(path, SETTINGS_FILE));
+        if (!text) return Unexpected(text.error());
+        SceneBudget unlimited{UINT64_MAX, UINT64_MAX, UINT64_MAX, UINT64_MAX};
+        auto budget = protocol::parse_scene_settings(text.value(), unlimited, {});
+        if (!budget)
+            return failure(ErrorCode::Storage, "scene '" + name + "': " +
+                                                   durable::join_path(path, SETTINGS_FILE) +
+                                                   ": " + budget.error().detail);
+        auto scene = open(name, clamp(budget.value(), default_budget()), path);
+        if (!scene)
+            return failure(ErrorCode::Storage, "scene '" + name + "': " + scene.error().message);
+        const Engine& engine = scene.value()->engine();
+        if (engine.version() != 0) {
+            auto built = scene.value()->engine().commit();
+            if (!built)
+                spdlog::error("scene '{}': building the recovered scene failed: {}", name,
+                              built.error().describe());
+        }
+        spdlog::info("scene '{}' recovered at version {}", name, engine.version());
+        m_scenes.emplace(name, std::move(scene.value()));
+    }
+    if (ec) return failure(ErrorCode::Storage, durable::errno_message("cannot list " + dir));
+    return {};
+}
+
+Expected<std::pair<std::shared_ptr<HostedScene>, bool>, protocol::Problem> SceneDirectory::create(
+    const std::string& name, const SceneBudget& budget) {
+    std::lock_guard lock(m_mutex);
+    if (auto it = m_scenes.find(name); it != m_scenes.end()) {
+        if (!same_budget(it->second->budget(), budget))
+            return Unexpected(protocol::make_problem(
+                protocol::ProblemType::SceneConflict,
+                "scene '" + name + "' exists with another budget; delete it first to change it"));
+        return std::pair(it->second, false);
+    }
+    {
+        std::lock_guard going(m_going->mutex);
+        if (m_going->names.count(name))
+            return Unexpected(protocol::make_problem(
+                protocol::ProblemType::SceneConflict,
+                "scene '" + name + "' is still being deleted (a request still uses it); try again"));
+    }
+    if (m_scenes.size() >= m_shared.config.max_scenes)
+        return Unexpected(protocol::make_problem(
+            protocol::ProblemType::TooLarge,
+            "this server holds " + std::to_string(m_scenes.size()) +
+                " named scenes already, its limit (--max-scenes)"));
+    std::string dir;
+    if (const std::string parent = root(); !parent.empty()) {
+        // Step: the directory and its settings, made under a temporary name and renamed, so that
+        // a crash leaves either no scene or a whole one.
+        std::error_code ec;
+        fs::create_directories(parent, ec);
+        const std::string fresh =
+            durable::join_path(parent, ".new-" + name + "-" + std::to_string(++m_serial));
+        fs::create_directories(fresh, ec);
+        if (ec) return Unexpected(storage_problem("cannot create " + fresh + ": " + ec.message()));
+        const std::string settings = protocol::scene_settings_json(budget).dump(1) + "\n";
+        dir = durable::join_path(parent, name);
+        Status written = durable::write_file_atomically(fresh, SETTINGS_FILE, settings);
+        if (written && ::rename(fresh.c_str(), dir.c_str()) != 0)
+            written = failure(ErrorCode::Storage,
+                              durable::errno_message("cannot rename " + fresh + " to " + dir));
+        if (written) written = durable::sync_directory(parent);
+        if (!written) {
+            remove_tree(fresh);
+            return Unexpected(storage_problem(written.error().message));
+        }
+    }
+    auto scene = open(name, budget, dir);
+    if (!scene) {
+        if (!dir.empty()) remove_tree(dir);
+        return Unexpected(storage_problem("scene '" + name + "': " + scene.error().message));
+    }
+    spdlog::info("scene '{}' created{}", name, dir.empty() ? " (in memory)" : " in " + dir);
+    m_scenes.emplace(name, scene.value());
+    return std::pair(std::move(scene.value()), true);
+}
+
+std::shared_ptr<HostedScene> SceneDirectory::find(std::string_view name) const {
+    std::lock_guard lock(m_mutex);
+    const auto it = m_scenes.find(name);
+    return it == m_scenes.end() ? nullptr : it->second;
+}
+
+bool SceneDirectory::remove(const std::string& name) {
+    std::shared_ptr<HostedScene> scene;
+    {
+        std::lock_guard lock(m_mutex);
+        const auto it = m_scenes.find(name);
+        if (it == m_scenes.end()) return false;
+        scene = std::move(it->second);
+        m_scenes.erase(it);
+        std::lock_guard going(m_going->mutex);
+        m_going->names.insert(name);
+        // Step: the files leave the scene's name at once; they are removed with the scene.
+        if (scene->m_store) {
+            const std::string dir = scene->m_store->directory();
+            const std::string trash = durable::join_path(
+                root(), ".deleted-" + name + "-" + std::to_string(++m_serial));
+            if (::rename(dir.c_str(), trash.c_str()) == 0) {
+                scene->m_trash = trash;
+                (void)durable::sync_directory(root());
+            } else {
+                spdlog::error("{}", durable::errno_message("cannot rename " + dir + " to " + trash) +
+                                        "; its files are left in place");
+            }
+        }
+    }
+    scene->m_streams->stop();
+    scene->m_on_gone = [going = m_going, name] {
+        std::lock_guard lock(going->mutex);
+        going->names.erase(name);
+    };
+    spdlog::info("scene '{}' deleted", name);
+    return true;  // the last holder of `scene` frees it
+}
+
+std::vector<std::shared_ptr<HostedScene>> SceneDirectory::list() const {
+    std::lock_guard lock(m_mutex);
+    std::vector<std::shared_ptr<HostedScene>> out;
+    for (const auto& [name, scene] : m_scenes) out.push_back(scene);
+    return out;
+}
+
+void SceneDirectory::stop_streams() {
+    for (const auto& scene : list()) scene->m_streams->stop();
+}
+
+}  // namespace strata::server

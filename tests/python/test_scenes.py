@@ -1,0 +1,187 @@
+"""Named scenes through the Python client against a real strata-server: scenes(),
+create_scene(), delete_scene(), Client(scene=...) and for_scene(), sync and asyncio; their data
+directories surviving a SIGKILL; and deleting a scene giving its memory back (measured from the
+process's resident set)."""
+
+import asyncio
+import shutil
+import tempfile
+import unittest
+
+from strata_client import (AsyncClient, Client, NotFoundError, SceneBudget, SceneConflictError,
+                           SceneSummary, TooLargeError, UnprocessableError)
+from strata_process import ServerProcess
+from test_client import SERVER
+
+BALL = [
+    {"op": "add_mesh", "id": "ball", "shape": {"type": "sphere", "segments": 16}},
+    {"op": "add_instance", "id": "b0", "mesh": "ball"},
+]
+
+
+def resident_bytes(pid: int) -> int:
+    """The process's resident set (VmRSS), in bytes."""
+    with open(f"/proc/{pid}/status", encoding="ascii") as status:
+        for line in status:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) * 1024
+    raise AssertionError("no VmRSS in /proc/PID/status")
+
+
+class ScenesTest(unittest.TestCase):
+
+    def setUp(self):
+        self.server = ServerProcess(SERVER, ["--max-scenes", "3"])
+        self.client = Client(self.server.url)
+
+    def tearDown(self):
+        self.client.close()
+        self.server.stop()
+
+    def test_a_named_scene_is_a_scene_of_its_own(self):
+        made = self.client.create_scene("city", max_instances=5)
+        self.assertIsInstance(made, SceneSummary)
+        self.assertEqual((made.name, made.version, made.instances, made.durable),
+                         ("city", 0, 0, False))
+        self.assertIsInstance(made.budget, SceneBudget)
+        self.assertEqual(made.budget.max_instances, 5)
+        with self.client.for_scene("city") as city:
+            self.assertEqual(city.edit(BALL, message="first"), 1)
+            city.edit([{"op": "set_transform", "instance": "b0",
+                        "transform": {"translate": [0, 1, 0]}}])
+            self.assertEqual([i["id"] for i in city.instances()], ["b0"])
+            self.assertEqual(city.undo().target, 2)
+            self.assertEqual(city.history().entries[-1].message, "first")
+            frame = city.render_frame(32, 32)
+            self.assertEqual(frame.info.version, 3)
+            with self.assertRaises(TooLargeError):
+                city.edit([{"op": "add_instances", "mesh": "ball",
+                            "ids": {"prefix": "x", "first": 0, "count": 5}}])
+        # The default scene saw none of it.
+        self.assertEqual(self.client.scene()["version"], 0)
+        self.assertEqual(list(self.client.instances()), [])
+        self.assertEqual([s.name for s in self.client.scenes()], ["default", "city"])
+        self.assertEqual(self.client.scene_summary("city").instances, 1)
+
+    def test_the_directory_refuses_what_it_cannot_do(self):
+        self.client.create_scene("a")
+        self.assertEqual(self.client.create_scene("a").version, 0)  # found, not made again
+        with self.assertRaises(SceneConflictError):
+            self.client.create_scene("a", max_instances=1)
+        with self.assertRaises(SceneConflictError):
+            self.client.delete_scene("default")
+        with self.assertRaises(UnprocessableError):
+            self.client.create_scene("b", max_triangles=1 << 40)
+        with self.assertRaises(NotFoundError):
+            self.client.delete_scene("nope")
+        with self.assertRaises(NotFoundError), Client(self.server.url, scene="nope") as nope:
+            nope.scene()
+        with self.assertRaises(ValueError):
+            Client(self.server.url, scene="Not A Name")
+        self.client.create_scene("b")
+        self.client.create_scene("c")
+        with self.assertRaises(TooLargeError):  # --max-scenes 3
+            self.client.create_scene("d")
+        self.client.delete_scene("c")
+        with self.assertRaises(NotFoundError), self.client.for_scene("c") as gone:
+            gone.scene()
+        self.assertEqual([s.name for s in self.client.scenes()], ["default", "a", "b"])
+
+    def test_the_async_client_works_on_named_scenes_too(self):
+        async def run():
+            async with AsyncClient(self.server.url) as strata:
+                await strata.create_scene("async")
+                async with strata.for_scene("async") as scene:
+                    self.assertEqual(await scene.edit(BALL), 1)
+                    self.assertEqual((await scene.scene())["version"], 1)
+                self.assertEqual([s.name for s in await strata.scenes()], ["default", "async"])
+                self.assertEqual((await strata.scene_summary("async")).meshes, 1)
+                await strata.delete_scene("async")
+                self.assertEqual((await strata.scene())["version"], 0)
+        asyncio.run(run())
+
+
+class DurableScenesTest(unittest.TestCase):
+
+    def setUp(self):
+        self.data = tempfile.mkdtemp(prefix="strata-scenes-")
+
+    def tearDown(self):
+        shutil.rmtree(self.data, ignore_errors=True)
+
+    def start(self) -> ServerProcess:
+        return ServerProcess(SERVER, ["--data", self.data])
+
+    def test_named_scenes_survive_a_kill_and_deleted_ones_stay_deleted(self):
+        server = self.start()
+        try:
+            with Client(server.url) as strata:
+                strata.create_scene("kept", max_instances=10)
+                strata.create_scene("dropped")
+                with strata.for_scene("kept") as kept:
+                    kept.edit(BALL)
+                    kept.edit([{"op": "add_instance", "id": "b1", "mesh": "ball"}])
+                with strata.for_scene("dropped") as dropped:
+                    dropped.edit(BALL)
+                with strata.for_scene("kept") as kept:
+                    before = kept.render_frame(48, 32).image
+                self.assertTrue(strata.scene_summary("kept").durable)
+        finally:
+            server.kill()
+        server = self.start()
+        try:
+            with Client(server.url) as strata:
+                names = [s.name for s in strata.scenes()]
+                self.assertEqual(names, ["default", "dropped", "kept"])
+                kept = strata.scene_summary("kept")
+                self.assertEqual((kept.version, kept.instances, kept.budget.max_instances),
+                                 (2, 2, 10))
+                with strata.for_scene("kept") as kept_scene:
+                    self.assertEqual(kept_scene.render_frame(48, 32).image, before)
+                    # The undo history came back with the scene.
+                    self.assertEqual(kept_scene.undo().target, 2)
+                strata.delete_scene("dropped")
+        finally:
+            server.kill()
+        server = self.start()
+        try:
+            with Client(server.url) as strata:
+                self.assertEqual([s.name for s in strata.scenes()], ["default", "kept"])
+                with self.assertRaises(NotFoundError):
+                    strata.scene_summary("dropped")
+                self.assertEqual(strata.create_scene("dropped").version, 0)
+        finally:
+            server.stop()
+
+
+class SceneMemoryTest(unittest.TestCase):
+
+    def test_deleting_a_scene_gives_its_memory_back(self):
+        server = ServerProcess(SERVER)
+        try:
+            with Client(server.url) as strata:
+                strata.create_scene("warm")  # what the first scene's code and threads cost
+                strata.delete_scene("warm")
+                base = resident_bytes(server.process.pid)
+                strata.create_scene("big")
+                big = strata.for_scene("big")
+                big.edit([{"op": "add_mesh", "id": f"m{k}",
+                           "shape": {"type": "sphere", "segments": 512}} for k in range(4)]
+                         + [{"op": "add_instance", "id": f"i{k}", "mesh": f"m{k}"}
+                            for k in range(4)])
+                big.commit()
+                loaded = resident_bytes(server.process.pid)
+                big.close()
+                strata.delete_scene("big")
+                after = resident_bytes(server.process.pid)
+            grown, kept = loaded - base, after - base
+            print(f"\n  resident: {base >> 20} MiB before, {loaded >> 20} MiB with the scene "
+                  f"(+{grown >> 20}), {after >> 20} MiB after deleting it (+{kept >> 20})")
+            self.assertGreater(grown, 64 << 20)  # four 512-segment spheres and their BLASes
+            self.assertLess(kept, grown // 4)
+        finally:
+            server.stop()
+
+
+if __name__ == "__main__":
+    unittest.main()
