@@ -24,6 +24,8 @@ struct Refusal {
 constexpr Refusal FRONT_END_REFUSALS[] = {
     {ProblemType::Unauthorized, "a token is needed and the request has none, or not this one",
      "WWW-Authenticate"},
+    {ProblemType::Forbidden,
+     "with --tokens-file: the token's role in this scene does not allow the request"},
     {ProblemType::InvalidRequest,
      "a malformed HTTP request or query (a bad percent-escape, invalid UTF-8, a control "
      "character, a repeated parameter)"},
@@ -224,7 +226,8 @@ J responses_json(const RouteDoc& doc) {
     for (const ResponseDoc& r : doc.responses) add_answer(answers, r);
     std::map<int, std::string> shared;  // status -> components/responses name
     for (const Refusal& r : FRONT_END_REFUSALS) {
-        if (doc.open && r.type == ProblemType::Unauthorized) continue;
+        if (doc.open && (r.type == ProblemType::Unauthorized || r.type == ProblemType::Forbidden))
+            continue;
         const int status = problem_status(r.type);
         if (answers.count(status))
             add_answer(answers, refusal_doc(r));

@@ -46,6 +46,7 @@ enum class ProblemType : uint8_t {
     NotFound,             ///< 404 no such route or object
     MethodNotAllowed,     ///< 405 the route exists for other methods
     Unauthorized,         ///< 401 missing or wrong bearer token
+    Forbidden,            ///< 403 the token's role in the scene does not allow the request
     Unavailable,          ///< 503 the server is shutting down
     DeadlineExceeded,     ///< 503 a render ran past --render-timeout and was stopped
     RequestTimeout,       ///< 408 the request did not arrive in time (headers or body)

@@ -70,6 +70,9 @@ constexpr TypeInfo TYPES[] = {
      "the path exists for other methods (see the `Allow` header); `HEAD /v1/render`, "
      "which would have to render to know its headers"},
     {"unauthorized", "Unauthorized", 401, "missing or wrong bearer token"},
+    {"forbidden", "Forbidden", 403,
+     "with `--tokens-file`: the token's role in the scene does not allow the request (a "
+     "read-only token sending edits, `PUT` or `DELETE /v1/scenes/{scene}` without admin)"},
     {"unavailable", "Service unavailable", 503,
      "shutting down (every endpoint but `/livez`; a render still running when "
      "`--shutdown-grace` ends is stopped), or more unfinished request data buffered than "

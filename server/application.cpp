@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "server/access.h"
 #include "server/context.h"
 #include "server/named_scenes.h"
 #include "server/replica/replica.h"
@@ -26,6 +27,7 @@ Application::Application(const ServerConfig& config, Engine& engine, ServerMetri
 Application::~Application() = default;
 
 Outcome Application::handle(PreparedRequest&& request, RequestContext& context, bool close) const {
+    context.grants = request.grants.get();
     Reply reply = dispatch(request.http, context);
     Outcome out;
     out.status = reply.response.status;
@@ -43,6 +45,11 @@ Outcome Application::handle(PreparedRequest&& request, RequestContext& context, 
 }
 
 Reply Application::dispatch(HttpRequest& request, RequestContext& context) const {
+    if (context.grants) {
+        if (auto refused = refuse_access(*context.grants,
+                                         required_access(request.method, request.path)))
+            return *refused;
+    }
     const std::optional<ScenePath> scoped = scene_path(request.path);
     if (!scoped) return m_routes.dispatch(request, context);
     const std::string name = decode_path_segment(scoped->scene);

@@ -214,6 +214,11 @@ void add_access_options(CLI::App& app, CommandLine& cl) {
                    "File holding a bearer token; then every endpoint but /livez and /readyz needs "
                    "'Authorization: Bearer <token>'. Or give the token itself in STRATA_TOKEN")
         ->check(CLI::ExistingFile);
+    app.add_option("--tokens-file", cl.tokens_file,
+                   "File of several tokens, each with its roles per scene: lines 'TOKEN "
+                   "SCENE:ROLE ...' (SCENE a name, default or *; ROLE read, edit or admin; see "
+                   "protocol/README.md). Instead of --token-file")
+        ->check(CLI::ExistingFile);
     app.add_flag("--insecure", cl.insecure, "Allow a non-loopback --host without a token");
     app.add_option("--cors-origin", cl.config.cors_origin,
                    "Origins whose pages may call the API (CORS): a comma-separated list such as "
@@ -328,6 +333,19 @@ std::string finish_config(CommandLine& cl) {
         cl.config.token = std::move(token.value());
         cl.token_source = TOKEN_ENV;
     }
+    if (!cl.tokens_file.empty()) {
+        if (!cl.config.token.empty())
+            return "both --tokens-file and a single token (--token-file, STRATA_TOKEN_FILE or "
+                   "STRATA_TOKEN) are given; give one";
+        if (!cl.config.peers.empty())
+            return "--peers needs the one token the servers share (--token-file), not "
+                   "--tokens-file";
+        auto table = read_token_table(cl.tokens_file);
+        if (!table) return table.error().message;
+        cl.config.tokens = std::make_shared<const TokenTable>(std::move(table.value()));
+        cl.token_source = "tokens file '" + cl.tokens_file + "' (" +
+                          std::to_string(cl.config.tokens->entries.size()) + " tokens)";
+    }
     if (!cl.config.log_url.empty()) {
         auto url = replica::parse_redis_url(cl.config.log_url);
         if (!url) return url.error().message;
@@ -339,7 +357,7 @@ std::string finish_config(CommandLine& cl) {
     if (!addresses) return addresses.error().message;
     bool loopback = !addresses.value().empty();
     for (const std::string& a : addresses.value()) loopback = loopback && is_loopback_host(a);
-    if (cl.config.token.empty() && !cl.insecure && !loopback)
+    if (cl.config.token.empty() && !cl.config.tokens && !cl.insecure && !loopback)
         return "refusing to listen on non-loopback address '" + cl.config.host +
                "' without a token: give --token-file, STRATA_TOKEN_FILE or STRATA_TOKEN (or "
                "--insecure, STRATA_INSECURE=1, to allow it)";

@@ -19,6 +19,7 @@ inline constexpr std::size_t MAX_URI_BYTES = 64 * 1024;
 struct CommandLine {
     ServerConfig config;
     std::string token_file;
+    std::string tokens_file;  ///< --tokens-file: tokens with roles per scene
     std::string token_source;  ///< where the token came from, for the log (never the token)
     std::string log_level = "info";
     bool insecure = false;

@@ -17,6 +17,8 @@ class CancelToken;
 
 namespace strata::server {
 
+struct Grants;
+
 struct HttpRequest {
     std::string method;
     /// Percent-encoded path: unreserved characters decoded, other escapes as upper-case %XX.
@@ -48,6 +50,8 @@ struct RequestContext {
     /// Cancelled when the client disconnects or the server shuts down; renders poll it (and
     /// set their deadline on it). Null outside the front end (tests, the fuzzer).
     CancelToken* cancel = nullptr;
+    /// With --tokens-file: the roles of the request's token (auth.h); null: it may do anything.
+    const Grants* grants = nullptr;
 };
 
 }  // namespace strata::server

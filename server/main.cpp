@@ -137,10 +137,10 @@ void stop_on_signal(server::ShutdownSignals& signals, server::Server& http,
 void log_listening(const server::CommandLine& cl, int port) {
     spdlog::info("strata-server listening on http://{}:{} ({} threads, {})", cl.config.host, port,
                  cl.config.threads,
-                 cl.config.token.empty() ? "no authentication"
+                 cl.token_source.empty() ? "no authentication"
                                          : "bearer token required, from " + cl.token_source);
     spdlog::info("viewer: open http://{}:{}/ in a browser{}", cl.config.host, port,
-                 cl.config.token.empty() ? "" : " (it asks for the token once per tab)");
+                 cl.token_source.empty() ? "" : " (it asks for the token once per tab)");
 }
 
 /// Follows the shared edit log (--log) from the `recovered` version (a snapshot jump goes

@@ -118,6 +118,7 @@ Reactor::Reactor(const ServerConfig& config, ServerMetrics& metrics, Dispatch di
     m_reader_config.limits.max_target_bytes = config.max_uri_bytes;
     m_reader_config.limits.max_body_bytes = config.max_body_bytes;
     m_reader_config.token = config.token;
+    m_reader_config.tokens = config.tokens;
     // The command line checked it (cli.cpp); a policy that does not parse allows no origin.
     if (auto cors = CorsPolicy::parse(config.cors_origin)) m_reader_config.cors = cors.value();
 }

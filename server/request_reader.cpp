@@ -46,14 +46,21 @@ const std::optional<std::string>& RequestReader::cors_origin() {
 }
 
 bool RequestReader::authorized() {
-    if (m_config.token.empty() || is_health_path(m_target.path)) return true;
+    m_grants.reset();
+    if ((m_config.token.empty() && !m_config.tokens) || is_health_path(m_target.path)) return true;
     const bool get = m_head.method == "GET" || m_head.method == "HEAD";
     if (get && is_public_path(m_target.path)) return true;
-    if (const std::string* auth = m_head.header("Authorization"))
-        return bearer_token_matches(*auth, m_config.token);
+    // With a tokens file, the token's grants go with the request (the application checks them
+    // against the scene, access.h).
+    const auto matches = [&](std::string_view authorization) {
+        if (!m_config.tokens) return bearer_token_matches(authorization, m_config.token);
+        m_grants = match_grants(*m_config.tokens, authorization);
+        return m_grants != nullptr;
+    };
+    if (const std::string* auth = m_head.header("Authorization")) return matches(*auth);
     if (!get || !accepts_query_token(m_target.path)) return false;
     for (const auto& [name, value] : m_target.query) {
-        if (name == QUERY_TOKEN) return bearer_token_matches("Bearer " + value, m_config.token);
+        if (name == QUERY_TOKEN) return matches("Bearer " + value);
     }
     return false;
 }
@@ -279,6 +286,7 @@ ReaderStep RequestReader::finish_request() {
     r.http.body = std::move(m_body);
     m_body = std::string();
     r.keep_alive = m_head.keep_alive;
+    r.grants = std::move(m_grants);
     const std::string route = route_of(r.http.path);
     r.heavy = route == "/v1/render" || route == "/v1/commit";
     m_phase = Phase::Head;

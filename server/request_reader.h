@@ -7,12 +7,14 @@
 
 #include <cstddef>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "protocol/api.h"
+#include "server/auth.h"
 #include "server/cors.h"
 #include "server/http_parser.h"
 #include "server/http_request.h"
@@ -24,6 +26,8 @@ namespace strata::server {
 struct ReaderConfig {
     HttpLimits limits;
     std::string token;  ///< bearer token every path but /livez and /readyz needs; empty: none
+    /// --tokens-file: tokens with roles per scene (then `token` is empty); null: none.
+    std::shared_ptr<const TokenTable> tokens;
     CorsPolicy cors;    ///< origins answered cross-origin (--cors-origin)
 };
 
@@ -55,6 +59,8 @@ struct PreparedRequest {
     /// The request's Origin when --cors-origin allows it: its answer carries the access-control
     /// headers.
     std::string cors_origin;
+    /// With --tokens-file: the roles of the token the request carries (access.h).
+    std::shared_ptr<const Grants> grants;
 };
 
 /// An answer written without a worker.
@@ -152,6 +158,7 @@ private:
     ChunkedDecoder m_chunked{0};
     std::optional<std::string> m_cors_origin;  ///< cors_origin()'s answer for this head
     bool m_cors_checked = false;
+    std::shared_ptr<const Grants> m_grants;  ///< authorized()'s match in the tokens file
 };
 
 }  // namespace strata::server

@@ -3,6 +3,7 @@
 // dispatches it); describe_scene_routes lists those for the OpenAPI description.
 
 #include "protocol/api.h"
+#include "server/auth.h"
 #include "server/context.h"
 #include "server/named_scenes.h"
 #include "server/route_table.h"
@@ -39,13 +40,20 @@ protocol::ParamDoc scene_parameter() {
                            "serve"};
 }
 
-Reply list_scenes(const ServerContext& ctx, const SceneDirectory& scenes) {
+/// Every scene `grants` may read (all without a tokens file), the default one first.
+Reply list_scenes(const ServerContext& ctx, const SceneDirectory& scenes, const Grants* grants) {
+    const auto visible = [grants](std::string_view name) {
+        return !grants || grants->in(name) >= Role::Read;
+    };
     protocol::Json list = protocol::Json::array();
-    list.push_back(protocol::scene_summary_json(DEFAULT_SCENE, ctx.engine, ctx.api_limits.budget,
-                                                ctx.store != nullptr));
-    for (const auto& scene : scenes.list())
+    if (visible(DEFAULT_SCENE))
+        list.push_back(protocol::scene_summary_json(DEFAULT_SCENE, ctx.engine,
+                                                    ctx.api_limits.budget, ctx.store != nullptr));
+    for (const auto& scene : scenes.list()) {
+        if (!visible(scene->name())) continue;
         list.push_back(protocol::scene_summary_json(scene->name(), scene->engine(),
                                                     scene->budget(), scene->durable()));
+    }
     return protocol::json_response(200, {{"scenes", std::move(list)}});
 }
 
@@ -115,7 +123,9 @@ void add_scene_directory_routes(RouteTable& routes, ServerContext& ctx, SceneDir
                {{.summary = "The scenes this server holds: the default one, then the named ones",
                  .tag = "scenes",
                  .responses = {ok_json("SceneList", "every scene's summary", {})}},
-                [&ctx, &scenes](RouteCall&) { return list_scenes(ctx, scenes); }});
+                [&ctx, &scenes](RouteCall& call) {
+                    return list_scenes(ctx, scenes, call.context.grants);
+                }});
     routes.get("/v1/scenes/{scene}",
                {{.summary = "One scene's summary: version, totals, memory and budget",
                  .tag = "scenes",

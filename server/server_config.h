@@ -3,9 +3,12 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 
 namespace strata::server {
+
+struct TokenTable;
 
 struct ServerConfig {
     std::string host = "127.0.0.1";
@@ -78,7 +81,9 @@ struct ServerConfig {
     std::string peers;            ///< comma-separated http://host:port; empty: no split renders
     int peer_timeout_ms = 10000;  ///< longest a split render waits for one peer's band
 
-    std::string token;  ///< bearer token; empty: no authentication
+    std::string token;  ///< bearer token; empty: no authentication (unless `tokens`)
+    /// --tokens-file: tokens with roles per scene (auth.h); null: `token` alone, or none.
+    std::shared_ptr<const TokenTable> tokens;
     /// Origins allowed cross-origin access (cors.h): "", "*" or a comma-separated list.
     std::string cors_origin;
     bool demo = false;        ///< start with the demo scene

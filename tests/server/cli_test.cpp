@@ -11,6 +11,8 @@
 
 #include <gtest/gtest.h>
 
+#include "server/auth.h"
+
 namespace strata::server::test {
 namespace {
 
@@ -50,7 +52,7 @@ ScopedEnv clean_env() {
                      {"STRATA_DATA", nullptr},       {"STRATA_TOKEN", nullptr},
                      {"STRATA_TOKEN_FILE", nullptr}, {"STRATA_INSECURE", nullptr},
                      {"STRATA_LOG_LEVEL", nullptr}, {"STRATA_TLAS", nullptr},
-                     {"STRATA_LOG", nullptr}};
+                     {"STRATA_LOG", nullptr}, {"STRATA_TOKENS_FILE", nullptr}};
 }
 
 /// Parses `args` (after the program name); fails the test on a usage error.
@@ -166,6 +168,32 @@ TEST(CommandLine, ATokenFileAndStrataTokenTogetherAreRefused) {
     const std::string problem = finish_config(cl);
     EXPECT_NE(problem.find("one way only"), std::string::npos) << problem;
     EXPECT_EQ(cl.config.token, "");
+}
+
+TEST(CommandLine, ATokensFileGivesRolesPerSceneAndExcludesASingleToken) {
+    auto base = clean_env();
+    const std::string path = ::testing::TempDir() + "strata-cli-tokens";
+    std::ofstream(path) << "alice a:admin\nbob *:read\n";
+    {
+        ScopedEnv env{{"STRATA_HOST", "0.0.0.0"}, {"STRATA_TOKENS_FILE", path.c_str()}};
+        CommandLine cl = parse({});
+        EXPECT_EQ(finish_config(cl), "");  // a tokens file is a token for the loopback rule
+        ASSERT_TRUE(cl.config.tokens);
+        EXPECT_EQ(cl.config.tokens->entries.size(), 2u);
+        EXPECT_EQ(cl.token_source, "tokens file '" + path + "' (2 tokens)");
+    }
+    {
+        ScopedEnv env{{"STRATA_TOKEN", "s3cret"}};
+        CommandLine cl = parse({"--tokens-file", path});
+        EXPECT_NE(finish_config(cl).find("give one"), std::string::npos);
+    }
+    CommandLine peers = parse({"--tokens-file", path, "--peers", "http://127.0.0.1:9"});
+    EXPECT_NE(finish_config(peers).find("--peers needs"), std::string::npos);
+    std::ofstream(path) << "alice a:superuser\n";
+    CommandLine bad = parse({"--tokens-file", path});
+    const std::string problem = finish_config(bad);
+    EXPECT_NE(problem.find("line 1"), std::string::npos) << problem;
+    EXPECT_EQ(problem.find("alice"), std::string::npos) << problem;
 }
 
 TEST(CommandLine, ABadTokenIsRefusedWithoutRepeatingIt) {
