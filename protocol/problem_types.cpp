@@ -62,7 +62,9 @@ constexpr TypeInfo TYPES[] = {
      "edit"},
     {"scene-conflict", "Scene conflict", 409,
      "`DELETE /v1/scenes/default` (the default scene is never deleted: send `clear`), or "
-     "`PUT /v1/scenes/{scene}` while an earlier scene of that name is still being deleted"},
+     "`PUT /v1/scenes/{scene}` of a scene that exists with another budget, while an earlier "
+     "scene of that name is still being deleted, or on a replica (`--log` carries the default "
+     "scene only)"},
     {"not-found", "Not found", 404,
      "unknown route, an unknown id in the URL of `GET /v1/scene/...`, or an `at_version` the "
      "server does not hold"},

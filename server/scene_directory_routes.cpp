@@ -86,6 +86,11 @@ Reply put_scene(const ServerContext& ctx, SceneDirectory& scenes, const std::str
                                           "--max-scene-* flags; it cannot be changed");
         return default_summary(ctx);
     }
+    if (ctx.replica)
+        return protocol::make_problem(ProblemType::SceneConflict,
+                                      "this server follows a shared edit log (--log), which "
+                                      "carries the default scene only: named scenes are not "
+                                      "replicated");
     auto made = scenes.create(name, budget.value());
     if (!made) return made.error();
     const auto& [scene, created] = made.value();
@@ -151,8 +156,9 @@ void add_scene_directory_routes(RouteTable& routes, ServerContext& ctx, SceneDir
                          .schema = "SceneSummary",
                          .headers = {"ETag"}},
                         problem(400, "not a scene name, or a body that does not match the schema"),
-                        problem(409, "the scene exists with another budget, or an earlier scene "
-                                     "of this name is still being deleted"),
+                        problem(409, "the scene exists with another budget, an earlier scene of "
+                                     "this name is still being deleted, or the server follows a "
+                                     "shared edit log (--log)"),
                         problem(413, "the server holds --max-scenes named scenes already"),
                         problem(422, "a budget above the server's flag (the pointer names it)"),
                         problem(503, "the data directory could not take the scene")}},

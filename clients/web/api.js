@@ -3,6 +3,15 @@
 
 const TOKEN_KEY = 'strata.token';
 
+/// The named scene this page shows (?scene=NAME), or null for the default scene.
+export const SCENE = new URLSearchParams(location.search).get('scene');
+
+/// `path` in the page's scene: /v1/X as /v1/scenes/NAME/X in a named scene.
+export function scoped(path) {
+  if (!SCENE || !path.startsWith('/v1/')) return path;
+  return `/v1/scenes/${encodeURIComponent(SCENE)}/${path.slice(4)}`;
+}
+
 export function token() {
   return sessionStorage.getItem(TOKEN_KEY) || '';
 }
@@ -29,7 +38,7 @@ export async function api(path, { method = 'GET', body, ifMatch } = {}) {
   if (token()) headers.Authorization = 'Bearer ' + token();
   if (body !== undefined) headers['Content-Type'] = 'application/json';
   if (ifMatch !== undefined && ifMatch !== null) headers['If-Match'] = `"${ifMatch}"`;
-  const response = await fetch(path, {
+  const response = await fetch(scoped(path), {
     method, headers, body: body === undefined ? undefined : JSON.stringify(body),
   });
   const text = await response.text();
@@ -50,7 +59,7 @@ export function withToken(path, params = {}) {
   const q = new URLSearchParams(params);
   if (token()) q.set('access_token', token());
   const s = q.toString();
-  return s ? `${path}?${s}` : path;
+  return s ? `${scoped(path)}?${s}` : scoped(path);
 }
 
 /// Applies one edit batch, conditional on `version` (If-Match) when given.

@@ -3,7 +3,7 @@
 // Ctrl+Y, and the history panel's buttons), the scene list, the history and the commit-cost
 // panel fed by GET /v1/events. Plain ES modules, no build step; served by strata-server at GET /.
 
-import { api, edit, enc, setToken, token, undo, withToken, ApiError } from './api.js';
+import { api, edit, enc, setToken, token, undo, withToken, ApiError, SCENE } from './api.js';
 import { CameraControl } from './camera.js';
 import { CostPanel } from './cost.js';
 import { HistoryPanel } from './history.js';
@@ -15,7 +15,8 @@ const $ = (id) => document.getElementById(id);
 /// Page parameters: ?width=&height= fix the frame size (else it fits the window), and
 /// ?fps=, ?quality=, ?max_samples= are passed to the stream (a slow link or a slow server).
 /// ?still shows one rendered frame (?spp=, default 16) and opens nothing endless, so that a
-/// headless browser's page load ends: screenshots and thumbnails.
+/// headless browser's page load ends: screenshots and thumbnails. ?scene=NAME shows the named
+/// scene NAME (api.js sends every request there).
 const page = new URLSearchParams(location.search);
 const pageNumber = (name, fallback) => {
   const v = Number(page.get(name));
@@ -43,7 +44,7 @@ function message(text, kind = 'error') {
 }
 
 function status(text) {
-  $('status').textContent = text;
+  $('status').textContent = SCENE ? `scene ${SCENE} · ${text}` : text;
 }
 
 // Step: the frame stream. The camera override travels in the URL; a new camera opens a new
@@ -95,7 +96,7 @@ function renderStill(camera) {
   const [w, h] = state.size;
   const img = $('frame');
   img.addEventListener('load', () => {
-    document.title = `Strata · version ${state.version} (still)`;
+    document.title = `Strata · ${SCENE ? SCENE + ' · ' : ''}version ${state.version} (still)`;
     document.body.dataset.still = 'ready';
   }, { once: true });
   img.addEventListener('error', () => {

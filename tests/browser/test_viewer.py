@@ -50,7 +50,8 @@ def request(server, method, path, body=None, token=None):
     data = json.dumps(body).encode() if body is not None else None
     req = urllib.request.Request(server.url + path, data=data, method=method, headers=headers)
     with urllib.request.urlopen(req, timeout=30) as r:
-        return json.load(r)
+        answer = r.read()
+        return json.loads(answer) if answer else None  # 204: no body
 
 
 @unittest.skipUnless(find_chromium(), "chromium is not installed: browser tests skipped "
@@ -240,6 +241,31 @@ class ViewerTreeAndStill(ViewerInChromium):
         row = 150 * width * channels
         stripe = pixels[row:row + 500 * channels]
         self.assertGreater(max(stripe), 60, "the screenshot shows no frame")
+
+    def test_4_a_named_scene_has_its_own_viewer_url(self):
+        request(self.server, "PUT", "/v1/scenes/lab")
+        request(self.server, "POST", "/v1/scenes/lab/edits", {"edits": [
+            {"op": "add_mesh", "id": "ball", "shape": {"type": "sphere", "segments": 24}},
+            {"op": "add_instance", "id": "lab-ball", "mesh": "ball"}]})
+        self.browser.navigate(self.server.url + "/?scene=lab&width=320&height=180&fps=30")
+        self.browser.wait_for(SAMPLE + " !== null", timeout=20)
+        status = self.browser.wait_for(
+            "(() => { const t = document.getElementById('status').textContent;"
+            " return t.includes('1 instances') ? t : null; })()", timeout=10)
+        self.assertTrue(status.startswith("scene lab · version 1"), status)
+        urls = self.browser.evaluate(
+            "performance.getEntriesByType('resource').map((e) => e.name).join(' ')")
+        self.assertIn("/v1/scenes/lab/stream?", urls)
+        self.assertIn("/v1/scenes/lab/scene", urls)
+        self.assertNotIn("/v1/stream?", urls)
+        # Another client's edit in that scene reaches this viewer; the default scene's do not
+        # (its version stays at 1).
+        request(self.server, "POST", "/v1/scenes/lab/edits", {"edits": [
+            {"op": "add_instance", "id": "lab-ball-2", "mesh": "ball",
+             "transform": {"translate": [2, 0, 0]}}]})
+        self.browser.wait_for("window.strata.version === 2", timeout=10)
+        self.shot("named-scene")
+        request(self.server, "DELETE", "/v1/scenes/lab")
 
 
 class ViewerWithToken(ViewerInChromium):

@@ -18,7 +18,7 @@ from strata_client._version import __version__
 from strata_client.aio import AsyncClient
 from strata_client.arrays import MISS, FrameArrays
 from strata_client.client import Client
-from strata_client.errors import (BadRequestError, NotFoundError, NothingToUndoError,
+from strata_client.errors import (BadRequestError, ForbiddenError, NotFoundError, NothingToUndoError,
                                   ProblemError, SceneConflictError, TooLargeError,
                                   TooManyConnectionsError,
                                   UnauthorizedError, UnavailableError, UnprocessableError,
@@ -33,7 +33,7 @@ __all__ = [
     "__version__", "bulk", "Client", "AsyncClient", "decode_png",
     "ProblemError", "BadRequestError", "UnauthorizedError", "NotFoundError",
     "NothingToUndoError", "VersionMismatchError", "TooLargeError", "UnprocessableError",
-    "TooManyConnectionsError", "UnavailableError", "SceneConflictError",
+    "TooManyConnectionsError", "UnavailableError", "SceneConflictError", "ForbiddenError",
     "Problem", "RebuildReport", "TlasReport", "TlasMerge", "BlasEntry", "MemoryBytes",
     "CommitPhases", "RenderInfo", "Frame", "Hit", "ImportResult", "Page", "UndoResult",
     "History", "HistoryEntry", "HistoryStack", "FrameArrays", "MISS", "SceneSummary",

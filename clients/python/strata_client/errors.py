@@ -63,6 +63,10 @@ class UnauthorizedError(ProblemError):
     """401: a missing or wrong bearer token."""
 
 
+class ForbiddenError(ProblemError):
+    """403: with --tokens-file, the token's role in the scene does not allow the request."""
+
+
 class NotFoundError(ProblemError):
     """404: an unknown route, or an unknown id in a URL."""
 
@@ -109,6 +113,7 @@ class UnavailableError(ProblemError):
 _BY_STATUS: Dict[int, Type[ProblemError]] = {
     400: BadRequestError,
     401: UnauthorizedError,
+    403: ForbiddenError,
     404: NotFoundError,
     409: NothingToUndoError,
     412: VersionMismatchError,
