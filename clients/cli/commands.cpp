@@ -19,13 +19,6 @@ std::string fixed(double v) {
     return buf;
 }
 
-/// Prints why a request failed; returns the exit code for it.
-int refused(const Console& c, const Transport& t, const char* what, const Reply& reply) {
-    c.err << "strata: " << what << " failed on " << t.describe() << ": " << describe_failure(reply)
-          << '\n';
-    return REFUSED;
-}
-
 /// Prints a report answer (commit or plan); returns the exit code.
 int print_report(const Console& c, const Transport& t, const char* what, const Reply& reply) {
     int code = OK;
@@ -51,6 +44,12 @@ void entries(std::string& out, const Json& list, const char* what) {
 }
 
 }  // namespace
+
+int refused(const Console& c, const Transport& t, const char* what, const Reply& reply) {
+    c.err << "strata: " << what << " failed on " << t.describe() << ": " << describe_failure(reply)
+          << '\n';
+    return REFUSED;
+}
 
 std::optional<Json> json_answer(const Console& c, const Transport& t, const std::string& what,
                                 const Reply& reply, int& code) {

@@ -27,6 +27,9 @@ struct Console {
     bool json = false;  ///< print answers as JSON, for scripts
 };
 
+/// Prints why a request failed; returns the exit code for it.
+int refused(const Console& c, const Transport& t, const char* what, const Reply& reply);
+
 /// The JSON of a 2xx answer, or nullopt having printed why not (and set `code` to the exit code).
 std::optional<Json> json_answer(const Console& c, const Transport& t, const std::string& what,
                                 const Reply& reply, int& code);
@@ -60,6 +63,18 @@ struct RenderArgs {
 std::optional<std::string> render_body(const RenderArgs& args, std::string& error);
 /// `strata render -o FILE ...`.
 int run_render(Transport& t, const Console& c, const RenderArgs& args);
+
+/// `strata scenes` (scenes_commands.cpp): every scene on the server, one line each (one JSON
+/// object each with --json).
+int run_scenes(Transport& t, const Console& c);
+/// `strata scenes create NAME`: PUT /v1/scenes/NAME, with the budget limits given.
+struct SceneCreateArgs {
+    std::string name;
+    std::optional<uint64_t> max_triangles, max_vertices, max_instances, max_texture_mb;
+};
+int run_scene_create(Transport& t, const Console& c, const SceneCreateArgs& args);
+/// `strata scenes delete NAME`: DELETE /v1/scenes/NAME.
+int run_scene_delete(Transport& t, const Console& c, const std::string& name);
 
 /// `strata undo` and `strata redo` (history_commands.cpp).
 int run_undo(Transport& t, const Console& c, bool redo, const std::optional<std::string>& if_match);

@@ -88,19 +88,31 @@ Outcome<std::unique_ptr<HttpTransport>> HttpTransport::create(const HttpOptions&
     client->set_read_timeout(options.timeout_s, 0);
     client->set_write_timeout(options.timeout_s, 0);
     if (!options.token.empty()) client->set_bearer_token_auth(options.token);
-    return std::unique_ptr<HttpTransport>(
-        new HttpTransport(url.value(), std::move(client), options.on_answer));
+    return std::unique_ptr<HttpTransport>(new HttpTransport(
+        url.value(), percent_encode(options.scene), std::move(client), options.on_answer));
 }
 
-HttpTransport::HttpTransport(std::string url, std::unique_ptr<httplib::Client> client,
+HttpTransport::HttpTransport(std::string url, std::string scene,
+                             std::unique_ptr<httplib::Client> client,
                              decltype(HttpOptions::on_answer) on_answer)
-    : m_url(std::move(url)), m_client(std::move(client)), m_on_answer(std::move(on_answer)) {}
+    : m_url(std::move(url)),
+      m_scene(std::move(scene)),
+      m_client(std::move(client)),
+      m_on_answer(std::move(on_answer)) {}
 
 HttpTransport::~HttpTransport() = default;
 
+std::string HttpTransport::scoped(const char* path) const {
+    const std::string_view p(path);
+    if (m_scene.empty() || p.substr(0, 4) != "/v1/" || p.substr(0, 10) == "/v1/scenes")
+        return std::string(p);
+    return "/v1/scenes/" + m_scene + "/" + std::string(p.substr(4));
+}
+
 Reply HttpTransport::get(const char* path) {
-    Reply reply = to_reply(m_client->Get(path), m_url);
-    if (m_on_answer) m_on_answer("GET", path, reply);
+    const std::string target = scoped(path);
+    Reply reply = to_reply(m_client->Get(target), m_url);
+    if (m_on_answer) m_on_answer("GET", target, reply);
     return reply;
 }
 
@@ -108,8 +120,27 @@ Reply HttpTransport::post(const char* path, const std::string& body, const std::
                           const char* content_type) {
     httplib::Headers headers;
     if (!if_match.empty()) headers.emplace("If-Match", if_match);
-    Reply reply = to_reply(m_client->Post(path, headers, body, content_type), m_url);
-    if (m_on_answer) m_on_answer("POST", path, reply);
+    const std::string target = scoped(path);
+    Reply reply = to_reply(m_client->Post(target, headers, body, content_type), m_url);
+    if (m_on_answer) m_on_answer("POST", target, reply);
+    return reply;
+}
+
+Reply HttpTransport::scenes() {
+    return get("/v1/scenes");
+}
+
+Reply HttpTransport::put_scene(const std::string& name, const std::string& body) {
+    const std::string target = "/v1/scenes/" + percent_encode(name);
+    Reply reply = to_reply(m_client->Put(target, body, "application/json"), m_url);
+    if (m_on_answer) m_on_answer("PUT", target, reply);
+    return reply;
+}
+
+Reply HttpTransport::delete_scene(const std::string& name) {
+    const std::string target = "/v1/scenes/" + percent_encode(name);
+    Reply reply = to_reply(m_client->Delete(target), m_url);
+    if (m_on_answer) m_on_answer("DELETE", target, reply);
     return reply;
 }
 

@@ -22,6 +22,8 @@ struct HttpOptions {
     /// Called with each request's method and target and the answer it got (tests record them).
     std::function<void(const char* method, const std::string& target, const Reply& reply)>
         on_answer;
+    /// A named scene: every scene request goes to /v1/scenes/{scene}/...; empty: the default.
+    std::string scene;
 };
 
 class HttpTransport final : public Transport {
@@ -46,16 +48,22 @@ public:
     Reply put_snapshot(std::string bytes) override;
     Reply import_asset(std::string bytes,
                        const std::multimap<std::string, std::string>& query) override;
+    Reply scenes() override;
+    Reply put_scene(const std::string& name, const std::string& body) override;
+    Reply delete_scene(const std::string& name) override;
     std::string describe() const override { return m_url; }
 
 private:
-    HttpTransport(std::string url, std::unique_ptr<httplib::Client> client,
+    HttpTransport(std::string url, std::string scene, std::unique_ptr<httplib::Client> client,
                   decltype(HttpOptions::on_answer) on_answer);
+    /// `path` in the transport's scene: /v1/X as /v1/scenes/{scene}/X.
+    std::string scoped(const char* path) const;
     Reply get(const char* path);
     Reply post(const char* path, const std::string& body, const std::string& if_match,
                const char* content_type = "application/json");
 
     std::string m_url;
+    std::string m_scene;  ///< percent-encoded; empty: the default scene
     std::unique_ptr<httplib::Client> m_client;
     decltype(HttpOptions::on_answer) m_on_answer;
 };

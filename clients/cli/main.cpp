@@ -102,6 +102,9 @@ void add_global_options(CLI::App& app, HttpOptions& http, bool& json) {
         ->capture_default_str();
     app.add_option("--token", http.token, "Bearer token for a server started with --token-file")
         ->envname("STRATA_TOKEN");
+    app.add_option("--scene", http.scene,
+                   "Work on this named scene (/v1/scenes/NAME/...) instead of the default one")
+        ->envname("STRATA_SCENE");
     app.add_option("--timeout", http.timeout_s, "Seconds to wait for the server")
         ->check(CLI::Range(1, 86400))
         ->capture_default_str();
@@ -162,6 +165,30 @@ void add_history(CLI::App& app, Actions& actions) {
         ->check(CLI::Range(1, 1000));
     cmd->add_option("--max", a->max_items, "Stop after this many versions");
     actions.emplace_back(cmd, [a](Transport& t, const Console& c) { return run_history(t, c, *a); });
+}
+
+void add_scenes(CLI::App& app, Actions& actions) {
+    CLI::App* scenes = app.add_subcommand(
+        "scenes", "List the server's scenes; create or delete named scenes");
+    auto create = std::make_shared<SceneCreateArgs>();
+    CLI::App* create_cmd =
+        scenes->add_subcommand("create", "Create a named scene (or find the one that exists)");
+    create_cmd->add_option("name", create->name, "The scene's name")->required();
+    create_cmd->add_option("--max-triangles", create->max_triangles, "Its triangle budget");
+    create_cmd->add_option("--max-vertices", create->max_vertices, "Its vertex budget");
+    create_cmd->add_option("--max-instances", create->max_instances, "Its instance budget");
+    create_cmd->add_option("--max-texture-mb", create->max_texture_mb, "Its texture budget, MiB");
+    actions.emplace_back(create_cmd, [create](Transport& t, const Console& c) {
+        return run_scene_create(t, c, *create);
+    });
+    auto name = std::make_shared<std::string>();
+    CLI::App* delete_cmd =
+        scenes->add_subcommand("delete", "Delete a named scene with its history and files");
+    delete_cmd->add_option("name", *name, "The scene's name")->required();
+    actions.emplace_back(delete_cmd, [name](Transport& t, const Console& c) {
+        return run_scene_delete(t, c, *name);
+    });
+    actions.emplace_back(scenes, run_scenes);
 }
 
 void add_render(CLI::App& app, Actions& actions) {
@@ -313,6 +340,7 @@ int main(int argc, char** argv) {
     Actions actions;
     add_edit(app, actions);
     add_history(app, actions);
+    add_scenes(app, actions);
     add_render(app, actions);
     add_reports(app, actions);
     add_scene(app, actions);
@@ -325,6 +353,10 @@ int main(int argc, char** argv) {
     } catch (const CLI::ParseError& e) {
         // --help and --version exit 0; every usage error exits 2, whatever CLI11 numbers it.
         return app.exit(e) == 0 ? 0 : USAGE;
+    }
+    if (play.embedded && !http.scene.empty()) {
+        std::cerr << "strata: --scene needs a server; the embedded engine holds one scene\n";
+        return USAGE;
     }
     if (!play.embedded && play.demo) {
         std::cerr << "strata: --demo only applies with --embedded\n";

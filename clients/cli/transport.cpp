@@ -9,6 +9,28 @@ namespace strata::cli {
 
 namespace {
 
+Reply single_scene(const Transport& t) {
+    Reply r;
+    r.error = t.describe() + " holds one scene: named scenes need a server";
+    return r;
+}
+
+}  // namespace
+
+Reply Transport::scenes() {
+    return single_scene(*this);
+}
+
+Reply Transport::put_scene(const std::string&, const std::string&) {
+    return single_scene(*this);
+}
+
+Reply Transport::delete_scene(const std::string&) {
+    return single_scene(*this);
+}
+
+namespace {
+
 bool equal_ignoring_case(std::string_view a, std::string_view b) {
     if (a.size() != b.size()) return false;
     for (std::size_t i = 0; i < a.size(); ++i)

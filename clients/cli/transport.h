@@ -77,6 +77,11 @@ public:
     /// instance.
     virtual Reply import_asset(std::string bytes,
                                const std::multimap<std::string, std::string>& query) = 0;
+    /// GET /v1/scenes; PUT and DELETE /v1/scenes/{name} (the directory of named scenes). Only a
+    /// server has one: other transports answer that they hold a single scene.
+    virtual Reply scenes();
+    virtual Reply put_scene(const std::string& name, const std::string& body);
+    virtual Reply delete_scene(const std::string& name);
     /// Where requests go, for messages: "http://127.0.0.1:7070" or "the embedded engine".
     virtual std::string describe() const = 0;
 };

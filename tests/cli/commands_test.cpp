@@ -83,6 +83,39 @@ TEST_F(Commands, UndoRedoAndHistoryWalkTheVersions) {
     EXPECT_NE(err.str().find("nothing-to-undo"), std::string::npos) << err.str();
 }
 
+TEST_F(Commands, ScenesAreListedMadeWorkedInAndDeleted) {
+    EXPECT_EQ(run_scene_create(*transport, console(), {"lab", std::nullopt, std::nullopt, 5,
+                                                        std::nullopt}),
+              0);
+    EXPECT_EQ(out.str(), "created lab  v0  0 meshes  0 instances  0 triangles\n");
+    // --scene: every scene request goes to the named scene.
+    HttpOptions in_lab = test::options_for(srv);
+    in_lab.scene = "lab";
+    auto lab = HttpTransport::create(in_lab);
+    ASSERT_TRUE(lab.has_value());
+    write(R"([{"op": "add_mesh", "id": "ball", "shape": {"type": "sphere", "segments": 8}},
+              {"op": "add_instance", "id": "b0", "mesh": "ball"}])");
+    EXPECT_EQ(run_edit(*lab.value(), console(), file.string(), std::nullopt), 0);
+    EXPECT_EQ(transport->scene_object("instances", "b0").status, 404);
+    EXPECT_EQ(lab.value()->scene_object("instances", "b0").status, 200);
+    out.str("");
+    EXPECT_EQ(run_scenes(*transport, console()), 0);
+    EXPECT_EQ(out.str(),
+              "default  v0  0 meshes  0 instances  0 triangles\n"
+              "lab  v1  1 meshes  1 instances  48 triangles\n");
+    // Its budget: a sixth instance is refused.
+    write(R"([{"op": "add_instances", "mesh": "ball",
+               "ids": {"prefix": "x", "first": 0, "count": 5}}])");
+    EXPECT_EQ(run_edit(*lab.value(), console(), file.string(), std::nullopt), 3);
+    EXPECT_EQ(run_scene_delete(*transport, console(), "default"), 3);
+    EXPECT_NE(err.str().find("scene-conflict"), std::string::npos) << err.str();
+    out.str("");
+    EXPECT_EQ(run_scene_delete(*transport, console(), "lab"), 0);
+    EXPECT_EQ(out.str(), "deleted lab\n");
+    EXPECT_EQ(run_edit(*lab.value(), console(), file.string(), std::nullopt), 3);
+    EXPECT_NE(err.str().find("no scene named 'lab'"), std::string::npos) << err.str();
+}
+
 TEST_F(Commands, ARefusedEditShowsTheProblemFieldsAndExitsWithThree) {
     write(R"([{"op": "add_instance", "id": "x", "mesh": "rock"}])");
     EXPECT_EQ(run_edit(*transport, console(), file.string(), std::nullopt), 3);

@@ -196,15 +196,15 @@ TEST_F(Transports, PickAndListStepsPlayToTheSameVerdictThroughBoth) {
 TEST(HttpTransport, RefusesUrlsItCannotUse) {
     for (const char* url : {"localhost:7070", "ftp://host", "http://", "http://host/v1",
                             "http://host:port", "http://host:123456"}) {
-        auto t = HttpTransport::create({url, "", 1, {}});
+        auto t = HttpTransport::create({url, "", 1, {}, {}});
         EXPECT_FALSE(t.has_value()) << url;
     }
-    EXPECT_TRUE(HttpTransport::create({"http://127.0.0.1:7070/", "", 1, {}}).has_value());
-    EXPECT_TRUE(HttpTransport::create({"https://strata.example:8443", "", 1, {}}).has_value());
+    EXPECT_TRUE(HttpTransport::create({"http://127.0.0.1:7070/", "", 1, {}, {}}).has_value());
+    EXPECT_TRUE(HttpTransport::create({"https://strata.example:8443", "", 1, {}, {}}).has_value());
 }
 
 TEST(HttpTransport, AnUnreachableServerIsAnAnswerWithoutStatusThatSaysWhy) {
-    auto t = HttpTransport::create({"http://127.0.0.1:1", "", 2, {}});
+    auto t = HttpTransport::create({"http://127.0.0.1:1", "", 2, {}, {}});
     ASSERT_TRUE(t.has_value());
     const Reply r = t.value()->commit();
     EXPECT_EQ(r.status, 0);
@@ -217,9 +217,9 @@ TEST(HttpTransport, SendsTheBearerToken) {
     config.token = "s3cret";
     TestServer srv(config);
     const std::string url = "http://127.0.0.1:" + std::to_string(srv.port());
-    EXPECT_EQ(HttpTransport::create({url, "", 5, {}}).value()->stats().status, 401);
-    EXPECT_EQ(HttpTransport::create({url, "wrong", 5, {}}).value()->stats().status, 401);
-    EXPECT_EQ(HttpTransport::create({url, "s3cret", 5, {}}).value()->stats().status, 200);
+    EXPECT_EQ(HttpTransport::create({url, "", 5, {}, {}}).value()->stats().status, 401);
+    EXPECT_EQ(HttpTransport::create({url, "wrong", 5, {}, {}}).value()->stats().status, 401);
+    EXPECT_EQ(HttpTransport::create({url, "s3cret", 5, {}, {}}).value()->stats().status, 200);
 }
 
 }  // namespace
