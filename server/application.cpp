@@ -84,6 +84,7 @@ void Application::install_routes(const FrontEndCounters* front_end, StreamHub* s
         m_engine, m_config, m_metrics, api_limits(m_config), front_end, nullptr, nullptr, {},
         streams, {}});
     m_context->past = std::make_unique<PastScenes>(engine_config(m_config));
+    m_context->scenes = m_scenes.get();
     if (!m_config.peers.empty()) {
         // finish_config checked the list.
         auto peers = parse_peers(m_config.peers);

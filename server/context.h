@@ -17,6 +17,7 @@ class Replica;
 namespace strata::server {
 
 struct FrontEndCounters;
+class SceneDirectory;
 class StreamHub;
 
 struct ServerContext {
@@ -33,6 +34,8 @@ struct ServerContext {
     protocol::SplitRender split_render;
     /// Older versions for `at_version` reads, loaded from `store` (past_scenes.h).
     std::unique_ptr<PastScenes> past = nullptr;
+    /// The named scenes (the default scene's context only), for /metrics.
+    const SceneDirectory* scenes = nullptr;
 
     /// Where write endpoints send batches: the log's append with --log, else the engine.
     const protocol::BatchApply* batch_apply() const { return replica ? &append_to_log : nullptr; }
@@ -52,7 +55,6 @@ void add_stream_routes(RouteTable& routes, ServerContext& ctx);
 /// GET / and /web/...: the viewer's files (web_routes.cpp).
 void add_web_routes(RouteTable& routes);
 
-class SceneDirectory;
 /// GET /v1/scenes and GET, PUT and DELETE /v1/scenes/{scene} (scene_directory_routes.cpp);
 /// `ctx` is the default scene's.
 void add_scene_directory_routes(RouteTable& routes, ServerContext& ctx, SceneDirectory& scenes);

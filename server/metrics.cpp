@@ -276,6 +276,34 @@ void add_durable_families(std::vector<MetricFamily>& out) {
                             }));
 }
 
+/// A gauge with one sample per named scene, labelled scene="NAME" (names need no escaping).
+MetricFamily per_scene(std::string name, std::string help,
+                       std::function<double(const NamedSceneMetrics&)> value) {
+    MetricFamily f{std::move(name), std::move(help), MetricType::Gauge, MetricPart::Scenes, {}, {}};
+    f.samples = [value = std::move(value)](const MetricsSnapshot& s) {
+        std::vector<MetricSample> out;
+        for (const NamedSceneMetrics& scene : *s.named_scenes)
+            out.push_back({"scene=\"" + scene.name + "\"", value(scene)});
+        return out;
+    };
+    return f;
+}
+
+void add_scene_families(std::vector<MetricFamily>& out) {
+    out.push_back(scalar("strata_named_scenes", "Named scenes held beside the default one.",
+                         MetricType::Gauge, MetricPart::Scenes, [](const MetricsSnapshot& s) {
+                             return double(s.named_scenes->size());
+                         }));
+    out.push_back(per_scene("strata_named_scene_version", "A named scene's version.",
+                            [](const NamedSceneMetrics& m) { return double(m.version); }));
+    out.push_back(per_scene("strata_named_scene_instances", "Instances in a named scene.",
+                            [](const NamedSceneMetrics& m) { return double(m.instances); }));
+    out.push_back(per_scene("strata_named_scene_triangles", "Triangles of a named scene's meshes.",
+                            [](const NamedSceneMetrics& m) { return double(m.triangles); }));
+    out.push_back(per_scene("strata_named_scene_blas_bytes", "Bytes a named scene's BLASes hold.",
+                            [](const NamedSceneMetrics& m) { return double(m.blas_bytes); }));
+}
+
 std::vector<MetricFamily> build_registry() {
     std::vector<MetricFamily> out;
     add_engine_families(out);
@@ -285,6 +313,7 @@ std::vector<MetricFamily> build_registry() {
               [](const MetricsSnapshot& s) -> const Replica& { return *s.replica; });
     add_stats(out, STREAM_METRICS, "strata_stream_", MetricPart::Streams,
               [](const MetricsSnapshot& s) -> const StreamHubStats& { return *s.streams; });
+    add_scene_families(out);
     return out;
 }
 
@@ -319,6 +348,8 @@ bool exported(const MetricFamily& family, const MetricsSnapshot& snapshot) {
             return snapshot.replica.has_value();
         case MetricPart::Streams:
             return snapshot.streams.has_value();
+        case MetricPart::Scenes:
+            return snapshot.named_scenes.has_value();
     }
     return false;
 }
@@ -379,7 +410,8 @@ std::string prometheus_text(const MetricsSnapshot& snapshot) {
 
 std::string metrics_markdown_table() {
     static const char* const PARTS[] = {"engine",   "server",  "front end (connections)",
-                                        "`--data`", "`--log`", "streams (viewer, events)"};
+                                        "`--data`", "`--log`", "streams (viewer, events)",
+                                        "named scenes"};
     std::string out = "| series | type | exported by | what it is |\n|---|---|---|---|\n";
     for (const MetricFamily& f : metric_registry()) {
         out += "| `" + f.name + "` | " + type_name(f.type) + " | " + PARTS[int(f.part)] + " | " +

@@ -65,6 +65,15 @@ private:
     std::array<std::atomic<uint64_t>, 5> m_responses{};
 };
 
+/// One named scene's numbers (named_scenes.h), for its labelled series.
+struct NamedSceneMetrics {
+    std::string name;
+    uint64_t version = 0;
+    uint64_t instances = 0;
+    uint64_t triangles = 0;
+    uint64_t blas_bytes = 0;
+};
+
 /// Everything one scrape reads, taken once.
 struct MetricsSnapshot {
     EngineCounters engine;
@@ -80,10 +89,12 @@ struct MetricsSnapshot {
     std::optional<durable::DurableStats> durable;
     std::optional<replica::ReplicaStatus> replica;
     std::optional<StreamHubStats> streams;
+    /// The named scenes beside the default one (the server always has the directory).
+    std::optional<std::vector<NamedSceneMetrics>> named_scenes;
 };
 
 /// The parts of the server a family belongs to (the README groups the table by it).
-enum class MetricPart : uint8_t { Engine, Server, FrontEnd, Durable, Replica, Streams };
+enum class MetricPart : uint8_t { Engine, Server, FrontEnd, Durable, Replica, Streams, Scenes };
 
 enum class MetricType : uint8_t { Counter, Gauge, Histogram };
 

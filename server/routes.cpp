@@ -13,6 +13,7 @@
 #include "protocol/api.h"
 #include "server/context.h"
 #include "server/front_end_counters.h"
+#include "server/named_scenes.h"
 #include "server/replica/replica.h"
 #include "server/route_table.h"
 #include "server/stream_hub.h"
@@ -308,6 +309,17 @@ MetricsSnapshot metrics_snapshot(const ServerContext& ctx) {
     if (ctx.store) s.durable = ctx.store->stats();
     if (ctx.replica) s.replica = ctx.replica->status();
     if (ctx.streams) s.streams = ctx.streams->stats();
+    if (ctx.scenes) {
+        s.named_scenes.emplace();
+        for (const auto& scene : ctx.scenes->list()) {
+            const auto [version, totals] = scene->engine().read(
+                [](const Scene& sc) { return std::pair(sc.version(), sc.mesh_totals()); });
+            s.named_scenes->push_back(
+                {scene->name(), version, totals.instances, totals.triangles,
+                 uint64_t(std::max<int64_t>(scene->engine().memory_bytes(MemoryCategory::Blas),
+                                            0))});
+        }
+    }
     return s;
 }
 

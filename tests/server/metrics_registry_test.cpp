@@ -37,6 +37,7 @@ MetricsSnapshot full_snapshot(const FrontEndCounters& front_end) {
     s.durable = durable::DurableStats{};
     s.replica = replica::ReplicaStatus{};
     s.streams = StreamHubStats{};
+    s.named_scenes = std::vector<NamedSceneMetrics>{{"city", 7, 3, 12, 4096}};
     s.commit_seconds = Histogram().counts();
     s.render_seconds = Histogram().counts();
     return s;
@@ -85,7 +86,11 @@ TEST(MetricsRegistry, FieldFamiliesReadTheirOwnField) {
           "strata_stream_frames_sent_total 5\n", "strata_stream_commit_events_total 7\n",
           "strata_stream_renders_deferred_total 9\n", "strata_stream_frames_dropped_total 10\n",
           "strata_stream_held_bytes 12\n", "strata_replica_applied_version 41\n",
-          "strata_replica_snapshot_version 42\n", "strata_replica_entries_trimmed_total 43\n"})
+          "strata_replica_snapshot_version 42\n", "strata_replica_entries_trimmed_total 43\n",
+          "strata_named_scenes 1\n", "strata_named_scene_version{scene=\"city\"} 7\n",
+          "strata_named_scene_instances{scene=\"city\"} 3\n",
+          "strata_named_scene_triangles{scene=\"city\"} 12\n",
+          "strata_named_scene_blas_bytes{scene=\"city\"} 4096\n"})
         EXPECT_NE(text.find(line), std::string::npos) << line;
 }
 
@@ -94,7 +99,8 @@ TEST(MetricsRegistry, PartsThatDoNotExistAreLeftOut) {
     EXPECT_NE(text.find("strata_batches_applied_total"), std::string::npos);
     EXPECT_NE(text.find("strata_http_responses_total{code=\"2xx\"} 0\n"), std::string::npos);
     for (const char* prefix :
-         {"strata_http_connections", "strata_durable_", "strata_replica_", "strata_stream_"})
+         {"strata_http_connections", "strata_durable_", "strata_replica_", "strata_stream_",
+          "strata_named_scene"})
         EXPECT_EQ(text.find(prefix), std::string::npos) << prefix;
 }
 

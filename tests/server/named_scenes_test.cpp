@@ -100,6 +100,12 @@ TEST_F(NamedScenes, RendersAndCommitsTraceTheirOwnScene) {
     EXPECT_EQ(stats["version"], 1);
     EXPECT_GT(stats["memory_bytes"]["blas"].get<int64_t>(), 0);
     EXPECT_EQ(srv.get("/v1/stats").json()["memory_bytes"]["blas"], 0);
+    // /metrics: the default scene's series, and each named scene's under its label.
+    const std::string metrics = srv.get("/metrics").body;
+    EXPECT_NE(metrics.find("\nstrata_scene_version 0\n"), std::string::npos) << metrics;
+    EXPECT_NE(metrics.find("\nstrata_named_scenes 1\n"), std::string::npos);
+    EXPECT_NE(metrics.find("\nstrata_named_scene_version{scene=\"b\"} 1\n"), std::string::npos);
+    EXPECT_NE(metrics.find("\nstrata_named_scene_instances{scene=\"b\"} 1\n"), std::string::npos);
 }
 
 TEST_F(NamedScenes, ABudgetOfItsOwnIsCheckedInThatSceneOnly) {

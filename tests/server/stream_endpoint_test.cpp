@@ -386,6 +386,35 @@ TEST(EventsEndpoint, EachCommitIsOneEventWithItsVersionAndReport) {
     EXPECT_FALSE(c.wait_for("event: commit", c.in().rfind("event: commit") + 1, 300ms));
 }
 
+TEST(EventsEndpoint, ANamedScenesStreamsCarryItsCommitsOnly) {
+    TestServer s({}, true);
+    auto http = s.client();
+    ASSERT_EQ(http.Put("/v1/scenes/side", "", "application/json")->status, 201);
+    RawClient side(s.port());
+    side.send_get("/v1/scenes/side/events");
+    auto hello = side.wait_for("event: hello\ndata: ");
+    ASSERT_TRUE(hello.has_value()) << side.in();
+    EXPECT_NE(side.in().find("\"version\":0", *hello), std::string::npos) << side.in();
+    // The default scene's commits are not this scene's events.
+    ASSERT_EQ(s.edits({move_ball(1.0f)}).status, 200);
+    ASSERT_EQ(s.post("/v1/commit", std::string()).status, 200);
+    EXPECT_FALSE(side.wait_for("event: commit", 0, 300ms));
+    const Reply edit = s.post("/v1/scenes/side/edits",
+                              Json{{"edits", {{{"op", "set_camera"}, {"eye", {1, 2, 3}}}}}});
+    ASSERT_EQ(edit.status, 200) << edit.body;
+    ASSERT_EQ(s.post("/v1/scenes/side/commit", std::string()).status, 200);
+    EXPECT_TRUE(side.wait_for("id: 1\nevent: commit\n").has_value()) << side.in();
+    // Its frames come from its own hub.
+    RawClient frames(s.port());
+    frames.send_get("/v1/scenes/side/stream?width=32&height=32&max_samples=1");
+    EXPECT_TRUE(frames.wait_for("Content-Type: image/jpeg\r\n\r\n").has_value())
+        << frames.in().substr(0, 600);
+    // Deleting the scene ends its streams.
+    ASSERT_EQ(http.Delete("/v1/scenes/side")->status, 204);
+    EXPECT_TRUE(side.wait_eof(3000ms));
+    EXPECT_TRUE(frames.wait_eof(3000ms));
+}
+
 TEST(EventsEndpoint, CommitsInQuickSuccessionAreEachOneEventInOrder) {
     // Edit-and-commit round trips on loopback take about a millisecond: a stream that looked for
     // commits now and then would report only some of them.
