@@ -66,7 +66,8 @@ constexpr TypeInfo TYPES[] = {
      "scene of that name is still being deleted, or on a replica (`--log` carries the default "
      "scene only)"},
     {"not-found", "Not found", 404,
-     "unknown route, an unknown id in the URL of `GET /v1/scene/...`, or an `at_version` the "
+     "unknown route, an unknown id in the URL of `GET /v1/scene/...`, a scene that does not "
+     "exist (or, with `--tokens-file`, that the token has no role in), or an `at_version` the "
      "server does not hold"},
     {"method-not-allowed", "Method not allowed", 405,
      "the path exists for other methods (see the `Allow` header); `HEAD /v1/render`, "

@@ -120,7 +120,11 @@ Status SceneDirectory::recover() {
     const std::string dir = root();
     std::error_code ec;
     if (dir.empty() || !fs::is_directory(dir, ec)) return {};
-    for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
+    std::vector<fs::directory_entry> entries;
+    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
+        entries.push_back(*it);
+    if (ec) return failure(ErrorCode::Storage, "cannot list " + dir + ": " + ec.message());
+    for (const fs::directory_entry& entry : entries) {
         const std::string name = entry.path().filename().string();
         if (name.rfind(".deleted-", 0) == 0 || name.rfind(".new-", 0) == 0) {
             spdlog::info("removing {} (left by a scene deletion or creation that did not end)",
@@ -128,7 +132,8 @@ Status SceneDirectory::recover() {
             remove_tree(entry.path().string());
             continue;
         }
-        if (!protocol::valid_scene_name(name) || name == "default" || !entry.is_directory()) {
+        std::error_code kind;
+        if (!protocol::valid_scene_name(name) || name == "default" || !entry.is_directory(kind)) {
             spdlog::warn("{}: not a scene (scene names are {}); left alone",
                          entry.path().string(), protocol::SCENE_NAME_RULE);
             continue;
@@ -153,9 +158,9 @@ Status SceneDirectory::recover() {
                               built.error().describe());
         }
         spdlog::info("scene '{}' recovered at version {}", name, engine.version());
+        std::lock_guard lock(m_mutex);
         m_scenes.emplace(name, std::move(scene.value()));
     }
-    if (ec) return failure(ErrorCode::Storage, durable::errno_message("cannot list " + dir));
     return {};
 }
 

@@ -2,8 +2,9 @@
 // headers, framing, target, query, body; pipelined or not, in any segmentation) through the
 // front end's request reader and the application's routes to protocol/api.h and the engine.
 //
-// Input: byte 0 picks the situation (token required, draining, over a connection limit) and the
-// size of the segments the rest arrives in; the rest is what the client sends.
+// Input: byte 0 picks the situation (token required, draining, over a connection limit, tokens
+// with roles per scene) and the size of the segments the rest arrives in; the rest is what the
+// client sends. Named scenes made by one input are deleted before the next.
 //
 // Checks, besides "no crash, no sanitizer report":
 //   - every answer is one complete HTTP/1.1 response whose Content-Length is its body's length;
@@ -17,6 +18,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include <spdlog/spdlog.h>
 
@@ -24,6 +26,8 @@
 #include "engine/scene/shapes.h"
 #include "protocol/safe_text.h"
 #include "server/application.h"
+#include "server/auth.h"
+#include "server/named_scenes.h"
 #include "server/request_reader.h"
 
 namespace {
@@ -47,6 +51,7 @@ struct World {
     std::unique_ptr<Application> app;
     ReaderConfig open_reader;
     ReaderConfig token_reader;
+    ReaderConfig tokens_reader;  ///< --tokens-file: roles per scene
 
     World() {
         spdlog::set_level(spdlog::level::off);
@@ -56,6 +61,10 @@ struct World {
         config.max_scene_instances = 4096;
         config.render_timeout_s = 1;
         config.max_body_bytes = 64 << 10;
+        // Named scenes get the same small budget, and at most four of them.
+        config.max_scene_triangles = 200000;
+        config.max_scene_vertices = 200000;
+        config.max_scenes = 4;
         EngineConfig ec;
         ec.budget = {200000, 200000, uint64_t(256) << 20, 4096};
         engine = std::move(Engine::create(ec).value());
@@ -63,6 +72,9 @@ struct World {
         open_reader.limits.max_body_bytes = config.max_body_bytes;
         token_reader = open_reader;
         token_reader.token = "fuzz";
+        tokens_reader = open_reader;
+        tokens_reader.tokens = std::make_shared<const TokenTable>(
+            parse_token_table("fuzz a:admin b:read default:read\nfuzzer *:edit\n", "fuzz").value());
     }
 
     /// The same small scene before every input, so that a crash reproduces from its input alone.
@@ -78,6 +90,9 @@ struct World {
         i.mesh = "box";
         b.edits.emplace_back(i);
         (void)engine->apply(std::move(b));
+        // No named scene: each is destroyed as its last reference (this list) goes.
+        std::vector<std::shared_ptr<HostedScene>> named = app->scenes().list();
+        for (const auto& scene : named) app->scenes().remove(scene->name());
     }
 };
 
@@ -113,7 +128,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const std::string_view input(reinterpret_cast<const char*>(data) + 1, size - 1);
     const ReaderSituation situation{(mode & 0x02) != 0, (mode & 0x04) != 0};
     const std::size_t segment = std::size_t(1) << ((mode >> 4) & 0x0F);  // 1 byte to 32 KiB
-    RequestReader reader((mode & 0x01) ? world.token_reader : world.open_reader);
+    RequestReader reader((mode & 0x08)   ? world.tokens_reader
+                         : (mode & 0x01) ? world.token_reader
+                                         : world.open_reader);
 
     std::size_t fed = 0;
     for (int steps = 0; steps < 64; ++steps) {

@@ -40,7 +40,8 @@ class ReadmeExamplesTest(unittest.TestCase):
     def run_examples(self, server_args: List[str], runs: int) -> None:
         with open(README, encoding="utf-8") as f:
             found = examples(f.read())
-        self.assertEqual(len(found), 4)  # the quick start, asyncio, undo and bulk examples
+        # The quick start, asyncio, named scenes, undo and bulk examples.
+        self.assertEqual(len(found), 5)
         with ServerProcess(SERVER, server_args) as server, tempfile.TemporaryDirectory() as cwd:
             for code, expected in found:
                 self.assertIn(README_URL, code)

@@ -4,6 +4,7 @@ directories surviving a SIGKILL; and deleting a scene giving its memory back (me
 process's resident set)."""
 
 import asyncio
+import os
 import shutil
 import tempfile
 import unittest
@@ -152,6 +153,29 @@ class DurableScenesTest(unittest.TestCase):
                 self.assertEqual(strata.create_scene("dropped").version, 0)
         finally:
             server.stop()
+
+    def test_leftovers_of_an_interrupted_creation_or_deletion_are_removed_at_start(self):
+        scenes = os.path.join(self.data, "scenes")
+        for name in (".new-a-1", ".deleted-b-2", "Not-A-Scene"):
+            os.makedirs(os.path.join(scenes, name))
+        server = self.start()
+        try:
+            with Client(server.url) as strata:
+                self.assertEqual([s.name for s in strata.scenes()], ["default"])
+            self.assertIn("Not-A-Scene: not a scene", server.log())
+        finally:
+            server.stop()
+        self.assertEqual(sorted(os.listdir(scenes)), ["Not-A-Scene"])
+
+    def test_a_damaged_scene_file_stops_the_server_naming_it(self):
+        settings = os.path.join(self.data, "scenes", "city", "scene.json")
+        os.makedirs(os.path.dirname(settings))
+        with open(settings, "w", encoding="utf-8") as f:
+            f.write('{"budget": {"max_instances": "many"}}')
+        with self.assertRaises(RuntimeError) as failed:
+            self.start()
+        self.assertIn("scene 'city'", str(failed.exception))
+        self.assertIn("scene.json", str(failed.exception))
 
 
 class SceneMemoryTest(unittest.TestCase):

@@ -14,12 +14,16 @@ namespace {
 
 using test::TestServer;
 
-/// A concrete path the pattern matches: each parameter an "x".
+/// A concrete path the pattern matches: each parameter an "x", a scene "default".
 std::string sample_path(const std::string& path) {
     std::string out;
     bool in_parameter = false;
-    for (char c : path) {
-        if (c == '{') {
+    for (std::size_t i = 0; i < path.size(); ++i) {
+        const char c = path[i];
+        if (path.compare(i, 7, "{scene}") == 0) {
+            out += "default";  // a scene every server has
+            i += 6;
+        } else if (c == '{') {
             in_parameter = true;
             out += 'x';
         } else if (c == '}') {
