@@ -34,11 +34,6 @@ SceneBudget clamp(SceneBudget budget, const SceneBudget& ceiling) {
     return budget;
 }
 
-bool same_budget(const SceneBudget& a, const SceneBudget& b) {
-    return a.max_triangles == b.max_triangles && a.max_vertices == b.max_vertices &&
-           a.max_instances == b.max_instances && a.max_texture_bytes == b.max_texture_bytes;
-}
-
 /// Removes `dir` and what it holds; a failure is logged (nothing else depends on it).
 void remove_tree(const std::string& dir) {
     std::error_code ec;
@@ -47,6 +42,11 @@ void remove_tree(const std::string& dir) {
 }
 
 }  // namespace
+
+bool same_budget(const SceneBudget& a, const SceneBudget& b) {
+    return a.max_triangles == b.max_triangles && a.max_vertices == b.max_vertices &&
+           a.max_instances == b.max_instances && a.max_texture_bytes == b.max_texture_bytes;
+}
 
 durable::StoreOptions store_options(const ServerConfig& c, const std::string& dir) {
     durable::StoreOptions o;
@@ -166,7 +166,9 @@ Status SceneDirectory::recover() {
 
 Expected<std::pair<std::shared_ptr<HostedScene>, bool>, protocol::Problem> SceneDirectory::create(
     const std::string& name, const SceneBudget& budget) {
-    std::lock_guard lock(m_mutex);
+    std::unique_lock lock(m_mutex);
+    // A PUT of a name another PUT is creating waits for it, then finds its scene.
+    m_created.wait(lock, [&] { return m_creating.count(name) == 0; });
     if (auto it = m_scenes.find(name); it != m_scenes.end()) {
         if (!same_budget(it->second->budget(), budget))
             return Unexpected(protocol::make_problem(
@@ -181,11 +183,28 @@ Expected<std::pair<std::shared_ptr<HostedScene>, bool>, protocol::Problem> Scene
                 protocol::ProblemType::SceneConflict,
                 "scene '" + name + "' is still being deleted (a request still uses it); try again"));
     }
-    if (m_scenes.size() >= m_shared.config.max_scenes)
+    const std::size_t held = m_scenes.size() + m_creating.size();
+    if (held >= m_shared.config.max_scenes)
         return Unexpected(protocol::make_problem(
             protocol::ProblemType::TooLarge,
-            "this server holds " + std::to_string(m_scenes.size()) +
+            "this server holds " + std::to_string(held) +
                 " named scenes already, its limit (--max-scenes)"));
+    // Step: the files and the engine, outside the lock (fsyncs take a while; other scenes' requests
+    // go on), the name reserved meanwhile.
+    m_creating.insert(name);
+    const uint64_t serial = ++m_serial;
+    lock.unlock();
+    auto made = build(name, budget, serial);
+    lock.lock();
+    m_creating.erase(name);
+    if (made) m_scenes.emplace(name, made.value());
+    m_created.notify_all();
+    if (!made) return Unexpected(std::move(made).error());
+    return std::pair(std::move(made.value()), true);
+}
+
+Expected<std::shared_ptr<HostedScene>, protocol::Problem> SceneDirectory::build(
+    const std::string& name, const SceneBudget& budget, uint64_t serial) {
     std::string dir;
     if (const std::string parent = root(); !parent.empty()) {
         // Step: the directory and its settings, made under a temporary name and renamed, so that
@@ -193,7 +212,7 @@ Expected<std::pair<std::shared_ptr<HostedScene>, bool>, protocol::Problem> Scene
         std::error_code ec;
         fs::create_directories(parent, ec);
         const std::string fresh =
-            durable::join_path(parent, ".new-" + name + "-" + std::to_string(++m_serial));
+            durable::join_path(parent, ".new-" + name + "-" + std::to_string(serial));
         fs::create_directories(fresh, ec);
         if (ec) return Unexpected(storage_problem("cannot create " + fresh + ": " + ec.message()));
         const std::string settings = protocol::scene_settings_json(budget).dump(1) + "\n";
@@ -214,8 +233,7 @@ Expected<std::pair<std::shared_ptr<HostedScene>, bool>, protocol::Problem> Scene
         return Unexpected(storage_problem("scene '" + name + "': " + scene.error().message));
     }
     spdlog::info("scene '{}' created{}", name, dir.empty() ? " (in memory)" : " in " + dir);
-    m_scenes.emplace(name, scene.value());
-    return std::pair(std::move(scene.value()), true);
+    return std::move(scene.value());
 }
 
 std::shared_ptr<HostedScene> SceneDirectory::find(std::string_view name) const {

@@ -13,6 +13,7 @@
 // so two stores never share one directory. Leftover .deleted-* and .new-* directories (a crash
 // in between) are removed when the server starts.
 
+#include <condition_variable>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -39,6 +40,9 @@ class StreamHub;
 
 /// The data directory options the flags set (--fsync, --snapshot-threshold-kb, ...), for `dir`.
 durable::StoreOptions store_options(const ServerConfig& c, const std::string& dir);
+
+/// Whether two budgets set the same limits.
+bool same_budget(const SceneBudget& a, const SceneBudget& b);
 
 /// What every named scene shares with the server.
 struct SceneShared {
@@ -89,8 +93,9 @@ public:
     Status recover();
 
     /// The scene `name`, made with `budget` (created: true), or the one that exists (false; a
-    /// scene-conflict problem when it holds another budget). Problems: a full directory
-    /// (--max-scenes, 413), a name still being deleted (409), storage (503).
+    /// scene-conflict problem when it holds another budget); a creation of the same name in
+    /// progress is waited for. Problems: a full directory (--max-scenes, 413), a name still
+    /// being deleted (409), storage (503). The files are written outside the directory's lock.
     Expected<std::pair<std::shared_ptr<HostedScene>, bool>, protocol::Problem> create(
         const std::string& name, const SceneBudget& budget);
     /// The scene `name`, or null.
@@ -106,6 +111,11 @@ public:
     SceneBudget default_budget() const;
 
 private:
+    /// A new scene with its files (with --data) and engine; `serial` names its temporary
+    /// directory.
+    Expected<std::shared_ptr<HostedScene>, protocol::Problem> build(const std::string& name,
+                                                                    const SceneBudget& budget,
+                                                                    uint64_t serial);
     /// A new scene in memory, with its store opened in `dir` when not empty.
     Result<std::shared_ptr<HostedScene>> open(const std::string& name, const SceneBudget& budget,
                                               const std::string& dir);
@@ -115,6 +125,8 @@ private:
     SceneShared m_shared;
     mutable std::mutex m_mutex;
     std::map<std::string, std::shared_ptr<HostedScene>, std::less<>> m_scenes;
+    std::set<std::string> m_creating;    ///< names whose files and engine are being made
+    std::condition_variable m_created;   ///< a creation ended
     /// Names deleted whose scene still lives (a request holds it); shared with their scenes.
     struct Going {
         std::mutex mutex;

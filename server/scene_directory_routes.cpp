@@ -77,10 +77,7 @@ Reply put_scene(const ServerContext& ctx, SceneDirectory& scenes, const std::str
                                                  ctx.api_limits.json);
     if (!budget) return budget.error();
     if (name == DEFAULT_SCENE) {
-        const SceneBudget& b = ctx.api_limits.budget;
-        const SceneBudget& want = budget.value();
-        if (want.max_triangles != b.max_triangles || want.max_vertices != b.max_vertices ||
-            want.max_instances != b.max_instances || want.max_texture_bytes != b.max_texture_bytes)
+        if (!same_budget(budget.value(), ctx.api_limits.budget))
             return protocol::make_problem(ProblemType::SceneConflict,
                                           "the default scene's budget is the server's "
                                           "--max-scene-* flags; it cannot be changed");

@@ -180,6 +180,21 @@ TEST(NamedSceneLimits, MaxScenesIs413) {
     EXPECT_EQ(put_scene(srv, "c").status, 201);
 }
 
+TEST(NamedSceneLimits, PutsRacingForOneNameMakeOneScene) {
+    TestServer srv;
+    for (int round = 0; round < 5; ++round) {
+        const std::string name = "race" + std::to_string(round);
+        std::vector<int> statuses(6);
+        std::vector<std::thread> putters;
+        for (std::size_t i = 0; i < statuses.size(); ++i)
+            putters.emplace_back([&, i] { statuses[i] = put_scene(srv, name).status; });
+        for (auto& t : putters) t.join();
+        EXPECT_EQ(std::count(statuses.begin(), statuses.end(), 201), 1) << name;
+        EXPECT_EQ(std::count(statuses.begin(), statuses.end(), 200), 5) << name;
+    }
+    EXPECT_EQ(srv.get("/v1/scenes").json()["scenes"].size(), 6u);
+}
+
 TEST(NamedSceneLimits, DeletingWhileRequestsRunAnswersEachOneWholly) {
     TestServer srv;
     std::atomic<bool> stop{false};
