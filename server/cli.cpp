@@ -199,6 +199,20 @@ void add_render_limit_options(CLI::App& app, ServerConfig& c) {
                    "Most named scenes (PUT /v1/scenes/NAME) beside the default one; each has "
                    "the --max-scene-* budget, or a smaller one of its own (beyond it: 413)")
         ->check(CLI::Range(std::size_t(0), std::size_t(4096)));
+    app.add_option("--max-total-triangles", c.max_total_triangles,
+                   "Server-wide budget: what the triangle budgets of all scenes, the default "
+                   "one's included, may add up to; a named scene that would take the sum beyond "
+                   "is not made (413). 0: no limit")
+        ->check(CLI::Range(uint64_t(0), uint64_t(1) << 40));
+    app.add_option("--max-total-vertices", c.max_total_vertices,
+                   "Server-wide budget of vertices, as --max-total-triangles")
+        ->check(CLI::Range(uint64_t(0), uint64_t(1) << 40));
+    app.add_option("--max-total-instances", c.max_total_instances,
+                   "Server-wide budget of instances, as --max-total-triangles")
+        ->check(CLI::Range(uint64_t(0), uint64_t(1) << 40));
+    app.add_option("--max-total-texture-mb", c.max_total_texture_mb,
+                   "Server-wide budget of texture MiB, as --max-total-triangles")
+        ->check(CLI::Range(uint64_t(0), uint64_t(1) << 30));
     app.add_option("--undo-depth", c.undo_depth,
                    "Batches POST /v1/undo can take back in a row (and redo); 0 turns undo off")
         ->check(CLI::Range(std::size_t(0), std::size_t(100000)));

@@ -83,6 +83,35 @@ std::string SceneDirectory::root() const {
     return data.empty() ? std::string() : durable::join_path(data, "scenes");
 }
 
+std::string SceneDirectory::over_total(const SceneBudget& budget) const {
+    struct Total {
+        uint64_t SceneBudget::*field;
+        uint64_t limit;  ///< in the field's unit; 0: none
+        const char* what;
+        const char* flag;
+    };
+    const ServerConfig& c = m_shared.config;
+    const Total totals[] = {
+        {&SceneBudget::max_triangles, c.max_total_triangles, "triangles", "--max-total-triangles"},
+        {&SceneBudget::max_vertices, c.max_total_vertices, "vertices", "--max-total-vertices"},
+        {&SceneBudget::max_instances, c.max_total_instances, "instances", "--max-total-instances"},
+        {&SceneBudget::max_texture_bytes, c.max_total_texture_mb << 20, "texture bytes",
+         "--max-total-texture-mb"},
+    };
+    for (const Total& t : totals) {
+        if (t.limit == 0) continue;
+        // The default scene's budget is the flags', reserved from the start.
+        uint64_t sum = default_budget().*t.field + budget.*t.field;
+        for (const auto& [name, scene] : m_scenes) sum += scene->budget().*t.field;
+        for (const auto& [name, reserved] : m_creating) sum += reserved.*t.field;
+        if (sum > t.limit)
+            return "the scenes' budgets would add up to " + std::to_string(sum) + " " + t.what +
+                   ", over the server's " + std::to_string(t.limit) + " (" + t.flag +
+                   "): give the scene a smaller budget, or delete a scene";
+    }
+    return "";
+}
+
 SceneBudget SceneDirectory::default_budget() const {
     return scene_budget(m_shared.config);
 }
@@ -168,7 +197,7 @@ Expected<std::pair<std::shared_ptr<HostedScene>, bool>, protocol::Problem> Scene
     const std::string& name, const SceneBudget& budget) {
     std::unique_lock lock(m_mutex);
     // A PUT of a name another PUT is creating waits for it, then finds its scene.
-    m_created.wait(lock, [&] { return m_creating.count(name) == 0; });
+    m_created.wait(lock, [&] { return m_creating.find(name) == m_creating.end(); });
     if (auto it = m_scenes.find(name); it != m_scenes.end()) {
         if (!same_budget(it->second->budget(), budget))
             return Unexpected(protocol::make_problem(
@@ -189,9 +218,14 @@ Expected<std::pair<std::shared_ptr<HostedScene>, bool>, protocol::Problem> Scene
             protocol::ProblemType::TooLarge,
             "this server holds " + std::to_string(held) +
                 " named scenes already, its limit (--max-scenes)"));
+    if (std::string over = over_total(budget); !over.empty()) {
+        protocol::Problem p = protocol::make_problem(protocol::ProblemType::TooLarge, over);
+        p.pointer = "/budget";
+        return Unexpected(std::move(p));
+    }
     // Step: the files and the engine, outside the lock (fsyncs take a while; other scenes' requests
     // go on), the name reserved meanwhile.
-    m_creating.insert(name);
+    m_creating.emplace(name, budget);
     const uint64_t serial = ++m_serial;
     lock.unlock();
     auto made = build(name, budget, serial);

@@ -121,11 +121,15 @@ private:
                                               const std::string& dir);
     /// --data/scenes, or "" without --data.
     std::string root() const;
+    /// Why `budget` does not fit in the server-wide budget beside the scenes held and being
+    /// made (--max-total-*), or "" when it fits. Under m_mutex.
+    std::string over_total(const SceneBudget& budget) const;
 
     SceneShared m_shared;
     mutable std::mutex m_mutex;
     std::map<std::string, std::shared_ptr<HostedScene>, std::less<>> m_scenes;
-    std::set<std::string> m_creating;    ///< names whose files and engine are being made
+    /// Names whose files and engine are being made, with their budgets.
+    std::map<std::string, SceneBudget, std::less<>> m_creating;
     std::condition_variable m_created;   ///< a creation ended
     /// Names deleted whose scene still lives (a request holds it); shared with their scenes.
     struct Going {

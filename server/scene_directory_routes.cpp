@@ -156,7 +156,8 @@ void add_scene_directory_routes(RouteTable& routes, ServerContext& ctx, SceneDir
                         problem(409, "the scene exists with another budget, an earlier scene of "
                                      "this name is still being deleted, or the server follows a "
                                      "shared edit log (--log)"),
-                        problem(413, "the server holds --max-scenes named scenes already"),
+                        problem(413, "the server holds --max-scenes named scenes already, or the "
+                                     "scenes' budgets would add up to more than --max-total-*"),
                         problem(422, "a budget above the server's flag (the pointer names it)"),
                         problem(503, "the data directory could not take the scene")}},
          [&ctx, &scenes](RouteCall& call) {

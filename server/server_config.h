@@ -56,6 +56,13 @@ struct ServerConfig {
 
     // Named scenes (named_scenes.h), beside the default one.
     std::size_t max_scenes = 64;
+    /// The server-wide budget: what the budgets of all scenes, the default one's included, may
+    /// add up to (a scene whose budget would take the sum beyond is not made); 0: no limit but
+    /// --max-scenes.
+    uint64_t max_total_triangles = 0;
+    uint64_t max_total_vertices = 0;
+    uint64_t max_total_instances = 0;
+    uint64_t max_total_texture_mb = 0;
 
     // The undo history (engine/scene/edit_history.h).
     std::size_t undo_depth = 100;  ///< batches on each of the undo and redo stacks; 0: no undo

@@ -180,6 +180,23 @@ TEST(NamedSceneLimits, MaxScenesIs413) {
     EXPECT_EQ(put_scene(srv, "c").status, 201);
 }
 
+TEST(NamedSceneLimits, TheScenesBudgetsFitInTheServersTotal) {
+    ServerConfig config;
+    config.max_scene_instances = 1000;
+    config.max_total_instances = 3000;  // the default scene reserves 1000 of it
+    TestServer srv(config);
+    EXPECT_EQ(put_scene(srv, "a").status, 201);
+    EXPECT_EQ(put_scene(srv, "b", R"({"budget": {"max_instances": 600}})").status, 201);
+    const Reply over = put_scene(srv, "c", R"({"budget": {"max_instances": 401}})");
+    expect_problem(over, 413, "too-large", "/budget");
+    EXPECT_NE(over.json()["detail"].get<std::string>().find("3001 instances"), std::string::npos)
+        << over.body;
+    EXPECT_EQ(put_scene(srv, "c", R"({"budget": {"max_instances": 400}})").status, 201);
+    expect_problem(put_scene(srv, "d", R"({"budget": {"max_instances": 1}})"), 413);
+    ASSERT_EQ(delete_scene(srv, "a").status, 204);
+    EXPECT_EQ(put_scene(srv, "d").status, 201);  // a's share is free again
+}
+
 TEST(NamedSceneLimits, PutsRacingForOneNameMakeOneScene) {
     TestServer srv;
     for (int round = 0; round < 5; ++round) {
