@@ -9,8 +9,9 @@ import shutil
 import tempfile
 import unittest
 
-from strata_client import (AsyncClient, Client, NotFoundError, SceneBudget, SceneConflictError,
-                           SceneSummary, TooLargeError, UnprocessableError)
+from strata_client import (AsyncClient, Client, ForbiddenError, NotFoundError, SceneBudget,
+                           SceneConflictError, SceneSummary, TooLargeError, UnauthorizedError,
+                           UnprocessableError)
 from strata_process import ServerProcess
 from test_client import SERVER
 
@@ -176,6 +177,43 @@ class DurableScenesTest(unittest.TestCase):
             self.start()
         self.assertIn("scene 'city'", str(failed.exception))
         self.assertIn("scene.json", str(failed.exception))
+
+
+class SceneAccessTest(unittest.TestCase):
+    """--tokens-file through the client: roles per scene, typed refusals, hidden scenes."""
+
+    def setUp(self):
+        self.tokens = tempfile.NamedTemporaryFile("w", suffix=".tokens", delete=False)
+        self.tokens.write("# test tokens\nt-admin *:admin\nt-city city:edit\nt-look *:read\n")
+        self.tokens.close()
+        self.server = ServerProcess(SERVER, ["--tokens-file", self.tokens.name])
+
+    def tearDown(self):
+        self.server.stop()
+        os.unlink(self.tokens.name)
+
+    def test_each_token_does_what_its_roles_allow(self):
+        with Client(self.server.url, token="t-admin") as admin:
+            admin.create_scene("city")
+            admin.create_scene("park")
+        with Client(self.server.url, token="t-city", scene="city") as city:
+            self.assertEqual(city.edit(BALL), 1)
+            self.assertEqual([s.name for s in city.scenes()], ["city"])
+            with self.assertRaises(ForbiddenError):
+                city.create_scene("city2")
+            with self.assertRaises(ForbiddenError), city.for_scene(None) as default:
+                default.scene()  # no role in the default scene
+            with self.assertRaises(NotFoundError), city.for_scene("park") as park:
+                park.scene()  # as if it did not exist
+        with Client(self.server.url, token="t-look", scene="city") as look:
+            self.assertEqual(look.scene()["version"], 1)
+            self.assertEqual(look.render_frame(16, 16).info.version, 1)
+            with self.assertRaises(ForbiddenError):
+                look.edit(BALL)
+            with self.assertRaises(ForbiddenError):
+                look.delete_scene("city")
+        with self.assertRaises(UnauthorizedError), Client(self.server.url, token="nope") as nope:
+            nope.scenes()
 
 
 class SceneMemoryTest(unittest.TestCase):
