@@ -74,7 +74,8 @@ std::string add_grant(std::string_view word, Grants& grants) {
 
 Result<std::string> read_token_file(const std::string& path) {
     const std::string source = "token file '" + path + "'";
-    auto text = read_small_file(path, MAX_TOKEN_FILE_BYTES, source, "it should hold the token alone");
+    auto text =
+        read_small_file(path, MAX_TOKEN_FILE_BYTES, source, "it should hold the token alone");
     if (!text) return Unexpected(text.error());
     return parse_token(text.value(), source);
 }

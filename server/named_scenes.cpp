@@ -210,7 +210,8 @@ Expected<std::pair<std::shared_ptr<HostedScene>, bool>, protocol::Problem> Scene
         if (m_going->names.count(name))
             return Unexpected(protocol::make_problem(
                 protocol::ProblemType::SceneConflict,
-                "scene '" + name + "' is still being deleted (a request still uses it); try again"));
+                "scene '" + name +
+                    "' is still being deleted (a request still uses it); try again"));
     }
     const std::size_t held = m_scenes.size() + m_creating.size();
     if (held >= m_shared.config.max_scenes)
@@ -295,8 +296,8 @@ bool SceneDirectory::remove(const std::string& name) {
                 scene->m_trash = trash;
                 (void)durable::sync_directory(root());
             } else {
-                spdlog::error("{}", durable::errno_message("cannot rename " + dir + " to " + trash) +
-                                        "; its files are left in place");
+                spdlog::error("{}; its files are left in place",
+                              durable::errno_message("cannot rename " + dir + " to " + trash));
             }
         }
     }

@@ -18,9 +18,9 @@ from strata_client._version import __version__
 from strata_client.aio import AsyncClient
 from strata_client.arrays import MISS, FrameArrays
 from strata_client.client import Client
-from strata_client.errors import (BadRequestError, ForbiddenError, NotFoundError, NothingToUndoError,
-                                  ProblemError, SceneConflictError, TooLargeError,
-                                  TooManyConnectionsError,
+from strata_client.errors import (BadRequestError, ForbiddenError, NotFoundError,
+                                  NothingToUndoError, ProblemError, SceneConflictError,
+                                  TooLargeError, TooManyConnectionsError,
                                   UnauthorizedError, UnavailableError, UnprocessableError,
                                   VersionMismatchError)
 from strata_client.png import decode_png
