@@ -12,6 +12,7 @@
 #include "engine/engine.h"
 #include "engine/scene/demo_scene.h"
 #include "protocol/json_document.h"
+#include "server/auth.h"
 #include "server/server.h"
 #include "tests/server/answer_log.h"
 
@@ -58,6 +59,9 @@ public:
         if (auto log = AnswerLog::from_environment()) {
             httplib::Headers auth;
             if (!config.token.empty()) auth.emplace("Authorization", "Bearer " + config.token);
+            // With a tokens file, any of its tokens may read the description.
+            if (config.tokens)
+                auth.emplace("Authorization", "Bearer " + config.tokens->entries.front().first);
             log->description(get("/v1/openapi.json", auth).body);  // before the log is on
             m_answers = std::move(log);
         }
