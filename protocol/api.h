@@ -153,6 +153,8 @@ bool valid_scene_name(std::string_view name);
 /// flag. An empty body is the ceiling itself.
 Parsed<SceneBudget> parse_scene_settings(std::string_view body, const SceneBudget& ceiling,
                                          const JsonLimits& limits);
+/// The members of a scene's budget, as the settings and the summary name them.
+std::vector<std::string> scene_budget_members();
 /// The settings as parse_scene_settings reads them back (the file a named scene keeps them in).
 Json scene_settings_json(const SceneBudget& budget);
 /// One scene as GET /v1/scenes lists it: name, version, totals, memory, budget.

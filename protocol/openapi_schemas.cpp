@@ -486,14 +486,12 @@ void misc_schemas(J& out) {
 // ---- named scenes (scenes_api.cpp) ----
 
 void scene_directory_schemas(J& out) {
-    const J limits = {{"max_triangles", count()},
-                      {"max_vertices", count()},
-                      {"max_instances", count()},
-                      {"max_texture_mb", count()}};
+    J limits = J::object();
+    for (const std::string& name : scene_budget_members()) limits[name] = count();
+    J some_limits = object(limits);
+    some_limits.erase("required");
     out["SceneSettings"] = described(
-        object({{"budget", object(limits, {"max_triangles", "max_vertices", "max_instances",
-                                           "max_texture_mb"})}},
-               {"budget"}),
+        object({{"budget", std::move(some_limits)}}, {"budget"}),
         "PUT /v1/scenes/{scene}'s body (optional): budget limits at most the server's flags; "
         "those left out are the flags'");
     out["SceneSummary"] =

@@ -31,8 +31,8 @@ SceneBudget read_settings(FieldReader& r, const Json& v, const SceneBudget& ceil
     SceneBudget budget = ceiling;
     const Json* b = FieldReader::member(v, "budget");
     if (!b) return budget;
-    r.expect_object(*b, "/budget",
-                    {"max_triangles", "max_vertices", "max_instances", "max_texture_mb"});
+    static const MemberRule MEMBERS{scene_budget_members(), {}};
+    r.expect_object(*b, "/budget", MEMBERS);
     for (const BudgetMember& m : BUDGET_MEMBERS) {
         const Json* f = FieldReader::member(*b, m.name);
         if (!f) continue;
@@ -73,6 +73,12 @@ Parsed<SceneBudget> parse_scene_settings(std::string_view body, const SceneBudge
     } catch (const RequestFailure& f) {
         return Unexpected(f.problem());
     }
+}
+
+std::vector<std::string> scene_budget_members() {
+    std::vector<std::string> out;
+    for (const BudgetMember& m : BUDGET_MEMBERS) out.emplace_back(m.name);
+    return out;
 }
 
 Json scene_settings_json(const SceneBudget& budget) {
