@@ -104,6 +104,8 @@ std::string SceneDirectory::over_total(const SceneBudget& budget) const {
         uint64_t sum = default_budget().*t.field + budget.*t.field;
         for (const auto& [name, scene] : m_scenes) sum += scene->budget().*t.field;
         for (const auto& [name, reserved] : m_creating) sum += reserved.*t.field;
+        std::lock_guard going(m_going->mutex);
+        for (const auto& [name, reserved] : m_going->names) sum += reserved.*t.field;
         if (sum > t.limit)
             return "the scenes' budgets would add up to " + std::to_string(sum) + " " + t.what +
                    ", over the server's " + std::to_string(t.limit) + " (" + t.flag +
@@ -207,7 +209,7 @@ Expected<std::pair<std::shared_ptr<HostedScene>, bool>, protocol::Problem> Scene
     }
     {
         std::lock_guard going(m_going->mutex);
-        if (m_going->names.count(name))
+        if (m_going->names.find(name) != m_going->names.end())
             return Unexpected(protocol::make_problem(
                 protocol::ProblemType::SceneConflict,
                 "scene '" + name +
@@ -286,7 +288,7 @@ bool SceneDirectory::remove(const std::string& name) {
         scene = std::move(it->second);
         m_scenes.erase(it);
         std::lock_guard going(m_going->mutex);
-        m_going->names.insert(name);
+        m_going->names.emplace(name, scene->budget());
         // Step: the files leave the scene's name at once; they are removed with the scene.
         if (scene->m_store) {
             const std::string dir = scene->m_store->directory();

@@ -121,8 +121,8 @@ private:
                                               const std::string& dir);
     /// --data/scenes, or "" without --data.
     std::string root() const;
-    /// Why `budget` does not fit in the server-wide budget beside the scenes held and being
-    /// made (--max-total-*), or "" when it fits. Under m_mutex.
+    /// Why `budget` does not fit in the server-wide budget beside the scenes held, being made
+    /// and still going (--max-total-*), or "" when it fits. Under m_mutex.
     std::string over_total(const SceneBudget& budget) const;
 
     SceneShared m_shared;
@@ -131,10 +131,11 @@ private:
     /// Names whose files and engine are being made, with their budgets.
     std::map<std::string, SceneBudget, std::less<>> m_creating;
     std::condition_variable m_created;   ///< a creation ended
-    /// Names deleted whose scene still lives (a request holds it); shared with their scenes.
+    /// Scenes deleted that still live (a request holds them), by name with their budgets (still
+    /// counted against --max-total-*); shared with the scenes, which leave it when destroyed.
     struct Going {
         std::mutex mutex;
-        std::set<std::string> names;
+        std::map<std::string, SceneBudget, std::less<>> names;
     };
     std::shared_ptr<Going> m_going = std::make_shared<Going>();
     uint64_t m_serial = 0;  ///< for the names of renamed directories

@@ -7,6 +7,7 @@
 
 #include <gmock/gmock.h>
 
+#include "server/named_scenes.h"
 #include "tests/server/test_server.h"
 
 namespace strata::server::test {
@@ -195,6 +196,28 @@ TEST(NamedSceneLimits, TheScenesBudgetsFitInTheServersTotal) {
     expect_problem(put_scene(srv, "d", R"({"budget": {"max_instances": 1}})"), 413);
     ASSERT_EQ(delete_scene(srv, "a").status, 204);
     EXPECT_EQ(put_scene(srv, "d").status, 201);  // a's share is free again
+}
+
+TEST(NamedSceneLimits, ADeletedSceneStillHeldKeepsItsShareAndItsName) {
+    ServerConfig config;
+    config.max_scene_instances = 1000;
+    config.max_total_instances = 2000;  // the default scene's 1000 and one more scene's
+    ServerMetrics metrics;
+    SceneDirectory scenes(SceneShared{config, metrics, nullptr, {}});
+    ASSERT_TRUE(scenes.create("a", scenes.default_budget()).has_value());
+    std::shared_ptr<HostedScene> held = scenes.find("a");  // as a running request holds it
+    ASSERT_TRUE(scenes.remove("a"));
+    EXPECT_EQ(scenes.find("a"), nullptr);
+    auto refused = scenes.create("b", scenes.default_budget());
+    ASSERT_FALSE(refused.has_value());
+    EXPECT_EQ(refused.error().status, 413);
+    auto again = scenes.create("a", scenes.default_budget());
+    ASSERT_FALSE(again.has_value());
+    EXPECT_EQ(again.error().status, 409);
+    held.reset();  // the request ends: the scene goes, with its share and its name
+    EXPECT_TRUE(scenes.create("b", scenes.default_budget()).has_value());
+    ASSERT_TRUE(scenes.remove("b"));
+    EXPECT_TRUE(scenes.create("a", scenes.default_budget()).has_value());
 }
 
 TEST(NamedSceneLimits, PutsRacingForOneNameMakeOneScene) {
