@@ -25,12 +25,14 @@ protocol::Problem storage_problem(const std::string& what) {
     return protocol::make_problem(protocol::ProblemType::Unavailable, what);
 }
 
+/// A budget's limits, for what compares or clamps them all.
+constexpr uint64_t SceneBudget::*BUDGET_FIELDS[] = {
+    &SceneBudget::max_triangles, &SceneBudget::max_vertices, &SceneBudget::max_instances,
+    &SceneBudget::max_texture_bytes};
+
 /// Each of `budget`'s limits, lowered to `ceiling`'s where it is above.
 SceneBudget clamp(SceneBudget budget, const SceneBudget& ceiling) {
-    budget.max_triangles = std::min(budget.max_triangles, ceiling.max_triangles);
-    budget.max_vertices = std::min(budget.max_vertices, ceiling.max_vertices);
-    budget.max_instances = std::min(budget.max_instances, ceiling.max_instances);
-    budget.max_texture_bytes = std::min(budget.max_texture_bytes, ceiling.max_texture_bytes);
+    for (uint64_t SceneBudget::*f : BUDGET_FIELDS) budget.*f = std::min(budget.*f, ceiling.*f);
     return budget;
 }
 
@@ -44,8 +46,9 @@ void remove_tree(const std::string& dir) {
 }  // namespace
 
 bool same_budget(const SceneBudget& a, const SceneBudget& b) {
-    return a.max_triangles == b.max_triangles && a.max_vertices == b.max_vertices &&
-           a.max_instances == b.max_instances && a.max_texture_bytes == b.max_texture_bytes;
+    for (uint64_t SceneBudget::*f : BUDGET_FIELDS)
+        if (a.*f != b.*f) return false;
+    return true;
 }
 
 durable::StoreOptions store_options(const ServerConfig& c, const std::string& dir) {
