@@ -234,6 +234,11 @@ Result<SnapshotReplace> Engine::replace_with_snapshot(std::string_view payload, 
             std::lock_guard accel_lock(m_accel_mutex);
             std::swap(m_accel, graph);
         }
+        m_compaction_of = nullptr;  // the next commit reads the new graph's list
+        {
+            std::lock_guard stats(m_stats_mutex);
+            m_compaction = {};
+        }
         std::swap(m_frame, frame);
         out.lock_ms = held.ms();
     }
@@ -281,8 +286,19 @@ Result<RebuildReport> Engine::commit_locked(std::unique_lock<std::shared_mutex>*
         if (freed >= int64_t(TRIM_THRESHOLD_BYTES)) release_free_memory();
     }
     report.phases.total_ms = clock.ms();
+    // The compacted BLASes change only when one is built, refit or freed: their list is walked
+    // then, and read (GET /v1/stats) from the copy.
+    const BlasStore& blas = m_accel->blas();
+    std::optional<CompactionSummary> compaction;
+    if (&blas != m_compaction_of || blas.compaction_version() != m_compaction_version) {
+        compaction = blas.compaction();
+        m_compaction_of = &blas;
+        m_compaction_version = blas.compaction_version();
+    }
 
     std::lock_guard stats(m_stats_mutex);
+    if (compaction) m_compaction = std::move(*compaction);
+    report.compaction = m_compaction.totals;
     EngineCounters& c = m_counters;
     ++c.commits;
     if (report.no_accel_work()) ++c.noop_commits;
@@ -429,6 +445,11 @@ EngineCounters Engine::counters() const {
 int64_t Engine::memory_bytes(MemoryCategory c) const {
     std::lock_guard accel_lock(m_accel_mutex);
     return m_accel->memory_bytes(c);
+}
+
+CompactionSummary Engine::compaction() const {
+    std::lock_guard stats(m_stats_mutex);
+    return m_compaction;
 }
 
 RebuildReport Engine::last_report() const {

@@ -170,6 +170,8 @@ public:
 
     /// Cumulative counters.
     EngineCounters counters() const;
+    /// The compacted BLASes (BuildOptions::compact) as the most recent commit left them.
+    CompactionSummary compaction() const;
     /// The report of the most recent commit (default-constructed before the first).
     RebuildReport last_report() const;
     /// Called with every commit's report, on the committing thread, right after the counters
@@ -218,6 +220,10 @@ private:
     mutable std::mutex m_stats_mutex;
     EngineCounters m_counters;
     RebuildReport m_last_report;
+    CompactionSummary m_compaction;  ///< guarded by m_stats_mutex
+    /// The store and version m_compaction was read from (the launch mutex guards these).
+    const BlasStore* m_compaction_of = nullptr;
+    uint64_t m_compaction_version = 0;
     CommitListener m_commit_listener;  ///< guarded by m_stats_mutex
 };
 

@@ -233,6 +233,7 @@ ApiResponse get_plan(const Engine& engine) {
     // A plan's memory is what the acceleration structures hold now, before the commit.
     plan.memory_blas_bytes = engine.memory_bytes(MemoryCategory::Blas);
     plan.memory_tlas_bytes = engine.memory_bytes(MemoryCategory::Tlas);
+    plan.compaction = engine.compaction().totals;
     return with_etag(json_response(200, report_to_json(plan)), plan.version);
 }
 
@@ -286,6 +287,13 @@ ApiResponse get_stats(const Engine& engine, const durable::DurableStats* durable
     });
     const int64_t tlas = engine.memory_bytes(MemoryCategory::Tlas);
     const uint64_t per_instance_bytes = instance_bytes + uint64_t(std::max<int64_t>(tlas, 0));
+    const CompactionSummary compacted = engine.compaction();
+    Json compaction = compaction_to_json(compacted.totals);
+    Json& per_mesh = compaction["per_mesh"] = Json::array();
+    for (const CompactedBlas& m : compacted.meshes)
+        per_mesh.push_back({{"mesh", m.mesh},
+                            {"uncompacted_bytes", m.uncompacted_bytes},
+                            {"bytes", m.bytes}});
     const Json doc = {
         {"version", version},
         {"counters", counters_to_json(counters)},
@@ -294,7 +302,8 @@ ApiResponse get_stats(const Engine& engine, const durable::DurableStats* durable
          {{"blas", engine.memory_bytes(MemoryCategory::Blas)},
           {"tlas", tlas},
           {"instances", instance_bytes},
-          {"per_instance", instances ? Json(per_instance_bytes / instances) : Json(nullptr)}}}};
+          {"per_instance", instances ? Json(per_instance_bytes / instances) : Json(nullptr)},
+          {"compaction", std::move(compaction)}}}};
     Json out = doc;
     out["durability"] = durable ? durable_stats_to_json(*durable) : Json(nullptr);
     return with_etag(json_response(200, out), version);

@@ -140,7 +140,8 @@ constexpr std::string_view SHARED_DEFS = R"json({
     "type": "object",
     "properties": {
       "prefer": {"enum": ["fast_trace", "fast_build"]},
-      "allow_refit": {"type": "boolean"}
+      "allow_refit": {"type": "boolean"},
+      "compact": {"type": "boolean", "description": "build the BLAS at full size, measure it, then rebuild it in Embree's compact layout (less memory, slower traces; the report shows both sizes)"}
     },
     "additionalProperties": false
   },

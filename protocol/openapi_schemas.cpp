@@ -145,8 +145,22 @@ J report_entry_schema() {
                    {"clusters_refit", described(count(), "clusters this commit refit")},
                    {"clusters_rebuilt", described(count(), "clusters this commit built")},
                    {"detail", described(string(), "the refit policy's measured drift")},
-                   {"ms", number()}},
-                  {"clusters", "clusters_refit", "clusters_rebuilt", "detail", "ms"});
+                   {"ms", number()},
+                   {"bytes", described(count(), "the BLAS's memory after this build")},
+                   {"uncompacted_bytes",
+                    described(count(), "a compacted mesh's BLAS memory at full size, measured "
+                                       "by this build's first pass")}},
+                  {"clusters", "clusters_refit", "clusters_rebuilt", "detail", "ms", "bytes",
+                   "uncompacted_bytes"});
+}
+
+J compaction_schema() {
+    return described(object({{"meshes", count()},
+                             {"uncompacted_bytes", count()},
+                             {"bytes", count()},
+                             {"saved_bytes", J{{"type", "integer"}}}}),
+                     "the meshes built with build.compact: their BLAS memory at full size "
+                     "(measured at their last builds) and compacted");
 }
 
 J tlas_report_schema() {
@@ -188,7 +202,9 @@ J report_schema() {
                   {"clusters_refit", count()},
                   {"world_transforms", count()},
                   {"instances_changed", count()},
-                  {"memory_bytes", object({{"blas", count()}, {"tlas", count()}})},
+                  {"memory_bytes", object({{"blas", count()},
+                                           {"tlas", count()},
+                                           {"compaction", compaction_schema()}})},
                   {"ms", number()},
                   {"phases", phases}},
                  {"ms", "phases"});
@@ -223,6 +239,14 @@ J durability_schema() {
                   {"failure", "last_snapshot_error"});
 }
 
+J stats_compaction_schema() {
+    J s = compaction_schema();
+    s["properties"]["per_mesh"] = array_of(object(
+        {{"mesh", ref("id")}, {"uncompacted_bytes", count()}, {"bytes", count()}}));
+    s["required"].push_back("per_mesh");
+    return s;
+}
+
 J stats_schema() {
     return object({{"version", count()},
                    {"counters", object(stat_properties(ENGINE_COUNTERS))},
@@ -236,7 +260,8 @@ J stats_schema() {
                             {"per_instance",
                              described(or_null(count()),
                                        "(instances + tlas) / instance count; null without "
-                                       "instances")}})},
+                                       "instances")},
+                            {"compaction", stats_compaction_schema()}})},
                    {"durability", or_null(ref("Durability"))}});
 }
 

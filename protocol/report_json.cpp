@@ -19,6 +19,9 @@ Json entries_to_json(const std::vector<MeshBuildEntry>& entries, bool planned) {
         }
         if (!e.detail.empty()) j["detail"] = e.detail;
         if (!planned) j["ms"] = e.ms;
+        // Only rebuilds measure their BLAS (a refit's size does not move).
+        if (!planned && e.bytes != 0) j["bytes"] = e.bytes;
+        if (!planned && e.uncompacted_bytes != 0) j["uncompacted_bytes"] = e.uncompacted_bytes;
         out.push_back(std::move(j));
     }
     return out;
@@ -55,7 +58,10 @@ Json report_to_json(const RebuildReport& r) {
               {"clusters_refit", r.clusters_refit},
               {"world_transforms", r.world_transforms},
               {"instances_changed", r.instances_changed},
-              {"memory_bytes", {{"blas", r.memory_blas_bytes}, {"tlas", r.memory_tlas_bytes}}}};
+              {"memory_bytes",
+               {{"blas", r.memory_blas_bytes},
+                {"tlas", r.memory_tlas_bytes},
+                {"compaction", compaction_to_json(r.compaction)}}}};
     if (!r.planned) {
         j["ms"] = r.phases.total_ms;
         j["phases"] = {{"plan_ms", r.phases.plan_ms},
@@ -64,6 +70,13 @@ Json report_to_json(const RebuildReport& r) {
                        {"sync_ms", r.phases.sync_ms}};
     }
     return j;
+}
+
+Json compaction_to_json(const CompactionTotals& c) {
+    return {{"meshes", c.meshes},
+            {"uncompacted_bytes", c.uncompacted_bytes},
+            {"bytes", c.bytes},
+            {"saved_bytes", c.uncompacted_bytes - c.bytes}};
 }
 
 Json counters_to_json(const EngineCounters& c) {

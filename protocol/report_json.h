@@ -12,6 +12,9 @@ namespace strata::protocol {
 /// memory held now).
 Json report_to_json(const RebuildReport& r);
 
+/// The compacted BLASes' totals (a report's and GET /v1/stats' `memory_bytes.compaction`).
+Json compaction_to_json(const CompactionTotals& c);
+
 /// The cumulative counters document (GET /v1/stats `counters`).
 Json counters_to_json(const EngineCounters& c);
 

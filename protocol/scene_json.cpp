@@ -111,7 +111,9 @@ Json mesh_json(const Scene& s, MeshHandle h, const MeshRecord& m) {
         {"instances", m.users.size()},
         {"material", material_ref(s, m.material)},
         {"build",
-         {{"prefer", build_preference_name(m.build.prefer)}, {"allow_refit", m.build.allow_refit}}},
+         {{"prefer", build_preference_name(m.build.prefer)},
+          {"allow_refit", m.build.allow_refit},
+          {"compact", m.build.compact}}},
         {"bounds", bounds_to_json(mesh_bounds(m))}};
     write_fields<MeshFields>(j, m);
     return j;

@@ -204,9 +204,17 @@ int run_stats(Transport& t, const Console& c) {
         return OK;
     }
     c.out << "version " << doc->value("version", uint64_t(0)) << "\n";
-    if (doc->contains("memory_bytes"))
-        c.out << "memory  blas " << (*doc)["memory_bytes"].value("blas", int64_t(0))
-              << " bytes, tlas " << (*doc)["memory_bytes"].value("tlas", int64_t(0)) << " bytes\n";
+    if (doc->contains("memory_bytes")) {
+        const Json& memory = (*doc)["memory_bytes"];
+        c.out << "memory  blas " << memory.value("blas", int64_t(0)) << " bytes, tlas "
+              << memory.value("tlas", int64_t(0)) << " bytes\n";
+        const Json compaction = memory.value("compaction", Json::object());
+        if (compaction.value("meshes", uint64_t(0)) != 0)
+            c.out << "compaction  " << compaction.value("meshes", uint64_t(0)) << " meshes, blas "
+                  << compaction.value("uncompacted_bytes", int64_t(0)) << " bytes at full size, "
+                  << compaction.value("bytes", int64_t(0)) << " compacted ("
+                  << compaction.value("saved_bytes", int64_t(0)) << " saved)\n";
+    }
     c.out << "counters\n";
     const Json counters = doc->value("counters", Json::object());
     for (const auto& [name, value] : counters.items()) {

@@ -64,13 +64,16 @@ export class CostPanel {
 
 /// A rebuild report (protocol/README "Rebuild reports") in words.
 export function describe(r) {
+  const mb = (b) => (b / 1048576).toFixed(2);
   const lines = [`version ${r.version}: ${r.ms !== undefined ? r.ms.toFixed(3) + ' ms' : 'planned'}`];
   const tlas = r.tlas || {};
   lines.push(`TLAS: ${tlas.action || '?'} over ${tlas.instances ?? '?'} instances (${tlas.strategy || '?'})`);
   lines.push(`BLAS: ${r.blas_rebuilds} rebuilt (${r.primitives_built} primitives), ${r.blas_refits} refit (${r.primitives_refit} primitives)`);
   for (const e of r.rebuilt || []) {
     const clusters = e.clusters ? ` as ${e.clusters} clusters` : '';
-    lines.push(`  rebuilt ${e.mesh}: ${e.reason}, ${e.primitives} primitives${clusters}`);
+    // A mesh built with build.compact: its full-size first pass, then what it holds compacted.
+    const compacted = e.uncompacted_bytes ? `, compacted ${mb(e.uncompacted_bytes)} → ${mb(e.bytes)} MiB` : '';
+    lines.push(`  rebuilt ${e.mesh}: ${e.reason}, ${e.primitives} primitives${clusters}${compacted}`);
   }
   for (const e of r.refit || []) {
     // A clustered BLAS refits (and may rebuild) only the clusters the edit touched.
@@ -86,8 +89,9 @@ export function describe(r) {
     lines.push(`phases: plan ${p.plan_ms.toFixed(3)} · BLAS ${p.blas_ms.toFixed(3)} · TLAS ${p.tlas_ms.toFixed(3)} · sync ${p.sync_ms.toFixed(3)} ms`);
   }
   if (r.memory_bytes) {
-    const mb = (b) => (b / 1048576).toFixed(2);
-    lines.push(`memory: BLAS ${mb(r.memory_bytes.blas)} MiB · TLAS ${mb(r.memory_bytes.tlas)} MiB`);
+    const c = r.memory_bytes.compaction;
+    const saved = c && c.meshes ? ` · compaction saves ${mb(c.saved_bytes)} MiB over ${c.meshes} meshes` : '';
+    lines.push(`memory: BLAS ${mb(r.memory_bytes.blas)} MiB · TLAS ${mb(r.memory_bytes.tlas)} MiB${saved}`);
   }
   return lines.join('\n');
 }

@@ -127,7 +127,10 @@ Status build_and_refit(const Scene& scene, BlasStore& blas, CommitPlan& plan,
             return s;
         MeshBuildEntry& entry = report.rebuilt[i];
         entry.ms = clock.ms();
-        if (const ClusteredBlas* c = blas.find(plan.rebuild[i])->clusters.get()) {
+        const BlasRecord& built = *blas.find(plan.rebuild[i]);
+        entry.bytes = built.bytes;
+        entry.uncompacted_bytes = built.uncompacted_bytes;
+        if (const ClusteredBlas* c = built.clusters.get()) {
             entry.clusters = entry.clusters_rebuilt = c->cluster_count();
             report.clusters_rebuilt += entry.clusters;
         }

@@ -108,6 +108,7 @@ void BlasStore::release_slot(uint32_t slot, bool account) {
     BlasRecord& r = m_records[slot];
     if (!r.scene) return;
     if (r.clusters) --m_clustered;
+    if (r.options.compact) ++m_compaction_version;
     release_record(r, account);
 }
 
@@ -115,6 +116,7 @@ void BlasStore::retire_slot(uint32_t slot) {
     BlasRecord& r = m_records[slot];
     if (!r.scene) return;
     if (r.clusters) --m_clustered;
+    if (r.options.compact) ++m_compaction_version;
     m_retired.push_back(std::move(r));
     r = BlasRecord{};
 }
@@ -144,19 +146,17 @@ Status BlasStore::build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics&
 
     // Step: create the scene the first time this mesh is built.
     if (!r.scene) {
-        const SceneSetup setup = setup_for(mesh.build);
         r.scene = rtcNewScene(device);
-        rtcSetSceneBuildQuality(r.scene, setup.scene_quality);
-        const int robust = m_watertight ? RTC_SCENE_FLAG_ROBUST : 0;
-        const int filter = m_context_filter ? RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION : 0;
-        rtcSetSceneFlags(r.scene, RTCSceneFlags(setup.flags | robust | filter));
+        rtcSetSceneBuildQuality(r.scene, setup_for(mesh.build).scene_quality);
         r.mesh_id = mesh.id;
         r.generation = h.generation;
         r.options = mesh.build;
         r.vertex_count = r.triangle_count = 0;
     }
 
-    // Step: the geometry (whole or clustered), uploaded, then the scene's BVH.
+    // Step: the geometry (whole or clustered), uploaded, then the scene's BVH (at full size
+    // first when it is compacted: that build is what compaction is measured against).
+    rtcSetSceneFlags(r.scene, RTCSceneFlags(scene_flags(r.options, false)));
     set_layout(r, mesh, clustered && may_cluster(mesh));
     if (Status s = m_device.status("allocating BLAS buffers"); !s) {
         release_slot(h.index);
@@ -164,16 +164,48 @@ Status BlasStore::build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics&
     }
     if (!r.clusters) upload_whole(r, mesh, vertex_count, triangle_count);
     rtcCommitScene(r.scene);
+    if (r.options.compact) compact(r, bytes_before);
 
     r.vertex_count = vertex_count;
     r.triangle_count = triangle_count;
     r.baseline = BuildBaseline{metrics, 0};
     r.bytes += m_device.bytes(MemoryCategory::Blas) - bytes_before;
+    if (r.options.compact) ++m_compaction_version;
     if (Status s = m_device.status("building BLAS"); !s) {
         release_slot(h.index);
         return s;
     }
     return {};
+}
+
+int BlasStore::scene_flags(const BuildOptions& options, bool compact) const {
+    const int robust = m_watertight ? RTC_SCENE_FLAG_ROBUST : 0;
+    const int filter = m_context_filter ? RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION : 0;
+    return setup_for(options).flags | robust | filter | (compact ? RTC_SCENE_FLAG_COMPACT : 0);
+}
+
+void BlasStore::compact(BlasRecord& r, int64_t bytes_before) {
+    STRATA_CHECK(r.geometry != nullptr);  // a compacted mesh is never clustered
+    r.uncompacted_bytes = r.bytes + (m_device.bytes(MemoryCategory::Blas) - bytes_before);
+    // Embree picks a scene's layout when it builds it: with the flag set, a topology change
+    // (the index buffer marked modified) makes the next commit build the compact BVH and free
+    // the full one.
+    rtcSetSceneFlags(r.scene, RTCSceneFlags(scene_flags(r.options, true)));
+    rtcUpdateGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_INDEX, 0);
+    rtcCommitGeometry(r.geometry);
+    rtcCommitScene(r.scene);
+}
+
+CompactionSummary BlasStore::compaction() const {
+    CompactionSummary out;
+    for (const BlasRecord& r : m_records) {
+        if (!r.scene || !r.options.compact) continue;
+        out.meshes.push_back({r.mesh_id, r.uncompacted_bytes, r.bytes});
+        ++out.totals.meshes;
+        out.totals.uncompacted_bytes += r.uncompacted_bytes;
+        out.totals.bytes += r.bytes;
+    }
+    return out;
 }
 
 void BlasStore::set_layout(BlasRecord& r, const MeshRecord& mesh, bool clustered) {
@@ -245,6 +277,7 @@ Status BlasStore::refit(MeshHandle h, const MeshRecord& mesh, const ClusterWork*
     rtcCommitScene(r->scene);
     ++r->baseline.refits_since_build;
     r->bytes += m_device.bytes(MemoryCategory::Blas) - bytes_before;
+    if (r->options.compact) ++m_compaction_version;
     return m_device.status("refitting BLAS");
 }
 

@@ -40,6 +40,20 @@ struct MeshBuildEntry {
     uint32_t clusters = 0;
     uint32_t clusters_refit = 0;
     uint32_t clusters_rebuilt = 0;
+    /// Memory of the BLAS after the build (rebuilds only), and for a compacted mesh its memory
+    /// at full size, measured by the build's first pass (0 otherwise).
+    int64_t bytes = 0;
+    int64_t uncompacted_bytes = 0;
+};
+
+/// The compacted BLASes of a scene (BuildOptions::compact): how many, and their memory at full
+/// size and compacted.
+struct CompactionTotals {
+    uint64_t meshes = 0;
+    int64_t uncompacted_bytes = 0;
+    int64_t bytes = 0;
+
+    friend bool operator==(const CompactionTotals&, const CompactionTotals&) = default;
 };
 
 /// Phase wall times of one commit, in milliseconds.
@@ -75,6 +89,7 @@ struct RebuildReport {
     uint64_t instances_changed = 0;
     int64_t memory_blas_bytes = 0;  ///< bytes Embree holds for BLASes, after the commit
     int64_t memory_tlas_bytes = 0;  ///< bytes Embree holds for the TLAS, after the commit
+    CompactionTotals compaction;    ///< the compacted BLASes, after the commit
     CommitPhases phases;
 
     /// True when the commit did no acceleration-structure work at all.

@@ -31,9 +31,21 @@ concept Kind = std::same_as<std::remove_const_t<E>, T>;
 
 // Step: one field list per value type, used by the writer and the reader -------------------------
 
+/// Build options are the preference byte and a flags byte. The flags byte was allow_refit's
+/// bool (0 or 1), so flags added later take its higher bits and older files read unchanged.
+enum BuildFlagBits : uint8_t { ALLOW_REFIT = 1, COMPACT = 2 };
 template <class Io, Kind<BuildOptions> E>
 void value_fields(Io& io, E& v) {
-    io(v.prefer, v.allow_refit);
+    if constexpr (std::is_const_v<E>) {
+        io(v.prefer, uint8_t((v.allow_refit ? ALLOW_REFIT : 0) | (v.compact ? COMPACT : 0)));
+    } else {
+        uint8_t flags = 0;
+        io(v.prefer, flags);
+        if (flags & ~(ALLOW_REFIT | COMPACT))
+            return io.fail("build flags byte " + std::to_string(flags) + " has unknown bits");
+        v.allow_refit = (flags & ALLOW_REFIT) != 0;
+        v.compact = (flags & COMPACT) != 0;
+    }
 }
 /// The first-layout (tag 0) fields of kind `K` in `v`, its record or add edit, in table order.
 template <class K, class Io, class V>

@@ -21,6 +21,9 @@ enum class BuildPreference : uint8_t { FastTrace, FastBuild };
 struct BuildOptions {
     BuildPreference prefer = BuildPreference::FastTrace;
     bool allow_refit = true;  ///< like OPTIX_BUILD_FLAG_ALLOW_UPDATE
+    /// Like OPTIX_BUILD_FLAG_ALLOW_COMPACTION followed by a compacting copy: every build of the
+    /// BLAS is measured at full size, then rebuilt in Embree's compact layout (blas_store.h).
+    bool compact = false;
 
     friend bool operator==(const BuildOptions&, const BuildOptions&) = default;
 };

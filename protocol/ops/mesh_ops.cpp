@@ -120,6 +120,8 @@ BuildOptions read_build(FieldReader& r, const Json& v, const std::string& ptr) {
                        : BuildPreference::FastBuild;
     if (const Json* a = FieldReader::member(v, "allow_refit"))
         b.allow_refit = r.boolean(*a, child(ptr, "allow_refit"));
+    if (const Json* c = FieldReader::member(v, "compact"))
+        b.compact = r.boolean(*c, child(ptr, "compact"));
     return b;
 }
 

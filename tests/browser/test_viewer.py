@@ -185,6 +185,18 @@ class ViewerWithoutToken(ViewerInChromium):
         text = self.browser.evaluate("document.getElementById('last-report').textContent")
         self.assertIn("TLAS:", text)
         self.shot("cost-panel")
+        # A compacted mesh: its entry gives both sizes, the memory line the saving.
+        version = request(self.server, "POST", "/v1/edits", {"edits": [
+            {"op": "add_mesh", "id": "gem", "build": {"compact": True},
+             "shape": {"type": "sphere", "radius": 0.5, "segments": 48}},
+            {"op": "add_instance", "id": "gem-a", "mesh": "gem",
+             "transform": {"translate": [0, 1, 0]}}]})["version"]
+        self.browser.wait_for(
+            f"document.getElementById('last-report').dataset.version == '{version}'", timeout=5)
+        text = self.browser.evaluate("document.getElementById('last-report').textContent")
+        self.assertRegex(text,
+                         r"rebuilt gem: added, \d+ primitives, compacted [\d.]+ → [\d.]+ MiB")
+        self.assertRegex(text, r"compaction saves [\d.]+ MiB over 1 meshes")
 
 
 class ViewerTreeAndStill(ViewerInChromium):

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -175,6 +176,21 @@ TEST_F(Commands, StatsAndScenePrintTheServersState) {
     out.str("");
     EXPECT_EQ(run_scene(*transport, console(true)), 0);
     EXPECT_EQ(Json::parse(out.str())["version"], 0);
+}
+
+TEST_F(Commands, StatsSayWhatCompactionSaved) {
+    write(R"([{"op": "add_mesh", "id": "ball", "shape": {"type": "sphere", "segments": 32},
+               "build": {"compact": true}}])");
+    ASSERT_EQ(run_edit(*transport, console(), file.string(), std::nullopt), 0);
+    EXPECT_EQ(run_stats(*transport, console()), 0);
+    EXPECT_EQ(out.str().find("compaction"), std::string::npos) << "before any commit: " << out.str();
+    ASSERT_EQ(run_commit(*transport, console()), 0);
+    out.str("");
+    EXPECT_EQ(run_stats(*transport, console()), 0);
+    EXPECT_TRUE(std::regex_search(
+        out.str(), std::regex("\ncompaction  1 meshes, blas [0-9]+ bytes at full size, "
+                              "[0-9]+ compacted \\([0-9]+ saved\\)\n")))
+        << out.str();
 }
 
 TEST_F(Commands, RenderWritesTheImageAndSaysWhatItsCommitDid) {

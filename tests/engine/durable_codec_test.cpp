@@ -255,6 +255,40 @@ TEST(EditCodec, AnInstanceWithoutAParentIsWrittenAsBeforeGroups) {
     EXPECT_EQ(with_parent.substr(5, plain.size() - 5), plain.substr(5));
 }
 
+TEST(EditCodec, BuildFlagsTakeTheOldRefitByteAndUnknownBitsAreRefused) {
+    // allow_refit was a bool byte: compaction is its second bit, so files written before it
+    // read unchanged (FilesWrittenBeforeTheFieldTablesReadAndWriteTheSame) and a mesh without
+    // compaction is written exactly as before.
+    AddMesh e;
+    e.id = "m";
+    e.positions = {Vec3(0), Vec3(1, 0, 0), Vec3(0, 1, 0)};
+    e.triangles = {Triangle(0, 1, 2)};
+    e.build.allow_refit = false;
+    const std::string plain = encoded(EditBatch{{e}});
+    e.build.compact = true;
+    const std::string compact = encoded(EditBatch{{e}});
+    ASSERT_EQ(plain.size(), compact.size());
+    std::size_t differ = 0, at = 0;
+    for (std::size_t i = 0; i < plain.size(); ++i) {
+        if (plain[i] != compact[i]) ++differ, at = i;
+    }
+    ASSERT_EQ(differ, 1u);
+    EXPECT_EQ(uint8_t(plain[at]), 0u);
+    EXPECT_EQ(uint8_t(compact[at]), 2u);
+    auto back = durable::decode_batch(compact);
+    ASSERT_TRUE(back.has_value()) << back.error().describe();
+    const BuildOptions& b = std::get<AddMesh>(back->edits[0]).build;
+    EXPECT_TRUE(b.compact);
+    EXPECT_FALSE(b.allow_refit);
+
+    std::string unknown = compact;
+    unknown[at] = char(6);
+    auto refused = durable::decode_batch(unknown);
+    ASSERT_FALSE(refused.has_value());
+    EXPECT_NE(refused.error().message.find("build flags byte 6"), std::string::npos)
+        << refused.error().message;
+}
+
 TEST(EditCodec, RandomBatchesRoundTrip) {
     test::RandomEdits edits(1234);
     for (int i = 0; i < 200; ++i) {

@@ -382,6 +382,33 @@ TEST_P(LeastWorkGroups, TheCounterSumsWorldTransforms) {
     EXPECT_EQ(engine->counters().world_transforms - before.world_transforms, 4u);
 }
 
+TEST_P(LeastWorkGroups, ACompactedMeshIsItsOwnBuildTwiceAndRefitsInPlace) {
+    BuildOptions compact;
+    compact.compact = true;
+    AddInstance gem = instance_edit("g0", "gem", {0, 1, 0});
+    gem.parent = "car";
+    apply_ok(*engine, mesh_edit("gem", make_sphere(0.5f, 24), compact), gem);
+    RebuildReport r = commit_ok(*engine);
+    ASSERT_EQ(ids(r.rebuilt), std::vector<std::string>{"gem"});
+    EXPECT_EQ(r.rebuilt[0].reason, BuildReason::Added);
+    EXPECT_EQ(r.primitives_built, sphere_triangle_count(24));  // two passes, one mesh's triangles
+    EXPECT_GT(r.rebuilt[0].uncompacted_bytes, r.rebuilt[0].bytes);
+    EXPECT_EQ(r.blas_refits, 0u);
+    EXPECT_EQ(r.tlas_action, TlasAction::Update);
+    EXPECT_EQ(r.instances_changed, 1u);
+
+    MeshData moved = make_sphere(0.6f, 24);
+    apply_ok(*engine, UpdateMeshPositions{"gem", 0, moved.positions});
+    r = commit_ok(*engine);
+    EXPECT_EQ(r.blas_rebuilds, 0u);
+    ASSERT_EQ(ids(r.refit), std::vector<std::string>{"gem"});
+    EXPECT_EQ(r.tlas_action, TlasAction::Update);
+    EXPECT_EQ(r.instances_changed, 1u);
+
+    apply_ok(*engine, UpdateGroup{"car", std::nullopt, Affine::translation({1, 0, -2}), std::nullopt});
+    expect_tlas_update_only(commit_ok(*engine), 3);
+}
+
 INSTANTIATE_TEST_SUITE_P(BothTlasStrategies, LeastWorkGroups,
                          ::testing::Values(TlasKind::Incremental, TlasKind::Embree),
                          [](const auto& info) {

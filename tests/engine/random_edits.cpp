@@ -47,6 +47,7 @@ AddMesh RandomEdits::random_mesh(const std::string& id) {
     e.triangles = std::move(data.triangles);
     e.build.prefer = chance(0.5) ? BuildPreference::FastTrace : BuildPreference::FastBuild;
     e.build.allow_refit = chance(0.75);
+    e.build.compact = chance(0.25);
     if (!m_materials.empty() && chance(0.5)) e.material = pick(m_materials);
     m_positions[id] = std::move(data.positions);
     return e;

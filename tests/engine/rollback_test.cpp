@@ -40,7 +40,7 @@ std::string snapshot(const Scene& s) {
         put(out, s.find_mesh(m.id));
         out << "material ";
         put(out, m.material);
-        out << "build " << int(m.build.prefer) << m.build.allow_refit << " dirty "
+        out << "build " << int(m.build.prefer) << m.build.allow_refit << m.build.compact << " dirty "
             << m.dirty.bits.value();
         for (const VertexRanges::Range& r : m.dirty.points.ranges())
             out << " [" << r.begin << ", " << r.end << ")";

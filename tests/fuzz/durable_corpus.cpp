@@ -27,7 +27,7 @@ std::vector<Edit> every_kind() {
     m.id = "tri";
     m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
     m.triangles = {{0, 1, 2}, {1, 3, 2}};
-    m.build = {BuildPreference::FastBuild, false};
+    m.build = {BuildPreference::FastBuild, false, true};
     m.material = "red";
     edits.emplace_back(AddMaterial{"red", Material{{1, 0, 0}, 0.25f, 0.5f, {0, 0, 0}}});
     edits.emplace_back(std::move(m));

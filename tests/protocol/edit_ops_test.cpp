@@ -150,7 +150,7 @@ TEST(EditSchema, EveryReferenceResolvesAndEverySharedDefinitionIsUsed) {
 
 TEST(EditSchema, NestedObjectsTakeTheirMembersFromTheSchema) {
     EXPECT_EQ(schema_members("/$defs/build").allowed,
-              (std::vector<std::string>{"prefer", "allow_refit"}));
+              (std::vector<std::string>{"prefer", "allow_refit", "compact"}));
     EXPECT_EQ(schema_members("").required, std::vector<std::string>{"edits"});
     const Problem e = fails({{"op", "add_mesh"},
                              {"id", "m"},

@@ -47,7 +47,18 @@ TEST(EditParser, AddMeshReadsFlatArraysBuildOptionsAndMaterial) {
     EXPECT_THAT(e.triangles, ::testing::ElementsAre(Triangle(0, 1, 2)));
     EXPECT_EQ(e.build.prefer, BuildPreference::FastBuild);
     EXPECT_FALSE(e.build.allow_refit);
+    EXPECT_FALSE(e.build.compact);
     EXPECT_EQ(e.material, "red");
+}
+
+TEST(EditParser, BuildCompactIsABooleanOption) {
+    const auto e = one<AddMesh>(R"({"op": "add_mesh", "id": "tri", "positions": [0,0,0, 1,0,0, 0,1,0],
+        "indices": [0,1,2], "build": {"compact": true}})");
+    EXPECT_TRUE(e.build.compact);
+    EXPECT_TRUE(e.build.allow_refit);
+    const Problem p = fails(R"({"op": "add_mesh", "id": "tri", "positions": [0,0,0, 1,0,0, 0,1,0],
+        "indices": [0,1,2], "build": {"compact": 1}})");
+    EXPECT_EQ(p.pointer, "/edits/0/build/compact");
 }
 
 TEST(EditParser, AddMeshReadsLittleEndianBase64Arrays) {

@@ -94,6 +94,25 @@ TEST(ReportJson, TheTlasMemberShowsTheIncrementalTiersAndTheMerge) {
     EXPECT_EQ(j["merge"]["cancelled"], true);
 }
 
+TEST(ReportJson, ARebuildSaysItsBytesAndACompactedOneItsFullSizeToo) {
+    RebuildReport r = sample(false);
+    r.rebuilt[0].bytes = 800;
+    r.rebuilt[0].uncompacted_bytes = 1200;
+    r.compaction = {1, 1200, 800};
+    Json j = report_to_json(r);
+    EXPECT_EQ(j["rebuilt"][0]["bytes"], 800);
+    EXPECT_EQ(j["rebuilt"][0]["uncompacted_bytes"], 1200);
+    EXPECT_FALSE(j["refit"][0].contains("bytes"));
+    EXPECT_EQ(j["memory_bytes"]["compaction"],
+              Json({{"meshes", 1}, {"uncompacted_bytes", 1200}, {"bytes", 800},
+                    {"saved_bytes", 400}}));
+    r.rebuilt[0].uncompacted_bytes = 0;
+    j = report_to_json(r);
+    EXPECT_FALSE(j["rebuilt"][0].contains("uncompacted_bytes"));
+    r.planned = true;
+    EXPECT_FALSE(report_to_json(r)["rebuilt"][0].contains("bytes"));
+}
+
 TEST(ReportJson, APlanHasTheSameShapeWithoutTimes) {
     const Json plan = report_to_json(sample(true));
     const Json done = report_to_json(sample(false));

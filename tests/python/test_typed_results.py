@@ -7,8 +7,8 @@ import os
 import tempfile
 import unittest
 
-from strata_client import (BadRequestError, BlasEntry, Client, CommitPhases, Frame, Hit,
-                           ImportResult, MemoryBytes, NotFoundError, Page, Problem, ProblemError,
+from strata_client import (BadRequestError, BlasEntry, Client, CommitPhases, Compaction, Frame,
+                           Hit, ImportResult, MemoryBytes, NotFoundError, Page, Problem, ProblemError,
                            RebuildReport, RenderInfo, TlasMerge, TlasReport, TooLargeError,
                            UnprocessableError, VersionMismatchError)
 from strata_process import ServerProcess
@@ -40,6 +40,10 @@ class TypedResultsTest(SceneTestCase):
         self.assertGreaterEqual(entry.ms, 0)
         self.assertIsInstance(report.memory_bytes, MemoryBytes)
         self.assertGreater(report.memory_bytes.blas, 0)
+        self.assertEqual(entry.bytes, report.memory_bytes.blas)
+        self.assertIsNone(entry.uncompacted_bytes)
+        self.assertIsInstance(report.memory_bytes.compaction, Compaction)
+        self.assertEqual(report.memory_bytes.compaction.meshes, 0)
         self.assertIsInstance(report.phases, CommitPhases)
         self.assertGreaterEqual(report.ms, report.phases.blas_ms)
         # The dict view is the same objects: what 0.1 code reads keeps working.
@@ -47,6 +51,23 @@ class TypedResultsTest(SceneTestCase):
         self.assertEqual(report["rebuilt"][0]["mesh"], "ball")
         self.assertIsInstance(report, dict)
         self.assertEqual(json.loads(json.dumps(report)), report)
+
+    def test_a_compacted_mesh_reports_its_size_before_and_after(self):
+        self.client.commit()
+        self.client.edit([{"op": "add_mesh", "id": "gem", "build": {"compact": True},
+                           "shape": {"type": "sphere", "segments": 48}}])
+        report = self.client.commit()
+        entry = report.rebuilt[0]
+        self.assertEqual(entry.mesh, "gem")
+        self.assertLess(entry.bytes, entry.uncompacted_bytes)
+        compaction = report.memory_bytes.compaction
+        self.assertEqual((compaction.meshes, compaction.uncompacted_bytes, compaction.bytes),
+                         (1, entry.uncompacted_bytes, entry.bytes))
+        self.assertEqual(compaction.saved_bytes, entry.uncompacted_bytes - entry.bytes)
+        self.assertTrue(self.client.scene("meshes", "gem")["build"]["compact"])
+        stats = self.client.stats()["memory_bytes"]["compaction"]
+        self.assertEqual(stats["per_mesh"], [{"mesh": "gem", "bytes": entry.bytes,
+                                              "uncompacted_bytes": entry.uncompacted_bytes}])
 
     def test_a_plan_leaves_out_what_only_a_commit_measures(self):
         plan = self.client.plan()

@@ -134,6 +134,49 @@ TEST_F(Status, StatsCarryCountersAndTheLastReport) {
     EXPECT_EQ(r.header("ETag"), "\"1\"");
 }
 
+TEST_F(Status, ACompactedMeshShowsBothSizesInItsReportTheStatsAndItsDocument) {
+    const Json sphere = {{"type", "sphere"}, {"radius", 1}, {"segments", 64}};
+    ASSERT_EQ(srv.edits({{{"op", "add_mesh"},
+                          {"id", "small"},
+                          {"shape", sphere},
+                          {"build", {{"compact", true}}}},
+                         {{"op", "add_mesh"}, {"id", "full"}, {"shape", sphere}}})
+                  .status,
+              200);
+    const Json c = srv.post("/v1/commit", std::string()).json();
+    Json small, full;
+    for (const Json& e : c["rebuilt"]) (e["mesh"] == "small" ? small : full) = e;
+    ASSERT_TRUE(small.is_object() && full.is_object()) << c.dump();
+    EXPECT_GT(full["bytes"].get<int64_t>(), 0);
+    EXPECT_FALSE(full.contains("uncompacted_bytes"));
+    const int64_t before = small["uncompacted_bytes"].get<int64_t>();
+    const int64_t after = small["bytes"].get<int64_t>();
+    EXPECT_LT(after, before);
+    const Json totals = {{"meshes", 1},
+                         {"uncompacted_bytes", before},
+                         {"bytes", after},
+                         {"saved_bytes", before - after}};
+    EXPECT_EQ(c["memory_bytes"]["compaction"], totals);
+
+    Json stats = srv.get("/v1/stats").json()["memory_bytes"]["compaction"];
+    const Json per_mesh = stats["per_mesh"];
+    stats.erase("per_mesh");
+    EXPECT_EQ(stats, totals);
+    EXPECT_EQ(per_mesh, Json::array({{{"mesh", "small"},
+                                      {"uncompacted_bytes", before},
+                                      {"bytes", after}}}));
+    EXPECT_EQ(srv.get("/v1/scene/meshes/small").json()["build"]["compact"], true);
+    EXPECT_EQ(srv.get("/v1/scene/meshes/full").json()["build"]["compact"], false);
+    // The plan shows what is held now.
+    EXPECT_EQ(srv.get("/v1/plan").json()["memory_bytes"]["compaction"], totals);
+
+    ASSERT_EQ(srv.edits({{{"op", "remove_mesh"}, {"mesh", "small"}}}).status, 200);
+    srv.post("/v1/commit", std::string());
+    stats = srv.get("/v1/stats").json()["memory_bytes"]["compaction"];
+    EXPECT_EQ(stats["meshes"], 0);
+    EXPECT_EQ(stats["per_mesh"], Json::array());
+}
+
 TEST_F(Status, MetricsArePrometheusText) {
     srv.post("/v1/render", Json{{"width", 16}, {"height", 16}});
     srv.get("/nothing-here");

@@ -24,8 +24,8 @@ from strata_client.errors import (BadRequestError, ForbiddenError, NotFoundError
                                   UnauthorizedError, UnavailableError, UnprocessableError,
                                   VersionMismatchError)
 from strata_client.png import decode_png
-from strata_client.results import (BlasEntry, CommitPhases, Frame, History, HistoryEntry,
-                                   HistoryStack, Hit, ImportResult, MemoryBytes, Page, Problem,
+from strata_client.results import (BlasEntry, CommitPhases, Compaction, Frame, History,
+                                   HistoryEntry, HistoryStack, Hit, ImportResult, MemoryBytes, Page, Problem,
                                    RebuildReport, RenderInfo, SceneBudget, SceneSummary,
                                    TlasMerge, TlasReport, UndoResult)
 
@@ -37,5 +37,5 @@ __all__ = [
     "Problem", "RebuildReport", "TlasReport", "TlasMerge", "BlasEntry", "MemoryBytes",
     "CommitPhases", "RenderInfo", "Frame", "Hit", "ImportResult", "Page", "UndoResult",
     "History", "HistoryEntry", "HistoryStack", "FrameArrays", "MISS", "SceneSummary",
-    "SceneBudget",
+    "SceneBudget", "Compaction",
 ]

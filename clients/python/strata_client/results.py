@@ -59,7 +59,8 @@ class BlasEntry(JsonObject):
     """One BLAS a commit rebuilt or refit: the mesh, why, its primitives and milliseconds.
 
     A clustered BLAS also says how many clusters it has and how many this commit refit and
-    rebuilt (None for a BLAS built whole)."""
+    rebuilt (None for a BLAS built whole). A rebuild gives the BLAS's bytes; a mesh built with
+    ``build.compact`` also its bytes at full size, before compaction (None otherwise)."""
 
     mesh: str
     reason: str
@@ -69,6 +70,8 @@ class BlasEntry(JsonObject):
     clusters: Optional[int] = None
     clusters_refit: Optional[int] = None
     clusters_rebuilt: Optional[int] = None
+    bytes: Optional[int] = None
+    uncompacted_bytes: Optional[int] = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -97,11 +100,23 @@ class TlasReport(JsonObject):
 
 
 @dataclass(frozen=True, eq=False)
+class Compaction(JsonObject):
+    """The meshes built with ``build.compact``: how many, their BLAS bytes at full size
+    (measured at their last builds) and compacted, and the difference."""
+
+    meshes: int
+    uncompacted_bytes: int
+    bytes: int
+    saved_bytes: int
+
+
+@dataclass(frozen=True, eq=False)
 class MemoryBytes(JsonObject):
-    """Bytes the acceleration structures hold."""
+    """Bytes the acceleration structures hold (a report's also says what compaction saved)."""
 
     blas: int
     tlas: int
+    compaction: Optional[Compaction] = _member(Compaction.from_json, default=None)
 
 
 @dataclass(frozen=True, eq=False)
