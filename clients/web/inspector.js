@@ -1,8 +1,9 @@
-// The selection: an instance's document (id, mesh, material, transform, group path) or a group's
-// (id, path, children), and the edits the viewer makes to it - move, rotate, scale, visibility,
-// and an instance's colour - each one batch with If-Match on the version the panel was filled
-// from. Each group in the path is a link that selects it. While the user types, a commit by
-// someone else does not overwrite the fields: the panel notes it, and Apply then meets a 412.
+// The selection: an instance's document (id, mesh and its build options, material, transform,
+// group path) or a group's (id, path, children), and the edits the viewer makes to it - move,
+// rotate, scale, visibility, and an instance's colour - each one batch with If-Match on the
+// version the panel was filled from. Each group in the path is a link that selects it. While the
+// user types, a commit by someone else does not overwrite the fields: the panel notes it, and
+// Apply then meets a 412.
 
 const fmt = (v) => (Math.abs(v) < 1e-9 ? 0 : Number(v.toFixed(4)));
 
@@ -91,6 +92,11 @@ export class Inspector {
     if (d.name) row('name', d.name).id = 'sel-name';
     if (d.kind === 'instance') {
       row('mesh', d.mesh);
+      const b = d.mesh_build;
+      if (b) {
+        row('mesh build', `${b.prefer}, ${b.allow_refit ? 'refit' : 'no refit'}` +
+          (b.compact ? ', compacted BLAS' : '')).id = 'sel-build';
+      }
       row('material', d.material === null ? '(mesh default)' : d.material);
     }
     row(d.kind === 'group' ? 'parent path' : 'group path', this.pathLinks(d.path || [])).id = 'sel-path';

@@ -142,6 +142,12 @@ class ViewerWithoutToken(ViewerInChromium):
         selected = self.browser.wait_for(
             "document.getElementById('inspector').dataset.instance", timeout=5)
         self.assertEqual(selected, instance)
+        mesh = request(self.server, "GET", "/v1/scene/instances/" + instance)["mesh"]
+        build = request(self.server, "GET", "/v1/scene/meshes/" + mesh)["build"]
+        self.assertEqual(
+            self.browser.evaluate("document.getElementById('sel-build').textContent"),
+            f"{build['prefer']}, {'refit' if build['allow_refit'] else 'no refit'}"
+            + (", compacted BLAS" if build["compact"] else ""))
         self.shot("selected")
 
         # The viewer's own edit: a new x translation through the inspector.
