@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "engine/scene/budget.h"
+#include "protocol/assets/draco_decode.h"
 #include "protocol/assets/tinygltf_config.h"
 
 namespace strata::assets {
@@ -100,6 +101,14 @@ JsonShape json_shape(std::string_view text, uint32_t depth_limit) {
     return shape;
 }
 
+/// Draco-compressed primitives (draco_decode.h).
+constexpr const char* DRACO = "KHR_draco_mesh_compression";
+
+/// The extensions this importer reads: a file may require them, and they are not warned about.
+bool is_read_extension(std::string_view name) {
+    return name == DRACO;
+}
+
 /// The JSON chunk of a .glb, for json_shape (the container is checked again by tinygltf).
 std::string_view glb_json(std::span<const uint8_t> bytes) {
     if (bytes.size() < 20) return {};
@@ -107,6 +116,59 @@ std::string_view glb_json(std::span<const uint8_t> bytes) {
     std::memcpy(&length, bytes.data() + 12, 4);
     if (length > bytes.size() - 20) return {};
     return {reinterpret_cast<const char*>(bytes.data()) + 20, length};
+}
+
+/// Where a Draco primitive's indices accessor goes before tinygltf reads the file: tinygltf 2.7
+/// refuses an indices accessor without a buffer view, which is what a Draco primitive has.
+constexpr const char* DRACO_INDICES = "strata_indices";
+
+/// The document with each Draco primitive's "indices" moved into its extension object (as
+/// DRACO_INDICES), or nullopt when there is nothing to move (or the JSON does not parse:
+/// tinygltf says what is wrong with it).
+std::optional<std::string> move_draco_indices(std::string_view json) {
+    if (json.find(DRACO) == std::string_view::npos) return std::nullopt;
+    nlohmann::json doc = nlohmann::json::parse(json, nullptr, false);
+    if (doc.is_discarded() || !doc.is_object() || !doc.contains("meshes") ||
+        !doc["meshes"].is_array())
+        return std::nullopt;
+    bool moved = false;
+    for (nlohmann::json& mesh : doc["meshes"]) {
+        if (!mesh.is_object() || !mesh.contains("primitives") || !mesh["primitives"].is_array())
+            continue;
+        for (nlohmann::json& prim : mesh["primitives"]) {
+            if (!prim.is_object() || !prim.contains("indices") || !prim.contains("extensions"))
+                continue;
+            nlohmann::json& ext = prim["extensions"];
+            if (!ext.is_object() || !ext.contains(DRACO) || !ext[DRACO].is_object()) continue;
+            ext[DRACO][DRACO_INDICES] = prim["indices"];
+            prim.erase("indices");
+            moved = true;
+        }
+    }
+    if (!moved) return std::nullopt;
+    return doc.dump();
+}
+
+/// `bytes` (a .glb when `binary`) with its JSON replaced by `json`.
+std::string with_json(std::span<const uint8_t> bytes, bool binary, std::string json) {
+    if (!binary) return json;
+    // A .glb: 12-byte header, the JSON chunk (length, type, data padded to 4 bytes), the rest.
+    const std::size_t old_chunk = 8 + glb_json(bytes).size();
+    while (json.size() % 4 != 0) json.push_back(' ');
+    std::string out(reinterpret_cast<const char*>(bytes.data()), 12);
+    const auto put32 = [&out](std::size_t at, uint32_t v) { std::memcpy(out.data() + at, &v, 4); };
+    const std::size_t rest = bytes.size() - 12 - old_chunk;
+    out.resize(20);
+    put32(12, uint32_t(json.size()));
+    std::memcpy(out.data() + 16, bytes.data() + 16, 4);  // the chunk type, "JSON"
+    out += json;
+    out.append(reinterpret_cast<const char*>(bytes.data()) + 12 + old_chunk, rest);
+    // The header's total length moves with the JSON only: a file shorter than its header says
+    // stays so, and tinygltf refuses it as it would have.
+    uint32_t declared = 0;
+    std::memcpy(&declared, bytes.data() + 8, 4);
+    put32(8, uint32_t(int64_t(declared) + int64_t(json.size()) - int64_t(old_chunk - 8)));
+    return out;
 }
 
 /// A checked view of one accessor's elements.
@@ -390,6 +452,8 @@ private:
         if (prim.material >= int(m_model.materials.size()))
             return m_sink.invalid(where,
                                   "material " + std::to_string(prim.material) + " does not exist");
+        if (const auto draco = prim.extensions.find(DRACO); draco != prim.extensions.end())
+            return read_draco_primitive(prim, draco->second, where, std::move(mesh));
         // Step 1: positions, against the budget left before allocating.
         const auto pos_it = prim.attributes.find("POSITION");
         if (pos_it == prim.attributes.end())
@@ -401,12 +465,7 @@ private:
             return m_sink.unsupported(where + ".attributes.POSITION",
                                       "positions must be float VEC3");
         if (pv.count == 0) return m_sink.invalid(where + ".attributes.POSITION", "has no vertices");
-        m_vertices += pv.count;
-        if (m_vertices > m_limits.max_vertices)
-            return m_sink.too_large(
-                where, "the asset holds at least " + std::to_string(m_vertices) +
-                           " vertices; the scene has room for " +
-                           std::to_string(m_limits.max_vertices) + " (max_scene_vertices)");
+        if (auto ok = charge_vertices(pv.count, where); !ok) return Unexpected(ok.error());
         mesh.positions.resize(pv.count);
         for (std::size_t v = 0; v < pv.count; ++v)
             mesh.positions[v] = {pv.get(v, 0), pv.get(v, 1), pv.get(v, 2)};
@@ -439,18 +498,7 @@ private:
                 return m_sink.invalid(where + ".indices", "indices must be unsigned SCALAR");
             n_indices = iv.count;
         }
-        if (n_indices % 3 != 0 || n_indices == 0)
-            return m_sink.invalid(
-                where, std::to_string(n_indices) + " indices do not make whole triangles");
-        // Each primitive becomes a mesh, which also costs MESH_OVERHEAD_TRIANGLES (budget.h).
-        m_triangles += n_indices / 3 + MESH_OVERHEAD_TRIANGLES;
-        if (m_triangles > m_limits.max_triangles)
-            return m_sink.too_large(
-                where, "the asset holds at least " + std::to_string(m_triangles) +
-                           " triangles, each mesh counted with " +
-                           std::to_string(MESH_OVERHEAD_TRIANGLES) +
-                           " more; the scene has room for " +
-                           std::to_string(m_limits.max_triangles) + " (max_scene_triangles)");
+        if (auto ok = charge_triangles(n_indices, where); !ok) return Unexpected(ok.error());
         mesh.triangles.resize(n_indices / 3);
         for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
             for (int k = 0; k < 3; ++k) {
@@ -465,6 +513,105 @@ private:
             }
         }
         return {};
+    }
+
+    /// Counts a primitive's vertices against the budget before they are allocated.
+    Imported<void> charge_vertices(std::size_t count, const std::string& where) {
+        m_vertices += count;
+        if (m_vertices > m_limits.max_vertices)
+            return m_sink.too_large(
+                where, "the asset holds at least " + std::to_string(m_vertices) +
+                           " vertices; the scene has room for " +
+                           std::to_string(m_limits.max_vertices) + " (max_scene_vertices)");
+        return {};
+    }
+
+    /// Checks that `n_indices` make whole triangles and counts them against the budget.
+    Imported<void> charge_triangles(std::size_t n_indices, const std::string& where) {
+        if (n_indices % 3 != 0 || n_indices == 0)
+            return m_sink.invalid(
+                where, std::to_string(n_indices) + " indices do not make whole triangles");
+        // Each primitive becomes a mesh, which also costs MESH_OVERHEAD_TRIANGLES (budget.h).
+        m_triangles += n_indices / 3 + MESH_OVERHEAD_TRIANGLES;
+        if (m_triangles > m_limits.max_triangles)
+            return m_sink.too_large(
+                where, "the asset holds at least " + std::to_string(m_triangles) +
+                           " triangles, each mesh counted with " +
+                           std::to_string(MESH_OVERHEAD_TRIANGLES) +
+                           " more; the scene has room for " +
+                           std::to_string(m_limits.max_triangles) + " (max_scene_triangles)");
+        return {};
+    }
+
+    /// accessors[i] as a Draco primitive declares it: no buffer view, only its type and count.
+    Imported<const tinygltf::Accessor*> declared(int i, const std::string& use) {
+        if (i < 0 || std::size_t(i) >= m_model.accessors.size())
+            return m_sink.invalid(use, "accessor " + std::to_string(i) + " does not exist (" +
+                                           std::to_string(m_model.accessors.size()) +
+                                           " accessors)");
+        return &m_model.accessors[std::size_t(i)];
+    }
+
+    /// A KHR_draco_mesh_compression primitive: the counts its accessors declare go against the
+    /// budget first, then its buffer view is decoded (draco_decode.h) and must match them.
+    Imported<AssetMesh> read_draco_primitive(const tinygltf::Primitive& prim,
+                                             const tinygltf::Value& ext, const std::string& where,
+                                             AssetMesh mesh) {
+        const std::string at = where + ".extensions." + DRACO;
+        const tinygltf::Value& view_index = ext.Get("bufferView");
+        const tinygltf::Value& ids = ext.Get("attributes");
+        if (!ext.IsObject() || !view_index.IsInt() || !ids.IsObject())
+            return m_sink.invalid(at, "needs an integer bufferView and an attributes object");
+        // Step 1: the declared counts, against the budget.
+        const auto pos_it = prim.attributes.find("POSITION");
+        if (pos_it == prim.attributes.end())
+            return m_sink.invalid(where, "has no POSITION attribute");
+        auto pos = declared(pos_it->second, where + ".attributes.POSITION");
+        if (!pos) return Unexpected(pos.error());
+        if (pos.value()->componentType != TINYGLTF_COMPONENT_TYPE_FLOAT ||
+            pos.value()->type != TINYGLTF_TYPE_VEC3)
+            return m_sink.unsupported(where + ".attributes.POSITION",
+                                      "positions must be float VEC3");
+        const std::size_t vertices = pos.value()->count;
+        if (vertices == 0) return m_sink.invalid(where + ".attributes.POSITION", "has no vertices");
+        // The indices accessor was moved into the extension object (move_draco_indices).
+        const tinygltf::Value& indices = ext.Get(DRACO_INDICES);
+        if (!indices.IsInt()) return m_sink.invalid(where, "a Draco primitive needs indices");
+        auto idx = declared(indices.Get<int>(), where + ".indices");
+        if (!idx) return Unexpected(idx.error());
+        if (idx.value()->type != TINYGLTF_TYPE_SCALAR)
+            return m_sink.invalid(where + ".indices", "indices must be SCALAR");
+        if (auto ok = charge_vertices(vertices, where); !ok) return Unexpected(ok.error());
+        if (auto ok = charge_triangles(idx.value()->count, where); !ok)
+            return Unexpected(ok.error());
+        // Step 2: which Draco attribute holds each glTF attribute the importer reads.
+        DracoAttributeIds draco;
+        for (auto [name, id] : {std::pair{"POSITION", &draco.position},
+                                std::pair{"NORMAL", &draco.normal},
+                                std::pair{"TEXCOORD_0", &draco.texcoord},
+                                std::pair{"COLOR_0", &draco.color}}) {
+            if (prim.attributes.find(name) == prim.attributes.end()) continue;
+            const tinygltf::Value& v = ids.Get(name);
+            if (!v.IsInt() || v.Get<int>() < 0)
+                return m_sink.invalid(at + ".attributes",
+                                      std::string(name) + " has no Draco attribute id");
+            *id = v.Get<int>();
+        }
+        // Step 3: the compressed bytes, then the decoded mesh.
+        const int vi = view_index.Get<int>();
+        if (vi < 0 || std::size_t(vi) >= m_model.bufferViews.size())
+            return m_sink.invalid(at, "bufferView " + std::to_string(vi) + " does not exist");
+        const tinygltf::BufferView& view = m_model.bufferViews[std::size_t(vi)];
+        if (view.buffer < 0 || std::size_t(view.buffer) >= m_model.buffers.size())
+            return m_sink.invalid(at, "its buffer view names no buffer");
+        const std::vector<unsigned char>& data = m_model.buffers[std::size_t(view.buffer)].data;
+        if (view.byteOffset > data.size() || view.byteLength > data.size() - view.byteOffset)
+            return m_sink.invalid(at, "its buffer view lies outside its buffer");
+        const std::span<const uint8_t> bytes(data.data() + view.byteOffset, view.byteLength);
+        const std::string error =
+            decode_draco_mesh(bytes, draco, {vertices, idx.value()->count}, mesh);
+        if (!error.empty()) return m_sink.invalid(at, error);
+        return mesh;
     }
 
     Imported<void> read_attribute(const tinygltf::Primitive& prim, const char* name,
@@ -614,11 +761,15 @@ private:
         count(m_model.skins.size(), "skins");
         count(m_model.cameras.size(), "cameras");
         std::string unread;
-        const std::size_t listed = std::min<std::size_t>(m_model.extensionsUsed.size(), 16);
-        for (std::size_t i = 0; i < listed; ++i)
-            unread += (unread.empty() ? "" : ", ") + m_model.extensionsUsed[i].substr(0, 64);
-        if (m_model.extensionsUsed.size() > listed)
-            unread += " and " + std::to_string(m_model.extensionsUsed.size() - listed) + " more";
+        std::size_t listed = 0, more = 0;
+        for (const std::string& name : m_model.extensionsUsed) {
+            if (is_read_extension(name)) continue;
+            if (listed++ < 16)
+                unread += (unread.empty() ? "" : ", ") + name.substr(0, 64);
+            else
+                ++more;
+        }
+        if (more > 0) unread += " and " + std::to_string(more) + " more";
         if (!unread.empty()) warn_once("extensionsUsed: " + unread + " not imported (ignored)");
     }
 
@@ -729,16 +880,17 @@ GltfPreamble gltf_preamble(std::string_view json) {
 }
 
 /// Refuses what tinygltf would misreport: glTF 1.0 ("asset object not found") and required
-/// extensions such as Draco compression ("invalid bufferView").
+/// extensions other than the ones read here ("invalid bufferView").
 Imported<void> check_preamble(const GltfPreamble& p, const ErrorSink& sink) {
     if (!p.version.empty() && p.version.rfind("2.", 0) != 0)
         return sink.unsupported("asset.version",
                                 "glTF " + p.version +
                                     " is not supported; only glTF 2.0 is imported (convert the "
                                     "file, for example with gltf-pipeline or Blender)");
-    if (p.required.empty()) return {};
     std::string names;
-    for (const std::string& e : p.required) names += (names.empty() ? "" : ", ") + e;
+    for (const std::string& e : p.required)
+        if (!is_read_extension(e)) names += (names.empty() ? "" : ", ") + e;
+    if (names.empty()) return {};
     return sink.unsupported("extensionsRequired",
                             "the file requires " + names +
                                 ", which Strata does not import (a required extension cannot "
@@ -778,6 +930,10 @@ Imported<Asset> import_gltf(std::span<const uint8_t> bytes, bool binary, const s
     // Step 2: a version and required extensions this importer reads.
     if (auto ok = check_preamble(gltf_preamble(json), sink); !ok) return Unexpected(ok.error());
     // Step 3: parse with the filesystem closed: external files come from the side files only.
+    const std::optional<std::string> moved =
+        json.empty() ? std::nullopt : move_draco_indices(json);
+    const std::string rewritten = moved ? with_json(bytes, binary, *moved) : std::string();
+    if (moved) bytes = {reinterpret_cast<const uint8_t*>(rewritten.data()), rewritten.size()};
     tinygltf::TinyGLTF loader;
     loader.SetFsCallbacks({&any_file_exists, &keep_path, &read_side_file, &refuse_write,
                            const_cast<SideFiles*>(&side_files)});

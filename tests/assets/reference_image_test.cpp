@@ -72,6 +72,16 @@ TEST(AssetReferenceImage, TwoCylinderEngineMatchesTheStoredFrame) {
                     AssetFormat::Glb, "engine");
 }
 
+TEST(AssetReferenceImage, TheDracoCompressedEngineMatchesTheUncompressedOnesFrame) {
+    // The same model as above, its 34 primitives compressed with Draco (KHR_draco_mesh_
+    // compression, positions and normals quantised): it must look like the uncompressed file.
+    const std::string dir = std::string(STRATA_ASSIMP_MODELS_DIR) + "/glTF2/draco/";
+    const std::string gltf = read_file(dir + "2CylinderEngine.gltf");
+    const SideFiles side{{"2CylinderEngine.bin", read_file(dir + "2CylinderEngine.bin")}};
+    ASSERT_FALSE(gltf.empty() || side.begin()->second.empty());
+    check_reference(import_asset(AssetFormat::Gltf, bytes_of(gltf), "engine", {}, side), "engine");
+}
+
 TEST(AssetReferenceImage, BoxTexturedShowsItsEmbeddedTexture) {
     const auto textures = check_reference(
         std::string(STRATA_ASSIMP_MODELS_DIR) + "/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb",

@@ -1,6 +1,7 @@
 """The Python client against a real strata-server: every method, problem documents as
 ProblemError, If-Match, keep-alive and reconnection, bearer tokens, and numpy frames."""
 
+import json
 import os
 import socket
 import tempfile
@@ -245,6 +246,23 @@ class ClientTest(SceneTestCase):
         self.assertEqual(answer["model"], "BoxTextured.gltf")
         self.assertEqual(answer["textures"], ["BoxTextured.texture0"])
         self.assertEqual(self.client.scene("textures", "BoxTextured.texture0")["format"], "png")
+
+    def test_import_asset_decodes_a_draco_compressed_gltf(self):
+        gltf = os.path.join(os.environ.get("STRATA_ASSIMP_MODELS_DIR", "/usr/share/assimp/models"),
+                            "glTF2", "draco", "2CylinderEngine.gltf")
+        if not os.path.exists(gltf):
+            self.skipTest(gltf + " missing")
+        answer = self.client.import_asset(gltf, prefix="engine")
+        self.assertEqual(len(answer["meshes"]), 34)
+        self.assertEqual(answer["warnings"], ["1 cameras not imported"])  # nothing of Draco
+        # Every primitive's triangles, as its indices accessor declares them.
+        with open(gltf) as f:
+            doc = json.load(f)
+        declared = sum(doc["accessors"][p["indices"]]["count"] // 3
+                       for m in doc["meshes"] for p in m["primitives"])
+        meshes = [self.client.scene("meshes", m) for m in answer["meshes"]]
+        self.assertEqual(sum(m["triangles"] for m in meshes), declared)
+        self.assertTrue(all(m["normals"] for m in meshes))
 
     def test_import_asset_refuses_a_missing_side_file_before_sending(self):
         with tempfile.TemporaryDirectory() as d:
