@@ -171,6 +171,31 @@ std::string with_json(std::span<const uint8_t> bytes, bool binary, std::string j
     return out;
 }
 
+/// What is wrong with a .glb's container, or "" when its header and chunks fit in `bytes`.
+/// tinygltf 2.7 checks the BIN chunk's length without its 8-byte chunk header, so a chunk that
+/// claims up to 8 bytes more than the file holds would be read past its end: checked here first.
+std::string glb_container_problem(std::span<const uint8_t> bytes) {
+    const auto u32 = [&bytes](std::size_t at) {
+        uint32_t v = 0;
+        std::memcpy(&v, bytes.data() + at, 4);
+        return uint64_t(v);
+    };
+    if (bytes.size() < 20) return "a .glb has a 12-byte header and a JSON chunk";
+    if (std::memcmp(bytes.data(), "glTF", 4) != 0) return "a .glb starts with \"glTF\"";
+    const uint64_t length = u32(8);
+    if (length > bytes.size())
+        return "its header says " + std::to_string(length) + " bytes; the file has " +
+               std::to_string(bytes.size());
+    const uint64_t json_end = 20 + u32(12);
+    if (json_end > length) return "its JSON chunk runs past the length in its header";
+    if (json_end == length) return {};
+    if (json_end + 8 > length) return "a chunk after the JSON chunk has no chunk header";
+    if (json_end + 8 + u32(json_end) > length)
+        return "its BIN chunk of " + std::to_string(u32(json_end)) +
+               " bytes runs past the length in its header";
+    return {};
+}
+
 /// A checked view of one accessor's elements.
 struct AccessorView {
     const uint8_t* base = nullptr;
@@ -910,6 +935,10 @@ Imported<Asset> import_gltf(std::span<const uint8_t> bytes, bool binary, const s
     const ErrorSink sink(file);
     if (bytes.size() > std::numeric_limits<unsigned int>::max())
         return sink.too_large("", "the file is larger than 4 GiB");
+    if (binary) {
+        if (const std::string problem = glb_container_problem(bytes); !problem.empty())
+            return sink.invalid("", "not a valid .glb: " + problem);
+    }
     // Step 1: refuse JSON nested deeper than any glTF needs (tinygltf recurses over extras).
     const std::string_view json =
         binary ? glb_json(bytes)

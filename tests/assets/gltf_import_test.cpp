@@ -2,6 +2,7 @@
 // matrices, composed down the tree), and refusals: other primitive modes, external files, bad
 // indices, cycles.
 
+#include <cstring>
 #include <functional>
 
 #include <gmock/gmock.h>
@@ -166,6 +167,33 @@ TEST(GltfImport, ADracoTetrahedronDecodesWithItsNormals) {
     // Every truncation of the file is refused with an answer, never a crash.
     for (std::size_t n = 0; n < glb.size(); n += 7)
         EXPECT_FALSE(import_asset(AssetFormat::Glb, bytes_of(glb.substr(0, n)), "t.glb", {})) << n;
+}
+
+TEST(GltfImport, AGlbWhoseChunksRunPastItsEndIsRefusedBeforeTinygltfReadsIt) {
+    std::string glb = read_file(std::string(STRATA_ASSET_TEST_DATA_DIR) + "/draco-tetrahedron.glb");
+    ASSERT_FALSE(glb.empty());
+    ASSERT_TRUE(import_asset(AssetFormat::Glb, bytes_of(glb), "t.glb", {}).has_value());
+    uint32_t json_length = 0;
+    std::memcpy(&json_length, glb.data() + 12, 4);
+    const std::size_t bin_header = 20 + json_length;
+    uint32_t bin_length = 0;
+    std::memcpy(&bin_length, glb.data() + bin_header, 4);
+    // The BIN chunk claiming 4 and 8 bytes more than there are (tinygltf's own check lets
+    // these through and reads past the end), then the header claiming more than the file.
+    for (uint32_t more : {4u, 8u}) {
+        std::string bad = glb;
+        const uint32_t claimed = bin_length + more;
+        std::memcpy(bad.data() + bin_header, &claimed, 4);
+        auto a = import_asset(AssetFormat::Glb, bytes_of(bad), "t.glb", {});
+        ASSERT_FALSE(a.has_value()) << more;
+        EXPECT_THAT(a.error().detail, HasSubstr("its BIN chunk of " + std::to_string(claimed) +
+                                                " bytes runs past the length in its header"));
+    }
+    auto cut = import_asset(AssetFormat::Glb, bytes_of(glb.substr(0, glb.size() - 1)), "t.glb", {});
+    ASSERT_FALSE(cut.has_value());
+    EXPECT_THAT(cut.error().detail, HasSubstr("its header says " + std::to_string(glb.size()) +
+                                              " bytes; the file has " +
+                                              std::to_string(glb.size() - 1)));
 }
 
 /// The Draco-compressed 2CylinderEngine (.gltf) with its .bin, `edit` applied to both.
