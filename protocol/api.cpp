@@ -56,6 +56,19 @@ std::string report_header(const RebuildReport& report) {
     return text;
 }
 
+/// A render's `frame` (when `target` holds an id) as its camera override, from the scene as it
+/// is now: the launch may render a newer version, with the eye and target this one framed.
+Parsed<void> aim(const Engine& engine, RenderRequest& request,
+                 const std::optional<FrameTarget>& target) {
+    if (!target) return {};
+    const float aspect = float(request.width) / float(request.height);
+    auto camera = engine.read(
+        [&](const Scene& s) { return framed_override(s, *target, request.camera, aspect); });
+    if (!camera) return Unexpected(std::move(camera).error());
+    request.camera = std::move(camera).value();
+    return {};
+}
+
 ApiResponse render(Engine& engine, RenderRequest request, const ApiLimits& limits,
                    CancelToken* cancel, uint32_t split = 1,
                    const SplitRender* split_render = nullptr) {
@@ -243,8 +256,10 @@ ApiResponse post_render(Engine& engine, std::string_view body, const ApiLimits& 
     auto doc = body.empty() ? Parsed<Json>(Json::object()) : parse_json(body, limits.json);
     if (!doc) return problem_response(doc.error());
     uint32_t split = 1;
-    auto spec = parse_render_body(doc.value(), &split);
+    std::optional<FrameTarget> frame;
+    auto spec = parse_render_body(doc.value(), &split, &frame);
     if (!spec) return problem_response(spec.error());
+    if (auto ok = aim(engine, spec.value(), frame); !ok) return problem_response(ok.error());
     return render(engine, spec.value(), limits, cancel, split, split_render);
 }
 
@@ -252,8 +267,10 @@ ApiResponse get_render(Engine& engine, const std::multimap<std::string, std::str
                        const ApiLimits& limits, CancelToken* cancel,
                        const SplitRender* split_render) {
     uint32_t split = 1;
-    auto spec = parse_render_query(query, &split);
+    std::optional<FrameTarget> frame;
+    auto spec = parse_render_query(query, &split, &frame);
     if (!spec) return problem_response(spec.error());
+    if (auto ok = aim(engine, spec.value(), frame); !ok) return problem_response(ok.error());
     return render(engine, spec.value(), limits, cancel, split, split_render);
 }
 
@@ -291,9 +308,8 @@ ApiResponse get_stats(const Engine& engine, const durable::DurableStats* durable
     Json compaction = compaction_to_json(compacted.totals);
     Json& per_mesh = compaction["per_mesh"] = Json::array();
     for (const CompactedBlas& m : compacted.meshes)
-        per_mesh.push_back({{"mesh", m.mesh},
-                            {"uncompacted_bytes", m.uncompacted_bytes},
-                            {"bytes", m.bytes}});
+        per_mesh.push_back(
+            {{"mesh", m.mesh}, {"uncompacted_bytes", m.uncompacted_bytes}, {"bytes", m.bytes}});
     const Json doc = {
         {"version", version},
         {"counters", counters_to_json(counters)},

@@ -7,7 +7,9 @@
 #include "protocol/assets/archive_import.h"
 #include "protocol/assets/asset_batch.h"
 #include "protocol/assets/import.h"
+#include "protocol/framing.h"
 #include "protocol/safe_text.h"
+#include "protocol/scene_json.h"
 
 namespace strata::protocol {
 
@@ -249,6 +251,16 @@ ApiResponse post_assets(Engine& engine, std::string body,
         return problem_response(p);
     }
     const ApplyResult& done = applied.value();
+    // Where the model landed: the world bounds of the instances it created, to aim at.
+    const Bounds3 bounds = engine.read([&](const Scene& s) {
+        InstanceBounds world(s);
+        Bounds3 box;
+        for (const std::string& id : out.instances) {
+            const auto i = s.instance(s.find_instance(id));
+            if (i) box.extend(world(*i.value()));  // else removed by a batch that landed since
+        }
+        return box;
+    });
     Json answer = {{"version", done.version},
                    {"applied", edits},
                    {"format", assets::format_name(q->format)},
@@ -257,6 +269,7 @@ ApiResponse post_assets(Engine& engine, std::string body,
                    {"materials", out.materials},
                    {"groups", out.groups},
                    {"instances", out.instances},
+                   {"bounds", bounds_to_json(bounds)},
                    {"warnings", out.warnings}};
     if (model) answer["model"] = *model;
     return with_etag(json_response(200, answer), done.version);

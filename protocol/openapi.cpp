@@ -328,24 +328,26 @@ std::vector<ParamDoc> query_parameters(std::string_view schema,
         return target.starts_with(prefix) ? schemas.at(target.substr(prefix.size())) : s;
     };
     std::vector<ParamDoc> out;
-    const auto add = [&](const J& object, auto& self) -> void {
+    // A nested object's members are parameters of their own, named with the prefix its member
+    // schema gives as x-query-prefix (frame's group is frame_group; camera's eye is eye).
+    const auto add = [&](const J& object, const std::string& prefix, auto& self) -> void {
         const J required = object.value("required", J::array());
         for (const auto& [name, member] : object.at("properties").items()) {
             if (std::find(leave_out.begin(), leave_out.end(), name) != leave_out.end()) continue;
             const J& target = resolved(member);
             if (target.value("type", "") == "object") {
-                self(target, self);
+                self(target, prefix + member.value("x-query-prefix", ""), self);
                 continue;
             }
             out.push_back(
-                {.name = name,
+                {.name = prefix + name,
                  .description = member.value("description", ""),
                  .schema = member.dump(),
                  .required = std::find(required.begin(), required.end(), name) != required.end(),
                  .comma_separated = target.value("type", "") == "array"});
         }
     };
-    add(schemas.at(std::string(schema)), add);
+    add(schemas.at(std::string(schema)), "", add);
     return out;
 }
 

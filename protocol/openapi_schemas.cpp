@@ -314,8 +314,14 @@ J group_schema() {
     const J own = {{"parent", or_null(ref("id"))},
                    {"world_transform", ref("transform")},
                    {"world_visible", boolean()},
-                   {"children", object({{"groups", count()}, {"instances", count()}})}};
-    return object(merged(merged(identity(true), own), fields<GroupFields>()));
+                   {"children", object({{"groups", count()}, {"instances", count()}})},
+                   {"bounds", described(or_null(ref("Bounds")),
+                                        "world bounds of every instance below it, hidden ones "
+                                        "too (null: none); in GET /v1/scene/groups/{id} only")}};
+    J s = object(merged(merged(identity(true), own), fields<GroupFields>()));
+    J& required = s["required"];
+    required.erase(std::find(required.begin(), required.end(), "bounds"));
+    return s;
 }
 
 J texture_schema() {
@@ -408,6 +414,15 @@ J render_request_schema() {
         {"camera", described(ref("CameraOverride"),
                              "override for this frame only: any of `eye`, `target`, `up`, "
                              "`fov_y_deg`; members left out come from the scene camera")},
+        {"frame",
+         merged(described(object({{"group", ref("id")}, {"instance", ref("id")}},
+                                 {"group", "instance"}),
+                          "aim the camera at a group (its whole subtree) or an instance: the "
+                          "scene camera's viewing direction, `up` and `fov_y_deg` (the "
+                          "override's when given), the eye moved back until the target's "
+                          "bounding sphere fits the frame; exactly one member; not with the "
+                          "override's `eye` or `target`"),
+                {{"minProperties", 1}, {"maxProperties", 1}, {"x-query-prefix", "frame_"}})},
         {"band", band},
         {"split", described(merged(integer(1, MAX_RENDER_SPLIT), {{"default", 1}}),
                             "render the frame in this many horizontal bands on this server "
@@ -491,6 +506,8 @@ void write_result_schemas(J& out) {
                 {"materials", ids},
                 {"groups", ids},
                 {"instances", ids},
+                {"bounds", described(or_null(ref("Bounds")),
+                                     "world bounds of the instances it created (null: none)")},
                 {"warnings", array_of(string())},
                 {"model", described(string(), "an archive's model: its path inside")}},
                {"model"});

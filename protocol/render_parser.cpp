@@ -20,15 +20,25 @@ SetCamera read_camera_override(FieldReader& r, const Json& v) {
 
 namespace {
 
-RenderRequest read_render(FieldReader& r, const Json& v, uint32_t* split) {
-    if (split)
-        r.expect_object(v, "",
-                        {"width", "height", "format", "spp", "aovs", "compression", "accumulate",
-                         "exposure", "camera", "filter", "band", "split"});
-    else
-        r.expect_object(v, "",
-                        {"width", "height", "format", "spp", "aovs", "compression", "accumulate",
-                         "exposure", "camera", "filter", "band"});
+/// `frame`: {"group": id} or {"instance": id}.
+FrameTarget read_frame(FieldReader& r, const Json& v) {
+    r.expect_object(v, "/frame", {"group", "instance"});
+    const Json* group = FieldReader::member(v, "group");
+    const Json* instance = FieldReader::member(v, "instance");
+    if ((group != nullptr) == (instance != nullptr))
+        r.schema_error("/frame", "give exactly one of group and instance");
+    return {group ? FrameTarget::Kind::Group : FrameTarget::Kind::Instance,
+            r.text(group ? *group : *instance, group ? "/frame/group" : "/frame/instance")};
+}
+
+RenderRequest read_render(FieldReader& r, const Json& v, uint32_t* split,
+                          std::optional<FrameTarget>* frame) {
+    MemberRule members{{"width", "height", "format", "spp", "aovs", "compression", "accumulate",
+                        "exposure", "camera", "filter", "band"},
+                       {}};
+    if (split) members.allowed.push_back("split");
+    if (frame) members.allowed.push_back("frame");
+    r.expect_object(v, "", members);
     RenderRequest q;
     auto u32 = [&](const char* key, uint32_t& out, uint64_t hi) {
         if (const Json* f = FieldReader::member(v, key))
@@ -63,6 +73,7 @@ RenderRequest read_render(FieldReader& r, const Json& v, uint32_t* split) {
     if (const Json* f = FieldReader::member(v, "filter"))
         q.filter = r.choice(*f, "/filter", {"none", "atrous"}) == 1;
     if (const Json* f = FieldReader::member(v, "camera")) q.camera = read_camera_override(r, *f);
+    if (const Json* f = FieldReader::member(v, "frame")) *frame = read_frame(r, *f);
     if (const Json* f = FieldReader::member(v, "band")) {
         if (!f->is_array() || f->size() != 2)
             r.schema_error("/band", "expected [y0, rows]: the first row and the number of rows");
@@ -144,11 +155,12 @@ Json list_from_text(const std::string& text, bool numbers) {
 
 }  // namespace
 
-Parsed<RenderRequest> parse_render_body(const Json& body, uint32_t* split) {
+Parsed<RenderRequest> parse_render_body(const Json& body, uint32_t* split,
+                                        std::optional<FrameTarget>* frame) {
     FieldReader r;
     if (split) *split = 1;
     try {
-        RenderRequest q = read_render(r, body, split);
+        RenderRequest q = read_render(r, body, split, frame);
         if (r.value_error()) return Unexpected(*r.value_error());
         return q;
     } catch (const RequestFailure& f) {
@@ -160,6 +172,16 @@ Parsed<Json> query_to_body(const std::multimap<std::string, std::string>& params
     Json body = Json::object();
     for (const auto& [key, text] : params) {
         const bool camera = key == "eye" || key == "target" || key == "up" || key == "fov_y_deg";
+        if (key == "frame_group" || key == "frame_instance") {
+            // An id stays text, even one that looks like a number.
+            const std::string member = key.substr(6);
+            Json& frame = body["frame"];
+            if (frame.is_object())
+                return Unexpected(problem_at(ProblemType::InvalidRequest, "/frame",
+                                             "give one of frame_group and frame_instance, once"));
+            frame = Json{{member, text}};
+            continue;
+        }
         if (key == "camera") {
             // The override's members are parameters of their own; "camera" itself would have to
             // be an object, which a query cannot carry.
@@ -186,10 +208,10 @@ Parsed<Json> query_to_body(const std::multimap<std::string, std::string>& params
 }
 
 Parsed<RenderRequest> parse_render_query(const std::multimap<std::string, std::string>& params,
-                                         uint32_t* split) {
+                                         uint32_t* split, std::optional<FrameTarget>* frame) {
     auto body = query_to_body(params);
     if (!body) return Unexpected(std::move(body).error());
-    return parse_render_body(body.value(), split);
+    return parse_render_body(body.value(), split, frame);
 }
 
 }  // namespace strata::protocol

@@ -4,6 +4,7 @@
 
 #include "engine/image/texture_decode.h"
 #include "protocol/field_json.h"
+#include "protocol/framing.h"
 
 namespace strata::protocol {
 
@@ -100,21 +101,20 @@ Bounds3 mesh_bounds(const MeshRecord& m) {
 }
 
 Json mesh_json(const Scene& s, MeshHandle h, const MeshRecord& m) {
-    Json j{
-        {"id", m.id},
-        {"index", h.index},
-        {"version", s.version()},
-        {"vertices", m.positions.size()},
-        {"triangles", m.triangles.size()},
-        {"normals", !m.normals.empty()},
-        {"uvs", !m.uvs.empty()},
-        {"instances", m.users.size()},
-        {"material", material_ref(s, m.material)},
-        {"build",
-         {{"prefer", build_preference_name(m.build.prefer)},
-          {"allow_refit", m.build.allow_refit},
-          {"compact", m.build.compact}}},
-        {"bounds", bounds_to_json(mesh_bounds(m))}};
+    Json j{{"id", m.id},
+           {"index", h.index},
+           {"version", s.version()},
+           {"vertices", m.positions.size()},
+           {"triangles", m.triangles.size()},
+           {"normals", !m.normals.empty()},
+           {"uvs", !m.uvs.empty()},
+           {"instances", m.users.size()},
+           {"material", material_ref(s, m.material)},
+           {"build",
+            {{"prefer", build_preference_name(m.build.prefer)},
+             {"allow_refit", m.build.allow_refit},
+             {"compact", m.build.compact}}},
+           {"bounds", bounds_to_json(mesh_bounds(m))}};
     write_fields<MeshFields>(j, m);
     return j;
 }
@@ -181,7 +181,11 @@ std::optional<Json> group_to_json(const Scene& s, std::string_view id) {
     const GroupHandle h = s.find_group(id);
     const auto r = s.group(h);
     if (!r) return std::nullopt;
-    return group_json(s, h, *r.value());
+    // One group's document has the world bounds of its subtree (a walk over it); listings,
+    // which would walk every subtree once per group, leave them out.
+    Json j = group_json(s, h, *r.value());
+    j["bounds"] = bounds_to_json(subtree_bounds(s, h));
+    return j;
 }
 
 std::optional<Json> light_to_json(const Scene& s, std::string_view id) {

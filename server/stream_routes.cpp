@@ -197,9 +197,9 @@ Reply open_event_stream(ServerContext& ctx, RouteCall& call) {
 
 /// GET /v1/stream's parameters: the render's that apply (filter on by default), then its own.
 std::vector<protocol::ParamDoc> frame_stream_parameters() {
-    // split is no stream's either (an unknown parameter); filter is documented below.
+    // split and frame are no stream's either (unknown parameters); filter is documented below.
     std::vector<std::string> leave_out(std::begin(RENDER_ONLY), std::end(RENDER_ONLY));
-    leave_out.insert(leave_out.end(), {"split", "filter"});
+    leave_out.insert(leave_out.end(), {"split", "filter", "frame"});
     std::vector<protocol::ParamDoc> params = protocol::query_parameters("RenderRequest", leave_out);
     using J = protocol::OrderedJson;
     const auto bounded = [](const char* type, J lo, J hi, J fallback) {

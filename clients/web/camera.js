@@ -60,6 +60,22 @@ export class CameraControl {
     this.onChange(null);
   }
 
+  /// Aims at `bounds` ({min, max}, world) as a render's `frame` does (protocol/framing.h): the
+  /// same viewing direction, the eye back until the box's bounding sphere fits the narrower
+  /// field of view of a frame `aspect` (width / height) wide.
+  frame(bounds, aspect) {
+    const c = this.current();
+    if (!c || !bounds) return;
+    const center = scale(add(bounds.min, bounds.max), 0.5);
+    const radius = Math.max(0.5 * len(sub(bounds.max, bounds.min)), 1e-3);
+    const halfV = (c.fov_y_deg * Math.PI) / 360;
+    const half = Math.min(halfV, Math.atan(Math.tan(halfV) * aspect));
+    const forward = norm(sub(c.target, c.eye));
+    c.target = center;
+    c.eye = sub(center, scale(forward, (1.05 * radius) / Math.sin(half)));
+    this.onChange(c);
+  }
+
   orbit(dx, dy) {
     const c = this.current();
     if (!c) return;

@@ -38,10 +38,11 @@ function unhex(h) {
 }
 
 export class Inspector {
-  constructor(root, { applyEdit, onSelectGroup }) {
+  constructor(root, { applyEdit, onSelectGroup, onFrame }) {
     this.root = root;
     this.applyEdit = applyEdit;
     this.onSelectGroup = onSelectGroup;
+    this.onFrame = onFrame;
     this.doc = null;
     this.dirty = false;
   }
@@ -155,7 +156,13 @@ export class Inspector {
     box.onchange = () => this.edit([{ op: d.kind === 'group' ? 'update_group' : 'update_instance', ...target,
       visible: box.checked }]);
     visible.append(box, ' visible');
-    controls.append(apply, visible);
+    // Aims the viewer's camera at the selection's world bounds (a group's: its whole subtree).
+    const frame = document.createElement('button');
+    frame.textContent = 'Frame';
+    frame.id = 'sel-frame';
+    frame.disabled = !d.bounds;
+    frame.onclick = () => this.onFrame(d.bounds);
+    controls.append(apply, frame, visible);
     root.append(controls);
     if (d.kind === 'instance') this.colorRow(d);
   }

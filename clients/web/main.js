@@ -398,6 +398,7 @@ const controls = new CameraControl($('view'), {
 });
 const inspector = new Inspector($('inspector'), {
   applyEdit, onSelectGroup: (id) => select(id, null, 'group'),
+  onFrame: (bounds) => controls.frame(bounds, state.size[0] / state.size[1]),
 });
 const scenePanel = new ScenePanel($('scene-list'), $('scene-search'), $('scene-more'), {
   onSelect: (id, kind) => select(id, null, kind),

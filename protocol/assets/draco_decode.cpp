@@ -14,11 +14,11 @@ namespace {
 /// Attribute `id`'s values for every point, `width` floats each (a colour's fourth is dropped),
 /// or an error naming `name`.
 template <class V, int Width>
-std::string read_attribute(const draco::Mesh& mesh, int id, const char* name,
-                           std::vector<V>& out) {
+std::string read_attribute(const draco::Mesh& mesh, int id, const char* name, std::vector<V>& out) {
     const draco::PointAttribute* a = mesh.GetAttributeByUniqueId(uint32_t(id));
-    if (!a) return std::string(name) + " names Draco attribute " + std::to_string(id) +
-                   ", which the data does not hold";
+    if (!a)
+        return std::string(name) + " names Draco attribute " + std::to_string(id) +
+               ", which the data does not hold";
     if (a->num_components() < Width)
         return std::string(name) + " has " + std::to_string(int(a->num_components())) +
                " components, not " + std::to_string(Width);
@@ -48,7 +48,8 @@ std::string decode(std::span<const uint8_t> bytes, const DracoAttributeIds& ids,
         return "the Draco data is a point cloud, not a triangle mesh";
     draco::Decoder decoder;
     auto decoded = decoder.DecodeMeshFromBuffer(&buffer);
-    if (!decoded.ok()) return "the Draco data does not decode: " + decoded.status().error_msg_string();
+    if (!decoded.ok())
+        return "the Draco data does not decode: " + decoded.status().error_msg_string();
     const std::unique_ptr<draco::Mesh> mesh = std::move(decoded).value();
     if (mesh->num_points() != declared.vertices)
         return "it decodes to " + std::to_string(mesh->num_points()) +

@@ -611,10 +611,9 @@ private:
             return Unexpected(ok.error());
         // Step 2: which Draco attribute holds each glTF attribute the importer reads.
         DracoAttributeIds draco;
-        for (auto [name, id] : {std::pair{"POSITION", &draco.position},
-                                std::pair{"NORMAL", &draco.normal},
-                                std::pair{"TEXCOORD_0", &draco.texcoord},
-                                std::pair{"COLOR_0", &draco.color}}) {
+        for (auto [name, id] :
+             {std::pair{"POSITION", &draco.position}, std::pair{"NORMAL", &draco.normal},
+              std::pair{"TEXCOORD_0", &draco.texcoord}, std::pair{"COLOR_0", &draco.color}}) {
             if (prim.attributes.find(name) == prim.attributes.end()) continue;
             const tinygltf::Value& v = ids.Get(name);
             if (!v.IsInt() || v.Get<int>() < 0)
@@ -959,8 +958,7 @@ Imported<Asset> import_gltf(std::span<const uint8_t> bytes, bool binary, const s
     // Step 2: a version and required extensions this importer reads.
     if (auto ok = check_preamble(gltf_preamble(json), sink); !ok) return Unexpected(ok.error());
     // Step 3: parse with the filesystem closed: external files come from the side files only.
-    const std::optional<std::string> moved =
-        json.empty() ? std::nullopt : move_draco_indices(json);
+    const std::optional<std::string> moved = json.empty() ? std::nullopt : move_draco_indices(json);
     const std::string rewritten = moved ? with_json(bytes, binary, *moved) : std::string();
     if (moved) bytes = {reinterpret_cast<const uint8_t*>(rewritten.data()), rewritten.size()};
     tinygltf::TinyGLTF loader;

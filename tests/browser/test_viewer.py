@@ -150,6 +150,23 @@ class ViewerWithoutToken(ViewerInChromium):
             + (", compacted BLAS" if build["compact"] else ""))
         self.shot("selected")
 
+        # Frame: the viewer's camera aims at the instance's world bounds, from where it looked.
+        bounds = request(self.server, "GET", "/v1/scene/instances/" + instance)["bounds"]
+        before = self.browser.evaluate("window.strata.sceneCamera")
+        self.browser.evaluate("document.getElementById('sel-frame').click()")
+        camera = self.browser.wait_for("window.strata.controls.camera", timeout=5)
+        center = [(a + b) / 2 for a, b in zip(bounds["min"], bounds["max"])]
+        for got, want in zip(camera["target"], center):
+            self.assertAlmostEqual(got, want, places=4)
+        def direction(c):
+            d = [t - e for t, e in zip(c["target"], c["eye"])]
+            n = sum(v * v for v in d) ** 0.5
+            return [v / n for v in d]
+        for got, want in zip(direction(camera), direction(before)):
+            self.assertAlmostEqual(got, want, places=4)
+        self.shot("framed")
+        self.browser.evaluate("window.strata.controls.follow()")
+
         # The viewer's own edit: a new x translation through the inspector.
         self.browser.evaluate(
             "(() => { document.getElementById('sel-translate-0').value = '-1.25';"

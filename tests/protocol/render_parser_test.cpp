@@ -49,6 +49,40 @@ TEST(RenderParser, TheQueryStringCarriesTheSameOptions) {
     EXPECT_EQ(r.value().camera->fov_y_deg, 60.0f);
 }
 
+TEST(RenderParser, FrameNamesAGroupOrAnInstanceInTheBodyOrTheQuery) {
+    std::optional<FrameTarget> frame;
+    auto r = parse_render_body(Json::parse(R"({"frame": {"group": "car"}})"), nullptr, &frame);
+    ASSERT_TRUE(r.has_value()) << r.error().detail;
+    ASSERT_TRUE(frame.has_value());
+    EXPECT_EQ(frame->kind, FrameTarget::Kind::Group);
+    EXPECT_EQ(frame->id, "car");
+    // A query id that looks like a number stays text.
+    frame.reset();
+    r = parse_render_query({{"frame_instance", "12"}, {"width", "32"}}, nullptr, &frame);
+    ASSERT_TRUE(r.has_value()) << r.error().detail;
+    ASSERT_TRUE(frame.has_value());
+    EXPECT_EQ(frame->kind, FrameTarget::Kind::Instance);
+    EXPECT_EQ(frame->id, "12");
+    frame.reset();
+    EXPECT_TRUE(parse_render_body(Json::object(), nullptr, &frame).has_value());
+    EXPECT_FALSE(frame.has_value());
+
+    const auto pointer = [&](const char* body) {
+        return parse_render_body(Json::parse(body), nullptr, &frame).error().pointer;
+    };
+    EXPECT_EQ(pointer(R"({"frame": {"group": "a", "instance": "b"}})"), "/frame");
+    EXPECT_EQ(pointer(R"({"frame": {}})"), "/frame");
+    EXPECT_EQ(pointer(R"({"frame": {"group": 7}})"), "/frame/group");
+    EXPECT_EQ(pointer(R"({"frame": {"mesh": "m"}})"), "/frame/mesh");
+    EXPECT_EQ(parse_render_query({{"frame_group", "a"}, {"frame_instance", "b"}}, nullptr, &frame)
+                  .error()
+                  .pointer,
+              "/frame");
+    // A caller that does not frame (the stream) refuses the member as unknown.
+    EXPECT_EQ(parse_render_body(Json::parse(R"({"frame": {"group": "a"}})")).error().pointer,
+              "/frame");
+}
+
 TEST(RenderParser, ErrorsPointAtTheMemberOrParameter) {
     EXPECT_EQ(parse_render_body(Json::parse(R"({"width": 0})")).error().pointer, "/width");
     EXPECT_EQ(parse_render_body(Json::parse(R"({"format": "jpg"})")).error().pointer, "/format");

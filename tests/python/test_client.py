@@ -247,6 +247,26 @@ class ClientTest(SceneTestCase):
         self.assertEqual(answer["textures"], ["BoxTextured.texture0"])
         self.assertEqual(self.client.scene("textures", "BoxTextured.texture0")["format"], "png")
 
+    def test_frame_aims_a_render_at_a_group_far_out_of_view(self):
+        self.client.edit([
+            {"op": "add_group", "id": "far", "transform": {"translate": [400, 0, 0]}},
+            {"op": "add_instance", "id": "far-ball", "mesh": "ball", "parent": "far"}])
+        group = self.client.scene("groups", "far")
+        self.assertEqual([round(v) for v in group["bounds"]["min"]], [399, -1, -1])
+        plain = self.client.render_arrays(48, 32, aovs=["instance_id"])
+        self.assertNotIn("far-ball", set(plain.client_ids("instance_id").flatten().tolist()))
+        framed = self.client.render_arrays(48, 32, aovs=["instance_id"], frame={"group": "far"})
+        self.assertEqual(framed.client_id("instance_id", framed["instance_id"][16, 24]),
+                         "far-ball")
+        # The whole ball is in the frame: no edge pixel shows it.
+        ids = framed.client_ids("instance_id")
+        for edge in (ids[0, :], ids[-1, :], ids[:, 0], ids[:, -1]):
+            self.assertNotIn("far-ball", set(edge.tolist()))
+        with self.assertRaises(ProblemError) as caught:
+            self.client.render_frame(16, 16, frame={"instance": "nowhere"})
+        self.assertEqual((caught.exception.status, caught.exception.pointer),
+                         (422, "/frame/instance"))
+
     def test_import_asset_decodes_a_draco_compressed_gltf(self):
         gltf = os.path.join(os.environ.get("STRATA_ASSIMP_MODELS_DIR", "/usr/share/assimp/models"),
                             "glTF2", "draco", "2CylinderEngine.gltf")
@@ -255,6 +275,7 @@ class ClientTest(SceneTestCase):
         answer = self.client.import_asset(gltf, prefix="engine")
         self.assertEqual(len(answer["meshes"]), 34)
         self.assertEqual(answer["warnings"], ["1 cameras not imported"])  # nothing of Draco
+        self.assertEqual(answer["bounds"], self.client.scene("groups", "engine")["bounds"])
         # Every primitive's triangles, as its indices accessor declares them.
         with open(gltf) as f:
             doc = json.load(f)

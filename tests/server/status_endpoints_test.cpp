@@ -177,6 +177,32 @@ TEST_F(Status, ACompactedMeshShowsBothSizesInItsReportTheStatsAndItsDocument) {
     EXPECT_EQ(stats["per_mesh"], Json::array());
 }
 
+TEST_F(Status, AGroupHasItsSubtreesBoundsAndARenderCanFrameIt) {
+    ASSERT_EQ(srv.edits({{{"op", "add_group"}, {"id", "spot"}},
+                         {{"op", "add_instance"},
+                          {"id", "spot-ball"},
+                          {"mesh", "ball"},
+                          {"parent", "spot"},
+                          {"transform", {{"translate", {30, 0, 0}}}}}})
+                  .status,
+              200);
+    const Json spot = srv.get("/v1/scene/groups/spot").json();
+    ASSERT_TRUE(spot["bounds"].is_object()) << spot.dump();
+    const Json listed = srv.get("/v1/scene/groups").json();
+    for (const Json& g : listed["items"]) EXPECT_FALSE(g.contains("bounds")) << g.dump();
+
+    EXPECT_EQ(srv.get("/v1/render?width=16&height=16&frame_group=spot").status, 200);
+    EXPECT_EQ(srv.get("/v1/render?width=16&height=16&frame_instance=spot-ball").status, 200);
+    const Reply unknown = srv.get("/v1/render?width=16&height=16&frame_group=nope");
+    EXPECT_EQ(unknown.status, 422);
+    EXPECT_EQ(unknown.json()["pointer"], "/frame/group");
+    const Reply both = srv.get("/v1/render?width=16&height=16&frame_group=spot&eye=1,2,3");
+    EXPECT_EQ(both.status, 400);
+    EXPECT_EQ(both.json()["pointer"], "/camera");
+    // The stream renders no framed frames: an unknown parameter there.
+    EXPECT_EQ(srv.get("/v1/stream?frame_group=spot").status, 400);
+}
+
 TEST_F(Status, MetricsArePrometheusText) {
     srv.post("/v1/render", Json{{"width", 16}, {"height", 16}});
     srv.get("/nothing-here");
