@@ -25,6 +25,7 @@
 
 #include "engine/engine.h"
 #include "engine/scene/shapes.h"
+#include "tests/bench/bench_clock.h"
 
 namespace strata {
 namespace {
@@ -32,16 +33,8 @@ namespace {
 constexpr uint32_t NX = 1000, NZ = 500;  // 1,000,000 triangles
 constexpr uint32_t ROW = NX + 1;
 
-double now_ms() {
-    return std::chrono::duration<double, std::milli>(
-               std::chrono::steady_clock::now().time_since_epoch())
-        .count();
-}
-
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
-}
+using bench::median;
+using bench::now_ms;
 
 struct Terrain {
     std::unique_ptr<Engine> engine;

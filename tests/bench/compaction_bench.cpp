@@ -21,22 +21,15 @@
 
 #include "engine/engine.h"
 #include "engine/scene/shapes.h"
+#include "tests/bench/bench_clock.h"
 
 namespace strata {
 namespace {
 
 constexpr uint32_t SEGMENTS = 1000;  // ~1M triangles
 
-double now_ms() {
-    return std::chrono::duration<double, std::milli>(
-               std::chrono::steady_clock::now().time_since_epoch())
-        .count();
-}
-
-double median(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return v[v.size() / 2];
-}
+using bench::median;
+using bench::now_ms;
 
 std::unique_ptr<Engine> make_engine() {
     auto created = Engine::create();
