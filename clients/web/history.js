@@ -2,7 +2,8 @@
 // (an edit, or an undo or redo of an earlier version), its message, its op counts and when, and
 // Undo and Redo buttons that name the version they would take back or apply again. Fetched again
 // whenever the viewer sees the scene's version change. Every entry is an <li data-version
-// data-kind>, marked `undoable` while it is on the undo stack.
+// data-kind>, marked `undoable` while it is on the undo stack, with a View button that shows the
+// scene as that version left it.
 
 import { api, coalesced } from './api.js';
 
@@ -22,7 +23,8 @@ function clock(time) {
 }
 
 export class HistoryPanel {
-  constructor(list, stacks, undoButton, redoButton, { onUndo, onRedo }) {
+  constructor(list, stacks, undoButton, redoButton, { onUndo, onRedo, onView }) {
+    this.onView = onView;
     this.list = list;
     this.stacks = stacks;
     this.undoButton = undoButton;
@@ -73,6 +75,13 @@ export class HistoryPanel {
     detail.className = 'history-detail';
     detail.textContent = `${opCounts(e.ops)} · ${clock(e.time)}`;
     detail.title = e.time;
+    // The scene as this version left it, rendered from the data directory (at_version).
+    const view = document.createElement('button');
+    view.className = 'view';
+    view.textContent = 'View';
+    view.title = `Show the scene as it was at version ${e.version}`;
+    view.addEventListener('click', () => this.onView(e.version));
+    head.prepend(view);
     li.append(head, detail);
     if (this.doc.undo.next === e.version) li.title = 'Undo (Ctrl+Z) takes this version back';
     return li;

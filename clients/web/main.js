@@ -29,6 +29,7 @@ const state = {
   sceneCamera: null,    // the scene's camera (GET /v1/scene)
   size: [960, 540],
   selected: null,       // the selected instance's or group's document (kind: 'instance' | 'group')
+  pastVersion: null,    // the version shown instead of the live stream (history's View), or null
   frameVersion: null,   // version of the newest frame shown
   streamUrl: '',
   listedVersion: null,  // the version the scene and history panels were last listed for
@@ -73,6 +74,10 @@ function showFrame(url) {
 }
 
 function openStream(camera) {
+  if (state.pastVersion !== null) {
+    renderPast(camera);
+    return;
+  }
   const [w, h] = state.size;
   const params = {
     width: w, height: h, quality: pageNumber('quality', 80), fps: pageNumber('fps', 20),
@@ -88,6 +93,57 @@ function openStream(camera) {
   const url = withToken('/v1/stream', params);
   state.streamUrl = url;
   showFrame(url);
+}
+
+// Step: a past version. The history's View shows the scene as version N left it: one frame
+// from GET /v1/render?at_version=N (the server's data directory) per camera move, instead of the
+// live stream, until Back to live. <body data-past="N"> says which version is shown once the
+// frame is in ("failed" when the server could not render it).
+let pastUrl = null;
+async function renderPast(camera) {
+  const version = state.pastVersion;
+  const [w, h] = state.size;
+  state.streamKey = null;
+  try {
+    const answer = await fetch(withToken('/v1/render', {
+      width: w, height: h, spp: pageNumber('spp', 16), at_version: version, ...cameraParams(camera),
+    }));
+    if (!answer.ok) {
+      const problem = await answer.json().catch(() => ({}));
+      throw new Error(problem.detail || `${answer.status} ${answer.statusText}`);
+    }
+    const blob = await answer.blob();
+    if (state.pastVersion !== version) return;  // back to live, or another version, meanwhile
+    if (pastUrl) URL.revokeObjectURL(pastUrl);
+    pastUrl = URL.createObjectURL(blob);
+    showFrame(pastUrl);
+    document.body.dataset.past = String(version);
+  } catch (e) {
+    document.body.dataset.past = 'failed';
+    message(`Cannot show version ${version}: ${e.message}`);
+  }
+}
+
+function viewPast(version) {
+  state.pastVersion = version;
+  $('past-version').textContent = String(version);
+  $('past').hidden = false;
+  delete document.body.dataset.past;
+  state.selected = null;  // picks and edits act on the live scene
+  inspector.show(null);
+  scenePanel.mark(null, null);
+  drawSelection();
+  renderPast(controls.camera);
+}
+
+function backToLive() {
+  state.pastVersion = null;
+  $('past').hidden = true;
+  delete document.body.dataset.past;
+  if (pastUrl) URL.revokeObjectURL(pastUrl);
+  pastUrl = null;
+  message('');
+  openStream(controls.camera);
 }
 
 /// ?still: one frame from GET /v1/render. Once it is shown, the title names its version and
@@ -148,6 +204,10 @@ async function refreshScene() {
 // Step: picking. The pick asks with the frame's own size and camera, so it names what the frame
 // shows under the click.
 async function pickAt(x, y) {
+  if (state.pastVersion !== null) {
+    message('Picking and editing act on the live scene: go back to live first.', 'info');
+    return;
+  }
   const [w, h] = state.size;
   const params = { x: Math.floor(x), y: Math.floor(y), width: w, height: h };
   const cam = controls.camera;
@@ -406,8 +466,9 @@ const scenePanel = new ScenePanel($('scene-list'), $('scene-search'), $('scene-m
 const costPanel = new CostPanel($('cost-chart'), $('last-report'));
 const historyPanel = new HistoryPanel($('history-list'), $('history-stacks'), $('history-undo'),
                                       $('history-redo'), {
-  onUndo: () => undoRedo(false), onRedo: () => undoRedo(true),
+  onUndo: () => undoRedo(false), onRedo: () => undoRedo(true), onView: viewPast,
 });
+$('past-live').addEventListener('click', backToLive);
 
 $('follow').addEventListener('click', () => controls.follow());
 $('follow').classList.add('on');

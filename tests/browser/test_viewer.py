@@ -58,17 +58,22 @@ def request(server, method, path, body=None, token=None):
                      "(scripts/install-deps.sh installs it)")
 class ViewerInChromium(unittest.TestCase):
     token = None
+    data = False  # True: the server keeps a data directory (past versions to view)
 
     @classmethod
     def setUpClass(cls):
         env = {"STRATA_TOKEN": cls.token} if cls.token else {}
-        cls.server = ServerProcess(SERVER, ["--demo"], env=env)
+        cls.data_dir = tempfile.TemporaryDirectory() if cls.data else None
+        args = ["--demo"] + (["--data", cls.data_dir.name] if cls.data_dir else [])
+        cls.server = ServerProcess(SERVER, args, env=env)
         cls.browser = Browser(width=1000, height=720)
 
     @classmethod
     def tearDownClass(cls):
         cls.browser.close()
         cls.server.stop()
+        if cls.data_dir:
+            cls.data_dir.cleanup()
 
     def shot(self, name):
         self.browser.screenshot(os.path.join(SHOTS, name + ".png"))
@@ -301,6 +306,41 @@ class ViewerTreeAndStill(ViewerInChromium):
         self.browser.wait_for("window.strata.version === 2", timeout=10)
         self.shot("named-scene")
         request(self.server, "DELETE", "/v1/scenes/lab")
+
+
+class ViewerWithHistory(ViewerInChromium):
+    data = True
+
+    def test_view_shows_a_past_version_until_back_to_live(self):
+        self.open_viewer()
+        before = luminance(self.wait_settled())
+        # Another client sinks the big glass ball out of sight.
+        version = request(self.server, "POST", "/v1/edits", {"edits": [
+            {"op": "set_transform", "instance": "ball",
+             "transform": {"translate": [0, -50, 0]}}]})["version"]
+        self.browser.wait_for(
+            f"document.getElementById('history-list').dataset.version == '{version}'",
+            timeout=10)
+        self.browser.wait_for(f"window.strata.version === {version}", timeout=10)
+        after = luminance(self.wait_settled())
+        self.assertGreater(mean_abs_diff(before, after), 2.0)
+
+        # View on the version before: the ball is back, rendered from the data directory.
+        self.browser.evaluate(
+            f"document.querySelector('#history-list li[data-version=\"{version - 1}\"] "
+            "button.view').click()")
+        self.browser.wait_for(f"document.body.dataset.past === '{version - 1}'", timeout=20)
+        self.browser.wait_for(SAMPLE + " !== null", timeout=10)
+        past = luminance(self.browser.evaluate(SAMPLE))
+        self.assertFalse(self.browser.evaluate("document.getElementById('past').hidden"))
+        self.assertLess(mean_abs_diff(before, past), mean_abs_diff(after, past))
+        self.shot("past-version")
+        # A click does not pick in the past; the live scene is one button away.
+        self.browser.evaluate("document.getElementById('past-live').click()")
+        self.browser.wait_for("document.body.dataset.past === undefined", timeout=5)
+        self.browser.wait_for("window.strata.streamKey !== null", timeout=10)
+        live = luminance(self.wait_settled())
+        self.assertLess(mean_abs_diff(after, live), mean_abs_diff(before, live))
 
 
 class ViewerWithToken(ViewerInChromium):
