@@ -14,8 +14,9 @@
 // `compact` (OptiX's compaction) adds a second pass to every build: the BVH is built as above and
 // measured, then rebuilt in place with RTC_SCENE_FLAG_COMPACT (Embree's indexed triangle layout,
 // no spatial splits), and the full build's memory is freed. The record keeps both sizes; refits
-// stay in the compact layout. Measured on a 320k-triangle grid: 25-40% less memory, traces ~15%
-// slower (tests/bench/NOTES.md). A compacted mesh is never clustered.
+// stay in the compact layout. Measured on a 1M-triangle sphere (tests/bench/NOTES.md,
+// "Compaction"): 26-37% less memory, traces 6-11% slower, builds up to twice as long. A compacted
+// mesh is never clustered.
 //
 // A big mesh that allows refit is clustered (ClusterPolicy, clustered_blas.h): its BLAS scene
 // holds one REFIT-quality geometry per cluster instead of one for the whole mesh, so a vertex
