@@ -151,6 +151,12 @@ std::optional<std::string> render_body(const RenderArgs& a, std::string& error) 
     if (a.split) body["split"] = *a.split;
     const Json camera = camera_json(a.camera);
     if (!camera.empty()) body["camera"] = camera;
+    if (a.frame_group && a.frame_instance) {
+        error = "give --frame-group or --frame-instance, not both";
+        return std::nullopt;
+    }
+    if (a.frame_group) body["frame"] = {{"group", *a.frame_group}};
+    if (a.frame_instance) body["frame"] = {{"instance", *a.frame_instance}};
     return body.dump();
 }
 

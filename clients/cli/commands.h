@@ -57,6 +57,7 @@ struct RenderArgs {
     std::optional<std::string> filter;  ///< "atrous" or "none"
     std::optional<uint32_t> split;      ///< bands over this server and its peers
     CameraOverride camera;
+    std::optional<std::string> frame_group, frame_instance;  ///< aim at one of them (`frame`)
 };
 /// The POST /v1/render body for `args` (format from the file name unless given); nullopt and a
 /// message when the arguments contradict each other.

@@ -213,6 +213,9 @@ void add_render(CLI::App& app, Actions& actions) {
                     "Render in N horizontal bands on this server and its --peers (1 to 16)")
         ->check(CLI::Range(1, 16));
     add_camera_options(cmd, a->camera);
+    cmd->add_option("--frame-group", a->frame_group,
+                    "Aim the camera at this group's instances (from the scene camera's direction)");
+    cmd->add_option("--frame-instance", a->frame_instance, "Aim the camera at this instance");
     actions.emplace_back(cmd, [a](Transport& t, const Console& c) { return run_render(t, c, *a); });
 }
 

@@ -208,6 +208,24 @@ TEST_F(Commands, RenderWritesTheImageAndSaysWhatItsCommitDid) {
     std::filesystem::remove(args.out);
 }
 
+TEST_F(Commands, ARenderFramesAGroupAndAnUnknownOneIsAProblem) {
+    write(R"([{"op": "add_mesh", "id": "ball", "shape": {"type": "sphere", "segments": 8}},
+              {"op": "add_group", "id": "far", "transform": {"translate": [90, 0, 0]}},
+              {"op": "add_instance", "id": "b0", "mesh": "ball", "parent": "far"}])");
+    ASSERT_EQ(run_edit(*transport, console(), file.string(), std::nullopt), 0);
+    RenderArgs args;
+    args.out = file.string() + ".png";
+    args.width = 40;
+    args.height = 20;
+    args.frame_group = "far";
+    EXPECT_EQ(run_render(*transport, console(), args), 0) << err.str();
+    args.frame_group = "near";
+    EXPECT_EQ(run_render(*transport, console(), args), 3);
+    EXPECT_NE(err.str().find("422 Unknown id"), std::string::npos) << err.str();
+    EXPECT_NE(err.str().find("pointer:    /frame/group"), std::string::npos) << err.str();
+    std::filesystem::remove(args.out);
+}
+
 TEST_F(Commands, ARenderTheServerCannotMakeIsAProblem) {
     RenderArgs args;
     args.out = file.string() + ".png";
@@ -244,6 +262,15 @@ TEST(RenderBody, PassesEveryOptionAndTakesTheFormatFromTheFileName) {
     RenderArgs plain;
     plain.out = "frame.bin";
     EXPECT_EQ(Json::parse(*render_body(plain, error)), Json::object());
+    plain.frame_group = "engine";
+    EXPECT_EQ(Json::parse(*render_body(plain, error)),
+              Json::parse(R"({"frame": {"group": "engine"}})"));
+    plain.frame_instance = "engine.node0";
+    EXPECT_FALSE(render_body(plain, error).has_value());
+    EXPECT_EQ(error, "give --frame-group or --frame-instance, not both");
+    plain.frame_group.reset();
+    EXPECT_EQ(Json::parse(*render_body(plain, error)),
+              Json::parse(R"({"frame": {"instance": "engine.node0"}})"));
 }
 
 TEST_F(Commands, SnapshotSaveThenLoadPutsTheSameSceneBackAsANewVersion) {
