@@ -163,8 +163,8 @@ std::string with_json(std::span<const uint8_t> bytes, bool binary, std::string j
     std::memcpy(out.data() + 16, bytes.data() + 16, 4);  // the chunk type, "JSON"
     out += json;
     out.append(reinterpret_cast<const char*>(bytes.data()) + 12 + old_chunk, rest);
-    // The header's total length moves with the JSON only: a file shorter than its header says
-    // stays so, and tinygltf refuses it as it would have.
+    // The header's total length moves with the JSON only (glb_container_problem has checked it
+    // against the file), so bytes past it stay past it, as tinygltf would have read them.
     uint32_t declared = 0;
     std::memcpy(&declared, bytes.data() + 8, 4);
     put32(8, uint32_t(int64_t(declared) + int64_t(json.size()) - int64_t(old_chunk - 8)));
