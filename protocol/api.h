@@ -184,5 +184,26 @@ ApiResponse post_assets(Engine& engine, std::string body,
                         std::optional<std::string_view> content_type,
                         std::optional<std::string_view> if_match, const ApiLimits& limits,
                         const BatchApply* apply = nullptr);
+/// GET /v1/assets: every asset (protocol/asset_index.h) with its file, counts and world bounds.
+/// O(objects in the scene).
+ApiResponse get_assets(const Engine& engine);
+/// GET /v1/assets/{id}: one asset with the ids of everything it owns; 404 when no asset has it.
+ApiResponse get_asset(const Engine& engine, std::string_view id);
+/// DELETE /v1/assets/{id}: removes everything the asset owns in one batch, read and applied at
+/// one version (without If-Match, read again when another writer landed in between). An object
+/// outside the asset that still uses a part of it refuses the batch, naming both.
+ApiResponse delete_asset(Engine& engine, std::string_view id,
+                         std::optional<std::string_view> if_match,
+                         const BatchApply* apply = nullptr);
+/// PUT /v1/assets/{id}: imports the body as asset `id` in one batch that first removes the old
+/// asset: the same ids where the structure is the same, the asset's group where the old one was
+/// (transform, visibility, name, parent unless ?parent= is given), and textures, materials and
+/// meshes whose content did not change kept as they are (no BLAS work for them). 200 when it
+/// replaced an asset, 201 when it made one; the query is POST's without `prefix`.
+ApiResponse put_asset(Engine& engine, std::string_view id, std::string body,
+                      const std::multimap<std::string, std::string>& query,
+                      std::optional<std::string_view> content_type,
+                      std::optional<std::string_view> if_match, const ApiLimits& limits,
+                      const BatchApply* apply = nullptr);
 
 }  // namespace strata::protocol

@@ -1,9 +1,13 @@
-// POST /v1/assets: the upload through an importer (protocol/assets/) into one engine batch.
+// /v1/assets: an upload through an importer (protocol/assets/) into one engine batch (POST), and
+// imports as units (GET, DELETE and PUT /v1/assets/{id}; protocol/asset_index.h).
 
 #include <algorithm>
 #include <cctype>
+#include <map>
+#include <set>
 
 #include "protocol/api.h"
+#include "protocol/asset_index.h"
 #include "protocol/assets/archive_import.h"
 #include "protocol/assets/asset_batch.h"
 #include "protocol/assets/import.h"
@@ -76,13 +80,16 @@ std::optional<std::string> value_of(const Query& query, const char* key) {
     return it == query.end() ? std::nullopt : std::optional(it->second);
 }
 
-/// Each parameter known and given at most once.
-bool check_keys(const Query& query, Problem& problem) {
+/// Each parameter known and given at most once; `prefix` only when the path does not name the
+/// asset (POST).
+bool check_keys(const Query& query, bool prefix, Problem& problem) {
     for (const auto& [key, value] : query) {
-        if (key != "format" && key != "name" && key != "prefix" && key != "instance" &&
-            key != "parent") {
-            problem = bad_query(
-                key, "unknown parameter (expected format, name, prefix, parent, instance)");
+        if (key != "format" && key != "name" && (key != "prefix" || !prefix) &&
+            key != "instance" && key != "parent") {
+            problem = bad_query(key, prefix ? "unknown parameter (expected format, name, prefix, "
+                                              "parent, instance)"
+                                            : "unknown parameter (expected format, name, parent, "
+                                              "instance; the path names the asset)");
             return false;
         }
         if (query.count(key) > 1) {
@@ -167,14 +174,286 @@ bool parse_placement(const Query& query, AssetQuery& q, Problem& problem) {
     return true;
 }
 
+/// The query of POST /v1/assets, or of PUT /v1/assets/{id} when `id` is given (the prefix).
 std::optional<AssetQuery> parse_query(const Query& query,
                                       std::optional<std::string_view> content_type,
-                                      Problem& problem) {
+                                      std::optional<std::string_view> id, Problem& problem) {
     AssetQuery q;
-    if (!check_keys(query, problem) || !parse_format(query, content_type, q, problem) ||
+    if (!check_keys(query, !id, problem) || !parse_format(query, content_type, q, problem) ||
         !parse_placement(query, q, problem))
         return std::nullopt;
+    if (id) q.prefix = *id;
     return q;
+}
+
+/// An upload read and turned into its batch, not applied yet.
+struct Upload {
+    AssetQuery q;
+    std::optional<std::string> model;  ///< an archive's model file
+    assets::AssetBatch out;
+};
+
+/// The room left in the scene budget, plus `freed` (what a re-import removes): what the
+/// importer may allocate (the engine checks the batch against the budget again when it applies).
+assets::ImportLimits import_limits(const Scene& s, const SceneBudget& b, const MeshTotals& freed) {
+    assets::ImportLimits limits;
+    const MeshTotals& t = s.mesh_totals();
+    const uint64_t vertices = t.vertices - std::min(t.vertices, freed.vertices);
+    const uint64_t used = t.budget_triangles() - std::min(t.budget_triangles(), freed.triangles);
+    limits.max_vertices = b.max_vertices > vertices ? b.max_vertices - vertices : 0;
+    limits.max_triangles = b.max_triangles > used ? b.max_triangles - used : 0;
+    return limits;
+}
+
+/// Step: import the body (an archive: its one model with the archive's other files as side
+/// files), then build the one batch.
+Parsed<Upload> read_upload(std::string& body, AssetQuery q, const assets::ImportLimits& limits) {
+    const std::span bytes(reinterpret_cast<const uint8_t*>(body.data()), body.size());
+    Upload u;
+    assets::Imported<assets::Asset> asset = assets::Asset{};
+    if (q.archive) {
+        auto archived = assets::import_archive(bytes, q.name, limits);
+        if (!archived) return Unexpected(archived.error());
+        q.format = archived.value().format;
+        u.model = archived.value().model;
+        if (q.prefix.empty()) q.prefix = prefix_from_name(*u.model);
+        if (q.prefix.empty()) q.prefix = assets::format_name(q.format);
+        asset = std::move(archived.value().asset);
+    } else {
+        asset = assets::import_asset(q.format, bytes, q.name, limits);
+    }
+    body = {};
+    if (!asset) return Unexpected(asset.error());
+    u.out = assets::asset_to_batch(std::move(asset.value()),
+                                   {q.prefix, q.instance, q.parent, q.name});
+    u.q = std::move(q);
+    return u;
+}
+
+/// A history message: `text`, else `fallback` when it is too long.
+std::string batch_message(std::string text, const char* fallback) {
+    return text.size() <= MAX_BATCH_MESSAGE_BYTES ? text : std::string(fallback);
+}
+
+/// The answer to a batch the engine refused: the version it is at for If-Match, else the error
+/// rewritten to name the object edit `edit_index` was about (`doing`: "creating", "removing").
+ApiResponse refused(Engine& engine, const Error& e, const std::vector<std::string>& edit_ids,
+                    const std::string& file, const std::string& what, const char* doing,
+                    const std::string& hint) {
+    if (e.code == ErrorCode::VersionMismatch) {
+        const uint64_t version = engine.read([](const Scene& s) { return s.version(); });
+        return with_etag(problem_response(make_problem(ProblemType::VersionMismatch,
+                                                       "If-Match: " + e.message)),
+                         version);
+    }
+    Error plain = e;
+    plain.field.clear();
+    plain.edit_index = Error::NO_INDEX;
+    plain.message = what + ": " +
+                    (e.edit_index < edit_ids.size()
+                         ? std::string(doing) + " '" + edit_ids[e.edit_index] + "': "
+                         : std::string()) +
+                    e.message + hint;
+    Problem p = problem_from(plain);
+    if (!file.empty()) p.file = file;
+    return problem_response(p);
+}
+
+/// World bounds of the instances `ids` (those removed since are skipped).
+Bounds3 instances_bounds(Engine& engine, const std::vector<std::string>& ids) {
+    return engine.read([&](const Scene& s) {
+        InstanceBounds world(s);
+        Bounds3 box;
+        for (const std::string& id : ids) {
+            const auto i = s.instance(s.find_instance(id));
+            if (i) box.extend(world(*i.value()));
+        }
+        return box;
+    });
+}
+
+/// The answer of an applied import: the ids it created, where they landed, what it warned.
+Json import_answer(const Upload& u, const ApplyResult& done, std::size_t edits,
+                   const Bounds3& bounds) {
+    Json answer = {{"version", done.version},
+                   {"applied", edits},
+                   {"format", assets::format_name(u.q.format)},
+                   {"textures", u.out.textures},
+                   {"meshes", u.out.meshes},
+                   {"materials", u.out.materials},
+                   {"groups", u.out.groups},
+                   {"instances", u.out.instances},
+                   {"bounds", bounds_to_json(bounds)},
+                   {"warnings", u.out.warnings}};
+    if (u.model) answer["model"] = *u.model;
+    return answer;
+}
+
+ApiResponse not_an_asset(std::string_view id, uint64_t version) {
+    return with_etag(problem_response(make_problem(
+                         ProblemType::NotFound, "no asset with id '" + std::string(id) + "'")),
+                     version);
+}
+
+/// How often a write without If-Match reads the asset again when another writer landed between
+/// its read and its apply.
+constexpr int WRITE_ATTEMPTS = 4;
+
+// Step (PUT): what a re-import keeps. A texture, material or mesh the new file makes exactly as
+// it is (same id, same content, and what it refers to kept too) is neither removed nor added, so
+// the commit rebuilds nothing for it.
+
+bool same_texture(const TextureRecord& old, const AddTexture& e) {
+    return old.name == e.name && *old.encoded == e.data;
+}
+
+bool same_material(const Scene& s, const MaterialRecord& old, const AddMaterial& e,
+                   const std::set<std::string>& kept_textures) {
+    const auto texture = s.texture(old.base_color_texture);
+    const std::optional<std::string> old_texture =
+        texture ? std::optional(texture.value()->id) : std::nullopt;
+    return old.material == e.material && old_texture == e.base_color_texture &&
+           (!old_texture || kept_textures.count(*old_texture) != 0);
+}
+
+bool same_mesh(const Scene& s, const MeshRecord& old, const AddMesh& e,
+               const std::set<std::string>& kept_materials) {
+    const auto material = s.material(old.material);
+    const std::optional<std::string> old_material =
+        material ? std::optional(material.value()->id) : std::nullopt;
+    return old.name == e.name && old.build == e.build && old_material == e.material &&
+           (!old_material || kept_materials.count(*old_material) != 0) &&
+           old.positions.get() == e.positions && old.triangles.get() == e.triangles &&
+           old.normals == e.normals && old.uvs == e.uvs;
+}
+
+/// What a re-import keeps, by id.
+struct Kept {
+    std::set<std::string> textures, materials, meshes;
+};
+
+/// Finds what `out` would add exactly as `old` holds it (textures, then the materials that use
+/// kept textures, then the meshes that use kept materials).
+Kept find_kept(const Scene& s, const AssetContents& old, const assets::AssetBatch& out) {
+    Kept kept;
+    std::map<std::string_view, const Edit*> adds;
+    for (std::size_t i = 0; i < out.batch.edits.size(); ++i)
+        adds.emplace(out.edit_ids[i], &out.batch.edits[i]);
+    const auto added = [&](const std::string& id) -> const Edit* {
+        const auto it = adds.find(id);
+        return it == adds.end() ? nullptr : it->second;
+    };
+    for (TextureHandle h : old.textures) {
+        const TextureRecord& r = s.textures().at(h);
+        const Edit* e = added(r.id);
+        if (const auto* t = e ? std::get_if<AddTexture>(e) : nullptr; t && same_texture(r, *t))
+            kept.textures.insert(r.id);
+    }
+    for (MaterialHandle h : old.materials) {
+        const MaterialRecord& r = s.materials().at(h);
+        const Edit* e = added(r.id);
+        if (const auto* m = e ? std::get_if<AddMaterial>(e) : nullptr;
+            m && same_material(s, r, *m, kept.textures))
+            kept.materials.insert(r.id);
+    }
+    for (MeshHandle h : old.meshes) {
+        const MeshRecord& r = s.meshes().at(h);
+        const Edit* e = added(r.id);
+        if (const auto* m = e ? std::get_if<AddMesh>(e) : nullptr;
+            m && same_mesh(s, r, *m, kept.materials))
+            kept.meshes.insert(r.id);
+    }
+    return kept;
+}
+
+/// `a` without what `kept` keeps.
+AssetContents without_kept(const Scene& s, AssetContents a, const Kept& kept) {
+    std::erase_if(a.textures,
+                  [&](TextureHandle h) { return kept.textures.count(s.textures().at(h).id); });
+    std::erase_if(a.materials,
+                  [&](MaterialHandle h) { return kept.materials.count(s.materials().at(h).id); });
+    std::erase_if(a.meshes, [&](MeshHandle h) { return kept.meshes.count(s.meshes().at(h).id); });
+    return a;
+}
+
+/// The ids `a` owns that `out` does not create again.
+std::vector<std::string> gone_ids(const Scene& s, const AssetContents& a,
+                                  const assets::AssetBatch& out) {
+    const std::set<std::string_view> made(out.edit_ids.begin(), out.edit_ids.end());
+    std::vector<std::string> gone;
+    const auto check = [&](const std::string& id) {
+        if (made.count(id) == 0) gone.push_back(id);
+    };
+    for (TextureHandle h : a.textures) check(s.textures().at(h).id);
+    for (MaterialHandle h : a.materials) check(s.materials().at(h).id);
+    for (MeshHandle h : a.meshes) check(s.meshes().at(h).id);
+    for (GroupHandle h : a.groups) check(s.groups().at(h).id);
+    for (InstanceHandle h : a.instances) check(s.instances().at(h).id);
+    return gone;
+}
+
+/// The batch of a re-import read at one version: the old asset's removal (less what is kept),
+/// then the new one's edits (less what is kept), the asset's group placed where the old one was
+/// unless the query names a parent.
+struct Replacement {
+    uint64_t version = 0;
+    bool replaced = false;  ///< false: no asset had the id (a first import)
+    EditBatch batch;
+    std::vector<std::string> edit_ids;
+    std::size_t removals = 0;  ///< the batch's first edits, which remove the old asset
+    Kept kept;
+    std::vector<std::string> gone;
+};
+
+Replacement plan_replacement(const Scene& s, const Upload& u) {
+    Replacement r;
+    r.version = s.version();
+    const std::optional<AssetContents> old = find_asset(s, u.q.prefix);
+    std::optional<AddGroup> placement;
+    if (old) {
+        r.replaced = true;
+        r.kept = find_kept(s, *old, u.out);
+        r.gone = gone_ids(s, *old, u.out);
+        r.batch.edits = removal_edits(s, without_kept(s, *old, r.kept), r.edit_ids);
+        r.removals = r.batch.edits.size();
+        const GroupRecord& g = s.groups().at(old->group);
+        placement = AddGroup{};
+        placement->transform = g.transform;
+        placement->visible = g.visible;
+        placement->name = g.name;
+        if (!u.q.parent) {
+            const auto parent = s.group(g.parent);
+            if (parent) placement->parent = parent.value()->id;
+        }
+    }
+    const std::set<std::string> kept_ids = [&] {
+        std::set<std::string> all(r.kept.textures);
+        all.insert(r.kept.materials.begin(), r.kept.materials.end());
+        all.insert(r.kept.meshes.begin(), r.kept.meshes.end());
+        return all;
+    }();
+    for (std::size_t i = 0; i < u.out.batch.edits.size(); ++i) {
+        const std::string& id = u.out.edit_ids[i];
+        if (i != u.out.root_edit && kept_ids.count(id) != 0) continue;
+        Edit e = u.out.batch.edits[i];
+        if (i == u.out.root_edit && placement) {
+            AddGroup& g = std::get<AddGroup>(e);
+            g.transform = placement->transform;
+            g.visible = placement->visible;
+            g.name = placement->name;
+            if (!u.q.parent) g.parent = placement->parent;
+        }
+        r.batch.edits.push_back(std::move(e));
+        r.edit_ids.push_back(id);
+    }
+    r.batch.info.message = batch_message(
+        (r.replaced ? "re-import asset '" : "import asset '") + u.q.prefix + "' from " + u.q.name,
+        r.replaced ? "re-import asset" : "import asset");
+    return r;
+}
+
+Json id_list(const std::set<std::string>& ids) {
+    return Json(std::vector<std::string>(ids.begin(), ids.end()));
 }
 
 }  // namespace
@@ -187,92 +466,147 @@ ApiResponse post_assets(Engine& engine, std::string body,
     Problem problem;
     const auto condition = if_match ? parse_if_match(*if_match, problem) : IfMatch{};
     if (!condition) return problem_response(problem);
-    auto q = parse_query(query, content_type, problem);
+    auto q = parse_query(query, content_type, std::nullopt, problem);
     if (!q) return problem_response(problem);
+    const assets::ImportLimits limits = engine.read(
+        [&](const Scene& s) { return import_limits(s, api_limits.budget, MeshTotals{}); });
+    auto upload = read_upload(body, std::move(*q), limits);
+    if (!upload) return problem_response(upload.error());
+    Upload& u = upload.value();
 
-    // Step 1: the room left in the scene budget bounds what the importer may allocate (the
-    // engine checks the batch against the budget again when it applies it).
-    assets::ImportLimits limits;
-    engine.read([&](const Scene& s) {
-        const SceneBudget& b = api_limits.budget;
-        const MeshTotals& t = s.mesh_totals();
-        limits.max_vertices = b.max_vertices > t.vertices ? b.max_vertices - t.vertices : 0;
-        const uint64_t used = t.budget_triangles();
-        limits.max_triangles = b.max_triangles > used ? b.max_triangles - used : 0;
-    });
-
-    // Step 2: import (an archive: its one model with the archive's other files as side files),
-    // then build the one batch.
-    const std::span bytes(reinterpret_cast<const uint8_t*>(body.data()), body.size());
-    std::optional<std::string> model;
-    assets::Imported<assets::Asset> asset = assets::Asset{};
-    if (q->archive) {
-        auto archived = assets::import_archive(bytes, q->name, limits);
-        if (archived) {
-            q->format = archived.value().format;
-            model = archived.value().model;
-            if (q->prefix.empty()) q->prefix = prefix_from_name(*model);
-            if (q->prefix.empty()) q->prefix = assets::format_name(q->format);
-            asset = std::move(archived.value().asset);
-        } else {
-            asset = Unexpected(archived.error());
-        }
-    } else {
-        asset = assets::import_asset(q->format, bytes, q->name, limits);
-    }
-    body = {};
-    if (!asset) return problem_response(asset.error());
-    assets::AssetBatch out =
-        assets::asset_to_batch(std::move(asset.value()), {q->prefix, q->instance, q->parent});
-    const std::size_t edits = out.batch.edits.size();
-
-    // Step 3: apply it like any batch; an engine refusal names the id it was creating.
-    auto applied = apply ? (*apply)(std::move(out.batch), condition->version)
-                         : engine.apply(std::move(out.batch), condition->version);
-    if (!applied) {
-        const Error& e = applied.error();
-        if (e.code == ErrorCode::VersionMismatch) {
-            const uint64_t version = engine.read([](const Scene& s) { return s.version(); });
-            return with_etag(problem_response(make_problem(ProblemType::VersionMismatch,
-                                                           "If-Match: " + e.message)),
-                             version);
-        }
-        Error plain = e;
-        plain.field.clear();
-        plain.edit_index = Error::NO_INDEX;
-        if (e.edit_index < out.edit_ids.size())
-            plain.message = q->name + ": creating '" + out.edit_ids[e.edit_index] +
-                            "': " + e.message +
-                            (e.code == ErrorCode::DuplicateId ? " (choose another ?prefix=)" : "");
-        else
-            plain.message = q->name + ": " + e.message;
-        Problem p = problem_from(plain);
-        p.file = q->name;
-        return problem_response(p);
-    }
+    // Apply it like any batch; an engine refusal names the id it was creating.
+    EditBatch batch = std::move(u.out.batch);  // the answer needs only the lists of ids
+    batch.info.message = batch_message("import asset '" + u.q.prefix + "' from " + u.q.name,
+                                       "import asset");
+    const std::size_t edits = batch.edits.size();
+    auto applied = apply ? (*apply)(std::move(batch), condition->version)
+                         : engine.apply(std::move(batch), condition->version);
+    if (!applied)
+        return refused(engine, applied.error(), u.out.edit_ids, u.q.name, u.q.name, "creating",
+                       applied.error().code == ErrorCode::DuplicateId
+                           ? " (choose another ?prefix=, or PUT /v1/assets/" + u.q.prefix +
+                                 " to replace that asset)"
+                           : "");
     const ApplyResult& done = applied.value();
     // Where the model landed: the world bounds of the instances it created, to aim at.
-    const Bounds3 bounds = engine.read([&](const Scene& s) {
-        InstanceBounds world(s);
-        Bounds3 box;
-        for (const std::string& id : out.instances) {
-            const auto i = s.instance(s.find_instance(id));
-            if (i) box.extend(world(*i.value()));  // else removed by a batch that landed since
-        }
-        return box;
-    });
-    Json answer = {{"version", done.version},
-                   {"applied", edits},
-                   {"format", assets::format_name(q->format)},
-                   {"textures", out.textures},
-                   {"meshes", out.meshes},
-                   {"materials", out.materials},
-                   {"groups", out.groups},
-                   {"instances", out.instances},
-                   {"bounds", bounds_to_json(bounds)},
-                   {"warnings", out.warnings}};
-    if (model) answer["model"] = *model;
+    const Json answer = import_answer(u, done, edits, instances_bounds(engine, u.out.instances));
     return with_etag(json_response(200, answer), done.version);
+}
+
+ApiResponse get_assets(const Engine& engine) {
+    return engine.read([](const Scene& s) {
+        Json items = Json::array();
+        for (const auto& [id, contents] : scene_assets(s))
+            items.push_back(asset_to_json(s, contents, false));
+        return with_etag(json_response(200, {{"version", s.version()}, {"assets", items}}),
+                         s.version());
+    });
+}
+
+ApiResponse get_asset(const Engine& engine, std::string_view id) {
+    return engine.read([&](const Scene& s) {
+        const std::optional<AssetContents> a = find_asset(s, id);
+        if (!a) return not_an_asset(id, s.version());
+        return with_etag(json_response(200, asset_to_json(s, *a, true)), s.version());
+    });
+}
+
+ApiResponse delete_asset(Engine& engine, std::string_view id,
+                         std::optional<std::string_view> if_match, const BatchApply* apply) {
+    Problem problem;
+    const auto condition = if_match ? parse_if_match(*if_match, problem) : IfMatch{};
+    if (!condition) return problem_response(problem);
+    const std::string what = "deleting asset '" + std::string(id) + "'";
+    for (int attempt = 1;; ++attempt) {
+        // Read what the asset owns at one version, and remove exactly that at that version.
+        struct Removal {
+            uint64_t version = 0;
+            std::optional<Json> removed;
+            EditBatch batch;
+            std::vector<std::string> edit_ids;
+        };
+        Removal r = engine.read([&](const Scene& s) {
+            Removal out;
+            out.version = s.version();
+            const std::optional<AssetContents> a = find_asset(s, id);
+            if (!a) return out;
+            Json listed = asset_to_json(s, *a, true);
+            out.removed = Json::object();
+            for (const char* kind : {"textures", "materials", "meshes", "groups", "instances"})
+                (*out.removed)[kind] = std::move(listed[kind]);
+            out.batch.edits = removal_edits(s, *a, out.edit_ids);
+            out.batch.info.message =
+                batch_message("delete asset '" + std::string(id) + "'", "delete asset");
+            return out;
+        });
+        if (!r.removed) return not_an_asset(id, r.version);
+        const std::optional<uint64_t> at = condition->version ? condition->version : r.version;
+        auto applied = apply ? (*apply)(std::move(r.batch), at) : engine.apply(std::move(r.batch), at);
+        if (!applied && applied.error().code == ErrorCode::VersionMismatch &&
+            !condition->version && attempt < WRITE_ATTEMPTS)
+            continue;  // another writer landed in between: read the asset again
+        if (!applied)
+            return refused(engine, applied.error(), r.edit_ids, "", what, "removing",
+                           applied.error().code == ErrorCode::InUse
+                               ? " (an object outside the asset uses it)"
+                               : "");
+        Json answer = {{"version", applied.value().version},
+                       {"applied", applied.value().applied},
+                       {"removed", std::move(*r.removed)}};
+        return with_etag(json_response(200, answer), applied.value().version);
+    }
+}
+
+ApiResponse put_asset(Engine& engine, std::string_view id, std::string body,
+                      const std::multimap<std::string, std::string>& query,
+                      std::optional<std::string_view> content_type,
+                      std::optional<std::string_view> if_match, const ApiLimits& api_limits,
+                      const BatchApply* apply) {
+    Problem problem;
+    const auto condition = if_match ? parse_if_match(*if_match, problem) : IfMatch{};
+    if (!condition) return problem_response(problem);
+    auto q = parse_query(query, content_type, id, problem);
+    if (!q) return problem_response(problem);
+    // The old asset's meshes leave room for the new ones.
+    const assets::ImportLimits limits = engine.read([&](const Scene& s) {
+        MeshTotals freed;
+        if (const auto old = find_asset(s, id)) {
+            for (MeshHandle h : old->meshes) {
+                freed.vertices += s.meshes().at(h).positions.size();
+                freed.triangles += s.meshes().at(h).triangles.size() + MESH_OVERHEAD_TRIANGLES;
+            }
+        }
+        return import_limits(s, api_limits.budget, freed);
+    });
+    auto upload = read_upload(body, std::move(*q), limits);
+    if (!upload) return problem_response(upload.error());
+    const Upload& u = upload.value();
+    for (int attempt = 1;; ++attempt) {
+        Replacement r = engine.read([&](const Scene& s) { return plan_replacement(s, u); });
+        const std::optional<uint64_t> at = condition->version ? condition->version : r.version;
+        const std::size_t edits = r.batch.edits.size();
+        auto applied = apply ? (*apply)(std::move(r.batch), at) : engine.apply(std::move(r.batch), at);
+        if (!applied && applied.error().code == ErrorCode::VersionMismatch &&
+            !condition->version && attempt < WRITE_ATTEMPTS)
+            continue;
+        if (!applied) {
+            const Error& e = applied.error();
+            return refused(engine, e, r.edit_ids, u.q.name,
+                           (r.replaced ? "re-importing asset '" : "importing asset '") +
+                               u.q.prefix + "' from " + u.q.name,
+                           e.edit_index < r.removals ? "removing" : "creating",
+                           e.code == ErrorCode::InUse ? " (an object outside the asset uses it)"
+                                                      : "");
+        }
+        Json answer = import_answer(u, applied.value(), edits,
+                                    instances_bounds(engine, u.out.instances));
+        answer["replaced"] = r.replaced;
+        answer["kept"] = {{"textures", id_list(r.kept.textures)},
+                          {"materials", id_list(r.kept.materials)},
+                          {"meshes", id_list(r.kept.meshes)}};
+        answer["removed"] = r.gone;
+        return with_etag(json_response(r.replaced ? 200 : 201, answer), applied.value().version);
+    }
 }
 
 }  // namespace strata::protocol

@@ -511,6 +511,47 @@ void write_result_schemas(J& out) {
                 {"warnings", array_of(string())},
                 {"model", described(string(), "an archive's model: its path inside")}},
                {"model"});
+    J replace = out["AssetResult"];
+    replace["properties"]["replaced"] =
+        described(boolean(), "true: an asset had the id (200); false: a first import (201)");
+    replace["properties"]["kept"] = described(
+        object({{"textures", ids}, {"materials", ids}, {"meshes", ids}}),
+        "what the new file makes exactly as the scene held it: neither removed nor added, so "
+        "no BLAS work");
+    replace["properties"]["removed"] =
+        described(ids, "what the old asset owned that the new file does not make again");
+    for (const char* m : {"replaced", "kept", "removed"}) replace["required"].push_back(m);
+    out["AssetReplaceResult"] = std::move(replace);
+
+    // GET /v1/assets (protocol/asset_index.h).
+    const J counts = object({{"textures", count()},
+                             {"materials", count()},
+                             {"meshes", count()},
+                             {"groups", count()},
+                             {"instances", count()}});
+    const J summary = {{"id", ref("id")},
+                       {"file", described(string(), "the file it was imported from")},
+                       {"name", described(string(), "its group's display name, when it has one")},
+                       {"counts", counts},
+                       {"bounds", described(or_null(ref("Bounds")),
+                                            "world bounds of its instances (null: none)")}};
+    out["AssetSummary"] = object(summary, {"name"});
+    J one = summary;
+    for (const char* kind : {"textures", "materials", "meshes", "groups", "instances"})
+        one[kind] = ids;
+    out["Asset"] = described(object(one, {"name"}),
+                             "An asset: its group (listed first among groups) and every object "
+                             "whose id begins with its id and a '.'.");
+    out["AssetList"] =
+        object({{"version", count()}, {"assets", array_of(ref("AssetSummary"))}});
+    out["AssetDeleteResult"] =
+        object({{"version", count()},
+                {"applied", count()},
+                {"removed", object({{"textures", ids},
+                                    {"materials", ids},
+                                    {"meshes", ids},
+                                    {"groups", ids},
+                                    {"instances", ids}})}});
 }
 
 void misc_schemas(J& out) {

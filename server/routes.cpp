@@ -457,6 +457,92 @@ void add_import_routes(RouteTable& routes, ServerContext& ctx) {
          }});
 }
 
+void add_asset_unit_routes(RouteTable& routes, ServerContext& ctx) {
+    const char* owns = "An asset is a group with `asset` set (what POST /v1/assets makes) and every "
+                       "object whose id begins with its id and a '.'.";
+    routes.get("/v1/assets",
+               versioned_read(ctx,
+                              {.summary = "List the imported assets with their counts and bounds",
+                               .description = owns,
+                               .tag = "edits",
+                               .responses = {ok_json("AssetList", "every asset, by id")}},
+                              [](Engine& engine, RouteCall&) {
+                                  return protocol::get_assets(engine);
+                              }));
+    routes.get("/v1/assets/{id}",
+               versioned_read(ctx,
+                              {.summary = "One asset with the ids of everything it owns",
+                               .description = owns,
+                               .tag = "edits",
+                               .responses = {ok_json("Asset", "the asset at the ETag's version"),
+                                             problem(404, "no asset has the id", {"ETag"})}},
+                              [](Engine& engine, RouteCall& call) {
+                                  return protocol::get_asset(engine, call.params[0]);
+                              }));
+    routes.add(
+        "DELETE", "/v1/assets/{id}",
+        {{.summary = "Delete an asset: everything it owns, in one batch",
+          .description = "Read and removed at one version (without If-Match, read again when "
+                         "another writer lands in between). Journaled and undoable like any "
+                         "batch.",
+          .tag = "edits",
+          .parameters = {if_match()},
+          .responses = {ok_json("AssetDeleteResult", "deleted: the ids removed"),
+                        problem(404, "no asset has the id", {"ETag"}), version_mismatch(),
+                        problem(422,
+                                "an object outside the asset still uses one of its meshes, "
+                                "materials or textures, or sits in one of its groups"),
+                        not_applied()}},
+         [&ctx](RouteCall& call) {
+             return protocol::delete_asset(ctx.engine, call.params[0],
+                                           call.request.header_value("If-Match"),
+                                           ctx.batch_apply());
+         }});
+    const auto text = [](const char* name, const char* doc) -> ParamDoc {
+        return {.name = name, .description = doc};
+    };
+    routes.add(
+        "PUT", "/v1/assets/{id}",
+        {{.summary = "Re-import an asset in place (or import it under this id)",
+          .description = "One batch removes the old asset and imports the body with the same "
+                         "ids where the structure is the same; the asset's group keeps its "
+                         "transform, visibility, name and parent; textures, materials and "
+                         "meshes whose content did not change are kept (no BLAS work).",
+          .tag = "edits",
+          .parameters = {{.name = "format",
+                          .description = "as for POST /v1/assets",
+                          .schema = R"({"enum": ["glb", "gltf", "obj", "ply", "tar"]})"},
+                         text("name", "the file's name: for problems, and the asset's `file`"),
+                         text("parent", "the group the asset's group joins (default: where "
+                                        "it was, else the root)"),
+                         {.name = "instance",
+                          .description = "false: meshes and materials only",
+                          .schema = R"({"type": "boolean", "default": true})"},
+                         if_match()},
+          .body_media = {"model/gltf-binary", "model/gltf+json", "model/obj", "application/ply",
+                         "application/x-tar", "application/octet-stream"},
+          .body_required = true,
+          .responses = {ok_json("AssetReplaceResult", "replaced: what was made, kept and removed"),
+                        {.status = 201,
+                         .description = "no asset had the id: imported as a new one",
+                         .schema = "AssetReplaceResult",
+                         .headers = {"ETag"}},
+                        problem(400, "an unknown format or a malformed query parameter"),
+                        version_mismatch(),
+                        problem(413, "the model takes the scene over its budget"),
+                        problem(422,
+                                "the file is malformed or unsupported, or an object outside "
+                                "the old asset still uses a part it removes"),
+                        not_applied()}},
+         [&ctx](RouteCall& call) {
+             HttpRequest& req = call.request;
+             return protocol::put_asset(ctx.engine, call.params[0], std::move(req.body),
+                                        req.query, req.header_value("Content-Type"),
+                                        req.header_value("If-Match"), ctx.api_limits,
+                                        ctx.batch_apply());
+         }});
+}
+
 void add_snapshot_routes(RouteTable& routes, ServerContext& ctx) {
     routes.get(
         "/v1/scene/snapshot",
@@ -732,6 +818,7 @@ void describe_health_routes(RouteTable& routes) {
 void add_api_routes(RouteTable& routes, ServerContext& ctx) {
     add_write_routes(routes, ctx);
     add_import_routes(routes, ctx);
+    add_asset_unit_routes(routes, ctx);
     add_snapshot_routes(routes, ctx);
     add_render_routes(routes, ctx);
     add_pick_routes(routes, ctx);

@@ -270,11 +270,11 @@ int run_snapshot_save(Transport& t, const Console& c, const std::string& file,
     return OK;
 }
 
-int run_import(Transport& t, const Console& c, const ImportArgs& args) {
+int pack_upload(const Console& c, const ImportArgs& args, std::string& bytes,
+                std::multimap<std::string, std::string>& query) {
     // An .obj with MTL files or a .gltf with external files goes as a tar of them all (unless
     // --format says how to read the file alone); a missing side file stops here.
     PackedAsset packed;
-    std::string bytes;
     if (args.format.empty()) {
         std::string error;
         if (!pack_asset(args.file, packed, error)) {
@@ -290,7 +290,6 @@ int run_import(Transport& t, const Console& c, const ImportArgs& args) {
         }
         bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
     }
-    std::multimap<std::string, std::string> query;
     const std::size_t slash = args.file.find_last_of('/');
     const std::string name = slash == std::string::npos ? args.file : args.file.substr(slash + 1);
     if (packed.archive) {
@@ -306,6 +305,13 @@ int run_import(Transport& t, const Console& c, const ImportArgs& args) {
     if (!args.format.empty()) query.emplace("format", args.format);
     if (!args.parent.empty()) query.emplace("parent", args.parent);
     if (!args.instance) query.emplace("instance", "false");
+    return OK;
+}
+
+int run_import(Transport& t, const Console& c, const ImportArgs& args) {
+    std::string bytes;
+    std::multimap<std::string, std::string> query;
+    if (const int packed = pack_upload(c, args, bytes, query); packed != OK) return packed;
     int code = OK;
     const auto doc =
         json_answer(c, t, "import " + args.file, t.import_asset(std::move(bytes), query), code);

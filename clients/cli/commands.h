@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <iosfwd>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -146,6 +147,22 @@ struct ImportArgs {
 /// `strata import FILE [--prefix P] [--parent G] [--format F] [--no-instance]`: POST /v1/assets with the
 /// file's bytes; prints the ids created and the new version, and the server's warnings on stderr.
 int run_import(Transport& t, const Console& c, const ImportArgs& args);
+/// The bytes and query of an upload of `args.file` (packed with its side files unless
+/// `args.format` is given); BAD_INPUT having said why when a file cannot be read.
+int pack_upload(const Console& c, const ImportArgs& args, std::string& bytes,
+                std::multimap<std::string, std::string>& query);
+
+/// `strata assets` (asset_commands.cpp): every asset, one line each (one JSON object each with
+/// --json): id, file, counts and bounds.
+int run_assets(Transport& t, const Console& c);
+/// `strata assets show ID`: GET /v1/assets/ID, with the ids of everything it owns.
+int run_asset_show(Transport& t, const Console& c, const std::string& id);
+/// `strata assets delete ID`: DELETE /v1/assets/ID.
+int run_asset_delete(Transport& t, const Console& c, const std::string& id);
+/// `strata assets reimport ID FILE [--parent G] [--format F] [--no-instance]`: PUT
+/// /v1/assets/ID with the file (args.prefix unused); prints what was kept and removed.
+int run_asset_reimport(Transport& t, const Console& c, const std::string& id,
+                       const ImportArgs& args);
 
 /// `strata snapshot load FILE`: replaces the server's scene with the file's (- for stdin).
 int run_snapshot_load(Transport& t, const Console& c, const std::string& file);

@@ -136,4 +136,19 @@ Reply EmbeddedTransport::import_asset(std::string bytes,
                                           LIMITS));
 }
 
+Reply EmbeddedTransport::assets(const std::optional<std::string>& id) {
+    return to_reply(id ? protocol::get_asset(*m_engine, *id) : protocol::get_assets(*m_engine));
+}
+
+Reply EmbeddedTransport::delete_asset(const std::string& id) {
+    return to_reply(protocol::delete_asset(*m_engine, id, std::nullopt));
+}
+
+Reply EmbeddedTransport::put_asset(const std::string& id, std::string bytes,
+                                   const std::multimap<std::string, std::string>& query) {
+    return to_reply(protocol::put_asset(*m_engine, id, std::move(bytes), query,
+                                        std::string("application/octet-stream"), std::nullopt,
+                                        LIMITS));
+}
+
 }  // namespace strata::cli

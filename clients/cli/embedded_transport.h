@@ -39,6 +39,10 @@ public:
     Reply put_snapshot(std::string bytes) override;
     Reply import_asset(std::string bytes,
                        const std::multimap<std::string, std::string>& query) override;
+    Reply assets(const std::optional<std::string>& id) override;
+    Reply delete_asset(const std::string& id) override;
+    Reply put_asset(const std::string& id, std::string bytes,
+                    const std::multimap<std::string, std::string>& query) override;
     std::string describe() const override { return "the embedded engine"; }
 
 private:

@@ -126,6 +126,16 @@ Reply HttpTransport::post(const char* path, const std::string& body, const std::
     return reply;
 }
 
+Reply HttpTransport::put_or_delete(const std::string& path, const std::string* body,
+                                   const char* content_type) {
+    const std::string target = scoped(path.c_str());
+    Reply reply = to_reply(body ? m_client->Put(target, *body, content_type)
+                                : m_client->Delete(target),
+                           m_url);
+    if (m_on_answer) m_on_answer(body ? "PUT" : "DELETE", target, reply);
+    return reply;
+}
+
 Reply HttpTransport::scenes() {
     return get("/v1/scenes");
 }
@@ -203,6 +213,20 @@ Reply HttpTransport::import_asset(std::string bytes,
                                   const std::multimap<std::string, std::string>& query) {
     // The format travels in the query (?format= or the name's extension).
     return post(with_query("/v1/assets", query).c_str(), bytes, "", "application/octet-stream");
+}
+
+Reply HttpTransport::assets(const std::optional<std::string>& id) {
+    return get(id ? ("/v1/assets/" + percent_encode(*id)).c_str() : "/v1/assets");
+}
+
+Reply HttpTransport::delete_asset(const std::string& id) {
+    return put_or_delete("/v1/assets/" + percent_encode(id), nullptr, "");
+}
+
+Reply HttpTransport::put_asset(const std::string& id, std::string bytes,
+                               const std::multimap<std::string, std::string>& query) {
+    return put_or_delete(with_query("/v1/assets/" + percent_encode(id), query), &bytes,
+                         "application/octet-stream");
 }
 
 }  // namespace strata::cli

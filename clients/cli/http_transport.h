@@ -48,6 +48,10 @@ public:
     Reply put_snapshot(std::string bytes) override;
     Reply import_asset(std::string bytes,
                        const std::multimap<std::string, std::string>& query) override;
+    Reply assets(const std::optional<std::string>& id) override;
+    Reply delete_asset(const std::string& id) override;
+    Reply put_asset(const std::string& id, std::string bytes,
+                    const std::multimap<std::string, std::string>& query) override;
     Reply scenes() override;
     Reply put_scene(const std::string& name, const std::string& body) override;
     Reply delete_scene(const std::string& name) override;
@@ -61,6 +65,9 @@ private:
     Reply get(const char* path);
     Reply post(const char* path, const std::string& body, const std::string& if_match,
                const char* content_type = "application/json");
+    /// PUT or DELETE (`body` null) of `path` in the transport's scene.
+    Reply put_or_delete(const std::string& path, const std::string* body,
+                        const char* content_type);
 
     std::string m_url;
     std::string m_scene;  ///< percent-encoded; empty: the default scene

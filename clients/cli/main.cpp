@@ -327,6 +327,37 @@ void add_import(CLI::App& app, Actions& actions) {
     });
 }
 
+void add_assets(CLI::App& app, Actions& actions) {
+    CLI::App* assets = app.add_subcommand(
+        "assets", "List imported assets; show, delete or re-import one (/v1/assets)");
+    auto id = std::make_shared<std::string>();
+    CLI::App* show = assets->add_subcommand("show", "One asset with the ids of what it owns");
+    show->add_option("id", *id, "The asset's id (its group's)")->required();
+    actions.emplace_back(
+        show, [id](Transport& t, const Console& c) { return run_asset_show(t, c, *id); });
+    CLI::App* remove =
+        assets->add_subcommand("delete", "Remove everything an asset owns, in one batch");
+    remove->add_option("id", *id, "The asset's id")->required();
+    actions.emplace_back(
+        remove, [id](Transport& t, const Console& c) { return run_asset_delete(t, c, *id); });
+    auto a = std::make_shared<ImportArgs>();
+    CLI::App* reimport = assets->add_subcommand(
+        "reimport", "Import FILE in place of an asset: same ids, what did not change kept");
+    reimport->add_option("id", *id, "The asset's id")->required();
+    reimport->add_option("file", a->file, "Model file (.glb, .gltf, .obj, .ply)")->required();
+    reimport->add_option("--parent", a->parent,
+                         "Group to put the asset's group under (default: where it was)");
+    reimport->add_option("--format", a->format,
+                         "glb, gltf, obj or ply (default: from the extension)");
+    auto no_instance = std::make_shared<bool>(false);
+    reimport->add_flag("--no-instance", *no_instance, "Create meshes and materials only");
+    actions.emplace_back(reimport, [id, a, no_instance](Transport& t, const Console& c) {
+        a->instance = !*no_instance;
+        return run_asset_reimport(t, c, *id, *a);
+    });
+    actions.emplace_back(assets, run_assets);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -344,6 +375,7 @@ int main(int argc, char** argv) {
     add_edit(app, actions);
     add_history(app, actions);
     add_scenes(app, actions);
+    add_assets(app, actions);
     add_render(app, actions);
     add_reports(app, actions);
     add_scene(app, actions);

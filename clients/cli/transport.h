@@ -77,6 +77,14 @@ public:
     /// instance.
     virtual Reply import_asset(std::string bytes,
                                const std::multimap<std::string, std::string>& query) = 0;
+    /// GET /v1/assets, or GET /v1/assets/{id} when `id` is given.
+    virtual Reply assets(const std::optional<std::string>& id) = 0;
+    /// DELETE /v1/assets/{id}.
+    virtual Reply delete_asset(const std::string& id) = 0;
+    /// PUT /v1/assets/{id}: re-imports a model file's bytes as asset `id`; `query` as for
+    /// import_asset without prefix.
+    virtual Reply put_asset(const std::string& id, std::string bytes,
+                            const std::multimap<std::string, std::string>& query) = 0;
     /// GET /v1/scenes; PUT and DELETE /v1/scenes/{name} (the directory of named scenes). Only a
     /// server has one: other transports answer that they hold a single scene.
     virtual Reply scenes();

@@ -220,7 +220,8 @@ struct AddGroup {
     std::optional<std::string> parent;  ///< a group id; nullopt: the root
     Affine transform;
     bool visible = true;
-    std::string name = {};  ///< display name (object_fields.h)
+    std::string name = {};   ///< display name (object_fields.h)
+    std::string asset = {};  ///< the file it was imported from (object_fields.h)
 };
 
 /// Changes some of a group's fields.
@@ -231,6 +232,7 @@ struct UpdateGroup {
     std::optional<Affine> transform;
     std::optional<bool> visible;
     std::optional<std::string> name = std::nullopt;
+    std::optional<std::string> asset = std::nullopt;
 };
 
 /// Removes a group; refused while it has children unless `recursive`, which removes the whole

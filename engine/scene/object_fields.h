@@ -16,6 +16,11 @@ namespace strata {
 inline constexpr std::string_view NAME_DOC =
     "A display name: free text for listings, picks and the viewer (not unique, not an id).";
 
+inline constexpr std::string_view ASSET_DOC =
+    "The file the group was imported from (POST /v1/assets sets it). A group with one is an "
+    "asset: it owns every object whose id begins with the group's id and a '.', unless a "
+    "longer asset id owns it; /v1/assets/{id} lists, deletes and re-imports them as one.";
+
 /// What a change to a field marked `dirty` costs the next commit, as the docs say it (the
 /// least-work tests hold the engine to it).
 constexpr std::string_view commit_cost(InstanceDirty dirty) {
@@ -146,6 +151,7 @@ constexpr auto GroupFields::table() {
         field<K>({"visible", "false hides everything below the group."},
                  STRATA_FIELD_OF(K, visible), GroupDirty::Visibility),
         field<K>({"name", NAME_DOC, {}, {}, 1, true}, STRATA_FIELD_OF(K, name), GroupDirty{}),
+        field<K>({"asset", ASSET_DOC, {}, {}, 2}, STRATA_FIELD_OF(K, asset), GroupDirty{}),
     };
 }
 

@@ -81,6 +81,7 @@ struct GroupRecord {
     Children children;
     DirtyBits<GroupDirty> dirty;  ///< until the batch's flattening
     std::string name = {};        ///< display name (object_fields.h)
+    std::string asset = {};       ///< the file it was imported from; empty: not an asset
 };
 
 struct MaterialRecord {

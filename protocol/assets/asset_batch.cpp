@@ -228,15 +228,17 @@ AssetBatch asset_to_batch(Asset&& asset, const BatchOptions& options) {
     const std::vector<std::string> texture_ids = add_textures(asset.textures, p, out);
     add_materials(asset.materials, texture_ids, p, out);
     add_meshes(asset.meshes, p, out);
-    if (!options.instance) return out;
 
     // The asset's own group, then the node tree (nodes come parents first).
     {
         AddGroup g;
         g.id = p;
         g.parent = options.parent;
+        g.asset = options.file;
+        out.root_edit = out.batch.edits.size();
         add_edit(out, std::move(g), p, out.groups);
     }
+    if (!options.instance) return out;
     const TreeShape shape = tree_shape(asset.nodes);
     const bool flatten = shape.deepest > MAX_GROUP_DEPTH;
     if (flatten)

@@ -6,7 +6,8 @@
 // the journal records it like any POST /v1/edits batch.
 //
 // The tree: one group named by the prefix holds the whole asset (move it, hide it or remove it
-// with one edit); a node with children becomes a group at its local transform; a node's meshes
+// with one edit) and marks it as an asset (its `asset` field: protocol/asset_index.h); without
+// instances it is created too, empty. A node with children becomes a group at its local transform; a node's meshes
 // become instances under its own group, or, for a leaf node, directly under its parent's group
 // at the node's local transform (most nodes are leaves: no group each). A tree deeper than the
 // scene's group depth is flattened to world transforms under the asset's group instead.
@@ -25,6 +26,7 @@ struct BatchOptions {
     std::string prefix;    ///< every id starts with it: "<prefix>.mesh0", "<prefix>.node3"
     bool instance = true;  ///< false: meshes and materials only
     std::optional<std::string> parent;  ///< the group the asset's group joins; nullopt: root
+    std::string file;  ///< the uploaded file's name: the asset's group's `asset` field
 };
 
 /// The batch and the ids it creates, in the order of its edits.
@@ -37,6 +39,7 @@ struct AssetBatch {
     std::vector<std::string> instances;
     std::vector<std::string> edit_ids;  ///< the id each edit creates (for error messages)
     std::vector<std::string> warnings;  ///< the asset's, plus what the scene cannot hold yet
+    std::size_t root_edit = 0;          ///< the edit that adds the asset's own group
 };
 
 /// Builds the batch. Nodes whose transform the scene cannot use (a zero scale, say) are left

@@ -97,6 +97,7 @@ Result<EditBatch> scene_with_models() {
 
     assets::BatchOptions options;
     options.prefix = std::string(MODEL_PREFIX);
+    options.file = "spot.obj";
     assets::AssetBatch model = assets::asset_to_batch(std::move(asset.value()), options);
     for (Edit& e : model.batch.edits) {
         if (auto* g = std::get_if<AddGroup>(&e); g && g->id == MODEL_PREFIX)

@@ -126,13 +126,16 @@ TEST(AssetBatch, ZeroNormalsAreDroppedForTheirMeshWithAWarning) {
     ASSERT_TRUE(engine->apply(std::move(b.batch)).has_value());
 }
 
-TEST(AssetBatch, WithoutInstancingOnlyMeshesAndMaterialsAreCreated) {
+TEST(AssetBatch, WithoutInstancingOnlyMeshesMaterialsAndTheEmptyAssetGroupAreCreated) {
     auto asset = import_text(AssetFormat::Gltf, triangle_gltf(R"([{"mesh": 0}])"));
     ASSERT_TRUE(asset.has_value());
-    AssetBatch b = asset_to_batch(std::move(asset.value()), {"m", false, {}});
+    AssetBatch b = asset_to_batch(std::move(asset.value()), {"m", false, {}, "m.gltf"});
     EXPECT_EQ(b.meshes, std::vector<std::string>{"m.mesh0"});
     EXPECT_TRUE(b.instances.empty());
-    EXPECT_EQ(b.batch.edits.size(), 1u);
+    EXPECT_EQ(b.groups, std::vector<std::string>{"m"});
+    ASSERT_EQ(b.batch.edits.size(), 2u);
+    ASSERT_EQ(b.root_edit, 1u);
+    EXPECT_EQ(std::get<AddGroup>(b.batch.edits[1]).asset, "m.gltf");
 }
 
 TEST(AssetBatch, ImportingTwiceUnderOnePrefixIsRefusedAndChangesNothing) {

@@ -338,6 +338,38 @@ TEST_F(ImportCommand, ImportsAFileUnderItsStemOrAPrefixAndPrintsWhatItCreated) {
     EXPECT_EQ(doc["instances"], Json::array());
 }
 
+TEST_F(ImportCommand, AssetsAreListedShownReimportedAndDeleted) {
+    const std::filesystem::path obj = dir / "tri.obj";
+    std::ofstream(obj) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    ImportArgs args;
+    args.file = obj.string();
+    ASSERT_EQ(run_import(*transport, console(), args), 0) << err.str();
+    out.str("");
+    EXPECT_EQ(run_assets(*transport, console()), 0) << err.str();
+    EXPECT_EQ(out.str(),
+              "tri  tri.obj  1 meshes  0 materials  0 textures  1 groups  1 instances  "
+              "[0.0,0.0,0.0]..[1.0,1.0,0.0]\n");
+    out.str("");
+    EXPECT_EQ(run_asset_show(*transport, console(), "tri"), 0) << err.str();
+    EXPECT_NE(out.str().find("\n  meshes  tri.mesh0\n"), std::string::npos) << out.str();
+    EXPECT_EQ(run_asset_show(*transport, console(), "nope"), 3);
+    EXPECT_NE(err.str().find("404"), std::string::npos) << err.str();
+
+    out.str("");
+    ImportArgs again;
+    again.file = obj.string();
+    EXPECT_EQ(run_asset_reimport(*transport, console(), "tri", again), 0) << err.str();
+    EXPECT_EQ(out.str(), "re-imported " + obj.string() +
+                             " as asset tri: 1 meshes, 1 groups, 1 instances; kept unchanged 1 "
+                             "meshes; removed 0; the scene is now version 2\n");
+    out.str("");
+    EXPECT_EQ(run_asset_delete(*transport, console(), "tri"), 0) << err.str();
+    EXPECT_EQ(out.str(), "deleted asset tri: 1 meshes, 1 groups, 1 instances; the scene is now "
+                         "version 3\n");
+    EXPECT_EQ(srv.get("/v1/scene").json()["counts"]["meshes"], 0);
+    EXPECT_EQ(run_asset_delete(*transport, console(), "tri"), 3);
+}
+
 TEST_F(ImportCommand, ARefusedFileShowsTheProblemAndExitsWithThree) {
     const std::filesystem::path ply = dir / "broken.ply";
     std::ofstream(ply) << "ply\nformat ascii 1.0\nelement vertex 1\n";

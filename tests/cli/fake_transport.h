@@ -88,6 +88,13 @@ public:
                           {"instances", {"a.node0"}},
                           {"warnings", Json::array()}});
     }
+    // Assets: only over a real server (commands_test.cpp).
+    Reply assets(const std::optional<std::string>&) override { return {}; }
+    Reply delete_asset(const std::string&) override { return {}; }
+    Reply put_asset(const std::string&, std::string,
+                    const std::multimap<std::string, std::string>&) override {
+        return {};
+    }
     std::string describe() const override { return "the fake"; }
     std::string asset_posted;
     std::multimap<std::string, std::string> asset_query;

@@ -116,6 +116,12 @@ TEST_F(ScriptRunner, ARenderAnswerWithoutItsReportIsARequestFailure) {
         Reply import_asset(std::string, const std::multimap<std::string, std::string>&) override {
             return {};
         }
+        Reply assets(const std::optional<std::string>&) override { return {}; }
+        Reply delete_asset(const std::string&) override { return {}; }
+        Reply put_asset(const std::string&, std::string,
+                        const std::multimap<std::string, std::string>&) override {
+            return {};
+        }
         std::string describe() const override { return "no report"; }
     } transport;
     script = load(R"({"render": {}})");

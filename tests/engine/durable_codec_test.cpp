@@ -241,6 +241,33 @@ TEST(EditCodec, GroupEditsAndParentsRoundTrip) {
     EXPECT_TRUE(std::get<RemoveGroup>(back->edits[7]).recursive);
 }
 
+TEST(EditCodec, AGroupsAssetFieldRoundTripsBesideItsName) {
+    EditBatch b;
+    AddGroup kit{"kit", std::nullopt, Affine::identity(), true};
+    kit.asset = "kit.tar";
+    kit.name = "Kit";
+    b.edits.emplace_back(kit);
+    UpdateGroup unmark;
+    unmark.group = "kit";
+    unmark.asset = "";
+    b.edits.emplace_back(unmark);
+    const std::string bytes = encoded(b);
+    auto back = durable::decode_batch(bytes);
+    ASSERT_TRUE(back.has_value()) << back.error().describe();
+    EXPECT_EQ(encoded(back.value()), bytes);
+    EXPECT_EQ(std::get<AddGroup>(back->edits[0]).asset, "kit.tar");
+    EXPECT_EQ(std::get<AddGroup>(back->edits[0]).name, "Kit");
+    EXPECT_EQ(std::get<UpdateGroup>(back->edits[1]).asset, std::optional<std::string>(""));
+    EXPECT_FALSE(std::get<UpdateGroup>(back->edits[1]).name.has_value());
+    // An empty asset field costs nothing in the record (the test of files written before the
+    // field tables holds the old bytes).
+    EditBatch plain;
+    plain.edits.emplace_back(AddGroup{"kit", std::nullopt, Affine::identity(), true});
+    EditBatch marked = plain;
+    std::get<AddGroup>(marked.edits[0]).asset = "kit.tar";
+    EXPECT_LT(encoded(plain).size(), encoded(marked).size());
+}
+
 TEST(EditCodec, AnInstanceWithoutAParentIsWrittenAsBeforeGroups) {
     // Journals written before groups existed hold tag 6 with the older layout; an add_instance
     // without a parent must still be exactly that, and one with a parent must not be.

@@ -5,7 +5,7 @@ strata-server serves, so that an example cannot go stale when a document changes
 
 Two kinds of example are read:
 - a curl command in a ```sh block, followed by `# {...}` comment lines: the answer of that
-  method and path (POST with -d, --data-binary or -X POST, else GET);
+  method and path (the one -X names, else POST with -d or --data-binary, else GET);
 - a ```json block directly under an endpoint's heading (`## GET /v1/scene`) or under
   "Rebuild reports" (the answer of POST /v1/commit), and a ```json problem anywhere.
 A document whose `type` is a problem URI is checked as a Problem, anything else as the route's
@@ -88,8 +88,10 @@ def curl_answers(first: int, lines: list):
             url = re.search(r"(?:localhost|127\.0\.0\.1):\d+(/[^' ]*)", command)
             if not url:
                 raise AssertionError(f"line {at}: no server URL in {command!r}")
-            post = re.search(r"(^|\s)(-d|--data-binary|-X POST)(\s|$)", command) is not None
-            yield at, "POST" if post else "GET", url.group(1).split("?")[0], answer
+            explicit = re.search(r"(?:^|\s)-X\s*([A-Z]+)(?:\s|$)", command)
+            post = re.search(r"(^|\s)(-d|--data-binary)(\s|$)", command) is not None
+            method = explicit.group(1) if explicit else "POST" if post else "GET"
+            yield at, method, url.group(1).split("?")[0], answer
             answer = None
         if line.startswith("# {"):
             answer, at = line[1:], number

@@ -120,6 +120,18 @@ class AsyncClientTest(unittest.IsolatedAsyncioTestCase):
             with self.assertRaises(FileNotFoundError):
                 await self.client.import_asset(os.path.join(d, "bad.obj"))
 
+    async def test_assets_are_listed_reimported_and_deleted(self):
+        with tempfile.TemporaryDirectory() as d:
+            path = write_quad_obj(d)
+            await self.client.import_asset(path, prefix="kit")
+            self.assertEqual([a.id for a in await self.client.assets()], ["kit"])
+            self.assertEqual((await self.client.asset("kit")).instances, ["kit.node0"])
+            again = await self.client.reimport_asset("kit", path)
+            self.assertEqual(again.kept.meshes, ["kit.mesh0"])
+        gone = await self.client.delete_asset("kit")
+        self.assertEqual(gone.removed["instances"], ["kit.node0"])
+        self.assertEqual(await self.client.assets(), [])
+
     async def test_problems_are_typed_exceptions(self):
         with self.assertRaises(UnprocessableError) as caught:
             await self.client.edit([{"op": "set_camera", "fov_y_deg": 30},

@@ -7,8 +7,9 @@ import os
 import tempfile
 import unittest
 
-from strata_client import (BadRequestError, BlasEntry, Client, CommitPhases, Compaction, Frame,
-                           Hit, ImportResult, MemoryBytes, NotFoundError, Page, Problem, ProblemError,
+from strata_client import (Asset, AssetCounts, AssetDeleteResult, BadRequestError, BlasEntry,
+                           Client, CommitPhases, Compaction, Frame, Hit, ImportResult, KeptIds,
+                           ReimportResult, MemoryBytes, NotFoundError, Page, Problem, ProblemError,
                            RebuildReport, RenderInfo, TlasMerge, TlasReport, TooLargeError,
                            UnprocessableError, VersionMismatchError)
 from strata_process import ServerProcess
@@ -136,6 +137,39 @@ class TypedResultsTest(SceneTestCase):
                          (["q.mesh0"], ["q.node0"], ["q"]))
         self.assertIsNone(answer.model)
         self.assertEqual(answer["meshes"], ["q.mesh0"])
+
+    def test_assets_are_listed_reimported_in_place_and_deleted_as_units(self):
+        with tempfile.TemporaryDirectory() as d:
+            path = write_quad_obj(d)
+            made = self.client.import_asset(path, prefix="kit")
+            self.assertEqual(made.bounds, {"min": [0, 0, 0], "max": [1, 1, 0]})
+            listed = self.client.assets()
+            self.assertEqual([a.id for a in listed], ["kit"])
+            self.assertIsInstance(listed[0], Asset)
+            self.assertIsInstance(listed[0].counts, AssetCounts)
+            self.assertEqual((listed[0].file, listed[0].counts.meshes), ("quad.obj", 1))
+            self.assertEqual(self.client.asset("kit").meshes, ["kit.mesh0"])
+            self.client.commit()
+
+            same = self.client.reimport_asset("kit", path)
+            self.assertIsInstance(same, ReimportResult)
+            self.assertIsInstance(same.kept, KeptIds)
+            self.assertTrue(same.replaced)
+            self.assertEqual((same.kept.meshes, same.removed), (["kit.mesh0"], []))
+            self.assertEqual(self.client.commit().blas_rebuilds, 0)
+            with open(path, "w") as f:
+                f.write("v 0 0 0\nv 2 0 0\nv 2 2 0\nf 1 2 3\n")
+            changed = self.client.reimport_asset("kit", path, if_match=same.version)
+            self.assertEqual(changed.kept.meshes, [])
+            self.assertEqual(self.client.commit().blas_rebuilds, 1)
+        gone = self.client.delete_asset("kit")
+        self.assertIsInstance(gone, AssetDeleteResult)
+        self.assertEqual(gone.removed["meshes"], ["kit.mesh0"])
+        self.assertEqual(self.client.assets(), [])
+        with self.assertRaises(NotFoundError):
+            self.client.asset("kit")
+        with self.assertRaises(NotFoundError):
+            self.client.delete_asset("kit")
 
 
 class TypedProblemsTest(unittest.TestCase):

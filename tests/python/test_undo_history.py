@@ -6,6 +6,7 @@ problems are typed: NothingToUndoError (409) on an empty stack, VersionMismatchE
 stale If-Match. Each test starts its own server, so its history starts empty at version 0."""
 
 import datetime
+import os
 import tempfile
 import unittest
 
@@ -221,6 +222,20 @@ class PastVersionTest(unittest.TestCase):
             self.client.scene(at_version=9)
         with self.assertRaises(ValueError):
             self.client.scene(at_version=-1)
+
+    def test_assets_at_a_past_version(self):
+        with tempfile.TemporaryDirectory() as d:
+            path = os.path.join(d, "tri.obj")
+            with open(path, "w") as f:
+                f.write("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+            made = self.client.import_asset(path, prefix="kit")
+        self.client.delete_asset("kit")
+        self.assertEqual(self.client.assets(), [])
+        past = self.client.assets(at_version=made.version)
+        self.assertEqual([(a.id, a.file, a.counts.meshes) for a in past], [("kit", "tri.obj", 1)])
+        self.assertEqual(self.client.asset("kit", at_version=made.version).meshes, ["kit.mesh0"])
+        with self.assertRaises(NotFoundError):
+            self.client.asset("kit")
 
 
 if __name__ == "__main__":

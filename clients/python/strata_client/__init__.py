@@ -24,10 +24,11 @@ from strata_client.errors import (BadRequestError, ForbiddenError, NotFoundError
                                   UnauthorizedError, UnavailableError, UnprocessableError,
                                   VersionMismatchError)
 from strata_client.png import decode_png
-from strata_client.results import (BlasEntry, CommitPhases, Compaction, Frame, History,
-                                   HistoryEntry, HistoryStack, Hit, ImportResult, MemoryBytes, Page, Problem,
-                                   RebuildReport, RenderInfo, SceneBudget, SceneSummary,
-                                   TlasMerge, TlasReport, UndoResult)
+from strata_client.results import (Asset, AssetCounts, AssetDeleteResult, BlasEntry,
+                                   CommitPhases, Compaction, Frame, History, HistoryEntry,
+                                   HistoryStack, Hit, ImportResult, KeptIds, MemoryBytes, Page,
+                                   Problem, RebuildReport, ReimportResult, RenderInfo,
+                                   SceneBudget, SceneSummary, TlasMerge, TlasReport, UndoResult)
 
 __all__ = [
     "__version__", "bulk", "Client", "AsyncClient", "decode_png",
@@ -37,5 +38,6 @@ __all__ = [
     "Problem", "RebuildReport", "TlasReport", "TlasMerge", "BlasEntry", "MemoryBytes",
     "CommitPhases", "RenderInfo", "Frame", "Hit", "ImportResult", "Page", "UndoResult",
     "History", "HistoryEntry", "HistoryStack", "FrameArrays", "MISS", "SceneSummary",
-    "SceneBudget", "Compaction",
+    "SceneBudget", "Compaction", "Asset", "AssetCounts", "AssetDeleteResult", "ReimportResult",
+    "KeptIds",
 ]

@@ -14,8 +14,9 @@ from typing import Any, Callable, Dict, Generic, Iterable, List, Optional, Tuple
 from strata_client._version import __version__
 from strata_client.asset_pack import pack_asset
 from strata_client.errors import etag_version, problem_error
-from strata_client.results import (Frame, History, Hit, ImportResult, Page, RebuildReport,
-                                   RenderInfo, SceneSummary, UndoResult)
+from strata_client.results import (Asset, AssetDeleteResult, Frame, History, Hit, ImportResult,
+                                   Page, RebuildReport, ReimportResult, RenderInfo, SceneSummary,
+                                   UndoResult)
 
 T = TypeVar("T")
 
@@ -188,10 +189,9 @@ def history(limit: Optional[int], cursor: Optional[str]) -> Call[History]:
     return Call(Request("GET", target), lambda r: History.from_json(_read_json(r)))
 
 
-def import_asset(path: str, prefix: Optional[str] = None, fmt: Optional[str] = None,
-                 instance: bool = True, parent: Optional[str] = None,
-                 if_match: IfMatch = None) -> Call[ImportResult]:
-    """Reads the file (and its side files) now: FileNotFoundError or ValueError before sending."""
+def _upload(path: str, fmt: Optional[str], instance: bool, parent: Optional[str],
+            if_match: IfMatch) -> Tuple[bytes, Dict[str, str], Dict[str, str]]:
+    """The body, query and headers of an upload of `path` (and its side files)."""
     archive = False
     if fmt is None:
         packed = pack_asset(path)
@@ -202,8 +202,6 @@ def import_asset(path: str, prefix: Optional[str] = None, fmt: Optional[str] = N
     query = {"name": os.path.basename(path)}
     if archive:
         query = {"name": os.path.splitext(os.path.basename(path))[0] + ".tar", "format": "tar"}
-    if prefix is not None:
-        query["prefix"] = prefix
     if fmt is not None:
         query["format"] = fmt
     if not instance:
@@ -212,9 +210,45 @@ def import_asset(path: str, prefix: Optional[str] = None, fmt: Optional[str] = N
         query["parent"] = parent
     headers = {"Content-Type": "application/octet-stream"}
     headers.update(_if_match(if_match))
+    return data, query, headers
+
+
+def import_asset(path: str, prefix: Optional[str] = None, fmt: Optional[str] = None,
+                 instance: bool = True, parent: Optional[str] = None,
+                 if_match: IfMatch = None) -> Call[ImportResult]:
+    """Reads the file (and its side files) now: FileNotFoundError or ValueError before sending."""
+    data, query, headers = _upload(path, fmt, instance, parent, if_match)
+    if prefix is not None:
+        query["prefix"] = prefix
     target = "/v1/assets?" + urllib.parse.urlencode(query, quote_via=urllib.parse.quote)
     return Call(Request("POST", target, data, headers),
                 lambda r: ImportResult.from_json(_read_json(r)))
+
+
+def reimport_asset(id: str, path: str, fmt: Optional[str] = None, instance: bool = True,
+                   parent: Optional[str] = None,
+                   if_match: IfMatch = None) -> Call[ReimportResult]:
+    """PUT /v1/assets/{id}; reads the file now, as import_asset."""
+    data, query, headers = _upload(path, fmt, instance, parent, if_match)
+    target = (f"/v1/assets/{_quote(id)}?" +
+              urllib.parse.urlencode(query, quote_via=urllib.parse.quote))
+    return Call(Request("PUT", target, data, headers),
+                lambda r: ReimportResult.from_json(_read_json(r)))
+
+
+def assets(at_version: Optional[int] = None) -> Call[List[Asset]]:
+    return Call(Request("GET", _at_version("/v1/assets", at_version)),
+                lambda r: [Asset.from_json(a) for a in _read_json(r)["assets"]])
+
+
+def asset(id: str, at_version: Optional[int] = None) -> Call[Asset]:
+    return Call(Request("GET", _at_version(f"/v1/assets/{_quote(id)}", at_version)),
+                lambda r: Asset.from_json(_read_json(r)))
+
+
+def delete_asset(id: str, if_match: IfMatch = None) -> Call[AssetDeleteResult]:
+    return Call(Request("DELETE", f"/v1/assets/{_quote(id)}", None, _if_match(if_match)),
+                lambda r: AssetDeleteResult.from_json(_read_json(r)))
 
 
 def commit() -> Call[RebuildReport]:

@@ -17,8 +17,9 @@ from strata_client._aio_http import Connection, RemoteDisconnected
 from strata_client._api import IfMatch
 from strata_client.arrays import FrameArrays, frame_arrays
 from strata_client.png import png_to_array
-from strata_client.results import (Frame, History, HistoryEntry, Hit, ImportResult, Page,
-                                   RebuildReport, RenderInfo, SceneSummary, UndoResult)
+from strata_client.results import (Asset, AssetDeleteResult, Frame, History, HistoryEntry, Hit,
+                                   ImportResult, Page, RebuildReport, ReimportResult, RenderInfo,
+                                   SceneSummary, UndoResult)
 
 __all__ = ["AsyncClient"]
 
@@ -167,6 +168,28 @@ class AsyncClient:
                            if_match: IfMatch = None) -> ImportResult:
         """Imports a model file (POST /v1/assets); the files are read in a worker thread."""
         build = functools.partial(_api.import_asset, path, prefix, fmt, instance, parent,
+                                  if_match)
+        call = await asyncio.get_running_loop().run_in_executor(None, build)
+        return await self._call(call)
+
+    async def assets(self, *, at_version: Optional[int] = None) -> List[Asset]:
+        """Every imported asset (GET /v1/assets), as Client.assets."""
+        return await self._call(_api.assets(at_version))
+
+    async def asset(self, id: str, *, at_version: Optional[int] = None) -> Asset:
+        """One asset with the ids it owns (GET /v1/assets/{id}), as Client.asset."""
+        return await self._call(_api.asset(id, at_version))
+
+    async def delete_asset(self, id: str, if_match: IfMatch = None) -> AssetDeleteResult:
+        """Removes everything an asset owns (DELETE /v1/assets/{id}), as Client.delete_asset."""
+        return await self._call(_api.delete_asset(id, if_match))
+
+    async def reimport_asset(self, id: str, path: str, fmt: Optional[str] = None,
+                             instance: bool = True, parent: Optional[str] = None,
+                             if_match: IfMatch = None) -> ReimportResult:
+        """Imports a file in place of asset `id` (PUT /v1/assets/{id}), as
+        Client.reimport_asset; the files are read in a worker thread."""
+        build = functools.partial(_api.reimport_asset, id, path, fmt, instance, parent,
                                   if_match)
         call = await asyncio.get_running_loop().run_in_executor(None, build)
         return await self._call(call)

@@ -9,8 +9,9 @@ from strata_client._api import IfMatch
 from strata_client.errors import ProblemError
 from strata_client.arrays import FrameArrays, frame_arrays
 from strata_client.png import png_to_array
-from strata_client.results import (Frame, History, HistoryEntry, Hit, ImportResult, Page,
-                                   RebuildReport, RenderInfo, SceneSummary, UndoResult)
+from strata_client.results import (Asset, AssetDeleteResult, Frame, History, HistoryEntry, Hit,
+                                   ImportResult, Page, RebuildReport, ReimportResult, RenderInfo,
+                                   SceneSummary, UndoResult)
 
 __all__ = ["Client", "ProblemError", "RenderInfo"]
 
@@ -208,6 +209,32 @@ class Client:
         "element" at fault.
         """
         return self._call(_api.import_asset(path, prefix, fmt, instance, parent, if_match))
+
+    def assets(self, *, at_version: Optional[int] = None) -> List[Asset]:
+        """Every imported asset (GET /v1/assets): id, file, counts (AssetCounts) and the world
+        bounds of its instances; with `at_version`, as they were at that version."""
+        return self._call(_api.assets(at_version))
+
+    def asset(self, id: str, *, at_version: Optional[int] = None) -> Asset:
+        """One asset with the ids of everything it owns (GET /v1/assets/{id}): its group and
+        every object whose id begins with its id and a '.'. NotFoundError when no asset has it."""
+        return self._call(_api.asset(id, at_version))
+
+    def delete_asset(self, id: str, if_match: IfMatch = None) -> AssetDeleteResult:
+        """Removes everything an asset owns in one batch (DELETE /v1/assets/{id}). An object
+        outside the asset that still uses part of it raises UnprocessableError (in-use) and
+        changes nothing."""
+        return self._call(_api.delete_asset(id, if_match))
+
+    def reimport_asset(self, id: str, path: str, fmt: Optional[str] = None,
+                       instance: bool = True, parent: Optional[str] = None,
+                       if_match: IfMatch = None) -> ReimportResult:
+        """Imports a file in place of asset `id` in one batch (PUT /v1/assets/{id}): the same
+        ids where the structure is the same, the asset's group where it was (unless `parent`
+        is given), and textures, materials and meshes that did not change kept as they are
+        (`kept`; no BLAS work). `replaced` is False when no asset had the id. Files are read
+        and packed as import_asset does."""
+        return self._call(_api.reimport_asset(id, path, fmt, instance, parent, if_match))
 
     def commit(self) -> RebuildReport:
         """Runs a commit (POST /v1/commit); returns its rebuild report."""

@@ -212,6 +212,64 @@ class ImportResult(JsonObject):
     textures: List[str] = field(default_factory=list)
     warnings: List[str] = field(default_factory=list)
     model: Optional[str] = None
+    bounds: Optional[Dict[str, List[float]]] = None  #: {"min", "max"} of its instances
+
+
+@dataclass(frozen=True, eq=False)
+class KeptIds(JsonObject):
+    """What a re-import made exactly as the scene held it: neither removed nor added."""
+
+    textures: List[str] = field(default_factory=list)
+    materials: List[str] = field(default_factory=list)
+    meshes: List[str] = field(default_factory=list)
+
+
+@dataclass(frozen=True, eq=False)
+class ReimportResult(ImportResult):
+    """The answer to PUT /v1/assets/{id}: an ImportResult, whether an asset was replaced (False:
+    a first import), what was kept unchanged (no BLAS work) and the ids that are gone."""
+
+    replaced: bool = False
+    kept: KeptIds = _member(KeptIds.from_json, default=None)
+    removed: List[str] = field(default_factory=list)
+
+
+@dataclass(frozen=True, eq=False)
+class AssetCounts(JsonObject):
+    """How many objects of each kind an asset owns."""
+
+    textures: int
+    materials: int
+    meshes: int
+    groups: int
+    instances: int
+
+
+@dataclass(frozen=True, eq=False)
+class Asset(JsonObject):
+    """An imported asset (GET /v1/assets): its id (its group's, the prefix of what it owns), the
+    file it came from, its counts and the world bounds of its instances (None: none). Read
+    with Client.asset(id), it also lists the ids it owns; from the listing those are empty."""
+
+    id: str
+    file: str
+    counts: AssetCounts = _member(AssetCounts.from_json)
+    bounds: Optional[Dict[str, List[float]]] = None
+    name: str = ""
+    textures: List[str] = field(default_factory=list)
+    materials: List[str] = field(default_factory=list)
+    meshes: List[str] = field(default_factory=list)
+    groups: List[str] = field(default_factory=list)
+    instances: List[str] = field(default_factory=list)
+
+
+@dataclass(frozen=True, eq=False)
+class AssetDeleteResult(JsonObject):
+    """The answer to DELETE /v1/assets/{id}: the new version and the ids removed, by kind."""
+
+    version: int
+    applied: int
+    removed: Dict[str, List[str]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True, eq=False)
