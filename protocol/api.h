@@ -16,6 +16,7 @@
 
 #include "engine/durable/durable_stats.h"
 #include "engine/engine.h"
+#include "protocol/assets/sandbox.h"
 #include "protocol/json_document.h"
 #include "protocol/problem.h"
 
@@ -30,6 +31,8 @@ struct ApiLimits {
     SceneBudget budget;
     /// Most edits in one batch, JSON or snapshot (--max-batch-edits).
     std::size_t max_batch_edits = std::size_t(1) << 20;
+    /// Where POST and PUT /v1/assets run their importer (--import-timeout, --import-memory-mb).
+    assets::SandboxLimits import_sandbox = {};
 };
 
 /// One endpoint's answer, ready for any transport.

@@ -110,8 +110,8 @@ bool parse_format(const Query& query, std::optional<std::string_view> content_ty
         q.archive = lower(*f) == "tar";
         format = assets::format_from_name(*f);
         if (!format && !q.archive) {
-            problem = bad_query(
-                "format", "'" + to_valid_utf8(*f) + "' is not one of glb, gltf, obj, ply, tar");
+            problem = bad_query("format", "'" + to_valid_utf8(*f) + "' is not one of " +
+                                              assets::format_names() + ", tar");
             return false;
         }
     }
@@ -133,9 +133,10 @@ bool parse_format(const Query& query, std::optional<std::string_view> content_ty
     if (!format && !q.archive) {
         problem = make_problem(
             ProblemType::InvalidRequest,
-            "the file's format is unknown: give ?format=glb|gltf|obj|ply|tar, or a Content-Type "
-            "of model/gltf-binary, model/gltf+json, model/obj, application/ply or "
-            "application/x-tar");
+            "the file's format is unknown: give ?format= (one of " + assets::format_names() +
+                ", tar), a name with one of those extensions, or a Content-Type of "
+                "model/gltf-binary, model/gltf+json, model/obj, application/ply, "
+                "model/vnd.collada+xml, model/stl, model/3mf or application/x-tar");
         return false;
     }
     if (format) q.format = *format;
@@ -205,27 +206,42 @@ assets::ImportLimits import_limits(const Scene& s, const SceneBudget& b, const M
     return limits;
 }
 
-/// Step: import the body (an archive: its one model with the archive's other files as side
-/// files), then build the one batch.
-Parsed<Upload> read_upload(std::string& body, AssetQuery q, const assets::ImportLimits& limits) {
+/// Step: import the body in the importers' sandbox (an archive: its one model with the
+/// archive's other files as side files), check what comes back as untrusted, then build the one
+/// batch.
+Parsed<Upload> read_upload(std::string& body, AssetQuery q, const assets::ImportLimits& limits,
+                           const assets::SandboxLimits& sandbox) {
     const std::span bytes(reinterpret_cast<const uint8_t*>(body.data()), body.size());
-    Upload u;
-    assets::Imported<assets::Asset> asset = assets::Asset{};
-    if (q.archive) {
-        auto archived = assets::import_archive(bytes, q.name, limits);
-        if (!archived) return Unexpected(archived.error());
-        q.format = archived.value().format;
-        u.model = archived.value().model;
-        if (q.prefix.empty()) q.prefix = prefix_from_name(*u.model);
-        if (q.prefix.empty()) q.prefix = assets::format_name(q.format);
-        asset = std::move(archived.value().asset);
-    } else {
-        asset = assets::import_asset(q.format, bytes, q.name, limits);
-    }
+    const bool archive = q.archive;
+    const AssetFormat format = q.format;
+    const std::string name = q.name;
+    auto imported = assets::run_sandboxed(
+        [&]() -> assets::Imported<assets::ImportOutcome> {
+            if (!archive) {
+                auto asset = assets::import_asset(format, bytes, name, limits);
+                if (!asset) return Unexpected(asset.error());
+                return assets::ImportOutcome{std::move(asset.value()), format, std::nullopt};
+            }
+            auto archived = assets::import_archive(bytes, name, limits);
+            if (!archived) return Unexpected(archived.error());
+            assets::ArchiveAsset& a = archived.value();
+            return assets::ImportOutcome{std::move(a.asset), a.format, std::move(a.model)};
+        },
+        q.name, sandbox);
     body = {};
-    if (!asset) return Unexpected(asset.error());
-    u.out = assets::asset_to_batch(std::move(asset.value()),
-                                   {q.prefix, q.instance, q.parent, q.name});
+    if (!imported) return Unexpected(imported.error());
+    assets::ImportOutcome& o = imported.value();
+    const assets::ErrorSink sink(o.model ? q.name + ": " + *o.model : q.name);
+    if (auto fits = assets::check_budget(o.asset, limits, sink); !fits)
+        return Unexpected(fits.error());
+    if (auto valid = assets::validate_asset(o.asset, sink); !valid)
+        return Unexpected(valid.error());
+    Upload u;
+    q.format = o.format;
+    u.model = std::move(o.model);
+    if (q.prefix.empty() && u.model) q.prefix = prefix_from_name(*u.model);
+    if (q.prefix.empty()) q.prefix = assets::format_name(q.format);
+    u.out = assets::asset_to_batch(std::move(o.asset), {q.prefix, q.instance, q.parent, q.name});
     u.q = std::move(q);
     return u;
 }
@@ -470,7 +486,7 @@ ApiResponse post_assets(Engine& engine, std::string body,
     if (!q) return problem_response(problem);
     const assets::ImportLimits limits = engine.read(
         [&](const Scene& s) { return import_limits(s, api_limits.budget, MeshTotals{}); });
-    auto upload = read_upload(body, std::move(*q), limits);
+    auto upload = read_upload(body, std::move(*q), limits, api_limits.import_sandbox);
     if (!upload) return problem_response(upload.error());
     Upload& u = upload.value();
 
@@ -578,7 +594,7 @@ ApiResponse put_asset(Engine& engine, std::string_view id, std::string body,
         }
         return import_limits(s, api_limits.budget, freed);
     });
-    auto upload = read_upload(body, std::move(*q), limits);
+    auto upload = read_upload(body, std::move(*q), limits, api_limits.import_sandbox);
     if (!upload) return problem_response(upload.error());
     const Upload& u = upload.value();
     for (int attempt = 1;; ++attempt) {

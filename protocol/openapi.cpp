@@ -39,7 +39,9 @@ constexpr Refusal FRONT_END_REFUSALS[] = {
      "this client already holds its share of connections: only /livez and /readyz are answered "
      "on this one"},
     {ProblemType::HeadersTooLarge, "too many header fields, or too many bytes of them"},
-    {ProblemType::Internal, "a bug or an Embree failure (the request is logged)"},
+    {ProblemType::Internal,
+     "a bug or an Embree failure (the request is logged), or an import's sandbox that could not "
+     "start (fork failed)"},
     {ProblemType::Unavailable,
      "the server is starting (recovering its data directory) or shutting down, or holds more "
      "unfinished request data than --max-buffered-mb",

@@ -500,7 +500,7 @@ void write_result_schemas(J& out) {
     out["AssetResult"] =
         object({{"version", count()},
                 {"applied", count()},
-                {"format", names_of(assets::AssetFormat::Ply, assets::format_name)},
+                {"format", names_of(assets::LAST_ASSET_FORMAT, assets::format_name)},
                 {"textures", ids},
                 {"meshes", ids},
                 {"materials", ids},

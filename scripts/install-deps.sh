@@ -20,7 +20,7 @@ esac
 # OpenEXR for the renderer. scripts/check-docker.sh fails if ldd finds a library missing.
 runtime_pkgs=(
     libembree3-3 libtbb12 libopenexr-3-1-30 libpng16-16 libspdlog1.10 libfmt9 libcpp-httplib0.11
-    libhiredis0.14 libstdc++6 libgcc-s1 libturbojpeg0 libdraco7
+    libhiredis0.14 libstdc++6 libgcc-s1 libturbojpeg0 libdraco7 libseccomp2 libassimp5
 )
 build_pkgs=(
     build-essential cmake ninja-build pkg-config git ca-certificates curl
@@ -28,6 +28,8 @@ build_pkgs=(
     libgtest-dev libgmock-dev libbenchmark-dev libpng-dev zlib1g-dev libturbojpeg0-dev
     libtinygltf-dev libtinyobjloader-dev libcli11-dev libspdlog-dev
     libdraco-dev  # KHR_draco_mesh_compression glTF primitives (protocol/assets/draco_decode.cpp)
+    libseccomp-dev  # the importers' sandboxed child process (protocol/assets/sandbox.cpp)
+    libassimp-dev  # FBX, COLLADA, STL, 3DS, ... imports (protocol/assets/assimp_import.cpp)
     libhiredis-dev redis-server  # the shared edit log (server/replica) and its tests
     nginx  # test_compose_topology.py runs docker/nginx-replicas.conf as its child process
     clang libclang-rt-14-dev

@@ -178,6 +178,13 @@ void add_render_limit_options(CLI::App& app, ServerConfig& c) {
                    "MiB the views of open frame streams (GET /v1/stream) may hold together, 8 "
                    "bytes a pixel each; a stream that would open a view beyond it gets 503")
         ->check(CLI::Range(std::size_t(1), std::size_t(1) << 20));
+    app.add_option("--import-timeout", c.import_timeout_s,
+                   "Seconds of wall-clock and of CPU time an import's sandboxed importer may "
+                   "take (POST and PUT /v1/assets; 422 naming the file beyond)")
+        ->check(CLI::Range(1, 3600));
+    app.add_option("--import-memory-mb", c.import_memory_mb,
+                   "MiB an import's sandboxed importer may allocate (422 beyond)")
+        ->check(CLI::Range(16u, 1u << 20));
     app.add_option("--shutdown-grace", c.shutdown_grace_s,
                    "Seconds in-flight requests get after SIGTERM before renders are stopped")
         ->check(CLI::Range(0, 3600));

@@ -16,8 +16,13 @@ SceneBudget scene_budget(const ServerConfig& c) {
 }
 
 protocol::ApiLimits api_limits(const ServerConfig& c) {
-    return {protocol::JsonLimits{c.max_json_depth, c.max_array_elements, c.max_json_values},
-            c.max_pixels, c.render_timeout_s, scene_budget(c), c.max_batch_edits};
+    protocol::ApiLimits limits{
+        protocol::JsonLimits{c.max_json_depth, c.max_array_elements, c.max_json_values},
+        c.max_pixels, c.render_timeout_s, scene_budget(c), c.max_batch_edits};
+    limits.import_sandbox.memory_mb = c.import_memory_mb;
+    limits.import_sandbox.cpu_seconds = uint32_t(c.import_timeout_s);
+    limits.import_sandbox.deadline_ms = uint32_t(c.import_timeout_s) * 1000;
+    return limits;
 }
 
 EngineConfig engine_config(const ServerConfig& c) {

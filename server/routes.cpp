@@ -416,6 +416,15 @@ void add_write_routes(RouteTable& routes, ServerContext& ctx) {
                  }});
 }
 
+/// The `format` query parameter's schema: every importer's format, and tar.
+std::string format_enum() {
+    protocol::Json names = protocol::Json::array();
+    for (int f = 0; f <= int(assets::LAST_ASSET_FORMAT); ++f)
+        names.push_back(assets::format_name(assets::AssetFormat(f)));
+    names.push_back("tar");
+    return protocol::Json{{"enum", names}}.dump();
+}
+
 void add_import_routes(RouteTable& routes, ServerContext& ctx) {
     const auto text = [](const char* name, const char* doc) -> ParamDoc {
         return {.name = name, .description = doc};
@@ -430,7 +439,7 @@ void add_import_routes(RouteTable& routes, ServerContext& ctx) {
           .parameters = {{.name = "format",
                           .description = "the file's format; tar: an archive of one model and "
                                          "the files it names",
-                          .schema = R"({"enum": ["glb", "gltf", "obj", "ply", "tar"]})"},
+                          .schema = format_enum()},
                          text("name", "the file's name: for problems and the default prefix"),
                          text("prefix", "every id created starts with it (default: name's stem)"),
                          text("parent", "the group the asset's group joins (default: the root)"),
@@ -439,15 +448,19 @@ void add_import_routes(RouteTable& routes, ServerContext& ctx) {
                           .schema = R"({"type": "boolean", "default": true})"},
                          if_match()},
           .body_media = {"model/gltf-binary", "model/gltf+json", "model/obj", "application/ply",
-                         "application/x-tar", "application/octet-stream"},
+                         "model/vnd.collada+xml", "model/stl", "model/3mf", "application/x-tar",
+                         "application/octet-stream"},
           .body_required = true,
           .responses = {ok_json("AssetResult", "imported: the ids it created and the new version"),
                         problem(400, "an unknown format or a malformed query parameter"),
                         version_mismatch(),
-                        problem(413, "the model takes the scene over its budget"),
+                        problem(413,
+                                "the model takes the scene over its budget, or its importer "
+                                "needs more than --import-memory-mb"),
                         problem(422,
                                 "the file is malformed or uses what Strata does not import "
-                                "(file and element say where)"),
+                                "(file and element say where), or its sandboxed importer "
+                                "crashed, hung or ran past --import-timeout"),
                         not_applied()}},
          [&ctx](RouteCall& call) {
              HttpRequest& req = call.request;
@@ -511,7 +524,7 @@ void add_asset_unit_routes(RouteTable& routes, ServerContext& ctx) {
           .tag = "edits",
           .parameters = {{.name = "format",
                           .description = "as for POST /v1/assets",
-                          .schema = R"({"enum": ["glb", "gltf", "obj", "ply", "tar"]})"},
+                          .schema = format_enum()},
                          text("name", "the file's name: for problems, and the asset's `file`"),
                          text("parent", "the group the asset's group joins (default: where "
                                         "it was, else the root)"),
@@ -520,7 +533,8 @@ void add_asset_unit_routes(RouteTable& routes, ServerContext& ctx) {
                           .schema = R"({"type": "boolean", "default": true})"},
                          if_match()},
           .body_media = {"model/gltf-binary", "model/gltf+json", "model/obj", "application/ply",
-                         "application/x-tar", "application/octet-stream"},
+                         "model/vnd.collada+xml", "model/stl", "model/3mf", "application/x-tar",
+                         "application/octet-stream"},
           .body_required = true,
           .responses = {ok_json("AssetReplaceResult", "replaced: what was made, kept and removed"),
                         {.status = 201,
@@ -529,10 +543,13 @@ void add_asset_unit_routes(RouteTable& routes, ServerContext& ctx) {
                          .headers = {"ETag"}},
                         problem(400, "an unknown format or a malformed query parameter"),
                         version_mismatch(),
-                        problem(413, "the model takes the scene over its budget"),
+                        problem(413,
+                                "the model takes the scene over its budget, or its importer "
+                                "needs more than --import-memory-mb"),
                         problem(422,
-                                "the file is malformed or unsupported, or an object outside "
-                                "the old asset still uses a part it removes"),
+                                "the file is malformed or unsupported, its sandboxed importer "
+                                "crashed or ran out of time, or an object outside the old "
+                                "asset still uses a part it removes"),
                         not_applied()}},
          [&ctx](RouteCall& call) {
              HttpRequest& req = call.request;

@@ -45,6 +45,8 @@ struct ServerConfig {
     int render_timeout_s = 60;  ///< a render running longer is stopped (503)
     std::size_t max_stream_mb = 1024;  ///< what the views of open frame streams hold together
     int shutdown_grace_s = 3;   ///< SIGTERM: in-flight requests get this long, then renders stop
+    int import_timeout_s = 60;  ///< an importer's child process is killed after this (422)
+    uint32_t import_memory_mb = 2048;  ///< what an importer's child may allocate (422 beyond)
 
     // The scene budget (engine/scene/budget.h), checked when a batch is validated.
     uint64_t max_scene_triangles = 1ull << 24;

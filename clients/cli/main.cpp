@@ -312,13 +312,16 @@ void add_snapshot(CLI::App& app, Actions& actions) {
 void add_import(CLI::App& app, Actions& actions) {
     auto a = std::make_shared<ImportArgs>();
     CLI::App* cmd =
-        app.add_subcommand("import", "Import a glTF, OBJ or PLY file (POST /v1/assets)");
-    cmd->add_option("file", a->file, "Model file (.glb, .gltf, .obj, .ply)")->required();
+        app.add_subcommand("import", "Import a model file: glTF, OBJ, PLY, FBX, COLLADA, STL, ... "
+                                     "(POST /v1/assets)");
+    cmd->add_option("file", a->file, "Model file (.glb, .gltf, .obj, .ply, .fbx, .dae, .stl, ...)")
+        ->required();
     cmd->add_option("--prefix", a->prefix,
                     "Id prefix of what it creates (default: the file name's stem)");
     cmd->add_option("--parent", a->parent,
                     "Group to put the asset's group under (default: the root)");
-    cmd->add_option("--format", a->format, "glb, gltf, obj or ply (default: from the extension)");
+    cmd->add_option("--format", a->format,
+                    "glb, gltf, obj, ply, fbx, dae, stl, ... (default: from the extension)");
     auto no_instance = std::make_shared<bool>(false);
     cmd->add_flag("--no-instance", *no_instance, "Create meshes and materials only");
     actions.emplace_back(cmd, [a, no_instance](Transport& t, const Console& c) {
@@ -344,11 +347,12 @@ void add_assets(CLI::App& app, Actions& actions) {
     CLI::App* reimport = assets->add_subcommand(
         "reimport", "Import FILE in place of an asset: same ids, what did not change kept");
     reimport->add_option("id", *id, "The asset's id")->required();
-    reimport->add_option("file", a->file, "Model file (.glb, .gltf, .obj, .ply)")->required();
+    reimport->add_option("file", a->file, "Model file (.glb, .gltf, .obj, .ply, .fbx, ...)")
+        ->required();
     reimport->add_option("--parent", a->parent,
                          "Group to put the asset's group under (default: where it was)");
     reimport->add_option("--format", a->format,
-                         "glb, gltf, obj or ply (default: from the extension)");
+                         "glb, gltf, obj, ply, fbx, dae, stl, ... (default: from the extension)");
     auto no_instance = std::make_shared<bool>(false);
     reimport->add_flag("--no-instance", *no_instance, "Create meshes and materials only");
     actions.emplace_back(reimport, [id, a, no_instance](Transport& t, const Console& c) {

@@ -79,11 +79,11 @@ void value_fields(Io& io, E& v) {
 template <class T>
 constexpr uint8_t ENUM_MAX = 1;
 template <>
-constexpr uint8_t ENUM_MAX<LightKind> = 2;
+inline constexpr uint8_t ENUM_MAX<LightKind> = 2;
 template <>
-constexpr uint8_t ENUM_MAX<TextureWrap> = 2;
+inline constexpr uint8_t ENUM_MAX<TextureWrap> = 2;
 template <>
-constexpr uint8_t ENUM_MAX<BatchKind> = 2;
+inline constexpr uint8_t ENUM_MAX<BatchKind> = 2;
 
 /// True for the types that have a value_fields() layout.
 template <class Io, class T>

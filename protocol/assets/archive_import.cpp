@@ -63,7 +63,8 @@ Imported<ArchiveAsset> import_archive(std::span<const uint8_t> body, const std::
     for (const TarEntry& e : entries.value())
         if (model_format(e.path)) models.push_back(&e);
     if (models.empty())
-        return sink.invalid("", "the archive holds no model (.obj, .gltf, .glb or .ply)" +
+        return sink.invalid("", "the archive holds no model (a file with one of the extensions " +
+                                    format_names() + ")" +
                                     std::string(entries.value().empty() ? ": it is empty" : ""));
     if (models.size() > 1)
         return sink.invalid("", "the archive holds " + std::to_string(models.size()) + " models (" +

@@ -18,8 +18,8 @@ struct ArchiveAsset {
     std::string model;  ///< the model's path inside the archive
 };
 
-/// Imports the one model (.obj, .gltf, .glb or .ply, by extension) of a tar archive, with the
-/// archive's other files as its side files. None or several models: Invalid, naming them. An
+/// Imports the one model (.obj, .gltf, .glb, .ply or an assimp format, by extension) of a tar
+/// archive, with the archive's other files as its side files. None or several models: Invalid, naming them. An
 /// importer's error names the file as "<archive>: <model path>".
 Imported<ArchiveAsset> import_archive(std::span<const uint8_t> body, const std::string& archive,
                                       const ImportLimits& limits, const TarLimits& tar_limits = {});

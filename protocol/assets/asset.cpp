@@ -1,6 +1,7 @@
 #include "protocol/assets/asset.h"
 
 #include <cctype>
+#include <iterator>
 
 #include "engine/scene/budget.h"
 
@@ -22,27 +23,28 @@ std::string_view trim(std::string_view v) {
 
 }  // namespace
 
+/// Each format's name, in the order of the enum.
+constexpr const char* FORMAT_NAMES[] = {"glb", "gltf", "obj", "ply", "fbx", "dae", "stl", "3ds",
+                                        "off", "x",   "ac",   "ase", "lwo", "ms3d", "b3d", "dxf",
+                                        "3mf", "amf", "smd",  "nff", "cob", "xgl"};
+static_assert(std::size(FORMAT_NAMES) == std::size_t(LAST_ASSET_FORMAT) + 1);
+
 const char* format_name(AssetFormat f) {
-    switch (f) {
-        case AssetFormat::Glb:
-            return "glb";
-        case AssetFormat::Gltf:
-            return "gltf";
-        case AssetFormat::Obj:
-            return "obj";
-        case AssetFormat::Ply:
-            return "ply";
-    }
-    return "?";
+    return std::size_t(f) < std::size(FORMAT_NAMES) ? FORMAT_NAMES[std::size_t(f)] : "?";
 }
 
 std::optional<AssetFormat> format_from_name(std::string_view name) {
     const std::string n = lower(name);
-    if (n == "glb") return AssetFormat::Glb;
-    if (n == "gltf") return AssetFormat::Gltf;
-    if (n == "obj") return AssetFormat::Obj;
-    if (n == "ply") return AssetFormat::Ply;
+    for (std::size_t i = 0; i < std::size(FORMAT_NAMES); ++i)
+        if (n == FORMAT_NAMES[i]) return AssetFormat(i);
+    if (n == "zgl") return AssetFormat::Xgl;  // compressed XGL
     return std::nullopt;
+}
+
+std::string format_names() {
+    std::string out;
+    for (const char* name : FORMAT_NAMES) out += (out.empty() ? "" : ", ") + std::string(name);
+    return out;
 }
 
 std::optional<AssetFormat> format_from_media_type(std::string_view type) {
@@ -51,6 +53,10 @@ std::optional<AssetFormat> format_from_media_type(std::string_view type) {
     if (t == "model/gltf+json") return AssetFormat::Gltf;
     if (t == "model/obj") return AssetFormat::Obj;
     if (t == "application/ply" || t == "model/ply" || t == "model/x-ply") return AssetFormat::Ply;
+    if (t == "model/vnd.collada+xml") return AssetFormat::Dae;
+    if (t == "model/stl" || t == "model/x.stl-binary" || t == "model/x.stl-ascii")
+        return AssetFormat::Stl;
+    if (t == "model/3mf") return AssetFormat::ThreeMf;
     return std::nullopt;
 }
 

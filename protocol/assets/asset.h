@@ -19,13 +19,24 @@
 
 namespace strata::assets {
 
-/// The file formats the importers read.
-enum class AssetFormat : uint8_t { Glb, Gltf, Obj, Ply };
+/// The file formats the importers read: four of our own, then those read through assimp
+/// (assimp_import.h). New formats go at the end (the sandbox's wire stores the number).
+enum class AssetFormat : uint8_t {
+    Glb, Gltf, Obj, Ply,
+    Fbx, Dae, Stl, ThreeDs, Off, X, Ac, Ase, Lwo, Ms3d, B3d, Dxf, ThreeMf, Amf, Smd, Nff, Cob, Xgl
+};
+inline constexpr AssetFormat LAST_ASSET_FORMAT = AssetFormat::Xgl;
 
-/// "glb", "gltf", "obj", "ply".
+/// "glb", "gltf", "obj", "ply", "fbx", "dae", "stl", "3ds", ...: the format's usual extension.
 const char* format_name(AssetFormat f);
 /// The format named by a `format` query value or a file extension (case-insensitive, no dot).
 std::optional<AssetFormat> format_from_name(std::string_view name);
+/// True for the formats read through assimp.
+constexpr bool format_is_assimp(AssetFormat f) {
+    return f > AssetFormat::Ply;
+}
+/// Every format's name, comma separated: "glb, gltf, obj, ply, fbx, ...".
+std::string format_names();
 /// The format of a Content-Type (model/gltf-binary, model/gltf+json, model/obj, application/ply,
 /// model/ply, text/plain is not one), parameters after ';' ignored.
 std::optional<AssetFormat> format_from_media_type(std::string_view type);

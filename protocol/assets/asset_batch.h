@@ -25,8 +25,8 @@ namespace strata::assets {
 struct BatchOptions {
     std::string prefix;    ///< every id starts with it: "<prefix>.mesh0", "<prefix>.node3"
     bool instance = true;  ///< false: meshes and materials only
-    std::optional<std::string> parent;  ///< the group the asset's group joins; nullopt: root
-    std::string file;  ///< the uploaded file's name: the asset's group's `asset` field
+    std::optional<std::string> parent = {};  ///< the group the asset's group joins; nullopt: root
+    std::string file = {};  ///< the uploaded file's name: the asset's group's `asset` field
 };
 
 /// The batch and the ids it creates, in the order of its edits.

@@ -3,6 +3,7 @@
 #include <exception>
 #include <new>
 
+#include "protocol/assets/assimp_import.h"
 #include "protocol/assets/gltf_import.h"
 #include "protocol/assets/ply_import.h"
 
@@ -23,6 +24,8 @@ Imported<Asset> import_asset(AssetFormat format, std::span<const uint8_t> bytes,
                 return import_obj(bytes, file, side_files, limits);
             case AssetFormat::Ply:
                 return import_ply(bytes, file, limits);
+            default:
+                return import_assimp(bytes, format, file, limits, side_files);
         }
     } catch (const std::bad_alloc&) {
         return sink.too_large("", "reading it needs more memory than this server can give");

@@ -1,6 +1,6 @@
 // Imported models against stored reference images, compared with a tolerance (as the demo's
-// reference test does): Spot, the bunny and the multi-node 2CylinderEngine, each framed by a
-// camera computed from its world bounds; and BoxTextured, whose embedded PNG must show, also
+// reference test does): Spot, the bunny and the multi-node 2CylinderEngine, an FBX spider and a
+// COLLADA duck read through assimp, each framed by a camera computed from its world bounds; and BoxTextured, whose embedded PNG must show, also
 // when it comes as a .gltf with its external .bin and PNG in a tar archive (that .gltf's sampler
 // mirrors the texture where the .glb's repeats it, hence its own reference frame).
 //
@@ -70,6 +70,17 @@ TEST(AssetReferenceImage, TwoCylinderEngineMatchesTheStoredFrame) {
     check_reference(std::string(STRATA_ASSIMP_MODELS_DIR) +
                         "/glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb",
                     AssetFormat::Glb, "engine");
+}
+
+TEST(AssetReferenceImage, AnFbxFileReadThroughAssimpMatchesTheStoredFrame) {
+    check_reference(std::string(STRATA_ASSIMP_MODELS_DIR) + "/FBX/spider.fbx", AssetFormat::Fbx,
+                    "spider-fbx");
+}
+
+TEST(AssetReferenceImage, AColladaFileReadThroughAssimpMatchesTheStoredFrame) {
+    // Its texture (duckCM.tga) is not part of the upload: the duck shows its material's colour.
+    check_reference(std::string(STRATA_ASSIMP_MODELS_DIR) + "/Collada/duck.dae", AssetFormat::Dae,
+                    "duck-dae");
 }
 
 TEST(AssetReferenceImage, TheDracoCompressedEngineMatchesTheUncompressedOnesFrame) {

@@ -4,8 +4,10 @@
 //
 // Checks, besides "no crash, no sanitizer report, no exception":
 //   - a refusal names the file and says what is wrong;
-//   - an accepted asset passes validate_asset again (every index in range) and its batch goes
-//     through the scene's rules; a refused batch leaves the scene as it was.
+//   - an accepted asset crosses the sandbox's wire unchanged, passes validate_asset again (every
+//     index in range) and its batch goes through the scene's rules; a refused batch leaves the
+//     scene as it was;
+//   - the input read as that wire either is refused or encodes back to itself.
 // Small limits keep each input cheap: the budget checks run on every input.
 // Build and run: scripts/run-fuzz.sh (its corpora are seeded from assimp-testmodels).
 
@@ -15,6 +17,7 @@
 
 #include "engine/scene/scene.h"
 #include "protocol/assets/asset_batch.h"
+#include "protocol/assets/asset_wire.h"
 #include "protocol/assets/import.h"
 #include "tests/fuzz/asset_fuzz_util.h"
 
@@ -43,6 +46,11 @@ AssetFormat format_of(const uint8_t* data, std::size_t size) {
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
     static Scene scene;
+    // The input as the sandbox's wire (asset_wire.h), what a subverted importer could send: a
+    // result that decodes encodes back to the same bytes.
+    const std::string_view wire(reinterpret_cast<const char*>(data), size);
+    if (auto decoded = decode_outcome(wire); decoded && encode_outcome(decoded.value()) != wire)
+        fail("a decoded wire result does not encode back to its bytes");
     ImportLimits limits;
     limits.max_vertices = 1u << 16;
     limits.max_triangles = 1u << 16;

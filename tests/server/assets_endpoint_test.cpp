@@ -79,6 +79,22 @@ TEST_F(Assets, AGlbUploadSharesMeshesBetweenItsNodes) {
     EXPECT_EQ(scene["counts"]["instances"], 115) << scene.dump();
 }
 
+TEST_F(Assets, FbxAndColladaFilesImportThroughAssimp) {
+    const std::string fbx = read_file(STRATA_ASSIMP_MODELS_DIR "/FBX/spider.fbx");
+    const std::string dae = read_file(STRATA_ASSIMP_MODELS_DIR "/Collada/duck.dae");
+    if (fbx.empty() || dae.empty()) GTEST_SKIP() << "assimp-testmodels missing";
+    const Reply spider = upload("?name=spider.fbx", fbx, "application/octet-stream");
+    ASSERT_EQ(spider.status, 200) << spider.body;
+    EXPECT_EQ(spider.json()["format"], "fbx");
+    EXPECT_FALSE(spider.json()["meshes"].empty());
+    EXPECT_TRUE(spider.json()["bounds"].is_object());
+    const Reply duck = upload("?prefix=duck", dae, "model/vnd.collada+xml");
+    ASSERT_EQ(duck.status, 200) << duck.body;
+    EXPECT_EQ(duck.json()["format"], "dae");
+    EXPECT_THAT(duck.json()["warnings"].dump(), HasSubstr("duckCM.tga"));
+    EXPECT_EQ(srv.get("/v1/render?width=32&height=32&frame_group=duck").status, 200);
+}
+
 TEST_F(Assets, AnAsciiPlyIsReadWithTheFormatInTheQuery) {
     const std::string ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
                             "property float y\nproperty float z\nelement face 1\n"
@@ -104,7 +120,7 @@ TEST_F(Assets, ABrokenFileIsA422NamingTheFileAndTheElementAndChangesNothing) {
 
 TEST_F(Assets, AnUnknownFormatOrQueryIsA400) {
     expect_problem(upload("", TRIANGLE_OBJ, "application/octet-stream"), 400, "invalid-request");
-    expect_problem(upload("?format=fbx", TRIANGLE_OBJ, "model/obj"), 400, "invalid-request",
+    expect_problem(upload("?format=c4d", TRIANGLE_OBJ, "model/obj"), 400, "invalid-request",
                    "/format");
     expect_problem(upload("?format=obj&colour=red", TRIANGLE_OBJ, "model/obj"), 400,
                    "invalid-request", "/colour");

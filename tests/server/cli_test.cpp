@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "server/auth.h"
+#include "server/past_scenes.h"
 
 namespace strata::server::test {
 namespace {
@@ -129,6 +130,20 @@ TEST(CommandLine, TheCommandLineWinsOverTheEnvironment) {
     CommandLine cl = parse({"--port", "9090", "--host", "127.0.0.1"});
     EXPECT_EQ(cl.config.port, 9090);
     EXPECT_EQ(cl.config.host, "127.0.0.1");
+}
+
+TEST(CommandLine, TheImportFlagsBoundTheImportersSandbox) {
+    auto base = clean_env();
+    const auto defaults = api_limits(parse({}).config).import_sandbox;
+    EXPECT_TRUE(defaults.enabled);
+    EXPECT_EQ(defaults.deadline_ms, 60000u);
+    EXPECT_EQ(defaults.memory_mb, 2048u);
+    const auto set =
+        api_limits(parse({"--import-timeout", "5", "--import-memory-mb", "128"}).config)
+            .import_sandbox;
+    EXPECT_EQ(set.deadline_ms, 5000u);
+    EXPECT_EQ(set.cpu_seconds, 5u);
+    EXPECT_EQ(set.memory_mb, 128u);
 }
 
 TEST(CommandLine, ANonLoopbackHostNeedsATokenOrInsecure) {

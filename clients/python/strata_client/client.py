@@ -193,7 +193,8 @@ class Client:
     def import_asset(self, path: str, prefix: Optional[str] = None, fmt: Optional[str] = None,
                      instance: bool = True, parent: Optional[str] = None,
                      if_match: IfMatch = None) -> ImportResult:
-        """Imports a glTF (.glb or .gltf), OBJ or PLY file (POST /v1/assets) as one batch;
+        """Imports a glTF (.glb or .gltf), OBJ or PLY file, or an FBX, COLLADA (.dae), STL, 3DS,
+        OFF, ... file read through assimp (POST /v1/assets) as one batch;
         returns the answer: version, applied, format, the ids created (meshes, materials,
         groups, instances, textures), warnings, and model when it went as an archive.
 
@@ -203,7 +204,7 @@ class Client:
         sent. With `fmt` given, the file is sent alone.
 
         `prefix` starts every id it creates (default: the file name's stem); `fmt` is glb, gltf,
-        obj or ply (default: from the extension); `instance=False` creates meshes and materials
+        obj, ply, fbx, dae, stl, ... (default: from the extension); `instance=False` creates meshes and materials
         only; `parent` names the group the asset's own group joins (default: the root). A file
         Strata cannot read raises UnprocessableError (422) whose body names the "file" and the
         "element" at fault.
