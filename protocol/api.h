@@ -92,6 +92,14 @@ const char* batch_kind_name(BatchKind kind);
 /// GET /v1/history?limit&cursor: the versions the history holds, newest first, and the stacks.
 ApiResponse get_history(const Engine& engine,
                         const std::multimap<std::string, std::string>& query);
+/// An RFC 3339 time ("2026-11-27T17:02:03.456Z", an offset instead of Z) as Unix milliseconds;
+/// nullopt when it is not one.
+std::optional<int64_t> parse_rfc3339(std::string_view text);
+/// The version a read with `at_time=text` answers: the newest version the history lists that
+/// was made at or before that time. 400 for a malformed time; 404 for a time before the oldest
+/// version the history lists (GET /v1/history: the versions since the scene was loaded, up to
+/// its bound).
+Parsed<uint64_t> version_at_time(const Engine& engine, std::string_view text);
 /// POST /v1/commit.
 ApiResponse post_commit(Engine& engine);
 /// GET /v1/plan.

@@ -348,6 +348,20 @@ struct Kept {
     std::set<std::string> textures, materials, meshes;
 };
 
+/// Adds to `into` the id of each of `handles` whose record `out` adds again as an `Add` for which
+/// `same(record, add)` holds.
+template <class Add, class H, class Records, class Same>
+void keep_same(const std::vector<H>& handles, const Records& records,
+               const std::map<std::string_view, const Edit*>& adds, Same&& same,
+               std::set<std::string>& into) {
+    for (H h : handles) {
+        const auto& r = records.at(h);
+        const auto it = adds.find(r.id);
+        const Add* add = it == adds.end() ? nullptr : std::get_if<Add>(it->second);
+        if (add && same(r, *add)) into.insert(r.id);
+    }
+}
+
 /// Finds what `out` would add exactly as `old` holds it (textures, then the materials that use
 /// kept textures, then the meshes that use kept materials).
 Kept find_kept(const Scene& s, const AssetContents& old, const assets::AssetBatch& out) {
@@ -355,30 +369,17 @@ Kept find_kept(const Scene& s, const AssetContents& old, const assets::AssetBatc
     std::map<std::string_view, const Edit*> adds;
     for (std::size_t i = 0; i < out.batch.edits.size(); ++i)
         adds.emplace(out.edit_ids[i], &out.batch.edits[i]);
-    const auto added = [&](const std::string& id) -> const Edit* {
-        const auto it = adds.find(id);
-        return it == adds.end() ? nullptr : it->second;
-    };
-    for (TextureHandle h : old.textures) {
-        const TextureRecord& r = s.textures().at(h);
-        const Edit* e = added(r.id);
-        if (const auto* t = e ? std::get_if<AddTexture>(e) : nullptr; t && same_texture(r, *t))
-            kept.textures.insert(r.id);
-    }
-    for (MaterialHandle h : old.materials) {
-        const MaterialRecord& r = s.materials().at(h);
-        const Edit* e = added(r.id);
-        if (const auto* m = e ? std::get_if<AddMaterial>(e) : nullptr;
-            m && same_material(s, r, *m, kept.textures))
-            kept.materials.insert(r.id);
-    }
-    for (MeshHandle h : old.meshes) {
-        const MeshRecord& r = s.meshes().at(h);
-        const Edit* e = added(r.id);
-        if (const auto* m = e ? std::get_if<AddMesh>(e) : nullptr;
-            m && same_mesh(s, r, *m, kept.materials))
-            kept.meshes.insert(r.id);
-    }
+    keep_same<AddTexture>(old.textures, s.textures(), adds, same_texture, kept.textures);
+    keep_same<AddMaterial>(
+        old.materials, s.materials(), adds,
+        [&](const MaterialRecord& r, const AddMaterial& e) {
+            return same_material(s, r, e, kept.textures);
+        },
+        kept.materials);
+    keep_same<AddMesh>(
+        old.meshes, s.meshes(), adds,
+        [&](const MeshRecord& r, const AddMesh& e) { return same_mesh(s, r, e, kept.materials); },
+        kept.meshes);
     return kept;
 }
 

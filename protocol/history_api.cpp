@@ -123,6 +123,95 @@ ApiResponse post_undo(Engine& engine, bool redo, std::optional<std::string_view>
                      done.version);
 }
 
+std::optional<int64_t> parse_rfc3339(std::string_view text) {
+    // YYYY-MM-DDTHH:MM:SS[.fraction](Z|+HH:MM|-HH:MM); 't' and 'z' as RFC 3339 allows.
+    const auto digits = [&](std::size_t at, std::size_t n, int& out) {
+        if (at + n > text.size()) return false;
+        out = 0;
+        for (std::size_t i = at; i < at + n; ++i) {
+            if (text[i] < '0' || text[i] > '9') return false;
+            out = out * 10 + (text[i] - '0');
+        }
+        return true;
+    };
+    int year, month, day, hour, minute, second;
+    if (!digits(0, 4, year) || text.size() < 20 || text[4] != '-' || !digits(5, 2, month) ||
+        text[7] != '-' || !digits(8, 2, day) || (text[10] != 'T' && text[10] != 't') ||
+        !digits(11, 2, hour) || text[13] != ':' || !digits(14, 2, minute) || text[16] != ':' ||
+        !digits(17, 2, second))
+        return std::nullopt;
+    if (month < 1 || month > 12 || day < 1 || day > 31 || hour > 23 || minute > 59 || second > 60)
+        return std::nullopt;
+    std::size_t at = 19;
+    int64_t millis = 0;
+    if (at < text.size() && text[at] == '.') {
+        std::size_t n = 0;
+        for (++at; at < text.size() && text[at] >= '0' && text[at] <= '9'; ++at, ++n)
+            if (n < 3) millis = millis * 10 + (text[at] - '0');
+        if (n == 0) return std::nullopt;
+        for (; n < 3; ++n) millis *= 10;
+    }
+    int64_t offset_minutes = 0;
+    if (at < text.size() && (text[at] == 'Z' || text[at] == 'z')) {
+        ++at;
+    } else if (at < text.size() && (text[at] == '+' || text[at] == '-')) {
+        int oh, om;
+        if (!digits(at + 1, 2, oh) || at + 3 >= text.size() || text[at + 3] != ':' ||
+            !digits(at + 4, 2, om) || oh > 23 || om > 59)
+            return std::nullopt;
+        offset_minutes = (text[at] == '-' ? -1 : 1) * (oh * 60 + om);
+        at += 6;
+    } else {
+        return std::nullopt;
+    }
+    if (at != text.size()) return std::nullopt;
+    std::tm utc{};
+    utc.tm_year = year - 1900;
+    utc.tm_mon = month - 1;
+    utc.tm_mday = day;
+    utc.tm_hour = hour;
+    utc.tm_min = minute;
+    utc.tm_sec = std::min(second, 59);
+    const std::time_t seconds = timegm(&utc);
+    if (utc.tm_mday != day) return std::nullopt;  // 2026-02-31 rolled over
+    return (int64_t(seconds) - offset_minutes * 60) * 1000 + millis;
+}
+
+Parsed<uint64_t> version_at_time(const Engine& engine, std::string_view text) {
+    const auto problem = [](std::string why) {
+        Problem p = make_problem(ProblemType::NotFound, "at_time: " + std::move(why));
+        p.pointer = "/at_time";
+        return Unexpected(std::move(p));
+    };
+    const std::optional<int64_t> ms = parse_rfc3339(text);
+    if (!ms) {
+        Problem p = make_problem(ProblemType::InvalidRequest,
+                                 "at_time must be an RFC 3339 time such as "
+                                 "2026-11-27T17:02:03Z or 2026-11-27T18:02:03.5+01:00");
+        p.pointer = "/at_time";
+        return Unexpected(std::move(p));
+    }
+    // The newest version made at or before the time, from the history's list (newest first).
+    uint64_t before = 0;
+    int64_t oldest_ms = 0;
+    uint64_t oldest = 0;
+    for (;;) {
+        const HistoryPage page = engine.history(MAX_PAGE, before);
+        for (const HistoryEntry& e : page.entries) {
+            if (e.info.time_ms <= *ms) return e.version;
+            oldest = e.version;
+            oldest_ms = e.info.time_ms;
+        }
+        if (page.entries.size() < MAX_PAGE) break;
+        before = page.entries.back().version;
+    }
+    if (oldest == 0)
+        return problem("the history lists no version since the scene was loaded, so none can be "
+                       "found by time (at_version works with the data directory)");
+    return problem("the oldest version the history lists, " + std::to_string(oldest) +
+                   ", was made at " + rfc3339(oldest_ms) + ", after " + std::string(text));
+}
+
 ApiResponse get_history(const Engine& engine,
                         const std::multimap<std::string, std::string>& query) {
     uint32_t limit = DEFAULT_PAGE;

@@ -145,27 +145,54 @@ Endpoint at_version(ServerContext& ctx, RouteDoc doc, EngineHandler handler) {
                         "request of a version pays that load and a full build; the last two "
                         "versions asked for stay loaded)",
          .schema = U64});
+    doc.parameters.push_back(
+        {.name = "at_time",
+         .description = "read the scene as it was at this time (RFC 3339): the newest version "
+                        "the history lists that was made at or before it, then as at_version",
+         .schema = R"({"type": "string", "format": "date-time"})"});
     doc.responses.push_back(
         problem(404, "at_version names a version that does not exist or that the data directory "
-                     "no longer holds, or the server runs without --data"));
+                     "no longer holds, or the server runs without --data; at_time is older "
+                     "than the history's oldest version"));
     return {std::move(doc), [&ctx, handler = std::move(handler)](RouteCall& call) -> Reply {
                 auto& query = call.request.query;
                 const auto it = query.find("at_version");
-                if (it == query.end()) return handler(ctx.engine, call);
-                uint64_t version = 0;
-                const std::string& text = it->second;
-                const auto [end, ec] =
-                    std::from_chars(text.data(), text.data() + text.size(), version);
-                if (query.count("at_version") > 1 || text.empty() || ec != std::errc() ||
-                    end != text.data() + text.size()) {
+                const auto time = query.find("at_time");
+                if (it == query.end() && time == query.end()) return handler(ctx.engine, call);
+                if (it != query.end() && time != query.end()) {
                     protocol::Problem p = protocol::make_problem(
                         protocol::ProblemType::InvalidRequest,
-                        "at_version must be one scene version (a whole number), not '" +
-                            text.substr(0, 40) + "'");
-                    p.pointer = "/at_version";
+                        "give at_version or at_time, not both");
+                    p.pointer = "/at_time";
                     return p;
                 }
-                query.erase("at_version");
+                uint64_t version = 0;
+                if (time != query.end()) {
+                    if (query.count("at_time") > 1) {
+                        protocol::Problem p = protocol::make_problem(
+                            protocol::ProblemType::InvalidRequest, "at_time is given twice");
+                        p.pointer = "/at_time";
+                        return p;
+                    }
+                    auto found = protocol::version_at_time(ctx.engine, time->second);
+                    if (!found) return found.error();
+                    version = found.value();
+                    query.erase("at_time");
+                } else {
+                    const std::string& text = it->second;
+                    const auto [end, ec] =
+                        std::from_chars(text.data(), text.data() + text.size(), version);
+                    if (query.count("at_version") > 1 || text.empty() || ec != std::errc() ||
+                        end != text.data() + text.size()) {
+                        protocol::Problem p = protocol::make_problem(
+                            protocol::ProblemType::InvalidRequest,
+                            "at_version must be one scene version (a whole number), not '" +
+                                text.substr(0, 40) + "'");
+                        p.pointer = "/at_version";
+                        return p;
+                    }
+                    query.erase("at_version");
+                }
                 auto engine = ctx.past->at(ctx.engine, ctx.store, version);
                 if (!engine) {
                     const Error& e = engine.error();
@@ -416,6 +443,19 @@ void add_write_routes(RouteTable& routes, ServerContext& ctx) {
                  }});
 }
 
+/// The body types POST and PUT /v1/assets read.
+std::vector<std::string> model_media() {
+    return {"model/gltf-binary",     "model/gltf+json", "model/obj", "application/ply",
+            "model/vnd.collada+xml", "model/stl",       "model/3mf", "application/x-tar",
+            "application/octet-stream"};
+}
+
+/// An import's 413.
+ResponseDoc model_too_large() {
+    return problem(413, "the model takes the scene over its budget, or its importer needs more "
+                        "than --import-memory-mb");
+}
+
 /// The `format` query parameter's schema: every importer's format, and tar.
 std::string format_enum() {
     protocol::Json names = protocol::Json::array();
@@ -447,16 +487,12 @@ void add_import_routes(RouteTable& routes, ServerContext& ctx) {
                           .description = "false: meshes and materials only",
                           .schema = R"({"type": "boolean", "default": true})"},
                          if_match()},
-          .body_media = {"model/gltf-binary", "model/gltf+json", "model/obj", "application/ply",
-                         "model/vnd.collada+xml", "model/stl", "model/3mf", "application/x-tar",
-                         "application/octet-stream"},
+          .body_media = model_media(),
           .body_required = true,
           .responses = {ok_json("AssetResult", "imported: the ids it created and the new version"),
                         problem(400, "an unknown format or a malformed query parameter"),
                         version_mismatch(),
-                        problem(413,
-                                "the model takes the scene over its budget, or its importer "
-                                "needs more than --import-memory-mb"),
+                        model_too_large(),
                         problem(422,
                                 "the file is malformed or uses what Strata does not import "
                                 "(file and element say where), or its sandboxed importer "
@@ -532,9 +568,7 @@ void add_asset_unit_routes(RouteTable& routes, ServerContext& ctx) {
                           .description = "false: meshes and materials only",
                           .schema = R"({"type": "boolean", "default": true})"},
                          if_match()},
-          .body_media = {"model/gltf-binary", "model/gltf+json", "model/obj", "application/ply",
-                         "model/vnd.collada+xml", "model/stl", "model/3mf", "application/x-tar",
-                         "application/octet-stream"},
+          .body_media = model_media(),
           .body_required = true,
           .responses = {ok_json("AssetReplaceResult", "replaced: what was made, kept and removed"),
                         {.status = 201,
@@ -543,9 +577,7 @@ void add_asset_unit_routes(RouteTable& routes, ServerContext& ctx) {
                          .headers = {"ETag"}},
                         problem(400, "an unknown format or a malformed query parameter"),
                         version_mismatch(),
-                        problem(413,
-                                "the model takes the scene over its budget, or its importer "
-                                "needs more than --import-memory-mb"),
+                        model_too_large(),
                         problem(422,
                                 "the file is malformed or unsupported, its sandboxed importer "
                                 "crashed or ran out of time, or an object outside the old "

@@ -87,8 +87,7 @@ int run_asset_reimport(Transport& t, const Console& c, const std::string& id,
     const auto doc = json_answer(c, t, "assets reimport " + id,
                                  t.put_asset(id, std::move(bytes), query), code);
     if (!doc) return code;
-    for (const Json& w : doc->value("warnings", Json::array()))
-        if (w.is_string()) c.err << "strata: warning: " << w.get<std::string>() << '\n';
+    print_warnings(c, *doc);
     if (c.json) {
         c.out << doc->dump() << '\n';
         return OK;

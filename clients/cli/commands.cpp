@@ -308,6 +308,11 @@ int pack_upload(const Console& c, const ImportArgs& args, std::string& bytes,
     return OK;
 }
 
+void print_warnings(const Console& c, const Json& answer) {
+    for (const Json& w : answer.value("warnings", Json::array()))
+        if (w.is_string()) c.err << "strata: warning: " << w.get<std::string>() << '\n';
+}
+
 int run_import(Transport& t, const Console& c, const ImportArgs& args) {
     std::string bytes;
     std::multimap<std::string, std::string> query;
@@ -316,8 +321,7 @@ int run_import(Transport& t, const Console& c, const ImportArgs& args) {
     const auto doc =
         json_answer(c, t, "import " + args.file, t.import_asset(std::move(bytes), query), code);
     if (!doc) return code;
-    for (const Json& w : doc->value("warnings", Json::array()))
-        if (w.is_string()) c.err << "strata: warning: " << w.get<std::string>() << '\n';
+    print_warnings(c, *doc);
     if (c.json) {
         c.out << doc->dump() << '\n';
         return OK;

@@ -152,6 +152,9 @@ int run_import(Transport& t, const Console& c, const ImportArgs& args);
 int pack_upload(const Console& c, const ImportArgs& args, std::string& bytes,
                 std::multimap<std::string, std::string>& query);
 
+/// Prints an import answer's warnings on stderr, one line each.
+void print_warnings(const Console& c, const Json& answer);
+
 /// `strata assets` (asset_commands.cpp): every asset, one line each (one JSON object each with
 /// --json): id, file, counts and bounds.
 int run_assets(Transport& t, const Console& c);

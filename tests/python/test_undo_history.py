@@ -8,6 +8,7 @@ stale If-Match. Each test starts its own server, so its history starts empty at 
 import datetime
 import os
 import tempfile
+import time
 import unittest
 
 from strata_client import (BadRequestError, Client, History, HistoryEntry, HistoryStack,
@@ -222,6 +223,37 @@ class PastVersionTest(unittest.TestCase):
             self.client.scene(at_version=9)
         with self.assertRaises(ValueError):
             self.client.scene(at_version=-1)
+
+    def test_the_scene_and_a_frame_as_they_were_at_a_time(self):
+        self.client.edit(BALL)
+        frame = self.client.render(48, 32, spp=1)
+        time.sleep(0.05)
+        then = datetime.datetime.now(datetime.timezone.utc)
+        time.sleep(0.05)
+        self.client.edit(MOVE)
+        self.assertEqual(self.client.scene(at_version=then)["version"], 1)
+        self.assertEqual(self.client.render(48, 32, spp=1, at_version=then), frame)
+        self.assertEqual(self.client.last_render.version, 1)
+        self.assertEqual(self.client.scene(at_version=datetime.datetime.now(
+            datetime.timezone.utc))["version"], 2)
+        with self.assertRaises(NotFoundError) as caught:
+            self.client.scene(at_version=then - datetime.timedelta(hours=1))
+        self.assertIn("oldest version the history lists, 1", caught.exception.detail)
+        with self.assertRaises(ValueError):
+            self.client.scene(at_version=datetime.datetime.now())  # no time zone
+        status = self.server_call("/v1/scene?at_time=yesterday")
+        self.assertEqual(status, 400)
+        status = self.server_call("/v1/scene?at_time=2026-01-01T00:00:00Z&at_version=1")
+        self.assertEqual(status, 400)
+
+    def server_call(self, target):
+        import urllib.error
+        import urllib.request
+        try:
+            with urllib.request.urlopen(self.server.url + target) as r:
+                return r.status
+        except urllib.error.HTTPError as e:
+            return e.code
 
     def test_assets_at_a_past_version(self):
         with tempfile.TemporaryDirectory() as d:

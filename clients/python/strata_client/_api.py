@@ -4,6 +4,7 @@ Client (blocking, http.client) and AsyncClient (asyncio) send the same Call obje
 speak the protocol the same way and give the same typed results.
 """
 
+import datetime
 import json
 import os
 import re
@@ -271,12 +272,18 @@ def _render_info(response: Response) -> RenderInfo:
                       response.headers.get("x-strata-split"))
 
 
-def _at_version(path: str, at_version: Optional[int]) -> str:
-    """`path` asking for the scene as it was at `at_version` (None: the live scene)."""
+def _at_version(path: str, at_version: "Union[int, datetime.datetime, None]") -> str:
+    """`path` asking for the scene as it was at `at_version`: a version, or a time-zone aware
+    datetime (at_time: the newest version made at or before it); None: the live scene."""
     if at_version is None:
         return path
+    if isinstance(at_version, datetime.datetime):
+        if at_version.tzinfo is None:
+            raise ValueError("at_version as a time needs a time zone (datetime.timezone.utc)")
+        stamp = at_version.astimezone(datetime.timezone.utc).isoformat(timespec="milliseconds")
+        return f"{path}?at_time={urllib.parse.quote(stamp.replace('+00:00', 'Z'))}"
     if isinstance(at_version, bool) or not isinstance(at_version, int) or at_version < 0:
-        raise ValueError("at_version is a scene version: a whole number >= 0")
+        raise ValueError("at_version is a scene version (a whole number >= 0) or a datetime")
     return f"{path}?at_version={at_version}"
 
 

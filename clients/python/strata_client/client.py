@@ -252,7 +252,8 @@ class Client:
         Every other request member passes through `opts`: spp, aovs, compression, accumulate,
         exposure, filter ("none" or "atrous"), split, camera={"eye": [...], "target": [...],
         "up": [...], "fov_y_deg": ...}, frame={"group": id} or {"instance": id} (aims the
-        camera at it). `at_version=N` renders the scene as it was at version N
+        camera at it). `at_version=N` renders the scene as it was at version N (a time-zone
+        aware datetime: as it was at that time, the newest version made by then)
         (from the server's data directory; NotFoundError when it holds no such version). Also
         sets `last_render`.
         """
