@@ -511,6 +511,11 @@ void write_result_schemas(J& out) {
                 {"warnings", array_of(string())},
                 {"model", described(string(), "an archive's model: its path inside")}},
                {"model"});
+}
+
+/// GET, DELETE and PUT /v1/assets (assets_api.cpp), after AssetResult.
+void asset_unit_schemas(J& out) {
+    const J ids = array_of(ref("id"));
     J replace = out["AssetResult"];
     replace["properties"]["replaced"] =
         described(boolean(), "true: an asset had the id (200); false: a first import (201)");
@@ -649,6 +654,7 @@ J build_components() {
     out["RenderRequest"] = render_request_schema();
     pick_schemas(out);
     write_result_schemas(out);
+    asset_unit_schemas(out);
     misc_schemas(out);
     scene_directory_schemas(out);
     rewrite_refs(out);

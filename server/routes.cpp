@@ -506,7 +506,7 @@ void add_import_routes(RouteTable& routes, ServerContext& ctx) {
          }});
 }
 
-void add_asset_unit_routes(RouteTable& routes, ServerContext& ctx) {
+void add_asset_read_routes(RouteTable& routes, ServerContext& ctx) {
     const char* owns = "An asset is a group with `asset` set (what POST /v1/assets makes) and every "
                        "object whose id begins with its id and a '.'.";
     routes.get("/v1/assets",
@@ -528,6 +528,9 @@ void add_asset_unit_routes(RouteTable& routes, ServerContext& ctx) {
                               [](Engine& engine, RouteCall& call) {
                                   return protocol::get_asset(engine, call.params[0]);
                               }));
+}
+
+void add_asset_write_routes(RouteTable& routes, ServerContext& ctx) {
     routes.add(
         "DELETE", "/v1/assets/{id}",
         {{.summary = "Delete an asset: everything it owns, in one batch",
@@ -867,7 +870,8 @@ void describe_health_routes(RouteTable& routes) {
 void add_api_routes(RouteTable& routes, ServerContext& ctx) {
     add_write_routes(routes, ctx);
     add_import_routes(routes, ctx);
-    add_asset_unit_routes(routes, ctx);
+    add_asset_read_routes(routes, ctx);
+    add_asset_write_routes(routes, ctx);
     add_snapshot_routes(routes, ctx);
     add_render_routes(routes, ctx);
     add_pick_routes(routes, ctx);

@@ -27,6 +27,22 @@
 
 namespace strata::assets {
 
+/// Whether the child installs its seccomp filter and meets its memory limit as bad_alloc: not
+/// in builds with a sanitizer, whose runtimes make system calls of their own and report
+/// allocation failures themselves.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+inline constexpr bool SANDBOX_FILTERS = false;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || \
+    __has_feature(memory_sanitizer)
+inline constexpr bool SANDBOX_FILTERS = false;
+#else
+inline constexpr bool SANDBOX_FILTERS = true;
+#endif
+#else
+inline constexpr bool SANDBOX_FILTERS = true;
+#endif
+
 /// What the child may use.
 struct SandboxLimits {
     bool enabled = true;             ///< false: run the importer in the calling process
