@@ -1,6 +1,7 @@
 #include "protocol/assets/gltf_import.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <exception>
@@ -104,9 +105,22 @@ JsonShape json_shape(std::string_view text, uint32_t depth_limit) {
 /// Draco-compressed primitives (draco_decode.h).
 constexpr const char* DRACO = "KHR_draco_mesh_compression";
 
+/// Texture transforms (offset, rotation, scale), read for base-colour textures and baked into
+/// the texture coordinates of the meshes that use the material.
+constexpr const char* TEXTURE_TRANSFORM = "KHR_texture_transform";
+
 /// The extensions this importer reads: a file may require them, and they are not warned about.
 bool is_read_extension(std::string_view name) {
-    return name == DRACO;
+    return name == DRACO || name == TEXTURE_TRANSFORM;
+}
+
+/// A 2x3 affine map of texture coordinates, row-major: u' = m[0] u + m[1] v + m[2], v' = ...
+using UvTransform = std::array<float, 6>;
+
+/// KHR_texture_transform's matrix, T * R * S as its specification writes it.
+UvTransform uv_transform(double ox, double oy, double rotation, double sx, double sy) {
+    const double c = std::cos(rotation), s = std::sin(rotation);
+    return {float(c * sx), float(s * sy), float(ox), float(-s * sx), float(c * sy), float(oy)};
 }
 
 /// The JSON chunk of a .glb, for json_shape (the container is checked again by tinygltf).
@@ -277,6 +291,7 @@ public:
         warn_unread_features();
         if (auto ok = read_materials(); !ok) return Unexpected(ok.error());
         if (auto ok = read_nodes(); !ok) return Unexpected(ok.error());
+        bake_texture_transforms();
         if (auto ok = check_budget(m_asset, m_limits, m_sink); !ok) return Unexpected(ok.error());
         if (auto ok = validate_asset(m_asset, m_sink); !ok) return Unexpected(ok.error());
         if (m_unlisted_warnings > 0)
@@ -367,14 +382,65 @@ private:
                 if (!t) return Unexpected(t.error());
                 m.base_color_texture = t.value();
                 m.material.base_color_sampler = read_sampler(texture);
-                if (pbr.baseColorTexture.texCoord != 0)
+                int tex_coord = pbr.baseColorTexture.texCoord;
+                auto transform = read_texture_transform(pbr.baseColorTexture.extensions,
+                                                        where + ".baseColorTexture", tex_coord);
+                if (!transform) return Unexpected(transform.error());
+                m_uv_transforms.resize(m_asset.materials.size() + 1);
+                m_uv_transforms.back() = transform.value();
+                if (tex_coord != 0)
                     warn_once(where + ".baseColorTexture uses TEXCOORD_" +
-                              std::to_string(pbr.baseColorTexture.texCoord) +
+                              std::to_string(tex_coord) +
                               "; only TEXCOORD_0 is imported, so it is read with those");
             }
             m_asset.materials.push_back(std::move(m));
         }
         return {};
+    }
+
+    /// A texture's KHR_texture_transform, if it has one: offset, rotation and scale (their
+    /// defaults when absent); its texCoord replaces `tex_coord`.
+    Imported<std::optional<UvTransform>> read_texture_transform(
+        const tinygltf::ExtensionMap& extensions, const std::string& where, int& tex_coord) {
+        const auto it = extensions.find(TEXTURE_TRANSFORM);
+        if (it == extensions.end()) return std::optional<UvTransform>();
+        const tinygltf::Value& t = it->second;
+        const std::string at = where + ".extensions." + TEXTURE_TRANSFORM;
+        if (!t.IsObject()) return m_sink.invalid(at, "is not an object");
+        const auto number = [&](const tinygltf::Value& v, double& out) {
+            if (!v.IsNumber()) return false;
+            out = v.GetNumberAsDouble();
+            return std::isfinite(out) && std::abs(out) < 1e6;
+        };
+        const auto pair = [&](const char* key, double& a, double& b) {
+            if (!t.Has(key)) return true;
+            const tinygltf::Value& v = t.Get(key);
+            return v.IsArray() && v.ArrayLen() == 2 && number(v.Get(0), a) && number(v.Get(1), b);
+        };
+        double ox = 0, oy = 0, sx = 1, sy = 1, rotation = 0;
+        if (!pair("offset", ox, oy) || !pair("scale", sx, sy) ||
+            (t.Has("rotation") && !number(t.Get("rotation"), rotation)))
+            return m_sink.invalid(at, "offset and scale must be two finite numbers each, and "
+                                      "rotation a finite number");
+        if (t.Has("texCoord")) {
+            if (!t.Get("texCoord").IsInt() || t.Get("texCoord").GetNumberAsInt() < 0)
+                return m_sink.invalid(at, "texCoord must be a whole number >= 0");
+            tex_coord = t.Get("texCoord").GetNumberAsInt();
+        }
+        return std::optional(uv_transform(ox, oy, rotation, sx, sy));
+    }
+
+    /// Each mesh's texture coordinates through its material's base-colour texture transform:
+    /// the only texture the renderer reads through them, so the result is what the file shows.
+    void bake_texture_transforms() {
+        for (AssetMesh& mesh : m_asset.meshes) {
+            if (mesh.material < 0 || std::size_t(mesh.material) >= m_uv_transforms.size()) continue;
+            const std::optional<UvTransform>& m = m_uv_transforms[std::size_t(mesh.material)];
+            if (!m) continue;
+            for (glm::vec2& uv : mesh.uvs)
+                uv = {(*m)[0] * uv.x + (*m)[1] * uv.y + (*m)[2],
+                      (*m)[3] * uv.x + (*m)[4] * uv.y + (*m)[5]};
+        }
     }
 
     /// textures[i]'s sampler (i is a valid index) as the engine's: one wrap mode for both axes
@@ -814,8 +880,9 @@ private:
         for (const auto& [name, value] : gm.extensions)
             warn_once(where + ".extensions." + name + " not imported");
         for (const auto& [name, value] : gm.pbrMetallicRoughness.baseColorTexture.extensions)
-            warn_once(where + ".pbrMetallicRoughness.baseColorTexture.extensions." + name +
-                      " not imported");
+            if (name != TEXTURE_TRANSFORM)
+                warn_once(where + ".pbrMetallicRoughness.baseColorTexture.extensions." + name +
+                          " not imported");
     }
 
     /// Adds a warning unless it was given already; past MAX_WARNINGS they are only counted (a
@@ -835,6 +902,8 @@ private:
     const ErrorSink& m_sink;
     const ImportLimits& m_limits;
     Asset m_asset;
+    /// Per material: its base-colour texture's transform, if any (bake_texture_transforms).
+    std::vector<std::optional<UvTransform>> m_uv_transforms;
     std::map<int, std::vector<int>> m_meshes;  ///< glTF mesh -> asset meshes
     std::map<int, int> m_images;               ///< glTF image -> asset texture
     std::map<int, int> m_views;                ///< buffer view holding an image -> asset texture

@@ -100,6 +100,52 @@ TEST(GltfImport, RequiredExtensionsAreRefusedByNameBeforeTheFileIsRead) {
     EXPECT_TRUE(import_text(AssetFormat::Gltf, doc.dump()).has_value());
 }
 
+TEST(GltfImport, ATextureTransformIsBakedIntoTheTextureCoordinates) {
+    // The triangle with uvs (0,0) (1,0) (0,1) and a material whose base-colour texture is
+    // offset by (0.5, 0.25), turned a quarter turn and scaled by 2: T * R * S of the extension.
+    auto doc = nlohmann::json::parse(triangle_gltf(R"([{"mesh": 0}])", R"(, "material": 0)"));
+    doc["extensionsUsed"] = {"KHR_texture_transform"};
+    doc["extensionsRequired"] = {"KHR_texture_transform"};
+    const float uvs[] = {0, 0, 1, 0, 0, 1};
+    std::string bytes(reinterpret_cast<const char*>(uvs), sizeof uvs);
+    const uint8_t rgb[] = {200, 100, 50};
+    const std::string png = protocol::encode_base64(encode_png(rgb, 1, 1, 3).value());
+    doc["buffers"].push_back({{"byteLength", bytes.size()},
+                              {"uri", "data:application/octet-stream;base64," +
+                                          protocol::encode_base64(bytes)}});
+    doc["bufferViews"].push_back({{"buffer", 1}, {"byteLength", bytes.size()}});
+    doc["accessors"].push_back(
+        {{"bufferView", 2}, {"componentType", 5126}, {"count", 3}, {"type", "VEC2"}});
+    doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = 2;
+    doc["images"] = {{{"uri", "data:image/png;base64," + png}}};
+    doc["textures"] = {{{"source", 0}}};
+    doc["materials"] = {
+        {{"pbrMetallicRoughness",
+          {{"baseColorTexture",
+            {{"index", 0},
+             {"extensions",
+              {{"KHR_texture_transform",
+                {{"offset", {0.5, 0.25}}, {"rotation", 1.5707963267948966}, {"scale", {2, 2}}}}}}}}}}}};
+    auto a = import_text(AssetFormat::Gltf, doc.dump());
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
+    const std::vector<glm::vec2>& got = a.value().meshes.at(0).uvs;
+    ASSERT_EQ(got.size(), 3u);
+    // u' = cos*2u + sin*2v + 0.5, v' = -sin*2u + cos*2v + 0.25
+    const glm::vec2 expected[] = {{0.5f, 0.25f}, {0.5f, -1.75f}, {2.5f, 0.25f}};
+    for (int i = 0; i < 3; ++i) {
+        EXPECT_NEAR(got[i].x, expected[i].x, 1e-5f) << i;
+        EXPECT_NEAR(got[i].y, expected[i].y, 1e-5f) << i;
+    }
+    for (const std::string& w : a.value().warnings)
+        EXPECT_EQ(w.find("KHR_texture_transform"), std::string::npos) << w;
+    // A transform that is not numbers is refused, naming it.
+    doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["extensions"]
+       ["KHR_texture_transform"]["scale"] = {"big", 2};
+    auto bad = import_text(AssetFormat::Gltf, doc.dump());
+    ASSERT_FALSE(bad.has_value());
+    EXPECT_THAT(bad.error().element.value_or(""), HasSubstr("KHR_texture_transform"));
+}
+
 TEST(GltfImport, ThousandsOfUnreadFeaturesGiveABoundedListOfWarnings) {
     auto doc = nlohmann::json::parse(triangle_gltf(R"([{"mesh": 0}])"));
     for (int i = 0; i < 200; ++i) doc["materials"].push_back({{"alphaMode", "BLEND"}});

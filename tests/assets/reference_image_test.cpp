@@ -93,6 +93,23 @@ TEST(AssetReferenceImage, TheDracoCompressedEngineMatchesTheUncompressedOnesFram
     check_reference(import_asset(AssetFormat::Gltf, bytes_of(gltf), "engine", {}, side), "engine");
 }
 
+TEST(AssetReferenceImage, TextureTransformsShowTheCorrectTextures) {
+    // KHR_texture_transform's test model: each plane is right when it shows the arrow pattern,
+    // and its "not supported" fallback would show otherwise.
+    const std::string dir = std::string(STRATA_ASSIMP_MODELS_DIR) + "/glTF2/textureTransform/";
+    const std::string gltf = read_file(dir + "TextureTransformTest.gltf");
+    SideFiles side;
+    for (const char* f : {"TextureTransformTest.bin", "Arrow.png", "UV.png", "Correct.png",
+                          "NotSupported.png", "Error.png"})
+        side[f] = read_file(dir + f);
+    ASSERT_FALSE(gltf.empty()) << dir << " missing";
+    auto asset = import_asset(AssetFormat::Gltf, bytes_of(gltf), "transform", {}, side);
+    ASSERT_TRUE(asset.has_value()) << asset.error().detail;
+    for (const std::string& w : asset.value().warnings)
+        EXPECT_EQ(w.find("KHR_texture_transform"), std::string::npos) << w;
+    check_reference(std::move(asset), "texture_transform");
+}
+
 TEST(AssetReferenceImage, BoxTexturedShowsItsEmbeddedTexture) {
     const auto textures = check_reference(
         std::string(STRATA_ASSIMP_MODELS_DIR) + "/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb",
