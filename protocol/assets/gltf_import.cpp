@@ -109,9 +109,12 @@ constexpr const char* DRACO = "KHR_draco_mesh_compression";
 /// the texture coordinates of the meshes that use the material.
 constexpr const char* TEXTURE_TRANSFORM = "KHR_texture_transform";
 
+/// A material's emissive factor multiplier (emissiveFactor stays within [0, 1]).
+constexpr const char* EMISSIVE_STRENGTH = "KHR_materials_emissive_strength";
+
 /// The extensions this importer reads: a file may require them, and they are not warned about.
 bool is_read_extension(std::string_view name) {
-    return name == DRACO || name == TEXTURE_TRANSFORM;
+    return name == DRACO || name == TEXTURE_TRANSFORM || name == EMISSIVE_STRENGTH;
 }
 
 /// A 2x3 affine map of texture coordinates, row-major: u' = m[0] u + m[1] v + m[2], v' = ...
@@ -372,9 +375,13 @@ private:
             m.material.roughness = unit(pbr.roughnessFactor);
             // An emissive factor is kept only without its texture: alone, the factor would make
             // the whole surface glow where the texture lights only parts of it.
-            if (gm.emissiveFactor.size() >= 3 && gm.emissiveTexture.index < 0)
-                m.material.emission = {unit(gm.emissiveFactor[0]), unit(gm.emissiveFactor[1]),
-                                       unit(gm.emissiveFactor[2])};
+            if (gm.emissiveFactor.size() >= 3 && gm.emissiveTexture.index < 0) {
+                auto strength = read_emissive_strength(gm, where);
+                if (!strength) return Unexpected(strength.error());
+                m.material.emission = strength.value() * Vec3(unit(gm.emissiveFactor[0]),
+                                                              unit(gm.emissiveFactor[1]),
+                                                              unit(gm.emissiveFactor[2]));
+            }
             warn_unread_material(gm, where);
             const int texture = pbr.baseColorTexture.index;
             if (texture >= 0) {
@@ -396,6 +403,18 @@ private:
             m_asset.materials.push_back(std::move(m));
         }
         return {};
+    }
+
+    /// KHR_materials_emissive_strength's emissiveStrength (1 without it): a finite number >= 0.
+    Imported<float> read_emissive_strength(const tinygltf::Material& gm, const std::string& where) {
+        const auto it = gm.extensions.find(EMISSIVE_STRENGTH);
+        if (it == gm.extensions.end() || !it->second.Has("emissiveStrength")) return 1.0f;
+        const tinygltf::Value& v = it->second.Get("emissiveStrength");
+        const double strength = v.IsNumber() ? v.GetNumberAsDouble() : -1.0;
+        if (!std::isfinite(strength) || strength < 0.0 || strength > 1e6)
+            return m_sink.invalid(where + ".extensions." + EMISSIVE_STRENGTH,
+                                  "emissiveStrength must be a number from 0 to 1e6");
+        return float(strength);
     }
 
     /// A texture's KHR_texture_transform, if it has one: offset, rotation and scale (their
@@ -878,7 +897,8 @@ private:
             warn_once(where + ".alphaMode " + gm.alphaMode +
                       " not imported: the surface is opaque");
         for (const auto& [name, value] : gm.extensions)
-            warn_once(where + ".extensions." + name + " not imported");
+            if (name != EMISSIVE_STRENGTH)
+                warn_once(where + ".extensions." + name + " not imported");
         for (const auto& [name, value] : gm.pbrMetallicRoughness.baseColorTexture.extensions)
             if (name != TEXTURE_TRANSFORM)
                 warn_once(where + ".pbrMetallicRoughness.baseColorTexture.extensions." + name +

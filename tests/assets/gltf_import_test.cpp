@@ -146,6 +146,22 @@ TEST(GltfImport, ATextureTransformIsBakedIntoTheTextureCoordinates) {
     EXPECT_THAT(bad.error().element.value_or(""), HasSubstr("KHR_texture_transform"));
 }
 
+TEST(GltfImport, AnEmissiveStrengthMultipliesTheEmissiveFactor) {
+    auto doc = nlohmann::json::parse(triangle_gltf(R"([{"mesh": 0}])", R"(, "material": 0)"));
+    doc["extensionsUsed"] = {"KHR_materials_emissive_strength"};
+    doc["materials"] = {{{"emissiveFactor", {1.0, 0.5, 0.0}},
+                         {"extensions", {{"KHR_materials_emissive_strength",
+                                          {{"emissiveStrength", 4.0}}}}}}};
+    auto a = import_text(AssetFormat::Gltf, doc.dump());
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
+    EXPECT_EQ(a.value().materials.at(0).material.emission, Vec3(4.0f, 2.0f, 0.0f));
+    EXPECT_TRUE(a.value().warnings.empty()) << a.value().warnings.front();
+    doc["materials"][0]["extensions"]["KHR_materials_emissive_strength"]["emissiveStrength"] = -1;
+    auto bad = import_text(AssetFormat::Gltf, doc.dump());
+    ASSERT_FALSE(bad.has_value());
+    EXPECT_THAT(bad.error().detail, HasSubstr("emissiveStrength"));
+}
+
 TEST(GltfImport, ThousandsOfUnreadFeaturesGiveABoundedListOfWarnings) {
     auto doc = nlohmann::json::parse(triangle_gltf(R"([{"mesh": 0}])"));
     for (int i = 0; i < 200; ++i) doc["materials"].push_back({{"alphaMode", "BLEND"}});
