@@ -235,8 +235,9 @@ int run_stats(Transport& t, const Console& c) {
 }
 
 int run_snapshot_save(Transport& t, const Console& c, const std::string& file,
-                      std::optional<uint64_t> at_version) {
-    const Reply reply = t.get_snapshot(at_version);
+                      std::optional<uint64_t> at_version,
+                      const std::optional<std::string>& at_time) {
+    const Reply reply = t.get_snapshot(at_version, at_time);
     if (!reply.ok()) return refused(c, t, "snapshot save", reply);
     if (file == "-") {
         c.out.write(reply.body.data(), std::streamsize(reply.body.size()));

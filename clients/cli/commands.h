@@ -133,9 +133,10 @@ struct PickArgs {
 int run_pick(Transport& t, const Console& c, const PickArgs& args);
 /// `strata snapshot save FILE`: the server's scene into a snapshot file (- for stdout); the file
 /// is written whole or not at all (a temporary file renamed).
-/// `at_version`: the scene as it was at that version.
+/// `at_version`, or `at_time` (RFC 3339): the scene as it was then.
 int run_snapshot_save(Transport& t, const Console& c, const std::string& file,
-                      std::optional<uint64_t> at_version = std::nullopt);
+                      std::optional<uint64_t> at_version = std::nullopt,
+                      const std::optional<std::string>& at_time = std::nullopt);
 /// What `strata import` sends.
 struct ImportArgs {
     std::string file;

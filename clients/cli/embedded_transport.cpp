@@ -116,11 +116,13 @@ Reply EmbeddedTransport::pick(const std::string& body) {
     return to_reply(protocol::post_pick(*m_engine, body, LIMITS));
 }
 
-Reply EmbeddedTransport::get_snapshot(std::optional<uint64_t> at_version) {
-    if (at_version && *at_version != m_engine->version())
+Reply EmbeddedTransport::get_snapshot(std::optional<uint64_t> at_version,
+                                      const std::optional<std::string>& at_time) {
+    if ((at_version && *at_version != m_engine->version()) || at_time)
         return to_reply(protocol::problem_response(protocol::make_problem(
             protocol::ProblemType::NotFound,
-            "at_version: the embedded engine keeps no data directory, only its current version " +
+            "at_version, at_time: the embedded engine keeps no data directory, only its current "
+            "version " +
                 std::to_string(m_engine->version()))));
     return to_reply(protocol::get_snapshot(*m_engine));
 }

@@ -199,9 +199,11 @@ Reply HttpTransport::pick(const std::string& body) {
     return post("/v1/pick", body, "");
 }
 
-Reply HttpTransport::get_snapshot(std::optional<uint64_t> at_version) {
+Reply HttpTransport::get_snapshot(std::optional<uint64_t> at_version,
+                                  const std::optional<std::string>& at_time) {
     if (at_version)
         return get(("/v1/scene/snapshot?at_version=" + std::to_string(*at_version)).c_str());
+    if (at_time) return get(("/v1/scene/snapshot?at_time=" + percent_encode(*at_time)).c_str());
     return get("/v1/scene/snapshot");
 }
 

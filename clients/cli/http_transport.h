@@ -44,7 +44,8 @@ public:
                      const std::multimap<std::string, std::string>& query) override;
     Reply scene_object(const std::string& collection, const std::string& id) override;
     Reply pick(const std::string& body) override;
-    Reply get_snapshot(std::optional<uint64_t> at_version) override;
+    Reply get_snapshot(std::optional<uint64_t> at_version,
+                       const std::optional<std::string>& at_time) override;
     Reply put_snapshot(std::string bytes) override;
     Reply import_asset(std::string bytes,
                        const std::multimap<std::string, std::string>& query) override;

@@ -295,15 +295,20 @@ void add_snapshot(CLI::App& app, Actions& actions) {
     CLI::App* save = cmd->add_subcommand(
         "save", "Save the whole scene (GET /v1/scene/snapshot) to FILE (- for stdout)");
     save->add_option("file", *file, "Snapshot file to write")->required();
-    save->add_option("--version,--at-version", *version,
-                     "The scene as it was at this version (the server's data directory must "
-                     "still hold it)");
+    auto time = std::make_shared<std::optional<std::string>>();
+    auto version_option = save->add_option("--version,--at-version", *version,
+                                           "The scene as it was at this version (the server's "
+                                           "data directory must still hold it)");
+    save->add_option("--at-time", *time,
+                     "The scene as it was at this time (RFC 3339, e.g. 2026-11-28T04:00:00Z): "
+                     "the newest version made by then")
+        ->excludes(version_option);
     CLI::App* load = cmd->add_subcommand(
         "load", "Replace the server's scene with FILE's (POST /v1/scene/snapshot; - for stdin)");
     load->add_option("file", *file, "Snapshot file to read")->required();
     actions.emplace_back(
-        save, [file, version](Transport& t, const Console& c) {
-            return run_snapshot_save(t, c, *file, *version);
+        save, [file, version, time](Transport& t, const Console& c) {
+            return run_snapshot_save(t, c, *file, *version, *time);
         });
     actions.emplace_back(
         load, [file](Transport& t, const Console& c) { return run_snapshot_load(t, c, *file); });

@@ -69,8 +69,10 @@ public:
     /// POST /v1/pick with a JSON request body.
     virtual Reply pick(const std::string& body) = 0;
     /// GET /v1/scene/snapshot: the scene as a snapshot file.
-    /// `at_version`: the scene as it was at that version (from the server's data directory).
-    virtual Reply get_snapshot(std::optional<uint64_t> at_version) = 0;
+    /// `at_version`, or `at_time` (RFC 3339): the scene as it was then (from the server's data
+    /// directory).
+    virtual Reply get_snapshot(std::optional<uint64_t> at_version,
+                               const std::optional<std::string>& at_time) = 0;
     /// POST /v1/scene/snapshot: replaces the scene with a snapshot file's.
     virtual Reply put_snapshot(std::string bytes) = 0;
     /// POST /v1/assets: imports a model file's bytes; `query` holds name, format, prefix,

@@ -243,7 +243,13 @@ AssetMaterial convert_material(const aiMaterial& m, unsigned index, TextureTable
             warnings.push_back(what + ": its emissive texture is not imported, nor its emissive "
                                       "colour (alone it would make the whole surface glow)");
         } else {
-            out.material.emission = {std::max(e.r, 0.0f), std::max(e.g, 0.0f), std::max(e.b, 0.0f)};
+            float intensity = 1.0f;  // glTF's KHR_materials_emissive_strength, FBX's factor
+            if (m.Get(AI_MATKEY_EMISSIVE_INTENSITY, intensity) != AI_SUCCESS ||
+                !std::isfinite(intensity) || intensity < 0.0f)
+                intensity = 1.0f;
+            intensity = std::min(intensity, 1e6f);
+            out.material.emission = intensity * Vec3(std::max(e.r, 0.0f), std::max(e.g, 0.0f),
+                                                     std::max(e.b, 0.0f));
         }
     }
     aiString path;

@@ -74,7 +74,7 @@ public:
             hits.push_back(pick_hit);
         return json(200, {{"version", version}, {"hits", hits}});
     }
-    Reply get_snapshot(std::optional<uint64_t>) override { return {200, "", "application/vnd.strata.snapshot", "SNAP", {}}; }
+    Reply get_snapshot(std::optional<uint64_t>, const std::optional<std::string>&) override { return {200, "", "application/vnd.strata.snapshot", "SNAP", {}}; }
     Reply put_snapshot(std::string bytes) override {
         snapshot_posted = std::move(bytes);
         return json(200, {{"version", ++version}, {"applied", 1}});

@@ -111,7 +111,9 @@ TEST_F(ScriptRunner, ARenderAnswerWithoutItsReportIsARequestFailure) {
         }
         Reply scene_object(const std::string&, const std::string&) override { return {}; }
         Reply pick(const std::string&) override { return {}; }
-        Reply get_snapshot(std::optional<uint64_t>) override { return {}; }
+        Reply get_snapshot(std::optional<uint64_t>, const std::optional<std::string>&) override {
+            return {};
+        }
         Reply put_snapshot(std::string) override { return {}; }
         Reply import_asset(std::string, const std::multimap<std::string, std::string>&) override {
             return {};

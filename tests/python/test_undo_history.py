@@ -7,6 +7,7 @@ stale If-Match. Each test starts its own server, so its history starts empty at 
 
 import datetime
 import os
+import subprocess
 import tempfile
 import time
 import unittest
@@ -241,6 +242,17 @@ class PastVersionTest(unittest.TestCase):
         self.assertIn("oldest version the history lists, 1", caught.exception.detail)
         with self.assertRaises(ValueError):
             self.client.scene(at_version=datetime.datetime.now())  # no time zone
+        cli = os.environ.get("STRATA_CLI_BINARY")
+        if cli:
+            with tempfile.TemporaryDirectory() as d:
+                past, live = os.path.join(d, "past.strata"), os.path.join(d, "v1.strata")
+                stamp = then.isoformat(timespec="milliseconds").replace("+00:00", "Z")
+                for args, path in ((["--at-time", stamp], past), (["--version", "1"], live)):
+                    done = subprocess.run([cli, "--server", self.server.url, "snapshot", "save",
+                                           *args, path], capture_output=True, text=True)
+                    self.assertEqual(done.returncode, 0, done.stderr)
+                with open(past, "rb") as a, open(live, "rb") as b:
+                    self.assertEqual(a.read(), b.read())
         status = self.server_call("/v1/scene?at_time=yesterday")
         self.assertEqual(status, 400)
         status = self.server_call("/v1/scene?at_time=2026-01-01T00:00:00Z&at_version=1")
