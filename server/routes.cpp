@@ -456,19 +456,31 @@ ResponseDoc model_too_large() {
                         "than --import-memory-mb");
 }
 
-/// The `format` query parameter's schema: every importer's format, and tar.
-std::string format_enum() {
-    protocol::Json names = protocol::Json::array();
+/// The query of POST /v1/assets (`prefix` too) or PUT /v1/assets/{id}, and If-Match.
+std::vector<ParamDoc> import_parameters(const char* name_doc, const char* parent_doc,
+                                        bool prefix) {
+    protocol::Json formats = protocol::Json::array();
     for (int f = 0; f <= int(assets::LAST_ASSET_FORMAT); ++f)
-        names.push_back(assets::format_name(assets::AssetFormat(f)));
-    names.push_back("tar");
-    return protocol::Json{{"enum", names}}.dump();
+        formats.push_back(assets::format_name(assets::AssetFormat(f)));
+    formats.push_back("tar");
+    std::vector<ParamDoc> out = {
+        {.name = "format",
+         .description = "the file's format; tar: an archive of one model and the files it names",
+         .schema = protocol::Json{{"enum", formats}}.dump()},
+        {.name = "name", .description = name_doc}};
+    if (prefix)
+        out.push_back({.name = "prefix",
+                       .description = "every id created starts with it (default: name's stem)"});
+    out.push_back({.name = "parent", .description = parent_doc});
+    out.push_back({.name = "instance",
+                   .description = "false: meshes and materials only (the asset's group stays "
+                                  "empty)",
+                   .schema = R"({"type": "boolean", "default": true})"});
+    out.push_back(if_match());
+    return out;
 }
 
 void add_import_routes(RouteTable& routes, ServerContext& ctx) {
-    const auto text = [](const char* name, const char* doc) -> ParamDoc {
-        return {.name = name, .description = doc};
-    };
     routes.post(
         "/v1/assets",
         {{.summary = "Import a model file (glTF, OBJ, PLY, or a tar archive with its side files)",
@@ -476,17 +488,9 @@ void add_import_routes(RouteTable& routes, ServerContext& ctx) {
                          "format comes from ?format=, else the Content-Type, else ?name='s "
                          "extension.",
           .tag = "edits",
-          .parameters = {{.name = "format",
-                          .description = "the file's format; tar: an archive of one model and "
-                                         "the files it names",
-                          .schema = format_enum()},
-                         text("name", "the file's name: for problems and the default prefix"),
-                         text("prefix", "every id created starts with it (default: name's stem)"),
-                         text("parent", "the group the asset's group joins (default: the root)"),
-                         {.name = "instance",
-                          .description = "false: meshes and materials only",
-                          .schema = R"({"type": "boolean", "default": true})"},
-                         if_match()},
+          .parameters = import_parameters(
+              "the file's name: for problems, the asset's `file` and the default prefix",
+              "the group the asset's group joins (default: the root)", true),
           .body_media = model_media(),
           .body_required = true,
           .responses = {ok_json("AssetResult", "imported: the ids it created and the new version"),
@@ -550,9 +554,6 @@ void add_asset_write_routes(RouteTable& routes, ServerContext& ctx) {
                                            call.request.header_value("If-Match"),
                                            ctx.batch_apply());
          }});
-    const auto text = [](const char* name, const char* doc) -> ParamDoc {
-        return {.name = name, .description = doc};
-    };
     routes.add(
         "PUT", "/v1/assets/{id}",
         {{.summary = "Re-import an asset in place (or import it under this id)",
@@ -561,16 +562,9 @@ void add_asset_write_routes(RouteTable& routes, ServerContext& ctx) {
                          "transform, visibility, name and parent; textures, materials and "
                          "meshes whose content did not change are kept (no BLAS work).",
           .tag = "edits",
-          .parameters = {{.name = "format",
-                          .description = "as for POST /v1/assets",
-                          .schema = format_enum()},
-                         text("name", "the file's name: for problems, and the asset's `file`"),
-                         text("parent", "the group the asset's group joins (default: where "
-                                        "it was, else the root)"),
-                         {.name = "instance",
-                          .description = "false: meshes and materials only",
-                          .schema = R"({"type": "boolean", "default": true})"},
-                         if_match()},
+          .parameters = import_parameters(
+              "the file's name: for problems and the asset's `file`",
+              "the group the asset's group joins (default: where it was, else the root)", false),
           .body_media = model_media(),
           .body_required = true,
           .responses = {ok_json("AssetReplaceResult", "replaced: what was made, kept and removed"),
