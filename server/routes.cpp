@@ -137,6 +137,43 @@ void describe_min_version(RouteDoc& doc) {
 /// A read of the scene at `at_version` (taken out of the query), or of the live scene without
 /// it: `handler` gets the engine at that version (past_scenes.h).
 using EngineHandler = std::function<Reply(Engine&, RouteCall&)>;
+
+protocol::Problem bad_past(const char* parameter, std::string detail) {
+    protocol::Problem p =
+        protocol::make_problem(protocol::ProblemType::InvalidRequest, std::move(detail));
+    p.pointer = std::string("/") + parameter;
+    return p;
+}
+
+/// The version a read asks for with `at_version` or `at_time` (taken out of the query), nullopt
+/// when it asks for neither; a problem when the ask is malformed or no version matches the time.
+Expected<std::optional<uint64_t>, protocol::Problem> asked_version(const Engine& live,
+                                                                   Query& query) {
+    const auto it = query.find("at_version");
+    const auto time = query.find("at_time");
+    if (it == query.end() && time == query.end()) return std::optional<uint64_t>();
+    if (it != query.end() && time != query.end())
+        return Unexpected(bad_past("at_time", "give at_version or at_time, not both"));
+    if (time != query.end()) {
+        if (query.count("at_time") > 1)
+            return Unexpected(bad_past("at_time", "at_time is given twice"));
+        auto found = protocol::version_at_time(live, time->second);
+        if (!found) return Unexpected(std::move(found.error()));
+        query.erase("at_time");
+        return std::optional(found.value());
+    }
+    uint64_t version = 0;
+    const std::string& text = it->second;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), version);
+    if (query.count("at_version") > 1 || text.empty() || ec != std::errc() ||
+        end != text.data() + text.size())
+        return Unexpected(bad_past("at_version",
+                                   "at_version must be one scene version (a whole number), not '" +
+                                       text.substr(0, 40) + "'"));
+    query.erase("at_version");
+    return std::optional(version);
+}
+
 Endpoint at_version(ServerContext& ctx, RouteDoc doc, EngineHandler handler) {
     doc.parameters.push_back(
         {.name = "at_version",
@@ -155,44 +192,10 @@ Endpoint at_version(ServerContext& ctx, RouteDoc doc, EngineHandler handler) {
                      "no longer holds, or the server runs without --data; at_time is older "
                      "than the history's oldest version"));
     return {std::move(doc), [&ctx, handler = std::move(handler)](RouteCall& call) -> Reply {
-                auto& query = call.request.query;
-                const auto it = query.find("at_version");
-                const auto time = query.find("at_time");
-                if (it == query.end() && time == query.end()) return handler(ctx.engine, call);
-                if (it != query.end() && time != query.end()) {
-                    protocol::Problem p = protocol::make_problem(
-                        protocol::ProblemType::InvalidRequest,
-                        "give at_version or at_time, not both");
-                    p.pointer = "/at_time";
-                    return p;
-                }
-                uint64_t version = 0;
-                if (time != query.end()) {
-                    if (query.count("at_time") > 1) {
-                        protocol::Problem p = protocol::make_problem(
-                            protocol::ProblemType::InvalidRequest, "at_time is given twice");
-                        p.pointer = "/at_time";
-                        return p;
-                    }
-                    auto found = protocol::version_at_time(ctx.engine, time->second);
-                    if (!found) return found.error();
-                    version = found.value();
-                    query.erase("at_time");
-                } else {
-                    const std::string& text = it->second;
-                    const auto [end, ec] =
-                        std::from_chars(text.data(), text.data() + text.size(), version);
-                    if (query.count("at_version") > 1 || text.empty() || ec != std::errc() ||
-                        end != text.data() + text.size()) {
-                        protocol::Problem p = protocol::make_problem(
-                            protocol::ProblemType::InvalidRequest,
-                            "at_version must be one scene version (a whole number), not '" +
-                                text.substr(0, 40) + "'");
-                        p.pointer = "/at_version";
-                        return p;
-                    }
-                    query.erase("at_version");
-                }
+                auto asked = asked_version(ctx.engine, call.request.query);
+                if (!asked) return std::move(asked.error());
+                if (!asked.value()) return handler(ctx.engine, call);
+                const uint64_t version = *asked.value();
                 auto engine = ctx.past->at(ctx.engine, ctx.store, version);
                 if (!engine) {
                     const Error& e = engine.error();
