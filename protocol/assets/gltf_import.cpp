@@ -395,10 +395,8 @@ private:
                 if (!transform) return Unexpected(transform.error());
                 m_uv_transforms.resize(m_asset.materials.size() + 1);
                 m_uv_transforms.back() = transform.value();
-                if (tex_coord != 0)
-                    warn_once(where + ".baseColorTexture uses TEXCOORD_" +
-                              std::to_string(tex_coord) +
-                              "; only TEXCOORD_0 is imported, so it is read with those");
+                m_uv_sets.resize(m_asset.materials.size() + 1, 0);
+                m_uv_sets.back() = tex_coord;
             }
             m_asset.materials.push_back(std::move(m));
         }
@@ -585,11 +583,25 @@ private:
         // Step 3: optional attributes, one per vertex.
         if (auto ok = read_attribute(prim, "NORMAL", where, pv.count, 3, mesh); !ok)
             return Unexpected(ok.error());
-        if (auto ok = read_attribute(prim, "TEXCOORD_0", where, pv.count, 2, mesh); !ok)
+        const std::string uv_set = "TEXCOORD_" + std::to_string(uv_set_of(prim, where));
+        if (auto ok = read_attribute(prim, uv_set.c_str(), where, pv.count, 2, mesh); !ok)
             return Unexpected(ok.error());
         if (auto ok = read_attribute(prim, "COLOR_0", where, pv.count, 3, mesh); !ok)
             return Unexpected(ok.error());
         return mesh;
+    }
+
+    /// The texture coordinate set the primitive's base-colour texture reads (its texCoord, or
+    /// its KHR_texture_transform's): the one set a mesh keeps. A set the primitive lacks falls
+    /// back to 0, with a warning.
+    int uv_set_of(const tinygltf::Primitive& prim, const std::string& where) {
+        if (prim.material < 0 || std::size_t(prim.material) >= m_uv_sets.size()) return 0;
+        const int set = m_uv_sets[std::size_t(prim.material)];
+        if (set == 0 || prim.attributes.count("TEXCOORD_" + std::to_string(set)) != 0)
+            return set;
+        warn_once(where + ": its material's baseColorTexture reads TEXCOORD_" +
+                  std::to_string(set) + ", which it lacks; TEXCOORD_0 is used");
+        return 0;
     }
 
     /// The primitive's triangles (its indices, or its vertices in order), every index checked,
@@ -668,6 +680,10 @@ private:
                                              const tinygltf::Value& ext, const std::string& where,
                                              AssetMesh mesh) {
         const std::string at = where + ".extensions." + DRACO;
+        if (prim.material >= 0 && std::size_t(prim.material) < m_uv_sets.size() &&
+            m_uv_sets[std::size_t(prim.material)] != 0)
+            warn_once(at + ": only its TEXCOORD_0 is decoded, though its material's "
+                           "baseColorTexture reads another set");
         const tinygltf::Value& view_index = ext.Get("bufferView");
         const tinygltf::Value& ids = ext.Get("attributes");
         if (!ext.IsObject() || !view_index.IsInt() || !ids.IsObject())
@@ -924,6 +940,8 @@ private:
     Asset m_asset;
     /// Per material: its base-colour texture's transform, if any (bake_texture_transforms).
     std::vector<std::optional<UvTransform>> m_uv_transforms;
+    /// Per material: the texture coordinate set its base-colour texture reads (uv_set_of).
+    std::vector<int> m_uv_sets;
     std::map<int, std::vector<int>> m_meshes;  ///< glTF mesh -> asset meshes
     std::map<int, int> m_images;               ///< glTF image -> asset texture
     std::map<int, int> m_views;                ///< buffer view holding an image -> asset texture

@@ -146,6 +146,42 @@ TEST(GltfImport, ATextureTransformIsBakedIntoTheTextureCoordinates) {
     EXPECT_THAT(bad.error().element.value_or(""), HasSubstr("KHR_texture_transform"));
 }
 
+TEST(GltfImport, TheTextureCoordinateSetTheBaseColourTextureReadsIsTheOneKept) {
+    auto doc = nlohmann::json::parse(triangle_gltf(R"([{"mesh": 0}])", R"(, "material": 0)"));
+    const float sets[] = {0, 0, 1, 0, 0, 1, 0.5f, 0.5f, 0.25f, 0.5f, 0.5f, 0.25f};
+    const std::string bytes(reinterpret_cast<const char*>(sets), sizeof sets);
+    doc["buffers"].push_back({{"byteLength", bytes.size()},
+                              {"uri", "data:application/octet-stream;base64," +
+                                          protocol::encode_base64(bytes)}});
+    doc["bufferViews"].push_back({{"buffer", 1}, {"byteLength", bytes.size()}});
+    for (int set = 0; set < 2; ++set)
+        doc["accessors"].push_back({{"bufferView", 2},
+                                    {"byteOffset", 24 * set},
+                                    {"componentType", 5126},
+                                    {"count", 3},
+                                    {"type", "VEC2"}});
+    doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = 2;
+    doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_1"] = 3;
+    const uint8_t rgb[] = {200, 100, 50};
+    doc["images"] = {
+        {{"uri", "data:image/png;base64," +
+                     protocol::encode_base64(encode_png(rgb, 1, 1, 3).value())}}};
+    doc["textures"] = {{{"source", 0}}};
+    doc["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}, {"texCoord", 1}}}}}}};
+    auto a = import_text(AssetFormat::Gltf, doc.dump());
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
+    EXPECT_EQ(a.value().meshes.at(0).uvs,
+              (std::vector<glm::vec2>{{0.5f, 0.5f}, {0.25f, 0.5f}, {0.5f, 0.25f}}));
+    EXPECT_TRUE(a.value().warnings.empty()) << a.value().warnings.front();
+    // A set the primitive lacks: TEXCOORD_0, and a warning that says so.
+    doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["texCoord"] = 3;
+    auto fallback = import_text(AssetFormat::Gltf, doc.dump());
+    ASSERT_TRUE(fallback.has_value()) << fallback.error().detail;
+    EXPECT_EQ(fallback.value().meshes.at(0).uvs.at(1), glm::vec2(1, 0));
+    ASSERT_FALSE(fallback.value().warnings.empty());
+    EXPECT_THAT(fallback.value().warnings.front(), HasSubstr("TEXCOORD_3, which it lacks"));
+}
+
 TEST(GltfImport, AnEmissiveStrengthMultipliesTheEmissiveFactor) {
     auto doc = nlohmann::json::parse(triangle_gltf(R"([{"mesh": 0}])", R"(, "material": 0)"));
     doc["extensionsUsed"] = {"KHR_materials_emissive_strength"};
