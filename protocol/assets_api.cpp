@@ -53,6 +53,13 @@ std::string lower(std::string_view s) {
     return out;
 }
 
+/// The Content-Types the importers know, comma separated.
+std::string media_types() {
+    std::string out;
+    for (const std::string& t : assets::media_type_names()) out += (out.empty() ? "" : ", ") + t;
+    return out;
+}
+
 /// A tar archive by its Content-Type (parameters after ';' ignored).
 bool is_tar_media_type(std::string_view type) {
     std::string t = lower(type.substr(0, type.find(';')));
@@ -134,9 +141,8 @@ bool parse_format(const Query& query, std::optional<std::string_view> content_ty
         problem = make_problem(
             ProblemType::InvalidRequest,
             "the file's format is unknown: give ?format= (one of " + assets::format_names() +
-                ", tar), a name with one of those extensions, or a Content-Type of "
-                "model/gltf-binary, model/gltf+json, model/obj, application/ply, "
-                "model/vnd.collada+xml, model/stl, model/3mf or application/x-tar");
+                ", tar), a name with one of those extensions, or a Content-Type (one of " +
+                media_types() + ", application/x-tar)");
         return false;
     }
     if (format) q.format = *format;
@@ -469,6 +475,23 @@ Replacement plan_replacement(const Scene& s, const Upload& u) {
     return r;
 }
 
+/// An upload's If-Match and query (`id`: PUT's asset, the prefix), or the problem with them.
+struct UploadRequest {
+    IfMatch condition;
+    AssetQuery query;
+};
+Parsed<UploadRequest> parse_upload_request(const Query& query,
+                                           std::optional<std::string_view> content_type,
+                                           std::optional<std::string_view> if_match,
+                                           std::optional<std::string_view> id) {
+    Problem problem;
+    const auto condition = if_match ? parse_if_match(*if_match, problem) : IfMatch{};
+    if (!condition) return Unexpected(problem);
+    auto q = parse_query(query, content_type, id, problem);
+    if (!q) return Unexpected(problem);
+    return UploadRequest{*condition, std::move(*q)};
+}
+
 Json id_list(const std::set<std::string>& ids) {
     return Json(std::vector<std::string>(ids.begin(), ids.end()));
 }
@@ -480,14 +503,13 @@ ApiResponse post_assets(Engine& engine, std::string body,
                         std::optional<std::string_view> content_type,
                         std::optional<std::string_view> if_match, const ApiLimits& api_limits,
                         const BatchApply* apply) {
-    Problem problem;
-    const auto condition = if_match ? parse_if_match(*if_match, problem) : IfMatch{};
-    if (!condition) return problem_response(problem);
-    auto q = parse_query(query, content_type, std::nullopt, problem);
-    if (!q) return problem_response(problem);
+    auto request = parse_upload_request(query, content_type, if_match, std::nullopt);
+    if (!request) return problem_response(request.error());
+    const IfMatch* condition = &request.value().condition;
     const assets::ImportLimits limits = engine.read(
         [&](const Scene& s) { return import_limits(s, api_limits.budget, MeshTotals{}); });
-    auto upload = read_upload(body, std::move(*q), limits, api_limits.import_sandbox);
+    auto upload =
+        read_upload(body, std::move(request.value().query), limits, api_limits.import_sandbox);
     if (!upload) return problem_response(upload.error());
     Upload& u = upload.value();
 
@@ -579,11 +601,9 @@ ApiResponse put_asset(Engine& engine, std::string_view id, std::string body,
                       std::optional<std::string_view> content_type,
                       std::optional<std::string_view> if_match, const ApiLimits& api_limits,
                       const BatchApply* apply) {
-    Problem problem;
-    const auto condition = if_match ? parse_if_match(*if_match, problem) : IfMatch{};
-    if (!condition) return problem_response(problem);
-    auto q = parse_query(query, content_type, id, problem);
-    if (!q) return problem_response(problem);
+    auto request = parse_upload_request(query, content_type, if_match, id);
+    if (!request) return problem_response(request.error());
+    const IfMatch* condition = &request.value().condition;
     // The old asset's meshes leave room for the new ones.
     const assets::ImportLimits limits = engine.read([&](const Scene& s) {
         MeshTotals freed;
@@ -595,7 +615,8 @@ ApiResponse put_asset(Engine& engine, std::string_view id, std::string body,
         }
         return import_limits(s, api_limits.budget, freed);
     });
-    auto upload = read_upload(body, std::move(*q), limits, api_limits.import_sandbox);
+    auto upload = read_upload(body, std::move(request.value().query), limits,
+                              api_limits.import_sandbox);
     if (!upload) return problem_response(upload.error());
     const Upload& u = upload.value();
     for (int attempt = 1;; ++attempt) {

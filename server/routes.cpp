@@ -448,9 +448,9 @@ void add_write_routes(RouteTable& routes, ServerContext& ctx) {
 
 /// The body types POST and PUT /v1/assets read.
 std::vector<std::string> model_media() {
-    return {"model/gltf-binary",     "model/gltf+json", "model/obj", "application/ply",
-            "model/vnd.collada+xml", "model/stl",       "model/3mf", "application/x-tar",
-            "application/octet-stream"};
+    std::vector<std::string> types = assets::media_type_names();
+    types.insert(types.end(), {"application/x-tar", "application/octet-stream"});
+    return types;
 }
 
 /// An import's 413.

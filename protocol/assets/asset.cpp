@@ -47,17 +47,27 @@ std::string format_names() {
     return out;
 }
 
+/// The Content-Types an upload may name its format with.
+constexpr std::pair<const char*, AssetFormat> MEDIA_TYPES[] = {
+    {"model/gltf-binary", AssetFormat::Glb},     {"model/gltf+json", AssetFormat::Gltf},
+    {"model/obj", AssetFormat::Obj},             {"application/ply", AssetFormat::Ply},
+    {"model/ply", AssetFormat::Ply},             {"model/x-ply", AssetFormat::Ply},
+    {"model/vnd.collada+xml", AssetFormat::Dae}, {"model/stl", AssetFormat::Stl},
+    {"model/x.stl-binary", AssetFormat::Stl},    {"model/x.stl-ascii", AssetFormat::Stl},
+    {"model/3mf", AssetFormat::ThreeMf},
+};
+
 std::optional<AssetFormat> format_from_media_type(std::string_view type) {
     const std::string t = lower(trim(type.substr(0, type.find(';'))));
-    if (t == "model/gltf-binary") return AssetFormat::Glb;
-    if (t == "model/gltf+json") return AssetFormat::Gltf;
-    if (t == "model/obj") return AssetFormat::Obj;
-    if (t == "application/ply" || t == "model/ply" || t == "model/x-ply") return AssetFormat::Ply;
-    if (t == "model/vnd.collada+xml") return AssetFormat::Dae;
-    if (t == "model/stl" || t == "model/x.stl-binary" || t == "model/x.stl-ascii")
-        return AssetFormat::Stl;
-    if (t == "model/3mf") return AssetFormat::ThreeMf;
+    for (const auto& [name, format] : MEDIA_TYPES)
+        if (t == name) return format;
     return std::nullopt;
+}
+
+std::vector<std::string> media_type_names() {
+    std::vector<std::string> out;
+    for (const auto& [name, format] : MEDIA_TYPES) out.emplace_back(name);
+    return out;
 }
 
 uint64_t Asset::vertex_count() const {

@@ -37,6 +37,8 @@ constexpr bool format_is_assimp(AssetFormat f) {
 }
 /// Every format's name, comma separated: "glb, gltf, obj, ply, fbx, ...".
 std::string format_names();
+/// Every Content-Type format_from_media_type knows.
+std::vector<std::string> media_type_names();
 /// The format of a Content-Type (model/gltf-binary, model/gltf+json, model/obj, application/ply,
 /// model/ply, text/plain is not one), parameters after ';' ignored.
 std::optional<AssetFormat> format_from_media_type(std::string_view type);
