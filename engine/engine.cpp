@@ -39,7 +39,7 @@ void decode_textures_ahead(EditBatch& batch, uint64_t budget) {
         if (!e || e->decoded) continue;
         TextureLimits limits;
         limits.max_bytes = left;
-        Result<TextureImage> image = decode_texture(e->data, limits);
+        Result<TextureImage> image = decode_texture(e->data, limits, e->color_space);
         if (!image && image.error().code == ErrorCode::TooLarge) continue;
         if (image) left -= std::min(left, image->bytes());
         e->decoded = std::make_shared<DecodedTexture>(DecodedTexture{std::move(image)});

@@ -331,11 +331,15 @@ bool same_texture(const TextureRecord& old, const AddTexture& e) {
 
 bool same_material(const Scene& s, const MaterialRecord& old, const AddMaterial& e,
                    const std::set<std::string>& kept_textures) {
-    const auto texture = s.texture(old.base_color_texture);
-    const std::optional<std::string> old_texture =
-        texture ? std::optional(texture.value()->id) : std::nullopt;
-    return old.material == e.material && old_texture == e.base_color_texture &&
-           (!old_texture || kept_textures.count(*old_texture) != 0);
+    if (!(old.material == e.material)) return false;
+    for (std::size_t slot = 0; slot < TEXTURE_SLOT_COUNT; ++slot) {
+        const auto texture = s.texture(old.textures[slot]);
+        const std::optional<std::string> old_texture =
+            texture ? std::optional(texture.value()->id) : std::nullopt;
+        if (old_texture != e.textures[slot]) return false;
+        if (old_texture && kept_textures.count(*old_texture) == 0) return false;
+    }
+    return true;
 }
 
 bool same_mesh(const Scene& s, const MeshRecord& old, const AddMesh& e,

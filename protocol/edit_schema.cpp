@@ -134,7 +134,7 @@ constexpr std::string_view SHARED_DEFS = R"json({
       "filter": {"enum": ["bilinear", "nearest"]}
     },
     "additionalProperties": false,
-    "description": "how base_color_texture is read outside [0, 1) and between texels (default repeat, bilinear)"
+    "description": "how the material's textures are read outside [0, 1) and between texels (default repeat, bilinear)"
   },
   "build": {
     "type": "object",

@@ -129,4 +129,14 @@ std::string fields_markdown() {
     return out;
 }
 
+/// A material's texture slots (TEXTURE_SLOTS) as a Markdown table for protocol/README.md.
+inline std::string texture_slots_markdown() {
+    std::string out = "| member | texture's color_space | meaning |\n|---|---|---|\n";
+    for (const TextureSlotInfo& slot : TEXTURE_SLOTS)
+        out += "| `" + std::string(slot.field) + "` | `" +
+               (slot.space == TextureColorSpace::Srgb ? "srgb" : "linear") + "` | " +
+               std::string(slot.doc) + " |\n";
+    return out;
+}
+
 }  // namespace strata::protocol

@@ -334,8 +334,10 @@ J texture_schema() {
 }
 
 J material_schema() {
-    return object(merged(merged(identity(false), {{"base_color_texture", or_null(ref("id"))}}),
-                         material_values()));
+    J textures = J::object();
+    for (const TextureSlotInfo& slot : TEXTURE_SLOTS)
+        textures[std::string(slot.field)] = described(or_null(ref("id")), std::string(slot.doc));
+    return object(merged(merged(identity(false), textures), material_values()));
 }
 
 /// A listing's item with `"kind"` first: a group's children (scene_tree.cpp).

@@ -151,8 +151,10 @@ Json group_json(const Scene& s, GroupHandle h, const GroupRecord& g) {
 Json material_json(const Scene& s, const MaterialRecord& m) {
     Json j = material_fields(m.material);
     j["id"] = m.id;
-    const auto t = s.texture(m.base_color_texture);
-    j["base_color_texture"] = t ? Json(t.value()->id) : Json(nullptr);
+    for (const TextureSlotInfo& slot : TEXTURE_SLOTS) {
+        const auto t = s.texture(m.textures[slot_index(slot.slot)]);
+        j[std::string(slot.field)] = t ? Json(t.value()->id) : Json(nullptr);
+    }
     j["version"] = s.version();
     return j;
 }

@@ -202,8 +202,7 @@ export class Inspector {
       const m = d.resolved_material;
       const edits = d.material === own
         ? [{ op: 'update_material', material: own, base_color: base }]
-        : [{ op: 'add_material', id: own, base_color: base, roughness: m.roughness, metallic: m.metallic,
-             emission: m.emission },
+        : [{ op: 'add_material', ...m, id: own, base_color: base },
            { op: 'update_instance', instance: d.id, material: own }];
       this.edit(edits);
     };

@@ -15,7 +15,9 @@ Result<std::unique_ptr<AccelGraph>> AccelGraph::create(const AccelConfig& config
 AccelGraph::AccelGraph(const AccelConfig& config, std::unique_ptr<EmbreeDevice> device)
     : m_config(config),
       m_device(std::move(device)),
-      m_blas(*m_device, config.watertight, config.tlas == TlasKind::Incremental, config.clusters),
+      // Every BLAS lets intersect-context filters see its hits: launches apply HitTests (alpha
+      // cut-outs) with them under both strategies. A context without a filter costs nothing.
+      m_blas(*m_device, config.watertight, true, config.clusters),
       m_tlas(config.tlas == TlasKind::Incremental
                  ? make_incremental_tlas(*m_device, config.tlas_prefer, config.watertight,
                                          config.tlas_policy)

@@ -75,7 +75,7 @@ class BlasStore {
 public:
     /// `watertight` adds Embree's robust flag to every BLAS (see AccelConfig::watertight);
     /// `context_filter` lets an intersect context's filter see their hits (the incremental TLAS
-    /// skips stale instance copies that way).
+    /// skips stale instance copies that way, and launches apply HitTests).
     BlasStore(EmbreeDevice& device, bool watertight, bool context_filter = false,
               const ClusterPolicy& clusters = {})
         : m_device(device),

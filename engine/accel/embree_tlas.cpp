@@ -16,7 +16,8 @@ namespace strata {
 namespace {
 
 using embree_trace::deactivate_unused_lanes;
-using embree_trace::make_context;
+using embree_trace::filter_context;
+using embree_trace::FilterContext;
 
 struct TlasInstance {
     RTCGeometry geometry = nullptr;
@@ -75,21 +76,22 @@ public:
         return m_device.status("rebuilding the TLAS");
     }
 
-    void trace1(RayHit1& ray, bool coherent) const override {
-        RTCIntersectContext ctx = make_context(coherent);
-        rtcIntersect1(m_scene, &ctx, reinterpret_cast<RTCRayHit*>(&ray));
+    void trace1(RayHit1& ray, bool coherent, const HitTest* test) const override {
+        FilterContext c = filter_context(coherent, *this, test);
+        rtcIntersect1(m_scene, &c.ctx, reinterpret_cast<RTCRayHit*>(&ray));
     }
 
-    void trace16(const ValidMask16& valid, RayHit16& rays, bool coherent) const override {
-        RTCIntersectContext ctx = make_context(coherent);
+    void trace16(const ValidMask16& valid, RayHit16& rays, bool coherent,
+                 const HitTest* test) const override {
+        FilterContext c = filter_context(coherent, *this, test);
         deactivate_unused_lanes(valid, rays);
-        rtcIntersect16(valid.lanes, m_scene, &ctx, reinterpret_cast<RTCRayHit16*>(&rays));
+        rtcIntersect16(valid.lanes, m_scene, &c.ctx, reinterpret_cast<RTCRayHit16*>(&rays));
     }
 
-    void occluded16(const ValidMask16& valid, Ray16& rays) const override {
-        RTCIntersectContext ctx = make_context(false);
+    void occluded16(const ValidMask16& valid, Ray16& rays, const HitTest* test) const override {
+        FilterContext c = filter_context(false, *this, test);
         deactivate_unused_lanes(valid, rays);
-        rtcOccluded16(valid.lanes, m_scene, &ctx, reinterpret_cast<RTCRay16*>(&rays));
+        rtcOccluded16(valid.lanes, m_scene, &c.ctx, reinterpret_cast<RTCRay16*>(&rays));
     }
 
 private:

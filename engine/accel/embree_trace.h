@@ -5,10 +5,12 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 
 #include <embree3/rtcore.h>
 
 #include "engine/accel/ray.h"
+#include "engine/accel/tlas.h"
 
 namespace strata::embree_trace {
 
@@ -30,6 +32,38 @@ inline RTCIntersectContext make_context(bool coherent) {
     ctx.flags =
         coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
     return ctx;
+}
+
+/// An intersect context with what its filter (filter_hits) reads. Embree hands the context back
+/// to the filter, which casts it to this (`ctx` comes first).
+struct FilterContext {
+    RTCIntersectContext ctx;
+    const TlasStrategy* tlas = nullptr;  ///< renumbers clustered triangles for the test
+    const HitTest* test = nullptr;       ///< null: no hit test
+    const uint8_t* stale = nullptr;      ///< by slot: 1 skips the hit (incremental static tier)
+    /// The slot of the traced scene's instance id i is the uint32_t at slots + i * slot_stride;
+    /// null: ids are slots.
+    const char* slots = nullptr;
+    std::size_t slot_stride = 0;
+
+    uint32_t slot(uint32_t inst) const {
+        if (!slots) return inst;
+        uint32_t s;
+        std::memcpy(&s, slots + std::size_t(inst) * slot_stride, sizeof s);
+        return s;
+    }
+};
+
+/// Refuses the candidate hits of stale instance copies and those the hit test refuses.
+void filter_hits(const RTCFilterFunctionNArguments* args);
+
+/// A context that filters with `test` and, when `stale` is set, skips stale copies; its filter
+/// is installed only when there is something to filter.
+inline FilterContext filter_context(bool coherent, const TlasStrategy& tlas, const HitTest* test,
+                                    const uint8_t* stale = nullptr) {
+    FilterContext c{make_context(coherent), &tlas, test, stale};
+    if (test || stale) c.ctx.filter = filter_hits;
+    return c;
 }
 
 /// Marks the lanes `valid` leaves out as inactive the way Embree's ray-stream path reads a packet:

@@ -41,22 +41,9 @@ namespace strata {
 namespace {
 
 using embree_trace::deactivate_unused_lanes;
-using embree_trace::make_context;
+using embree_trace::filter_context;
+using embree_trace::FilterContext;
 
-/// The intersect context the static tier is traced with: Embree hands it back to the filter.
-struct StaleContext {
-    RTCIntersectContext ctx;
-    const uint8_t* stale;  ///< by slot: 1 when the static tier's copy is out of date
-};
-
-/// Rejects hits on stale static-tier copies (the instance lives on in the dynamic tier, or not).
-void skip_stale(const RTCFilterFunctionNArguments* args) {
-    const auto* context = reinterpret_cast<const StaleContext*>(args->context);
-    for (unsigned i = 0; i < args->N; ++i) {
-        if (args->valid[i] == 0) continue;
-        if (context->stale[RTCHitN_instID(args->hit, args->N, i, 0)]) args->valid[i] = 0;
-    }
-}
 
 /// Sets the calling thread's memory category to the TLAS for a scope: background merges are
 /// released from the commit thread, whatever phase it is in.
@@ -200,17 +187,16 @@ public:
         reap_retired(true);
     }
 
-    void trace1(RayHit1& ray, bool coherent) const override {
-        StaleContext context{make_context(coherent), m_stale.data()};
-        if (m_stale_count) context.ctx.filter = skip_stale;
+    void trace1(RayHit1& ray, bool coherent, const HitTest* test) const override {
+        FilterContext context = static_context(coherent, test);
         rtcIntersect1(m_static, &context.ctx, reinterpret_cast<RTCRayHit*>(&ray));
         if (m_dyn.empty()) return;
 
         SavedHit1 saved;
         std::memcpy(&saved, &ray.ng_x, sizeof saved);
         ray.inst_id = INVALID_ID;
-        RTCIntersectContext ctx = make_context(coherent);
-        rtcIntersect1(m_dynamic, &ctx, reinterpret_cast<RTCRayHit*>(&ray));
+        FilterContext dynamic = dynamic_context(coherent, test);
+        rtcIntersect1(m_dynamic, &dynamic.ctx, reinterpret_cast<RTCRayHit*>(&ray));
         if (ray.inst_id == INVALID_ID) {
             std::memcpy(&ray.ng_x, &saved, sizeof saved);
         } else {
@@ -218,10 +204,10 @@ public:
         }
     }
 
-    void trace16(const ValidMask16& valid, RayHit16& rays, bool coherent) const override {
+    void trace16(const ValidMask16& valid, RayHit16& rays, bool coherent,
+                 const HitTest* test) const override {
         deactivate_unused_lanes(valid, rays);
-        StaleContext context{make_context(coherent), m_stale.data()};
-        if (m_stale_count) context.ctx.filter = skip_stale;
+        FilterContext context = static_context(coherent, test);
         rtcIntersect16(valid.lanes, m_static, &context.ctx, reinterpret_cast<RTCRayHit16*>(&rays));
         if (m_dyn.empty()) return;
 
@@ -232,8 +218,8 @@ public:
         std::memcpy(reinterpret_cast<char*>(&saved) + HIT_BEGIN,
                     reinterpret_cast<const char*>(&rays) + HIT_BEGIN, HIT_BYTES);
         for (uint32_t i = 0; i < 16; ++i) rays.inst_id[i] = INVALID_ID;
-        RTCIntersectContext ctx = make_context(coherent);
-        rtcIntersect16(valid.lanes, m_dynamic, &ctx, reinterpret_cast<RTCRayHit16*>(&rays));
+        FilterContext dynamic = dynamic_context(coherent, test);
+        rtcIntersect16(valid.lanes, m_dynamic, &dynamic.ctx, reinterpret_cast<RTCRayHit16*>(&rays));
         for (uint32_t i = 0; i < 16; ++i) {
             if (!valid.lanes[i]) {
                 rays.inst_id[i] = saved.inst_id[i];
@@ -252,10 +238,9 @@ public:
         }
     }
 
-    void occluded16(const ValidMask16& valid, Ray16& rays) const override {
+    void occluded16(const ValidMask16& valid, Ray16& rays, const HitTest* test) const override {
         deactivate_unused_lanes(valid, rays);
-        StaleContext context{make_context(false), m_stale.data()};
-        if (m_stale_count) context.ctx.filter = skip_stale;
+        FilterContext context = static_context(false, test);
         rtcOccluded16(valid.lanes, m_static, &context.ctx, reinterpret_cast<RTCRay16*>(&rays));
         if (m_dyn.empty()) return;
 
@@ -268,11 +253,23 @@ public:
             any |= open.lanes[i] != 0;
         }
         if (!any) return;
-        RTCIntersectContext ctx = make_context(false);
-        rtcOccluded16(open.lanes, m_dynamic, &ctx, reinterpret_cast<RTCRay16*>(&rays));
+        FilterContext dynamic = dynamic_context(false, test);
+        rtcOccluded16(open.lanes, m_dynamic, &dynamic.ctx, reinterpret_cast<RTCRay16*>(&rays));
     }
 
 private:
+    /// The static tier's context: skips stale copies (while there are any) and applies `test`.
+    FilterContext static_context(bool coherent, const HitTest* test) const {
+        return filter_context(coherent, *this, test, m_stale_count ? m_stale.data() : nullptr);
+    }
+    /// The dynamic tier's: applies `test`, its instance ids read as slots through m_dyn.
+    FilterContext dynamic_context(bool coherent, const HitTest* test) const {
+        FilterContext c = filter_context(coherent, *this, test);
+        c.slots = reinterpret_cast<const char*>(m_dyn.data()) + offsetof(DynEntry, slot);
+        c.slot_stride = sizeof(DynEntry);
+        return c;
+    }
+
     /// What the TLAS knows of one instance slot.
     struct Slot {
         uint32_t generation = 0;  ///< of the instance held
@@ -615,7 +612,7 @@ private:
     std::vector<RTCGeometry> m_static_geoms;  ///< by slot; read by a running merge
     uint64_t m_static_count = 0;
     uint64_t m_static_serial = 0;  ///< the edits the static tier covers
-    std::vector<uint8_t> m_stale;  ///< by slot; read by skip_stale
+    std::vector<uint8_t> m_stale;  ///< by slot; read by the static tier's filter
     uint64_t m_stale_count = 0;
     std::vector<uint32_t> m_touched;  ///< slots edited since the static build
 

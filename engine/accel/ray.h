@@ -43,6 +43,18 @@ struct alignas(64) ValidMask16 {
     int operator[](std::size_t i) const { return lanes[i]; }
 };
 
+/// Decides whether a candidate hit is really there: the renderer's alpha cut-outs and blending
+/// (FrameState::coverage). Traced through Embree's intersect-context filter, so Embree goes on
+/// looking past a refused hit, for closest and any hits alike. Launches pass one only while some
+/// material needs it; without one no filter is installed and tracing costs what it did.
+struct HitTest {
+    /// True keeps the hit on the instance in `slot`, on triangle `prim` of its mesh (its own
+    /// numbering) at barycentrics (u, v). `seed` hashes the ray and the triangle: a stochastic
+    /// decision made from it is the same each time that ray meets that triangle.
+    bool (*keep)(const void* user, uint32_t slot, uint32_t prim, float u, float v, uint32_t seed);
+    const void* user;
+};
+
 /// Sixteen shadow rays: a miss leaves tfar unchanged, a hit sets it to -inf.
 struct alignas(64) Ray16 {
     float org_x[16], org_y[16], org_z[16], tnear[16];

@@ -20,6 +20,11 @@ namespace strata {
 
 bool TlasStrategy::blas_clustered() const { return m_blas->any_clustered(); }
 
+uint32_t TlasStrategy::mesh_triangle(uint32_t slot, uint32_t geom, uint32_t prim) const {
+    if (!m_blas || !m_blas->any_clustered() || slot >= m_instance_mesh.size()) return prim;
+    return m_blas->mesh_triangle(m_instance_mesh[slot], geom, prim);
+}
+
 void TlasStrategy::to_mesh_triangles(RayHit1& ray) const {
     if (ray.inst_id == INVALID_ID) return;
     ray.prim_id = m_blas->mesh_triangle(m_instance_mesh[ray.inst_id], ray.geom_id, ray.prim_id);

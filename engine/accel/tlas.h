@@ -99,22 +99,30 @@ public:
     virtual void wait_for_background() {}
 
     /// Closest hit for one ray: inst_id is the instance slot, prim_id the triangle in the
-    /// mesh's own numbering (also for clustered BLASes), geom_id 0.
-    void intersect1(RayHit1& ray, bool coherent) const {
-        trace1(ray, coherent);
+    /// mesh's own numbering (also for clustered BLASes), geom_id 0. Hits `test` refuses are
+    /// passed through.
+    void intersect1(RayHit1& ray, bool coherent, const HitTest* test = nullptr) const {
+        trace1(ray, coherent, test);
         if (m_blas && blas_clustered()) to_mesh_triangles(ray);
     }
     /// Closest hits for the active lanes of a packet, numbered as intersect1's.
-    void intersect16(const ValidMask16& valid, RayHit16& rays, bool coherent) const {
-        trace16(valid, rays, coherent);
+    void intersect16(const ValidMask16& valid, RayHit16& rays, bool coherent,
+                     const HitTest* test = nullptr) const {
+        trace16(valid, rays, coherent, test);
         if (m_blas && blas_clustered()) to_mesh_triangles(valid, rays);
     }
     /// Any hit for a packet of shadow rays: tfar becomes -inf on a hit.
-    virtual void occluded16(const ValidMask16& valid, Ray16& rays) const = 0;
+    virtual void occluded16(const ValidMask16& valid, Ray16& rays,
+                            const HitTest* test = nullptr) const = 0;
+
+    /// The mesh's own triangle index of a hit on the instance in `slot` at BLAS geometry `geom`,
+    /// primitive `prim` (what HitTest::keep is told).
+    uint32_t mesh_triangle(uint32_t slot, uint32_t geom, uint32_t prim) const;
 
 protected:
-    virtual void trace1(RayHit1& ray, bool coherent) const = 0;
-    virtual void trace16(const ValidMask16& valid, RayHit16& rays, bool coherent) const = 0;
+    virtual void trace1(RayHit1& ray, bool coherent, const HitTest* test) const = 0;
+    virtual void trace16(const ValidMask16& valid, RayHit16& rays, bool coherent,
+                         const HitTest* test) const = 0;
 
     /// Records which mesh's BLAS the instance in `slot` references (every strategy calls it
     /// when it points an instance at a BLAS), so hits on clustered BLASes can be renumbered.
@@ -137,8 +145,9 @@ private:
 std::unique_ptr<TlasStrategy> make_embree_tlas(EmbreeDevice& device, BuildPreference prefer,
                                                bool watertight);
 
-/// The two-tier incremental TLAS (incremental_tlas.cpp). The BLASes it traces must be built with
-/// Embree's context-filter flag (BlasStore does when told `context_filter`).
+/// The two-tier incremental TLAS (incremental_tlas.cpp). Both strategies trace BLASes built with
+/// Embree's context-filter flag (BlasStore's `context_filter`): the incremental one skips stale
+/// copies through it, and both apply HitTests through it.
 std::unique_ptr<TlasStrategy> make_incremental_tlas(EmbreeDevice& device, BuildPreference prefer,
                                                     bool watertight, const TlasPolicy& policy);
 

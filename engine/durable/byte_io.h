@@ -84,6 +84,8 @@ template <>
 inline constexpr uint8_t ENUM_MAX<TextureWrap> = 2;
 template <>
 inline constexpr uint8_t ENUM_MAX<BatchKind> = 2;
+template <>
+inline constexpr uint8_t ENUM_MAX<AlphaMode> = 2;
 
 /// True for the types that have a value_fields() layout.
 template <class Io, class T>

@@ -222,23 +222,24 @@ void extension(Io& io, E& e) {
 /// A material's texture and its sampler.
 template <class Io, Kind<AddMaterial> E>
 void extension(Io& io, E& e) {
-    io(e.base_color_texture, e.material.base_color_sampler.wrap,
+    io(e.textures[slot_index(TextureSlot::BaseColor)], e.material.base_color_sampler.wrap,
        e.material.base_color_sampler.filter);
 }
 /// update_material's texture is "unchanged" (absent), "none" (null) or a texture id, like
 /// update_instance's parent; the sampler fields are plain optionals.
 template <class Io, Kind<UpdateMaterial> E>
 void extension(Io& io, E& e) {
+    auto& base = e.textures[slot_index(TextureSlot::BaseColor)];
     if constexpr (std::is_const_v<E>) {
-        io(e.base_color_texture.has_value());
-        if (e.base_color_texture) io(*e.base_color_texture);
+        io(base.has_value());
+        if (base) io(*base);
     } else {
         bool set = false;
         io(set);
         if (set) {
             std::optional<std::string> texture;
             io(texture);
-            e.base_color_texture = std::move(texture);
+            base = std::move(texture);
         }
     }
     io(e.wrap, e.filter);
@@ -276,10 +277,64 @@ bool has_extension(const UpdateInstance& e) {
     return e.parent.has_value();
 }
 bool has_extension(const AddMaterial& e) {
-    return e.base_color_texture.has_value() || !(e.material.base_color_sampler == TextureSampler{});
+    return e.textures[slot_index(TextureSlot::BaseColor)].has_value() ||
+           !(e.material.base_color_sampler == TextureSampler{});
 }
 bool has_extension(const UpdateMaterial& e) {
-    return e.base_color_texture.has_value() || e.wrap.has_value() || e.filter.has_value();
+    return e.textures[slot_index(TextureSlot::BaseColor)].has_value() || e.wrap.has_value() ||
+           e.filter.has_value();
+}
+
+// Step: a material's texture slots beyond the base colour's, tagged fields under TEXTURE_SLOTS'
+// numbers: an add's as the texture id, an update's as the optional id (null: none) ------------
+
+template <class E>
+constexpr bool HAS_SLOTS = Kind<E, AddMaterial> || Kind<E, UpdateMaterial>;
+
+constexpr bool slot_tags_free() {
+    for (const TextureSlotInfo& s : TEXTURE_SLOTS) {
+        if (s.slot == TextureSlot::BaseColor) continue;
+        if (s.tag < 32 || s.tag >= 64) return false;
+        bool taken = false;
+        for_each_field<MaterialFields>([&](const auto& row) { taken |= row.info.tag == s.tag; });
+        if (taken) return false;
+    }
+    return true;
+}
+static_assert(slot_tags_free(), "texture slot tags are in [32, 64) and no material row has them");
+
+template <class E>
+std::size_t slot_count(const E& e) {
+    std::size_t n = 0;
+    if constexpr (HAS_SLOTS<E>)
+        for (const TextureSlotInfo& s : TEXTURE_SLOTS)
+            n += s.tag != 0 && e.textures[slot_index(s.slot)].has_value();
+    return n;
+}
+
+template <class E>
+void write_slots(ByteWriter& w, const E& e) {
+    if constexpr (HAS_SLOTS<E>) {
+        for (const TextureSlotInfo& s : TEXTURE_SLOTS) {
+            const auto& texture = e.textures[slot_index(s.slot)];
+            if (s.tag == 0 || !texture) continue;
+            w(s.tag);
+            w(*texture);
+        }
+    }
+}
+
+/// Reads the slot tagged `tag` into `e`; false when no slot has that tag.
+template <class E>
+bool read_slot(ByteReader& r, E& e, uint8_t tag) {
+    if constexpr (HAS_SLOTS<E>) {
+        for (const TextureSlotInfo& s : TEXTURE_SLOTS) {
+            if (s.tag == 0 || s.tag != tag) continue;
+            r(e.textures[slot_index(s.slot)].emplace());
+            return true;
+        }
+    }
+    return false;
 }
 
 // Step: tagged fields, for the edits that carry a kind's table --------------------------------
@@ -351,7 +406,7 @@ std::size_t tagged_count(const E& e) {
     if constexpr (std::is_void_v<typename C::Kind>) {
         return 0;
     } else {
-        std::size_t n = 0;
+        std::size_t n = slot_count(e);
         for_each_field<typename C::Kind>([&](const auto& row) {
             if (row.info.tag != 0 && tagged_present(row, carried(e), C::update)) ++n;
         });
@@ -373,6 +428,7 @@ void write_tagged(ByteWriter& w, const E& e) {
             else
                 w(v.*(row.add));
         });
+        write_slots(w, e);
     }
 }
 
@@ -405,6 +461,7 @@ void read_tagged(ByteReader& r, E& e) {
                         r.fail("tagged field " + std::to_string(tag) + " holds its default");
                 }
             });
+            if (!known) known = read_slot(r, e, tag);
             if (!known) return r.fail("unknown field tag " + std::to_string(tag));
             if (seen & (uint64_t{1} << tag))
                 return r.fail("field tag " + std::to_string(tag) + " twice");

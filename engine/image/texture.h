@@ -18,15 +18,21 @@ namespace strata {
 
 /// Bytes one decoded texel takes (what counts against the scene's texture budget).
 constexpr uint64_t TEXTURE_BYTES_PER_TEXEL = 6;
+/// Bytes a texel's alpha adds, for images whose alpha is not everywhere opaque.
+constexpr uint64_t TEXTURE_BYTES_PER_ALPHA = 1;
 
 struct TextureImage {
     uint32_t width = 0;
     uint32_t height = 0;
     /// Linear RGB, row-major from the top, 0..65535 meaning 0..1.
     std::vector<uint16_t> texels;
+    /// Coverage, row-major from the top, 0..255 meaning 0..1; empty: opaque everywhere.
+    std::vector<uint8_t> alpha;
 
     /// Decoded bytes (what the budget counts).
-    uint64_t bytes() const { return uint64_t(width) * height * TEXTURE_BYTES_PER_TEXEL; }
+    uint64_t bytes() const {
+        return uint64_t(width) * height * TEXTURE_BYTES_PER_TEXEL + alpha.size();
+    }
 
     /// Texel (x, y), both inside the image, as linear RGB in [0, 1].
     Vec3 texel(uint32_t x, uint32_t y) const {
@@ -53,6 +59,29 @@ struct TextureImage {
         const uint32_t ya = wrap(y0, height, s.wrap), yb = wrap(y0 + 1, height, s.wrap);
         const Vec3 top = texel(xa, ya) * (1.0f - tx) + texel(xb, ya) * tx;
         const Vec3 bottom = texel(xa, yb) * (1.0f - tx) + texel(xb, yb) * tx;
+        return top * (1.0f - ty) + bottom * ty;
+    }
+
+    /// The filtered coverage at texture coordinate `uv` (finite): 1 for an opaque image.
+    float sample_alpha(Vec2 uv, const TextureSampler& s) const {
+        if (alpha.empty()) return 1.0f;
+        uv = glm::clamp(uv, Vec2(-1e6f), Vec2(1e6f));
+        const float fx = uv.x * float(width);
+        const float fy = uv.y * float(height);
+        constexpr float SCALE = 1.0f / 255.0f;
+        const auto at = [&](uint32_t x, uint32_t y) {
+            return float(alpha[std::size_t(y) * width + x]) * SCALE;
+        };
+        if (s.filter == TextureFilter::Nearest)
+            return at(wrap(floor_index(fx), width, s.wrap), wrap(floor_index(fy), height, s.wrap));
+        const float gx = fx - 0.5f, gy = fy - 0.5f;
+        const float x0f = std::floor(gx), y0f = std::floor(gy);
+        const float tx = gx - x0f, ty = gy - y0f;
+        const int64_t x0 = clamp_index(x0f), y0 = clamp_index(y0f);
+        const uint32_t xa = wrap(x0, width, s.wrap), xb = wrap(x0 + 1, width, s.wrap);
+        const uint32_t ya = wrap(y0, height, s.wrap), yb = wrap(y0 + 1, height, s.wrap);
+        const float top = at(xa, ya) * (1.0f - tx) + at(xb, ya) * tx;
+        const float bottom = at(xa, yb) * (1.0f - tx) + at(xb, yb) * tx;
         return top * (1.0f - ty) + bottom * ty;
     }
 

@@ -76,7 +76,7 @@ std::size_t jpeg_length(const uint8_t* p, std::size_t n) {
 }  // namespace
 
 Status check_texture_size(uint32_t width, uint32_t height, const TextureLimits& limits,
-                          const char* format) {
+                          const char* format, bool alpha) {
     if (width == 0 || height == 0)
         return failure(ErrorCode::InvalidArgument,
                        std::string(format) + " image has no pixels (" + std::to_string(width) +
@@ -88,7 +88,8 @@ Status check_texture_size(uint32_t width, uint32_t height, const TextureLimits& 
                            std::to_string(height) + ", over the largest side of " +
                            std::to_string(limits.max_side) + " texels",
                        FIELD);
-    const uint64_t bytes = uint64_t(width) * height * TEXTURE_BYTES_PER_TEXEL;
+    const uint64_t bytes =
+        uint64_t(width) * height * (TEXTURE_BYTES_PER_TEXEL + (alpha ? TEXTURE_BYTES_PER_ALPHA : 0));
     if (bytes > limits.max_bytes)
         return failure(ErrorCode::TooLarge,
                        std::string(format) + " image is " + std::to_string(width) + "x" +
@@ -101,12 +102,32 @@ Status check_texture_size(uint32_t width, uint32_t height, const TextureLimits& 
 
 namespace {
 
-/// 8-bit sRGB RGB rows to the linear texels of `out` (sized here).
-void to_linear(const uint8_t* rgb, TextureImage& out) {
-    const auto& table = srgb_table();
-    const std::size_t n = std::size_t(out.width) * out.height * 3;
-    out.texels.resize(n);
-    for (std::size_t i = 0; i < n; ++i) out.texels[i] = table[rgb[i]];
+/// 8-bit codes to 16-bit values: sRGB decoded to linear, or data codes scaled as they are.
+const std::array<uint16_t, 256>& code_table(TextureColorSpace space) {
+    static const std::array<uint16_t, 256> linear = [] {
+        std::array<uint16_t, 256> t{};
+        for (int i = 0; i < 256; ++i) t[i] = uint16_t(i * 257);
+        return t;
+    }();
+    return space == TextureColorSpace::Srgb ? srgb_table() : linear;
+}
+
+/// 8-bit pixels of `channels` (3: RGB, 4: RGBA) to the texels of `out` (sized here); the alpha
+/// plane is kept only where some texel is not opaque.
+void to_texels(const uint8_t* pixels, uint32_t channels, TextureColorSpace space,
+               TextureImage& out) {
+    const auto& table = code_table(space);
+    const std::size_t n = std::size_t(out.width) * out.height;
+    out.texels.resize(n * 3);
+    bool opaque = true;
+    for (std::size_t i = 0; i < n; ++i) {
+        const uint8_t* p = pixels + i * channels;
+        for (int c = 0; c < 3; ++c) out.texels[i * 3 + c] = table[p[c]];
+        if (channels == 4) opaque = opaque && p[3] == 255;
+    }
+    if (opaque) return;
+    out.alpha.resize(n);
+    for (std::size_t i = 0; i < n; ++i) out.alpha[i] = pixels[i * channels + 3];
 }
 
 // Step: PNG ------------------------------------------------------------------------------------
@@ -117,7 +138,7 @@ struct PngState {
     std::size_t size = 0;
     std::size_t offset = 0;
     std::string error;
-    std::vector<uint8_t> rgb;
+    std::vector<uint8_t> rgba;
     std::vector<png_bytep> rows;
     TextureImage image;
     png_structp png = nullptr;
@@ -141,7 +162,8 @@ void png_read_bytes(png_structp png, png_bytep out, png_size_t length) {
 
 void png_on_warning(png_structp, png_const_charp) {}
 
-Result<TextureImage> decode_png_texture(std::string_view bytes, const TextureLimits& limits) {
+Result<TextureImage> decode_png_texture(std::string_view bytes, const TextureLimits& limits,
+                                        TextureColorSpace space) {
     auto s = std::make_unique<PngState>();
     s->data = reinterpret_cast<const uint8_t*>(bytes.data());
     s->size = bytes.size();
@@ -157,33 +179,39 @@ Result<TextureImage> decode_png_texture(std::string_view bytes, const TextureLim
     png_set_user_limits(s->png, 0x7fffffff, 0x7fffffff);
     png_set_chunk_malloc_max(s->png, 8u << 20);
     png_read_info(s->png, s->info);
+    // The budget counts an alpha plane for any image that may have one (it is dropped after the
+    // decode when every texel is opaque).
+    const bool may_have_alpha =
+        (png_get_color_type(s->png, s->info) & PNG_COLOR_MASK_ALPHA) != 0 ||
+        png_get_valid(s->png, s->info, PNG_INFO_tRNS) != 0;
     size_ok = check_texture_size(png_get_image_width(s->png, s->info),
-                         png_get_image_height(s->png, s->info), limits, "PNG");
+                                 png_get_image_height(s->png, s->info), limits, "PNG",
+                                 may_have_alpha);
     if (!size_ok) return Unexpected(size_ok.error());
     png_set_expand(s->png);
     png_set_strip_16(s->png);
-    png_set_strip_alpha(s->png);
     png_set_gray_to_rgb(s->png);
+    png_set_add_alpha(s->png, 0xFF, PNG_FILLER_AFTER);
     png_set_interlace_handling(s->png);
     png_read_update_info(s->png, s->info);
     s->image.width = png_get_image_width(s->png, s->info);
     s->image.height = png_get_image_height(s->png, s->info);
-    if (png_get_channels(s->png, s->info) != 3 ||
-        png_get_rowbytes(s->png, s->info) != std::size_t(s->image.width) * 3)
-        return failure(ErrorCode::InvalidArgument, "PNG pixel layout could not be read as RGB",
+    if (png_get_channels(s->png, s->info) != 4 ||
+        png_get_rowbytes(s->png, s->info) != std::size_t(s->image.width) * 4)
+        return failure(ErrorCode::InvalidArgument, "PNG pixel layout could not be read as RGBA",
                        FIELD);
     try {
-        s->rgb.resize(std::size_t(s->image.width) * s->image.height * 3);
+        s->rgba.resize(std::size_t(s->image.width) * s->image.height * 4);
         s->rows.resize(s->image.height);
     } catch (const std::bad_alloc&) {
         return failure(ErrorCode::TooLarge, "not enough memory to decode the PNG image", FIELD);
     }
     for (uint32_t y = 0; y < s->image.height; ++y)
-        s->rows[y] = s->rgb.data() + std::size_t(y) * s->image.width * 3;
+        s->rows[y] = s->rgba.data() + std::size_t(y) * s->image.width * 4;
     png_read_image(s->png, s->rows.data());
     png_read_end(s->png, nullptr);
     try {
-        to_linear(s->rgb.data(), s->image);
+        to_texels(s->rgba.data(), 4, space, s->image);
     } catch (const std::bad_alloc&) {
         return failure(ErrorCode::TooLarge, "not enough memory to decode the PNG image", FIELD);
     }
@@ -199,7 +227,8 @@ struct TjHandle {
     }
 };
 
-Result<TextureImage> decode_jpeg_texture(std::string_view bytes, const TextureLimits& limits) {
+Result<TextureImage> decode_jpeg_texture(std::string_view bytes, const TextureLimits& limits,
+                                         TextureColorSpace space) {
     TjHandle tj;
     if (!tj.h) return failure(ErrorCode::Internal, "libturbojpeg could not be initialised");
     auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
@@ -234,7 +263,7 @@ Result<TextureImage> decode_jpeg_texture(std::string_view bytes, const TextureLi
         return failure(ErrorCode::InvalidArgument,
                        std::string("corrupt JPEG: ") + tjGetErrorStr2(tj.h), FIELD);
     try {
-        to_linear(rgb.data(), image);
+        to_texels(rgb.data(), 3, space, image);
     } catch (const std::bad_alloc&) {
         return failure(ErrorCode::TooLarge, "not enough memory to decode the JPEG image", FIELD);
     }
@@ -263,15 +292,16 @@ const char* texture_format(std::string_view bytes) {
     return nullptr;
 }
 
-Result<TextureImage> decode_texture(std::string_view bytes, const TextureLimits& limits) {
+Result<TextureImage> decode_texture(std::string_view bytes, const TextureLimits& limits,
+                                   TextureColorSpace space) {
     const char* format = texture_format(bytes);
     if (!format)
         return failure(ErrorCode::InvalidArgument,
                        bytes.empty() ? "the image is empty"
                                      : "the image is neither PNG nor JPEG (unknown signature)",
                        FIELD);
-    return format[0] == 'p' ? decode_png_texture(bytes, limits)
-                            : decode_jpeg_texture(bytes, limits);
+    return format[0] == 'p' ? decode_png_texture(bytes, limits, space)
+                            : decode_jpeg_texture(bytes, limits, space);
 }
 
 }  // namespace strata

@@ -1,9 +1,11 @@
 #pragma once
 // Decoding untrusted PNG and JPEG bytes into a TextureImage (libpng, libturbojpeg). The format
 // comes from the first bytes, never from a name. The header is read first: an image larger than
-// the limits is refused before any texel memory is allocated. Texels are taken as sRGB (what glTF
-// and OBJ base-colour textures are) and converted to linear once, here. Alpha is dropped;
-// greyscale and palette images become RGB.
+// the limits is refused before any texel memory is allocated. Colour textures (TextureColorSpace::
+// Srgb: what glTF and OBJ base-colour textures are) are converted to linear once, here; data
+// textures (Linear: normal and roughness maps) keep their codes. Greyscale and palette images
+// become RGB. A PNG's alpha (its alpha channel or tRNS chunk) is kept, unless it is opaque
+// everywhere; JPEG has none.
 
 #include <cstddef>
 #include <cstdint>
@@ -32,9 +34,10 @@ const char* texture_format(std::string_view bytes);
 std::size_t image_length(std::string_view bytes);
 
 /// Checks a decoded image's size against `limits` (what decode_texture checks from the header),
-/// for an image decoded earlier with wider limits. `format`: "PNG" or "JPEG".
+/// for an image decoded earlier with wider limits. `format`: "PNG" or "JPEG"; `alpha`: the image
+/// keeps an alpha plane (TEXTURE_BYTES_PER_ALPHA more per texel).
 Status check_texture_size(uint32_t width, uint32_t height, const TextureLimits& limits,
-                          const char* format);
+                          const char* format, bool alpha = false);
 
 /// An image decoded ahead of the rule that stores it (AddTexture::decoded), with the limits the
 /// decode could know then: the rule checks what is left of the budget again.
@@ -44,7 +47,8 @@ struct DecodedTexture {
 
 /// Decodes a PNG or JPEG. Errors (field "data"): InvalidArgument for bytes that are neither or
 /// are corrupt (the message says what the decoder found), TooLarge for an image over `limits`.
-Result<TextureImage> decode_texture(std::string_view bytes, const TextureLimits& limits);
+Result<TextureImage> decode_texture(std::string_view bytes, const TextureLimits& limits,
+                                   TextureColorSpace space = TextureColorSpace::Srgb);
 
 /// The linear value of an 8-bit sRGB code, as 0..65535.
 uint16_t srgb8_to_linear16(uint8_t code);

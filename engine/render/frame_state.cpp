@@ -2,9 +2,34 @@
 
 #include <cmath>
 
+#include "engine/render/tangents.h"
+
 namespace strata {
 
 namespace {
+
+/// The mean colour of a texture's texels (what the light table gives a textured emitter).
+Vec3 mean_color(const TextureImage& t) {
+    glm::dvec3 sum(0.0);
+    const std::size_t n = std::size_t(t.width) * t.height;
+    for (std::size_t i = 0; i < n; ++i)
+        sum += glm::dvec3(t.texels[i * 3], t.texels[i * 3 + 1], t.texels[i * 3 + 2]);
+    return n > 0 ? Vec3(sum / (double(n) * 65535.0)) : Vec3(1.0f);
+}
+
+/// HitTest::keep over a FrameState: mask cuts below the cutoff, blend keeps a hit with
+/// probability equal to its coverage (drawn from the ray's seed).
+bool keep_covered(const void* user, uint32_t slot, uint32_t prim, float u, float v,
+                  uint32_t seed) {
+    const auto& f = *static_cast<const FrameState*>(user);
+    if (slot >= f.instances.size()) return true;
+    const InstanceShade& inst = f.instances[slot];
+    const Material& m = f.materials[inst.material];
+    if (m.alpha_mode == AlphaMode::Opaque) return true;
+    const float a = f.coverage(inst.material, f.mesh_shade(inst.mesh_slot), prim, u, v);
+    if (m.alpha_mode == AlphaMode::Mask) return a >= m.alpha_cutoff;
+    return float(seed >> 8) * (1.0f / 16777216.0f) < a;
+}
 
 /// (slot, names[slot]) for every distinct slot in `ids` but MISS_ID, sorted by slot.
 std::vector<std::pair<uint32_t, std::string>> named_slots(const std::vector<uint32_t>& ids,
@@ -29,6 +54,72 @@ FrameIdNames FrameState::id_names(const FrameBuffers& buffers) const {
         out.instances = named_slots(buffers.instance_id, instance_ids);
     if (buffers.aovs.has(Aov::MeshId)) out.meshes = named_slots(buffers.mesh_id, mesh_ids);
     return out;
+}
+
+SurfaceMaterial FrameState::surface(uint32_t material, const MeshShade* mesh, uint32_t prim,
+                                    float u, float v) const {
+    SurfaceMaterial s{materials[material]};
+    const MaterialTextures& tex = material_textures[material];
+    if (!mesh || mesh->uvs.empty() || prim >= mesh->triangles.size()) return s;
+    const Vec2 uv = mesh->uv(prim, u, v);
+    const TextureSampler& sampler = s.material.base_color_sampler;
+    const auto read = [&](TextureSlot slot) -> const TextureImage* {
+        return tex[slot_index(slot)].get();
+    };
+    Material& m = s.material;
+    if (const TextureImage* t = read(TextureSlot::BaseColor)) m.base_color *= t->sample(uv, sampler);
+    if (const TextureImage* t = read(TextureSlot::MetallicRoughness)) {
+        const Vec3 mr = t->sample(uv, sampler);
+        m.roughness *= mr.y;
+        m.metallic *= mr.z;
+    }
+    if (const TextureImage* t = read(TextureSlot::Emissive)) m.emission *= t->sample(uv, sampler);
+    if (const TextureImage* t = read(TextureSlot::Occlusion))
+        s.occlusion = 1.0f + m.occlusion_strength * (t->sample(uv, sampler).x - 1.0f);
+    if (const TextureImage* t = read(TextureSlot::Normal); t && !mesh->tangents.empty()) {
+        const Vec3 c = t->sample(uv, sampler) * 2.0f - Vec3(1.0f);
+        s.tangent_normal = Vec3(c.x * m.normal_scale, c.y * m.normal_scale, c.z);
+        s.normal_mapped = true;
+    }
+    return s;
+}
+
+float FrameState::coverage(uint32_t material, const MeshShade* mesh, uint32_t prim, float u,
+                           float v) const {
+    const Material& m = materials[material];
+    const TextureImage* t = material_textures[material][slot_index(TextureSlot::BaseColor)].get();
+    if (!t || !mesh || mesh->uvs.empty() || prim >= mesh->triangles.size()) return m.alpha;
+    return m.alpha * t->sample_alpha(mesh->uv(prim, u, v), m.base_color_sampler);
+}
+
+std::optional<HitTest> FrameState::hit_test() const {
+    if (m_see_through == 0) return std::nullopt;
+    return HitTest{keep_covered, this};
+}
+
+void FrameState::refresh_material(const Scene& scene, MaterialHandle h) {
+    const std::size_t i = h.index + 1;
+    if (i >= materials.size()) {
+        materials.resize(i + 1);
+        material_textures.resize(i + 1);
+        emitter_emission.resize(i + 1, Vec3(0.0f));
+    }
+    m_see_through -= materials[i].alpha_mode != AlphaMode::Opaque;
+    if (const MaterialRecord* m = scene.materials().get(h)) {
+        materials[i] = m->material;
+        for (std::size_t s = 0; s < TEXTURE_SLOT_COUNT; ++s) {
+            const TextureRecord* t = scene.textures().get(m->textures[s]);
+            material_textures[i][s] = t ? t->image : nullptr;
+        }
+    } else if (!scene.materials().alive_at(h.index)) {
+        materials[i] = Material{};
+        material_textures[i] = {};  // removed: let its texels go
+    }
+    m_see_through += materials[i].alpha_mode != AlphaMode::Opaque;
+    const TextureImage* emissive = material_textures[i][slot_index(TextureSlot::Emissive)].get();
+    emitter_emission[i] = materials[i].emission;
+    if (emissive && glm::any(glm::greaterThan(materials[i].emission, Vec3(0.0f))))
+        emitter_emission[i] *= mean_color(*emissive);
 }
 
 bool FrameState::emits(const Scene& scene, uint32_t slot) const {
@@ -76,7 +167,7 @@ void FrameState::rebuild_lights(const Scene& scene) {
         if (!m_emitter[slot]) continue;
         const InstanceRecord& inst = scene.instances().at_slot(slot);
         const MeshRecord& mesh = scene.meshes().at(inst.mesh);
-        const Vec3 emission = materials[instances[slot].material].emission;
+        const Vec3 emission = emitter_emission[instances[slot].material];
         for (const Triangle& t : mesh.triangles) {
             const Vec3 a = inst.world.transform_point(mesh.positions[t[0]]);
             const Vec3 e1 = inst.world.transform_point(mesh.positions[t[1]]) - a;
@@ -103,8 +194,10 @@ void FrameState::refresh_mesh(const Scene& scene, MeshHandle h) {
         meshes[h.index].reset();
         return;
     }
-    meshes[h.index] =
-        std::make_shared<const MeshShade>(MeshShade{r->triangles, r->normals, r->uvs});
+    auto shade = std::make_shared<MeshShade>(MeshShade{r->triangles, r->normals, r->uvs, {}});
+    if (!r->normals.empty() && !r->uvs.empty())
+        shade->tangents = make_tangents(r->positions, r->triangles, r->normals, r->uvs);
+    meshes[h.index] = std::move(shade);
 }
 
 void FrameState::sync(const Scene& scene) {
@@ -116,18 +209,9 @@ void FrameState::sync(const Scene& scene) {
     // instance that is or was an emitter changed, or the mesh of one did.
     bool rescan = false;
     for (MaterialHandle h : changes.materials()) {
-        if (h.index + 1 >= materials.size()) {
-            materials.resize(h.index + 2);
-            material_textures.resize(h.index + 2);
-        }
-        const Material before = materials[h.index + 1];
-        if (const MaterialRecord* m = scene.materials().get(h)) {
-            materials[h.index + 1] = m->material;
-            const TextureRecord* t = scene.textures().get(m->base_color_texture);
-            material_textures[h.index + 1] = t ? t->image : nullptr;
-        } else if (!scene.materials().alive_at(h.index)) {
-            material_textures[h.index + 1].reset();  // removed: let its texels go
-        }
+        const Material before =
+            h.index + 1 < materials.size() ? materials[h.index + 1] : Material{};
+        refresh_material(scene, h);
         const Material& after = materials[h.index + 1];
         rescan = rescan || glm::any(glm::greaterThan(before.emission, Vec3(0.0f))) ||
                  glm::any(glm::greaterThan(after.emission, Vec3(0.0f)));

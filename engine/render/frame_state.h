@@ -5,11 +5,14 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
 
+#include "engine/accel/ray.h"
+#include "engine/image/texture.h"
 #include "engine/render/frame.h"
 #include "engine/render/light_table.h"
 #include "engine/scene/scene.h"
@@ -32,6 +35,10 @@ struct MeshShade {
     std::vector<Triangle> triangles;
     std::vector<Vec3> normals;  ///< empty: geometric normals
     std::vector<Vec2> uvs;      ///< empty: none
+    /// Tangent frames for normal maps (tangents.h), made when the mesh has normals and uvs, from
+    /// the positions of the commit that changed its topology or attributes: a commit that only
+    /// moves vertices keeps them, as it keeps the normals.
+    std::vector<glm::vec4> tangents;
 
     /// The interpolated normal of triangle `prim` at barycentrics (u, v) (Embree's: weight u on
     /// the second vertex, v on the third), in object space, not normalised.
@@ -44,6 +51,26 @@ struct MeshShade {
         const Triangle& t = triangles[prim];
         return (1.0f - u - v) * uvs[t[0]] + u * uvs[t[1]] + v * uvs[t[2]];
     }
+    /// The interpolated tangent (xyz, not normalised) and handedness (w) of triangle `prim`.
+    glm::vec4 tangent(uint32_t prim, float u, float v) const {
+        const Triangle& t = triangles[prim];
+        return (1.0f - u - v) * tangents[t[0]] + u * tangents[t[1]] + v * tangents[t[2]];
+    }
+};
+
+/// A material's textures as launches read them, by TextureSlot (null: none). Textures are
+/// immutable and cannot be removed while a material names them, so sharing the texels is safe.
+using MaterialTextures = PerTextureSlot<std::shared_ptr<const TextureImage>>;
+
+/// A material at one surface point: its factors times its textures there.
+struct SurfaceMaterial {
+    /// base_color, roughness, metallic and emission with their textures applied.
+    Material material;
+    float occlusion = 1.0f;  ///< multiplies light that arrives by bounces
+    /// The normal map's tangent-space normal, scaled by normal_scale (not normalised); valid
+    /// when `normal_mapped`.
+    Vec3 tangent_normal{0.0f, 0.0f, 1.0f};
+    bool normal_mapped = false;
 };
 
 class FrameState {
@@ -51,6 +78,7 @@ public:
     FrameState() {
         materials.push_back(Material{});
         material_textures.emplace_back();
+        emitter_emission.emplace_back(0.0f);
     }
 
     /// Copies the entries the scene's change lists name.
@@ -61,9 +89,11 @@ public:
     Lighting lighting;
     /// [0] is the built-in default; material slot s lives at s + 1.
     std::vector<Material> materials;
-    /// The base-colour texture of each entry of `materials` (null: none). Textures are immutable
-    /// and cannot be removed while a material names them, so sharing the texels is safe.
-    std::vector<std::shared_ptr<const TextureImage>> material_textures;
+    /// The textures of each entry of `materials`.
+    std::vector<MaterialTextures> material_textures;
+    /// The emission the light table gives each entry of `materials`: its emission times the
+    /// mean of its emissive texture (next-event estimation sees a textured emitter as uniform).
+    std::vector<Vec3> emitter_emission;
     /// Indexed by instance slot (the inst_id of a hit).
     std::vector<InstanceShade> instances;
     /// Indexed by mesh slot; null for meshes without normals and uvs.
@@ -82,17 +112,21 @@ public:
         return slot < m_emitter.size() && m_emitter[slot] != 0;
     }
 
-    /// The base colour of material `material` (an index into `materials`) at a hit on the mesh
-    /// `mesh` (nullptr: no uvs) at barycentrics (u, v) of triangle `prim`: the material's colour,
-    /// times its texture where it has one and the mesh has uvs.
-    Vec3 base_color(uint32_t material, const MeshShade* mesh, uint32_t prim, float u,
-                    float v) const {
-        const Material& m = materials[material];
-        const TextureImage* tex = material_textures[material].get();
-        if (!tex || !mesh || mesh->uvs.empty() || prim >= mesh->triangles.size())
-            return m.base_color;
-        return m.base_color * tex->sample(mesh->uv(prim, u, v), m.base_color_sampler);
-    }
+    /// Material `material` (an index into `materials`) at a hit on the mesh `mesh` (nullptr:
+    /// no attributes) at barycentrics (u, v) of triangle `prim`: its factors, times its textures
+    /// where it has them and the mesh has uvs (glTF's channels: metallic-roughness G and B,
+    /// occlusion R).
+    SurfaceMaterial surface(uint32_t material, const MeshShade* mesh, uint32_t prim, float u,
+                            float v) const;
+
+    /// The coverage of material `material` at a hit as surface() would see it: alpha times the
+    /// base-colour texture's alpha.
+    float coverage(uint32_t material, const MeshShade* mesh, uint32_t prim, float u,
+                   float v) const;
+
+    /// The hit test that applies the materials' alpha modes (mask and blend), or nullopt when
+    /// every material is opaque. It refers to this state: launches take it with the state.
+    std::optional<HitTest> hit_test() const;
 
     /// The shading attributes of the mesh in `slot`, or nullptr.
     const MeshShade* mesh_shade(uint32_t slot) const {
@@ -111,8 +145,12 @@ private:
     void rebuild_lights(const Scene& scene);
     void refresh_mesh(const Scene& scene, MeshHandle h);
 
+    /// Refreshes the material entry `index` (a slot + 1) from the scene.
+    void refresh_material(const Scene& scene, MaterialHandle h);
+
     std::vector<uint8_t> m_emitter;  ///< by instance slot
     std::size_t m_emitters = 0;      ///< slots set in m_emitter
+    std::size_t m_see_through = 0;   ///< entries of `materials` whose alpha mode is not opaque
 };
 
 }  // namespace strata

@@ -35,6 +35,8 @@ std::vector<std::optional<PickHit>> pick_pixels(const TlasStrategy& tlas, const 
     const CameraRays rays(camera, request.width, request.height);
     std::vector<std::optional<PickHit>> out;
     out.reserve(request.pixels.size());
+    // Picks see through cut-outs as frames do.
+    const std::optional<HitTest> test = frame.hit_test();
     for (const PickPixel& p : request.pixels) {
         // The same arithmetic as a render's pixel-centre rays (CameraRays::directions).
         const float px = float(p.x) + 0.5f, py = float(p.y) + 0.5f;
@@ -50,7 +52,7 @@ std::vector<std::optional<PickHit>> pick_pixels(const TlasStrategy& tlas, const 
         ray.tfar = std::numeric_limits<float>::infinity();
         ray.mask = 0xFFFFFFFFu;
         ray.geom_id = ray.inst_id = ray.prim_id = INVALID_ID;
-        tlas.intersect1(ray, false);
+        tlas.intersect1(ray, false, test ? &*test : nullptr);
         if (ray.inst_id == INVALID_ID) {
             out.emplace_back();
             continue;

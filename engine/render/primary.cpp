@@ -31,7 +31,7 @@ void render_primary(const TlasStrategy& tlas, const FrameState& frame,
     Vec3* const normal = out.normal.data();
     Vec3* const color = out.color.data();
     const InstanceShade* const shades = frame.instances.data();
-    const Material* const materials = frame.materials.data();
+    const std::optional<HitTest> test = frame.hit_test();
 
     parallel_for_tiles(settings.width, settings.height, [&](const TileRect& tile) {
         // The output rows of a tile are short pieces of five large arrays, too scattered for the
@@ -52,7 +52,7 @@ void render_primary(const TlasStrategy& tlas, const FrameState& frame,
                 // Step: pixel-centre rays; lanes outside the image are off.
                 packet_lanes(tile, x0, y0, valid);
                 RayHit16& packet = camera.aim_centres(x0, y0);
-                tlas.intersect16(valid, packet, true);
+                tlas.intersect16(valid, packet, true, test ? &*test : nullptr);
 
                 // Step: write hit buffers and a simple preview shade.
                 for (uint32_t i = 0; i < PACKET_LANES; ++i) {
@@ -73,17 +73,19 @@ void render_primary(const TlasStrategy& tlas, const FrameState& frame,
                                             Vec3(packet.ng_x[i], packet.ng_y[i], packet.ng_z[i]));
                     const Vec3 dir(packet.dir_x[i], packet.dir_y[i], packet.dir_z[i]);
                     if (glm::dot(n, dir) > 0.0f) n = -n;
-                    const Material& m = materials[shade.material];
-                    const Vec3 base =
-                        frame.base_color(shade.material, frame.mesh_shade(shade.mesh_slot),
-                                         packet.prim_id[i], packet.u[i], packet.v[i]);
+                    const Material m =
+                        frame.surface(shade.material, frame.mesh_shade(shade.mesh_slot),
+                                      packet.prim_id[i], packet.u[i], packet.v[i])
+                            .material;
+                    const Vec3& base = m.base_color;
                     distance[p] = packet.tfar[i];
                     instance[p] = inst;
                     primitive[p] = packet.prim_id[i];
                     normal[p] = n;
-                    color[p] = base * (light.sun_color * std::max(0.0f, glm::dot(n, sun)) +
-                                               background) +
-                               m.emission;
+                    color[p] = m.unlit ? base
+                                       : base * (light.sun_color * std::max(0.0f, glm::dot(n, sun)) +
+                                                 background) +
+                                             m.emission;
                 }
             }
         }

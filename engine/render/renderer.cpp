@@ -58,8 +58,8 @@ struct SurfaceHit {
     Vec3 normal;    ///< shading normal: unit, facing the incoming ray
     Vec3 geometry;  ///< geometric normal: unit, facing the incoming ray
     Vec3 origin;    ///< where rays leaving the surface start
-    uint32_t material;
-    Vec3 base_color;  ///< the material's, times its texture at the hit's uv
+    uint32_t material;      ///< index into FrameState::materials
+    SurfaceMaterial shade;  ///< the material with its textures read at the hit
 
     /// True when direction `l` leaves on the side the ray came from. Shading normals may lean
     /// past the true surface; light from behind it must not leak through.
@@ -86,6 +86,21 @@ Vec3 shading_normal(Vec3 ns, const Vec3& ng, const Vec3& v) {
     return ns;
 }
 
+/// The normal a normal map gives: `tn` (tangent space) in the frame of the interpolated tangent
+/// `t4` and normal `n` (object space) of a mesh, taken to world space by `normal_matrix`.
+Vec3 mapped_normal(const Vec3& tn, const glm::vec4& t4, const Vec3& n,
+                   const glm::mat3& normal_matrix) {
+    const Vec3 t(t4);
+    const Vec3 b = glm::cross(n, t) * (t4.w < 0.0f ? -1.0f : 1.0f);
+    // Tangents transform as directions: by the linear part, the inverse transpose of normals'.
+    const glm::mat3 linear = glm::transpose(glm::inverse(normal_matrix));
+    const auto unit = [](const Vec3& v) {
+        const float l = glm::length(v);
+        return l > 0.0f && std::isfinite(l) ? v / l : Vec3(0.0f);
+    };
+    return tn.x * unit(linear * t) + tn.y * unit(linear * b) + tn.z * unit(normal_matrix * n);
+}
+
 /// Everything one launch's tiles share. `out` holds rows [row0, row0 + out.height) of a
 /// out.width x `frame_height` frame; tiles may trace rows beyond them (whole packets), which are
 /// not written.
@@ -107,7 +122,8 @@ public:
           m_total(total_samples),
           m_accum(accum),
           m_variance(variance),
-          m_cancel(cancel) {}
+          m_cancel(cancel),
+          m_hit_test(frame.hit_test()) {}
 
     void render_tile(const TileRect& tile) const {
         PixelSums local[TILE_SIZE * TILE_SIZE];
@@ -165,22 +181,24 @@ private:
         s.geometry = n;
         s.normal = n;
         const MeshShade* mesh = m_frame.mesh_shade(inst.mesh_slot);
-        if (mesh && !mesh->normals.empty() && hits.prim_id[i] < mesh->triangles.size())
-            s.normal = shading_normal(
-                inst.normal_matrix * mesh->normal(hits.prim_id[i], hits.u[i], hits.v[i]), n, -dir);
-        s.origin = offset_origin(s.position, n, org, hits.tfar[i]);
+        const uint32_t prim = hits.prim_id[i];
         s.material = inst.material;
-        s.base_color =
-            m_frame.base_color(inst.material, mesh, hits.prim_id[i], hits.u[i], hits.v[i]);
+        s.shade = m_frame.surface(inst.material, mesh, prim, hits.u[i], hits.v[i]);
+        if (mesh && !mesh->normals.empty() && prim < mesh->triangles.size()) {
+            const Vec3 normal = mesh->normal(prim, hits.u[i], hits.v[i]);
+            const Vec3 ns = s.shade.normal_mapped
+                                ? mapped_normal(s.shade.tangent_normal,
+                                                mesh->tangent(prim, hits.u[i], hits.v[i]), normal,
+                                                inst.normal_matrix)
+                                : inst.normal_matrix * normal;
+            s.normal = shading_normal(ns, n, -dir);
+        }
+        s.origin = offset_origin(s.position, n, org, hits.tfar[i]);
         return s;
     }
 
-    /// The material of a hit with its textured base colour.
-    Material shading_material(const SurfaceHit& hit) const {
-        Material m = m_frame.materials[hit.material];
-        m.base_color = hit.base_color;
-        return m;
-    }
+    /// The hit test the launch traces with (alpha cut-outs), or null.
+    const HitTest* test() const { return m_hit_test ? &*m_hit_test : nullptr; }
 
     /// Shadow rays from up to one surface per lane, each with the radiance it adds to its lane
     /// when nothing blocks it.
@@ -229,7 +247,7 @@ private:
     /// Returns the rays traced.
     uint64_t trace_shadows(ShadowQueue& q, Vec3* radiance) const {
         if (!q.any) return 0;
-        m_tlas.occluded16(q.valid, q.rays);
+        m_tlas.occluded16(q.valid, q.rays, test());
         uint64_t rays = 0;
         for (uint32_t i = 0; i < PACKET_LANES; ++i) {
             if (!q.valid[i]) continue;
@@ -263,7 +281,7 @@ private:
             ++rays;
         }
         const RayHit16& primary = camera.aim(px, py);
-        m_tlas.intersect16(valid, camera.packet(), true);
+        m_tlas.intersect16(valid, camera.packet(), true, test());
 
         // Step: shade first hits; queue shadow rays (sun, lights) and bounce rays.
         const bool lights = !m_frame.lights.empty();
@@ -284,12 +302,16 @@ private:
                 continue;
             }
             const SurfaceHit hit = surface(primary, i);
-            const Material m = shading_material(hit);
+            const Material& m = hit.shade.material;
+            sums[i]->albedo += m.base_color;
+            sums[i]->normal += hit.normal;
+            if (m.unlit) {
+                radiance[i] = m.base_color;
+                continue;
+            }
             const Bsdf bsdf(m);
             radiance[i] = m.emission;
             first_roughness[i] = m.roughness;
-            sums[i]->albedo += m.base_color;
-            sums[i]->normal += hit.normal;
             queue_sun(sun, i, hit, bsdf, -dir);
             if (lights)
                 queue_light(light, i, hit, bsdf, -dir, samplers[i].get4(index, DIM_GROUP_LIGHT),
@@ -298,7 +320,7 @@ private:
                 bsdf.sample(hit.normal, -dir, bounce_u[i][0], bounce_u[i][1], bounce_u[i][2]);
             if (b.valid && hit.above(b.dir) && ray_origin_ok(hit.origin)) {
                 set_lane(bounce, i, hit.origin, b.dir);
-                weight[i] = b.weight;
+                weight[i] = b.weight * hit.shade.occlusion;
                 bounce_pdf[i] = b.pdf;
                 bounce_valid[i] = -1;
                 any_bounce = true;
@@ -311,7 +333,7 @@ private:
 
         // Step: one bounce, ended by the sky or by direct light at the second surface.
         if (any_bounce) {
-            m_tlas.intersect16(bounce_valid, bounce, false);
+            m_tlas.intersect16(bounce_valid, bounce, false, test());
             Vec3 incoming[PACKET_LANES];
             ShadowQueue sun2, light2;
             for (uint32_t i = 0; i < PACKET_LANES; ++i) {
@@ -323,16 +345,22 @@ private:
                     continue;
                 }
                 const SurfaceHit hit = surface(bounce, i);
-                const Material m = shading_material(hit);
+                const Material& m = hit.shade.material;
+                if (m.unlit) {
+                    incoming[i] = m.base_color;
+                    continue;
+                }
                 // An emitter in the light table was also sampled at the first hit: weigh its
                 // emission against that strategy.
                 float emission_weight = 1.0f;
                 if (lights && m_frame.is_emitter(bounce.inst_id[i])) {
-                    const float pdf_light = m_frame.lights.emitter_pdf(
-                        m.emission, bounce.tfar[i], glm::dot(hit.geometry, -dir));
+                    const float pdf_light =
+                        m_frame.lights.emitter_pdf(m_frame.emitter_emission[hit.material],
+                                                   bounce.tfar[i], glm::dot(hit.geometry, -dir));
                     emission_weight = power_heuristic(bounce_pdf[i], pdf_light);
                 }
-                incoming[i] = m.emission * emission_weight + m.base_color * m_sky.radiance(hit.normal);
+                incoming[i] = m.emission * emission_weight +
+                              m.base_color * m_sky.radiance(hit.normal) * hit.shade.occlusion;
                 const Bsdf bsdf(m, std::max(MIN_SECONDARY_ROUGHNESS, first_roughness[i]));
                 queue_sun(sun2, i, hit, bsdf, -dir);
                 // The path ends here: light sampling is the only strategy, so no MIS.
@@ -375,7 +403,7 @@ private:
         uint64_t rays = 0;
         for (uint32_t i = 0; i < PACKET_LANES; ++i) rays += valid[i] != 0;
         RayHit16& packet = camera.aim_centres(x0, y0);
-        m_tlas.intersect16(valid, packet, true);
+        m_tlas.intersect16(valid, packet, true, test());
         const AovSet aovs = m_out.aovs;
         for (uint32_t i = 0; i < PACKET_LANES; ++i) {
             if (!valid[i]) continue;
@@ -432,6 +460,7 @@ private:
     PixelSums* const m_accum;
     float* const m_variance;
     const CancelToken* const m_cancel;
+    const std::optional<HitTest> m_hit_test;
     mutable std::atomic<uint64_t> m_ray_count{0};
 };
 

@@ -66,7 +66,8 @@ struct RemoveMesh {
 struct AddMaterial {
     std::string id;
     Material material;
-    std::optional<std::string> base_color_texture = std::nullopt;  ///< a texture id
+    /// A texture id per slot (TEXTURE_SLOTS); nullopt: none.
+    PerTextureSlot<std::optional<std::string>> textures = {};
 };
 
 /// Removes a material; refused while a mesh (as its default) or an instance uses it.
@@ -80,19 +81,26 @@ struct UpdateMaterial {
     std::optional<float> roughness;
     std::optional<float> metallic;
     std::optional<Vec3> emission;
-    /// Set: a texture id; set to nullopt: no texture any more.
-    std::optional<std::optional<std::string>> base_color_texture = std::nullopt;
+    /// Per slot (TEXTURE_SLOTS): set to a texture id; set to nullopt: no texture any more.
+    PerTextureSlot<std::optional<std::optional<std::string>>> textures = {};
     std::optional<TextureWrap> wrap = std::nullopt;
     std::optional<TextureFilter> filter = std::nullopt;
     std::optional<std::string> name = std::nullopt;
+    std::optional<float> alpha = std::nullopt;
+    std::optional<AlphaMode> alpha_mode = std::nullopt;
+    std::optional<float> alpha_cutoff = std::nullopt;
+    std::optional<float> normal_scale = std::nullopt;
+    std::optional<float> occlusion_strength = std::nullopt;
+    std::optional<bool> unlit = std::nullopt;
 };
 
 /// A texture from PNG or JPEG bytes (the format is read from the bytes). Decoded when the edit is
-/// applied; the encoded bytes are kept for snapshots.
+/// applied, as `color_space` says; the encoded bytes are kept for snapshots.
 struct AddTexture {
     std::string id;
     std::string data;
     std::string name = {};  ///< display name (object_fields.h)
+    TextureColorSpace color_space = TextureColorSpace::Srgb;
     /// `data` decoded ahead, outside the scene lock (Engine::apply); never on the wire. The rule
     /// decodes `data` itself when this is empty.
     std::shared_ptr<DecodedTexture> decoded = {};

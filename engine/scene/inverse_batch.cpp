@@ -110,8 +110,10 @@ public:
     }
 
     void operator()(undo::Removed<MaterialHandle, MaterialRecord>& r) {
-        emit(AddMaterial{r.record.id, std::move(r.record.material),
-                         id_or_none(r.record.base_color_texture)});
+        AddMaterial e{r.record.id, std::move(r.record.material)};
+        for (std::size_t s = 0; s < TEXTURE_SLOT_COUNT; ++s)
+            e.textures[s] = id_or_none(r.record.textures[s]);
+        emit(std::move(e));
     }
 
     void operator()(undo::Removed<GroupHandle, GroupRecord>& r) {
@@ -191,7 +193,8 @@ public:
     void operator()(undo::MaterialState& r) {
         UpdateMaterial e = update_to<MaterialFields>(r.material);
         e.material = id_of(r.handle);
-        e.base_color_texture.emplace(id_or_none(r.base_color_texture));
+        for (std::size_t s = 0; s < TEXTURE_SLOT_COUNT; ++s)
+            e.textures[s].emplace(id_or_none(r.textures[s]));
         e.wrap = r.material.base_color_sampler.wrap;
         e.filter = r.material.base_color_sampler.filter;
         emit(std::move(e));

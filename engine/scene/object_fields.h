@@ -81,6 +81,9 @@ constexpr auto LightFields::table() {
     };
 }
 
+inline constexpr std::string_view ALPHA_MODES[] = {"opaque", "mask", "blend"};
+inline constexpr std::string_view COLOR_SPACES[] = {"srgb", "linear"};
+
 struct MaterialFields {
     using Record = Material;
     using Add = Material;
@@ -102,6 +105,29 @@ constexpr auto MaterialFields::table() {
         field<K>({"emission", "Emitted radiance, linear RGB.", NON_NEGATIVE},
                  STRATA_FIELD_OF(K, emission), P),
         field<K>({"name", NAME_DOC, {}, {}, 1, true}, STRATA_FIELD_OF(K, name), MaterialDirty{}),
+        field<K>({"alpha", "Coverage: 1 opaque, 0 invisible; the base_color_texture's alpha "
+                           "multiplies it. Read only by the mask and blend alpha modes.",
+                  UNIT, {}, 2},
+                 STRATA_FIELD_OF(K, alpha), P),
+        field<K>({"alpha_mode",
+                  "opaque ignores alpha; mask cuts the surface away where alpha < alpha_cutoff; "
+                  "blend lets a ray through with probability 1 - alpha (converges to alpha "
+                  "blending over samples).",
+                  {}, ALPHA_MODES, 3},
+                 STRATA_FIELD_OF(K, alpha_mode), P),
+        field<K>({"alpha_cutoff", "The mask alpha mode's threshold.", UNIT, {}, 4},
+                 STRATA_FIELD_OF(K, alpha_cutoff), P),
+        field<K>({"normal_scale", "Scales the normal map's X and Y (0: no effect).",
+                  closed(-100.0, 100.0), {}, 5},
+                 STRATA_FIELD_OF(K, normal_scale), P),
+        field<K>({"occlusion_strength", "0: the occlusion texture has no effect, 1: full effect.",
+                  UNIT, {}, 6},
+                 STRATA_FIELD_OF(K, occlusion_strength), P),
+        field<K>({"unlit",
+                  "Shows the base colour (times its texture) as it is, lit by nothing and "
+                  "reflecting nothing (KHR_materials_unlit).",
+                  {}, {}, 7},
+                 STRATA_FIELD_OF(K, unlit), P),
     };
 }
 
@@ -186,6 +212,11 @@ constexpr auto TextureFields::table() {
     return std::tuple{
         field<K>({"name", NAME_DOC, {}, {}, 1, true}, &TextureRecord::name, &AddTexture::name,
                  nullptr, SceneDirty{}),
+        field<K>({"color_space",
+                  "srgb: colours (base colour, emissive), decoded to linear; linear: data "
+                  "(normal, metallic-roughness and occlusion maps), read as stored.",
+                  {}, COLOR_SPACES, 2},
+                 &TextureRecord::color_space, &AddTexture::color_space, nullptr, SceneDirty{}),
     };
 }
 

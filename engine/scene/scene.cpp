@@ -291,8 +291,8 @@ EditBatch SceneImage::to_batch() const {
     });
     materials.for_each([&](MaterialHandle, const MaterialRecord& m) {
         AddMaterial e{m.id, m.material};
-        if (const TextureRecord* t = textures.get(m.base_color_texture))
-            e.base_color_texture = t->id;
+        for (std::size_t s = 0; s < TEXTURE_SLOT_COUNT; ++s)
+            if (const TextureRecord* t = textures.get(m.textures[s])) e.textures[s] = t->id;
         b.edits.emplace_back(std::move(e));
     });
     meshes.for_each([&](MeshHandle, const MeshRecord& m) {

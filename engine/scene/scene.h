@@ -88,7 +88,7 @@ struct MaterialRecord {
     std::string id;
     Material material;
     DirtyBits<MaterialDirty> dirty;
-    TextureHandle base_color_texture;  ///< null: none
+    PerTextureSlot<TextureHandle> textures;  ///< by TextureSlot; null: none
 };
 
 /// A decoded texture. Textures are immutable once added (remove and add again to change one), so
@@ -99,6 +99,7 @@ struct TextureRecord {
     /// The PNG or JPEG bytes it was decoded from: what a snapshot writes.
     std::shared_ptr<const std::string> encoded;
     std::string name = {};  ///< display name (object_fields.h)
+    TextureColorSpace color_space = TextureColorSpace::Srgb;  ///< how it was decoded
 };
 
 struct LightRecord {
@@ -283,8 +284,9 @@ private:
     void remove_material(MaterialHandle h, UndoLog& undo);
     void remove_light(LightHandle h, UndoLog& undo);
     void remove_texture(TextureHandle h, UndoLog& undo);
-    /// Resolves an optional texture id of a material edit (field `base_color_texture`).
-    Result<TextureHandle> find_material_texture(const std::optional<std::string>& id) const;
+    /// Resolves an optional texture id of a material edit for `slot` (the error names its field).
+    Result<TextureHandle> find_material_texture(const std::optional<std::string>& id,
+                                                TextureSlot slot) const;
 
     // Scene graph helpers (scene_graph.cpp).
     Children& children_of(GroupHandle parent);

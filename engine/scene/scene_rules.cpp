@@ -4,6 +4,7 @@
 // so a rule never has to think about the edits after it. Editing only records changes (dirty
 // bits and change lists); no acceleration structure is touched here.
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -408,23 +409,29 @@ void Scene::remove_mesh(MeshHandle h, UndoLog& undo) {
 
 // Step: material ops -----------------------------------------------------------------------------
 
-Result<TextureHandle> Scene::find_material_texture(const std::optional<std::string>& id) const {
+Result<TextureHandle> Scene::find_material_texture(const std::optional<std::string>& id,
+                                                   TextureSlot slot) const {
     if (!id) return TextureHandle{};
     const TextureHandle h = find_texture(*id);
     if (h.is_null())
-        return failure(ErrorCode::UnknownId, "unknown texture '" + *id + "'", "base_color_texture");
+        return failure(ErrorCode::UnknownId, "unknown texture '" + *id + "'",
+                       std::string(TEXTURE_SLOTS[slot_index(slot)].field));
     return h;
 }
 
 Status Scene::apply_edit(AddMaterial&& e, UndoLog& undo) {
     if (Status s = check_new_id(e.id, !find_material(e.id).is_null(), "material"); !s) return s;
     if (Status s = check_material(e.material); !s) return s;
-    const auto texture = find_material_texture(e.base_color_texture);
-    if (!texture) return Unexpected(texture.error());
+    PerTextureSlot<TextureHandle> textures;
+    for (const TextureSlotInfo& slot : TEXTURE_SLOTS) {
+        const auto texture = find_material_texture(e.textures[slot_index(slot.slot)], slot.slot);
+        if (!texture) return Unexpected(texture.error());
+        textures[slot_index(slot.slot)] = texture.value();
+    }
 
     bool reused = false;
     const MaterialHandle h =
-        m_materials.insert(MaterialRecord{e.id, e.material, {}, texture.value()}, &reused);
+        m_materials.insert(MaterialRecord{e.id, e.material, {}, textures}, &reused);
     undo.records.emplace_back(undo::Inserted<MaterialHandle>{h, reused});
     m_material_ids.emplace(std::move(e.id), h);
     mark(h, MaterialDirty::Added);
@@ -438,17 +445,18 @@ Status Scene::apply_edit(UpdateMaterial&& e, UndoLog& undo) {
     Material updated = r.material;
     apply_to(updated, e);
     if (Status s = check_material(updated); !s) return s;
-    TextureHandle texture = r.base_color_texture;
-    if (e.base_color_texture) {
-        const auto found = find_material_texture(*e.base_color_texture);
+    PerTextureSlot<TextureHandle> textures = r.textures;
+    for (const TextureSlotInfo& slot : TEXTURE_SLOTS) {
+        const auto& set = e.textures[slot_index(slot.slot)];
+        if (!set) continue;
+        const auto found = find_material_texture(*set, slot.slot);
         if (!found) return Unexpected(found.error());
-        texture = found.value();
+        textures[slot_index(slot.slot)] = found.value();
     }
 
-    undo.records.emplace_back(
-        undo::MaterialState{h, std::move(r.material), r.dirty, r.base_color_texture});
+    undo.records.emplace_back(undo::MaterialState{h, std::move(r.material), r.dirty, r.textures});
     r.material = std::move(updated);
-    r.base_color_texture = texture;
+    r.textures = textures;
     mark(h, MaterialDirty::Params);
     return {};
 }
@@ -499,10 +507,12 @@ Status Scene::apply_edit(AddTexture&& e, UndoLog& undo) {
     TextureLimits limits;
     limits.max_bytes = m_budget.max_texture_bytes > used ? m_budget.max_texture_bytes - used : 0;
     Result<TextureImage> image =
-        e.decoded ? std::move(e.decoded->image) : decode_texture(e.data, limits);
+        e.decoded ? std::move(e.decoded->image) : decode_texture(e.data, limits, e.color_space);
     if (image && e.decoded) {
         const char* format = std::string_view(texture_format(e.data)) == "png" ? "PNG" : "JPEG";
-        if (Status s = check_texture_size(image->width, image->height, limits, format); !s)
+        if (Status s = check_texture_size(image->width, image->height, limits, format,
+                                          !image->alpha.empty());
+            !s)
             image = Unexpected(std::move(s).error());
     }
     if (!image) {
@@ -533,7 +543,7 @@ Status Scene::apply_edit(RemoveTexture&& e, UndoLog& undo) {
     std::size_t users = 0;
     std::string first;
     m_materials.for_each([&](MaterialHandle, const MaterialRecord& m) {
-        if (!(m.base_color_texture == h)) return;
+        if (std::find(m.textures.begin(), m.textures.end(), h) == m.textures.end()) return;
         if (users++ == 0) first = m.id;
     });
     if (users > 0)

@@ -197,7 +197,7 @@ struct Reverser {
         MaterialRecord& m = materials.at(r.handle);
         m.material = r.material;
         m.dirty = r.dirty;
-        m.base_color_texture = r.base_color_texture;
+        m.textures = r.textures;
     }
 };
 

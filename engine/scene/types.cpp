@@ -65,6 +65,15 @@ Status check_material(const Material& m) {
     return check_fields<MaterialFields>(m);
 }
 
+const char* alpha_mode_name(AlphaMode m) {
+    switch (m) {
+        case AlphaMode::Opaque: return "opaque";
+        case AlphaMode::Mask: return "mask";
+        case AlphaMode::Blend: return "blend";
+    }
+    return "opaque";
+}
+
 const char* light_kind_name(LightKind k) {
     switch (k) {
         case LightKind::Point: return "point";

@@ -1,8 +1,11 @@
 #pragma once
 // Plain scene value types: meshes, materials, camera and lighting.
 
+#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -46,15 +49,82 @@ struct TextureSampler {
 const char* texture_wrap_name(TextureWrap w);
 const char* texture_filter_name(TextureFilter f);
 
-/// Surface description. Colors are linear RGB. The base-colour texture itself is named by the
-/// material's record (MaterialRecord::base_color_texture); its texels multiply `base_color`.
+/// How a texture's texels are meant: colours (sRGB-encoded, decoded to linear once) or data
+/// (normals, roughness, occlusion: the codes read as they are, 0..255 meaning 0..1).
+enum class TextureColorSpace : uint8_t { Srgb, Linear };
+
+/// How a material's coverage (`alpha` times its base-colour texture's alpha) hides its surface,
+/// as glTF's alphaMode: opaque ignores it; mask cuts the surface away where coverage is below
+/// `alpha_cutoff`; blend lets each ray through with probability 1 - coverage (FrameState::
+/// hit_test applies them during traversal).
+enum class AlphaMode : uint8_t { Opaque, Mask, Blend };
+
+const char* alpha_mode_name(AlphaMode m);
+
+/// The textures a material may read, as glTF 2.0's metallic-roughness material has them. Each is
+/// named by the material's record (MaterialRecord::textures) and read through the material's one
+/// sampler at the mesh's texture coordinates.
+enum class TextureSlot : uint8_t { BaseColor, MetallicRoughness, Normal, Occlusion, Emissive };
+inline constexpr std::size_t TEXTURE_SLOT_COUNT = 5;
+template <class T>
+using PerTextureSlot = std::array<T, TEXTURE_SLOT_COUNT>;
+
+constexpr std::size_t slot_index(TextureSlot s) {
+    return static_cast<std::size_t>(s);
+}
+
+/// What one texture slot is: declared once here, read by the rules, the journal, the wire parser,
+/// the JSON writer, the schema and the importers.
+struct TextureSlotInfo {
+    TextureSlot slot;
+    std::string_view field;  ///< the material's member on the wire
+    std::string_view doc;    ///< one line for the schema and the docs
+    TextureColorSpace space;  ///< how a texture made for this slot is decoded (importers)
+    /// The number of its entry in a material edit's tagged section (edit_codec.cpp); 0: the
+    /// base-colour texture, which is part of the material's first extension layout.
+    uint8_t tag;
+};
+
+inline constexpr TextureSlotInfo TEXTURE_SLOTS[TEXTURE_SLOT_COUNT] = {
+    {TextureSlot::BaseColor, "base_color_texture",
+     "Multiplies base_color (RGB) and alpha (A); an sRGB colour texture.", TextureColorSpace::Srgb,
+     0},
+    {TextureSlot::MetallicRoughness, "metallic_roughness_texture",
+     "Multiplies roughness (G channel) and metallic (B channel); a linear data texture.",
+     TextureColorSpace::Linear, 32},
+    {TextureSlot::Normal, "normal_texture",
+     "A tangent-space normal map (glTF's convention: +Y up in texture space), scaled by "
+     "normal_scale; a linear data texture. Needs the mesh's normals and uvs.",
+     TextureColorSpace::Linear, 33},
+    {TextureSlot::Occlusion, "occlusion_texture",
+     "Ambient occlusion (R channel), applied with occlusion_strength to light arriving by "
+     "bounces; a linear data texture.",
+     TextureColorSpace::Linear, 34},
+    {TextureSlot::Emissive, "emissive_texture",
+     "Multiplies emission (RGB); an sRGB colour texture.", TextureColorSpace::Srgb, 35},
+};
+static_assert(TEXTURE_SLOTS[0].slot == TextureSlot::BaseColor &&
+              TEXTURE_SLOTS[1].slot == TextureSlot::MetallicRoughness &&
+              TEXTURE_SLOTS[2].slot == TextureSlot::Normal &&
+              TEXTURE_SLOTS[3].slot == TextureSlot::Occlusion &&
+              TEXTURE_SLOTS[4].slot == TextureSlot::Emissive,
+              "TEXTURE_SLOTS is indexed by TextureSlot");
+
+/// Surface description: glTF 2.0's metallic-roughness material. Colors are linear RGB. Its
+/// textures are named by the material's record (MaterialRecord::textures).
 struct Material {
     Vec3 base_color{0.8f};
     float roughness = 0.5f;
     float metallic = 0.0f;
     Vec3 emission{0.0f};
-    TextureSampler base_color_sampler = {};
+    TextureSampler base_color_sampler = {};  ///< how every texture of the material is read
     std::string name = {};  ///< display name (object_fields.h)
+    float alpha = 1.0f;     ///< coverage, multiplied by the base-colour texture's alpha
+    AlphaMode alpha_mode = AlphaMode::Opaque;
+    float alpha_cutoff = 0.5f;        ///< mask: coverage below it is cut away
+    float normal_scale = 1.0f;        ///< scales the normal map's X and Y
+    float occlusion_strength = 1.0f;  ///< 0: the occlusion texture has no effect
+    bool unlit = false;  ///< shows base colour as it is, without lighting (KHR_materials_unlit)
 
     friend bool operator==(const Material&, const Material&) = default;
 };

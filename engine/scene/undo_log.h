@@ -110,7 +110,7 @@ struct MaterialState {
     MaterialHandle handle;
     Material material;
     DirtyBits<MaterialDirty> dirty;
-    TextureHandle base_color_texture;
+    PerTextureSlot<TextureHandle> textures;
 };
 
 /// A light's values before an edit changed them.

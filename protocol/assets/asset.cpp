@@ -154,9 +154,10 @@ Imported<void> validate_asset(const Asset& asset, const ErrorSink& sink) {
             "material " + std::to_string(i) + (m.name.empty() ? "" : " ('" + m.name + "')");
         if (Status s = check_material(m.material); !s)
             return sink.invalid(where, s.error().field + ": " + s.error().message);
-        if (m.base_color_texture < -1 || m.base_color_texture >= int(asset.textures.size()))
-            return sink.invalid(where, "refers to texture " + std::to_string(m.base_color_texture) +
-                                           " of only " + std::to_string(asset.textures.size()));
+        for (int texture : m.textures)
+            if (texture < -1 || texture >= int(asset.textures.size()))
+                return sink.invalid(where, "refers to texture " + std::to_string(texture) +
+                                               " of only " + std::to_string(asset.textures.size()));
     }
     // Step 3: the node tree, parents first, and the world transforms it produces.
     for (std::size_t i = 0; i < asset.nodes.size(); ++i) {

@@ -61,13 +61,19 @@ struct AssetTexture {
     std::string mime_type;       ///< "image/png", "image/jpeg", or "" when unknown
     std::vector<uint8_t> bytes;  ///< empty when only `uri` is known
     std::string uri;             ///< the file's own reference (OBJ map_Kd, glTF external uri)
+    /// How the scene decodes it: the space of the material slots that use it (TEXTURE_SLOTS).
+    TextureColorSpace color_space = TextureColorSpace::Srgb;
 };
 
 /// A PBR metallic-roughness material, values already in the engine's ranges.
 struct AssetMaterial {
     std::string name;
     Material material;
-    int base_color_texture = -1;  ///< index into Asset::textures; -1: none
+    /// By TextureSlot: an index into Asset::textures; -1: none.
+    PerTextureSlot<int> textures = {-1, -1, -1, -1, -1};
+
+    int& texture(TextureSlot s) { return textures[slot_index(s)]; }
+    int texture(TextureSlot s) const { return textures[slot_index(s)]; }
 };
 
 /// One node of the hierarchy: a local transform, its parent and the meshes it places.

@@ -70,6 +70,7 @@ std::vector<std::string> add_textures(std::vector<AssetTexture>& textures, const
         AddTexture e;
         e.id = p + ".texture" + std::to_string(i);
         e.name = display_name(t.name);
+        e.color_space = t.color_space;
         e.data.assign(t.bytes.begin(), t.bytes.end());
         t.bytes = {};
         if (!texture_format(e.data)) {
@@ -85,8 +86,8 @@ std::vector<std::string> add_textures(std::vector<AssetTexture>& textures, const
     return texture_ids;
 }
 
-/// Adds the materials, each with its base colour texture when the batch holds that texture
-/// (`texture_ids`: add_textures' answer).
+/// Adds the materials, each with its textures when the batch holds them (`texture_ids`:
+/// add_textures' answer).
 void add_materials(const std::vector<AssetMaterial>& materials,
                    const std::vector<std::string>& texture_ids, const std::string& p,
                    AssetBatch& out) {
@@ -95,9 +96,20 @@ void add_materials(const std::vector<AssetMaterial>& materials,
         e.id = p + ".material" + std::to_string(i);
         e.material = materials[i].material;
         e.material.name = display_name(materials[i].name);
-        const int texture = materials[i].base_color_texture;
-        if (texture >= 0 && !texture_ids[std::size_t(texture)].empty())
-            e.base_color_texture = texture_ids[std::size_t(texture)];
+        for (std::size_t slot = 0; slot < TEXTURE_SLOT_COUNT; ++slot) {
+            const int texture = materials[i].textures[slot];
+            if (texture >= 0 && !texture_ids[std::size_t(texture)].empty())
+                e.textures[slot] = texture_ids[std::size_t(texture)];
+        }
+        // An emissive factor without its texture would light the whole surface where the
+        // texture lights parts of it: it goes too.
+        const std::size_t emissive = slot_index(TextureSlot::Emissive);
+        if (materials[i].textures[emissive] >= 0 && !e.textures[emissive] &&
+            e.material.emission != Vec3(0.0f)) {
+            e.material.emission = Vec3(0.0f);
+            out.warnings.push_back(label("material", i, materials[i].name) +
+                                   ": its emission is left out with its emissive texture");
+        }
         const std::string id = e.id;
         add_edit(out, std::move(e), id, out.materials);
     }

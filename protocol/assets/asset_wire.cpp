@@ -54,6 +54,13 @@ bool get_count(ByteReader& r, uint64_t& n, std::size_t least, const char* what) 
     return r.ok();
 }
 
+/// Every field of a material, tagged rows too (the wire is written and read by one binary).
+template <class Io, class M>
+void material_rows(Io& io, M& m) {
+    for_each_field<MaterialFields>([&](const auto& row) { io(m.*(row.add)); });
+    io(m.base_color_sampler.wrap, m.base_color_sampler.filter);
+}
+
 void put_asset(ByteWriter& w, const Asset& a) {
     w(uint64_t(a.meshes.size()));
     for (const AssetMesh& m : a.meshes) {
@@ -61,12 +68,13 @@ void put_asset(ByteWriter& w, const Asset& a) {
     }
     w(uint64_t(a.materials.size()));
     for (const AssetMaterial& m : a.materials) {
-        w(m.name, m.material, m.material.base_color_sampler.wrap,
-          m.material.base_color_sampler.filter, int32_t(m.base_color_texture));
+        w(m.name);
+        material_rows(w, m.material);
+        for (int texture : m.textures) w(int32_t(texture));
     }
     w(uint64_t(a.textures.size()));
     for (const AssetTexture& t : a.textures) {
-        w(t.name, t.mime_type, t.uri);
+        w(t.name, t.mime_type, t.uri, t.color_space);
         put_bytes(w, t.bytes);
     }
     w(uint64_t(a.nodes.size()));
@@ -90,15 +98,18 @@ void get_asset(ByteReader& r, Asset& a) {
     if (!get_count(r, n, 4 + 8, "material")) return;
     a.materials.resize(n);
     for (AssetMaterial& m : a.materials) {
-        int32_t texture = -1;
-        r(m.name, m.material, m.material.base_color_sampler.wrap,
-          m.material.base_color_sampler.filter, texture);
-        m.base_color_texture = texture;
+        r(m.name);
+        material_rows(r, m.material);
+        for (int& texture : m.textures) {
+            int32_t t = -1;
+            r(t);
+            texture = t;
+        }
     }
     if (!get_count(r, n, 3 * 4 + 8, "texture")) return;
     a.textures.resize(n);
     for (AssetTexture& t : a.textures) {
-        r(t.name, t.mime_type, t.uri);
+        r(t.name, t.mime_type, t.uri, t.color_space);
         get_bytes(r, t.bytes);
     }
     if (!get_count(r, n, 4 + 4 + 48 + 8, "node")) return;

@@ -170,12 +170,15 @@ public:
         : m_scene(scene), m_side(side), m_asset(asset) {}
 
     /// The texture `path` names (embedded "*N", an embedded file name, a side file, or only its
-    /// uri); -1 when it is embedded in a format the renderer does not read (a warning says so).
-    int get(const std::string& path, const std::string& material) {
-        if (const auto it = m_index.find(path); it != m_index.end()) return it->second;
+    /// uri) decoded in `space`; -1 when it is embedded in a format the renderer does not read (a
+    /// warning says so).
+    int get(const std::string& path, const std::string& material, TextureColorSpace space) {
+        const auto key = std::pair(path, space);
+        if (const auto it = m_index.find(key); it != m_index.end()) return it->second;
         int index = -1;
         if (const aiTexture* t = m_scene.GetEmbeddedTexture(path.c_str())) {
             if (auto tex = embedded(*t, path)) {
+                tex->color_space = space;
                 index = add(std::move(*tex));
             } else {
                 m_asset.warnings.push_back(material + ": its embedded texture '" + path +
@@ -185,11 +188,12 @@ public:
             AssetTexture tex;
             tex.name = path;
             tex.uri = path;
+            tex.color_space = space;
             if (const std::string* file = find_side_file(m_side, path))
                 tex.bytes.assign(file->begin(), file->end());
             index = add(std::move(tex));
         }
-        m_index.emplace(path, index);
+        m_index.emplace(key, index);
         return index;
     }
 
@@ -202,16 +206,17 @@ private:
     const aiScene& m_scene;
     const SideFiles& m_side;
     Asset& m_asset;
-    std::map<std::string, int> m_index;
+    std::map<std::pair<std::string, TextureColorSpace>, int> m_index;
 };
 
 float clamp01(float v) {
     return std::isfinite(v) ? std::min(std::max(v, 0.0f), 1.0f) : 0.0f;
 }
 
-/// The texture kinds the renderer does not read, for warnings.
+/// The texture kinds the renderer does not read, for warnings (metalness, roughness and occlusion
+/// come as separate images here, where the engine reads glTF's packed channels).
 constexpr std::pair<aiTextureType, const char*> UNREAD_TEXTURES[] = {
-    {aiTextureType_NORMALS, "normal"},       {aiTextureType_HEIGHT, "height (bump)"},
+    {aiTextureType_HEIGHT, "height (bump)"},
     {aiTextureType_SPECULAR, "specular"},    {aiTextureType_SHININESS, "shininess"},
     {aiTextureType_OPACITY, "opacity"},      {aiTextureType_AMBIENT, "ambient"},
     {aiTextureType_LIGHTMAP, "light map"},   {aiTextureType_REFLECTION, "reflection"},
@@ -238,24 +243,25 @@ AssetMaterial convert_material(const aiMaterial& m, unsigned index, TextureTable
         out.material.roughness = clamp01(std::pow(2.0f / (shininess + 2.0f), 0.25f));  // as OBJ
     }
     aiColor3D e;
-    if (m.Get(AI_MATKEY_COLOR_EMISSIVE, e) == AI_SUCCESS && std::isfinite(e.r + e.g + e.b)) {
-        if (m.GetTextureCount(aiTextureType_EMISSIVE) > 0) {
-            warnings.push_back(what + ": its emissive texture is not imported, nor its emissive "
-                                      "colour (alone it would make the whole surface glow)");
-        } else {
-            float intensity = 1.0f;  // glTF's KHR_materials_emissive_strength, FBX's factor
-            if (m.Get(AI_MATKEY_EMISSIVE_INTENSITY, intensity) != AI_SUCCESS ||
-                !std::isfinite(intensity) || intensity < 0.0f)
-                intensity = 1.0f;
-            intensity = std::min(intensity, 1e6f);
-            out.material.emission = intensity * Vec3(std::max(e.r, 0.0f), std::max(e.g, 0.0f),
-                                                     std::max(e.b, 0.0f));
-        }
-    }
+    const bool emissive_map = m.GetTextureCount(aiTextureType_EMISSIVE) > 0;
+    if (m.Get(AI_MATKEY_COLOR_EMISSIVE, e) != AI_SUCCESS || !std::isfinite(e.r + e.g + e.b))
+        e = emissive_map ? aiColor3D(1.0f, 1.0f, 1.0f) : aiColor3D(0.0f, 0.0f, 0.0f);
+    float intensity = 1.0f;  // glTF's KHR_materials_emissive_strength, FBX's factor
+    if (m.Get(AI_MATKEY_EMISSIVE_INTENSITY, intensity) != AI_SUCCESS ||
+        !std::isfinite(intensity) || intensity < 0.0f)
+        intensity = 1.0f;
+    intensity = std::min(intensity, 1e6f);
+    out.material.emission =
+        intensity * Vec3(std::max(e.r, 0.0f), std::max(e.g, 0.0f), std::max(e.b, 0.0f));
     aiString path;
     if (m.GetTexture(aiTextureType_BASE_COLOR, 0, &path) == AI_SUCCESS ||
         m.GetTexture(aiTextureType_DIFFUSE, 0, &path) == AI_SUCCESS)
-        out.base_color_texture = textures.get(text(path), what);
+        out.texture(TextureSlot::BaseColor) =
+            textures.get(text(path), what, TextureColorSpace::Srgb);
+    if (m.GetTexture(aiTextureType_NORMALS, 0, &path) == AI_SUCCESS)
+        out.texture(TextureSlot::Normal) = textures.get(text(path), what, TextureColorSpace::Linear);
+    if (emissive_map && m.GetTexture(aiTextureType_EMISSIVE, 0, &path) == AI_SUCCESS)
+        out.texture(TextureSlot::Emissive) = textures.get(text(path), what, TextureColorSpace::Srgb);
     for (const auto& [type, kind] : UNREAD_TEXTURES)
         if (m.GetTextureCount(type) > 0)
             warnings.push_back(what + ": its " + std::string(kind) + " texture is not imported");

@@ -105,17 +105,30 @@ JsonShape json_shape(std::string_view text, uint32_t depth_limit) {
 /// Draco-compressed primitives (draco_decode.h).
 constexpr const char* DRACO = "KHR_draco_mesh_compression";
 
-/// Texture transforms (offset, rotation, scale), read for base-colour textures and baked into
-/// the texture coordinates of the meshes that use the material.
+/// Texture transforms (offset, rotation, scale), baked into the texture coordinates of the
+/// meshes that use the material (one per material: its textures share the mesh's uvs).
 constexpr const char* TEXTURE_TRANSFORM = "KHR_texture_transform";
 
 /// A material's emissive factor multiplier (emissiveFactor stays within [0, 1]).
 constexpr const char* EMISSIVE_STRENGTH = "KHR_materials_emissive_strength";
 
+/// A material shown as its base colour, without lighting.
+constexpr const char* UNLIT = "KHR_materials_unlit";
+
 /// The extensions this importer reads: a file may require them, and they are not warned about.
 bool is_read_extension(std::string_view name) {
-    return name == DRACO || name == TEXTURE_TRANSFORM || name == EMISSIVE_STRENGTH;
+    return name == DRACO || name == TEXTURE_TRANSFORM || name == EMISSIVE_STRENGTH ||
+           name == UNLIT;
 }
+
+/// One texture reference of a glTF material, whichever its kind.
+struct TextureRef {
+    TextureSlot slot;
+    const char* path;  ///< where the material holds it, for messages
+    int index;
+    int tex_coord;
+    const tinygltf::ExtensionMap* extensions;
+};
 
 /// A 2x3 affine map of texture coordinates, row-major: u' = m[0] u + m[1] v + m[2], v' = ...
 using UvTransform = std::array<float, 6>;
@@ -358,49 +371,100 @@ private:
         for (std::size_t i = 0; i < m_model.materials.size(); ++i) {
             const tinygltf::Material& gm = m_model.materials[i];
             const std::string where = "materials[" + std::to_string(i) + "]";
-            const auto& pbr = gm.pbrMetallicRoughness;
-            AssetMaterial m;
-            m.name = gm.name;
-            for (double v : pbr.baseColorFactor)
-                if (!std::isfinite(v))
-                    return m_sink.invalid(where, "baseColorFactor is not finite");
-            for (double v : gm.emissiveFactor)
-                if (!std::isfinite(v)) return m_sink.invalid(where, "emissiveFactor is not finite");
-            if (!std::isfinite(pbr.metallicFactor) || !std::isfinite(pbr.roughnessFactor))
-                return m_sink.invalid(where, "metallicFactor or roughnessFactor is not finite");
-            if (pbr.baseColorFactor.size() >= 3)
-                m.material.base_color = {unit(pbr.baseColorFactor[0]), unit(pbr.baseColorFactor[1]),
-                                         unit(pbr.baseColorFactor[2])};
-            m.material.metallic = unit(pbr.metallicFactor);
-            m.material.roughness = unit(pbr.roughnessFactor);
-            // An emissive factor is kept only without its texture: alone, the factor would make
-            // the whole surface glow where the texture lights only parts of it.
-            if (gm.emissiveFactor.size() >= 3 && gm.emissiveTexture.index < 0) {
-                auto strength = read_emissive_strength(gm, where);
-                if (!strength) return Unexpected(strength.error());
-                m.material.emission = strength.value() * Vec3(unit(gm.emissiveFactor[0]),
-                                                              unit(gm.emissiveFactor[1]),
-                                                              unit(gm.emissiveFactor[2]));
-            }
-            warn_unread_material(gm, where);
-            const int texture = pbr.baseColorTexture.index;
-            if (texture >= 0) {
-                auto t = read_texture(texture, where + ".baseColorTexture");
-                if (!t) return Unexpected(t.error());
-                m.base_color_texture = t.value();
-                m.material.base_color_sampler = read_sampler(texture);
-                int tex_coord = pbr.baseColorTexture.texCoord;
-                auto transform = read_texture_transform(pbr.baseColorTexture.extensions,
-                                                        where + ".baseColorTexture", tex_coord);
-                if (!transform) return Unexpected(transform.error());
+            auto m = read_material(gm, where);
+            if (!m) return Unexpected(m.error());
+            m_asset.materials.push_back(std::move(m).value());
+        }
+        return {};
+    }
+
+    /// Material `gm`'s factors, modes and textures (the first texture's texture coordinate set
+    /// and transform become the material's: its meshes have one set of uvs).
+    Imported<AssetMaterial> read_material(const tinygltf::Material& gm, const std::string& where) {
+        const auto& pbr = gm.pbrMetallicRoughness;
+        AssetMaterial m;
+        m.name = gm.name;
+        for (double v : pbr.baseColorFactor)
+            if (!std::isfinite(v)) return m_sink.invalid(where, "baseColorFactor is not finite");
+        for (double v : gm.emissiveFactor)
+            if (!std::isfinite(v)) return m_sink.invalid(where, "emissiveFactor is not finite");
+        if (!std::isfinite(pbr.metallicFactor) || !std::isfinite(pbr.roughnessFactor) ||
+            !std::isfinite(gm.alphaCutoff) || !std::isfinite(gm.normalTexture.scale) ||
+            !std::isfinite(gm.occlusionTexture.strength))
+            return m_sink.invalid(where, "metallicFactor, roughnessFactor, alphaCutoff, "
+                                         "normalTexture.scale or occlusionTexture.strength is "
+                                         "not finite");
+        Material& out = m.material;
+        if (pbr.baseColorFactor.size() >= 3)
+            out.base_color = {unit(pbr.baseColorFactor[0]), unit(pbr.baseColorFactor[1]),
+                              unit(pbr.baseColorFactor[2])};
+        if (pbr.baseColorFactor.size() >= 4) out.alpha = unit(pbr.baseColorFactor[3]);
+        out.metallic = unit(pbr.metallicFactor);
+        out.roughness = unit(pbr.roughnessFactor);
+        if (gm.emissiveFactor.size() >= 3) {
+            auto strength = read_emissive_strength(gm, where);
+            if (!strength) return Unexpected(strength.error());
+            out.emission = strength.value() * Vec3(unit(gm.emissiveFactor[0]),
+                                                   unit(gm.emissiveFactor[1]),
+                                                   unit(gm.emissiveFactor[2]));
+        }
+        if (gm.alphaMode == "MASK") {
+            out.alpha_mode = AlphaMode::Mask;
+        } else if (gm.alphaMode == "BLEND") {
+            out.alpha_mode = AlphaMode::Blend;
+        } else if (!gm.alphaMode.empty() && gm.alphaMode != "OPAQUE") {
+            return m_sink.invalid(where, "alphaMode '" + gm.alphaMode.substr(0, 64) +
+                                             "' is none of OPAQUE, MASK and BLEND");
+        }
+        out.alpha_cutoff = unit(gm.alphaCutoff);
+        out.normal_scale = float(std::clamp(gm.normalTexture.scale, -100.0, 100.0));
+        out.occlusion_strength = unit(gm.occlusionTexture.strength);
+        out.unlit = gm.extensions.count(UNLIT) != 0;
+        warn_unread_material(gm, where);
+        const TextureRef refs[] = {
+            {TextureSlot::BaseColor, "pbrMetallicRoughness.baseColorTexture",
+             pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord,
+             &pbr.baseColorTexture.extensions},
+            {TextureSlot::MetallicRoughness, "pbrMetallicRoughness.metallicRoughnessTexture",
+             pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord,
+             &pbr.metallicRoughnessTexture.extensions},
+            {TextureSlot::Normal, "normalTexture", gm.normalTexture.index,
+             gm.normalTexture.texCoord, &gm.normalTexture.extensions},
+            {TextureSlot::Occlusion, "occlusionTexture", gm.occlusionTexture.index,
+             gm.occlusionTexture.texCoord, &gm.occlusionTexture.extensions},
+            {TextureSlot::Emissive, "emissiveTexture", gm.emissiveTexture.index,
+             gm.emissiveTexture.texCoord, &gm.emissiveTexture.extensions},
+        };
+        bool mapped = false;
+        for (const TextureRef& ref : refs) {
+            if (ref.index < 0) continue;
+            const std::string at = where + "." + ref.path;
+            const TextureSlotInfo& info = TEXTURE_SLOTS[slot_index(ref.slot)];
+            auto t = read_texture(ref.index, at, info.space);
+            if (!t) return Unexpected(t.error());
+            int tex_coord = ref.tex_coord;
+            auto transform = read_texture_transform(*ref.extensions, at, tex_coord);
+            if (!transform) return Unexpected(transform.error());
+            for (const auto& [name, value] : *ref.extensions)
+                if (name != TEXTURE_TRANSFORM)
+                    warn_once(at + ".extensions." + name + " not imported");
+            // The first texture's sampler, coordinate set and transform are the material's.
+            if (!mapped) {
+                mapped = true;
+                out.base_color_sampler = read_sampler(ref.index);
                 m_uv_transforms.resize(m_asset.materials.size() + 1);
                 m_uv_transforms.back() = transform.value();
                 m_uv_sets.resize(m_asset.materials.size() + 1, 0);
                 m_uv_sets.back() = tex_coord;
+            } else if (tex_coord != m_uv_sets.back() ||
+                       transform.value() != m_uv_transforms.back()) {
+                warn_once(at + " reads other texture coordinates (a TEXCOORD set or "
+                               "KHR_texture_transform) than the material's first texture: it is "
+                               "read through the first one's");
             }
-            m_asset.materials.push_back(std::move(m));
+            m.texture(ref.slot) = t.value();
         }
-        return {};
+        return m;
     }
 
     /// KHR_materials_emissive_strength's emissiveStrength (1 without it): a finite number >= 0.
@@ -447,8 +511,8 @@ private:
         return std::optional(uv_transform(ox, oy, rotation, sx, sy));
     }
 
-    /// Each mesh's texture coordinates through its material's base-colour texture transform:
-    /// the only texture the renderer reads through them, so the result is what the file shows.
+    /// Each mesh's texture coordinates through its material's texture transform (its first
+    /// texture's: all its textures are read through the same uvs).
     void bake_texture_transforms() {
         for (AssetMesh& mesh : m_asset.meshes) {
             if (mesh.material < 0 || std::size_t(mesh.material) >= m_uv_transforms.size()) continue;
@@ -482,26 +546,29 @@ private:
     }
 
     /// textures[i]'s image as an asset texture (each image once).
-    Imported<int> read_texture(int i, const std::string& use) {
+    Imported<int> read_texture(int i, const std::string& use, TextureColorSpace space) {
         if (std::size_t(i) >= m_model.textures.size())
             return m_sink.invalid(use, "texture " + std::to_string(i) + " does not exist");
         const int source = m_model.textures[std::size_t(i)].source;
         if (source < 0 || std::size_t(source) >= m_model.images.size())
             return m_sink.invalid("textures[" + std::to_string(i) + "]",
                                   "image " + std::to_string(source) + " does not exist");
-        if (auto it = m_images.find(source); it != m_images.end()) return it->second;
+        // An image is one texture per colour space it is read in (a file may use one image as
+        // colour and as data).
+        if (auto it = m_images.find({source, space}); it != m_images.end()) return it->second;
         const tinygltf::Image& image = m_model.images[std::size_t(source)];
         // Images that share a buffer view share one texture: a file naming one view from many
         // images must not multiply its bytes.
-        if (auto it = m_views.find(image.bufferView);
+        if (auto it = m_views.find({image.bufferView, space});
             image.bufferView >= 0 && it != m_views.end()) {
-            m_images.emplace(source, it->second);
+            m_images.emplace(std::pair(source, space), it->second);
             return it->second;
         }
         AssetTexture t;
         t.name = image.name;
         t.mime_type = image.mimeType;
         t.uri = image.uri;
+        t.color_space = space;
         if (image.bufferView >= 0) {
             const std::string at = "images[" + std::to_string(source) + "]";
             if (std::size_t(image.bufferView) >= m_model.bufferViews.size())
@@ -520,8 +587,8 @@ private:
         }
         const int index = int(m_asset.textures.size());
         m_asset.textures.push_back(std::move(t));
-        m_images.emplace(source, index);
-        if (image.bufferView >= 0) m_views.emplace(image.bufferView, index);
+        m_images.emplace(std::pair(source, space), index);
+        if (image.bufferView >= 0) m_views.emplace(std::pair(image.bufferView, space), index);
         return index;
     }
 
@@ -588,18 +655,21 @@ private:
             return Unexpected(ok.error());
         if (auto ok = read_attribute(prim, "COLOR_0", where, pv.count, 3, mesh); !ok)
             return Unexpected(ok.error());
+        if (prim.attributes.count("TANGENT") != 0)
+            warn_once(where + ".attributes.TANGENT not imported: normal maps read tangents the "
+                              "server makes from the normals and uvs (MikkTSpace's convention)");
         return mesh;
     }
 
-    /// The texture coordinate set the primitive's base-colour texture reads (its texCoord, or
-    /// its KHR_texture_transform's): the one set a mesh keeps. A set the primitive lacks falls
+    /// The texture coordinate set the primitive's material's first texture reads (its texCoord,
+    /// or its KHR_texture_transform's): the one set a mesh keeps. A set the primitive lacks falls
     /// back to 0, with a warning.
     int uv_set_of(const tinygltf::Primitive& prim, const std::string& where) {
         if (prim.material < 0 || std::size_t(prim.material) >= m_uv_sets.size()) return 0;
         const int set = m_uv_sets[std::size_t(prim.material)];
         if (set == 0 || prim.attributes.count("TEXCOORD_" + std::to_string(set)) != 0)
             return set;
-        warn_once(where + ": its material's baseColorTexture reads TEXCOORD_" +
+        warn_once(where + ": its material's textures read TEXCOORD_" +
                   std::to_string(set) + ", which it lacks; TEXCOORD_0 is used");
         return 0;
     }
@@ -900,25 +970,9 @@ private:
 
     /// The parts of material `gm` the engine's material has no place for.
     void warn_unread_material(const tinygltf::Material& gm, const std::string& where) {
-        const auto texture = [&](int index, const char* what, const char* consequence) {
-            if (index >= 0) warn_once(where + "." + what + " not imported" + consequence);
-        };
-        texture(gm.emissiveTexture.index, "emissiveTexture",
-                ": the surface does not glow (its emissiveFactor is dropped with it)");
-        texture(gm.normalTexture.index, "normalTexture", " (normal map)");
-        texture(gm.occlusionTexture.index, "occlusionTexture", "");
-        texture(gm.pbrMetallicRoughness.metallicRoughnessTexture.index,
-                "pbrMetallicRoughness.metallicRoughnessTexture", ": the factors alone are used");
-        if (!gm.alphaMode.empty() && gm.alphaMode != "OPAQUE")
-            warn_once(where + ".alphaMode " + gm.alphaMode +
-                      " not imported: the surface is opaque");
         for (const auto& [name, value] : gm.extensions)
-            if (name != EMISSIVE_STRENGTH)
+            if (name != EMISSIVE_STRENGTH && name != UNLIT)
                 warn_once(where + ".extensions." + name + " not imported");
-        for (const auto& [name, value] : gm.pbrMetallicRoughness.baseColorTexture.extensions)
-            if (name != TEXTURE_TRANSFORM)
-                warn_once(where + ".pbrMetallicRoughness.baseColorTexture.extensions." + name +
-                          " not imported");
     }
 
     /// Adds a warning unless it was given already; past MAX_WARNINGS they are only counted (a
@@ -938,13 +992,15 @@ private:
     const ErrorSink& m_sink;
     const ImportLimits& m_limits;
     Asset m_asset;
-    /// Per material: its base-colour texture's transform, if any (bake_texture_transforms).
+    /// Per material: its first texture's transform, if any (bake_texture_transforms).
     std::vector<std::optional<UvTransform>> m_uv_transforms;
-    /// Per material: the texture coordinate set its base-colour texture reads (uv_set_of).
+    /// Per material: the texture coordinate set its first texture reads (uv_set_of).
     std::vector<int> m_uv_sets;
     std::map<int, std::vector<int>> m_meshes;  ///< glTF mesh -> asset meshes
-    std::map<int, int> m_images;               ///< glTF image -> asset texture
-    std::map<int, int> m_views;                ///< buffer view holding an image -> asset texture
+    /// (glTF image, colour space) -> asset texture
+    std::map<std::pair<int, TextureColorSpace>, int> m_images;
+    /// (buffer view holding an image, colour space) -> asset texture
+    std::map<std::pair<int, TextureColorSpace>, int> m_views;
     uint64_t m_vertices = 0;
     uint64_t m_triangles = 0;
     std::size_t m_unlisted_warnings = 0;  ///< past MAX_WARNINGS

@@ -201,15 +201,15 @@ void read_materials(const ObjFile& obj, const SideFiles& side_files, Asset& asse
             if (!image) image = find_side_file(side_files, m.diffuse_texname);
             if (auto shared = texture_of_file.find(image);
                 image && shared != texture_of_file.end()) {
-                out.base_color_texture = shared->second;
+                out.texture(TextureSlot::BaseColor) = shared->second;
             } else {
                 AssetTexture t;
                 t.name = m.diffuse_texname;
                 t.uri = m.diffuse_texname;
                 t.mime_type = mime_of(m.diffuse_texname);
                 if (image) t.bytes.assign(image->begin(), image->end());
-                out.base_color_texture = int(asset.textures.size());
-                if (image) texture_of_file.emplace(image, out.base_color_texture);
+                out.texture(TextureSlot::BaseColor) = int(asset.textures.size());
+                if (image) texture_of_file.emplace(image, out.texture(TextureSlot::BaseColor));
                 asset.textures.push_back(std::move(t));
             }
         }

@@ -35,9 +35,18 @@ std::optional<std::string> normalize_reference(std::string_view reference) {
 
 const std::string* find_side_file(const SideFiles& files, std::string_view reference) {
     if (files.empty()) return nullptr;
-    const auto key = normalize_reference(reference);
-    if (!key || key->empty()) return nullptr;
-    const auto it = files.find(*key);
+    if (const auto key = normalize_reference(reference); key) {
+        if (key->empty()) return nullptr;
+        if (const auto it = files.find(*key); it != files.end()) return &it->second;
+        // A reference above the model's folder names nothing else.
+        if (key->starts_with("..")) return nullptr;
+    }
+    // Step: the file's name alone, at the top of the upload.
+    const std::size_t cut = reference.find_last_of("/\\");
+    const std::string_view name = cut == std::string_view::npos ? reference : reference.substr(cut + 1);
+    if (name.empty() || name == "." || name == ".." || name.find('\0') != std::string_view::npos)
+        return nullptr;
+    const auto it = files.find(name);
     return it == files.end() ? nullptr : &it->second;
 }
 

@@ -19,7 +19,10 @@ using SideFiles = std::map<std::string, std::string, std::less<>>;
 /// nullopt for an absolute path ("/a", "C:/a") or one that holds a NUL.
 std::optional<std::string> normalize_reference(std::string_view reference);
 
-/// The side file a model's reference names, or nullptr.
+/// The side file a model's reference names, or nullptr. An absolute reference (a "D:\\art\\
+/// wood.jpg" written on the exporter's machine), or one into a folder the upload lacks, finds the
+/// file of its name at the top of the upload, as Blender and assimp's viewers look for textures;
+/// one that climbs above the model's folder ("../x.png") finds only that.
 const std::string* find_side_file(const SideFiles& files, std::string_view reference);
 
 }  // namespace strata::assets

@@ -1,5 +1,5 @@
-// Material ops: add_material, update_material (with a base-colour texture and its sampler),
-// remove_material.
+// Material ops: add_material, update_material (with their textures, one per TEXTURE_SLOTS entry,
+// and the sampler that reads them), remove_material.
 
 #include "protocol/edit_schema.h"
 #include "protocol/field_json.h"
@@ -28,7 +28,8 @@ Edit parse_add_material(OpFields& f) {
     AddMaterial e;
     e.id = f.id("id");
     read_added<MaterialFields>(f, e.material);
-    f.read("base_color_texture", e.base_color_texture);
+    for (const TextureSlotInfo& slot : TEXTURE_SLOTS)
+        f.read(slot.field, e.textures[slot_index(slot.slot)]);
     std::optional<TextureWrap> wrap;
     std::optional<TextureFilter> filter;
     read_sampler(f, wrap, filter);
@@ -41,9 +42,12 @@ Edit parse_update_material(OpFields& f) {
     UpdateMaterial e;
     e.material = f.id("material");
     read_updates<MaterialFields>(f, e);
-    if (const Json* t = f.get("base_color_texture"))
-        e.base_color_texture = t->is_null() ? std::optional<std::string>()
-                                            : f.reader().id(*t, f.pointer("base_color_texture"));
+    for (const TextureSlotInfo& slot : TEXTURE_SLOTS) {
+        const Json* t = f.get(slot.field);
+        if (!t) continue;
+        e.textures[slot_index(slot.slot)] =
+            t->is_null() ? std::optional<std::string>() : f.reader().id(*t, f.pointer(slot.field));
+    }
     read_sampler(f, e.wrap, e.filter);
     return e;
 }
@@ -54,33 +58,46 @@ Edit parse_remove_material(OpFields& f) {
     return e;
 }
 
+/// The material's fields and, after them, one texture id per slot (`Added`: an id; else an id,
+/// or null for none).
+template <bool Added>
+OrderedJson material_properties() {
+    OrderedJson properties = field_properties<MaterialFields, Added>();
+    const OrderedJson id = {{"$ref", "#/$defs/id"}};
+    for (const TextureSlotInfo& slot : TEXTURE_SLOTS) {
+        OrderedJson p = Added ? id : OrderedJson{{"oneOf", {id, {{"type", "null"}}}}};
+        p["description"] = std::string(slot.doc);
+        properties[std::string(slot.field)] = std::move(p);
+    }
+    return properties;
+}
+
 constexpr EditOp OPS[] = {
     {"add_material",
-     "A new material: base colour (optionally times a texture), roughness, metallic and "
-     "emission.",
+     "A new material (glTF 2.0's metallic-roughness model): base colour and alpha, roughness, "
+     "metallic, emission, each optionally times a texture, a normal map, occlusion, alpha mode "
+     "and unlit.",
      R"json({
   "type": "object",
   "properties": {
     "id": {"$ref": "#/$defs/id"},
-    "base_color_texture": {"$ref": "#/$defs/id"},
     "sampler": {"$ref": "#/$defs/sampler"}
   },
   "required": ["id"],
   "additionalProperties": false
 })json",
-     parse_add_material, edit_kinds<AddMaterial>(), field_properties<MaterialFields, true>},
+     parse_add_material, edit_kinds<AddMaterial>(), material_properties<true>},
     {"update_material", "Changes some of a material's values; the others keep theirs.",
      R"json({
   "type": "object",
   "properties": {
     "material": {"$ref": "#/$defs/id"},
-    "base_color_texture": {"oneOf": [{"$ref": "#/$defs/id"}, {"type": "null"}]},
     "sampler": {"$ref": "#/$defs/sampler"}
   },
   "required": ["material"],
   "additionalProperties": false
 })json",
-     parse_update_material, edit_kinds<UpdateMaterial>(), field_properties<MaterialFields, false>},
+     parse_update_material, edit_kinds<UpdateMaterial>(), material_properties<false>},
     {"remove_material",
      "Removes a material; refused (in-use) while a mesh has it as its default or an instance "
      "overrides with it.",

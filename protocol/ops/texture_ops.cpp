@@ -24,8 +24,8 @@ Edit parse_remove_texture(OpFields& f) {
 
 constexpr EditOp OPS[] = {
     {"add_texture",
-     "A texture from PNG or JPEG bytes (base64), decoded to linear RGB; materials use it as "
-     "base_color_texture.",
+     "A texture from PNG or JPEG bytes (base64), decoded to linear RGB (from sRGB, or as stored "
+     "for color_space linear) with its alpha; materials name it in their texture slots.",
      R"json({
   "type": "object",
   "properties": {

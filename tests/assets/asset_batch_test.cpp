@@ -178,7 +178,7 @@ TEST(AssetBatch, NormalsUvsAndTheEmbeddedTextureReachTheScene) {
         const TextureRecord* t = s.texture(s.find_texture("box.texture0")).value();
         EXPECT_EQ(t->image->width, 211u);  // CesiumLogoFlat.png, a palette PNG
         const MaterialRecord* mat = s.material(m->material).value();
-        EXPECT_EQ(mat->base_color_texture, s.find_texture("box.texture0"));
+        EXPECT_EQ(mat->textures[0], s.find_texture("box.texture0"));
     });
 }
 
@@ -197,7 +197,7 @@ TEST(AssetBatch, TexturesWithoutBytesOrInAnotherFormatAreLeftOutWithAWarning) {
     ASSERT_TRUE(engine->apply(std::move(b.batch)).has_value());
     engine->read([](const Scene& s) {
         const MaterialRecord* m = s.material(s.find_material("t.material0")).value();
-        EXPECT_TRUE(m->base_color_texture.is_null());
+        EXPECT_TRUE(m->textures[0].is_null());
     });
 }
 

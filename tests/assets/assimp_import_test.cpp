@@ -115,7 +115,7 @@ TEST(AssimpImport, AColladaTextureComesFromTheUploadOrIsOnlyNamed) {
     EXPECT_EQ(alone.value().textures[0].uri, "./duckCM.tga");
     EXPECT_TRUE(alone.value().textures[0].bytes.empty());
     ASSERT_EQ(alone.value().materials.size(), 1u);
-    EXPECT_EQ(alone.value().materials[0].base_color_texture, 0);
+    EXPECT_EQ(alone.value().materials[0].textures[0], 0);
     const SideFiles side{{"duckCM.tga", "not really a tga"}};
     auto with = import_model("Collada/duck.dae", AssetFormat::Dae, side);
     ASSERT_TRUE(with.has_value()) << with.error().detail;

@@ -81,7 +81,7 @@ TEST(ObjImport, MaterialsComeFromTheUploadedMtlWithKdKsNsAndMapKdMapped) {
     EXPECT_EQ(asset.materials[0].material.roughness, 1.0f);   // no specular: fully rough
     EXPECT_LT(asset.materials[1].material.roughness, 0.25f);  // Ns 1000: glossy
     EXPECT_EQ(asset.materials[1].material.emission, Vec3(0.5f, 0, 0));
-    ASSERT_EQ(asset.materials[1].base_color_texture, 0);
+    ASSERT_EQ(asset.materials[1].textures[0], 0);
     EXPECT_EQ(asset.textures[0].uri, "shiny.png");
     EXPECT_EQ(asset.textures[0].mime_type, "image/png");
     EXPECT_TRUE(asset.textures[0].bytes.empty());  // not uploaded
@@ -117,7 +117,7 @@ TEST(ObjImport, AMapKdImageThatCameWithTheUploadBecomesTheMaterialsTexture) {
     ASSERT_TRUE(applied.has_value()) << applied.error().describe();
     engine.value()->read([](const Scene& s) {
         const MaterialRecord* shiny = s.material(s.find_material("cube.material1")).value();
-        EXPECT_EQ(shiny->base_color_texture, s.find_texture("cube.texture0"));
+        EXPECT_EQ(shiny->textures[0], s.find_texture("cube.texture0"));
     });
 }
 
@@ -132,8 +132,8 @@ TEST(ObjImport, MaterialsNamingTheSameImageShareOneTexture) {
                          {{"cube.mtl", mtl}, {"shiny.png", png}, {"other.png", png}});
     ASSERT_TRUE(a.has_value()) << a.error().detail;
     ASSERT_EQ(a.value().textures.size(), 2u);
-    for (std::size_t i = 0; i < 50; ++i) EXPECT_EQ(a.value().materials[i].base_color_texture, 0);
-    EXPECT_EQ(a.value().materials[50].base_color_texture, 1);
+    for (std::size_t i = 0; i < 50; ++i) EXPECT_EQ(a.value().materials[i].textures[0], 0);
+    EXPECT_EQ(a.value().materials[50].textures[0], 1);
 }
 
 TEST(ObjImport, AnMtllibOutsideTheUploadIsNeverReadAndIsNamedInTheWarnings) {

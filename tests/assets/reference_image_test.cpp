@@ -1,6 +1,8 @@
 // Imported models against stored reference images, compared with a tolerance (as the demo's
 // reference test does): Spot, the bunny and the multi-node 2CylinderEngine, an FBX spider and a
-// COLLADA duck read through assimp, each framed by a camera computed from its world bounds; and BoxTextured, whose embedded PNG must show, also
+// COLLADA duck read through assimp, each framed by a camera computed from its world bounds;
+// glTF's ClearCoat test model with its normal maps, emissive labels and blended coating; and
+// BoxTextured, whose embedded PNG must show, also
 // when it comes as a .gltf with its external .bin and PNG in a tar archive (that .gltf's sampler
 // mirrors the texture where the .glb's repeats it, hence its own reference frame).
 //
@@ -108,6 +110,23 @@ TEST(AssetReferenceImage, TextureTransformsShowTheCorrectTextures) {
     for (const std::string& w : asset.value().warnings)
         EXPECT_EQ(w.find("KHR_texture_transform"), std::string::npos) << w;
     check_reference(std::move(asset), "texture_transform");
+}
+
+TEST(AssetReferenceImage, ClearCoatShowsItsNormalMapsLabelsAndBlendedCoating) {
+    // KHR_materials_clearcoat's test model, read without its extension (a warning says so): the
+    // rows show normal maps (ribs, plastic wrap), a roughness-striped metallic-roughness texture
+    // and an alpha-blended partial coating, and the label plates glow only where their emissive
+    // texture has letters.
+    const std::string folder = std::string(STRATA_ASSIMP_MODELS_DIR) + "/glTF2/ClearCoat-glTF";
+    const std::string archive = run_tar(folder, "", ".");
+    ASSERT_FALSE(archive.empty()) << folder << " missing, or tar failed";
+    auto imported = import_archive(bytes_of(archive), "clearcoat.tar", {});
+    ASSERT_TRUE(imported.has_value()) << imported.error().detail;
+    for (const std::string& w : imported.value().asset.warnings) {
+        EXPECT_EQ(w.find("normalTexture"), std::string::npos) << w;
+        EXPECT_EQ(w.find("emissiveTexture"), std::string::npos) << w;
+    }
+    check_reference(std::move(imported.value().asset), "clearcoat");
 }
 
 TEST(AssetReferenceImage, BoxTexturedShowsItsEmbeddedTexture) {

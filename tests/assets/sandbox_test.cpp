@@ -59,7 +59,7 @@ ImportOutcome sample_outcome() {
     mat.material.base_color = {0.9f, 0.1f, 0.1f};
     mat.material.roughness = 0.25f;
     mat.material.base_color_sampler = {TextureWrap::Mirror, TextureFilter::Nearest};
-    mat.base_color_texture = 0;
+    mat.textures[0] = 0;
     o.asset.materials.push_back(mat);
     o.asset.textures.push_back({"tex", "image/png", {1, 2, 3, 0, 255}, "t.png"});
     AssetNode root;

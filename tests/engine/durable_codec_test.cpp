@@ -69,7 +69,7 @@ EditBatch first_layout_batch() {
     m.normals = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}};
     b.edits.emplace_back(AddTexture{"tex", "bytes"});
     AddMaterial am{"red", Material{{1, 0, 0}, 0.25f, 0.5f, {0, 0, 0}}};
-    am.base_color_texture = "tex";
+    am.textures[0] = "tex";
     am.material.base_color_sampler.wrap = TextureWrap::Mirror;
     b.edits.emplace_back(am);
     b.edits.emplace_back(std::move(m));

@@ -305,11 +305,11 @@ TEST(Durability, NormalsAndUvsSurviveARestartFromJournalAndFromSnapshot) {
 TEST(Durability, TexturesAndMaterialBindingsSurviveARestartFromJournalAndFromSnapshot) {
     TempDir dir;
     AddMaterial m{"m", Material{}};
-    m.base_color_texture = "checker";
+    m.textures[0] = "checker";
     m.material.base_color_sampler = {TextureWrap::Mirror, TextureFilter::Nearest};
     UpdateMaterial rebind;
     rebind.material = "m";
-    rebind.base_color_texture = std::optional<std::string>("photo");
+    rebind.textures[0] = std::optional<std::string>("photo");
     rebind.wrap = TextureWrap::Clamp;
     auto state = [](const Engine& e) {
         return e.read([](const Scene& s) {
@@ -319,7 +319,7 @@ TEST(Durability, TexturesAndMaterialBindingsSurviveARestartFromJournalAndFromSna
                        std::to_string(t.image->height) + ";";
             });
             const MaterialRecord* mat = s.material(s.find_material("m")).value();
-            out += "m->" + s.texture(mat->base_color_texture).value()->id + " wrap " +
+            out += "m->" + s.texture(mat->textures[0]).value()->id + " wrap " +
                    texture_wrap_name(mat->material.base_color_sampler.wrap) + " filter " +
                    texture_filter_name(mat->material.base_color_sampler.filter);
             out += " bytes " + std::to_string(s.mesh_totals().texture_bytes);

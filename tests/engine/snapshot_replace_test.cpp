@@ -45,7 +45,7 @@ void build_scene(Engine& engine, uint64_t seed, int batches, const std::string& 
         ASSERT_TRUE(r.has_value()) << r.error().describe();
     }
     AddMaterial textured{"tex-" + tag, Material{}};
-    textured.base_color_texture = "checker-" + tag;
+    textured.textures[0] = "checker-" + tag;
     AddInstance a = test::instance_edit("a-" + tag, "box-" + tag, {1, 0, 0});
     a.parent = "wheels-" + tag;
     a.material = "tex-" + tag;

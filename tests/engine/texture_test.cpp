@@ -158,7 +158,7 @@ AddTexture texture_edit(const std::string& id, std::string bytes = test::four_co
 AddMaterial textured_material(const std::string& id, const std::string& texture) {
     AddMaterial m{id, Material{}};
     m.material.base_color = Vec3(1.0f);
-    m.base_color_texture = texture;
+    m.textures[0] = texture;
     return m;
 }
 
@@ -182,7 +182,7 @@ TEST(TextureRules, AMaterialNamesATextureThatExists) {
         const TextureRecord* t = s.texture(s.find_texture("checker")).value();
         EXPECT_EQ(t->image->width, 2u);
         const MaterialRecord* m = s.material(s.find_material("m")).value();
-        EXPECT_EQ(m->base_color_texture, s.find_texture("checker"));
+        EXPECT_EQ(m->textures[0], s.find_texture("checker"));
         EXPECT_EQ(s.mesh_totals().texture_bytes,
                   4u * TEXTURE_BYTES_PER_TEXEL + test::four_colour_png().size());
         EXPECT_EQ(s.counts().textures, 1u);
@@ -221,13 +221,13 @@ TEST(TextureRules, ATextureInUseCannotBeRemovedUntilNoMaterialNamesIt) {
 
     UpdateMaterial drop_a;
     drop_a.material = "a";
-    drop_a.base_color_texture = std::optional<std::string>();
+    drop_a.textures[0] = std::optional<std::string>();
     UpdateMaterial drop_b = drop_a;
     drop_b.material = "b";
     e = refused(*engine, batch(drop_a, RemoveTexture{"t"}));  // b still uses it
     EXPECT_EQ(e.code, ErrorCode::InUse);
     engine->read([](const Scene& s) {  // and the batch's first edit was undone
-        EXPECT_FALSE(s.material(s.find_material("a")).value()->base_color_texture.is_null());
+        EXPECT_FALSE(s.material(s.find_material("a")).value()->textures[0].is_null());
     });
     apply_ok(*engine, drop_a, drop_b, RemoveTexture{"t"});
     engine->read([](const Scene& s) {
@@ -248,7 +248,7 @@ TEST(TextureRules, ARefusedBatchRestoresRemovedTexturesAndMaterialBindings) {
     });
     UpdateMaterial swap;
     swap.material = "m";
-    swap.base_color_texture = std::optional<std::string>("u");
+    swap.textures[0] = std::optional<std::string>("u");
     swap.wrap = TextureWrap::Mirror;
     const Error e =
         refused(*engine, batch(swap, RemoveTexture{"t"}, texture_edit("v"), RemoveMesh{"missing"}));
@@ -293,7 +293,7 @@ TEST(TextureCodec, TextureEditsAndMaterialBindingsRoundTripThroughTheJournalEnco
     add.material.base_color_sampler = {TextureWrap::Mirror, TextureFilter::Nearest};
     UpdateMaterial unbind;
     unbind.material = "m";
-    unbind.base_color_texture = std::optional<std::string>();
+    unbind.textures[0] = std::optional<std::string>();
     unbind.filter = TextureFilter::Bilinear;
     UpdateMaterial untouched;
     untouched.material = "m";
@@ -309,17 +309,17 @@ TEST(TextureCodec, TextureEditsAndMaterialBindingsRoundTripThroughTheJournalEnco
     EXPECT_EQ(t.id, "t");
     EXPECT_EQ(t.data, test::four_colour_png());
     const auto& m = std::get<AddMaterial>(back->edits[1]);
-    EXPECT_EQ(m.base_color_texture, std::optional<std::string>("t"));
+    EXPECT_EQ(m.textures[0], std::optional<std::string>("t"));
     EXPECT_EQ(m.material, add.material);
     const auto& u = std::get<UpdateMaterial>(back->edits[2]);
-    ASSERT_TRUE(u.base_color_texture.has_value());
-    EXPECT_FALSE(u.base_color_texture->has_value());
+    ASSERT_TRUE(u.textures[0].has_value());
+    EXPECT_FALSE(u.textures[0]->has_value());
     EXPECT_EQ(u.filter, std::optional<TextureFilter>(TextureFilter::Bilinear));
     EXPECT_FALSE(u.wrap.has_value());
     const auto& v = std::get<UpdateMaterial>(back->edits[3]);
-    EXPECT_FALSE(v.base_color_texture.has_value());
+    EXPECT_FALSE(v.textures[0].has_value());
     EXPECT_EQ(std::get<RemoveTexture>(back->edits[4]).texture, "t");
-    EXPECT_FALSE(std::get<AddMaterial>(back->edits[5]).base_color_texture.has_value());
+    EXPECT_FALSE(std::get<AddMaterial>(back->edits[5]).textures[0].has_value());
     // A wrap byte past the last mode is corruption, not a mode.
     std::string one;
     durable::encode_batch(batch(add), one);
@@ -335,14 +335,14 @@ TEST(TextureLeastWork, TextureAndTextureBindingEditsTouchNoBvh) {
     commit_ok(*engine);
     UpdateMaterial bind;
     bind.material = "m";
-    bind.base_color_texture = std::optional<std::string>("t");
+    bind.textures[0] = std::optional<std::string>("t");
     bind.wrap = TextureWrap::Clamp;
     apply_ok(*engine, texture_edit("t"), bind);
     RebuildReport r = commit_ok(*engine);
     EXPECT_TRUE(r.no_accel_work());
     EXPECT_EQ(r.tlas_action, TlasAction::None);
     EXPECT_EQ(r.blas_rebuilds + r.blas_refits, 0u);
-    bind.base_color_texture = std::optional<std::string>();
+    bind.textures[0] = std::optional<std::string>();
     apply_ok(*engine, bind, RemoveTexture{"t"});
     r = commit_ok(*engine);
     EXPECT_TRUE(r.no_accel_work());
@@ -396,7 +396,7 @@ TEST(TextureRender, UnbindingTheTextureBringsBackThePlainBaseColour) {
     auto engine = textured_quad_scene(TextureFilter::Bilinear);
     UpdateMaterial unbind;
     unbind.material = "m";
-    unbind.base_color_texture = std::optional<std::string>();
+    unbind.textures[0] = std::optional<std::string>();
     unbind.base_color = Vec3(0.25f, 0.5f, 0.75f);
     apply_ok(*engine, unbind, RemoveTexture{"t"});
     const Frame f = test::render_frame_ok(*engine, test::request(32, 32, 1, {Aov::Albedo}));

@@ -225,13 +225,13 @@ TEST(EditParser, MaterialCameraLightingAndSceneOps) {
     EXPECT_EQ(one<RemoveMaterial>(R"({"op":"remove_material","material":"m"})").material, "m");
     const auto bound = one<AddMaterial>(
         R"({"op":"add_material","id":"m","base_color_texture":"t","sampler":{"wrap":"clamp"}})");
-    EXPECT_EQ(bound.base_color_texture, std::optional<std::string>("t"));
+    EXPECT_EQ(bound.textures[0], std::optional<std::string>("t"));
     EXPECT_EQ(bound.material.base_color_sampler.wrap, TextureWrap::Clamp);
     EXPECT_EQ(bound.material.base_color_sampler.filter, TextureFilter::Bilinear);
     const auto unbound = one<UpdateMaterial>(
         R"({"op":"update_material","material":"m","base_color_texture":null,"sampler":{"filter":"nearest"}})");
-    ASSERT_TRUE(unbound.base_color_texture.has_value());
-    EXPECT_FALSE(unbound.base_color_texture->has_value());
+    ASSERT_TRUE(unbound.textures[0].has_value());
+    EXPECT_FALSE(unbound.textures[0]->has_value());
     EXPECT_EQ(unbound.filter, std::optional<TextureFilter>(TextureFilter::Nearest));
     EXPECT_FALSE(unbound.wrap.has_value());
 }

@@ -185,6 +185,7 @@ std::vector<std::pair<std::string, std::string>> field_tables() {
     return {{"mesh", fields_markdown<MeshFields>()},
             {"texture", fields_markdown<TextureFields>()},
             {"material", fields_markdown<MaterialFields>()},
+            {"material-textures", texture_slots_markdown()},
             {"instance", fields_markdown<InstanceFields>()},
             {"group", fields_markdown<GroupFields>()},
             {"light", fields_markdown<LightFields>()},

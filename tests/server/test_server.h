@@ -1,6 +1,7 @@
 #pragma once
 // The real server, in-process on a free loopback port, and a real httplib client.
 
+#include <cstdlib>
 #include <memory>
 #include <string>
 #include <thread>
@@ -34,7 +35,7 @@ struct Reply {
 };
 
 inline Reply to_reply(const httplib::Result& r) {
-    if (!r) return {};
+    if (!r) return {0, "no response: " + httplib::to_string(r.error()), {}};
     return {r->status, r->body, r->headers};
 }
 
@@ -42,7 +43,7 @@ class TestServer {
 public:
     explicit TestServer(ServerConfig config = {}, bool demo = false,
                         const EngineConfig& engine_config = {}) {
-        spdlog::set_level(spdlog::level::warn);
+        spdlog::set_level(std::getenv("STRATA_TEST_LOG") ? spdlog::level::info : spdlog::level::warn);
         auto engine = Engine::create(engine_config);
         EXPECT_TRUE(engine.has_value());
         m_engine = std::move(engine.value());
