@@ -13,6 +13,9 @@
 #   gltf_import_fuzzer    .glb and .gltf files: tinygltf (compiled here, instrumented), the glTF
 #   obj_import_fuzzer     importer, OBJ (tinyobjloader) and our PLY reader, then the asset's batch
 #   ply_import_fuzzer     through the scene's rules (protocol/assets/)
+#   assimp_import_fuzzer  FBX, COLLADA, STL, 3DS, OFF, X, AC, ASE, ... through Debian's assimp (not
+#                         instrumented; it leaks on some broken files, so no leak detection here):
+#                         our IOSystem, scene, material and texture glue, then the batch
 #   archive_import_fuzzer tar uploads: our ustar reader, the one model it holds and its side files,
 #                         then that model's importer and batch (protocol/assets/archive_import.h)
 #   texture_decode_fuzzer PNG and JPEG bytes: libpng and libturbojpeg behind our header checks and
@@ -53,7 +56,8 @@ cmake -S "$root" -B "$build" -G Ninja \
     -DSTRATA_FUZZ=ON -DSTRATA_BUILD_BENCHMARKS=OFF
 ninja -C "$build" -j "${STRATA_BUILD_JOBS:-2}" edit_batch_fuzzer http_request_fuzzer \
     journal_record_fuzzer snapshot_fuzzer durable_corpus \
-    gltf_import_fuzzer obj_import_fuzzer ply_import_fuzzer archive_import_fuzzer \
+    gltf_import_fuzzer obj_import_fuzzer ply_import_fuzzer assimp_import_fuzzer \
+    archive_import_fuzzer \
     texture_decode_fuzzer ${STRATA_FUZZ_ALSO:-}
 [ "$build_only" = 1 ] && exit 0
 
@@ -62,13 +66,14 @@ trap 'rm -rf "$scratch"' EXIT
 # A crashing input is kept in build-fuzz/artifacts/ (reproduce: <fuzzer> FILE).
 mkdir -p "$build/artifacts"
 
-run() {  # fuzzer corpus dictionary runs (corpus: a folder in tests/fuzz, a scratch one, or both)
+run() {  # fuzzer corpus dictionary runs [libFuzzer flags...] (corpus: a folder in tests/fuzz, a
+         # scratch one, or both)
     mkdir -p "$scratch/$2"
     if [ -d "$root/tests/fuzz/$2" ]; then cp -r "$root/tests/fuzz/$2/." "$scratch/$2/"; fi
     local dict=()
     [ -n "$3" ] && dict=(-dict="$root/tests/fuzz/$3")
     "$build/tests/fuzz/$1" -runs="$4" -max_len=65536 -timeout=10 -rss_limit_mb=2048 \
-        "${dict[@]}" -artifact_prefix="$build/artifacts/$1-" ${STRATA_FUZZ_ARGS:-} \
+        "${dict[@]}" -artifact_prefix="$build/artifacts/$1-" "${@:5}" ${STRATA_FUZZ_ARGS:-} \
         "$scratch/$2"
     echo "fuzz: $1, $4 runs, no crash"
 }
@@ -96,6 +101,19 @@ for format in gltf obj ply; do
     fi
     run "${format}_import_fuzzer" "asset_corpus/$format" "" "$((runs / 4))"
 done
+
+# assimp's formats, seeded from their small assimp-testmodels files, each behind its format's line.
+mkdir -p "$scratch/asset_corpus/assimp"
+if [ -d "$models" ]; then
+    n=0
+    for ext in fbx dae stl 3ds off x ac ase lwo ms3d b3d dxf 3mf amf smd nff cob xgl; do
+        while IFS= read -r -d '' f; do
+            { printf '%s\n' "$ext"; cat "$f"; } > "$scratch/asset_corpus/assimp/$n-$(basename "$f")"
+            n=$((n + 1))
+        done < <(find "$models" -type f -size -64k -iname "*.$ext" -print0)
+    done
+fi
+run assimp_import_fuzzer asset_corpus/assimp "" "$((runs / 4))" -detect_leaks=0
 
 # Tar uploads, seeded with archives tar writes now.
 mkdir -p "$scratch/archive_corpus"

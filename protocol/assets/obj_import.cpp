@@ -181,9 +181,30 @@ Imported<ObjFile> parse_obj(std::string_view text, const SideFiles& side_files,
     return obj;
 }
 
-/// Step 2: materials. Materials naming the same image share one texture.
+/// Most warnings of unread maps listed (a file of thousands of materials must not make the
+/// answer huge); the rest are counted.
+constexpr std::size_t MAX_MAP_WARNINGS = 64;
+
+/// The MTL maps the engine has no slot for, for warnings.
+constexpr std::pair<std::string tinyobj::material_t::*, const char*> UNREAD_MAPS[] = {
+    {&tinyobj::material_t::bump_texname, "map_Bump (a height map)"},
+    {&tinyobj::material_t::displacement_texname, "disp"},
+    {&tinyobj::material_t::alpha_texname, "map_d"},
+    {&tinyobj::material_t::specular_texname, "map_Ks"},
+    {&tinyobj::material_t::specular_highlight_texname, "map_Ns"},
+    {&tinyobj::material_t::ambient_texname, "map_Ka"},
+    {&tinyobj::material_t::reflection_texname, "refl"},
+    {&tinyobj::material_t::roughness_texname, "map_Pr"},
+    {&tinyobj::material_t::metallic_texname, "map_Pm"},
+    {&tinyobj::material_t::sheen_texname, "map_Ps"},
+};
+
+/// Step 2: materials, with their diffuse (base colour), normal (`norm`) and emissive (`map_Ke`)
+/// maps, and dissolve (`d`, or 1 - `Tr`) below 1 as blended alpha. Materials naming the same
+/// image in the same colour space share one texture.
 void read_materials(const ObjFile& obj, const SideFiles& side_files, Asset& asset) {
-    std::map<const std::string*, int> texture_of_file;
+    std::map<std::pair<const std::string*, TextureColorSpace>, int> texture_of_file;
+    std::size_t unlisted = 0;
     for (std::size_t i = 0; i < obj.mtl.size(); ++i) {
         const tinyobj::material_t& m = obj.mtl[i];
         AssetMaterial out;
@@ -194,27 +215,51 @@ void read_materials(const ObjFile& obj, const SideFiles& side_files, Asset& asse
         for (int c = 0; c < 3; ++c)
             out.material.emission[c] =
                 std::isfinite(m.emission[c]) ? std::clamp(m.emission[c], 0.0f, 1e4f) : 0.0f;
-        if (!m.diffuse_texname.empty()) {
-            const std::string& folder = i < obj.folders.size() ? obj.folders[i] : "";
+        if (std::isfinite(m.dissolve) && m.dissolve < 1.0f) {
+            out.material.alpha = unit(m.dissolve);
+            out.material.alpha_mode = AlphaMode::Blend;
+        }
+        const std::string& folder = i < obj.folders.size() ? obj.folders[i] : "";
+        const auto map = [&](const std::string& name, TextureSlot slot) {
+            if (name.empty()) return;
+            const TextureColorSpace space = TEXTURE_SLOTS[slot_index(slot)].space;
             const std::string* image =
-                folder.empty() ? nullptr : find_side_file(side_files, folder + m.diffuse_texname);
-            if (!image) image = find_side_file(side_files, m.diffuse_texname);
-            if (auto shared = texture_of_file.find(image);
+                folder.empty() ? nullptr : find_side_file(side_files, folder + name);
+            if (!image) image = find_side_file(side_files, name);
+            if (auto shared = texture_of_file.find({image, space});
                 image && shared != texture_of_file.end()) {
-                out.texture(TextureSlot::BaseColor) = shared->second;
-            } else {
-                AssetTexture t;
-                t.name = m.diffuse_texname;
-                t.uri = m.diffuse_texname;
-                t.mime_type = mime_of(m.diffuse_texname);
-                if (image) t.bytes.assign(image->begin(), image->end());
-                out.texture(TextureSlot::BaseColor) = int(asset.textures.size());
-                if (image) texture_of_file.emplace(image, out.texture(TextureSlot::BaseColor));
-                asset.textures.push_back(std::move(t));
+                out.texture(slot) = shared->second;
+                return;
             }
+            AssetTexture t;
+            t.name = name;
+            t.uri = name;
+            t.mime_type = mime_of(name);
+            t.color_space = space;
+            if (image) t.bytes.assign(image->begin(), image->end());
+            out.texture(slot) = int(asset.textures.size());
+            if (image) texture_of_file.emplace(std::pair(image, space), out.texture(slot));
+            asset.textures.push_back(std::move(t));
+        };
+        map(m.diffuse_texname, TextureSlot::BaseColor);
+        map(m.normal_texname, TextureSlot::Normal);
+        // An emissive map multiplies Ke; a map with no Ke (black) is read as Ke 1 1 1.
+        if (!m.emissive_texname.empty() && out.material.emission == Vec3(0.0f))
+            out.material.emission = Vec3(1.0f);
+        map(m.emissive_texname, TextureSlot::Emissive);
+        for (const auto& [member, keyword] : UNREAD_MAPS) {
+            if ((m.*member).empty()) continue;
+            if (asset.warnings.size() < MAX_MAP_WARNINGS)
+                asset.warnings.push_back("material '" + m.name.substr(0, 64) + "': its " +
+                                         keyword + " map '" + (m.*member).substr(0, 256) +
+                                         "' is not imported");
+            else
+                ++unlisted;
         }
         asset.materials.push_back(std::move(out));
     }
+    if (unlisted > 0)
+        asset.warnings.push_back(std::to_string(unlisted) + " more warnings not listed");
 }
 
 /// Step 3: counts triangles against the budget before building anything.

@@ -198,6 +198,70 @@ TEST(GltfImport, AnEmissiveStrengthMultipliesTheEmissiveFactor) {
     EXPECT_THAT(bad.error().detail, HasSubstr("emissiveStrength"));
 }
 
+TEST(GltfImport, AMaterialsMapsAlphaAndUnlitAreRead) {
+    auto doc = nlohmann::json::parse(triangle_gltf(R"([{"mesh": 0}])", R"(, "material": 0)"));
+    const uint8_t rgb[] = {128, 128, 255};
+    const std::string png = "data:image/png;base64," +
+                            protocol::encode_base64(encode_png(rgb, 1, 1, 3).value());
+    doc["images"] = {{{"uri", png}}, {{"uri", png}}};
+    doc["textures"] = {{{"source", 0}}, {{"source", 1}}};
+    doc["extensionsUsed"] = {"KHR_materials_unlit"};
+    doc["materials"] = {
+        {{"alphaMode", "MASK"},
+         {"alphaCutoff", 0.3},
+         {"pbrMetallicRoughness",
+          {{"baseColorFactor", {1.0, 1.0, 1.0, 0.5}},
+           {"baseColorTexture", {{"index", 0}}},
+           {"metallicRoughnessTexture", {{"index", 1}}}}},
+         {"normalTexture", {{"index", 0}, {"scale", 2.0}}},
+         {"occlusionTexture", {{"index", 1}, {"strength", 0.25}}},
+         {"emissiveTexture", {{"index", 1}}},
+         {"emissiveFactor", {1.0, 0.5, 0.25}},
+         {"extensions", {{"KHR_materials_unlit", nlohmann::json::object()}}}}};
+    auto a = import_text(AssetFormat::Gltf, doc.dump());
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
+    EXPECT_TRUE(a.value().warnings.empty()) << a.value().warnings.front();
+    const AssetMaterial& m = a.value().materials.at(0);
+    EXPECT_EQ(m.material.alpha_mode, AlphaMode::Mask);
+    EXPECT_FLOAT_EQ(m.material.alpha_cutoff, 0.3f);
+    EXPECT_FLOAT_EQ(m.material.alpha, 0.5f);
+    EXPECT_FLOAT_EQ(m.material.normal_scale, 2.0f);
+    EXPECT_FLOAT_EQ(m.material.occlusion_strength, 0.25f);
+    EXPECT_TRUE(m.material.unlit);
+    EXPECT_EQ(m.material.emission, Vec3(1.0f, 0.5f, 0.25f));  // kept with its texture
+    // Image 0 as colour (base colour) and as data (normals): two textures. Image 1 only as data
+    // (metallic-roughness, occlusion) and as colour (emissive): two as well.
+    const auto& t = a.value().textures;
+    ASSERT_EQ(t.size(), 4u);
+    for (const TextureSlotInfo& slot : TEXTURE_SLOTS) {
+        const int i = m.texture(slot.slot);
+        ASSERT_GE(i, 0) << slot.field;
+        EXPECT_EQ(t.at(std::size_t(i)).color_space, slot.space) << slot.field;
+    }
+    EXPECT_EQ(m.texture(TextureSlot::MetallicRoughness), m.texture(TextureSlot::Occlusion));
+    EXPECT_NE(m.texture(TextureSlot::BaseColor), m.texture(TextureSlot::Normal));
+
+    doc["materials"][0]["alphaMode"] = "SOMETIMES";
+    auto bad = import_text(AssetFormat::Gltf, doc.dump());
+    ASSERT_FALSE(bad.has_value());
+    EXPECT_THAT(bad.error().detail, HasSubstr("alphaMode 'SOMETIMES'"));
+}
+
+TEST(GltfImport, ATexturesOtherCoordinatesThanTheFirstOnesAreNamedInAWarning) {
+    auto doc = nlohmann::json::parse(triangle_gltf(R"([{"mesh": 0}])", R"(, "material": 0)"));
+    const uint8_t rgb[] = {128, 128, 255};
+    doc["images"] = {{{"uri", "data:image/png;base64," +
+                                  protocol::encode_base64(encode_png(rgb, 1, 1, 3).value())}}};
+    doc["textures"] = {{{"source", 0}}};
+    doc["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}},
+                         {"normalTexture", {{"index", 0}, {"texCoord", 1}}}}};
+    auto a = import_text(AssetFormat::Gltf, doc.dump());
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
+    ASSERT_EQ(a.value().warnings.size(), 1u);
+    EXPECT_THAT(a.value().warnings[0], HasSubstr("materials[0].normalTexture reads other texture "
+                                                 "coordinates"));
+}
+
 TEST(GltfImport, ThousandsOfUnreadFeaturesGiveABoundedListOfWarnings) {
     auto doc = nlohmann::json::parse(triangle_gltf(R"([{"mesh": 0}])"));
     for (int i = 0; i < 200; ++i)

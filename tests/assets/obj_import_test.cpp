@@ -136,6 +136,34 @@ TEST(ObjImport, MaterialsNamingTheSameImageShareOneTexture) {
     EXPECT_EQ(a.value().materials[50].textures[0], 1);
 }
 
+TEST(ObjImport, NormAndMapKeAreReadAsMapsDissolveAsBlendAndOtherMapsAreNamed) {
+    const uint8_t rgb[] = {128, 128, 255};
+    const std::string png = encode_png(rgb, 1, 1, 3).value();
+    const std::string mtl = "newmtl glass\nKd 1 1 1\nd 0.25\nmap_Kd shiny.png\n"
+                            "norm shiny.png\nmap_Ke glow.png\nmap_Bump bump.png\n"
+                            "newmtl solid\nKd 1 1 1\n";
+    auto a = import_text(AssetFormat::Obj, CUBE_FACES,
+                         {{"cube.mtl", mtl}, {"shiny.png", png}, {"glow.png", png}});
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
+    const AssetMaterial& glass = a.value().materials.at(0);
+    EXPECT_EQ(glass.material.alpha_mode, AlphaMode::Blend);
+    EXPECT_EQ(glass.material.alpha, 0.25f);
+    EXPECT_EQ(glass.material.emission, Vec3(1.0f));  // map_Ke without Ke
+    // One image read as colour and as data is two textures, one per colour space.
+    const int base = glass.texture(TextureSlot::BaseColor);
+    const int normal = glass.texture(TextureSlot::Normal);
+    ASSERT_GE(base, 0);
+    ASSERT_GE(normal, 0);
+    EXPECT_NE(base, normal);
+    EXPECT_EQ(a.value().textures.at(std::size_t(base)).color_space, TextureColorSpace::Srgb);
+    EXPECT_EQ(a.value().textures.at(std::size_t(normal)).color_space, TextureColorSpace::Linear);
+    EXPECT_GE(glass.texture(TextureSlot::Emissive), 0);
+    EXPECT_EQ(a.value().materials.at(1).material.alpha_mode, AlphaMode::Opaque);
+    ASSERT_EQ(a.value().warnings.size(), 1u);
+    EXPECT_EQ(a.value().warnings[0],
+              "material 'glass': its map_Bump (a height map) map 'bump.png' is not imported");
+}
+
 TEST(ObjImport, AnMtllibOutsideTheUploadIsNeverReadAndIsNamedInTheWarnings) {
     std::string obj = CUBE_FACES;
     obj.replace(0, 15, "mtllib /etc/passwd");

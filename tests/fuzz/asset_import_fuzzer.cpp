@@ -1,6 +1,10 @@
 // libFuzzer target for one importer (protocol/assets/), built once per format:
 //   gltf_import_fuzzer (.glb when the input starts with "glTF", else .gltf JSON),
-//   obj_import_fuzzer, ply_import_fuzzer.
+//   obj_import_fuzzer, ply_import_fuzzer, and assimp_import_fuzzer: our glue around Debian's
+//   assimp (its IOSystem over the upload, the conversion of its scene, materials and textures),
+//   the input's first line naming the format ("fbx\n" then the file; run-fuzz.sh writes seeds
+//   so). assimp itself is not instrumented, and it leaks on some broken files: that fuzzer runs
+//   without leak detection.
 //
 // Checks, besides "no crash, no sanitizer report, no exception":
 //   - a refusal names the file and says what is wrong;
@@ -13,7 +17,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <algorithm>
 #include <cstring>
+#include <optional>
 
 #include "engine/scene/scene.h"
 #include "protocol/assets/asset_batch.h"
@@ -30,8 +36,19 @@ using namespace strata::assets;
     fuzz::fail("asset fuzzer", what);
 }
 
-AssetFormat format_of(const uint8_t* data, std::size_t size) {
-#if defined(STRATA_FUZZ_GLTF)
+/// The format the input is read as, and the input without what named it (the assimp fuzzer's
+/// first line); nullopt for an input that names no assimp format.
+std::optional<AssetFormat> format_of(const uint8_t*& data, std::size_t& size) {
+#if defined(STRATA_FUZZ_ASSIMP)
+    const auto* end = static_cast<const uint8_t*>(std::memchr(data, '\n', std::min<std::size_t>(size, 8)));
+    if (!end) return std::nullopt;
+    const auto format =
+        format_from_name(std::string_view(reinterpret_cast<const char*>(data), std::size_t(end - data)));
+    if (!format || !format_is_assimp(*format)) return std::nullopt;
+    size -= std::size_t(end + 1 - data);
+    data = end + 1;
+    return format;
+#elif defined(STRATA_FUZZ_GLTF)
     return size >= 4 && std::memcmp(data, "glTF", 4) == 0 ? AssetFormat::Glb : AssetFormat::Gltf;
 #elif defined(STRATA_FUZZ_OBJ)
     (void)data, (void)size;
@@ -56,7 +73,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
     limits.max_triangles = 1u << 16;
     limits.max_nodes = 1024;
     const SideFiles side = {{"fuzz.mtl", "newmtl a\nKd 0.5 0.5 0.5\nmap_Kd a.png\n"}};
-    auto asset = import_asset(format_of(data, size), {data, size}, "fuzz", limits, side);
+    const std::optional<AssetFormat> format = format_of(data, size);
+    if (!format) return 0;
+    auto asset = import_asset(*format, {data, size}, "fuzz", limits, side);
     if (!asset) {
         if (asset.error().file != "fuzz" || asset.error().detail.empty())
             fail("a refusal without its file or message");
