@@ -2,6 +2,8 @@
 
 #include <cstring>
 
+#include "engine/core/hash.h"
+
 namespace strata::embree_trace {
 
 namespace {
@@ -10,17 +12,6 @@ uint32_t bits(float f) {
     uint32_t u;
     std::memcpy(&u, &f, sizeof u);
     return u;
-}
-
-/// Folds `v` into hash `h` (the murmur3 finaliser after each step).
-uint32_t mix(uint32_t h, uint32_t v) {
-    h ^= v + 0x9E3779B9u + (h << 6) + (h >> 2);
-    h ^= h >> 16;
-    h *= 0x85EBCA6Bu;
-    h ^= h >> 13;
-    h *= 0xC2B2AE35u;
-    h ^= h >> 16;
-    return h;
 }
 
 }  // namespace
@@ -39,13 +30,13 @@ void filter_hits(const RTCFilterFunctionNArguments* args) {
         if (!c->test) continue;
         const uint32_t prim = c->tlas->mesh_triangle(slot, RTCHitN_geomID(args->hit, n, i),
                                                      RTCHitN_primID(args->hit, n, i));
-        uint32_t seed = mix(slot, prim);
-        seed = mix(seed, bits(RTCRayN_org_x(args->ray, n, i)));
-        seed = mix(seed, bits(RTCRayN_org_y(args->ray, n, i)));
-        seed = mix(seed, bits(RTCRayN_org_z(args->ray, n, i)));
-        seed = mix(seed, bits(RTCRayN_dir_x(args->ray, n, i)));
-        seed = mix(seed, bits(RTCRayN_dir_y(args->ray, n, i)));
-        seed = mix(seed, bits(RTCRayN_dir_z(args->ray, n, i)));
+        uint32_t seed = hash_combine(slot, prim);
+        seed = hash_combine(seed, bits(RTCRayN_org_x(args->ray, n, i)));
+        seed = hash_combine(seed, bits(RTCRayN_org_y(args->ray, n, i)));
+        seed = hash_combine(seed, bits(RTCRayN_org_z(args->ray, n, i)));
+        seed = hash_combine(seed, bits(RTCRayN_dir_x(args->ray, n, i)));
+        seed = hash_combine(seed, bits(RTCRayN_dir_y(args->ray, n, i)));
+        seed = hash_combine(seed, bits(RTCRayN_dir_z(args->ray, n, i)));
         if (!c->test->keep(c->test->user, slot, prim, RTCHitN_u(args->hit, n, i),
                            RTCHitN_v(args->hit, n, i), seed))
             args->valid[i] = 0;

@@ -43,46 +43,15 @@ struct TextureImage {
 
     /// The filtered linear colour at texture coordinate `uv` (finite).
     Vec3 sample(Vec2 uv, const TextureSampler& s) const {
-        // Far coordinates keep finite texel arithmetic (they only lose precision).
-        uv = glm::clamp(uv, Vec2(-1e6f), Vec2(1e6f));
-        const float fx = uv.x * float(width);
-        const float fy = uv.y * float(height);
-        if (s.filter == TextureFilter::Nearest)
-            return texel(wrap(floor_index(fx), width, s.wrap),
-                         wrap(floor_index(fy), height, s.wrap));
-        // Bilinear: texel centres sit at half-integers.
-        const float gx = fx - 0.5f, gy = fy - 0.5f;
-        const float x0f = std::floor(gx), y0f = std::floor(gy);
-        const float tx = gx - x0f, ty = gy - y0f;
-        const int64_t x0 = clamp_index(x0f), y0 = clamp_index(y0f);
-        const uint32_t xa = wrap(x0, width, s.wrap), xb = wrap(x0 + 1, width, s.wrap);
-        const uint32_t ya = wrap(y0, height, s.wrap), yb = wrap(y0 + 1, height, s.wrap);
-        const Vec3 top = texel(xa, ya) * (1.0f - tx) + texel(xb, ya) * tx;
-        const Vec3 bottom = texel(xa, yb) * (1.0f - tx) + texel(xb, yb) * tx;
-        return top * (1.0f - ty) + bottom * ty;
+        return filtered(uv, s, [&](uint32_t x, uint32_t y) { return texel(x, y); });
     }
 
     /// The filtered coverage at texture coordinate `uv` (finite): 1 for an opaque image.
     float sample_alpha(Vec2 uv, const TextureSampler& s) const {
         if (alpha.empty()) return 1.0f;
-        uv = glm::clamp(uv, Vec2(-1e6f), Vec2(1e6f));
-        const float fx = uv.x * float(width);
-        const float fy = uv.y * float(height);
-        constexpr float SCALE = 1.0f / 255.0f;
-        const auto at = [&](uint32_t x, uint32_t y) {
-            return float(alpha[std::size_t(y) * width + x]) * SCALE;
-        };
-        if (s.filter == TextureFilter::Nearest)
-            return at(wrap(floor_index(fx), width, s.wrap), wrap(floor_index(fy), height, s.wrap));
-        const float gx = fx - 0.5f, gy = fy - 0.5f;
-        const float x0f = std::floor(gx), y0f = std::floor(gy);
-        const float tx = gx - x0f, ty = gy - y0f;
-        const int64_t x0 = clamp_index(x0f), y0 = clamp_index(y0f);
-        const uint32_t xa = wrap(x0, width, s.wrap), xb = wrap(x0 + 1, width, s.wrap);
-        const uint32_t ya = wrap(y0, height, s.wrap), yb = wrap(y0 + 1, height, s.wrap);
-        const float top = at(xa, ya) * (1.0f - tx) + at(xb, ya) * tx;
-        const float bottom = at(xa, yb) * (1.0f - tx) + at(xb, yb) * tx;
-        return top * (1.0f - ty) + bottom * ty;
+        return filtered(uv, s, [&](uint32_t x, uint32_t y) {
+            return float(alpha[std::size_t(y) * width + x]) * (1.0f / 255.0f);
+        });
     }
 
     /// Texel index `i` (any integer) wrapped into [0, n).
@@ -106,6 +75,29 @@ struct TextureImage {
     }
 
 private:
+    /// `fetch(x, y)` (a texel's value) filtered at texture coordinate `uv` as `s` says.
+    template <class Fetch>
+    auto filtered(Vec2 uv, const TextureSampler& s, Fetch&& fetch) const
+        -> decltype(fetch(0u, 0u)) {
+        // Far coordinates keep finite texel arithmetic (they only lose precision).
+        uv = glm::clamp(uv, Vec2(-1e6f), Vec2(1e6f));
+        const float fx = uv.x * float(width);
+        const float fy = uv.y * float(height);
+        if (s.filter == TextureFilter::Nearest)
+            return fetch(wrap(floor_index(fx), width, s.wrap),
+                         wrap(floor_index(fy), height, s.wrap));
+        // Bilinear: texel centres sit at half-integers.
+        const float gx = fx - 0.5f, gy = fy - 0.5f;
+        const float x0f = std::floor(gx), y0f = std::floor(gy);
+        const float tx = gx - x0f, ty = gy - y0f;
+        const int64_t x0 = clamp_index(x0f), y0 = clamp_index(y0f);
+        const uint32_t xa = wrap(x0, width, s.wrap), xb = wrap(x0 + 1, width, s.wrap);
+        const uint32_t ya = wrap(y0, height, s.wrap), yb = wrap(y0 + 1, height, s.wrap);
+        const auto top = fetch(xa, ya) * (1.0f - tx) + fetch(xb, ya) * tx;
+        const auto bottom = fetch(xa, yb) * (1.0f - tx) + fetch(xb, yb) * tx;
+        return top * (1.0f - ty) + bottom * ty;
+    }
+
     /// A float texel coordinate as an integer index, kept where int64 arithmetic cannot overflow
     /// (uvs are finite but may be huge; the wrap makes any far index equivalent to a near one
     /// only approximately there, which is fine for coordinates beyond 2^40).

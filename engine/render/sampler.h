@@ -19,6 +19,7 @@
 #include <array>
 #include <cstdint>
 
+#include "engine/core/hash.h"
 #include "engine/render/blue_noise.h"
 
 namespace strata {
@@ -96,19 +97,6 @@ constexpr uint32_t owen_scramble(uint32_t x, uint32_t seed) {
 
 }  // namespace sampler_detail
 
-/// A well-mixed 32-bit hash (Wellons' lowbias32).
-constexpr uint32_t hash_u32(uint32_t x) {
-    x ^= x >> 16;
-    x *= 0x7feb352du;
-    x ^= x >> 15;
-    x *= 0x846ca68bu;
-    x ^= x >> 16;
-    return x;
-}
-
-constexpr uint32_t hash_combine(uint32_t seed, uint32_t v) {
-    return hash_u32(seed ^ (v + 0x9e3779b9u + (seed << 6) + (seed >> 2)));
-}
 
 namespace sampler_detail {
 

@@ -11,6 +11,7 @@
 //   strata_render_bench --benchmark_repetitions=15 --benchmark_enable_random_interleaving=true
 //       --benchmark_report_aggregates_only=true [STRATA_BENCH_THREADS=N in the environment]
 
+#include <optional>
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
@@ -77,15 +78,19 @@ SceneDesc instances_10k() {
     return d;
 }
 
-std::unique_ptr<Engine> make_engine(const SceneDesc& d) {
+/// The scene as an engine; `material`, when given, is every mesh's default material.
+std::unique_ptr<Engine> make_engine(const SceneDesc& d,
+                                    const std::optional<Material>& material = std::nullopt) {
     auto engine = std::move(Engine::create().value());
     EditBatch b;
+    if (material) b.edits.emplace_back(AddMaterial{"material", *material});
     for (std::size_t m = 0; m < d.meshes.size(); ++m) {
         AddMesh e;
         e.id = "m" + std::to_string(m);
         e.positions = d.meshes[m].positions;
         e.triangles = d.meshes[m].triangles;
         e.build = BUILD;
+        if (material) e.material = "material";
         b.edits.emplace_back(std::move(e));
     }
     for (std::size_t i = 0; i < d.instances.size(); ++i) {
@@ -378,19 +383,23 @@ void BM_PrimaryRatio(benchmark::State& state) {
     state.counters["hit_fraction"] = loops.hit_fraction();
 }
 
-/// Full frames (sun shadows, one bounce) at 1280x720, 1 spp: rays of every kind per second.
-void BM_EngineRender(benchmark::State& state) {
-    const Fixture& f = fixture_of(state);
+/// Renders WIDTH x HEIGHT frames at 1 spp for the benchmark's iterations and reports rays.
+void render_frames(benchmark::State& state, Engine& engine) {
     RenderRequest r;
     r.width = WIDTH;
     r.height = HEIGHT;
     double rays = 0.0;
     for (auto _ : state) {
-        auto frame = f.engine->render_frame(r);
+        auto frame = engine.render_frame(r);
         rays = double(frame.value().info.rays);
         benchmark::DoNotOptimize(frame.value().buffers.color.data());
     }
     report(state, rays);
+}
+
+/// Full frames (sun shadows, one bounce) at 1280x720, 1 spp: rays of every kind per second.
+void BM_EngineRender(benchmark::State& state) {
+    render_frames(state, *fixture_of(state).engine);
     state.counters["Msamples/s"] = benchmark::Counter(
         double(WIDTH) * HEIGHT * 1e-6, benchmark::Counter::kIsIterationInvariantRate);
 }
@@ -411,16 +420,27 @@ void BM_EngineRenderSmooth(benchmark::State& state) {
         return e;
     }();
     state.SetLabel("mesh_1m_smooth");
-    RenderRequest r;
-    r.width = WIDTH;
-    r.height = HEIGHT;
-    double rays = 0.0;
-    for (auto _ : state) {
-        auto frame = engine->render_frame(r);
-        rays = double(frame.value().info.rays);
-        benchmark::DoNotOptimize(frame.value().buffers.color.data());
+    render_frames(state, *engine);
+}
+
+/// BM_EngineRender with every surface under one material of alpha mode (second argument) 0:
+/// opaque (the baseline: no filter installed), 1: mask with alpha 1 (the intersection filter
+/// runs on every candidate hit and keeps it), 2: blend with alpha 0.5 (half the hits are passed
+/// through, so rays go further). The filter's cost is 1 against 0, in the same run.
+void BM_EngineRenderCoverage(benchmark::State& state) {
+    const int which = int(state.range(0));
+    const int mode = int(state.range(1));
+    static std::unique_ptr<Engine> engines[2][3];
+    std::unique_ptr<Engine>& engine = engines[which][mode];
+    if (!engine) {
+        Material m;
+        m.alpha_mode = mode == 0 ? AlphaMode::Opaque : mode == 1 ? AlphaMode::Mask : AlphaMode::Blend;
+        m.alpha = mode == 2 ? 0.5f : 1.0f;
+        engine = make_engine(which == 0 ? mesh_1m() : instances_10k(), m);
     }
-    report(state, rays);
+    static const char* const MODES[] = {"opaque", "mask", "blend"};
+    state.SetLabel(std::string(which == 0 ? "mesh_1m/" : "instances_10k/") + MODES[mode]);
+    render_frames(state, *engine);
 }
 
 BENCHMARK(BM_EnginePrimary)
@@ -466,6 +486,11 @@ BENCHMARK(BM_EngineRender)
     ->UseRealTime()
     ->ComputeStatistics("min", min_of);
 BENCHMARK(BM_EngineRenderSmooth)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->ComputeStatistics("min", min_of);
+BENCHMARK(BM_EngineRenderCoverage)
+    ->ArgsProduct({{0, 1}, {0, 1, 2}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->ComputeStatistics("min", min_of);
