@@ -107,6 +107,8 @@ void FrameState::refresh_material(const Scene& scene, MaterialHandle h) {
     m_see_through -= materials[i].alpha_mode != AlphaMode::Opaque;
     if (const MaterialRecord* m = scene.materials().get(h)) {
         materials[i] = m->material;
+        // Launches copy a hit's material: a long name would cost an allocation per hit.
+        materials[i].name.clear();
         for (std::size_t s = 0; s < TEXTURE_SLOT_COUNT; ++s) {
             const TextureRecord* t = scene.textures().get(m->textures[s]);
             material_textures[i][s] = t ? t->image : nullptr;

@@ -87,7 +87,8 @@ public:
     uint64_t version = 0;
     Camera camera;
     Lighting lighting;
-    /// [0] is the built-in default; material slot s lives at s + 1.
+    /// [0] is the built-in default; material slot s lives at s + 1. Without their names
+    /// (launches copy a hit's material; picks name things from the scene).
     std::vector<Material> materials;
     /// The textures of each entry of `materials`.
     std::vector<MaterialTextures> material_textures;

@@ -378,8 +378,7 @@ private:
         return {};
     }
 
-    /// Material `gm`'s factors, modes and textures (the first texture's texture coordinate set
-    /// and transform become the material's: its meshes have one set of uvs).
+    /// Material `gm`'s factors, modes and textures.
     Imported<AssetMaterial> read_material(const tinygltf::Material& gm, const std::string& where) {
         const auto& pbr = gm.pbrMetallicRoughness;
         AssetMaterial m;
@@ -421,6 +420,16 @@ private:
         out.occlusion_strength = unit(gm.occlusionTexture.strength);
         out.unlit = gm.extensions.count(UNLIT) != 0;
         warn_unread_material(gm, where);
+        if (auto ok = read_material_textures(gm, where, m); !ok) return Unexpected(ok.error());
+        return m;
+    }
+
+    /// Material `gm`'s textures into `m`: the first one's sampler, texture coordinate set and
+    /// transform become the material's (its meshes have one set of uvs); another texture that
+    /// reads other coordinates is named in a warning.
+    Imported<void> read_material_textures(const tinygltf::Material& gm, const std::string& where,
+                                          AssetMaterial& m) {
+        const auto& pbr = gm.pbrMetallicRoughness;
         const TextureRef refs[] = {
             {TextureSlot::BaseColor, "pbrMetallicRoughness.baseColorTexture",
              pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord,
@@ -448,10 +457,9 @@ private:
             for (const auto& [name, value] : *ref.extensions)
                 if (name != TEXTURE_TRANSFORM)
                     warn_once(at + ".extensions." + name + " not imported");
-            // The first texture's sampler, coordinate set and transform are the material's.
             if (!mapped) {
                 mapped = true;
-                out.base_color_sampler = read_sampler(ref.index);
+                m.material.base_color_sampler = read_sampler(ref.index);
                 m_uv_transforms.resize(m_asset.materials.size() + 1);
                 m_uv_transforms.back() = transform.value();
                 m_uv_sets.resize(m_asset.materials.size() + 1, 0);
@@ -464,7 +472,7 @@ private:
             }
             m.texture(ref.slot) = t.value();
         }
-        return m;
+        return {};
     }
 
     /// KHR_materials_emissive_strength's emissiveStrength (1 without it): a finite number >= 0.

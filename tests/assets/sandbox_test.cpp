@@ -140,6 +140,23 @@ TEST(Sandbox, ACrashingImporterIsA422AndThisProcessGoesOn) {
                 HasSubstr("crashed (SIGABRT)"));
 }
 
+TEST(Sandbox, AFileThatKillsAssimpItselfIsA422) {
+    // Found by assimp_import_fuzzer: a mutated COB file on which Debian's assimp 5.2 throws
+    // through noexcept code, so std::terminate aborts whatever process parses it.
+    const std::string cob = read_file(STRATA_ASSET_TEST_DATA_DIR "/assimp-terminates.cob");
+    ASSERT_FALSE(cob.empty());
+    EXPECT_THAT(refusal(run_sandboxed(
+                            [&]() -> Imported<ImportOutcome> {
+                                auto a = import_asset(AssetFormat::Cob, bytes_of(cob), "m.cob", {});
+                                if (!a) return Unexpected(a.error());
+                                return ImportOutcome{std::move(a.value()), AssetFormat::Cob,
+                                                     std::nullopt};
+                            },
+                            "m.cob", fast()),
+                        "m.cob"),
+                HasSubstr("crashed (SIGABRT)"));
+}
+
 TEST(Sandbox, AHangingImporterIsStoppedAtTheDeadline) {
     const auto start = std::chrono::steady_clock::now();
     const std::string why = refusal(run_sandboxed(

@@ -3,8 +3,9 @@
 //   obj_import_fuzzer, ply_import_fuzzer, and assimp_import_fuzzer: our glue around Debian's
 //   assimp (its IOSystem over the upload, the conversion of its scene, materials and textures),
 //   the input's first line naming the format ("fbx\n" then the file; run-fuzz.sh writes seeds
-//   so). assimp itself is not instrumented, and it leaks on some broken files: that fuzzer runs
-//   without leak detection.
+//   so). assimp itself is not instrumented, leaks on some broken files and allocates what a
+//   header declares: that fuzzer runs without leak detection, in libFuzzer's fork mode skipping
+//   out-of-memory inputs (the server's sandbox refuses them with its memory limit).
 //
 // Checks, besides "no crash, no sanitizer report, no exception":
 //   - a refusal names the file and says what is wrong;
