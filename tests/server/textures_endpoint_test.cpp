@@ -1,6 +1,7 @@
-// Textures over real HTTP: add_texture with base64 PNG and JPEG bytes, the material binding, the
-// texture documents and listing, and every refusal with its status and pointer (a corrupt image
-// named, a huge one refused from its header with 413, a texture in use).
+// Textures over real HTTP: add_texture with base64 PNG and JPEG bytes, the material's texture
+// slots and alpha fields, the texture documents and listing, and every refusal with its status
+// and pointer (a corrupt image named, a huge one refused from its header with 413, a texture in
+// use, an unknown slot texture, a bad alpha mode or colour space).
 
 #include <gmock/gmock.h>
 
@@ -70,6 +71,55 @@ TEST_F(Textures, ACorruptImageIs422NamingTheTextureAndTheDecodersReason) {
     expect_problem(
         srv.edits({{{"op", "add_material"}, {"id", "m"}, {"base_color_texture", "nope"}}}), 422,
         "unknown-id", "/edits/0/base_color_texture");
+}
+
+TEST_F(Textures, EveryMaterialMapAndAlphaFieldGoesInAndComesBackOut) {
+    Json texture = add_texture("n", png_2x2());
+    texture["color_space"] = "linear";
+    Json material = {{"op", "add_material"}, {"id", "m"}, {"alpha_mode", "mask"},
+                     {"alpha_cutoff", 0.25}, {"unlit", true}, {"normal_scale", -2}};
+    for (const char* slot : {"base_color_texture", "metallic_roughness_texture", "normal_texture",
+                             "occlusion_texture", "emissive_texture"})
+        material[slot] = "n";
+    const Reply r = srv.edits({texture, material});
+    ASSERT_EQ(r.status, 200) << r.body;
+    EXPECT_EQ(srv.get("/v1/scene/textures/n").json()["color_space"], "linear");
+    const Json m = srv.get("/v1/scene/materials/m").json();
+    for (const char* slot : {"base_color_texture", "metallic_roughness_texture", "normal_texture",
+                             "occlusion_texture", "emissive_texture"})
+        EXPECT_EQ(m[slot], "n") << slot;
+    EXPECT_EQ(m["alpha_mode"], "mask");
+    EXPECT_EQ(m["alpha_cutoff"], 0.25);
+    EXPECT_EQ(m["unlit"], true);
+    EXPECT_EQ(m["normal_scale"], -2);
+    // One slot at a time: null takes it away, the others stay.
+    ASSERT_EQ(srv.edits({{{"op", "update_material"}, {"material", "m"}, {"normal_texture", nullptr},
+                          {"alpha_mode", "blend"}}})
+                  .status,
+              200);
+    const Json after = srv.get("/v1/scene/materials/m").json();
+    EXPECT_EQ(after["normal_texture"], nullptr);
+    EXPECT_EQ(after["emissive_texture"], "n");
+    EXPECT_EQ(after["alpha_mode"], "blend");
+}
+
+TEST_F(Textures, BadMapsAndAlphaValuesAreRefusedNamingTheMemberAndChangeNothing) {
+    ASSERT_EQ(srv.edits({add_texture("t", png_2x2())}).status, 200);
+    expect_problem(srv.edits({{{"op", "add_material"}, {"id", "m"}, {"normal_texture", "nope"}}}),
+                   422, "unknown-id", "/edits/0/normal_texture");
+    expect_problem(srv.edits({{{"op", "add_material"}, {"id", "m"}, {"alpha_mode", "sometimes"}}}),
+                   400, "", "/edits/0/alpha_mode");
+    expect_problem(srv.edits({{{"op", "add_material"}, {"id", "m"}, {"alpha_cutoff", 1.5}}}), 422,
+                   "invalid-value", "/edits/0/alpha_cutoff");
+    Json bad_space = add_texture("u", png_2x2());
+    bad_space["color_space"] = "cmyk";
+    expect_problem(srv.edits({bad_space}), 400, "", "/edits/0/color_space");
+    // A batch whose last edit is refused adds nothing before it either.
+    expect_problem(srv.edits({{{"op", "add_material"}, {"id", "m"}, {"emissive_texture", "t"}},
+                              {{"op", "update_material"}, {"material", "m"},
+                               {"occlusion_texture", "nope"}}}),
+                   422, "unknown-id", "/edits/1/occlusion_texture");
+    expect_problem(srv.get("/v1/scene/materials/m"), 404);
 }
 
 TEST(TexturesBudget, AnImageOverTheTextureBudgetIs413FromItsHeader) {
