@@ -265,14 +265,19 @@ SetCamera straight_on() {
     return cam;
 }
 
-/// One quad with material `m` (added by the caller) in front of the camera.
+/// The quad mesh in front of the camera; the caller adds material "m" and quad_instance().
 std::unique_ptr<Engine> quad_scene(EngineConfig config = {}) {
     auto engine = Engine::create(config);
     EXPECT_TRUE(engine.has_value());
-    AddInstance inst = test::instance_edit("q", "quad");
-    inst.material = "m";
     apply_ok(**engine, quad_mesh("quad"), straight_on());
     return std::move(engine).value();
+}
+
+/// The instance "q" of the quad with material "m".
+AddInstance quad_instance() {
+    AddInstance inst = test::instance_edit("q", "quad");
+    inst.material = "m";
+    return inst;
 }
 
 /// The centre pixel of a 16x16 render with `aovs`.
@@ -286,8 +291,7 @@ Vec3 shading_normal_with_map(uint8_t r, uint8_t g, uint8_t b, float scale = 1.0f
     AddMaterial m{"m", Material{}};
     m.material.normal_scale = scale;
     m.textures[slot_index(TextureSlot::Normal)] = "n";
-    AddInstance inst = test::instance_edit("q", "quad");
-    inst.material = "m";
+    AddInstance inst = quad_instance();
     apply_ok(*engine, texture("n", pixel_png(r, g, b), TextureColorSpace::Linear), m, inst);
     return centre_frame(*engine, {Aov::Normal}).buffers.normal[CENTRE];
 }
@@ -313,8 +317,7 @@ TEST(MaterialMapsRender, UnlitShowsTheTexturedBaseColourExactly) {
     m.material.base_color = Vec3(0.5f, 1.0f, 1.0f);
     m.material.unlit = true;
     m.textures[slot_index(TextureSlot::BaseColor)] = "c";
-    AddInstance inst = test::instance_edit("q", "quad");
-    inst.material = "m";
+    AddInstance inst = quad_instance();
     apply_ok(*engine, texture("c", pixel_png(255, 255, 0)), m, inst);
     const Frame f = centre_frame(*engine, {Aov::Albedo}, 4);
     expect_near(f.buffers.color[CENTRE], Vec3(0.5f, 1.0f, 0.0f), 1e-5f);
@@ -331,8 +334,7 @@ TEST(MaterialMapsRender, MetallicRoughnessEmissiveAndOcclusionTexturesMultiplyTh
     m.textures[slot_index(TextureSlot::MetallicRoughness)] = "mr";
     m.textures[slot_index(TextureSlot::Emissive)] = "e";
     m.textures[slot_index(TextureSlot::Occlusion)] = "ao";
-    AddInstance inst = test::instance_edit("q", "quad");
-    inst.material = "m";
+    AddInstance inst = quad_instance();
     apply_ok(*engine, texture("mr", pixel_png(0, 128, 64), TextureColorSpace::Linear),
              texture("e", pixel_png(255, 0, 0)),
              texture("ao", pixel_png(0, 255, 255), TextureColorSpace::Linear), m, inst);
@@ -356,8 +358,7 @@ TEST(MaterialMapsRender, OcclusionDarkensOnlyTheLightThatArrivesByBounces) {
         AddMaterial m{"m", Material{}};
         m.material.occlusion_strength = strength;
         m.textures[slot_index(TextureSlot::Occlusion)] = "ao";
-        AddInstance inst = test::instance_edit("q", "quad");
-        inst.material = "m";
+        AddInstance inst = quad_instance();
         SetLighting sky_only;
         sky_only.sun_color = Vec3(0.0f);
         apply_ok(*engine, texture("ao", pixel_png(0, 0, 0), TextureColorSpace::Linear), m, inst,
@@ -413,8 +414,7 @@ TEST_P(CoverageRender, AMaskCutsThroughWhereAlphaIsBelowTheCutoffForFramesAndPic
     m.material.alpha_mode = AlphaMode::Mask;
     m.material.base_color_sampler.filter = TextureFilter::Nearest;
     m.textures[slot_index(TextureSlot::BaseColor)] = "a";
-    AddInstance inst = test::instance_edit("q", "quad");
-    inst.material = "m";
+    AddInstance inst = quad_instance();
     apply_ok(*engine, texture("a", rgba_png(2, 1, {255, 255, 255, 0, 255, 255, 255, 255})), m,
              inst);
     const RebuildReport r = commit_ok(*engine);
@@ -446,8 +446,7 @@ TEST_P(CoverageRender, AFullyCutAwayInstanceLeavesTheFrameAsItWasWithoutIt) {
     AddMaterial m{"m", Material{}};
     m.material.alpha_mode = AlphaMode::Mask;
     m.material.alpha = 0.0f;
-    AddInstance inst = test::instance_edit("q", "quad");
-    inst.material = "m";
+    AddInstance inst = quad_instance();
     inst.transform = Affine::translation(Vec3(0, 0, 0.25f));
     apply_ok(*engine, m, inst);
     const Frame with = test::render_frame_ok(*engine, test::request(24, 24, 4));
@@ -466,8 +465,7 @@ TEST_P(CoverageRender, BlendLetsRaysThroughInProportionToAlpha) {
     m.material.base_color = Vec3(0, 0, 1);
     m.material.alpha_mode = AlphaMode::Blend;
     m.material.alpha = 0.25f;
-    AddInstance inst = test::instance_edit("q", "quad");
-    inst.material = "m";
+    AddInstance inst = quad_instance();
     apply_ok(*engine, m, inst);
     const Frame f = test::render_frame_ok(*engine, test::request(16, 16, 256, {Aov::Albedo}));
     // Over many samples the albedo is alpha * front + (1 - alpha) * back.
