@@ -33,8 +33,10 @@ std::string_view trim(std::string_view v) {
     return v;
 }
 
-/// Largest X-Strata-Report value: proxies and clients commonly refuse header lines over 64 KiB.
-constexpr std::size_t MAX_REPORT_HEADER = 60 * 1024;
+/// Largest X-Strata-Report value. Clients and proxies bound response headers tightly:
+/// cpp-httplib (our CLI's client) refuses a header line over 8 KiB, nginx a header block over
+/// its 4 KiB proxy_buffer_size by default. 3 KiB leaves the rest of the answer's header room.
+constexpr std::size_t MAX_REPORT_HEADER = 3 * 1024;
 
 /// The report of a render's commit as one header value (compact JSON). A report too long for a
 /// header keeps its counts but lists only the first entries of `rebuilt`, `refit` and

@@ -58,7 +58,9 @@ constexpr std::pair<const char*, const char*> HEADERS[] = {
     {"X-Strata-Rebuild",
      "One line summing up the commit the render ran: v12 tlas=update(19) rebuilds=1 refits=0 "
      "prims=4096 ms=1.250."},
-    {"X-Strata-Report", "The rebuild report of the render's commit, as compact JSON."},
+    {"X-Strata-Report",
+     "The rebuild report of the render's commit, as compact JSON of at most 3 KiB: a longer one "
+     "keeps its counts, lists only its first entries and says `entries_truncated: true`."},
     {"X-Strata-Samples", "Samples per pixel the frame holds (grows while accumulating)."},
     {"X-Strata-Split", "Who rendered each band of a split frame."},
     {"Content-Disposition", "attachment; filename=\"scene-N.strata\"."},

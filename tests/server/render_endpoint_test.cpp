@@ -37,6 +37,30 @@ TEST_F(Render, PostAnswersAPngWithTheVersionAndTheCommitSummary) {
                 ::testing::StartsWith("v1 tlas=none(18) rebuilds=0 refits=0"));
 }
 
+TEST_F(Render, AReportTooLongForAHeaderKeepsItsCountsAndFitsEveryClient) {
+    // Two hundred rebuilt meshes would make a 20 KiB header line: cpp-httplib, this test's own
+    // client, refuses lines over 8 KiB (the answer would be lost), nginx header blocks over 4 KiB.
+    Json edits = Json::array();
+    for (int i = 0; i < 200; ++i) {
+        edits.push_back({{"op", "add_mesh"},
+                         {"id", "a-mesh-with-a-longish-name-" + std::to_string(i)},
+                         {"shape", {{"type", "box"}}}});
+    }
+    ASSERT_EQ(srv.edits(edits).status, 200);
+    const Reply r = srv.get("/v1/render?width=16&height=16");
+    ASSERT_EQ(r.status, 200) << r.body;
+    const std::string header = r.header("X-Strata-Report");
+    EXPECT_LE(header.size(), 3u * 1024);
+    const Json report = Json::parse(header);
+    EXPECT_EQ(report["blas_rebuilds"], 205);  // the demo's five and these
+    EXPECT_EQ(report["entries_truncated"], true);
+    EXPECT_GT(report["rebuilt"].size(), 0u);
+    EXPECT_LT(report["rebuilt"].size(), 205u);
+    // A short report is whole.
+    const Json again = Json::parse(srv.get("/v1/render?width=16&height=16").header("X-Strata-Report"));
+    EXPECT_FALSE(again.contains("entries_truncated"));
+}
+
 TEST_F(Render, GetUsesTheQueryString) {
     const Reply r = srv.get("/v1/render?width=40&height=30&format=png&spp=1&exposure=0.5");
     ASSERT_EQ(r.status, 200) << r.body;

@@ -8,7 +8,7 @@ from typing import Dict, List, Optional, Tuple
 
 from strata_client._api import Endpoint, Response
 
-# Long enough for a header line such as X-Strata-Report (at most about 60 KiB).
+# Long enough for any header line a server or proxy may send (X-Strata-Report is at most 3 KiB).
 _LINE_LIMIT = 1 << 20
 
 #: Bodies from this size on are sent after the server's `100 Continue`, so that a body over its
