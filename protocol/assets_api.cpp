@@ -350,7 +350,7 @@ bool same_mesh(const Scene& s, const MeshRecord& old, const AddMesh& e,
     return old.name == e.name && old.build == e.build && old_material == e.material &&
            (!old_material || kept_materials.count(*old_material) != 0) &&
            old.positions.get() == e.positions && old.triangles.get() == e.triangles &&
-           old.normals == e.normals && old.uvs == e.uvs;
+           old.normals == e.normals && old.uvs == e.uvs && old.tangents == e.tangents;
 }
 
 /// What a re-import keeps, by id.

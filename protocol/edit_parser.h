@@ -22,6 +22,7 @@ struct EditSource {
     bool indices_b64 = false;
     bool normals_b64 = false;
     bool uvs_b64 = false;
+    bool tangents_b64 = false;
     bool vertices_b64 = false;
     bool shape = false;
     bool ids_range = false;  ///< bulk ids given as a numbered range

@@ -53,10 +53,15 @@ constexpr std::string_view SHARED_DEFS = R"json({
     "items": {"type": "number"},
     "description": "u v per vertex, flat"
   },
+  "tangents": {
+    "type": "array",
+    "items": {"type": "number"},
+    "description": "x y z w per vertex, flat: the tangent (non-zero) and w, the bitangent's sign (+1 or -1), glTF's convention; without them, normal maps use tangents the server makes (MikkTSpace convention)"
+  },
   "base64": {
     "type": "string",
     "pattern": "^(?:[A-Za-z0-9+/]{4})*(?:[A-Za-z0-9+/]{2}==|[A-Za-z0-9+/]{3}=)?$",
-    "description": "RFC 4648 base64 of little-endian float32 (positions, normals) or uint32 (indices) triples, or float32 pairs (uvs)"
+    "description": "RFC 4648 base64 of little-endian float32 (positions, normals) or uint32 (indices) triples, float32 pairs (uvs) or quadruples (tangents)"
   },
   "transforms_base64": {
     "type": "string",

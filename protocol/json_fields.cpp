@@ -272,6 +272,17 @@ std::vector<Vec2> FieldReader::uvs(const Json& v, const std::string& ptr) {
     return out;
 }
 
+std::vector<Vec4> FieldReader::tangents(const Json& v, const std::string& ptr) {
+    const std::vector<float> flat = floats(v, ptr);
+    if (flat.size() % 4 != 0)
+        record_value_error(ptr, "tangents has " + std::to_string(flat.size()) +
+                                    " numbers, not a multiple of 4 (x y z w per vertex)");
+    std::vector<Vec4> out(flat.size() / 4);
+    for (std::size_t i = 0; i < out.size(); ++i)
+        out[i] = {flat[4 * i], flat[4 * i + 1], flat[4 * i + 2], flat[4 * i + 3]};
+    return out;
+}
+
 std::vector<Triangle> FieldReader::indices(const Json& v, const std::string& ptr) {
     const std::size_t n = array_size(v, ptr, "a flat array of integers");
     std::vector<Triangle> out(n / 3);
@@ -344,6 +355,19 @@ std::vector<Affine> FieldReader::transforms_b64(const Json& v, const std::string
 
 std::vector<Vec3> FieldReader::normals_b64(const Json& v, const std::string& ptr) {
     return positions_b64(v, ptr);
+}
+
+std::vector<Vec4> FieldReader::tangents_b64(const Json& v, const std::string& ptr) {
+    const std::string bytes = base64_bytes(v, ptr, 16);
+    std::vector<Vec4> out(bytes.size() / 16);
+    for (std::size_t i = 0; i < out.size(); ++i) {
+        for (int k = 0; k < 4; ++k) out[i][k] = load_le<float>(bytes.data() + i * 16 + k * 4);
+        if (!is_finite(out[i]))
+            record_value_error(ptr,
+                               "vertex " + std::to_string(i) + " has a NaN or infinite tangent",
+                               ErrorCode::NotFinite);
+    }
+    return out;
 }
 
 std::vector<Vec2> FieldReader::uvs_b64(const Json& v, const std::string& ptr) {

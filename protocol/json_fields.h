@@ -92,6 +92,9 @@ public:
     /// Per-vertex texture coordinates: flat u v pairs, or base64 float32 pairs.
     std::vector<Vec2> uvs(const Json& v, const std::string& ptr);
     std::vector<Vec2> uvs_b64(const Json& v, const std::string& ptr);
+    /// Per-vertex tangents: flat x y z w quadruples, or base64 float32 quadruples.
+    std::vector<Vec4> tangents(const Json& v, const std::string& ptr);
+    std::vector<Vec4> tangents_b64(const Json& v, const std::string& ptr);
     /// Base64 little-endian uint32 triples.
     std::vector<Triangle> indices_b64(const Json& v, const std::string& ptr);
     /// Vertex indices: a flat array of non-negative 32-bit integers, or base64 little-endian

@@ -293,7 +293,7 @@ J material_values() {
 
 J mesh_schema() {
     const J own = {{"vertices", count()},   {"triangles", count()},
-                   {"normals", boolean()},  {"uvs", boolean()},
+                   {"normals", boolean()},  {"uvs", boolean()},  {"tangents", boolean()},
                    {"instances", count()},  {"material", or_null(ref("id"))},
                    {"build", ref("build")}, {"bounds", or_null(ref("Bounds"))}};
     return object(merged(merged(identity(true), own), fields<MeshFields>()));

@@ -108,6 +108,7 @@ Json mesh_json(const Scene& s, MeshHandle h, const MeshRecord& m) {
            {"triangles", m.triangles.size()},
            {"normals", !m.normals.empty()},
            {"uvs", !m.uvs.empty()},
+           {"tangents", !m.tangents.empty()},
            {"instances", m.users.size()},
            {"material", material_ref(s, m.material)},
            {"build",

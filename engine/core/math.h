@@ -17,6 +17,7 @@ using Vec4 = glm::vec4;
 inline bool is_finite(float v) { return std::isfinite(v); }
 inline bool is_finite(const Vec3& v) { return is_finite(v.x) && is_finite(v.y) && is_finite(v.z); }
 inline bool is_finite(const Vec2& v) { return is_finite(v.x) && is_finite(v.y); }
+inline bool is_finite(const Vec4& v) { return is_finite(Vec3(v)) && is_finite(v.w); }
 
 /// Rec. 709 luminance of linear RGB.
 inline float luminance(const Vec3& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }

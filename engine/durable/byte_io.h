@@ -120,7 +120,7 @@ private:
             put(uint32_t(v.size()));
             raw(v.data(), v.size());
         } else if constexpr (std::is_same_v<T, Vec3> || std::is_same_v<T, Vec2> ||
-                             std::is_same_v<T, Triangle>) {
+                             std::is_same_v<T, Vec4> || std::is_same_v<T, Triangle>) {
             raw(&v, sizeof v);
         } else if constexpr (HasValueFields<ByteWriter, const T>) {
             value_fields(*this, v);
@@ -135,7 +135,7 @@ private:
             for (const std::string& x : v) put(x);
         } else {
             static_assert(std::is_same_v<T, Vec3> || std::is_same_v<T, Vec2> ||
-                          std::is_same_v<T, Triangle> || std::is_same_v<T, uint32_t> ||
+                          std::is_same_v<T, Vec4> || std::is_same_v<T, Triangle> || std::is_same_v<T, uint32_t> ||
                           std::is_same_v<T, Affine>);
             raw(v.data(), v.size() * sizeof(T));
         }
@@ -204,7 +204,7 @@ private:
             v.assign(m_in.data() + m_pos, n);
             m_pos += n;
         } else if constexpr (std::is_same_v<T, Vec3> || std::is_same_v<T, Vec2> ||
-                             std::is_same_v<T, Triangle>) {
+                             std::is_same_v<T, Vec4> || std::is_same_v<T, Triangle>) {
             raw(&v, sizeof v);
         } else if constexpr (HasValueFields<ByteReader, T>) {
             value_fields(*this, v);

@@ -69,8 +69,9 @@ static_assert(std::size(KIND_NAMES) == std::variant_size_v<Edit>);
 /// so older files read the same and a file only grows the bit where it uses what is new.
 constexpr uint8_t EXTENDED = 0x80;
 /// Kind tag bit: the edit's tagged fields follow (after its extension fields, if any): fields
-/// added to a kind's table after its first layout (tag > 0 in object_fields.h), written as a
-/// count byte, then a tag byte and the value for each field that is not absent.
+/// added to a kind's table after its first layout (tag > 0 in object_fields.h), and a few outside
+/// the tables (a material's texture slots, a mesh's tangents), written as a count byte, then a
+/// tag byte and the value for each field that is not absent.
 constexpr uint8_t TAGGED = 0x40;
 static_assert(std::variant_size_v<Edit> < TAGGED);
 
@@ -290,6 +291,13 @@ bool has_extension(const UpdateMaterial& e) {
 
 template <class E>
 constexpr bool HAS_SLOTS = Kind<E, AddMaterial> || Kind<E, UpdateMaterial>;
+template <class E>
+constexpr bool HAS_TANGENTS =
+    Kind<E, AddMesh> || Kind<E, UpdateMeshPositions> || Kind<E, ReplaceMeshTopology>;
+
+/// A mesh's tangents, tagged on the edits that carry vertex attributes (added after their
+/// extension layouts were pinned).
+constexpr uint8_t TANGENTS_TAG = 32;
 
 constexpr bool slot_tags_free() {
     for (const TextureSlotInfo& s : TEXTURE_SLOTS) {
@@ -302,18 +310,45 @@ constexpr bool slot_tags_free() {
     return true;
 }
 static_assert(slot_tags_free(), "texture slot tags are in [32, 64) and no material row has them");
+constexpr bool tangent_tag_free() {
+    bool taken = false;
+    for_each_field<MeshFields>([&](const auto& row) { taken |= row.info.tag == TANGENTS_TAG; });
+    return !taken;
+}
+static_assert(tangent_tag_free(), "no mesh row has the tangents' tag");
 
+/// Whether an edit's tangents are there: an add's when not empty, an update's when set (an
+/// update's empty array removes them).
+bool tangents_present(const AddMesh& e) { return !e.tangents.empty(); }
 template <class E>
-std::size_t slot_count(const E& e) {
+bool tangents_present(const E& e) {
+    return e.tangents.has_value();
+}
+/// The array the tangents' tag holds (an update's made present for reading into).
+std::vector<Vec4>& tangent_array(AddMesh& e) { return e.tangents; }
+const std::vector<Vec4>& tangent_array(const AddMesh& e) { return e.tangents; }
+template <class E>
+auto& tangent_array(E& e) {
+    if constexpr (std::is_const_v<E>)
+        return *e.tangents;
+    else
+        return e.tangents ? *e.tangents : e.tangents.emplace();
+}
+
+/// The tagged fields an edit carries outside its kind's table: a material's texture slots, a
+/// mesh edit's tangents.
+template <class E>
+std::size_t extra_count(const E& e) {
     std::size_t n = 0;
     if constexpr (HAS_SLOTS<E>)
         for (const TextureSlotInfo& s : TEXTURE_SLOTS)
             n += s.tag != 0 && e.textures[slot_index(s.slot)].has_value();
+    if constexpr (HAS_TANGENTS<E>) n += tangents_present(e);
     return n;
 }
 
 template <class E>
-void write_slots(ByteWriter& w, const E& e) {
+void write_extras(ByteWriter& w, const E& e) {
     if constexpr (HAS_SLOTS<E>) {
         for (const TextureSlotInfo& s : TEXTURE_SLOTS) {
             const auto& texture = e.textures[slot_index(s.slot)];
@@ -322,17 +357,29 @@ void write_slots(ByteWriter& w, const E& e) {
             w(*texture);
         }
     }
+    if constexpr (HAS_TANGENTS<E>) {
+        if (!tangents_present(e)) return;
+        w(TANGENTS_TAG);
+        w(tangent_array(e));
+    }
 }
 
-/// Reads the slot tagged `tag` into `e`; false when no slot has that tag.
+/// Reads the field tagged `tag` into `e`; false when no extra field has that tag.
 template <class E>
-bool read_slot(ByteReader& r, E& e, uint8_t tag) {
+bool read_extra(ByteReader& r, E& e, uint8_t tag) {
     if constexpr (HAS_SLOTS<E>) {
         for (const TextureSlotInfo& s : TEXTURE_SLOTS) {
             if (s.tag == 0 || s.tag != tag) continue;
             r(e.textures[slot_index(s.slot)].emplace());
             return true;
         }
+    }
+    if constexpr (HAS_TANGENTS<E>) {
+        if (tag != TANGENTS_TAG) return false;
+        r(tangent_array(e));
+        // Not a form any writer produces (and it would re-encode differently).
+        if (r.ok() && !tangents_present(e)) r.fail("tagged tangents hold no tangents");
+        return true;
     }
     return false;
 }
@@ -344,6 +391,7 @@ bool read_slot(ByteReader& r, E& e, uint8_t tag) {
 template <class E>
 struct Carries {
     using Kind = void;
+    static constexpr bool update = false;
 };
 template <class K, bool U>
 struct CarriesKind {
@@ -400,73 +448,67 @@ bool tagged_present(const Row& row, const V& v, bool update) {
     return false;
 }
 
+/// Calls `f` with each row of the table `E` carries (none for edits that carry no table).
+template <class E, class F>
+void for_each_carried_row(F&& f) {
+    using C = Carries<E>;
+    if constexpr (!std::is_void_v<typename C::Kind>) for_each_field<typename C::Kind>(f);
+}
+
 template <class E>
 std::size_t tagged_count(const E& e) {
-    using C = Carries<E>;
-    if constexpr (std::is_void_v<typename C::Kind>) {
-        return 0;
-    } else {
-        std::size_t n = slot_count(e);
-        for_each_field<typename C::Kind>([&](const auto& row) {
-            if (row.info.tag != 0 && tagged_present(row, carried(e), C::update)) ++n;
-        });
-        return n;
-    }
+    std::size_t n = extra_count(e);
+    for_each_carried_row<E>([&](const auto& row) {
+        if (row.info.tag != 0 && tagged_present(row, carried(e), Carries<E>::update)) ++n;
+    });
+    return n;
 }
 
 template <class E>
 void write_tagged(ByteWriter& w, const E& e) {
-    using C = Carries<E>;
-    if constexpr (!std::is_void_v<typename C::Kind>) {
-        w(uint8_t(tagged_count(e)));
-        const auto& v = carried(e);
-        for_each_field<typename C::Kind>([&](const auto& row) {
-            if (row.info.tag == 0 || !tagged_present(row, v, C::update)) return;
-            w(row.info.tag);
-            if constexpr (C::update)
-                w(*(v.*(row.update)));
-            else
-                w(v.*(row.add));
-        });
-        write_slots(w, e);
-    }
+    w(uint8_t(tagged_count(e)));
+    const auto& v = carried(e);
+    for_each_carried_row<E>([&](const auto& row) {
+        constexpr bool update = Carries<E>::update;
+        if (row.info.tag == 0 || !tagged_present(row, v, update)) return;
+        w(row.info.tag);
+        if constexpr (update)
+            w(*(v.*(row.update)));
+        else
+            w(v.*(row.add));
+    });
+    write_extras(w, e);
 }
 
 template <class E>
 void read_tagged(ByteReader& r, E& e) {
-    using C = Carries<E>;
-    if constexpr (std::is_void_v<typename C::Kind>) {
-        r.fail("tagged fields on an edit that has none");
-    } else {
-        uint8_t count = 0;
-        r(count);
-        if (r.ok() && count == 0) r.fail("an empty tagged section");
-        uint64_t seen = 0;
-        auto& v = carried(e);
-        for (uint8_t i = 0; i < count && r.ok(); ++i) {
-            uint8_t tag = 0;
-            r(tag);
-            if (!r.ok()) return;
-            bool known = false;
-            for_each_field<typename C::Kind>([&](const auto& row) {
-                if (row.info.tag == 0 || row.info.tag != tag) return;
-                known = true;
-                if constexpr (C::update) {
-                    (v.*(row.update)).emplace();
-                    r(*(v.*(row.update)));
-                } else {
-                    r(v.*(row.add));
-                    // Not a form any writer produces (and it would re-encode differently).
-                    if (r.ok() && !tagged_present(row, v, false))
-                        r.fail("tagged field " + std::to_string(tag) + " holds its default");
-                }
-            });
-            if (!known) known = read_slot(r, e, tag);
-            if (!known) return r.fail("unknown field tag " + std::to_string(tag));
-            if (seen & (uint64_t{1} << tag))
-                return r.fail("field tag " + std::to_string(tag) + " twice");
-            seen |= uint64_t{1} << tag;
-        }
+    uint8_t count = 0;
+    r(count);
+    if (r.ok() && count == 0) r.fail("an empty tagged section");
+    uint64_t seen = 0;
+    auto& v = carried(e);
+    for (uint8_t i = 0; i < count && r.ok(); ++i) {
+        uint8_t tag = 0;
+        r(tag);
+        if (!r.ok()) return;
+        bool known = false;
+        for_each_carried_row<E>([&](const auto& row) {
+            if (row.info.tag == 0 || row.info.tag != tag) return;
+            known = true;
+            if constexpr (Carries<E>::update) {
+                (v.*(row.update)).emplace();
+                r(*(v.*(row.update)));
+            } else {
+                r(v.*(row.add));
+                // Not a form any writer produces (and it would re-encode differently).
+                if (r.ok() && !tagged_present(row, v, false))
+                    r.fail("tagged field " + std::to_string(tag) + " holds its default");
+            }
+        });
+        if (!known) known = read_extra(r, e, tag);
+        if (!known) return r.fail("unknown field tag " + std::to_string(tag));
+        if (seen & (uint64_t{1} << tag)) return r.fail("field tag " + std::to_string(tag) + " twice");
+        seen |= uint64_t{1} << tag;
     }
 }
 

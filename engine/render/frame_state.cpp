@@ -197,8 +197,11 @@ void FrameState::refresh_mesh(const Scene& scene, MeshHandle h) {
         return;
     }
     auto shade = std::make_shared<MeshShade>(MeshShade{r->triangles, r->normals, r->uvs, {}});
+    // The mesh's own tangents (a file's), else made in MikkTSpace's convention.
     if (!r->normals.empty() && !r->uvs.empty())
-        shade->tangents = make_tangents(r->positions, r->triangles, r->normals, r->uvs);
+        shade->tangents = r->tangents.empty()
+                              ? make_tangents(r->positions, r->triangles, r->normals, r->uvs)
+                              : r->tangents;
     meshes[h.index] = std::move(shade);
 }
 

@@ -35,9 +35,9 @@ struct MeshShade {
     std::vector<Triangle> triangles;
     std::vector<Vec3> normals;  ///< empty: geometric normals
     std::vector<Vec2> uvs;      ///< empty: none
-    /// Tangent frames for normal maps (tangents.h), made when the mesh has normals and uvs, from
-    /// the positions of the commit that changed its topology or attributes: a commit that only
-    /// moves vertices keeps them, as it keeps the normals.
+    /// Tangent frames for normal maps when the mesh has normals and uvs: its own tangents, or
+    /// else made (tangents.h) from the positions of the commit that changed its topology or
+    /// attributes: a commit that only moves vertices keeps them, as it keeps the normals.
     std::vector<glm::vec4> tangents;
 
     /// The interpolated normal of triangle `prim` at barycentrics (u, v) (Embree's: weight u on

@@ -32,17 +32,18 @@ uint64_t ids_bytes(const BulkIds& ids) {
 struct ArrayBytes {
     uint64_t operator()(const AddMesh& e) const {
         return bytes_of(e.positions) + bytes_of(e.triangles) + bytes_of(e.normals) +
-               bytes_of(e.uvs);
+               bytes_of(e.uvs) + bytes_of(e.tangents);
     }
     uint64_t operator()(const UpdateMeshPositions& e) const {
-        return bytes_of(e.positions) + bytes_of(e.normals) + bytes_of(e.uvs);
+        return bytes_of(e.positions) + bytes_of(e.normals) + bytes_of(e.uvs) +
+               bytes_of(e.tangents);
     }
     uint64_t operator()(const UpdateMeshVertices& e) const {
         return bytes_of(e.vertices) + bytes_of(e.positions);
     }
     uint64_t operator()(const ReplaceMeshTopology& e) const {
         return bytes_of(e.positions) + bytes_of(e.triangles) + bytes_of(e.normals) +
-               bytes_of(e.uvs);
+               bytes_of(e.uvs) + bytes_of(e.tangents);
     }
     uint64_t operator()(const AddTexture& e) const { return e.data.size(); }
     uint64_t operator()(const AddInstances& e) const {

@@ -24,19 +24,23 @@ struct AddMesh {
     std::optional<std::string> material;  ///< default material of the mesh's instances
     std::vector<Vec3> normals = {};       ///< per-vertex shading normals; empty: none
     std::vector<Vec2> uvs = {};           ///< per-vertex texture coordinates; empty: none
+    /// Per-vertex tangents for normal maps (xyz, w = +1 or -1 the bitangent's sign); empty:
+    /// made at commit in the MikkTSpace convention (engine/render/tangents.h).
+    std::vector<Vec4> tangents = {};
     std::string name = {};                ///< display name (object_fields.h)
 };
 
 /// New vertex data for vertices [offset, offset + n): positions (empty: unchanged) and, when set,
-/// normals and uvs over their own length from the same offset. The vertex count is unchanged. A
-/// mesh without normals (uvs) takes them only whole (offset 0, one per vertex); an empty array
-/// removes them. Only positions touch the BLAS.
+/// normals, uvs and tangents over their own length from the same offset. The vertex count is
+/// unchanged. A mesh without normals (uvs, tangents) takes them only whole (offset 0, one per
+/// vertex); an empty array removes them. Only positions touch the BLAS.
 struct UpdateMeshPositions {
     std::string mesh;
     uint32_t offset = 0;
     std::vector<Vec3> positions;
     std::optional<std::vector<Vec3>> normals = std::nullopt;
     std::optional<std::vector<Vec2>> uvs = std::nullopt;
+    std::optional<std::vector<Vec4>> tangents = std::nullopt;
 };
 
 /// New positions for listed vertices: vertex `vertices[i]` takes `positions[i]` (a vertex listed
@@ -49,14 +53,15 @@ struct UpdateMeshVertices {
 };
 
 /// New triangles, and optionally a whole new vertex array (which may change the vertex count),
-/// with whole new normals and uvs when set (empty: removed). A vertex count change must bring
-/// new normals (uvs) for a mesh that has them.
+/// with whole new normals, uvs and tangents when set (empty: removed). A vertex count change must
+/// bring new normals (uvs, tangents) for a mesh that has them.
 struct ReplaceMeshTopology {
     std::string mesh;
     std::optional<std::vector<Vec3>> positions;
     std::vector<Triangle> triangles;
     std::optional<std::vector<Vec3>> normals = std::nullopt;
     std::optional<std::vector<Vec2>> uvs = std::nullopt;
+    std::optional<std::vector<Vec4>> tangents = std::nullopt;
 };
 
 struct RemoveMesh {

@@ -54,7 +54,7 @@ public:
     void invert(std::vector<UndoRecord>& records, EditBatch& out) {
         m_out = &out;
         for (std::size_t i = records.size(); i-- > 0;) {
-            // A topology change saved its normals and uvs in the record just before it: they go
+            // A topology change saved its normals, uvs and tangents in the record just before it: they go
             // back with the topology (a vertex count change needs them in the same edit).
             auto* topology = std::get_if<undo::MeshTopology>(&records[i]);
             auto* attributes = i > 0 ? std::get_if<undo::MeshAttributes>(&records[i - 1]) : nullptr;
@@ -94,6 +94,7 @@ public:
         e.material = id_or_none(m.material);
         e.normals = std::move(m.normals);
         e.uvs = std::move(m.uvs);
+        e.tangents = std::move(m.tangents);
         copy_to_add<MeshFields>(e, m);
         emit(std::move(e));
     }
@@ -156,7 +157,8 @@ public:
 
     void operator()(undo::MeshAttributes& r) {
         // The saved arrays are whole, so they go back whole (offset 0; [] removes them again).
-        emit(UpdateMeshPositions{id_of(r.handle), 0, {}, std::move(r.normals), std::move(r.uvs)});
+        emit(UpdateMeshPositions{id_of(r.handle), 0, {}, std::move(r.normals), std::move(r.uvs),
+                                 std::move(r.tangents)});
     }
 
     void operator()(undo::InstanceState& r) {
@@ -296,6 +298,7 @@ private:
         if (attributes) {
             e.normals = std::move(attributes->normals);
             e.uvs = std::move(attributes->uvs);
+            e.tangents = std::move(attributes->tangents);
         }
         emit(std::move(e));
     }

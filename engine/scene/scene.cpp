@@ -302,6 +302,7 @@ EditBatch SceneImage::to_batch() const {
         e.triangles = m.triangles.get();
         e.normals = m.normals;
         e.uvs = m.uvs;
+        e.tangents = m.tangents;
         e.build = m.build;
         if (const MaterialRecord* mat = materials.get(m.material)) e.material = mat->id;
         copy_to_add<MeshFields>(e, m);

@@ -112,7 +112,39 @@ Status check_uvs(const std::vector<Vec2>& uvs, uint64_t first_vertex = 0) {
     return {};
 }
 
-/// A whole attribute array (normals or uvs) for a mesh of `vertex_count` vertices: one per vertex.
+/// Per-vertex tangents: xyz finite and not zero, w the bitangent's sign (+1 or -1, as glTF's).
+Status check_tangents(const std::vector<Vec4>& tangents, uint64_t first_vertex = 0) {
+    for (std::size_t i = 0; i < tangents.size(); ++i) {
+        const Vec4& t = tangents[i];
+        const std::string vertex = "tangent of vertex " + std::to_string(first_vertex + i);
+        if (!is_finite(t))
+            return failure(ErrorCode::NotFinite, vertex + " has a NaN or infinite component",
+                           "tangents/" + std::to_string(i * 4));
+        const glm::dvec3 d(t.x, t.y, t.z);
+        if (!(glm::dot(d, d) > 1e-24))
+            return failure(ErrorCode::InvalidArgument, vertex + " is zero",
+                           "tangents/" + std::to_string(i * 4));
+        if (t.w != 1.0f && t.w != -1.0f)
+            return failure(ErrorCode::InvalidArgument,
+                           vertex + " has w " + std::to_string(t.w) +
+                               ": w is the bitangent's sign, +1 or -1",
+                           "tangents/" + std::to_string(i * 4 + 3));
+    }
+    return {};
+}
+
+/// The checks of one attribute's values (each attribute has its own element type).
+Status check_values(const std::vector<Vec3>& normals, uint64_t first_vertex) {
+    return check_normals(normals, first_vertex);
+}
+Status check_values(const std::vector<Vec2>& uvs, uint64_t first_vertex) {
+    return check_uvs(uvs, first_vertex);
+}
+Status check_values(const std::vector<Vec4>& tangents, uint64_t first_vertex) {
+    return check_tangents(tangents, first_vertex);
+}
+
+/// A whole attribute array (normals, uvs or tangents) for a mesh of `vertex_count` vertices: one per vertex.
 template <class T>
 Status check_attribute_count(const std::vector<T>& values, std::size_t vertex_count,
                              const char* field) {
@@ -148,15 +180,61 @@ Status check_attribute_range(const std::vector<T>& values, uint32_t offset,
     return {};
 }
 
-/// Writes `values` over `dst` from `offset` (an empty `values` clears `dst`; an empty `dst` takes
-/// `values` whole).
+/// A new mesh's attribute: none (empty), or one valid value per vertex.
 template <class T>
-void patch_attribute(std::vector<T>& dst, std::vector<T>&& values, uint32_t offset) {
-    if (values.empty() || dst.empty()) {
-        dst = std::move(values);
+Status check_whole(const std::vector<T>& values, std::size_t vertex_count, const char* field) {
+    if (values.empty()) return {};
+    if (Status s = check_attribute_count(values, vertex_count, field); !s) return s;
+    return check_values(values, 0);
+}
+
+/// An attribute update (when given) over vertices from `offset`.
+template <class T>
+Status check_update(const std::optional<std::vector<T>>& values, uint32_t offset,
+                    const std::vector<T>& current, std::size_t vertex_count,
+                    const std::string& mesh, const char* field) {
+    if (!values) return {};
+    if (Status s = check_attribute_range(*values, offset, current, vertex_count, mesh, field); !s)
+        return s;
+    return check_values(*values, offset);
+}
+
+/// A topology change's attribute: when given, whole for the new vertex count (or [] to remove
+/// it); when not, the kept one must still fit that count.
+template <class T>
+Status check_replaced(const std::optional<std::vector<T>>& values, const std::vector<T>& current,
+                      std::size_t old_count, std::size_t vertex_count, const std::string& mesh,
+                      const char* field) {
+    if (values) return check_whole(*values, vertex_count, field);
+    if (vertex_count == old_count || current.empty()) return {};
+    return failure(ErrorCode::InvalidArgument,
+                   "mesh '" + mesh + "' has " + field + " for " + std::to_string(old_count) +
+                       " vertices: a topology change to " + std::to_string(vertex_count) +
+                       " vertices needs new " + field + " (or [] to remove them)",
+                   field);
+}
+
+/// When `values` is given, writes it over `dst` from `offset` (an empty `values` clears `dst`; an
+/// empty `dst` takes `values` whole), keeping what `dst` held in `old`.
+template <class T>
+void patch_attribute(std::vector<T>& dst, std::optional<std::vector<T>>& values,
+                     std::optional<std::vector<T>>& old, uint32_t offset) {
+    if (!values) return;
+    old = dst;
+    if (values->empty() || dst.empty()) {
+        dst = std::move(*values);
     } else {
-        std::copy(values.begin(), values.end(), dst.begin() + offset);
+        std::copy(values->begin(), values->end(), dst.begin() + offset);
     }
+}
+
+/// When `values` is given, it replaces `dst` whole; `old` takes what `dst` held.
+template <class T>
+void replace_attribute(std::vector<T>& dst, std::optional<std::vector<T>>& values,
+                       std::optional<std::vector<T>>& old) {
+    if (!values) return;
+    old = std::move(dst);
+    dst = std::move(*values);
 }
 
 }  // namespace
@@ -172,15 +250,10 @@ Status Scene::apply_edit(AddMesh&& e, UndoLog& undo) {
             e.positions.empty() ? "positions" : "indices");
     if (Status s = check_vertex_array(e.positions); !s) return s;
     if (Status s = check_triangles(e.triangles, e.positions.size(), "indices"); !s) return s;
-    if (!e.normals.empty()) {
-        if (Status s = check_attribute_count(e.normals, e.positions.size(), "normals"); !s)
-            return s;
-        if (Status s = check_normals(e.normals); !s) return s;
-    }
-    if (!e.uvs.empty()) {
-        if (Status s = check_attribute_count(e.uvs, e.positions.size(), "uvs"); !s) return s;
-        if (Status s = check_uvs(e.uvs); !s) return s;
-    }
+    const std::size_t vertex_count = e.positions.size();
+    if (Status s = check_whole(e.normals, vertex_count, "normals"); !s) return s;
+    if (Status s = check_whole(e.uvs, vertex_count, "uvs"); !s) return s;
+    if (Status s = check_whole(e.tangents, vertex_count, "tangents"); !s) return s;
     MaterialHandle material;
     if (e.material) {
         material = find_material(*e.material);
@@ -197,6 +270,7 @@ Status Scene::apply_edit(AddMesh&& e, UndoLog& undo) {
     r.triangles = std::move(e.triangles);
     r.normals = std::move(e.normals);
     r.uvs = std::move(e.uvs);
+    r.tangents = std::move(e.tangents);
     r.build = e.build;
     r.material = material;
     copy_added<MeshFields>(r, e);
@@ -212,8 +286,9 @@ Status Scene::apply_edit(UpdateMeshPositions&& e, UndoLog& undo) {
     const MeshHandle h = find_mesh(e.mesh);
     if (h.is_null()) return unknown("mesh", e.mesh, "mesh");
     MeshRecord& r = m_meshes.at(h);
-    if (e.positions.empty() && !e.normals && !e.uvs)
-        return failure(ErrorCode::InvalidArgument, "no positions, normals or uvs given",
+    const bool attributes = e.normals || e.uvs || e.tangents;
+    if (e.positions.empty() && !attributes)
+        return failure(ErrorCode::InvalidArgument, "no positions, normals, uvs or tangents given",
                        "positions");
     const uint64_t end = uint64_t(e.offset) + e.positions.size();
     if (!e.positions.empty()) {
@@ -225,34 +300,21 @@ Status Scene::apply_edit(UpdateMeshPositions&& e, UndoLog& undo) {
                            e.offset ? "offset" : "positions");
         if (Status s = check_positions(e.positions, "positions", e.offset); !s) return s;
     }
-    if (e.normals) {
-        if (Status s = check_attribute_range(*e.normals, e.offset, r.normals, r.positions.size(),
-                                             e.mesh, "normals");
-            !s)
-            return s;
-        if (Status s = check_normals(*e.normals, e.offset); !s) return s;
-    }
-    if (e.uvs) {
-        if (Status s =
-                check_attribute_range(*e.uvs, e.offset, r.uvs, r.positions.size(), e.mesh, "uvs");
-            !s)
-            return s;
-        if (Status s = check_uvs(*e.uvs, e.offset); !s) return s;
-    }
+    const std::size_t count = r.positions.size();
+    if (Status s = check_update(e.normals, e.offset, r.normals, count, e.mesh, "normals"); !s)
+        return s;
+    if (Status s = check_update(e.uvs, e.offset, r.uvs, count, e.mesh, "uvs"); !s) return s;
+    if (Status s = check_update(e.tangents, e.offset, r.tangents, count, e.mesh, "tangents"); !s)
+        return s;
 
     save_mesh(h, undo);
-    // Step: normals and uvs (shading only: no BLAS work).
-    if (e.normals || e.uvs) {
+    // Step: normals, uvs and tangents (shading only: no BLAS work).
+    if (attributes) {
         mark(h, MeshDirty::Attributes);
-        undo::MeshAttributes old{h, std::nullopt, std::nullopt};
-        if (e.normals) {
-            old.normals = r.normals;
-            patch_attribute(r.normals, std::move(*e.normals), e.offset);
-        }
-        if (e.uvs) {
-            old.uvs = r.uvs;
-            patch_attribute(r.uvs, std::move(*e.uvs), e.offset);
-        }
+        undo::MeshAttributes old{h};
+        patch_attribute(r.normals, e.normals, old.normals, e.offset);
+        patch_attribute(r.uvs, e.uvs, old.uvs, e.offset);
+        patch_attribute(r.tangents, e.tangents, old.tangents, e.offset);
         undo.records.emplace_back(std::move(old));
     }
     if (e.positions.empty()) return {};
@@ -330,42 +392,25 @@ Status Scene::apply_edit(ReplaceMeshTopology&& e, UndoLog& undo) {
         vertex_count = e.positions->size();
     }
     if (Status s = check_triangles(e.triangles, vertex_count, "indices"); !s) return s;
-    // Normals and uvs: whole arrays for the new vertex count; kept ones must still fit it.
-    const bool count_changes = vertex_count != r.positions.size();
-    if (e.normals && !e.normals->empty()) {
-        if (Status s = check_attribute_count(*e.normals, vertex_count, "normals"); !s) return s;
-        if (Status s = check_normals(*e.normals); !s) return s;
-    } else if (!e.normals && count_changes && !r.normals.empty()) {
-        return failure(ErrorCode::InvalidArgument,
-                       "mesh '" + e.mesh + "' has normals for " +
-                           std::to_string(r.positions.size()) + " vertices: a topology change to " +
-                           std::to_string(vertex_count) +
-                           " vertices needs new normals (or [] to remove them)",
-                       "normals");
-    }
-    if (e.uvs && !e.uvs->empty()) {
-        if (Status s = check_attribute_count(*e.uvs, vertex_count, "uvs"); !s) return s;
-        if (Status s = check_uvs(*e.uvs); !s) return s;
-    } else if (!e.uvs && count_changes && !r.uvs.empty()) {
-        return failure(ErrorCode::InvalidArgument,
-                       "mesh '" + e.mesh + "' has uvs for " + std::to_string(r.positions.size()) +
-                           " vertices: a topology change to " + std::to_string(vertex_count) +
-                           " vertices needs new uvs (or [] to remove them)",
-                       "uvs");
-    }
+    // Normals, uvs and tangents: whole arrays for the new vertex count; kept ones must fit it.
+    const std::size_t old_count = r.positions.size();
+    if (Status s = check_replaced(e.normals, r.normals, old_count, vertex_count, e.mesh, "normals");
+        !s)
+        return s;
+    if (Status s = check_replaced(e.uvs, r.uvs, old_count, vertex_count, e.mesh, "uvs"); !s)
+        return s;
+    if (Status s =
+            check_replaced(e.tangents, r.tangents, old_count, vertex_count, e.mesh, "tangents");
+        !s)
+        return s;
 
     save_mesh(h, undo);
-    if (e.normals || e.uvs) {
+    if (e.normals || e.uvs || e.tangents) {
         mark(h, MeshDirty::Attributes);
-        undo::MeshAttributes old{h, std::nullopt, std::nullopt};
-        if (e.normals) {
-            old.normals = std::move(r.normals);
-            r.normals = std::move(*e.normals);
-        }
-        if (e.uvs) {
-            old.uvs = std::move(r.uvs);
-            r.uvs = std::move(*e.uvs);
-        }
+        undo::MeshAttributes old{h};
+        replace_attribute(r.normals, e.normals, old.normals);
+        replace_attribute(r.uvs, e.uvs, old.uvs);
+        replace_attribute(r.tangents, e.tangents, old.tangents);
         undo.records.emplace_back(std::move(old));
     }
     mark(h, MeshDirty::Topology);

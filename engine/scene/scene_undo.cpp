@@ -166,6 +166,7 @@ struct Reverser {
         MeshRecord& mesh = meshes.at(r.handle);
         if (r.normals) mesh.normals = std::move(*r.normals);
         if (r.uvs) mesh.uvs = std::move(*r.uvs);
+        if (r.tangents) mesh.tangents = std::move(*r.tangents);
     }
 
     void operator()(undo::InstanceTransform& r) {

@@ -66,11 +66,12 @@ struct MeshTopology {
     CowVector<Triangle> triangles;
 };
 
-/// The normals and uvs an edit replaced (each only when that edit touched it).
+/// The normals, uvs and tangents an edit replaced (each only when that edit touched it).
 struct MeshAttributes {
     MeshHandle handle;
-    std::optional<std::vector<Vec3>> normals;
-    std::optional<std::vector<Vec2>> uvs;
+    std::optional<std::vector<Vec3>> normals = std::nullopt;
+    std::optional<std::vector<Vec2>> uvs = std::nullopt;
+    std::optional<std::vector<Vec4>> tangents = std::nullopt;
 };
 
 /// An instance's editable state before an edit changed it.

@@ -140,6 +140,9 @@ Imported<void> validate_asset(const Asset& asset, const ErrorSink& sink) {
         if (!m.uvs.empty() && m.uvs.size() != n)
             return sink.invalid(where, "has " + std::to_string(m.uvs.size()) + " uvs for " +
                                            std::to_string(n) + " vertices");
+        if (!m.tangents.empty() && m.tangents.size() != n)
+            return sink.invalid(where, "has " + std::to_string(m.tangents.size()) +
+                                           " tangents for " + std::to_string(n) + " vertices");
         if (!m.colors.empty() && m.colors.size() != n)
             return sink.invalid(where, "has " + std::to_string(m.colors.size()) + " colors for " +
                                            std::to_string(n) + " vertices");

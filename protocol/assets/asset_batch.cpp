@@ -38,6 +38,16 @@ bool usable_normals(const std::vector<Vec3>& normals) {
     return true;
 }
 
+/// True when every tangent is finite with a non-zero direction; w becomes the sign it stands for
+/// (glTF asks for exactly +1 or -1; exporters write 0.99999 and, rarely, 0).
+bool usable_tangents(std::vector<Vec4>& tangents) {
+    for (Vec4& t : tangents) {
+        if (!is_finite(t) || glm::dot(Vec3(t), Vec3(t)) == 0.0f) return false;
+        t.w = t.w < 0.0f ? -1.0f : 1.0f;
+    }
+    return true;
+}
+
 bool usable_uvs(const std::vector<glm::vec2>& uvs) {
     for (const glm::vec2& t : uvs)
         if (!std::isfinite(t.x) || !std::isfinite(t.y)) return false;
@@ -115,7 +125,7 @@ void add_materials(const std::vector<AssetMaterial>& materials,
     }
 }
 
-/// Adds the meshes with their normals and uvs; what the scene cannot hold is named in the
+/// Adds the meshes with their normals, uvs and tangents; what the scene cannot hold is named in the
 /// warnings rather than dropped silently.
 void add_meshes(std::vector<AssetMesh>& meshes, const std::string& p, AssetBatch& out) {
     bool colors = false;
@@ -138,6 +148,16 @@ void add_meshes(std::vector<AssetMesh>& meshes, const std::string& p, AssetBatch
         } else {
             out.warnings.push_back(label("mesh", i, m.name) +
                                    ": texture coordinates dropped (some are not finite)");
+        }
+        // Tangents go with the normals they are orthogonal to (glTF: no TANGENT without NORMAL).
+        if (!m.tangents.empty() && (e.normals.empty() || !usable_tangents(m.tangents))) {
+            out.warnings.push_back(label("mesh", i, m.name) +
+                                   (e.normals.empty() ? ": tangents without normals dropped"
+                                                      : ": tangents dropped (some are zero or "
+                                                        "not finite)") +
+                                   "; normal maps use tangents the server makes");
+        } else {
+            e.tangents = std::move(m.tangents);
         }
         if (m.material >= 0) e.material = out.materials[std::size_t(m.material)];
         const std::string id = e.id;

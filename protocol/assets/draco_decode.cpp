@@ -83,6 +83,11 @@ std::string decode(std::span<const uint8_t> bytes, const DracoAttributeIds& ids,
             !e.empty())
             return e;
     }
+    if (ids.tangent >= 0) {
+        if (auto e = read_attribute<Vec4, 4>(*mesh, ids.tangent, "TANGENT", out.tangents);
+            !e.empty())
+            return e;
+    }
     if (ids.color >= 0) {
         if (auto e = read_attribute<Vec3, 3>(*mesh, ids.color, "COLOR_0", out.colors); !e.empty())
             return e;

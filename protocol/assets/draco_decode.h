@@ -17,6 +17,7 @@ struct DracoAttributeIds {
     int normal = -1;
     int texcoord = -1;
     int color = -1;
+    int tangent = -1;
 };
 
 /// What the glTF accessors of the primitive declare: the decoded mesh must match.

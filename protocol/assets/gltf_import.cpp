@@ -529,6 +529,11 @@ private:
             for (glm::vec2& uv : mesh.uvs)
                 uv = {(*m)[0] * uv.x + (*m)[1] * uv.y + (*m)[2],
                       (*m)[3] * uv.x + (*m)[4] * uv.y + (*m)[5]};
+            // A rotation or mirror turns the directions in which u and v grow: the file's
+            // tangents no longer follow them, and the server makes them from the new uvs.
+            const bool turns = (*m)[1] != 0.0f || (*m)[3] != 0.0f || (*m)[0] < 0.0f ||
+                               (*m)[4] < 0.0f;
+            if (turns) mesh.tangents.clear();
         }
     }
 
@@ -663,9 +668,8 @@ private:
             return Unexpected(ok.error());
         if (auto ok = read_attribute(prim, "COLOR_0", where, pv.count, 3, mesh); !ok)
             return Unexpected(ok.error());
-        if (prim.attributes.count("TANGENT") != 0)
-            warn_once(where + ".attributes.TANGENT not imported: normal maps read tangents the "
-                              "server makes from the normals and uvs (MikkTSpace's convention)");
+        if (auto ok = read_attribute(prim, "TANGENT", where, pv.count, 4, mesh); !ok)
+            return Unexpected(ok.error());
         return mesh;
     }
 
@@ -792,7 +796,8 @@ private:
         DracoAttributeIds draco;
         for (auto [name, id] :
              {std::pair{"POSITION", &draco.position}, std::pair{"NORMAL", &draco.normal},
-              std::pair{"TEXCOORD_0", &draco.texcoord}, std::pair{"COLOR_0", &draco.color}}) {
+              std::pair{"TEXCOORD_0", &draco.texcoord}, std::pair{"COLOR_0", &draco.color},
+              std::pair{"TANGENT", &draco.tangent}}) {
             if (prim.attributes.find(name) == prim.attributes.end()) continue;
             const tinygltf::Value& v = ids.Get(name);
             if (!v.IsInt() || v.Get<int>() < 0)
@@ -831,6 +836,7 @@ private:
         // Normals are float; uvs and colours may also be normalized unsigned bytes or shorts.
         const bool small_int = a.component == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
                                a.component == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT;
+        // Tangents are float VEC4 (w: the bitangent's sign).
         const bool ok_type = a.component == TINYGLTF_COMPONENT_TYPE_FLOAT ||
                              ((width == 2 || is_color) && small_int && a.normalized);
         if (!ok_width || !ok_type)
@@ -843,6 +849,13 @@ private:
                 mesh.uvs.push_back({a.get(v, 0), a.get(v, 1)});
                 if (!std::isfinite(mesh.uvs.back().x) || !std::isfinite(mesh.uvs.back().y))
                     return m_sink.invalid(use, "element " + std::to_string(v) + " is not finite");
+                continue;
+            }
+            if (width == 4) {
+                const Vec4 t{a.get(v, 0), a.get(v, 1), a.get(v, 2), a.get(v, 3)};
+                if (!is_finite(t))
+                    return m_sink.invalid(use, "element " + std::to_string(v) + " is not finite");
+                mesh.tangents.push_back(t);
                 continue;
             }
             const Vec3 value{a.get(v, 0), a.get(v, 1), a.get(v, 2)};

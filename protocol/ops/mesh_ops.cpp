@@ -49,6 +49,11 @@ std::optional<std::vector<Vec2>> read_uvs(OpFields& f) {
                       &EditSource::uvs_b64);
 }
 
+std::optional<std::vector<Vec4>> read_tangents(OpFields& f) {
+    return read_array(f, "tangents", "tangents_b64", &FieldReader::tangents,
+                      &FieldReader::tangents_b64, &EditSource::tangents_b64);
+}
+
 std::optional<std::vector<uint32_t>> read_vertices(OpFields& f) {
     return read_array(f, "vertices", "vertices_b64", &FieldReader::vertex_ids,
                       &FieldReader::vertex_ids_b64, &EditSource::vertices_b64);
@@ -159,6 +164,7 @@ Edit parse_add_mesh(OpFields& f) {
     }
     if (auto normals = read_normals(f)) e.normals = std::move(*normals);
     if (auto uvs = read_uvs(f)) e.uvs = std::move(*uvs);
+    if (auto tangents = read_tangents(f)) e.tangents = std::move(*tangents);
     if (const Json* b = f.get("build")) e.build = read_build(r, *b, f.pointer("build"));
     f.read("material", e.material);
     read_added<MeshFields>(f, e);
@@ -172,11 +178,12 @@ Edit parse_update_mesh(OpFields& f) {
     auto indices = read_indices(f);
     auto normals = read_normals(f);
     auto uvs = read_uvs(f);
+    auto tangents = read_tangents(f);
     auto vertices = read_vertices(f);
     if (vertices) {
         // Positions for listed vertices (a brush stroke): positions only, no offset.
         for (const char* other : {"offset", "indices", "indices_b64", "normals", "normals_b64",
-                                  "uvs", "uvs_b64"}) {
+                                  "uvs", "uvs_b64", "tangents", "tangents_b64"}) {
             if (f.get(other))
                 r.schema_error(f.pointer(other),
                                std::string(other) + " does not go with vertices (positions only)");
@@ -201,16 +208,18 @@ Edit parse_update_mesh(OpFields& f) {
         e.triangles = std::move(*indices);
         e.normals = std::move(normals);
         e.uvs = std::move(uvs);
+        e.tangents = std::move(tangents);
         return e;
     }
-    if (!positions && !normals && !uvs)
+    if (!positions && !normals && !uvs && !tangents)
         r.schema_error(f.pointer("positions"),
-                       "update_mesh needs positions, normals or uvs (or indices)");
+                       "update_mesh needs positions, normals, uvs or tangents (or indices)");
     UpdateMeshPositions e;
     e.mesh = std::move(mesh);
     if (positions) e.positions = std::move(*positions);
     e.normals = std::move(normals);
     e.uvs = std::move(uvs);
+    e.tangents = std::move(tangents);
     f.read("offset", e.offset);
     return e;
 }
@@ -222,7 +231,7 @@ Edit parse_remove_mesh(OpFields& f) {
 constexpr EditOp OPS[] = {
     {"add_mesh",
      "A new mesh from flat arrays, base64 arrays or a procedural shape; optionally with "
-     "per-vertex normals and uvs.",
+     "per-vertex normals, uvs and tangents.",
      R"json({
   "type": "object",
   "properties": {
@@ -235,13 +244,16 @@ constexpr EditOp OPS[] = {
     "normals_b64": {"$ref": "#/$defs/base64"},
     "uvs": {"$ref": "#/$defs/uvs"},
     "uvs_b64": {"$ref": "#/$defs/base64"},
+    "tangents": {"$ref": "#/$defs/tangents"},
+    "tangents_b64": {"$ref": "#/$defs/base64"},
     "shape": {"$ref": "#/$defs/shape"},
     "build": {"$ref": "#/$defs/build"},
     "material": {"$ref": "#/$defs/id"}
   },
   "required": ["id"],
   "additionalProperties": false,
-  "not": {"anyOf": [{"required": ["normals", "normals_b64"]}, {"required": ["uvs", "uvs_b64"]}]},
+  "not": {"anyOf": [{"required": ["normals", "normals_b64"]}, {"required": ["uvs", "uvs_b64"]},
+                    {"required": ["tangents", "tangents_b64"]}]},
   "oneOf": [
     {
       "required": ["shape"],
@@ -259,7 +271,7 @@ constexpr EditOp OPS[] = {
 })json",
      parse_add_mesh, edit_kinds<AddMesh>(), field_properties<MeshFields, true>},
     {"update_mesh",
-     "New positions, normals or uvs for a vertex range (offset in vertices), new positions for "
+     "New positions, normals, uvs or tangents for a vertex range (offset in vertices), new positions for "
      "listed vertices (vertices), or with indices a topology change.",
      R"json({
   "type": "object",
@@ -273,6 +285,8 @@ constexpr EditOp OPS[] = {
     "normals_b64": {"$ref": "#/$defs/base64"},
     "uvs": {"$ref": "#/$defs/uvs"},
     "uvs_b64": {"$ref": "#/$defs/base64"},
+    "tangents": {"$ref": "#/$defs/tangents"},
+    "tangents_b64": {"$ref": "#/$defs/base64"},
     "offset": {"$ref": "#/$defs/u32"},
     "vertices": {"type": "array", "items": {"$ref": "#/$defs/u32"},
                  "description": "vertex indices: positions[i] goes to vertex vertices[i]"},
@@ -286,6 +300,7 @@ constexpr EditOp OPS[] = {
       {"required": ["indices", "indices_b64"]},
       {"required": ["normals", "normals_b64"]},
       {"required": ["uvs", "uvs_b64"]},
+      {"required": ["tangents", "tangents_b64"]},
       {"required": ["vertices", "vertices_b64"]},
       {"required": ["indices", "offset"]},
       {"required": ["indices_b64", "offset"]}
@@ -297,12 +312,14 @@ constexpr EditOp OPS[] = {
     "not": {"anyOf": [{"required": ["offset"]}, {"required": ["indices"]},
                       {"required": ["indices_b64"]}, {"required": ["normals"]},
                       {"required": ["normals_b64"]}, {"required": ["uvs"]},
-                      {"required": ["uvs_b64"]}]}
+                      {"required": ["uvs_b64"]}, {"required": ["tangents"]},
+                      {"required": ["tangents_b64"]}]}
   },
   "anyOf": [{"required": ["positions"]}, {"required": ["positions_b64"]},
             {"required": ["indices"]}, {"required": ["indices_b64"]},
             {"required": ["normals"]}, {"required": ["normals_b64"]},
-            {"required": ["uvs"]}, {"required": ["uvs_b64"]}]
+            {"required": ["uvs"]}, {"required": ["uvs_b64"]},
+            {"required": ["tangents"]}, {"required": ["tangents_b64"]}]
 })json",
      parse_update_mesh,
      edit_kinds<UpdateMeshPositions, UpdateMeshVertices, ReplaceMeshTopology>()},

@@ -11,12 +11,14 @@
 #include <nlohmann/json.hpp>
 
 #include "engine/image/png.h"
+#include "protocol/assets/asset_batch.h"
 #include "protocol/base64.h"
 #include "tests/assets/asset_test_util.h"
 
 namespace strata::assets::test {
 namespace {
 
+using ::testing::Contains;
 using ::testing::HasSubstr;
 using ::testing::Not;
 
@@ -144,6 +146,53 @@ TEST(GltfImport, ATextureTransformIsBakedIntoTheTextureCoordinates) {
     auto bad = import_text(AssetFormat::Gltf, doc.dump());
     ASSERT_FALSE(bad.has_value());
     EXPECT_THAT(bad.error().element.value_or(""), HasSubstr("KHR_texture_transform"));
+}
+
+/// Adds a float accessor named `name` (its own buffer, view and accessor) to the triangle's
+/// primitive.
+void add_float_attribute(nlohmann::json& doc, const char* name, const std::vector<float>& values,
+                         const char* type) {
+    const std::string bytes(reinterpret_cast<const char*>(values.data()), values.size() * 4);
+    const std::size_t buffer = doc["buffers"].size(), view = doc["bufferViews"].size();
+    doc["buffers"].push_back({{"byteLength", bytes.size()},
+                              {"uri", "data:application/octet-stream;base64," +
+                                          protocol::encode_base64(bytes)}});
+    doc["bufferViews"].push_back({{"buffer", buffer}, {"byteLength", bytes.size()}});
+    doc["accessors"].push_back(
+        {{"bufferView", view}, {"componentType", 5126}, {"count", 3}, {"type", type}});
+    doc["meshes"][0]["primitives"][0]["attributes"][name] = doc["accessors"].size() - 1;
+}
+
+TEST(GltfImport, TangentsAreReadAndKeptWithTheNormalsTheyGoWith) {
+    auto doc = nlohmann::json::parse(triangle_gltf(R"([{"mesh": 0}])"));
+    add_float_attribute(doc, "NORMAL", {0, 0, 1, 0, 0, 1, 0, 0, 1}, "VEC3");
+    add_float_attribute(doc, "TEXCOORD_0", {0, 0, 1, 0, 0, 1}, "VEC2");
+    // Exporters write w as 0.99999 now and then: it stands for +1.
+    add_float_attribute(doc, "TANGENT", {1, 0, 0, 1, 1, 0, 0, 0.99999f, 0, 1, 0, -1}, "VEC4");
+    auto a = import_text(AssetFormat::Gltf, doc.dump());
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
+    ASSERT_EQ(a.value().meshes.at(0).tangents.size(), 3u);
+    for (const std::string& w : a.value().warnings) EXPECT_THAT(w, Not(HasSubstr("TANGENT")));
+    AssetBatch b = asset_to_batch(std::move(a.value()), {"t", true, {}});
+    const auto& mesh = std::get<AddMesh>(b.batch.edits.at(0));
+    const std::vector<Vec4> want = {{1, 0, 0, 1}, {1, 0, 0, 1}, {0, 1, 0, -1}};
+    EXPECT_EQ(mesh.tangents, want);
+
+    // Without normals they are dropped, saying so (glTF has no TANGENT without NORMAL).
+    auto bare = nlohmann::json::parse(triangle_gltf(R"([{"mesh": 0}])"));
+    add_float_attribute(bare, "TANGENT", {1, 0, 0, 1, 1, 0, 0, 1, 1, 0, 0, 1}, "VEC4");
+    auto without = import_text(AssetFormat::Gltf, bare.dump());
+    ASSERT_TRUE(without.has_value()) << without.error().detail;
+    AssetBatch dropped = asset_to_batch(std::move(without.value()), {"t", true, {}});
+    EXPECT_TRUE(std::get<AddMesh>(dropped.batch.edits.at(0)).tangents.empty());
+    EXPECT_THAT(dropped.warnings, Contains(HasSubstr("tangents without normals dropped")));
+
+    // A tangent that is not a VEC4 of floats is refused, naming the attribute.
+    auto vec3 = nlohmann::json::parse(triangle_gltf(R"([{"mesh": 0}])"));
+    add_float_attribute(vec3, "TANGENT", {1, 0, 0, 1, 0, 0, 1, 0, 0}, "VEC3");
+    auto bad = import_text(AssetFormat::Gltf, vec3.dump());
+    ASSERT_FALSE(bad.has_value());
+    EXPECT_THAT(bad.error().element.value_or(""), HasSubstr("TANGENT"));
 }
 
 TEST(GltfImport, TheTextureCoordinateSetTheBaseColourTextureReadsIsTheOneKept) {

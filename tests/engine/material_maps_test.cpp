@@ -265,11 +265,14 @@ SetCamera straight_on() {
     return cam;
 }
 
-/// The quad mesh in front of the camera; the caller adds material "m" and quad_instance().
-std::unique_ptr<Engine> quad_scene(EngineConfig config = {}) {
+/// The quad mesh (with `tangents`, when given) in front of the camera; the caller adds material
+/// "m" and quad_instance().
+std::unique_ptr<Engine> quad_scene(EngineConfig config = {}, std::vector<Vec4> tangents = {}) {
     auto engine = Engine::create(config);
     EXPECT_TRUE(engine.has_value());
-    apply_ok(**engine, quad_mesh("quad"), straight_on());
+    AddMesh quad = quad_mesh("quad");
+    quad.tangents = std::move(tangents);
+    apply_ok(**engine, quad, straight_on());
     return std::move(engine).value();
 }
 
@@ -286,8 +289,9 @@ Frame centre_frame(Engine& engine, std::vector<Aov> aovs, uint32_t spp = 1) {
 }
 constexpr std::size_t CENTRE = 8 * 16 + 8;
 
-Vec3 shading_normal_with_map(uint8_t r, uint8_t g, uint8_t b, float scale = 1.0f) {
-    auto engine = quad_scene();
+Vec3 shading_normal_with_map(uint8_t r, uint8_t g, uint8_t b, float scale = 1.0f,
+                             std::vector<Vec4> tangents = {}) {
+    auto engine = quad_scene({}, std::move(tangents));
     AddMaterial m{"m", Material{}};
     m.material.normal_scale = scale;
     m.textures[slot_index(TextureSlot::Normal)] = "n";
@@ -309,6 +313,25 @@ TEST(MaterialMapsRender, ANormalMapBendsTheShadingNormalWithPlusYUpTheImage) {
     // normal_scale 0 flattens the map; a negative one mirrors it.
     expect_near(shading_normal_with_map(128, 218, 218, 0.0f), Vec3(0, 0, 1), 0.01f);
     EXPECT_LT(shading_normal_with_map(128, 218, 218, -1.0f).y, -0.5f);
+}
+
+TEST(MaterialMapsRender, AMeshsOwnTangentsOrientTheNormalMap) {
+    // The quad's generated tangents are +x (where u grows) with w = 1: given as its own, the
+    // frame is the same.
+    const std::vector<Vec4> generated(4, Vec4(1, 0, 0, 1));
+    expect_near(shading_normal_with_map(218, 128, 218, 1.0f, generated),
+                shading_normal_with_map(218, 128, 218), 1e-5f);
+    // Tangents along +y: red (the tangent) now bends the normal up, and green, along
+    // cross(n, t) = -x, to the left.
+    const std::vector<Vec4> up(4, Vec4(0, 1, 0, 1));
+    const Vec3 red = shading_normal_with_map(218, 128, 218, 1.0f, up);
+    EXPECT_GT(red.y, 0.5f);
+    EXPECT_NEAR(red.x, 0.0f, 0.02f);
+    EXPECT_LT(shading_normal_with_map(128, 218, 218, 1.0f, up).x, -0.5f);
+    // w = -1 mirrors the bitangent: green bends the normal down where the made tangents bend it
+    // up.
+    const std::vector<Vec4> mirrored(4, Vec4(1, 0, 0, -1));
+    EXPECT_LT(shading_normal_with_map(128, 218, 218, 1.0f, mirrored).y, -0.5f);
 }
 
 TEST(MaterialMapsRender, UnlitShowsTheTexturedBaseColourExactly) {

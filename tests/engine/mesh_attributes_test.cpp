@@ -1,5 +1,5 @@
-// Per-vertex normals and uvs: the scene's rules for them (counts, values, partial updates,
-// topology changes), rollback of refused batches, and their journal encoding.
+// Per-vertex normals, uvs and tangents: the scene's rules for them (counts, values, partial
+// updates, topology changes), rollback of refused batches, undo, and their journal encoding.
 
 #include <string>
 
@@ -227,6 +227,166 @@ TEST(MeshAttributes, JournalCodecCarriesThemAndLeavesOtherEditsAsBefore) {
     EXPECT_EQ(again, bytes);
     for (std::size_t n = 0; n < bytes.size(); ++n)
         EXPECT_FALSE(durable::decode_batch(std::string_view(bytes).substr(0, n)).has_value()) << n;
+}
+
+// Step: tangents ---------------------------------------------------------------------------------
+
+std::vector<Vec4> tangents_of(const Engine& engine, const std::string& id) {
+    return engine.read([&](const Scene& s) { return s.mesh(s.find_mesh(id)).value()->tangents; });
+}
+
+/// Applies the inverse of the newest batch.
+void undo_last(Engine& engine) {
+    auto inverse = engine.undo_batch(engine.version());
+    ASSERT_TRUE(inverse.has_value()) << inverse.error().describe();
+    ASSERT_TRUE(engine.apply(std::move(inverse.value()), engine.version()).has_value());
+}
+
+AddMesh quad_with_tangents(const std::string& id) {
+    AddMesh m = quad(id);
+    m.normals = std::vector<Vec3>(4, Vec3(0, 0, 1));
+    m.uvs = {{0, 1}, {1, 1}, {0, 0}, {1, 0}};
+    m.tangents = std::vector<Vec4>(4, Vec4(1, 0, 0, 1));
+    return m;
+}
+
+TEST(MeshTangents, EachIsADirectionWithWPlusOrMinusOneOnePerVertex) {
+    auto engine = test::make_engine();
+    AddMesh m = quad_with_tangents("q");
+    m.tangents.pop_back();
+    Error e = refused(*engine, m);
+    EXPECT_EQ(e.field, "tangents");
+    EXPECT_NE(e.message.find("3 entries"), std::string::npos) << e.message;
+
+    m = quad_with_tangents("q");
+    m.tangents[1].w = 0.5f;
+    e = refused(*engine, m);
+    EXPECT_EQ(e.code, ErrorCode::InvalidArgument);
+    EXPECT_EQ(e.field, "tangents/7");
+    EXPECT_NE(e.message.find("+1 or -1"), std::string::npos) << e.message;
+
+    m.tangents[1] = Vec4(0, 0, 0, 1);
+    e = refused(*engine, m);
+    EXPECT_EQ(e.field, "tangents/4");
+    EXPECT_NE(e.message.find("vertex 1 is zero"), std::string::npos) << e.message;
+
+    m.tangents[1] = Vec4(1, std::nanf(""), 0, 1);
+    e = refused(*engine, m);
+    EXPECT_EQ(e.code, ErrorCode::NotFinite);
+
+    m.tangents[1] = Vec4(0, 1, 0, -1);
+    apply_ok(*engine, m);
+    EXPECT_EQ(tangents_of(*engine, "q"), m.tangents);
+}
+
+TEST(MeshTangents, UpdatesPatchRangesTouchNoBvhAndUndoPutsThemBack) {
+    auto engine = test::make_engine();
+    AddMesh bare = quad("bare");
+    UpdateMeshPositions part;
+    part.mesh = "bare";
+    part.offset = 1;
+    part.tangents = std::vector<Vec4>{{0, 1, 0, 1}};
+    apply_ok(*engine, bare);
+    Error e = refused(*engine, part);
+    EXPECT_EQ(e.field, "tangents");
+    EXPECT_NE(e.message.find("has no tangents yet"), std::string::npos) << e.message;
+
+    apply_ok(*engine, quad_with_tangents("q"), test::instance_edit("i", "q"));
+    test::commit_ok(*engine);
+    part.mesh = "q";
+    part.offset = 2;
+    part.tangents = std::vector<Vec4>{{0, 1, 0, -1}, {0, 1, 0, 1}};
+    apply_ok(*engine, part);
+    const RebuildReport r = test::commit_ok(*engine);
+    EXPECT_TRUE(r.no_accel_work());
+    std::vector<Vec4> want(4, Vec4(1, 0, 0, 1));
+    want[2] = Vec4(0, 1, 0, -1);
+    want[3] = Vec4(0, 1, 0, 1);
+    EXPECT_EQ(tangents_of(*engine, "q"), want);
+
+    // A refused batch leaves them; undo restores the previous ones.
+    UpdateMeshPositions remove;
+    remove.mesh = "q";
+    remove.tangents = std::vector<Vec4>{};
+    EditBatch b;
+    b.edits.emplace_back(remove);
+    b.edits.emplace_back(RemoveMesh{"no-such-mesh"});
+    ASSERT_FALSE(engine->apply(std::move(b)).has_value());
+    EXPECT_EQ(tangents_of(*engine, "q"), want);
+    undo_last(*engine);
+    EXPECT_EQ(tangents_of(*engine, "q"), std::vector<Vec4>(4, Vec4(1, 0, 0, 1)));
+}
+
+TEST(MeshTangents, ATopologyChangeOfTheVertexCountMustBringNewTangents) {
+    auto engine = test::make_engine();
+    apply_ok(*engine, quad_with_tangents("q"));
+    ReplaceMeshTopology smaller;
+    smaller.mesh = "q";
+    smaller.positions = std::vector<Vec3>{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    smaller.triangles = {{0, 1, 2}};
+    smaller.normals = std::vector<Vec3>(3, Vec3(0, 0, 1));
+    smaller.uvs = std::vector<Vec2>(3, Vec2(0.5f));
+    Error e = refused(*engine, smaller);
+    EXPECT_EQ(e.field, "tangents");
+    EXPECT_NE(e.message.find("needs new tangents"), std::string::npos) << e.message;
+    smaller.tangents = std::vector<Vec4>{};
+    apply_ok(*engine, smaller);
+    EXPECT_TRUE(tangents_of(*engine, "q").empty());
+    // Undo brings back the four vertices with their tangents, in one edit.
+    undo_last(*engine);
+    EXPECT_EQ(tangents_of(*engine, "q"), std::vector<Vec4>(4, Vec4(1, 0, 0, 1)));
+}
+
+TEST(MeshTangents, JournalCodecCarriesThemAsATaggedFieldOfEachMeshEdit) {
+    // Without tangents, a mesh with normals and uvs is written exactly as before them.
+    AddMesh plain = quad_with_tangents("q");
+    plain.tangents.clear();
+    EditBatch old;
+    old.edits.emplace_back(plain);
+    std::string old_bytes;
+    durable::encode_batch(old, old_bytes);
+    EXPECT_EQ(uint8_t(old_bytes[4]), 0x80u) << "extension bit only";
+
+    EditBatch b;
+    b.edits.emplace_back(quad_with_tangents("q"));
+    UpdateMeshPositions u;
+    u.mesh = "q";
+    u.offset = 3;
+    u.tangents = std::vector<Vec4>{{0, 1, 0, -1}};
+    b.edits.emplace_back(u);
+    ReplaceMeshTopology t;
+    t.mesh = "q";
+    t.triangles = {{0, 1, 2}};
+    t.tangents = std::vector<Vec4>{};
+    b.edits.emplace_back(t);
+    std::string bytes;
+    durable::encode_batch(b, bytes);
+    auto back = durable::decode_batch(bytes);
+    ASSERT_TRUE(back.has_value()) << back.error().describe();
+    EXPECT_EQ(std::get<AddMesh>(back->edits[0]).tangents, quad_with_tangents("q").tangents);
+    const auto& u2 = std::get<UpdateMeshPositions>(back->edits[1]);
+    EXPECT_EQ(u2.tangents, u.tangents);
+    EXPECT_FALSE(u2.normals.has_value());
+    const auto& t2 = std::get<ReplaceMeshTopology>(back->edits[2]);
+    ASSERT_TRUE(t2.tangents.has_value());
+    EXPECT_TRUE(t2.tangents->empty());
+    std::string again;
+    durable::encode_batch(back.value(), again);
+    EXPECT_EQ(again, bytes);
+    for (std::size_t n = 0; n < bytes.size(); ++n)
+        EXPECT_FALSE(durable::decode_batch(std::string_view(bytes).substr(0, n)).has_value()) << n;
+
+    // An add_mesh whose tangents tag holds none is not a form any writer produces.
+    EditBatch empty;
+    empty.edits.emplace_back(quad("e"));
+    std::string forged;
+    durable::encode_batch(empty, forged);
+    forged[4] = char(0x40);  // tagged
+    forged += std::string("\x01\x20", 2) + std::string(8, '\0');  // one field: tag 32, count 0
+    auto refused_bytes = durable::decode_batch(forged);
+    ASSERT_FALSE(refused_bytes.has_value());
+    EXPECT_NE(refused_bytes.error().message.find("tangents"), std::string::npos)
+        << refused_bytes.error().message;
 }
 
 }  // namespace

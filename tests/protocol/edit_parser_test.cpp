@@ -163,6 +163,42 @@ TEST(EditParser, NormalsAndUvsComeFlatOrBase64) {
               "/edits/0/uvs_b64");
 }
 
+TEST(EditParser, TangentsComeFlatOrBase64AsXyzwQuadruples) {
+    const auto e = one<AddMesh>(
+        R"({"op":"add_mesh","id":"t","positions":[0,0,0, 1,0,0, 0,1,0],"indices":[0,1,2],
+        "tangents":[1,0,0,1, 1,0,0,1, 0,1,0,-1]})");
+    EXPECT_THAT(e.tangents,
+                ::testing::ElementsAre(Vec4(1, 0, 0, 1), Vec4(1, 0, 0, 1), Vec4(0, 1, 0, -1)));
+
+    const float t[8] = {0, 1, 0, 1, 1, 0, 0, -1};
+    const auto u = one<UpdateMeshPositions>(
+        R"({"op":"update_mesh","mesh":"t","offset":1,"tangents_b64":")" + b64(t, sizeof t) + "\"}");
+    ASSERT_TRUE(u.tangents.has_value());
+    EXPECT_THAT(*u.tangents, ::testing::ElementsAre(Vec4(0, 1, 0, 1), Vec4(1, 0, 0, -1)));
+    const auto topology = one<ReplaceMeshTopology>(
+        R"({"op":"update_mesh","mesh":"t","indices":[0,2,1],"tangents":[]})");
+    ASSERT_TRUE(topology.tangents.has_value());
+    EXPECT_TRUE(topology.tangents->empty());
+
+    EXPECT_EQ(fails(R"({"op":"update_mesh","mesh":"t","tangents":[1,0,0]})").pointer,
+              "/edits/0/tangents");
+    EXPECT_EQ(fails(R"({"op":"update_mesh","mesh":"t","tangents_b64":"AAAAAAAA"})").pointer,
+              "/edits/0/tangents_b64");
+    EXPECT_EQ(fails(R"({"op":"update_mesh","mesh":"t","tangents":[1,0,0,1],"tangents_b64":""})")
+                  .pointer,
+              "/edits/0/tangents_b64");
+    EXPECT_EQ(fails(R"({"op":"update_mesh","mesh":"t","vertices":[0],"positions":[0,0,0],
+                       "tangents":[1,0,0,1]})")
+                  .pointer,
+              "/edits/0/tangents");
+    // The engine's errors point at the member the client used.
+    ParsedBatch b = parse_ok(R"({"edits": [{"op":"update_mesh","mesh":"t","tangents_b64":")" +
+                             b64(t, sizeof t) + "\"}]}");
+    Error engine_error = make_error(ErrorCode::InvalidArgument, "w", "tangents/3");
+    engine_error.edit_index = 0;
+    EXPECT_EQ(problem_from_batch_error(engine_error, b.sources).pointer, "/edits/0/tangents_b64");
+}
+
 TEST(EditParser, EngineErrorsInNormalsPointAtTheBase64MemberWhenUsed) {
     const float n[3] = {0, 0, 0};
     ParsedBatch b = parse_ok(R"({"edits": [{"op":"update_mesh","mesh":"t","normals_b64":")" +

@@ -160,5 +160,26 @@ TEST_F(Textures, ATexturedMaterialRendersItsTexels) {
     EXPECT_GT(px[centre], 2 * px[centre + 2]);
 }
 
+TEST_F(Textures, AMeshsTangentsGoInAsJsonAndAreListed) {
+    const Json quad = {{"op", "add_mesh"},
+                       {"id", "quad"},
+                       {"positions", {-1, -1, 0, 1, -1, 0, -1, 1, 0, 1, 1, 0}},
+                       {"indices", {0, 1, 2, 1, 3, 2}},
+                       {"normals", {0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1}},
+                       {"uvs", {0, 1, 1, 1, 0, 0, 1, 0}},
+                       {"tangents", {1, 0, 0, 1, 1, 0, 0, 1, 1, 0, 0, 1, 1, 0, 0, 0.5}}};
+    const Reply bad = srv.edits({quad});
+    expect_problem(bad, 422, {}, "/edits/0/tangents/15");
+    EXPECT_THAT(bad.json()["detail"].get<std::string>(), HasSubstr("+1 or -1"));
+    Json good = quad;
+    good["tangents"][15] = -1;
+    ASSERT_EQ(srv.edits({good}).status, 200);
+    EXPECT_EQ(srv.get("/v1/scene/meshes/quad").json()["tangents"], true);
+    ASSERT_EQ(srv.edits({{{"op", "update_mesh"}, {"mesh", "quad"}, {"tangents", Json::array()}}})
+                  .status,
+              200);
+    EXPECT_EQ(srv.get("/v1/scene/meshes/quad").json()["tangents"], false);
+}
+
 }  // namespace
 }  // namespace strata::server::test
