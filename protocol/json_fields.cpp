@@ -240,47 +240,39 @@ std::vector<float> FieldReader::floats(const Json& v, const std::string& ptr) {
     return out;
 }
 
-std::vector<Vec3> FieldReader::positions(const Json& v, const std::string& ptr) {
-    const std::vector<float> flat = floats(v, ptr);
-    if (flat.size() % 3 != 0)
-        record_value_error(ptr, "positions has " + std::to_string(flat.size()) +
-                                    " numbers, not a multiple of 3 (x y z per vertex)");
-    std::vector<Vec3> out(flat.size() / 3);
+namespace {
+
+/// A flat array of `N` numbers per vertex (`layout` says which) as vectors of `N` floats.
+template <class V, int N>
+std::vector<V> per_vertex(FieldReader& r, const Json& v, const std::string& ptr,
+                          const char* field, const char* layout) {
+    const std::vector<float> flat = r.floats(v, ptr);
+    if (flat.size() % N != 0)
+        r.record_value_error(ptr, std::string(field) + " has " + std::to_string(flat.size()) +
+                                      " numbers, not a multiple of " + std::to_string(N) + " (" +
+                                      layout + " per vertex)");
+    std::vector<V> out(flat.size() / N);
     for (std::size_t i = 0; i < out.size(); ++i)
-        out[i] = {flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]};
+        for (int k = 0; k < N; ++k) out[i][k] = flat[N * i + std::size_t(k)];
     return out;
+}
+
+}  // namespace
+
+std::vector<Vec3> FieldReader::positions(const Json& v, const std::string& ptr) {
+    return per_vertex<Vec3, 3>(*this, v, ptr, "positions", "x y z");
 }
 
 std::vector<Vec3> FieldReader::normals(const Json& v, const std::string& ptr) {
-    const std::vector<float> flat = floats(v, ptr);
-    if (flat.size() % 3 != 0)
-        record_value_error(ptr, "normals has " + std::to_string(flat.size()) +
-                                    " numbers, not a multiple of 3 (x y z per vertex)");
-    std::vector<Vec3> out(flat.size() / 3);
-    for (std::size_t i = 0; i < out.size(); ++i)
-        out[i] = {flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]};
-    return out;
+    return per_vertex<Vec3, 3>(*this, v, ptr, "normals", "x y z");
 }
 
 std::vector<Vec2> FieldReader::uvs(const Json& v, const std::string& ptr) {
-    const std::vector<float> flat = floats(v, ptr);
-    if (flat.size() % 2 != 0)
-        record_value_error(ptr, "uvs has " + std::to_string(flat.size()) +
-                                    " numbers, not a multiple of 2 (u v per vertex)");
-    std::vector<Vec2> out(flat.size() / 2);
-    for (std::size_t i = 0; i < out.size(); ++i) out[i] = {flat[2 * i], flat[2 * i + 1]};
-    return out;
+    return per_vertex<Vec2, 2>(*this, v, ptr, "uvs", "u v");
 }
 
 std::vector<Vec4> FieldReader::tangents(const Json& v, const std::string& ptr) {
-    const std::vector<float> flat = floats(v, ptr);
-    if (flat.size() % 4 != 0)
-        record_value_error(ptr, "tangents has " + std::to_string(flat.size()) +
-                                    " numbers, not a multiple of 4 (x y z w per vertex)");
-    std::vector<Vec4> out(flat.size() / 4);
-    for (std::size_t i = 0; i < out.size(); ++i)
-        out[i] = {flat[4 * i], flat[4 * i + 1], flat[4 * i + 2], flat[4 * i + 3]};
-    return out;
+    return per_vertex<Vec4, 4>(*this, v, ptr, "tangents", "x y z w");
 }
 
 std::vector<Triangle> FieldReader::indices(const Json& v, const std::string& ptr) {
@@ -330,17 +322,25 @@ std::string FieldReader::base64_bytes(const Json& v, const std::string& ptr, std
     return std::move(*bytes);
 }
 
-std::vector<Vec3> FieldReader::positions_b64(const Json& v, const std::string& ptr) {
-    const std::string bytes = base64_bytes(v, ptr, 12);
-    std::vector<Vec3> out(bytes.size() / 12);
+template <class V, int N>
+std::vector<V> FieldReader::per_vertex_b64(const Json& v, const std::string& ptr,
+                                           const char* what) {
+    constexpr std::size_t size = N * sizeof(float);
+    const std::string bytes = base64_bytes(v, ptr, size);
+    std::vector<V> out(bytes.size() / size);
     for (std::size_t i = 0; i < out.size(); ++i) {
-        for (int k = 0; k < 3; ++k) out[i][k] = load_le<float>(bytes.data() + i * 12 + k * 4);
+        for (int k = 0; k < N; ++k)
+            out[i][k] = load_le<float>(bytes.data() + i * size + std::size_t(k) * sizeof(float));
         if (!is_finite(out[i]))
             record_value_error(ptr,
-                               "vertex " + std::to_string(i) + " has a NaN or infinite coordinate",
+                               "vertex " + std::to_string(i) + " has a NaN or infinite " + what,
                                ErrorCode::NotFinite);
     }
     return out;
+}
+
+std::vector<Vec3> FieldReader::positions_b64(const Json& v, const std::string& ptr) {
+    return per_vertex_b64<Vec3, 3>(v, ptr, "coordinate");
 }
 
 std::vector<Affine> FieldReader::transforms_b64(const Json& v, const std::string& ptr) {
@@ -358,28 +358,11 @@ std::vector<Vec3> FieldReader::normals_b64(const Json& v, const std::string& ptr
 }
 
 std::vector<Vec4> FieldReader::tangents_b64(const Json& v, const std::string& ptr) {
-    const std::string bytes = base64_bytes(v, ptr, 16);
-    std::vector<Vec4> out(bytes.size() / 16);
-    for (std::size_t i = 0; i < out.size(); ++i) {
-        for (int k = 0; k < 4; ++k) out[i][k] = load_le<float>(bytes.data() + i * 16 + k * 4);
-        if (!is_finite(out[i]))
-            record_value_error(ptr,
-                               "vertex " + std::to_string(i) + " has a NaN or infinite tangent",
-                               ErrorCode::NotFinite);
-    }
-    return out;
+    return per_vertex_b64<Vec4, 4>(v, ptr, "tangent");
 }
 
 std::vector<Vec2> FieldReader::uvs_b64(const Json& v, const std::string& ptr) {
-    const std::string bytes = base64_bytes(v, ptr, 8);
-    std::vector<Vec2> out(bytes.size() / 8);
-    for (std::size_t i = 0; i < out.size(); ++i) {
-        for (int k = 0; k < 2; ++k) out[i][k] = load_le<float>(bytes.data() + i * 8 + k * 4);
-        if (!is_finite(out[i]))
-            record_value_error(ptr, "vertex " + std::to_string(i) + " has a NaN or infinite uv",
-                               ErrorCode::NotFinite);
-    }
-    return out;
+    return per_vertex_b64<Vec2, 2>(v, ptr, "uv");
 }
 
 std::vector<Triangle> FieldReader::indices_b64(const Json& v, const std::string& ptr) {

@@ -125,6 +125,9 @@ private:
     template <class Vec>
     Vec fixed_numbers(const Json& v, const std::string& ptr);
     std::string base64_bytes(const Json& v, const std::string& ptr, std::size_t unit);
+    /// Base64 little-endian float32s, `N` a vertex, each vertex finite (`what` names it).
+    template <class V, int N>
+    std::vector<V> per_vertex_b64(const Json& v, const std::string& ptr, const char* what);
 
     std::size_t m_edit_index = Error::NO_INDEX;
     std::optional<Problem> m_value_error;

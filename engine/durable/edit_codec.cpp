@@ -482,6 +482,8 @@ void write_tagged(ByteWriter& w, const E& e) {
 
 template <class E>
 void read_tagged(ByteReader& r, E& e) {
+    if constexpr (std::is_void_v<typename Carries<E>::Kind> && !HAS_SLOTS<E> && !HAS_TANGENTS<E>)
+        return r.fail("tagged fields on an edit that has none");
     uint8_t count = 0;
     r(count);
     if (r.ok() && count == 0) r.fail("an empty tagged section");
