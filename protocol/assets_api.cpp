@@ -342,6 +342,13 @@ bool same_material(const Scene& s, const MaterialRecord& old, const AddMaterial&
     return true;
 }
 
+bool same_attributes(const MeshRecord& old, const AddMesh& e) {
+    bool same = true;
+    for_each_vertex_attribute(
+        [&](auto a) { same = same && decltype(a)::of(old) == decltype(a)::of(e); });
+    return same;
+}
+
 bool same_mesh(const Scene& s, const MeshRecord& old, const AddMesh& e,
                const std::set<std::string>& kept_materials) {
     const auto material = s.material(old.material);
@@ -350,7 +357,7 @@ bool same_mesh(const Scene& s, const MeshRecord& old, const AddMesh& e,
     return old.name == e.name && old.build == e.build && old_material == e.material &&
            (!old_material || kept_materials.count(*old_material) != 0) &&
            old.positions.get() == e.positions && old.triangles.get() == e.triangles &&
-           old.normals == e.normals && old.uvs == e.uvs && old.tangents == e.tangents;
+           same_attributes(old, e);
 }
 
 /// What a re-import keeps, by id.

@@ -20,9 +20,8 @@ namespace strata::protocol {
 struct EditSource {
     bool positions_b64 = false;
     bool indices_b64 = false;
-    bool normals_b64 = false;
-    bool uvs_b64 = false;
-    bool tangents_b64 = false;
+    /// Bit `A::index` per vertex attribute A (vertex_attributes.h) given as base64.
+    uint8_t attributes_b64 = 0;
     bool vertices_b64 = false;
     bool shape = false;
     bool ids_range = false;  ///< bulk ids given as a numbered range

@@ -84,7 +84,9 @@ OrderedJson field_schema(const FieldInfo& info, const bool* fallback) {
 
 OrderedJson field_schema(const FieldInfo& info, const uint32_t* fallback) {
     const OrderedJson d = fallback ? OrderedJson(*fallback) : OrderedJson();
-    return described({{"$ref", "#/$defs/u32"}}, info, fallback ? &d : nullptr);
+    OrderedJson s = {{"$ref", "#/$defs/u32"}};
+    add_limits(s, info.limits);
+    return described(std::move(s), info, fallback ? &d : nullptr);
 }
 
 OrderedJson field_schema(const FieldInfo& info, const Affine*) {

@@ -240,39 +240,30 @@ std::vector<float> FieldReader::floats(const Json& v, const std::string& ptr) {
     return out;
 }
 
-namespace {
-
-/// A flat array of `N` numbers per vertex (`layout` says which) as vectors of `N` floats.
-template <class V, int N>
-std::vector<V> per_vertex(FieldReader& r, const Json& v, const std::string& ptr,
-                          const char* field, const char* layout) {
-    const std::vector<float> flat = r.floats(v, ptr);
-    if (flat.size() % N != 0)
-        r.record_value_error(ptr, std::string(field) + " has " + std::to_string(flat.size()) +
-                                      " numbers, not a multiple of " + std::to_string(N) + " (" +
-                                      layout + " per vertex)");
-    std::vector<V> out(flat.size() / N);
+template <class V>
+std::vector<V> FieldReader::per_vertex(const Json& v, const std::string& ptr,
+                                       std::string_view field) {
+    constexpr std::size_t n = V::length();
+    static constexpr const char* LAYOUT[] = {"", "", "u v", "x y z", "x y z w"};
+    const std::vector<float> flat = floats(v, ptr);
+    if (flat.size() % n != 0)
+        record_value_error(ptr, std::string(field) + " has " + std::to_string(flat.size()) +
+                                    " numbers, not a multiple of " + std::to_string(n) + " (" +
+                                    LAYOUT[n] + " per vertex)");
+    std::vector<V> out(flat.size() / n);
     for (std::size_t i = 0; i < out.size(); ++i)
-        for (int k = 0; k < N; ++k) out[i][k] = flat[N * i + std::size_t(k)];
+        for (std::size_t k = 0; k < n; ++k) out[i][int(k)] = flat[n * i + k];
     return out;
 }
-
-}  // namespace
+template std::vector<Vec2> FieldReader::per_vertex(const Json&, const std::string&,
+                                                   std::string_view);
+template std::vector<Vec3> FieldReader::per_vertex(const Json&, const std::string&,
+                                                   std::string_view);
+template std::vector<Vec4> FieldReader::per_vertex(const Json&, const std::string&,
+                                                   std::string_view);
 
 std::vector<Vec3> FieldReader::positions(const Json& v, const std::string& ptr) {
-    return per_vertex<Vec3, 3>(*this, v, ptr, "positions", "x y z");
-}
-
-std::vector<Vec3> FieldReader::normals(const Json& v, const std::string& ptr) {
-    return per_vertex<Vec3, 3>(*this, v, ptr, "normals", "x y z");
-}
-
-std::vector<Vec2> FieldReader::uvs(const Json& v, const std::string& ptr) {
-    return per_vertex<Vec2, 2>(*this, v, ptr, "uvs", "u v");
-}
-
-std::vector<Vec4> FieldReader::tangents(const Json& v, const std::string& ptr) {
-    return per_vertex<Vec4, 4>(*this, v, ptr, "tangents", "x y z w");
+    return per_vertex<Vec3>(v, ptr, "positions");
 }
 
 std::vector<Triangle> FieldReader::indices(const Json& v, const std::string& ptr) {
@@ -322,25 +313,32 @@ std::string FieldReader::base64_bytes(const Json& v, const std::string& ptr, std
     return std::move(*bytes);
 }
 
-template <class V, int N>
+template <class V>
 std::vector<V> FieldReader::per_vertex_b64(const Json& v, const std::string& ptr,
-                                           const char* what) {
-    constexpr std::size_t size = N * sizeof(float);
+                                           std::string_view field) {
+    constexpr std::size_t size = V::length() * sizeof(float);
     const std::string bytes = base64_bytes(v, ptr, size);
     std::vector<V> out(bytes.size() / size);
     for (std::size_t i = 0; i < out.size(); ++i) {
-        for (int k = 0; k < N; ++k)
+        for (int k = 0; k < V::length(); ++k)
             out[i][k] = load_le<float>(bytes.data() + i * size + std::size_t(k) * sizeof(float));
         if (!is_finite(out[i]))
             record_value_error(ptr,
-                               "vertex " + std::to_string(i) + " has a NaN or infinite " + what,
+                               "vertex " + std::to_string(i) + " of " + std::string(field) +
+                                   " has a NaN or infinite component",
                                ErrorCode::NotFinite);
     }
     return out;
 }
+template std::vector<Vec2> FieldReader::per_vertex_b64(const Json&, const std::string&,
+                                                       std::string_view);
+template std::vector<Vec3> FieldReader::per_vertex_b64(const Json&, const std::string&,
+                                                       std::string_view);
+template std::vector<Vec4> FieldReader::per_vertex_b64(const Json&, const std::string&,
+                                                       std::string_view);
 
 std::vector<Vec3> FieldReader::positions_b64(const Json& v, const std::string& ptr) {
-    return per_vertex_b64<Vec3, 3>(v, ptr, "coordinate");
+    return per_vertex_b64<Vec3>(v, ptr, "positions");
 }
 
 std::vector<Affine> FieldReader::transforms_b64(const Json& v, const std::string& ptr) {
@@ -351,18 +349,6 @@ std::vector<Affine> FieldReader::transforms_b64(const Json& v, const std::string
             out[i].m[k] = load_le<float>(bytes.data() + i * sizeof(Affine) + k * 4);
     }
     return out;
-}
-
-std::vector<Vec3> FieldReader::normals_b64(const Json& v, const std::string& ptr) {
-    return positions_b64(v, ptr);
-}
-
-std::vector<Vec4> FieldReader::tangents_b64(const Json& v, const std::string& ptr) {
-    return per_vertex_b64<Vec4, 4>(v, ptr, "tangent");
-}
-
-std::vector<Vec2> FieldReader::uvs_b64(const Json& v, const std::string& ptr) {
-    return per_vertex_b64<Vec2, 2>(v, ptr, "uv");
 }
 
 std::vector<Triangle> FieldReader::indices_b64(const Json& v, const std::string& ptr) {

@@ -86,15 +86,12 @@ public:
     std::vector<Triangle> indices(const Json& v, const std::string& ptr);
     /// Base64 little-endian float32 triples.
     std::vector<Vec3> positions_b64(const Json& v, const std::string& ptr);
-    /// Per-vertex normals: as positions (flat triples, or base64 float32 triples).
-    std::vector<Vec3> normals(const Json& v, const std::string& ptr);
-    std::vector<Vec3> normals_b64(const Json& v, const std::string& ptr);
-    /// Per-vertex texture coordinates: flat u v pairs, or base64 float32 pairs.
-    std::vector<Vec2> uvs(const Json& v, const std::string& ptr);
-    std::vector<Vec2> uvs_b64(const Json& v, const std::string& ptr);
-    /// Per-vertex tangents: flat x y z w quadruples, or base64 float32 quadruples.
-    std::vector<Vec4> tangents(const Json& v, const std::string& ptr);
-    std::vector<Vec4> tangents_b64(const Json& v, const std::string& ptr);
+    /// A per-vertex attribute `field` of V::length() floats a vertex: a flat array of numbers,
+    /// or base64 little-endian float32s (each vertex finite).
+    template <class V>
+    std::vector<V> per_vertex(const Json& v, const std::string& ptr, std::string_view field);
+    template <class V>
+    std::vector<V> per_vertex_b64(const Json& v, const std::string& ptr, std::string_view field);
     /// Base64 little-endian uint32 triples.
     std::vector<Triangle> indices_b64(const Json& v, const std::string& ptr);
     /// Vertex indices: a flat array of non-negative 32-bit integers, or base64 little-endian
@@ -125,9 +122,6 @@ private:
     template <class Vec>
     Vec fixed_numbers(const Json& v, const std::string& ptr);
     std::string base64_bytes(const Json& v, const std::string& ptr, std::size_t unit);
-    /// Base64 little-endian float32s, `N` a vertex, each vertex finite (`what` names it).
-    template <class V, int N>
-    std::vector<V> per_vertex_b64(const Json& v, const std::string& ptr, const char* what);
 
     std::size_t m_edit_index = Error::NO_INDEX;
     std::optional<Problem> m_value_error;

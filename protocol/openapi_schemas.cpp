@@ -292,10 +292,10 @@ J material_values() {
 }
 
 J mesh_schema() {
-    const J own = {{"vertices", count()},   {"triangles", count()},
-                   {"normals", boolean()},  {"uvs", boolean()},  {"tangents", boolean()},
-                   {"instances", count()},  {"material", or_null(ref("id"))},
-                   {"build", ref("build")}, {"bounds", or_null(ref("Bounds"))}};
+    J own = {{"vertices", count()},   {"triangles", count()},
+             {"instances", count()},  {"material", or_null(ref("id"))},
+             {"build", ref("build")}, {"bounds", or_null(ref("Bounds"))}};
+    for_each_vertex_attribute([&](auto a) { own[std::string(a.name)] = boolean(); });
     return object(merged(merged(identity(true), own), fields<MeshFields>()));
 }
 

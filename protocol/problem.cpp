@@ -7,7 +7,7 @@ namespace strata::protocol {
 
 namespace {
 
-/// The engine names array elements of `positions`/`indices`/`normals`/`uvs`/`tangents`; point at the member
+/// The engine names array elements of `positions`, `indices` and the vertex attributes; point at the member
 /// the client used.
 std::string wire_field(const std::string& field, const EditSource* src) {
     if (!src || field.empty()) return field;
@@ -17,9 +17,12 @@ std::string wire_field(const std::string& field, const EditSource* src) {
         if (head == "positions" && src->positions_b64) return "positions_b64";
         if (head == "indices" && src->indices_b64) return "indices_b64";
     }
-    if (head == "normals" && src->normals_b64) return "normals_b64";
-    if (head == "uvs" && src->uvs_b64) return "uvs_b64";
-    if (head == "tangents" && src->tangents_b64) return "tangents_b64";
+    std::string b64;
+    for_each_vertex_attribute([&](auto a) {
+        if (head == decltype(a)::name && (src->attributes_b64 >> decltype(a)::index & 1u) != 0)
+            b64 = head + "_b64";
+    });
+    if (!b64.empty()) return b64;
     if (head == "vertices" && src->vertices_b64) return "vertices_b64";
     // A bulk edit's item in a packed form: the member (the message names the item).
     if (head == "ids" && src->ids_range) return "ids";

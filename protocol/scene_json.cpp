@@ -106,9 +106,6 @@ Json mesh_json(const Scene& s, MeshHandle h, const MeshRecord& m) {
            {"version", s.version()},
            {"vertices", m.positions.size()},
            {"triangles", m.triangles.size()},
-           {"normals", !m.normals.empty()},
-           {"uvs", !m.uvs.empty()},
-           {"tangents", !m.tangents.empty()},
            {"instances", m.users.size()},
            {"material", material_ref(s, m.material)},
            {"build",
@@ -116,6 +113,9 @@ Json mesh_json(const Scene& s, MeshHandle h, const MeshRecord& m) {
              {"allow_refit", m.build.allow_refit},
              {"compact", m.build.compact}}},
            {"bounds", bounds_to_json(mesh_bounds(m))}};
+    // Whether it has each vertex attribute.
+    for_each_vertex_attribute(
+        [&](auto a) { j[std::string(a.name)] = !decltype(a)::of(m).empty(); });
     write_fields<MeshFields>(j, m);
     return j;
 }

@@ -64,14 +64,14 @@ constexpr const char* KIND_NAMES[] = {"add_mesh",
 static_assert(std::size(KIND_NAMES) == std::variant_size_v<Edit>);
 
 /// Kind tag bit: the edit's extension fields follow its base layout. Fields added to a kind after
-/// its layout was first written (a mesh's normals and uvs, an
-/// instance's parent group) are extensions: an edit without them is written exactly as before,
-/// so older files read the same and a file only grows the bit where it uses what is new.
+/// its layout was first written (a mesh's normals and uvs, an instance's parent group) are
+/// extensions: an edit without them is written exactly as before, so older files read the same
+/// and a file only grows the bit where it uses what is new.
 constexpr uint8_t EXTENDED = 0x80;
 /// Kind tag bit: the edit's tagged fields follow (after its extension fields, if any): fields
 /// added to a kind's table after its first layout (tag > 0 in object_fields.h), and a few outside
-/// the tables (a material's texture slots, a mesh's tangents), written as a count byte, then a
-/// tag byte and the value for each field that is not absent.
+/// the tables (a material's texture slots, a mesh's later vertex attributes), written as a count
+/// byte, then a tag byte and the value for each field that is not absent.
 constexpr uint8_t TAGGED = 0x40;
 static_assert(std::variant_size_v<Edit> < TAGGED);
 
@@ -292,12 +292,8 @@ bool has_extension(const UpdateMaterial& e) {
 template <class E>
 constexpr bool HAS_SLOTS = Kind<E, AddMaterial> || Kind<E, UpdateMaterial>;
 template <class E>
-constexpr bool HAS_TANGENTS =
+constexpr bool HAS_ATTRIBUTES =
     Kind<E, AddMesh> || Kind<E, UpdateMeshPositions> || Kind<E, ReplaceMeshTopology>;
-
-/// A mesh's tangents, tagged on the edits that carry vertex attributes (added after their
-/// extension layouts were pinned).
-constexpr uint8_t TANGENTS_TAG = 32;
 
 constexpr bool slot_tags_free() {
     for (const TextureSlotInfo& s : TEXTURE_SLOTS) {
@@ -310,40 +306,65 @@ constexpr bool slot_tags_free() {
     return true;
 }
 static_assert(slot_tags_free(), "texture slot tags are in [32, 64) and no material row has them");
-constexpr bool tangent_tag_free() {
+template <class A>
+constexpr bool attribute_tag_free() {
+    if (A::tag == 0) return true;
     bool taken = false;
-    for_each_field<MeshFields>([&](const auto& row) { taken |= row.info.tag == TANGENTS_TAG; });
-    return !taken;
+    for_each_field<MeshFields>([&](const auto& row) { taken |= row.info.tag == A::tag; });
+    return A::tag < 64 && !taken;
 }
-static_assert(tangent_tag_free(), "no mesh row has the tangents' tag");
+static_assert(attribute_tag_free<Uvs1Attribute>() && attribute_tag_free<TangentsAttribute>() &&
+                  Uvs1Attribute::tag != TangentsAttribute::tag,
+              "vertex attribute tags are below 64, distinct, and no mesh row has them");
 
-/// Whether an edit's tangents are there: an add's when not empty, an update's when set (an
-/// update's empty array removes them).
-bool tangents_present(const AddMesh& e) { return !e.tangents.empty(); }
-template <class E>
-bool tangents_present(const E& e) {
-    return e.tangents.has_value();
+/// Whether an edit's attribute `A` is there: an add's when not empty, an update's when set (an
+/// update's empty array removes it).
+template <class A>
+bool attribute_present(const AddMesh& e) {
+    return !A::of(e).empty();
 }
-/// The array the tangents' tag holds (an update's made present for reading into).
-std::vector<Vec4>& tangent_array(AddMesh& e) { return e.tangents; }
-const std::vector<Vec4>& tangent_array(const AddMesh& e) { return e.tangents; }
-template <class E>
-auto& tangent_array(E& e) {
+template <class A, class E>
+bool attribute_present(const E& e) {
+    return A::of(e).has_value();
+}
+/// The array attribute `A`'s tag holds (an update's made present for reading into).
+template <class A>
+auto& attribute_array(AddMesh& e) {
+    return A::of(e);
+}
+template <class A>
+const auto& attribute_array(const AddMesh& e) {
+    return A::of(e);
+}
+template <class A, class E>
+auto& attribute_array(E& e) {
+    auto& value = A::of(e);
     if constexpr (std::is_const_v<E>)
-        return *e.tangents;
+        return *value;
     else
-        return e.tangents ? *e.tangents : e.tangents.emplace();
+        return value ? *value : value.emplace();
+}
+
+/// Calls `f` with each vertex attribute that is a tagged field (those added after the mesh
+/// edits' extension layouts were pinned).
+template <class F>
+void for_each_tagged_attribute(F&& f) {
+    for_each_vertex_attribute([&](auto a) {
+        if constexpr (decltype(a)::tag != 0) f(a);
+    });
 }
 
 /// The tagged fields an edit carries outside its kind's table: a material's texture slots, a
-/// mesh edit's tangents.
+/// mesh edit's later vertex attributes.
 template <class E>
 std::size_t extra_count(const E& e) {
     std::size_t n = 0;
     if constexpr (HAS_SLOTS<E>)
         for (const TextureSlotInfo& s : TEXTURE_SLOTS)
             n += s.tag != 0 && e.textures[slot_index(s.slot)].has_value();
-    if constexpr (HAS_TANGENTS<E>) n += tangents_present(e);
+    if constexpr (HAS_ATTRIBUTES<E>)
+        for_each_tagged_attribute(
+            [&](auto a) { n += attribute_present<decltype(a)>(e) ? 1 : 0; });
     return n;
 }
 
@@ -357,16 +378,20 @@ void write_extras(ByteWriter& w, const E& e) {
             w(*texture);
         }
     }
-    if constexpr (HAS_TANGENTS<E>) {
-        if (!tangents_present(e)) return;
-        w(TANGENTS_TAG);
-        w(tangent_array(e));
+    if constexpr (HAS_ATTRIBUTES<E>) {
+        for_each_tagged_attribute([&](auto a) {
+            using A = decltype(a);
+            if (!attribute_present<A>(e)) return;
+            w(A::tag);
+            w(attribute_array<A>(e));
+        });
     }
 }
 
 /// Reads the field tagged `tag` into `e`; false when no extra field has that tag.
 template <class E>
 bool read_extra(ByteReader& r, E& e, uint8_t tag) {
+    bool known = false;
     if constexpr (HAS_SLOTS<E>) {
         for (const TextureSlotInfo& s : TEXTURE_SLOTS) {
             if (s.tag == 0 || s.tag != tag) continue;
@@ -374,14 +399,18 @@ bool read_extra(ByteReader& r, E& e, uint8_t tag) {
             return true;
         }
     }
-    if constexpr (HAS_TANGENTS<E>) {
-        if (tag != TANGENTS_TAG) return false;
-        r(tangent_array(e));
-        // Not a form any writer produces (and it would re-encode differently).
-        if (r.ok() && !tangents_present(e)) r.fail("tagged tangents hold no tangents");
-        return true;
+    if constexpr (HAS_ATTRIBUTES<E>) {
+        for_each_tagged_attribute([&](auto a) {
+            using A = decltype(a);
+            if (known || tag != A::tag) return;
+            known = true;
+            r(attribute_array<A>(e));
+            // Not a form any writer produces (and it would re-encode differently).
+            if (r.ok() && !attribute_present<A>(e))
+                r.fail("tagged " + std::string(A::name) + " hold no values");
+        });
     }
-    return false;
+    return known;
 }
 
 // Step: tagged fields, for the edits that carry a kind's table --------------------------------
@@ -482,7 +511,7 @@ void write_tagged(ByteWriter& w, const E& e) {
 
 template <class E>
 void read_tagged(ByteReader& r, E& e) {
-    if constexpr (std::is_void_v<typename Carries<E>::Kind> && !HAS_SLOTS<E> && !HAS_TANGENTS<E>)
+    if constexpr (std::is_void_v<typename Carries<E>::Kind> && !HAS_SLOTS<E> && !HAS_ATTRIBUTES<E>)
         return r.fail("tagged fields on an edit that has none");
     uint8_t count = 0;
     r(count);

@@ -60,24 +60,27 @@ SurfaceMaterial FrameState::surface(uint32_t material, const MeshShade* mesh, ui
                                     float u, float v) const {
     SurfaceMaterial s{materials[material]};
     const MaterialTextures& tex = material_textures[material];
-    if (!mesh || mesh->uvs.empty() || prim >= mesh->triangles.size()) return s;
-    const Vec2 uv = mesh->uv(prim, u, v);
+    if (!mesh || prim >= mesh->triangles.size()) return s;
     const TextureSampler& sampler = s.material.base_color_sampler;
-    const auto read = [&](TextureSlot slot) -> const TextureImage* {
-        return tex[slot_index(slot)].get();
-    };
     Material& m = s.material;
-    if (const TextureImage* t = read(TextureSlot::BaseColor)) m.base_color *= t->sample(uv, sampler);
-    if (const TextureImage* t = read(TextureSlot::MetallicRoughness)) {
-        const Vec3 mr = t->sample(uv, sampler);
-        m.roughness *= mr.y;
-        m.metallic *= mr.z;
+    // Each slot's texture at its own coordinate set; none without a texture or coordinates.
+    Vec3 texel;
+    const auto read = [&](TextureSlot slot) {
+        const TextureImage* t = tex[slot_index(slot)].get();
+        const std::vector<Vec2>* set =
+            t ? mesh->uv_set(m.*(TEXTURE_SLOTS[slot_index(slot)].uv_set)) : nullptr;
+        if (set) texel = t->sample(mesh->uv(*set, prim, u, v), sampler);
+        return set != nullptr;
+    };
+    if (read(TextureSlot::BaseColor)) m.base_color *= texel;
+    if (read(TextureSlot::MetallicRoughness)) {
+        m.roughness *= texel.y;
+        m.metallic *= texel.z;
     }
-    if (const TextureImage* t = read(TextureSlot::Emissive)) m.emission *= t->sample(uv, sampler);
-    if (const TextureImage* t = read(TextureSlot::Occlusion))
-        s.occlusion = 1.0f + m.occlusion_strength * (t->sample(uv, sampler).x - 1.0f);
-    if (const TextureImage* t = read(TextureSlot::Normal); t && !mesh->tangents.empty()) {
-        const Vec3 c = t->sample(uv, sampler) * 2.0f - Vec3(1.0f);
+    if (read(TextureSlot::Emissive)) m.emission *= texel;
+    if (read(TextureSlot::Occlusion)) s.occlusion = 1.0f + m.occlusion_strength * (texel.x - 1.0f);
+    if (!mesh->tangents.empty() && read(TextureSlot::Normal)) {
+        const Vec3 c = texel * 2.0f - Vec3(1.0f);
         s.tangent_normal = Vec3(c.x * m.normal_scale, c.y * m.normal_scale, c.z);
         s.normal_mapped = true;
     }
@@ -88,8 +91,10 @@ float FrameState::coverage(uint32_t material, const MeshShade* mesh, uint32_t pr
                            float v) const {
     const Material& m = materials[material];
     const TextureImage* t = material_textures[material][slot_index(TextureSlot::BaseColor)].get();
-    if (!t || !mesh || mesh->uvs.empty() || prim >= mesh->triangles.size()) return m.alpha;
-    return m.alpha * t->sample_alpha(mesh->uv(prim, u, v), m.base_color_sampler);
+    if (!t || !mesh || prim >= mesh->triangles.size()) return m.alpha;
+    const std::vector<Vec2>* set = mesh->uv_set(m.base_color_uv_set);
+    if (!set) return m.alpha;
+    return m.alpha * t->sample_alpha(mesh->uv(*set, prim, u, v), m.base_color_sampler);
 }
 
 std::optional<HitTest> FrameState::hit_test() const {
@@ -192,11 +197,12 @@ void FrameState::refresh_mesh(const Scene& scene, MeshHandle h) {
     }
     if (!r->dirty.bits.has(MeshDirty::Added | MeshDirty::Topology | MeshDirty::Attributes)) return;
     if (h.index >= meshes.size()) meshes.resize(h.index + 1);
-    if (r->normals.empty() && r->uvs.empty()) {
+    if (r->normals.empty() && r->uvs.empty() && r->uvs1.empty()) {
         meshes[h.index].reset();
         return;
     }
-    auto shade = std::make_shared<MeshShade>(MeshShade{r->triangles, r->normals, r->uvs, {}});
+    auto shade =
+        std::make_shared<MeshShade>(MeshShade{r->triangles, r->normals, r->uvs, r->uvs1, {}});
     // The mesh's own tangents (a file's), else made in MikkTSpace's convention.
     if (!r->normals.empty() && !r->uvs.empty())
         shade->tangents = r->tangents.empty()

@@ -35,6 +35,7 @@ struct MeshShade {
     std::vector<Triangle> triangles;
     std::vector<Vec3> normals;  ///< empty: geometric normals
     std::vector<Vec2> uvs;      ///< empty: none
+    std::vector<Vec2> uvs1;     ///< the second texture coordinate set; empty: none
     /// Tangent frames for normal maps when the mesh has normals and uvs: its own tangents, or
     /// else made (tangents.h) from the positions of the commit that changed its topology or
     /// attributes: a commit that only moves vertices keeps them, as it keeps the normals.
@@ -46,10 +47,18 @@ struct MeshShade {
         const Triangle& t = triangles[prim];
         return (1.0f - u - v) * normals[t[0]] + u * normals[t[1]] + v * normals[t[2]];
     }
-    /// The interpolated texture coordinate of triangle `prim` at (u, v).
-    Vec2 uv(uint32_t prim, float u, float v) const {
+    /// The texture coordinate set `set` reads (0: uvs, 1: uvs1), or the other one when the
+    /// mesh lacks it; null when it has neither.
+    const std::vector<Vec2>* uv_set(uint32_t set) const {
+        const std::vector<Vec2>* first = set == 1 ? &uvs1 : &uvs;
+        const std::vector<Vec2>* other = set == 1 ? &uvs : &uvs1;
+        return !first->empty() ? first : !other->empty() ? other : nullptr;
+    }
+    /// The interpolated texture coordinate of triangle `prim` at (u, v) in `set`'s coordinates
+    /// (one of uv_set()'s answers).
+    Vec2 uv(const std::vector<Vec2>& set, uint32_t prim, float u, float v) const {
         const Triangle& t = triangles[prim];
-        return (1.0f - u - v) * uvs[t[0]] + u * uvs[t[1]] + v * uvs[t[2]];
+        return (1.0f - u - v) * set[t[0]] + u * set[t[1]] + v * set[t[2]];
     }
     /// The interpolated tangent (xyz, not normalised) and handedness (w) of triangle `prim`.
     glm::vec4 tangent(uint32_t prim, float u, float v) const {

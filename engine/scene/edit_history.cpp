@@ -28,22 +28,27 @@ uint64_t ids_bytes(const BulkIds& ids) {
     return strings_bytes(ids.list) + ids.prefix.size();
 }
 
+/// The bytes of a mesh edit's optional vertex attributes.
+template <class E>
+uint64_t attribute_bytes(const E& e) {
+    uint64_t bytes = 0;
+    for_each_vertex_attribute([&](auto a) { bytes += bytes_of(decltype(a)::of(e)); });
+    return bytes;
+}
+
 /// The heap bytes of one edit beyond its struct: its arrays and its encoded image.
 struct ArrayBytes {
     uint64_t operator()(const AddMesh& e) const {
-        return bytes_of(e.positions) + bytes_of(e.triangles) + bytes_of(e.normals) +
-               bytes_of(e.uvs) + bytes_of(e.tangents);
+        return bytes_of(e.positions) + bytes_of(e.triangles) + attribute_bytes(e);
     }
     uint64_t operator()(const UpdateMeshPositions& e) const {
-        return bytes_of(e.positions) + bytes_of(e.normals) + bytes_of(e.uvs) +
-               bytes_of(e.tangents);
+        return bytes_of(e.positions) + attribute_bytes(e);
     }
     uint64_t operator()(const UpdateMeshVertices& e) const {
         return bytes_of(e.vertices) + bytes_of(e.positions);
     }
     uint64_t operator()(const ReplaceMeshTopology& e) const {
-        return bytes_of(e.positions) + bytes_of(e.triangles) + bytes_of(e.normals) +
-               bytes_of(e.uvs) + bytes_of(e.tangents);
+        return bytes_of(e.positions) + bytes_of(e.triangles) + attribute_bytes(e);
     }
     uint64_t operator()(const AddTexture& e) const { return e.data.size(); }
     uint64_t operator()(const AddInstances& e) const {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "engine/scene/types.h"
+#include "engine/scene/vertex_attributes.h"
 
 namespace strata {
 
@@ -24,6 +25,7 @@ struct AddMesh {
     std::optional<std::string> material;  ///< default material of the mesh's instances
     std::vector<Vec3> normals = {};       ///< per-vertex shading normals; empty: none
     std::vector<Vec2> uvs = {};           ///< per-vertex texture coordinates; empty: none
+    std::vector<Vec2> uvs1 = {};          ///< a second set (TEXCOORD_1); empty: none
     /// Per-vertex tangents for normal maps (xyz, w = +1 or -1 the bitangent's sign); empty:
     /// made at commit in the MikkTSpace convention (engine/render/tangents.h).
     std::vector<Vec4> tangents = {};
@@ -31,9 +33,9 @@ struct AddMesh {
 };
 
 /// New vertex data for vertices [offset, offset + n): positions (empty: unchanged) and, when set,
-/// normals, uvs and tangents over their own length from the same offset. The vertex count is
-/// unchanged. A mesh without normals (uvs, tangents) takes them only whole (offset 0, one per
-/// vertex); an empty array removes them. Only positions touch the BLAS.
+/// its other attributes (vertex_attributes.h) over their own length from the same offset. The
+/// vertex count is unchanged. A mesh without an attribute takes it only whole (offset 0, one per
+/// vertex); an empty array removes it. Only positions touch the BLAS.
 struct UpdateMeshPositions {
     std::string mesh;
     uint32_t offset = 0;
@@ -41,6 +43,7 @@ struct UpdateMeshPositions {
     std::optional<std::vector<Vec3>> normals = std::nullopt;
     std::optional<std::vector<Vec2>> uvs = std::nullopt;
     std::optional<std::vector<Vec4>> tangents = std::nullopt;
+    std::optional<std::vector<Vec2>> uvs1 = std::nullopt;
 };
 
 /// New positions for listed vertices: vertex `vertices[i]` takes `positions[i]` (a vertex listed
@@ -53,8 +56,8 @@ struct UpdateMeshVertices {
 };
 
 /// New triangles, and optionally a whole new vertex array (which may change the vertex count),
-/// with whole new normals, uvs and tangents when set (empty: removed). A vertex count change must
-/// bring new normals (uvs, tangents) for a mesh that has them.
+/// with whole new attributes (vertex_attributes.h) when set (empty: removed). A vertex count
+/// change must bring a new array of each attribute the mesh has.
 struct ReplaceMeshTopology {
     std::string mesh;
     std::optional<std::vector<Vec3>> positions;
@@ -62,6 +65,7 @@ struct ReplaceMeshTopology {
     std::optional<std::vector<Vec3>> normals = std::nullopt;
     std::optional<std::vector<Vec2>> uvs = std::nullopt;
     std::optional<std::vector<Vec4>> tangents = std::nullopt;
+    std::optional<std::vector<Vec2>> uvs1 = std::nullopt;
 };
 
 struct RemoveMesh {
@@ -97,6 +101,11 @@ struct UpdateMaterial {
     std::optional<float> normal_scale = std::nullopt;
     std::optional<float> occlusion_strength = std::nullopt;
     std::optional<bool> unlit = std::nullopt;
+    std::optional<uint32_t> base_color_uv_set = std::nullopt;
+    std::optional<uint32_t> metallic_roughness_uv_set = std::nullopt;
+    std::optional<uint32_t> normal_uv_set = std::nullopt;
+    std::optional<uint32_t> occlusion_uv_set = std::nullopt;
+    std::optional<uint32_t> emissive_uv_set = std::nullopt;
 };
 
 /// A texture from PNG or JPEG bytes (the format is read from the bytes). Decoded when the edit is

@@ -241,8 +241,9 @@ Status check_value(const FieldInfo& info, const Affine& v);
 inline Status check_value(const FieldInfo&, bool) {
     return {};
 }
-inline Status check_value(const FieldInfo&, uint32_t) {
-    return {};
+inline Status check_value(const FieldInfo& info, uint32_t v) {
+    if (info.limits.contains(double(v))) return {};
+    return refuse_number(info, float(v));
 }
 template <class E>
 requires std::is_enum_v<E>
@@ -272,8 +273,8 @@ inline bool value_ok(const FieldInfo&, const Affine& v) {
 inline bool value_ok(const FieldInfo&, bool) {
     return true;
 }
-inline bool value_ok(const FieldInfo&, uint32_t) {
-    return true;
+inline bool value_ok(const FieldInfo& info, uint32_t v) {
+    return info.limits.contains(double(v));
 }
 template <class E>
 requires std::is_enum_v<E>

@@ -54,7 +54,7 @@ public:
     void invert(std::vector<UndoRecord>& records, EditBatch& out) {
         m_out = &out;
         for (std::size_t i = records.size(); i-- > 0;) {
-            // A topology change saved its normals, uvs and tangents in the record just before it: they go
+            // A topology change saved its other attributes in the record just before it: they go
             // back with the topology (a vertex count change needs them in the same edit).
             auto* topology = std::get_if<undo::MeshTopology>(&records[i]);
             auto* attributes = i > 0 ? std::get_if<undo::MeshAttributes>(&records[i - 1]) : nullptr;
@@ -92,9 +92,8 @@ public:
         e.triangles = take(m.triangles);
         e.build = m.build;
         e.material = id_or_none(m.material);
-        e.normals = std::move(m.normals);
-        e.uvs = std::move(m.uvs);
-        e.tangents = std::move(m.tangents);
+        for_each_vertex_attribute(
+            [&](auto a) { decltype(a)::of(e) = std::move(decltype(a)::of(m)); });
         copy_to_add<MeshFields>(e, m);
         emit(std::move(e));
     }
@@ -157,8 +156,10 @@ public:
 
     void operator()(undo::MeshAttributes& r) {
         // The saved arrays are whole, so they go back whole (offset 0; [] removes them again).
-        emit(UpdateMeshPositions{id_of(r.handle), 0, {}, std::move(r.normals), std::move(r.uvs),
-                                 std::move(r.tangents)});
+        UpdateMeshPositions e{id_of(r.handle), 0, {}};
+        for_each_vertex_attribute(
+            [&](auto a) { decltype(a)::of(e) = std::move(decltype(a)::of(r)); });
+        emit(std::move(e));
     }
 
     void operator()(undo::InstanceState& r) {
@@ -296,9 +297,8 @@ private:
         if (r.positions) e.positions = take(*r.positions);
         e.triangles = take(r.triangles);
         if (attributes) {
-            e.normals = std::move(attributes->normals);
-            e.uvs = std::move(attributes->uvs);
-            e.tangents = std::move(attributes->tangents);
+            for_each_vertex_attribute(
+                [&](auto a) { decltype(a)::of(e) = std::move(decltype(a)::of(*attributes)); });
         }
         emit(std::move(e));
     }

@@ -84,6 +84,12 @@ constexpr auto LightFields::table() {
 inline constexpr std::string_view ALPHA_MODES[] = {"opaque", "mask", "blend"};
 inline constexpr std::string_view COLOR_SPACES[] = {"srgb", "linear"};
 
+/// A texture slot's coordinate set (glTF's texCoord): the mesh's uvs or its uvs1.
+inline constexpr Limits UV_SETS = closed(0, 1);
+inline constexpr std::string_view UV_SET_DOC =
+    "The texture coordinates the slot's texture reads: 0, the mesh's uvs; 1, its uvs1 (a mesh "
+    "without uvs1 reads its uvs).";
+
 struct MaterialFields {
     using Record = Material;
     using Add = Material;
@@ -128,6 +134,16 @@ constexpr auto MaterialFields::table() {
                   "reflecting nothing (KHR_materials_unlit).",
                   {}, {}, 7},
                  STRATA_FIELD_OF(K, unlit), P),
+        field<K>({"base_color_uv_set", UV_SET_DOC, UV_SETS, {}, 8},
+                 STRATA_FIELD_OF(K, base_color_uv_set), P),
+        field<K>({"metallic_roughness_uv_set", UV_SET_DOC, UV_SETS, {}, 9},
+                 STRATA_FIELD_OF(K, metallic_roughness_uv_set), P),
+        field<K>({"normal_uv_set", UV_SET_DOC, UV_SETS, {}, 10},
+                 STRATA_FIELD_OF(K, normal_uv_set), P),
+        field<K>({"occlusion_uv_set", UV_SET_DOC, UV_SETS, {}, 11},
+                 STRATA_FIELD_OF(K, occlusion_uv_set), P),
+        field<K>({"emissive_uv_set", UV_SET_DOC, UV_SETS, {}, 12},
+                 STRATA_FIELD_OF(K, emissive_uv_set), P),
     };
 }
 

@@ -300,9 +300,7 @@ EditBatch SceneImage::to_batch() const {
         e.id = m.id;
         e.positions = m.positions.get();
         e.triangles = m.triangles.get();
-        e.normals = m.normals;
-        e.uvs = m.uvs;
-        e.tangents = m.tangents;
+        for_each_vertex_attribute([&](auto a) { decltype(a)::of(e) = decltype(a)::of(m); });
         e.build = m.build;
         if (const MaterialRecord* mat = materials.get(m.material)) e.material = mat->id;
         copy_to_add<MeshFields>(e, m);

@@ -29,6 +29,7 @@ struct MeshRecord {
     CowVector<Triangle> triangles;
     std::vector<Vec3> normals;  ///< per-vertex shading normals (object space); empty: none
     std::vector<Vec2> uvs;      ///< per-vertex texture coordinates; empty: none
+    std::vector<Vec2> uvs1;      ///< a second set of texture coordinates; empty: none
     std::vector<Vec4> tangents;  ///< per-vertex tangents (xyz, w: handedness); empty: made
     BuildOptions build;
     MaterialHandle material;          ///< default for its instances; null: built-in default

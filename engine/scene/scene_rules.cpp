@@ -99,15 +99,15 @@ Status check_normals(const std::vector<Vec3>& normals, uint64_t first_vertex = 0
     return {};
 }
 
-/// Per-vertex texture coordinates: every component finite.
-Status check_uvs(const std::vector<Vec2>& uvs, uint64_t first_vertex = 0) {
+/// Per-vertex texture coordinates (of the set `field` names): every component finite.
+Status check_uvs(const std::vector<Vec2>& uvs, uint64_t first_vertex, std::string_view field) {
     for (std::size_t i = 0; i < uvs.size(); ++i) {
         if (is_finite(uvs[i])) continue;
         const int k = std::isfinite(uvs[i].x) ? 1 : 0;
         return failure(ErrorCode::NotFinite,
                        "uv of vertex " + std::to_string(first_vertex + i) +
                            " has a NaN or infinite " + "uv"[k] + " coordinate",
-                       "uvs/" + std::to_string(i * 2 + k));
+                       std::string(field) + "/" + std::to_string(i * 2 + k));
     }
     return {};
 }
@@ -133,27 +133,27 @@ Status check_tangents(const std::vector<Vec4>& tangents, uint64_t first_vertex =
     return {};
 }
 
-/// The checks of one attribute's values (each attribute has its own element type).
-Status check_values(const std::vector<Vec3>& normals, uint64_t first_vertex) {
-    return check_normals(normals, first_vertex);
-}
-Status check_values(const std::vector<Vec2>& uvs, uint64_t first_vertex) {
-    return check_uvs(uvs, first_vertex);
-}
-Status check_values(const std::vector<Vec4>& tangents, uint64_t first_vertex) {
-    return check_tangents(tangents, first_vertex);
+/// The checks of attribute `A`'s values, the first of them at vertex `first_vertex`.
+template <class A>
+Status check_values(A, const std::vector<typename A::Value>& values, uint64_t first_vertex) {
+    if constexpr (std::is_same_v<A, NormalsAttribute>)
+        return check_normals(values, first_vertex);
+    else if constexpr (std::is_same_v<A, TangentsAttribute>)
+        return check_tangents(values, first_vertex);
+    else
+        return check_uvs(values, first_vertex, A::name);
 }
 
-/// A whole attribute array (normals, uvs or tangents) for a mesh of `vertex_count` vertices: one per vertex.
+/// A whole attribute array for a mesh of `vertex_count` vertices: one per vertex.
 template <class T>
 Status check_attribute_count(const std::vector<T>& values, std::size_t vertex_count,
-                             const char* field) {
+                             std::string_view field) {
     if (values.size() == vertex_count) return {};
     return failure(ErrorCode::InvalidArgument,
                    std::string(field) + " has " + std::to_string(values.size()) +
                        " entries but the mesh has " + std::to_string(vertex_count) +
                        " vertices (one per vertex)",
-                   field);
+                   std::string(field));
 }
 
 /// An attribute update from vertex `offset`: an empty array removes the attribute; a mesh that
@@ -161,7 +161,8 @@ Status check_attribute_count(const std::vector<T>& values, std::size_t vertex_co
 template <class T>
 Status check_attribute_range(const std::vector<T>& values, uint32_t offset,
                              const std::vector<T>& current, std::size_t vertex_count,
-                             const std::string& mesh, const char* field) {
+                             const std::string& mesh, std::string_view name) {
+    const std::string field(name);
     if (values.empty()) return {};
     if (current.empty()) {
         if (offset == 0 && values.size() == vertex_count) return {};
@@ -173,68 +174,74 @@ Status check_attribute_range(const std::vector<T>& values, uint32_t offset,
     const uint64_t end = uint64_t(offset) + values.size();
     if (end > vertex_count)
         return failure(ErrorCode::OutOfRange,
-                       std::string(field) + " for vertices [" + std::to_string(offset) + ", " +
+                       field + " for vertices [" + std::to_string(offset) + ", " +
                            std::to_string(end) + ") are outside mesh '" + mesh + "' which has " +
                            std::to_string(vertex_count) + " vertices",
                        field);
     return {};
 }
 
-/// A new mesh's attribute: none (empty), or one valid value per vertex.
-template <class T>
-Status check_whole(const std::vector<T>& values, std::size_t vertex_count, const char* field) {
+/// A new mesh's attribute `a`: none (empty), or one valid value per vertex.
+template <class A>
+Status check_whole(A a, const std::vector<typename A::Value>& values, std::size_t vertex_count) {
     if (values.empty()) return {};
-    if (Status s = check_attribute_count(values, vertex_count, field); !s) return s;
-    return check_values(values, 0);
+    if (Status s = check_attribute_count(values, vertex_count, A::name); !s) return s;
+    return check_values(a, values, 0);
 }
 
-/// An attribute update (when given) over vertices from `offset`.
-template <class T>
-Status check_update(const std::optional<std::vector<T>>& values, uint32_t offset,
-                    const std::vector<T>& current, std::size_t vertex_count,
-                    const std::string& mesh, const char* field) {
+/// An update of attribute `a` (when given) over vertices from `offset`.
+template <class A>
+Status check_update(A a, const UpdateMeshPositions& e, const MeshRecord& r) {
+    const auto& values = A::of(e);
     if (!values) return {};
-    if (Status s = check_attribute_range(*values, offset, current, vertex_count, mesh, field); !s)
+    if (Status s = check_attribute_range(*values, e.offset, A::of(r), r.positions.size(), e.mesh,
+                                         A::name);
+        !s)
         return s;
-    return check_values(*values, offset);
+    return check_values(a, *values, e.offset);
 }
 
-/// A topology change's attribute: when given, whole for the new vertex count (or [] to remove
-/// it); when not, the kept one must still fit that count.
-template <class T>
-Status check_replaced(const std::optional<std::vector<T>>& values, const std::vector<T>& current,
-                      std::size_t old_count, std::size_t vertex_count, const std::string& mesh,
-                      const char* field) {
-    if (values) return check_whole(*values, vertex_count, field);
-    if (vertex_count == old_count || current.empty()) return {};
+/// A topology change's attribute `a`: when given, whole for the new vertex count (or [] to
+/// remove it); when not, the kept one must still fit that count.
+template <class A>
+Status check_replaced(A a, const ReplaceMeshTopology& e, const MeshRecord& r,
+                      std::size_t vertex_count) {
+    const std::size_t old_count = r.positions.size();
+    const std::string field(A::name);
+    if (const auto& values = A::of(e)) return check_whole(a, *values, vertex_count);
+    if (vertex_count == old_count || A::of(r).empty()) return {};
     return failure(ErrorCode::InvalidArgument,
-                   "mesh '" + mesh + "' has " + field + " for " + std::to_string(old_count) +
+                   "mesh '" + e.mesh + "' has " + field + " for " + std::to_string(old_count) +
                        " vertices: a topology change to " + std::to_string(vertex_count) +
                        " vertices needs new " + field + " (or [] to remove them)",
                    field);
 }
 
-/// When `values` is given, writes it over `dst` from `offset` (an empty `values` clears `dst`; an
-/// empty `dst` takes `values` whole), keeping what `dst` held in `old`.
-template <class T>
-void patch_attribute(std::vector<T>& dst, std::optional<std::vector<T>>& values,
-                     std::optional<std::vector<T>>& old, uint32_t offset) {
-    if (!values) return;
-    old = dst;
-    if (values->empty() || dst.empty()) {
-        dst = std::move(*values);
-    } else {
-        std::copy(values->begin(), values->end(), dst.begin() + offset);
-    }
+/// Each attribute `e` gives, written over the record's from `offset` (an empty array clears it;
+/// a record without it takes the array whole), what it held kept in `old`.
+void patch_attributes(MeshRecord& r, UpdateMeshPositions& e, undo::MeshAttributes& old) {
+    for_each_vertex_attribute([&](auto a) {
+        using A = decltype(a);
+        auto& values = A::of(e);
+        auto& dst = A::of(r);
+        if (!values) return;
+        A::of(old) = dst;
+        if (values->empty() || dst.empty()) {
+            dst = std::move(*values);
+        } else {
+            std::copy(values->begin(), values->end(), dst.begin() + e.offset);
+        }
+    });
 }
 
-/// When `values` is given, it replaces `dst` whole; `old` takes what `dst` held.
-template <class T>
-void replace_attribute(std::vector<T>& dst, std::optional<std::vector<T>>& values,
-                       std::optional<std::vector<T>>& old) {
-    if (!values) return;
-    old = std::move(dst);
-    dst = std::move(*values);
+/// Each attribute `e` gives replaces the record's whole; `old` takes what it held.
+void replace_attributes(MeshRecord& r, ReplaceMeshTopology& e, undo::MeshAttributes& old) {
+    for_each_vertex_attribute([&](auto a) {
+        using A = decltype(a);
+        if (!A::of(e)) return;
+        A::of(old) = std::move(A::of(r));
+        A::of(r) = std::move(*A::of(e));
+    });
 }
 
 }  // namespace
@@ -250,10 +257,11 @@ Status Scene::apply_edit(AddMesh&& e, UndoLog& undo) {
             e.positions.empty() ? "positions" : "indices");
     if (Status s = check_vertex_array(e.positions); !s) return s;
     if (Status s = check_triangles(e.triangles, e.positions.size(), "indices"); !s) return s;
-    const std::size_t vertex_count = e.positions.size();
-    if (Status s = check_whole(e.normals, vertex_count, "normals"); !s) return s;
-    if (Status s = check_whole(e.uvs, vertex_count, "uvs"); !s) return s;
-    if (Status s = check_whole(e.tangents, vertex_count, "tangents"); !s) return s;
+    if (Status s = first_failure_over_vertex_attributes([&](auto a) {
+            return check_whole(a, decltype(a)::of(e), e.positions.size());
+        });
+        !s)
+        return s;
     MaterialHandle material;
     if (e.material) {
         material = find_material(*e.material);
@@ -268,9 +276,7 @@ Status Scene::apply_edit(AddMesh&& e, UndoLog& undo) {
     r.id = e.id;
     r.positions = std::move(e.positions);
     r.triangles = std::move(e.triangles);
-    r.normals = std::move(e.normals);
-    r.uvs = std::move(e.uvs);
-    r.tangents = std::move(e.tangents);
+    for_each_vertex_attribute([&](auto a) { decltype(a)::of(r) = std::move(decltype(a)::of(e)); });
     r.build = e.build;
     r.material = material;
     copy_added<MeshFields>(r, e);
@@ -286,10 +292,10 @@ Status Scene::apply_edit(UpdateMeshPositions&& e, UndoLog& undo) {
     const MeshHandle h = find_mesh(e.mesh);
     if (h.is_null()) return unknown("mesh", e.mesh, "mesh");
     MeshRecord& r = m_meshes.at(h);
-    const bool attributes = e.normals || e.uvs || e.tangents;
+    const bool attributes = gives_attributes(e);
     if (e.positions.empty() && !attributes)
-        return failure(ErrorCode::InvalidArgument, "no positions, normals, uvs or tangents given",
-                       "positions");
+        return failure(ErrorCode::InvalidArgument,
+                       "no positions, normals, uvs, uvs1 or tangents given", "positions");
     const uint64_t end = uint64_t(e.offset) + e.positions.size();
     if (!e.positions.empty()) {
         if (end > r.positions.size())
@@ -300,21 +306,17 @@ Status Scene::apply_edit(UpdateMeshPositions&& e, UndoLog& undo) {
                            e.offset ? "offset" : "positions");
         if (Status s = check_positions(e.positions, "positions", e.offset); !s) return s;
     }
-    const std::size_t count = r.positions.size();
-    if (Status s = check_update(e.normals, e.offset, r.normals, count, e.mesh, "normals"); !s)
-        return s;
-    if (Status s = check_update(e.uvs, e.offset, r.uvs, count, e.mesh, "uvs"); !s) return s;
-    if (Status s = check_update(e.tangents, e.offset, r.tangents, count, e.mesh, "tangents"); !s)
+    if (Status s =
+            first_failure_over_vertex_attributes([&](auto a) { return check_update(a, e, r); });
+        !s)
         return s;
 
     save_mesh(h, undo);
-    // Step: normals, uvs and tangents (shading only: no BLAS work).
+    // Step: the other attributes (shading only: no BLAS work).
     if (attributes) {
         mark(h, MeshDirty::Attributes);
         undo::MeshAttributes old{h};
-        patch_attribute(r.normals, e.normals, old.normals, e.offset);
-        patch_attribute(r.uvs, e.uvs, old.uvs, e.offset);
-        patch_attribute(r.tangents, e.tangents, old.tangents, e.offset);
+        patch_attributes(r, e, old);
         undo.records.emplace_back(std::move(old));
     }
     if (e.positions.empty()) return {};
@@ -392,25 +394,17 @@ Status Scene::apply_edit(ReplaceMeshTopology&& e, UndoLog& undo) {
         vertex_count = e.positions->size();
     }
     if (Status s = check_triangles(e.triangles, vertex_count, "indices"); !s) return s;
-    // Normals, uvs and tangents: whole arrays for the new vertex count; kept ones must fit it.
-    const std::size_t old_count = r.positions.size();
-    if (Status s = check_replaced(e.normals, r.normals, old_count, vertex_count, e.mesh, "normals");
-        !s)
-        return s;
-    if (Status s = check_replaced(e.uvs, r.uvs, old_count, vertex_count, e.mesh, "uvs"); !s)
-        return s;
-    if (Status s =
-            check_replaced(e.tangents, r.tangents, old_count, vertex_count, e.mesh, "tangents");
+    // The other attributes: whole arrays for the new vertex count; kept ones must fit it.
+    if (Status s = first_failure_over_vertex_attributes(
+            [&](auto a) { return check_replaced(a, e, r, vertex_count); });
         !s)
         return s;
 
     save_mesh(h, undo);
-    if (e.normals || e.uvs || e.tangents) {
+    if (gives_attributes(e)) {
         mark(h, MeshDirty::Attributes);
         undo::MeshAttributes old{h};
-        replace_attribute(r.normals, e.normals, old.normals);
-        replace_attribute(r.uvs, e.uvs, old.uvs);
-        replace_attribute(r.tangents, e.tangents, old.tangents);
+        replace_attributes(r, e, old);
         undo.records.emplace_back(std::move(old));
     }
     mark(h, MeshDirty::Topology);

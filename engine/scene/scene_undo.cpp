@@ -164,9 +164,9 @@ struct Reverser {
 
     void operator()(undo::MeshAttributes& r) {
         MeshRecord& mesh = meshes.at(r.handle);
-        if (r.normals) mesh.normals = std::move(*r.normals);
-        if (r.uvs) mesh.uvs = std::move(*r.uvs);
-        if (r.tangents) mesh.tangents = std::move(*r.tangents);
+        for_each_vertex_attribute([&](auto a) {
+            if (auto& saved = decltype(a)::of(r)) decltype(a)::of(mesh) = std::move(*saved);
+        });
     }
 
     void operator()(undo::InstanceTransform& r) {

@@ -63,7 +63,7 @@ const char* alpha_mode_name(AlphaMode m);
 
 /// The textures a material may read, as glTF 2.0's metallic-roughness material has them. Each is
 /// named by the material's record (MaterialRecord::textures) and read through the material's one
-/// sampler at the mesh's texture coordinates.
+/// sampler at the texture coordinate set the slot's uv_set names.
 enum class TextureSlot : uint8_t { BaseColor, MetallicRoughness, Normal, Occlusion, Emissive };
 inline constexpr std::size_t TEXTURE_SLOT_COUNT = 5;
 template <class T>
@@ -72,43 +72,6 @@ using PerTextureSlot = std::array<T, TEXTURE_SLOT_COUNT>;
 constexpr std::size_t slot_index(TextureSlot s) {
     return static_cast<std::size_t>(s);
 }
-
-/// What one texture slot is: declared once here, read by the rules, the journal, the wire parser,
-/// the JSON writer, the schema and the importers.
-struct TextureSlotInfo {
-    TextureSlot slot;
-    std::string_view field;  ///< the material's member on the wire
-    std::string_view doc;    ///< one line for the schema and the docs
-    TextureColorSpace space;  ///< how a texture made for this slot is decoded (importers)
-    /// The number of its entry in a material edit's tagged section (edit_codec.cpp); 0: the
-    /// base-colour texture, which is part of the material's first extension layout.
-    uint8_t tag;
-};
-
-inline constexpr TextureSlotInfo TEXTURE_SLOTS[TEXTURE_SLOT_COUNT] = {
-    {TextureSlot::BaseColor, "base_color_texture",
-     "Multiplies base_color (RGB) and alpha (A); an sRGB colour texture.", TextureColorSpace::Srgb,
-     0},
-    {TextureSlot::MetallicRoughness, "metallic_roughness_texture",
-     "Multiplies roughness (G channel) and metallic (B channel); a linear data texture.",
-     TextureColorSpace::Linear, 32},
-    {TextureSlot::Normal, "normal_texture",
-     "A tangent-space normal map (glTF's convention: +Y up in texture space), scaled by "
-     "normal_scale; a linear data texture. Needs the mesh's normals and uvs.",
-     TextureColorSpace::Linear, 33},
-    {TextureSlot::Occlusion, "occlusion_texture",
-     "Ambient occlusion (R channel), applied with occlusion_strength to light arriving by "
-     "bounces; a linear data texture.",
-     TextureColorSpace::Linear, 34},
-    {TextureSlot::Emissive, "emissive_texture",
-     "Multiplies emission (RGB); an sRGB colour texture.", TextureColorSpace::Srgb, 35},
-};
-static_assert(TEXTURE_SLOTS[0].slot == TextureSlot::BaseColor &&
-              TEXTURE_SLOTS[1].slot == TextureSlot::MetallicRoughness &&
-              TEXTURE_SLOTS[2].slot == TextureSlot::Normal &&
-              TEXTURE_SLOTS[3].slot == TextureSlot::Occlusion &&
-              TEXTURE_SLOTS[4].slot == TextureSlot::Emissive,
-              "TEXTURE_SLOTS is indexed by TextureSlot");
 
 /// Surface description: glTF 2.0's metallic-roughness material. Colors are linear RGB. Its
 /// textures are named by the material's record (MaterialRecord::textures).
@@ -125,9 +88,55 @@ struct Material {
     float normal_scale = 1.0f;        ///< scales the normal map's X and Y
     float occlusion_strength = 1.0f;  ///< 0: the occlusion texture has no effect
     bool unlit = false;  ///< shows base colour as it is, without lighting (KHR_materials_unlit)
+    /// The texture coordinate set each slot's texture reads: 0 (the mesh's uvs) or 1 (uvs1).
+    uint32_t base_color_uv_set = 0;
+    uint32_t metallic_roughness_uv_set = 0;
+    uint32_t normal_uv_set = 0;
+    uint32_t occlusion_uv_set = 0;
+    uint32_t emissive_uv_set = 0;
 
     friend bool operator==(const Material&, const Material&) = default;
 };
+
+/// What one texture slot is: declared once here, read by the rules, the journal, the wire parser,
+/// the JSON writer, the schema and the importers.
+struct TextureSlotInfo {
+    TextureSlot slot;
+    std::string_view field;  ///< the material's member on the wire
+    std::string_view doc;    ///< one line for the schema and the docs
+    TextureColorSpace space;  ///< how a texture made for this slot is decoded (importers)
+    /// The number of its entry in a material edit's tagged section (edit_codec.cpp); 0: the
+    /// base-colour texture, which is part of the material's first extension layout.
+    uint8_t tag;
+    /// The material's member that says which texture coordinate set the slot reads.
+    uint32_t Material::*uv_set;
+};
+
+inline constexpr TextureSlotInfo TEXTURE_SLOTS[TEXTURE_SLOT_COUNT] = {
+    {TextureSlot::BaseColor, "base_color_texture",
+     "Multiplies base_color (RGB) and alpha (A); an sRGB colour texture.", TextureColorSpace::Srgb,
+     0, &Material::base_color_uv_set},
+    {TextureSlot::MetallicRoughness, "metallic_roughness_texture",
+     "Multiplies roughness (G channel) and metallic (B channel); a linear data texture.",
+     TextureColorSpace::Linear, 32, &Material::metallic_roughness_uv_set},
+    {TextureSlot::Normal, "normal_texture",
+     "A tangent-space normal map (glTF's convention: +Y up in texture space), scaled by "
+     "normal_scale; a linear data texture. Needs the mesh's normals and uvs.",
+     TextureColorSpace::Linear, 33, &Material::normal_uv_set},
+    {TextureSlot::Occlusion, "occlusion_texture",
+     "Ambient occlusion (R channel), applied with occlusion_strength to light arriving by "
+     "bounces; a linear data texture.",
+     TextureColorSpace::Linear, 34, &Material::occlusion_uv_set},
+    {TextureSlot::Emissive, "emissive_texture",
+     "Multiplies emission (RGB); an sRGB colour texture.", TextureColorSpace::Srgb, 35,
+     &Material::emissive_uv_set},
+};
+static_assert(TEXTURE_SLOTS[0].slot == TextureSlot::BaseColor &&
+              TEXTURE_SLOTS[1].slot == TextureSlot::MetallicRoughness &&
+              TEXTURE_SLOTS[2].slot == TextureSlot::Normal &&
+              TEXTURE_SLOTS[3].slot == TextureSlot::Occlusion &&
+              TEXTURE_SLOTS[4].slot == TextureSlot::Emissive,
+              "TEXTURE_SLOTS is indexed by TextureSlot");
 
 /// Pinhole camera.
 struct Camera {

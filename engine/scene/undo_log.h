@@ -66,12 +66,13 @@ struct MeshTopology {
     CowVector<Triangle> triangles;
 };
 
-/// The normals, uvs and tangents an edit replaced (each only when that edit touched it).
+/// The vertex attributes an edit replaced (each only when that edit touched it).
 struct MeshAttributes {
     MeshHandle handle;
     std::optional<std::vector<Vec3>> normals = std::nullopt;
     std::optional<std::vector<Vec2>> uvs = std::nullopt;
     std::optional<std::vector<Vec4>> tangents = std::nullopt;
+    std::optional<std::vector<Vec2>> uvs1 = std::nullopt;
 };
 
 /// An instance's editable state before an edit changed it.

@@ -134,18 +134,14 @@ Imported<void> validate_asset(const Asset& asset, const ErrorSink& sink) {
                                                    std::to_string(tri[k]) + " of only " +
                                                    std::to_string(n));
         }
-        if (!m.normals.empty() && m.normals.size() != n)
-            return sink.invalid(where, "has " + std::to_string(m.normals.size()) + " normals for " +
-                                           std::to_string(n) + " vertices");
-        if (!m.uvs.empty() && m.uvs.size() != n)
-            return sink.invalid(where, "has " + std::to_string(m.uvs.size()) + " uvs for " +
-                                           std::to_string(n) + " vertices");
-        if (!m.tangents.empty() && m.tangents.size() != n)
-            return sink.invalid(where, "has " + std::to_string(m.tangents.size()) +
-                                           " tangents for " + std::to_string(n) + " vertices");
-        if (!m.colors.empty() && m.colors.size() != n)
-            return sink.invalid(where, "has " + std::to_string(m.colors.size()) + " colors for " +
-                                           std::to_string(n) + " vertices");
+        for (const auto& [count, what] :
+             {std::pair{m.normals.size(), "normals"}, std::pair{m.uvs.size(), "uvs"},
+              std::pair{m.uvs1.size(), "uvs1"}, std::pair{m.tangents.size(), "tangents"},
+              std::pair{m.colors.size(), "colors"}}) {
+            if (count != 0 && count != n)
+                return sink.invalid(where, "has " + std::to_string(count) + " " + what + " for " +
+                                               std::to_string(n) + " vertices");
+        }
         if (m.material < -1 || m.material >= int(asset.materials.size()))
             return sink.invalid(where, "refers to material " + std::to_string(m.material) +
                                            " of only " + std::to_string(asset.materials.size()));

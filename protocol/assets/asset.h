@@ -50,6 +50,7 @@ struct AssetMesh {
     std::vector<Triangle> triangles;
     std::vector<Vec3> normals;
     std::vector<glm::vec2> uvs;
+    std::vector<glm::vec2> uvs1;  ///< a second texture coordinate set (glTF's TEXCOORD_1)
     std::vector<Vec4> tangents;  ///< xyz and the bitangent's sign w (glTF's TANGENT)
     std::vector<Vec3> colors;    ///< linear RGB in [0, 1]
     int material = -1;         ///< index into Asset::materials; -1: the built-in default

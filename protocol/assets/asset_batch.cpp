@@ -143,11 +143,14 @@ void add_meshes(std::vector<AssetMesh>& meshes, const std::string& p, AssetBatch
             out.warnings.push_back(label("mesh", i, m.name) +
                                    ": normals dropped (some are zero or not finite)");
         }
-        if (usable_uvs(m.uvs)) {
-            e.uvs = std::move(m.uvs);
-        } else {
-            out.warnings.push_back(label("mesh", i, m.name) +
-                                   ": texture coordinates dropped (some are not finite)");
+        for (auto [from, to, set] :
+             {std::tuple{&m.uvs, &e.uvs, "0"}, std::tuple{&m.uvs1, &e.uvs1, "1"}}) {
+            if (usable_uvs(*from)) {
+                *to = std::move(*from);
+            } else {
+                out.warnings.push_back(label("mesh", i, m.name) + ": texture coordinates (set " +
+                                       set + ") dropped (some are not finite)");
+            }
         }
         // Tangents go with the normals they are orthogonal to (glTF: no TANGENT without NORMAL).
         if (!m.tangents.empty() && (e.normals.empty() || !usable_tangents(m.tangents))) {

@@ -64,7 +64,7 @@ void material_rows(Io& io, M& m) {
 void put_asset(ByteWriter& w, const Asset& a) {
     w(uint64_t(a.meshes.size()));
     for (const AssetMesh& m : a.meshes) {
-        w(m.name, m.positions, m.triangles, m.normals, m.uvs, m.tangents, m.colors,
+        w(m.name, m.positions, m.triangles, m.normals, m.uvs, m.uvs1, m.tangents, m.colors,
           int32_t(m.material));
     }
     w(uint64_t(a.materials.size()));
@@ -89,11 +89,12 @@ void put_asset(ByteWriter& w, const Asset& a) {
 void get_asset(ByteReader& r, Asset& a) {
     uint64_t n = 0;
     // The least bytes each record takes: its name's length and its arrays' counts.
-    if (!get_count(r, n, 4 + 6 * 8 + 4, "mesh")) return;
+    if (!get_count(r, n, 4 + 7 * 8 + 4, "mesh")) return;
     a.meshes.resize(n);
     for (AssetMesh& m : a.meshes) {
         int32_t material = -1;
-        r(m.name, m.positions, m.triangles, m.normals, m.uvs, m.tangents, m.colors, material);
+        r(m.name, m.positions, m.triangles, m.normals, m.uvs, m.uvs1, m.tangents, m.colors,
+          material);
         m.material = material;
     }
     if (!get_count(r, n, 4 + 8, "material")) return;

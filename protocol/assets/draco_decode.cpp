@@ -78,10 +78,10 @@ std::string decode(std::span<const uint8_t> bytes, const DracoAttributeIds& ids,
         if (auto e = read_attribute<Vec3, 3>(*mesh, ids.normal, "NORMAL", out.normals); !e.empty())
             return e;
     }
-    if (ids.texcoord >= 0) {
-        if (auto e = read_attribute<glm::vec2, 2>(*mesh, ids.texcoord, "TEXCOORD_0", out.uvs);
-            !e.empty())
-            return e;
+    for (auto [id, name, uvs] : {std::tuple{ids.texcoord, "TEXCOORD_0", &out.uvs},
+                                 std::tuple{ids.texcoord1, "TEXCOORD_1", &out.uvs1}}) {
+        if (id < 0) continue;
+        if (auto e = read_attribute<glm::vec2, 2>(*mesh, id, name, *uvs); !e.empty()) return e;
     }
     if (ids.tangent >= 0) {
         if (auto e = read_attribute<Vec4, 4>(*mesh, ids.tangent, "TANGENT", out.tangents);

@@ -16,6 +16,7 @@ struct DracoAttributeIds {
     int position = -1;
     int normal = -1;
     int texcoord = -1;
+    int texcoord1 = -1;
     int color = -1;
     int tangent = -1;
 };

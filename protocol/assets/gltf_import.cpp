@@ -298,6 +298,14 @@ float unit(double v) {
     return float(std::clamp(v, 0.0, 1.0));
 }
 
+/// The texture coordinate sets a material's textures read (0 and 1), with each set's transform
+/// (that of its first texture) and the set the normal texture reads.
+struct MaterialUvs {
+    std::array<bool, 2> reads = {};
+    std::array<std::optional<UvTransform>, 2> transform = {};
+    std::size_t normal_set = 0;
+};
+
 class GltfReader {
 public:
     GltfReader(const tinygltf::Model& model, const ErrorSink& sink, const ImportLimits& limits)
@@ -424,9 +432,11 @@ private:
         return m;
     }
 
-    /// Material `gm`'s textures into `m`: the first one's sampler, texture coordinate set and
-    /// transform become the material's (its meshes have one set of uvs); another texture that
-    /// reads other coordinates is named in a warning.
+    /// Material `gm`'s textures into `m`, each slot with its texture coordinate set (0 or 1; a
+    /// higher one reads set 0, with a warning). The first texture's sampler becomes the
+    /// material's; each set's first KHR_texture_transform is baked into that set's coordinates
+    /// (bake_texture_transforms), and another texture that transforms the same set otherwise
+    /// is named in a warning.
     Imported<void> read_material_textures(const tinygltf::Material& gm, const std::string& where,
                                           AssetMaterial& m) {
         const auto& pbr = gm.pbrMetallicRoughness;
@@ -445,6 +455,7 @@ private:
              gm.emissiveTexture.texCoord, &gm.emissiveTexture.extensions},
         };
         bool mapped = false;
+        MaterialUvs& uvs = m_material_uvs.emplace_back();
         for (const TextureRef& ref : refs) {
             if (ref.index < 0) continue;
             const std::string at = where + "." + ref.path;
@@ -460,16 +471,27 @@ private:
             if (!mapped) {
                 mapped = true;
                 m.material.base_color_sampler = read_sampler(ref.index);
-                m_uv_transforms.resize(m_asset.materials.size() + 1);
-                m_uv_transforms.back() = transform.value();
-                m_uv_sets.resize(m_asset.materials.size() + 1, 0);
-                m_uv_sets.back() = tex_coord;
-            } else if (tex_coord != m_uv_sets.back() ||
-                       transform.value() != m_uv_transforms.back()) {
-                warn_once(at + " reads other texture coordinates (a TEXCOORD set or "
-                               "KHR_texture_transform) than the material's first texture: it is "
-                               "read through the first one's");
+            } else if (!(read_sampler(ref.index) == m.material.base_color_sampler)) {
+                warn_once(at + "'s sampler (wrap or filter) differs from the material's first "
+                               "texture's: the scene reads all of a material's textures through "
+                               "that one");
             }
+            if (tex_coord > 1) {
+                warn_once(at + " reads TEXCOORD_" + std::to_string(tex_coord) +
+                          ": sets 0 and 1 are imported, and it reads TEXCOORD_0");
+                tex_coord = 0;
+            }
+            const std::size_t set = std::size_t(tex_coord);
+            if (!uvs.reads[set]) {
+                uvs.reads[set] = true;
+                uvs.transform[set] = transform.value();
+            } else if (transform.value() != uvs.transform[set]) {
+                warn_once(at + " transforms TEXCOORD_" + std::to_string(set) +
+                          " otherwise (KHR_texture_transform) than the material's first texture "
+                          "that reads it: it is read through the first one's");
+            }
+            if (ref.slot == TextureSlot::Normal) uvs.normal_set = set;
+            m.material.*(info.uv_set) = uint32_t(set);
             m.texture(ref.slot) = t.value();
         }
         return {};
@@ -519,22 +541,30 @@ private:
         return std::optional(uv_transform(ox, oy, rotation, sx, sy));
     }
 
-    /// Each mesh's texture coordinates through its material's texture transform (its first
-    /// texture's: all its textures are read through the same uvs).
+    /// Each mesh's texture coordinates through its material's texture transforms, one per set.
     void bake_texture_transforms() {
         for (AssetMesh& mesh : m_asset.meshes) {
-            if (mesh.material < 0 || std::size_t(mesh.material) >= m_uv_transforms.size()) continue;
-            const std::optional<UvTransform>& m = m_uv_transforms[std::size_t(mesh.material)];
-            if (!m) continue;
-            for (glm::vec2& uv : mesh.uvs)
-                uv = {(*m)[0] * uv.x + (*m)[1] * uv.y + (*m)[2],
-                      (*m)[3] * uv.x + (*m)[4] * uv.y + (*m)[5]};
-            // A rotation or mirror turns the directions in which u and v grow: the file's
-            // tangents no longer follow them, and the server makes them from the new uvs.
-            const bool turns = (*m)[1] != 0.0f || (*m)[3] != 0.0f || (*m)[0] < 0.0f ||
-                               (*m)[4] < 0.0f;
-            if (turns) mesh.tangents.clear();
+            const MaterialUvs* uvs = material_uvs(mesh.material);
+            if (!uvs) continue;
+            for (std::size_t set = 0; set < 2; ++set) {
+                const std::optional<UvTransform>& m = uvs->transform[set];
+                if (!m) continue;
+                for (glm::vec2& uv : set == 0 ? mesh.uvs : mesh.uvs1)
+                    uv = {(*m)[0] * uv.x + (*m)[1] * uv.y + (*m)[2],
+                          (*m)[3] * uv.x + (*m)[4] * uv.y + (*m)[5]};
+                // A rotation or mirror turns the directions in which u and v grow: the file's
+                // tangents no longer follow them, and the server makes them from the new uvs.
+                const bool turns = (*m)[1] != 0.0f || (*m)[3] != 0.0f || (*m)[0] < 0.0f ||
+                                   (*m)[4] < 0.0f;
+                if (turns && set == uvs->normal_set) mesh.tangents.clear();
+            }
         }
+    }
+
+    /// What material `i`'s textures read, or null (no such material, or one without textures).
+    const MaterialUvs* material_uvs(int i) const {
+        return i >= 0 && std::size_t(i) < m_material_uvs.size() ? &m_material_uvs[std::size_t(i)]
+                                                                : nullptr;
     }
 
     /// textures[i]'s sampler (i is a valid index) as the engine's: one wrap mode for both axes
@@ -663,9 +693,12 @@ private:
         // Step 3: optional attributes, one per vertex.
         if (auto ok = read_attribute(prim, "NORMAL", where, pv.count, 3, mesh); !ok)
             return Unexpected(ok.error());
-        const std::string uv_set = "TEXCOORD_" + std::to_string(uv_set_of(prim, where));
-        if (auto ok = read_attribute(prim, uv_set.c_str(), where, pv.count, 2, mesh); !ok)
+        if (auto ok = read_attribute(prim, "TEXCOORD_0", where, pv.count, 2, mesh); !ok)
             return Unexpected(ok.error());
+        if (reads_second_set(prim, where)) {
+            if (auto ok = read_attribute(prim, "TEXCOORD_1", where, pv.count, 2, mesh); !ok)
+                return Unexpected(ok.error());
+        }
         if (auto ok = read_attribute(prim, "COLOR_0", where, pv.count, 3, mesh); !ok)
             return Unexpected(ok.error());
         if (auto ok = read_attribute(prim, "TANGENT", where, pv.count, 4, mesh); !ok)
@@ -673,17 +706,15 @@ private:
         return mesh;
     }
 
-    /// The texture coordinate set the primitive's material's first texture reads (its texCoord,
-    /// or its KHR_texture_transform's): the one set a mesh keeps. A set the primitive lacks falls
-    /// back to 0, with a warning.
-    int uv_set_of(const tinygltf::Primitive& prim, const std::string& where) {
-        if (prim.material < 0 || std::size_t(prim.material) >= m_uv_sets.size()) return 0;
-        const int set = m_uv_sets[std::size_t(prim.material)];
-        if (set == 0 || prim.attributes.count("TEXCOORD_" + std::to_string(set)) != 0)
-            return set;
-        warn_once(where + ": its material's textures read TEXCOORD_" +
-                  std::to_string(set) + ", which it lacks; TEXCOORD_0 is used");
-        return 0;
+    /// Whether the primitive's material reads TEXCOORD_1 and the primitive has it (when it
+    /// lacks it, a warning says the textures read TEXCOORD_0).
+    bool reads_second_set(const tinygltf::Primitive& prim, const std::string& where) {
+        const MaterialUvs* uvs = material_uvs(prim.material);
+        if (!uvs || !uvs->reads[1]) return false;
+        if (prim.attributes.count("TEXCOORD_1") != 0) return true;
+        warn_once(where + ": its material's textures read TEXCOORD_1, which it lacks; they read "
+                          "TEXCOORD_0");
+        return false;
     }
 
     /// The primitive's triangles (its indices, or its vertices in order), every index checked,
@@ -762,10 +793,6 @@ private:
                                              const tinygltf::Value& ext, const std::string& where,
                                              AssetMesh mesh) {
         const std::string at = where + ".extensions." + DRACO;
-        if (prim.material >= 0 && std::size_t(prim.material) < m_uv_sets.size() &&
-            m_uv_sets[std::size_t(prim.material)] != 0)
-            warn_once(at + ": only its TEXCOORD_0 is decoded, though its material's "
-                           "baseColorTexture reads another set");
         const tinygltf::Value& view_index = ext.Get("bufferView");
         const tinygltf::Value& ids = ext.Get("attributes");
         if (!ext.IsObject() || !view_index.IsInt() || !ids.IsObject())
@@ -796,9 +823,10 @@ private:
         DracoAttributeIds draco;
         for (auto [name, id] :
              {std::pair{"POSITION", &draco.position}, std::pair{"NORMAL", &draco.normal},
-              std::pair{"TEXCOORD_0", &draco.texcoord}, std::pair{"COLOR_0", &draco.color},
-              std::pair{"TANGENT", &draco.tangent}}) {
+              std::pair{"TEXCOORD_0", &draco.texcoord}, std::pair{"TEXCOORD_1", &draco.texcoord1},
+              std::pair{"COLOR_0", &draco.color}, std::pair{"TANGENT", &draco.tangent}}) {
             if (prim.attributes.find(name) == prim.attributes.end()) continue;
+            if (id == &draco.texcoord1 && !reads_second_set(prim, at)) continue;
             const tinygltf::Value& v = ids.Get(name);
             if (!v.IsInt() || v.Get<int>() < 0)
                 return m_sink.invalid(at + ".attributes",
@@ -846,8 +874,10 @@ private:
                                            std::to_string(vertices) + " vertices");
         for (std::size_t v = 0; v < vertices; ++v) {
             if (width == 2) {
-                mesh.uvs.push_back({a.get(v, 0), a.get(v, 1)});
-                if (!std::isfinite(mesh.uvs.back().x) || !std::isfinite(mesh.uvs.back().y))
+                std::vector<glm::vec2>& uvs =
+                    std::string_view(name) == "TEXCOORD_1" ? mesh.uvs1 : mesh.uvs;
+                uvs.push_back({a.get(v, 0), a.get(v, 1)});
+                if (!std::isfinite(uvs.back().x) || !std::isfinite(uvs.back().y))
                     return m_sink.invalid(use, "element " + std::to_string(v) + " is not finite");
                 continue;
             }
@@ -1013,10 +1043,8 @@ private:
     const ErrorSink& m_sink;
     const ImportLimits& m_limits;
     Asset m_asset;
-    /// Per material: its first texture's transform, if any (bake_texture_transforms).
-    std::vector<std::optional<UvTransform>> m_uv_transforms;
-    /// Per material: the texture coordinate set its first texture reads (uv_set_of).
-    std::vector<int> m_uv_sets;
+    /// Per material (read_material_textures): the texture coordinate sets its textures read.
+    std::vector<MaterialUvs> m_material_uvs;
     std::map<int, std::vector<int>> m_meshes;  ///< glTF mesh -> asset meshes
     /// (glTF image, colour space) -> asset texture
     std::map<std::pair<int, TextureColorSpace>, int> m_images;

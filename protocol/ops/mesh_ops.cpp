@@ -39,19 +39,34 @@ std::optional<std::vector<Triangle>> read_indices(OpFields& f) {
                       &EditSource::indices_b64);
 }
 
-std::optional<std::vector<Vec3>> read_normals(OpFields& f) {
-    return read_array(f, "normals", "normals_b64", &FieldReader::normals, &FieldReader::normals_b64,
-                      &EditSource::normals_b64);
+/// Vertex attribute `A`, flat (`normals`) or base64 (`normals_b64`); nullopt when neither.
+template <class A>
+std::optional<std::vector<typename A::Value>> read_attribute(OpFields& f, A) {
+    using V = typename A::Value;
+    FieldReader& r = f.reader();
+    const std::string b64_key = std::string(A::name) + "_b64";
+    const Json* flat = f.get(A::name);
+    const Json* b64 = f.get(b64_key);
+    if (flat && b64)
+        r.schema_error(f.pointer(b64_key),
+                       "give " + std::string(A::name) + " or " + b64_key + ", not both");
+    if (flat) return r.per_vertex<V>(*flat, f.pointer(A::name), A::name);
+    if (!b64) return std::nullopt;
+    f.source().attributes_b64 |= uint8_t(1u << A::index);
+    return r.per_vertex_b64<V>(*b64, f.pointer(b64_key), A::name);
 }
 
-std::optional<std::vector<Vec2>> read_uvs(OpFields& f) {
-    return read_array(f, "uvs", "uvs_b64", &FieldReader::uvs, &FieldReader::uvs_b64,
-                      &EditSource::uvs_b64);
-}
-
-std::optional<std::vector<Vec4>> read_tangents(OpFields& f) {
-    return read_array(f, "tangents", "tangents_b64", &FieldReader::tangents,
-                      &FieldReader::tangents_b64, &EditSource::tangents_b64);
+/// Every vertex attribute the op gives, into `e`'s members of the same names.
+template <class E>
+void read_attributes(OpFields& f, E& e) {
+    for_each_vertex_attribute([&](auto a) {
+        auto values = read_attribute(f, a);
+        if constexpr (std::is_same_v<E, AddMesh>) {
+            if (values) decltype(a)::of(e) = std::move(*values);
+        } else {
+            decltype(a)::of(e) = std::move(values);
+        }
+    });
 }
 
 std::optional<std::vector<uint32_t>> read_vertices(OpFields& f) {
@@ -162,9 +177,7 @@ Edit parse_add_mesh(OpFields& f) {
         e.positions = std::move(*positions);
         e.triangles = std::move(*indices);
     }
-    if (auto normals = read_normals(f)) e.normals = std::move(*normals);
-    if (auto uvs = read_uvs(f)) e.uvs = std::move(*uvs);
-    if (auto tangents = read_tangents(f)) e.tangents = std::move(*tangents);
+    read_attributes(f, e);
     if (const Json* b = f.get("build")) e.build = read_build(r, *b, f.pointer("build"));
     f.read("material", e.material);
     read_added<MeshFields>(f, e);
@@ -176,50 +189,50 @@ Edit parse_update_mesh(OpFields& f) {
     std::string mesh = f.id("mesh");
     auto positions = read_positions(f);
     auto indices = read_indices(f);
-    auto normals = read_normals(f);
-    auto uvs = read_uvs(f);
-    auto tangents = read_tangents(f);
+    UpdateMeshPositions e;  // the attributes, whichever edit they go to
+    read_attributes(f, e);
+    const bool attributes = gives_attributes(e);
     auto vertices = read_vertices(f);
     if (vertices) {
         // Positions for listed vertices (a brush stroke): positions only, no offset.
-        for (const char* other : {"offset", "indices", "indices_b64", "normals", "normals_b64",
-                                  "uvs", "uvs_b64", "tangents", "tangents_b64"}) {
+        for (const char* other : {"offset", "indices", "indices_b64"}) {
             if (f.get(other))
                 r.schema_error(f.pointer(other),
                                std::string(other) + " does not go with vertices (positions only)");
         }
+        for_each_vertex_attribute([&](auto a) {
+            for (const std::string key : {std::string(a.name), std::string(a.name) + "_b64"})
+                if (f.get(key))
+                    r.schema_error(f.pointer(key),
+                                   key + " does not go with vertices (positions only)");
+        });
         if (!positions)
             r.schema_error(f.pointer("positions"),
                            "update_mesh with vertices needs positions or positions_b64");
-        UpdateMeshVertices e;
-        e.mesh = std::move(mesh);
-        e.vertices = std::move(*vertices);
-        e.positions = std::move(*positions);
-        return e;
+        UpdateMeshVertices listed;
+        listed.mesh = std::move(mesh);
+        listed.vertices = std::move(*vertices);
+        listed.positions = std::move(*positions);
+        return listed;
     }
     if (indices) {
         // A topology change: new triangles and optionally a whole new vertex array.
         if (f.get("offset"))
             r.schema_error(f.pointer("offset"),
                            "offset applies to a positions update, not to a topology change");
-        ReplaceMeshTopology e;
-        e.mesh = std::move(mesh);
-        e.positions = std::move(positions);
-        e.triangles = std::move(*indices);
-        e.normals = std::move(normals);
-        e.uvs = std::move(uvs);
-        e.tangents = std::move(tangents);
-        return e;
+        ReplaceMeshTopology topology;
+        topology.mesh = std::move(mesh);
+        topology.positions = std::move(positions);
+        topology.triangles = std::move(*indices);
+        for_each_vertex_attribute(
+            [&](auto a) { decltype(a)::of(topology) = std::move(decltype(a)::of(e)); });
+        return topology;
     }
-    if (!positions && !normals && !uvs && !tangents)
+    if (!positions && !attributes)
         r.schema_error(f.pointer("positions"),
-                       "update_mesh needs positions, normals, uvs or tangents (or indices)");
-    UpdateMeshPositions e;
+                       "update_mesh needs positions, normals, uvs, uvs1 or tangents (or indices)");
     e.mesh = std::move(mesh);
     if (positions) e.positions = std::move(*positions);
-    e.normals = std::move(normals);
-    e.uvs = std::move(uvs);
-    e.tangents = std::move(tangents);
     f.read("offset", e.offset);
     return e;
 }
@@ -231,7 +244,7 @@ Edit parse_remove_mesh(OpFields& f) {
 constexpr EditOp OPS[] = {
     {"add_mesh",
      "A new mesh from flat arrays, base64 arrays or a procedural shape; optionally with "
-     "per-vertex normals, uvs and tangents.",
+     "per-vertex normals, uvs (two sets) and tangents.",
      R"json({
   "type": "object",
   "properties": {
@@ -244,6 +257,8 @@ constexpr EditOp OPS[] = {
     "normals_b64": {"$ref": "#/$defs/base64"},
     "uvs": {"$ref": "#/$defs/uvs"},
     "uvs_b64": {"$ref": "#/$defs/base64"},
+    "uvs1": {"$ref": "#/$defs/uvs"},
+    "uvs1_b64": {"$ref": "#/$defs/base64"},
     "tangents": {"$ref": "#/$defs/tangents"},
     "tangents_b64": {"$ref": "#/$defs/base64"},
     "shape": {"$ref": "#/$defs/shape"},
@@ -253,7 +268,7 @@ constexpr EditOp OPS[] = {
   "required": ["id"],
   "additionalProperties": false,
   "not": {"anyOf": [{"required": ["normals", "normals_b64"]}, {"required": ["uvs", "uvs_b64"]},
-                    {"required": ["tangents", "tangents_b64"]}]},
+                    {"required": ["uvs1", "uvs1_b64"]}, {"required": ["tangents", "tangents_b64"]}]},
   "oneOf": [
     {
       "required": ["shape"],
@@ -271,7 +286,7 @@ constexpr EditOp OPS[] = {
 })json",
      parse_add_mesh, edit_kinds<AddMesh>(), field_properties<MeshFields, true>},
     {"update_mesh",
-     "New positions, normals, uvs or tangents for a vertex range (offset in vertices), new positions for "
+     "New positions, normals, uvs (either set) or tangents for a vertex range (offset in vertices), new positions for "
      "listed vertices (vertices), or with indices a topology change.",
      R"json({
   "type": "object",
@@ -285,6 +300,8 @@ constexpr EditOp OPS[] = {
     "normals_b64": {"$ref": "#/$defs/base64"},
     "uvs": {"$ref": "#/$defs/uvs"},
     "uvs_b64": {"$ref": "#/$defs/base64"},
+    "uvs1": {"$ref": "#/$defs/uvs"},
+    "uvs1_b64": {"$ref": "#/$defs/base64"},
     "tangents": {"$ref": "#/$defs/tangents"},
     "tangents_b64": {"$ref": "#/$defs/base64"},
     "offset": {"$ref": "#/$defs/u32"},
@@ -300,6 +317,7 @@ constexpr EditOp OPS[] = {
       {"required": ["indices", "indices_b64"]},
       {"required": ["normals", "normals_b64"]},
       {"required": ["uvs", "uvs_b64"]},
+      {"required": ["uvs1", "uvs1_b64"]},
       {"required": ["tangents", "tangents_b64"]},
       {"required": ["vertices", "vertices_b64"]},
       {"required": ["indices", "offset"]},
@@ -312,13 +330,15 @@ constexpr EditOp OPS[] = {
     "not": {"anyOf": [{"required": ["offset"]}, {"required": ["indices"]},
                       {"required": ["indices_b64"]}, {"required": ["normals"]},
                       {"required": ["normals_b64"]}, {"required": ["uvs"]},
-                      {"required": ["uvs_b64"]}, {"required": ["tangents"]},
+                      {"required": ["uvs_b64"]}, {"required": ["uvs1"]},
+                      {"required": ["uvs1_b64"]}, {"required": ["tangents"]},
                       {"required": ["tangents_b64"]}]}
   },
   "anyOf": [{"required": ["positions"]}, {"required": ["positions_b64"]},
             {"required": ["indices"]}, {"required": ["indices_b64"]},
             {"required": ["normals"]}, {"required": ["normals_b64"]},
             {"required": ["uvs"]}, {"required": ["uvs_b64"]},
+            {"required": ["uvs1"]}, {"required": ["uvs1_b64"]},
             {"required": ["tangents"]}, {"required": ["tangents_b64"]}]
 })json",
      parse_update_mesh,

@@ -195,40 +195,41 @@ TEST(GltfImport, TangentsAreReadAndKeptWithTheNormalsTheyGoWith) {
     EXPECT_THAT(bad.error().element.value_or(""), HasSubstr("TANGENT"));
 }
 
-TEST(GltfImport, TheTextureCoordinateSetTheBaseColourTextureReadsIsTheOneKept) {
+TEST(GltfImport, EachTextureReadsItsOwnCoordinateSetZeroOrOne) {
     auto doc = nlohmann::json::parse(triangle_gltf(R"([{"mesh": 0}])", R"(, "material": 0)"));
-    const float sets[] = {0, 0, 1, 0, 0, 1, 0.5f, 0.5f, 0.25f, 0.5f, 0.5f, 0.25f};
-    const std::string bytes(reinterpret_cast<const char*>(sets), sizeof sets);
-    doc["buffers"].push_back({{"byteLength", bytes.size()},
-                              {"uri", "data:application/octet-stream;base64," +
-                                          protocol::encode_base64(bytes)}});
-    doc["bufferViews"].push_back({{"buffer", 1}, {"byteLength", bytes.size()}});
-    for (int set = 0; set < 2; ++set)
-        doc["accessors"].push_back({{"bufferView", 2},
-                                    {"byteOffset", 24 * set},
-                                    {"componentType", 5126},
-                                    {"count", 3},
-                                    {"type", "VEC2"}});
-    doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = 2;
-    doc["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_1"] = 3;
+    add_float_attribute(doc, "TEXCOORD_0", {0, 0, 1, 0, 0, 1}, "VEC2");
+    add_float_attribute(doc, "TEXCOORD_1", {0.5f, 0.5f, 0.25f, 0.5f, 0.5f, 0.25f}, "VEC2");
     const uint8_t rgb[] = {200, 100, 50};
     doc["images"] = {
         {{"uri", "data:image/png;base64," +
                      protocol::encode_base64(encode_png(rgb, 1, 1, 3).value())}}};
     doc["textures"] = {{{"source", 0}}};
-    doc["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}, {"texCoord", 1}}}}}}};
+    // Colour through set 0, occlusion (a light map, as exporters write it) through set 1.
+    doc["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}},
+                         {"occlusionTexture", {{"index", 0}, {"texCoord", 1}}}}};
     auto a = import_text(AssetFormat::Gltf, doc.dump());
     ASSERT_TRUE(a.has_value()) << a.error().detail;
-    EXPECT_EQ(a.value().meshes.at(0).uvs,
-              (std::vector<glm::vec2>{{0.5f, 0.5f}, {0.25f, 0.5f}, {0.5f, 0.25f}}));
     EXPECT_TRUE(a.value().warnings.empty()) << a.value().warnings.front();
-    // A set the primitive lacks: TEXCOORD_0, and a warning that says so.
-    doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["texCoord"] = 3;
-    auto fallback = import_text(AssetFormat::Gltf, doc.dump());
-    ASSERT_TRUE(fallback.has_value()) << fallback.error().detail;
-    EXPECT_EQ(fallback.value().meshes.at(0).uvs.at(1), glm::vec2(1, 0));
-    ASSERT_FALSE(fallback.value().warnings.empty());
-    EXPECT_THAT(fallback.value().warnings.front(), HasSubstr("TEXCOORD_3, which it lacks"));
+    const AssetMesh& mesh = a.value().meshes.at(0);
+    EXPECT_EQ(mesh.uvs, (std::vector<glm::vec2>{{0, 0}, {1, 0}, {0, 1}}));
+    EXPECT_EQ(mesh.uvs1, (std::vector<glm::vec2>{{0.5f, 0.5f}, {0.25f, 0.5f}, {0.5f, 0.25f}}));
+    const Material& m = a.value().materials.at(0).material;
+    EXPECT_EQ(m.base_color_uv_set, 0u);
+    EXPECT_EQ(m.occlusion_uv_set, 1u);
+
+    // Without a texture that reads it, the second set is not kept.
+    doc["materials"][0]["occlusionTexture"]["texCoord"] = 0;
+    auto one = import_text(AssetFormat::Gltf, doc.dump());
+    ASSERT_TRUE(one.has_value()) << one.error().detail;
+    EXPECT_TRUE(one.value().meshes.at(0).uvs1.empty());
+
+    // A set beyond 1 reads set 0, and a warning says so.
+    doc["materials"][0]["occlusionTexture"]["texCoord"] = 3;
+    auto beyond = import_text(AssetFormat::Gltf, doc.dump());
+    ASSERT_TRUE(beyond.has_value()) << beyond.error().detail;
+    EXPECT_EQ(beyond.value().materials.at(0).material.occlusion_uv_set, 0u);
+    ASSERT_EQ(beyond.value().warnings.size(), 1u);
+    EXPECT_THAT(beyond.value().warnings[0], HasSubstr("occlusionTexture reads TEXCOORD_3"));
 }
 
 TEST(GltfImport, AnEmissiveStrengthMultipliesTheEmissiveFactor) {
@@ -296,19 +297,35 @@ TEST(GltfImport, AMaterialsMapsAlphaAndUnlitAreRead) {
     EXPECT_THAT(bad.error().detail, HasSubstr("alphaMode 'SOMETIMES'"));
 }
 
-TEST(GltfImport, ATexturesOtherCoordinatesThanTheFirstOnesAreNamedInAWarning) {
+TEST(GltfImport, ASecondSetThePrimitiveLacksAndASecondTransformOfOneSetAreNamedInWarnings) {
     auto doc = nlohmann::json::parse(triangle_gltf(R"([{"mesh": 0}])", R"(, "material": 0)"));
     const uint8_t rgb[] = {128, 128, 255};
     doc["images"] = {{{"uri", "data:image/png;base64," +
                                   protocol::encode_base64(encode_png(rgb, 1, 1, 3).value())}}};
     doc["textures"] = {{{"source", 0}}};
+    doc["extensionsUsed"] = {"KHR_texture_transform"};
+    const nlohmann::json turned = {{"KHR_texture_transform", {{"rotation", 1.0}}}};
     doc["materials"] = {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}},
+                         {"emissiveTexture", {{"index", 0}, {"extensions", turned}}},
                          {"normalTexture", {{"index", 0}, {"texCoord", 1}}}}};
     auto a = import_text(AssetFormat::Gltf, doc.dump());
     ASSERT_TRUE(a.has_value()) << a.error().detail;
-    ASSERT_EQ(a.value().warnings.size(), 1u);
-    EXPECT_THAT(a.value().warnings[0], HasSubstr("materials[0].normalTexture reads other texture "
-                                                 "coordinates"));
+    const std::vector<std::string>& w = a.value().warnings;
+    ASSERT_EQ(w.size(), 2u);
+    EXPECT_THAT(w, Contains(HasSubstr("materials[0].emissiveTexture transforms TEXCOORD_0 "
+                                      "otherwise")));
+    EXPECT_THAT(w, Contains(HasSubstr("read TEXCOORD_1, which it lacks")));
+    // The normal map still reads set 1: the scene reads set 0 on a mesh without it.
+    EXPECT_EQ(a.value().materials.at(0).material.normal_uv_set, 1u);
+
+    // A texture with another sampler than the first's is read through the first's, saying so.
+    doc["samplers"] = {{{"wrapS", 33071}, {"wrapT", 33071}}};  // clamp to edge
+    doc["textures"].push_back({{"source", 0}, {"sampler", 0}});
+    doc["materials"][0]["normalTexture"] = {{"index", 1}};
+    auto sampled = import_text(AssetFormat::Gltf, doc.dump());
+    ASSERT_TRUE(sampled.has_value()) << sampled.error().detail;
+    EXPECT_THAT(sampled.value().warnings,
+                Contains(HasSubstr("materials[0].normalTexture's sampler (wrap or filter) differs")));
 }
 
 TEST(GltfImport, ThousandsOfUnreadFeaturesGiveABoundedListOfWarnings) {

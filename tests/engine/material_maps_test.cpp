@@ -347,6 +347,56 @@ TEST(MaterialMapsRender, UnlitShowsTheTexturedBaseColourExactly) {
     expect_near(f.buffers.albedo[CENTRE], Vec3(0.5f, 1.0f, 0.0f), 1e-5f);
 }
 
+/// The centre colour of the unlit quad whose base-colour texture (red left, blue right) reads
+/// set `set`, the mesh's uvs pointing at the red texel and its uvs1 (when given) at the blue one.
+Vec3 colour_through_uv_set(uint32_t set, bool with_uvs1) {
+    auto engine = Engine::create();
+    EXPECT_TRUE(engine.has_value());
+    AddMesh quad = quad_mesh("quad");
+    quad.uvs = std::vector<Vec2>(4, Vec2(0.25f, 0.5f));
+    if (with_uvs1) quad.uvs1 = std::vector<Vec2>(4, Vec2(0.75f, 0.5f));
+    AddMaterial m{"m", Material{}};
+    m.material.base_color = Vec3(1.0f);
+    m.material.unlit = true;
+    m.material.base_color_sampler.filter = TextureFilter::Nearest;
+    m.material.base_color_uv_set = set;
+    m.textures[slot_index(TextureSlot::BaseColor)] = "c";
+    apply_ok(**engine, quad, straight_on(),
+             texture("c", rgba_png(2, 1, {255, 0, 0, 255, 0, 0, 255, 255})), m, quad_instance());
+    return centre_frame(**engine, {}).buffers.color[CENTRE];
+}
+
+TEST(MaterialMapsRender, EachSlotReadsTheTextureCoordinateSetItNames) {
+    expect_near(colour_through_uv_set(0, true), Vec3(1, 0, 0), 1e-5f);
+    expect_near(colour_through_uv_set(1, true), Vec3(0, 0, 1), 1e-5f);
+    // A mesh without the second set reads its first there.
+    expect_near(colour_through_uv_set(1, false), Vec3(1, 0, 0), 1e-5f);
+}
+
+TEST(MaterialMapsRules, AUvSetIsZeroOrOneAndItsUpdateTouchesNoBvh) {
+    auto engine = quad_scene();
+    AddMaterial m{"m", Material{}};
+    m.material.occlusion_uv_set = 2;
+    EditBatch bad;
+    bad.edits.emplace_back(m);
+    auto refused = engine->apply(std::move(bad));
+    ASSERT_FALSE(refused.has_value());
+    EXPECT_EQ(refused.error().field, "occlusion_uv_set");
+    EXPECT_NE(refused.error().message.find("[0, 1]"), std::string::npos)
+        << refused.error().message;
+    m.material.occlusion_uv_set = 1;
+    apply_ok(*engine, m, quad_instance());
+    test::commit_ok(*engine);
+    UpdateMaterial u;
+    u.material = "m";
+    u.occlusion_uv_set = 0;
+    apply_ok(*engine, u);
+    EXPECT_TRUE(test::commit_ok(*engine).no_accel_work());
+    engine->read([](const Scene& s) {
+        EXPECT_EQ(s.material(s.find_material("m")).value()->material.occlusion_uv_set, 0u);
+    });
+}
+
 TEST(MaterialMapsRender, MetallicRoughnessEmissiveAndOcclusionTexturesMultiplyTheirFactors) {
     auto engine = quad_scene();
     AddMaterial m{"m", Material{}};

@@ -389,5 +389,42 @@ TEST(MeshTangents, JournalCodecCarriesThemAsATaggedFieldOfEachMeshEdit) {
         << refused_bytes.error().message;
 }
 
+TEST(MeshUvs1, TheSecondSetKeepsTheRulesOfTheFirstAndRoundTripsAsATaggedField) {
+    auto engine = test::make_engine();
+    AddMesh m = quad("q");
+    m.uvs1 = {{0, 0}, {1, 0}, {0, std::nanf("")}, {1, 1}};
+    Error e = refused(*engine, m);
+    EXPECT_EQ(e.code, ErrorCode::NotFinite);
+    EXPECT_EQ(e.field, "uvs1/5");
+    m.uvs1.pop_back();
+    EXPECT_EQ(refused(*engine, m).field, "uvs1");
+    m.uvs1 = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
+    apply_ok(*engine, m);
+    UpdateMeshPositions part;
+    part.mesh = "q";
+    part.offset = 3;
+    part.uvs1 = std::vector<Vec2>{{0.5f, 0.5f}};
+    apply_ok(*engine, part);
+    const auto uvs1 = [&] {
+        return engine->read([](const Scene& s) { return s.mesh(s.find_mesh("q")).value()->uvs1; });
+    };
+    EXPECT_EQ(uvs1()[3], Vec2(0.5f, 0.5f));
+    undo_last(*engine);
+    EXPECT_EQ(uvs1()[3], Vec2(1, 1));
+
+    EditBatch b;
+    b.edits.emplace_back(m);
+    b.edits.emplace_back(part);
+    std::string bytes;
+    durable::encode_batch(b, bytes);
+    auto back = durable::decode_batch(bytes);
+    ASSERT_TRUE(back.has_value()) << back.error().describe();
+    EXPECT_EQ(std::get<AddMesh>(back->edits[0]).uvs1, m.uvs1);
+    EXPECT_EQ(std::get<UpdateMeshPositions>(back->edits[1]).uvs1, part.uvs1);
+    std::string again;
+    durable::encode_batch(back.value(), again);
+    EXPECT_EQ(again, bytes);
+}
+
 }  // namespace
 }  // namespace strata

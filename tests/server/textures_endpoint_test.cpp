@@ -160,13 +160,14 @@ TEST_F(Textures, ATexturedMaterialRendersItsTexels) {
     EXPECT_GT(px[centre], 2 * px[centre + 2]);
 }
 
-TEST_F(Textures, AMeshsTangentsGoInAsJsonAndAreListed) {
+TEST_F(Textures, AMeshsTangentsAndSecondUvSetGoInAsJsonAndAreListed) {
     const Json quad = {{"op", "add_mesh"},
                        {"id", "quad"},
                        {"positions", {-1, -1, 0, 1, -1, 0, -1, 1, 0, 1, 1, 0}},
                        {"indices", {0, 1, 2, 1, 3, 2}},
                        {"normals", {0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1}},
                        {"uvs", {0, 1, 1, 1, 0, 0, 1, 0}},
+                       {"uvs1", {0, 0, 0, 0, 0, 0, 0, 0}},
                        {"tangents", {1, 0, 0, 1, 1, 0, 0, 1, 1, 0, 0, 1, 1, 0, 0, 0.5}}};
     const Reply bad = srv.edits({quad});
     expect_problem(bad, 422, {}, "/edits/0/tangents/15");
@@ -175,6 +176,13 @@ TEST_F(Textures, AMeshsTangentsGoInAsJsonAndAreListed) {
     good["tangents"][15] = -1;
     ASSERT_EQ(srv.edits({good}).status, 200);
     EXPECT_EQ(srv.get("/v1/scene/meshes/quad").json()["tangents"], true);
+    EXPECT_EQ(srv.get("/v1/scene/meshes/quad").json()["uvs1"], true);
+    // A material slot reads set 0 or 1.
+    expect_problem(srv.edits({{{"op", "add_material"}, {"id", "m"}, {"occlusion_uv_set", 2}}}), 422,
+                   {}, "/edits/0/occlusion_uv_set");
+    ASSERT_EQ(srv.edits({{{"op", "add_material"}, {"id", "m"}, {"occlusion_uv_set", 1}}}).status,
+              200);
+    EXPECT_EQ(srv.get("/v1/scene/materials/m").json()["occlusion_uv_set"], 1);
     ASSERT_EQ(srv.edits({{{"op", "update_mesh"}, {"mesh", "quad"}, {"tangents", Json::array()}}})
                   .status,
               200);
