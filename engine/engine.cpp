@@ -183,6 +183,11 @@ Status Engine::restore_snapshot(std::string_view payload, uint64_t version) {
     return s;
 }
 
+void Engine::restore_history(HistoryState&& state) {
+    std::unique_lock lock(m_scene_mutex);
+    m_history.restore(std::move(state));
+}
+
 Result<SnapshotReplace> Engine::replace_with_snapshot(std::string_view payload, uint64_t version,
                                                       const std::function<Status()>& before_swap) {
     Stopwatch clock;

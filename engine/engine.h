@@ -98,6 +98,10 @@ public:
     /// this empty engine edit by edit, straight into the scene's storage: no whole batch decoded
     /// first, no undo log. On error the engine is left empty.
     Status restore_snapshot(std::string_view payload, uint64_t version);
+    /// Recovery, after restore_snapshot: the history the snapshot was written with (what undo
+    /// and GET history reach), which the journal records replayed after it extend. Not
+    /// journaled.
+    void restore_history(HistoryState&& state);
     /// Replaces the whole scene, whatever it holds, with a snapshot's scene (`payload`, as for
     /// restore_snapshot) at `version`, which must be newer than the scene's: a replica that finds
     /// its log trimmed past its version jumps to the log's snapshot. The new scene and a fresh
@@ -166,6 +170,12 @@ public:
     auto read(F&& f) const {
         std::shared_lock lock(m_scene_mutex);
         return f(m_scene);
+    }
+    /// The same, with the history of the same version.
+    template <class F>
+    auto read_with_history(F&& f) const {
+        std::shared_lock lock(m_scene_mutex);
+        return f(m_scene, m_history);
     }
 
     /// Cumulative counters.

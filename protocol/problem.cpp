@@ -7,8 +7,8 @@ namespace strata::protocol {
 
 namespace {
 
-/// The engine names array elements of `positions`, `indices` and the vertex attributes; point at the member
-/// the client used.
+/// The engine names array elements of `positions`, `indices` and the vertex attributes; point at
+/// the member the client used.
 std::string wire_field(const std::string& field, const EditSource* src) {
     if (!src || field.empty()) return field;
     const std::string head = field.substr(0, field.find('/'));

@@ -135,8 +135,8 @@ private:
             for (const std::string& x : v) put(x);
         } else {
             static_assert(std::is_same_v<T, Vec3> || std::is_same_v<T, Vec2> ||
-                          std::is_same_v<T, Vec4> || std::is_same_v<T, Triangle> || std::is_same_v<T, uint32_t> ||
-                          std::is_same_v<T, Affine>);
+                          std::is_same_v<T, Vec4> || std::is_same_v<T, Triangle> ||
+                          std::is_same_v<T, uint32_t> || std::is_same_v<T, Affine>);
             raw(v.data(), v.size() * sizeof(T));
         }
     }

@@ -154,10 +154,12 @@ Status DurableStore::write_snapshot() {
     // Step: a consistent copy and the journal's cut, in one critical section. The copy shares
     // the scene's chunks and buffers copy-on-write (Scene::image), so edits wait microseconds.
     SceneImage image;
+    HistoryState history;
     double lock_ms = 0.0;
-    Status rotated = m_engine.read([&](const Scene& s) {
+    Status rotated = m_engine.read_with_history([&](const Scene& s, const EditHistory& h) {
         Stopwatch held;
         image = s.image();
+        history = h.state();
         Status r = m_journal->rotate(image.version);
         lock_ms = held.ms();
         return r;
@@ -176,7 +178,12 @@ Status DurableStore::write_snapshot() {
     };
     if (!rotated) return fail(rotated.error());
 
-    // Step: serialised and written outside the lock, atomically.
+    // Step: serialised and written outside the lock, atomically: the history first, so that a
+    // snapshot on disk always has its history beside it.
+    const std::string kept = encode_history(history, version);
+    history = {};
+    if (Status s = write_file_atomically(m_options.dir, history_name(version), kept); !s)
+        return fail(s.error());
     std::string bytes = encode_snapshot(image.to_batch(), version);
     image = {};
     if (Status s = write_file_atomically(m_options.dir, snapshot_name(version), bytes); !s)
@@ -195,7 +202,7 @@ void DurableStore::remove_covered(uint64_t version) {
     if (auto names = list_files(m_options.dir)) {
         for (const std::string& name : names.value()) {
             uint64_t v = 0;
-            if (parse_snapshot_name(name, v) && v < keep_from)
+            if ((parse_snapshot_name(name, v) || parse_history_name(name, v)) && v < keep_from)
                 ::unlink(join_path(m_options.dir, name).c_str());
         }
         (void)sync_directory(m_options.dir);

@@ -538,7 +538,8 @@ void read_tagged(ByteReader& r, E& e) {
         });
         if (!known) known = read_extra(r, e, tag);
         if (!known) return r.fail("unknown field tag " + std::to_string(tag));
-        if (seen & (uint64_t{1} << tag)) return r.fail("field tag " + std::to_string(tag) + " twice");
+        if (seen & (uint64_t{1} << tag))
+            return r.fail("field tag " + std::to_string(tag) + " twice");
         seen |= uint64_t{1} << tag;
     }
 }

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstring>
 
+#include "engine/durable/byte_io.h"
 #include "engine/durable/crc32c.h"
 #include "engine/durable/edit_codec.h"
 
@@ -13,6 +14,7 @@ namespace {
 
 constexpr char SEGMENT_MAGIC[8] = {'S', 'T', 'R', 'A', 'T', 'A', 'J', '1'};
 constexpr char SNAPSHOT_MAGIC[8] = {'S', 'T', 'R', 'A', 'T', 'A', 'S', '1'};
+constexpr char HISTORY_MAGIC[8] = {'S', 'T', 'R', 'A', 'T', 'A', 'H', '1'};
 
 template <class T>
 void put(std::string& out, std::size_t at, T v) {
@@ -54,11 +56,17 @@ std::string segment_name(uint64_t base) {
 std::string snapshot_name(uint64_t version) {
     return numbered("snapshot-", version, ".snap");
 }
+std::string history_name(uint64_t version) {
+    return numbered("history-", version, ".hist");
+}
 bool parse_segment_name(std::string_view name, uint64_t& base) {
     return parse_numbered(name, "journal-", ".log", base);
 }
 bool parse_snapshot_name(std::string_view name, uint64_t& version) {
     return parse_numbered(name, "snapshot-", ".snap", version);
+}
+bool parse_history_name(std::string_view name, uint64_t& version) {
+    return parse_numbered(name, "history-", ".hist", version);
 }
 
 std::string segment_header(uint64_t base) {
@@ -145,39 +153,123 @@ SegmentScan scan_segment(std::string_view bytes) {
     return scan;
 }
 
-std::string encode_snapshot(const EditBatch& scene, uint64_t version) {
+namespace {
+
+/// `payload` behind a 32-byte header: `magic`, the format, its checksum, `version`, its length.
+std::string framed(const char (&magic)[8], uint64_t version, std::string payload) {
     std::string out(SNAPSHOT_HEADER_BYTES, '\0');
-    encode_batch(scene, out);
-    std::memcpy(out.data(), SNAPSHOT_MAGIC, 8);
+    out += payload;
+    std::memcpy(out.data(), magic, 8);
     put<uint32_t>(out, 8, FORMAT_VERSION);
-    put<uint32_t>(out, 12,
-                  crc32c(out.data() + SNAPSHOT_HEADER_BYTES, out.size() - SNAPSHOT_HEADER_BYTES));
+    put<uint32_t>(out, 12, crc32c(payload.data(), payload.size()));
     put<uint64_t>(out, 16, version);
-    put<uint64_t>(out, 24, out.size() - SNAPSHOT_HEADER_BYTES);
+    put<uint64_t>(out, 24, payload.size());
     return out;
 }
 
-Result<SnapshotView> open_snapshot(std::string_view bytes) {
-    if (bytes.size() < SNAPSHOT_HEADER_BYTES || std::memcmp(bytes.data(), SNAPSHOT_MAGIC, 8) != 0)
-        return failure(
-            ErrorCode::InvalidArgument,
-            "not a Strata snapshot (it must start with 'STRATAS1' and a 32-byte header)");
+/// The version and payload of a file framed with `magic`; `what` names the kind in errors.
+Result<SnapshotView> unframed(std::string_view bytes, const char (&magic)[8], const char* what) {
+    const std::string kind(what);
+    if (bytes.size() < SNAPSHOT_HEADER_BYTES || std::memcmp(bytes.data(), magic, 8) != 0)
+        return failure(ErrorCode::InvalidArgument, "not a Strata " + kind + " (it must start with '" +
+                                                       std::string(magic, 8) +
+                                                       "' and a 32-byte header)");
     if (get<uint32_t>(bytes, 8) != FORMAT_VERSION)
         return failure(ErrorCode::InvalidArgument,
-                       "snapshot format " + std::to_string(get<uint32_t>(bytes, 8)) +
+                       kind + " format " + std::to_string(get<uint32_t>(bytes, 8)) +
                            " is not supported (this server reads format 1)");
     const uint64_t length = get<uint64_t>(bytes, 24);
     if (length != bytes.size() - SNAPSHOT_HEADER_BYTES)
         return failure(ErrorCode::InvalidArgument,
-                       "snapshot payload should be " + std::to_string(length) + " bytes but " +
+                       kind + " payload should be " + std::to_string(length) + " bytes but " +
                            std::to_string(bytes.size() - SNAPSHOT_HEADER_BYTES) +
                            " follow the header (truncated or padded)");
     const std::string_view payload = bytes.substr(SNAPSHOT_HEADER_BYTES);
     if (crc32c(payload.data(), payload.size()) != get<uint32_t>(bytes, 12))
         return failure(ErrorCode::InvalidArgument,
-                       "snapshot checksum mismatch in the payload at offset 32 (the file is "
-                       "damaged)");
+                       kind + " checksum mismatch in the payload at offset 32 (the file is "
+                              "damaged)");
     return SnapshotView{get<uint64_t>(bytes, 16), payload};
+}
+
+void put_steps(ByteWriter& w, const std::vector<HistoryState::Step>& steps) {
+    w(uint64_t(steps.size()));
+    for (const HistoryState::Step& s : steps) {
+        std::string batch;
+        encode_batch(s.batch, batch);
+        w(s.version, batch);
+    }
+}
+
+void get_steps(ByteReader& r, std::vector<HistoryState::Step>& steps) {
+    uint64_t n = 0;
+    r(n);
+    // A step takes at least its version and its batch's length.
+    if (r.ok() && n > r.remaining() / 12) return r.fail("step count " + std::to_string(n));
+    for (uint64_t i = 0; i < n && r.ok(); ++i) {
+        HistoryState::Step s;
+        std::string bytes;
+        r(s.version, bytes);
+        if (!r.ok()) return;
+        auto batch = decode_batch(bytes);
+        if (!batch) return r.fail("step " + std::to_string(i) + ": " + batch.error().message);
+        s.batch = std::move(batch.value());
+        steps.push_back(std::move(s));
+    }
+}
+
+}  // namespace
+
+std::string encode_snapshot(const EditBatch& scene, uint64_t version) {
+    std::string payload;
+    encode_batch(scene, payload);
+    return framed(SNAPSHOT_MAGIC, version, std::move(payload));
+}
+
+Result<SnapshotView> open_snapshot(std::string_view bytes) {
+    return unframed(bytes, SNAPSHOT_MAGIC, "snapshot");
+}
+
+std::string encode_history(const HistoryState& state, uint64_t version) {
+    std::string payload;
+    ByteWriter w(payload);
+    w(uint64_t(state.entries.size()));
+    for (const HistoryEntry& e : state.entries) {
+        w(e.version, e.info.kind, e.info.target, e.info.time_ms, e.info.message, e.edits,
+          uint64_t(e.ops.size()));
+        for (const auto& [kind, count] : e.ops) w(kind, count);
+    }
+    put_steps(w, state.undo);
+    put_steps(w, state.redo);
+    return framed(HISTORY_MAGIC, version, std::move(payload));
+}
+
+Result<DecodedHistory> decode_history(std::string_view bytes) {
+    auto view = unframed(bytes, HISTORY_MAGIC, "history file");
+    if (!view) return Unexpected(view.error());
+    DecodedHistory out{view->version, {}};
+    ByteReader r(view->payload);
+    uint64_t n = 0;
+    r(n);
+    // An entry takes at least its 33 fixed bytes.
+    if (r.ok() && n > r.remaining() / 33) r.fail("entry count " + std::to_string(n));
+    for (uint64_t i = 0; i < n && r.ok(); ++i) {
+        HistoryEntry e;
+        uint64_t ops = 0;
+        r(e.version, e.info.kind, e.info.target, e.info.time_ms, e.info.message, e.edits, ops);
+        if (r.ok() && ops > r.remaining() / 5) r.fail("op count " + std::to_string(ops));
+        for (uint64_t k = 0; k < ops && r.ok(); ++k) {
+            std::pair<uint8_t, uint32_t> op;
+            r(op.first, op.second);
+            e.ops.push_back(op);
+        }
+        out.state.entries.push_back(std::move(e));
+    }
+    get_steps(r, out.state.undo);
+    get_steps(r, out.state.redo);
+    if (r.ok() && r.remaining() != 0) r.fail(std::to_string(r.remaining()) + " bytes left over");
+    if (!r.ok()) return failure(ErrorCode::InvalidArgument, "history file payload: " + r.error());
+    return out;
 }
 
 Result<DecodedSnapshot> decode_snapshot(std::string_view bytes) {

@@ -12,6 +12,12 @@
 // header
 //   "STRATAS1" | u32 format (1) | u32 crc32c(payload) | u64 version | u64 payload length
 // followed by the payload: an edit batch that builds the scene from an empty one.
+//
+// Beside a snapshot, `history-<version>.hist` keeps the scene's history at that version (so that
+// undo reaches past the snapshot after a restart): the same header with the magic "STRATAH1",
+// followed by the entries, the undo stack and the redo stack (each step's batch as edit_codec.h
+// writes it). A history file that is missing or damaged costs the history before its snapshot,
+// never the scene.
 
 #include <cstdint>
 #include <string>
@@ -19,6 +25,7 @@
 #include <vector>
 
 #include "engine/core/result.h"
+#include "engine/scene/edit_history.h"
 #include "engine/scene/edits.h"
 
 namespace strata::durable {
@@ -31,8 +38,10 @@ inline constexpr uint32_t FORMAT_VERSION = 1;
 /// `journal-<base>.log` / `snapshot-<version>.snap` names, and their parsers (false: not ours).
 std::string segment_name(uint64_t base);
 std::string snapshot_name(uint64_t version);
+std::string history_name(uint64_t version);
 bool parse_segment_name(std::string_view name, uint64_t& base);
 bool parse_snapshot_name(std::string_view name, uint64_t& version);
+bool parse_history_name(std::string_view name, uint64_t& version);
 
 /// A segment header for records after `base`.
 std::string segment_header(uint64_t base);
@@ -86,5 +95,14 @@ struct SnapshotView {
     std::string_view payload;
 };
 Result<SnapshotView> open_snapshot(std::string_view bytes);
+
+/// A history file's bytes for the history `state` of the scene at `version`.
+std::string encode_history(const HistoryState& state, uint64_t version);
+/// A history file's history and version; errors say what is wrong and where.
+struct DecodedHistory {
+    uint64_t version = 0;
+    HistoryState state;
+};
+Result<DecodedHistory> decode_history(std::string_view bytes);
 
 }  // namespace strata::durable

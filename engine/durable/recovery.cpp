@@ -33,6 +33,34 @@ void set_aside(const std::string& path, RecoveryResult& out) {
     }
 }
 
+/// The history written beside snapshot `version` (journal_format.h), into `engine`. One that is
+/// missing (a directory from before history files) or damaged costs only the history before the
+/// snapshot, never the scene: a note says so.
+void restore_history(const std::string& dir, uint64_t version, Engine& engine,
+                     RecoveryResult& out) {
+    const std::string path = join_path(dir, history_name(version));
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) return;
+    auto bytes = read_whole_file(path);
+    Result<DecodedHistory> history =
+        bytes ? decode_history(bytes.value()) : Result<DecodedHistory>(Unexpected(bytes.error()));
+    if (history && history->version != version)
+        history = failure(ErrorCode::InvalidArgument,
+                          "it holds version " + std::to_string(history->version));
+    if (!history) {
+        out.notes.push_back("the history saved with the snapshot was not restored (" + path +
+                            ": " + history.error().message + "): undo reaches back to version " +
+                            std::to_string(version) + " only");
+        return;
+    }
+    const HistoryState& h = history->state;
+    out.notes.push_back("restored the history saved with the snapshot (" +
+                        std::to_string(h.entries.size()) + " versions, " +
+                        std::to_string(h.undo.size()) + " to undo, " +
+                        std::to_string(h.redo.size()) + " to redo)");
+    engine.restore_history(std::move(history->state));
+}
+
 }  // namespace
 
 std::string RecoveryProgress::describe() const {
@@ -117,6 +145,7 @@ Result<RecoveryResult> recover(const std::string& dir, Engine& engine,
         out.snapshot_version = version;
         out.notes.push_back("loaded snapshot " + path + " (version " + std::to_string(version) +
                             ")");
+        restore_history(dir, version, engine, out);
         break;
     }
     uint64_t current = out.snapshot_version;

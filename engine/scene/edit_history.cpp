@@ -205,4 +205,27 @@ void EditHistory::clear() {
     m_bytes = 0;
 }
 
+HistoryState EditHistory::state() const {
+    HistoryState out;
+    out.entries.assign(m_entries.begin(), m_entries.end());
+    for (const Step& s : m_undo) out.undo.push_back({s.version, s.batch});
+    for (const Step& s : m_redo) out.redo.push_back({s.version, s.batch});
+    return out;
+}
+
+void EditHistory::restore(HistoryState&& state) {
+    clear();
+    for (HistoryEntry& e : state.entries) m_entries.push_back(std::move(e));
+    while (m_entries.size() > m_limits.max_entries) m_entries.pop_front();
+    for (auto [from, to] : {std::pair{&state.undo, &m_undo}, std::pair{&state.redo, &m_redo}}) {
+        for (HistoryState::Step& s : *from) {
+            Step step{s.version, std::move(s.batch), 0};
+            step.bytes = approx_bytes(step.batch);
+            m_bytes += step.bytes;
+            to->push_back(std::move(step));
+        }
+    }
+    trim();
+}
+
 }  // namespace strata

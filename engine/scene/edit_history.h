@@ -56,6 +56,19 @@ struct HistoryPage {
     uint64_t held_bytes = 0;  ///< by both stacks
 };
 
+/// A history as data: what a snapshot keeps of it (engine/durable/history_file.h), so that undo
+/// reaches past the snapshot after a restart.
+struct HistoryState {
+    /// A batch on a stack, with the version it undoes (undo stack) or redoes (redo stack).
+    struct Step {
+        uint64_t version = 0;
+        EditBatch batch;
+    };
+    std::vector<HistoryEntry> entries;  ///< oldest first
+    std::vector<Step> undo;             ///< oldest first: the next to undo is the last
+    std::vector<Step> redo;             ///< the next to redo is the last
+};
+
 /// Edit counts of a batch, per kind (for HistoryEntry::ops).
 std::vector<std::pair<uint8_t, uint32_t>> count_ops(const EditBatch& batch);
 
@@ -82,6 +95,12 @@ public:
 
     /// Forgets everything (the scene was replaced).
     void clear();
+
+    /// Everything it holds, as data.
+    HistoryState state() const;
+    /// Replaces what it holds with `state` (within this history's limits: the oldest entries
+    /// and steps beyond them go).
+    void restore(HistoryState&& state);
 
 private:
     struct Step {

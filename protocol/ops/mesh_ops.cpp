@@ -268,7 +268,8 @@ constexpr EditOp OPS[] = {
   "required": ["id"],
   "additionalProperties": false,
   "not": {"anyOf": [{"required": ["normals", "normals_b64"]}, {"required": ["uvs", "uvs_b64"]},
-                    {"required": ["uvs1", "uvs1_b64"]}, {"required": ["tangents", "tangents_b64"]}]},
+                    {"required": ["uvs1", "uvs1_b64"]},
+                    {"required": ["tangents", "tangents_b64"]}]},
   "oneOf": [
     {
       "required": ["shape"],
@@ -286,8 +287,9 @@ constexpr EditOp OPS[] = {
 })json",
      parse_add_mesh, edit_kinds<AddMesh>(), field_properties<MeshFields, true>},
     {"update_mesh",
-     "New positions, normals, uvs (either set) or tangents for a vertex range (offset in vertices), new positions for "
-     "listed vertices (vertices), or with indices a topology change.",
+     "New positions, normals, uvs (either set) or tangents for a vertex range (offset in "
+     "vertices), new positions for listed vertices (vertices), or with indices a topology "
+     "change.",
      R"json({
   "type": "object",
   "properties": {

@@ -325,7 +325,8 @@ TEST(GltfImport, ASecondSetThePrimitiveLacksAndASecondTransformOfOneSetAreNamedI
     auto sampled = import_text(AssetFormat::Gltf, doc.dump());
     ASSERT_TRUE(sampled.has_value()) << sampled.error().detail;
     EXPECT_THAT(sampled.value().warnings,
-                Contains(HasSubstr("materials[0].normalTexture's sampler (wrap or filter) differs")));
+                Contains(HasSubstr(
+                    "materials[0].normalTexture's sampler (wrap or filter) differs")));
 }
 
 TEST(GltfImport, ThousandsOfUnreadFeaturesGiveABoundedListOfWarnings) {

@@ -600,5 +600,104 @@ TEST(PastVersion, KeptHistoryReachesBehindSnapshotsAndSurvivesARestart) {
     EXPECT_EQ(gone.error().code, ErrorCode::OutOfRange);
 }
 
+// Step: the history across snapshots -------------------------------------------------------------
+
+/// Applies the engine's undo (or redo) batch at its version; false when there is none.
+bool take_back(Engine& e, bool redo = false) {
+    auto batch = redo ? e.redo_batch(e.version()) : e.undo_batch(e.version());
+    if (!batch) return false;
+    auto applied = e.apply(std::move(batch.value()), e.version());
+    EXPECT_TRUE(applied.has_value()) << applied.error().describe();
+    return applied.has_value();
+}
+
+bool has_mesh(const Engine& e, const char* id) {
+    return e.read([&](const Scene& s) { return !s.find_mesh(id).is_null(); });
+}
+
+TEST(HistoryFile, UndoReachesPastSnapshotsAfterARestart) {
+    TempDir dir;
+    {
+        Server s = start(options_for(dir));
+        EditBatch first;
+        first.edits.emplace_back(test::mesh_edit("a", make_box(Vec3(1))));
+        first.info.message = "the first box";
+        ASSERT_TRUE(s.engine->apply(std::move(first)).has_value());
+        test::apply_ok(*s.engine, test::mesh_edit("b", make_box(Vec3(1))));
+        test::apply_ok(*s.engine, test::mesh_edit("c", make_box(Vec3(1))));
+        ASSERT_TRUE(take_back(*s.engine));  // c undone: on the redo stack
+        ASSERT_TRUE(s.store->snapshot_now().has_value());
+        test::apply_ok(*s.engine, test::mesh_edit("d", make_box(Vec3(1))));
+        ASSERT_TRUE(s.store->snapshot_now().has_value());  // two snapshots between
+        test::apply_ok(*s.engine, test::mesh_edit("e", make_box(Vec3(1))));
+    }
+    Server s = start(options_for(dir));
+    ASSERT_TRUE(s.store->recovery().loaded_snapshot);
+    EXPECT_EQ(s.store->recovery().snapshot_version, 5u);
+    const HistoryPage page = s.engine->history(100, 0);
+    ASSERT_EQ(page.entries.size(), 6u);  // five versions and the undo
+    EXPECT_EQ(page.entries.back().info.message, "the first box");
+    EXPECT_EQ(page.undo_depth, 4u);  // e, d, b, a: c was undone, and d emptied the redo stack
+    // Undo walks back over both snapshots to the empty scene.
+    for (const char* id : {"e", "d", "b", "a"}) {
+        ASSERT_TRUE(take_back(*s.engine)) << id;
+        EXPECT_FALSE(has_mesh(*s.engine, id)) << id;
+    }
+    EXPECT_FALSE(take_back(*s.engine));
+    EXPECT_EQ(s.engine->read([](const Scene& sc) { return sc.meshes().size(); }), 0u);
+    // Redo brings them back in order.
+    ASSERT_TRUE(take_back(*s.engine, true));
+    EXPECT_TRUE(has_mesh(*s.engine, "a"));
+}
+
+TEST(HistoryFile, AMissingOrDamagedHistoryFileCostsTheHistoryNotTheScene) {
+    for (const bool damaged : {false, true}) {
+        TempDir dir;
+        {
+            Server s = start(options_for(dir));
+            test::apply_ok(*s.engine, test::mesh_edit("a", make_box(Vec3(1))));
+            ASSERT_TRUE(s.store->snapshot_now().has_value());
+            test::apply_ok(*s.engine, test::mesh_edit("b", make_box(Vec3(1))));
+        }
+        const std::string history = dir.file(durable::history_name(1));
+        if (damaged) {
+            std::fstream f(history, std::ios::in | std::ios::out | std::ios::binary);
+            f.seekp(40);
+            f.put('\x7f');
+        } else {
+            ASSERT_EQ(std::remove(history.c_str()), 0);
+        }
+        Server s = start(options_for(dir));
+        EXPECT_TRUE(has_mesh(*s.engine, "a"));
+        EXPECT_TRUE(has_mesh(*s.engine, "b"));
+        bool noted = false;
+        for (const std::string& n : s.store->recovery().notes)
+            noted = noted || n.find("checksum mismatch") != std::string::npos;
+        EXPECT_EQ(noted, damaged);
+        // The journal after the snapshot still gives its undo; nothing before it.
+        ASSERT_TRUE(take_back(*s.engine));
+        EXPECT_FALSE(has_mesh(*s.engine, "b"));
+        EXPECT_FALSE(take_back(*s.engine));
+    }
+}
+
+TEST(HistoryFile, EncodingRoundTripsAndRefusesDamage) {
+    HistoryState h;
+    EditBatch inverse;
+    inverse.edits.emplace_back(RemoveMesh{"a"});
+    h.entries.push_back({1, BatchInfo{BatchKind::Edits, 0, 1795000000000, "first"}, 1, {{0, 1}}});
+    h.undo.push_back({1, inverse});
+    inverse.info = BatchInfo{BatchKind::Undo, 1, 0, ""};
+    h.redo.push_back({1, inverse});
+    const std::string bytes = durable::encode_history(h, 7);
+    auto back = durable::decode_history(bytes);
+    ASSERT_TRUE(back.has_value()) << back.error().describe();
+    EXPECT_EQ(back->version, 7u);
+    EXPECT_EQ(durable::encode_history(back->state, 7), bytes);
+    for (std::size_t n = 0; n < bytes.size(); ++n)
+        EXPECT_FALSE(durable::decode_history(std::string_view(bytes).substr(0, n)).has_value()) << n;
+    EXPECT_FALSE(durable::decode_history(durable::encode_snapshot({}, 7)).has_value());
+}
+
 }  // namespace
 }  // namespace strata

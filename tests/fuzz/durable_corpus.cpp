@@ -29,6 +29,11 @@ std::vector<Edit> every_kind() {
     m.triangles = {{0, 1, 2}, {1, 3, 2}};
     m.build = {BuildPreference::FastBuild, false, true};
     m.material = "red";
+    // Every vertex attribute: the extension layout's and the tagged ones.
+    m.normals.assign(4, Vec3(0, 0, 1));
+    m.uvs = {{0, 1}, {1, 1}, {0, 0}, {1, 0}};
+    m.uvs1 = m.uvs;
+    m.tangents.assign(4, Vec4(1, 0, 0, 1));
     edits.emplace_back(AddMaterial{"red", Material{{1, 0, 0}, 0.25f, 0.5f, {0, 0, 0}}});
     edits.emplace_back(std::move(m));
     edits.emplace_back(UpdateMeshPositions{"tri", 1, {{2, 0, 0}}});
@@ -53,6 +58,10 @@ std::vector<Edit> every_kind() {
     edits.emplace_back(SetCamera{Vec3(1), std::nullopt, std::nullopt, 30.0f});
     edits.emplace_back(SetLighting{std::nullopt, Vec3(2), std::nullopt, 0.5f});
     edits.emplace_back(UpdateMeshVertices{"tri", {3, 0}, {{2, 1, 0}, {0, 0, 1}}});
+    UpdateMeshPositions attributes{"tri", 2, {}};
+    attributes.tangents = std::vector<Vec4>{{0, 1, 0, -1}};
+    attributes.uvs1 = std::vector<Vec2>{};
+    edits.emplace_back(std::move(attributes));
     AddInstances many;
     many.ids.prefix = "t";
     many.ids.count = 3;

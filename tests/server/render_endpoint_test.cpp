@@ -57,7 +57,8 @@ TEST_F(Render, AReportTooLongForAHeaderKeepsItsCountsAndFitsEveryClient) {
     EXPECT_GT(report["rebuilt"].size(), 0u);
     EXPECT_LT(report["rebuilt"].size(), 205u);
     // A short report is whole.
-    const Json again = Json::parse(srv.get("/v1/render?width=16&height=16").header("X-Strata-Report"));
+    const Json again =
+        Json::parse(srv.get("/v1/render?width=16&height=16").header("X-Strata-Report"));
     EXPECT_FALSE(again.contains("entries_truncated"));
 }
 

@@ -418,6 +418,32 @@ class DataDirectory(unittest.TestCase):
         self.assertEqual(durable_scene.check(s, 40), "")
         self.assertIn("loaded snapshot", s.log())
 
+    def test_undo_reaches_past_snapshots_after_a_kill(self):
+        s = self.server("--snapshot-threshold-kb", "16")
+        stream(s, 0, 40)
+        deadline = time.monotonic() + 10
+        while s.json("GET", "/v1/stats")[1]["durability"]["snapshots_written"] == 0:
+            self.assertLess(time.monotonic(), deadline, "no snapshot was written")
+            time.sleep(0.05)
+        stream(s, 40, 1)  # one batch in the journal after the snapshot
+        before = s.json("GET", "/v1/history?limit=100")[1]
+        self.assertEqual(before["undo"]["depth"], 41)
+        s.kill()
+        s = self.server()
+        self.assertIn("restored the history saved with the snapshot", s.log())
+        after = s.json("GET", "/v1/history?limit=100")[1]
+        self.assertEqual(after["undo"], before["undo"])
+        self.assertEqual([e["version"] for e in after["entries"]],
+                         [e["version"] for e in before["entries"]])
+        # Every batch can be taken back, those before the snapshot too.
+        for n in range(41):
+            status, answer = s.json("POST", "/v1/undo", None)
+            self.assertEqual(status, 200, answer)
+            self.assertEqual(answer["undone"], 41 - n)
+        status, answer = s.json("POST", "/v1/undo", None)
+        self.assertEqual(status, 409, answer)
+        self.assertEqual(s.json("GET", "/v1/scene")[1]["counts"]["instances"], 0)
+
     def test_the_server_listens_while_it_recovers_and_answers_503_until_built(self):
         # A journal long enough that replaying it takes a while: 300k instances in 15 batches.
         s = self.server()
