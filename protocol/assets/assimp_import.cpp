@@ -113,12 +113,14 @@ std::optional<AssetMesh> convert_mesh(const aiMesh& m, unsigned index, const Err
         out.normals.reserve(m.mNumVertices);
         for (unsigned v = 0; v < m.mNumVertices; ++v) out.normals.push_back(vec(m.mNormals[v]));
     }
-    if (m.HasTextureCoords(0)) {
-        out.uvs.reserve(m.mNumVertices);
+    for (unsigned set = 0; set < 2; ++set) {
+        if (!m.HasTextureCoords(set)) continue;
+        std::vector<glm::vec2>& uvs = set == 0 ? out.uvs : out.uvs1;
+        uvs.reserve(m.mNumVertices);
         for (unsigned v = 0; v < m.mNumVertices; ++v)
-            out.uvs.emplace_back(m.mTextureCoords[0][v].x, m.mTextureCoords[0][v].y);
+            uvs.emplace_back(m.mTextureCoords[set][v].x, m.mTextureCoords[set][v].y);
     }
-    if (m.HasTextureCoords(1)) warnings.push_back(what + ": texture coordinate sets beyond 0 left out");
+    if (m.HasTextureCoords(2)) warnings.push_back(what + ": texture coordinate sets beyond 1 left out");
     if (m.HasVertexColors(0)) {
         out.colors.reserve(m.mNumVertices);
         for (unsigned v = 0; v < m.mNumVertices; ++v)
@@ -253,15 +255,24 @@ AssetMaterial convert_material(const aiMaterial& m, unsigned index, TextureTable
     intensity = std::min(intensity, 1e6f);
     out.material.emission =
         intensity * Vec3(std::max(e.r, 0.0f), std::max(e.g, 0.0f), std::max(e.b, 0.0f));
-    aiString path;
-    if (m.GetTexture(aiTextureType_BASE_COLOR, 0, &path) == AI_SUCCESS ||
-        m.GetTexture(aiTextureType_DIFFUSE, 0, &path) == AI_SUCCESS)
-        out.texture(TextureSlot::BaseColor) =
-            textures.get(text(path), what, TextureColorSpace::Srgb);
-    if (m.GetTexture(aiTextureType_NORMALS, 0, &path) == AI_SUCCESS)
-        out.texture(TextureSlot::Normal) = textures.get(text(path), what, TextureColorSpace::Linear);
-    if (emissive_map && m.GetTexture(aiTextureType_EMISSIVE, 0, &path) == AI_SUCCESS)
-        out.texture(TextureSlot::Emissive) = textures.get(text(path), what, TextureColorSpace::Srgb);
+    // Each map with the texture coordinate set (assimp's uv channel) it reads.
+    const auto map = [&](TextureSlot slot, aiTextureType type) {
+        aiString path;
+        unsigned channel = 0;
+        if (m.GetTexture(type, 0, &path, nullptr, &channel) != AI_SUCCESS) return false;
+        const TextureSlotInfo& info = TEXTURE_SLOTS[slot_index(slot)];
+        out.texture(slot) = textures.get(text(path), what, info.space);
+        if (channel > 1)
+            warnings.push_back(what + ": its " + std::string(info.field) + " reads uv channel " +
+                               std::to_string(channel) + "; channels 0 and 1 are imported, and "
+                               "it reads channel 0");
+        out.material.*(info.uv_set) = channel == 1 ? 1 : 0;
+        return true;
+    };
+    if (!map(TextureSlot::BaseColor, aiTextureType_BASE_COLOR))
+        map(TextureSlot::BaseColor, aiTextureType_DIFFUSE);
+    map(TextureSlot::Normal, aiTextureType_NORMALS);
+    if (emissive_map) map(TextureSlot::Emissive, aiTextureType_EMISSIVE);
     for (const auto& [type, kind] : UNREAD_TEXTURES)
         if (m.GetTextureCount(type) > 0)
             warnings.push_back(what + ": its " + std::string(kind) + " texture is not imported");

@@ -11,7 +11,7 @@
 // emissive colour unless an emissive texture would be lost with it, the diffuse or base-colour
 // texture when it is embedded or a side file), the node tree with its transforms. Everything
 // else is named in the warnings: points and lines, bones, morph targets, animations, cameras,
-// lights, texture coordinate sets beyond 0, and texture kinds the renderer does not read.
+// lights, texture coordinate sets beyond 1, and texture kinds the renderer does not read.
 
 #include <span>
 #include <string>

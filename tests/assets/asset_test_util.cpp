@@ -45,4 +45,17 @@ std::string triangle_gltf(const std::string& nodes_json, const std::string& prim
            uri + R"("}]})";
 }
 
+void add_float_attribute(nlohmann::json& doc, const char* name, const std::vector<float>& values,
+                         const char* type) {
+    const std::string bytes(reinterpret_cast<const char*>(values.data()), values.size() * 4);
+    const std::size_t buffer = doc["buffers"].size(), view = doc["bufferViews"].size();
+    doc["buffers"].push_back({{"byteLength", bytes.size()},
+                              {"uri", "data:application/octet-stream;base64," +
+                                          protocol::encode_base64(bytes)}});
+    doc["bufferViews"].push_back({{"buffer", buffer}, {"byteLength", bytes.size()}});
+    doc["accessors"].push_back(
+        {{"bufferView", view}, {"componentType", 5126}, {"count", 3}, {"type", type}});
+    doc["meshes"][0]["primitives"][0]["attributes"][name] = doc["accessors"].size() - 1;
+}
+
 }  // namespace strata::assets::test

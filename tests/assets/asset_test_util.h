@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "protocol/assets/import.h"
 
 namespace strata::assets::test {
@@ -26,5 +28,10 @@ Imported<Asset> import_text(AssetFormat format, const std::string& text,
 /// "indices": 1 <extra>}]}].
 std::string triangle_gltf(const std::string& nodes_json, const std::string& primitive_extra = "",
                           const std::string& scenes_json = "[{\"nodes\": [0]}]");
+
+/// Adds a float accessor named `name` (`type`: "VEC2", "VEC3", "VEC4"; three elements, in a
+/// buffer, view and accessor of its own) to the first primitive of triangle_gltf()'s document.
+void add_float_attribute(nlohmann::json& doc, const char* name, const std::vector<float>& values,
+                         const char* type);
 
 }  // namespace strata::assets::test

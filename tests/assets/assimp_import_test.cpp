@@ -6,6 +6,9 @@
 
 #include <gmock/gmock.h>
 
+#include "engine/image/png.h"
+#include "protocol/assets/assimp_import.h"
+#include "protocol/base64.h"
 #include "tests/assets/asset_test_util.h"
 
 namespace strata::assets::test {
@@ -120,6 +123,39 @@ TEST(AssimpImport, AColladaTextureComesFromTheUploadOrIsOnlyNamed) {
     auto with = import_model("Collada/duck.dae", AssetFormat::Dae, side);
     ASSERT_TRUE(with.has_value()) << with.error().detail;
     EXPECT_EQ(with.value().textures[0].bytes.size(), side.at("duckCM.tga").size());
+}
+
+TEST(AssimpImport, TwoUvChannelsBecomeTheMeshsTwoTextureCoordinateSets) {
+    auto a = import_model("Collada/cube_with_2UVs.DAE", AssetFormat::Dae);
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
+    ASSERT_FALSE(a.value().meshes.empty());
+    const AssetMesh& m = a.value().meshes[0];
+    EXPECT_EQ(m.uvs.size(), m.positions.size());
+    EXPECT_EQ(m.uvs1.size(), m.positions.size());
+    EXPECT_NE(m.uvs, m.uvs1);
+    EXPECT_FALSE(any_warning(a.value(), "texture coordinate sets"));
+}
+
+TEST(AssimpImport, AMapReadsTheUvChannelItsMaterialNames) {
+    // A glTF through assimp's own reader: its texCoord becomes assimp's uv channel.
+    auto doc = nlohmann::json::parse(triangle_gltf(R"([{"mesh": 0}])", R"(, "material": 0)"));
+    add_float_attribute(doc, "TEXCOORD_0", {0, 0, 1, 0, 0, 1}, "VEC2");
+    add_float_attribute(doc, "TEXCOORD_1", {0.5f, 0.5f, 0.25f, 0.5f, 0.5f, 0.25f}, "VEC2");
+    const uint8_t rgb[] = {200, 100, 50};
+    doc["images"] = {{{"uri", "data:image/png;base64," +
+                                  protocol::encode_base64(encode_png(rgb, 1, 1, 3).value())}}};
+    doc["textures"] = {{{"source", 0}}};
+    doc["materials"] = {
+        {{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}, {"texCoord", 1}}}}}}};
+    const std::string text = doc.dump();
+    auto a = import_assimp(bytes_of(text), AssetFormat::Gltf, "t.gltf", {}, {});
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
+    const AssetMesh& mesh = a.value().meshes.at(0);
+    ASSERT_GE(mesh.material, 0);  // assimp adds a default material of its own
+    const AssetMaterial& m = a.value().materials.at(std::size_t(mesh.material));
+    EXPECT_GE(m.texture(TextureSlot::BaseColor), 0);
+    EXPECT_EQ(m.material.base_color_uv_set, 1u);
+    EXPECT_EQ(mesh.uvs1.size(), 3u);
 }
 
 TEST(AssimpImport, AFileNamingAServerPathGetsNothingFromIt) {
