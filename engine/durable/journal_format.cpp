@@ -196,7 +196,7 @@ void put_steps(ByteWriter& w, const std::vector<HistoryState::Step>& steps) {
     w(uint64_t(steps.size()));
     for (const HistoryState::Step& s : steps) {
         std::string batch;
-        encode_batch(s.batch, batch);
+        encode_batch(*s.batch, batch);
         w(s.version, batch);
     }
 }
@@ -213,7 +213,7 @@ void get_steps(ByteReader& r, std::vector<HistoryState::Step>& steps) {
         if (!r.ok()) return;
         auto batch = decode_batch(bytes);
         if (!batch) return r.fail("step " + std::to_string(i) + ": " + batch.error().message);
-        s.batch = std::move(batch.value());
+        s.batch = std::make_shared<const EditBatch>(std::move(batch.value()));
         steps.push_back(std::move(s));
     }
 }

@@ -91,8 +91,8 @@ void EditHistory::record(uint64_t version, const BatchInfo& info,
     m_entries.push_back(std::move(entry));
     while (m_entries.size() > m_limits.max_entries) m_entries.pop_front();
 
-    Step step{version, std::move(inverse), 0};
-    step.bytes = approx_bytes(step.batch);
+    Step step{version, std::make_shared<const EditBatch>(std::move(inverse)), 0};
+    step.bytes = approx_bytes(*step.batch);
     switch (info.kind) {
         case BatchKind::Edits:
             for (const Step& s : m_redo) m_bytes -= s.bytes;
@@ -161,7 +161,7 @@ void EditHistory::trim() {
 std::optional<EditBatch> EditHistory::tagged(const std::deque<Step>& stack, BatchKind kind) {
     if (stack.empty()) return std::nullopt;
     EditBatch batch;
-    batch.edits = stack.back().batch.edits;
+    batch.edits = stack.back().batch->edits;
     batch.info.kind = kind;
     batch.info.target = stack.back().version;
     return batch;
@@ -219,8 +219,9 @@ void EditHistory::restore(HistoryState&& state) {
     while (m_entries.size() > m_limits.max_entries) m_entries.pop_front();
     for (auto [from, to] : {std::pair{&state.undo, &m_undo}, std::pair{&state.redo, &m_redo}}) {
         for (HistoryState::Step& s : *from) {
+            if (!s.batch) continue;
             Step step{s.version, std::move(s.batch), 0};
-            step.bytes = approx_bytes(step.batch);
+            step.bytes = approx_bytes(*step.batch);
             m_bytes += step.bytes;
             to->push_back(std::move(step));
         }

@@ -19,6 +19,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -60,9 +61,11 @@ struct HistoryPage {
 /// reaches past the snapshot after a restart.
 struct HistoryState {
     /// A batch on a stack, with the version it undoes (undo stack) or redoes (redo stack).
+    /// Shared with the history, immutable: taking the state copies pointers, not batches (a
+    /// snapshot takes it under the scene lock).
     struct Step {
         uint64_t version = 0;
-        EditBatch batch;
+        std::shared_ptr<const EditBatch> batch;
     };
     std::vector<HistoryEntry> entries;  ///< oldest first
     std::vector<Step> undo;             ///< oldest first: the next to undo is the last
@@ -105,7 +108,7 @@ public:
 private:
     struct Step {
         uint64_t version = 0;  ///< the version it undoes (undo stack) or redoes (redo stack)
-        EditBatch batch;
+        std::shared_ptr<const EditBatch> batch;  ///< never null
         uint64_t bytes = 0;
     };
     void push_undo(Step&& step);

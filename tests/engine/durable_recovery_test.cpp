@@ -686,9 +686,9 @@ TEST(HistoryFile, EncodingRoundTripsAndRefusesDamage) {
     EditBatch inverse;
     inverse.edits.emplace_back(RemoveMesh{"a"});
     h.entries.push_back({1, BatchInfo{BatchKind::Edits, 0, 1795000000000, "first"}, 1, {{0, 1}}});
-    h.undo.push_back({1, inverse});
+    h.undo.push_back({1, std::make_shared<const EditBatch>(inverse)});
     inverse.info = BatchInfo{BatchKind::Undo, 1, 0, ""};
-    h.redo.push_back({1, inverse});
+    h.redo.push_back({1, std::make_shared<const EditBatch>(inverse)});
     const std::string bytes = durable::encode_history(h, 7);
     auto back = durable::decode_history(bytes);
     ASSERT_TRUE(back.has_value()) << back.error().describe();
