@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "engine/durable/journal_format.h"
+#include "engine/scene/edit_history.h"
 #include "engine/scene/scene.h"
 #include "tests/fuzz/durable_fuzz_util.h"
 
@@ -147,6 +148,31 @@ int main(int argc, char** argv) {
     ok &= write(snapshot + "/scene.snap", durable::encode_snapshot(state, scene.version()));
     ok &= write(snapshot + "/empty.snap", durable::encode_snapshot(Scene().to_batch(), 0));
     ok &= write(snapshot + "/scene-payload", fuzz::encoded(state));
+
+    // Step: a history file of that scene's making: an entry and an undo step per edit, the last
+    // one undone (a redo step), as the engine records them.
+    Scene made;
+    EditHistory history;
+    for (std::size_t k = 0; k < 11; ++k) {
+        EditBatch one;
+        one.edits.push_back(kinds[k]);
+        auto ops = count_ops(one);
+        EditBatch inverse;
+        auto version = made.apply(std::move(one), nullptr, &inverse);
+        if (!version) {
+            std::fprintf(stderr, "the seed history's edit %zu was refused\n", k);
+            return 1;
+        }
+        history.record(version.value(), {}, std::move(ops), std::move(inverse));
+    }
+    if (auto undo = history.undo_batch()) {
+        const BatchInfo info = undo->info;
+        auto ops = count_ops(*undo);
+        EditBatch inverse;
+        auto version = made.apply(std::move(*undo), nullptr, &inverse);
+        if (version) history.record(version.value(), info, std::move(ops), std::move(inverse));
+    }
+    ok &= write(snapshot + "/scene.hist", durable::encode_history(history.state(), made.version()));
 
     // Step: snapshots only the rules can refuse: ids and names that break the text rule, and a
     // payload of many one-byte clears.

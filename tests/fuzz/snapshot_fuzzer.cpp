@@ -1,10 +1,14 @@
 // libFuzzer target for the snapshot decoder, which reads untrusted bytes (POST
 // /v1/scene/snapshot) as well as the data directory's snapshot files: the header checks
-// (open_snapshot), the scene batch (decode_batch), and both ways a decoded scene is loaded.
+// (open_snapshot), the scene batch (decode_batch), and both ways a decoded scene is loaded. The
+// same bytes also go to the history file decoder (decode_history: the history-<version>.hist a
+// data directory keeps beside each snapshot).
 //
-// An input that starts with the snapshot magic is read as is; any other input becomes the payload
-// of a snapshot with a correct header and checksum, so that mutations reach the scene decoder
-// instead of all dying at the checksum. Checks, besides "no crash, no sanitizer report":
+// An input that starts with the snapshot (history) magic is read as is; any other input becomes
+// the payload of a snapshot (and of a history file) with a correct header and checksum, so that
+// mutations reach the decoders instead of all dying at the checksum. Checks, besides "no crash,
+// no sanitizer report":
+//   - a history file that decodes encodes back to the same bytes;
 //   - decode_snapshot and open_snapshot agree;
 //   - the import path (Scene::apply of the decoded batch, what POST does) and the restore path
 //     (Scene::load edit by edit, what recovery does) accept the same snapshots and build the same
@@ -21,20 +25,34 @@
 #include "engine/durable/journal_format.h"
 #include "tests/fuzz/durable_fuzz_util.h"
 
+namespace {
+
+/// `input` as it is when it starts with `magic`, else behind the header `empty` (an encoder's
+/// file with no payload) begins with, its checksum and length set for `input`.
+std::string framed(std::string_view input, const char* magic, const std::string& empty) {
+    if (input.size() >= 8 && std::memcmp(input.data(), magic, 8) == 0) return std::string(input);
+    std::string out = empty.substr(0, strata::durable::SNAPSHOT_HEADER_BYTES);
+    const uint32_t crc = strata::durable::crc32c(input.data(), input.size());
+    const uint64_t length = input.size();
+    std::memcpy(out.data() + 12, &crc, sizeof crc);
+    std::memcpy(out.data() + 24, &length, sizeof length);
+    return out += input;
+}
+
+}  // namespace
+
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     using namespace strata;
-    std::string_view input(reinterpret_cast<const char*>(data), size);
-    std::string wrapped;
-    if (size < 8 || std::memcmp(data, "STRATAS1", 8) != 0) {
-        // The encoder's header for this payload: its checksum at 12, its length at 24.
-        wrapped = durable::encode_snapshot(EditBatch{}, 7).substr(0, durable::SNAPSHOT_HEADER_BYTES);
-        const uint32_t crc = durable::crc32c(input.data(), input.size());
-        const uint64_t length = input.size();
-        std::memcpy(wrapped.data() + 12, &crc, sizeof crc);
-        std::memcpy(wrapped.data() + 24, &length, sizeof length);
-        wrapped += input;
-        input = wrapped;
-    }
+    const std::string_view bytes(reinterpret_cast<const char*>(data), size);
+
+    // Step: as a history file.
+    const std::string history =
+        framed(bytes, "STRATAH1", durable::encode_history(HistoryState{}, 7));
+    if (auto h = durable::decode_history(history))
+        FUZZ_CHECK(durable::encode_history(h->state, h->version) == history);
+
+    const std::string wrapped = framed(bytes, "STRATAS1", durable::encode_snapshot(EditBatch{}, 7));
+    std::string_view input = wrapped;
 
     // Step: the header, then the scene.
     auto view = durable::open_snapshot(input);
