@@ -1,6 +1,7 @@
 #include "engine/render/frame_state.h"
 
 #include <cmath>
+#include <optional>
 
 #include "engine/render/tangents.h"
 
@@ -63,14 +64,19 @@ SurfaceMaterial FrameState::surface(uint32_t material, const MeshShade* mesh, ui
     if (!mesh || prim >= mesh->triangles.size()) return s;
     const TextureSampler& sampler = s.material.base_color_sampler;
     Material& m = s.material;
-    // Each slot's texture at its own coordinate set; none without a texture or coordinates.
+    // Each slot's texture at its own coordinate set (each set interpolated once); none without
+    // a texture or coordinates.
     Vec3 texel;
+    std::optional<Vec2> at[2];
     const auto read = [&](TextureSlot slot) {
         const TextureImage* t = tex[slot_index(slot)].get();
         const std::vector<Vec2>* set =
             t ? mesh->uv_set(m.*(TEXTURE_SLOTS[slot_index(slot)].uv_set)) : nullptr;
-        if (set) texel = t->sample(mesh->uv(*set, prim, u, v), sampler);
-        return set != nullptr;
+        if (!set) return false;
+        std::optional<Vec2>& uv = at[set == &mesh->uvs ? 0 : 1];
+        if (!uv) uv = mesh->uv(*set, prim, u, v);
+        texel = t->sample(*uv, sampler);
+        return true;
     };
     if (read(TextureSlot::BaseColor)) m.base_color *= texel;
     if (read(TextureSlot::MetallicRoughness)) {
