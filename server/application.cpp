@@ -72,11 +72,15 @@ void Application::attach_store(durable::DurableStore* store) {
     m_context->store = store;
 }
 
-void Application::attach_replica(replica::Replica* replica) {
-    m_context->replica = replica;
-    m_context->append_to_log = [replica](EditBatch&& batch, std::optional<uint64_t> expected) {
-        return replica->append(std::move(batch), expected);
+void ServerContext::attach_replica(replica::Replica* r) {
+    replica = r;
+    append_to_log = [r](EditBatch&& batch, std::optional<uint64_t> expected) {
+        return r->append(std::move(batch), expected);
     };
+}
+
+void Application::attach_replica(replica::Replica* replica) {
+    m_context->attach_replica(replica);
 }
 
 void Application::install_routes(const FrontEndCounters* front_end, StreamHub* streams) {

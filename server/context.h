@@ -37,6 +37,8 @@ struct ServerContext {
     /// The named scenes (the default scene's context only), for /metrics.
     const SceneDirectory* scenes = nullptr;
 
+    /// Sends this scene's writes through `r` (the shared edit log) from now on.
+    void attach_replica(replica::Replica* r);
     /// Where write endpoints send batches: the log's append with --log, else the engine.
     const protocol::BatchApply* batch_apply() const { return replica ? &append_to_log : nullptr; }
     /// How `split` renders are made: null without --peers (a split above 1 is then a 422).

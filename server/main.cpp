@@ -159,6 +159,7 @@ std::unique_ptr<replica::Replica> follow_edit_log(const server::ServerConfig& c,
     follower = follow.get();
     http.attach_replica(follow.get());
     spdlog::info("following the edit log {} from version {}", o.url.describe(), recovered);
+    http.follow_scene_log(o);
     return follow;
 }
 

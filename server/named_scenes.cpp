@@ -20,6 +20,8 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr const char* SETTINGS_FILE = "scene.json";
+/// The scene's incarnation in the shared edit log's directory, when it has one.
+constexpr const char* LOG_ID_FILE = "log-id";
 
 protocol::Problem storage_problem(const std::string& what) {
     return protocol::make_problem(protocol::ProblemType::Unavailable, what);
@@ -29,12 +31,6 @@ protocol::Problem storage_problem(const std::string& what) {
 constexpr uint64_t SceneBudget::*BUDGET_FIELDS[] = {
     &SceneBudget::max_triangles, &SceneBudget::max_vertices, &SceneBudget::max_instances,
     &SceneBudget::max_texture_bytes};
-
-/// Each of `budget`'s limits, lowered to `ceiling`'s where it is above.
-SceneBudget clamp(SceneBudget budget, const SceneBudget& ceiling) {
-    for (uint64_t SceneBudget::*f : BUDGET_FIELDS) budget.*f = std::min(budget.*f, ceiling.*f);
-    return budget;
-}
 
 /// Removes `dir` and what it holds; a failure is logged (nothing else depends on it).
 void remove_tree(const std::string& dir) {
@@ -49,6 +45,11 @@ bool same_budget(const SceneBudget& a, const SceneBudget& b) {
     for (uint64_t SceneBudget::*f : BUDGET_FIELDS)
         if (a.*f != b.*f) return false;
     return true;
+}
+
+SceneBudget clamp(SceneBudget budget, const SceneBudget& ceiling) {
+    for (uint64_t SceneBudget::*f : BUDGET_FIELDS) budget.*f = std::min(budget.*f, ceiling.*f);
+    return budget;
 }
 
 durable::StoreOptions store_options(const ServerConfig& c, const std::string& dir) {
@@ -66,6 +67,7 @@ durable::StoreOptions store_options(const ServerConfig& c, const std::string& di
 }
 
 HostedScene::~HostedScene() {
+    m_replica.reset();  // its reader applies to the engine
     m_streams.reset();  // joins its thread, which renders with the engine
     m_context.reset();
     m_store.reset();  // the journal's last fsync, before the engine goes
@@ -78,6 +80,7 @@ HostedScene::~HostedScene() {
 SceneDirectory::SceneDirectory(SceneShared shared) : m_shared(std::move(shared)) {}
 
 SceneDirectory::~SceneDirectory() {
+    stop_following();
     stop_streams();
 }
 
@@ -123,10 +126,12 @@ SceneBudget SceneDirectory::default_budget() const {
 
 Result<std::shared_ptr<HostedScene>> SceneDirectory::open(const std::string& name,
                                                           const SceneBudget& budget,
+                                                          const std::string& log_id,
                                                           const std::string& dir) {
     std::shared_ptr<HostedScene> scene(new HostedScene());
     scene->m_name = name;
     scene->m_budget = budget;
+    scene->m_log_id = log_id;
     EngineConfig config = engine_config(m_shared.config);
     config.budget = budget;
     auto engine = Engine::create(config);
@@ -147,6 +152,7 @@ Result<std::shared_ptr<HostedScene>> SceneDirectory::open(const std::string& nam
     scene->m_context->past = std::make_unique<PastScenes>(config);
     add_api_routes(scene->m_routes, *scene->m_context);
     add_stream_routes(scene->m_routes, *scene->m_context);
+    if (m_log_options && !log_id.empty()) follow_stream(*scene);
     return scene;
 }
 
@@ -181,7 +187,16 @@ Status SceneDirectory::recover() {
             return failure(ErrorCode::Storage, "scene '" + name + "': " +
                                                    durable::join_path(path, SETTINGS_FILE) +
                                                    ": " + budget.error().detail);
-        auto scene = open(name, clamp(budget.value(), default_budget()), path);
+        // Its incarnation in the shared edit log, when it was made with one.
+        std::string log_id;
+        if (auto id = durable::read_whole_file(durable::join_path(path, LOG_ID_FILE))) {
+            if (!replica::valid_scene_log_id(id.value()))
+                return failure(ErrorCode::Storage,
+                               "scene '" + name + "': " + durable::join_path(path, LOG_ID_FILE) +
+                                   " is not a scene incarnation (16 hex digits)");
+            log_id = id.value();
+        }
+        auto scene = open(name, clamp(budget.value(), default_budget()), log_id, path);
         if (!scene)
             return failure(ErrorCode::Storage, "scene '" + name + "': " + scene.error().message);
         const Engine& engine = scene.value()->engine();
@@ -200,6 +215,26 @@ Status SceneDirectory::recover() {
 
 Expected<std::pair<std::shared_ptr<HostedScene>, bool>, protocol::Problem> SceneDirectory::create(
     const std::string& name, const SceneBudget& budget) {
+    if (!m_log) return create_here(name, budget, "");
+    // Step: the log's directory first: one server's incarnation wins a race for the name.
+    auto entry = m_log->publish(name, protocol::scene_settings_json(budget).dump());
+    if (!entry)
+        return Unexpected(storage_problem("scene '" + name +
+                                          "' not created: the edit log's scene directory: " +
+                                          entry.error().message));
+    auto listed = protocol::parse_scene_settings(entry->settings, default_budget(), {});
+    if (!listed || !same_budget(listed.value(), budget))
+        return Unexpected(protocol::make_problem(
+            protocol::ProblemType::SceneConflict,
+            "scene '" + name + "' exists with another budget; delete it first to change it"));
+    auto made = create_here(name, budget, entry->id);
+    if (!made && entry->created) (void)m_log->retract(name, entry->id);  // nobody saw it
+    if (made) made->second = entry->created;
+    return made;
+}
+
+Expected<SceneDirectory::Made, protocol::Problem> SceneDirectory::create_here(
+    const std::string& name, const SceneBudget& budget, const std::string& log_id) {
     std::unique_lock lock(m_mutex);
     // A PUT of a name another PUT is creating waits for it, then finds its scene.
     m_created.wait(lock, [&] { return m_creating.find(name) == m_creating.end(); });
@@ -208,6 +243,13 @@ Expected<std::pair<std::shared_ptr<HostedScene>, bool>, protocol::Problem> Scene
             return Unexpected(protocol::make_problem(
                 protocol::ProblemType::SceneConflict,
                 "scene '" + name + "' exists with another budget; delete it first to change it"));
+        if (it->second->log_id() != log_id)
+            return Unexpected(protocol::make_problem(
+                protocol::ProblemType::SceneConflict,
+                "scene '" + name + "' is held here as " +
+                    (it->second->log_id().empty() ? "this server's own scene"
+                                                  : "an older incarnation") +
+                    ", not the edit log's; try again once it is replaced"));
         return std::pair(it->second, false);
     }
     {
@@ -234,7 +276,7 @@ Expected<std::pair<std::shared_ptr<HostedScene>, bool>, protocol::Problem> Scene
     m_creating.emplace(name, budget);
     const uint64_t serial = ++m_serial;
     lock.unlock();
-    auto made = build(name, budget, serial);
+    auto made = build(name, budget, log_id, serial);
     lock.lock();
     m_creating.erase(name);
     if (made) m_scenes.emplace(name, made.value());
@@ -244,7 +286,8 @@ Expected<std::pair<std::shared_ptr<HostedScene>, bool>, protocol::Problem> Scene
 }
 
 Expected<std::shared_ptr<HostedScene>, protocol::Problem> SceneDirectory::build(
-    const std::string& name, const SceneBudget& budget, uint64_t serial) {
+    const std::string& name, const SceneBudget& budget, const std::string& log_id,
+    uint64_t serial) {
     std::string dir;
     if (const std::string parent = root(); !parent.empty()) {
         // Step: the directory and its settings, made under a temporary name and renamed, so that
@@ -258,6 +301,8 @@ Expected<std::shared_ptr<HostedScene>, protocol::Problem> SceneDirectory::build(
         const std::string settings = protocol::scene_settings_json(budget).dump(1) + "\n";
         dir = durable::join_path(parent, name);
         Status written = durable::write_file_atomically(fresh, SETTINGS_FILE, settings);
+        if (written && !log_id.empty())
+            written = durable::write_file_atomically(fresh, LOG_ID_FILE, log_id);
         if (written && ::rename(fresh.c_str(), dir.c_str()) != 0)
             written = failure(ErrorCode::Storage,
                               durable::errno_message("cannot rename " + fresh + " to " + dir));
@@ -267,7 +312,7 @@ Expected<std::shared_ptr<HostedScene>, protocol::Problem> SceneDirectory::build(
             return Unexpected(storage_problem(written.error().message));
         }
     }
-    auto scene = open(name, budget, dir);
+    auto scene = open(name, budget, log_id, dir);
     if (!scene) {
         if (!dir.empty()) remove_tree(dir);
         return Unexpected(storage_problem("scene '" + name + "': " + scene.error().message));
@@ -276,13 +321,13 @@ Expected<std::shared_ptr<HostedScene>, protocol::Problem> SceneDirectory::build(
     return std::move(scene.value());
 }
 
-std::shared_ptr<HostedScene> SceneDirectory::find(std::string_view name) const {
+std::shared_ptr<HostedScene> SceneDirectory::find_here(std::string_view name) const {
     std::lock_guard lock(m_mutex);
     const auto it = m_scenes.find(name);
     return it == m_scenes.end() ? nullptr : it->second;
 }
 
-bool SceneDirectory::remove(const std::string& name) {
+bool SceneDirectory::drop(const std::string& name) {
     std::shared_ptr<HostedScene> scene;
     {
         std::lock_guard lock(m_mutex);

@@ -2,6 +2,8 @@
 
 #include "server/past_scenes.h"
 
+#include <algorithm>
+
 #include <spdlog/spdlog.h>
 
 #include "engine/durable/durable_store.h"
@@ -37,10 +39,9 @@ EngineConfig engine_config(const ServerConfig& c) {
     return config;
 }
 
-Result<std::shared_ptr<Engine>> PastScenes::at(Engine& live, durable::DurableStore* store,
-                                               uint64_t version) {
+Status PastScenes::check(const Engine& live, const durable::DurableStore* store,
+                         uint64_t version) {
     const uint64_t now = live.version();
-    if (version == now) return std::shared_ptr<Engine>(&live, [](Engine*) {});
     if (version > now)
         return failure(ErrorCode::OutOfRange, "version " + std::to_string(version) +
                                                   " does not exist yet (the scene is at " +
@@ -49,22 +50,64 @@ Result<std::shared_ptr<Engine>> PastScenes::at(Engine& live, durable::DurableSto
         return failure(ErrorCode::InvalidArgument,
                        "past versions are read from the data directory: this server runs "
                        "without --data");
+    return {};
+}
+
+Result<std::shared_ptr<Engine>> PastScenes::at(Engine& live, durable::DurableStore* store,
+                                               uint64_t version) {
+    if (version == live.version()) return std::shared_ptr<Engine>(&live, [](Engine*) {});
+    if (Status s = check(live, store, version); !s) return Unexpected(s.error());
     std::lock_guard lock(m_mutex);
+    return load(*store, version);
+}
+
+Result<std::shared_ptr<Engine>> PastScenes::for_stream(Engine& live, durable::DurableStore* store,
+                                                       uint64_t version) {
+    if (Status s = check(live, store, version); !s) return Unexpected(s.error());
+    std::lock_guard lock(m_mutex);
+    m_streamed.erase(std::remove_if(m_streamed.begin(), m_streamed.end(),
+                                    [](const Streamed& s) { return s.second.expired(); }),
+                     m_streamed.end());
+    for (const auto& [v, engine] : m_streamed) {
+        if (auto held = engine.lock(); held && v == version) return held;
+    }
+    if (m_streamed.size() >= m_max_streamed) {
+        std::string held;
+        for (const auto& [v, engine] : m_streamed)
+            held += (held.empty() ? "" : ", ") + std::to_string(v);
+        return failure(ErrorCode::TooLarge,
+                       "open streams hold " + std::to_string(m_streamed.size()) +
+                           " past versions already (" + held +
+                           "), the most they may: watch one of those, or the live scene");
+    }
+    auto engine = load(*store, version);
+    if (engine) m_streamed.emplace_back(version, engine.value());
+    return engine;
+}
+
+Result<std::shared_ptr<Engine>> PastScenes::load(durable::DurableStore& store, uint64_t version) {
     for (auto it = m_loaded.begin(); it != m_loaded.end(); ++it) {
         if (it->first != version) continue;
-        auto found = std::move(*it);
+        Loaded found = std::move(*it);
         m_loaded.erase(it);
         m_loaded.push_back(found);
         return found.second;
     }
-    durable::PastVersionLoad load;
-    auto engine = durable::load_past_version(store->directory(), version, m_config, &load);
-    if (!engine) return Unexpected(engine.error());
-    spdlog::info(
-        "loaded version {} for at_version reads: snapshot {}, {} records replayed from "
-        "{} journal bytes in {:.1f} ms",
-        version, load.snapshot_version, load.records_replayed, load.journal_bytes, load.load_ms);
-    std::shared_ptr<Engine> shared(std::move(engine.value()));
+    std::shared_ptr<Engine> shared;
+    for (const auto& [v, engine] : m_streamed) {
+        if (v == version) shared = engine.lock();
+    }
+    if (!shared) {
+        durable::PastVersionLoad load;
+        auto engine = durable::load_past_version(store.directory(), version, m_config, &load);
+        if (!engine) return Unexpected(engine.error());
+        spdlog::info(
+            "loaded version {} for at_version reads: snapshot {}, {} records replayed from "
+            "{} journal bytes in {:.1f} ms",
+            version, load.snapshot_version, load.records_replayed, load.journal_bytes,
+            load.load_ms);
+        shared = std::move(engine.value());
+    }
     m_loaded.emplace_back(version, shared);
     while (m_loaded.size() > m_keep) m_loaded.pop_front();
     return shared;

@@ -17,6 +17,7 @@
 #include "protocol/problem.h"
 #include "server/metrics.h"
 #include "server/response_writer.h"
+#include "server/request_target.h"
 #include "server/scene_path.h"
 
 namespace strata::server {
@@ -389,11 +390,13 @@ void Reactor::dispatch(Connection& c, PreparedRequest&& request) {
 
 void Reactor::dispatch_or_wait(Connection& c, PreparedRequest&& request, Clock::time_point now) {
     const std::optional<HttpRequest::MinVersion> asked = request.http.min_version();
-    // A malformed value is the route's 400; a reached one, or no wait allowed, runs at once. The
-    // version followed here is the default scene's; a named scene's route checks its own.
-    if (!asked || !asked->valid || !m_version || m_draining || m_config.min_version_wait_ms == 0 ||
-        scene_path(request.http.path) || m_version() >= asked->version)
+    // A malformed value is the route's 400; a reached one, or no wait allowed, runs at once.
+    if (!asked || !asked->valid || !m_version || m_draining || m_config.min_version_wait_ms == 0)
         return dispatch(c, std::move(request));
+    const std::optional<ScenePath> scoped = scene_path(request.http.path);
+    std::string scene = scoped ? decode_path_segment(scoped->scene) : std::string();
+    if (scene == "default") scene.clear();
+    if (m_version(scene) >= asked->version) return dispatch(c, std::move(request));
     if (!m_waiting.admits(c.client)) {
         ++m_counters.waits_refused;
         protocol::ApiResponse refusal = protocol::problem_response(protocol::make_problem(
@@ -412,7 +415,7 @@ void Reactor::dispatch_or_wait(Connection& c, PreparedRequest&& request, Clock::
     c.in_flight = request.http.held_bytes();
     account(c);
     ++m_counters.reads_waiting;
-    m_waiting.park({c.id, c.client, asked->version,
+    m_waiting.park({c.id, c.client, std::move(scene), asked->version,
                     now + std::chrono::milliseconds(m_config.min_version_wait_ms),
                     std::move(request)});
     if (!watch(c, EPOLLRDHUP | EPOLLONESHOT)) close(c.id);
@@ -420,7 +423,7 @@ void Reactor::dispatch_or_wait(Connection& c, PreparedRequest&& request, Clock::
 
 void Reactor::release_waiters(Clock::time_point now) {
     if (m_waiting.empty()) return;
-    for (WaitingReads::Waiter& w : m_waiting.take_due(m_version(), now, m_draining)) {
+    for (WaitingReads::Waiter& w : m_waiting.take_due(m_version, now, m_draining)) {
         --m_counters.reads_waiting;
         // A worker answers now: the version arrived, or it says how far behind the scene is.
         auto it = m_connections.find(w.conn);

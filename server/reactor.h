@@ -81,9 +81,10 @@ public:
         m_starting.store(starting);
     }
     bool starting() const { return m_starting.load(); }
-    /// The scene's version, for requests waiting for a min_version; called on the reactor
-    /// thread, so it must not block. Set before run(), never after.
-    void set_version_source(std::function<uint64_t()> version) { m_version = std::move(version); }
+    /// A scene's version by name ("" for the default scene), for requests waiting for a
+    /// min_version; called on the reactor thread, so it must not block. Set before run(), never
+    /// after.
+    void set_version_source(WaitingReads::VersionOf version) { m_version = std::move(version); }
     /// What else /readyz asks (request_reader.h); set before run(), never after.
     void set_readiness(std::function<Readiness()> readiness) { m_readiness = std::move(readiness); }
     /// A worker's answer for connection `conn`; `close`: close after writing it. A stream's
@@ -150,7 +151,7 @@ private:
     std::mutex m_progress_mutex;
     std::function<std::string()> m_progress;  ///< what starting is doing; guarded by the mutex
     std::function<Readiness()> m_readiness;   ///< set before run()
-    std::function<uint64_t()> m_version;      ///< set before run()
+    WaitingReads::VersionOf m_version;        ///< set before run()
     WaitingReads m_waiting;
     bool m_draining = false;
     Clock::time_point m_grace_deadline{};

@@ -3,7 +3,6 @@
 // and the server's own logs and metrics. Each route is registered with its description
 // (protocol/openapi.h), which GET /v1/openapi.json serves.
 
-#include <charconv>
 #include <mutex>
 
 #include <spdlog/spdlog.h>
@@ -14,6 +13,7 @@
 #include "server/context.h"
 #include "server/front_end_counters.h"
 #include "server/named_scenes.h"
+#include "server/past_version_query.h"
 #include "server/replica/replica.h"
 #include "server/route_table.h"
 #include "server/stream_hub.h"
@@ -138,76 +138,17 @@ void describe_min_version(RouteDoc& doc) {
 /// it: `handler` gets the engine at that version (past_scenes.h).
 using EngineHandler = std::function<Reply(Engine&, RouteCall&)>;
 
-protocol::Problem bad_past(const char* parameter, std::string detail) {
-    protocol::Problem p =
-        protocol::make_problem(protocol::ProblemType::InvalidRequest, std::move(detail));
-    p.pointer = std::string("/") + parameter;
-    return p;
-}
-
-/// The version a read asks for with `at_version` or `at_time` (taken out of the query), nullopt
-/// when it asks for neither; a problem when the ask is malformed or no version matches the time.
-Expected<std::optional<uint64_t>, protocol::Problem> asked_version(const Engine& live,
-                                                                   Query& query) {
-    const auto it = query.find("at_version");
-    const auto time = query.find("at_time");
-    if (it == query.end() && time == query.end()) return std::optional<uint64_t>();
-    if (it != query.end() && time != query.end())
-        return Unexpected(bad_past("at_time", "give at_version or at_time, not both"));
-    if (time != query.end()) {
-        if (query.count("at_time") > 1)
-            return Unexpected(bad_past("at_time", "at_time is given twice"));
-        auto found = protocol::version_at_time(live, time->second);
-        if (!found) return Unexpected(std::move(found.error()));
-        query.erase("at_time");
-        return std::optional(found.value());
-    }
-    uint64_t version = 0;
-    const std::string& text = it->second;
-    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), version);
-    if (query.count("at_version") > 1 || text.empty() || ec != std::errc() ||
-        end != text.data() + text.size())
-        return Unexpected(bad_past("at_version",
-                                   "at_version must be one scene version (a whole number), not '" +
-                                       text.substr(0, 40) + "'"));
-    query.erase("at_version");
-    return std::optional(version);
-}
-
 Endpoint at_version(ServerContext& ctx, RouteDoc doc, EngineHandler handler) {
-    doc.parameters.push_back(
-        {.name = "at_version",
-         .description = "read the scene as it was at this version: loaded from the data "
-                        "directory's newest snapshot before it and its journal (the first "
-                        "request of a version pays that load and a full build; the last two "
-                        "versions asked for stay loaded)",
-         .schema = U64});
-    doc.parameters.push_back(
-        {.name = "at_time",
-         .description = "read the scene as it was at this time (RFC 3339): the newest version "
-                        "the history lists that was made at or before it, then as at_version",
-         .schema = R"({"type": "string", "format": "date-time"})"});
-    doc.responses.push_back(
-        problem(404, "at_version names a version that does not exist or that the data directory "
-                     "no longer holds, or the server runs without --data; at_time is older "
-                     "than the history's oldest version"));
+    describe_past_version(doc,
+                          "loaded from the data directory's newest snapshot before it and its "
+                          "journal (the first request of a version pays that load and a full "
+                          "build; the last two versions asked for stay loaded)");
     return {std::move(doc), [&ctx, handler = std::move(handler)](RouteCall& call) -> Reply {
                 auto asked = asked_version(ctx.engine, call.request.query);
                 if (!asked) return std::move(asked.error());
                 if (!asked.value()) return handler(ctx.engine, call);
-                const uint64_t version = *asked.value();
-                auto engine = ctx.past->at(ctx.engine, ctx.store, version);
-                if (!engine) {
-                    const Error& e = engine.error();
-                    const bool missing = e.code == ErrorCode::OutOfRange ||
-                                         e.code == ErrorCode::InvalidArgument;
-                    protocol::Problem p =
-                        missing ? protocol::make_problem(protocol::ProblemType::NotFound,
-                                                         "at_version: " + e.message)
-                                : protocol::problem_from(e);
-                    if (missing) p.pointer = "/at_version";
-                    return p;
-                }
+                auto engine = ctx.past->at(ctx.engine, ctx.store, *asked.value());
+                if (!engine) return past_version_problem(engine.error());
                 return handler(*engine.value(), call);
             }};
 }

@@ -57,7 +57,7 @@ Reply list_scenes(const ServerContext& ctx, const SceneDirectory& scenes, const 
     return protocol::json_response(200, {{"scenes", std::move(list)}});
 }
 
-Reply get_scene(const ServerContext& ctx, const SceneDirectory& scenes, const std::string& name) {
+Reply get_scene(const ServerContext& ctx, SceneDirectory& scenes, const std::string& name) {
     if (name == DEFAULT_SCENE) return default_summary(ctx);
     const auto scene = scenes.find(name);
     if (!scene) return unknown_scene(name);
@@ -83,11 +83,6 @@ Reply put_scene(const ServerContext& ctx, SceneDirectory& scenes, const std::str
                                           "--max-scene-* flags; it cannot be changed");
         return default_summary(ctx);
     }
-    if (ctx.replica)
-        return protocol::make_problem(ProblemType::SceneConflict,
-                                      "this server follows a shared edit log (--log), which "
-                                      "carries the default scene only: named scenes are not "
-                                      "replicated");
     auto made = scenes.create(name, budget.value());
     if (!made) return made.error();
     const auto& [scene, created] = made.value();
@@ -99,7 +94,9 @@ Reply delete_scene(SceneDirectory& scenes, const std::string& name) {
         return protocol::make_problem(ProblemType::SceneConflict,
                                       "the default scene cannot be deleted; a `clear` edit "
                                       "empties it");
-    if (!scenes.remove(name)) return unknown_scene(name);
+    auto removed = scenes.remove(name);
+    if (!removed) return removed.error();
+    if (!removed.value()) return unknown_scene(name);
     protocol::ApiResponse r;
     r.status = 204;
     return r;
@@ -143,7 +140,8 @@ void add_scene_directory_routes(RouteTable& routes, ServerContext& ctx, SceneDir
               "Idempotent. Every /v1 route then also exists under /v1/scenes/{scene}/, for this "
               "scene alone: its own version, journal and snapshots (--data/scenes/{scene}/), "
               "undo history, streams and past versions. The body may lower the scene's budget "
-              "below the server's --max-scene-* flags.",
+              "below the server's --max-scene-* flags. With --log the scene is the shared edit "
+              "log's: every server on the log holds it, and its edits go to its own stream.",
           .tag = "scenes",
           .parameters = {scene_parameter()},
           .body = "SceneSettings",
@@ -153,25 +151,28 @@ void add_scene_directory_routes(RouteTable& routes, ServerContext& ctx, SceneDir
                          .schema = "SceneSummary",
                          .headers = {"ETag"}},
                         problem(400, "not a scene name, or a body that does not match the schema"),
-                        problem(409, "the scene exists with another budget, an earlier scene of "
-                                     "this name is still being deleted, or the server follows a "
-                                     "shared edit log (--log)"),
+                        problem(409, "the scene exists with another budget, or an earlier "
+                                     "scene of this name is still being deleted or replaced"),
                         problem(413, "the server holds --max-scenes named scenes already, or the "
                                      "scenes' budgets would add up to more than --max-total-*"),
                         problem(422, "a budget above the server's flag (the pointer names it)"),
-                        problem(503, "the data directory could not take the scene")}},
+                        problem(503, "the data directory could not take the scene, or (--log) "
+                                     "Redis is unreachable")}},
          [&ctx, &scenes](RouteCall& call) {
              return put_scene(ctx, scenes, call.params[0], call.request.body);
          }});
     routes.add("DELETE", "/v1/scenes/{scene}",
                {{.summary = "Delete a named scene: its objects, history and files",
                  .description = "Requests already running on the scene finish; later ones get "
-                                "404. Its memory and files are freed when the last of them ends.",
+                                "404. Its memory and files are freed when the last of them ends. "
+                                "With --log, every server on the log deletes it.",
                  .tag = "scenes",
                  .parameters = {scene_parameter()},
                  .responses = {{.status = 204, .description = "deleted"},
                                missing,
-                               problem(409, "the default scene is never deleted")}},
+                               problem(409, "the default scene is never deleted"),
+                               problem(503, "(--log) Redis is unreachable: nothing was "
+                                            "deleted")}},
                 [&scenes](RouteCall& call) { return delete_scene(scenes, call.params[0]); }});
 }
 

@@ -30,7 +30,9 @@ Server::Server(ServerConfig config, Engine& engine, durable::DurableStore* store
                     if (body_bytes >= TRIM_THRESHOLD_BYTES) release_free_memory();
                 });
         });
-    m_reactor->set_version_source([&engine] { return engine.version(); });
+    m_reactor->set_version_source([this](std::string_view scene) {
+        return scene.empty() ? m_engine.version() : m_app->scenes().version_of(scene);
+    });
     m_streams = std::make_unique<StreamHub>(
         m_engine, [this] { return m_api_heavy.load() > 0; }, m_config.max_stream_mb << 20);
     m_app = std::make_unique<Application>(m_config, m_engine, m_metrics, &m_reactor->counters(),
@@ -75,6 +77,10 @@ void Server::stop() {
 
 Status Server::recover_scenes() {
     return m_app->scenes().recover();
+}
+
+void Server::follow_scene_log(const replica::ReplicaOptions& options) {
+    m_app->scenes().follow_log(options);
 }
 
 void Server::attach_replica(replica::Replica* replica) {

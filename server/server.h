@@ -27,6 +27,7 @@ class DurableStore;
 }
 namespace strata::replica {
 class Replica;
+struct ReplicaOptions;
 }
 
 namespace strata::server {
@@ -65,6 +66,9 @@ public:
     Status recover_scenes();
     /// The shared edit log (while starting, like attach_store).
     void attach_replica(replica::Replica* replica);
+    /// The named scenes follow the shared edit log's scene directory from now on (while
+    /// starting, after recover_scenes); `options`: the default scene's replica's.
+    void follow_scene_log(const replica::ReplicaOptions& options);
     /// What /readyz asks beyond starting and draining (a replica's state). Before listen() only.
     void set_readiness(std::function<Readiness()> readiness);
     int port() const { return m_port; }

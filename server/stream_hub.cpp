@@ -223,13 +223,14 @@ bool StreamHub::render_one(Clock::time_point now) {
         request.format = ImageFormat::Exr;  // AOVs are listed with EXR only; nothing encodes it
         request.aovs = {Aov::InstanceId};
     }
-    auto frame = m_engine.render_frame(request);
+    Engine& engine = pick->spec.past ? *pick->spec.past : m_engine;
+    auto frame = engine.render_frame(request);
 
     // Step: tone-map once, then one JPEG per distinct highlight.
     RenderedFrame rendered = encode_render(frame, request.exposure, *pick);
 
     // Step: hand the frame to the view's viewers.
-    offer_render(pick->key, version, now, frame, std::move(rendered));
+    offer_render(pick->key, pick->version, now, frame, std::move(rendered));
     return true;
 }
 
@@ -257,7 +258,8 @@ std::optional<StreamHub::ViewPick> StreamHub::pick_view(uint64_t version, Clock:
             continue;
         }
         const View& v = it->second;
-        const bool due = wants_frame(v, version) && v.failed_version != version &&
+        const uint64_t shown = v.spec.past ? v.spec.past->version() : version;
+        const bool due = wants_frame(v, shown) && v.failed_version != shown &&
                          now >= v.next_render && v.next_render < oldest;
         if (due) {
             oldest = v.next_render;
@@ -273,8 +275,9 @@ std::optional<StreamHub::ViewPick> StreamHub::pick_view(uint64_t version, Clock:
     const View& chosen = m_views.at(key);
     std::optional<ViewPick> pick(std::in_place);
     pick->spec = chosen.spec;
+    pick->version = chosen.spec.past ? chosen.spec.past->version() : version;
     for (const Watcher& w : chosen.viewers) pick->highlights.insert(w.highlight);
-    if (chosen.frame && chosen.frame->version == version && chosen.frame->ids)
+    if (chosen.frame && chosen.frame->version == pick->version && chosen.frame->ids)
         pick->previous = chosen.frame;
     pick->key = std::move(key);
     return pick;
@@ -339,7 +342,8 @@ void StreamHub::offer_render(const std::string& key, uint64_t version, Clock::ti
         }
         ++m_stats.frames_rendered;
         const FrameInfo& info = frame->info;
-        committed = info.report;
+        // A past version's first build is no commit of the scene.
+        if (!v.spec.past) committed = info.report;
         v.launches = info.version == v.version ? v.launches + 1 : 1;
         v.version = info.version;
         v.samples = info.samples;

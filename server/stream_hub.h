@@ -55,6 +55,9 @@ struct ViewerSpec {
     uint32_t max_samples = 16;  ///< accumulation stops improving the frame here
     std::string key;            ///< viewers with equal keys share renders
     std::string highlight;      ///< instance id whose pixels are tinted; "" for none
+    /// The scene at a past version (at_version), held while the view is open; null: the live
+    /// scene. Its frames accumulate up to max_samples and then stay as they are.
+    std::shared_ptr<Engine> past;
 };
 
 /// Cumulative counts, for /metrics and tests.
@@ -144,6 +147,7 @@ private:
     struct ViewPick {
         std::string key;
         ViewerSpec spec;
+        uint64_t version = 0;                       ///< of the scene it shows
         std::set<std::string> highlights;           ///< of the view's viewers ("" for none)
         std::shared_ptr<const ViewFrame> previous;  ///< of this accumulation, with its ids
     };
@@ -169,8 +173,9 @@ private:
     /// Whether `view` needs a frame at scene `version`: the scene moved, or accumulation can
     /// still improve the frame (or one more launch must trace the ids a highlight needs).
     static bool wants_frame(const View& view, uint64_t version);
-    /// Drops the views nobody watches, then picks the most overdue view due a frame at
-    /// `version`; none when none is due or API work waits (counted as a deferred render).
+    /// Drops the views nobody watches, then picks the most overdue view due a frame (at the
+    /// live scene's `version`, or at its own past version); none when none is due or API work
+    /// waits (counted as a deferred render).
     std::optional<ViewPick> pick_view(uint64_t version, Clock::time_point now);
     /// `frame` tone-mapped, taking its ids; without ids of its own, those of `previous` when it
     /// is at the same version.

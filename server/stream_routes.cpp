@@ -10,6 +10,7 @@
 #include "protocol/report_json.h"
 #include "protocol/safe_text.h"
 #include "server/context.h"
+#include "server/past_version_query.h"
 #include "server/route_table.h"
 #include "server/stream_hub.h"
 
@@ -123,11 +124,10 @@ protocol::ApiResponse stream_head(const char* content_type, std::string preamble
     return head;
 }
 
-/// The problem of a highlight naming no instance, if it does not.
-std::optional<protocol::Problem> unknown_highlight(ServerContext& ctx, const std::string& id) {
+/// The problem of a highlight naming no instance of the scene shown, if it does not.
+std::optional<protocol::Problem> unknown_highlight(Engine& shown, const std::string& id) {
     if (id.empty()) return std::nullopt;
-    const bool known =
-        ctx.engine.read([&](const Scene& s) { return !s.find_instance(id).is_null(); });
+    const bool known = shown.read([&](const Scene& s) { return !s.find_instance(id).is_null(); });
     if (known) return std::nullopt;
     protocol::Problem p = protocol::make_problem(ProblemType::NotFound,
                                                  "highlight: no instance with id '" + id + "'");
@@ -136,9 +136,9 @@ std::optional<protocol::Problem> unknown_highlight(ServerContext& ctx, const std
 }
 
 /// The problem of a camera override the scene's camera cannot be completed into a usable one.
-std::optional<protocol::Problem> unusable_camera(ServerContext& ctx, const RenderRequest& r) {
+std::optional<protocol::Problem> unusable_camera(Engine& shown, const RenderRequest& r) {
     if (!r.camera) return std::nullopt;
-    const Status usable = ctx.engine.read([&](const Scene& s) -> Status {
+    const Status usable = shown.read([&](const Scene& s) -> Status {
         auto camera = resolve_camera(r.camera, s.camera());
         if (!camera) return Unexpected(camera.error());
         return {};
@@ -147,24 +147,46 @@ std::optional<protocol::Problem> unusable_camera(ServerContext& ctx, const Rende
     return protocol::problem_from(usable.error());
 }
 
+/// A stream refused for memory (its view's, or a past version's): 503, try again later.
+protocol::ApiResponse streams_full(const Error& e) {
+    protocol::ApiResponse r =
+        protocol::problem_response(protocol::make_problem(ProblemType::Unavailable, e.message));
+    r.headers.emplace_back("Retry-After", "5");
+    return r;
+}
+
+/// Gives `spec` the scene at the version `asked` names, if any (its view apart from the live
+/// one's); a problem when that version cannot be had.
+std::optional<Reply> hold_past_version(ServerContext& ctx, std::optional<uint64_t> asked,
+                                       ViewerSpec& spec) {
+    if (!asked) return std::nullopt;
+    auto past = ctx.past->for_stream(ctx.engine, ctx.store, *asked);
+    if (!past && past.error().code == ErrorCode::TooLarge) return streams_full(past.error());
+    if (!past) return past_version_problem(past.error());
+    spec.past = std::move(past.value());
+    spec.key += "&at_version=" + std::to_string(*asked);
+    return std::nullopt;
+}
+
 Reply open_frame_stream(ServerContext& ctx, RouteCall& call) {
     if (auto refusal = refuse_head(call.request)) return std::move(*refusal);
-    auto parsed = parse_viewer(call.request.query, ctx.api_limits);
+    auto query = call.request.query;
+    auto asked = asked_version(ctx.engine, query);
+    if (!asked) return std::move(asked.error());
+    auto parsed = parse_viewer(std::move(query), ctx.api_limits);
     if (auto* p = std::get_if<protocol::Problem>(&parsed)) return *p;
+    ViewerSpec& spec = std::get<ViewerSpec>(parsed);
+    if (auto refusal = hold_past_version(ctx, asked.value(), spec)) return std::move(*refusal);
+    Engine& shown = spec.past ? *spec.past : ctx.engine;
     // An unknown instance is refused at once (a typo would otherwise tint nothing, silently);
     // one removed later simply stops being tinted.
-    if (auto p = unknown_highlight(ctx, std::get<ViewerSpec>(parsed).highlight)) return *p;
+    if (auto p = unknown_highlight(shown, spec.highlight)) return *p;
     // So is a camera no frame can be rendered with: answered now, not by a stream that starts
     // and then sends nothing.
-    if (auto p = unusable_camera(ctx, std::get<ViewerSpec>(parsed).request)) return *p;
+    if (auto p = unusable_camera(shown, spec.request)) return *p;
     if (!ctx.streams) return stream_unavailable();
-    auto watched = ctx.streams->watch(std::move(std::get<ViewerSpec>(parsed)));
-    if (!watched) {
-        protocol::ApiResponse r = protocol::problem_response(
-            protocol::make_problem(ProblemType::Unavailable, watched.error().message));
-        r.headers.emplace_back("Retry-After", "5");
-        return r;
-    }
+    auto watched = ctx.streams->watch(std::move(spec));
+    if (!watched) return streams_full(watched.error());
     std::shared_ptr<StreamChannel> channel = std::move(watched.value());
     if (!channel) return stream_unavailable();
     return Reply::streaming(stream_head("multipart/x-mixed-replace; boundary=strata-frame",
@@ -237,27 +259,36 @@ void add_stream_routes(RouteTable& routes, ServerContext& ctx) {
                                                "starts; use GET",
                                                {"Allow"});
     const protocol::ResponseDoc closed = problem(503, "the server is shutting down");
-    routes.get(
-        "/v1/stream",
-        {{.summary = "Live JPEG frames of the scene (multipart/x-mixed-replace)",
-          .description = "Each part a JPEG whose comment says `strata version=V samples=S`; a "
-                         "new frame when the version changes or accumulation improves it. An "
-                         "<img src> shows it.",
-          .tag = "stream",
-          .parameters = frame_stream_parameters(),
-          .responses = {{.status = 200,
-                         .description = "the stream, until the client leaves or the server "
-                                        "shuts down",
-                         .media = {"multipart/x-mixed-replace"},
-                         .headers = {"Cache-Control"}},
-                        problem(400, "a parameter that does not apply, or a malformed one"),
-                        problem(404, "highlight names no instance (pointer /highlight)"),
-                        head,
-                        problem(413, "more pixels than a stream renders"),
-                        problem(422, "a value the renderer cannot use"),
-                        closed},
-          .query_token = true},
-         [&ctx](RouteCall& call) { return open_frame_stream(ctx, call); }});
+    protocol::RouteDoc frames{
+        .summary = "Live JPEG frames of the scene (multipart/x-mixed-replace)",
+        .description = "Each part a JPEG whose comment says `strata version=V samples=S`; a new "
+                       "frame when the version changes or accumulation improves it. An <img "
+                       "src> shows it. With at_version, the frames show that version and stop "
+                       "once they reach max_samples.",
+        .tag = "stream",
+        .parameters = frame_stream_parameters(),
+        .responses = {{.status = 200,
+                       .description = "the stream, until the client leaves or the server "
+                                      "shuts down",
+                       .media = {"multipart/x-mixed-replace"},
+                       .headers = {"Cache-Control"}},
+                      problem(400, "a parameter that does not apply, or a malformed one"),
+                      problem(404, "highlight names no instance (pointer /highlight)"),
+                      head,
+                      problem(413, "more pixels than a stream renders"),
+                      problem(422, "a value the renderer cannot use"),
+                      problem(503,
+                              "the server is shutting down, or open streams hold all the "
+                              "memory they may (--max-stream-mb) or all the past versions",
+                              {"Retry-After"})},
+        .query_token = true};
+    describe_past_version(frames,
+                          "loaded from the data directory as for GET /v1/render (at the live "
+                          "version too, so that the stream stays there as the scene moves on); "
+                          "the stream holds it while it is open, streams of one version share "
+                          "it, and streams may hold 4 versions at once (then 503)");
+    routes.get("/v1/stream", {std::move(frames),
+                              [&ctx](RouteCall& call) { return open_frame_stream(ctx, call); }});
     routes.get(
         "/v1/events",
         {{.summary = "Commit events (Server-Sent Events)",

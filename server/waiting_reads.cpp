@@ -25,12 +25,12 @@ void WaitingReads::forget(uint64_t conn) {
     m_waiters.erase(it);
 }
 
-std::vector<WaitingReads::Waiter> WaitingReads::take_due(uint64_t version, Clock::time_point now,
-                                                         bool all) {
+std::vector<WaitingReads::Waiter> WaitingReads::take_due(const VersionOf& version,
+                                                         Clock::time_point now, bool all) {
     std::vector<Waiter> due;
     std::vector<Waiter> still;
     for (Waiter& w : m_waiters) {
-        if (!all && version < w.wanted && now < w.deadline) {
+        if (!all && now < w.deadline && version(w.scene) < w.wanted) {
             still.push_back(std::move(w));
             continue;
         }

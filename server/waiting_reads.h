@@ -1,11 +1,13 @@
 #pragma once
-// Reads held by the front end until the scene reaches the min_version they ask for (reactor.h,
+// Reads held by the front end until their scene reaches the min_version they ask for (reactor.h,
 // the Waiting phase): who waits, for which version, until when; at most --max-waiting-reads in
 // all and --max-waiting-reads-per-client each. A held read costs its buffered bytes, no thread.
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "server/client_quota.h"
@@ -21,6 +23,7 @@ public:
     struct Waiter {
         uint64_t conn = 0;
         std::string client;
+        std::string scene;    ///< the named scene it reads; "" for the default scene
         uint64_t wanted = 0;  ///< its min_version
         Clock::time_point deadline{};
         PreparedRequest request;
@@ -36,9 +39,11 @@ public:
     void park(Waiter&& waiter);
     /// Forgets the read of connection `conn` (its client left), if it holds one.
     void forget(uint64_t conn);
-    /// The reads whose version arrived or whose wait is over (all of them when `all`), oldest
-    /// first; they are no longer held.
-    std::vector<Waiter> take_due(uint64_t version, Clock::time_point now, bool all);
+    /// A scene's version now, by name ("" for the default scene).
+    using VersionOf = std::function<uint64_t(std::string_view scene)>;
+    /// The reads whose scene's version arrived or whose wait is over (all of them when `all`),
+    /// oldest first; they are no longer held.
+    std::vector<Waiter> take_due(const VersionOf& version, Clock::time_point now, bool all);
     bool empty() const { return m_waiters.empty(); }
     std::size_t size() const { return m_waiters.size(); }
 

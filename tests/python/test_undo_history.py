@@ -6,11 +6,15 @@ problems are typed: NothingToUndoError (409) on an empty stack, VersionMismatchE
 stale If-Match. Each test starts its own server, so its history starts empty at version 0."""
 
 import datetime
+import json
 import os
+import re
+import socket
 import subprocess
 import tempfile
 import time
 import unittest
+import urllib.parse
 
 from strata_client import (BadRequestError, Client, History, HistoryEntry, HistoryStack,
                            NotFoundError, NothingToUndoError, ProblemError, UndoResult,
@@ -25,6 +29,67 @@ BALL = [
 SECOND = [{"op": "add_instance", "id": "b1", "mesh": "ball",
            "transform": {"translate": [2, 0, 0]}}]
 MOVE = [{"op": "set_transform", "instance": "b0", "transform": {"translate": [0, 3, 0]}}]
+
+
+class FrameStream:
+    """GET /v1/stream read over a raw socket (an endless body no HTTP client here reads): the
+    answer's head, then each part's JPEG with the version and sample count of its comment."""
+
+    SEPARATOR = b"\r\n--strata-frame\r\nContent-Type: image/jpeg\r\n\r\n"
+
+    def __init__(self, url, query):
+        parts = urllib.parse.urlsplit(url)
+        self.sock = socket.create_connection((parts.hostname, parts.port), timeout=10)
+        self.sock.sendall(f"GET /v1/stream?{query} HTTP/1.1\r\nHost: x\r\n\r\n".encode())
+        self.data = b""
+        self.read_until(lambda: b"\r\n\r\n" in self.data, 10)
+        head, _, self.data = self.data.partition(b"\r\n\r\n")
+        self.status = int(head.split(b" ")[1]) if head else 0
+        self.headers = head.decode("latin-1")
+
+    def close(self):
+        self.sock.close()
+
+    def read_until(self, done, timeout):
+        end = time.monotonic() + timeout
+        while not done() and time.monotonic() < end:
+            self.sock.settimeout(max(end - time.monotonic(), 0.01))
+            try:
+                got = self.sock.recv(65536)
+            except socket.timeout:
+                break
+            if not got:
+                break
+            self.data += got
+        return done()
+
+    def problem(self):
+        """The problem document of a refused stream."""
+        length = int(re.search(r"Content-Length: (\d+)", self.headers, re.I).group(1))
+        self.read_until(lambda: len(self.data) >= length, 10)
+        return json.loads(self.data[:length])
+
+    def next(self, timeout=10):
+        """(version, samples, jpeg) of the next whole part, or None when none came in time."""
+        start = self.data.find(b"\xff\xd8")
+        if start < 0 and not self.read_until(lambda: b"\xff\xd8" in self.data, timeout):
+            return None
+        start = self.data.find(b"\xff\xd8")
+        if not self.read_until(lambda: self.data.find(self.SEPARATOR, start) >= 0, timeout):
+            return None
+        end = self.data.find(self.SEPARATOR, start)
+        jpeg, self.data = self.data[start:end], self.data[end + len(self.SEPARATOR):]
+        comment = re.search(rb"strata version=(\d+) samples=(\d+)", jpeg)
+        return int(comment.group(1)), int(comment.group(2)), jpeg
+
+    def converged(self, samples, timeout=20):
+        """The first part with `samples` samples (parts before it are skipped)."""
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            part = self.next(end - time.monotonic())
+            if part is None or part[1] >= samples:
+                return part
+        return None
 
 
 class UndoHistoryTest(unittest.TestCase):
@@ -266,6 +331,73 @@ class PastVersionTest(unittest.TestCase):
                 return r.status
         except urllib.error.HTTPError as e:
             return e.code
+
+    def stream(self, query):
+        stream = FrameStream(self.server.url, query)
+        self.addCleanup(stream.close)
+        return stream
+
+    def test_a_frame_stream_shows_a_past_version_and_stays_there(self):
+        view = "width=48&height=32&max_samples=2&fps=30"
+        self.client.edit(BALL)
+        live = self.stream(view)
+        self.assertEqual(live.status, 200, live.headers)
+        version, samples, live_v1 = live.converged(2)
+        self.assertEqual((version, samples), (1, 2))
+        live.close()
+        self.client.edit(MOVE)
+        # The stream at version 1 shows the frames the live stream showed then, byte for byte,
+        # and stops at max_samples though the scene moves on.
+        past = self.stream(view + "&at_version=1")
+        self.assertEqual(past.status, 200, past.headers)
+        self.assertEqual(past.converged(2), (1, 2, live_v1))
+        self.client.edit(SECOND)
+        self.assertIsNone(past.next(timeout=0.6))
+        # A stream at the live version stays at it too: an edit sends it no new frame.
+        now = self.stream(view + "&at_version=3")
+        self.assertEqual(now.converged(2)[:2], (3, 2))
+        self.client.edit([{"op": "remove_instance", "instance": "b1"}])
+        self.assertIsNone(now.next(timeout=0.6))
+        # A live stream opened beside them shows the newest version.
+        self.assertEqual(self.stream(view).converged(2)[:2], (4, 2))
+        # at_time names the version made then: a viewer of it shares version 1's view.
+        stamp = urllib.parse.quote(self.client.history(limit=4).entries[-1].time)
+        self.assertEqual(self.stream(f"{view}&at_time={stamp}").converged(2), (1, 2, live_v1))
+
+    def test_past_version_streams_are_refused_with_a_problem_naming_why(self):
+        self.client.edit(BALL)
+        for query, status, pointer in (("at_version=7", 404, "/at_version"),
+                                       ("at_version=one", 400, "/at_version"),
+                                       ("at_version=1&at_time=2026-01-01T00:00:00Z", 400,
+                                        "/at_time"),
+                                       ("at_version=1&highlight=nobody", 404, "/highlight")):
+            with self.subTest(query=query):
+                refused = self.stream("width=16&height=16&" + query)
+                self.assertEqual(refused.status, status, refused.headers)
+                self.assertEqual(refused.problem().get("pointer"), pointer)
+        # Streams hold at most four past versions at once; a fifth waits (503, Retry-After),
+        # while more viewers of a held version share it.
+        for _ in range(4):
+            self.client.edit(MOVE)
+        held = [self.stream(f"width=16&height=16&max_samples=1&at_version={v}")
+                for v in range(1, 5)]
+        for stream in held:
+            self.assertIsNotNone(stream.next(), stream.headers)
+        refused = self.stream("width=16&height=16&at_version=5")
+        self.assertEqual(refused.status, 503, refused.headers)
+        self.assertIn("Retry-After", refused.headers)
+        self.assertIn("past versions", refused.problem()["detail"])
+        self.assertEqual(self.stream("width=24&height=16&at_version=2").status, 200)
+        held[0].close()
+        # Once a stream lets its version go, another version may be streamed.
+        deadline = time.monotonic() + 10
+        while True:
+            again = self.stream("width=16&height=16&at_version=5")
+            if again.status == 200 or time.monotonic() > deadline:
+                break
+            time.sleep(0.05)
+        self.assertEqual(again.status, 200, again.headers)
+        self.assertEqual(again.next()[0], 5)
 
     def test_assets_at_a_past_version(self):
         with tempfile.TemporaryDirectory() as d:

@@ -207,7 +207,7 @@ TEST(NamedSceneLimits, ADeletedSceneStillHeldKeepsItsShareAndItsName) {
     SceneDirectory scenes(SceneShared{config, metrics, nullptr, {}});
     ASSERT_TRUE(scenes.create("a", scenes.default_budget()).has_value());
     std::shared_ptr<HostedScene> held = scenes.find("a");  // as a running request holds it
-    ASSERT_TRUE(scenes.remove("a"));
+    ASSERT_TRUE(scenes.remove("a").value());
     EXPECT_EQ(scenes.find("a"), nullptr);
     auto refused = scenes.create("b", scenes.default_budget());
     ASSERT_FALSE(refused.has_value());
@@ -217,7 +217,7 @@ TEST(NamedSceneLimits, ADeletedSceneStillHeldKeepsItsShareAndItsName) {
     EXPECT_EQ(again.error().status, 409);
     held.reset();  // the request ends: the scene goes, with its share and its name
     EXPECT_TRUE(scenes.create("b", scenes.default_budget()).has_value());
-    ASSERT_TRUE(scenes.remove("b"));
+    ASSERT_TRUE(scenes.remove("b").value());
     EXPECT_TRUE(scenes.create("a", scenes.default_budget()).has_value());
 }
 

@@ -456,6 +456,15 @@ TEST(StreamEndpoint, BadParametersAreRefusedWithAProblemNamingThem) {
                    "/camera/eye");
     expect_problem(s.get("/v1/stream?eye=0,2,8&target=0,2,8"), 422, "invalid-value",
                    "/camera/target");
+    // A past version is read from the data directory, which this server has none of; a
+    // version still to come does not exist.
+    const uint64_t now = scene_version(s);
+    expect_problem(s.get("/v1/stream?at_version=" + std::to_string(now)), 404, "not-found",
+                   "/at_version");
+    expect_problem(s.get("/v1/stream?at_version=" + std::to_string(now + 1)), 404, "not-found",
+                   "/at_version");
+    expect_problem(s.get("/v1/stream?at_version=-1"), 400, "invalid-request", "/at_version");
+    EXPECT_EQ(s.server().streams().stats().views, 0u);
 }
 
 /// A stream part decoded to packed RGB. Fast upsampling: a pixel's chroma comes from its own

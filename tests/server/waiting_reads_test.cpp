@@ -33,10 +33,16 @@ TEST(ClientQuota, EachClientAndEveryoneTogetherStayUnderTheirLimits) {
     EXPECT_EQ(q.total(), 0u);
 }
 
+/// Every scene at `version`.
+WaitingReads::VersionOf at(uint64_t version) {
+    return [version](std::string_view) { return version; };
+}
+
 WaitingReads::Waiter waiter(uint64_t conn, std::string client, uint64_t wanted,
-                            Clock::time_point deadline) {
+                            Clock::time_point deadline, std::string scene = {}) {
     WaitingReads::Waiter w;
     w.conn = conn;
+    w.scene = std::move(scene);
     w.client = std::move(client);
     w.wanted = wanted;
     w.deadline = deadline;
@@ -50,16 +56,33 @@ TEST(WaitingReads, ReadsLeaveOldestFirstWhenTheirVersionArrivesOrTheirWaitEnds) 
     w.park(waiter(1, "a", 5, now + milliseconds(100)));
     w.park(waiter(2, "a", 3, now + milliseconds(100)));
     w.park(waiter(3, "b", 9, now + milliseconds(10)));
-    EXPECT_TRUE(w.take_due(2, now, false).empty());
-    auto due = w.take_due(5, now, false);
+    EXPECT_TRUE(w.take_due(at(2), now, false).empty());
+    auto due = w.take_due(at(5), now, false);
     ASSERT_EQ(due.size(), 2u);
     EXPECT_EQ(due[0].conn, 1u);
     EXPECT_EQ(due[1].conn, 2u);
     EXPECT_EQ(due[1].request.http.path, "/v1/scene/2") << "the request comes back with it";
-    due = w.take_due(5, now + milliseconds(10), false);
+    due = w.take_due(at(5), now + milliseconds(10), false);
     ASSERT_EQ(due.size(), 1u) << "its wait is over, its version has not come";
     EXPECT_EQ(due[0].conn, 3u);
     EXPECT_TRUE(w.empty());
+}
+
+TEST(WaitingReads, EachReadWaitsForItsOwnScenesVersion) {
+    WaitingReads w(10, 10);
+    const Clock::time_point now = Clock::now();
+    w.park(waiter(1, "a", 4, now + milliseconds(100)));
+    w.park(waiter(2, "a", 4, now + milliseconds(100), "city"));
+    const auto versions = [](uint64_t main, uint64_t city) -> WaitingReads::VersionOf {
+        return [=](std::string_view scene) { return scene == "city" ? city : main; };
+    };
+    auto due = w.take_due(versions(4, 3), now, false);
+    ASSERT_EQ(due.size(), 1u);
+    EXPECT_EQ(due[0].conn, 1u);
+    EXPECT_TRUE(w.take_due(versions(9, 3), now, false).empty()) << "another scene moved";
+    due = w.take_due(versions(9, 4), now, false);
+    ASSERT_EQ(due.size(), 1u);
+    EXPECT_EQ(due[0].scene, "city");
 }
 
 TEST(WaitingReads, ADrainReleasesEveryRead) {
@@ -67,7 +90,7 @@ TEST(WaitingReads, ADrainReleasesEveryRead) {
     const Clock::time_point now = Clock::now();
     w.park(waiter(1, "a", 50, now + milliseconds(1000)));
     w.park(waiter(2, "b", 60, now + milliseconds(1000)));
-    EXPECT_EQ(w.take_due(1, now, true).size(), 2u);
+    EXPECT_EQ(w.take_due(at(1), now, true).size(), 2u);
     EXPECT_TRUE(w.admits("a"));
 }
 
