@@ -61,6 +61,10 @@ struct SnapshotReplace {
 class Engine {
 public:
     static Result<std::unique_ptr<Engine>> create(const EngineConfig& config = {});
+    /// The Embree device this engine shares with others (AccelConfig::shared_device), or null.
+    const std::shared_ptr<SharedEmbree>& shared_device() const {
+        return m_config.accel.shared_device;
+    }
 
     /// Validates and applies a batch atomically; the version moves by one on success.
     Result<ApplyResult> apply(EditBatch&& batch);

@@ -62,9 +62,8 @@ constexpr TypeInfo TYPES[] = {
      "edit"},
     {"scene-conflict", "Scene conflict", 409,
      "`DELETE /v1/scenes/default` (the default scene is never deleted: send `clear`), or "
-     "`PUT /v1/scenes/{scene}` of a scene that exists with another budget, while an earlier "
-     "scene of that name is still being deleted, or on a replica (`--log` carries the default "
-     "scene only)"},
+     "`PUT /v1/scenes/{scene}` of a scene that exists with another budget, or while an "
+     "earlier scene of that name is still being deleted or replaced"},
     {"not-found", "Not found", 404,
      "unknown route, an unknown id in the URL of `GET /v1/scene/...`, a scene that does not "
      "exist (or, with `--tokens-file`, that the token has no role in), or an `at_version` the "

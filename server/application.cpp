@@ -19,7 +19,7 @@ Application::Application(const ServerConfig& config, Engine& engine, ServerMetri
                          StreamHub* streams, std::function<bool()> api_busy)
     : m_config(config), m_engine(engine), m_metrics(metrics) {
     m_scenes = std::make_unique<SceneDirectory>(
-        SceneShared{config, metrics, front_end, std::move(api_busy)});
+        SceneShared{config, metrics, front_end, std::move(api_busy), engine.shared_device()});
     install_routes(front_end, streams);
     m_context->store = store;
 }
@@ -87,7 +87,10 @@ void Application::install_routes(const FrontEndCounters* front_end, StreamHub* s
     m_context = std::make_unique<ServerContext>(ServerContext{
         m_engine, m_config, m_metrics, api_limits(m_config), front_end, nullptr, nullptr, {},
         streams, {}});
-    m_context->past = std::make_unique<PastScenes>(engine_config(m_config));
+    // Past versions share the scene's Embree device: their meshes mostly share its BLASes.
+    EngineConfig past = engine_config(m_config);
+    past.accel.shared_device = m_engine.shared_device();
+    m_context->past = std::make_unique<PastScenes>(past);
     m_context->scenes = m_scenes.get();
     if (!m_config.peers.empty()) {
         // finish_config checked the list.

@@ -86,8 +86,17 @@ void prepare_process(server::ServerConfig& c) {
 
 /// The engine with the scene budget and TLAS strategy of `c`; null (and a logged reason) when
 /// it cannot start.
+/// The default scene's engine, on an Embree device the named scenes share (identical meshes
+/// then share their BLASes, engine/accel/blas_pool.h).
 std::unique_ptr<Engine> create_engine(const server::ServerConfig& c) {
-    auto engine = Engine::create(server::engine_config(c));
+    EngineConfig config = server::engine_config(c);
+    auto device = SharedEmbree::create(config.accel.embree_config);
+    if (!device) {
+        spdlog::critical("cannot start the engine: {}", device.error().describe());
+        return nullptr;
+    }
+    config.accel.shared_device = std::move(device.value());
+    auto engine = Engine::create(config);
     if (!engine) {
         spdlog::critical("cannot start the engine: {}", engine.error().describe());
         return nullptr;

@@ -77,7 +77,12 @@ HostedScene::~HostedScene() {
     release_free_memory();
 }
 
-SceneDirectory::SceneDirectory(SceneShared shared) : m_shared(std::move(shared)) {}
+SceneDirectory::SceneDirectory(SceneShared shared) : m_shared(std::move(shared)) {
+    if (!m_shared.device) {
+        auto device = SharedEmbree::create("");
+        if (device) m_shared.device = std::move(device.value());
+    }
+}
 
 SceneDirectory::~SceneDirectory() {
     stop_following();
@@ -134,6 +139,7 @@ Result<std::shared_ptr<HostedScene>> SceneDirectory::open(const std::string& nam
     scene->m_log_id = log_id;
     EngineConfig config = engine_config(m_shared.config);
     config.budget = budget;
+    config.accel.shared_device = m_shared.device;
     auto engine = Engine::create(config);
     if (!engine) return Unexpected(engine.error());
     scene->m_engine = std::move(engine.value());

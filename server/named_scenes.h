@@ -67,6 +67,9 @@ struct SceneShared {
     ServerMetrics& metrics;
     const FrontEndCounters* front_end = nullptr;
     std::function<bool()> api_busy;  ///< true while API renders or commits are queued or running
+    /// The Embree device the scenes share (their identical meshes share BLASes); null: the
+    /// directory makes one for the named scenes.
+    std::shared_ptr<SharedEmbree> device = nullptr;
 };
 
 class HostedScene {

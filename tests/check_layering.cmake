@@ -5,6 +5,7 @@
 cmake_minimum_required(VERSION 3.25)
 set(EMBREE_ALLOWED
     engine/accel/embree_device.cpp
+    engine/accel/blas_pool.cpp
     engine/accel/blas_store.cpp
     engine/accel/embree_tlas.cpp
     engine/accel/clustered_blas.cpp

@@ -53,7 +53,8 @@ constexpr AnswerField LIST_FIELDS[] = {
 
 const std::vector<std::string> REBUILD_REASONS = {
     "added",         "topology_changed", "rebuild_requested", "refit_not_allowed",
-    "bounds_growth", "triangle_growth",  "refit_limit"};
+    "bounds_growth", "triangle_growth",  "refit_limit",       "shared",
+    "unshared"};
 const std::vector<std::string> REFIT_REASONS = {"positions_changed", "refit_requested"};
 const std::vector<std::string> TLAS_ACTIONS = {"none", "update", "rebuild"};
 

@@ -7,6 +7,9 @@
 namespace strata {
 
 Result<std::unique_ptr<AccelGraph>> AccelGraph::create(const AccelConfig& config) {
+    if (config.shared_device)
+        return std::unique_ptr<AccelGraph>(
+            new AccelGraph(config, EmbreeDevice::view(config.shared_device)));
     auto device = EmbreeDevice::create(config.embree_config);
     if (!device) return Unexpected(device.error());
     return std::unique_ptr<AccelGraph>(new AccelGraph(config, std::move(device.value())));
@@ -54,6 +57,10 @@ MeshAction decide(const MeshRecord& mesh, const BlasRecord* built, const BlasSto
         a.entry.reason = BuildReason::TopologyChanged;
     } else if (dirty.has(MeshDirty::RebuildRequested)) {
         a.entry.reason = BuildReason::RebuildRequested;
+    } else if (blas.shared_elsewhere(*built)) {
+        a.entry.reason = BuildReason::Unshared;
+        a.entry.detail =
+            "its BLAS is shared with another scene, which keeps it: this one builds its own";
     } else if (!built->clusters && blas.may_cluster(mesh) && dirty.has(MeshDirty::Points) &&
                config.clusters.local(mesh.dirty.points.count(), mesh.positions.size())) {
         a.entry.reason = BuildReason::Clustered;
@@ -130,7 +137,13 @@ Status build_and_refit(const Scene& scene, BlasStore& blas, CommitPlan& plan,
         MeshBuildEntry& entry = report.rebuilt[i];
         entry.ms = clock.ms();
         const BlasRecord& built = *blas.find(plan.rebuild[i]);
-        entry.bytes = built.bytes;
+        entry.bytes = blas.bytes_of(built);
+        if (built.adopted) {
+            entry.reason = BuildReason::Shared;
+            entry.detail = "identical to a BLAS another scene holds: held, not built";
+            report.primitives_built -= mesh.triangles.size();
+            --report.blas_rebuilds;
+        }
         entry.uncompacted_bytes = built.uncompacted_bytes;
         if (const ClusteredBlas* c = built.clusters.get()) {
             entry.clusters = entry.clusters_rebuilt = c->cluster_count();

@@ -29,6 +29,10 @@ struct AccelConfig {
     bool watertight = true;
     std::string embree_config;  ///< Embree device configuration string
     ClusterPolicy clusters;     ///< which meshes get a clustered BLAS
+    /// An Embree device shared with other engines, whose identical BLASes this engine may hold
+    /// (blas_pool.h); null: a device of its own (embree_config). Engines on one device take
+    /// turns in their commits' Embree phases (embree_device.h).
+    std::shared_ptr<SharedEmbree> shared_device;
 };
 
 /// A planned commit. The handle vectors run parallel to the report's entry lists.

@@ -90,8 +90,18 @@ RTCSceneTy* BlasStore::scene(uint32_t slot) const {
     return slot < m_records.size() ? m_records[slot].scene : nullptr;
 }
 
+int64_t BlasStore::bytes_of(const BlasRecord& r) const {
+    return r.shared ? m_device.pool()->bytes_for(*r.shared, m_device) : r.bytes;
+}
+
+bool BlasStore::shared_elsewhere(const BlasRecord& r) const {
+    return r.shared && m_device.pool()->held_elsewhere(*r.shared, m_device);
+}
+
 void BlasStore::release_record(BlasRecord& r, bool account) {
     const int64_t before = m_device.bytes(MemoryCategory::Blas);
+    // A shared BLAS's bytes stay with the engines that still hold it.
+    if (r.shared) r.bytes = m_device.pool()->release(r.shared, m_device);
     r.clusters.reset();
     if (r.geometry) rtcReleaseGeometry(r.geometry);
     rtcReleaseScene(r.scene);
@@ -136,8 +146,23 @@ Status BlasStore::build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics&
                         bool clustered) {
     if (h.index >= m_records.size()) m_records.resize(h.index + 1);
     BlasRecord& r = m_records[h.index];
-    if (r.scene && (r.generation != h.generation || !(r.options == mesh.build)))
+    // A shared BLAS never changes: the record lets go of it (a TLAS may still reference it).
+    if (r.scene && (r.generation != h.generation || !(r.options == mesh.build) || r.shared))
         retire_slot(h.index);
+
+    // Step: a whole BLAS another engine built for exactly this content is held, not built.
+    BlasPool* pool = m_device.pool();
+    const bool poolable = pool && !(clustered && may_cluster(mesh)) && !mesh.build.compact;
+    const int flags = scene_flags(mesh.build, false);
+    const uint64_t key = poolable ? shared_blas_key(mesh, flags) : 0;
+    if (poolable) {
+        if (auto found = pool->hold(mesh, flags, key, m_device)) {
+            if (r.scene) retire_slot(h.index);
+            adopt(m_records[h.index], found, h, mesh);
+            return {};
+        }
+    }
+    r.adopted = false;
 
     const auto vertex_count = static_cast<uint32_t>(mesh.positions.size());
     const auto triangle_count = static_cast<uint32_t>(mesh.triangles.size());
@@ -175,7 +200,43 @@ Status BlasStore::build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics&
         release_slot(h.index);
         return s;
     }
+    if (poolable && r.geometry) publish(r, key, flags);
     return {};
+}
+
+void BlasStore::adopt(BlasRecord& r, const std::shared_ptr<SharedBlas>& blas, MeshHandle h,
+                      const MeshRecord& mesh) {
+    rtcRetainScene(blas->scene);
+    rtcRetainGeometry(blas->geometry);
+    r.mesh_id = mesh.id;
+    r.scene = blas->scene;
+    r.geometry = blas->geometry;
+    r.generation = h.generation;
+    r.vertex_count = blas->vertex_count;
+    r.triangle_count = blas->triangle_count;
+    r.options = blas->options;
+    r.baseline = blas->baseline;
+    r.bytes = r.uncompacted_bytes = 0;
+    r.shared = blas;
+    r.adopted = true;
+}
+
+void BlasStore::publish(BlasRecord& r, uint64_t key, int flags) {
+    auto blas = std::make_shared<SharedBlas>();
+    blas->scene = r.scene;
+    blas->geometry = r.geometry;
+    blas->key = key;
+    blas->vertex_count = r.vertex_count;
+    blas->triangle_count = r.triangle_count;
+    blas->options = r.options;
+    blas->scene_flags = flags;
+    blas->baseline = r.baseline;
+    blas->bytes = r.bytes;
+    blas->owner = &m_device;
+    blas->holders = {&m_device};
+    m_device.pool()->publish(blas);
+    r.shared = std::move(blas);
+    r.bytes = 0;
 }
 
 int BlasStore::scene_flags(const BuildOptions& options, bool compact) const {
@@ -261,6 +322,15 @@ Status BlasStore::refit(MeshHandle h, const MeshRecord& mesh, const ClusterWork*
     BlasRecord* r = h.index < m_records.size() ? &m_records[h.index] : nullptr;
     STRATA_CHECK(r && r->scene && r->generation == h.generation);
     STRATA_CHECK(r->vertex_count == mesh.positions.size());
+    if (r->shared) {
+        // Shared since the commit was planned: this engine builds its own copy.
+        if (!m_device.pool()->withdraw(r->shared, m_device))
+            return build(h, mesh, measure_mesh(mesh), false);
+        // Held by this engine alone: out of the pool, it is an ordinary BLAS again.
+        r->bytes = r->shared->bytes;
+        r->baseline = r->shared->baseline;
+        r->shared.reset();
+    }
     const int64_t bytes_before = m_device.bytes(MemoryCategory::Blas);
     if (r->clusters) {
         STRATA_CHECK(work != nullptr);

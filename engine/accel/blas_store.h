@@ -18,6 +18,11 @@
 // "Compaction"): 26-37% less memory, traces 6-11% slower, builds up to twice as long. A compacted
 // mesh is never clustered.
 //
+// On a device shared with other engines (embree_device.h), a whole BLAS is shared with them
+// when their meshes are identical (blas_pool.h): a build that finds one holds it instead, and a
+// store never changes a shared BLAS (a rebuild lets go of it, a refit of one others hold builds
+// a copy first).
+//
 // A big mesh that allows refit is clustered (ClusterPolicy, clustered_blas.h): its BLAS scene
 // holds one REFIT-quality geometry per cluster instead of one for the whole mesh, so a vertex
 // edit refits the clusters it touches. Hits on it report a cluster and a triangle within it;
@@ -28,6 +33,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/accel/blas_pool.h"
 #include "engine/accel/cluster_layout.h"
 #include "engine/accel/clustered_blas.h"
 #include "engine/accel/embree_device.h"
@@ -53,9 +59,12 @@ struct BlasRecord {
     uint32_t triangle_count = 0;
     BuildOptions options;
     BuildBaseline baseline;  ///< drift reference for the refit policy
-    int64_t bytes = 0;       ///< Embree memory its builds and refits allocated
+    int64_t bytes = 0;       ///< Embree memory its builds and refits allocated (not shared)
     /// For a compacted BLAS: its memory at full size, measured at its last build (0 otherwise).
     int64_t uncompacted_bytes = 0;
+    /// The pooled BLAS it holds (scene and geometry are its), or null (blas_pool.h).
+    std::shared_ptr<SharedBlas> shared;
+    bool adopted = false;  ///< its last build held another engine's BLAS instead of building
 };
 
 /// One compacted BLAS's memory before and after compaction.
@@ -105,6 +114,10 @@ public:
         return mesh.build.allow_refit && !mesh.build.compact &&
                m_cluster_policy.clusters(mesh.triangles.size());
     }
+    /// The Embree memory `r` counts in this store's device: a shared BLAS's is its owner's.
+    int64_t bytes_of(const BlasRecord& r) const;
+    /// Whether `r`'s BLAS is shared with another engine that still holds it.
+    bool shared_elsewhere(const BlasRecord& r) const;
     /// True when some live BLAS is clustered: hits need mesh_triangle().
     bool any_clustered() const { return m_clustered != 0; }
     /// The mesh's own triangle index of a hit on BLAS `slot` (geomID `geom`, primID `prim`).
@@ -137,6 +150,11 @@ private:
                       uint32_t triangle_count);
     /// The Embree scene flags of a BLAS with `options`, with or without the compact layout.
     int scene_flags(const BuildOptions& options, bool compact) const;
+    /// Holds `blas` (another engine's, of `mesh`'s content) in `r`, for mesh handle `h`.
+    void adopt(BlasRecord& r, const std::shared_ptr<SharedBlas>& blas, MeshHandle h,
+               const MeshRecord& mesh);
+    /// Publishes `r`'s freshly built whole BLAS in the pool under `key`.
+    void publish(BlasRecord& r, uint64_t key, int flags);
     /// Rebuilds the record's freshly built whole-mesh BVH in the compact layout; the full build's
     /// size (`bytes_before` the build started) becomes its uncompacted size.
     void compact(BlasRecord& r, int64_t bytes_before);

@@ -58,8 +58,9 @@ public:
         MemoryScope memory(m_device, MemoryCategory::Tlas);
         for (InstanceHandle h : delta.changed) sync_instance(scene, blas, h);
         for (InstanceHandle h : delta.blas_changed) {
-            // The BLAS object is the same; committing the instance makes Embree re-read its bounds.
-            if (holds(h)) rtcCommitGeometry(m_instances[h.index].geometry);
+            // Committing the instance makes Embree re-read its BLAS's bounds; a BLAS object of
+            // its own in place of a shared one (blas_pool.h) is set first.
+            if (holds(h)) sync_instance(scene, blas, h);
         }
         rtcCommitScene(m_scene);
         return m_device.status("updating the TLAS");

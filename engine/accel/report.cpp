@@ -23,6 +23,8 @@ const char* build_reason_name(BuildReason r) {
         case BuildReason::TriangleGrowth: return "triangle_growth";
         case BuildReason::RefitLimit: return "refit_limit";
         case BuildReason::Clustered: return "clustered";
+        case BuildReason::Shared: return "shared";
+        case BuildReason::Unshared: return "unshared";
         case BuildReason::PositionsChanged: return "positions_changed";
         case BuildReason::RefitRequested: return "refit_requested";
     }

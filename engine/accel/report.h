@@ -21,6 +21,8 @@ enum class BuildReason : uint8_t {
     TriangleGrowth,    ///< rebuild: refit policy, triangles stretched too much since the build
     RefitLimit,        ///< rebuild: refit policy, too many refits since the last build
     Clustered,         ///< rebuild: a big mesh's first local edit; rebuilt as clusters
+    Shared,            ///< no build: another engine's identical BLAS is held (blas_pool.h)
+    Unshared,          ///< rebuild: the mesh of a BLAS shared with another engine changed
     PositionsChanged,  ///< refit: vertex positions moved
     RefitRequested,    ///< refit: mark_dirty {mesh, refit}
 };

@@ -244,6 +244,60 @@ class SceneMemoryTest(unittest.TestCase):
         finally:
             server.stop()
 
+    def test_copies_of_one_city_share_its_blases_and_an_edit_copies_only_what_it_changes(self):
+        def city(variant):
+            # Two meshes; `variant` > 0 makes every scene's content its own.
+            return [{"op": "add_mesh", "id": "tower",
+                     "shape": {"type": "sphere", "segments": 384 + variant}},
+                    {"op": "add_mesh", "id": "hall", "shape": {"type": "box"}},
+                    {"op": "add_instance", "id": "t0", "mesh": "tower"},
+                    {"op": "add_instance", "id": "h0", "mesh": "hall",
+                     "transform": {"translate": [0, -1.5, 0]}}]
+
+        def grow(server, strata, prefix, copies, variant):
+            """Resident growth of `copies` scenes of the city; their summaries."""
+            before = resident_bytes(server.process.pid)
+            for k in range(copies):
+                strata.create_scene(f"{prefix}{k}")
+                with strata.for_scene(f"{prefix}{k}") as scene:
+                    scene.edit(city(variant(k)))
+                    scene.commit()
+            grown = resident_bytes(server.process.pid) - before
+            return grown, {s.name: s for s in strata.scenes() if s.name.startswith(prefix)}
+
+        copies = 8
+        server = ServerProcess(SERVER, ["--max-scenes", str(2 * copies + 1)])
+        try:
+            with Client(server.url) as strata:
+                strata.create_scene("warm")  # what the first scene's code and threads cost
+                strata.delete_scene("warm")
+                shared, same = grow(server, strata, "same", copies, lambda k: 0)
+                own, apart = grow(server, strata, "apart", copies, lambda k: k + 1)
+                blas = [same[f"same{k}"].memory_bytes.blas for k in range(copies)]
+                print(f"\n  {copies} scenes of one city: +{shared >> 20} MiB resident, BLAS bytes "
+                      f"{blas[0] >> 10} KiB once; {copies} different cities: +{own >> 20} MiB, "
+                      f"BLAS {sum(s.memory_bytes.blas for s in apart.values()) >> 10} KiB")
+                self.assertGreater(blas[0], 1 << 20)
+                self.assertEqual(blas[1:], [0] * (copies - 1), "counted once, by its builder")
+                self.assertLess(shared, own * 0.6, "copies held what different cities hold")
+                # An edit to one scene's tower copies it for that scene alone.
+                one, other = strata.for_scene("same3"), strata.for_scene("same4")
+                before = other.render(64, 48, spp=1)
+                self.assertEqual(one.render(64, 48, spp=1), before)
+                # The tower's top rings pulled into a spike towards the camera (+z).
+                one.edit([{"op": "update_mesh", "mesh": "tower", "offset": 0,
+                           "positions": [0, 1.2, 2.5] * 2000}])
+                report = one.commit()
+                self.assertEqual([(e.mesh, e.reason) for e in report.rebuilt],
+                                 [("tower", "unshared")])
+                self.assertNotEqual(one.render(64, 48, spp=1), before)
+                self.assertEqual(other.render(64, 48, spp=1), before)
+                self.assertGreater(strata.scene_summary("same3").memory_bytes.blas, 1 << 20)
+                one.close()
+                other.close()
+        finally:
+            server.stop()
+
 
 if __name__ == "__main__":
     unittest.main()
