@@ -219,9 +219,29 @@ Status SceneDirectory::recover() {
     return {};
 }
 
+std::optional<protocol::Problem> SceneDirectory::no_room(const SceneBudget& budget) const {
+    const std::size_t held = m_scenes.size() + m_creating.size();
+    if (held >= m_shared.config.max_scenes)
+        return protocol::make_problem(protocol::ProblemType::TooLarge,
+                                      "this server holds " + std::to_string(held) +
+                                          " named scenes already, its limit (--max-scenes)");
+    if (std::string over = over_total(budget); !over.empty()) {
+        protocol::Problem p = protocol::make_problem(protocol::ProblemType::TooLarge, over);
+        p.pointer = "/budget";
+        return p;
+    }
+    return std::nullopt;
+}
+
 Expected<std::pair<std::shared_ptr<HostedScene>, bool>, protocol::Problem> SceneDirectory::create(
     const std::string& name, const SceneBudget& budget) {
     if (!m_log) return create_here(name, budget, "");
+    {
+        // A scene this server could not hold is not published for the others either.
+        std::lock_guard lock(m_mutex);
+        if (auto refused = no_room(budget); refused && !m_scenes.count(name))
+            return Unexpected(std::move(*refused));
+    }
     // Step: the log's directory first: one server's incarnation wins a race for the name.
     auto entry = m_log->publish(name, protocol::scene_settings_json(budget).dump());
     if (!entry)
@@ -266,17 +286,7 @@ Expected<SceneDirectory::Made, protocol::Problem> SceneDirectory::create_here(
                 "scene '" + name +
                     "' is still being deleted (a request still uses it); try again"));
     }
-    const std::size_t held = m_scenes.size() + m_creating.size();
-    if (held >= m_shared.config.max_scenes)
-        return Unexpected(protocol::make_problem(
-            protocol::ProblemType::TooLarge,
-            "this server holds " + std::to_string(held) +
-                " named scenes already, its limit (--max-scenes)"));
-    if (std::string over = over_total(budget); !over.empty()) {
-        protocol::Problem p = protocol::make_problem(protocol::ProblemType::TooLarge, over);
-        p.pointer = "/budget";
-        return Unexpected(std::move(p));
-    }
+    if (auto refused = no_room(budget)) return Unexpected(std::move(*refused));
     // Step: the files and the engine, outside the lock (fsyncs take a while; other scenes' requests
     // go on), the name reserved meanwhile.
     m_creating.emplace(name, budget);

@@ -29,6 +29,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <string>
 #include <thread>
@@ -161,6 +162,9 @@ private:
     /// stream when it has an incarnation and the log is followed.
     Result<std::shared_ptr<HostedScene>> open(const std::string& name, const SceneBudget& budget,
                                               const std::string& log_id, const std::string& dir);
+    /// Why a new scene of `budget` does not fit here (--max-scenes, --max-total-*), if it does
+    /// not. Under m_mutex.
+    std::optional<protocol::Problem> no_room(const SceneBudget& budget) const;
     /// The scene `name` on this server, or null.
     std::shared_ptr<HostedScene> find_here(std::string_view name) const;
     /// remove() on this server only; false when it held no such scene.

@@ -74,17 +74,19 @@ function showFrame(url) {
 }
 
 function openStream(camera) {
-  if (state.pastVersion !== null) {
-    renderPast(camera);
-    return;
-  }
   const [w, h] = state.size;
   const params = {
     width: w, height: h, quality: pageNumber('quality', 80), fps: pageNumber('fps', 20),
     max_samples: pageNumber('max_samples', 32), ...cameraParams(camera),
   };
-  // The selected instance is tinted by the server, pixel by pixel, from the frame's instance ids.
-  if (state.selected && state.selected.kind === 'instance') params.highlight = state.selected.id;
+  const past = state.pastVersion;
+  if (past !== null) {
+    // The history's View: the scene as version N left it, from the server's data directory.
+    params.at_version = past;
+  } else if (state.selected && state.selected.kind === 'instance') {
+    // The selected instance is tinted by the server, pixel by pixel, from the frame's ids.
+    params.highlight = state.selected.id;
+  }
   const key = JSON.stringify(params);
   if (key === state.streamKey) return;
   state.streamKey = key;
@@ -92,36 +94,34 @@ function openStream(camera) {
   params.client = `${clientId}-${++streamCount}`;
   const url = withToken('/v1/stream', params);
   state.streamUrl = url;
+  if (past !== null) watchPast(past, url);
   showFrame(url);
 }
 
-// Step: a past version. The history's View shows the scene as version N left it: one frame
-// from GET /v1/render?at_version=N (the server's data directory) per camera move, instead of the
-// live stream, until Back to live. <body data-past="N"> says which version is shown once the
-// frame is in ("failed" when the server could not render it).
-let pastUrl = null;
-async function renderPast(camera) {
-  const version = state.pastVersion;
-  const [w, h] = state.size;
-  state.streamKey = null;
-  try {
-    const answer = await fetch(withToken('/v1/render', {
-      width: w, height: h, spp: pageNumber('spp', 16), at_version: version, ...cameraParams(camera),
-    }));
-    if (!answer.ok) {
-      const problem = await answer.json().catch(() => ({}));
-      throw new Error(problem.detail || `${answer.status} ${answer.statusText}`);
+// Step: a past version. The history's View shows the scene as version N left it: the frame
+// stream at that version (GET /v1/stream?at_version=N, which accumulates and then stays), until
+// Back to live. <body data-past="N"> says which version is shown once its first frame is in
+// ("failed" when the server could not show it, with its reason).
+function watchPast(version, url) {
+  const img = $('frame');
+  const shown = () => {
+    img.removeEventListener('error', failed);
+    if (state.pastVersion === version && state.streamUrl === url) {
+      document.body.dataset.past = String(version);
     }
-    const blob = await answer.blob();
-    if (state.pastVersion !== version) return;  // back to live, or another version, meanwhile
-    if (pastUrl) URL.revokeObjectURL(pastUrl);
-    pastUrl = URL.createObjectURL(blob);
-    showFrame(pastUrl);
-    document.body.dataset.past = String(version);
-  } catch (e) {
+  };
+  const failed = async () => {
+    img.removeEventListener('load', shown);
+    if (state.pastVersion !== version || state.streamUrl !== url) return;
     document.body.dataset.past = 'failed';
-    message(`Cannot show version ${version}: ${e.message}`);
-  }
+    // An <img> hears no reason: a one-pixel render of that version says why.
+    const probe = withToken('/v1/render', { width: 1, height: 1, at_version: version });
+    const answer = await fetch(probe);
+    const problem = answer.ok ? {} : await answer.json().catch(() => ({}));
+    message(`Cannot show version ${version}: ${problem.detail || 'the stream failed'}`);
+  };
+  img.addEventListener('load', shown, { once: true });
+  img.addEventListener('error', failed, { once: true });
 }
 
 function viewPast(version) {
@@ -133,15 +133,13 @@ function viewPast(version) {
   inspector.show(null);
   scenePanel.mark(null, null);
   drawSelection();
-  renderPast(controls.camera);
+  openStream(controls.camera);
 }
 
 function backToLive() {
   state.pastVersion = null;
   $('past').hidden = true;
   delete document.body.dataset.past;
-  if (pastUrl) URL.revokeObjectURL(pastUrl);
-  pastUrl = null;
   message('');
   openStream(controls.camera);
 }
