@@ -328,7 +328,6 @@ Status BlasStore::refit(MeshHandle h, const MeshRecord& mesh, const ClusterWork*
             return build(h, mesh, measure_mesh(mesh), false);
         // Held by this engine alone: out of the pool, it is an ordinary BLAS again.
         r->bytes = r->shared->bytes;
-        r->baseline = r->shared->baseline;
         r->shared.reset();
     }
     const int64_t bytes_before = m_device.bytes(MemoryCategory::Blas);
