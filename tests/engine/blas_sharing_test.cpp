@@ -5,6 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <thread>
+
 #include "engine/accel/blas_pool.h"
 #include "tests/engine/test_util.h"
 
@@ -156,6 +159,42 @@ TEST_P(BlasSharing, AnEnginesOwnIdenticalMeshesAndDifferentContentAreNotShared) 
     auto c = engine();
     apply_ok(*c, mesh_edit("near", moved), instance_edit("i", "near"));
     EXPECT_EQ(commit_ok(*c).blas_rebuilds, 1u);
+}
+
+TEST_P(BlasSharing, EnginesCommittingAndRenderingAtOnceShareAndCopyWithoutLosingABlas) {
+    // Each thread loads the city, renders, dents its ball (a copy), renders, and clears, over
+    // and over, while the others do the same: holds, copies and releases race each other.
+    constexpr int THREADS = 3, ROUNDS = 12;
+    std::vector<std::unique_ptr<Engine>> engines;
+    for (int t = 0; t < THREADS; ++t) engines.push_back(engine());
+    std::atomic<int> failures{0};
+    std::vector<std::thread> threads;
+    for (int t = 0; t < THREADS; ++t) {
+        threads.emplace_back([&, t] {
+            Engine& e = *engines[std::size_t(t)];
+            MeshData dented = make_sphere(1.0f, 48);
+            for (Vec3& p : dented.positions) p *= 0.5f + 0.1f * float(t);
+            for (int round = 0; round < ROUNDS; ++round) {
+                EditBatch load;
+                load.edits = {mesh_edit("ball", make_sphere(1.0f, 48)),
+                              mesh_edit("crate", make_box(Vec3(1))), instance_edit("b0", "ball"),
+                              instance_edit("c0", "crate", {0, -2, 0})};
+                EditBatch dent;
+                dent.edits = {UpdateMeshPositions{"ball", 0, dented.positions}};
+                EditBatch clear;
+                clear.edits = {Clear{}};
+                for (EditBatch* batch : {&load, &dent, &clear}) {
+                    const bool ok = e.apply(std::move(*batch)).has_value() &&
+                                    e.commit().has_value() && !frame(e).empty();
+                    if (!ok) ++failures;
+                }
+            }
+        });
+    }
+    for (std::thread& t : threads) t.join();
+    EXPECT_EQ(failures.load(), 0);
+    for (const auto& e : engines) EXPECT_EQ(e->memory_bytes(MemoryCategory::Blas), 0);
+    EXPECT_EQ(device->pool()->size(), 0u);
 }
 
 INSTANTIATE_TEST_SUITE_P(BothTlasStrategies, BlasSharing,
