@@ -289,7 +289,20 @@ MetricFamily per_scene(std::string name, std::string help,
     return f;
 }
 
+constexpr StatSpec<SharedBlasStats> SHARED_BLAS_METRICS[] = {
+    {STRATA_STAT(SharedBlasStats, count),
+     "BLASes the scenes may share: whole BLASes built on the server's Embree device.",
+     StatUnit::Count, CURRENT},
+    {STRATA_STAT(SharedBlasStats, holds),
+     "Holds of a shared BLAS by a scene that did not build it (builds avoided now).",
+     StatUnit::Count, CURRENT},
+    {STRATA_STAT(SharedBlasStats, bytes), "Embree memory of the BLASes the scenes may share.",
+     StatUnit::Bytes, CURRENT},
+};
+
 void add_scene_families(std::vector<MetricFamily>& out) {
+    add_stats(out, SHARED_BLAS_METRICS, "strata_shared_blas_", MetricPart::Scenes,
+              [](const MetricsSnapshot& s) -> const SharedBlasStats& { return s.shared_blases; });
     out.push_back(scalar("strata_named_scenes", "Named scenes held beside the default one.",
                          MetricType::Gauge, MetricPart::Scenes, [](const MetricsSnapshot& s) {
                              return double(s.named_scenes->size());

@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/accel/blas_pool.h"
 #include "engine/durable/durable_stats.h"
 #include "engine/engine.h"
 #include "server/front_end_counters.h"
@@ -91,6 +92,8 @@ struct MetricsSnapshot {
     std::optional<StreamHubStats> streams;
     /// The named scenes beside the default one (the server always has the directory).
     std::optional<std::vector<NamedSceneMetrics>> named_scenes;
+    /// The BLASes the scenes share (engine/accel/blas_pool.h), with the directory.
+    SharedBlasStats shared_blases;
 };
 
 /// The parts of the server a family belongs to (the README groups the table by it).

@@ -142,6 +142,9 @@ public:
     /// Ends every named scene's streams (the server is shutting down).
     void stop_streams();
 
+    /// The Embree device the scenes share, with its pool of shared BLASes.
+    const std::shared_ptr<SharedEmbree>& shared_device() const { return m_shared.device; }
+
     /// The budget a scene gets when PUT names none: the server's --max-scene-* flags.
     SceneBudget default_budget() const;
 

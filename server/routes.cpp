@@ -281,6 +281,8 @@ MetricsSnapshot metrics_snapshot(const ServerContext& ctx) {
     if (ctx.replica) s.replica = ctx.replica->status();
     if (ctx.streams) s.streams = ctx.streams->stats();
     if (ctx.scenes) {
+        if (const auto& device = ctx.scenes->shared_device())
+            s.shared_blases = device->pool()->stats();
         s.named_scenes.emplace();
         for (const auto& scene : ctx.scenes->list()) {
             const auto [version, totals] = scene->engine().read(

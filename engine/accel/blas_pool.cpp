@@ -124,4 +124,15 @@ std::size_t BlasPool::size() const {
     return m_by_key.size();
 }
 
+SharedBlasStats BlasPool::stats() const {
+    std::lock_guard lock(m_mutex);
+    SharedBlasStats out;
+    for (const auto& [key, blas] : m_by_key) {
+        ++out.count;
+        out.holds += blas->holders.size() - 1;
+        out.bytes += uint64_t(std::max<int64_t>(blas->bytes, 0));
+    }
+    return out;
+}
+
 }  // namespace strata

@@ -46,6 +46,13 @@ struct SharedBlas {
     std::vector<EmbreeDevice*> holders;  ///< one entry per holding record
 };
 
+/// What a pool holds now (GET /metrics: strata_shared_blas_*).
+struct SharedBlasStats {
+    uint64_t count = 0;   ///< BLASes published
+    uint64_t holds = 0;   ///< holds by engines that did not build them: builds avoided now
+    uint64_t bytes = 0;   ///< the published BLASes' Embree memory
+};
+
 /// The key a mesh's content is published under (a sample of it: matches are checked in full).
 uint64_t shared_blas_key(const MeshRecord& mesh, int scene_flags);
 
@@ -72,6 +79,7 @@ public:
 
     /// BLASes published now.
     std::size_t size() const;
+    SharedBlasStats stats() const;
 
 private:
     void erase(const SharedBlas& blas);

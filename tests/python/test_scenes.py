@@ -8,6 +8,7 @@ import os
 import shutil
 import tempfile
 import unittest
+import urllib.request
 
 from strata_client import (AsyncClient, Client, ForbiddenError, NotFoundError, SceneBudget,
                            SceneConflictError, SceneSummary, TooLargeError, UnauthorizedError,
@@ -28,6 +29,15 @@ def resident_bytes(pid: int) -> int:
             if line.startswith("VmRSS:"):
                 return int(line.split()[1]) * 1024
     raise AssertionError("no VmRSS in /proc/PID/status")
+
+
+def metric(server: ServerProcess, name: str) -> float:
+    """One unlabelled sample of GET /metrics."""
+    with urllib.request.urlopen(server.url + "/metrics") as answer:
+        for line in answer.read().decode().splitlines():
+            if line.startswith(name + " "):
+                return float(line.split()[1])
+    raise AssertionError(f"{name} is not exported")
 
 
 class ScenesTest(unittest.TestCase):
@@ -280,6 +290,10 @@ class SceneMemoryTest(unittest.TestCase):
                 self.assertGreater(blas[0], 1 << 20)
                 self.assertEqual(blas[1:], [0] * (copies - 1), "counted once, by its builder")
                 self.assertLess(shared, own * 0.6, "copies held what different cities hold")
+                # The hall is one box in all sixteen scenes, the tower one sphere in the first
+                # eight: 15 + 7 builds avoided.
+                self.assertEqual(metric(server, "strata_shared_blas_holds"), 22)
+                self.assertEqual(metric(server, "strata_shared_blas_count"), 1 + 1 + copies)
                 # An edit to one scene's tower copies it for that scene alone.
                 one, other = strata.for_scene("same3"), strata.for_scene("same4")
                 before = other.render(64, 48, spp=1)
@@ -293,6 +307,7 @@ class SceneMemoryTest(unittest.TestCase):
                 self.assertNotEqual(one.render(64, 48, spp=1), before)
                 self.assertEqual(other.render(64, 48, spp=1), before)
                 self.assertGreater(strata.scene_summary("same3").memory_bytes.blas, 1 << 20)
+                self.assertEqual(metric(server, "strata_shared_blas_holds"), 21)
                 one.close()
                 other.close()
         finally:
