@@ -368,6 +368,7 @@ bool SceneDirectory::drop(const std::string& name) {
         }
     }
     scene->m_streams->stop();
+    if (scene->m_replica) scene->m_replica->stop();  // its stream is gone or going
     scene->m_on_gone = [going = m_going, name] {
         std::lock_guard lock(going->mutex);
         going->names.erase(name);

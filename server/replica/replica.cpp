@@ -29,6 +29,10 @@ Replica::~Replica() {
     if (m_snapshots) m_snapshots->stop();
 }
 
+void Replica::stop() {
+    m_state->shut_down();
+}
+
 Result<ApplyResult> Replica::append(EditBatch&& batch, std::optional<uint64_t> expected) {
     return m_writer->append(std::move(batch), expected);
 }

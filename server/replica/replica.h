@@ -105,6 +105,10 @@ public:
     /// unreachable, a stopped replica or a timeout: a Storage error saying which.
     Result<ApplyResult> append(EditBatch&& batch, std::optional<uint64_t> expected);
 
+    /// Stops following quietly, without waiting for the threads (the destructor joins them):
+    /// for a scene whose log is being deleted. Appends fail from now on.
+    void stop();
+
     uint64_t applied_version() const;
     ReplicaStatus status() const;
     /// Ready to serve: joined, not stopped.

@@ -56,7 +56,9 @@ void ReplicaState::mark_joined() {
 void ReplicaState::stop_loudly(const std::string& why) {
     {
         std::lock_guard lock(m_mutex);
-        if (m_stopped) return;
+        // Shutting down (the scene was deleted, the server stops): a log that went with it is
+        // no news.
+        if (m_stopped || m_shutdown) return;
         m_stop_reason = why;
         m_stopped = true;
     }

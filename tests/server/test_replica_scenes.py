@@ -152,6 +152,9 @@ class ReplicaScenes(unittest.TestCase):
             self.assertEqual((status, scene["version"]), (200, 0))
         self.edit(a, "city", 0)
         self.assert_converged([a, b], "city", 1)
+        # A deleted scene's replicas stop quietly: its log going is no failure of the log.
+        for s in (a, b):
+            self.assertNotIn("replica stopped", s.log())
 
     def test_a_replica_restarted_on_its_data_directory_follows_its_scenes(self):
         data = tempfile.mkdtemp(prefix="strata-replica-scenes-")
