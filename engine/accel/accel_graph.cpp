@@ -57,10 +57,11 @@ MeshAction decide(const MeshRecord& mesh, const BlasRecord* built, const BlasSto
         a.entry.reason = BuildReason::TopologyChanged;
     } else if (dirty.has(MeshDirty::RebuildRequested)) {
         a.entry.reason = BuildReason::RebuildRequested;
-    } else if (blas.shared_elsewhere(*built)) {
+    } else if (blas.frozen(*built)) {
         a.entry.reason = BuildReason::Unshared;
         a.entry.detail =
-            "its BLAS is shared with another scene, which keeps it: this one builds its own";
+            "its BLAS is (or was) shared with another scene, which may still trace it: this "
+            "one builds its own";
     } else if (!built->clusters && blas.may_cluster(mesh) && dirty.has(MeshDirty::Points) &&
                config.clusters.local(mesh.dirty.points.count(), mesh.positions.size())) {
         a.entry.reason = BuildReason::Clustered;

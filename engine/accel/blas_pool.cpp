@@ -64,6 +64,7 @@ std::shared_ptr<SharedBlas> BlasPool::hold(const MeshRecord& mesh, int scene_fla
             !same_content(b, mesh))
             continue;
         b.holders.push_back(&view);
+        b.held_by_others = true;
         return it->second;
     }
     return nullptr;
@@ -104,9 +105,10 @@ int64_t BlasPool::bytes_for(const SharedBlas& blas, const EmbreeDevice& view) co
     return blas.owner == &view ? blas.bytes : 0;
 }
 
-bool BlasPool::held_elsewhere(const SharedBlas& blas, const EmbreeDevice& view) const {
+bool BlasPool::frozen(const SharedBlas& blas, const EmbreeDevice& view) const {
     std::lock_guard lock(m_mutex);
-    return std::any_of(blas.holders.begin(), blas.holders.end(),
+    return blas.held_by_others ||
+           std::any_of(blas.holders.begin(), blas.holders.end(),
                        [&](const EmbreeDevice* h) { return h != &view; });
 }
 
@@ -114,7 +116,7 @@ bool BlasPool::withdraw(const std::shared_ptr<SharedBlas>& blas, const EmbreeDev
     std::lock_guard lock(m_mutex);
     const bool alone = std::all_of(blas->holders.begin(), blas->holders.end(),
                                    [&](const EmbreeDevice* h) { return h == &view; });
-    if (!alone) return false;
+    if (!alone || blas->held_by_others) return false;
     erase(*blas);
     return true;
 }

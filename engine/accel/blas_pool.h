@@ -8,7 +8,8 @@
 // flags. A store about to build a BLAS for a mesh of exactly that content (checked byte for byte
 // against the published BLAS's own Embree buffers) holds the published one instead. A published
 // BLAS never changes: a store whose mesh changes takes its record out first, and builds a copy
-// of its own when others still hold it (the report says "unshared").
+// of its own (the report says "unshared") when another engine holds it, or ever held it: that
+// engine's TLAS may still reference it (a stale static-tier copy) and trace it at any time.
 //
 // Memory. A shared BLAS's bytes are counted once, by its owner, the view that built it; when the
 // owner lets go while others hold it, its bytes move to one of them, so the view that frees it
@@ -44,6 +45,7 @@ struct SharedBlas {
     int64_t bytes = 0;       ///< its Embree memory, counted by `owner`
     EmbreeDevice* owner = nullptr;
     std::vector<EmbreeDevice*> holders;  ///< one entry per holding record
+    bool held_by_others = false;         ///< another engine than its builder held it once
 };
 
 /// What a pool holds now (GET /metrics: strata_shared_blas_*).
@@ -71,10 +73,10 @@ public:
     int64_t release(const std::shared_ptr<SharedBlas>& blas, EmbreeDevice& view);
     /// The bytes `view` counts for `blas`: all of them for its owner, none for the others.
     int64_t bytes_for(const SharedBlas& blas, const EmbreeDevice& view) const;
-    /// Whether views other than `view` hold `blas`.
-    bool held_elsewhere(const SharedBlas& blas, const EmbreeDevice& view) const;
-    /// Takes `blas`, held by `view` alone, out of the pool before its content changes; false
-    /// (nothing done) when others hold it.
+    /// Whether `blas` may not change in place for `view`: another view holds it or held it.
+    bool frozen(const SharedBlas& blas, const EmbreeDevice& view) const;
+    /// Takes `blas`, which only `view` ever held, out of the pool before its content changes;
+    /// false (nothing done) when it is frozen.
     bool withdraw(const std::shared_ptr<SharedBlas>& blas, const EmbreeDevice& view);
 
     /// BLASes published now.

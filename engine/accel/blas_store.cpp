@@ -94,8 +94,8 @@ int64_t BlasStore::bytes_of(const BlasRecord& r) const {
     return r.shared ? m_device.pool()->bytes_for(*r.shared, m_device) : r.bytes;
 }
 
-bool BlasStore::shared_elsewhere(const BlasRecord& r) const {
-    return r.shared && m_device.pool()->held_elsewhere(*r.shared, m_device);
+bool BlasStore::frozen(const BlasRecord& r) const {
+    return r.shared && m_device.pool()->frozen(*r.shared, m_device);
 }
 
 void BlasStore::release_record(BlasRecord& r, bool account) {
@@ -326,7 +326,7 @@ Status BlasStore::refit(MeshHandle h, const MeshRecord& mesh, const ClusterWork*
         // Shared since the commit was planned: this engine builds its own copy.
         if (!m_device.pool()->withdraw(r->shared, m_device))
             return build(h, mesh, measure_mesh(mesh), false);
-        // Held by this engine alone: out of the pool, it is an ordinary BLAS again.
+        // Only ever held by this engine: out of the pool, it is an ordinary BLAS again.
         r->bytes = r->shared->bytes;
         r->shared.reset();
     }

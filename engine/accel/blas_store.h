@@ -116,8 +116,9 @@ public:
     }
     /// The Embree memory `r` counts in this store's device: a shared BLAS's is its owner's.
     int64_t bytes_of(const BlasRecord& r) const;
-    /// Whether `r`'s BLAS is shared with another engine that still holds it.
-    bool shared_elsewhere(const BlasRecord& r) const;
+    /// Whether `r`'s BLAS may not change in place: shared with another engine that holds it,
+    /// or held it once (blas_pool.h). A change to its mesh builds a copy.
+    bool frozen(const BlasRecord& r) const;
     /// True when some live BLAS is clustered: hits need mesh_triangle().
     bool any_clustered() const { return m_clustered != 0; }
     /// The mesh's own triangle index of a hit on BLAS `slot` (geomID `geom`, primID `prim`).
