@@ -35,6 +35,12 @@ redis.call('ZREMRANGEBYRANK', KEYS[5], 0, -10001)
 return 1
 )lua";
 
+/// The error of a directory value that is not "ID SETTINGS".
+Unexpected<Error> damaged(const std::string& directory, const std::string& name) {
+    return storage("Redis: the scene directory " + directory + " holds a damaged entry for '" +
+                   name.substr(0, 80) + "'");
+}
+
 std::string new_id() {
     std::random_device random;
     const uint64_t bits = (uint64_t(random()) << 32) ^ random();
@@ -89,9 +95,7 @@ Result<SceneLogEntry> SceneLog::publish(const std::string& name, const std::stri
         return storage("Redis: the scene directory " + directory + " answered no entry for '" +
                        name + "'");
     auto entry = parse_scene_log_value(r.elements[1].str);
-    if (!entry)
-        return storage("Redis: the scene directory " + directory + " holds a damaged entry for '" +
-                       name + "'");
+    if (!entry) return damaged(directory, name);
     entry->created = r.elements[0].integer == 1;
     return *entry;
 }
@@ -130,9 +134,7 @@ Result<std::optional<SceneLogEntry>> SceneLog::find(const std::string& name) {
     if (!answer) return Unexpected(answer.error());
     if (answer.value().is_nil()) return std::optional<SceneLogEntry>();
     auto entry = parse_scene_log_value(answer.value().str);
-    if (!entry)
-        return storage("Redis: the scene directory " + directory + " holds a damaged entry for '" +
-                       name + "'");
+    if (!entry) return damaged(directory, name);
     return entry;
 }
 
@@ -147,9 +149,7 @@ Result<std::map<std::string, SceneLogEntry>> SceneLog::list() {
     std::map<std::string, SceneLogEntry> out;
     for (std::size_t i = 0; i + 1 < fields.size(); i += 2) {
         auto entry = parse_scene_log_value(fields[i + 1].str);
-        if (!entry)
-            return storage("Redis: the scene directory " + directory +
-                           " holds a damaged entry for '" + fields[i].str.substr(0, 80) + "'");
+        if (!entry) return damaged(directory, fields[i].str);
         out.emplace(fields[i].str, std::move(*entry));
     }
     return out;
