@@ -136,7 +136,7 @@ J problem_schema() {
 // ---- rebuild reports (report_json.cpp) ----
 
 J report_entry_schema() {
-    const J reason = names_of(BuildReason::RefitRequested, build_reason_name);
+    const J reason = names_of(LAST_BUILD_REASON, build_reason_name);
     return object({{"mesh", ref("id")},
                    {"reason", reason},
                    {"primitives", count()},

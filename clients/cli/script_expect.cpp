@@ -53,9 +53,10 @@ constexpr AnswerField LIST_FIELDS[] = {
 
 const std::vector<std::string> REBUILD_REASONS = {
     "added",         "topology_changed", "rebuild_requested", "refit_not_allowed",
-    "bounds_growth", "triangle_growth",  "refit_limit",       "shared",
-    "unshared"};
-const std::vector<std::string> REFIT_REASONS = {"positions_changed", "refit_requested"};
+    "bounds_growth", "triangle_growth",  "refit_limit",       "clustered",
+    "shared",        "unshared"};
+const std::vector<std::string> REFIT_REASONS = {"positions_changed", "refit_requested",
+                                                "triangles_replaced"};
 const std::vector<std::string> TLAS_ACTIONS = {"none", "update", "rebuild"};
 
 std::string quoted_list(const std::vector<std::string>& items) {

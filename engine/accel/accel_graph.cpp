@@ -62,6 +62,19 @@ MeshAction decide(const MeshRecord& mesh, const BlasRecord* built, const BlasSto
         a.entry.detail =
             "its BLAS is (or was) shared with another scene, which may still trace it: this "
             "one builds its own";
+    } else if (!built->clusters && dirty.has(MeshDirty::Triangles)) {
+        // A whole BLAS has no smaller part to rebuild: a big one turns clustered at this first
+        // local edit, others are rebuilt.
+        const TriangleSplices& t = mesh.dirty.triangles;
+        a.entry.detail = std::to_string(t.old_count()) + " triangles replaced by " +
+                         std::to_string(t.new_count());
+        a.clustered = blas.may_cluster(mesh) &&
+                      config.clusters.local(t.old_count(), built->triangle_count) &&
+                      config.clusters.local(t.new_count(), mesh.triangles.size());
+        a.entry.reason = a.clustered ? BuildReason::Clustered : BuildReason::TopologyChanged;
+        if (a.clustered)
+            a.entry.detail += ": rebuilt as clusters, so local edits rebuild only the clusters "
+                              "they touch";
     } else if (!built->clusters && blas.may_cluster(mesh) && dirty.has(MeshDirty::Points) &&
                config.clusters.local(mesh.dirty.points.count(), mesh.positions.size())) {
         a.entry.reason = BuildReason::Clustered;
@@ -71,12 +84,13 @@ MeshAction decide(const MeshRecord& mesh, const BlasRecord* built, const BlasSto
                          "only the clusters they touch";
         a.clustered = true;
     } else {
-        const BuildReason asked = dirty.has(MeshDirty::Points) ? BuildReason::PositionsChanged
-                                                               : BuildReason::RefitRequested;
+        const BuildReason asked = dirty.has(MeshDirty::Triangles) ? BuildReason::TrianglesReplaced
+                                  : dirty.has(MeshDirty::Points)  ? BuildReason::PositionsChanged
+                                                                  : BuildReason::RefitRequested;
         RefitDecision d;
         if (built->clusters) {
             // A clustered BLAS measures only the clusters the edit touches.
-            a.clusters = built->clusters->plan(mesh, config.refit_policy, asked);
+            a.clusters = built->clusters->plan(mesh, config.refit_policy, config.clusters, asked);
             d = a.clusters.whole;
         } else {
             a.metrics = measure_mesh(mesh);
@@ -108,14 +122,15 @@ void record(MeshHandle h, const MeshRecord& mesh, const BlasRecord* built, MeshA
         entry.clusters = built->clusters->cluster_count();
         entry.clusters_refit = uint32_t(work.refit.size());
         entry.clusters_rebuilt = uint32_t(work.rebuild.size());
-        entry.primitives = work.refit_triangles + work.rebuild_triangles;
+        entry.clusters_rebuilt += uint32_t(work.splice.clusters.size());
+        entry.primitives = work.refit_triangles + work.rebuild_triangles + work.splice.triangles;
         if (!work.rebuild.empty())
             entry.detail += "; " + std::to_string(work.rebuild.size()) +
                             " clusters rebuilt past the refit policy's limits";
         report.clusters_refit += entry.clusters_refit;
         report.clusters_rebuilt += entry.clusters_rebuilt;
         report.primitives_refit += work.refit_triangles;
-        report.primitives_built += work.rebuild_triangles;
+        report.primitives_built += work.rebuild_triangles + work.splice.triangles;
     } else {
         report.primitives_refit += mesh.triangles.size();
     }
@@ -172,7 +187,8 @@ CommitPlan AccelGraph::plan(const Scene& scene) const {
 
     // Step: meshes. Each dirty mesh gets at most one BLAS action.
     constexpr DirtyBits<MeshDirty> GEOMETRY_BITS = MeshDirty::Added | MeshDirty::Points |
-                                                   MeshDirty::Topology | MeshDirty::RefitRequested |
+                                                   MeshDirty::Topology | MeshDirty::Triangles |
+                                                   MeshDirty::RefitRequested |
                                                    MeshDirty::RebuildRequested;
     for (MeshHandle h : changes.meshes()) {
         const BlasRecord* built = m_blas.find(h);

@@ -318,7 +318,7 @@ void BlasStore::upload_whole(BlasRecord& r, const MeshRecord& mesh, uint32_t ver
     rtcCommitGeometry(r.geometry);
 }
 
-Status BlasStore::refit(MeshHandle h, const MeshRecord& mesh, const ClusterWork* work) {
+Status BlasStore::refit(MeshHandle h, const MeshRecord& mesh, ClusterWork* work) {
     BlasRecord* r = h.index < m_records.size() ? &m_records[h.index] : nullptr;
     STRATA_CHECK(r && r->scene && r->generation == h.generation);
     STRATA_CHECK(r->vertex_count == mesh.positions.size());
@@ -344,6 +344,7 @@ Status BlasStore::refit(MeshHandle h, const MeshRecord& mesh, const ClusterWork*
         rtcCommitGeometry(r->geometry);
     }
     rtcCommitScene(r->scene);
+    r->triangle_count = static_cast<uint32_t>(mesh.triangles.size());
     ++r->baseline.refits_since_build;
     r->bytes += m_device.bytes(MemoryCategory::Blas) - bytes_before;
     if (r->options.compact) ++m_compaction_version;

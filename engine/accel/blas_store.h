@@ -107,7 +107,7 @@ public:
                  bool clustered = false);
     /// Refits the BLAS of `mesh` after uploading its dirty vertex ranges; a clustered BLAS
     /// refits (and rebuilds) the clusters `work` names.
-    Status refit(MeshHandle h, const MeshRecord& mesh, const ClusterWork* work = nullptr);
+    Status refit(MeshHandle h, const MeshRecord& mesh, ClusterWork* work = nullptr);
 
     /// Whether `mesh` may have a clustered BLAS (big enough, refit allowed, not compacted).
     bool may_cluster(const MeshRecord& mesh) const {

@@ -78,16 +78,30 @@ ClusterLayout::ClusterLayout(std::span<const Vec3> positions, std::span<const Tr
                               m_order[i] = static_cast<uint32_t>(keys[i]);
                       });
 
-    // Step: the vertex-to-cluster map. Clusters are visited in order, so each vertex's list comes
-    // out ascending and a vertex used twice by one cluster is counted once.
-    const std::size_t vertices = positions.size();
+    // Step: each cluster's size and triangles, then the vertex-to-cluster map.
+    m_cut_size = std::max<uint32_t>(cluster_size, 1);
+    m_triangle_count = static_cast<uint32_t>(n);
+    const uint32_t count = static_cast<uint32_t>(m_first.size() - 1);
+    m_size.resize(count);
+    m_ids.resize(count);
+    m_remade.assign(count, 0);
+    m_own.resize(count);
+    for (uint32_t c = 0; c < count; ++c) {
+        m_size[c] = m_first[c + 1] - m_first[c];
+        m_ids[c] = m_order.data() + m_first[c];
+    }
+    map_vertices(triangles, positions.size());
+}
+
+void ClusterLayout::map_vertices(std::span<const Triangle> triangles, std::size_t vertices) {
+    // Clusters are visited in order, so each vertex's list comes out ascending and a vertex used
+    // twice by one cluster is counted once.
     std::vector<uint32_t> last(vertices, UINT32_MAX);
     m_vertex_offsets.assign(vertices + 1, 0);
     auto visit = [&](auto&& f) {
         for (uint32_t c = 0; c < cluster_count(); ++c) {
-            const uint32_t end = first(c) + size(c);
-            for (uint32_t k = first(c); k < end; ++k) {
-                const Triangle& t = triangles[m_order[k]];
+            for (uint32_t id : members(c)) {
+                const Triangle& t = triangles[id];
                 for (int corner = 0; corner < 3; ++corner) {
                     const uint32_t v = t[corner];
                     if (last[v] == c) continue;
@@ -103,6 +117,7 @@ ClusterLayout::ClusterLayout(std::span<const Vec3> positions, std::span<const Tr
     std::fill(last.begin(), last.end(), UINT32_MAX);
     std::vector<uint32_t> cursor(m_vertex_offsets.begin(), m_vertex_offsets.end() - 1);
     visit([&](uint32_t v, uint32_t c) { m_vertex_clusters[cursor[v]++] = c; });
+    m_extra.clear();
 }
 
 void ClusterLayout::cut(const std::vector<uint64_t>& keys, uint32_t max_size) {
@@ -154,15 +169,88 @@ std::vector<uint32_t> ClusterLayout::touched(const VertexRanges& ranges) const {
     for (const VertexRanges::Range& r : ranges.ranges()) {
         const uint32_t end = std::min(r.end, vertices);
         for (uint32_t v = r.begin; v < end; ++v) {
-            for (uint32_t c : clusters_of(v)) {
-                if (seen[c]) continue;
+            for_each_cluster_of(v, [&](uint32_t c) {
+                if (seen[c]) return;
                 seen[c] = 1;
                 out.push_back(c);
-            }
+            });
         }
     }
     std::sort(out.begin(), out.end());
     return out;
+}
+
+std::vector<uint32_t> ClusterLayout::holding(const TriangleSplices& splices) const {
+    // A bit per triangle of the last commit, set where a run replaced it: one cheap test per
+    // cluster member.
+    std::vector<uint64_t> replaced((std::size_t(m_triangle_count) + 63) / 64, 0);
+    for (const TriangleSplices::Run& run : splices.runs())
+        for (uint32_t t = run.old_first; t < std::min(run.old_end, m_triangle_count); ++t)
+            replaced[t >> 6] |= uint64_t(1) << (t & 63);
+    std::vector<uint8_t> holds(cluster_count(), 0);
+    tbb::parallel_for(tbb::blocked_range<uint32_t>(0, cluster_count(), 16),
+                      [&](const tbb::blocked_range<uint32_t>& r) {
+                          for (uint32_t c = r.begin(); c != r.end(); ++c) {
+                              for (uint32_t id : members(c)) {
+                                  if (replaced[id >> 6] >> (id & 63) & 1) {
+                                      holds[c] = 1;
+                                      break;
+                                  }
+                              }
+                          }
+                      });
+    std::vector<uint32_t> out;
+    for (uint32_t c = 0; c < cluster_count(); ++c)
+        if (holds[c]) out.push_back(c);
+    return out;
+}
+
+void ClusterLayout::splice(const TriangleRenumbering& renumber, std::span<const uint32_t> clusters,
+                           std::vector<std::vector<uint32_t>>&& members,
+                           std::span<const Triangle> triangles, std::size_t vertex_count) {
+    // Step: the re-made clusters take their new members.
+    std::vector<uint8_t> remade(cluster_count(), 0);
+    for (std::size_t i = 0; i < clusters.size(); ++i) {
+        const uint32_t c = clusters[i];
+        remade[c] = 1;
+        m_remade[c] = 1;
+        m_own[c] = std::move(members[i]);
+        m_ids[c] = m_own[c].data();
+        m_size[c] = static_cast<uint32_t>(m_own[c].size());
+    }
+    m_triangle_count = static_cast<uint32_t>(triangles.size());
+
+    // Step: the other clusters' triangles are renumbered (none of them was replaced).
+    if (renumber.moves()) {
+        tbb::parallel_for(tbb::blocked_range<uint32_t>(0, cluster_count(), 16),
+                          [&](const tbb::blocked_range<uint32_t>& r) {
+                              for (uint32_t c = r.begin(); c != r.end(); ++c) {
+                                  if (remade[c]) continue;
+                                  uint32_t* ids = m_ids[c];
+                                  for (uint32_t k = 0; k < m_size[c]; ++k)
+                                      ids[k] = renumber(ids[k]).value_or(ids[k]);
+                              }
+                          });
+    }
+
+    // Step: the vertices the re-made clusters use. Past a quarter of the map, it is built anew.
+    std::vector<uint64_t> added;
+    for (uint32_t c : clusters) {
+        for (uint32_t id : this->members(c)) {
+            const Triangle& t = triangles[id];
+            for (int corner = 0; corner < 3; ++corner)
+                added.push_back(uint64_t(t[corner]) << 32 | c);
+        }
+    }
+    if (m_extra.size() + added.size() > m_vertex_clusters.size() / 4 + 1024) {
+        map_vertices(triangles, vertex_count);
+        return;
+    }
+    std::sort(added.begin(), added.end());
+    const std::size_t mid = m_extra.size();
+    m_extra.insert(m_extra.end(), added.begin(), added.end());
+    std::inplace_merge(m_extra.begin(), m_extra.begin() + std::ptrdiff_t(mid), m_extra.end());
+    m_extra.erase(std::unique(m_extra.begin(), m_extra.end()), m_extra.end());
 }
 
 void ClusterLayout::write_sorted(std::span<const Triangle> triangles, Triangle* out) const {
@@ -173,12 +261,11 @@ void ClusterLayout::write_sorted(std::span<const Triangle> triangles, Triangle* 
                       });
 }
 
-ClusterMetrics ClusterLayout::measure(uint32_t c, std::span<const Vec3> positions,
-                                      const Triangle* sorted) const {
+ClusterMetrics ClusterLayout::measure(std::span<const Vec3> positions, const Triangle* tris,
+                                      uint32_t count) {
     ClusterMetrics m;
-    const uint32_t end = first(c) + size(c);
-    for (uint32_t k = first(c); k < end; ++k) {
-        const Triangle& t = sorted[k];
+    for (uint32_t k = 0; k < count; ++k) {
+        const Triangle& t = tris[k];
         Bounds3 b;
         b.extend(positions[t.x]);
         b.extend(positions[t.y]);

@@ -7,11 +7,13 @@
 //
 // Pure data: no Embree. The BLAS store turns each cluster into one Embree geometry.
 
+#include <algorithm>
 #include <cstdint>
 #include <span>
 #include <vector>
 
 #include "engine/core/math.h"
+#include "engine/scene/dirty.h"
 #include "engine/scene/types.h"
 #include "engine/scene/vertex_ranges.h"
 
@@ -59,38 +61,65 @@ public:
     ClusterLayout(std::span<const Vec3> positions, std::span<const Triangle> triangles,
                   uint32_t cluster_size);
 
-    uint32_t cluster_count() const { return static_cast<uint32_t>(m_first.size() - 1); }
-    uint32_t triangle_count() const { return static_cast<uint32_t>(m_order.size()); }
-    /// Position in sorted order of cluster `c`'s first triangle, and its triangle count.
+    uint32_t cluster_count() const { return static_cast<uint32_t>(m_size.size()); }
+    uint32_t triangle_count() const { return m_triangle_count; }
+    /// The size the clusters were cut to.
+    uint32_t cut_size() const { return m_cut_size; }
+    /// Cluster `c`'s triangle count.
+    uint32_t size(uint32_t c) const { return m_size[c]; }
+    /// Whether cluster `c` is still the run of the sorted order it was cut as (no splice has
+    /// re-made it), and that run's first position.
+    bool in_place(uint32_t c) const { return !m_remade[c]; }
     uint32_t first(uint32_t c) const { return m_first[c]; }
-    uint32_t size(uint32_t c) const { return m_first[c + 1] - m_first[c]; }
     /// The mesh's own index of triangle `prim` of cluster `cluster` (a hit's ids).
-    uint32_t mesh_triangle(uint32_t cluster, uint32_t prim) const {
-        return m_order[first(cluster) + prim];
-    }
-    /// The clusters that use vertex `v` (none for an unreferenced vertex).
-    std::span<const uint32_t> clusters_of(uint32_t v) const {
-        return {m_vertex_clusters.data() + m_vertex_offsets[v],
-                m_vertex_clusters.data() + m_vertex_offsets[v + 1]};
+    uint32_t mesh_triangle(uint32_t cluster, uint32_t prim) const { return m_ids[cluster][prim]; }
+    /// Cluster `c`'s triangles, as the mesh numbers them, in the cluster's own order.
+    std::span<const uint32_t> members(uint32_t c) const { return {m_ids[c], m_size[c]}; }
+    /// Calls `f(cluster)` for each cluster that uses vertex `v` (a cluster may come twice).
+    template <class F>
+    void for_each_cluster_of(uint32_t v, F&& f) const {
+        for (uint32_t k = m_vertex_offsets[v]; k < m_vertex_offsets[v + 1]; ++k)
+            f(m_vertex_clusters[k]);
+        auto it = std::lower_bound(m_extra.begin(), m_extra.end(), uint64_t(v) << 32);
+        for (; it != m_extra.end() && uint32_t(*it >> 32) == v; ++it) f(uint32_t(*it));
     }
     /// The clusters that use a vertex in `ranges`, ascending, each once.
     std::vector<uint32_t> touched(const VertexRanges& ranges) const;
+    /// The clusters holding a triangle that one of `splices`' runs replaced, ascending.
+    std::vector<uint32_t> holding(const TriangleSplices& splices) const;
 
     /// Copies the triangles in sorted order (the clusters one after another) to `out`.
     void write_sorted(std::span<const Triangle> triangles, Triangle* out) const;
-    /// Measures cluster `c` at `positions`; `sorted` holds the triangles in sorted order (what
-    /// write_sorted wrote), so the cluster's triangles are read in one run.
-    ClusterMetrics measure(uint32_t c, std::span<const Vec3> positions,
-                           const Triangle* sorted) const;
+    /// Measures the `count` triangles at `tris` (one cluster's) at `positions`.
+    static ClusterMetrics measure(std::span<const Vec3> positions, const Triangle* tris,
+                                  uint32_t count);
+
+    /// A local topology edit: clusters[i] now holds members[i] (mesh triangles, numbered as
+    /// now); every other cluster's triangles are renumbered by `renumber`. `triangles` are the
+    /// mesh's triangles now.
+    void splice(const TriangleRenumbering& renumber, std::span<const uint32_t> clusters,
+                std::vector<std::vector<uint32_t>>&& members, std::span<const Triangle> triangles,
+                std::size_t vertex_count);
 
 private:
     /// Fills m_first from the sorted (code << 32 | triangle) keys.
     void cut(const std::vector<uint64_t>& keys, uint32_t max_size);
+    /// Rebuilds the vertex-to-cluster map from the clusters' members (m_extra emptied).
+    void map_vertices(std::span<const Triangle> triangles, std::size_t vertex_count);
 
-    std::vector<uint32_t> m_first;            ///< cluster -> first sorted position; one past the end
-    std::vector<uint32_t> m_order;            ///< sorted position -> mesh triangle
+    uint32_t m_cut_size = 0;
+    uint32_t m_triangle_count = 0;
+    std::vector<uint32_t> m_first;   ///< cluster -> first sorted position; one past the end
+    std::vector<uint32_t> m_order;   ///< sorted position -> mesh triangle (clusters in place)
+    std::vector<uint32_t> m_size;    ///< cluster -> triangle count
+    std::vector<uint8_t> m_remade;   ///< cluster -> re-made by a splice (its ids in m_own)
+    std::vector<std::vector<uint32_t>> m_own;  ///< re-made clusters' triangles
+    std::vector<uint32_t*> m_ids;    ///< cluster -> its triangles (into m_order or m_own)
     std::vector<uint32_t> m_vertex_offsets;   ///< vertex -> its run in m_vertex_clusters
     std::vector<uint32_t> m_vertex_clusters;  ///< clusters by vertex, ascending per vertex
+    /// (vertex << 32 | cluster) pairs splices added since the map was built, sorted: a vertex
+    /// a new triangle uses. Entries a splice made stale only cost a cluster measured in vain.
+    std::vector<uint64_t> m_extra;
 };
 
 }  // namespace strata

@@ -1,6 +1,7 @@
 #include "engine/accel/clustered_blas.h"
 
 #include <cstring>
+#include <limits>
 
 #include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
@@ -25,23 +26,42 @@ struct LayoutMetrics {
     MeshMetrics built;
 };
 
-std::vector<ClusterMetrics> measure_clusters(const ClusterLayout& layout,
-                                             const std::vector<uint32_t>& clusters,
-                                             const MeshRecord& mesh, RTCBuffer sorted) {
-    std::vector<ClusterMetrics> out(clusters.size());
-    const auto* triangles = static_cast<const Triangle*>(rtcGetBufferData(sorted));
-    auto measure = [&](std::size_t i) {
-        out[i] = layout.measure(clusters[i], mesh.positions, triangles);
-    };
-    if (clusters.size() < 4) {
-        for (std::size_t i = 0; i < clusters.size(); ++i) measure(i);
+/// Measures `count` items in parallel when there are enough: out[i] = measure(i).
+template <class F>
+std::vector<ClusterMetrics> measure_each(std::size_t count, F&& measure) {
+    std::vector<ClusterMetrics> out(count);
+    if (count < 4) {
+        for (std::size_t i = 0; i < count; ++i) out[i] = measure(i);
         return out;
     }
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, clusters.size(), 2),
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 2),
                       [&](const tbb::blocked_range<std::size_t>& r) {
-                          for (std::size_t i = r.begin(); i != r.end(); ++i) measure(i);
+                          for (std::size_t i = r.begin(); i != r.end(); ++i) out[i] = measure(i);
                       });
     return out;
+}
+
+/// Measures mesh triangles `ids` at the mesh's positions now.
+ClusterMetrics measure_ids(const MeshRecord& mesh, std::span<const uint32_t> ids) {
+    ClusterMetrics m;
+    const std::vector<Vec3>& p = mesh.positions;
+    for (uint32_t id : ids) {
+        const Triangle& t = mesh.triangles[id];
+        Bounds3 b;
+        b.extend(p[t.x]);
+        b.extend(p[t.y]);
+        b.extend(p[t.z]);
+        m.triangle_area += b.surface_area();
+        m.bounds.extend(b);
+    }
+    return m;
+}
+
+/// Squared distance from `p` to box `b` (0 inside; infinite for an empty box).
+float distance2(const Bounds3& b, const Vec3& p) {
+    if (b.empty()) return std::numeric_limits<float>::infinity();
+    const Vec3 d = glm::max(glm::max(b.lower - p, p - b.upper), Vec3(0.0f));
+    return glm::dot(d, d);
 }
 
 void copy_ranges(RTCBuffer buffer, const MeshRecord& mesh) {
@@ -59,7 +79,7 @@ void copy_ranges(RTCBuffer buffer, const MeshRecord& mesh) {
 
 ClusteredBlas::ClusteredBlas(RTCDeviceTy* device, RTCSceneTy* scene, const MeshRecord& mesh,
                              uint32_t cluster_size, int geometry_quality)
-    : m_scene(scene), m_layout(mesh.positions, mesh.triangles, cluster_size) {
+    : m_device(device), m_scene(scene), m_layout(mesh.positions, mesh.triangles, cluster_size) {
     static_assert(sizeof(Vec3) == 3 * sizeof(float));
     static_assert(sizeof(Triangle) == 3 * sizeof(uint32_t));
     const std::size_t vertices = mesh.positions.size();
@@ -75,6 +95,7 @@ ClusteredBlas::ClusteredBlas(RTCDeviceTy* device, RTCSceneTy* scene, const MeshR
     // Step: one geometry per cluster over its slice of the index buffer.
     const uint32_t count = m_layout.cluster_count();
     m_geometries.resize(count, nullptr);
+    m_own_indices.resize(count, nullptr);
     for (uint32_t c = 0; c < count; ++c) {
         RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
         if (!g) return;
@@ -90,9 +111,10 @@ ClusteredBlas::ClusteredBlas(RTCDeviceTy* device, RTCSceneTy* scene, const MeshR
     }
 
     // Step: every cluster's drift baseline.
-    std::vector<uint32_t> all(count);
-    for (uint32_t c = 0; c < count; ++c) all[c] = c;
-    m_metrics = measure_clusters(m_layout, all, mesh, m_indices);
+    m_metrics = measure_each(count, [&](std::size_t c) {
+        return ClusterLayout::measure(mesh.positions, triangles_of(uint32_t(c)),
+                                      m_layout.size(uint32_t(c)));
+    });
     m_baselines.resize(count);
     for (uint32_t c = 0; c < count; ++c) m_baselines[c] = {as_mesh_metrics(m_metrics[c]), 0};
 }
@@ -103,41 +125,70 @@ ClusteredBlas::~ClusteredBlas() {
         rtcDetachGeometry(m_scene, c);
         rtcReleaseGeometry(m_geometries[c]);
     }
+    for (RTCBuffer b : m_own_indices)
+        if (b) rtcReleaseBuffer(b);
     if (m_vertices) rtcReleaseBuffer(m_vertices);
     if (m_indices) rtcReleaseBuffer(m_indices);
 }
 
+const Triangle* ClusteredBlas::triangles_of(uint32_t c) const {
+    if (m_own_indices[c]) return static_cast<const Triangle*>(rtcGetBufferData(m_own_indices[c]));
+    if (!m_layout.in_place(c)) return nullptr;  // re-made empty
+    return static_cast<const Triangle*>(rtcGetBufferData(m_indices)) + m_layout.first(c);
+}
+
 ClusterWork ClusteredBlas::plan(const MeshRecord& mesh, const RefitPolicy& policy,
-                                BuildReason asked) const {
+                                const ClusterPolicy& clusters, BuildReason asked) const {
     ClusterWork work;
-    // Step: the clusters the edit touches, measured at their new positions.
+    // Step: a local topology edit re-makes the clusters of the triangles it replaced.
+    if (!mesh.dirty.triangles.empty()) {
+        plan_splice(mesh, clusters, work);
+        if (work.whole.rebuild) return work;
+    }
+    std::vector<uint8_t> remade(cluster_count(), 0);
+    for (uint32_t c : work.splice.clusters) remade[c] = 1;
+
+    // Step: the clusters the edit's vertices touch, measured at their new positions.
     std::vector<uint32_t> touched;
     if (asked == BuildReason::RefitRequested) {
         touched.resize(cluster_count());
         for (uint32_t c = 0; c < cluster_count(); ++c) touched[c] = c;
-    } else {
+    } else if (mesh.dirty.bits.has(MeshDirty::Points)) {
         touched = m_layout.touched(mesh.dirty.points);
     }
-    const std::vector<ClusterMetrics> measured =
-        measure_clusters(m_layout, touched, mesh, m_indices);
+    std::erase_if(touched, [&](uint32_t c) { return remade[c] || m_layout.size(c) == 0; });
+    const std::vector<ClusterMetrics> measured = measure_each(touched.size(), [&](std::size_t i) {
+        return ClusterLayout::measure(mesh.positions, triangles_of(touched[i]),
+                                      m_layout.size(touched[i]));
+    });
 
     // Step: the layout as a whole. Clusters that drift apart overlap, which a refit of each
     // cannot mend: past the mesh's limits on the summed box areas, the mesh is re-clustered.
+    // Re-made clusters count as built now.
     LayoutMetrics sums;
-    std::vector<uint8_t> is_touched(cluster_count(), 0);
-    for (std::size_t i = 0; i < touched.size(); ++i) {
-        is_touched[touched[i]] = 1;
-        add(sums.now, measured[i]);
+    for (std::size_t i = 0; i < touched.size(); ++i) add(sums.now, measured[i]);
+    for (std::size_t i = 0; i < work.splice.clusters.size(); ++i) {
+        add(sums.now, work.splice.metrics[i]);
+        add(sums.built, work.splice.metrics[i]);
     }
+    std::vector<uint8_t> is_touched(cluster_count(), 0);
+    for (uint32_t c : touched) is_touched[c] = 1;
     for (uint32_t c = 0; c < cluster_count(); ++c) {
+        if (remade[c]) continue;
         sums.built.bounds_area += m_baselines[c].metrics.bounds_area;
         sums.built.triangle_area += m_baselines[c].metrics.triangle_area;
-        if (is_touched[c]) continue;
-        add(sums.now, m_metrics[c]);
+        if (!is_touched[c]) add(sums.now, m_metrics[c]);
     }
     work.whole = decide_refit(policy, mesh.build, BuildBaseline{sums.built, 0}, sums.now, asked);
     work.whole.detail = "clusters' " + work.whole.detail;
     if (work.whole.rebuild) return work;
+    if (!work.splice.empty()) {
+        const TriangleSplices& runs = work.splice.runs;
+        work.whole.detail = std::to_string(runs.old_count()) + " triangles replaced by " +
+                            std::to_string(runs.new_count()) + ": " +
+                            std::to_string(work.splice.clusters.size()) +
+                            " clusters re-made; " + work.whole.detail;
+    }
 
     // Step: each touched cluster against its own baseline, as a mesh would be.
     for (std::size_t i = 0; i < touched.size(); ++i) {
@@ -157,9 +208,125 @@ ClusterWork ClusteredBlas::plan(const MeshRecord& mesh, const RefitPolicy& polic
     return work;
 }
 
-void ClusteredBlas::refit(const MeshRecord& mesh, const ClusterWork& work) {
-    copy_ranges(m_vertices, mesh);
-    for (std::size_t i = 0; i < work.refit.size(); ++i) {
+void ClusteredBlas::plan_splice(const MeshRecord& mesh, const ClusterPolicy& clusters,
+                                ClusterWork& work) const {
+    const TriangleSplices& runs = mesh.dirty.triangles;
+    ClusterSplice& splice = work.splice;
+    splice.runs = runs;
+    auto recluster = [&](std::string detail) {
+        work.whole = {true, BuildReason::TopologyChanged, std::move(detail)};
+    };
+    if (!clusters.local(runs.old_count(), m_layout.triangle_count()) ||
+        !clusters.local(runs.new_count(), mesh.triangles.size())) {
+        recluster(std::to_string(runs.old_count()) + " of " +
+                  std::to_string(m_layout.triangle_count()) + " triangles replaced by " +
+                  std::to_string(runs.new_count()) + ": not a local edit, the mesh is re-clustered");
+        return;
+    }
+
+    // Step: the clusters that held a replaced triangle keep their others, renumbered.
+    const TriangleRenumbering renumber(runs);
+    std::vector<int32_t> slot(cluster_count(), -1);
+    auto take = [&](uint32_t c) -> std::vector<uint32_t>& {
+        if (slot[c] < 0) {
+            slot[c] = static_cast<int32_t>(splice.clusters.size());
+            splice.clusters.push_back(c);
+            std::vector<uint32_t>& kept = splice.members.emplace_back();
+            for (uint32_t id : m_layout.members(c))
+                if (const auto now = renumber(id)) kept.push_back(*now);
+        }
+        return splice.members[std::size_t(slot[c])];
+    };
+    const std::vector<uint32_t> losing = m_layout.holding(runs);
+    for (uint32_t c : losing) take(c);
+
+    // Step: each new triangle joins the nearest cluster among those that use its vertices, else
+    // among those that lost triangles, else among all.
+    const std::vector<Vec3>& p = mesh.positions;
+    auto nearest = [&](const Triangle& t) {
+        const Vec3 centre = (p[t.x] + p[t.y] + p[t.z]) * (1.0f / 3.0f);
+        uint32_t best = UINT32_MAX;
+        float best_d = 0.0f;
+        auto consider = [&](uint32_t c) {
+            const float d = distance2(m_metrics[c].bounds, centre);
+            if (best == UINT32_MAX || d < best_d) {
+                best = c;
+                best_d = d;
+            }
+        };
+        for (int corner = 0; corner < 3; ++corner) m_layout.for_each_cluster_of(t[corner], consider);
+        if (best == UINT32_MAX)
+            for (uint32_t c : losing) consider(c);
+        if (best == UINT32_MAX)
+            for (uint32_t c = 0; c < cluster_count(); ++c) consider(c);
+        return best;
+    };
+    const std::vector<uint32_t> starts = runs.starts();
+    for (std::size_t k = 0; k < starts.size(); ++k) {
+        const uint32_t end = starts[k] + runs.runs()[k].count;
+        for (uint32_t id = starts[k]; id < end; ++id) take(nearest(mesh.triangles[id])).push_back(id);
+    }
+
+    // Step: ascending clusters, each still of a cluster's size, and their measurements.
+    std::vector<uint32_t> order(splice.clusters.size());
+    for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(),
+              [&](uint32_t a, uint32_t b) { return splice.clusters[a] < splice.clusters[b]; });
+    ClusterSplice sorted;
+    sorted.runs = runs;
+    const uint64_t limit = 2 * uint64_t(m_layout.cut_size());
+    for (uint32_t i : order) {
+        if (splice.members[i].size() > limit) {
+            recluster("cluster " + std::to_string(splice.clusters[i]) + " would hold " +
+                      std::to_string(splice.members[i].size()) + " triangles (limit " +
+                      std::to_string(limit) + "): the mesh is re-clustered");
+            return;
+        }
+        sorted.triangles += splice.members[i].size();
+        sorted.clusters.push_back(splice.clusters[i]);
+        sorted.members.push_back(std::move(splice.members[i]));
+    }
+    sorted.metrics = measure_each(sorted.clusters.size(), [&](std::size_t i) {
+        return measure_ids(mesh, sorted.members[i]);
+    });
+    splice = std::move(sorted);
+}
+
+void ClusteredBlas::apply_splice(const MeshRecord& mesh, ClusterSplice& splice) {
+    for (std::size_t i = 0; i < splice.clusters.size(); ++i) {
+        const uint32_t c = splice.clusters[i];
+        const std::vector<uint32_t>& members = splice.members[i];
+        RTCGeometry g = m_geometries[c];
+        const bool was_empty = m_layout.size(c) == 0;
+        RTCBuffer old = m_own_indices[c];
+        m_own_indices[c] = nullptr;
+        if (members.empty()) {
+            // Embree builds no geometry of zero triangles: an empty cluster is switched off.
+            if (!was_empty) rtcDisableGeometry(g);
+        } else {
+            RTCBuffer b = rtcNewBuffer(m_device, members.size() * sizeof(Triangle));
+            if (!b) return;  // the device reports the error
+            auto* dst = static_cast<Triangle*>(rtcGetBufferData(b));
+            for (std::size_t k = 0; k < members.size(); ++k) dst[k] = mesh.triangles[members[k]];
+            rtcSetGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, b, 0,
+                                 sizeof(Triangle), members.size());
+            rtcUpdateGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0);
+            rtcUpdateGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0);
+            if (was_empty) rtcEnableGeometry(g);
+            rtcCommitGeometry(g);
+            m_own_indices[c] = b;
+        }
+        if (old) rtcReleaseBuffer(old);
+        m_metrics[c] = splice.metrics[i];
+        m_baselines[c] = {as_mesh_metrics(m_metrics[c]), 0};
+    }
+    m_layout.splice(TriangleRenumbering(splice.runs), splice.clusters, std::move(splice.members), mesh.triangles,
+                    mesh.positions.size());
+}
+
+void ClusteredBlas::refit(const MeshRecord& mesh, ClusterWork& work) {
+    if (!work.splice.empty()) apply_splice(mesh, work.splice);
+    copy_ranges(m_vertices, mesh);    for (std::size_t i = 0; i < work.refit.size(); ++i) {
         const uint32_t c = work.refit[i];
         rtcUpdateGeometryBuffer(m_geometries[c], RTC_BUFFER_TYPE_VERTEX, 0);
         rtcCommitGeometry(m_geometries[c]);

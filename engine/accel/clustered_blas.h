@@ -23,8 +23,21 @@ struct RTCBufferTy;
 
 namespace strata {
 
-/// What a commit does to a clustered BLAS whose positions changed: planned without touching
-/// Embree, carried out by ClusteredBlas::refit.
+/// What local topology edits (TriangleSplices) do to the clusters: those that held a replaced
+/// triangle or take a new one are re-made with the members listed (mesh triangles, numbered as
+/// after the edits), and their BVHs rebuilt.
+struct ClusterSplice {
+    TriangleSplices runs;
+    std::vector<uint32_t> clusters;  ///< ascending
+    std::vector<std::vector<uint32_t>> members;  ///< parallel to `clusters`
+    std::vector<ClusterMetrics> metrics;         ///< parallel to `clusters`
+    uint64_t triangles = 0;  ///< triangles in the re-made clusters
+
+    bool empty() const { return runs.empty(); }
+};
+
+/// What a commit does to a clustered BLAS whose positions or triangles changed: planned without
+/// touching Embree, carried out by ClusteredBlas::refit.
 struct ClusterWork {
     /// The decision over all clusters: `whole.rebuild` when their drift taken together calls for
     /// a new layout (the whole BLAS is rebuilt), with its reason and detail.
@@ -35,6 +48,7 @@ struct ClusterWork {
     std::vector<ClusterMetrics> rebuild_metrics;  ///< parallel to `rebuild`
     uint64_t refit_triangles = 0;
     uint64_t rebuild_triangles = 0;
+    ClusterSplice splice;  ///< a local topology edit's clusters (empty: none)
 };
 
 class ClusteredBlas {
@@ -54,19 +68,33 @@ public:
         return m_layout.mesh_triangle(geom, prim);
     }
 
-    /// Which clusters a commit of `mesh`'s current positions refits or rebuilds. `asked` is
-    /// PositionsChanged (the clusters its dirty vertices touch) or RefitRequested (all of them).
-    ClusterWork plan(const MeshRecord& mesh, const RefitPolicy& policy, BuildReason asked) const;
-    /// Uploads the dirty vertices and commits the clusters of `work` (the caller commits the
-    /// scene).
-    void refit(const MeshRecord& mesh, const ClusterWork& work);
+    /// Which clusters a commit of `mesh`'s current positions and triangles refits or rebuilds.
+    /// `asked` is PositionsChanged (the clusters its dirty vertices touch), TrianglesReplaced
+    /// (the clusters of its dirty triangles, and of its dirty vertices) or RefitRequested (all).
+    ClusterWork plan(const MeshRecord& mesh, const RefitPolicy& policy,
+                     const ClusterPolicy& clusters, BuildReason asked) const;
+    /// Re-makes the clusters of `work`'s splice, uploads the dirty vertices and commits the
+    /// clusters of `work` (the caller commits the scene).
+    void refit(const MeshRecord& mesh, ClusterWork& work);
 
 private:
+    /// Cluster `c`'s triangles as Embree reads them.
+    const Triangle* triangles_of(uint32_t c) const;
+    /// Which clusters a local topology edit re-makes, and with what (work.whole.rebuild when the
+    /// edit is too big for that).
+    void plan_splice(const MeshRecord& mesh, const ClusterPolicy& clusters,
+                     ClusterWork& work) const;
+    /// Carries out `splice`: new index buffers for its clusters, the layout's numbering.
+    void apply_splice(const MeshRecord& mesh, ClusterSplice& splice);
+
+    RTCDeviceTy* m_device;
     RTCSceneTy* m_scene;
     ClusterLayout m_layout;
     RTCBufferTy* m_vertices = nullptr;
     RTCBufferTy* m_indices = nullptr;
     std::vector<RTCGeometryTy*> m_geometries;  ///< by cluster, attached by cluster index
+    /// A re-made cluster's own index buffer (null: its slice of m_indices; or none, when empty).
+    std::vector<RTCBufferTy*> m_own_indices;
     std::vector<ClusterMetrics> m_metrics;     ///< now
     std::vector<BuildBaseline> m_baselines;    ///< at each cluster's last build
 };

@@ -25,7 +25,10 @@ enum class BuildReason : uint8_t {
     Unshared,          ///< rebuild: the mesh of a BLAS shared with another engine changed
     PositionsChanged,  ///< refit: vertex positions moved
     RefitRequested,    ///< refit: mark_dirty {mesh, refit}
+    TrianglesReplaced,  ///< clusters re-made: a local topology edit on a clustered BLAS
 };
+/// The last BuildReason: names and schemas list them all up to it.
+inline constexpr BuildReason LAST_BUILD_REASON = BuildReason::TrianglesReplaced;
 
 const char* tlas_action_name(TlasAction a);
 const char* build_reason_name(BuildReason r);

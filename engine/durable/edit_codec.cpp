@@ -29,7 +29,8 @@ static_assert(TAG_IS<0, AddMesh> && TAG_IS<1, UpdateMeshPositions> &&
                   TAG_IS<20, AddTexture> && TAG_IS<21, RemoveTexture> &&
                   TAG_IS<22, UpdateMeshVertices> && TAG_IS<23, RemoveMaterial> &&
                   TAG_IS<24, AddInstances> && TAG_IS<25, UpdateInstances> &&
-                  TAG_IS<26, RemoveInstances> && std::variant_size_v<Edit> == 27,
+                  TAG_IS<26, RemoveInstances> && TAG_IS<27, ReplaceMeshTriangles> &&
+                  std::variant_size_v<Edit> == 28,
               "journal kind tags are the Edit variant's indices: append new kinds at the end");
 
 
@@ -60,7 +61,8 @@ constexpr const char* KIND_NAMES[] = {"add_mesh",
                                       "remove_material",
                                       "add_instances",
                                       "update_instances",
-                                      "remove_instances"};
+                                      "remove_instances",
+                                      "replace_triangles"};
 static_assert(std::size(KIND_NAMES) == std::variant_size_v<Edit>);
 
 /// Kind tag bit: the edit's extension fields follow its base layout. Fields added to a kind after
@@ -92,6 +94,10 @@ void fields(Io& io, E& e) {
 template <class Io, Kind<ReplaceMeshTopology> E>
 void fields(Io& io, E& e) {
     io(e.mesh, e.positions, e.triangles);
+}
+template <class Io, Kind<ReplaceMeshTriangles> E>
+void fields(Io& io, E& e) {
+    io(e.mesh, e.first, e.count, e.triangles);
 }
 template <class Io, Kind<RemoveMesh> E>
 void fields(Io& io, E& e) {

@@ -201,7 +201,9 @@ void FrameState::refresh_mesh(const Scene& scene, MeshHandle h) {
         if (h.index < meshes.size() && !scene.meshes().alive_at(h.index)) meshes[h.index].reset();
         return;
     }
-    if (!r->dirty.bits.has(MeshDirty::Added | MeshDirty::Topology | MeshDirty::Attributes)) return;
+    if (!r->dirty.bits.has(MeshDirty::Added | MeshDirty::Topology | MeshDirty::Triangles |
+                           MeshDirty::Attributes))
+        return;
     if (h.index >= meshes.size()) meshes.resize(h.index + 1);
     if (r->normals.empty() && r->uvs.empty() && r->uvs1.empty()) {
         meshes[h.index].reset();
@@ -249,7 +251,8 @@ void FrameState::sync(const Scene& scene) {
     }
     for (MeshHandle h : changes.meshes()) {
         const MeshRecord* r = scene.meshes().get(h);
-        if (!r || m_emitters == 0 || !r->dirty.bits.has(MeshDirty::Points | MeshDirty::Topology))
+        if (!r || m_emitters == 0 || !r->dirty.bits.has(MeshDirty::Points | MeshDirty::Topology |
+                                                          MeshDirty::Triangles))
             continue;
         for (InstanceHandle user : r->users) emitters_changed = emitters_changed || is_emitter(user.index);
     }

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "engine/core/handle.h"
+#include "engine/scene/triangle_splices.h"
 #include "engine/scene/vertex_ranges.h"
 
 namespace strata {
@@ -22,6 +23,7 @@ enum class MeshDirty : uint32_t {
     RefitRequested = 1u << 3,    ///< mark_dirty {mesh, refit}
     RebuildRequested = 1u << 4,  ///< mark_dirty {mesh, rebuild}
     Attributes = 1u << 5,        ///< normals or uvs changed: shading only, no BLAS work
+    Triangles = 1u << 6,         ///< runs of triangles replaced (TriangleSplices), same vertices
 };
 
 /// What changed in an instance.
@@ -110,10 +112,12 @@ inline constexpr DirtyBits<InstanceDirty> INSTANCE_TLAS_BITS =
     InstanceDirty::Added | InstanceDirty::Transform | InstanceDirty::Visibility |
     InstanceDirty::Mask;
 
-/// A mesh's dirty state: its bits and the vertices whose positions changed.
+/// A mesh's dirty state: its bits, the vertices whose positions changed and the triangles
+/// replaced.
 struct MeshDirtyState {
     DirtyBits<MeshDirty> bits;
     VertexRanges points;
+    TriangleSplices triangles;
 
     friend bool operator==(const MeshDirtyState&, const MeshDirtyState&) = default;
 };

@@ -47,6 +47,7 @@ struct ArrayBytes {
     uint64_t operator()(const UpdateMeshVertices& e) const {
         return bytes_of(e.vertices) + bytes_of(e.positions);
     }
+    uint64_t operator()(const ReplaceMeshTriangles& e) const { return bytes_of(e.triangles); }
     uint64_t operator()(const ReplaceMeshTopology& e) const {
         return bytes_of(e.positions) + bytes_of(e.triangles) + attribute_bytes(e);
     }

@@ -68,6 +68,17 @@ struct ReplaceMeshTopology {
     std::optional<std::vector<Vec2>> uvs1 = std::nullopt;
 };
 
+/// A local topology edit: triangles [first, first + count) are replaced by `triangles` (any
+/// number, none to cut a hole); the triangles after them move by triangles.size() - count. The
+/// vertices stay as they are. On a clustered BLAS the commit rebuilds only the clusters that held
+/// the replaced triangles (clustered_blas.h).
+struct ReplaceMeshTriangles {
+    std::string mesh;
+    uint32_t first = 0;
+    uint32_t count = 0;
+    std::vector<Triangle> triangles;
+};
+
 struct RemoveMesh {
     std::string mesh;
 };
@@ -294,7 +305,7 @@ using Edit = std::variant<AddMesh, UpdateMeshPositions, ReplaceMeshTopology, Rem
                           RemoveInstance, MarkDirty, SetCamera, SetLighting, Clear, AddGroup,
                           UpdateGroup, RemoveGroup, AddLight, UpdateLight, RemoveLight,
                           AddTexture, RemoveTexture, UpdateMeshVertices, RemoveMaterial,
-                          AddInstances, UpdateInstances, RemoveInstances>;
+                          AddInstances, UpdateInstances, RemoveInstances, ReplaceMeshTriangles>;
 
 /// Copies the fields an edit sets onto a full value; unset fields keep theirs.
 void apply_to(Camera& c, const SetCamera& e);

@@ -154,6 +154,10 @@ public:
 
     void operator()(undo::MeshTopology& r) { invert_topology(r, nullptr); }
 
+    void operator()(undo::MeshTriangles& r) {
+        emit(ReplaceMeshTriangles{id_of(r.handle), r.first, r.inserted, std::move(r.triangles)});
+    }
+
     void operator()(undo::MeshAttributes& r) {
         // The saved arrays are whole, so they go back whole (offset 0; [] removes them again).
         UpdateMeshPositions e{id_of(r.handle), 0, {}};

@@ -241,6 +241,7 @@ private:
     Status apply_edit(UpdateMeshPositions&& e, UndoLog& undo);
     Status apply_edit(UpdateMeshVertices&& e, UndoLog& undo);
     Status apply_edit(ReplaceMeshTopology&& e, UndoLog& undo);
+    Status apply_edit(ReplaceMeshTriangles&& e, UndoLog& undo);
     Status apply_edit(RemoveMesh&& e, UndoLog& undo);
     Status apply_edit(AddMaterial&& e, UndoLog& undo);
     Status apply_edit(UpdateMaterial&& e, UndoLog& undo);

@@ -422,6 +422,51 @@ Status Scene::apply_edit(ReplaceMeshTopology&& e, UndoLog& undo) {
     return {};
 }
 
+Status Scene::apply_edit(ReplaceMeshTriangles&& e, UndoLog& undo) {
+    const MeshHandle h = find_mesh(e.mesh);
+    if (h.is_null()) return unknown("mesh", e.mesh, "mesh");
+    MeshRecord& r = m_meshes.at(h);
+    const std::size_t n = r.triangles.size();
+    if (e.first > n)
+        return failure(ErrorCode::OutOfRange,
+                       "first triangle " + std::to_string(e.first) + " is past the end of mesh '" +
+                           e.mesh + "', which has " + std::to_string(n) + " triangles",
+                       "first");
+    if (e.count > n - e.first)
+        return failure(ErrorCode::OutOfRange,
+                       "triangles " + std::to_string(e.first) + " to " +
+                           std::to_string(uint64_t(e.first) + e.count - 1) +
+                           " are not all in mesh '" + e.mesh + "', which has " +
+                           std::to_string(n) + " triangles",
+                       "count");
+    const std::size_t after = n - e.count + e.triangles.size();
+    if (after == 0) return failure(ErrorCode::EmptyMesh, "mesh would have no triangles", "indices");
+    if (after > MAX_MESH_ELEMENTS)
+        return failure(ErrorCode::TooLarge,
+                       "too many triangles (" + std::to_string(after) + ")", "indices");
+    if (Status s = check_triangles(e.triangles, r.positions.size(), "indices"); !s) return s;
+
+    save_mesh(h, undo);
+    mark(h, MeshDirty::Triangles);
+    const auto inserted = static_cast<uint32_t>(e.triangles.size());
+    r.dirty.triangles.add(e.first, e.count, inserted);
+    m_totals.triangles = m_totals.triangles - n + after;
+    std::vector<Triangle>& tris = r.triangles.mut();
+    const auto at = tris.begin() + std::ptrdiff_t(e.first);
+    undo::MeshTriangles old{h, e.first, inserted,
+                            std::vector<Triangle>(at, at + std::ptrdiff_t(e.count))};
+    // Step: splice. Same counts overwrite in place; otherwise the tail moves once.
+    if (e.count == inserted) {
+        std::copy(e.triangles.begin(), e.triangles.end(), at);
+    } else {
+        tris.erase(at, at + std::ptrdiff_t(e.count));
+        tris.insert(tris.begin() + std::ptrdiff_t(e.first), e.triangles.begin(),
+                    e.triangles.end());
+    }
+    undo.records.emplace_back(std::move(old));
+    return {};
+}
+
 Status Scene::apply_edit(RemoveMesh&& e, UndoLog& undo) {
     const MeshHandle h = find_mesh(e.mesh);
     if (h.is_null()) return unknown("mesh", e.mesh, "mesh");

@@ -162,6 +162,18 @@ struct Reverser {
         mesh.triangles = std::move(r.triangles);
     }
 
+    void operator()(undo::MeshTriangles& r) {
+        std::vector<Triangle>& tris = meshes.at(r.handle).triangles.mut();
+        const auto at = tris.begin() + std::ptrdiff_t(r.first);
+        if (r.inserted == r.triangles.size()) {
+            std::copy(r.triangles.begin(), r.triangles.end(), at);
+            return;
+        }
+        tris.erase(at, at + std::ptrdiff_t(r.inserted));
+        tris.insert(tris.begin() + std::ptrdiff_t(r.first), r.triangles.begin(),
+                    r.triangles.end());
+    }
+
     void operator()(undo::MeshAttributes& r) {
         MeshRecord& mesh = meshes.at(r.handle);
         for_each_vertex_attribute([&](auto a) {

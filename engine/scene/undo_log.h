@@ -66,6 +66,15 @@ struct MeshTopology {
     CowVector<Triangle> triangles;
 };
 
+/// The triangles a local topology edit replaced: `triangles` stood at [first, first + size),
+/// where `inserted` triangles stand now.
+struct MeshTriangles {
+    MeshHandle handle;
+    uint32_t first = 0;
+    uint32_t inserted = 0;
+    std::vector<Triangle> triangles;
+};
+
 /// The vertex attributes an edit replaced (each only when that edit touched it).
 struct MeshAttributes {
     MeshHandle handle;
@@ -132,7 +141,8 @@ using UndoRecord = std::variant<
     undo::Removed<GroupHandle, GroupRecord>, undo::GroupState, undo::Reparented<InstanceHandle>,
     undo::Reparented<GroupHandle>, undo::Inserted<TextureHandle>,
     undo::Removed<TextureHandle, TextureRecord>, undo::Inserted<LightHandle>,
-    undo::Removed<LightHandle, LightRecord>, undo::LightState, undo::MeshVertexPositions>;
+    undo::Removed<LightHandle, LightRecord>, undo::LightState, undo::MeshVertexPositions,
+    undo::MeshTriangles>;
 
 /// Everything needed to take one batch back.
 struct UndoLog {

@@ -8,7 +8,7 @@
 
 namespace strata::protocol::ops {
 
-/// add_mesh, update_mesh, remove_mesh (mesh_ops.cpp).
+/// add_mesh, update_mesh, replace_triangles, remove_mesh (mesh_ops.cpp).
 std::span<const EditOp> mesh_ops();
 /// add_material, update_material (material_ops.cpp).
 std::span<const EditOp> material_ops();

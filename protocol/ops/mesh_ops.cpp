@@ -237,6 +237,19 @@ Edit parse_update_mesh(OpFields& f) {
     return e;
 }
 
+Edit parse_replace_triangles(OpFields& f) {
+    ReplaceMeshTriangles e;
+    e.mesh = f.id("mesh");
+    f.read("first", e.first);
+    f.read("count", e.count);
+    auto indices = read_indices(f);
+    if (!indices)
+        f.reader().schema_error(f.pointer("indices"),
+                                "replace_triangles needs indices or indices_b64 ([] removes)");
+    e.triangles = std::move(*indices);
+    return e;
+}
+
 Edit parse_remove_mesh(OpFields& f) {
     return RemoveMesh{f.id("mesh")};
 }
@@ -345,6 +358,25 @@ constexpr EditOp OPS[] = {
 })json",
      parse_update_mesh,
      edit_kinds<UpdateMeshPositions, UpdateMeshVertices, ReplaceMeshTopology>()},
+    {"replace_triangles",
+     "A local topology edit: triangles first .. first + count - 1 are replaced by the triangles "
+     "of indices (any number; [] cuts them out) over the mesh's existing vertices, and the "
+     "triangles after them are renumbered. A clustered mesh rebuilds only the clusters that held "
+     "them.",
+     R"json({
+  "type": "object",
+  "properties": {
+    "mesh": {"$ref": "#/$defs/id"},
+    "first": {"$ref": "#/$defs/u32", "description": "the first triangle replaced"},
+    "count": {"$ref": "#/$defs/u32", "description": "how many triangles are replaced"},
+    "indices": {"$ref": "#/$defs/indices"},
+    "indices_b64": {"$ref": "#/$defs/base64"}
+  },
+  "required": ["mesh", "first", "count"],
+  "additionalProperties": false,
+  "oneOf": [{"required": ["indices"]}, {"required": ["indices_b64"]}]
+})json",
+     parse_replace_triangles, edit_kinds<ReplaceMeshTriangles>()},
     {"remove_mesh", "Removes a mesh that no instance uses.",
      R"json({
   "type": "object",

@@ -5,8 +5,10 @@
 //   build/tests/bench/strata_cluster_bench [runs] [threads] [size_factor]
 //
 // Rows: the commit after a square patch holding 1%, 10% or all of the vertices moved (the patch
-// is written as one update_mesh per grid row, as a client sculpting it would send), and primary
-// rays per second on a fresh BLAS and after 1000 small local edits. Commit times are wall time
+// is written as one update_mesh per grid row, as a client sculpting it would send), the commit
+// after a patch of 1% or 10% of the triangles was re-cut (one replace_triangles per grid row:
+// the whole BLAS is rebuilt, the clustered one rebuilds the clusters that held them), BLAS
+// memory, and primary rays per second on a fresh BLAS and after 1000 small local edits. Commit times are wall time
 // around Engine::commit (the apply before it is not timed), medians over `runs`.
 
 #include <algorithm>
@@ -111,6 +113,31 @@ EditBatch patch(Terrain& t, double fraction, uint32_t cx, uint32_t cz, float lif
     return b;
 }
 
+/// Re-cuts a square patch of about `fraction` of the quads, centred at (cx, cz), along the
+/// other diagonal (`flip`) or back: one replace_triangles per grid row (each row of the patch is
+/// one run of triangles), the triangle count unchanged.
+EditBatch recut(double fraction, uint32_t cx, uint32_t cz, bool flip) {
+    EditBatch b;
+    const auto side = uint32_t(std::sqrt(fraction * double(NX) * double(NZ)));
+    const uint32_t x0 = std::min(cx - std::min(cx, side / 2), NX - side);
+    const uint32_t z0 = std::min(cz - std::min(cz, side / 2), NZ - side);
+    for (uint32_t z = z0; z < z0 + side; ++z) {
+        ReplaceMeshTriangles e{"terrain", 2 * (z * NX + x0), 2 * side, {}};
+        for (uint32_t x = x0; x < x0 + side; ++x) {
+            const uint32_t a = z * ROW + x, bb = a + 1, c = a + ROW, d = c + 1;
+            if (flip) {
+                e.triangles.push_back({a, c, d});
+                e.triangles.push_back({a, d, bb});
+            } else {  // make_plane's own cut
+                e.triangles.push_back({a, c, bb});
+                e.triangles.push_back({bb, c, d});
+            }
+        }
+        b.edits.emplace_back(std::move(e));
+    }
+    return b;
+}
+
 /// Applies `batch` (untimed), then times the commit.
 double timed_commit(Terrain& t, EditBatch batch, RebuildReport* report = nullptr) {
     if (auto r = t.engine->apply(std::move(batch)); !r) {
@@ -171,6 +198,34 @@ void run(int runs) {
                     median(a) / median(b), median(plan), median(blas), median(tlas),
                     median(sync));
     }
+
+    std::printf("\n| commit after replacing the triangles of | whole BLAS (rebuild) | clustered | "
+                "clusters rebuilt | speed-up | clustered phases: plan / blas / tlas / sync |\n");
+    std::printf("|---|---|---|---|---|---|\n");
+    for (double fraction : {0.01, 0.10}) {
+        std::vector<double> a, b, plan, blas, tlas, sync;
+        RebuildReport report;
+        for (int i = 0; i < runs; ++i) {
+            const bool flip = i % 2 == 0;  // re-cut, then cut back
+            a.push_back(timed_commit(whole, recut(fraction, NX / 2, NZ / 2, flip)));
+            b.push_back(timed_commit(clustered, recut(fraction, NX / 2, NZ / 2, flip), &report));
+            plan.push_back(report.phases.plan_ms);
+            blas.push_back(report.phases.blas_ms);
+            tlas.push_back(report.phases.tlas_ms);
+            sync.push_back(report.phases.sync_ms);
+        }
+        const uint32_t rebuilt = report.refit.empty() ? 0 : report.refit[0].clusters_rebuilt;
+        std::printf("| %g%% of the triangles (one patch) | %.3f ms | %.3f ms | %u of %u | %.1fx | "
+                    "%.3f / %.3f / %.3f / %.3f ms |\n",
+                    fraction * 100.0, median(a), median(b), rebuilt, clustered.clusters,
+                    median(a) / median(b), median(plan), median(blas), median(tlas),
+                    median(sync));
+    }
+    const auto mb = [](Terrain& t) {
+        return double(t.engine->memory_bytes(MemoryCategory::Blas)) / (1024.0 * 1024.0);
+    };
+    std::printf("\nBLAS memory: whole %.1f MiB, clustered %.1f MiB (%.2fx)\n", mb(whole),
+                mb(clustered), mb(clustered) / mb(whole));
 
     std::printf("\n| primary rays, 1280x720 | whole | clustered | clustered / whole speed |\n");
     std::printf("|---|---|---|---|\n");

@@ -16,6 +16,7 @@
 
 #include "engine/accel/cluster_layout.h"
 #include "engine/scene/vertex_ranges.h"
+#include "tests/engine/cluster_fixtures.h"
 #include "tests/engine/hit_frames.h"
 #include "tests/engine/test_util.h"
 
@@ -23,6 +24,11 @@ namespace strata {
 namespace {
 
 using Range = VertexRanges::Range;
+using test::batch_of;
+using test::bumpy_grid;
+using test::clustered_config;
+using test::committed_grid;
+using test::make;
 
 std::vector<Range> ranges_of(const VertexRanges& r) { return {r.ranges().begin(), r.ranges().end()}; }
 
@@ -63,17 +69,6 @@ TEST(VertexRanges, StaysShortByMergingTheClosestRangesAndNeverLosesAVertex) {
     }
 }
 
-/// A bumpy grid whose triangles are listed in random order: the client's numbering is not the
-/// clusters' order.
-MeshData bumpy_grid(uint32_t nx, uint32_t nz, uint32_t seed) {
-    MeshData m = make_plane(Vec3(8.0f, 0.0f, 8.0f), nx, nz);
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<float> bump(-0.05f, 0.05f);
-    for (Vec3& p : m.positions) p.y = 0.3f * std::sin(p.x * 1.7f) * std::cos(p.z * 1.3f) + bump(rng);
-    std::shuffle(m.triangles.begin(), m.triangles.end(), rng);
-    return m;
-}
-
 TEST(ClusterLayout, EveryTriangleInOneClusterAndEveryVertexMapsToTheClustersUsingIt) {
     const MeshData m = bumpy_grid(40, 30, 1);
     const ClusterLayout layout(m.positions, m.triangles, 64);
@@ -91,9 +86,11 @@ TEST(ClusterLayout, EveryTriangleInOneClusterAndEveryVertexMapsToTheClustersUsin
     }
     EXPECT_TRUE(std::all_of(seen.begin(), seen.end(), [](uint32_t n) { return n == 1; }));
     for (uint32_t v = 0; v < m.positions.size(); ++v) {
-        const auto got = layout.clusters_of(v);
+        std::vector<uint32_t> got;
+        layout.for_each_cluster_of(v, [&](uint32_t c) { got.push_back(c); });
         EXPECT_EQ(std::set<uint32_t>(got.begin(), got.end()), users[v]) << "vertex " << v;
         EXPECT_TRUE(std::is_sorted(got.begin(), got.end()));
+        EXPECT_EQ(got.size(), users[v].size()) << "each cluster once";
     }
     // touched(): exactly the union over the vertices in the ranges.
     VertexRanges r;
@@ -116,7 +113,9 @@ TEST(ClusterLayout, ClustersAreCompactPatches) {
     layout.write_sorted(m.triangles, sorted.data());
     double sorted_area = 0.0, naive_area = 0.0;
     for (uint32_t c = 0; c < layout.cluster_count(); ++c) {
-        sorted_area += double(layout.measure(c, m.positions, sorted.data()).bounds.surface_area());
+        sorted_area += double(ClusterLayout::measure(m.positions, sorted.data() + layout.first(c),
+                                                     layout.size(c))
+                                  .bounds.surface_area());
         Bounds3 naive;
         for (uint32_t k = layout.first(c); k < layout.first(c) + layout.size(c); ++k)
             for (int i = 0; i < 3; ++i) naive.extend(m.positions[m.triangles[k][i]]);
@@ -126,45 +125,6 @@ TEST(ClusterLayout, ClustersAreCompactPatches) {
 }
 
 // ---- the engine with clustered BLASes ----
-
-EngineConfig clustered_config(uint32_t min_triangles) {
-    EngineConfig c;
-    c.accel.clusters.min_triangles = min_triangles;
-    c.accel.clusters.min_size = 16;
-    c.accel.clusters.size_factor = 2.0;
-    return c;
-}
-
-std::unique_ptr<Engine> make(const EngineConfig& config) {
-    auto e = Engine::create(config);
-    EXPECT_TRUE(e.has_value());
-    return std::move(e.value());
-}
-
-EditBatch batch_of(std::vector<Edit> edits) {
-    EditBatch b;
-    b.edits = std::move(edits);
-    return b;
-}
-
-/// An engine (clusters from 1,024 triangles) holding mesh "g", a 100x100-quad bumpy grid
-/// (101x101 vertices, 20,000 triangles), instanced once and committed.
-struct GridScene {
-    std::unique_ptr<Engine> engine;
-    std::vector<Vec3> positions;  ///< the grid's vertices, as the engine holds them
-    RebuildReport added;          ///< the first commit's report
-};
-
-GridScene committed_grid(uint32_t seed) {
-    GridScene g;
-    g.engine = make(clustered_config(1024));
-    MeshData grid = bumpy_grid(100, 100, seed);
-    g.positions = grid.positions;
-    test::apply_ok(*g.engine, test::mesh_edit("g", std::move(grid)),
-                   test::instance_edit("i", "g"));
-    g.added = test::commit_ok(*g.engine);
-    return g;
-}
 
 TEST(UpdateMeshVertices, MovesTheListedVerticesAndIsAtomicAndUndoable) {
     auto engine = make(clustered_config(1024));
@@ -352,7 +312,8 @@ TEST(ClusteredBlas, SmallMeshesAndMeshesThatForbidRefitStayWhole) {
 // ---- differential: clustered against a fresh monolithic build ----
 
 /// Random edits on a few bumpy grids and spheres of many sizes: local vertex patches (several
-/// ranges per batch), whole-mesh deformations, refit and rebuild requests, topology changes.
+/// ranges per batch), whole-mesh deformations, refit and rebuild requests, local topology edits
+/// (runs of triangles replaced) and whole topology changes.
 class ClusterEdits {
 public:
     explicit ClusterEdits(uint64_t seed) : m_rng(seed) {}
@@ -379,13 +340,15 @@ public:
         for (int k = 0; k < edits; ++k) {
             Mesh& m = m_meshes[m_rng() % m_meshes.size()];
             const uint32_t kind = m_rng() % 10;
-            if (kind < 5) {
+            if (kind < 4) {
                 local_patch(m, b);
-            } else if (kind < 6) {
+            } else if (kind < 5) {
                 deform_all(m, b);
-            } else if (kind < 7) {
+            } else if (kind < 6) {
                 b.edits.emplace_back(MarkDirty{m.id, m_rng() % 2 ? DirtyAction::Refit : DirtyAction::Rebuild});
             } else if (kind < 8) {
+                splice(m, b);
+            } else if (kind < 9 && m_rng() % 2) {
                 retopologize(m, b);
             } else {
                 b.edits.emplace_back(camera());
@@ -453,6 +416,39 @@ private:
         b.edits.emplace_back(std::move(e));
     }
 
+    /// A run of triangles replaced (a local topology edit): some kept, some re-wound, some cut
+    /// out, some joined by a new triangle over nearby vertices; or, with none replaced, new
+    /// triangles inserted.
+    void splice(Mesh& m, EditBatch& b) {
+        const auto n = uint32_t(m.triangles.size());
+        const auto vertices = uint32_t(m.positions.size());
+        const uint32_t count = std::min(n - 1, uint32_t(m_rng() % 41));
+        const uint32_t first = uint32_t(m_rng() % (n - count + 1));
+        const uint32_t step = m.row ? m.row : 61;
+        std::vector<Triangle> out;
+        auto near = [&](const Triangle& t) {
+            return Triangle(t.x, t.y, std::min(vertices - 1, t.x + step + 1));
+        };
+        for (uint32_t i = first; i < first + count; ++i) {
+            const Triangle t = m.triangles[i];
+            switch (m_rng() % 4) {
+                case 0: break;
+                case 1: out.push_back(Triangle(t.x, t.z, t.y)); break;
+                case 2:
+                    out.push_back(t);
+                    out.push_back(near(t));
+                    break;
+                default: out.push_back(t);
+            }
+        }
+        if (count == 0) {
+            for (uint32_t k = 0; k < 1 + m_rng() % 8; ++k) out.push_back(near(m.triangles[m_rng() % n]));
+        }
+        m.triangles.erase(m.triangles.begin() + first, m.triangles.begin() + first + count);
+        m.triangles.insert(m.triangles.begin() + first, out.begin(), out.end());
+        b.edits.emplace_back(ReplaceMeshTriangles{m.id, first, count, std::move(out)});
+    }
+
     /// New triangles in a new order (some dropped): a topology change and a new numbering.
     void retopologize(Mesh& m, EditBatch& b) {
         std::shuffle(m.triangles.begin(), m.triangles.end(), m_rng);
@@ -482,7 +478,7 @@ std::string compare_normals(const test::HitFrame& a, const test::HitFrame& b) {
 TEST(ClusteredBlas, HitsMatchAFreshMonolithicBuildAfterRandomEdits) {
     constexpr int SEQUENCES = 12;
     constexpr int BATCHES = 25;
-    uint64_t clusters_refit = 0, clusters_rebuilt = 0, hits = 0, launches = 0;
+    uint64_t clusters_refit = 0, clusters_rebuilt = 0, hits = 0, launches = 0, spliced = 0;
     for (int seq = 0; seq < SEQUENCES; ++seq) {
         ClusterEdits edits(0xC1u + uint64_t(seq));
         auto engine = make(clustered_config(256));
@@ -493,6 +489,8 @@ TEST(ClusteredBlas, HitsMatchAFreshMonolithicBuildAfterRandomEdits) {
             const test::HitFrame clustered = test::render(*engine, 0xFFFFFFFFu, &report, 96, 64);
             clusters_refit += report.clusters_refit;
             clusters_rebuilt += report.clusters_rebuilt;
+            for (const MeshBuildEntry& e : report.refit)
+                spliced += e.reason == BuildReason::TrianglesReplaced;
 
             auto whole = make(clustered_config(0));
             ASSERT_TRUE(whole->apply(engine->read([](const Scene& s) { return s.to_batch(); }))
@@ -509,6 +507,7 @@ TEST(ClusteredBlas, HitsMatchAFreshMonolithicBuildAfterRandomEdits) {
     // Not vacuous: clusters were refit and rebuilt, and the frames show geometry.
     EXPECT_GT(clusters_refit, 100u);
     EXPECT_GT(clusters_rebuilt, 100u);
+    EXPECT_GT(spliced, 20u) << "local topology edits re-made clusters";
     EXPECT_GT(double(hits) / double(launches * 96 * 64), 0.2);
 }
 

@@ -49,6 +49,7 @@ EditBatch every_kind() {
     b.edits.emplace_back(SetCamera{Vec3(1), std::nullopt, std::nullopt, 30.0f});
     b.edits.emplace_back(SetLighting{std::nullopt, Vec3(2), std::nullopt, 0.5f});
     b.edits.emplace_back(UpdateMeshVertices{"tri", {2, 0, 2}, {{0, 3, 0}, {0, 0, 1}, {0, 4, 0}}});
+    b.edits.emplace_back(ReplaceMeshTriangles{"tri", 0, 1, {{0, 2, 1}, {1, 2, 0}}});
     b.edits.emplace_back(RemoveInstance{"a"});
     b.edits.emplace_back(RemoveMesh{"tri"});
     b.edits.emplace_back(RemoveMaterial{"red"});
@@ -195,6 +196,10 @@ TEST(EditCodec, EveryEditKindRoundTripsByteForByte) {
     const auto& listed = std::get<UpdateMeshVertices>(back->edits[11]);
     EXPECT_EQ(listed.vertices, (std::vector<uint32_t>{2, 0, 2}));
     EXPECT_EQ(listed.positions[2], Vec3(0, 4, 0));
+    const auto& spliced = std::get<ReplaceMeshTriangles>(back->edits[12]);
+    EXPECT_EQ(spliced.first, 0u);
+    EXPECT_EQ(spliced.count, 1u);
+    EXPECT_EQ(spliced.triangles, (std::vector<Triangle>{{0, 2, 1}, {1, 2, 0}}));
 }
 
 TEST(EditCodec, GroupEditsAndParentsRoundTrip) {

@@ -169,6 +169,14 @@ void RandomEdits::add_edit(EditBatch& b) {
             u.base_color = colour();
             e.emplace_back(std::move(u));
         }
+    } else if (kind < 86) {  // replace_triangles: the first triangle by one to three others
+        const std::string id = pick(meshes);
+        const uint32_t n = m_meshes[id].vertices;
+        ReplaceMeshTriangles t{id, 0, chance(0.8) ? 1u : 0u, {}};
+        for (int k = integer(1, 3); k > 0; --k)
+            t.triangles.emplace_back(integer(0, int(n) - 1), integer(0, int(n) - 1),
+                                     integer(0, int(n) - 1));
+        e.emplace_back(std::move(t));
     } else if (kind < 90) {  // mark_dirty on a mesh or the TLAS
         const DirtyAction action = chance(0.5) ? DirtyAction::Refit : DirtyAction::Rebuild;
         if (chance(0.7)) {

@@ -59,6 +59,7 @@ std::vector<Edit> every_kind() {
     edits.emplace_back(SetCamera{Vec3(1), std::nullopt, std::nullopt, 30.0f});
     edits.emplace_back(SetLighting{std::nullopt, Vec3(2), std::nullopt, 0.5f});
     edits.emplace_back(UpdateMeshVertices{"tri", {3, 0}, {{2, 1, 0}, {0, 0, 1}}});
+    edits.emplace_back(ReplaceMeshTriangles{"tri", 0, 1, {{0, 2, 1}, {1, 2, 3}}});
     UpdateMeshPositions attributes{"tri", 2, {}};
     attributes.tangents = std::vector<Vec4>{{0, 1, 0, -1}};
     attributes.uvs1 = std::vector<Vec2>{};

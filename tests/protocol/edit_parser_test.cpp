@@ -276,13 +276,58 @@ TEST(EditParser, EveryOpHasAParserAndAnEngineStruct) {
     std::vector<std::string_view> names;
     for (const EditOp& op : edit_ops()) names.push_back(op.name);
     EXPECT_THAT(names, ::testing::ElementsAre(
-                           "add_mesh", "update_mesh", "remove_mesh", "add_texture",
+                           "add_mesh", "update_mesh", "replace_triangles", "remove_mesh",
+                           "add_texture",
                            "remove_texture", "add_material", "update_material",
                            "remove_material", "add_instance",
                            "update_instance", "set_transform", "remove_instance",
                            "add_instances", "update_instances", "remove_instances", "add_group",
                            "update_group", "remove_group", "add_light", "update_light",
                            "remove_light", "mark_dirty", "set_camera", "set_lighting", "clear"));
+}
+
+TEST(EditParser, ReplaceTrianglesReadsItsRunAndItsNewTrianglesInEitherEncoding) {
+    const auto e = one<ReplaceMeshTriangles>(
+        R"({"op":"replace_triangles","mesh":"t","first":4,"count":2,"indices":[0,1,2, 2,1,3]})");
+    EXPECT_EQ(e.mesh, "t");
+    EXPECT_EQ(e.first, 4u);
+    EXPECT_EQ(e.count, 2u);
+    EXPECT_EQ(e.triangles, (std::vector<Triangle>{{0, 1, 2}, {2, 1, 3}}));
+    const uint32_t t[3] = {0, 2, 1};
+    const auto b = one<ReplaceMeshTriangles>(
+        R"({"op":"replace_triangles","mesh":"t","first":0,"count":0,"indices_b64":")" +
+        b64(t, sizeof t) + "\"}");
+    EXPECT_EQ(b.triangles, (std::vector<Triangle>{{0, 2, 1}}));
+    const auto hole = one<ReplaceMeshTriangles>(
+        R"({"op":"replace_triangles","mesh":"t","first":1,"count":3,"indices":[]})");
+    EXPECT_TRUE(hole.triangles.empty());
+
+    EXPECT_EQ(fails(R"({"op":"replace_triangles","mesh":"t","first":0,"indices":[]})").pointer,
+              "/edits/0/count");
+    EXPECT_EQ(fails(R"({"op":"replace_triangles","mesh":"t","first":0,"count":1})").pointer,
+              "/edits/0/indices");
+    EXPECT_EQ(fails(R"({"op":"replace_triangles","mesh":"t","first":-1,"count":1,"indices":[]})")
+                  .pointer,
+              "/edits/0/first");
+    EXPECT_EQ(fails(R"({"op":"replace_triangles","mesh":"t","first":0,"count":1,"indices":[0,1]})")
+                  .pointer,
+              "/edits/0/indices");
+    EXPECT_EQ(fails(R"({"op":"replace_triangles","mesh":"t","first":0,"count":1,"indices":[],
+                       "indices_b64":""})")
+                  .pointer,
+              "/edits/0/indices_b64");
+    EXPECT_EQ(fails(R"({"op":"replace_triangles","mesh":"t","first":0,"count":1,"indices":[],
+                       "offset":2})")
+                  .pointer,
+              "/edits/0/offset");
+    // The engine's errors point at the member the client used.
+    ParsedBatch parsed = parse_ok(
+        R"({"edits": [{"op":"replace_triangles","mesh":"t","first":0,"count":0,"indices_b64":")" +
+        b64(t, sizeof t) + "\"}]}");
+    Error engine_error = make_error(ErrorCode::OutOfRange, "w", "indices/2");
+    engine_error.edit_index = 0;
+    EXPECT_EQ(problem_from_batch_error(engine_error, parsed.sources).pointer,
+              "/edits/0/indices_b64");
 }
 
 TEST(EditParser, BulkInstanceOpsReadEveryFormOfIdsAndTransforms) {
