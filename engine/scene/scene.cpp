@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "engine/core/utf8.h"
+#include "engine/scene/bulk_packing.h"
 #include "engine/scene/inverse_batch.h"
 #include "engine/scene/object_fields.h"
 #include "engine/scene/undo_log.h"
@@ -318,6 +319,9 @@ EditBatch SceneImage::to_batch() const {
         b.edits.emplace_back(std::move(e));
         stack.insert(stack.end(), g.children.groups.rbegin(), g.children.groups.rend());
     }
+    // Instances in slot order, runs of them packed into bulk adds (numbered ids as a range), so a
+    // snapshot of a million instances holds a few big edits.
+    const std::size_t first_instance = b.edits.size();
     instances.for_each([&](InstanceHandle, const InstanceRecord& i) {
         AddInstance e;
         e.id = i.id;
@@ -325,8 +329,10 @@ EditBatch SceneImage::to_batch() const {
         if (const MaterialRecord* mat = materials.get(i.material)) e.material = mat->id;
         copy_to_add<InstanceFields>(e, i);
         if (!i.parent.is_null()) e.parent = groups.at(i.parent).id;
-        b.edits.emplace_back(std::move(e));
+        append_add_instance(b, std::move(e));
     });
+    for (std::size_t k = first_instance; k < b.edits.size(); ++k)
+        compact_ids(b.edits[k], IdOrder::Kept);
     lights.for_each(
         [&](LightHandle, const LightRecord& l) { b.edits.emplace_back(AddLight{l.id, l.light}); });
     b.edits.emplace_back(update_to<CameraFields>(camera));

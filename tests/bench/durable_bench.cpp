@@ -19,7 +19,12 @@
 //           without one, and as the baseline restore_snapshot of the same bytes into an empty
 //           engine (how long loading under the lock would hold it).
 //
-//   build/tests/bench/strata_durable_bench [edits|restart|stall|replace|all] [runs]
+//   image   a 1M-instance scene's snapshot as SceneImage::to_batch writes it (runs of instances
+//           packed into bulk adds, numbered ids as ranges) against the same scene written one
+//           add_instance per instance (the baseline, what snapshots held before): bytes, encode
+//           time, and restore_snapshot into an empty engine, alternating, same run.
+//
+//   build/tests/bench/strata_durable_bench [edits|restart|stall|replace|image|all] [runs]
 //   (default: all 3)
 //   STRATA_BENCH_DIR picks where the data directories go (default: $TMPDIR).
 
@@ -44,6 +49,7 @@
 #include "engine/engine.h"
 #include "engine/scene/shapes.h"
 #include "server/server.h"
+#include "tests/engine/bulk_singles.h"
 
 namespace strata {
 namespace {
@@ -474,6 +480,53 @@ ReplaceResult run_replace(const std::string& snapshot) {
     return out;
 }
 
+/// `image` with every bulk add written as its single add_instance edits.
+EditBatch one_edit_per_instance(const EditBatch& image) {
+    EditBatch out;
+    for (const Edit& e : image.edits) {
+        if (const auto* bulk = std::get_if<AddInstances>(&e)) {
+            for (Edit& one : test::singles(*bulk)) out.edits.push_back(std::move(one));
+        } else {
+            out.edits.push_back(e);
+        }
+    }
+    return out;
+}
+
+void bench_image(int runs) {
+    std::printf("image: a 1M-instance scene's snapshot, packed (now) against one add_instance per "
+                "instance (baseline); %d runs, median\n",
+                runs);
+    auto eng = engine();
+    for (auto& b : million_instances())
+        if (!eng->apply(std::move(b))) std::abort();
+    const uint64_t version = eng->version();
+    struct Form {
+        const char* name;
+        std::string bytes;
+        std::vector<double> encode_ms, restore_s;
+    } forms[2] = {{"packed (bulk adds)", {}, {}, {}}, {"one add_instance each", {}, {}, {}}};
+    for (int r = 0; r < runs; ++r) {
+        for (int f = 0; f < 2; ++f) {
+            Stopwatch encode;
+            const EditBatch image = eng->read([](const Scene& sc) { return sc.to_batch(); });
+            forms[f].bytes =
+                durable::encode_snapshot(f == 0 ? image : one_edit_per_instance(image), version);
+            forms[f].encode_ms.push_back(encode.ms());
+            auto empty = engine();
+            auto view = durable::open_snapshot(forms[f].bytes);
+            if (!view) std::abort();
+            Stopwatch restore;
+            if (!empty->restore_snapshot(view->payload, view->version)) std::abort();
+            forms[f].restore_s.push_back(restore.ms() / 1000.0);
+        }
+    }
+    for (Form& f : forms)
+        std::printf("  %-22s %7.1f MB   image + encode %7.1f ms   restore_snapshot %5.2f s\n",
+                    f.name, double(f.bytes.size()) / 1e6, median(f.encode_ms),
+                    median(f.restore_s));
+}
+
 void bench_replace(int runs) {
     std::printf("replace: a built 1M-instance scene replaced by another 1M-instance scene's "
                 "snapshot through a DurableStore (fsync always), 1 reader thread; %d runs, "
@@ -523,5 +576,6 @@ int main(int argc, char** argv) {
     if (what == "restart" || what == "all") strata::bench_restart(runs);
     if (what == "stall" || what == "all") strata::bench_stall(runs);
     if (what == "replace" || what == "all") strata::bench_replace(runs);
+    if (what == "image" || what == "all") strata::bench_image(runs);
     return 0;
 }

@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "engine/durable/edit_codec.h"
+#include "tests/engine/bulk_singles.h"
 #include "engine/engine.h"
 
 namespace strata::test {
@@ -26,10 +27,17 @@ inline std::string encoded(const EditBatch& b) {
 }
 
 /// A scene's objects and fields without slots, handles or child order: its rebuilding batch, one
-/// encoded edit per object, sorted. Two scenes with equal states hold the same objects.
+/// encoded edit per object (bulk adds as their single edits), sorted. Two scenes with equal states
+/// hold the same objects.
 inline std::vector<std::string> state_of(const Scene& s) {
     std::vector<std::string> out;
-    for (Edit& e : s.to_batch().edits) out.push_back(encoded(EditBatch{{std::move(e)}}));
+    for (Edit& e : s.to_batch().edits) {
+        if (const auto* bulk = std::get_if<AddInstances>(&e)) {
+            for (Edit& one : singles(*bulk)) out.push_back(encoded(EditBatch{{std::move(one)}}));
+        } else {
+            out.push_back(encoded(EditBatch{{std::move(e)}}));
+        }
+    }
     std::sort(out.begin(), out.end());
     return out;
 }
