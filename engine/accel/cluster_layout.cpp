@@ -264,15 +264,7 @@ void ClusterLayout::write_sorted(std::span<const Triangle> triangles, Triangle* 
 ClusterMetrics ClusterLayout::measure(std::span<const Vec3> positions, const Triangle* tris,
                                       uint32_t count) {
     ClusterMetrics m;
-    for (uint32_t k = 0; k < count; ++k) {
-        const Triangle& t = tris[k];
-        Bounds3 b;
-        b.extend(positions[t.x]);
-        b.extend(positions[t.y]);
-        b.extend(positions[t.z]);
-        m.triangle_area += b.surface_area();
-        m.bounds.extend(b);
-    }
+    for (uint32_t k = 0; k < count; ++k) measure_into(m, positions, tris[k]);
     return m;
 }
 

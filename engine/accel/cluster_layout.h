@@ -55,6 +55,16 @@ struct ClusterMetrics {
     float triangle_area = 0.0f;  ///< sum of the surface areas of its triangles' boxes
 };
 
+/// Adds triangle `t` at `positions` to `m`.
+inline void measure_into(ClusterMetrics& m, std::span<const Vec3> positions, const Triangle& t) {
+    Bounds3 b;
+    b.extend(positions[t.x]);
+    b.extend(positions[t.y]);
+    b.extend(positions[t.z]);
+    m.triangle_area += b.surface_area();
+    m.bounds.extend(b);
+}
+
 class ClusterLayout {
 public:
     /// Sorts `triangles` (indices into `positions`) into clusters of at most `cluster_size`.

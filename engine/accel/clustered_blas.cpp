@@ -44,16 +44,7 @@ std::vector<ClusterMetrics> measure_each(std::size_t count, F&& measure) {
 /// Measures mesh triangles `ids` at the mesh's positions now.
 ClusterMetrics measure_ids(const MeshRecord& mesh, std::span<const uint32_t> ids) {
     ClusterMetrics m;
-    const std::vector<Vec3>& p = mesh.positions;
-    for (uint32_t id : ids) {
-        const Triangle& t = mesh.triangles[id];
-        Bounds3 b;
-        b.extend(p[t.x]);
-        b.extend(p[t.y]);
-        b.extend(p[t.z]);
-        m.triangle_area += b.surface_area();
-        m.bounds.extend(b);
-    }
+    for (uint32_t id : ids) measure_into(m, mesh.positions, mesh.triangles[id]);
     return m;
 }
 
@@ -150,7 +141,7 @@ ClusterWork ClusteredBlas::plan(const MeshRecord& mesh, const RefitPolicy& polic
 
     // Step: the clusters the edit's vertices touch, measured at their new positions.
     std::vector<uint32_t> touched;
-    if (asked == BuildReason::RefitRequested) {
+    if (mesh.dirty.bits.has(MeshDirty::RefitRequested)) {
         touched.resize(cluster_count());
         for (uint32_t c = 0; c < cluster_count(); ++c) touched[c] = c;
     } else if (mesh.dirty.bits.has(MeshDirty::Points)) {

@@ -9,6 +9,31 @@
 
 namespace strata {
 
+namespace {
+
+/// What the preview shade reads of a hit's material: its base colour and emission, times their
+/// textures as FrameState::surface() applies them, and whether it is unlit. A material without
+/// those textures is read in place: surface() copies the whole material for every hit, which
+/// cost the primary pass more than its own buffer writes.
+struct Preview {
+    const Vec3& base;
+    const Vec3& emission;
+    bool unlit;
+};
+
+template <class F>
+auto with_preview(const FrameState& frame, uint32_t material, uint32_t mesh_slot, uint32_t prim,
+                  float u, float v, F&& f) {
+    const Material& m = frame.materials[material];
+    const MaterialTextures& tex = frame.material_textures[material];
+    if (!tex[slot_index(TextureSlot::BaseColor)] && !tex[slot_index(TextureSlot::Emissive)])
+        return f(Preview{m.base_color, m.emission, m.unlit});
+    const SurfaceMaterial s = frame.surface(material, frame.mesh_shade(mesh_slot), prim, u, v);
+    return f(Preview{s.material.base_color, s.material.emission, s.material.unlit});
+}
+
+}  // namespace
+
 AovSet primary_aovs() {
     AovSet set;
     for (Aov a : {Aov::Depth, Aov::InstanceId, Aov::PrimitiveId, Aov::Normal}) set.add(a);
@@ -73,19 +98,19 @@ void render_primary(const TlasStrategy& tlas, const FrameState& frame,
                                             Vec3(packet.ng_x[i], packet.ng_y[i], packet.ng_z[i]));
                     const Vec3 dir(packet.dir_x[i], packet.dir_y[i], packet.dir_z[i]);
                     if (glm::dot(n, dir) > 0.0f) n = -n;
-                    const Material m =
-                        frame.surface(shade.material, frame.mesh_shade(shade.mesh_slot),
-                                      packet.prim_id[i], packet.u[i], packet.v[i])
-                            .material;
-                    const Vec3& base = m.base_color;
                     distance[p] = packet.tfar[i];
                     instance[p] = inst;
                     primitive[p] = packet.prim_id[i];
                     normal[p] = n;
-                    color[p] = m.unlit ? base
-                                       : base * (light.sun_color * std::max(0.0f, glm::dot(n, sun)) +
-                                                 background) +
-                                             m.emission;
+                    color[p] = with_preview(
+                        frame, shade.material, shade.mesh_slot, packet.prim_id[i], packet.u[i],
+                        packet.v[i], [&](const Preview& m) {
+                            return m.unlit ? m.base
+                                           : m.base * (light.sun_color *
+                                                           std::max(0.0f, glm::dot(n, sun)) +
+                                                       background) +
+                                                 m.emission;
+                        });
                 }
             }
         }

@@ -10,6 +10,7 @@
 
 #include "engine/render/shading.h"
 #include "tests/engine/render_test_util.h"
+#include "tests/engine/texture_test_util.h"
 
 namespace strata {
 namespace {
@@ -246,6 +247,61 @@ TEST(RenderKnownAnswer, ARayThroughAVertexSharedByManyTrianglesHitsTheSurface) {
             << "the ray slipped between the pole's triangles (" << segments << " segments)";
         EXPECT_NEAR(hit.distance, 12.0f - 2.0f * radius, 1e-4f);
     }
+}
+
+TEST(RenderKnownAnswer, ThePrimaryPreviewIsBaseColourLitBySunAndSkyPlusEmissionTimesTextures) {
+    // A quad with uvs, four times with four materials: plain; the same with white base-colour
+    // and emissive textures (the textured path, which must give the same colour); a red
+    // base-colour texture; unlit.
+    MeshData quad;
+    quad.positions = {{-1, 0, -1}, {1, 0, -1}, {-1, 0, 1}, {1, 0, 1}};
+    quad.triangles = {{0, 2, 1}, {1, 2, 3}};
+    AddMesh mesh = mesh_edit("quad", quad);
+    mesh.uvs = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
+    auto engine = test::make_engine();
+    Material plain;
+    plain.base_color = Vec3(0.5f, 0.4f, 0.3f);
+    plain.emission = Vec3(0.1f, 0.0f, 0.05f);
+    AddMaterial white{"white", plain}, red{"red", plain}, unlit{"unlit", plain};
+    white.textures[slot_index(TextureSlot::BaseColor)] = "white-texel";
+    white.textures[slot_index(TextureSlot::Emissive)] = "white-texel";
+    red.textures[slot_index(TextureSlot::BaseColor)] = "red-texel";
+    unlit.material.unlit = true;
+    std::vector<Edit> edits = {mesh,
+                               AddTexture{"white-texel", test::png_bytes(1, 1, {255, 255, 255})},
+                               AddTexture{"red-texel", test::png_bytes(1, 1, {255, 0, 0})},
+                               AddMaterial{"plain", plain}, white, red, unlit};
+    const char* materials[] = {"plain", "white", "red", "unlit"};
+    for (int k = 0; k < 4; ++k) {
+        AddInstance i = instance_edit(materials[k], "quad", Vec3(float(k) * 3.0f - 4.5f, 0, 0));
+        i.material = materials[k];
+        edits.emplace_back(std::move(i));
+    }
+    edits.emplace_back(SetCamera{Vec3(0, 12, 0.01f), Vec3(0), Vec3(0, 0, -1), 60.0f});
+    EditBatch batch;
+    batch.edits = std::move(edits);
+    ASSERT_TRUE(engine->apply(std::move(batch)).has_value());
+
+    PrimarySettings s;
+    s.width = 64;
+    s.height = 32;
+    const FrameBuffers f = std::move(engine->render_primary(s).value().buffers);
+    const auto ids = engine->read([&](const Scene& sc) {
+        std::vector<uint32_t> out;
+        for (const char* m : materials) out.push_back(sc.find_instance(m).index);
+        return out;
+    });
+    std::vector<Vec3> colour(4, Vec3(-1.0f));
+    for (std::size_t p = 0; p < f.pixel_count(); ++p)
+        for (int k = 0; k < 4; ++k)
+            if (f.instance_id[p] == ids[std::size_t(k)]) colour[std::size_t(k)] = f.color[p];
+    for (int k = 0; k < 4; ++k) ASSERT_GE(colour[std::size_t(k)].x, 0.0f) << materials[k];
+    EXPECT_LT(glm::length(colour[1] - colour[0]), 1e-5f) << "a white texel changes nothing";
+    EXPECT_NEAR(colour[2].x, colour[0].x, 1e-5f) << "red keeps the red channel";
+    EXPECT_LT(colour[2].y, colour[0].y - 0.01f) << "and drops the others";
+    EXPECT_NEAR(colour[2].y, plain.emission.y, 1e-5f);
+    EXPECT_LT(glm::length(colour[3] - plain.base_color), 1e-6f) << "unlit: the base colour";
+    EXPECT_GT(colour[0].x, plain.base_color.x * 0.1f + plain.emission.x) << "lit by sun and sky";
 }
 
 }  // namespace
