@@ -211,7 +211,8 @@ void ClusteredBlas::plan_splice(const MeshRecord& mesh, const ClusterPolicy& clu
         !clusters.local(runs.new_count(), mesh.triangles.size())) {
         recluster(std::to_string(runs.old_count()) + " of " +
                   std::to_string(m_layout.triangle_count()) + " triangles replaced by " +
-                  std::to_string(runs.new_count()) + ": not a local edit, the mesh is re-clustered");
+                  std::to_string(runs.new_count()) +
+                  ": not a local edit, the mesh is re-clustered");
         return;
     }
 
@@ -245,7 +246,8 @@ void ClusteredBlas::plan_splice(const MeshRecord& mesh, const ClusterPolicy& clu
                 best_d = d;
             }
         };
-        for (int corner = 0; corner < 3; ++corner) m_layout.for_each_cluster_of(t[corner], consider);
+        for (int corner = 0; corner < 3; ++corner)
+            m_layout.for_each_cluster_of(t[corner], consider);
         if (best == UINT32_MAX)
             for (uint32_t c : losing) consider(c);
         if (best == UINT32_MAX)
@@ -255,7 +257,8 @@ void ClusteredBlas::plan_splice(const MeshRecord& mesh, const ClusterPolicy& clu
     const std::vector<uint32_t> starts = runs.starts();
     for (std::size_t k = 0; k < starts.size(); ++k) {
         const uint32_t end = starts[k] + runs.runs()[k].count;
-        for (uint32_t id = starts[k]; id < end; ++id) take(nearest(mesh.triangles[id])).push_back(id);
+        for (uint32_t id = starts[k]; id < end; ++id)
+            take(nearest(mesh.triangles[id])).push_back(id);
     }
 
     // Step: ascending clusters, each still of a cluster's size, and their measurements.
@@ -311,8 +314,8 @@ void ClusteredBlas::apply_splice(const MeshRecord& mesh, ClusterSplice& splice) 
         m_metrics[c] = splice.metrics[i];
         m_baselines[c] = {as_mesh_metrics(m_metrics[c]), 0};
     }
-    m_layout.splice(TriangleRenumbering(splice.runs), splice.clusters, std::move(splice.members), mesh.triangles,
-                    mesh.positions.size());
+    m_layout.splice(TriangleRenumbering(splice.runs), splice.clusters, std::move(splice.members),
+                    mesh.triangles, mesh.positions.size());
 }
 
 void ClusteredBlas::refit(const MeshRecord& mesh, ClusterWork& work) {

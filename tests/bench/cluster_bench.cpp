@@ -8,14 +8,16 @@
 // is written as one update_mesh per grid row, as a client sculpting it would send), the commit
 // after a patch of 1% or 10% of the triangles was re-cut (one replace_triangles per grid row:
 // the whole BLAS is rebuilt, the clustered one rebuilds the clusters that held them), BLAS
-// memory, and primary rays per second on a fresh BLAS and after 1000 small local edits. Commit times are wall time
-// around Engine::commit (the apply before it is not timed), medians over `runs`.
+// memory, and primary rays per second on a fresh BLAS and after 1000 small local edits. Commit
+// times are wall time around Engine::commit (the apply before it is not timed), medians over
+// `runs`.
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <initializer_list>
 #include <memory>
 #include <random>
 #include <string>
@@ -171,56 +173,56 @@ std::pair<double, double> trace_ms(Terrain& a, Terrain& b, int runs) {
     return {median(va), median(vb)};
 }
 
+/// One table row per fraction: the whole engine's commit against the clustered one's after
+/// `edit(terrain, fraction, i)` (the i-th run), with the clustered commit's phases and the
+/// clusters `count(entry)` names.
+template <class Edit, class Count>
+void rows(Terrain& whole, Terrain& clustered, int runs, std::initializer_list<double> fractions,
+          const char* what, Edit&& edit, Count&& count) {
+    for (double fraction : fractions) {
+        std::vector<double> a, b, plan, blas, tlas, sync;
+        RebuildReport report;
+        for (int i = 0; i < runs; ++i) {
+            a.push_back(timed_commit(whole, edit(whole, fraction, i)));
+            b.push_back(timed_commit(clustered, edit(clustered, fraction, i), &report));
+            plan.push_back(report.phases.plan_ms);
+            blas.push_back(report.phases.blas_ms);
+            tlas.push_back(report.phases.tlas_ms);
+            sync.push_back(report.phases.sync_ms);
+        }
+        const uint32_t clusters = report.refit.empty() ? 0 : count(report.refit[0]);
+        std::printf("| %g%% of the %s (one patch) | %.3f ms | %.3f ms | %u of %u | %.1fx | "
+                    "%.3f / %.3f / %.3f / %.3f ms |\n",
+                    fraction * 100.0, what, median(a), median(b), clusters, clustered.clusters,
+                    median(a) / median(b), median(plan), median(blas), median(tlas),
+                    median(sync));
+    }
+}
+
 void run(int runs) {
     Terrain whole = make_terrain(false), clustered = make_terrain(true);
     std::printf("first build %.1f ms; first local edit (rebuilt as %u clusters) %.1f ms\n\n",
                 whole.build_ms, clustered.clusters, clustered.clustering_ms);
-    std::printf("| commit after moving | whole BLAS (refit) | clustered | clusters refit | speed-up | "
-                "clustered phases: plan / blas / tlas / sync |\n");
+    std::printf("| commit after moving | whole BLAS (refit) | clustered | clusters refit | "
+                "speed-up | clustered phases: plan / blas / tlas / sync |\n");
     std::printf("|---|---|---|---|---|---|\n");
-    for (double fraction : {0.01, 0.10, 1.0}) {
-        std::vector<double> a, b, plan, blas, tlas, sync;
-        RebuildReport report;
-        for (int i = 0; i < runs; ++i) {
+    rows(
+        whole, clustered, runs, {0.01, 0.10, 1.0}, "vertices",
+        [](Terrain& t, double fraction, int i) {
             const float lift = i % 2 ? -0.05f : 0.05f;  // back and forth: no drift
-            a.push_back(timed_commit(whole, patch(whole, fraction, ROW / 2, NZ / 2, lift)));
-            b.push_back(timed_commit(clustered, patch(clustered, fraction, ROW / 2, NZ / 2, lift),
-                                     &report));
-            plan.push_back(report.phases.plan_ms);
-            blas.push_back(report.phases.blas_ms);
-            tlas.push_back(report.phases.tlas_ms);
-            sync.push_back(report.phases.sync_ms);
-        }
-        const uint32_t refit = report.refit.empty() ? 0 : report.refit[0].clusters_refit;
-        std::printf("| %g%% of the vertices (one patch) | %.3f ms | %.3f ms | %u of %u | %.1fx | "
-                    "%.3f / %.3f / %.3f / %.3f ms |\n",
-                    fraction * 100.0, median(a), median(b), refit, clustered.clusters,
-                    median(a) / median(b), median(plan), median(blas), median(tlas),
-                    median(sync));
-    }
+            return patch(t, fraction, ROW / 2, NZ / 2, lift);
+        },
+        [](const MeshBuildEntry& e) { return e.clusters_refit; });
 
     std::printf("\n| commit after replacing the triangles of | whole BLAS (rebuild) | clustered | "
                 "clusters rebuilt | speed-up | clustered phases: plan / blas / tlas / sync |\n");
     std::printf("|---|---|---|---|---|---|\n");
-    for (double fraction : {0.01, 0.10}) {
-        std::vector<double> a, b, plan, blas, tlas, sync;
-        RebuildReport report;
-        for (int i = 0; i < runs; ++i) {
-            const bool flip = i % 2 == 0;  // re-cut, then cut back
-            a.push_back(timed_commit(whole, recut(fraction, NX / 2, NZ / 2, flip)));
-            b.push_back(timed_commit(clustered, recut(fraction, NX / 2, NZ / 2, flip), &report));
-            plan.push_back(report.phases.plan_ms);
-            blas.push_back(report.phases.blas_ms);
-            tlas.push_back(report.phases.tlas_ms);
-            sync.push_back(report.phases.sync_ms);
-        }
-        const uint32_t rebuilt = report.refit.empty() ? 0 : report.refit[0].clusters_rebuilt;
-        std::printf("| %g%% of the triangles (one patch) | %.3f ms | %.3f ms | %u of %u | %.1fx | "
-                    "%.3f / %.3f / %.3f / %.3f ms |\n",
-                    fraction * 100.0, median(a), median(b), rebuilt, clustered.clusters,
-                    median(a) / median(b), median(plan), median(blas), median(tlas),
-                    median(sync));
-    }
+    rows(
+        whole, clustered, runs, {0.01, 0.10}, "triangles",
+        [](Terrain&, double fraction, int i) {
+            return recut(fraction, NX / 2, NZ / 2, i % 2 == 0);  // re-cut, then cut back
+        },
+        [](const MeshBuildEntry& e) { return e.clusters_rebuilt; });
     const auto mb = [](Terrain& t) {
         return double(t.engine->memory_bytes(MemoryCategory::Blas)) / (1024.0 * 1024.0);
     };

@@ -519,7 +519,8 @@ TEST(BulkInstances, ASnapshotPacksRunsOfInstancesIntoFewBulkAddsAndRebuildsTheSa
               test::encoded(image));
     EXPECT_TRUE(state_of(*restored) == state_of(*engine));
     EXPECT_TRUE(test::hits(*restored) == test::hits(*engine));
-    EXPECT_LT(test::encoded(image).size(), 3500u * 80u) << "no id map or per-item defaults repeated";
+    EXPECT_LT(test::encoded(image).size(), 3500u * 80u)
+        << "no id map or per-item defaults repeated";
 }
 
 TEST(BulkInstances, NumberedInstancesInSlotOrderAreWrittenAsARange) {

@@ -442,7 +442,8 @@ private:
             }
         }
         if (count == 0) {
-            for (uint32_t k = 0; k < 1 + m_rng() % 8; ++k) out.push_back(near(m.triangles[m_rng() % n]));
+            for (uint32_t k = 0; k < 1 + m_rng() % 8; ++k)
+                out.push_back(near(m.triangles[m_rng() % n]));
         }
         m.triangles.erase(m.triangles.begin() + first, m.triangles.begin() + first + count);
         m.triangles.insert(m.triangles.begin() + first, out.begin(), out.end());

@@ -20,7 +20,8 @@ inline MeshData bumpy_grid(uint32_t nx, uint32_t nz, uint32_t seed) {
     MeshData m = make_plane(Vec3(8.0f, 0.0f, 8.0f), nx, nz);
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> bump(-0.05f, 0.05f);
-    for (Vec3& p : m.positions) p.y = 0.3f * std::sin(p.x * 1.7f) * std::cos(p.z * 1.3f) + bump(rng);
+    for (Vec3& p : m.positions)
+        p.y = 0.3f * std::sin(p.x * 1.7f) * std::cos(p.z * 1.3f) + bump(rng);
     std::shuffle(m.triangles.begin(), m.triangles.end(), rng);
     return m;
 }

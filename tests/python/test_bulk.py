@@ -9,7 +9,7 @@ import numpy
 
 from strata_client import Client, TooLargeError, UnprocessableError, bulk
 from strata_process import ServerProcess
-from test_client import SERVER
+from test_client import SERVER, ServerTestCase
 
 N = 20_000
 
@@ -25,17 +25,7 @@ def grid(n: int, y: float = 0.0) -> numpy.ndarray:
     return xs
 
 
-class BulkInstancesTest(unittest.TestCase):
-
-    @classmethod
-    def setUpClass(cls):
-        cls.server = ServerProcess(SERVER)
-        cls.client = Client(cls.server.url)
-
-    @classmethod
-    def tearDownClass(cls):
-        cls.client.close()
-        cls.server.stop()
+class BulkInstancesTest(ServerTestCase):
 
     def setUp(self):
         self.client.edit([{"op": "clear"},

@@ -20,6 +20,20 @@ SCENE = [
 ]
 
 
+class ServerTestCase(unittest.TestCase):
+    """One server and one client for the class."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.server = ServerProcess(SERVER)
+        cls.client = Client(cls.server.url)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.client.close()
+        cls.server.stop()
+
+
 class SceneTestCase(unittest.TestCase):
     """One server for the class; each test starts from SCENE with a fresh blocking client."""
 

@@ -7,9 +7,8 @@ import unittest
 
 import numpy
 
-from strata_client import Client, UnprocessableError, mesh_edits
-from strata_process import ServerProcess
-from test_client import SERVER
+from strata_client import UnprocessableError, mesh_edits
+from test_client import ServerTestCase
 
 N = 256  # quads per side: 131,072 triangles, numbered row by row, big enough to cluster
 
@@ -23,17 +22,7 @@ def other_diagonal(z: int) -> numpy.ndarray:
     return numpy.stack([numpy.stack([a, c, d], 1), numpy.stack([a, d, b], 1)], 1).reshape(-1, 3)
 
 
-class MeshEditsTest(unittest.TestCase):
-
-    @classmethod
-    def setUpClass(cls):
-        cls.server = ServerProcess(SERVER)
-        cls.client = Client(cls.server.url)
-
-    @classmethod
-    def tearDownClass(cls):
-        cls.client.close()
-        cls.server.stop()
+class MeshEditsTest(ServerTestCase):
 
     def setUp(self):
         self.client.edit([{"op": "clear"},
