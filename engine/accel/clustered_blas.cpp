@@ -20,12 +20,6 @@ void add(MeshMetrics& sum, const ClusterMetrics& m) {
     sum.triangle_area += double(m.triangle_area);
 }
 
-/// Sums of the clusters' box areas and triangle areas: what the whole-layout decision compares.
-struct LayoutMetrics {
-    MeshMetrics now;
-    MeshMetrics built;
-};
-
 /// Measures `count` items in parallel when there are enough: out[i] = measure(i).
 template <class F>
 std::vector<ClusterMetrics> measure_each(std::size_t count, F&& measure) {
@@ -128,6 +122,27 @@ const Triangle* ClusteredBlas::triangles_of(uint32_t c) const {
     return static_cast<const Triangle*>(rtcGetBufferData(m_indices)) + m_layout.first(c);
 }
 
+LayoutMetrics ClusteredBlas::layout_sums(std::span<const uint32_t> touched,
+                                         std::span<const ClusterMetrics> measured,
+                                         const ClusterSplice& splice,
+                                         const std::vector<uint8_t>& remade) const {
+    LayoutMetrics sums;
+    for (const ClusterMetrics& m : measured) add(sums.now, m);
+    for (const ClusterMetrics& m : splice.metrics) {  // re-made: built now
+        add(sums.now, m);
+        add(sums.built, m);
+    }
+    std::vector<uint8_t> is_touched(cluster_count(), 0);
+    for (uint32_t c : touched) is_touched[c] = 1;
+    for (uint32_t c = 0; c < cluster_count(); ++c) {
+        if (remade[c]) continue;
+        sums.built.bounds_area += m_baselines[c].metrics.bounds_area;
+        sums.built.triangle_area += m_baselines[c].metrics.triangle_area;
+        if (!is_touched[c]) add(sums.now, m_metrics[c]);
+    }
+    return sums;
+}
+
 ClusterWork ClusteredBlas::plan(const MeshRecord& mesh, const RefitPolicy& policy,
                                 const ClusterPolicy& clusters, BuildReason asked) const {
     ClusterWork work;
@@ -155,21 +170,7 @@ ClusterWork ClusteredBlas::plan(const MeshRecord& mesh, const RefitPolicy& polic
 
     // Step: the layout as a whole. Clusters that drift apart overlap, which a refit of each
     // cannot mend: past the mesh's limits on the summed box areas, the mesh is re-clustered.
-    // Re-made clusters count as built now.
-    LayoutMetrics sums;
-    for (std::size_t i = 0; i < touched.size(); ++i) add(sums.now, measured[i]);
-    for (std::size_t i = 0; i < work.splice.clusters.size(); ++i) {
-        add(sums.now, work.splice.metrics[i]);
-        add(sums.built, work.splice.metrics[i]);
-    }
-    std::vector<uint8_t> is_touched(cluster_count(), 0);
-    for (uint32_t c : touched) is_touched[c] = 1;
-    for (uint32_t c = 0; c < cluster_count(); ++c) {
-        if (remade[c]) continue;
-        sums.built.bounds_area += m_baselines[c].metrics.bounds_area;
-        sums.built.triangle_area += m_baselines[c].metrics.triangle_area;
-        if (!is_touched[c]) add(sums.now, m_metrics[c]);
-    }
+    const LayoutMetrics sums = layout_sums(touched, measured, work.splice, remade);
     work.whole = decide_refit(policy, mesh.build, BuildBaseline{sums.built, 0}, sums.now, asked);
     work.whole.detail = "clusters' " + work.whole.detail;
     if (work.whole.rebuild) return work;
@@ -204,15 +205,13 @@ void ClusteredBlas::plan_splice(const MeshRecord& mesh, const ClusterPolicy& clu
     const TriangleSplices& runs = mesh.dirty.triangles;
     ClusterSplice& splice = work.splice;
     splice.runs = runs;
-    auto recluster = [&](std::string detail) {
-        work.whole = {true, BuildReason::TopologyChanged, std::move(detail)};
-    };
     if (!clusters.local(runs.old_count(), m_layout.triangle_count()) ||
         !clusters.local(runs.new_count(), mesh.triangles.size())) {
-        recluster(std::to_string(runs.old_count()) + " of " +
-                  std::to_string(m_layout.triangle_count()) + " triangles replaced by " +
-                  std::to_string(runs.new_count()) +
-                  ": not a local edit, the mesh is re-clustered");
+        work.whole = {true, BuildReason::TopologyChanged,
+                      std::to_string(runs.old_count()) + " of " +
+                          std::to_string(m_layout.triangle_count()) + " triangles replaced by " +
+                          std::to_string(runs.new_count()) +
+                          ": not a local edit, the mesh is re-clustered"};
         return;
     }
 
@@ -232,48 +231,53 @@ void ClusteredBlas::plan_splice(const MeshRecord& mesh, const ClusterPolicy& clu
     const std::vector<uint32_t> losing = m_layout.holding(runs);
     for (uint32_t c : losing) take(c);
 
-    // Step: each new triangle joins the nearest cluster among those that use its vertices, else
-    // among those that lost triangles, else among all.
-    const std::vector<Vec3>& p = mesh.positions;
-    auto nearest = [&](const Triangle& t) {
-        const Vec3 centre = (p[t.x] + p[t.y] + p[t.z]) * (1.0f / 3.0f);
-        uint32_t best = UINT32_MAX;
-        float best_d = 0.0f;
-        auto consider = [&](uint32_t c) {
-            const float d = distance2(m_metrics[c].bounds, centre);
-            if (best == UINT32_MAX || d < best_d) {
-                best = c;
-                best_d = d;
-            }
-        };
-        for (int corner = 0; corner < 3; ++corner)
-            m_layout.for_each_cluster_of(t[corner], consider);
-        if (best == UINT32_MAX)
-            for (uint32_t c : losing) consider(c);
-        if (best == UINT32_MAX)
-            for (uint32_t c = 0; c < cluster_count(); ++c) consider(c);
-        return best;
-    };
+    // Step: each new triangle joins the nearest cluster (nearest_cluster).
     const std::vector<uint32_t> starts = runs.starts();
     for (std::size_t k = 0; k < starts.size(); ++k) {
         const uint32_t end = starts[k] + runs.runs()[k].count;
         for (uint32_t id = starts[k]; id < end; ++id)
-            take(nearest(mesh.triangles[id])).push_back(id);
+            take(nearest_cluster(mesh, mesh.triangles[id], losing)).push_back(id);
     }
 
-    // Step: ascending clusters, each still of a cluster's size, and their measurements.
+    finish_splice(mesh, work);
+}
+
+uint32_t ClusteredBlas::nearest_cluster(const MeshRecord& mesh, const Triangle& t,
+                                        std::span<const uint32_t> losing) const {
+    const std::vector<Vec3>& p = mesh.positions;
+    const Vec3 centre = (p[t.x] + p[t.y] + p[t.z]) * (1.0f / 3.0f);
+    uint32_t best = UINT32_MAX;
+    float best_d = 0.0f;
+    auto consider = [&](uint32_t c) {
+        const float d = distance2(m_metrics[c].bounds, centre);
+        if (best == UINT32_MAX || d < best_d) {
+            best = c;
+            best_d = d;
+        }
+    };
+    for (int corner = 0; corner < 3; ++corner) m_layout.for_each_cluster_of(t[corner], consider);
+    if (best == UINT32_MAX)
+        for (uint32_t c : losing) consider(c);
+    if (best == UINT32_MAX)
+        for (uint32_t c = 0; c < cluster_count(); ++c) consider(c);
+    return best;
+}
+
+void ClusteredBlas::finish_splice(const MeshRecord& mesh, ClusterWork& work) const {
+    ClusterSplice& splice = work.splice;
     std::vector<uint32_t> order(splice.clusters.size());
     for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
     std::sort(order.begin(), order.end(),
               [&](uint32_t a, uint32_t b) { return splice.clusters[a] < splice.clusters[b]; });
     ClusterSplice sorted;
-    sorted.runs = runs;
+    sorted.runs = splice.runs;
     const uint64_t limit = 2 * uint64_t(m_layout.cut_size());
     for (uint32_t i : order) {
         if (splice.members[i].size() > limit) {
-            recluster("cluster " + std::to_string(splice.clusters[i]) + " would hold " +
-                      std::to_string(splice.members[i].size()) + " triangles (limit " +
-                      std::to_string(limit) + "): the mesh is re-clustered");
+            work.whole = {true, BuildReason::TopologyChanged,
+                          "cluster " + std::to_string(splice.clusters[i]) + " would hold " +
+                              std::to_string(splice.members[i].size()) + " triangles (limit " +
+                              std::to_string(limit) + "): the mesh is re-clustered"};
             return;
         }
         sorted.triangles += splice.members[i].size();

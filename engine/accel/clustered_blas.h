@@ -9,6 +9,7 @@
 // mesh_triangle() turns the pair back into the mesh's own triangle index.
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,13 @@ struct ClusterSplice {
     uint64_t triangles = 0;  ///< triangles in the re-made clusters
 
     bool empty() const { return runs.empty(); }
+};
+
+/// Sums of the clusters' box areas and triangle areas, now and at their builds: what the
+/// whole-layout decision compares.
+struct LayoutMetrics {
+    MeshMetrics now;
+    MeshMetrics built;
 };
 
 /// What a commit does to a clustered BLAS whose positions or triangles changed: planned without
@@ -84,6 +92,19 @@ private:
     /// edit is too big for that).
     void plan_splice(const MeshRecord& mesh, const ClusterPolicy& clusters,
                      ClusterWork& work) const;
+    /// The layout's sums, with `touched` measured now (`measured`) and the clusters `splice`
+    /// re-makes (`remade`) counting as built now.
+    LayoutMetrics layout_sums(std::span<const uint32_t> touched,
+                              std::span<const ClusterMetrics> measured,
+                              const ClusterSplice& splice,
+                              const std::vector<uint8_t>& remade) const;
+    /// The cluster new triangle `t` joins: the nearest (by its centroid's distance to their
+    /// boxes) among those using its vertices, else among `losing`, else among all.
+    uint32_t nearest_cluster(const MeshRecord& mesh, const Triangle& t,
+                             std::span<const uint32_t> losing) const;
+    /// Orders work.splice's clusters, measures them, or asks for a new layout (work.whole) when
+    /// one would hold more than twice the cut size.
+    void finish_splice(const MeshRecord& mesh, ClusterWork& work) const;
     /// Carries out `splice`: new index buffers for its clusters, the layout's numbering.
     void apply_splice(const MeshRecord& mesh, ClusterSplice& splice);
 
