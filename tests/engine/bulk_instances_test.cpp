@@ -36,6 +36,15 @@ void base_scene(Engine& engine) {
                    park, SetCamera{Vec3(0, 0, 12), Vec3(0), std::nullopt, 60.0f});
 }
 
+/// `count` instances of `mesh` numbered `prefix`0, `prefix`1, ... at the origin.
+AddInstances numbered(const std::string& prefix, uint64_t count, const std::string& mesh) {
+    AddInstances add;
+    add.ids.prefix = prefix;
+    add.ids.count = count;
+    add.meshes = {mesh};
+    return add;
+}
+
 Affine random_place(std::mt19937& rng) {
     std::uniform_real_distribution<float> at(-4.0f, 4.0f);
     std::uniform_real_distribution<float> turn(0.0f, 180.0f);
@@ -232,11 +241,7 @@ void expect_refused(Engine& engine, Edit edit, ErrorCode code, const std::string
 TEST(BulkInstances, RefusedItemIsNamedAndChangesNothing) {
     auto engine = test::make_engine();
     base_scene(*engine);
-    AddInstances ok;
-    ok.ids.prefix = "t";
-    ok.ids.count = 10;
-    ok.meshes = {"ball"};
-    test::apply_ok(*engine, ok);
+    test::apply_ok(*engine, numbered("t", 10, "ball"));
 
     const auto adds = [](std::vector<std::string> ids) {
         AddInstances e;
@@ -526,11 +531,7 @@ TEST(BulkInstances, ASnapshotPacksRunsOfInstancesIntoFewBulkAddsAndRebuildsTheSa
 TEST(BulkInstances, NumberedInstancesInSlotOrderAreWrittenAsARange) {
     auto engine = test::make_engine();
     base_scene(*engine);
-    AddInstances add;
-    add.ids.prefix = "tree-";
-    add.ids.count = 100000;
-    add.meshes = {"ball"};
-    test::apply_ok(*engine, add);
+    test::apply_ok(*engine, numbered("tree-", 100000, "ball"));
     const EditBatch image = engine->read([](const Scene& s) { return s.to_batch(); });
     std::size_t ranges = 0;
     for (const Edit& e : image.edits) {
