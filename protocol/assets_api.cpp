@@ -357,7 +357,8 @@ bool same_mesh(const Scene& s, const MeshRecord& old, const AddMesh& e,
     return old.name == e.name && old.build == e.build && old_material == e.material &&
            (!old_material || kept_materials.count(*old_material) != 0) &&
            old.positions.get() == e.positions && old.triangles.get() == e.triangles &&
-           same_attributes(old, e);
+           old.kind == e.kind && old.basis == e.basis && old.style == e.style &&
+           old.strands == e.strands && same_attributes(old, e);
 }
 
 /// What a re-import keeps, by id.

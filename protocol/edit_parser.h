@@ -23,6 +23,7 @@ struct EditSource {
     /// Bit `A::index` per vertex attribute A (vertex_attributes.h) given as base64.
     uint8_t attributes_b64 = 0;
     bool vertices_b64 = false;
+    bool strands_b64 = false;
     bool shape = false;
     bool ids_range = false;  ///< bulk ids given as a numbered range
     bool transforms_b64 = false;

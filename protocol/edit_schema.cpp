@@ -43,6 +43,17 @@ constexpr std::string_view SHARED_DEFS = R"json({
     "items": {"$ref": "#/$defs/u32"},
     "description": "three vertex indices per triangle, flat"
   },
+  "radii": {
+    "type": "array",
+    "items": {"type": "number"},
+    "description": "one radius per vertex (> 0): a points mesh's spheres, a curve mesh's thickness at each control vertex"
+  },
+  "strands": {
+    "type": "array",
+    "items": {"$ref": "#/$defs/u32"},
+    "minItems": 1,
+    "description": "a curve mesh's topology: the control vertices of each strand, in vertex order (they add up to the vertex count)"
+  },
   "normals": {
     "type": "array",
     "items": {"type": "number"},

@@ -240,11 +240,31 @@ std::vector<float> FieldReader::floats(const Json& v, const std::string& ptr) {
     return out;
 }
 
+namespace {
+
+/// The floats of one per-vertex value: 1 for a plain float (a radius), else its vector length.
+template <class V>
+constexpr std::size_t components() {
+    if constexpr (std::is_same_v<V, float>)
+        return 1;
+    else
+        return std::size_t(V::length());
+}
+template <class V>
+float& component(V& v, std::size_t k) {
+    if constexpr (std::is_same_v<V, float>)
+        return v;
+    else
+        return v[int(k)];
+}
+
+}  // namespace
+
 template <class V>
 std::vector<V> FieldReader::per_vertex(const Json& v, const std::string& ptr,
                                        std::string_view field) {
-    constexpr std::size_t n = V::length();
-    static constexpr const char* LAYOUT[] = {"", "", "u v", "x y z", "x y z w"};
+    constexpr std::size_t n = components<V>();
+    static constexpr const char* LAYOUT[] = {"", "one", "u v", "x y z", "x y z w"};
     const std::vector<float> flat = floats(v, ptr);
     if (flat.size() % n != 0)
         record_value_error(ptr, std::string(field) + " has " + std::to_string(flat.size()) +
@@ -252,9 +272,11 @@ std::vector<V> FieldReader::per_vertex(const Json& v, const std::string& ptr,
                                     LAYOUT[n] + " per vertex)");
     std::vector<V> out(flat.size() / n);
     for (std::size_t i = 0; i < out.size(); ++i)
-        for (std::size_t k = 0; k < n; ++k) out[i][int(k)] = flat[n * i + k];
+        for (std::size_t k = 0; k < n; ++k) component(out[i], k) = flat[n * i + k];
     return out;
 }
+template std::vector<float> FieldReader::per_vertex(const Json&, const std::string&,
+                                                    std::string_view);
 template std::vector<Vec2> FieldReader::per_vertex(const Json&, const std::string&,
                                                    std::string_view);
 template std::vector<Vec3> FieldReader::per_vertex(const Json&, const std::string&,
@@ -316,13 +338,16 @@ std::string FieldReader::base64_bytes(const Json& v, const std::string& ptr, std
 template <class V>
 std::vector<V> FieldReader::per_vertex_b64(const Json& v, const std::string& ptr,
                                            std::string_view field) {
-    constexpr std::size_t size = V::length() * sizeof(float);
+    constexpr std::size_t size = components<V>() * sizeof(float);
     const std::string bytes = base64_bytes(v, ptr, size);
     std::vector<V> out(bytes.size() / size);
     for (std::size_t i = 0; i < out.size(); ++i) {
-        for (int k = 0; k < V::length(); ++k)
-            out[i][k] = load_le<float>(bytes.data() + i * size + std::size_t(k) * sizeof(float));
-        if (!is_finite(out[i]))
+        for (std::size_t k = 0; k < components<V>(); ++k)
+            component(out[i], k) = load_le<float>(bytes.data() + i * size + k * sizeof(float));
+        bool finite = true;
+        for (std::size_t k = 0; k < components<V>(); ++k)
+            finite = finite && std::isfinite(component(out[i], k));
+        if (!finite)
             record_value_error(ptr,
                                "vertex " + std::to_string(i) + " of " + std::string(field) +
                                    " has a NaN or infinite component",
@@ -330,6 +355,8 @@ std::vector<V> FieldReader::per_vertex_b64(const Json& v, const std::string& ptr
     }
     return out;
 }
+template std::vector<float> FieldReader::per_vertex_b64(const Json&, const std::string&,
+                                                        std::string_view);
 template std::vector<Vec2> FieldReader::per_vertex_b64(const Json&, const std::string&,
                                                        std::string_view);
 template std::vector<Vec3> FieldReader::per_vertex_b64(const Json&, const std::string&,

@@ -292,8 +292,12 @@ J material_values() {
 }
 
 J mesh_schema() {
-    J own = {{"vertices", count()},   {"triangles", count()},
-             {"instances", count()},  {"material", or_null(ref("id"))},
+    J own = {{"vertices", count()},
+             {"triangles", count()},
+             {"primitives", described(count(), "triangles, points or curve segments")},
+             {"strands", described(count(), "a curve mesh's strands (0 for other kinds)")},
+             {"instances", count()},
+             {"material", or_null(ref("id"))},
              {"build", ref("build")}, {"bounds", or_null(ref("Bounds"))}};
     for_each_vertex_attribute([&](auto a) { own[std::string(a.name)] = boolean(); });
     return object(merged(merged(identity(true), own), fields<MeshFields>()));

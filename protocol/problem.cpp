@@ -24,6 +24,7 @@ std::string wire_field(const std::string& field, const EditSource* src) {
     });
     if (!b64.empty()) return b64;
     if (head == "vertices" && src->vertices_b64) return "vertices_b64";
+    if (head == "strands" && src->strands_b64) return "strands_b64";
     // A bulk edit's item in a packed form: the member (the message names the item).
     if (head == "ids" && src->ids_range) return "ids";
     if (head == "transforms" && src->transforms_b64) return "transforms_b64";

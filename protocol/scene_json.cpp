@@ -95,9 +95,7 @@ Json scene_summary_to_json(const Scene& s) {
 }
 
 Bounds3 mesh_bounds(const MeshRecord& m) {
-    Bounds3 bounds;
-    for (const Vec3& p : m.positions) bounds.extend(p);
-    return bounds;
+    return m.bounds();
 }
 
 Json mesh_json(const Scene& s, MeshHandle h, const MeshRecord& m) {
@@ -106,6 +104,8 @@ Json mesh_json(const Scene& s, MeshHandle h, const MeshRecord& m) {
            {"version", s.version()},
            {"vertices", m.positions.size()},
            {"triangles", m.triangles.size()},
+           {"primitives", m.primitive_count()},
+           {"strands", m.strands.size()},
            {"instances", m.users.size()},
            {"material", material_ref(s, m.material)},
            {"build",

@@ -51,10 +51,12 @@ constexpr AnswerField LIST_FIELDS[] = {
     {"ids", nullptr, "ids", AnswerType::IdSet},
 };
 
+// Points and curves have no refit (Embree's sphere and curve BVHs are rebuilt), so their position
+// edits and refit requests are rebuilds with the refit reasons.
 const std::vector<std::string> REBUILD_REASONS = {
     "added",         "topology_changed", "rebuild_requested", "refit_not_allowed",
     "bounds_growth", "triangle_growth",  "refit_limit",       "clustered",
-    "shared",        "unshared"};
+    "shared",        "unshared",         "positions_changed", "refit_requested"};
 const std::vector<std::string> REFIT_REASONS = {"positions_changed", "refit_requested",
                                                 "triangles_replaced"};
 const std::vector<std::string> TLAS_ACTIONS = {"none", "update", "rebuild"};

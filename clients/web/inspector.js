@@ -27,6 +27,16 @@ export function decompose(m) {
   return { translate: [m[3], m[7], m[11]], rotate_deg: [deg(rx), deg(ry), deg(rz)], scale: s };
 }
 
+/// What a mesh document holds, in words: "12 triangles", "300 points", "40 round bspline curve
+/// segments in 10 strands".
+export function meshPrimitives(m) {
+  if (m.kind === 'points') return `${m.vertices} points`;
+  if (m.kind === 'curves') {
+    return `${m.primitives} ${m.style} ${m.basis} curve segments in ${m.strands} strands`;
+  }
+  return `${m.triangles} triangles`;
+}
+
 function hex(c) {
   const to = (v) => Math.round(Math.min(1, Math.max(0, v)) ** (1 / 2.2) * 255).toString(16).padStart(2, '0');
   return '#' + to(c[0]) + to(c[1]) + to(c[2]);
@@ -93,6 +103,7 @@ export class Inspector {
     if (d.name) row('name', d.name).id = 'sel-name';
     if (d.kind === 'instance') {
       row('mesh', d.mesh);
+      if (d.mesh_doc) row('primitives', meshPrimitives(d.mesh_doc)).id = 'sel-primitives';
       const b = d.mesh_build;
       if (b) {
         row('mesh build', `${b.prefer}, ${b.allow_refit ? 'refit' : 'no refit'}` +

@@ -242,9 +242,11 @@ async function readSelected(kind, id) {
   const { doc } = await api(`/v1/scene/${kind === 'group' ? 'groups' : 'instances'}/` + enc(id));
   doc.kind = kind;
   doc.path = await groupPath(doc.parent);
-  // An instance's mesh: its build options (compaction among them) are shown with it.
+  // An instance's mesh: its kind, primitives and build options (compaction among them) are
+  // shown with it.
   if (kind === 'instance') {
-    doc.mesh_build = (await api('/v1/scene/meshes/' + enc(doc.mesh))).doc.build;
+    doc.mesh_doc = (await api('/v1/scene/meshes/' + enc(doc.mesh))).doc;
+    doc.mesh_build = doc.mesh_doc.build;
   }
   return doc;
 }

@@ -48,7 +48,7 @@ MeshAction decide(const MeshRecord& mesh, const BlasRecord* built, const BlasSto
     const DirtyBits<MeshDirty> dirty = mesh.dirty.bits;
     MeshAction a;
     a.entry.mesh = mesh.id;
-    a.entry.primitives = mesh.triangles.size();
+    a.entry.primitives = mesh.primitive_count();
     // A rebuilt BLAS keeps its kind; a big whole one turns clustered at its first local edit.
     a.clustered = built && built->clusters && blas.may_cluster(mesh);
     if (!built) {
@@ -62,6 +62,13 @@ MeshAction decide(const MeshRecord& mesh, const BlasRecord* built, const BlasSto
         a.entry.detail =
             "its BLAS is (or was) shared with another scene, which may still trace it: this "
             "one builds its own";
+    } else if (mesh.kind != MeshKind::Triangles) {
+        // Embree 3 builds sphere and curve BVHs with a builder that has no refit (only
+        // triangle, quad, user and instance geometry refit): moved points are a rebuild.
+        a.entry.reason = dirty.has(MeshDirty::Points) ? BuildReason::PositionsChanged
+                                                      : BuildReason::RefitRequested;
+        a.entry.detail = std::string(mesh_kind_name(mesh.kind)) +
+                         ": Embree has no refit for them, so their BVH is rebuilt";
     } else if (!built->clusters && dirty.has(MeshDirty::Triangles)) {
         // A whole BLAS has no smaller part to rebuild: a big one turns clustered at this first
         // local edit, others are rebuilt.
@@ -113,7 +120,7 @@ void record(MeshHandle h, const MeshRecord& mesh, const BlasRecord* built, MeshA
         plan.rebuild_metrics.push_back(a.metrics);
         plan.rebuild_clustered.push_back(a.clustered);
         report.rebuilt.push_back(std::move(a.entry));
-        report.primitives_built += mesh.triangles.size();
+        report.primitives_built += mesh.primitive_count();
         return;
     }
     MeshBuildEntry& entry = a.entry;
@@ -132,7 +139,7 @@ void record(MeshHandle h, const MeshRecord& mesh, const BlasRecord* built, MeshA
         report.primitives_refit += work.refit_triangles;
         report.primitives_built += work.rebuild_triangles + work.splice.triangles;
     } else {
-        report.primitives_refit += mesh.triangles.size();
+        report.primitives_refit += mesh.primitive_count();
     }
     plan.refit.push_back(h);
     plan.refit_clusters.push_back(std::move(a.clusters));
@@ -157,7 +164,7 @@ Status build_and_refit(const Scene& scene, BlasStore& blas, CommitPlan& plan,
         if (built.adopted) {
             entry.reason = BuildReason::Shared;
             entry.detail = "identical to a BLAS another scene holds: held, not built";
-            report.primitives_built -= mesh.triangles.size();
+            report.primitives_built -= mesh.primitive_count();
             --report.blas_rebuilds;
         }
         entry.uncompacted_bytes = built.uncompacted_bytes;

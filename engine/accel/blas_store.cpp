@@ -33,6 +33,37 @@ void copy_vertices(RTCGeometry g, const std::vector<Vec3>& positions, uint32_t b
                 std::size_t(end - begin) * sizeof(Vec3));
 }
 
+/// Points and curves: x y z and the radius of vertices [begin, end) into the float4 buffer.
+void copy_vertices_radii(RTCGeometry g, const MeshRecord& mesh, uint32_t begin, uint32_t end) {
+    auto* dst = static_cast<float*>(rtcGetGeometryBufferData(g, RTC_BUFFER_TYPE_VERTEX, 0));
+    const std::vector<Vec3>& p = mesh.positions;
+    for (uint32_t i = begin; i < end; ++i) {
+        float* v = dst + std::size_t(i) * 4;
+        v[0] = p[i].x;
+        v[1] = p[i].y;
+        v[2] = p[i].z;
+        v[3] = mesh.radii[i];
+    }
+}
+
+RTCGeometryType geometry_type(const MeshRecord& mesh) {
+    if (mesh.kind == MeshKind::Points) return RTC_GEOMETRY_TYPE_SPHERE_POINT;
+    if (mesh.kind == MeshKind::Triangles) return RTC_GEOMETRY_TYPE_TRIANGLE;
+    const bool flat = mesh.style == CurveStyle::Flat;
+    switch (mesh.basis) {
+        case CurveBasis::Bezier:
+            return flat ? RTC_GEOMETRY_TYPE_FLAT_BEZIER_CURVE : RTC_GEOMETRY_TYPE_ROUND_BEZIER_CURVE;
+        case CurveBasis::BSpline:
+            return flat ? RTC_GEOMETRY_TYPE_FLAT_BSPLINE_CURVE
+                        : RTC_GEOMETRY_TYPE_ROUND_BSPLINE_CURVE;
+        case CurveBasis::CatmullRom:
+            return flat ? RTC_GEOMETRY_TYPE_FLAT_CATMULL_ROM_CURVE
+                        : RTC_GEOMETRY_TYPE_ROUND_CATMULL_ROM_CURVE;
+        default:
+            return flat ? RTC_GEOMETRY_TYPE_FLAT_LINEAR_CURVE : RTC_GEOMETRY_TYPE_ROUND_LINEAR_CURVE;
+    }
+}
+
 void copy_triangles(RTCGeometry g, const std::vector<Triangle>& tris) {
     static_assert(sizeof(Triangle) == 3 * sizeof(uint32_t));
     auto* dst = rtcGetGeometryBufferData(g, RTC_BUFFER_TYPE_INDEX, 0);
@@ -46,7 +77,42 @@ struct MetricsAccumulator {
 
 }  // namespace
 
+namespace {
+
+/// Points and curves: the bounds of each primitive's control vertices grown by their radii.
+MeshMetrics measure_primitives(const MeshRecord& mesh) {
+    const std::vector<Vec3>& p = mesh.positions;
+    const std::vector<float>& radius = mesh.radii;
+    auto vertex_bounds = [&](uint32_t i) {
+        Bounds3 b;
+        b.extend(p[i] - Vec3(radius[i]));
+        b.extend(p[i] + Vec3(radius[i]));
+        return b;
+    };
+    Bounds3 total;
+    double area = 0.0;
+    if (mesh.kind == MeshKind::Points) {
+        for (uint32_t i = 0; i < p.size(); ++i) {
+            const Bounds3 b = vertex_bounds(i);
+            area += b.surface_area();
+            total.extend(b);
+        }
+        return {total.surface_area(), area};
+    }
+    const uint32_t span = mesh.basis == CurveBasis::Linear ? 2 : 4;
+    for (uint32_t first : curve_segment_starts(mesh.basis, mesh.strands)) {
+        Bounds3 b;
+        for (uint32_t k = 0; k < span; ++k) b.extend(vertex_bounds(first + k));
+        area += b.surface_area();
+        total.extend(b);
+    }
+    return {total.surface_area(), area};
+}
+
+}  // namespace
+
 MeshMetrics measure_mesh(const MeshRecord& mesh) {
+    if (mesh.kind != MeshKind::Triangles) return measure_primitives(mesh);
     const std::vector<Vec3>& p = mesh.positions;
     const std::vector<Triangle>& t = mesh.triangles;
     // Every vertex of a valid mesh may be unreferenced, so bounds come from the vertex array the
@@ -152,7 +218,8 @@ Status BlasStore::build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics&
 
     // Step: a whole BLAS another engine built for exactly this content is held, not built.
     BlasPool* pool = m_device.pool();
-    const bool poolable = pool && !(clustered && may_cluster(mesh)) && !mesh.build.compact;
+    const bool poolable = pool && !(clustered && may_cluster(mesh)) && !mesh.build.compact &&
+                          mesh.kind == MeshKind::Triangles;
     const int flags = scene_flags(mesh.build, false);
     const uint64_t key = poolable ? shared_blas_key(mesh, flags) : 0;
     if (poolable) {
@@ -165,7 +232,7 @@ Status BlasStore::build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics&
     r.adopted = false;
 
     const auto vertex_count = static_cast<uint32_t>(mesh.positions.size());
-    const auto triangle_count = static_cast<uint32_t>(mesh.triangles.size());
+    const auto triangle_count = static_cast<uint32_t>(mesh.primitive_count());
     RTCDevice device = m_device.get();
     const int64_t bytes_before = m_device.bytes(MemoryCategory::Blas);
 
@@ -187,9 +254,12 @@ Status BlasStore::build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics&
         release_slot(h.index);
         return s;
     }
-    if (!r.clusters) upload_whole(r, mesh, vertex_count, triangle_count);
+    if (mesh.kind != MeshKind::Triangles)
+        upload_points_or_curves(r, mesh);
+    else if (!r.clusters)
+        upload_whole(r, mesh, vertex_count, triangle_count);
     rtcCommitScene(r.scene);
-    if (r.options.compact) compact(r, bytes_before);
+    if (r.options.compact) compact(r, bytes_before, mesh.kind != MeshKind::Points);
 
     r.vertex_count = vertex_count;
     r.triangle_count = triangle_count;
@@ -245,14 +315,19 @@ int BlasStore::scene_flags(const BuildOptions& options, bool compact) const {
     return setup_for(options).flags | robust | filter | (compact ? RTC_SCENE_FLAG_COMPACT : 0);
 }
 
-void BlasStore::compact(BlasRecord& r, int64_t bytes_before) {
+void BlasStore::compact(BlasRecord& r, int64_t bytes_before, bool indexed) {
     STRATA_CHECK(r.geometry != nullptr);  // a compacted mesh is never clustered
     r.uncompacted_bytes = r.bytes + (m_device.bytes(MemoryCategory::Blas) - bytes_before);
     // Embree picks a scene's layout when it builds it: with the flag set, a topology change
-    // (the index buffer marked modified) makes the next commit build the compact BVH and free
-    // the full one.
+    // (the index buffer marked modified; points have none, so the geometry is attached anew)
+    // makes the next commit build the compact BVH and free the full one.
     rtcSetSceneFlags(r.scene, RTCSceneFlags(scene_flags(r.options, true)));
-    rtcUpdateGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_INDEX, 0);
+    if (indexed) {
+        rtcUpdateGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_INDEX, 0);
+    } else {
+        rtcDetachGeometry(r.scene, 0);
+        rtcAttachGeometryByID(r.scene, r.geometry, 0);
+    }
     rtcCommitGeometry(r.geometry);
     rtcCommitScene(r.scene);
 }
@@ -275,9 +350,15 @@ void BlasStore::set_layout(BlasRecord& r, const MeshRecord& mesh, bool clustered
         r.clusters.reset();
         --m_clustered;
     }
+    // Points and curves start from a new geometry at every build (a new count is a new BVH).
+    if (mesh.kind != MeshKind::Triangles && r.geometry) {
+        rtcDetachGeometry(r.scene, 0);
+        rtcReleaseGeometry(r.geometry);
+        r.geometry = nullptr;
+    }
     if (!clustered) {
         if (!r.geometry) {
-            r.geometry = rtcNewGeometry(m_device.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
+            r.geometry = rtcNewGeometry(m_device.get(), geometry_type(mesh));
             rtcSetGeometryBuildQuality(r.geometry, setup_for(r.options).geometry_quality);
             rtcAttachGeometryByID(r.scene, r.geometry, 0);
             r.vertex_count = r.triangle_count = 0;
@@ -318,10 +399,27 @@ void BlasStore::upload_whole(BlasRecord& r, const MeshRecord& mesh, uint32_t ver
     rtcCommitGeometry(r.geometry);
 }
 
+void BlasStore::upload_points_or_curves(BlasRecord& r, const MeshRecord& mesh) {
+    const auto vertex_count = static_cast<uint32_t>(mesh.positions.size());
+    if (!rtcSetNewGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4,
+                                 4 * sizeof(float), vertex_count))
+        return;  // allocation failed: the device reports it
+    copy_vertices_radii(r.geometry, mesh, 0, vertex_count);
+    if (mesh.kind == MeshKind::Curves) {
+        const std::vector<uint32_t> starts = curve_segment_starts(mesh.basis, mesh.strands);
+        auto* dst = rtcSetNewGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT,
+                                            sizeof(uint32_t), starts.size());
+        if (!dst) return;
+        std::memcpy(dst, starts.data(), starts.size() * sizeof(uint32_t));
+    }
+    rtcCommitGeometry(r.geometry);
+}
+
 Status BlasStore::refit(MeshHandle h, const MeshRecord& mesh, ClusterWork* work) {
     BlasRecord* r = h.index < m_records.size() ? &m_records[h.index] : nullptr;
     STRATA_CHECK(r && r->scene && r->generation == h.generation);
     STRATA_CHECK(r->vertex_count == mesh.positions.size());
+    STRATA_CHECK(mesh.kind == MeshKind::Triangles);  // points and curves rebuild (accel_graph.cpp)
     if (r->shared) {
         // Shared since the commit was planned: this engine builds its own copy.
         if (!m_device.pool()->withdraw(r->shared, m_device))

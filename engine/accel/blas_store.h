@@ -23,6 +23,10 @@
 // store never changes a shared BLAS (a rebuild lets go of it, a refit of one others hold builds
 // a copy first).
 //
+// Points and curves (mesh_kind.h) get one geometry of Embree's sphere or curve type, its vertex
+// buffer holding x y z and the radius (float4); a curve mesh's index buffer holds each segment's
+// first control vertex. They are neither clustered nor shared; a rebuild makes a new geometry.
+//
 // A big mesh that allows refit is clustered (ClusterPolicy, clustered_blas.h): its BLAS scene
 // holds one REFIT-quality geometry per cluster instead of one for the whole mesh, so a vertex
 // edit refits the clusters it touches. Hits on it report a cluster and a triangle within it;
@@ -111,8 +115,8 @@ public:
 
     /// Whether `mesh` may have a clustered BLAS (big enough, refit allowed, not compacted).
     bool may_cluster(const MeshRecord& mesh) const {
-        return mesh.build.allow_refit && !mesh.build.compact &&
-               m_cluster_policy.clusters(mesh.triangles.size());
+        return mesh.kind == MeshKind::Triangles && mesh.build.allow_refit &&
+               !mesh.build.compact && m_cluster_policy.clusters(mesh.triangles.size());
     }
     /// The Embree memory `r` counts in this store's device: a shared BLAS's is its owner's.
     int64_t bytes_of(const BlasRecord& r) const;
@@ -146,6 +150,8 @@ private:
     /// Swaps the record's geometry for clusters of `mesh`, or back (the scene object stays, so
     /// instances keep referencing it).
     void set_layout(BlasRecord& r, const MeshRecord& mesh, bool clustered);
+    /// Uploads a points or curve mesh whole into its (new) geometry.
+    void upload_points_or_curves(BlasRecord& r, const MeshRecord& mesh);
     /// Uploads the whole mesh into the record's single geometry and commits it.
     void upload_whole(BlasRecord& r, const MeshRecord& mesh, uint32_t vertex_count,
                       uint32_t triangle_count);
@@ -157,8 +163,9 @@ private:
     /// Publishes `r`'s freshly built whole BLAS in the pool under `key`.
     void publish(BlasRecord& r, uint64_t key, int flags);
     /// Rebuilds the record's freshly built whole-mesh BVH in the compact layout; the full build's
-    /// size (`bytes_before` the build started) becomes its uncompacted size.
-    void compact(BlasRecord& r, int64_t bytes_before);
+    /// size (`bytes_before` the build started) becomes its uncompacted size. `indexed`: the
+    /// geometry has an index buffer (points have none).
+    void compact(BlasRecord& r, int64_t bytes_before, bool indexed);
 
     EmbreeDevice& m_device;
     bool m_watertight;

@@ -86,6 +86,10 @@ template <>
 inline constexpr uint8_t ENUM_MAX<BatchKind> = 2;
 template <>
 inline constexpr uint8_t ENUM_MAX<AlphaMode> = 2;
+template <>
+inline constexpr uint8_t ENUM_MAX<MeshKind> = 2;
+template <>
+inline constexpr uint8_t ENUM_MAX<CurveBasis> = 3;
 
 /// True for the types that have a value_fields() layout.
 template <class Io, class T>
@@ -136,7 +140,8 @@ private:
         } else {
             static_assert(std::is_same_v<T, Vec3> || std::is_same_v<T, Vec2> ||
                           std::is_same_v<T, Vec4> || std::is_same_v<T, Triangle> ||
-                          std::is_same_v<T, uint32_t> || std::is_same_v<T, Affine>);
+                          std::is_same_v<T, uint32_t> || std::is_same_v<T, float> ||
+                          std::is_same_v<T, Affine>);
             raw(v.data(), v.size() * sizeof(T));
         }
     }

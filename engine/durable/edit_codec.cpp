@@ -319,9 +319,36 @@ constexpr bool attribute_tag_free() {
     for_each_field<MeshFields>([&](const auto& row) { taken |= row.info.tag == A::tag; });
     return A::tag < 64 && !taken;
 }
+/// A curve mesh's strands (an add's when not empty, a topology change's when set): a tagged
+/// field of the mesh edits that have them.
+constexpr uint8_t STRANDS_TAG = 35;
 static_assert(attribute_tag_free<Uvs1Attribute>() && attribute_tag_free<TangentsAttribute>() &&
-                  Uvs1Attribute::tag != TangentsAttribute::tag,
+                  attribute_tag_free<RadiiAttribute>() &&
+                  Uvs1Attribute::tag != TangentsAttribute::tag &&
+                  RadiiAttribute::tag != TangentsAttribute::tag &&
+                  RadiiAttribute::tag != Uvs1Attribute::tag && RadiiAttribute::tag != STRANDS_TAG,
               "vertex attribute tags are below 64, distinct, and no mesh row has them");
+template <class E>
+constexpr bool HAS_STRANDS = Kind<E, AddMesh> || Kind<E, ReplaceMeshTopology>;
+
+bool strands_present(const AddMesh& e) {
+    return !e.strands.empty();
+}
+bool strands_present(const ReplaceMeshTopology& e) {
+    return e.strands.has_value();
+}
+std::vector<uint32_t>& strands_array(AddMesh& e) {
+    return e.strands;
+}
+std::vector<uint32_t>& strands_array(ReplaceMeshTopology& e) {
+    return e.strands ? *e.strands : e.strands.emplace();
+}
+const std::vector<uint32_t>& strands_array(const AddMesh& e) {
+    return e.strands;
+}
+const std::vector<uint32_t>& strands_array(const ReplaceMeshTopology& e) {
+    return *e.strands;
+}
 
 /// Whether an edit's attribute `A` is there: an add's when not empty, an update's when set (an
 /// update's empty array removes it).
@@ -371,6 +398,7 @@ std::size_t extra_count(const E& e) {
     if constexpr (HAS_ATTRIBUTES<E>)
         for_each_tagged_attribute(
             [&](auto a) { n += attribute_present<decltype(a)>(e) ? 1 : 0; });
+    if constexpr (HAS_STRANDS<E>) n += strands_present(e) ? 1 : 0;
     return n;
 }
 
@@ -391,6 +419,12 @@ void write_extras(ByteWriter& w, const E& e) {
             w(A::tag);
             w(attribute_array<A>(e));
         });
+    }
+    if constexpr (HAS_STRANDS<E>) {
+        if (strands_present(e)) {
+            w(STRANDS_TAG);
+            w(strands_array(e));
+        }
     }
 }
 
@@ -415,6 +449,13 @@ bool read_extra(ByteReader& r, E& e, uint8_t tag) {
             if (r.ok() && !attribute_present<A>(e))
                 r.fail("tagged " + std::string(A::name) + " hold no values");
         });
+    }
+    if constexpr (HAS_STRANDS<E>) {
+        if (tag == STRANDS_TAG) {
+            r(strands_array(e));
+            if (r.ok() && strands_array(e).empty()) r.fail("tagged strands hold no values");
+            return true;
+        }
     }
     return known;
 }

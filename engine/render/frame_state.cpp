@@ -138,6 +138,9 @@ void FrameState::refresh_material(const Scene& scene, MaterialHandle h) {
 bool FrameState::emits(const Scene& scene, uint32_t slot) const {
     if (!scene.instances().alive_at(slot) || !scene.instances().at_slot(slot).world_visible)
         return false;
+    // Only triangles are sampled as lights; emitting points and curves are found by bounces.
+    const MeshRecord* mesh = scene.meshes().get(scene.instances().at_slot(slot).mesh);
+    if (!mesh || mesh->kind != MeshKind::Triangles) return false;
     const Vec3& e = materials[instances[slot].material].emission;
     return e.x > 0.0f || e.y > 0.0f || e.z > 0.0f;
 }

@@ -39,7 +39,8 @@ uint64_t attribute_bytes(const E& e) {
 /// The heap bytes of one edit beyond its struct: its arrays and its encoded image.
 struct ArrayBytes {
     uint64_t operator()(const AddMesh& e) const {
-        return bytes_of(e.positions) + bytes_of(e.triangles) + attribute_bytes(e);
+        return bytes_of(e.positions) + bytes_of(e.triangles) + bytes_of(e.strands) +
+               attribute_bytes(e);
     }
     uint64_t operator()(const UpdateMeshPositions& e) const {
         return bytes_of(e.positions) + attribute_bytes(e);
@@ -49,7 +50,8 @@ struct ArrayBytes {
     }
     uint64_t operator()(const ReplaceMeshTriangles& e) const { return bytes_of(e.triangles); }
     uint64_t operator()(const ReplaceMeshTopology& e) const {
-        return bytes_of(e.positions) + bytes_of(e.triangles) + attribute_bytes(e);
+        return bytes_of(e.positions) + bytes_of(e.triangles) + bytes_of(e.strands) +
+               attribute_bytes(e);
     }
     uint64_t operator()(const AddTexture& e) const { return e.data.size(); }
     uint64_t operator()(const AddInstances& e) const {

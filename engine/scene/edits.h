@@ -30,6 +30,11 @@ struct AddMesh {
     /// made at commit in the MikkTSpace convention (engine/render/tangents.h).
     std::vector<Vec4> tangents = {};
     std::string name = {};                ///< display name (object_fields.h)
+    MeshKind kind = MeshKind::Triangles;  ///< mesh_kind.h; triangles need `triangles` only
+    CurveBasis basis = CurveBasis::Linear;
+    CurveStyle style = CurveStyle::Round;
+    std::vector<float> radii = {};        ///< points and curves: one per vertex
+    std::vector<uint32_t> strands = {};   ///< curves: control vertices per strand
 };
 
 /// New vertex data for vertices [offset, offset + n): positions (empty: unchanged) and, when set,
@@ -44,6 +49,7 @@ struct UpdateMeshPositions {
     std::optional<std::vector<Vec2>> uvs = std::nullopt;
     std::optional<std::vector<Vec4>> tangents = std::nullopt;
     std::optional<std::vector<Vec2>> uvs1 = std::nullopt;
+    std::optional<std::vector<float>> radii = std::nullopt;
 };
 
 /// New positions for listed vertices: vertex `vertices[i]` takes `positions[i]` (a vertex listed
@@ -57,7 +63,8 @@ struct UpdateMeshVertices {
 
 /// New triangles, and optionally a whole new vertex array (which may change the vertex count),
 /// with whole new attributes (vertex_attributes.h) when set (empty: removed). A vertex count
-/// change must bring a new array of each attribute the mesh has.
+/// change must bring a new array of each attribute the mesh has. For points `triangles` stays
+/// empty; for curves too, with `strands` when they change (a count change must bring them).
 struct ReplaceMeshTopology {
     std::string mesh;
     std::optional<std::vector<Vec3>> positions;
@@ -66,6 +73,9 @@ struct ReplaceMeshTopology {
     std::optional<std::vector<Vec2>> uvs = std::nullopt;
     std::optional<std::vector<Vec4>> tangents = std::nullopt;
     std::optional<std::vector<Vec2>> uvs1 = std::nullopt;
+    std::optional<std::vector<float>> radii = std::nullopt;
+    /// A curve mesh's new strands (mesh_kind.h); absent: unchanged.
+    std::optional<std::vector<uint32_t>> strands = std::nullopt;
 };
 
 /// A local topology edit: triangles [first, first + count) are replaced by `triangles` (any

@@ -91,6 +91,7 @@ public:
         e.id = m.id;
         e.positions = take(m.positions);
         e.triangles = take(m.triangles);
+        e.strands = std::move(m.strands);
         e.build = m.build;
         e.material = id_or_none(m.material);
         for_each_vertex_attribute(
@@ -254,6 +255,7 @@ private:
         e.mesh = id_of(r.handle);
         if (r.positions) e.positions = take(*r.positions);
         e.triangles = take(r.triangles);
+        e.strands = std::move(r.strands);
         if (attributes) {
             for_each_vertex_attribute(
                 [&](auto a) { decltype(a)::of(e) = std::move(decltype(a)::of(*attributes)); });

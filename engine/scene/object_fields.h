@@ -203,6 +203,9 @@ struct MeshFields {
     using Update = NoUpdate;
     using Dirty = MeshDirty;
     static constexpr std::string_view KIND = "mesh";
+    static constexpr std::string_view KINDS[] = {"triangles", "points", "curves"};
+    static constexpr std::string_view BASES[] = {"linear", "bezier", "bspline", "catmull_rom"};
+    static constexpr std::string_view STYLES[] = {"round", "flat"};
     static constexpr auto table();
 };
 
@@ -211,6 +214,19 @@ constexpr auto MeshFields::table() {
     return std::tuple{
         field<K>({"name", NAME_DOC, {}, {}, 1, true}, &MeshRecord::name, &AddMesh::name, nullptr,
                  MeshDirty{}),
+        field<K>({"kind",
+                  "triangles (indices), points (a sphere per vertex, radius from radii) or "
+                  "curves (strands of control vertices with radii). Fixed when added.",
+                  {}, KINDS, 2},
+                 &MeshRecord::kind, &AddMesh::kind, nullptr, MeshDirty{}),
+        field<K>({"basis",
+                  "Curves: how control vertices make segments. linear (n >= 2 per strand), "
+                  "bezier (cubic, 3k + 1), bspline or catmull_rom (n >= 4).",
+                  {}, BASES, 3},
+                 &MeshRecord::basis, &AddMesh::basis, nullptr, MeshDirty{}),
+        field<K>({"style", "Curves: round (a tube) or flat (a ribbon facing the ray).", {},
+                  STYLES, 4},
+                 &MeshRecord::style, &AddMesh::style, nullptr, MeshDirty{}),
     };
 }
 

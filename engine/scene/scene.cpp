@@ -263,15 +263,26 @@ SceneCounts Scene::counts() const {
     return c;
 }
 
+Bounds3 MeshRecord::bounds() const {
+    Bounds3 b;
+    if (radii.empty()) {
+        for (const Vec3& p : positions) b.extend(p);
+        return b;
+    }
+    for (std::size_t i = 0; i < positions.size(); ++i) {
+        b.extend(positions[i] - Vec3(radii[i]));
+        b.extend(positions[i] + Vec3(radii[i]));
+    }
+    return b;
+}
+
 Bounds3 Scene::world_bounds() const {
     std::unordered_map<uint32_t, Bounds3> mesh_bounds;
     Bounds3 world;
     m_instances.for_each([&](InstanceHandle, const InstanceRecord& i) {
         if (!i.world_visible) return;
         auto [it, fresh] = mesh_bounds.try_emplace(i.mesh.index);
-        if (fresh) {
-            for (const Vec3& p : m_meshes.at(i.mesh).positions) it->second.extend(p);
-        }
+        if (fresh) it->second = m_meshes.at(i.mesh).bounds();
         world.extend(i.world.transform_bounds(it->second));
     });
     return world;
@@ -301,6 +312,7 @@ EditBatch SceneImage::to_batch() const {
         e.id = m.id;
         e.positions = m.positions.get();
         e.triangles = m.triangles.get();
+        e.strands = m.strands;
         for_each_vertex_attribute([&](auto a) { decltype(a)::of(e) = decltype(a)::of(m); });
         e.build = m.build;
         if (const MaterialRecord* mat = materials.get(m.material)) e.material = mat->id;

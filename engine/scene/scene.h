@@ -36,6 +36,23 @@ struct MeshRecord {
     CowVector<InstanceHandle> users;  ///< instances that reference this mesh
     MeshDirtyState dirty;             ///< since the last commit
     std::string name = {};            ///< display name (object_fields.h)
+    MeshKind kind = MeshKind::Triangles;  ///< mesh_kind.h; fixed when the mesh is added
+    CurveBasis basis = CurveBasis::Linear;
+    CurveStyle style = CurveStyle::Round;
+    std::vector<float> radii;        ///< points and curves: one per vertex; triangles: empty
+    std::vector<uint32_t> strands;   ///< curves: control vertices per strand; others: empty
+
+    /// Its object-space bounds: the vertices, grown by their radii for points and curves (a
+    /// curve's control vertices bound its segments in every basis Strata has).
+    Bounds3 bounds() const;
+    /// Its primitives: triangles, points or curve segments.
+    std::size_t primitive_count() const {
+        switch (kind) {
+            case MeshKind::Points: return positions.size();
+            case MeshKind::Curves: return curve_segment_count(basis, strands);
+            default: return triangles.size();
+        }
+    }
 };
 
 /// Deepest a group may sit: the groups on the path from the root to any group, itself included.

@@ -133,6 +133,25 @@ Status check_tangents(const std::vector<Vec4>& tangents, uint64_t first_vertex =
     return {};
 }
 
+/// Radii of points or curve control vertices: finite, > 0 and at most MAX_COORDINATE.
+Status check_radii(const std::vector<float>& radii, uint64_t first_vertex) {
+    for (std::size_t i = 0; i < radii.size(); ++i) {
+        const float r = radii[i];
+        if (!std::isfinite(r))
+            return failure(ErrorCode::NotFinite,
+                           "radius of vertex " + std::to_string(first_vertex + i) +
+                               " is NaN or infinite",
+                           "radii/" + std::to_string(i));
+        if (!(r > 0.0f) || double(r) > double(MAX_COORDINATE))
+            return failure(ErrorCode::InvalidArgument,
+                           "radius of vertex " + std::to_string(first_vertex + i) + " is " +
+                               std::to_string(r) + ": radii are > 0 and at most " +
+                               std::to_string(MAX_COORDINATE),
+                           "radii/" + std::to_string(i));
+    }
+    return {};
+}
+
 /// The checks of attribute `A`'s values, the first of them at vertex `first_vertex`.
 template <class A>
 Status check_values(A, const std::vector<typename A::Value>& values, uint64_t first_vertex) {
@@ -140,8 +159,82 @@ Status check_values(A, const std::vector<typename A::Value>& values, uint64_t fi
         return check_normals(values, first_vertex);
     else if constexpr (std::is_same_v<A, TangentsAttribute>)
         return check_tangents(values, first_vertex);
+    else if constexpr (std::is_same_v<A, RadiiAttribute>)
+        return check_radii(values, first_vertex);
     else
         return check_uvs(values, first_vertex, A::name);
+}
+
+/// Whether a mesh of `kind` may carry attribute `A`: radii are for points and curves, the
+/// shading attributes (normals, uvs, tangents) for triangles.
+template <class A>
+bool attribute_fits(MeshKind kind) {
+    return A::geometric == (kind != MeshKind::Triangles);
+}
+
+/// Refuses an attribute `e` gives (non-empty for an add, present for an update) that a mesh of
+/// `kind` cannot carry, and an add of points or curves without radii.
+template <class E>
+Status check_attribute_kinds(const E& e, MeshKind kind, const std::string& mesh) {
+    return first_failure_over_vertex_attributes([&](auto a) -> Status {
+        using A = decltype(a);
+        bool given = false;
+        bool removed = false;  // an update's empty array
+        if constexpr (std::is_same_v<E, AddMesh>) {
+            given = !A::of(e).empty();
+        } else {
+            given = A::of(e).has_value();
+            removed = given && A::of(e)->empty();
+        }
+        if (given && !attribute_fits<A>(kind))
+            return failure(ErrorCode::InvalidArgument,
+                           std::string(A::name) + " are for " +
+                               (A::geometric ? "points and curves" : "triangle meshes") +
+                               ", and mesh '" + mesh + "' is " + mesh_kind_name(kind),
+                           std::string(A::name));
+        if constexpr (A::geometric) {
+            if ((std::is_same_v<E, AddMesh> && !given && kind != MeshKind::Triangles) || removed)
+                return failure(ErrorCode::InvalidArgument,
+                               std::string(mesh_kind_name(kind)) + " mesh '" + mesh +
+                                   "' needs radii, one per vertex",
+                               std::string(A::name));
+        }
+        return {};
+    });
+}
+
+/// A curve mesh's strands for `vertex_count` vertices.
+Status check_strands(CurveBasis basis, const std::vector<uint32_t>& strands,
+                     std::size_t vertex_count) {
+    std::size_t bad = 0;
+    const std::string why = strands_problem(basis, strands, vertex_count, bad);
+    if (why.empty()) return {};
+    return failure(ErrorCode::InvalidArgument, why,
+                   bad < strands.size() ? "strands/" + std::to_string(bad) : "strands");
+}
+
+/// The topology arrays of a new mesh of its kind: triangles need indices, points none, curves
+/// their strands.
+Status check_primitives(const AddMesh& e) {
+    const bool curves = e.kind == MeshKind::Curves;
+    if (e.kind != MeshKind::Triangles && !e.triangles.empty())
+        return failure(ErrorCode::InvalidArgument,
+                       std::string(mesh_kind_name(e.kind)) + " mesh '" + e.id +
+                           "' takes no indices",
+                       "indices");
+    if (!curves && !e.strands.empty())
+        return failure(ErrorCode::InvalidArgument, "strands are for curve meshes", "strands");
+    if (!curves && (e.basis != CurveBasis::Linear || e.style != CurveStyle::Round))
+        return failure(ErrorCode::InvalidArgument, "basis and style are for curve meshes",
+                       e.basis != CurveBasis::Linear ? "basis" : "style");
+    if (e.kind == MeshKind::Triangles) {
+        if (e.triangles.empty())
+            return failure(ErrorCode::EmptyMesh, "mesh '" + e.id + "' has no triangles",
+                           "indices");
+        return check_triangles(e.triangles, e.positions.size(), "indices");
+    }
+    if (curves) return check_strands(e.basis, e.strands, e.positions.size());
+    return {};
 }
 
 /// A whole attribute array for a mesh of `vertex_count` vertices: one per vertex.
@@ -244,19 +337,42 @@ void replace_attributes(MeshRecord& r, ReplaceMeshTopology& e, undo::MeshAttribu
     });
 }
 
+/// A topology change's primitives for `vertex_count` vertices: triangles for a triangle mesh,
+/// none for points, valid strands (new or kept) for curves.
+Status check_new_topology(const ReplaceMeshTopology& e, const MeshRecord& r,
+                          std::size_t vertex_count) {
+    if (r.kind == MeshKind::Triangles) {
+        if (e.strands)
+            return failure(ErrorCode::InvalidArgument, "strands are for curve meshes", "strands");
+        if (e.triangles.empty())
+            return failure(ErrorCode::EmptyMesh, "mesh has no triangles", "indices");
+        return check_triangles(e.triangles, vertex_count, "indices");
+    }
+    if (!e.triangles.empty())
+        return failure(ErrorCode::InvalidArgument,
+                       std::string(mesh_kind_name(r.kind)) + " mesh '" + e.mesh +
+                           "' takes no indices",
+                       "indices");
+    if (r.kind == MeshKind::Points) {
+        if (e.strands)
+            return failure(ErrorCode::InvalidArgument, "strands are for curve meshes", "strands");
+        return {};
+    }
+    return check_strands(r.basis, e.strands ? *e.strands : r.strands, vertex_count);
+}
+
 }  // namespace
 
 // Step: mesh ops ---------------------------------------------------------------------------------
 
 Status Scene::apply_edit(AddMesh&& e, UndoLog& undo) {
     if (Status s = check_new_id(e.id, !find_mesh(e.id).is_null(), "mesh"); !s) return s;
-    if (e.positions.empty() || e.triangles.empty())
-        return failure(
-            ErrorCode::EmptyMesh,
-            "mesh '" + e.id + "' has no " + (e.positions.empty() ? "vertices" : "triangles"),
-            e.positions.empty() ? "positions" : "indices");
+    if (Status s = check_fields<MeshFields>(e); !s) return s;
+    if (e.positions.empty())
+        return failure(ErrorCode::EmptyMesh, "mesh '" + e.id + "' has no vertices", "positions");
     if (Status s = check_vertex_array(e.positions); !s) return s;
-    if (Status s = check_triangles(e.triangles, e.positions.size(), "indices"); !s) return s;
+    if (Status s = check_primitives(e); !s) return s;
+    if (Status s = check_attribute_kinds(e, e.kind, e.id); !s) return s;
     if (Status s = first_failure_over_vertex_attributes([&](auto a) {
             return check_whole(a, decltype(a)::of(e), e.positions.size());
         });
@@ -267,7 +383,6 @@ Status Scene::apply_edit(AddMesh&& e, UndoLog& undo) {
         material = find_material(*e.material);
         if (material.is_null()) return unknown("material", *e.material, "material");
     }
-    if (Status s = check_fields<MeshFields>(e); !s) return s;
 
     m_totals.vertices += e.positions.size();
     m_totals.triangles += e.triangles.size();
@@ -276,6 +391,7 @@ Status Scene::apply_edit(AddMesh&& e, UndoLog& undo) {
     r.id = e.id;
     r.positions = std::move(e.positions);
     r.triangles = std::move(e.triangles);
+    r.strands = std::move(e.strands);
     for_each_vertex_attribute([&](auto a) { decltype(a)::of(r) = std::move(decltype(a)::of(e)); });
     r.build = e.build;
     r.material = material;
@@ -295,9 +411,17 @@ Status Scene::apply_edit(UpdateMeshPositions&& e, UndoLog& undo) {
     const bool attributes = gives_attributes(e);
     if (e.positions.empty() && !attributes)
         return failure(ErrorCode::InvalidArgument,
-                       "no positions, normals, uvs, uvs1 or tangents given", "positions");
+                       "no positions, normals, uvs, uvs1, tangents or radii given", "positions");
+    if (Status s = check_attribute_kinds(e, r.kind, e.mesh); !s) return s;
     const uint64_t end = uint64_t(e.offset) + e.positions.size();
     if (!e.positions.empty()) {
+        if (end > r.positions.size() && r.kind != MeshKind::Triangles && e.offset == 0)
+            return failure(ErrorCode::OutOfRange,
+                           std::string(mesh_kind_name(r.kind)) + " mesh '" + e.mesh + "' has " +
+                               std::to_string(r.positions.size()) + " vertices: a new number of " +
+                               (r.kind == MeshKind::Points ? "points needs resize"
+                                                           : "control vertices needs strands"),
+                           "positions");
         if (end > r.positions.size())
             return failure(ErrorCode::OutOfRange,
                            "vertices [" + std::to_string(e.offset) + ", " + std::to_string(end) +
@@ -312,9 +436,13 @@ Status Scene::apply_edit(UpdateMeshPositions&& e, UndoLog& undo) {
         return s;
 
     save_mesh(h, undo);
-    // Step: the other attributes (shading only: no BLAS work).
+    // Step: the other attributes (shading only: no BLAS work; radii refit like positions).
     if (attributes) {
-        mark(h, MeshDirty::Attributes);
+        if (gives_shading_attributes(e)) mark(h, MeshDirty::Attributes);
+        if (e.radii) {
+            mark(h, MeshDirty::Points);
+            r.dirty.points.add(e.offset, static_cast<uint32_t>(e.offset + e.radii->size()));
+        }
         undo::MeshAttributes old{h};
         patch_attributes(r, e, old);
         undo.records.emplace_back(std::move(old));
@@ -384,8 +512,7 @@ Status Scene::apply_edit(ReplaceMeshTopology&& e, UndoLog& undo) {
     const MeshHandle h = find_mesh(e.mesh);
     if (h.is_null()) return unknown("mesh", e.mesh, "mesh");
     MeshRecord& r = m_meshes.at(h);
-    if (e.triangles.empty())
-        return failure(ErrorCode::EmptyMesh, "mesh has no triangles", "indices");
+    if (Status s = check_attribute_kinds(e, r.kind, e.mesh); !s) return s;
     std::size_t vertex_count = r.positions.size();
     if (e.positions) {
         if (e.positions->empty())
@@ -393,7 +520,7 @@ Status Scene::apply_edit(ReplaceMeshTopology&& e, UndoLog& undo) {
         if (Status s = check_vertex_array(*e.positions); !s) return s;
         vertex_count = e.positions->size();
     }
-    if (Status s = check_triangles(e.triangles, vertex_count, "indices"); !s) return s;
+    if (Status s = check_new_topology(e, r, vertex_count); !s) return s;
     // The other attributes: whole arrays for the new vertex count; kept ones must fit it.
     if (Status s = first_failure_over_vertex_attributes(
             [&](auto a) { return check_replaced(a, e, r, vertex_count); });
@@ -402,7 +529,7 @@ Status Scene::apply_edit(ReplaceMeshTopology&& e, UndoLog& undo) {
 
     save_mesh(h, undo);
     if (gives_attributes(e)) {
-        mark(h, MeshDirty::Attributes);
+        if (gives_shading_attributes(e)) mark(h, MeshDirty::Attributes);
         undo::MeshAttributes old{h};
         replace_attributes(r, e, old);
         undo.records.emplace_back(std::move(old));
@@ -415,6 +542,10 @@ Status Scene::apply_edit(ReplaceMeshTopology&& e, UndoLog& undo) {
         old.positions = r.positions;
         r.positions = std::move(*e.positions);
     }
+    if (e.strands) {
+        old.strands = std::move(r.strands);
+        r.strands = std::move(*e.strands);
+    }
     r.triangles = std::move(e.triangles);
     undo.records.emplace_back(std::move(old));
     r.dirty.points.clear();
@@ -426,6 +557,11 @@ Status Scene::apply_edit(ReplaceMeshTriangles&& e, UndoLog& undo) {
     const MeshHandle h = find_mesh(e.mesh);
     if (h.is_null()) return unknown("mesh", e.mesh, "mesh");
     MeshRecord& r = m_meshes.at(h);
+    if (r.kind != MeshKind::Triangles)
+        return failure(ErrorCode::InvalidArgument,
+                       "mesh '" + e.mesh + "' is " + mesh_kind_name(r.kind) +
+                           ": replace_triangles is for triangle meshes",
+                       "mesh");
     const std::size_t n = r.triangles.size();
     if (e.first > n)
         return failure(ErrorCode::OutOfRange,

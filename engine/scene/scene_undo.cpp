@@ -160,6 +160,7 @@ struct Reverser {
         MeshRecord& mesh = meshes.at(r.handle);
         if (r.positions) mesh.positions = std::move(*r.positions);
         mesh.triangles = std::move(r.triangles);
+        if (r.strands) mesh.strands = std::move(*r.strands);
     }
 
     void operator()(undo::MeshTriangles& r) {

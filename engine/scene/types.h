@@ -12,6 +12,7 @@
 
 #include "engine/core/math.h"
 #include "engine/core/result.h"
+#include "engine/scene/mesh_kind.h"
 
 namespace strata {
 

@@ -64,6 +64,7 @@ struct MeshTopology {
     MeshHandle handle;
     std::optional<CowVector<Vec3>> positions;
     CowVector<Triangle> triangles;
+    std::optional<std::vector<uint32_t>> strands = std::nullopt;  ///< a curve mesh's, if replaced
 };
 
 /// The triangles a local topology edit replaced: `triangles` stood at [first, first + size),
@@ -82,6 +83,7 @@ struct MeshAttributes {
     std::optional<std::vector<Vec2>> uvs = std::nullopt;
     std::optional<std::vector<Vec4>> tangents = std::nullopt;
     std::optional<std::vector<Vec2>> uvs1 = std::nullopt;
+    std::optional<std::vector<float>> radii = std::nullopt;
 };
 
 /// An instance's editable state before an edit changed it.

@@ -19,6 +19,7 @@ struct NormalsAttribute {
     static constexpr unsigned index = 0;  ///< its place in for_each_vertex_attribute's order
     /// Journal tag of the mesh edits' tagged field; 0: in their first extension layout.
     static constexpr uint8_t tag = 0;
+    static constexpr bool geometric = false;  ///< true: it shapes the BLAS (a change refits)
     template <class S>
     static auto& of(S& s) {
         return s.normals;
@@ -31,6 +32,7 @@ struct UvsAttribute {
     static constexpr std::string_view name = "uvs";
     static constexpr unsigned index = 1;
     static constexpr uint8_t tag = 0;
+    static constexpr bool geometric = false;
     template <class S>
     static auto& of(S& s) {
         return s.uvs;
@@ -43,6 +45,7 @@ struct Uvs1Attribute {
     static constexpr std::string_view name = "uvs1";
     static constexpr unsigned index = 2;
     static constexpr uint8_t tag = 33;
+    static constexpr bool geometric = false;
     template <class S>
     static auto& of(S& s) {
         return s.uvs1;
@@ -55,9 +58,24 @@ struct TangentsAttribute {
     static constexpr std::string_view name = "tangents";
     static constexpr unsigned index = 3;
     static constexpr uint8_t tag = 32;
+    static constexpr bool geometric = false;
     template <class S>
     static auto& of(S& s) {
         return s.tangents;
+    }
+};
+
+/// The radius of each point of a points mesh or control vertex of a curve mesh (mesh_kind.h):
+/// finite and > 0. Geometry, not shading: a change refits the BLAS like moved positions.
+struct RadiiAttribute {
+    using Value = float;
+    static constexpr std::string_view name = "radii";
+    static constexpr unsigned index = 4;
+    static constexpr uint8_t tag = 34;
+    static constexpr bool geometric = true;
+    template <class S>
+    static auto& of(S& s) {
+        return s.radii;
     }
 };
 
@@ -68,6 +86,7 @@ void for_each_vertex_attribute(F&& f) {
     f(UvsAttribute{});
     f(Uvs1Attribute{});
     f(TangentsAttribute{});
+    f(RadiiAttribute{});
 }
 
 /// Calls `f` with each attribute's descriptor until one returns a failed status; that status, or
@@ -86,6 +105,16 @@ template <class E>
 bool gives_attributes(const E& e) {
     bool any = false;
     for_each_vertex_attribute([&](auto a) { any = any || decltype(a)::of(e).has_value(); });
+    return any;
+}
+
+/// Whether an update edit gives any shading attribute (one that is not geometric).
+template <class E>
+bool gives_shading_attributes(const E& e) {
+    bool any = false;
+    for_each_vertex_attribute([&](auto a) {
+        if constexpr (!decltype(a)::geometric) any = any || decltype(a)::of(e).has_value();
+    });
     return any;
 }
 

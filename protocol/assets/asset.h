@@ -14,6 +14,7 @@
 
 #include "engine/core/expected.h"
 #include "engine/core/math.h"
+#include "engine/scene/mesh_kind.h"
 #include "engine/scene/types.h"
 #include "protocol/problem.h"
 
@@ -43,11 +44,16 @@ std::vector<std::string> media_type_names();
 /// model/ply, text/plain is not one), parameters after ';' ignored.
 std::optional<AssetFormat> format_from_media_type(std::string_view type);
 
-/// One triangle mesh. Optional attributes are empty or hold one entry per position.
+/// One mesh: triangles, points or linear curves (engine/scene/mesh_kind.h). Optional attributes
+/// are empty or hold one entry per position. Points and curves have radii and no triangles, and
+/// carry no normals, texture coordinates or tangents (importers drop them, saying so).
 struct AssetMesh {
     std::string name;
+    MeshKind kind = MeshKind::Triangles;
     std::vector<Vec3> positions;
-    std::vector<Triangle> triangles;
+    std::vector<Triangle> triangles;  ///< triangle meshes only
+    std::vector<float> radii;         ///< points and curves: one per position, finite, > 0
+    std::vector<uint32_t> strands;    ///< curves: control vertices per linear strand (>= 2)
     std::vector<Vec3> normals;
     std::vector<glm::vec2> uvs;
     std::vector<glm::vec2> uvs1;  ///< a second texture coordinate set (glTF's TEXCOORD_1)
@@ -94,7 +100,8 @@ struct Asset {
     std::vector<AssetNode> nodes;
     std::vector<std::string> warnings;  ///< what was read but ignored, for the answer
 
-    /// Vertices and triangles over meshes, each counted once.
+    /// Vertices (points and control vertices too) and triangles over meshes, each counted once.
+    /// Points and curves cost the scene's budget their vertices and each mesh's overhead only.
     uint64_t vertex_count() const;
     uint64_t triangle_count() const;
 };
@@ -140,12 +147,27 @@ private:
     std::string m_file;
 };
 
+/// The radius of each point of a point cloud that brings none (a PLY without a `radius`
+/// property, glTF POINTS, which has no point size): half the spacing of its N points spread
+/// evenly over a square as wide as their bounds' diagonal D, 0.5 * D / sqrt(N), with D = 1 when
+/// the points coincide. Scanned clouds sample surfaces, so neighbours about touch; a cloud that
+/// fills a volume looks sparser rather than hiding its shape.
+float default_point_radius(const std::vector<Vec3>& positions);
+
+/// The radius of lines that bring none (glTF LINES, LINE_STRIP and LINE_LOOP): 0.002 * D, D as
+/// for points: thin next to the whole model, wide enough to be hit.
+float default_line_radius(const std::vector<Vec3>& positions);
+
+/// A radius as warnings print it ("0.0125", "3.2e-05").
+std::string radius_text(float radius);
+
 /// Checks an asset's counts against `limits` (TooLarge naming the count and the limit).
 Imported<void> check_budget(const Asset& asset, const ImportLimits& limits, const ErrorSink& sink);
 
 /// Checks every index, every number and every reference of an asset an importer produced:
-/// triangles inside their mesh, finite positions, material, texture, mesh and parent indices in
-/// range, parents before children. Importers call it last; a failure names the element.
+/// triangles inside their mesh, finite positions, radii and strands of points and curves,
+/// material, texture, mesh and parent indices in range, parents before children. Importers call
+/// it last; a failure names the element.
 Imported<void> validate_asset(const Asset& asset, const ErrorSink& sink);
 
 }  // namespace strata::assets

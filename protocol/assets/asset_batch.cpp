@@ -125,8 +125,9 @@ void add_materials(const std::vector<AssetMaterial>& materials,
     }
 }
 
-/// Adds the meshes with their normals, uvs and tangents; what the scene cannot hold is named in the
-/// warnings rather than dropped silently.
+/// Adds the meshes with their normals, uvs and tangents, or, for points and curves (linear, round),
+/// their radii and strands; what the scene cannot hold is named in the warnings rather than
+/// dropped silently.
 void add_meshes(std::vector<AssetMesh>& meshes, const std::string& p, AssetBatch& out) {
     bool colors = false;
     for (std::size_t i = 0; i < meshes.size(); ++i) {
@@ -135,8 +136,11 @@ void add_meshes(std::vector<AssetMesh>& meshes, const std::string& p, AssetBatch
         AddMesh e;
         e.id = p + ".mesh" + std::to_string(i);
         e.name = display_name(m.name);
+        e.kind = m.kind;
         e.positions = std::move(m.positions);
         e.triangles = std::move(m.triangles);
+        e.radii = std::move(m.radii);
+        e.strands = std::move(m.strands);
         if (usable_normals(m.normals)) {
             e.normals = std::move(m.normals);
         } else {

@@ -64,8 +64,8 @@ void material_rows(Io& io, M& m) {
 void put_asset(ByteWriter& w, const Asset& a) {
     w(uint64_t(a.meshes.size()));
     for (const AssetMesh& m : a.meshes) {
-        w(m.name, m.positions, m.triangles, m.normals, m.uvs, m.uvs1, m.tangents, m.colors,
-          int32_t(m.material));
+        w(m.name, m.kind, m.positions, m.triangles, m.radii, m.strands, m.normals, m.uvs, m.uvs1,
+          m.tangents, m.colors, int32_t(m.material));
     }
     w(uint64_t(a.materials.size()));
     for (const AssetMaterial& m : a.materials) {
@@ -88,13 +88,15 @@ void put_asset(ByteWriter& w, const Asset& a) {
 
 void get_asset(ByteReader& r, Asset& a) {
     uint64_t n = 0;
-    // The least bytes each record takes: its name's length and its arrays' counts.
-    if (!get_count(r, n, 4 + 7 * 8 + 4, "mesh")) return;
+    // The least bytes each record takes: its name's length, its kind, its arrays' counts and
+    // its material. The kind's byte is checked against MeshKind's range; what the arrays must
+    // hold for the kind is validate_asset's business.
+    if (!get_count(r, n, 4 + 1 + 9 * 8 + 4, "mesh")) return;
     a.meshes.resize(n);
     for (AssetMesh& m : a.meshes) {
         int32_t material = -1;
-        r(m.name, m.positions, m.triangles, m.normals, m.uvs, m.uvs1, m.tangents, m.colors,
-          material);
+        r(m.name, m.kind, m.positions, m.triangles, m.radii, m.strands, m.normals, m.uvs, m.uvs1,
+          m.tangents, m.colors, material);
         m.material = material;
     }
     if (!get_count(r, n, 4 + 8, "material")) return;

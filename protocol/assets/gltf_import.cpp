@@ -294,6 +294,34 @@ const char* mode_name(int mode) {
     }
 }
 
+/// The primitive modes imported: triangles, points, and lines as linear curves (the strips and
+/// fans of triangles are not).
+bool imported_mode(int mode) {
+    return mode == TINYGLTF_MODE_TRIANGLES || mode == TINYGLTF_MODE_POINTS ||
+           mode == TINYGLTF_MODE_LINE || mode == TINYGLTF_MODE_LINE_LOOP ||
+           mode == TINYGLTF_MODE_LINE_STRIP;
+}
+
+/// The strands of a line primitive whose vertices, in index order, are `order` (indices into
+/// its vertices; a loop's closing vertex is appended to it): LINES one 2-vertex strand per
+/// line, LINE_STRIP one strand, LINE_LOOP one strand closed by repeating its first vertex.
+/// Returns why the vertices make no lines, or "".
+std::string line_strands(int mode, std::vector<uint32_t>& order, std::vector<uint32_t>& strands) {
+    const std::size_t n = order.size();
+    if (mode == TINYGLTF_MODE_LINE) {
+        if (n == 0 || n % 2 != 0)
+            return std::to_string(n) + " vertices do not make whole lines (2 each)";
+        strands.assign(n / 2, 2);
+        return {};
+    }
+    if (n < 2)
+        return std::string(mode_name(mode)) + " of " + std::to_string(n) +
+               " vertices: it needs 2 or more";
+    if (mode == TINYGLTF_MODE_LINE_LOOP) order.push_back(order.front());
+    strands = {uint32_t(order.size())};
+    return {};
+}
+
 float unit(double v) {
     return float(std::clamp(v, 0.0, 1.0));
 }
@@ -660,18 +688,23 @@ private:
 
     Imported<AssetMesh> read_primitive(const tinygltf::Primitive& prim, const std::string& where) {
         const int mode = prim.mode < 0 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
-        if (mode != TINYGLTF_MODE_TRIANGLES)
+        if (!imported_mode(mode))
             return m_sink.unsupported(where, std::string("mode ") + std::to_string(mode) + " (" +
                                                  mode_name(mode) +
-                                                 ") is not supported; only triangles (4)");
+                                                 ") is not supported; only triangles (4), "
+                                                 "points (0) and lines (1, 2, 3)");
         if (!prim.targets.empty()) warn_once("morph targets ignored (the base shape is kept)");
         AssetMesh mesh;
         mesh.material = prim.material;
         if (prim.material >= int(m_model.materials.size()))
             return m_sink.invalid(where,
                                   "material " + std::to_string(prim.material) + " does not exist");
-        if (const auto draco = prim.extensions.find(DRACO); draco != prim.extensions.end())
+        if (const auto draco = prim.extensions.find(DRACO); draco != prim.extensions.end()) {
+            if (mode != TINYGLTF_MODE_TRIANGLES)
+                return m_sink.unsupported(where + ".extensions." + DRACO,
+                                          "Draco-compressed points and lines are not imported");
             return read_draco_primitive(prim, draco->second, where, std::move(mesh));
+        }
         // Step 1: positions, against the budget left before allocating.
         const auto pos_it = prim.attributes.find("POSITION");
         if (pos_it == prim.attributes.end())
@@ -683,6 +716,8 @@ private:
             return m_sink.unsupported(where + ".attributes.POSITION",
                                       "positions must be float VEC3");
         if (pv.count == 0) return m_sink.invalid(where + ".attributes.POSITION", "has no vertices");
+        if (mode != TINYGLTF_MODE_TRIANGLES)
+            return read_points_or_lines(prim, mode, pv, where, std::move(mesh));
         if (auto ok = charge_vertices(pv.count, where); !ok) return Unexpected(ok.error());
         mesh.positions.resize(pv.count);
         for (std::size_t v = 0; v < pv.count; ++v)
@@ -717,6 +752,31 @@ private:
         return false;
     }
 
+    /// The primitive's indices accessor (it has one), unsigned SCALAR.
+    Imported<AccessorView> index_accessor(const tinygltf::Primitive& prim,
+                                          const std::string& where) {
+        auto idx = accessor(prim.indices, where + ".indices");
+        if (!idx) return Unexpected(idx.error());
+        const AccessorView& iv = idx.value();
+        if (iv.width != 1 || (iv.component != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
+                              iv.component != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+                              iv.component != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT))
+            return m_sink.invalid(where + ".indices", "indices must be unsigned SCALAR");
+        return idx;
+    }
+
+    /// Index `at` of the primitive (`iv`: its indices, or none: the vertices in order), checked
+    /// against its `vertices`.
+    Imported<uint32_t> vertex_at(const tinygltf::Primitive& prim, const AccessorView& iv,
+                                 std::size_t at, std::size_t vertices, const std::string& where) {
+        const uint32_t v = prim.indices >= 0 ? iv.index(at) : uint32_t(at);
+        if (v >= vertices)
+            return m_sink.invalid(where + ".indices", "index " + std::to_string(at) + " is " +
+                                                          std::to_string(v) + ", outside the " +
+                                                          std::to_string(vertices) + " vertices");
+        return v;
+    }
+
     /// The primitive's triangles (its indices, or its vertices in order), every index checked,
     /// against the budget left.
     Imported<void> read_triangles(const tinygltf::Primitive& prim, const std::string& where,
@@ -724,30 +784,98 @@ private:
         std::size_t n_indices = vertices;
         AccessorView iv;
         if (prim.indices >= 0) {
-            auto idx = accessor(prim.indices, where + ".indices");
+            auto idx = index_accessor(prim, where);
             if (!idx) return Unexpected(idx.error());
             iv = idx.value();
-            if (iv.width != 1 || (iv.component != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
-                                  iv.component != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
-                                  iv.component != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT))
-                return m_sink.invalid(where + ".indices", "indices must be unsigned SCALAR");
             n_indices = iv.count;
         }
         if (auto ok = charge_triangles(n_indices, where); !ok) return Unexpected(ok.error());
         mesh.triangles.resize(n_indices / 3);
         for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
             for (int k = 0; k < 3; ++k) {
-                const std::size_t at = 3 * t + std::size_t(k);
-                const uint32_t v = prim.indices >= 0 ? iv.index(at) : uint32_t(at);
-                if (v >= vertices)
-                    return m_sink.invalid(where + ".indices",
-                                          "index " + std::to_string(at) + " is " +
-                                              std::to_string(v) + ", outside the " +
-                                              std::to_string(vertices) + " vertices");
-                mesh.triangles[t][k] = v;
+                auto v = vertex_at(prim, iv, 3 * t + std::size_t(k), vertices, where);
+                if (!v) return Unexpected(v.error());
+                mesh.triangles[t][k] = v.value();
             }
         }
         return {};
+    }
+
+    /// A POINTS, LINES, LINE_STRIP or LINE_LOOP primitive (`pv`: its positions) as a points or
+    /// linear curve mesh: its vertices in index order (each line with copies of its own), each
+    /// with the default radius (asset.h; glTF gives points no size and lines no width). COLOR_0
+    /// is read; NORMAL, TEXCOORD_n and TANGENT are dropped with a warning.
+    Imported<AssetMesh> read_points_or_lines(const tinygltf::Primitive& prim, int mode,
+                                             const AccessorView& pv, const std::string& where,
+                                             AssetMesh mesh) {
+        // Step 1: which vertices, in which order, and the strands they make.
+        auto read = read_order(prim, where, pv.count, mode == TINYGLTF_MODE_LINE_LOOP);
+        if (!read) return Unexpected(read.error());
+        std::vector<uint32_t>& order = read.value();
+        const bool points = mode == TINYGLTF_MODE_POINTS;
+        mesh.kind = points ? MeshKind::Points : MeshKind::Curves;
+        if (points && order.empty()) return m_sink.invalid(where + ".indices", "has no indices");
+        if (!points) {
+            if (const std::string why = line_strands(mode, order, mesh.strands); !why.empty())
+                return m_sink.invalid(where, why);
+        }
+        // Step 2: positions and colours in that order.
+        mesh.positions.resize(order.size());
+        for (std::size_t i = 0; i < order.size(); ++i)
+            mesh.positions[i] = {pv.get(order[i], 0), pv.get(order[i], 1), pv.get(order[i], 2)};
+        AssetMesh source;
+        if (auto ok = read_attribute(prim, "COLOR_0", where, pv.count, 3, source); !ok)
+            return Unexpected(ok.error());
+        for (std::size_t i = 0; i < order.size() && !source.colors.empty(); ++i)
+            mesh.colors.push_back(source.colors[order[i]]);
+        // Step 3: the radii, and what points and curves cannot carry.
+        const float r =
+            points ? default_point_radius(mesh.positions) : default_line_radius(mesh.positions);
+        mesh.radii.assign(order.size(), r);
+        warn_once(where + ": " + mode_name(mode) +
+                  (points ? " have no size in glTF: each point has radius " + radius_text(r) +
+                                " (0.5 * D / sqrt(N), D the diagonal of their bounds)"
+                          : " have no width in glTF: their radius is " + radius_text(r) +
+                                " (0.002 * D, D the diagonal of their bounds)"));
+        warn_surface_attributes(prim, where);
+        return mesh;
+    }
+
+    /// The vertices a point or line primitive draws, in order: its indices (each checked) or
+    /// all its `vertices`; counted against the budget (with a loop's closing vertex) first.
+    Imported<std::vector<uint32_t>> read_order(const tinygltf::Primitive& prim,
+                                               const std::string& where, std::size_t vertices,
+                                               bool loop) {
+        std::size_t n = vertices;
+        AccessorView iv;
+        if (prim.indices >= 0) {
+            auto idx = index_accessor(prim, where);
+            if (!idx) return Unexpected(idx.error());
+            iv = idx.value();
+            n = iv.count;
+        }
+        if (auto ok = charge_vertices(n + (loop ? 1 : 0), where); !ok)
+            return Unexpected(ok.error());
+        if (auto ok = charge_mesh(0, where); !ok) return Unexpected(ok.error());
+        std::vector<uint32_t> order(n);
+        for (std::size_t i = 0; i < n; ++i) {
+            auto v = vertex_at(prim, iv, i, vertices, where);
+            if (!v) return Unexpected(v.error());
+            order[i] = v.value();
+        }
+        return order;
+    }
+
+    /// Names the attributes of a point or line primitive that points and curves cannot carry.
+    void warn_surface_attributes(const tinygltf::Primitive& prim, const std::string& where) {
+        std::string names;
+        for (const auto& [name, index] : prim.attributes)
+            if (name == "NORMAL" || name == "TANGENT" || name.starts_with("TEXCOORD_"))
+                names += (names.empty() ? "" : ", ") + name.substr(0, 32);
+        if (!names.empty())
+            warn_once(where + ": " + names +
+                      " dropped: points and curves carry no normals, texture coordinates or "
+                      "tangents");
     }
 
     /// Counts a primitive's vertices against the budget before they are allocated.
@@ -766,8 +894,14 @@ private:
         if (n_indices % 3 != 0 || n_indices == 0)
             return m_sink.invalid(
                 where, std::to_string(n_indices) + " indices do not make whole triangles");
+        return charge_mesh(n_indices / 3, where);
+    }
+
+    /// Counts a primitive's mesh of `triangles` triangles (none for points and curves) against
+    /// the budget.
+    Imported<void> charge_mesh(std::size_t triangles, const std::string& where) {
         // Each primitive becomes a mesh, which also costs MESH_OVERHEAD_TRIANGLES (budget.h).
-        m_triangles += n_indices / 3 + MESH_OVERHEAD_TRIANGLES;
+        m_triangles += triangles + MESH_OVERHEAD_TRIANGLES;
         if (m_triangles > m_limits.max_triangles)
             return m_sink.too_large(
                 where, "the asset holds at least " + std::to_string(m_triangles) +

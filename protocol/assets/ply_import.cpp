@@ -37,6 +37,8 @@ bool is_integral(PlyType t) {
 constexpr double MAX_FACE_CORNERS = 65536;
 /// Longest header accepted.
 constexpr std::size_t MAX_HEADER = 1 << 16;
+/// The scalar properties of a row that are kept (the first ones; later ones feed nothing).
+constexpr std::size_t MAX_ROW_VALUES = 64;
 
 struct PlyProperty {
     std::string name;
@@ -249,6 +251,7 @@ private:
 /// Which vertex property feeds which attribute.
 struct VertexSlots {
     int x = -1, y = -1, z = -1, nx = -1, ny = -1, nz = -1, r = -1, g = -1, b = -1, u = -1, v = -1;
+    int radius = -1;
     float color_scale = 1.0f;
 };
 
@@ -270,6 +273,7 @@ VertexSlots vertex_slots(const PlyElement& e) {
         if (n == "blue" || n == "diffuse_blue") s.b = k;
         if (n == "u" || n == "s" || n == "texture_u" || n == "texture_s") s.u = k;
         if (n == "v" || n == "t" || n == "texture_v" || n == "texture_t") s.v = k;
+        if (n == "radius" && i < MAX_ROW_VALUES) s.radius = k;
     }
     if (s.r >= 0) {
         const PlyType t = e.properties[std::size_t(s.r)].type;
@@ -335,6 +339,7 @@ public:
             if (plan.face_list < 0) return m_sink.invalid(where, "has no vertex_indices list");
             if (!is_integral(e.properties[std::size_t(plan.face_list)].type))
                 return m_sink.invalid(where, "vertex_indices must be integers");
+            m_declared_faces += e.count;
             if (e.count > m_limits.max_triangles)
                 return m_sink.too_large(where, std::to_string(e.count) +
                                                    " faces; the scene has room for " +
@@ -364,13 +369,19 @@ public:
         return {};
     }
 
-    /// Step 3: the mesh as an asset of one node, its optional attributes checked.
+    /// Step 3: the mesh (or, without faces, the point cloud) as an asset of one node, its
+    /// optional attributes checked.
     Imported<Asset> finish() {
         if (!m_have_vertices) return m_sink.invalid("header", "has no vertex element");
-        if (m_mesh.triangles.empty())
-            return m_sink.invalid("element face", "no faces: point clouds are not imported");
         Asset asset;
         asset.warnings = std::move(m_warnings);
+        if (m_mesh.triangles.empty() && m_declared_faces > 0)
+            return m_sink.invalid(
+                "element face",
+                "none of its " + std::to_string(m_declared_faces) + " faces has 3 corners or more");
+        if (m_mesh.triangles.empty()) {
+            if (auto ok = make_points(asset.warnings); !ok) return Unexpected(ok.error());
+        }
         if (m_skipped_faces)
             asset.warnings.push_back(std::to_string(m_skipped_faces) +
                                      " faces with fewer than 3 corners skipped");
@@ -391,6 +402,34 @@ public:
     }
 
 private:
+    /// The vertices as a point cloud: each with its `radius` (checked, naming the vertex) or the
+    /// default radius; the normals and texture coordinates points cannot carry are dropped.
+    Imported<void> make_points(std::vector<std::string>& warnings) {
+        const std::size_t n = m_mesh.positions.size();
+        m_mesh.kind = MeshKind::Points;
+        if (m_radii.size() == n && n > 0) {
+            for (std::size_t v = 0; v < n; ++v)
+                if (!std::isfinite(m_radii[v]) || !(m_radii[v] > 0.0f) ||
+                    double(m_radii[v]) > MAX_COORDINATE)
+                    return m_sink.invalid("element vertex " + std::to_string(v),
+                                          "radius " + radius_text(m_radii[v]) +
+                                              " is not a finite number > 0 and at most 1e15");
+            m_mesh.radii = std::move(m_radii);
+        } else {
+            const float r = default_point_radius(m_mesh.positions);
+            m_mesh.radii.assign(n, r);
+            warnings.push_back("no faces: the " + std::to_string(n) +
+                               " vertices are points, without a radius property; each has radius " +
+                               radius_text(r) +
+                               " (0.5 * D / sqrt(N), D the diagonal of their bounds)");
+        }
+        if (!m_mesh.normals.empty() || !m_mesh.uvs.empty())
+            warnings.push_back("normals and texture coordinates dropped: points carry none");
+        m_mesh.normals.clear();
+        m_mesh.uvs.clear();
+        return {};
+    }
+
     /// One row's properties into m_row (scalars) and m_corners (the face list).
     Imported<void> read_row(const PlyElement& e, const ElementPlan& plan, const std::string& at) {
         for (std::size_t k = 0; k < e.properties.size(); ++k) {
@@ -437,6 +476,8 @@ private:
                            Vec3(0.0f), Vec3(1.0f)));
         // PLY's v, like OBJ's, grows upward; the engine's grows downward.
         if (slots.u >= 0 && slots.v >= 0) m_mesh.uvs.push_back({get(slots.u), 1.0f - get(slots.v)});
+        // Kept as read (checked only if the file turns out to be a point cloud).
+        if (slots.radius >= 0) m_radii.push_back(get(slots.radius));
     }
 
     ValueReader m_in;
@@ -445,7 +486,9 @@ private:
     AssetMesh m_mesh;
     bool m_have_vertices = false;
     uint64_t m_skipped_faces = 0;
-    double m_row[64] = {};
+    uint64_t m_declared_faces = 0;  ///< over face elements' headers
+    std::vector<float> m_radii;     ///< the vertices' `radius` property, when they have one
+    double m_row[MAX_ROW_VALUES] = {};
     std::vector<uint32_t> m_corners;
     std::vector<std::string> m_warnings;  ///< the header's, then the body's
 };

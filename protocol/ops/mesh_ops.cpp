@@ -69,6 +69,12 @@ void read_attributes(OpFields& f, E& e) {
     });
 }
 
+/// A curve mesh's strands: control vertices per strand, flat or base64 uint32s.
+std::optional<std::vector<uint32_t>> read_strands(OpFields& f) {
+    return read_array(f, "strands", "strands_b64", &FieldReader::vertex_ids,
+                      &FieldReader::vertex_ids_b64, &EditSource::strands_b64);
+}
+
 std::optional<std::vector<uint32_t>> read_vertices(OpFields& f) {
     return read_array(f, "vertices", "vertices_b64", &FieldReader::vertex_ids,
                       &FieldReader::vertex_ids_b64, &EditSource::vertices_b64);
@@ -170,12 +176,15 @@ Edit parse_add_mesh(OpFields& f) {
         if (!positions)
             r.schema_error(f.pointer("positions"),
                            "add_mesh needs positions, positions_b64 or shape");
+        // Triangles need indices; points and curves have none (the scene's rules say so).
         auto indices = read_indices(f);
-        if (!indices)
+        const Json* kind = f.get("kind");
+        if (!indices && (!kind || *kind == "triangles"))
             r.schema_error(f.pointer("indices"),
                            "add_mesh needs indices or indices_b64 with positions");
         e.positions = std::move(*positions);
-        e.triangles = std::move(*indices);
+        if (indices) e.triangles = std::move(*indices);
+        if (auto strands = read_strands(f)) e.strands = std::move(*strands);
     }
     read_attributes(f, e);
     if (const Json* b = f.get("build")) e.build = read_build(r, *b, f.pointer("build"));
@@ -193,9 +202,11 @@ Edit parse_update_mesh(OpFields& f) {
     read_attributes(f, e);
     const bool attributes = gives_attributes(e);
     auto vertices = read_vertices(f);
+    auto strands = read_strands(f);
     if (vertices) {
         // Positions for listed vertices (a brush stroke): positions only, no offset.
-        for (const char* other : {"offset", "indices", "indices_b64"}) {
+        for (const char* other :
+             {"offset", "indices", "indices_b64", "strands", "strands_b64", "resize"}) {
             if (f.get(other))
                 r.schema_error(f.pointer(other),
                                std::string(other) + " does not go with vertices (positions only)");
@@ -215,22 +226,32 @@ Edit parse_update_mesh(OpFields& f) {
         listed.positions = std::move(*positions);
         return listed;
     }
-    if (indices) {
-        // A topology change: new triangles and optionally a whole new vertex array.
+    bool resize = false;
+    f.read("resize", resize);
+    if (resize && !positions)
+        r.schema_error(f.pointer("positions"), "resize needs positions or positions_b64");
+    if (indices || strands || resize) {
+        // A topology change: new triangles, a curve mesh's strands or a points mesh's new
+        // count, and optionally a whole new vertex array.
         if (f.get("offset"))
             r.schema_error(f.pointer("offset"),
                            "offset applies to a positions update, not to a topology change");
+        if (int(bool(indices)) + int(bool(strands)) + int(resize) > 1)
+            r.schema_error(f.pointer(resize ? "resize" : "strands"),
+                           "give one of indices (triangles), strands (curves) or resize (points)");
         ReplaceMeshTopology topology;
         topology.mesh = std::move(mesh);
         topology.positions = std::move(positions);
-        topology.triangles = std::move(*indices);
+        if (indices) topology.triangles = std::move(*indices);
+        topology.strands = std::move(strands);
         for_each_vertex_attribute(
             [&](auto a) { decltype(a)::of(topology) = std::move(decltype(a)::of(e)); });
         return topology;
     }
     if (!positions && !attributes)
         r.schema_error(f.pointer("positions"),
-                       "update_mesh needs positions, normals, uvs, uvs1 or tangents (or indices)");
+                       "update_mesh needs positions, normals, uvs, uvs1, tangents or radii (or "
+                       "indices or strands)");
     e.mesh = std::move(mesh);
     if (positions) e.positions = std::move(*positions);
     f.read("offset", e.offset);
@@ -257,7 +278,8 @@ Edit parse_remove_mesh(OpFields& f) {
 constexpr EditOp OPS[] = {
     {"add_mesh",
      "A new mesh from flat arrays, base64 arrays or a procedural shape; optionally with "
-     "per-vertex normals, uvs (two sets) and tangents.",
+     "per-vertex normals, uvs (two sets) and tangents. With kind points or curves: spheres "
+     "or strands of curve segments with a radius per vertex.",
      R"json({
   "type": "object",
   "properties": {
@@ -274,6 +296,10 @@ constexpr EditOp OPS[] = {
     "uvs1_b64": {"$ref": "#/$defs/base64"},
     "tangents": {"$ref": "#/$defs/tangents"},
     "tangents_b64": {"$ref": "#/$defs/base64"},
+    "radii": {"$ref": "#/$defs/radii"},
+    "radii_b64": {"$ref": "#/$defs/base64"},
+    "strands": {"$ref": "#/$defs/strands"},
+    "strands_b64": {"$ref": "#/$defs/base64"},
     "shape": {"$ref": "#/$defs/shape"},
     "build": {"$ref": "#/$defs/build"},
     "material": {"$ref": "#/$defs/id"}
@@ -282,27 +308,38 @@ constexpr EditOp OPS[] = {
   "additionalProperties": false,
   "not": {"anyOf": [{"required": ["normals", "normals_b64"]}, {"required": ["uvs", "uvs_b64"]},
                     {"required": ["uvs1", "uvs1_b64"]},
-                    {"required": ["tangents", "tangents_b64"]}]},
+                    {"required": ["tangents", "tangents_b64"]},
+                    {"required": ["radii", "radii_b64"]},
+                    {"required": ["strands", "strands_b64"]}]},
   "oneOf": [
     {
       "required": ["shape"],
       "not": {"anyOf": [{"required": ["positions"]}, {"required": ["positions_b64"]},
-                        {"required": ["indices"]}, {"required": ["indices_b64"]}]}
+                        {"required": ["indices"]}, {"required": ["indices_b64"]},
+                        {"required": ["kind"]}]}
     },
     {
       "not": {"required": ["shape"]},
       "allOf": [
         {"oneOf": [{"required": ["positions"]}, {"required": ["positions_b64"]}]},
-        {"oneOf": [{"required": ["indices"]}, {"required": ["indices_b64"]}]}
+        {
+          "if": {"required": ["kind"], "properties": {"kind": {"enum": ["points", "curves"]}}},
+          "then": {"oneOf": [{"required": ["radii"]}, {"required": ["radii_b64"]}]},
+          "else": {"oneOf": [{"required": ["indices"]}, {"required": ["indices_b64"]}]}
+        },
+        {
+          "if": {"required": ["kind"], "properties": {"kind": {"const": "curves"}}},
+          "then": {"oneOf": [{"required": ["strands"]}, {"required": ["strands_b64"]}]}
+        }
       ]
     }
   ]
 })json",
      parse_add_mesh, edit_kinds<AddMesh>(), field_properties<MeshFields, true>},
     {"update_mesh",
-     "New positions, normals, uvs (either set) or tangents for a vertex range (offset in "
-     "vertices), new positions for listed vertices (vertices), or with indices a topology "
-     "change.",
+     "New positions, normals, uvs (either set), tangents or radii for a vertex range (offset "
+     "in vertices), new positions for listed vertices (vertices), or with indices (or a curve "
+     "mesh's strands, or a points mesh's positions of a new length) a topology change.",
      R"json({
   "type": "object",
   "properties": {
@@ -319,6 +356,11 @@ constexpr EditOp OPS[] = {
     "uvs1_b64": {"$ref": "#/$defs/base64"},
     "tangents": {"$ref": "#/$defs/tangents"},
     "tangents_b64": {"$ref": "#/$defs/base64"},
+    "radii": {"$ref": "#/$defs/radii"},
+    "radii_b64": {"$ref": "#/$defs/base64"},
+    "strands": {"$ref": "#/$defs/strands"},
+    "strands_b64": {"$ref": "#/$defs/base64"},
+    "resize": {"type": "boolean", "description": "points: positions (and radii) are the mesh's whole new vertex array, of any length"},
     "offset": {"$ref": "#/$defs/u32"},
     "vertices": {"type": "array", "items": {"$ref": "#/$defs/u32"},
                  "description": "vertex indices: positions[i] goes to vertex vertices[i]"},
@@ -334,9 +376,22 @@ constexpr EditOp OPS[] = {
       {"required": ["uvs", "uvs_b64"]},
       {"required": ["uvs1", "uvs1_b64"]},
       {"required": ["tangents", "tangents_b64"]},
+      {"required": ["radii", "radii_b64"]},
+      {"required": ["strands", "strands_b64"]},
       {"required": ["vertices", "vertices_b64"]},
       {"required": ["indices", "offset"]},
-      {"required": ["indices_b64", "offset"]}
+      {"required": ["indices_b64", "offset"]},
+      {"required": ["strands", "offset"]},
+      {"required": ["strands_b64", "offset"]},
+      {"required": ["indices", "strands"]},
+      {"required": ["indices", "strands_b64"]},
+      {"required": ["indices_b64", "strands"]},
+      {"required": ["indices_b64", "strands_b64"]},
+      {"required": ["resize", "offset"]},
+      {"required": ["resize", "indices"]},
+      {"required": ["resize", "indices_b64"]},
+      {"required": ["resize", "strands"]},
+      {"required": ["resize", "strands_b64"]}
     ]
   },
   "if": {"anyOf": [{"required": ["vertices"]}, {"required": ["vertices_b64"]}]},
@@ -347,14 +402,18 @@ constexpr EditOp OPS[] = {
                       {"required": ["normals_b64"]}, {"required": ["uvs"]},
                       {"required": ["uvs_b64"]}, {"required": ["uvs1"]},
                       {"required": ["uvs1_b64"]}, {"required": ["tangents"]},
-                      {"required": ["tangents_b64"]}]}
+                      {"required": ["tangents_b64"]}, {"required": ["radii"]},
+                      {"required": ["radii_b64"]}, {"required": ["strands"]},
+                      {"required": ["strands_b64"]}, {"required": ["resize"]}]}
   },
   "anyOf": [{"required": ["positions"]}, {"required": ["positions_b64"]},
             {"required": ["indices"]}, {"required": ["indices_b64"]},
             {"required": ["normals"]}, {"required": ["normals_b64"]},
             {"required": ["uvs"]}, {"required": ["uvs_b64"]},
             {"required": ["uvs1"]}, {"required": ["uvs1_b64"]},
-            {"required": ["tangents"]}, {"required": ["tangents_b64"]}]
+            {"required": ["tangents"]}, {"required": ["tangents_b64"]},
+            {"required": ["radii"]}, {"required": ["radii_b64"]},
+            {"required": ["strands"]}, {"required": ["strands_b64"]}]
 })json",
      parse_update_mesh,
      edit_kinds<UpdateMeshPositions, UpdateMeshVertices, ReplaceMeshTopology>()},

@@ -7,6 +7,7 @@
 
 #include "engine/engine.h"
 #include "protocol/assets/asset_batch.h"
+#include "protocol/base64.h"
 #include "tests/assets/asset_test_util.h"
 
 namespace strata::assets::test {
@@ -124,6 +125,72 @@ TEST(AssetBatch, ZeroNormalsAreDroppedForTheirMeshWithAWarning) {
     EXPECT_THAT(b.warnings, Contains(HasSubstr("normals dropped")));
     auto engine = make_engine();
     ASSERT_TRUE(engine->apply(std::move(b.batch)).has_value());
+}
+
+TEST(AssetBatch, APointCloudBecomesAPointsMeshTheSceneHolds) {
+    const std::string ply =
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+        "property float z\nproperty float radius\nproperty uchar red\nproperty uchar green\n"
+        "property uchar blue\nend_header\n0 0 0 0.5 255 0 0\n1 0 0 0.25 0 255 0\n"
+        "0 1 0 2 0 0 255\n";
+    auto asset = import_text(AssetFormat::Ply, ply);
+    ASSERT_TRUE(asset.has_value()) << asset.error().detail;
+    AssetBatch b = asset_to_batch(std::move(asset.value()), {"cloud", true, {}});
+    const auto& mesh = std::get<AddMesh>(b.batch.edits.at(0));
+    EXPECT_EQ(mesh.kind, MeshKind::Points);
+    EXPECT_EQ(mesh.radii, (std::vector<float>{0.5f, 0.25f, 2.0f}));
+    EXPECT_TRUE(mesh.triangles.empty());
+    EXPECT_TRUE(mesh.strands.empty());
+    // Vertex colours go as they do for triangle meshes.
+    EXPECT_THAT(b.warnings, Contains(HasSubstr("vertex colours dropped")));
+    auto engine = make_engine();
+    auto applied = engine->apply(std::move(b.batch));
+    ASSERT_TRUE(applied.has_value()) << applied.error().describe();
+    ASSERT_TRUE(engine->commit().has_value());
+    engine->read([](const Scene& s) {
+        const MeshRecord* m = s.mesh(s.find_mesh("cloud.mesh0")).value();
+        EXPECT_EQ(m->kind, MeshKind::Points);
+        EXPECT_EQ(m->radii, (std::vector<float>{0.5f, 0.25f, 2.0f}));
+        EXPECT_EQ(s.counts().instances, 1u);
+    });
+}
+
+TEST(AssetBatch, GltfLinesBecomeALinearRoundCurveMeshWithItsMaterial) {
+    // A LINE_STRIP over the four corners of a 3 by 4 rectangle, in a green material.
+    const std::vector<float> corners = {0, 0, 0, 3, 0, 0, 3, 4, 0, 0, 4, 0};
+    const std::string buffer(reinterpret_cast<const char*>(corners.data()), corners.size() * 4);
+    const std::string gltf =
+        R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0, 1, 0, 1]}}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "mode": 3, "material": 0}]}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3"}],
+        "bufferViews": [{"buffer": 0, "byteLength": 48}],
+        "buffers": [{"byteLength": 48, "uri": "data:application/octet-stream;base64,)" +
+        protocol::encode_base64(buffer) + R"("}]})";
+    auto asset = import_text(AssetFormat::Gltf, gltf);
+    ASSERT_TRUE(asset.has_value()) << asset.error().detail;
+    AssetBatch b = asset_to_batch(std::move(asset.value()), {"wire", true, {}});
+    const AddMesh* mesh = nullptr;
+    for (const Edit& e : b.batch.edits)
+        if (const auto* m = std::get_if<AddMesh>(&e)) mesh = m;
+    ASSERT_NE(mesh, nullptr);
+    EXPECT_EQ(mesh->kind, MeshKind::Curves);
+    EXPECT_EQ(mesh->basis, CurveBasis::Linear);
+    EXPECT_EQ(mesh->style, CurveStyle::Round);
+    EXPECT_EQ(mesh->strands, std::vector<uint32_t>{4});
+    EXPECT_EQ(mesh->radii, std::vector<float>(4, 0.01f));  // 0.002 * the diagonal, 5
+    EXPECT_EQ(mesh->material, "wire.material0");
+    auto engine = make_engine();
+    auto applied = engine->apply(std::move(b.batch));
+    ASSERT_TRUE(applied.has_value()) << applied.error().describe();
+    ASSERT_TRUE(engine->commit().has_value());
+    engine->read([](const Scene& s) {
+        const MeshRecord* m = s.mesh(s.find_mesh("wire.mesh0")).value();
+        EXPECT_EQ(m->kind, MeshKind::Curves);
+        EXPECT_EQ(m->strands, std::vector<uint32_t>{4});
+        EXPECT_EQ(m->primitive_count(), 3u);
+    });
 }
 
 TEST(AssetBatch, WithoutInstancingOnlyMeshesMaterialsAndTheEmptyAssetGroupAreCreated) {

@@ -1,7 +1,8 @@
 // The glTF importer: a real multi-node model whose meshes are shared, node transforms (TRS and
-// matrices, composed down the tree), and refusals: other primitive modes, external files, bad
-// indices, cycles.
+// matrices, composed down the tree), points and lines as points and curve meshes, and refusals:
+// triangle strips and fans, external files, bad indices, cycles.
 
+#include <cmath>
 #include <cstring>
 #include <functional>
 
@@ -78,12 +79,159 @@ TEST(GltfImport, NodeTransformsAreReadAsTrsOrColumnMajorMatrices) {
     EXPECT_EQ(asset.nodes[2].meshes, std::vector<int>{0});
 }
 
-TEST(GltfImport, ModesOtherThanTrianglesAreRefusedNamingThePrimitive) {
-    auto a = import_text(AssetFormat::Gltf, triangle_gltf(R"([{"mesh": 0}])", R"(, "mode": 1)"));
-    ASSERT_FALSE(a.has_value());
-    EXPECT_EQ(a.error().type, protocol::ProblemType::InvalidAsset);
-    EXPECT_EQ(a.error().element, "meshes[0].primitives[0]");
-    EXPECT_THAT(a.error().detail, HasSubstr("LINES"));
+TEST(GltfImport, TriangleStripsAndFansAreRefusedNamingThePrimitive) {
+    for (const auto& [mode, name] :
+         {std::pair{5, "TRIANGLE_STRIP"}, std::pair{6, "TRIANGLE_FAN"}}) {
+        auto a =
+            import_text(AssetFormat::Gltf,
+                        triangle_gltf(R"([{"mesh": 0}])", ", \"mode\": " + std::to_string(mode)));
+        ASSERT_FALSE(a.has_value());
+        EXPECT_EQ(a.error().type, protocol::ProblemType::InvalidAsset);
+        EXPECT_EQ(a.error().element, "meshes[0].primitives[0]");
+        EXPECT_THAT(a.error().detail, HasSubstr(name));
+    }
+}
+
+/// Adds an accessor over `bytes`, in a buffer and buffer view of its own, to `doc`; returns
+/// its index.
+std::size_t add_accessor(nlohmann::json& doc, const std::string& bytes, int component,
+                         std::size_t count, const char* type) {
+    doc["buffers"].push_back(
+        {{"byteLength", bytes.size()},
+         {"uri", "data:application/octet-stream;base64," + protocol::encode_base64(bytes)}});
+    doc["bufferViews"].push_back(
+        {{"buffer", doc["buffers"].size() - 1}, {"byteLength", bytes.size()}});
+    doc["accessors"].push_back({{"bufferView", doc["bufferViews"].size() - 1},
+                                {"componentType", component},
+                                {"count", count},
+                                {"type", type}});
+    return doc["accessors"].size() - 1;
+}
+
+template <class T>
+std::string bytes_of_vector(const std::vector<T>& v) {
+    return std::string(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+}
+
+/// Adds float attribute `name` (`type` VEC2 or VEC3) to the first primitive of `doc`.
+void add_attribute(nlohmann::json& doc, const char* name, const std::vector<float>& values,
+                   const char* type) {
+    const std::size_t width = std::string_view(type) == "VEC2" ? 2 : 3;
+    doc["meshes"][0]["primitives"][0]["attributes"][name] =
+        add_accessor(doc, bytes_of_vector(values), 5126, values.size() / width, type);
+}
+
+/// A .gltf of one node placing one primitive of `mode` over `positions` (x y z each), with
+/// uint16 `indices` when given and material 0 (a green one).
+nlohmann::json primitive_gltf(int mode, const std::vector<float>& positions,
+                              const std::vector<uint16_t>& indices = {}) {
+    nlohmann::json doc = nlohmann::json::parse(R"({"asset": {"version": "2.0"}, "scene": 0,
+      "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+      "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0, 1, 0, 1]}}],
+      "meshes": [{"name": "wire", "primitives": [{"attributes": {}, "material": 0}]}],
+      "accessors": [], "bufferViews": [], "buffers": []})");
+    doc["meshes"][0]["primitives"][0]["mode"] = mode;
+    add_attribute(doc, "POSITION", positions, "VEC3");
+    if (!indices.empty())
+        doc["meshes"][0]["primitives"][0]["indices"] =
+            add_accessor(doc, bytes_of_vector(indices), 5123, indices.size(), "SCALAR");
+    return doc;
+}
+
+/// Four corners of a 3 by 4 rectangle: their bounds' diagonal is 5.
+const std::vector<float> RECTANGLE = {0, 0, 0, 3, 0, 0, 3, 4, 0, 0, 4, 0};
+const Vec3 CORNERS[4] = {{0, 0, 0}, {3, 0, 0}, {3, 4, 0}, {0, 4, 0}};
+
+/// The one mesh of a glTF document, which must import.
+AssetMesh only_mesh(const nlohmann::json& doc, std::vector<std::string>* warnings = nullptr) {
+    auto a = import_text(AssetFormat::Gltf, doc.dump());
+    EXPECT_TRUE(a.has_value()) << a.error().detail;
+    if (!a.has_value() || a.value().meshes.size() != 1) return {};
+    if (warnings) *warnings = a.value().warnings;
+    return a.value().meshes[0];
+}
+
+TEST(GltfImport, PointsBecomeAPointsMeshWithTheDefaultRadiusAndTheirMaterial) {
+    std::vector<std::string> warnings;
+    const AssetMesh m = only_mesh(primitive_gltf(0, RECTANGLE), &warnings);
+    EXPECT_EQ(m.kind, MeshKind::Points);
+    ASSERT_EQ(m.positions.size(), 4u);
+    EXPECT_EQ(m.positions[2], CORNERS[2]);
+    EXPECT_TRUE(m.triangles.empty());
+    EXPECT_TRUE(m.strands.empty());
+    EXPECT_EQ(m.material, 0);
+    // 0.5 * D / sqrt(N) with D = 5 and N = 4.
+    EXPECT_EQ(m.radii, std::vector<float>(4, 1.25f));
+    EXPECT_THAT(warnings, Contains(HasSubstr("POINTS have no size in glTF: each point has "
+                                             "radius 1.25")));
+    // With indices: the points they list, in their order.
+    const AssetMesh listed = only_mesh(primitive_gltf(0, RECTANGLE, {2, 0}));
+    EXPECT_EQ(listed.positions, (std::vector<Vec3>{CORNERS[2], CORNERS[0]}));
+    EXPECT_FLOAT_EQ(listed.radii.at(1), 2.5f / std::sqrt(2.0f));
+}
+
+TEST(GltfImport, LinesBecomeOneTwoVertexStrandPerLine) {
+    const AssetMesh m = only_mesh(primitive_gltf(1, RECTANGLE, {0, 1, 1, 2, 2, 3}));
+    EXPECT_EQ(m.kind, MeshKind::Curves);
+    EXPECT_EQ(m.strands, (std::vector<uint32_t>{2, 2, 2}));
+    EXPECT_EQ(m.positions, (std::vector<Vec3>{CORNERS[0], CORNERS[1], CORNERS[1], CORNERS[2],
+                                              CORNERS[2], CORNERS[3]}));
+    EXPECT_EQ(m.radii, std::vector<float>(6, 0.01f));  // 0.002 * D
+    EXPECT_EQ(m.material, 0);
+    // Without indices: the vertices in pairs.
+    const AssetMesh bare = only_mesh(primitive_gltf(1, RECTANGLE));
+    EXPECT_EQ(bare.strands, (std::vector<uint32_t>{2, 2}));
+    EXPECT_EQ(bare.positions, std::vector<Vec3>(CORNERS, CORNERS + 4));
+}
+
+TEST(GltfImport, ALineStripIsOneStrandAndALoopRepeatsItsFirstVertex) {
+    const AssetMesh strip = only_mesh(primitive_gltf(3, RECTANGLE));
+    EXPECT_EQ(strip.kind, MeshKind::Curves);
+    EXPECT_EQ(strip.strands, std::vector<uint32_t>{4});
+    EXPECT_EQ(strip.positions, std::vector<Vec3>(CORNERS, CORNERS + 4));
+    EXPECT_EQ(strip.radii.size(), 4u);
+
+    auto doc = primitive_gltf(2, RECTANGLE, {3, 1, 2});
+    add_attribute(doc, "COLOR_0", {1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1}, "VEC3");
+    const AssetMesh loop = only_mesh(doc);
+    EXPECT_EQ(loop.strands, std::vector<uint32_t>{4});
+    EXPECT_EQ(loop.positions, (std::vector<Vec3>{CORNERS[3], CORNERS[1], CORNERS[2], CORNERS[3]}));
+    // Colours follow their vertices.
+    EXPECT_EQ(loop.colors, (std::vector<Vec3>{{1, 1, 1}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}}));
+}
+
+TEST(GltfImport, PointsAndLinesDropNormalsAndTextureCoordinatesSayingSo) {
+    auto doc = primitive_gltf(1, RECTANGLE);
+    add_attribute(doc, "NORMAL", {0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1}, "VEC3");
+    add_attribute(doc, "TEXCOORD_0", {0, 0, 1, 0, 1, 1, 0, 1}, "VEC2");
+    std::vector<std::string> warnings;
+    const AssetMesh m = only_mesh(doc, &warnings);
+    EXPECT_EQ(m.kind, MeshKind::Curves);
+    EXPECT_TRUE(m.normals.empty());
+    EXPECT_TRUE(m.uvs.empty());
+    EXPECT_THAT(warnings, Contains(HasSubstr("NORMAL, TEXCOORD_0 dropped")));
+}
+
+TEST(GltfImport, LinesThatDoNotCloseOrIndexOutsideTheVerticesAreRefused) {
+    auto odd = import_text(AssetFormat::Gltf, primitive_gltf(1, RECTANGLE, {0, 1, 2}).dump());
+    ASSERT_FALSE(odd.has_value());
+    EXPECT_EQ(odd.error().element, "meshes[0].primitives[0]");
+    EXPECT_THAT(odd.error().detail, HasSubstr("3 vertices do not make whole lines"));
+    auto alone = import_text(AssetFormat::Gltf, primitive_gltf(3, RECTANGLE, {1}).dump());
+    ASSERT_FALSE(alone.has_value());
+    EXPECT_THAT(alone.error().detail, HasSubstr("LINE_STRIP of 1 vertices"));
+    auto outside = import_text(AssetFormat::Gltf, primitive_gltf(1, RECTANGLE, {0, 4}).dump());
+    ASSERT_FALSE(outside.has_value());
+    EXPECT_EQ(outside.error().element, "meshes[0].primitives[0].indices");
+    EXPECT_THAT(outside.error().detail, HasSubstr("outside the 4 vertices"));
+    // A loop's closing vertex counts against the budget.
+    ImportLimits limits;
+    limits.max_vertices = 4;
+    auto loop = import_text(AssetFormat::Gltf, primitive_gltf(2, RECTANGLE).dump(), {}, limits);
+    ASSERT_FALSE(loop.has_value());
+    EXPECT_EQ(loop.error().type, protocol::ProblemType::TooLarge);
+    EXPECT_TRUE(import_text(AssetFormat::Gltf, primitive_gltf(3, RECTANGLE).dump(), {}, limits)
+                    .has_value());
 }
 
 TEST(GltfImport, RequiredExtensionsAreRefusedByNameBeforeTheFileIsRead) {

@@ -1,5 +1,6 @@
 // The PLY reader: the three encodings agree, polygons are fan-triangulated, attributes are read,
-// and every broken header or body is refused naming the element.
+// a file without faces is a point cloud, and every broken header or body is refused naming the
+// element.
 
 #include <bit>
 #include <cstring>
@@ -12,7 +13,9 @@
 namespace strata::assets::test {
 namespace {
 
+using ::testing::Contains;
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 const std::string QUAD_ASCII = R"(ply
 format ascii 1.0
@@ -195,11 +198,108 @@ TEST(PlyImport, BlendersOldHeaderImports) {
     EXPECT_THAT(a.value().warnings[0], HasSubstr("unknown keyword 'Created'"));
 }
 
-TEST(PlyImport, APointCloudIsRefusedAsHavingNoFaces) {
-    const std::string ply =
-        "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\n"
-        "property float y\nproperty float z\nend_header\n0 0 0\n1 1 1\n";
-    EXPECT_THAT(refusal(ply).detail, HasSubstr("no faces"));
+/// An ASCII PLY of 4 vertices with `properties`, the elements `after` declares, and `rows`.
+std::string cloud_ascii(const std::string& properties, const std::string& rows,
+                        const std::string& after = "") {
+    return "ply\nformat ascii 1.0\nelement vertex 4\n" + properties + after + "end_header\n" + rows;
+}
+
+const std::string XYZ = "property float x\nproperty float y\nproperty float z\n";
+/// Four corners of a 3 by 4 rectangle: their bounds' diagonal is 5.
+const std::string CORNER_ROWS = "0 0 0\n3 0 0\n3 4 0\n0 4 0\n";
+
+TEST(PlyImport, APointCloudWithoutFacesIsAPointsMeshWithTheDefaultRadius) {
+    // No face element, or one of no faces: the same point cloud.
+    for (const std::string faces :
+         {"", "element face 0\nproperty list uchar int vertex_indices\n"}) {
+        auto a = import_text(AssetFormat::Ply, cloud_ascii(XYZ, CORNER_ROWS, faces));
+        ASSERT_TRUE(a.has_value()) << a.error().detail;
+        ASSERT_EQ(a.value().meshes.size(), 1u);
+        const AssetMesh& m = a.value().meshes[0];
+        EXPECT_EQ(m.kind, MeshKind::Points);
+        ASSERT_EQ(m.positions.size(), 4u);
+        EXPECT_EQ(m.positions[2], Vec3(3, 4, 0));
+        EXPECT_TRUE(m.triangles.empty());
+        // 0.5 * D / sqrt(N) with D = 5 and N = 4, named in a warning.
+        EXPECT_EQ(m.radii, std::vector<float>(4, 1.25f));
+        EXPECT_THAT(a.value().warnings,
+                    Contains(HasSubstr("4 vertices are points, without a radius property; "
+                                       "each has radius 1.25")));
+        EXPECT_EQ(a.value().nodes.at(0).meshes, std::vector<int>{0});
+    }
+}
+
+TEST(PlyImport, APointCloudTakesItsRadiusPropertyAndDropsItsNormals) {
+    const std::string props = XYZ + "property float nx\nproperty float ny\nproperty float nz\n" +
+                              "property uchar red\nproperty uchar green\nproperty uchar blue\n" +
+                              "property float radius\n";
+    const std::string rows =
+        "0 0 0 0 0 1 255 0 0 0.5\n3 0 0 0 0 1 0 255 0 0.25\n"
+        "3 4 0 0 0 1 0 0 255 1\n0 4 0 0 0 1 0 0 0 2\n";
+    const std::string ascii = cloud_ascii(props, rows);
+    // The same file in binary little-endian.
+    std::string binary = ascii.substr(0, ascii.find("end_header\n") + 11);
+    binary.replace(binary.find("ascii"), 5, "binary_little_endian");
+    const float xyz[4][3] = {{0, 0, 0}, {3, 0, 0}, {3, 4, 0}, {0, 4, 0}};
+    const float radii[4] = {0.5f, 0.25f, 1.0f, 2.0f};
+    const uint8_t rgb[4][3] = {{255, 0, 0}, {0, 255, 0}, {0, 0, 255}, {0, 0, 0}};
+    const float normal[3] = {0, 0, 1};
+    for (int i = 0; i < 4; ++i) {
+        binary.append(reinterpret_cast<const char*>(xyz[i]), 12);
+        binary.append(reinterpret_cast<const char*>(normal), 12);
+        binary.append(reinterpret_cast<const char*>(rgb[i]), 3);
+        binary.append(reinterpret_cast<const char*>(&radii[i]), 4);
+    }
+    for (const std::string& text : {ascii, binary}) {
+        auto a = import_text(AssetFormat::Ply, text);
+        ASSERT_TRUE(a.has_value()) << a.error().detail;
+        const AssetMesh& m = a.value().meshes.at(0);
+        EXPECT_EQ(m.kind, MeshKind::Points);
+        EXPECT_EQ(m.radii, (std::vector<float>{0.5f, 0.25f, 1.0f, 2.0f}));
+        EXPECT_EQ(m.positions[3], Vec3(0, 4, 0));
+        EXPECT_TRUE(m.normals.empty());
+        ASSERT_EQ(m.colors.size(), 4u);
+        EXPECT_EQ(m.colors[1], Vec3(0, 1, 0));
+        EXPECT_THAT(a.value().warnings, Contains(HasSubstr("normals and texture coordinates "
+                                                           "dropped: points carry none")));
+        EXPECT_THAT(a.value().warnings, Not(Contains(HasSubstr("without a radius property"))));
+    }
+}
+
+TEST(PlyImport, APointCloudsBadRadiusIsRefusedNamingTheVertex) {
+    const std::string props = XYZ + "property float radius\n";
+    for (const auto& [bad, text] :
+         {std::pair{"-1", "radius -1 "}, std::pair{"nan", "radius nan "},
+          std::pair{"0", "radius 0 "}, std::pair{"1e300", "radius inf "}}) {
+        const std::string rows = "0 0 0 1\n3 0 0 " + std::string(bad) + "\n3 4 0 1\n0 4 0 1\n";
+        const protocol::Problem e = refusal(cloud_ascii(props, rows));
+        EXPECT_EQ(e.type, protocol::ProblemType::InvalidAsset);
+        EXPECT_EQ(e.element, "element vertex 1") << bad;
+        EXPECT_THAT(e.detail, HasSubstr(text)) << e.detail;
+        EXPECT_THAT(e.detail, HasSubstr("not a finite number > 0"));
+    }
+}
+
+TEST(PlyImport, AMeshWithFacesIgnoresARadiusPropertyAndStaysTriangles) {
+    std::string ply = QUAD_ASCII;
+    ply.replace(ply.find("property uchar blue\n"), 20,
+                "property uchar blue\nproperty float radius\n");
+    for (const char* row : {"0 0 0 0 0 1 255 0 0", "1 0 0 0 0 1 0 255 0", "1 1 0 0 0 1 0 0 255",
+                            "0 1 0 0 0 1 255 255 255", "2 2 2 0 0 1 0 0 0"})
+        ply.replace(ply.find(row), std::strlen(row), std::string(row) + " -1");
+    auto a = import_text(AssetFormat::Ply, ply);
+    ASSERT_TRUE(a.has_value()) << a.error().detail;
+    expect_quad_mesh(a.value());
+    EXPECT_EQ(a.value().meshes[0].kind, MeshKind::Triangles);
+    EXPECT_TRUE(a.value().meshes[0].radii.empty());
+}
+
+TEST(PlyImport, FacesThatAllHaveFewerThanThreeCornersAreRefused) {
+    const std::string ply = cloud_ascii(XYZ, CORNER_ROWS + "2 0 1\n",
+                                        "element face 1\nproperty list uchar int vertex_indices\n");
+    const protocol::Problem e = refusal(ply);
+    EXPECT_EQ(e.element, "element face");
+    EXPECT_THAT(e.detail, HasSubstr("none of its 1 faces has 3 corners"));
 }
 
 TEST(PlyImport, NonFinitePositionsAreRefused) {

@@ -268,6 +268,94 @@ TEST(AssetWire, EveryTruncationOrDamageIsAnErrorNotACrash) {
                  r.value().value().asset.meshes.size() > 1);
 }
 
+/// An outcome of a points mesh and a curve mesh (two linear strands), both coloured.
+ImportOutcome points_and_curves_outcome() {
+    ImportOutcome o;
+    AssetMesh points;
+    points.name = "pts";
+    points.kind = MeshKind::Points;
+    points.positions = {{0, 0, 0}, {1, 0, 0}};
+    points.radii = {0.5f, 0.25f};
+    points.colors = {{1, 0, 0}, {0, 1, 0}};
+    AssetMesh curves;
+    curves.kind = MeshKind::Curves;
+    curves.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 0}};
+    curves.radii = {0.1f, 0.1f, 0.2f, 0.2f, 0.2f};
+    curves.strands = {2, 3};
+    o.asset.meshes = {points, curves};
+    AssetNode node;
+    node.meshes = {0, 1};
+    o.asset.nodes = {node};
+    return o;
+}
+
+TEST(AssetWire, PointsAndCurvesComeBackWithTheirKindRadiiAndStrands) {
+    const ImportOutcome sent = points_and_curves_outcome();
+    const std::string bytes = encode_outcome(sent);
+    auto r = decode_outcome(bytes);
+    ASSERT_TRUE(r.has_value()) << r.error();
+    ASSERT_TRUE(r.value().has_value());
+    const Asset& got = r.value().value().asset;
+    ASSERT_EQ(got.meshes.size(), 2u);
+    for (std::size_t i = 0; i < 2; ++i) {
+        EXPECT_EQ(got.meshes[i].kind, sent.asset.meshes[i].kind);
+        EXPECT_EQ(got.meshes[i].positions, sent.asset.meshes[i].positions);
+        EXPECT_EQ(got.meshes[i].radii, sent.asset.meshes[i].radii);
+        EXPECT_EQ(got.meshes[i].strands, sent.asset.meshes[i].strands);
+        EXPECT_EQ(got.meshes[i].colors, sent.asset.meshes[i].colors);
+    }
+    EXPECT_TRUE(validate_asset(got, ErrorSink("m.ply")).has_value());
+    // Every truncation fails cleanly, and so does a kind byte outside MeshKind: magic 4, kind 1,
+    // format 1, no model 1, mesh count 8, the name "pts" 4 + 3, then the mesh's kind.
+    for (std::size_t n = 0; n < bytes.size(); ++n)
+        EXPECT_FALSE(decode_outcome(std::string_view(bytes).substr(0, n)).has_value()) << n;
+    ASSERT_EQ(bytes[22], char(MeshKind::Points));
+    std::string bad = bytes;
+    bad[22] = 3;
+    auto damaged = decode_outcome(bad);
+    ASSERT_FALSE(damaged.has_value());
+    EXPECT_THAT(damaged.error(), HasSubstr("enum value 3 out of range"));
+}
+
+TEST(AssetWire, ADecodedPointsOrCurveMeshThatBreaksTheRulesFailsValidation) {
+    const ErrorSink sink("m.ply");
+    const auto problem = [&](auto&& damage) {
+        ImportOutcome o = points_and_curves_outcome();
+        damage(o.asset);
+        auto r = decode_outcome(encode_outcome(o));
+        EXPECT_TRUE(r.has_value() && r.value().has_value());
+        auto valid = validate_asset(r.value().value().asset, sink);
+        EXPECT_FALSE(valid.has_value());
+        return valid.has_value() ? std::string() : valid.error().detail;
+    };
+    EXPECT_THAT(problem([](Asset& a) {
+                    a.meshes[1].strands = {2, 2};
+                }),
+                HasSubstr("the strands hold 4 control vertices but the mesh has 5"));
+    EXPECT_THAT(problem([](Asset& a) {
+                    a.meshes[1].strands = {1, 4};
+                }),
+                HasSubstr("strand 0 has 1 control vertices"));
+    EXPECT_THAT(problem([](Asset& a) { a.meshes[0].radii[1] = -1.0f; }),
+                HasSubstr("radius 1 is not a finite number > 0"));
+    EXPECT_THAT(problem([](Asset& a) { a.meshes[0].radii.pop_back(); }),
+                HasSubstr("has 1 radii for 2 vertices"));
+    EXPECT_THAT(problem([](Asset& a) {
+                    a.meshes[0].triangles = {{0, 1, 1}};
+                }),
+                HasSubstr("is a points mesh: it takes no triangles"));
+    EXPECT_THAT(problem([](Asset& a) { a.meshes[0].strands = {2}; }),
+                HasSubstr("is a points mesh: strands are for curve meshes"));
+    EXPECT_THAT(problem([](Asset& a) { a.meshes[1].normals.assign(5, Vec3(0, 0, 1)); }),
+                HasSubstr("is a curve mesh: normals, texture coordinates and tangents are for "
+                          "triangle meshes"));
+    EXPECT_THAT(problem([](Asset& a) {
+                    a.meshes[0].kind = MeshKind::Triangles;
+                    a.meshes[0].triangles = {{0, 1, 1}};
+                }),
+                HasSubstr("radii and strands are for points and curves"));
+}
+
 TEST(Sandbox, TurnedOffItRunsTheImporterInThisProcess) {
     SandboxLimits l;
     l.enabled = false;

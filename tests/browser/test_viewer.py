@@ -149,6 +149,16 @@ class ViewerWithoutToken(ViewerInChromium):
         self.assertEqual(selected, instance)
         mesh = request(self.server, "GET", "/v1/scene/instances/" + instance)["mesh"]
         build = request(self.server, "GET", "/v1/scene/meshes/" + mesh)["build"]
+        triangles = request(self.server, "GET", "/v1/scene/meshes/" + mesh)["triangles"]
+        self.assertEqual(
+            self.browser.evaluate("document.getElementById('sel-primitives').textContent"),
+            f"{triangles} triangles")
+        # The words for points and curves, from the viewer's own module.
+        words = self.browser.evaluate(
+            "import('/web/inspector.js').then((m) => [m.meshPrimitives({kind: 'points', vertices: 3}),"
+            " m.meshPrimitives({kind: 'curves', primitives: 8, style: 'flat', basis: 'bezier',"
+            " strands: 2})])")
+        self.assertEqual(words, ["3 points", "8 flat bezier curve segments in 2 strands"])
         self.assertEqual(
             self.browser.evaluate("document.getElementById('sel-build').textContent"),
             f"{build['prefer']}, {'refit' if build['allow_refit'] else 'no refit'}"

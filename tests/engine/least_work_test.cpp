@@ -409,12 +409,92 @@ TEST_P(LeastWorkGroups, ACompactedMeshIsItsOwnBuildTwiceAndRefitsInPlace) {
     expect_tlas_update_only(commit_ok(*engine), 3);
 }
 
+std::string strategy_name(const ::testing::TestParamInfo<TlasKind>& info) {
+    return info.param == TlasKind::Incremental ? "incremental" : "embree";
+}
+
 INSTANTIATE_TEST_SUITE_P(BothTlasStrategies, LeastWorkGroups,
                          ::testing::Values(TlasKind::Incremental, TlasKind::Embree),
-                         [](const auto& info) {
-                             return info.param == TlasKind::Incremental ? std::string("incremental")
-                                                                        : std::string("embree");
-                         });
+                         strategy_name);
+
+/// Points ("dots", two instances) and curves ("hair", one) beside a triangle mesh ("crate"):
+/// the README's rows for points and curves, under both TLAS strategies.
+class LeastWorkPointsAndCurves : public ::testing::TestWithParam<TlasKind> {
+protected:
+    void SetUp() override {
+        EngineConfig config;
+        config.accel.tlas = GetParam();
+        auto created = Engine::create(config);
+        ASSERT_TRUE(created.has_value());
+        engine = std::move(created.value());
+        AddMesh dots;
+        dots.id = "dots";
+        dots.kind = MeshKind::Points;
+        dots.positions = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}};
+        dots.radii = {0.2f, 0.2f, 0.2f};
+        AddMesh hair;
+        hair.id = "hair";
+        hair.kind = MeshKind::Curves;
+        hair.basis = CurveBasis::Bezier;
+        hair.positions = {{0, 0, 0}, {0, 1, 0}, {0, 2, 0}, {0, 3, 0}};
+        hair.radii.assign(4, 0.05f);
+        hair.strands = {4};
+        apply_ok(*engine, dots, hair, mesh_edit("crate", make_box(Vec3(1.0f))),
+                 instance_edit("d0", "dots"), instance_edit("d1", "dots", {0, 2, 0}),
+                 instance_edit("h0", "hair", {3, 0, 0}), instance_edit("c0", "crate", {0, 3, 0}));
+        ASSERT_EQ(commit_ok(*engine).blas_rebuilds, 3u);
+    }
+
+    /// `r` rebuilt exactly `mesh` for `reason`, with `primitives`, and updated the TLAS.
+    static void expect_rebuilt_alone(const RebuildReport& r, const std::string& mesh,
+                                     BuildReason reason, uint64_t primitives) {
+        EXPECT_THAT(ids(r.rebuilt), ElementsAre(mesh));
+        EXPECT_TRUE(r.refit.empty());
+        if (!r.rebuilt.empty()) EXPECT_EQ(r.rebuilt[0].reason, reason);
+        EXPECT_EQ(r.primitives_built, primitives);
+        EXPECT_EQ(r.tlas_action, TlasAction::Update);
+    }
+
+    std::unique_ptr<Engine> engine;
+};
+
+TEST_P(LeastWorkPointsAndCurves, MovedPointsRebuildOnlyThatMesh) {
+    apply_ok(*engine, UpdateMeshPositions{"dots", 1, {{1, 1, 0}}});
+    expect_rebuilt_alone(commit_ok(*engine), "dots", BuildReason::PositionsChanged, 3);
+}
+
+TEST_P(LeastWorkPointsAndCurves, NewRadiiRebuildOnlyThatMesh) {
+    UpdateMeshPositions thicker{"hair", 2, {}};
+    thicker.radii = std::vector<float>{0.1f, 0.1f};
+    apply_ok(*engine, thicker);
+    expect_rebuilt_alone(commit_ok(*engine), "hair", BuildReason::PositionsChanged, 1);
+}
+
+TEST_P(LeastWorkPointsAndCurves, ANewPointCountOrNewStrandsRebuildOnlyThatMesh) {
+    ReplaceMeshTopology four{"dots", std::vector<Vec3>{{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}},
+                             {}};
+    four.radii = std::vector<float>(4, 0.3f);
+    apply_ok(*engine, four);
+    expect_rebuilt_alone(commit_ok(*engine), "dots", BuildReason::TopologyChanged, 4);
+
+    ReplaceMeshTopology longer{"hair", std::vector<Vec3>(7, Vec3(0.5f)), {}};
+    longer.radii = std::vector<float>(7, 0.05f);
+    longer.strands = std::vector<uint32_t>{7};
+    apply_ok(*engine, longer);
+    expect_rebuilt_alone(commit_ok(*engine), "hair", BuildReason::TopologyChanged, 2);
+}
+
+TEST_P(LeastWorkPointsAndCurves, MovingAnInstanceOfPointsIsATlasUpdateOnly) {
+    apply_ok(*engine, SetTransform{"d1", Affine::translation({0, 4, 0})});
+    const RebuildReport r = commit_ok(*engine);
+    EXPECT_EQ(r.tlas_action, TlasAction::Update);
+    EXPECT_EQ(r.blas_rebuilds + r.blas_refits, 0u);
+    EXPECT_EQ(r.instances_changed, 1u);
+}
+
+INSTANTIATE_TEST_SUITE_P(BothTlasStrategies, LeastWorkPointsAndCurves,
+                         ::testing::Values(TlasKind::Incremental, TlasKind::Embree),
+                         strategy_name);
 
 }  // namespace
 }  // namespace strata

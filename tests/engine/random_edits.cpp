@@ -29,8 +29,48 @@ std::vector<std::string> RandomEdits::instance_ids() const {
 
 uint32_t RandomEdits::ray_mask() { return chance(0.8) ? 0xFFFFFFFFu : 0x1u; }
 
+void RandomEdits::random_points(AddMesh& e) {
+    e.kind = MeshKind::Points;
+    for (int i = integer(3, 60); i > 0; --i) {
+        e.positions.emplace_back(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1));
+        e.radii.push_back(uniform(0.05f, 0.3f));
+    }
+}
+
+void RandomEdits::random_curves(AddMesh& e, CurveBasis basis) {
+    e.kind = MeshKind::Curves;
+    e.basis = basis;
+    for (int s = integer(1, 5); s > 0; --s) {
+        const int n = basis == CurveBasis::Linear   ? integer(2, 6)
+                      : basis == CurveBasis::Bezier ? 3 * integer(1, 3) + 1
+                                                    : integer(4, 8);
+        e.strands.push_back(uint32_t(n));
+        Vec3 p(uniform(-1, 1), uniform(-1, 0), uniform(-1, 1));
+        for (int k = 0; k < n; ++k) {
+            e.positions.push_back(p);
+            e.radii.push_back(uniform(0.03f, 0.15f));
+            p += Vec3(uniform(-0.3f, 0.3f), uniform(0.1f, 0.4f), uniform(-0.3f, 0.3f));
+        }
+    }
+}
+
 AddMesh RandomEdits::random_mesh(const std::string& id) {
     MeshData data;
+    if (chance(0.25)) {
+        AddMesh e;
+        e.id = id;
+        if (chance(0.5)) {
+            random_points(e);
+        } else {
+            random_curves(e, CurveBasis(integer(0, 3)));
+            e.style = chance(0.3) ? CurveStyle::Flat : CurveStyle::Round;
+        }
+        e.build.allow_refit = chance(0.75);
+        e.build.compact = chance(0.25);
+        if (!m_materials.empty() && chance(0.5)) e.material = pick(m_materials);
+        m_positions[id] = e.positions;
+        return e;
+    }
     switch (integer(0, 2)) {
         case 0: data = make_sphere(uniform(0.4f, 1.2f), uint32_t(integer(5, 18))); break;
         case 1: data = make_box({uniform(0.3f, 1.5f), uniform(0.3f, 1.5f), uniform(0.3f, 1.5f)}); break;
@@ -53,6 +93,27 @@ AddMesh RandomEdits::random_mesh(const std::string& id) {
     return e;
 }
 
+ReplaceMeshTopology RandomEdits::random_topology(const std::string& id) {
+    const MeshInfo& info = m_meshes[id];
+    AddMesh shape;
+    if (info.kind == MeshKind::Points) {
+        random_points(shape);
+    } else if (info.kind == MeshKind::Curves) {
+        random_curves(shape, info.basis);
+    } else {
+        do shape = random_mesh(id);
+        while (shape.kind != MeshKind::Triangles);
+    }
+    m_positions[id] = shape.positions;
+    ReplaceMeshTopology t;
+    t.mesh = id;
+    t.positions = std::move(shape.positions);
+    t.triangles = std::move(shape.triangles);
+    if (info.kind != MeshKind::Triangles) t.radii = std::move(shape.radii);
+    if (info.kind == MeshKind::Curves) t.strands = std::move(shape.strands);
+    return t;
+}
+
 Affine RandomEdits::random_transform() {
     const Vec3 t(uniform(-4, 4), uniform(-3, 3), uniform(-4, 4));
     const Vec3 r(uniform(-180, 180), uniform(-180, 180), uniform(-180, 180));
@@ -65,7 +126,7 @@ void RandomEdits::add_mesh(EditBatch& b) {
     if (m_meshes.count(id)) id += "x" + std::to_string(m_counter);
     if (m_meshes.count(id)) return;
     AddMesh add = random_mesh(id);
-    m_meshes[id] = MeshInfo{uint32_t(add.positions.size()), 0};
+    m_meshes[id] = MeshInfo{uint32_t(add.positions.size()), 0, add.kind, add.basis};
     b.edits.emplace_back(std::move(add));
 }
 
@@ -131,18 +192,21 @@ void RandomEdits::add_edit(EditBatch& b) {
         const uint32_t n = uint32_t(pos.size());
         u.offset = chance(0.5) ? 0 : uint32_t(integer(0, int(n) - 1));
         const uint32_t count = u.offset == 0 && chance(0.5) ? n : uint32_t(integer(1, int(n - u.offset)));
-        for (uint32_t i = u.offset; i < u.offset + count; ++i) {
+        // Points and curves: new radii for the range too, sometimes alone.
+        const bool radii = m_meshes[id].kind != MeshKind::Triangles && chance(0.5);
+        const bool radii_alone = radii && chance(0.3);
+        for (uint32_t i = u.offset; i < u.offset + count && !radii_alone; ++i) {
             pos[i] += Vec3(uniform(-amplitude, amplitude), uniform(-amplitude, amplitude), uniform(-amplitude, amplitude));
             u.positions.push_back(pos[i]);
+        }
+        if (radii) {
+            u.radii.emplace();
+            for (uint32_t i = 0; i < count; ++i) u.radii->push_back(uniform(0.03f, 0.3f));
         }
         e.emplace_back(std::move(u));
     } else if (kind < 73) {  // topology change: a different shape under the same id
         const std::string id = pick(meshes);
-        AddMesh shape = random_mesh(id);
-        ReplaceMeshTopology t;
-        t.mesh = id;
-        t.positions = std::move(shape.positions);
-        t.triangles = std::move(shape.triangles);
+        ReplaceMeshTopology t = random_topology(id);
         m_meshes[id].vertices = uint32_t(t.positions->size());
         e.emplace_back(std::move(t));
     } else if (kind < 76) {  // remove_mesh, removing its instances first in the same batch
@@ -171,6 +235,7 @@ void RandomEdits::add_edit(EditBatch& b) {
         }
     } else if (kind < 86) {  // replace_triangles: the first triangle by one to three others
         const std::string id = pick(meshes);
+        if (m_meshes[id].kind != MeshKind::Triangles) return;
         const uint32_t n = m_meshes[id].vertices;
         ReplaceMeshTriangles t{id, 0, chance(0.8) ? 1u : 0u, {}};
         for (int k = integer(1, 3); k > 0; --k)

@@ -30,7 +30,14 @@ private:
     struct MeshInfo {
         uint32_t vertices = 0;
         int instances = 0;
+        MeshKind kind = MeshKind::Triangles;
+        CurveBasis basis = CurveBasis::Linear;
     };
+    /// Points or curves: positions, radii and (curves) strands, in `e`.
+    void random_points(AddMesh& e);
+    void random_curves(AddMesh& e, CurveBasis basis);
+    /// A new shape for mesh `id` of its kind, as a topology change.
+    ReplaceMeshTopology random_topology(const std::string& id);
 
     void add_edit(EditBatch& b);
     void add_mesh(EditBatch& b);

@@ -1,13 +1,14 @@
 // Frames against stored reference images (the demo scene; a coarse sphere with and without
-// shading normals), compared with a tolerance: Embree and libm
-// pick different code paths on different CPUs, so the bytes may differ slightly across machines
-// (on one machine they never do, see render_determinism_test).
+// shading normals; a fur ball of curves; a point cloud), compared with a tolerance: Embree and
+// libm pick different code paths on different CPUs, so the bytes may differ slightly across
+// machines (on one machine they never do, see render_determinism_test).
 //
 // Regenerate after an intended change of the renderer or of the demo scene, then look at it:
 //   STRATA_UPDATE_REFERENCE=1 ctest --test-dir build -R ReferenceImage
 // On a mismatch the test writes the frame it got to <name>_actual.png in its working
 // directory (build/tests/engine under ctest).
 
+#include <cmath>
 
 #include <gtest/gtest.h>
 
@@ -56,6 +57,63 @@ TEST(ReferenceImage, SmoothAndFacetedSpheresMatchTheirStoredFrames) {
     EXPECT_NE(smooth.bytes, faceted.bytes);
     expect_matches_reference("sphere_smooth_reference", smooth);
     expect_matches_reference("sphere_faceted_reference", faceted);
+}
+
+/// A fur ball: a sphere with 600 round B-spline hairs of tapering radius, on a floor.
+TEST(ReferenceImage, AFurBallOfCurvesMatchesItsStoredFrame) {
+    auto engine = test::make_engine();
+    AddMesh hair;
+    hair.id = "hair";
+    hair.kind = MeshKind::Curves;
+    hair.basis = CurveBasis::BSpline;
+    const float golden = 2.39996323f;
+    for (int k = 0; k < 600; ++k) {
+        const float z = 1.0f - 2.0f * (float(k) + 0.5f) / 600.0f, r = std::sqrt(1.0f - z * z);
+        const Vec3 n(r * std::cos(golden * float(k)), z, r * std::sin(golden * float(k)));
+        const Vec3 droop(0.0f, -0.12f, 0.0f);
+        hair.strands.push_back(5);
+        for (int c = 0; c < 5; ++c) {
+            const float t = float(c) / 4.0f;
+            hair.positions.push_back(n * (0.95f + 0.55f * t) + droop * t * t);
+            hair.radii.push_back(0.025f * (1.0f - 0.8f * t));
+        }
+    }
+    hair.material = "fur";
+    AddMesh ball = test::mesh_edit("ball", make_sphere(1.0f, 24));
+    ball.material = "fur";
+    test::apply_ok(*engine, AddMaterial{"fur", Material{Vec3(0.75f, 0.5f, 0.25f), 0.7f, 0.0f, Vec3(0.0f)}},
+                   hair, ball, test::instance_edit("hair-1", "hair", {0, 1.5f, 0}),
+                   test::instance_edit("ball-1", "ball", {0, 1.5f, 0}),
+                   test::mesh_edit("floor", make_plane(Vec3(8.0f), 1, 1)),
+                   test::instance_edit("floor-1", "floor"),
+                   SetCamera{Vec3(0, 2.5f, 5.5f), Vec3(0, 1.3f, 0), Vec3(0, 1, 0), 40.0f});
+    expect_matches_reference(
+        "fur_ball_reference",
+        test::render_ok(*engine, test::request(WIDTH, HEIGHT, SPP, {}, ImageFormat::Png)));
+}
+
+/// A point cloud: 3,000 spheres of varying radius on a spiral, on a floor.
+TEST(ReferenceImage, APointCloudMatchesItsStoredFrame) {
+    auto engine = test::make_engine();
+    AddMesh cloud;
+    cloud.id = "cloud";
+    cloud.kind = MeshKind::Points;
+    for (int k = 0; k < 3000; ++k) {
+        const float t = float(k) / 3000.0f, a = 40.0f * t;
+        const float wobble = 0.15f * std::sin(float(k) * 12.9898f);
+        cloud.positions.emplace_back((0.4f + 1.6f * t) * std::cos(a), 0.2f + 2.0f * t + wobble,
+                                     (0.4f + 1.6f * t) * std::sin(a));
+        cloud.radii.push_back(0.02f + 0.05f * t);
+    }
+    cloud.material = "blue";
+    test::apply_ok(*engine, AddMaterial{"blue", Material{Vec3(0.2f, 0.4f, 0.85f), 0.3f, 0.0f, Vec3(0.0f)}},
+                   cloud, test::instance_edit("cloud-1", "cloud"),
+                   test::mesh_edit("floor", make_plane(Vec3(8.0f), 1, 1)),
+                   test::instance_edit("floor-1", "floor"),
+                   SetCamera{Vec3(0, 3.0f, 6.0f), Vec3(0, 1.1f, 0), Vec3(0, 1, 0), 45.0f});
+    expect_matches_reference(
+        "point_cloud_reference",
+        test::render_ok(*engine, test::request(WIDTH, HEIGHT, SPP, {}, ImageFormat::Png)));
 }
 
 }  // namespace

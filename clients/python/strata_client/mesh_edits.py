@@ -1,12 +1,16 @@
-"""Local mesh edits (protocol/README.md, "update_mesh" and "replace_triangles"): new positions for
-listed vertices, and a run of triangles replaced by others, with their arrays packed as base64
-little-endian (float32 positions, uint32 indices). On a big mesh the server then refits or
-rebuilds only the clusters the edit touches.
+"""Mesh edits with packed arrays (protocol/README.md, "add_mesh", "update_mesh" and
+"replace_triangles"): new positions for listed vertices, a run of triangles replaced by others,
+and points and curve meshes with their radii, with their arrays packed as base64 little-endian
+(float32 positions and radii, uint32 indices and strands). On a big mesh the server then refits
+or rebuilds only the clusters the edit touches.
 
     from strata_client import mesh_edits
 
     strata.edit([mesh_edits.update_vertices("terrain", dent_ids, dent_positions),
                  mesh_edits.replace_triangles("terrain", first=5120, count=512, triangles=cut)])
+    strata.edit([mesh_edits.add_points("stars", centres, radii),
+                 mesh_edits.add_curves("fur", control_points, radii, strands=[4] * 1000,
+                                       basis="bspline")])
 
 Arrays may be numpy arrays (positions (n, 3) or flat, triangles (n, 3) or flat, vertex ids (n,))
 or sequences of numbers or of triples; numpy is imported only when an array is given.
@@ -52,6 +56,36 @@ def pack_positions(positions: Any) -> str:
 def pack_indices(values: Any, width: int = 3) -> str:
     """Base64 of little-endian uint32s (`width` per item: 3 for triangles, 1 for vertex ids)."""
     return _pack(values, width, "<u4", "I", "triangle" if width == 3 else "vertex id")
+
+
+def pack_radii(radii: Any) -> str:
+    """Base64 of little-endian float32s, one per vertex."""
+    return _pack(radii, 1, "<f4", "f", "radius")
+
+
+def add_points(mesh_id: str, positions: Any, radii: Any, **fields: Any) -> Dict[str, Any]:
+    """An add_mesh op of kind points: a sphere of radius `radii[i]` around each position.
+    `fields` adds other members (material, name, build)."""
+    return {"op": "add_mesh", "id": mesh_id, "kind": "points",
+            "positions_b64": pack_positions(positions), "radii_b64": pack_radii(radii),
+            **fields}
+
+
+def add_curves(mesh_id: str, positions: Any, radii: Any, strands: Iterable[int],
+               basis: str = "linear", style: str = "round", **fields: Any) -> Dict[str, Any]:
+    """An add_mesh op of kind curves: strands of control vertices (`strands[k]` of them in
+    strand k, in vertex order) with a radius each; `basis` linear, bezier, bspline or
+    catmull_rom, `style` round (tubes) or flat (ribbons facing the ray)."""
+    return {"op": "add_mesh", "id": mesh_id, "kind": "curves", "basis": basis, "style": style,
+            "positions_b64": pack_positions(positions), "radii_b64": pack_radii(radii),
+            "strands_b64": pack_indices(strands, 1), **fields}
+
+
+def update_radii(mesh: str, radii: Any, offset: int = 0) -> Dict[str, Any]:
+    """An update_mesh op giving vertices offset .. offset + len(radii) - 1 of a points or curve
+    mesh new radii (a refit, like moved positions)."""
+    return {"op": "update_mesh", "mesh": mesh, "offset": int(offset),
+            "radii_b64": pack_radii(radii)}
 
 
 def update_vertices(mesh: str, vertices: Iterable[int], positions: Any) -> Dict[str, Any]:
