@@ -1,8 +1,11 @@
 // Points and curves (mesh_kind.h): hits against analytic answers, the rules of their edits, what
 // a commit does with them, and incremental commits against a fresh build of the same scene.
 
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <random>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -321,6 +324,64 @@ TEST(PointsAndCurves, IncrementalCommitsMatchAFreshBuildOfTheSameScene) {
         EXPECT_EQ(test::compare(incremental, scratch), "");
     }
     EXPECT_GE(applied, 20) << "most batches must apply for the comparison to mean something";
+}
+
+/// Renders race a stream of point and curve edits (each a rebuild): every frame shows exactly one
+/// committed version, the one a fresh build of the same edits shows (run under TSan too).
+TEST(PointsAndCurves, RendersDuringEditsTraceExactlyOneVersion) {
+    constexpr int BATCHES = 60;
+    std::vector<float> ys;
+    for (int k = 0; k < 5; ++k) ys.push_back(-1.0f + 0.5f * float(k));
+    EditBatch initial;
+    initial.edits.emplace_back(points("p", {{-1, 0, 0.5f}, {1, 0.5f, 0}, {0, -1, -0.5f}},
+                                      {0.4f, 0.3f, 0.5f}));
+    initial.edits.emplace_back(curves("c", CurveBasis::Bezier, CurveStyle::Round, ys, 4, 0.1f));
+    initial.edits.emplace_back(test::instance_edit("ip", "p"));
+    initial.edits.emplace_back(test::instance_edit("ic", "c", {0, 0, 0.3f}));
+    initial.edits.emplace_back(SetCamera{Vec3(0, 0, 8), Vec3(0), Vec3(0, 1, 0), 45.0f});
+    std::vector<EditBatch> batches;
+    std::mt19937 rng(9);
+    for (int i = 0; i < BATCHES; ++i) {
+        EditBatch b;
+        const float dy = std::uniform_real_distribution<float>(-0.5f, 0.5f)(rng);
+        UpdateMeshPositions moved{"p", uint32_t(rng() % 3), {Vec3(0.5f, dy, 0.0f)}};
+        UpdateMeshPositions thicker{"c", 4 * uint32_t(rng() % 5), {}};
+        thicker.radii = std::vector<float>(4, 0.05f + 0.2f * std::abs(dy));
+        b.edits.emplace_back(std::move(moved));
+        b.edits.emplace_back(std::move(thicker));
+        batches.push_back(std::move(b));
+    }
+    auto engine = test::make_engine();
+    ASSERT_TRUE(engine->apply(EditBatch(initial)).has_value());
+    test::commit_ok(*engine);
+    const uint64_t base = engine->read([](const Scene& s) { return s.version(); });
+
+    std::atomic<int> next{0};
+    std::thread editor([&] {
+        for (; next.load() < BATCHES; next.fetch_add(1)) {
+            if (!engine->apply(EditBatch(batches[std::size_t(next.load())])).has_value()) break;
+            std::this_thread::sleep_for(std::chrono::microseconds(300));
+        }
+    });
+    std::vector<std::pair<uint64_t, test::HitFrame>> shown;
+    while (shown.size() < 5 || (shown.size() < 30 && next.load() < BATCHES)) {
+        RebuildReport report;
+        test::HitFrame frame = test::render(*engine, 0xFFFFFFFFu, &report, 64, 48);
+        shown.emplace_back(report.version, std::move(frame));
+    }
+    editor.join();
+    ASSERT_EQ(next.load(), BATCHES) << "every batch applies";
+    for (const auto& [version, frame] : shown) {
+        ASSERT_GE(version, base);
+        const uint64_t applied = version - base;
+        ASSERT_LE(applied, uint64_t(BATCHES));
+        auto fresh = test::make_engine();
+        ASSERT_TRUE(fresh->apply(EditBatch(initial)).has_value());
+        for (uint64_t i = 0; i < applied; ++i)
+            ASSERT_TRUE(fresh->apply(EditBatch(batches[i])).has_value());
+        EXPECT_EQ(test::compare(frame, test::render(*fresh, 0xFFFFFFFFu, nullptr, 64, 48)), "")
+            << "frame of version " << version;
+    }
 }
 
 }  // namespace
