@@ -39,6 +39,19 @@ std::unique_ptr<Engine> instance_field(int64_t n) {
     return engine;
 }
 
+/// An engine holding `mesh` and one instance of it (named as the mesh), committed.
+std::unique_ptr<Engine> one_instance_of(AddMesh mesh) {
+    auto engine = make_engine();
+    EditBatch b;
+    AddInstance inst;
+    inst.id = inst.mesh = mesh.id;
+    b.edits.emplace_back(std::move(mesh));
+    b.edits.emplace_back(std::move(inst));
+    (void)engine->apply(std::move(b));
+    (void)engine->commit();
+    return engine;
+}
+
 void commit_timed(benchmark::State& state, Engine& engine) {
     auto report = engine.commit();
     if (!report) state.SkipWithError(report.error().describe().c_str());
@@ -94,17 +107,9 @@ BENCHMARK(BM_TlasRebuild)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond
 
 /// One instanced mesh of about 1M triangles whose vertices wobble each frame.
 void deform_big_mesh(benchmark::State& state, BuildOptions options, bool force_rebuild) {
-    auto engine = make_engine();
     MeshData sphere = make_sphere(1.0f, 1000);
     const std::vector<Vec3> base = sphere.positions;
-    EditBatch b;
-    b.edits.emplace_back(add_mesh_edit("big", std::move(sphere), options));
-    AddInstance inst;
-    inst.id = "big";
-    inst.mesh = "big";
-    b.edits.emplace_back(inst);
-    (void)engine->apply(std::move(b));
-    (void)engine->commit();
+    auto engine = one_instance_of(add_mesh_edit("big", std::move(sphere), options));
     int frame = 0;
     for (auto _ : state) {
         state.PauseTiming();
@@ -140,7 +145,6 @@ BENCHMARK(BM_Deform1MTriangles_RebuildFastBuild)->Unit(benchmark::kMillisecond);
 /// sphere, one instance: the commit after one vertex moved. Embree has no refit for spheres
 /// and curves, so this is a rebuild of the mesh; a 1M-triangle refit is the row above.
 void move_one_vertex(benchmark::State& state, MeshKind kind) {
-    auto engine = make_engine();
     AddMesh m;
     m.id = "cloud";
     m.kind = kind;
@@ -156,14 +160,7 @@ void move_one_vertex(benchmark::State& state, MeshKind kind) {
         m.basis = CurveBasis::BSpline;
         m.strands.assign(n / 4, 4);
     }
-    EditBatch b;
-    b.edits.emplace_back(std::move(m));
-    AddInstance inst;
-    inst.id = "cloud";
-    inst.mesh = "cloud";
-    b.edits.emplace_back(inst);
-    (void)engine->apply(std::move(b));
-    (void)engine->commit();
+    auto engine = one_instance_of(std::move(m));
     int frame = 0;
     for (auto _ : state) {
         state.PauseTiming();
