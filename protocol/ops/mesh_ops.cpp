@@ -193,6 +193,31 @@ Edit parse_add_mesh(OpFields& f) {
     return e;
 }
 
+/// update_mesh with `vertices`: positions for listed vertices (a brush stroke), positions only.
+Edit listed_vertices(OpFields& f, std::string mesh, std::optional<std::vector<Vec3>> positions,
+                     std::vector<uint32_t> vertices) {
+    FieldReader& r = f.reader();
+    for (const char* other : {"offset", "indices", "indices_b64", "strands", "strands_b64",
+                              "resize"}) {
+        if (f.get(other))
+            r.schema_error(f.pointer(other),
+                           std::string(other) + " does not go with vertices (positions only)");
+    }
+    for_each_vertex_attribute([&](auto a) {
+        for (const std::string key : {std::string(a.name), std::string(a.name) + "_b64"})
+            if (f.get(key))
+                r.schema_error(f.pointer(key), key + " does not go with vertices (positions only)");
+    });
+    if (!positions)
+        r.schema_error(f.pointer("positions"),
+                       "update_mesh with vertices needs positions or positions_b64");
+    UpdateMeshVertices listed;
+    listed.mesh = std::move(mesh);
+    listed.vertices = std::move(vertices);
+    listed.positions = std::move(*positions);
+    return listed;
+}
+
 Edit parse_update_mesh(OpFields& f) {
     FieldReader& r = f.reader();
     std::string mesh = f.id("mesh");
@@ -203,29 +228,7 @@ Edit parse_update_mesh(OpFields& f) {
     const bool attributes = gives_attributes(e);
     auto vertices = read_vertices(f);
     auto strands = read_strands(f);
-    if (vertices) {
-        // Positions for listed vertices (a brush stroke): positions only, no offset.
-        for (const char* other :
-             {"offset", "indices", "indices_b64", "strands", "strands_b64", "resize"}) {
-            if (f.get(other))
-                r.schema_error(f.pointer(other),
-                               std::string(other) + " does not go with vertices (positions only)");
-        }
-        for_each_vertex_attribute([&](auto a) {
-            for (const std::string key : {std::string(a.name), std::string(a.name) + "_b64"})
-                if (f.get(key))
-                    r.schema_error(f.pointer(key),
-                                   key + " does not go with vertices (positions only)");
-        });
-        if (!positions)
-            r.schema_error(f.pointer("positions"),
-                           "update_mesh with vertices needs positions or positions_b64");
-        UpdateMeshVertices listed;
-        listed.mesh = std::move(mesh);
-        listed.vertices = std::move(*vertices);
-        listed.positions = std::move(*positions);
-        return listed;
-    }
+    if (vertices) return listed_vertices(f, std::move(mesh), std::move(positions), std::move(*vertices));
     bool resize = false;
     f.read("resize", resize);
     if (resize && !positions)

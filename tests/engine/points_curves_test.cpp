@@ -181,11 +181,17 @@ void expect_refused(Engine& engine, Edit edit, ErrorCode code, const std::string
     EXPECT_EQ(engine.read([](const Scene& s) { return s.version(); }), before);
 }
 
-TEST(PointsAndCurves, BadPointsAndCurvesAreRefusedAndChangeNothing) {
+/// An engine holding points "p" (2), a linear curve "c" (one strand of 3) and a box "t".
+std::unique_ptr<Engine> three_kinds() {
     auto engine = test::make_engine();
     apply_ok(*engine, points("p", {{0, 0, 0}, {1, 0, 0}}, {0.5f, 0.5f}),
              curves("c", CurveBasis::Linear, CurveStyle::Round, {0.0f}, 3, 0.1f),
              test::mesh_edit("t", make_box(Vec3(1.0f))));
+    return engine;
+}
+
+TEST(PointsAndCurves, BadNewPointsAndCurvesAreRefusedAndChangeNothing) {
+    auto engine = three_kinds();
     using E = ErrorCode;
 
     AddMesh no_radii = points("q", {{0, 0, 0}}, {});
@@ -218,7 +224,11 @@ TEST(PointsAndCurves, BadPointsAndCurvesAreRefusedAndChangeNothing) {
     tube.radii.clear();
     tube.basis = CurveBasis::Bezier;
     expect_refused(*engine, tube, E::InvalidArgument, "basis");
+}
 
+TEST(PointsAndCurves, BadEditsOfPointsAndCurvesAreRefusedAndChangeNothing) {
+    auto engine = three_kinds();
+    using E = ErrorCode;
     UpdateMeshPositions drop;
     drop.mesh = "p";
     drop.radii = std::vector<float>{};
