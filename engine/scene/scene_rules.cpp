@@ -135,6 +135,7 @@ Status check_tangents(const std::vector<Vec4>& tangents, uint64_t first_vertex =
 
 /// Radii of points or curve control vertices: finite, > 0 and at most MAX_COORDINATE.
 Status check_radii(const std::vector<float>& radii, uint64_t first_vertex) {
+    static_assert(MAX_COORDINATE == 1e15, "the message below says 1e15");
     for (std::size_t i = 0; i < radii.size(); ++i) {
         const float r = radii[i];
         if (!std::isfinite(r))
@@ -145,8 +146,7 @@ Status check_radii(const std::vector<float>& radii, uint64_t first_vertex) {
         if (!(r > 0.0f) || double(r) > double(MAX_COORDINATE))
             return failure(ErrorCode::InvalidArgument,
                            "radius of vertex " + std::to_string(first_vertex + i) + " is " +
-                               std::to_string(r) + ": radii are > 0 and at most " +
-                               std::to_string(MAX_COORDINATE),
+                               std::to_string(r) + ": radii are > 0 and at most 1e15",
                            "radii/" + std::to_string(i));
     }
     return {};
