@@ -104,4 +104,17 @@ bool OpFields::read(std::string_view key, Affine& out) {
     });
 }
 
+bool OpFields::read(std::string_view key, std::vector<Affine>& out) {
+    return read_member(*this, key, out, [&](const Json& v, const std::string& p) {
+        if (!v.is_array() || v.size() > MAX_MOTION_KEYS)
+            m_r.schema_error(p, "expected an array of at most " + std::to_string(MAX_MOTION_KEYS) +
+                                    " transforms");
+        std::vector<Affine> keys;
+        keys.reserve(v.size());
+        for (std::size_t k = 0; k < v.size(); ++k)
+            keys.push_back(parse_transform(m_r, v[k], child(p, k)));
+        return keys;
+    });
+}
+
 }  // namespace strata::protocol

@@ -52,6 +52,11 @@ Json field_json(const FieldInfo&, uint32_t v) {
 Json field_json(const FieldInfo&, const Affine& v) {
     return affine_to_json(v);
 }
+Json field_json(const FieldInfo&, const std::vector<Affine>& v) {
+    Json out = Json::array();
+    for (const Affine& k : v) out.push_back(affine_to_json(k));
+    return out;
+}
 Json field_json(const FieldInfo&, const std::string& v) {
     return v;
 }
@@ -94,6 +99,14 @@ OrderedJson field_schema(const FieldInfo& info, const Affine*) {
     return described({{"$ref", "#/$defs/transform"}}, info, nullptr);
 }
 
+OrderedJson field_schema(const FieldInfo& info, const std::vector<Affine>*) {
+    // The default is no keys, which the description says.
+    return described({{"type", "array"},
+                      {"items", {{"$ref", "#/$defs/transform"}}},
+                      {"maxItems", MAX_MOTION_KEYS}},
+                     info, nullptr);
+}
+
 OrderedJson field_schema(const FieldInfo& info, const std::string* fallback) {
     const OrderedJson d = fallback ? OrderedJson(*fallback) : OrderedJson();
     return described({{"$ref", "#/$defs/text"}}, info, fallback ? &d : nullptr);
@@ -121,14 +134,18 @@ std::string field_row(const FieldInfo& info, const OrderedJson& schema, std::str
     } else if (ref.ends_with("/text")) {
         type = "string";
         range = "at most " + std::to_string(MAX_NAME_BYTES) + " bytes";
+    } else if (schema.value("type", "") == "array") {
+        type = "array of transforms";
+        range = "none, or 2 to " + std::to_string(MAX_MOTION_KEYS) + " keys";
     } else {
         type = schema.value("type", "");
     }
     if (info.limits.has_lo() || info.limits.has_hi()) range = limits_text(info.limits);
     const std::string fallback = schema.contains("default")
                                      ? "`" + docs_value(schema["default"]) + "`"
-                                 : type == "transform" ? "identity"
-                                                       : "";
+                                 : type == "transform"           ? "identity"
+                                 : type == "array of transforms" ? "`[]`"
+                                                                 : "";
     return "| `" + std::string(info.name) + "` | " + type + " | " + fallback + " | " + range +
            " | " + std::string(cost) + " | " + std::string(info.doc) + " |\n";
 }

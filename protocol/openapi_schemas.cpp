@@ -418,8 +418,9 @@ J render_request_schema() {
                              "`atrous`: smooth the colour with an edge-aware à-trous filter "
                              "guided by albedo, normal and depth")},
         {"camera", described(ref("CameraOverride"),
-                             "override for this frame only: any of `eye`, `target`, `up`, "
-                             "`fov_y_deg`; members left out come from the scene camera")},
+                             "override for this frame only: any of the camera's fields (as "
+                             "set_camera takes them); members left out come from the scene "
+                             "camera")},
         {"frame",
          merged(described(object({{"group", ref("id")}, {"instance", ref("id")}},
                                  {"group", "instance"}),

@@ -3,18 +3,24 @@
 #include <charconv>
 #include <string_view>
 
+#include "protocol/field_json.h"
 #include "protocol/json_fields.h"
 
 namespace strata::protocol {
 
 SetCamera read_camera_override(FieldReader& r, const Json& v) {
-    r.expect_object(v, "/camera", {"eye", "target", "up", "fov_y_deg"});
+    // The camera's fields as set_camera takes them (the field table), any of them.
+    static const MemberRule CAMERA = [] {
+        MemberRule rule;
+        for_each_field<CameraFields>(
+            [&](const auto& row) { rule.allowed.emplace_back(row.info.name); });
+        return rule;
+    }();
+    r.expect_object(v, "/camera", CAMERA);
+    EditSource source;
+    OpFields f(r, v, "/camera", CAMERA, source);
     SetCamera c;
-    if (const Json* m = FieldReader::member(v, "eye")) c.eye = r.vec3(*m, "/camera/eye");
-    if (const Json* m = FieldReader::member(v, "target")) c.target = r.vec3(*m, "/camera/target");
-    if (const Json* m = FieldReader::member(v, "up")) c.up = r.vec3(*m, "/camera/up");
-    if (const Json* m = FieldReader::member(v, "fov_y_deg"))
-        c.fov_y_deg = r.number(*m, "/camera/fov_y_deg");
+    read_updates<CameraFields>(f, c);
     return c;
 }
 

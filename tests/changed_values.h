@@ -4,6 +4,7 @@
 
 #include <string>
 #include <type_traits>
+#include <vector>
 
 #include "engine/core/math.h"
 
@@ -23,6 +24,11 @@ inline uint32_t changed(uint32_t v) {
 }
 inline Affine changed(const Affine& v) {
     return Affine::translation({1, 2, 3}) * v;
+}
+/// Motion keys: two when there were none, none when there were some.
+inline std::vector<Affine> changed(const std::vector<Affine>& v) {
+    if (!v.empty()) return {};
+    return {Affine::identity(), Affine::translation({1, 2, 3})};
 }
 inline std::string changed(const std::string& v) {
     return v + "x";

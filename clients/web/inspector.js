@@ -104,6 +104,7 @@ export class Inspector {
     if (d.kind === 'instance') {
       row('mesh', d.mesh);
       if (d.mesh_doc) row('primitives', meshPrimitives(d.mesh_doc)).id = 'sel-primitives';
+      if (d.motion && d.motion.length) row('motion', `${d.motion.length} keys`).id = 'sel-motion';
       const b = d.mesh_build;
       if (b) {
         row('mesh build', `${b.prefer}, ${b.allow_refit ? 'refit' : 'no refit'}` +

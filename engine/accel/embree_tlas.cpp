@@ -7,6 +7,7 @@
 
 #include "engine/accel/blas_store.h"
 #include "engine/accel/embree_device.h"
+#include "engine/accel/instance_transform.h"
 #include "engine/accel/embree_trace.h"
 #include "engine/accel/tlas.h"
 #include "engine/scene/scene.h"
@@ -141,7 +142,7 @@ private:
             rtcSetGeometryInstancedScene(t.geometry, blas_scene);
             t.blas = blas_scene;
         }
-        rtcSetGeometryTransform(t.geometry, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, r.world.m.data());
+        set_instance_transform(t.geometry, r.world.m.data(), r.world_motion);
         rtcSetGeometryMask(t.geometry, r.mask);
         if (r.world_visible) {
             rtcEnableGeometry(t.geometry);

@@ -31,6 +31,7 @@
 
 #include "engine/accel/blas_store.h"
 #include "engine/accel/embree_device.h"
+#include "engine/accel/instance_transform.h"
 #include "engine/accel/embree_trace.h"
 #include "engine/accel/tlas.h"
 #include "engine/accel/tlas_merge.h"
@@ -285,6 +286,7 @@ private:
         uint32_t slot = 0;
         RTCScene blas = nullptr;
         std::array<float, 12> transform{};
+        std::vector<Affine> keys;  ///< world-space motion keys; empty: none
         uint32_t mask = 0;
     };
 
@@ -380,8 +382,9 @@ private:
             e.blas = blas_scene;
         }
         e.transform = r.world.m;
+        e.keys = r.world_motion;
         e.mask = r.mask;
-        rtcSetGeometryTransform(e.geometry, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, e.transform.data());
+        set_instance_transform(e.geometry, e.transform.data(), e.keys);
         rtcSetGeometryMask(e.geometry, e.mask);
         rtcCommitGeometry(e.geometry);
         m_dyn_dirty = true;
@@ -470,7 +473,7 @@ private:
             attach_static(h.index, g);
         }
         rtcSetGeometryInstancedScene(g, blas_scene);
-        rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, r.world.m.data());
+        set_instance_transform(g, r.world.m.data(), r.world_motion);
         rtcSetGeometryMask(g, r.mask);
         rtcCommitGeometry(g);
     }
@@ -490,6 +493,7 @@ private:
                 const DynEntry& d = m_dyn[std::size_t(s.dyn)];
                 e.blas = d.blas;
                 e.transform = d.transform;
+                e.keys = d.keys;
                 e.mask = d.mask;
             }
             entries.push_back(e);

@@ -6,6 +6,7 @@
 #include <tbb/task_arena.h>
 #include <tbb/task_scheduler_observer.h>
 
+#include "engine/accel/instance_transform.h"
 #include "engine/core/timer.h"
 
 namespace strata {
@@ -99,7 +100,7 @@ void TlasMerge::run(const std::vector<RTCGeometryTy*>& static_geoms) {
         }
         RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
         rtcSetGeometryInstancedScene(g, e.blas);
-        rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, e.transform.data());
+        set_instance_transform(g, e.transform.data(), e.keys);
         rtcSetGeometryMask(g, e.mask);
         rtcCommitGeometry(g);
         m_created.push_back(g);

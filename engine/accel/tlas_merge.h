@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "engine/accel/embree_device.h"
+#include "engine/core/math.h"
 
 struct RTCSceneTy;
 struct RTCGeometryTy;
@@ -35,6 +36,7 @@ struct MergeEntry {
     uint32_t slot = 0;
     RTCSceneTy* blas = nullptr;  ///< nullptr: the instance is gone or hidden, leave it out
     std::array<float, 12> transform{};
+    std::vector<Affine> keys;  ///< world-space motion keys; empty: none
     uint32_t mask = 0;
 };
 

@@ -90,6 +90,12 @@ Affine Affine::operator*(const Affine& o) const {
     return out;
 }
 
+Affine Affine::lerp(const Affine& a, const Affine& b, float t) {
+    Affine out;
+    for (std::size_t k = 0; k < out.m.size(); ++k) out.m[k] = (1.0f - t) * a.m[k] + t * b.m[k];
+    return out;
+}
+
 glm::mat3 Affine::normal_matrix() const {
     const glm::mat3 lin(m[0], m[4], m[8], m[1], m[5], m[9], m[2], m[6], m[10]);
     return glm::transpose(glm::inverse(lin));

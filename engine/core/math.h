@@ -46,6 +46,10 @@ struct Bounds3 {
 };
 
 /// Row-major 3x4 affine transform: rows are (r00 r01 r02 tx), (r10 r11 r12 ty), (r20 r21 r22 tz).
+/// Most motion keys (transforms over time) one instance may have: Embree's
+/// RTC_MAX_TIME_STEP_COUNT.
+constexpr std::size_t MAX_MOTION_KEYS = 129;
+
 struct Affine {
     std::array<float, 12> m{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
 
@@ -75,6 +79,9 @@ struct Affine {
     bool is_finite() const;
     /// The box around the transformed corners of `b`.
     Bounds3 transform_bounds(const Bounds3& b) const;
+    /// The linear blend (1 - t) * a + t * b of every number: how Embree interpolates an
+    /// instance's transform keys.
+    static Affine lerp(const Affine& a, const Affine& b, float t);
     /// The 16 numbers of the 4x4 row-major matrix (last row 0 0 0 1).
     std::array<float, 16> to_rows16() const;
 

@@ -47,7 +47,8 @@ inline glm::mat4 world_to_ndc(const Camera& c, uint32_t width, uint32_t height) 
 
 class CameraRays {
 public:
-    CameraRays(const Camera& c, uint32_t width, uint32_t height) : m_eye(c.eye) {
+    CameraRays(const Camera& c, uint32_t width, uint32_t height)
+        : m_eye(c.eye), m_shutter_open(c.shutter_open), m_shutter_close(c.shutter_close) {
         const Vec3 forward = glm::normalize(c.target - c.eye);
         const Vec3 right = glm::normalize(glm::cross(forward, c.up));
         const Vec3 up = glm::cross(right, forward);
@@ -60,6 +61,10 @@ public:
     }
 
     const Vec3& eye() const { return m_eye; }
+    /// The ray time of shutter position `u` in [0, 1]: from shutter_open to shutter_close.
+    float time(float u) const { return m_shutter_open + (m_shutter_close - m_shutter_open) * u; }
+    /// Whether the shutter stays open for a while (the frame has motion blur if anything moves).
+    bool blurs() const { return m_shutter_close > m_shutter_open; }
 
     /// Unit direction through image position (x, y) in pixels; (0.5, 0.5) is the first pixel's
     /// centre.
@@ -85,6 +90,8 @@ public:
 
 private:
     Vec3 m_eye;
+    float m_shutter_open;
+    float m_shutter_close;
     Vec3 m_right;
     Vec3 m_up;
     Vec3 m_origin_offset;

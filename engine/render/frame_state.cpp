@@ -168,6 +168,7 @@ bool FrameState::refresh_instance(const Scene& scene, uint32_t slot) {
     shade.mesh_slot = r.mesh.index;
     shade.user_id = r.user_id;
     shade.normal_matrix = r.world.normal_matrix();
+    shade.motion = r.world_motion;
     const bool now = emits(scene, slot);
     m_emitter[slot] = now;
     m_emitters = m_emitters - was + now;

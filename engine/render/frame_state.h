@@ -26,7 +26,13 @@ struct InstanceShade {
     uint32_t material = DEFAULT_MATERIAL;  ///< index into FrameState::materials
     uint32_t mesh_slot = 0;
     uint32_t user_id = 0;           ///< the client's number, for the user_id AOV
-    glm::mat3 normal_matrix{1.0f};  ///< object-to-world for normals
+    glm::mat3 normal_matrix{1.0f};  ///< object-to-world for normals (without motion)
+    std::vector<Affine> motion;     ///< world-space motion keys; empty: none
+
+    /// Object-to-world for normals at ray time `time`.
+    glm::mat3 normals_at(float time) const {
+        return motion.empty() ? normal_matrix : motion_at(motion, time).normal_matrix();
+    }
 };
 
 /// A mesh's per-vertex shading attributes with the triangles that index them: copied at commit,

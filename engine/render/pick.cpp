@@ -49,6 +49,7 @@ std::vector<std::optional<PickHit>> pick_pixels(const TlasStrategy& tlas, const 
         ray.dir_x = dir.x;
         ray.dir_y = dir.y;
         ray.dir_z = dir.z;
+        ray.time = rays.time(0.0f);  // picks see the scene as the shutter opens
         ray.tfar = std::numeric_limits<float>::infinity();
         ray.mask = 0xFFFFFFFFu;
         ray.geom_id = ray.inst_id = ray.prim_id = INVALID_ID;
@@ -59,7 +60,7 @@ std::vector<std::optional<PickHit>> pick_pixels(const TlasStrategy& tlas, const 
         }
         const InstanceRecord& inst = scene.instances().at_slot(ray.inst_id);
         const InstanceShade& shade = frame.instances[ray.inst_id];
-        Vec3 n = shade.normal_matrix * Vec3(ray.ng_x, ray.ng_y, ray.ng_z);
+        Vec3 n = shade.normals_at(ray.time) * Vec3(ray.ng_x, ray.ng_y, ray.ng_z);
         const float len2 = glm::dot(n, n);
         n = len2 > 0.0f ? n / std::sqrt(len2) : -dir;
         if (glm::dot(n, dir) > 0.0f) n = -n;

@@ -21,6 +21,7 @@ namespace {
 // Sample dimensions: group 0 is the pixel jitter and the bounce direction, dimension 4 (group 1)
 // picks the BRDF lobe, groups 2 and 3 choose a point on a light at the first and second surface.
 constexpr uint32_t DIM_LOBE = 4;
+constexpr uint32_t DIM_TIME = 5;  ///< where in the shutter interval a camera sample is taken
 constexpr uint32_t DIM_GROUP_LIGHT = 2;
 
 /// Shadow rays toward a light point stop this far short of it (relative): an emitting triangle
@@ -58,6 +59,7 @@ struct SurfaceHit {
     Vec3 normal;    ///< shading normal: unit, facing the incoming ray
     Vec3 geometry;  ///< geometric normal: unit, facing the incoming ray
     Vec3 origin;    ///< where rays leaving the surface start
+    float time;     ///< the ray time it was hit at: rays leaving it see the scene then
     uint32_t material;      ///< index into FrameState::materials
     SurfaceMaterial shade;  ///< the material with its textures read at the hit
 
@@ -172,7 +174,8 @@ private:
         const InstanceShade& inst = m_frame.instances[hits.inst_id[i]];
         const Vec3 dir(hits.dir_x[i], hits.dir_y[i], hits.dir_z[i]);
         const Vec3 org(hits.org_x[i], hits.org_y[i], hits.org_z[i]);
-        Vec3 n = inst.normal_matrix * Vec3(hits.ng_x[i], hits.ng_y[i], hits.ng_z[i]);
+        const glm::mat3 normals = inst.normals_at(hits.time[i]);
+        Vec3 n = normals * Vec3(hits.ng_x[i], hits.ng_y[i], hits.ng_z[i]);
         const float len2 = glm::dot(n, n);
         n = len2 > 0.0f ? n / std::sqrt(len2) : -dir;
         if (glm::dot(n, dir) > 0.0f) n = -n;
@@ -189,11 +192,12 @@ private:
             const Vec3 ns = s.shade.normal_mapped
                                 ? mapped_normal(s.shade.tangent_normal,
                                                 mesh->tangent(prim, hits.u[i], hits.v[i]), normal,
-                                                inst.normal_matrix)
-                                : inst.normal_matrix * normal;
+                                                normals)
+                                : normals * normal;
             s.normal = shading_normal(ns, n, -dir);
         }
         s.origin = offset_origin(s.position, n, org, hits.tfar[i]);
+        s.time = hits.time[i];
         return s;
     }
 
@@ -208,8 +212,10 @@ private:
         Vec3 add[PACKET_LANES];
         bool any = false;
 
-        void push(uint32_t i, const Vec3& origin, const Vec3& dir, float tfar, const Vec3& value) {
-            set_lane(rays, i, origin, dir);
+        void push(uint32_t i, const SurfaceHit& from, const Vec3& dir, float tfar,
+                  const Vec3& value) {
+            set_lane(rays, i, from.origin, dir);
+            rays.time[i] = from.time;
             rays.tfar[i] = tfar;
             add[i] = value;
             valid[i] = -1;
@@ -225,7 +231,7 @@ private:
         if (!ray_origin_ok(hit.origin)) return;
         const Vec3 f = bsdf.eval_cos(hit.normal, v, m_sky.sun_direction());
         if (f.x <= 0.0f && f.y <= 0.0f && f.z <= 0.0f) return;
-        q.push(i, hit.origin, m_sky.sun_direction(), std::numeric_limits<float>::infinity(),
+        q.push(i, hit, m_sky.sun_direction(), std::numeric_limits<float>::infinity(),
                f * m_sky.sun_irradiance());
     }
 
@@ -240,7 +246,7 @@ private:
         Vec3 f = bsdf.eval_cos(hit.normal, v, s.dir);
         if (f.x <= 0.0f && f.y <= 0.0f && f.z <= 0.0f) return;
         if (mis && s.pdf > 0.0f) f *= power_heuristic(s.pdf, bsdf.pdf(hit.normal, v, s.dir));
-        q.push(i, hit.origin, s.dir, s.distance * SHADOW_SHORTEN, f * s.weight);
+        q.push(i, hit, s.dir, s.distance * SHADOW_SHORTEN, f * s.weight);
     }
 
     /// Traces the queued shadow rays and adds the radiance of each unblocked one to its lane.
@@ -264,12 +270,13 @@ private:
         uint64_t rays = 0;
 
         // Step: camera rays, jittered by the pixel's own sequence.
-        float px[PACKET_LANES], py[PACKET_LANES];
+        float px[PACKET_LANES], py[PACKET_LANES], time[PACKET_LANES];
         float bounce_u[PACKET_LANES][3];
         for (uint32_t i = 0; i < PACKET_LANES; ++i) {
             const uint32_t x = x0 + i % PACKET_SIZE, y = y0 + i / PACKET_SIZE;
             px[i] = float(x) + 0.5f;
             py[i] = float(y) + 0.5f;
+            time[i] = m_rays.time(0.0f);
             if (!valid[i]) continue;
             const PixelSampler& sampler = samplers[i];
             const auto u = sampler.get4(index, 0);
@@ -278,9 +285,10 @@ private:
             bounce_u[i][0] = u[2];
             bounce_u[i][1] = u[3];
             bounce_u[i][2] = sampler.get1(index, DIM_LOBE);
+            if (m_rays.blurs()) time[i] = m_rays.time(sampler.get1(index, DIM_TIME));
             ++rays;
         }
-        const RayHit16& primary = camera.aim(px, py);
+        const RayHit16& primary = camera.aim(px, py, time);
         m_tlas.intersect16(valid, camera.packet(), true, test());
 
         // Step: shade first hits; queue shadow rays (sun, lights) and bounce rays.
@@ -320,6 +328,7 @@ private:
                 bsdf.sample(hit.normal, -dir, bounce_u[i][0], bounce_u[i][1], bounce_u[i][2]);
             if (b.valid && hit.above(b.dir) && ray_origin_ok(hit.origin)) {
                 set_lane(bounce, i, hit.origin, b.dir);
+                bounce.time[i] = hit.time;
                 weight[i] = b.weight * hit.shade.occlusion;
                 bounce_pdf[i] = b.pdf;
                 bounce_valid[i] = -1;

@@ -85,17 +85,19 @@ public:
             m_packet.org_y[i] = eye.y;
             m_packet.org_z[i] = eye.z;
             m_packet.tnear[i] = 0.0f;
-            m_packet.time[i] = 0.0f;
+            m_packet.time[i] = rays.time(0.0f);
             m_packet.mask[i] = mask;
             m_packet.id[i] = i;
             m_packet.flags[i] = 0;
         }
     }
 
-    /// Aims lane i through image position (x[i], y[i]) and clears the hit of every lane.
-    RayHit16& aim(const float* x, const float* y) {
+    /// Aims lane i through image position (x[i], y[i]) at ray time `times[i]` (null: the
+    /// shutter's opening) and clears the hit of every lane.
+    RayHit16& aim(const float* x, const float* y, const float* times = nullptr) {
         m_rays.directions(x, y, PACKET_LANES, m_packet.dir_x, m_packet.dir_y, m_packet.dir_z);
         for (uint32_t i = 0; i < PACKET_LANES; ++i) {
+            m_packet.time[i] = times ? times[i] : m_rays.time(0.0f);
             m_packet.tfar[i] = std::numeric_limits<float>::infinity();
             m_packet.geom_id[i] = INVALID_ID;
             m_packet.inst_id[i] = INVALID_ID;

@@ -21,7 +21,7 @@ bool joins(const AddInstance& e, const std::optional<std::string>& parent, bool 
     static const AddInstance defaults{};
     return e.parent == parent && e.visible == visible &&
            e.material.has_value() == with_material && e.mask == defaults.mask &&
-           e.user_id == defaults.user_id && e.name.empty();
+           e.user_id == defaults.user_id && e.name.empty() && e.motion.empty();
 }
 
 /// Appends one item to a per-item array that may still hold one value for its `n` items.

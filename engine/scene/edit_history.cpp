@@ -62,6 +62,8 @@ struct ArrayBytes {
         return ids_bytes(e.ids) + bytes_of(e.transforms);
     }
     uint64_t operator()(const RemoveInstances& e) const { return ids_bytes(e.ids); }
+    uint64_t operator()(const AddInstance& e) const { return bytes_of(e.motion); }
+    uint64_t operator()(const UpdateInstance& e) const { return bytes_of(e.motion); }
     template <class E>
     uint64_t operator()(const E&) const {
         return 0;

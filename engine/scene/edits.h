@@ -156,6 +156,7 @@ struct AddInstance {
     uint32_t user_id = 0;
     std::optional<std::string> parent;  ///< a group id; nullopt: the root
     std::string name = {};              ///< display name (object_fields.h)
+    std::vector<Affine> motion = {};    ///< motion keys (object_fields.h); empty: none
 };
 
 struct UpdateInstance {
@@ -169,6 +170,7 @@ struct UpdateInstance {
     /// Set: a group id moves the instance under that group; set to nullopt: to the root.
     std::optional<std::optional<std::string>> parent;
     std::optional<std::string> name = std::nullopt;
+    std::optional<std::vector<Affine>> motion = std::nullopt;  ///< [] removes the keys
 };
 
 struct SetTransform {
@@ -242,6 +244,8 @@ struct SetCamera {
     std::optional<Vec3> target;
     std::optional<Vec3> up;
     std::optional<float> fov_y_deg;
+    std::optional<float> shutter_open = std::nullopt;
+    std::optional<float> shutter_close = std::nullopt;
 };
 
 /// Lighting fields to change; unset fields keep their value.

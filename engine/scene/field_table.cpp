@@ -72,4 +72,28 @@ Status check_value(const FieldInfo& info, const Affine& t) {
     return {};
 }
 
+bool value_ok(const FieldInfo&, const std::vector<Affine>& keys) {
+    if (keys.size() == 1 || keys.size() > MAX_MOTION_KEYS) return false;
+    for (const Affine& k : keys)
+        if (transform_problem(k)) return false;
+    return true;
+}
+
+Status check_value(const FieldInfo& info, const std::vector<Affine>& keys) {
+    const std::string field(info.name);
+    if (keys.size() == 1 || keys.size() > MAX_MOTION_KEYS)
+        return failure(ErrorCode::InvalidArgument,
+                       field + " has " + std::to_string(keys.size()) + " keys: give none or 2 to " +
+                           std::to_string(MAX_MOTION_KEYS),
+                       field);
+    for (std::size_t k = 0; k < keys.size(); ++k) {
+        if (const char* why = transform_problem(keys[k]))
+            return failure(keys[k].is_finite() ? ErrorCode::DegenerateTransform
+                                               : ErrorCode::NotFinite,
+                           "key " + std::to_string(k) + ": " + why,
+                           field + "/" + std::to_string(k));
+    }
+    return {};
+}
+
 }  // namespace strata

@@ -22,6 +22,7 @@
 #include <string_view>
 #include <tuple>
 #include <type_traits>
+#include <vector>
 
 #include "engine/core/check.h"
 #include "engine/core/math.h"
@@ -238,6 +239,8 @@ inline Status check_value(const FieldInfo& info, const std::string& v) {
     return check_text(info, v);
 }
 Status check_value(const FieldInfo& info, const Affine& v);
+/// Motion keys: none, or 2 to MAX_MOTION_KEYS transforms that each keep the transform rule.
+Status check_value(const FieldInfo& info, const std::vector<Affine>& keys);
 inline Status check_value(const FieldInfo&, bool) {
     return {};
 }
@@ -270,6 +273,7 @@ inline bool value_ok(const FieldInfo& info, const std::string& v) {
 inline bool value_ok(const FieldInfo&, const Affine& v) {
     return transform_problem(v) == nullptr;
 }
+bool value_ok(const FieldInfo& info, const std::vector<Affine>& keys);
 inline bool value_ok(const FieldInfo&, bool) {
     return true;
 }

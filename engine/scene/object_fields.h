@@ -173,6 +173,13 @@ constexpr auto InstanceFields::table() {
                   true},
                  STRATA_FIELD_OF(K, user_id), InstanceDirty::UserId),
         field<K>({"name", NAME_DOC, {}, {}, 1, true}, STRATA_FIELD_OF(K, name), InstanceDirty{}),
+        field<K>({"motion",
+                  "Motion keys for motion blur: 2 to 129 transforms in the instance's own space, "
+                  "evenly spaced over the frame (time 0 to 1) and interpolated linearly; the "
+                  "instance at time t is its world transform times the keys at t. [] or absent: "
+                  "no motion.",
+                  {}, {}, 2},
+                 STRATA_FIELD_OF(K, motion), InstanceDirty::Transform),
     };
 }
 
@@ -271,6 +278,15 @@ constexpr auto CameraFields::table() {
         field<K>({"up", "Up on the image (not along the view)."}, STRATA_FIELD_OF(K, up), C),
         field<K>({"fov_y_deg", "Vertical field of view.", open(0.0, 180.0)},
                  STRATA_FIELD_OF(K, fov_y_deg), C),
+        field<K>({"shutter_open",
+                  "When the shutter opens, in frame time (0 to 1, the span motion keys cover). "
+                  "Each sample of a render picks a time between it and shutter_close.",
+                  UNIT, {}, 1},
+                 STRATA_FIELD_OF(K, shutter_open), C),
+        field<K>({"shutter_close",
+                  "When the shutter closes (at least shutter_open); equal to it: no motion blur.",
+                  UNIT, {}, 2},
+                 STRATA_FIELD_OF(K, shutter_close), C),
     };
 }
 

@@ -86,6 +86,9 @@ struct InstanceRecord {
     uint32_t user_slot = 0;  ///< position in the mesh's `users`
     DirtyBits<InstanceDirty> dirty;  ///< since the last commit
     std::string name = {};           ///< display name (object_fields.h)
+    std::vector<Affine> motion = {};  ///< motion keys in its own space (object_fields.h)
+    /// `world` times each motion key: what the TLAS interpolates (empty without motion).
+    std::vector<Affine> world_motion = {};
 };
 
 /// A scene-graph node: its transform and visibility apply to everything below it.

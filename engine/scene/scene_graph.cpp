@@ -137,6 +137,8 @@ void Scene::refresh_instance_world(InstanceHandle h, InstanceRecord& r) {
     if (visible != r.world_visible) bits |= InstanceDirty::Visibility;
     r.world = world;
     r.world_visible = visible;
+    r.world_motion.resize(r.motion.size());
+    for (std::size_t k = 0; k < r.motion.size(); ++k) r.world_motion[k] = world * r.motion[k];
     if (bits.any()) mark(h, bits);
 }
 
@@ -166,6 +168,12 @@ Status Scene::check_world_transforms() const {
         const Affine world = parent_world * i.transform;
         if (const char* why = transform_problem(world))
             return refuse(g, "instance '" + i.id + "'", world.is_finite() ? why : nullptr);
+        for (std::size_t k = 0; k < i.motion.size(); ++k) {
+            const Affine key = world * i.motion[k];
+            if (const char* why = transform_problem(key))
+                return refuse(g, "instance '" + i.id + "' (motion key " + std::to_string(k) + ")",
+                              key.is_finite() ? why : nullptr);
+        }
         return {};
     };
     auto under_dirty = [&](GroupHandle p) {
@@ -194,6 +202,10 @@ Status Scene::check_world_transforms() const {
     for (InstanceHandle h : m_world_instances) {
         const InstanceRecord* i = m_instances.get(h);
         const GroupRecord* parent = i ? m_groups.get(i->parent) : nullptr;
+        // A root instance's transform passed the field rule; its motion keys times it did not.
+        if (i && !parent && !i->motion.empty()) {
+            if (Status s = check_instance(i->parent, Affine::identity(), *i); !s) return s;
+        }
         if (!parent || under_dirty(i->parent)) continue;
         if (Status s = check_instance(i->parent, parent->world, *i); !s) return s;
     }

@@ -1,5 +1,6 @@
 #include "engine/scene/types.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "engine/scene/object_fields.h"
@@ -32,6 +33,9 @@ Status bad(ErrorCode code, const char* field, const char* message) {
 
 Status check_camera(const Camera& c) {
     if (Status s = check_fields<CameraFields>(c); !s) return s;
+    if (c.shutter_close < c.shutter_open)
+        return bad(ErrorCode::InvalidArgument, "shutter_close",
+                   "the shutter closes before it opens");
     // Validate what is computed from the numbers, not only the numbers: finite values within
     // range can still give a basis that does not come out finite. Hence the basis in double.
     const glm::dvec3 view = glm::dvec3(c.target) - glm::dvec3(c.eye);
@@ -72,6 +76,12 @@ const char* alpha_mode_name(AlphaMode m) {
         case AlphaMode::Blend: return "blend";
     }
     return "opaque";
+}
+
+Affine motion_at(const std::vector<Affine>& keys, float time) {
+    const float f = std::clamp(time, 0.0f, 1.0f) * float(keys.size() - 1);
+    const auto k = std::min(static_cast<std::size_t>(f), keys.size() - 2);
+    return Affine::lerp(keys[k], keys[k + 1], f - float(k));
 }
 
 const char* light_kind_name(LightKind k) {

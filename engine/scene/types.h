@@ -145,11 +145,19 @@ struct Camera {
     Vec3 target{0.0f};
     Vec3 up{0.0f, 1.0f, 0.0f};
     float fov_y_deg = 45.0f;
+    /// The part of the frame the shutter is open for, in frame time (0 to 1, the span motion
+    /// keys cover): each camera sample picks a time in [open, close]. Equal: no motion blur.
+    float shutter_open = 0.0f;
+    float shutter_close = 0.0f;
 
     friend bool operator==(const Camera&, const Camera&) = default;
 };
 
 /// Directional sun plus a uniform sky. `sun_direction` points from the scene toward the sun.
+/// Transform keys evenly spaced over frame time [0, 1], interpolated linearly at `time` (as
+/// Embree interpolates them); `keys` holds at least two.
+Affine motion_at(const std::vector<Affine>& keys, float time);
+
 struct Lighting {
     Vec3 sun_direction{0.4f, 0.8f, 0.45f};
     Vec3 sun_color{1.0f, 0.95f, 0.9f};

@@ -1,6 +1,9 @@
 #include "tests/engine/many_instances.h"
 
 #include <cmath>
+#include <functional>
+#include <random>
+#include <string>
 
 #include "engine/scene/shapes.h"
 
@@ -104,6 +107,16 @@ EditBatch ManyInstances::mixed_batch(int edits, bool allow_mesh_edits) {
             UpdateInstance u;
             u.instance = l->id;
             u.mask = chance(0.5) ? 0xFFFFFFFFu : (chance(0.5) ? 0x1u : 0x2u);
+            // Motion keys (rays see key 0's end of them at the default shutter), or none: drawn
+            // from their own stream, so the edits above stay what the coverage guards expect.
+            std::mt19937 keys_rng(uint32_t(std::hash<std::string>{}(l->id)) ^ uint32_t(i));
+            std::uniform_real_distribution<float> offset(-1.0f, 1.0f);
+            if (keys_rng() % 10 < 3) {
+                u.motion.emplace();
+                for (uint32_t k = keys_rng() % 2 ? 0 : 2 + keys_rng() % 3; k > 0; --k)
+                    u.motion->push_back(Affine::translation(
+                        {offset(keys_rng), offset(keys_rng), offset(keys_rng)}));
+            }
             b.edits.emplace_back(std::move(u));
         } else {
             // A wobble refits a mesh's BLAS: every instance of it changes bounds.

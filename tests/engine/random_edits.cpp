@@ -1,5 +1,6 @@
 #include "tests/engine/random_edits.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "engine/scene/shapes.h"
@@ -177,6 +178,11 @@ void RandomEdits::add_edit(EditBatch& b) {
                                                                : std::nullopt;
         }
         if (chance(0.2)) u.user_id = uint32_t(integer(0, 1000));
+        if (chance(0.15)) {  // motion keys, or none
+            u.motion.emplace();
+            for (int k = chance(0.3) ? 0 : integer(2, 5); k > 0; --k)
+                u.motion->push_back(random_transform());
+        }
         e.emplace_back(std::move(u));
     } else if (kind < 55 && !instances.empty()) {  // remove_instance
         const std::string id = pick(instances);
@@ -255,6 +261,10 @@ void RandomEdits::add_edit(EditBatch& b) {
         c.eye = Vec3(9.0f * std::cos(a), 9.0f * h, 9.0f * std::sin(a));
         c.target = Vec3(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1));
         c.fov_y_deg = uniform(30, 70);
+        if (chance(0.4)) {  // launches trace at the shutter's opening
+            c.shutter_open = uniform(0, 1);
+            c.shutter_close = std::min(1.0f, *c.shutter_open + uniform(0, 0.5f));
+        }
         e.emplace_back(c);
     } else if (kind < 99) {  // lighting
         SetLighting l;

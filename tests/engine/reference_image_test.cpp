@@ -1,7 +1,8 @@
 // Frames against stored reference images (the demo scene; a coarse sphere with and without
-// shading normals; a fur ball of curves; a point cloud), compared with a tolerance: Embree and
-// libm pick different code paths on different CPUs, so the bytes may differ slightly across
-// machines (on one machine they never do, see render_determinism_test).
+// shading normals; a fur ball of curves; a point cloud; a spinning wheel with motion blur),
+// compared with a tolerance: Embree and libm pick different code paths on different CPUs, so
+// the bytes may differ slightly across machines (on one machine they never do, see
+// render_determinism_test).
 //
 // Regenerate after an intended change of the renderer or of the demo scene, then look at it:
 //   STRATA_UPDATE_REFERENCE=1 ctest --test-dir build -R ReferenceImage
@@ -114,6 +115,47 @@ TEST(ReferenceImage, APointCloudMatchesItsStoredFrame) {
     expect_matches_reference(
         "point_cloud_reference",
         test::render_ok(*engine, test::request(WIDTH, HEIGHT, SPP, {}, ImageFormat::Png)));
+}
+
+/// A wheel of six spokes turning 24 degrees while the shutter is open (nine motion keys each),
+/// its hub still, in front of a painted wall: the spokes blur along their arcs.
+TEST(ReferenceImage, ASpinningWheelIsMotionBlurred) {
+    auto engine = test::make_engine();
+    EditBatch b;
+    b.edits.emplace_back(AddMaterial{"steel", Material{Vec3(0.7f, 0.7f, 0.75f), 0.3f, 1.0f, Vec3(0.0f)}});
+    AddMesh spoke = test::mesh_edit("spoke", make_box(Vec3(0.12f, 1.6f, 0.12f)));
+    spoke.material = "steel";
+    b.edits.emplace_back(std::move(spoke));
+    b.edits.emplace_back(test::mesh_edit("hub", make_sphere(0.25f, 24)));
+    b.edits.emplace_back(AddMaterial{"paint", Material{Vec3(0.8f, 0.5f, 0.25f), 0.8f, 0.0f, Vec3(0.0f)}});
+    AddMesh wall_mesh = test::mesh_edit("wall", make_plane(Vec3(10.0f), 1, 1));
+    wall_mesh.material = "paint";
+    b.edits.emplace_back(std::move(wall_mesh));
+    b.edits.emplace_back(AddGroup{"wheel", std::nullopt, Affine::translation({0, 1.5f, 0}), true});
+    for (int s = 0; s < 6; ++s) {
+        AddInstance i = test::instance_edit("spoke-" + std::to_string(s), "spoke");
+        i.parent = "wheel";
+        for (int k = 0; k < 9; ++k) {
+            const float deg = 60.0f * float(s) + 24.0f * float(k) / 8.0f;
+            i.motion.push_back(Affine::rotation_euler_deg({0, 0, deg}) *
+                               Affine::translation({0, 0.8f, 0}));
+        }
+        b.edits.emplace_back(std::move(i));
+    }
+    AddInstance hub = test::instance_edit("hub-1", "hub");
+    hub.parent = "wheel";
+    b.edits.emplace_back(std::move(hub));
+    AddInstance wall = test::instance_edit("wall-1", "wall");
+    wall.transform = Affine::trs({0, 1.5f, -1}, Affine::rotation_euler_deg({90, 0, 0}), Vec3(1.0f));
+    b.edits.emplace_back(std::move(wall));
+    SetCamera camera{Vec3(0, 1.5f, 5.0f), Vec3(0, 1.5f, 0), Vec3(0, 1, 0), 45.0f};
+    camera.shutter_open = 0.0f;
+    camera.shutter_close = 1.0f;
+    b.edits.emplace_back(camera);
+    ASSERT_TRUE(engine->apply(std::move(b)).has_value());
+    expect_matches_reference(
+        "motion_blur_reference",
+        test::render_ok(*engine, test::request(WIDTH, HEIGHT, 64, {}, ImageFormat::Png)));
 }
 
 }  // namespace

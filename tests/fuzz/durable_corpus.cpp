@@ -53,10 +53,15 @@ std::vector<Edit> every_kind() {
     u.instance = "a";
     u.material = std::optional<std::string>("red");
     u.visible = true;
+    u.motion = std::vector<Affine>{Affine::identity(), Affine::translation({1, 0, 0})};
     edits.emplace_back(u);
     edits.emplace_back(SetTransform{"a", Affine::scaling({2, 2, 2})});
     edits.emplace_back(MarkDirty{std::string("tri"), DirtyAction::Refit});
     edits.emplace_back(SetCamera{Vec3(1), std::nullopt, std::nullopt, 30.0f});
+    SetCamera shutter;
+    shutter.shutter_open = 0.25f;
+    shutter.shutter_close = 0.75f;
+    edits.emplace_back(shutter);
     edits.emplace_back(SetLighting{std::nullopt, Vec3(2), std::nullopt, 0.5f});
     edits.emplace_back(UpdateMeshVertices{"tri", {3, 0}, {{2, 1, 0}, {0, 0, 1}}});
     edits.emplace_back(ReplaceMeshTriangles{"tri", 0, 1, {{0, 2, 1}, {1, 2, 3}}});

@@ -1,0 +1,18 @@
+#pragma once
+// An instance's transform in a TLAS: one transform, or motion keys (Embree time steps, evenly
+// spaced over ray time [0, 1] and interpolated linearly).
+
+#include <vector>
+
+#include "engine/core/math.h"
+
+struct RTCGeometryTy;
+
+namespace strata {
+
+/// Gives instance geometry `g` its world transform: `world` (12 floats, 3x4 row-major) when
+/// `keys` is empty, else the world-space motion keys `keys` (at least two) as its time steps.
+/// The caller commits the geometry.
+void set_instance_transform(RTCGeometryTy* g, const float* world, const std::vector<Affine>& keys);
+
+}  // namespace strata

@@ -1,0 +1,137 @@
+// Motion blur: instance transform keys over frame time and the camera's shutter. Hits at a ray
+// time must be those of a static scene whose instances sit where their keys say at that time;
+// key edits are TLAS work only, under both strategies.
+
+#include <gtest/gtest.h>
+
+#include "tests/engine/hit_frames.h"
+#include "tests/engine/test_util.h"
+
+namespace strata {
+namespace {
+
+using test::apply_ok;
+using test::commit_ok;
+
+/// Keys that move and turn an instance over the frame.
+std::vector<Affine> wobble(int keys) {
+    std::vector<Affine> out;
+    for (int k = 0; k < keys; ++k) {
+        const float t = float(k) / float(keys - 1);
+        out.push_back(Affine::trs({2.0f * t - 1.0f, 0.5f * t, 0.0f},
+                                  Affine::rotation_euler_deg({0.0f, 0.0f, 40.0f * t}),
+                                  Vec3(1.0f + 0.3f * t)));
+    }
+    return out;
+}
+
+std::unique_ptr<Engine> engine_with(TlasKind tlas) {
+    EngineConfig config;
+    config.accel.tlas = tlas;
+    auto created = Engine::create(config);
+    if (!created.has_value()) {
+        ADD_FAILURE() << created.error().describe();
+        return nullptr;
+    }
+    return std::move(created.value());
+}
+
+SetCamera shutter_at(float time) {
+    SetCamera c{Vec3(0, 1, 9), Vec3(0, 0.3f, 0), Vec3(0, 1, 0), 40.0f};
+    c.shutter_open = c.shutter_close = time;
+    return c;
+}
+
+class Motion : public ::testing::TestWithParam<TlasKind> {};
+
+TEST_P(Motion, HitsAtARayTimeAreThoseOfTheKeysInterpolatedThere) {
+    for (const int keys : {2, 5}) {
+        const std::vector<Affine> motion = wobble(keys);
+        auto moving = engine_with(GetParam());
+        ASSERT_NE(moving, nullptr);
+        AddGroup lift{"lift", std::nullopt, Affine::translation({0, 0.2f, 0}), true};
+        AddInstance box = test::instance_edit("box", "box", {0.5f, 0, 0});
+        box.parent = "lift";
+        box.motion = motion;
+        apply_ok(*moving, test::mesh_edit("box", make_box(Vec3(1.0f))),
+                 test::mesh_edit("floor", make_plane(Vec3(8.0f), 1, 1)), lift, box,
+                 test::instance_edit("floor", "floor", {0, -1, 0}));
+        for (const float t : {0.0f, 0.3f, 0.5f, 0.85f, 1.0f}) {
+            SCOPED_TRACE(testing::Message() << keys << " keys at time " << t);
+            apply_ok(*moving, shutter_at(t));
+            const test::HitFrame blurred = test::render(*moving, 0xFFFFFFFFu);
+            // The same scene without motion, the box placed where its keys say at t.
+            auto still = engine_with(GetParam());
+            AddInstance placed = test::instance_edit("box", "box");
+            placed.transform = Affine::translation({0, 0.2f, 0}) *
+                               Affine::translation({0.5f, 0, 0}) * motion_at(motion, t);
+            apply_ok(*still, test::mesh_edit("box", make_box(Vec3(1.0f))),
+                     test::mesh_edit("floor", make_plane(Vec3(8.0f), 1, 1)), placed,
+                     test::instance_edit("floor", "floor", {0, -1, 0}), shutter_at(t));
+            EXPECT_EQ(test::compare(blurred, test::render(*still, 0xFFFFFFFFu)), "");
+        }
+    }
+}
+
+TEST_P(Motion, KeyEditsAreTlasWorkOnly) {
+    auto engine = engine_with(GetParam());
+    ASSERT_NE(engine, nullptr);
+    apply_ok(*engine, test::mesh_edit("box", make_box(Vec3(1.0f))),
+             test::instance_edit("a", "box"), test::instance_edit("b", "box", {3, 0, 0}));
+    commit_ok(*engine);
+    UpdateInstance keys;
+    keys.instance = "a";
+    keys.motion = wobble(3);
+    apply_ok(*engine, keys);
+    RebuildReport r = commit_ok(*engine);
+    EXPECT_EQ(r.tlas_action, TlasAction::Update);
+    EXPECT_EQ(r.blas_rebuilds + r.blas_refits, 0u);
+    EXPECT_EQ(r.instances_changed, 1u);
+    keys.motion = std::vector<Affine>{};  // motion removed
+    apply_ok(*engine, keys);
+    r = commit_ok(*engine);
+    EXPECT_EQ(r.tlas_action, TlasAction::Update);
+    EXPECT_EQ(r.instances_changed, 1u);
+    apply_ok(*engine, shutter_at(0.5f));  // the shutter is the camera's: no BVH work
+    EXPECT_TRUE(commit_ok(*engine).no_accel_work());
+}
+
+INSTANTIATE_TEST_SUITE_P(BothTlasStrategies, Motion,
+                         ::testing::Values(TlasKind::Incremental, TlasKind::Embree),
+                         [](const auto& info) {
+                             return info.param == TlasKind::Incremental ? "incremental" : "embree";
+                         });
+
+TEST(Motion, BadKeysAndShuttersAreRefusedAndChangeNothing) {
+    auto engine = test::make_engine();
+    apply_ok(*engine, test::mesh_edit("box", make_box(Vec3(1.0f))),
+             test::instance_edit("a", "box"));
+    const uint64_t version = engine->read([](const Scene& s) { return s.version(); });
+    auto refused = [&](Edit edit, const std::string& field) {
+        EditBatch b;
+        b.edits.push_back(std::move(edit));
+        auto r = engine->apply(std::move(b));
+        ASSERT_FALSE(r.has_value()) << field;
+        EXPECT_EQ(r.error().field, field) << r.error().describe();
+    };
+    UpdateInstance one{"a"};
+    one.motion = std::vector<Affine>{Affine::identity()};
+    refused(one, "motion");
+    UpdateInstance flat{"a"};
+    flat.motion = std::vector<Affine>{Affine::identity(), Affine::scaling({1, 0, 1})};
+    refused(flat, "motion/1");
+    UpdateInstance many{"a"};
+    many.motion = std::vector<Affine>(MAX_MOTION_KEYS + 1, Affine::identity());
+    refused(many, "motion");
+    SetCamera backwards;
+    backwards.shutter_open = 0.8f;
+    backwards.shutter_close = 0.2f;
+    refused(backwards, "shutter_close");
+    SetCamera late;
+    late.shutter_close = 1.5f;
+    refused(late, "shutter_close");
+    EXPECT_EQ(engine->read([](const Scene& s) { return s.version(); }), version);
+}
+
+}  // namespace
+}  // namespace strata

@@ -1,0 +1,64 @@
+"""Motion blur through the Python client against a real strata-server: an instance's motion
+keys put it where they say at the shutter's opening (what picks see), key edits are one TLAS
+update, a blurred render differs from a still one, and bad keys are refused with their pointer
+and change nothing."""
+
+import unittest
+
+from strata_client import UnprocessableError
+from test_client import ServerTestCase
+
+
+def camera(time: float, x: float = 0.0) -> dict:
+    return {"eye": [x, 0, 10], "target": [x, 0, 0], "up": [0, 1, 0], "fov_y_deg": 20,
+            "shutter_open": time, "shutter_close": time}
+
+
+class MotionTest(ServerTestCase):
+
+    def setUp(self):
+        keys = [{"translate": [-2, 0, 0]}, {"translate": [0, 0, 0]}, {"translate": [2, 0, 0]}]
+        self.client.edit([{"op": "clear"},
+                          {"op": "add_mesh", "id": "ball", "shape": {"type": "sphere"}},
+                          {"op": "add_instance", "id": "b", "mesh": "ball", "motion": keys}])
+        self.client.commit()
+
+    def test_picks_see_the_keys_at_the_shutter_opening(self):
+        for time, x in [(0.0, -2.0), (0.25, -1.0), (0.5, 0.0), (1.0, 2.0)]:
+            hit = self.client.pick(50, 50, 101, 101, camera=camera(time, x))
+            self.assertIsNotNone(hit, f"time {time}")
+            self.assertAlmostEqual(hit.distance, 9.0, places=2)
+            self.assertIsNone(self.client.pick(50, 50, 101, 101, camera=camera(time, x + 3)))
+        self.assertEqual(len(self.client.scene("instances", "b")["motion"]), 3)
+
+    def test_key_edits_are_one_tlas_update_and_blur_the_frame(self):
+        self.client.edit([{"op": "update_instance", "instance": "b",
+                           "motion": [{"translate": [0, 0, 0]}, {"translate": [1, 0, 0]}]}])
+        report = self.client.commit()
+        self.assertEqual((report.tlas.action, report.blas_rebuilds, report.blas_refits),
+                         ("update", 0, 0))
+        self.client.edit([{"op": "set_camera", "eye": [0, 0, 8], "target": [0, 0, 0],
+                           "shutter_open": 0, "shutter_close": 0}])
+        still = self.client.render(64, 48, spp=8)
+        self.client.edit([{"op": "set_camera", "shutter_close": 1}])
+        blurred = self.client.render(64, 48, spp=8)
+        self.assertNotEqual(still, blurred)
+
+    def test_bad_keys_are_refused_with_their_pointer(self):
+        version = self.client.scene()["version"]
+        with self.assertRaises(UnprocessableError) as flat:
+            self.client.edit([{"op": "update_instance", "instance": "b",
+                               "motion": [{"translate": [0, 0, 0]}, {"scale": [1, 0, 1]}]}])
+        self.assertEqual(flat.exception.pointer, "/edits/0/motion/1")
+        with self.assertRaises(UnprocessableError) as one:
+            self.client.edit([{"op": "update_instance", "instance": "b",
+                               "motion": [{"translate": [0, 0, 0]}]}])
+        self.assertEqual(one.exception.pointer, "/edits/0/motion")
+        with self.assertRaises(UnprocessableError) as shutter:
+            self.client.edit([{"op": "set_camera", "shutter_open": 0.9, "shutter_close": 0.1}])
+        self.assertEqual(shutter.exception.pointer, "/edits/0/shutter_close")
+        self.assertEqual(self.client.scene()["version"], version)
+
+
+if __name__ == "__main__":
+    unittest.main()
