@@ -1,7 +1,9 @@
 #include "protocol/render_parser.h"
 
 #include <charconv>
+#include <optional>
 #include <string_view>
+#include <type_traits>
 
 #include "protocol/field_json.h"
 #include "protocol/json_fields.h"
@@ -174,10 +176,25 @@ Parsed<RenderRequest> parse_render_body(const Json& body, uint32_t* split,
     }
 }
 
+namespace {
+
+/// Whether `key` names one of the camera's fields, and if so whether its value is a vector.
+std::optional<bool> camera_field(const std::string& key) {
+    std::optional<bool> vector;
+    for_each_field<CameraFields>([&](const auto& row) {
+        using T = typename std::decay_t<decltype(row)>::Type;
+        if (row.info.name == key) vector = std::is_same_v<T, Vec3>;
+    });
+    return vector;
+}
+
+}  // namespace
+
 Parsed<Json> query_to_body(const std::multimap<std::string, std::string>& params) {
     Json body = Json::object();
     for (const auto& [key, text] : params) {
-        const bool camera = key == "eye" || key == "target" || key == "up" || key == "fov_y_deg";
+        const std::optional<bool> camera_vector = camera_field(key);
+        const bool camera = camera_vector.has_value();
         if (key == "frame_group" || key == "frame_instance") {
             // An id stays text, even one that looks like a number.
             const std::string member = key.substr(6);
@@ -192,8 +209,10 @@ Parsed<Json> query_to_body(const std::multimap<std::string, std::string>& params
             // The override's members are parameters of their own; "camera" itself would have to
             // be an object, which a query cannot carry.
             return Unexpected(problem_at(ProblemType::InvalidRequest, "/camera",
-                                         "query parameter 'camera' is not supported: give eye, "
-                                         "target, up and fov_y_deg as parameters of their own"));
+                                         "query parameter 'camera' is not supported: give the "
+                                         "camera's fields (eye, target, up, fov_y_deg, "
+                                         "shutter_open, shutter_close) as parameters of their "
+                                         "own"));
         }
         Json& slot = camera ? body["camera"][key] : body[key];
         if (!slot.is_null()) {
@@ -204,7 +223,7 @@ Parsed<Json> query_to_body(const std::multimap<std::string, std::string>& params
         }
         if (key == "aovs") {
             slot = text.empty() ? Json::array() : list_from_text(text, false);
-        } else if (key == "eye" || key == "target" || key == "up" || key == "band") {
+        } else if (key == "band" || camera_vector.value_or(false)) {
             slot = list_from_text(text, true);
         } else {
             slot = scalar_from_text(text);

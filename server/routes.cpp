@@ -626,7 +626,8 @@ void add_render_routes(RouteTable& routes, ServerContext& ctx) {
     RouteDoc get = {.summary = "Render one frame, asked for in the query",
                     .description =
                         "The members of POST /v1/render's body as parameters: the "
-                        "camera override's as eye, target, up and fov_y_deg, lists "
+                        "camera override's as the camera's fields (eye, target, up, "
+                        "fov_y_deg, shutter_open, shutter_close), lists "
                         "comma-separated. HEAD is 405: the headers exist only once "
                         "the frame is rendered.",
                     .tag = "render",

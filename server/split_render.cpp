@@ -14,6 +14,7 @@
 #include "engine/image/exr.h"
 #include "engine/render/band_assembly.h"
 #include "engine/render/frame_encode.h"
+#include "engine/scene/object_fields.h"
 
 namespace strata::server {
 
@@ -335,10 +336,16 @@ std::string band_query(const RenderRequest& request, RowBand band) {
             q += (i ? "," : "") + std::string(aov_name(b.aovs[i]));
     }
     if (b.camera) {
-        if (b.camera->eye) q += "&eye=" + vec_text(*b.camera->eye);
-        if (b.camera->target) q += "&target=" + vec_text(*b.camera->target);
-        if (b.camera->up) q += "&up=" + vec_text(*b.camera->up);
-        if (b.camera->fov_y_deg) q += "&fov_y_deg=" + exact_text(*b.camera->fov_y_deg);
+        // Every field of the override, so peers trace the same frame (shutter included).
+        for_each_field<CameraFields>([&](const auto& row) {
+            const auto& value = (*b.camera).*(row.update);
+            if (!value) return;
+            q += "&" + std::string(row.info.name) + "=";
+            if constexpr (std::is_same_v<std::decay_t<decltype(*value)>, Vec3>)
+                q += vec_text(*value);
+            else
+                q += exact_text(*value);
+        });
     }
     return q;
 }

@@ -495,6 +495,40 @@ BENCHMARK(BM_EngineRenderCoverage)
     ->UseRealTime()
     ->ComputeStatistics("min", min_of);
 
+/// BM_EngineRender on instances_10k with motion (argument 1: every instance moves half a unit
+/// over two motion keys and the shutter is open all frame; 0: the same scene without keys): what
+/// motion blur costs a frame, in the same run.
+void BM_EngineRenderMotion(benchmark::State& state) {
+    const bool moving = state.range(0) != 0;
+    static std::unique_ptr<Engine> engines[2];
+    std::unique_ptr<Engine>& engine = engines[moving];
+    if (!engine) {
+        engine = make_engine(instances_10k());
+        if (moving) {
+            EditBatch b;
+            for (int i = 0; i < 10000; ++i) {
+                UpdateInstance u{"i" + std::to_string(i)};
+                u.motion = std::vector<Affine>{Affine::identity(),
+                                               Affine::translation({0.5f, 0.0f, 0.0f})};
+                b.edits.emplace_back(std::move(u));
+            }
+            SetCamera shutter;
+            shutter.shutter_open = 0.0f;
+            shutter.shutter_close = 1.0f;
+            b.edits.emplace_back(shutter);
+            STRATA_CHECK(engine->apply(std::move(b)).has_value());
+        }
+    }
+    state.SetLabel(moving ? "instances_10k/motion" : "instances_10k/still");
+    render_frames(state, *engine);
+}
+BENCHMARK(BM_EngineRenderMotion)
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->ComputeStatistics("min", min_of);
+
 /// A 1920x1080 frame of the demo scene (4 spp, every AOV), rendered once for the encoders.
 const FrameBuffers& demo_1080p() {
     static const FrameBuffers frame = [] {

@@ -38,7 +38,7 @@ TEST(RenderParser, TheQueryStringCarriesTheSameOptions) {
     const std::multimap<std::string, std::string> params = {
         {"width", "64"},          {"height", "48"},        {"format", "png"},   {"spp", "4"},
         {"aovs", "normal,depth"}, {"accumulate", "false"}, {"exposure", "0.5"}, {"eye", "1,2,3"},
-        {"fov_y_deg", "60"},      {"compression", "zip"}};
+        {"fov_y_deg", "60"},      {"compression", "zip"},  {"shutter_close", "0.5"}};
     auto r = parse_render_query(params);
     ASSERT_TRUE(r.has_value()) << r.error().detail;
     EXPECT_EQ(r.value().width, 64u);
@@ -47,6 +47,8 @@ TEST(RenderParser, TheQueryStringCarriesTheSameOptions) {
     EXPECT_EQ(r.value().exposure, 0.5f);
     EXPECT_EQ(r.value().camera->eye, Vec3(1, 2, 3));
     EXPECT_EQ(r.value().camera->fov_y_deg, 60.0f);
+    EXPECT_EQ(r.value().camera->shutter_close, 0.5f);
+    EXPECT_FALSE(r.value().camera->shutter_open.has_value());
 }
 
 TEST(RenderParser, FrameNamesAGroupOrAnInstanceInTheBodyOrTheQuery) {

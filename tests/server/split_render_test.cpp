@@ -57,6 +57,8 @@ TEST(SplitRender, TheBandQueryReadsBackAsTheBandRequestBitForBit) {
     r.camera->eye = Vec3(0.1f, -1e-7f, 12345.678f);
     r.camera->target = Vec3(1.0f / 3.0f, 2.0f / 7.0f, -0.3f);
     r.camera->fov_y_deg = 33.3f;
+    r.camera->shutter_open = 0.125f;
+    r.camera->shutter_close = 2.0f / 3.0f;
     const RowBand band{64, 70};
     auto parsed = protocol::parse_render_query(query_params(band_query(r, band)));
     ASSERT_TRUE(parsed.has_value()) << parsed.error().detail;
@@ -76,6 +78,8 @@ TEST(SplitRender, TheBandQueryReadsBackAsTheBandRequestBitForBit) {
     EXPECT_EQ(got.camera->target, r.camera->target);
     EXPECT_FALSE(got.camera->up.has_value());
     EXPECT_EQ(got.camera->fov_y_deg, r.camera->fov_y_deg);
+    EXPECT_EQ(got.camera->shutter_open, r.camera->shutter_open);
+    EXPECT_EQ(got.camera->shutter_close, r.camera->shutter_close);
 }
 
 }  // namespace
