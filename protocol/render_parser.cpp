@@ -18,9 +18,10 @@ SetCamera read_camera_override(FieldReader& r, const Json& v) {
             [&](const auto& row) { rule.allowed.emplace_back(row.info.name); });
         return rule;
     }();
-    r.expect_object(v, "/camera", CAMERA);
+    static const std::string POINTER = "/camera";  // OpFields keeps a reference to it
+    r.expect_object(v, POINTER, CAMERA);
     EditSource source;
-    OpFields f(r, v, "/camera", CAMERA, source);
+    OpFields f(r, v, POINTER, CAMERA, source);
     SetCamera c;
     read_updates<CameraFields>(f, c);
     return c;

@@ -275,21 +275,10 @@ TEST_F(LeastWork, MemoryIsReportedAndShrinksWhenMeshesGo) {
 
 // Groups: "car" holds b0 and "wheels", which holds b1; b2 and c0 stay at the root. Each test
 // runs with both TLAS strategies.
-std::unique_ptr<Engine> engine_with(TlasKind tlas) {
-    EngineConfig config;
-    config.accel.tlas = tlas;
-    auto created = Engine::create(config);
-    if (!created.has_value()) {
-        ADD_FAILURE() << created.error().describe();
-        return nullptr;
-    }
-    return std::move(created.value());
-}
-
 class LeastWorkGroups : public ::testing::TestWithParam<TlasKind> {
 protected:
     void SetUp() override {
-        engine = engine_with(GetParam());
+        engine = test::make_engine(GetParam());
         ASSERT_NE(engine, nullptr);
         AddGroup car{"car", std::nullopt, Affine::translation({0, 0, -2}), true};
         AddGroup wheels{"wheels", std::string("car"), Affine::translation({0, -1, 0}), true};
@@ -430,7 +419,7 @@ INSTANTIATE_TEST_SUITE_P(BothTlasStrategies, LeastWorkGroups,
 class LeastWorkPointsAndCurves : public ::testing::TestWithParam<TlasKind> {
 protected:
     void SetUp() override {
-        engine = engine_with(GetParam());
+        engine = test::make_engine(GetParam());
         ASSERT_NE(engine, nullptr);
         AddMesh dots;
         dots.id = "dots";

@@ -25,17 +25,6 @@ std::vector<Affine> wobble(int keys) {
     return out;
 }
 
-std::unique_ptr<Engine> engine_with(TlasKind tlas) {
-    EngineConfig config;
-    config.accel.tlas = tlas;
-    auto created = Engine::create(config);
-    if (!created.has_value()) {
-        ADD_FAILURE() << created.error().describe();
-        return nullptr;
-    }
-    return std::move(created.value());
-}
-
 SetCamera shutter_at(float time) {
     SetCamera c{Vec3(0, 1, 9), Vec3(0, 0.3f, 0), Vec3(0, 1, 0), 40.0f};
     c.shutter_open = c.shutter_close = time;
@@ -47,7 +36,7 @@ class Motion : public ::testing::TestWithParam<TlasKind> {};
 TEST_P(Motion, HitsAtARayTimeAreThoseOfTheKeysInterpolatedThere) {
     for (const int keys : {2, 5}) {
         const std::vector<Affine> motion = wobble(keys);
-        auto moving = engine_with(GetParam());
+        auto moving = test::make_engine(GetParam());
         ASSERT_NE(moving, nullptr);
         AddGroup lift{"lift", std::nullopt, Affine::translation({0, 0.2f, 0}), true};
         AddInstance box = test::instance_edit("box", "box", {0.5f, 0, 0});
@@ -61,7 +50,7 @@ TEST_P(Motion, HitsAtARayTimeAreThoseOfTheKeysInterpolatedThere) {
             apply_ok(*moving, shutter_at(t));
             const test::HitFrame blurred = test::render(*moving, 0xFFFFFFFFu);
             // The same scene without motion, the box placed where its keys say at t.
-            auto still = engine_with(GetParam());
+            auto still = test::make_engine(GetParam());
             AddInstance placed = test::instance_edit("box", "box");
             placed.transform = Affine::translation({0, 0.2f, 0}) *
                                Affine::translation({0.5f, 0, 0}) * motion_at(motion, t);
@@ -74,7 +63,7 @@ TEST_P(Motion, HitsAtARayTimeAreThoseOfTheKeysInterpolatedThere) {
 }
 
 TEST_P(Motion, KeyEditsAreTlasWorkOnly) {
-    auto engine = engine_with(GetParam());
+    auto engine = test::make_engine(GetParam());
     ASSERT_NE(engine, nullptr);
     apply_ok(*engine, test::mesh_edit("box", make_box(Vec3(1.0f))),
              test::instance_edit("a", "box"), test::instance_edit("b", "box", {3, 0, 0}));

@@ -41,6 +41,18 @@ inline std::unique_ptr<Engine> make_engine() {
     return std::move(engine.value());
 }
 
+/// An engine with TLAS strategy `tlas`; null (a recorded failure) when it cannot be made.
+inline std::unique_ptr<Engine> make_engine(TlasKind tlas) {
+    EngineConfig config;
+    config.accel.tlas = tlas;
+    auto created = Engine::create(config);
+    if (!created.has_value()) {
+        ADD_FAILURE() << created.error().describe();
+        return nullptr;
+    }
+    return std::move(created.value());
+}
+
 /// Applies a batch that must succeed.
 template <class... Edits>
 uint64_t apply_ok(Engine& engine, Edits&&... edits) {
