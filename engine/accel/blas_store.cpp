@@ -52,7 +52,8 @@ RTCGeometryType geometry_type(const MeshRecord& mesh) {
     const bool flat = mesh.style == CurveStyle::Flat;
     switch (mesh.basis) {
         case CurveBasis::Bezier:
-            return flat ? RTC_GEOMETRY_TYPE_FLAT_BEZIER_CURVE : RTC_GEOMETRY_TYPE_ROUND_BEZIER_CURVE;
+            return flat ? RTC_GEOMETRY_TYPE_FLAT_BEZIER_CURVE
+                        : RTC_GEOMETRY_TYPE_ROUND_BEZIER_CURVE;
         case CurveBasis::BSpline:
             return flat ? RTC_GEOMETRY_TYPE_FLAT_BSPLINE_CURVE
                         : RTC_GEOMETRY_TYPE_ROUND_BSPLINE_CURVE;
@@ -60,7 +61,8 @@ RTCGeometryType geometry_type(const MeshRecord& mesh) {
             return flat ? RTC_GEOMETRY_TYPE_FLAT_CATMULL_ROM_CURVE
                         : RTC_GEOMETRY_TYPE_ROUND_CATMULL_ROM_CURVE;
         default:
-            return flat ? RTC_GEOMETRY_TYPE_FLAT_LINEAR_CURVE : RTC_GEOMETRY_TYPE_ROUND_LINEAR_CURVE;
+            return flat ? RTC_GEOMETRY_TYPE_FLAT_LINEAR_CURVE
+                        : RTC_GEOMETRY_TYPE_ROUND_LINEAR_CURVE;
     }
 }
 

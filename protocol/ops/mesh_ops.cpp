@@ -228,7 +228,8 @@ Edit parse_update_mesh(OpFields& f) {
     const bool attributes = gives_attributes(e);
     auto vertices = read_vertices(f);
     auto strands = read_strands(f);
-    if (vertices) return listed_vertices(f, std::move(mesh), std::move(positions), std::move(*vertices));
+    if (vertices)
+        return listed_vertices(f, std::move(mesh), std::move(positions), std::move(*vertices));
     bool resize = false;
     f.read("resize", resize);
     if (resize && !positions)

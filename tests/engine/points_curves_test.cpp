@@ -328,7 +328,8 @@ TEST(PointsAndCurves, IncrementalCommitsMatchAFreshBuildOfTheSameScene) {
         ++applied;
         const test::HitFrame incremental = test::render(*engine, 0xFFFFFFFFu);
         auto fresh = test::make_engine();
-        auto rebuilt = fresh->apply(engine->read([](const Scene& s) { return s.image().to_batch(); }));
+        auto rebuilt =
+            fresh->apply(engine->read([](const Scene& s) { return s.image().to_batch(); }));
         ASSERT_TRUE(rebuilt.has_value()) << rebuilt.error().describe();
         const test::HitFrame scratch = test::render(*fresh, 0xFFFFFFFFu);
         EXPECT_EQ(test::compare(incremental, scratch), "");

@@ -82,7 +82,8 @@ TEST(ReferenceImage, AFurBallOfCurvesMatchesItsStoredFrame) {
     hair.material = "fur";
     AddMesh ball = test::mesh_edit("ball", make_sphere(1.0f, 24));
     ball.material = "fur";
-    test::apply_ok(*engine, AddMaterial{"fur", Material{Vec3(0.75f, 0.5f, 0.25f), 0.7f, 0.0f, Vec3(0.0f)}},
+    const AddMaterial fur{"fur", Material{Vec3(0.75f, 0.5f, 0.25f), 0.7f, 0.0f, Vec3(0.0f)}};
+    test::apply_ok(*engine, fur,
                    hair, ball, test::instance_edit("hair-1", "hair", {0, 1.5f, 0}),
                    test::instance_edit("ball-1", "ball", {0, 1.5f, 0}),
                    test::mesh_edit("floor", make_plane(Vec3(8.0f), 1, 1)),
@@ -107,7 +108,8 @@ TEST(ReferenceImage, APointCloudMatchesItsStoredFrame) {
         cloud.radii.push_back(0.02f + 0.05f * t);
     }
     cloud.material = "blue";
-    test::apply_ok(*engine, AddMaterial{"blue", Material{Vec3(0.2f, 0.4f, 0.85f), 0.3f, 0.0f, Vec3(0.0f)}},
+    const AddMaterial blue{"blue", Material{Vec3(0.2f, 0.4f, 0.85f), 0.3f, 0.0f, Vec3(0.0f)}};
+    test::apply_ok(*engine, blue,
                    cloud, test::instance_edit("cloud-1", "cloud"),
                    test::mesh_edit("floor", make_plane(Vec3(8.0f), 1, 1)),
                    test::instance_edit("floor-1", "floor"),
@@ -122,12 +124,14 @@ TEST(ReferenceImage, APointCloudMatchesItsStoredFrame) {
 TEST(ReferenceImage, ASpinningWheelIsMotionBlurred) {
     auto engine = test::make_engine();
     EditBatch b;
-    b.edits.emplace_back(AddMaterial{"steel", Material{Vec3(0.7f, 0.7f, 0.75f), 0.3f, 1.0f, Vec3(0.0f)}});
+    b.edits.emplace_back(
+        AddMaterial{"steel", Material{Vec3(0.7f, 0.7f, 0.75f), 0.3f, 1.0f, Vec3(0.0f)}});
     AddMesh spoke = test::mesh_edit("spoke", make_box(Vec3(0.12f, 1.6f, 0.12f)));
     spoke.material = "steel";
     b.edits.emplace_back(std::move(spoke));
     b.edits.emplace_back(test::mesh_edit("hub", make_sphere(0.25f, 24)));
-    b.edits.emplace_back(AddMaterial{"paint", Material{Vec3(0.8f, 0.5f, 0.25f), 0.8f, 0.0f, Vec3(0.0f)}});
+    b.edits.emplace_back(
+        AddMaterial{"paint", Material{Vec3(0.8f, 0.5f, 0.25f), 0.8f, 0.0f, Vec3(0.0f)}});
     AddMesh wall_mesh = test::mesh_edit("wall", make_plane(Vec3(10.0f), 1, 1));
     wall_mesh.material = "paint";
     b.edits.emplace_back(std::move(wall_mesh));
