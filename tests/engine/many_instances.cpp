@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <functional>
+#include <optional>
 #include <random>
 #include <string>
 
@@ -67,6 +68,23 @@ EditBatch ManyInstances::moves(int count) {
     return b;
 }
 
+namespace {
+
+/// Motion keys for edit `i` of instance `id` (rays see key 0's end of them at the default
+/// shutter), none (an empty array) or unchanged (nullopt), three times in ten something: drawn
+/// from their own stream, so the batch's other edits stay what the coverage guards expect.
+std::optional<std::vector<Affine>> random_keys(const std::string& id, uint32_t i) {
+    std::mt19937 rng(uint32_t(std::hash<std::string>{}(id)) ^ i);
+    std::uniform_real_distribution<float> offset(-1.0f, 1.0f);
+    if (rng() % 10 >= 3) return std::nullopt;
+    std::vector<Affine> keys;
+    for (uint32_t k = rng() % 2 ? 0 : 2 + rng() % 3; k > 0; --k)
+        keys.push_back(Affine::translation({offset(rng), offset(rng), offset(rng)}));
+    return keys;
+}
+
+}  // namespace
+
 EditBatch ManyInstances::mixed_batch(int edits, bool allow_mesh_edits) {
     EditBatch b;
     std::vector<std::string> removed;  // an instance is not edited after its removal
@@ -107,16 +125,7 @@ EditBatch ManyInstances::mixed_batch(int edits, bool allow_mesh_edits) {
             UpdateInstance u;
             u.instance = l->id;
             u.mask = chance(0.5) ? 0xFFFFFFFFu : (chance(0.5) ? 0x1u : 0x2u);
-            // Motion keys (rays see key 0's end of them at the default shutter), or none: drawn
-            // from their own stream, so the edits above stay what the coverage guards expect.
-            std::mt19937 keys_rng(uint32_t(std::hash<std::string>{}(l->id)) ^ uint32_t(i));
-            std::uniform_real_distribution<float> offset(-1.0f, 1.0f);
-            if (keys_rng() % 10 < 3) {
-                u.motion.emplace();
-                for (uint32_t k = keys_rng() % 2 ? 0 : 2 + keys_rng() % 3; k > 0; --k)
-                    u.motion->push_back(Affine::translation(
-                        {offset(keys_rng), offset(keys_rng), offset(keys_rng)}));
-            }
+            u.motion = random_keys(l->id, uint32_t(i));
             b.edits.emplace_back(std::move(u));
         } else {
             // A wobble refits a mesh's BLAS: every instance of it changes bounds.

@@ -155,6 +155,39 @@ EditBatch RandomEdits::initial_batch(int meshes, int instances) {
     return b;
 }
 
+UpdateInstance RandomEdits::random_update_instance(const std::vector<std::string>& instances) {
+    UpdateInstance u;
+    u.instance = pick(instances);
+    if (chance(0.5)) u.transform = random_transform();
+    if (chance(0.4)) u.visible = chance(0.7);
+    if (chance(0.3)) u.mask = chance(0.7) ? 0xFFFFFFFFu : 0x2u;
+    if (chance(0.3)) {
+        u.material = (!m_materials.empty() && chance(0.7))
+                         ? std::optional<std::string>(pick(m_materials))
+                         : std::nullopt;
+    }
+    if (chance(0.2)) u.user_id = uint32_t(integer(0, 1000));
+    if (chance(0.15)) {  // motion keys, or none
+        u.motion.emplace();
+        for (int k = chance(0.3) ? 0 : integer(2, 5); k > 0; --k)
+            u.motion->push_back(random_transform());
+    }
+    return u;
+}
+
+SetCamera RandomEdits::random_camera() {
+    SetCamera c;
+    const float a = uniform(0, 6.28f), h = uniform(-0.3f, 0.9f);
+    c.eye = Vec3(9.0f * std::cos(a), 9.0f * h, 9.0f * std::sin(a));
+    c.target = Vec3(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1));
+    c.fov_y_deg = uniform(30, 70);
+    if (chance(0.4)) {  // launches trace at the shutter's opening
+        c.shutter_open = uniform(0, 1);
+        c.shutter_close = std::min(1.0f, *c.shutter_open + uniform(0, 0.5f));
+    }
+    return c;
+}
+
 void RandomEdits::add_edit(EditBatch& b) {
     auto& e = b.edits;
     const std::vector<std::string> meshes = mesh_ids();
@@ -167,23 +200,8 @@ void RandomEdits::add_edit(EditBatch& b) {
         add_instance(b, meshes);
     } else if (kind < 44 && !instances.empty()) {  // set_transform
         e.emplace_back(SetTransform{pick(instances), random_transform()});
-    } else if (kind < 50 && !instances.empty()) {  // update_instance
-        UpdateInstance u;
-        u.instance = pick(instances);
-        if (chance(0.5)) u.transform = random_transform();
-        if (chance(0.4)) u.visible = chance(0.7);
-        if (chance(0.3)) u.mask = chance(0.7) ? 0xFFFFFFFFu : 0x2u;
-        if (chance(0.3)) {
-            u.material = (!m_materials.empty() && chance(0.7)) ? std::optional<std::string>(pick(m_materials))
-                                                               : std::nullopt;
-        }
-        if (chance(0.2)) u.user_id = uint32_t(integer(0, 1000));
-        if (chance(0.15)) {  // motion keys, or none
-            u.motion.emplace();
-            for (int k = chance(0.3) ? 0 : integer(2, 5); k > 0; --k)
-                u.motion->push_back(random_transform());
-        }
-        e.emplace_back(std::move(u));
+    } else if (kind < 50 && !instances.empty()) {
+        e.emplace_back(random_update_instance(instances));
     } else if (kind < 55 && !instances.empty()) {  // remove_instance
         const std::string id = pick(instances);
         --m_meshes[m_instances[id]].instances;
@@ -255,17 +273,8 @@ void RandomEdits::add_edit(EditBatch& b) {
         } else {
             e.emplace_back(MarkDirty{std::nullopt, action});
         }
-    } else if (kind < 95) {  // camera
-        SetCamera c;
-        const float a = uniform(0, 6.28f), h = uniform(-0.3f, 0.9f);
-        c.eye = Vec3(9.0f * std::cos(a), 9.0f * h, 9.0f * std::sin(a));
-        c.target = Vec3(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1));
-        c.fov_y_deg = uniform(30, 70);
-        if (chance(0.4)) {  // launches trace at the shutter's opening
-            c.shutter_open = uniform(0, 1);
-            c.shutter_close = std::min(1.0f, *c.shutter_open + uniform(0, 0.5f));
-        }
-        e.emplace_back(c);
+    } else if (kind < 95) {
+        e.emplace_back(random_camera());
     } else if (kind < 99) {  // lighting
         SetLighting l;
         l.sun_direction = Vec3(uniform(-1, 1), uniform(0.1f, 1), uniform(-1, 1));

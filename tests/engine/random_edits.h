@@ -36,6 +36,10 @@ private:
     /// Points or curves: positions, radii and (curves) strands, in `e`.
     void random_points(AddMesh& e);
     void random_curves(AddMesh& e, CurveBasis basis);
+    /// An update of one of `instances`: some of its fields, motion keys among them.
+    UpdateInstance random_update_instance(const std::vector<std::string>& instances);
+    /// A camera somewhere around the scene, sometimes with its shutter open.
+    SetCamera random_camera();
     /// A new shape for mesh `id` of its kind, as a topology change.
     ReplaceMeshTopology random_topology(const std::string& id);
 
