@@ -11,7 +11,7 @@
 namespace strata::test {
 
 inline float changed(float v) {
-    return v + 0.5f;
+    return v >= 1e6f ? v * 0.5f : v + 0.5f;  // past 1e6, +0.5 may round back to v
 }
 inline Vec3 changed(const Vec3& v) {
     return v + Vec3(0.25f);

@@ -9,6 +9,7 @@ set(EMBREE_ALLOWED
     engine/accel/blas_store.cpp
     engine/accel/embree_tlas.cpp
     engine/accel/instance_transform.cpp
+    engine/accel/lod_scenes.cpp
     engine/accel/clustered_blas.cpp
     engine/accel/embree_trace.h
     engine/accel/incremental_tlas.cpp

@@ -37,6 +37,15 @@ export function meshPrimitives(m) {
   return `${m.triangles} triangles`;
 }
 
+/// Where an object under a level-of-detail group is drawn, in words ("from 0 to 40", "from 40
+/// on"), or '' for the full range (the default: drawn at every distance).
+export function lodRange(d) {
+  const near = d.lod_near || 0;
+  const far = d.lod_far === undefined ? 1e15 : d.lod_far;
+  if (near === 0 && far >= 1e15) return '';
+  return far >= 1e15 ? `from ${fmt(near)} on` : `from ${fmt(near)} to ${fmt(far)}`;
+}
+
 function hex(c) {
   const to = (v) => Math.round(Math.min(1, Math.max(0, v)) ** (1 / 2.2) * 255).toString(16).padStart(2, '0');
   return '#' + to(c[0]) + to(c[1]) + to(c[2]);
@@ -115,7 +124,10 @@ export class Inspector {
     row(d.kind === 'group' ? 'parent path' : 'group path', this.pathLinks(d.path || [])).id = 'sel-path';
     if (d.kind === 'group') {
       row('children', `${d.children.groups} groups, ${d.children.instances} instances`);
+      if (d.lod) row('level of detail', 'children are levels, chosen by distance').id = 'sel-lod';
     }
+    const range = lodRange(d);
+    if (range) row('LOD range', range).id = 'sel-lod-range';
     row('version', String(d.version)).id = 'sel-version';
     root.append(table);
 

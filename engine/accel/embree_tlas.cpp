@@ -57,6 +57,7 @@ public:
 
     Status update(const Scene& scene, const BlasStore& blas, const TlasDelta& delta) override {
         MemoryScope memory(m_device, MemoryCategory::Tlas);
+        sweep_lod(blas);
         for (InstanceHandle h : delta.changed) sync_instance(scene, blas, h);
         for (InstanceHandle h : delta.blas_changed) {
             // Committing the instance makes Embree re-read its BLAS's bounds; a BLAS object of
@@ -69,6 +70,7 @@ public:
 
     Status rebuild(const Scene& scene, const BlasStore& blas) override {
         MemoryScope memory(m_device, MemoryCategory::Tlas);
+        sweep_lod(blas);
         release_all();
         rtcReleaseScene(m_scene);
         create_scene();
@@ -78,20 +80,21 @@ public:
         return m_device.status("rebuilding the TLAS");
     }
 
-    void trace1(RayHit1& ray, bool coherent, const HitTest* test) const override {
-        FilterContext c = filter_context(coherent, *this, test);
+    void trace1(RayHit1& ray, bool coherent, const TraceOptions& options) const override {
+        FilterContext c = filter_context(coherent, *this, options);
         rtcIntersect1(m_scene, &c.ctx, reinterpret_cast<RTCRayHit*>(&ray));
     }
 
     void trace16(const ValidMask16& valid, RayHit16& rays, bool coherent,
-                 const HitTest* test) const override {
-        FilterContext c = filter_context(coherent, *this, test);
+                 const TraceOptions& options) const override {
+        FilterContext c = filter_context(coherent, *this, options);
         deactivate_unused_lanes(valid, rays);
         rtcIntersect16(valid.lanes, m_scene, &c.ctx, reinterpret_cast<RTCRayHit16*>(&rays));
     }
 
-    void occluded16(const ValidMask16& valid, Ray16& rays, const HitTest* test) const override {
-        FilterContext c = filter_context(false, *this, test);
+    void trace_occluded16(const ValidMask16& valid, Ray16& rays,
+                          const TraceOptions& options) const override {
+        FilterContext c = filter_context(false, *this, options);
         deactivate_unused_lanes(valid, rays);
         rtcOccluded16(valid.lanes, m_scene, &c.ctx, reinterpret_cast<RTCRay16*>(&rays));
     }
@@ -129,9 +132,8 @@ private:
         }
         const InstanceRecord& r = *inst.value();
         if (t.geometry && t.generation != h.generation) release_slot(h.index);
-        RTCScene blas_scene = blas.scene(r.mesh.index);
-        STRATA_CHECK(blas_scene != nullptr);
-        note_blas(blas, h.index, r.mesh.index);
+        STRATA_CHECK(blas.scene(r.mesh.index) != nullptr);
+        RTCScene blas_scene = instanced_scene(m_device, blas, h.index, r);
         if (!t.geometry) {
             t.geometry = rtcNewGeometry(m_device.get(), RTC_GEOMETRY_TYPE_INSTANCE);
             t.generation = h.generation;
@@ -142,7 +144,8 @@ private:
             rtcSetGeometryInstancedScene(t.geometry, blas_scene);
             t.blas = blas_scene;
         }
-        set_instance_transform(t.geometry, r.world.m.data(), r.world_motion);
+        set_instance_transform(t.geometry, r.world.m.data(), r.world_motion,
+                               r.motion_interpolation);
         rtcSetGeometryMask(t.geometry, r.mask);
         if (r.world_visible) {
             rtcEnableGeometry(t.geometry);

@@ -45,6 +45,7 @@ struct FilterContext {
     /// null: ids are slots.
     const char* slots = nullptr;
     std::size_t slot_stride = 0;
+    const Vec3* lod_eye = nullptr;  ///< what LOD groups measure from (null: the ray's origin)
 
     uint32_t slot(uint32_t inst) const {
         if (!slots) return inst;
@@ -57,12 +58,13 @@ struct FilterContext {
 /// Refuses the candidate hits of stale instance copies and those the hit test refuses.
 void filter_hits(const RTCFilterFunctionNArguments* args);
 
-/// A context that filters with `test` and, when `stale` is set, skips stale copies; its filter
-/// is installed only when there is something to filter.
-inline FilterContext filter_context(bool coherent, const TlasStrategy& tlas, const HitTest* test,
-                                    const uint8_t* stale = nullptr) {
-    FilterContext c{make_context(coherent), &tlas, test, stale};
-    if (test || stale) c.ctx.filter = filter_hits;
+/// A context that filters with `options.test` and, when `stale` is set, skips stale copies; its
+/// filter is installed only when there is something to filter.
+inline FilterContext filter_context(bool coherent, const TlasStrategy& tlas,
+                                    const TraceOptions& options, const uint8_t* stale = nullptr) {
+    FilterContext c{make_context(coherent), &tlas, options.test, stale};
+    c.lod_eye = options.lod_eye;
+    if (options.test || stale) c.ctx.filter = filter_hits;
     return c;
 }
 

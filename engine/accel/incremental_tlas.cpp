@@ -103,6 +103,7 @@ public:
 
     Status update(const Scene& scene, const BlasStore& blas, const TlasDelta& delta) override {
         MemoryScope memory(m_device, MemoryCategory::Tlas);
+        sweep_lod(blas);
         ++m_serial;
         // Step: choose the path. The dynamic tier must stay a small fraction of the scene (every
         // update rebuilds it); small scenes keep none, since a full build there is cheap.
@@ -144,6 +145,7 @@ public:
 
     Status rebuild(const Scene& scene, const BlasStore& blas) override {
         MemoryScope memory(m_device, MemoryCategory::Tlas);
+        sweep_lod(blas);
         ++m_serial;
         cancel_merge();
         release_everything();
@@ -188,15 +190,15 @@ public:
         reap_retired(true);
     }
 
-    void trace1(RayHit1& ray, bool coherent, const HitTest* test) const override {
-        FilterContext context = static_context(coherent, test);
+    void trace1(RayHit1& ray, bool coherent, const TraceOptions& options) const override {
+        FilterContext context = static_context(coherent, options);
         rtcIntersect1(m_static, &context.ctx, reinterpret_cast<RTCRayHit*>(&ray));
         if (m_dyn.empty()) return;
 
         SavedHit1 saved;
         std::memcpy(&saved, &ray.ng_x, sizeof saved);
         ray.inst_id = INVALID_ID;
-        FilterContext dynamic = dynamic_context(coherent, test);
+        FilterContext dynamic = dynamic_context(coherent, options);
         rtcIntersect1(m_dynamic, &dynamic.ctx, reinterpret_cast<RTCRayHit*>(&ray));
         if (ray.inst_id == INVALID_ID) {
             std::memcpy(&ray.ng_x, &saved, sizeof saved);
@@ -206,9 +208,9 @@ public:
     }
 
     void trace16(const ValidMask16& valid, RayHit16& rays, bool coherent,
-                 const HitTest* test) const override {
+                 const TraceOptions& options) const override {
         deactivate_unused_lanes(valid, rays);
-        FilterContext context = static_context(coherent, test);
+        FilterContext context = static_context(coherent, options);
         rtcIntersect16(valid.lanes, m_static, &context.ctx, reinterpret_cast<RTCRayHit16*>(&rays));
         if (m_dyn.empty()) return;
 
@@ -219,7 +221,7 @@ public:
         std::memcpy(reinterpret_cast<char*>(&saved) + HIT_BEGIN,
                     reinterpret_cast<const char*>(&rays) + HIT_BEGIN, HIT_BYTES);
         for (uint32_t i = 0; i < 16; ++i) rays.inst_id[i] = INVALID_ID;
-        FilterContext dynamic = dynamic_context(coherent, test);
+        FilterContext dynamic = dynamic_context(coherent, options);
         rtcIntersect16(valid.lanes, m_dynamic, &dynamic.ctx, reinterpret_cast<RTCRayHit16*>(&rays));
         for (uint32_t i = 0; i < 16; ++i) {
             if (!valid.lanes[i]) {
@@ -239,9 +241,10 @@ public:
         }
     }
 
-    void occluded16(const ValidMask16& valid, Ray16& rays, const HitTest* test) const override {
+    void trace_occluded16(const ValidMask16& valid, Ray16& rays,
+                          const TraceOptions& options) const override {
         deactivate_unused_lanes(valid, rays);
-        FilterContext context = static_context(false, test);
+        FilterContext context = static_context(false, options);
         rtcOccluded16(valid.lanes, m_static, &context.ctx, reinterpret_cast<RTCRay16*>(&rays));
         if (m_dyn.empty()) return;
 
@@ -254,18 +257,19 @@ public:
             any |= open.lanes[i] != 0;
         }
         if (!any) return;
-        FilterContext dynamic = dynamic_context(false, test);
+        FilterContext dynamic = dynamic_context(false, options);
         rtcOccluded16(open.lanes, m_dynamic, &dynamic.ctx, reinterpret_cast<RTCRay16*>(&rays));
     }
 
 private:
-    /// The static tier's context: skips stale copies (while there are any) and applies `test`.
-    FilterContext static_context(bool coherent, const HitTest* test) const {
-        return filter_context(coherent, *this, test, m_stale_count ? m_stale.data() : nullptr);
+    /// The static tier's context: skips stale copies (while there are any) and applies the
+    /// options.
+    FilterContext static_context(bool coherent, const TraceOptions& options) const {
+        return filter_context(coherent, *this, options, m_stale_count ? m_stale.data() : nullptr);
     }
-    /// The dynamic tier's: applies `test`, its instance ids read as slots through m_dyn.
-    FilterContext dynamic_context(bool coherent, const HitTest* test) const {
-        FilterContext c = filter_context(coherent, *this, test);
+    /// The dynamic tier's: applies the options, its instance ids read as slots through m_dyn.
+    FilterContext dynamic_context(bool coherent, const TraceOptions& options) const {
+        FilterContext c = filter_context(coherent, *this, options);
         c.slots = reinterpret_cast<const char*>(m_dyn.data()) + offsetof(DynEntry, slot);
         c.slot_stride = sizeof(DynEntry);
         return c;
@@ -287,6 +291,7 @@ private:
         RTCScene blas = nullptr;
         std::array<float, 12> transform{};
         std::vector<Affine> keys;  ///< world-space motion keys; empty: none
+        MotionInterpolation interpolation = MotionInterpolation::Linear;
         uint32_t mask = 0;
     };
 
@@ -364,9 +369,8 @@ private:
     }
 
     void put_dynamic(uint32_t slot, const InstanceRecord& r, const BlasStore& blas) {
-        RTCScene blas_scene = blas.scene(r.mesh.index);
-        STRATA_CHECK(blas_scene != nullptr);
-        note_blas(blas, slot, r.mesh.index);
+        STRATA_CHECK(blas.scene(r.mesh.index) != nullptr);
+        RTCScene blas_scene = instanced_scene(m_device, blas, slot, r);
         Slot& s = m_slots[slot];
         if (s.dyn < 0) {
             DynEntry e;
@@ -383,8 +387,9 @@ private:
         }
         e.transform = r.world.m;
         e.keys = r.world_motion;
+        e.interpolation = r.motion_interpolation;
         e.mask = r.mask;
-        set_instance_transform(e.geometry, e.transform.data(), e.keys);
+        set_instance_transform(e.geometry, e.transform.data(), e.keys, e.interpolation);
         rtcSetGeometryMask(e.geometry, e.mask);
         rtcCommitGeometry(e.geometry);
         m_dyn_dirty = true;
@@ -464,16 +469,15 @@ private:
             release_static(h.index);
             return;
         }
-        RTCScene blas_scene = blas.scene(r.mesh.index);
-        STRATA_CHECK(blas_scene != nullptr);
-        note_blas(blas, h.index, r.mesh.index);
+        STRATA_CHECK(blas.scene(r.mesh.index) != nullptr);
+        RTCScene blas_scene = instanced_scene(m_device, blas, h.index, r);
         RTCGeometry g = static_geometry(h.index);
         if (!g) {
             g = rtcNewGeometry(m_device.get(), RTC_GEOMETRY_TYPE_INSTANCE);
             attach_static(h.index, g);
         }
         rtcSetGeometryInstancedScene(g, blas_scene);
-        set_instance_transform(g, r.world.m.data(), r.world_motion);
+        set_instance_transform(g, r.world.m.data(), r.world_motion, r.motion_interpolation);
         rtcSetGeometryMask(g, r.mask);
         rtcCommitGeometry(g);
     }
@@ -494,6 +498,7 @@ private:
                 e.blas = d.blas;
                 e.transform = d.transform;
                 e.keys = d.keys;
+                e.interpolation = d.interpolation;
                 e.mask = d.mask;
             }
             entries.push_back(e);

@@ -1,6 +1,8 @@
 #include "engine/accel/tlas.h"
 
 #include "engine/accel/blas_store.h"
+#include "engine/accel/lod_scenes.h"
+#include "engine/scene/scene.h"
 
 namespace strata {
 
@@ -17,6 +19,23 @@ std::optional<TlasKind> parse_tlas_kind(std::string_view name) {
 }  // namespace strata
 
 namespace strata {
+
+TlasStrategy::TlasStrategy() = default;
+TlasStrategy::~TlasStrategy() = default;
+
+RTCSceneTy* TlasStrategy::instanced_scene(EmbreeDevice& device, const BlasStore& blas,
+                                          uint32_t slot, const InstanceRecord& r) {
+    note_blas(blas, slot, r.mesh.index);
+    if (!m_lod) {
+        if (r.world_lod.empty()) return blas.scene(r.mesh.index);
+        m_lod = std::make_unique<LodScenes>(device);
+    }
+    return m_lod->instanced_scene(blas, slot, r);
+}
+
+void TlasStrategy::sweep_lod(const BlasStore& blas) {
+    if (m_lod) m_lod->sweep(blas);
+}
 
 bool TlasStrategy::blas_clustered() const { return m_blas->any_clustered(); }
 

@@ -19,11 +19,15 @@
 #include "engine/core/result.h"
 #include "engine/scene/types.h"
 
+struct RTCSceneTy;
+
 namespace strata {
 
 class Scene;
 class BlasStore;
 class EmbreeDevice;
+class LodScenes;
+struct InstanceRecord;
 
 /// Instances to revisit in an update.
 struct TlasDelta {
@@ -33,6 +37,13 @@ struct TlasDelta {
     std::vector<InstanceHandle> blas_changed;
 
     bool empty() const { return changed.empty() && blas_changed.empty(); }
+};
+
+/// What a trace applies besides the rays: a hit test, and the eye level-of-detail groups
+/// measure from (TlasStrategy::intersect1).
+struct TraceOptions {
+    const HitTest* test = nullptr;
+    const Vec3* lod_eye = nullptr;
 };
 
 /// Which TLAS strategy an engine uses.
@@ -74,7 +85,8 @@ struct TlasTiers {
 
 class TlasStrategy {
 public:
-    virtual ~TlasStrategy() = default;
+    TlasStrategy();
+    virtual ~TlasStrategy();
 
     /// Short name for logs and reports.
     virtual const char* name() const = 0;
@@ -100,29 +112,40 @@ public:
 
     /// Closest hit for one ray: inst_id is the instance slot, prim_id the triangle in the
     /// mesh's own numbering (also for clustered BLASes), geom_id 0. Hits `test` refuses are
-    /// passed through.
-    void intersect1(RayHit1& ray, bool coherent, const HitTest* test = nullptr) const {
-        trace1(ray, coherent, test);
+    /// passed through. Level-of-detail groups choose their level by their distance from
+    /// `lod_eye` (engine/scene/lod.h): the launch's camera, so that every ray of a frame sees
+    /// the level the camera sees; null: from the ray's own origin.
+    void intersect1(RayHit1& ray, bool coherent, const HitTest* test = nullptr,
+                    const Vec3* lod_eye = nullptr) const {
+        trace1(ray, coherent, {test, lod_eye});
         if (m_blas && blas_clustered()) to_mesh_triangles(ray);
     }
     /// Closest hits for the active lanes of a packet, numbered as intersect1's.
     void intersect16(const ValidMask16& valid, RayHit16& rays, bool coherent,
-                     const HitTest* test = nullptr) const {
-        trace16(valid, rays, coherent, test);
+                     const HitTest* test = nullptr, const Vec3* lod_eye = nullptr) const {
+        trace16(valid, rays, coherent, {test, lod_eye});
         if (m_blas && blas_clustered()) to_mesh_triangles(valid, rays);
     }
     /// Any hit for a packet of shadow rays: tfar becomes -inf on a hit.
-    virtual void occluded16(const ValidMask16& valid, Ray16& rays,
-                            const HitTest* test = nullptr) const = 0;
+    void occluded16(const ValidMask16& valid, Ray16& rays, const HitTest* test = nullptr,
+                    const Vec3* lod_eye = nullptr) const {
+        trace_occluded16(valid, rays, {test, lod_eye});
+    }
 
     /// The mesh's own triangle index of a hit on the instance in `slot` at BLAS geometry `geom`,
     /// primitive `prim` (what HitTest::keep is told).
     uint32_t mesh_triangle(uint32_t slot, uint32_t geom, uint32_t prim) const;
 
+    /// The level-of-detail wrappers (lod_scenes.h); null until an instance under an LOD group
+    /// was placed. Their callbacks ask it which instances a ray may see.
+    const LodScenes* lod_scenes() const { return m_lod.get(); }
+
 protected:
-    virtual void trace1(RayHit1& ray, bool coherent, const HitTest* test) const = 0;
+    virtual void trace1(RayHit1& ray, bool coherent, const TraceOptions& options) const = 0;
     virtual void trace16(const ValidMask16& valid, RayHit16& rays, bool coherent,
-                         const HitTest* test) const = 0;
+                         const TraceOptions& options) const = 0;
+    virtual void trace_occluded16(const ValidMask16& valid, Ray16& rays,
+                                  const TraceOptions& options) const = 0;
 
     /// Records which mesh's BLAS the instance in `slot` references (every strategy calls it
     /// when it points an instance at a BLAS), so hits on clustered BLASes can be renumbered.
@@ -131,6 +154,12 @@ protected:
         if (slot >= m_instance_mesh.size()) m_instance_mesh.resize(slot + 1, 0);
         m_instance_mesh[slot] = mesh_slot;
     }
+    /// The scene the geometry of instance `r` in `slot` instances: its mesh's BLAS, or under a
+    /// level-of-detail group that BLAS's wrapper (lod_scenes.h). Notes the BLAS (note_blas).
+    RTCSceneTy* instanced_scene(EmbreeDevice& device, const BlasStore& blas, uint32_t slot,
+                                const InstanceRecord& r);
+    /// Called at the start of each update and rebuild: lets wrappers drop removed BLASes.
+    void sweep_lod(const BlasStore& blas);
 
 private:
     bool blas_clustered() const;
@@ -139,6 +168,7 @@ private:
 
     const BlasStore* m_blas = nullptr;
     std::vector<uint32_t> m_instance_mesh;  ///< by instance slot: the mesh slot of its BLAS
+    std::unique_ptr<LodScenes> m_lod;
 };
 
 /// The Embree top-level scene over instance geometries attached by slot id.

@@ -100,7 +100,7 @@ void TlasMerge::run(const std::vector<RTCGeometryTy*>& static_geoms) {
         }
         RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
         rtcSetGeometryInstancedScene(g, e.blas);
-        set_instance_transform(g, e.transform.data(), e.keys);
+        set_instance_transform(g, e.transform.data(), e.keys, e.interpolation);
         rtcSetGeometryMask(g, e.mask);
         rtcCommitGeometry(g);
         m_created.push_back(g);

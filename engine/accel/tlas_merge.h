@@ -19,6 +19,7 @@
 
 #include "engine/accel/embree_device.h"
 #include "engine/core/math.h"
+#include "engine/scene/types.h"
 
 struct RTCSceneTy;
 struct RTCGeometryTy;
@@ -37,6 +38,7 @@ struct MergeEntry {
     RTCSceneTy* blas = nullptr;  ///< nullptr: the instance is gone or hidden, leave it out
     std::array<float, 12> transform{};
     std::vector<Affine> keys;  ///< world-space motion keys; empty: none
+    MotionInterpolation interpolation = MotionInterpolation::Linear;
     uint32_t mask = 0;
 };
 

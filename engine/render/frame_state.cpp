@@ -138,7 +138,9 @@ void FrameState::refresh_material(const Scene& scene, MaterialHandle h) {
 bool FrameState::emits(const Scene& scene, uint32_t slot) const {
     if (!scene.instances().alive_at(slot) || !scene.instances().at_slot(slot).world_visible)
         return false;
-    // Only triangles are sampled as lights; emitting points and curves are found by bounces.
+    // Only triangles are sampled as lights; emitting points and curves are found by bounces, and
+    // so are the levels of LOD groups (which level a shadow ray would meet depends on the ray).
+    if (!scene.instances().at_slot(slot).world_lod.empty()) return false;
     const MeshRecord* mesh = scene.meshes().get(scene.instances().at_slot(slot).mesh);
     if (!mesh || mesh->kind != MeshKind::Triangles) return false;
     const Vec3& e = materials[instances[slot].material].emission;
@@ -169,6 +171,7 @@ bool FrameState::refresh_instance(const Scene& scene, uint32_t slot) {
     shade.user_id = r.user_id;
     shade.normal_matrix = r.world.normal_matrix();
     shade.motion = r.world_motion;
+    shade.interpolation = r.motion_interpolation;
     const bool now = emits(scene, slot);
     m_emitter[slot] = now;
     m_emitters = m_emitters - was + now;

@@ -28,10 +28,12 @@ struct InstanceShade {
     uint32_t user_id = 0;           ///< the client's number, for the user_id AOV
     glm::mat3 normal_matrix{1.0f};  ///< object-to-world for normals (without motion)
     std::vector<Affine> motion;     ///< world-space motion keys; empty: none
+    MotionInterpolation interpolation = MotionInterpolation::Linear;  ///< of `motion`
 
     /// Object-to-world for normals at ray time `time`.
     glm::mat3 normals_at(float time) const {
-        return motion.empty() ? normal_matrix : motion_at(motion, time).normal_matrix();
+        return motion.empty() ? normal_matrix
+                              : motion_at(motion, time, interpolation).normal_matrix();
     }
 };
 

@@ -253,7 +253,7 @@ private:
     /// Returns the rays traced.
     uint64_t trace_shadows(ShadowQueue& q, Vec3* radiance) const {
         if (!q.any) return 0;
-        m_tlas.occluded16(q.valid, q.rays, test());
+        m_tlas.occluded16(q.valid, q.rays, test(), &m_rays.eye());
         uint64_t rays = 0;
         for (uint32_t i = 0; i < PACKET_LANES; ++i) {
             if (!q.valid[i]) continue;
@@ -289,7 +289,7 @@ private:
             ++rays;
         }
         const RayHit16& primary = camera.aim(px, py, time);
-        m_tlas.intersect16(valid, camera.packet(), true, test());
+        m_tlas.intersect16(valid, camera.packet(), true, test(), &m_rays.eye());
 
         // Step: shade first hits; queue shadow rays (sun, lights) and bounce rays.
         const bool lights = !m_frame.lights.empty();
@@ -342,7 +342,7 @@ private:
 
         // Step: one bounce, ended by the sky or by direct light at the second surface.
         if (any_bounce) {
-            m_tlas.intersect16(bounce_valid, bounce, false, test());
+            m_tlas.intersect16(bounce_valid, bounce, false, test(), &m_rays.eye());
             Vec3 incoming[PACKET_LANES];
             ShadowQueue sun2, light2;
             for (uint32_t i = 0; i < PACKET_LANES; ++i) {
@@ -412,7 +412,7 @@ private:
         uint64_t rays = 0;
         for (uint32_t i = 0; i < PACKET_LANES; ++i) rays += valid[i] != 0;
         RayHit16& packet = camera.aim_centres(x0, y0);
-        m_tlas.intersect16(valid, packet, true, test());
+        m_tlas.intersect16(valid, packet, true, test(), &m_rays.eye());
         const AovSet aovs = m_out.aovs;
         for (uint32_t i = 0; i < PACKET_LANES; ++i) {
             if (!valid[i]) continue;

@@ -34,6 +34,7 @@ enum class InstanceDirty : uint32_t {
     Mask = 1u << 3,
     Material = 1u << 4,  ///< shading only
     UserId = 1u << 5,    ///< shading only
+    Lod = 1u << 6,       ///< its level-of-detail range or the LOD groups above it (lod.h)
 };
 
 /// What changed in a group. All mean the same to the flattening at the end of a batch (the
@@ -44,6 +45,7 @@ enum class GroupDirty : uint32_t {
     Transform = 1u << 1,
     Parent = 1u << 2,
     Visibility = 1u << 3,
+    Lod = 1u << 4,  ///< its `lod` flag or its level-of-detail range (lod.h)
 };
 
 /// What changed in a material.
@@ -110,7 +112,7 @@ constexpr DirtyBits<Bit> operator|(Bit a, Bit b) {
 /// Instance bits that change what the TLAS holds; the others only change shading.
 inline constexpr DirtyBits<InstanceDirty> INSTANCE_TLAS_BITS =
     InstanceDirty::Added | InstanceDirty::Transform | InstanceDirty::Visibility |
-    InstanceDirty::Mask;
+    InstanceDirty::Mask | InstanceDirty::Lod;
 
 /// A mesh's dirty state: its bits, the vertices whose positions changed and the triangles
 /// replaced.

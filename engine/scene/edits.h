@@ -157,6 +157,9 @@ struct AddInstance {
     std::optional<std::string> parent;  ///< a group id; nullopt: the root
     std::string name = {};              ///< display name (object_fields.h)
     std::vector<Affine> motion = {};    ///< motion keys (object_fields.h); empty: none
+    float lod_near = 0.0f;              ///< under an LOD group (lod.h; object_fields.h)
+    float lod_far = LOD_NO_LIMIT;
+    MotionInterpolation motion_interpolation = MotionInterpolation::Linear;
 };
 
 struct UpdateInstance {
@@ -171,6 +174,9 @@ struct UpdateInstance {
     std::optional<std::optional<std::string>> parent;
     std::optional<std::string> name = std::nullopt;
     std::optional<std::vector<Affine>> motion = std::nullopt;  ///< [] removes the keys
+    std::optional<float> lod_near = std::nullopt;
+    std::optional<float> lod_far = std::nullopt;
+    std::optional<MotionInterpolation> motion_interpolation = std::nullopt;
 };
 
 struct SetTransform {
@@ -269,6 +275,9 @@ struct AddGroup {
     bool visible = true;
     std::string name = {};   ///< display name (object_fields.h)
     std::string asset = {};  ///< the file it was imported from (object_fields.h)
+    bool lod = false;                   ///< a level-of-detail group (lod.h)
+    float lod_near = 0.0f;              ///< under an LOD group (lod.h; object_fields.h)
+    float lod_far = LOD_NO_LIMIT;
 };
 
 /// Changes some of a group's fields.
@@ -280,6 +289,9 @@ struct UpdateGroup {
     std::optional<bool> visible;
     std::optional<std::string> name = std::nullopt;
     std::optional<std::string> asset = std::nullopt;
+    std::optional<bool> lod = std::nullopt;
+    std::optional<float> lod_near = std::nullopt;
+    std::optional<float> lod_far = std::nullopt;
 };
 
 /// Removes a group; refused while it has children unless `recursive`, which removes the whole

@@ -7,9 +7,6 @@
 
 namespace strata {
 
-namespace {
-
-/// A bound as people write it: 90, 0.5, 1e12.
 std::string number_text(double v) {
     char buf[32];
     if (std::abs(v) >= 1e6 && std::abs(v) == std::floor(std::abs(v))) {
@@ -23,6 +20,8 @@ std::string number_text(double v) {
     std::snprintf(buf, sizeof buf, "%.10g", v);
     return buf;
 }
+
+namespace {
 
 Status refuse(ErrorCode code, const FieldInfo& info, const std::string& why) {
     return failure(code, std::string(info.name) + " " + why, std::string(info.name));

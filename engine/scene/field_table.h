@@ -63,6 +63,8 @@ constexpr Limits open(double lo, double hi) {
     return {lo, hi, true, true};
 }
 
+/// A number as people write it: 90, 0.5, 1e12.
+std::string number_text(double v);
 /// The limits as the docs and messages write them: "[0, 1]", "(0, 90]", ">= 0".
 std::string limits_text(const Limits& l);
 /// As a message says it: "in [0, 1]", ">= 0".

@@ -16,6 +16,7 @@ Status Scene::apply_edit(AddGroup&& e, UndoLog& undo) {
     if (!parent) return Unexpected(parent.error());
     if (Status s = check_group_move(GroupHandle{}, parent.value()); !s) return s;
     if (Status s = check_fields<GroupFields>(e); !s) return s;
+    if (Status s = check_lod_range(e.lod_near, e.lod_far); !s) return s;
 
     GroupRecord r;
     r.id = e.id;
@@ -50,6 +51,11 @@ Status Scene::apply_edit(UpdateGroup&& e, UndoLog& undo) {
         if (Status s = check_group_move(h, parent); !s) return s;
     }
     if (Status s = check_update<GroupFields>(e); !s) return s;
+    const GroupRecord& current = m_groups.at(h);
+    if (Status s = check_lod_range(e.lod_near.value_or(current.lod_near),
+                                   e.lod_far.value_or(current.lod_far));
+        !s)
+        return s;
 
     save_group(h, undo);
     DirtyBits<GroupDirty> bits;

@@ -35,6 +35,15 @@ constexpr std::string_view commit_cost(D) {
 }
 
 inline constexpr Limits COORDINATE = closed(-MAX_COORDINATE, MAX_COORDINATE);
+inline constexpr Limits LOD_DISTANCE = closed(0.0, MAX_COORDINATE);
+
+inline constexpr std::string_view LOD_NEAR_DOC =
+    "Under a level-of-detail group (lod: true): the LOD distance from which this child and all "
+    "below it are drawn: the distance from the camera (for every ray of a frame, shadow and "
+    "bounce rays too) to the group's origin. Elsewhere it has no effect.";
+inline constexpr std::string_view LOD_FAR_DOC =
+    "Under a level-of-detail group: the LOD distance from which this child is no longer drawn; "
+    "above lod_near. The default, 1e15, is no limit.";
 inline constexpr Limits UNIT = closed(0.0, 1.0);
 inline constexpr Limits NON_NEGATIVE = at_least(0.0);
 
@@ -153,6 +162,7 @@ struct InstanceFields {
     using Update = UpdateInstance;
     using Dirty = InstanceDirty;
     static constexpr std::string_view KIND = "instance";
+    static constexpr std::string_view INTERPOLATIONS[] = {"linear", "srt"};
     static constexpr auto table();
 };
 
@@ -180,6 +190,17 @@ constexpr auto InstanceFields::table() {
                   "no motion.",
                   {}, {}, 2},
                  STRATA_FIELD_OF(K, motion), InstanceDirty::Transform),
+        field<K>({"lod_near", LOD_NEAR_DOC, LOD_DISTANCE, {}, 3}, STRATA_FIELD_OF(K, lod_near),
+                 InstanceDirty::Lod),
+        field<K>({"lod_far", LOD_FAR_DOC, LOD_DISTANCE, {}, 4}, STRATA_FIELD_OF(K, lod_far),
+                 InstanceDirty::Lod),
+        field<K>({"motion_interpolation",
+                  "How motion keys are interpolated: linear blends the matrices (a turning "
+                  "object shrinks between keys); srt interpolates scale, skew and translation "
+                  "linearly and the rotation by slerp, the shorter way between two keys (turn "
+                  "less than 180 degrees per key).",
+                  {}, INTERPOLATIONS, 5},
+                 STRATA_FIELD_OF(K, motion_interpolation), InstanceDirty::Transform),
     };
 }
 
@@ -201,6 +222,16 @@ constexpr auto GroupFields::table() {
                  STRATA_FIELD_OF(K, visible), GroupDirty::Visibility),
         field<K>({"name", NAME_DOC, {}, {}, 1, true}, STRATA_FIELD_OF(K, name), GroupDirty{}),
         field<K>({"asset", ASSET_DOC, {}, {}, 2}, STRATA_FIELD_OF(K, asset), GroupDirty{}),
+        field<K>({"lod",
+                  "true: a level-of-detail group, whose children are levels; each child is "
+                  "drawn for the rays whose LOD distance from the group's origin lies in its "
+                  "[lod_near, lod_far).",
+                  {}, {}, 3},
+                 STRATA_FIELD_OF(K, lod), GroupDirty::Lod),
+        field<K>({"lod_near", LOD_NEAR_DOC, LOD_DISTANCE, {}, 4}, STRATA_FIELD_OF(K, lod_near),
+                 GroupDirty::Lod),
+        field<K>({"lod_far", LOD_FAR_DOC, LOD_DISTANCE, {}, 5}, STRATA_FIELD_OF(K, lod_far),
+                 GroupDirty::Lod),
     };
 }
 

@@ -89,6 +89,11 @@ struct InstanceRecord {
     std::vector<Affine> motion = {};  ///< motion keys in its own space (object_fields.h)
     /// `world` times each motion key: what the TLAS interpolates (empty without motion).
     std::vector<Affine> world_motion = {};
+    float lod_near = 0.0f;  ///< under an LOD group: where it is drawn (lod.h)
+    float lod_far = LOD_NO_LIMIT;
+    /// The LOD groups above it and their conditions, from the flattening (lod.h).
+    LodBands world_lod = {};
+    MotionInterpolation motion_interpolation = MotionInterpolation::Linear;  ///< of `motion`
 };
 
 /// A scene-graph node: its transform and visibility apply to everything below it.
@@ -104,6 +109,10 @@ struct GroupRecord {
     DirtyBits<GroupDirty> dirty;  ///< until the batch's flattening
     std::string name = {};        ///< display name (object_fields.h)
     std::string asset = {};       ///< the file it was imported from; empty: not an asset
+    bool lod = false;                   ///< its children are levels (lod.h)
+    float lod_near = 0.0f;              ///< under an LOD group: where it is drawn (lod.h)
+    float lod_far = LOD_NO_LIMIT;
+    LodBands world_lod = {};  ///< as for InstanceRecord::world_lod
 };
 
 struct MaterialRecord {

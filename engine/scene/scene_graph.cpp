@@ -127,16 +127,20 @@ void Scene::remove_subtree(GroupHandle g, UndoLog& undo) {
 void Scene::refresh_instance_world(InstanceHandle h, InstanceRecord& r) {
     Affine world = r.transform;
     bool visible = r.visible;
+    LodBands lod;
     if (const GroupRecord* p = m_groups.get(r.parent)) {
         world = p->world * r.transform;
         visible = visible && p->world_visible;
+        lod = child_lod_bands(&p->world_lod, p->lod, p->world, r.lod_near, r.lod_far);
     }
     m_changes.count_world_transforms();
     DirtyBits<InstanceDirty> bits;
     if (!(world == r.world)) bits |= InstanceDirty::Transform;
     if (visible != r.world_visible) bits |= InstanceDirty::Visibility;
+    if (lod != r.world_lod) bits |= InstanceDirty::Lod;
     r.world = world;
     r.world_visible = visible;
+    r.world_lod = std::move(lod);
     r.world_motion.resize(r.motion.size());
     for (std::size_t k = 0; k < r.motion.size(); ++k) r.world_motion[k] = world * r.motion[k];
     if (bits.any()) mark(h, bits);
@@ -230,9 +234,12 @@ void Scene::flatten() {
             GroupRecord& group = m_groups.at(g);
             group.world = group.transform;
             group.world_visible = group.visible;
+            group.world_lod.clear();
             if (const GroupRecord* p = m_groups.get(group.parent)) {
                 group.world = p->world * group.transform;
                 group.world_visible = group.visible && p->world_visible;
+                group.world_lod = child_lod_bands(&p->world_lod, p->lod, p->world,
+                                                  group.lod_near, group.lod_far);
             }
             group.dirty = {};
             m_changes.count_world_transforms();

@@ -795,6 +795,7 @@ Status Scene::apply_edit(AddInstance&& e, UndoLog& undo) {
         if (material.is_null()) return unknown("material", *e.material, "material");
     }
     if (Status s = check_fields<InstanceFields>(e); !s) return s;
+    if (Status s = check_lod_range(e.lod_near, e.lod_far); !s) return s;
     auto parent = find_parent(e.parent, "parent");
     if (!parent) return Unexpected(parent.error());
 
@@ -833,6 +834,11 @@ Status Scene::apply_edit(UpdateInstance&& e, UndoLog& undo) {
         if (material.is_null()) return unknown("material", **e.material, "material");
     }
     if (Status s = check_update<InstanceFields>(e); !s) return s;
+    const InstanceRecord& current = m_instances.at(h);
+    if (Status s = check_lod_range(e.lod_near.value_or(current.lod_near),
+                                   e.lod_far.value_or(current.lod_far));
+        !s)
+        return s;
     GroupHandle parent;
     if (e.parent) {
         auto found = find_parent(*e.parent, "parent");
@@ -849,7 +855,7 @@ Status Scene::apply_edit(UpdateInstance&& e, UndoLog& undo) {
         bits |= InstanceDirty::Material;
     }
     if (bits.any()) mark(h, bits);
-    if ((bits & (InstanceDirty::Transform | InstanceDirty::Visibility)).any())
+    if ((bits & (InstanceDirty::Transform | InstanceDirty::Visibility | InstanceDirty::Lod)).any())
         mark_instance_world(h);
     return {};
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "engine/core/srt.h"
 #include "engine/scene/object_fields.h"
 
 namespace strata {
@@ -78,10 +79,13 @@ const char* alpha_mode_name(AlphaMode m) {
     return "opaque";
 }
 
-Affine motion_at(const std::vector<Affine>& keys, float time) {
+Affine motion_at(const std::vector<Affine>& keys, float time, MotionInterpolation how) {
     const float f = std::clamp(time, 0.0f, 1.0f) * float(keys.size() - 1);
     const auto k = std::min(static_cast<std::size_t>(f), keys.size() - 2);
-    return Affine::lerp(keys[k], keys[k + 1], f - float(k));
+    if (how == MotionInterpolation::Linear)
+        return Affine::lerp(keys[k], keys[k + 1], f - float(k));
+    const std::vector<SrtParts> pair = srt_keys({keys[k], keys[k + 1]});
+    return srt_lerp(pair[0], pair[1], f - float(k));
 }
 
 const char* light_kind_name(LightKind k) {

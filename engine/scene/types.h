@@ -12,6 +12,7 @@
 
 #include "engine/core/math.h"
 #include "engine/core/result.h"
+#include "engine/scene/lod.h"
 #include "engine/scene/mesh_kind.h"
 
 namespace strata {
@@ -154,9 +155,15 @@ struct Camera {
 };
 
 /// Directional sun plus a uniform sky. `sun_direction` points from the scene toward the sun.
-/// Transform keys evenly spaced over frame time [0, 1], interpolated linearly at `time` (as
-/// Embree interpolates them); `keys` holds at least two.
-Affine motion_at(const std::vector<Affine>& keys, float time);
+/// How motion keys are interpolated: linear blends every number of the matrices (rotations
+/// shrink halfway); srt interpolates scale, skew and translation linearly and the rotation by
+/// slerp (engine/core/srt.h), as Embree's quaternion keys.
+enum class MotionInterpolation : uint8_t { Linear, Srt };
+
+/// Transform keys evenly spaced over frame time [0, 1], interpolated at `time` as Embree
+/// interpolates them; `keys` holds at least two.
+Affine motion_at(const std::vector<Affine>& keys, float time,
+                 MotionInterpolation how = MotionInterpolation::Linear);
 
 struct Lighting {
     Vec3 sun_direction{0.4f, 0.8f, 0.45f};

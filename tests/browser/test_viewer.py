@@ -159,6 +159,10 @@ class ViewerWithoutToken(ViewerInChromium):
             " m.meshPrimitives({kind: 'curves', primitives: 8, style: 'flat', basis: 'bezier',"
             " strands: 2})])")
         self.assertEqual(words, ["3 points", "8 flat bezier curve segments in 2 strands"])
+        ranges = self.browser.evaluate(
+            "import('/web/inspector.js').then((m) => [m.lodRange({lod_near: 0, lod_far: 1e15}),"
+            " m.lodRange({lod_near: 0, lod_far: 40}), m.lodRange({lod_near: 40, lod_far: 1e15})])")
+        self.assertEqual(ranges, ["", "from 0 to 40", "from 40 on"])
         self.assertEqual(
             self.browser.evaluate("document.getElementById('sel-build').textContent"),
             f"{build['prefer']}, {'refit' if build['allow_refit'] else 'no refit'}"

@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
 #include "engine/core/math.h"
+#include "engine/core/srt.h"
+#include "engine/scene/types.h"
 
 namespace strata {
 namespace {
@@ -28,6 +30,32 @@ TEST(Affine, QuaternionMatchesEulerForTheSameRotation) {
     const Affine q = Affine::rotation_quaternion({0, 0, h, h});  // 90 degrees about Z
     const Affine e = Affine::rotation_euler_deg({0, 0, 90});
     for (int i = 0; i < 12; ++i) EXPECT_NEAR(q.m[i], e.m[i], 1e-6f);
+}
+
+TEST(Srt, DecomposingAndComposingGivesTheTransformBack) {
+    for (const Affine& a :
+         {Affine::trs({1, -2, 3}, Affine::rotation_euler_deg({30, -50, 110}), {0.5f, 2.0f, 1.5f}),
+          Affine::scaling({1, 1, -2}) * Affine::rotation_euler_deg({10, 20, 30}),  // a mirror
+          Affine{{1, 0.4f, 0, 0, 0, 1, 0.2f, 0, 0, 0, 1, 0}}}) {  // skewed
+        const SrtParts p = decompose_srt(a);
+        const Affine back = compose_srt(p);
+        for (std::size_t k = 0; k < 12; ++k) EXPECT_NEAR(back.m[k], a.m[k], 1e-5f) << k;
+    }
+}
+
+TEST(Srt, HalfwayBetweenTwoTurnsIsTheHalfTurnRigidly) {
+    const std::vector<Affine> keys = {Affine::rotation_euler_deg({0, 0, 0}),
+                                      Affine::rotation_euler_deg({0, 170, 0})};
+    const Affine half = motion_at(keys, 0.5f, MotionInterpolation::Srt);
+    const Affine expected = Affine::rotation_euler_deg({0, 85, 0});
+    for (std::size_t k = 0; k < 12; ++k) EXPECT_NEAR(half.m[k], expected.m[k], 1e-5f) << k;
+    // A linear blend of the same keys shrinks the object halfway.
+    EXPECT_LT(motion_at(keys, 0.5f).determinant(), 0.01f);
+    // 190 degrees is the shorter way round as -170: SRT turns through -85.
+    const std::vector<Affine> past = {Affine::identity(), Affine::rotation_euler_deg({0, 190, 0})};
+    const Affine back = motion_at(past, 0.5f, MotionInterpolation::Srt);
+    const Affine minus = Affine::rotation_euler_deg({0, -85, 0});
+    for (std::size_t k = 0; k < 12; ++k) EXPECT_NEAR(back.m[k], minus.m[k], 1e-5f) << k;
 }
 
 TEST(Affine, InverseUndoesTheTransform) {

@@ -2,6 +2,8 @@
 // time must be those of a static scene whose instances sit where their keys say at that time;
 // key edits are TLAS work only, under both strategies.
 
+#include <cmath>
+
 #include <gtest/gtest.h>
 
 #include "tests/engine/hit_frames.h"
@@ -60,6 +62,47 @@ TEST_P(Motion, HitsAtARayTimeAreThoseOfTheKeysInterpolatedThere) {
             EXPECT_EQ(test::compare(blurred, test::render(*still, 0xFFFFFFFFu)), "");
         }
     }
+}
+
+TEST_P(Motion, SrtKeysTurnRigidlyWhereLinearKeysShrink) {
+    // Two keys a half turn apart less a little: SRT turns the box through its keys rigidly
+    // (hits at each time are those of the box turned by the interpolated angle), linear ones
+    // blend the matrices, so the box shrinks towards the middle of the frame.
+    const std::vector<Affine> keys = {
+        Affine::trs({-1, 0, 0}, Affine::rotation_euler_deg({0, 0, 0}), Vec3(1.0f)),
+        Affine::trs({1, 0, 0}, Affine::rotation_euler_deg({0, 170, 20}), Vec3(1.2f))};
+    auto moving = test::make_engine(GetParam());
+    ASSERT_NE(moving, nullptr);
+    AddInstance box = test::instance_edit("box", "box");
+    box.motion = keys;
+    box.motion_interpolation = MotionInterpolation::Srt;
+    apply_ok(*moving, test::mesh_edit("box", make_box(Vec3(1.5f, 1.0f, 0.5f))), box);
+    for (const float t : {0.0f, 0.25f, 0.5f, 0.8f, 1.0f}) {
+        SCOPED_TRACE(testing::Message() << "time " << t);
+        apply_ok(*moving, shutter_at(t));
+        auto still = test::make_engine(GetParam());
+        AddInstance placed = test::instance_edit("box", "box");
+        placed.transform = motion_at(keys, t, MotionInterpolation::Srt);
+        // Rigid but for the uniform scale, which goes linearly from 1 to 1.2.
+        EXPECT_NEAR(placed.transform.determinant(), std::pow(1.0f + 0.2f * t, 3.0f), 1e-4f);
+        apply_ok(*still, test::mesh_edit("box", make_box(Vec3(1.5f, 1.0f, 0.5f))), placed,
+                 shutter_at(t));
+        EXPECT_EQ(test::compare(test::render(*moving, 0xFFFFFFFFu),
+                                test::render(*still, 0xFFFFFFFFu)),
+                  "");
+    }
+    // Back to linear: one TLAS update, and the middle of the frame differs.
+    apply_ok(*moving, shutter_at(0.5f));
+    const test::HitFrame srt = test::render(*moving, 0xFFFFFFFFu);
+    UpdateInstance linear;
+    linear.instance = "box";
+    linear.motion_interpolation = MotionInterpolation::Linear;
+    apply_ok(*moving, linear);
+    RebuildReport r;
+    const test::HitFrame blended = test::render(*moving, 0xFFFFFFFFu, &r);
+    EXPECT_EQ(r.tlas_action, TlasAction::Update);
+    EXPECT_EQ(r.blas_rebuilds + r.blas_refits, 0u);
+    EXPECT_NE(test::compare(srt, blended), "");
 }
 
 TEST_P(Motion, KeyEditsAreTlasWorkOnly) {

@@ -172,6 +172,9 @@ UpdateInstance RandomEdits::random_update_instance(const std::vector<std::string
         for (int k = chance(0.3) ? 0 : integer(2, 5); k > 0; --k)
             u.motion->push_back(random_transform());
     }
+    if (chance(0.1))
+        u.motion_interpolation =
+            chance(0.5) ? MotionInterpolation::Srt : MotionInterpolation::Linear;
     return u;
 }
 

@@ -1,5 +1,6 @@
 // Frames against stored reference images (the demo scene; a coarse sphere with and without
-// shading normals; a fur ball of curves; a point cloud; a spinning wheel with motion blur),
+// shading normals; a fur ball of curves; a point cloud; a spinning wheel with motion blur; a
+// field of level-of-detail objects from near and far),
 // compared with a tolerance: Embree and libm pick different code paths on different CPUs, so
 // the bytes may differ slightly across machines (on one machine they never do, see
 // render_determinism_test).
@@ -160,6 +161,53 @@ TEST(ReferenceImage, ASpinningWheelIsMotionBlurred) {
     expect_matches_reference(
         "motion_blur_reference",
         test::render_ok(*engine, test::request(WIDTH, HEIGHT, 64, {}, ImageFormat::Png)));
+}
+
+/// A field of 9x9 level-of-detail groups on a floor in the sun: each draws a smooth blue sphere
+/// up to 9 units from the camera and an orange box beyond. Near, the first rows are spheres and
+/// the rest boxes; far, all are boxes. Shadow rays measure from the camera too, so boxes cast
+/// box shadows and no sphere is shadowed by its own box at the switch.
+TEST(ReferenceImage, AFieldOfLevelsOfDetailFromNearAndFar) {
+    auto engine = test::make_engine();
+    EditBatch b;
+    b.edits.emplace_back(
+        AddMaterial{"blue", Material{Vec3(0.2f, 0.35f, 0.8f), 0.4f, 0.0f, Vec3(0.0f)}});
+    b.edits.emplace_back(
+        AddMaterial{"orange", Material{Vec3(0.9f, 0.45f, 0.1f), 0.6f, 0.0f, Vec3(0.0f)}});
+    MeshData sphere = make_sphere(0.4f, 32);
+    AddMesh fine = test::mesh_edit("fine", sphere);
+    fine.normals = sphere.positions;  // a sphere at the origin: its positions are its normals
+    fine.material = "blue";
+    AddMesh coarse = test::mesh_edit("coarse", make_box(Vec3(0.7f)));
+    coarse.material = "orange";
+    b.edits.emplace_back(std::move(fine));
+    b.edits.emplace_back(std::move(coarse));
+    b.edits.emplace_back(test::mesh_edit("floor", make_plane(Vec3(30.0f), 1, 1)));
+    b.edits.emplace_back(test::instance_edit("floor-1", "floor", {0, -0.4f, 0}));
+    for (int i = 0; i < 81; ++i) {
+        const std::string id = "g" + std::to_string(i);
+        AddGroup g{id, std::nullopt,
+                   Affine::translation({1.5f * float(i % 9 - 4), 0.0f, -1.5f * float(i / 9)}),
+                   true};
+        g.lod = true;
+        b.edits.emplace_back(std::move(g));
+        AddInstance near = test::instance_edit(id + ".fine", "fine");
+        near.parent = id;
+        near.lod_far = 9.0f;
+        AddInstance far = test::instance_edit(id + ".coarse", "coarse");
+        far.parent = id;
+        far.lod_near = 9.0f;
+        b.edits.emplace_back(std::move(near));
+        b.edits.emplace_back(std::move(far));
+    }
+    ASSERT_TRUE(engine->apply(std::move(b)).has_value());
+    for (const auto& [name, eye] : {std::pair{"lod_near_reference", Vec3(0, 2.5f, 4.0f)},
+                                    std::pair{"lod_far_reference", Vec3(0, 9.0f, 16.0f)}}) {
+        test::apply_ok(*engine, SetCamera{eye, Vec3(0, 0, -5), Vec3(0, 1, 0), 50.0f});
+        expect_matches_reference(
+            name,
+            test::render_ok(*engine, test::request(WIDTH, HEIGHT, SPP, {}, ImageFormat::Png)));
+    }
 }
 
 }  // namespace

@@ -55,6 +55,18 @@ std::vector<Edit> every_kind() {
     u.visible = true;
     u.motion = std::vector<Affine>{Affine::identity(), Affine::translation({1, 0, 0})};
     edits.emplace_back(u);
+    AddGroup lod;
+    lod.id = "lod";
+    lod.lod = true;
+    lod.lod_far = 40.0f;
+    edits.emplace_back(lod);
+    UpdateInstance level;
+    level.instance = "a";
+    level.parent = std::optional<std::string>("lod");
+    level.lod_near = 5.0f;
+    level.lod_far = 20.0f;
+    level.motion_interpolation = MotionInterpolation::Srt;
+    edits.emplace_back(level);
     edits.emplace_back(SetTransform{"a", Affine::scaling({2, 2, 2})});
     edits.emplace_back(MarkDirty{std::string("tri"), DirtyAction::Refit});
     edits.emplace_back(SetCamera{Vec3(1), std::nullopt, std::nullopt, 30.0f});

@@ -1,7 +1,7 @@
 """Motion blur through the Python client against a real strata-server: an instance's motion
-keys put it where they say at the shutter's opening (what picks see), key edits are one TLAS
-update, a blurred render differs from a still one, and bad keys are refused with their pointer
-and change nothing."""
+keys put it where they say at the shutter's opening (what picks see), SRT keys turn rigidly where
+linear ones shrink, key edits are one TLAS update, a blurred render differs from a still one, and
+bad keys are refused with their pointer and change nothing."""
 
 import unittest
 
@@ -43,6 +43,23 @@ class MotionTest(ServerTestCase):
         self.client.edit([{"op": "set_camera", "shutter_close": 1}])
         blurred = self.client.render(64, 48, spp=8)
         self.assertNotEqual(still, blurred)
+
+    def test_srt_keys_turn_a_bar_rigidly(self):
+        # A bar along x turning 170 degrees about z: halfway, SRT keys hold it upright at full
+        # length, a linear blend of the matrices shrinks it to almost nothing.
+        keys = [{"rotate_deg": [0, 0, 0]}, {"rotate_deg": [0, 0, 170]}]
+        self.client.edit([{"op": "add_mesh", "id": "bar", "shape": {"type": "box",
+                                                                  "size": [4, 0.3, 0.3]}},
+                          {"op": "add_instance", "id": "turning", "mesh": "bar", "motion": keys,
+                           "motion_interpolation": "srt"},
+                          {"op": "update_instance", "instance": "b", "visible": False}])
+        upright = dict(camera(0.5), eye=[0, 1.5, 10], target=[0, 1.5, 0])
+        hit = self.client.pick(50, 50, 101, 101, camera=upright)
+        self.assertEqual(hit.instance if hit else None, "turning")
+        self.assertEqual(self.client.scene("instances", "turning")["motion_interpolation"], "srt")
+        self.client.edit([{"op": "update_instance", "instance": "turning",
+                           "motion_interpolation": "linear"}])
+        self.assertIsNone(self.client.pick(50, 50, 101, 101, camera=upright))
 
     def test_bad_keys_are_refused_with_their_pointer(self):
         version = self.client.scene()["version"]

@@ -40,8 +40,8 @@ class ReadmeExamplesTest(unittest.TestCase):
     def run_examples(self, server_args: List[str], runs: int) -> None:
         with open(README, encoding="utf-8") as f:
             found = examples(f.read())
-        # The quick start, asyncio, named scenes, undo, bulk and mesh edits examples.
-        self.assertEqual(len(found), 6)
+        # The quick start, asyncio, named scenes, undo, bulk, mesh edits and LOD examples.
+        self.assertEqual(len(found), 7)
         with ServerProcess(SERVER, server_args) as server, tempfile.TemporaryDirectory() as cwd:
             for code, expected in found:
                 self.assertIn(README_URL, code)
