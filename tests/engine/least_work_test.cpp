@@ -406,13 +406,9 @@ TEST_P(LeastWorkGroups, ACompactedMeshIsItsOwnBuildTwiceAndRefitsInPlace) {
     expect_tlas_update_only(commit_ok(*engine), 3);
 }
 
-std::string strategy_name(const ::testing::TestParamInfo<TlasKind>& info) {
-    return info.param == TlasKind::Incremental ? "incremental" : "embree";
-}
-
 INSTANTIATE_TEST_SUITE_P(BothTlasStrategies, LeastWorkGroups,
                          ::testing::Values(TlasKind::Incremental, TlasKind::Embree),
-                         strategy_name);
+                         test::strategy_name);
 
 /// Points ("dots", two instances) and curves ("hair", one) beside a triangle mesh ("crate"):
 /// the README's rows for points and curves, under both TLAS strategies.
@@ -488,7 +484,7 @@ TEST_P(LeastWorkPointsAndCurves, MovingAnInstanceOfPointsIsATlasUpdateOnly) {
 
 INSTANTIATE_TEST_SUITE_P(BothTlasStrategies, LeastWorkPointsAndCurves,
                          ::testing::Values(TlasKind::Incremental, TlasKind::Embree),
-                         strategy_name);
+                         test::strategy_name);
 
 }  // namespace
 }  // namespace strata

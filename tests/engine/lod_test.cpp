@@ -72,16 +72,23 @@ std::vector<std::string> hits(Engine& engine, const std::vector<Vec3>& origins, 
     });
 }
 
+/// Meshes "fine" (a sphere of `radius`, larger than the box, so a ray that wrongly sees it stops
+/// earlier) and "coarse" (a unit box), and LOD group "tree" at the origin whose levels are
+/// `<prefix>fine` up to `switch_at` and `<prefix>coarse` from there to `coarse_far`.
+void add_tree(Engine& engine, float radius, const std::string& prefix, float switch_at,
+              float coarse_far) {
+    apply_ok(engine, test::mesh_edit("fine", make_sphere(radius, 16)),
+             test::mesh_edit("coarse", make_box(Vec3(1.0f))), lod_group("tree", {0, 0, 0}),
+             level(prefix + "fine", "fine", "tree", 0.0f, switch_at),
+             level(prefix + "coarse", "coarse", "tree", switch_at, coarse_far));
+}
+
 class LevelOfDetail : public ::testing::TestWithParam<TlasKind> {};
 
 TEST_P(LevelOfDetail, EachRayDrawsTheLevelItsDistanceSelects) {
     auto engine = test::make_engine(GetParam());
     ASSERT_NE(engine, nullptr);
-    // The fine level is the larger, so a ray that wrongly sees it stops earlier.
-    apply_ok(*engine, test::mesh_edit("fine", make_sphere(1.5f, 24)),
-             test::mesh_edit("coarse", make_box(Vec3(1.0f))), lod_group("tree", {0, 0, 0}),
-             level("tree.fine", "fine", "tree", 0.0f, 10.0f),
-             level("tree.coarse", "coarse", "tree", 10.0f, 40.0f));
+    add_tree(*engine, 1.5f, "tree.", 10.0f, 40.0f);
     const std::vector<Vec3> from = {{0, 0, 3}, {0, 0, 9.9f}, {0, 0, 10.1f}, {0, 0, 39},
                                     {0, 0, 41}, {3, 0, 0},   {0, -3, 0}};
     EXPECT_EQ(hits(*engine, from, Vec3(0.0f)),
@@ -228,10 +235,7 @@ TEST_P(LevelOfDetail, AFieldMatchesAFreshBuildOfTheChosenLevelsThroughEdits) {
 TEST_P(LevelOfDetail, PicksNameTheLevelTheFrameShows) {
     auto engine = test::make_engine(GetParam());
     ASSERT_NE(engine, nullptr);
-    apply_ok(*engine, test::mesh_edit("fine", make_sphere(1.0f, 16)),
-             test::mesh_edit("coarse", make_box(Vec3(1.0f))), lod_group("tree", {0, 0, 0}),
-             level("fine", "fine", "tree", 0.0f, 10.0f),
-             level("coarse", "coarse", "tree", 10.0f, LOD_NO_LIMIT));
+    add_tree(*engine, 1.0f, "", 10.0f, LOD_NO_LIMIT);
     for (const auto& [eye, expected] :
          {std::pair{Vec3(0, 0, 5), "fine"}, std::pair{Vec3(0, 0, 15), "coarse"}}) {
         apply_ok(*engine, SetCamera{eye, Vec3(0.0f), Vec3(0, 1, 0), 30.0f});
@@ -248,11 +252,8 @@ TEST_P(LevelOfDetail, PicksNameTheLevelTheFrameShows) {
 TEST_P(LevelOfDetail, RangeAndKindEditsAreTlasWorkOnly) {
     auto engine = test::make_engine(GetParam());
     ASSERT_NE(engine, nullptr);
-    apply_ok(*engine, test::mesh_edit("fine", make_sphere(1.0f, 8)),
-             test::mesh_edit("coarse", make_box(Vec3(1.0f))), lod_group("tree", {0, 0, 0}),
-             level("fine", "fine", "tree", 0.0f, 10.0f),
-             level("coarse", "coarse", "tree", 10.0f, LOD_NO_LIMIT),
-             test::instance_edit("other", "coarse", {5, 0, 0}));
+    add_tree(*engine, 1.0f, "", 10.0f, LOD_NO_LIMIT);
+    apply_ok(*engine, test::instance_edit("other", "coarse", {5, 0, 0}));
     commit_ok(*engine);
     UpdateInstance far;
     far.instance = "fine";
@@ -316,9 +317,7 @@ TEST_P(LevelOfDetail, LevelMeshEditsAndRemovalsReachTheWrappers) {
 
 INSTANTIATE_TEST_SUITE_P(BothTlasStrategies, LevelOfDetail,
                          ::testing::Values(TlasKind::Incremental, TlasKind::Embree),
-                         [](const auto& info) {
-                             return info.param == TlasKind::Incremental ? "incremental" : "embree";
-                         });
+                         test::strategy_name);
 
 TEST(LevelOfDetail, BadRangesAreRefusedAndChangeNothing) {
     auto engine = test::make_engine();
@@ -326,11 +325,7 @@ TEST(LevelOfDetail, BadRangesAreRefusedAndChangeNothing) {
              level("a", "box", "tree", 0.0f, 10.0f));
     const uint64_t version = engine->read([](const Scene& s) { return s.version(); });
     auto refused = [&](Edit edit, const std::string& field) {
-        EditBatch b;
-        b.edits.push_back(std::move(edit));
-        auto r = engine->apply(std::move(b));
-        ASSERT_FALSE(r.has_value()) << field;
-        EXPECT_EQ(r.error().field, field) << r.error().describe();
+        test::expect_refused(*engine, std::move(edit), field);
     };
     UpdateInstance inverted;
     inverted.instance = "a";

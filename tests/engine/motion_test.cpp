@@ -130,9 +130,7 @@ TEST_P(Motion, KeyEditsAreTlasWorkOnly) {
 
 INSTANTIATE_TEST_SUITE_P(BothTlasStrategies, Motion,
                          ::testing::Values(TlasKind::Incremental, TlasKind::Embree),
-                         [](const auto& info) {
-                             return info.param == TlasKind::Incremental ? "incremental" : "embree";
-                         });
+                         test::strategy_name);
 
 TEST(Motion, BadKeysAndShuttersAreRefusedAndChangeNothing) {
     auto engine = test::make_engine();
@@ -140,11 +138,7 @@ TEST(Motion, BadKeysAndShuttersAreRefusedAndChangeNothing) {
              test::instance_edit("a", "box"));
     const uint64_t version = engine->read([](const Scene& s) { return s.version(); });
     auto refused = [&](Edit edit, const std::string& field) {
-        EditBatch b;
-        b.edits.push_back(std::move(edit));
-        auto r = engine->apply(std::move(b));
-        ASSERT_FALSE(r.has_value()) << field;
-        EXPECT_EQ(r.error().field, field) << r.error().describe();
+        test::expect_refused(*engine, std::move(edit), field);
     };
     UpdateInstance one{"a"};
     one.motion = std::vector<Affine>{Affine::identity()};

@@ -69,6 +69,20 @@ inline RebuildReport commit_ok(Engine& engine) {
     return r.has_value() ? r.value() : RebuildReport{};
 }
 
+/// Names a test instantiated over both TLAS strategies after its strategy.
+inline std::string strategy_name(const ::testing::TestParamInfo<TlasKind>& info) {
+    return info.param == TlasKind::Incremental ? "incremental" : "embree";
+}
+
+/// Applies `edit` alone, expecting it refused with its error at `field`.
+inline void expect_refused(Engine& engine, Edit edit, const std::string& field) {
+    EditBatch b;
+    b.edits.push_back(std::move(edit));
+    auto r = engine.apply(std::move(b));
+    ASSERT_FALSE(r.has_value()) << field;
+    EXPECT_EQ(r.error().field, field) << r.error().describe();
+}
+
 inline std::vector<std::string> ids(const std::vector<MeshBuildEntry>& entries) {
     std::vector<std::string> out;
     for (const auto& e : entries) out.push_back(e.mesh);
