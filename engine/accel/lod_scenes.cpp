@@ -64,12 +64,16 @@ void wrapper_bounds(const RTCBoundsFunctionArguments* args) {
 /// Copies the lanes of N-wide `ray` (N <= 16) that are active and see the instance into the
 /// same lanes of `out`, marks them in `lanes` and deactivates every other lane of `out` the way
 /// the stream path reads a packet (embree_trace::deactivate_unused_lanes). Returns whether any
-/// lane was copied.
+/// lane was copied. With an eye in the context the choice is one for the whole packet.
 bool gather(const LodScenes& lod, const RTCIntersectContext* context, uint32_t slot,
             const int* valid, RTCRayN* ray, unsigned n, RTCRay16& out, ValidMask16& lanes) {
+    const Vec3* eye = reinterpret_cast<const FilterContext*>(context)->lod_eye;
+    if (eye && !lod.selects(slot, eye, Vec3(0.0f), 0.0f)) return false;
     bool any = false;
     for (unsigned i = 0; i < 16; ++i) {
-        lanes[i] = i < n && valid[i] && lane_selected(lod, context, slot, ray, n, i) ? -1 : 0;
+        lanes[i] = i < n && valid[i] && (eye || lane_selected(lod, context, slot, ray, n, i))
+                       ? -1
+                       : 0;
         if (!lanes[i]) {
             out.tnear[i] = 1.0f;
             out.tfar[i] = 0.0f;
