@@ -8,8 +8,9 @@
 #   3. build-fuzz/ (clang, ASan + UBSan)     engine tests under the sanitizers, in the build the
 #                                            fuzzers use (the sanitized libraries compile once)
 #   4. build-tsan/ (ThreadSanitizer)         the engine tests that run background TLAS merges beside
-#                                            commits, launches and edits, and engines sharing one
-#                                            Embree device (only those are built)
+#                                            commits, launches and edits, engines sharing one
+#                                            Embree device, and renders whose threads share the
+#                                            level-of-detail wrappers (only those are built)
 #   5. build-fuzz/ (clang, libFuzzer)        every fuzzer (scripts/run-fuzz.sh), bounded runs
 #   6. build-docker/ (mmdebstrap, chroot)    docker/: lint, and the image's runtime stage run in a
 #                                            fresh Debian 12 root (scripts/check-docker.sh)
@@ -37,7 +38,7 @@ STRATA_TARGETS=strata_engine_tsan_tests scripts/build.sh build-tsan \
     -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSTRATA_TSAN=ON -DSTRATA_BUILD_BENCHMARKS=OFF
 TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/tests/engine/tsan.supp" \
     timeout 900 build-tsan/tests/engine/strata_engine_tsan_tests \
-    --gtest_filter='IncrementalTlas.*:Differential.ThousandsOfInstancesMatchAFreshBuildThroughMerges*:ClusteredBlas.RendersDuringLocalEdits*:*BlasSharing.*'
+    --gtest_filter='IncrementalTlas.*:Differential.ThousandsOfInstancesMatchAFreshBuildThroughMerges*:ClusteredBlas.RendersDuringLocalEdits*:*BlasSharing.*:*LevelOfDetail.PicksNameTheLevelTheFrameShows*'
 
 step "fuzzing: edit batches, HTTP requests, journal, snapshots, assets, textures (build-fuzz/)"
 scripts/run-fuzz.sh
