@@ -139,7 +139,8 @@ bool FrameState::emits(const Scene& scene, uint32_t slot) const {
     if (!scene.instances().alive_at(slot) || !scene.instances().at_slot(slot).world_visible)
         return false;
     // Only triangles are sampled as lights; emitting points and curves are found by bounces, and
-    // so are the levels of LOD groups (which level a shadow ray would meet depends on the ray).
+    // so are the levels of LOD groups (the table is made here, before a launch's camera chooses
+    // which level is drawn).
     if (!scene.instances().at_slot(slot).world_lod.empty()) return false;
     const MeshRecord* mesh = scene.meshes().get(scene.instances().at_slot(slot).mesh);
     if (!mesh || mesh->kind != MeshKind::Triangles) return false;
