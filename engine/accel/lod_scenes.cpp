@@ -1,8 +1,5 @@
 #include "engine/accel/lod_scenes.h"
 
-#include <algorithm>
-#include <cmath>
-#include <cstring>
 #include <limits>
 
 #include "engine/accel/blas_store.h"

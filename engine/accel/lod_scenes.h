@@ -43,8 +43,6 @@ public:
     /// when `eye` is null, the ray's own origin (`org` in the instance's object space, at ray
     /// time `time`).
     bool selects(uint32_t slot, const Vec3* eye, const Vec3& org, float time) const;
-    /// Wrappers held (one per mesh that an LOD instance uses).
-    std::size_t wrappers() const { return m_wrappers.size(); }
 
     /// A wrapper scene and what its callbacks read (lod_scenes.cpp).
     struct Wrapper;

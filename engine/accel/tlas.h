@@ -136,10 +136,6 @@ public:
     /// primitive `prim` (what HitTest::keep is told).
     uint32_t mesh_triangle(uint32_t slot, uint32_t geom, uint32_t prim) const;
 
-    /// The level-of-detail wrappers (lod_scenes.h); null until an instance under an LOD group
-    /// was placed. Their callbacks ask it which instances a ray may see.
-    const LodScenes* lod_scenes() const { return m_lod.get(); }
-
 protected:
     virtual void trace1(RayHit1& ray, bool coherent, const TraceOptions& options) const = 0;
     virtual void trace16(const ValidMask16& valid, RayHit16& rays, bool coherent,
