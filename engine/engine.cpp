@@ -259,9 +259,14 @@ Result<RebuildReport> Engine::commit() {
     return commit_locked();
 }
 
-Result<RebuildReport> Engine::commit_locked(std::unique_lock<std::shared_mutex>* keep_scene_lock) {
+Result<RebuildReport> Engine::commit_locked(std::unique_lock<std::shared_mutex>* keep_scene_lock,
+                                            std::optional<float> time) {
     Stopwatch clock;
     std::unique_lock lock(m_scene_mutex);
+    Timeline shown = m_scene.timeline();
+    if (time) shown.time = *time;
+    m_scene.show(shown);  // marks the animated instances that move
+    m_frame.clock = shown;
     RebuildReport report;
     int64_t freed = 0;  // acceleration-structure bytes the commit released
     if (m_scene.changes().empty()) {
@@ -359,7 +364,7 @@ Status Engine::render_primary(const PrimarySettings& settings, Frame& out) {
 
 Result<Frame> Engine::render_frame(const RenderRequest& request) {
     if (Status s = check_render_request(request); !s) return Unexpected(s.error());
-    auto frame = launch([&](const FrameState& state, const TlasStrategy& tlas,
+    auto frame = launch_at(request.time, [&](const FrameState& state, const TlasStrategy& tlas,
                             const RebuildReport& report) -> Result<Frame> {
         auto rendered = m_renderer.render(tlas, state, request);
         if (rendered) rendered->info.report = report;
@@ -376,7 +381,7 @@ Result<std::vector<Frame>> Engine::render_bands(const RenderRequest& request,
         band.band = b;
         if (Status s = check_render_request(band); !s) return Unexpected(s.error());
     }
-    auto frames = launch([&](const FrameState& state, const TlasStrategy& tlas,
+    auto frames = launch_at(request.time, [&](const FrameState& state, const TlasStrategy& tlas,
                              const RebuildReport& report) -> Result<std::vector<Frame>> {
         std::vector<Frame> out;
         for (const RowBand& b : bands) {
@@ -415,7 +420,7 @@ Result<PickResult> Engine::pick(const PickRequest& request) {
     // The scene stays locked from the commit to the end of the pick, so the ids the hits are
     // named with are those of the version the rays saw (edits wait for a few rays).
     std::unique_lock<std::shared_mutex> scene_lock;
-    auto report = commit_locked(&scene_lock);
+    auto report = commit_locked(&scene_lock, request.time);
     if (!report) return Unexpected(report.error());
     const auto camera = resolve_camera(request.camera, m_frame.camera);
     if (!camera) return Unexpected(camera.error());

@@ -154,11 +154,16 @@ public:
     /// back the same way, never nested).
     template <class F>
     auto launch(F&& f) {
+        return launch_at(std::nullopt, std::forward<F>(f));
+    }
+    /// The same with the animated instances shown at scene time `time` (RenderRequest::time).
+    template <class F>
+    auto launch_at(std::optional<float> time, F&& f) {
         using R = decltype(f(std::declval<const FrameState&>(), std::declval<const TlasStrategy&>(),
                              std::declval<const RebuildReport&>()));
         using Out = std::conditional_t<is_expected_v<R>, R, Result<R>>;
         std::lock_guard launch_lock(m_launch_mutex);
-        auto report = commit_locked();
+        auto report = commit_locked(nullptr, time);
         if (!report) return Out(Unexpected(std::move(report).error()));
         Out result = f(m_frame, m_accel->tlas(), report.value());
         if (Status s = m_accel->device_status("tracing"); !s) return Out(Unexpected(s.error()));
@@ -212,9 +217,11 @@ private:
         : m_config(config), m_accel(std::move(accel)), m_history(config.history) {}
     /// The commit, with the launch mutex held. With `keep_scene_lock`, the scene's exclusive
     /// lock is handed to the caller instead of released (the caller then reads the scene at
-    /// exactly the committed version).
-    Result<RebuildReport> commit_locked(std::unique_lock<std::shared_mutex>* keep_scene_lock =
-                                            nullptr);
+    /// exactly the committed version). With `time`, the animated instances show that scene time
+    /// instead of the scene's.
+    Result<RebuildReport> commit_locked(
+        std::unique_lock<std::shared_mutex>* keep_scene_lock = nullptr,
+        std::optional<float> time = std::nullopt);
 
     const EngineConfig m_config;  ///< what a replaced scene's budget and acceleration graph use
     mutable std::mutex m_launch_mutex;

@@ -117,4 +117,22 @@ bool OpFields::read(std::string_view key, std::vector<Affine>& out) {
     });
 }
 
+bool OpFields::read(std::string_view key, std::vector<Keyframe>& out) {
+    return read_member(*this, key, out, [&](const Json& v, const std::string& p) {
+        if (!v.is_array() || v.size() > MAX_ANIMATION_KEYS)
+            m_r.schema_error(p, "expected an array of at most " +
+                                    std::to_string(MAX_ANIMATION_KEYS) + " keyframes");
+        std::vector<Keyframe> keys(v.size());
+        for (std::size_t k = 0; k < v.size(); ++k) {
+            const std::string kp = child(p, k);
+            static const MemberRule KEY = schema_members("/$defs/keyframe");
+            m_r.expect_object(v[k], kp, KEY);
+            keys[k].time = m_r.number(m_r.required(v[k], kp, "time"), child(kp, "time"));
+            keys[k].transform =
+                parse_transform(m_r, m_r.required(v[k], kp, "transform"), child(kp, "transform"));
+        }
+        return keys;
+    });
+}
+
 }  // namespace strata::protocol

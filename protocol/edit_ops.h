@@ -128,6 +128,7 @@ public:
     bool read(std::string_view key, Affine& out);
     /// An array of transforms (motion keys), at most MAX_MOTION_KEYS.
     bool read(std::string_view key, std::vector<Affine>& out);
+    bool read(std::string_view key, std::vector<Keyframe>& out);
     /// Free text (a display name), where read(std::string&) reads an id.
     bool read_text(std::string_view key, std::string& out);
     /// One of `choices`, stored as the enum value of its position.

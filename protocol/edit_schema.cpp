@@ -143,6 +143,17 @@ constexpr std::string_view SHARED_DEFS = R"json({
       }
     ]
   },
+  "keyframe": {
+    "type": "object",
+    "properties": {
+      "time": {"type": "number", "minimum": -1e7, "maximum": 1e7,
+               "description": "scene time in seconds; increasing along an animation"},
+      "transform": {"$ref": "#/$defs/transform"}
+    },
+    "required": ["time", "transform"],
+    "additionalProperties": false,
+    "description": "an instance's transform (relative to its parent) at one scene time"
+  },
   "sampler": {
     "type": "object",
     "properties": {

@@ -57,6 +57,12 @@ Json field_json(const FieldInfo&, const std::vector<Affine>& v) {
     for (const Affine& k : v) out.push_back(affine_to_json(k));
     return out;
 }
+Json field_json(const FieldInfo&, const std::vector<Keyframe>& v) {
+    Json out = Json::array();
+    for (const Keyframe& k : v)
+        out.push_back({{"time", float_to_json(k.time)}, {"transform", affine_to_json(k.transform)}});
+    return out;
+}
 Json field_json(const FieldInfo&, const std::string& v) {
     return v;
 }
@@ -107,6 +113,14 @@ OrderedJson field_schema(const FieldInfo& info, const std::vector<Affine>*) {
                      info, nullptr);
 }
 
+OrderedJson field_schema(const FieldInfo& info, const std::vector<Keyframe>*) {
+    // The default is no keyframes, which the description says.
+    return described({{"type", "array"},
+                      {"items", {{"$ref", "#/$defs/keyframe"}}},
+                      {"maxItems", MAX_ANIMATION_KEYS}},
+                     info, nullptr);
+}
+
 OrderedJson field_schema(const FieldInfo& info, const std::string* fallback) {
     const OrderedJson d = fallback ? OrderedJson(*fallback) : OrderedJson();
     return described({{"$ref", "#/$defs/text"}}, info, fallback ? &d : nullptr);
@@ -134,6 +148,10 @@ std::string field_row(const FieldInfo& info, const OrderedJson& schema, std::str
     } else if (ref.ends_with("/text")) {
         type = "string";
         range = "at most " + std::to_string(MAX_NAME_BYTES) + " bytes";
+    } else if (schema.value("type", "") == "array" &&
+               schema["items"].value("$ref", "").ends_with("/keyframe")) {
+        type = "array of keyframes";
+        range = "at most " + std::to_string(MAX_ANIMATION_KEYS) + " keys, times increasing";
     } else if (schema.value("type", "") == "array") {
         type = "array of transforms";
         range = "none, or 2 to " + std::to_string(MAX_MOTION_KEYS) + " keys";
@@ -144,8 +162,8 @@ std::string field_row(const FieldInfo& info, const OrderedJson& schema, std::str
     const std::string fallback = schema.contains("default")
                                      ? "`" + docs_value(schema["default"]) + "`"
                                  : type == "transform"           ? "identity"
-                                 : type == "array of transforms" ? "`[]`"
-                                                                 : "";
+                                 : type.starts_with("array of") ? "`[]`"
+                                                                : "";
     return "| `" + std::string(info.name) + "` | " + type + " | " + fallback + " | " + range +
            " | " + std::string(cost) + " | " + std::string(info.doc) + " |\n";
 }

@@ -38,6 +38,7 @@ Json field_json(const FieldInfo& info, bool v);
 Json field_json(const FieldInfo& info, uint32_t v);
 Json field_json(const FieldInfo& info, const Affine& v);
 Json field_json(const FieldInfo& info, const std::vector<Affine>& v);
+Json field_json(const FieldInfo& info, const std::vector<Keyframe>& v);
 Json field_json(const FieldInfo& info, const std::string& v);
 Json choice_json(const FieldInfo& info, std::size_t v);
 template <class E>
@@ -53,6 +54,7 @@ OrderedJson field_schema(const FieldInfo& info, const bool* fallback);
 OrderedJson field_schema(const FieldInfo& info, const uint32_t* fallback);
 OrderedJson field_schema(const FieldInfo& info, const Affine* fallback);
 OrderedJson field_schema(const FieldInfo& info, const std::vector<Affine>* fallback);
+OrderedJson field_schema(const FieldInfo& info, const std::vector<Keyframe>* fallback);
 OrderedJson field_schema(const FieldInfo& info, const std::string* fallback);
 OrderedJson choice_schema(const FieldInfo& info, const std::size_t* fallback);
 template <class E>

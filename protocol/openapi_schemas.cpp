@@ -276,7 +276,8 @@ J scene_schema() {
                    {"counts", object(std::move(counts))},
                    {"bounds", or_null(ref("Bounds"))},
                    {"camera", object(fields<CameraFields>())},
-                   {"lighting", object(fields<LightingFields>())}});
+                   {"lighting", object(fields<LightingFields>())},
+                   {"timeline", object(fields<TimelineFields>())}});
 }
 
 /// The members every object document has before its fields: id and the version it was read at.
@@ -383,6 +384,16 @@ J tree_schemas(J& out) {
 
 // ---- renders and picks (render_parser.cpp, pick_parser.cpp, pick_api.cpp) ----
 
+/// A launch's own scene time (a render's or a pick's `time`).
+J launch_time() {
+    return described(
+        {{"type", "number"},
+         {"minimum", -int64_t(MAX_SCENE_TIME)},
+         {"maximum", int64_t(MAX_SCENE_TIME)}},
+        "show the animated instances at this scene time (seconds) instead of the scene's "
+        "(set_time), for this launch only: the scene is not changed");
+}
+
 J render_request_schema() {
     const RenderRequest d;
     const J side = integer(1, MAX_RENDER_SIDE);
@@ -414,6 +425,7 @@ J render_request_schema() {
         {"exposure",
          described({{"type", "number"}, {"minimum", -64}, {"maximum", 64}, {"default", 0}},
                    "EV stops applied before tone mapping")},
+        {"time", launch_time()},
         {"filter", described({{"enum", {"none", "atrous"}}, {"default", "none"}},
                              "`atrous`: smooth the colour with an edge-aware à-trous filter "
                              "guided by albedo, normal and depth")},
@@ -455,14 +467,16 @@ void pick_schemas(J& out) {
     out["PickRequest"] = object({{"width", side},
                                  {"height", side},
                                  {"pixels", std::move(pixels)},
-                                 {"camera", ref("CameraOverride")}},
-                                {"camera"});
+                                 {"camera", ref("CameraOverride")},
+                                 {"time", launch_time()}},
+                                {"camera", "time"});
     out["PickQuery"] = object({{"x", integer(0, MAX_RENDER_SIDE - 1)},
                                {"y", integer(0, MAX_RENDER_SIDE - 1)},
                                {"width", side},
                                {"height", side},
-                               {"camera", ref("CameraOverride")}},
-                              {"camera"});
+                               {"camera", ref("CameraOverride")},
+                               {"time", launch_time()}},
+                              {"camera", "time"});
     const J hit = {{"instance", ref("id")},
                    {"mesh", ref("id")},
                    {"group_path", described(array_of(ref("id")), "the groups from the root down")},

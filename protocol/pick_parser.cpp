@@ -14,7 +14,7 @@ void read_size(FieldReader& r, const Json& v, PickRequest& q) {
 }
 
 PickRequest read_pick_body(FieldReader& r, const Json& v) {
-    r.expect_object(v, "", {"width", "height", "pixels", "camera"});
+    r.expect_object(v, "", {"width", "height", "pixels", "camera", "time"});
     PickRequest q;
     read_size(r, v, q);
     const Json& pixels = r.required(v, "", "pixels");
@@ -32,16 +32,18 @@ PickRequest read_pick_body(FieldReader& r, const Json& v) {
                             uint32_t(r.integer(p[1], ptr + "/1", 0, MAX_RENDER_SIDE - 1))});
     }
     if (const Json* f = FieldReader::member(v, "camera")) q.camera = read_camera_override(r, *f);
+    if (const Json* f = FieldReader::member(v, "time")) q.time = r.number(*f, "/time");
     return q;
 }
 
 PickRequest read_pick_query(FieldReader& r, const Json& v) {
-    r.expect_object(v, "", {"x", "y", "width", "height", "camera"});
+    r.expect_object(v, "", {"x", "y", "width", "height", "camera", "time"});
     PickRequest q;
     read_size(r, v, q);
     q.pixels.push_back({uint32_t(r.integer(r.required(v, "", "x"), "/x", 0, MAX_RENDER_SIDE - 1)),
                         uint32_t(r.integer(r.required(v, "", "y"), "/y", 0, MAX_RENDER_SIDE - 1))});
     if (const Json* f = FieldReader::member(v, "camera")) q.camera = read_camera_override(r, *f);
+    if (const Json* f = FieldReader::member(v, "time")) q.time = r.number(*f, "/time");
     return q;
 }
 

@@ -43,7 +43,7 @@ FrameTarget read_frame(FieldReader& r, const Json& v) {
 RenderRequest read_render(FieldReader& r, const Json& v, uint32_t* split,
                           std::optional<FrameTarget>* frame) {
     MemberRule members{{"width", "height", "format", "spp", "aovs", "compression", "accumulate",
-                        "exposure", "camera", "filter", "band"},
+                        "exposure", "camera", "filter", "band", "time"},
                        {}};
     if (split) members.allowed.push_back("split");
     if (frame) members.allowed.push_back("frame");
@@ -79,6 +79,7 @@ RenderRequest read_render(FieldReader& r, const Json& v, uint32_t* split,
     if (const Json* f = FieldReader::member(v, "accumulate"))
         q.accumulate = r.boolean(*f, "/accumulate");
     if (const Json* f = FieldReader::member(v, "exposure")) q.exposure = r.number(*f, "/exposure");
+    if (const Json* f = FieldReader::member(v, "time")) q.time = r.number(*f, "/time");
     if (const Json* f = FieldReader::member(v, "filter"))
         q.filter = r.choice(*f, "/filter", {"none", "atrous"}) == 1;
     if (const Json* f = FieldReader::member(v, "camera")) q.camera = read_camera_override(r, *f);

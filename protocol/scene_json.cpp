@@ -72,6 +72,12 @@ Json lighting_to_json(const Lighting& l) {
     return j;
 }
 
+Json timeline_to_json(const Timeline& t) {
+    Json j = Json::object();
+    write_fields<TimelineFields>(j, t);
+    return j;
+}
+
 Json bounds_to_json(const Bounds3& b) {
     if (b.empty()) return nullptr;
     return {{"min", vec3_to_json(b.lower)}, {"max", vec3_to_json(b.upper)}};
@@ -91,7 +97,8 @@ Json scene_summary_to_json(const Scene& s) {
               {"instanced_triangles", c.instanced_triangles}}},
             {"bounds", bounds_to_json(s.world_bounds())},
             {"camera", camera_to_json(s.camera())},
-            {"lighting", lighting_to_json(s.lighting())}};
+            {"lighting", lighting_to_json(s.lighting())},
+            {"timeline", timeline_to_json(s.timeline())}};
 }
 
 Bounds3 mesh_bounds(const MeshRecord& m) {

@@ -18,6 +18,7 @@ Json vec3_to_json(const Vec3& v);
 Json affine_to_json(const Affine& a);
 Json camera_to_json(const Camera& c);
 Json lighting_to_json(const Lighting& l);
+Json timeline_to_json(const Timeline& t);
 /// {"min": [3], "max": [3]}, or null for an empty box.
 Json bounds_to_json(const Bounds3& b);
 

@@ -347,6 +347,7 @@ std::string band_query(const RenderRequest& request, RowBand band) {
                 q += exact_text(*value);
         });
     }
+    if (b.time) q += "&time=" + exact_text(*b.time);  // the animated instances where ours are
     return q;
 }
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "engine/core/math.h"
+#include "engine/scene/types.h"
 
 namespace strata::test {
 
@@ -29,6 +30,11 @@ inline Affine changed(const Affine& v) {
 inline std::vector<Affine> changed(const std::vector<Affine>& v) {
     if (!v.empty()) return {};
     return {Affine::identity(), Affine::translation({1, 2, 3})};
+}
+/// Keyframes: two when there were none, none when there were some.
+inline std::vector<Keyframe> changed(const std::vector<Keyframe>& v) {
+    if (!v.empty()) return {};
+    return {{0.0f, Affine::identity()}, {1.5f, Affine::translation({1, 2, 3})}};
 }
 inline std::string changed(const std::string& v) {
     return v + "x";

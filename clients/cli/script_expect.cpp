@@ -20,6 +20,7 @@ constexpr CountSource COUNT_FIELDS[] = {
     {"tlas_static_instances", "tlas", "static_instances"},
     {"tlas_dynamic_instances", "tlas", "dynamic_instances"},
     {"tlas_stale_copies", "tlas", "stale_copies"},
+    {"instances_changed", nullptr, "instances_changed"},
     {"blas_rebuilds", nullptr, "blas_rebuilds"},
     {"blas_refits", nullptr, "blas_refits"},
     {"primitives_built", nullptr, "primitives_built"},

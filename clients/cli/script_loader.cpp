@@ -24,14 +24,15 @@ void compile_expect(Step& s, const Json& v, const std::vector<std::string>& name
         value_or_throw(Expectation::compile(v["expect"], names, s.kind != StepKind::Plan, target));
 }
 
-/// A pick step's object: the GET /v1/pick members (x, y, width, height required; camera).
+/// A pick step's object: the GET /v1/pick members (x, y, width, height required; camera,
+/// time).
 void compile_pick(Step& s, const Json& v, const std::vector<std::string>& names) {
     const Json& p = v["pick"];
     if (!p.is_object())
         throw ScriptFailure{
             "\"pick\" must be an object {\"x\", \"y\", \"width\", \"height\"} "
-            "(and optionally \"camera\")"};
-    if (auto bad = check_members(p, "\"pick\"", {"x", "y", "width", "height", "camera"}))
+            "(and optionally \"camera\" and \"time\")"};
+    if (auto bad = check_members(p, "\"pick\"", {"x", "y", "width", "height", "camera", "time"}))
         throw ScriptFailure{bad->message};
     for (const char* key : {"x", "y", "width", "height"})
         if (!p.contains(key)) throw ScriptFailure{std::string("\"pick\" needs \"") + key + "\""};

@@ -159,7 +159,8 @@ private:
         Json body = {{"width", p["width"]},
                      {"height", p["height"]},
                      {"pixels", Json::array({Json::array({p["x"], p["y"]})})}};
-        if (p.contains("camera")) body["camera"] = p["camera"];
+        for (const char* key : {"camera", "time"})
+            if (p.contains(key)) body[key] = p[key];
         const Json doc = answer_json(r, m_transport.pick(body.dump()));
         const Json hits = doc.value("hits", Json::array());
         if (!hits.is_array() || hits.size() != 1)

@@ -46,6 +46,16 @@ export function lodRange(d) {
   return far >= 1e15 ? `from ${fmt(near)} on` : `from ${fmt(near)} to ${fmt(far)}`;
 }
 
+/// An instance's animation in words: "3 keys from 0 to 1.5 s, looping"; '' without one.
+export function animationSpan(d) {
+  const keys = d.animation || [];
+  if (!keys.length) return '';
+  const span = keys.length === 1 ? `at ${fmt(keys[0].time)} s`
+    : `from ${fmt(keys[0].time)} to ${fmt(keys[keys.length - 1].time)} s`;
+  return `${keys.length} key${keys.length === 1 ? '' : 's'} ${span}` +
+    (d.animation_loop ? ', looping' : '');
+}
+
 function hex(c) {
   const to = (v) => Math.round(Math.min(1, Math.max(0, v)) ** (1 / 2.2) * 255).toString(16).padStart(2, '0');
   return '#' + to(c[0]) + to(c[1]) + to(c[2]);
@@ -114,6 +124,8 @@ export class Inspector {
       row('mesh', d.mesh);
       if (d.mesh_doc) row('primitives', meshPrimitives(d.mesh_doc)).id = 'sel-primitives';
       if (d.motion && d.motion.length) row('motion', `${d.motion.length} keys`).id = 'sel-motion';
+      const animated = animationSpan(d);
+      if (animated) row('animation', animated).id = 'sel-animation';
       const b = d.mesh_build;
       if (b) {
         row('mesh build', `${b.prefer}, ${b.allow_refit ? 'refit' : 'no refit'}` +

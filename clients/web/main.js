@@ -1,5 +1,6 @@
-// The Strata viewer: the live frame stream (GET /v1/stream), a per-viewer camera, picking and
-// selection, edits through /v1/edits with If-Match, undo and redo (Ctrl+Z, Ctrl+Shift+Z or
+// The Strata viewer: the live frame stream (GET /v1/stream), a per-viewer camera and scene time
+// (the time bar, timeline.js), picking and selection, edits through /v1/edits with If-Match,
+// undo and redo (Ctrl+Z, Ctrl+Shift+Z or
 // Ctrl+Y, and the history panel's buttons), the scene list, the history and the commit-cost
 // panel fed by GET /v1/events. Plain ES modules, no build step; served by strata-server at GET /.
 
@@ -9,6 +10,7 @@ import { CostPanel } from './cost.js';
 import { HistoryPanel } from './history.js';
 import { Inspector } from './inspector.js';
 import { ScenePanel } from './scene_panel.js';
+import { TimeBar } from './timeline.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -64,6 +66,11 @@ function cameraParams(camera) {
   };
 }
 
+/// The viewer's own scene time as a query parameter (none: the scene's time).
+function timeParams() {
+  return timeBar.time === null ? {} : { time: timeBar.time.toFixed(3) };
+}
+
 /// Shows `url` in the frame at the frame size.
 function showFrame(url) {
   const [w, h] = state.size;
@@ -77,7 +84,7 @@ function openStream(camera) {
   const [w, h] = state.size;
   const params = {
     width: w, height: h, quality: pageNumber('quality', 80), fps: pageNumber('fps', 20),
-    max_samples: pageNumber('max_samples', 32), ...cameraParams(camera),
+    max_samples: pageNumber('max_samples', 32), ...cameraParams(camera), ...timeParams(),
   };
   const past = state.pastVersion;
   if (past !== null) {
@@ -158,7 +165,7 @@ function renderStill(camera) {
     message('The frame could not be rendered.');
   }, { once: true });
   showFrame(withToken('/v1/render', {
-    width: w, height: h, spp: pageNumber('spp', 16), ...cameraParams(camera),
+    width: w, height: h, spp: pageNumber('spp', 16), ...cameraParams(camera), ...timeParams(),
   }));
 }
 
@@ -192,6 +199,7 @@ function drawSelection() {
 async function refreshScene() {
   const { doc } = await api('/v1/scene');
   state.sceneCamera = doc.camera;
+  timeBar.sceneChanged(doc);
   // Never back: an answer overtaken by the viewer's own newer edit or undo must not make the
   // next undo's If-Match name the older version.
   state.version = Math.max(doc.version, state.version ?? 0);
@@ -207,7 +215,7 @@ async function pickAt(x, y) {
     return;
   }
   const [w, h] = state.size;
-  const params = { x: Math.floor(x), y: Math.floor(y), width: w, height: h };
+  const params = { x: Math.floor(x), y: Math.floor(y), width: w, height: h, ...timeParams() };
   const cam = controls.camera;
   if (cam) {
     params.eye = cam.eye.join(',');
@@ -463,6 +471,10 @@ const inspector = new Inspector($('inspector'), {
 const scenePanel = new ScenePanel($('scene-list'), $('scene-search'), $('scene-more'), {
   onSelect: (id, kind) => select(id, null, kind),
 });
+const timeBar = new TimeBar({
+  play: $('time-play'), slider: $('time-slider'), label: $('time-label'),
+  length: $('time-length'), scene: $('time-scene'), set: $('time-set'),
+}, { onChange: () => cameraChanged(controls.camera), applyEdit: (edits) => applyEdit(edits) });
 const costPanel = new CostPanel($('cost-chart'), $('last-report'));
 const historyPanel = new HistoryPanel($('history-list'), $('history-stacks'), $('history-undo'),
                                       $('history-redo'), {
@@ -492,6 +504,7 @@ $('frame').addEventListener('error', () => {
 });
 
 state.select = select;
+state.timeBar = timeBar;
 state.pickAt = pickAt;
 state.controls = controls;
 state.undoRedo = undoRedo;

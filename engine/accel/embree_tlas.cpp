@@ -145,7 +145,7 @@ private:
             t.blas = blas_scene;
         }
         set_instance_transform(t.geometry, r.world.m.data(), r.world_motion,
-                               r.motion_interpolation);
+                               r.world_interpolation);
         rtcSetGeometryMask(t.geometry, r.mask);
         if (r.world_visible) {
             rtcEnableGeometry(t.geometry);

@@ -387,7 +387,7 @@ private:
         }
         e.transform = r.world.m;
         e.keys = r.world_motion;
-        e.interpolation = r.motion_interpolation;
+        e.interpolation = r.world_interpolation;
         e.mask = r.mask;
         set_instance_transform(e.geometry, e.transform.data(), e.keys, e.interpolation);
         rtcSetGeometryMask(e.geometry, e.mask);
@@ -477,7 +477,7 @@ private:
             attach_static(h.index, g);
         }
         rtcSetGeometryInstancedScene(g, blas_scene);
-        set_instance_transform(g, r.world.m.data(), r.world_motion, r.motion_interpolation);
+        set_instance_transform(g, r.world.m.data(), r.world_motion, r.world_interpolation);
         rtcSetGeometryMask(g, r.mask);
         rtcCommitGeometry(g);
     }

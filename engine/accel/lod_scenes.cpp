@@ -214,7 +214,7 @@ RTCScene LodScenes::instanced_scene(const BlasStore& blas, uint32_t slot,
         rtcCommitGeometry(rtcGetGeometry(w.scene, 0));
         rtcCommitScene(w.scene);
     }
-    m_instances[slot] = Instance{r.world, r.world_motion, r.motion_interpolation, r.world_lod};
+    m_instances[slot] = Instance{r.world, r.world_motion, r.world_interpolation, r.world_lod};
     return w.scene;
 }
 

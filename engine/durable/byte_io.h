@@ -24,6 +24,7 @@ namespace strata::durable {
 
 static_assert(std::endian::native == std::endian::little,
               "the journal stores raw little-endian buffers");
+static_assert(sizeof(Keyframe) == 13 * sizeof(float), "keyframes are copied as raw buffers");
 
 /// `E` is T or const T: the same function writes (const) and reads (mutable).
 template <class E, class T>
@@ -141,7 +142,7 @@ private:
             static_assert(std::is_same_v<T, Vec3> || std::is_same_v<T, Vec2> ||
                           std::is_same_v<T, Vec4> || std::is_same_v<T, Triangle> ||
                           std::is_same_v<T, uint32_t> || std::is_same_v<T, float> ||
-                          std::is_same_v<T, Affine>);
+                          std::is_same_v<T, Affine> || std::is_same_v<T, Keyframe>);
             raw(v.data(), v.size() * sizeof(T));
         }
     }

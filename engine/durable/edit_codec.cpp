@@ -30,7 +30,7 @@ static_assert(TAG_IS<0, AddMesh> && TAG_IS<1, UpdateMeshPositions> &&
                   TAG_IS<22, UpdateMeshVertices> && TAG_IS<23, RemoveMaterial> &&
                   TAG_IS<24, AddInstances> && TAG_IS<25, UpdateInstances> &&
                   TAG_IS<26, RemoveInstances> && TAG_IS<27, ReplaceMeshTriangles> &&
-                  std::variant_size_v<Edit> == 28,
+                  TAG_IS<28, SetTime> && std::variant_size_v<Edit> == 29,
               "journal kind tags are the Edit variant's indices: append new kinds at the end");
 
 
@@ -62,7 +62,8 @@ constexpr const char* KIND_NAMES[] = {"add_mesh",
                                       "add_instances",
                                       "update_instances",
                                       "remove_instances",
-                                      "replace_triangles"};
+                                      "replace_triangles",
+                                      "set_time"};
 static_assert(std::size(KIND_NAMES) == std::variant_size_v<Edit>);
 
 /// Kind tag bit: the edit's extension fields follow its base layout. Fields added to a kind after
@@ -165,6 +166,10 @@ void fields(Io& io, E& e) {
 template <class Io, Kind<SetLighting> E>
 void fields(Io& io, E& e) {
     table_updates<LightingFields>(io, e);
+}
+template <class Io, Kind<SetTime> E>
+void fields(Io& io, E& e) {
+    table_updates<TimelineFields>(io, e);
 }
 template <class Io, Kind<Clear> E>
 void fields(Io&, E&) {}
@@ -498,6 +503,8 @@ template <>
 struct Carries<SetCamera> : CarriesKind<CameraFields, true> {};
 template <>
 struct Carries<SetLighting> : CarriesKind<LightingFields, true> {};
+template <>
+struct Carries<SetTime> : CarriesKind<TimelineFields, true> {};
 
 /// Where the carried fields live in the edit: the edit itself, or the value an add holds.
 template <class E>

@@ -32,6 +32,7 @@ struct AccumulationKey {
     Camera camera;
     uint32_t width = 0;
     uint32_t height = 0;
+    Timeline clock;  ///< the time the animated instances show
 
     friend bool operator==(const AccumulationKey&, const AccumulationKey&) = default;
 };

@@ -172,7 +172,7 @@ bool FrameState::refresh_instance(const Scene& scene, uint32_t slot) {
     shade.user_id = r.user_id;
     shade.normal_matrix = r.world.normal_matrix();
     shade.motion = r.world_motion;
-    shade.interpolation = r.motion_interpolation;
+    shade.interpolation = r.world_interpolation;
     const bool now = emits(scene, slot);
     m_emitter[slot] = now;
     m_emitters = m_emitters - was + now;

@@ -104,6 +104,8 @@ public:
     uint64_t version = 0;
     Camera camera;
     Lighting lighting;
+    /// The clock the animated instances show (Scene::shown_clock), set by every commit.
+    Timeline clock;
     /// [0] is the built-in default; material slot s lives at s + 1. Without their names
     /// (launches copy a hit's material; picks name things from the scene).
     std::vector<Material> materials;

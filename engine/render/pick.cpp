@@ -4,12 +4,14 @@
 #include <limits>
 
 #include "engine/render/camera_rays.h"
+#include "engine/scene/animation.h"
 
 namespace strata {
 
 Status check_pick_request(const PickRequest& request) {
     if (request.width == 0 || request.height == 0)
         return failure(ErrorCode::InvalidArgument, "width and height must be at least 1", "width");
+    if (Status s = check_launch_time(request.time); !s) return s;
     if (request.pixels.empty())
         return failure(ErrorCode::InvalidArgument, "no pixel to pick", "pixels");
     if (request.pixels.size() > MAX_PICK_PIXELS)

@@ -30,6 +30,8 @@ struct PickRequest {
     std::vector<PickPixel> pixels;
     /// Overrides the scene camera, as a render's override does.
     std::optional<SetCamera> camera;
+    /// The scene time the animated instances show, as a render's (RenderRequest::time).
+    std::optional<float> time;
 };
 
 /// The surface under one pixel, named with client ids.

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "engine/scene/animation.h"
+
 namespace strata {
 
 namespace {
@@ -53,6 +55,7 @@ Status check_render_request(const RenderRequest& r) {
     if (r.spp == 0 || r.spp > MAX_RENDER_SPP)
         return failure(ErrorCode::InvalidArgument,
                        "spp must be in [1, " + std::to_string(MAX_RENDER_SPP) + "]", "spp");
+    if (Status s = check_launch_time(r.time); !s) return s;
     if (!std::isfinite(r.exposure) || std::abs(r.exposure) > 64.0f)
         return failure(ErrorCode::InvalidArgument,
                        "exposure must be a finite number of stops in [-64, 64]", "exposure");

@@ -78,6 +78,9 @@ struct RenderRequest {
     /// sums belong to whole frames) or `filter` (it reads neighbours across the band's edges:
     /// a caller assembling bands filters the assembled frame, renderer.h).
     std::optional<RowBand> band;
+    /// Shows the animated instances at this scene time instead of the scene's (Timeline): the
+    /// scene is not changed, and the next launch without one shows the scene's time again.
+    std::optional<float> time;
     /// Not part of what a client asks: the caller's stop flag (deadline, client gone, shutdown),
     /// polled between packets. A cancelled launch returns ErrorCode::Cancelled.
     const CancelToken* cancel = nullptr;

@@ -97,11 +97,17 @@ private:
     uint32_t m_bits = 0;
 };
 
+/// The scene clock's (set_time): it marks nothing itself; the batch's flattening marks the
+/// animated instances that move (Scene::show).
+enum class ClockDirty : uint32_t {
+    Time = 1u << 0,
+};
+
 template <class T>
 inline constexpr bool IS_DIRTY_BIT =
     std::is_same_v<T, MeshDirty> || std::is_same_v<T, InstanceDirty> ||
     std::is_same_v<T, GroupDirty> || std::is_same_v<T, MaterialDirty> ||
-    std::is_same_v<T, SceneDirty>;
+    std::is_same_v<T, SceneDirty> || std::is_same_v<T, ClockDirty>;
 
 template <class Bit>
 requires IS_DIRTY_BIT<Bit>

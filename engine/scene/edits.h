@@ -160,6 +160,8 @@ struct AddInstance {
     float lod_near = 0.0f;              ///< under an LOD group (lod.h; object_fields.h)
     float lod_far = LOD_NO_LIMIT;
     MotionInterpolation motion_interpolation = MotionInterpolation::Linear;
+    std::vector<Keyframe> animation = {};  ///< keyframes (animation.h); empty: none
+    bool animation_loop = false;
 };
 
 struct UpdateInstance {
@@ -177,6 +179,8 @@ struct UpdateInstance {
     std::optional<float> lod_near = std::nullopt;
     std::optional<float> lod_far = std::nullopt;
     std::optional<MotionInterpolation> motion_interpolation = std::nullopt;
+    std::optional<std::vector<Keyframe>> animation = std::nullopt;  ///< [] removes it
+    std::optional<bool> animation_loop = std::nullopt;
 };
 
 struct SetTransform {
@@ -254,6 +258,12 @@ struct SetCamera {
     std::optional<float> shutter_close = std::nullopt;
 };
 
+/// Timeline fields to change (set_time): the scene's time and the frame duration.
+struct SetTime {
+    std::optional<float> time = std::nullopt;
+    std::optional<float> frame_duration = std::nullopt;
+};
+
 /// Lighting fields to change; unset fields keep their value.
 struct SetLighting {
     std::optional<Vec3> sun_direction;
@@ -278,6 +288,10 @@ struct AddGroup {
     bool lod = false;                   ///< a level-of-detail group (lod.h)
     float lod_near = 0.0f;              ///< under an LOD group (lod.h; object_fields.h)
     float lod_far = LOD_NO_LIMIT;
+    std::vector<Affine> motion = {};    ///< motion keys (object_fields.h); empty: none
+    MotionInterpolation motion_interpolation = MotionInterpolation::Linear;
+    std::vector<Keyframe> animation = {};  ///< keyframes (animation.h); empty: none
+    bool animation_loop = false;
 };
 
 /// Changes some of a group's fields.
@@ -292,6 +306,10 @@ struct UpdateGroup {
     std::optional<bool> lod = std::nullopt;
     std::optional<float> lod_near = std::nullopt;
     std::optional<float> lod_far = std::nullopt;
+    std::optional<std::vector<Affine>> motion = std::nullopt;  ///< [] removes the keys
+    std::optional<MotionInterpolation> motion_interpolation = std::nullopt;
+    std::optional<std::vector<Keyframe>> animation = std::nullopt;  ///< [] removes it
+    std::optional<bool> animation_loop = std::nullopt;
 };
 
 /// Removes a group; refused while it has children unless `recursive`, which removes the whole
@@ -331,11 +349,13 @@ using Edit = std::variant<AddMesh, UpdateMeshPositions, ReplaceMeshTopology, Rem
                           RemoveInstance, MarkDirty, SetCamera, SetLighting, Clear, AddGroup,
                           UpdateGroup, RemoveGroup, AddLight, UpdateLight, RemoveLight,
                           AddTexture, RemoveTexture, UpdateMeshVertices, RemoveMaterial,
-                          AddInstances, UpdateInstances, RemoveInstances, ReplaceMeshTriangles>;
+                          AddInstances, UpdateInstances, RemoveInstances, ReplaceMeshTriangles,
+                          SetTime>;
 
 /// Copies the fields an edit sets onto a full value; unset fields keep theirs.
 void apply_to(Camera& c, const SetCamera& e);
 void apply_to(Lighting& l, const SetLighting& e);
+void apply_to(Timeline& t, const SetTime& e);
 void apply_to(Material& m, const UpdateMaterial& e);
 void apply_to(Light& l, const UpdateLight& e);
 

@@ -95,4 +95,36 @@ Status check_value(const FieldInfo& info, const std::vector<Affine>& keys) {
     return {};
 }
 
+Status check_value(const FieldInfo& info, const std::vector<Keyframe>& keys) {
+    const std::string field(info.name);
+    if (keys.size() > MAX_ANIMATION_KEYS)
+        return failure(ErrorCode::TooLarge,
+                       field + " has " + std::to_string(keys.size()) + " keys: at most " +
+                           std::to_string(MAX_ANIMATION_KEYS),
+                       field);
+    for (std::size_t k = 0; k < keys.size(); ++k) {
+        const std::string at = field + "/" + std::to_string(k);
+        const float t = keys[k].time;
+        if (!std::isfinite(t))
+            return failure(ErrorCode::NotFinite, "key " + std::to_string(k) + ": time is NaN or "
+                           "infinite", at + "/time");
+        if (!(std::abs(t) <= MAX_SCENE_TIME))
+            return failure(ErrorCode::InvalidArgument,
+                           "key " + std::to_string(k) + ": time must be in [-" +
+                               number_text(MAX_SCENE_TIME) + ", " + number_text(MAX_SCENE_TIME) +
+                               "]",
+                           at + "/time");
+        if (k > 0 && !(t > keys[k - 1].time))
+            return failure(ErrorCode::InvalidArgument,
+                           "key " + std::to_string(k) + ": times must increase (" +
+                               number_text(t) + " follows " + number_text(keys[k - 1].time) + ")",
+                           at + "/time");
+        if (const char* why = transform_problem(keys[k].transform))
+            return failure(keys[k].transform.is_finite() ? ErrorCode::DegenerateTransform
+                                                         : ErrorCode::NotFinite,
+                           "key " + std::to_string(k) + ": " + why, at + "/transform");
+    }
+    return {};
+}
+
 }  // namespace strata

@@ -28,6 +28,7 @@
 #include "engine/core/math.h"
 #include "engine/core/result.h"
 #include "engine/scene/dirty.h"
+#include "engine/scene/types.h"
 
 namespace strata {
 
@@ -243,6 +244,9 @@ inline Status check_value(const FieldInfo& info, const std::string& v) {
 Status check_value(const FieldInfo& info, const Affine& v);
 /// Motion keys: none, or 2 to MAX_MOTION_KEYS transforms that each keep the transform rule.
 Status check_value(const FieldInfo& info, const std::vector<Affine>& keys);
+/// Keyframes: at most MAX_ANIMATION_KEYS, times finite within MAX_SCENE_TIME and increasing,
+/// transforms that keep the transform rule.
+Status check_value(const FieldInfo& info, const std::vector<Keyframe>& keys);
 inline Status check_value(const FieldInfo&, bool) {
     return {};
 }
@@ -276,6 +280,9 @@ inline bool value_ok(const FieldInfo&, const Affine& v) {
     return transform_problem(v) == nullptr;
 }
 bool value_ok(const FieldInfo& info, const std::vector<Affine>& keys);
+inline bool value_ok(const FieldInfo& info, const std::vector<Keyframe>& keys) {
+    return keys.empty() || check_value(info, keys).has_value();
+}
 inline bool value_ok(const FieldInfo&, bool) {
     return true;
 }

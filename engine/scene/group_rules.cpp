@@ -3,6 +3,7 @@
 // the change overwrote. World transforms are not touched here: flatten() does that once the
 // whole batch passed (scene_graph.cpp).
 
+#include "engine/scene/animation.h"
 #include "engine/scene/child_list.h"
 #include "engine/scene/object_fields.h"
 #include "engine/scene/scene.h"
@@ -17,6 +18,7 @@ Status Scene::apply_edit(AddGroup&& e, UndoLog& undo) {
     if (Status s = check_group_move(GroupHandle{}, parent.value()); !s) return s;
     if (Status s = check_fields<GroupFields>(e); !s) return s;
     if (Status s = check_lod_range(e.lod_near, e.lod_far); !s) return s;
+    if (Status s = check_keys(e.motion, e.animation); !s) return s;
 
     GroupRecord r;
     r.id = e.id;
@@ -25,8 +27,10 @@ Status Scene::apply_edit(AddGroup&& e, UndoLog& undo) {
     std::vector<GroupHandle>& siblings = children_of(r.parent).groups;
     r.child_slot = static_cast<uint32_t>(siblings.size());
     bool reused = false;
+    const bool animated = !r.animation.empty();
     const GroupHandle h = m_groups.insert(std::move(r), &reused);
     undo.records.emplace_back(undo::Inserted<GroupHandle>{h, reused});
+    if (animated) m_animated_groups.push_back(h);
     ++m_totals.groups;
     children_of(parent.value()).groups.push_back(h);
     m_group_ids.emplace(std::move(e.id), h);
@@ -56,6 +60,10 @@ Status Scene::apply_edit(UpdateGroup&& e, UndoLog& undo) {
                                    e.lod_far.value_or(current.lod_far));
         !s)
         return s;
+    if (Status s = check_keys(e.motion ? *e.motion : current.motion,
+                              e.animation ? *e.animation : current.animation);
+        !s)
+        return s;
 
     save_group(h, undo);
     DirtyBits<GroupDirty> bits;
@@ -65,6 +73,7 @@ Status Scene::apply_edit(UpdateGroup&& e, UndoLog& undo) {
     }
     bits |= apply_update<GroupFields>(m_groups.at(h), e);
     if (bits.any()) mark(h, bits);
+    if (e.animation && !e.animation->empty()) m_animated_groups.push_back(h);
     return {};
 }
 

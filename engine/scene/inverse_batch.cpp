@@ -328,11 +328,13 @@ EditBatch inverse_batch(UndoLog&& log, const Scene& scene) {
     // The order of a bulk edit's items only decides slots and child order, which an inverse does
     // not promise: ids that are a numbered range in any order become that range.
     for (Edit& e : out.edits) compact_ids(e, IdOrder::Free);
-    // Camera and lighting were saved whole at the start of the batch.
+    // Camera, lighting and timeline were saved whole at the start of the batch.
     if (!(scene.camera() == log.camera))
         out.edits.emplace_back(update_to<CameraFields>(log.camera));
     if (!(scene.lighting() == log.lighting))
         out.edits.emplace_back(update_to<LightingFields>(log.lighting));
+    if (!(scene.timeline() == log.timeline))
+        out.edits.emplace_back(update_to<TimelineFields>(log.timeline));
     return out;
 }
 

@@ -29,6 +29,9 @@ constexpr std::string_view commit_cost(InstanceDirty dirty) {
 constexpr std::string_view commit_cost(GroupDirty dirty) {
     return dirty == GroupDirty{} ? "no BVH work" : "TLAS update of the instances below";
 }
+constexpr std::string_view commit_cost(ClockDirty) {
+    return "TLAS update of the animated instances that move";
+}
 template <class D>
 constexpr std::string_view commit_cost(D) {
     return "no BVH work";
@@ -44,6 +47,14 @@ inline constexpr std::string_view LOD_NEAR_DOC =
 inline constexpr std::string_view LOD_FAR_DOC =
     "Under a level-of-detail group: the LOD distance from which this child is no longer drawn; "
     "above lod_near. The default, 1e15, is no limit.";
+inline constexpr std::string_view INTERPOLATION_DOC =
+    "How motion keys and keyframes are interpolated: linear blends the matrices (a turning "
+    "object shrinks between keys); srt interpolates scale, skew and translation linearly and the "
+    "rotation by slerp, the shorter way between two keys (turn less than 180 degrees per key).";
+inline constexpr std::string_view ANIMATION_LOOP_DOC =
+    "true: the animation repeats, scene time wrapping into [first key, last key).";
+/// Motion interpolations on the wire (MotionInterpolation's order).
+inline constexpr std::string_view INTERPOLATIONS[] = {"linear", "srt"};
 inline constexpr Limits UNIT = closed(0.0, 1.0);
 inline constexpr Limits NON_NEGATIVE = at_least(0.0);
 
@@ -162,7 +173,6 @@ struct InstanceFields {
     using Update = UpdateInstance;
     using Dirty = InstanceDirty;
     static constexpr std::string_view KIND = "instance";
-    static constexpr std::string_view INTERPOLATIONS[] = {"linear", "srt"};
     static constexpr auto table();
 };
 
@@ -194,13 +204,19 @@ constexpr auto InstanceFields::table() {
                  InstanceDirty::Lod),
         field<K>({"lod_far", LOD_FAR_DOC, LOD_DISTANCE, {}, 4}, STRATA_FIELD_OF(K, lod_far),
                  InstanceDirty::Lod),
-        field<K>({"motion_interpolation",
-                  "How motion keys are interpolated: linear blends the matrices (a turning "
-                  "object shrinks between keys); srt interpolates scale, skew and translation "
-                  "linearly and the rotation by slerp, the shorter way between two keys (turn "
-                  "less than 180 degrees per key).",
-                  {}, INTERPOLATIONS, 5},
+        field<K>({"motion_interpolation", INTERPOLATION_DOC, {}, INTERPOLATIONS, 5},
                  STRATA_FIELD_OF(K, motion_interpolation), InstanceDirty::Transform),
+        field<K>({"animation",
+                  "Keyframes: the instance's transform (relative to its parent, as transform) at "
+                  "scene times in seconds, increasing; non-empty, they and the scene's time "
+                  "(set_time) place it instead of transform, interpolated as "
+                  "motion_interpolation says, holding the first and last key outside them. "
+                  "Over a frame it moves as they say, so an open shutter blurs it. Not with "
+                  "motion. [] or absent: none.",
+                  {}, {}, 6},
+                 STRATA_FIELD_OF(K, animation), InstanceDirty::Transform),
+        field<K>({"animation_loop", ANIMATION_LOOP_DOC, {}, {}, 7},
+                 STRATA_FIELD_OF(K, animation_loop), InstanceDirty::Transform),
     };
 }
 
@@ -232,6 +248,21 @@ constexpr auto GroupFields::table() {
                  GroupDirty::Lod),
         field<K>({"lod_far", LOD_FAR_DOC, LOD_DISTANCE, {}, 5}, STRATA_FIELD_OF(K, lod_far),
                  GroupDirty::Lod),
+        field<K>({"motion",
+                  "Motion keys, as an instance's: 2 to 129 transforms in the group's own space "
+                  "over the frame; everything below moves with them (its own keys composed). "
+                  "[] or absent: no motion.",
+                  {}, {}, 6},
+                 STRATA_FIELD_OF(K, motion), GroupDirty::Transform),
+        field<K>({"motion_interpolation", INTERPOLATION_DOC, {}, INTERPOLATIONS, 7},
+                 STRATA_FIELD_OF(K, motion_interpolation), GroupDirty::Transform),
+        field<K>({"animation",
+                  "Keyframes, as an instance's: the group's transform at scene times, carrying "
+                  "everything below. Not with motion.",
+                  {}, {}, 8},
+                 STRATA_FIELD_OF(K, animation), GroupDirty::Transform),
+        field<K>({"animation_loop", ANIMATION_LOOP_DOC, {}, {}, 9},
+                 STRATA_FIELD_OF(K, animation_loop), GroupDirty::Transform),
     };
 }
 
@@ -318,6 +349,32 @@ constexpr auto CameraFields::table() {
                   "When the shutter closes (at least shutter_open); equal to it: no motion blur.",
                   UNIT, {}, 2},
                  STRATA_FIELD_OF(K, shutter_close), C),
+    };
+}
+
+struct TimelineFields {
+    using Record = Timeline;
+    using Add = Timeline;
+    using Update = SetTime;
+    using Dirty = ClockDirty;
+    static constexpr std::string_view KIND = "timeline";
+    static constexpr auto table();
+};
+
+constexpr auto TimelineFields::table() {
+    using K = TimelineFields;
+    return std::tuple{
+        field<K>({"time",
+                  "The scene's time in seconds: where animations (an instance's animation "
+                  "keyframes) are evaluated. Changing it updates the animated instances only.",
+                  closed(-MAX_SCENE_TIME, MAX_SCENE_TIME)},
+                 STRATA_FIELD_OF(K, time), ClockDirty::Time),
+        field<K>({"frame_duration",
+                  "Seconds of scene time one frame spans (frame time 0 to 1, which the camera's "
+                  "shutter_open and shutter_close are part of): an animated instance moving "
+                  "during it blurs under an open shutter. 0: animations do not blur.",
+                  closed(0.0, 3600.0)},
+                 STRATA_FIELD_OF(K, frame_duration), ClockDirty::Time),
     };
 }
 

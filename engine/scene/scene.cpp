@@ -32,6 +32,10 @@ void apply_to(Lighting& l, const SetLighting& e) {
     apply_update<LightingFields>(l, e);
 }
 
+void apply_to(Timeline& t, const SetTime& e) {
+    apply_update<TimelineFields>(t, e);
+}
+
 void apply_to(Light& l, const UpdateLight& e) {
     apply_update<LightFields>(l, e);
 }
@@ -103,6 +107,7 @@ Result<uint64_t> Scene::apply(EditBatch&& batch,
     UndoLog undo;
     undo.camera = m_camera;
     undo.lighting = m_lighting;
+    undo.timeline = m_timeline;
     undo.changes = m_changes.position();
     undo.totals = m_totals;
     undo.world_instances = m_world_instances.size();
@@ -289,8 +294,8 @@ Bounds3 Scene::world_bounds() const {
 }
 
 SceneImage Scene::image() const {
-    return SceneImage{m_meshes,        m_instances, m_materials, m_groups, m_lights, m_textures,
-                      m_root.groups, m_camera,    m_lighting,  m_version};
+    return SceneImage{m_meshes,        m_instances, m_materials, m_groups,  m_lights, m_textures,
+                      m_root.groups, m_camera,    m_lighting,  m_version, m_timeline};
 }
 
 EditBatch SceneImage::to_batch() const {
@@ -349,6 +354,8 @@ EditBatch SceneImage::to_batch() const {
         [&](LightHandle, const LightRecord& l) { b.edits.emplace_back(AddLight{l.id, l.light}); });
     b.edits.emplace_back(update_to<CameraFields>(camera));
     b.edits.emplace_back(update_to<LightingFields>(lighting));
+    // Older files have no clock; a scene at the default one writes none either.
+    if (!(timeline == Timeline{})) b.edits.emplace_back(update_to<TimelineFields>(timeline));
     return b;
 }
 

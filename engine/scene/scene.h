@@ -87,13 +87,18 @@ struct InstanceRecord {
     DirtyBits<InstanceDirty> dirty;  ///< since the last commit
     std::string name = {};           ///< display name (object_fields.h)
     std::vector<Affine> motion = {};  ///< motion keys in its own space (object_fields.h)
-    /// `world` times each motion key: what the TLAS interpolates (empty without motion).
+    /// Its world keys over the frame (animation.h: its keys and its groups' composed): what the
+    /// TLAS interpolates, as `world_interpolation` says (empty: still during the frame).
     std::vector<Affine> world_motion = {};
     float lod_near = 0.0f;  ///< under an LOD group: where it is drawn (lod.h)
     float lod_far = LOD_NO_LIMIT;
     /// The LOD groups above it and their conditions, from the flattening (lod.h).
     LodBands world_lod = {};
-    MotionInterpolation motion_interpolation = MotionInterpolation::Linear;  ///< of `motion`
+    MotionInterpolation motion_interpolation = MotionInterpolation::Linear;  ///< of its keys
+    /// Keyframes at scene times (animation.h); non-empty: they, not `transform`, place it.
+    std::vector<Keyframe> animation = {};
+    bool animation_loop = false;
+    MotionInterpolation world_interpolation = MotionInterpolation::Linear;  ///< of world_motion
 };
 
 /// A scene-graph node: its transform and visibility apply to everything below it.
@@ -113,6 +118,13 @@ struct GroupRecord {
     float lod_near = 0.0f;              ///< under an LOD group: where it is drawn (lod.h)
     float lod_far = LOD_NO_LIMIT;
     LodBands world_lod = {};  ///< as for InstanceRecord::world_lod
+    std::vector<Affine> motion = {};  ///< as an instance's (object_fields.h)
+    MotionInterpolation motion_interpolation = MotionInterpolation::Linear;
+    std::vector<Keyframe> animation = {};
+    bool animation_loop = false;
+    /// Its world keys over the frame, as InstanceRecord::world_motion (empty: still).
+    std::vector<Affine> world_keys = {};
+    MotionInterpolation world_interpolation = MotionInterpolation::Linear;
 };
 
 struct MaterialRecord {
@@ -173,6 +185,7 @@ struct SceneImage {
     Camera camera;
     Lighting lighting;
     uint64_t version = 0;
+    Timeline timeline = {};
 
     /// A batch that builds this state from an empty scene.
     EditBatch to_batch() const;
@@ -240,6 +253,14 @@ public:
     std::vector<std::string> group_path(GroupHandle parent) const;
     const Camera& camera() const { return m_camera; }
     const Lighting& lighting() const { return m_lighting; }
+    /// The scene's clock (set_time).
+    const Timeline& timeline() const { return m_timeline; }
+    /// The clock the animated instances' world transforms show: the scene's after each batch; a
+    /// launch may show another time (Engine: a render's `time`) until the next.
+    const Timeline& shown_clock() const { return m_shown; }
+    /// Brings every animated instance to `clock` (marking those whose world moves), when it is
+    /// not the clock they show: the cost follows the animated instances, never the scene.
+    void show(const Timeline& clock);
 
     /// The material an instance shades with: its own, else its mesh's, else the built-in one.
     Material resolved_material(const InstanceRecord& inst) const;
@@ -282,6 +303,7 @@ private:
     Status apply_edit(MarkDirty&& e, UndoLog& undo);
     Status apply_edit(SetCamera&& e, UndoLog& undo);
     Status apply_edit(SetLighting&& e, UndoLog& undo);
+    Status apply_edit(SetTime&& e, UndoLog& undo);
     Status apply_edit(Clear&& e, UndoLog& undo);
     Status apply_edit(AddGroup&& e, UndoLog& undo);
     Status apply_edit(UpdateGroup&& e, UndoLog& undo);
@@ -336,8 +358,11 @@ private:
     void remove_subtree(GroupHandle g, UndoLog& undo);
     /// Recomputes the world transform and visibility of every dirty subtree and dirty instance
     /// (Hydra's transform flattening, incremental): runs once per applied batch, costs what the
-    /// batch dirtied, and marks the instances whose world changed for the TLAS.
+    /// batch dirtied, and marks the instances whose world changed for the TLAS; then shows the
+    /// scene's clock (show()).
     void flatten();
+    /// flatten() without the clock: the subtrees and instances marked so far.
+    void flatten_marked();
     /// What flatten() is about to compose, checked first and changing nothing: every world
     /// transform the batch's dirty groups and instances will get must be finite (each local
     /// one is, but a chain of groups can multiply past float range). The error names the chain.
@@ -346,6 +371,10 @@ private:
     std::string group_chain(GroupHandle g) const;
     /// Recomputes one instance's world from its parent's; marks it when it changed.
     void refresh_instance_world(InstanceHandle h, InstanceRecord& r);
+    /// Whether `g` or a group above it is dirty (its world is about to be recomputed).
+    bool under_dirty(GroupHandle g) const;
+    /// Recomputes one group's world from its parent's and cleans it.
+    void refresh_group_world(GroupRecord& group);
 
     SlotArray<MeshRecord, MeshTag> m_meshes;
     SlotArray<InstanceRecord, InstanceTag> m_instances;
@@ -366,6 +395,12 @@ private:
     std::unordered_map<std::string, TextureHandle> m_texture_ids;
     Camera m_camera;
     Lighting m_lighting;
+    Timeline m_timeline;
+    Timeline m_shown;  ///< shown_clock()
+    /// Every instance and group with an animation, and perhaps some that lost theirs or are
+    /// gone (show() drops those): the only objects a clock change visits.
+    std::vector<InstanceHandle> m_animated;
+    std::vector<GroupHandle> m_animated_groups;
     ChangeTracker m_changes;
     uint64_t m_version = 0;
     SceneBudget m_budget;

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 
+#include "engine/scene/animation.h"
 #include "engine/scene/child_list.h"
 #include "engine/scene/scene.h"
 #include "engine/scene/undo_log.h"
@@ -124,26 +125,108 @@ void Scene::remove_subtree(GroupHandle g, UndoLog& undo) {
 
 // Step: flattening -------------------------------------------------------------------------------
 
+namespace {
+
+/// Whether an object and its parent are still over the frame: no keys to compose (the common
+/// case, kept off the pose machinery).
+template <class Record>
+bool still(const Record& r, const GroupRecord* parent) {
+    return r.motion.empty() && r.animation.empty() && (!parent || parent->world_keys.empty());
+}
+
+template <class Record>
+FramePose pose_of(const Record& r, const GroupRecord* parent, const Timeline& clock) {
+    FramePose pose = local_pose(
+        {r.transform, r.motion, r.animation, r.animation_loop, r.motion_interpolation}, clock);
+    if (!parent) return pose;
+    return compose({parent->world, parent->world_keys, parent->world_interpolation}, pose);
+}
+
+/// Drops from `list` the handles of objects gone or no longer animated, and repeats (an update
+/// that gave an animated object another animation lists it again).
+template <class Handle, class Slots>
+void prune_animated(std::vector<Handle>& list, const Slots& slots) {
+    std::sort(list.begin(), list.end(), [](Handle a, Handle b) {
+        return std::pair(a.index, a.generation) < std::pair(b.index, b.generation);
+    });
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+    std::erase_if(list, [&](Handle h) {
+        const auto* r = slots.get(h);
+        return !r || r->animation.empty();
+    });
+}
+
+}  // namespace
+
 void Scene::refresh_instance_world(InstanceHandle h, InstanceRecord& r) {
-    Affine world = r.transform;
+    const GroupRecord* p = m_groups.get(r.parent);
+    Affine world;
+    std::vector<Affine> keys;
+    MotionInterpolation how = r.motion_interpolation;
+    if (still(r, p)) {
+        world = p ? p->world * r.transform : r.transform;
+    } else {
+        FramePose pose = pose_of(r, p, m_shown);
+        world = pose.start;
+        keys = std::move(pose.keys);
+        how = pose.how;
+    }
     bool visible = r.visible;
     LodBands lod;
-    if (const GroupRecord* p = m_groups.get(r.parent)) {
-        world = p->world * r.transform;
+    if (p) {
         visible = visible && p->world_visible;
         lod = child_lod_bands(&p->world_lod, p->lod, p->world, r.lod_near, r.lod_far);
     }
     m_changes.count_world_transforms();
     DirtyBits<InstanceDirty> bits;
-    if (!(world == r.world)) bits |= InstanceDirty::Transform;
+    if (!(world == r.world) || keys != r.world_motion || how != r.world_interpolation)
+        bits |= InstanceDirty::Transform;
     if (visible != r.world_visible) bits |= InstanceDirty::Visibility;
     if (lod != r.world_lod) bits |= InstanceDirty::Lod;
     r.world = world;
     r.world_visible = visible;
     r.world_lod = std::move(lod);
-    r.world_motion.resize(r.motion.size());
-    for (std::size_t k = 0; k < r.motion.size(); ++k) r.world_motion[k] = world * r.motion[k];
+    r.world_motion = std::move(keys);
+    r.world_interpolation = how;
     if (bits.any()) mark(h, bits);
+}
+
+void Scene::refresh_group_world(GroupRecord& group) {
+    const GroupRecord* p = m_groups.get(group.parent);
+    if (still(group, p)) {
+        group.world = p ? p->world * group.transform : group.transform;
+        group.world_keys.clear();
+    } else {
+        FramePose pose = pose_of(group, p, m_shown);
+        group.world = pose.start;
+        group.world_keys = std::move(pose.keys);
+        group.world_interpolation = pose.how;
+    }
+    group.world_visible = group.visible && (!p || p->world_visible);
+    group.world_lod.clear();
+    if (p)
+        group.world_lod =
+            child_lod_bands(&p->world_lod, p->lod, p->world, group.lod_near, group.lod_far);
+    group.dirty = {};
+    m_changes.count_world_transforms();
+}
+
+bool Scene::under_dirty(GroupHandle g) const {
+    for (; !g.is_null(); g = m_groups.at(g).parent)
+        if (m_groups.at(g).dirty.any()) return true;
+    return false;
+}
+
+void Scene::show(const Timeline& clock) {
+    if (clock == m_shown) return;
+    m_shown = clock;
+    prune_animated(m_animated, m_instances);
+    prune_animated(m_animated_groups, m_groups);
+    for (GroupHandle g : m_animated_groups) mark(g, GroupDirty::Transform);
+    // An instance below a marked group is refreshed by the group's walk.
+    for (InstanceHandle h : m_animated)
+        if (!under_dirty(m_instances.at(h).parent)) mark_instance_world(h);
+    flatten_marked();
 }
 
 std::string Scene::group_chain(GroupHandle g) const {
@@ -178,29 +261,42 @@ Status Scene::check_world_transforms() const {
                 return refuse(g, "instance '" + i.id + "' (motion key " + std::to_string(k) + ")",
                               key.is_finite() ? why : nullptr);
         }
+        for (std::size_t k = 0; k < i.animation.size(); ++k) {
+            const Affine key = parent_world * i.animation[k].transform;
+            if (const char* why = transform_problem(key))
+                return refuse(g, "instance '" + i.id + "' (keyframe " + std::to_string(k) + ")",
+                              key.is_finite() ? why : nullptr);
+        }
         return {};
     };
-    auto under_dirty = [&](GroupHandle p) {
-        for (; !p.is_null(); p = m_groups.at(p).parent)
-            if (m_groups.at(p).dirty.any()) return true;
-        return false;
+    // A group's world, and its keys' (at rest), must be finite to compose.
+    auto check_group = [&](GroupHandle g, const Affine& parent_world) -> Status {
+        const GroupRecord& group = m_groups.at(g);
+        const Affine world = parent_world * group.transform;
+        bool finite = world.is_finite();
+        for (const Affine& k : group.motion) finite = finite && (world * k).is_finite();
+        for (const Keyframe& k : group.animation)
+            finite = finite && (parent_world * k.transform).is_finite();
+        if (!finite) return refuse(g, "group '" + group.id + "'", nullptr);
+        return {};
     };
+    // Entries: a group and its parent's world.
     std::vector<std::pair<GroupHandle, Affine>> stack;
     for (GroupHandle top : m_world_groups) {
         const GroupRecord* r = m_groups.get(top);
         if (!r || r->dirty.none() || under_dirty(r->parent)) continue;
         const GroupRecord* parent = m_groups.get(r->parent);
-        stack.emplace_back(top, parent ? parent->world * r->transform : r->transform);
+        stack.emplace_back(top, parent ? parent->world : Affine::identity());
         while (!stack.empty()) {
-            const auto [g, world] = stack.back();
+            const auto [g, parent_world] = stack.back();
             stack.pop_back();
+            if (Status s = check_group(g, parent_world); !s) return s;
             const GroupRecord& group = m_groups.at(g);
-            if (!world.is_finite()) return refuse(g, "group '" + group.id + "'", nullptr);
+            const Affine world = parent_world * group.transform;
             for (InstanceHandle h : group.children.instances) {
                 if (Status s = check_instance(g, world, m_instances.at(h)); !s) return s;
             }
-            for (GroupHandle c : group.children.groups)
-                stack.emplace_back(c, world * m_groups.at(c).transform);
+            for (GroupHandle c : group.children.groups) stack.emplace_back(c, world);
         }
     }
     for (InstanceHandle h : m_world_instances) {
@@ -217,32 +313,23 @@ Status Scene::check_world_transforms() const {
 }
 
 void Scene::flatten() {
+    flatten_marked();
+    show(m_timeline);
+}
+
+void Scene::flatten_marked() {
     // Step: dirty subtrees. A dirty group under another dirty group is done by the upper one;
     // every group a subtree walk visits is cleaned, so no group is visited twice.
     std::vector<GroupHandle> stack;
     for (GroupHandle top : m_world_groups) {
         const GroupRecord* r = m_groups.get(top);
-        if (!r || r->dirty.none()) continue;
-        bool covered = false;
-        for (GroupHandle p = r->parent; !p.is_null() && !covered; p = m_groups.at(p).parent)
-            covered = m_groups.at(p).dirty.any();
-        if (covered) continue;
+        if (!r || r->dirty.none() || under_dirty(r->parent)) continue;
         stack.push_back(top);
         while (!stack.empty()) {
             const GroupHandle g = stack.back();
             stack.pop_back();
             GroupRecord& group = m_groups.at(g);
-            group.world = group.transform;
-            group.world_visible = group.visible;
-            group.world_lod.clear();
-            if (const GroupRecord* p = m_groups.get(group.parent)) {
-                group.world = p->world * group.transform;
-                group.world_visible = group.visible && p->world_visible;
-                group.world_lod = child_lod_bands(&p->world_lod, p->lod, p->world,
-                                                  group.lod_near, group.lod_far);
-            }
-            group.dirty = {};
-            m_changes.count_world_transforms();
+            refresh_group_world(group);
             for (InstanceHandle h : group.children.instances)
                 refresh_instance_world(h, m_instances.at(h));
             stack.insert(stack.end(), group.children.groups.begin(), group.children.groups.end());

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "engine/core/utf8.h"
+#include "engine/scene/animation.h"
 #include "engine/image/texture_decode.h"
 #include "engine/scene/child_list.h"
 #include "engine/scene/object_fields.h"
@@ -796,6 +797,7 @@ Status Scene::apply_edit(AddInstance&& e, UndoLog& undo) {
     }
     if (Status s = check_fields<InstanceFields>(e); !s) return s;
     if (Status s = check_lod_range(e.lod_near, e.lod_far); !s) return s;
+    if (Status s = check_keys(e.motion, e.animation); !s) return s;
     auto parent = find_parent(e.parent, "parent");
     if (!parent) return Unexpected(parent.error());
 
@@ -815,8 +817,10 @@ void Scene::insert_instance(InstanceRecord&& r, std::string&& id, UndoLog& undo)
     std::vector<InstanceHandle>& siblings = children_of(r.parent).instances;
     r.child_slot = static_cast<uint32_t>(siblings.size());
     bool reused = false;
+    const bool animated = !r.animation.empty();
     const InstanceHandle h = m_instances.insert(std::move(r), &reused);
     undo.records.emplace_back(undo::Inserted<InstanceHandle>{h, reused});
+    if (animated) m_animated.push_back(h);
     mesh.users.mut().push_back(h);
     siblings.push_back(h);
     mark_instance_world(h);
@@ -839,6 +843,10 @@ Status Scene::apply_edit(UpdateInstance&& e, UndoLog& undo) {
                                    e.lod_far.value_or(current.lod_far));
         !s)
         return s;
+    if (Status s = check_keys(e.motion ? *e.motion : current.motion,
+                              e.animation ? *e.animation : current.animation);
+        !s)
+        return s;
     GroupHandle parent;
     if (e.parent) {
         auto found = find_parent(*e.parent, "parent");
@@ -857,6 +865,7 @@ Status Scene::apply_edit(UpdateInstance&& e, UndoLog& undo) {
     if (bits.any()) mark(h, bits);
     if ((bits & (InstanceDirty::Transform | InstanceDirty::Visibility | InstanceDirty::Lod)).any())
         mark_instance_world(h);
+    if (e.animation && !e.animation->empty()) m_animated.push_back(h);
     return {};
 }
 
@@ -961,7 +970,7 @@ void Scene::remove_light(LightHandle h, UndoLog& undo) {
     m_changes.mark(SceneDirty::Lights);
 }
 
-// Camera and lighting are saved whole at the start of each batch (UndoLog::camera, ::lighting).
+// Camera, lighting and timeline are saved whole at the start of each batch (UndoLog).
 Status Scene::apply_edit(SetCamera&& e, UndoLog&) {
     Camera updated = m_camera;
     apply_to(updated, e);
@@ -977,6 +986,12 @@ Status Scene::apply_edit(SetLighting&& e, UndoLog&) {
     if (Status s = check_lighting(updated); !s) return s;
     m_lighting = updated;
     m_changes.mark(SceneDirty::Lighting);
+    return {};
+}
+
+Status Scene::apply_edit(SetTime&& e, UndoLog&) {
+    if (Status s = check_update<TimelineFields>(e); !s) return s;
+    apply_to(m_timeline, e);  // the batch's flattening shows it (Scene::show)
     return {};
 }
 
@@ -1001,6 +1016,7 @@ Status Scene::apply_edit(Clear&&, UndoLog& undo) {
     for (TextureHandle h : textures) remove_texture(h, undo);
     m_camera = Camera{};
     m_lighting = Lighting{};
+    m_timeline = Timeline{};
     m_changes.mark(SceneDirty::Camera | SceneDirty::Lighting | SceneDirty::Materials);
     return {};
 }

@@ -224,6 +224,7 @@ void Scene::roll_back(UndoLog& undo) {
     for (auto it = undo.records.rbegin(); it != undo.records.rend(); ++it) std::visit(reverse, *it);
     m_camera = undo.camera;
     m_lighting = undo.lighting;
+    m_timeline = undo.timeline;
     m_totals = undo.totals;
     m_changes.rewind(undo.changes);
     m_world_instances.resize(undo.world_instances);

@@ -82,10 +82,13 @@ const char* alpha_mode_name(AlphaMode m) {
 Affine motion_at(const std::vector<Affine>& keys, float time, MotionInterpolation how) {
     const float f = std::clamp(time, 0.0f, 1.0f) * float(keys.size() - 1);
     const auto k = std::min(static_cast<std::size_t>(f), keys.size() - 2);
-    if (how == MotionInterpolation::Linear)
-        return Affine::lerp(keys[k], keys[k + 1], f - float(k));
-    const std::vector<SrtParts> pair = srt_keys({keys[k], keys[k + 1]});
-    return srt_lerp(pair[0], pair[1], f - float(k));
+    return interpolate(keys[k], keys[k + 1], f - float(k), how);
+}
+
+Affine interpolate(const Affine& a, const Affine& b, float u, MotionInterpolation how) {
+    if (how == MotionInterpolation::Linear) return Affine::lerp(a, b, u);
+    const std::vector<SrtParts> pair = srt_keys({a, b});
+    return srt_lerp(pair[0], pair[1], u);
 }
 
 const char* light_kind_name(LightKind k) {

@@ -160,10 +160,36 @@ struct Camera {
 /// slerp (engine/core/srt.h), as Embree's quaternion keys.
 enum class MotionInterpolation : uint8_t { Linear, Srt };
 
+/// Between transforms `a` (u = 0) and `b` (u = 1), as `how` interpolates keys.
+Affine interpolate(const Affine& a, const Affine& b, float u, MotionInterpolation how);
+
 /// Transform keys evenly spaced over frame time [0, 1], interpolated at `time` as Embree
 /// interpolates them; `keys` holds at least two.
 Affine motion_at(const std::vector<Affine>& keys, float time,
                  MotionInterpolation how = MotionInterpolation::Linear);
+
+/// One key of an instance's animation: its transform (relative to its parent, as `transform`)
+/// at scene time `time`, in seconds (animation.h).
+struct Keyframe {
+    float time = 0.0f;
+    Affine transform;
+
+    friend bool operator==(const Keyframe&, const Keyframe&) = default;
+};
+
+/// Most keyframes one animation holds.
+constexpr std::size_t MAX_ANIMATION_KEYS = 65536;
+/// Scene times (the clock and keyframes) lie in [-MAX_SCENE_TIME, MAX_SCENE_TIME] seconds.
+constexpr float MAX_SCENE_TIME = 1e7f;
+
+/// The scene's clock: the time animations are evaluated at, and how long a frame lasts (the
+/// scene time frame time 0 to 1 spans, so an animated instance blurs over it; animation.h).
+struct Timeline {
+    float time = 0.0f;
+    float frame_duration = 1.0f / 24.0f;
+
+    friend bool operator==(const Timeline&, const Timeline&) = default;
+};
 
 struct Lighting {
     Vec3 sun_direction{0.4f, 0.8f, 0.45f};

@@ -153,6 +153,7 @@ struct UndoLog {
     // their lengths are enough to restore them.
     Camera camera;
     Lighting lighting;
+    Timeline timeline;
     MeshTotals totals;
     ChangeTracker::Position changes;
     std::size_t world_instances = 0;

@@ -1,4 +1,4 @@
-// Scene-wide ops: mark_dirty, set_camera, set_lighting, clear.
+// Scene-wide ops: mark_dirty, set_camera, set_lighting, set_time, clear.
 
 #include "protocol/edit_schema.h"
 #include "protocol/field_json.h"
@@ -36,6 +36,12 @@ Edit parse_set_camera(OpFields& f) {
 Edit parse_set_lighting(OpFields& f) {
     SetLighting e;
     read_updates<LightingFields>(f, e);
+    return e;
+}
+
+Edit parse_set_time(OpFields& f) {
+    SetTime e;
+    read_updates<TimelineFields>(f, e);
     return e;
 }
 
@@ -79,9 +85,17 @@ constexpr EditOp OPS[] = {
   "additionalProperties": false
 })json",
      parse_set_lighting, edit_kinds<SetLighting>(), field_properties<LightingFields, false>},
+    {"set_time",
+     "Sets the scene's time (and the frame's duration): the animated instances move to it, at "
+     "the cost of a TLAS update of those alone.",
+     R"json({
+  "type": "object",
+  "additionalProperties": false
+})json",
+     parse_set_time, edit_kinds<SetTime>(), field_properties<TimelineFields, false>},
     {"clear",
-     "Removes every mesh, instance, material, texture, group and light and resets camera and "
-     "lighting.",
+     "Removes every mesh, instance, material, texture, group and light and resets camera, "
+     "lighting and timeline.",
      R"json({"type": "object", "additionalProperties": false})json", parse_clear,
      edit_kinds<Clear>()},
 };

@@ -163,6 +163,11 @@ class ViewerWithoutToken(ViewerInChromium):
             "import('/web/inspector.js').then((m) => [m.lodRange({lod_near: 0, lod_far: 1e15}),"
             " m.lodRange({lod_near: 0, lod_far: 40}), m.lodRange({lod_near: 40, lod_far: 1e15})])")
         self.assertEqual(ranges, ["", "from 0 to 40", "from 40 on"])
+        spans = self.browser.evaluate(
+            "import('/web/inspector.js').then((m) => [m.animationSpan({}),"
+            " m.animationSpan({animation: [{time: 0}, {time: 1.5}], animation_loop: true}),"
+            " m.animationSpan({animation: [{time: 2}]})])")
+        self.assertEqual(spans, ["", "2 keys from 0 to 1.5 s, looping", "1 key at 2 s"])
         self.assertEqual(
             self.browser.evaluate("document.getElementById('sel-build').textContent"),
             f"{build['prefer']}, {'refit' if build['allow_refit'] else 'no refit'}"
@@ -239,6 +244,41 @@ class ViewerWithoutToken(ViewerInChromium):
         self.assertRegex(text,
                          r"rebuilt gem: added, \d+ primitives, compacted [\d.]+ → [\d.]+ MiB")
         self.assertRegex(text, r"compaction saves [\d.]+ MiB over 1 meshes")
+
+    def test_5_the_time_bar_scrubs_plays_and_sets_the_scene_time(self):
+        request(self.server, "POST", "/v1/edits", {"edits": [
+            {"op": "update_instance", "instance": "ball", "animation": [
+                {"time": 0, "transform": {"translate": [-3, 1, 0]}},
+                {"time": 2, "transform": {"translate": [3, 1, 0], "scale": 1.5}}]},
+            {"op": "set_time", "time": 0}]})
+        self.open_viewer()
+        self.assertEqual(self.browser.evaluate("document.getElementById('time-label').textContent"),
+                         "0.00 s (scene)")
+        before = luminance(self.wait_settled())
+        # Scrubbing: the viewer's own time travels in the stream's URL; the scene keeps its clock.
+        self.browser.evaluate("window.strata.timeBar.scrub(1.5)")
+        self.browser.wait_for("window.strata.streamUrl.includes('time=1.500')", timeout=5)
+        after = luminance(self.wait_settled())
+        self.assertGreater(mean_abs_diff(before, after), 2.0, "scrubbing did not move the ball")
+        self.shot("time-scrubbed")
+        self.assertEqual(request(self.server, "GET", "/v1/scene")["timeline"]["time"], 0)
+        self.assertEqual(self.browser.evaluate("document.getElementById('time-label').textContent"),
+                         "1.50 s")
+        # Playing moves the time on, a stream per step, until paused.
+        self.browser.evaluate("document.getElementById('time-play').click()")
+        self.browser.wait_for("window.strata.timeBar.time > 1.7", timeout=5)
+        self.browser.evaluate("document.getElementById('time-play').click()")
+        paused = self.browser.evaluate("window.strata.timeBar.time")
+        time.sleep(0.3)
+        self.assertEqual(self.browser.evaluate("window.strata.timeBar.time"), paused)
+        # "Set scene time": one set_time edit, and the bar follows the scene's clock again.
+        self.browser.evaluate("window.strata.timeBar.scrub(0.5)")
+        self.browser.evaluate("document.getElementById('time-set').click()")
+        self.browser.wait_for("window.strata.timeBar.time === null", timeout=5)
+        self.assertEqual(request(self.server, "GET", "/v1/scene")["timeline"]["time"], 0.5)
+        self.assertNotIn("time=", self.browser.evaluate("window.strata.streamUrl"))
+        request(self.server, "POST", "/v1/edits", {"edits": [
+            {"op": "update_instance", "instance": "ball", "animation": []}]})
 
 
 class ViewerTreeAndStill(ViewerInChromium):

@@ -171,6 +171,16 @@ UpdateInstance RandomEdits::random_update_instance(const std::vector<std::string
         u.motion.emplace();
         for (int k = chance(0.3) ? 0 : integer(2, 5); k > 0; --k)
             u.motion->push_back(random_transform());
+        u.animation = std::vector<Keyframe>{};  // an instance has one or the other
+    } else if (chance(0.12)) {  // keyframes at increasing times, or none
+        u.animation.emplace();
+        u.motion = std::vector<Affine>{};
+        float t = uniform(-1, 1);
+        for (int k = chance(0.2) ? 0 : integer(1, 4); k > 0; --k) {
+            u.animation->push_back({t, random_transform()});
+            t += uniform(0.1f, 2);
+        }
+        u.animation_loop = chance(0.5);
     }
     if (chance(0.1))
         u.motion_interpolation =
@@ -278,6 +288,8 @@ void RandomEdits::add_edit(EditBatch& b) {
         }
     } else if (kind < 95) {
         e.emplace_back(random_camera());
+    } else if (kind < 97) {  // the scene's clock: animated instances move
+        e.emplace_back(SetTime{uniform(-1, 6), chance(0.5) ? uniform(0, 0.5f) : 1.0f / 24.0f});
     } else if (kind < 99) {  // lighting
         SetLighting l;
         l.sun_direction = Vec3(uniform(-1, 1), uniform(0.1f, 1), uniform(-1, 1));

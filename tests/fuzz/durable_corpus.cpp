@@ -67,6 +67,14 @@ std::vector<Edit> every_kind() {
     level.lod_far = 20.0f;
     level.motion_interpolation = MotionInterpolation::Srt;
     edits.emplace_back(level);
+    UpdateInstance animated;
+    animated.instance = "a";
+    animated.motion = std::vector<Affine>{};
+    animated.animation = std::vector<Keyframe>{{0.0f, Affine::identity()},
+                                               {1.5f, Affine::translation({0, 2, 0})}};
+    animated.animation_loop = true;
+    edits.emplace_back(animated);
+    edits.emplace_back(SetTime{0.75f, 0.04f});
     edits.emplace_back(SetTransform{"a", Affine::scaling({2, 2, 2})});
     edits.emplace_back(MarkDirty{std::string("tri"), DirtyAction::Refit});
     edits.emplace_back(SetCamera{Vec3(1), std::nullopt, std::nullopt, 30.0f});

@@ -283,7 +283,8 @@ TEST(EditParser, EveryOpHasAParserAndAnEngineStruct) {
                            "update_instance", "set_transform", "remove_instance",
                            "add_instances", "update_instances", "remove_instances", "add_group",
                            "update_group", "remove_group", "add_light", "update_light",
-                           "remove_light", "mark_dirty", "set_camera", "set_lighting", "clear"));
+                           "remove_light", "mark_dirty", "set_camera", "set_lighting", "set_time",
+                           "clear"));
 }
 
 TEST(EditParser, ReplaceTrianglesReadsItsRunAndItsNewTrianglesInEitherEncoding) {

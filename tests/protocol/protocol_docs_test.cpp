@@ -190,7 +190,8 @@ std::vector<std::pair<std::string, std::string>> field_tables() {
             {"group", fields_markdown<GroupFields>()},
             {"light", fields_markdown<LightFields>()},
             {"camera", fields_markdown<CameraFields>()},
-            {"lighting", fields_markdown<LightingFields>()}};
+            {"lighting", fields_markdown<LightingFields>()},
+            {"timeline", fields_markdown<TimelineFields>()}};
 }
 
 TEST(ProtocolDocs, CommittedSchemaIsTheOneTheOpTableGenerates) {

@@ -77,7 +77,7 @@ class OpenApiCheck:
         except ValueError as e:
             return [f"the body is not JSON ({e})"]
         errors = sorted(self._validator(ref).iter_errors(value), key=lambda e: list(e.path))
-        return [f"/{'/'.join(str(p) for p in e.path)}: {e.message[:300]}" for e in errors[:5]]
+        return [f"/{'/'.join(str(p) for p in e.path)}: {e.message[:300]}" for e in errors[:8]]
 
     def problems(self, method: str, target: str, status: int, content_type: str,
                  body: bytes) -> List[str]:

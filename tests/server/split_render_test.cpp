@@ -59,6 +59,7 @@ TEST(SplitRender, TheBandQueryReadsBackAsTheBandRequestBitForBit) {
     r.camera->fov_y_deg = 33.3f;
     r.camera->shutter_open = 0.125f;
     r.camera->shutter_close = 2.0f / 3.0f;
+    r.time = 1.0f / 7.0f;
     const RowBand band{64, 70};
     auto parsed = protocol::parse_render_query(query_params(band_query(r, band)));
     ASSERT_TRUE(parsed.has_value()) << parsed.error().detail;
@@ -80,6 +81,7 @@ TEST(SplitRender, TheBandQueryReadsBackAsTheBandRequestBitForBit) {
     EXPECT_EQ(got.camera->fov_y_deg, r.camera->fov_y_deg);
     EXPECT_EQ(got.camera->shutter_open, r.camera->shutter_open);
     EXPECT_EQ(got.camera->shutter_close, r.camera->shutter_close);
+    EXPECT_EQ(got.time, r.time);  // the peers show the animated instances where this one does
 }
 
 }  // namespace

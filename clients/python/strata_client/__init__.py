@@ -13,7 +13,7 @@ AsyncClient has the same methods as coroutines. See clients/python/README.md and
 protocol/README.md.
 """
 
-from strata_client import bulk, lod, mesh_edits
+from strata_client import animation, bulk, lod, mesh_edits
 from strata_client._version import __version__
 from strata_client.aio import AsyncClient
 from strata_client.arrays import MISS, FrameArrays
@@ -31,7 +31,8 @@ from strata_client.results import (Asset, AssetCounts, AssetDeleteResult, BlasEn
                                    SceneBudget, SceneSummary, TlasMerge, TlasReport, UndoResult)
 
 __all__ = [
-    "__version__", "bulk", "lod", "mesh_edits", "Client", "AsyncClient", "decode_png",
+    "__version__", "animation", "bulk", "lod", "mesh_edits", "Client", "AsyncClient",
+    "decode_png",
     "ProblemError", "BadRequestError", "UnauthorizedError", "NotFoundError",
     "NothingToUndoError", "VersionMismatchError", "TooLargeError", "UnprocessableError",
     "TooManyConnectionsError", "UnavailableError", "SceneConflictError", "ForbiddenError",

@@ -347,9 +347,12 @@ def _hits(response: Response) -> List[Optional[Hit]]:
 
 
 def pick_many(pixels: Iterable[Tuple[int, int]], width: int, height: int,
-              camera: Optional[Dict[str, Any]]) -> Call[List[Optional[Hit]]]:
+              camera: Optional[Dict[str, Any]],
+              time: Optional[float] = None) -> Call[List[Optional[Hit]]]:
     body: Dict[str, Any] = {"width": width, "height": height,
                             "pixels": [[int(px), int(py)] for px, py in pixels]}
     if camera is not None:
         body["camera"] = camera
+    if time is not None:
+        body["time"] = float(time)
     return Call(Request("POST", "/v1/pick", _json_body(body)), _hits)

@@ -294,11 +294,13 @@ class AsyncClient:
         return self._walk("lights", page_size)
 
     async def pick(self, x: int, y: int, width: int, height: int,
-                   camera: Optional[Dict[str, Any]] = None) -> Optional[Hit]:
+                   camera: Optional[Dict[str, Any]] = None,
+                   time: Optional[float] = None) -> Optional[Hit]:
         """What lies under pixel (x, y) of a width x height frame (POST /v1/pick), or None."""
-        return (await self.pick_many([(x, y)], width, height, camera))[0]
+        return (await self.pick_many([(x, y)], width, height, camera, time))[0]
 
     async def pick_many(self, pixels: Iterable[Tuple[int, int]], width: int, height: int,
-                        camera: Optional[Dict[str, Any]] = None) -> List[Optional[Hit]]:
+                        camera: Optional[Dict[str, Any]] = None,
+                        time: Optional[float] = None) -> List[Optional[Hit]]:
         """pick() for many pixels at once (at most 10000), all at one version."""
-        return await self._call(_api.pick_many(pixels, width, height, camera))
+        return await self._call(_api.pick_many(pixels, width, height, camera, time))

@@ -250,9 +250,10 @@ class Client:
         """Renders a frame (POST /v1/render); returns the encoded image with its RenderInfo.
 
         Every other request member passes through `opts`: spp, aovs, compression, accumulate,
-        exposure, filter ("none" or "atrous"), split, camera={"eye": [...], "target": [...],
-        "up": [...], "fov_y_deg": ...}, frame={"group": id} or {"instance": id} (aims the
-        camera at it). `at_version=N` renders the scene as it was at version N (a time-zone
+        exposure, filter ("none" or "atrous"), split, time (the scene time the animated
+        instances show in this frame; the scene keeps its own), camera={"eye": [...],
+        "target": [...], "up": [...], "fov_y_deg": ...}, frame={"group": id} or
+        {"instance": id} (aims the camera at it). `at_version=N` renders the scene as it was at version N (a time-zone
         aware datetime: as it was at that time, the newest version made by then)
         (from the server's data directory; NotFoundError when it holds no such version). Also
         sets `last_render`.
@@ -357,13 +358,16 @@ class Client:
         return self._walk("lights", page_size)
 
     def pick(self, x: int, y: int, width: int, height: int,
-             camera: Optional[Dict[str, Any]] = None) -> Optional[Hit]:
+             camera: Optional[Dict[str, Any]] = None,
+             time: Optional[float] = None) -> Optional[Hit]:
         """What lies under pixel (x, y) of a width x height frame (POST /v1/pick), seen from
-        the scene camera or from `camera` (the render's override): a Hit, or None."""
-        return self.pick_many([(x, y)], width, height, camera)[0]
+        the scene camera or from `camera` (the render's override), with the animated instances
+        at the scene's time or at `time` (the render's): a Hit, or None."""
+        return self.pick_many([(x, y)], width, height, camera, time)[0]
 
     def pick_many(self, pixels: Iterable[Tuple[int, int]], width: int, height: int,
-                  camera: Optional[Dict[str, Any]] = None) -> List[Optional[Hit]]:
+                  camera: Optional[Dict[str, Any]] = None,
+                  time: Optional[float] = None) -> List[Optional[Hit]]:
         """pick() for many pixels at once (at most 10000), one ray each, all at one version."""
-        return self._call(_api.pick_many(pixels, width, height, camera))
+        return self._call(_api.pick_many(pixels, width, height, camera, time))
 
