@@ -512,8 +512,8 @@ Result<Frame> Renderer::render(const TlasStrategy& tlas, const FrameState& frame
                                "accumulation is limited to " +
                                    std::to_string(MAX_ACCUMULATE_PIXELS) + " pixels",
                                "accumulate");
-            samples = m_accumulator.begin({frame.version, camera, request.width, request.height, frame.clock},
-                                          request.spp);
+            samples = m_accumulator.begin(
+                {frame.version, camera, request.width, request.height, frame.clock}, request.spp);
             accum = m_accumulator.sums();
         }
         const uint32_t total = samples.first + samples.count;

@@ -1,11 +1,11 @@
 #pragma once
 // Keyframe animation: an instance's or a group's transform given at scene times (Keyframe,
-// types.h) and evaluated at the scene's time (Timeline). Between two keys the transform is interpolated as
-// the instance's motion_interpolation says (linear, or srt: rotations by slerp); before the first
-// key it holds the first, after the last the last, unless the animation loops, when scene time
-// wraps into [first, last). Over one frame (Timeline::frame_duration seconds from the scene time)
-// a moving instance gets motion keys, so a render with an open shutter blurs it as it moves.
-// Evaluating touches the animated objects only: stepping time costs what they need.
+// types.h) and evaluated at the scene's time (Timeline). Between two keys the transform is
+// interpolated as the object's motion_interpolation says (linear, or srt: rotations by slerp);
+// before the first key it holds the first, after the last the last, unless the animation loops,
+// when scene time wraps into [first, last). Over one frame (Timeline::frame_duration seconds from
+// the scene time) a moving object gets motion keys, so a render with an open shutter blurs it as
+// it moves. Evaluating touches the animated objects only: stepping time costs what they need.
 //
 // Poses over a frame compose down the scene graph (FramePose): a group's keys (its motion keys,
 // or its animation sampled over the frame) times its child's give the child's world keys, both

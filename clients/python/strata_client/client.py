@@ -253,10 +253,10 @@ class Client:
         exposure, filter ("none" or "atrous"), split, time (the scene time the animated
         instances show in this frame; the scene keeps its own), camera={"eye": [...],
         "target": [...], "up": [...], "fov_y_deg": ...}, frame={"group": id} or
-        {"instance": id} (aims the camera at it). `at_version=N` renders the scene as it was at version N (a time-zone
-        aware datetime: as it was at that time, the newest version made by then)
-        (from the server's data directory; NotFoundError when it holds no such version). Also
-        sets `last_render`.
+        {"instance": id} (aims the camera at it). `at_version=N` renders the scene as it was at
+        version N (a time-zone aware datetime: as it was at that time, the newest version made
+        by then) (from the server's data directory; NotFoundError when it holds no such
+        version). Also sets `last_render`.
         """
         frame = self._call(_api.render(width, height, fmt, opts))
         self.last_render = frame.info
