@@ -149,6 +149,7 @@ std::optional<std::string> render_body(const RenderArgs& a, std::string& error) 
     if (a.accumulate) body["accumulate"] = true;
     if (a.filter) body["filter"] = *a.filter;
     if (a.split) body["split"] = *a.split;
+    if (a.time) body["time"] = *a.time;
     const Json camera = camera_json(a.camera);
     if (!camera.empty()) body["camera"] = camera;
     if (a.frame_group && a.frame_instance) {

@@ -59,6 +59,7 @@ struct RenderArgs {
     std::optional<uint32_t> split;      ///< bands over this server and its peers
     CameraOverride camera;
     std::optional<std::string> frame_group, frame_instance;  ///< aim at one of them (`frame`)
+    std::optional<double> time;  ///< the scene time the animated instances show (`time`)
 };
 /// The POST /v1/render body for `args` (format from the file name unless given); nullopt and a
 /// message when the arguments contradict each other.
@@ -127,6 +128,7 @@ struct PickArgs {
     uint32_t x = 0, y = 0;
     uint32_t width = 0, height = 0;
     CameraOverride camera;
+    std::optional<double> time;  ///< as a render's
 };
 /// `strata pick X Y --width W --height H`: what lies under that pixel of a W x H frame, seen from
 /// the scene camera or from `camera`.

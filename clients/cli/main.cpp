@@ -89,6 +89,12 @@ CLI::Option* add_vec3(CLI::App* app, const char* name, std::vector<double>& v, c
 }
 
 /// --eye, --target, --up and --fov: a camera for this one request.
+/// --time: the scene time a launch shows its animated instances at (the scene keeps its own).
+void add_time_option(CLI::App* app, std::optional<double>& time) {
+    app->add_option("--time", time,
+                    "Show animated instances at this scene time, in seconds (this launch only)");
+}
+
 void add_camera_options(CLI::App* app, CameraOverride& camera) {
     add_vec3(app, "--eye", camera.eye, "Camera override: eye position x,y,z");
     add_vec3(app, "--target", camera.target, "Camera override: target x,y,z");
@@ -213,6 +219,7 @@ void add_render(CLI::App& app, Actions& actions) {
                     "Render in N horizontal bands on this server and its --peers (1 to 16)")
         ->check(CLI::Range(1, 16));
     add_camera_options(cmd, a->camera);
+    add_time_option(cmd, a->time);
     cmd->add_option("--frame-group", a->frame_group,
                     "Aim the camera at this group's instances (from the scene camera's direction)");
     cmd->add_option("--frame-instance", a->frame_instance, "Aim the camera at this instance");
@@ -283,6 +290,7 @@ void add_pick(CLI::App& app, Actions& actions) {
     cmd->add_option("--width", a->width, "Width of the frame the pixel belongs to")->required();
     cmd->add_option("--height", a->height, "Height of that frame")->required();
     add_camera_options(cmd, a->camera);
+    add_time_option(cmd, a->time);
     actions.emplace_back(cmd, [a](Transport& t, const Console& c) { return run_pick(t, c, *a); });
 }
 

@@ -211,6 +211,7 @@ int run_pick(Transport& t, const Console& c, const PickArgs& args) {
                  {"pixels", Json::array({Json::array({args.x, args.y})})}};
     const Json camera = camera_json(args.camera);
     if (!camera.empty()) body["camera"] = camera;
+    if (args.time) body["time"] = *args.time;
     int code = OK;
     const auto doc = json_answer(c, t, "pick", t.pick(body.dump()), code);
     if (!doc) return code;

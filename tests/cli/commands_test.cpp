@@ -250,12 +250,14 @@ TEST(RenderBody, PassesEveryOptionAndTakesTheFormatFromTheFileName) {
     a.split = 3;
     a.camera.eye = {1, 2, 3};
     a.camera.fov_y_deg = 30;
+    a.time = 2.5;
     std::string error;
     const auto body = render_body(a, error);
     ASSERT_TRUE(body.has_value()) << error;
     EXPECT_EQ(Json::parse(*body), Json::parse(R"({"width": 320, "spp": 16, "format": "exr",
         "aovs": ["depth", "normal"], "compression": "piz", "exposure": -1, "accumulate": true,
-        "filter": "atrous", "split": 3, "camera": {"eye": [1, 2, 3], "fov_y_deg": 30}})"));
+        "filter": "atrous", "split": 3, "camera": {"eye": [1, 2, 3], "fov_y_deg": 30},
+        "time": 2.5})"));
     a.format = "png";
     EXPECT_FALSE(render_body(a, error).has_value());
     EXPECT_NE(error.find("does not match"), std::string::npos);
@@ -492,7 +494,7 @@ TEST_F(FakeCommands, RenderSendsFilterAndSplit) {
               Json::parse(R"({"height": 90, "format": "png", "filter": "none", "split": 2})"));
 }
 
-TEST_F(FakeCommands, PickSendsTheCameraOverrideOnlyWhenGiven) {
+TEST_F(FakeCommands, PickSendsTheCameraOverrideAndTimeOnlyWhenGiven) {
     PickArgs args;
     args.x = 3;
     args.y = 4;
@@ -501,12 +503,14 @@ TEST_F(FakeCommands, PickSendsTheCameraOverrideOnlyWhenGiven) {
     ASSERT_EQ(run_pick(fake, console(), args), 0) << err.str();
     args.camera.target = {0, 1, 0};
     args.camera.fov_y_deg = 20;
+    args.time = 0.5;
     ASSERT_EQ(run_pick(fake, console(), args), 0) << err.str();
     ASSERT_EQ(fake.pick_bodies.size(), 2u);
     EXPECT_EQ(fake.pick_bodies[0],
               Json::parse(R"({"width": 64, "height": 48, "pixels": [[3, 4]]})"));
     EXPECT_EQ(fake.pick_bodies[1]["camera"],
               Json::parse(R"({"target": [0, 1, 0], "fov_y_deg": 20})"));
+    EXPECT_EQ(fake.pick_bodies[1]["time"], 0.5);
     EXPECT_EQ(out.str(), "nothing at (3, 4) at version 0\nnothing at (3, 4) at version 0\n");
 }
 
