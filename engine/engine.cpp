@@ -270,8 +270,12 @@ Result<RebuildReport> Engine::commit_locked(std::unique_lock<std::shared_mutex>*
     RebuildReport report;
     int64_t freed = 0;  // acceleration-structure bytes the commit released
     if (m_scene.changes().empty()) {
-        // Nothing changed: no planning, no Embree call.
+        // Nothing changed: no planning, no Embree call. The flattenings since the last commit
+        // may still have evaluated world transforms that moved nothing (an animation holding a
+        // key): this report counts them, and the next does not.
         report.version = m_scene.version();
+        report.world_transforms = m_scene.changes().world_transforms();
+        m_scene.clear_changes();
         report.tlas_instances = m_accel->tlas().instance_count();
         // No scene change, but a background TLAS merge that finished is swapped in now.
         m_accel->maintain(report);

@@ -119,7 +119,9 @@ TEST_P(Animation, SteppingTimeCostsTheAnimatedInstancesOnly) {
     apply_ok(*engine, clock_at(10.0f));
     EXPECT_EQ(commit_ok(*engine).instances_changed, 1u);
     apply_ok(*engine, clock_at(11.0f));
-    EXPECT_TRUE(commit_ok(*engine).no_accel_work());
+    r = commit_ok(*engine);
+    EXPECT_TRUE(r.no_accel_work());
+    EXPECT_EQ(r.world_transforms, 1u);  // evaluated, unmoved
     // Without animated instances, time costs nothing at all.
     UpdateInstance off{"box"};
     off.animation = std::vector<Keyframe>{};
