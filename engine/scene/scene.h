@@ -74,6 +74,10 @@ struct InstanceRecord {
     MaterialHandle material;  ///< null: the mesh's default
     Affine transform;         ///< relative to the parent group (world when at the root)
     bool visible = true;      ///< its own flag; hidden too when a group above it is hidden
+    // Three one-byte fields in the padding before `parent` (a million instances hold them).
+    MotionInterpolation motion_interpolation = MotionInterpolation::Linear;  ///< of its keys
+    bool animation_loop = false;  ///< its animation repeats (animation.h)
+    MotionInterpolation world_interpolation = MotionInterpolation::Linear;  ///< of world_motion
     GroupHandle parent;       ///< null: the root
     uint32_t child_slot = 0;  ///< position in the parent's `Children::instances`
     /// Product of the ancestors' transforms and its own, and whether it and every ancestor are
@@ -94,11 +98,8 @@ struct InstanceRecord {
     float lod_far = LOD_NO_LIMIT;
     /// The LOD groups above it and their conditions, from the flattening (lod.h).
     LodBands world_lod = {};
-    MotionInterpolation motion_interpolation = MotionInterpolation::Linear;  ///< of its keys
     /// Keyframes at scene times (animation.h); non-empty: they, not `transform`, place it.
     std::vector<Keyframe> animation = {};
-    bool animation_loop = false;
-    MotionInterpolation world_interpolation = MotionInterpolation::Linear;  ///< of world_motion
 };
 
 /// A scene-graph node: its transform and visibility apply to everything below it.
