@@ -36,7 +36,10 @@ ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:ha
 step "engine concurrency tests under ThreadSanitizer (build-tsan/)"
 STRATA_TARGETS=strata_engine_tsan_tests scripts/build.sh build-tsan \
     -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSTRATA_TSAN=ON -DSTRATA_BUILD_BENCHMARKS=OFF
-TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1 suppressions=$PWD/tests/engine/tsan.supp" \
+# history_size=7: the longest access history, so that the earlier access of a race report keeps
+# its stack and the library suppressions can match it (tests/engine/tsan.supp).
+tsan_options="halt_on_error=1 history_size=7 second_deadlock_stack=1"
+TSAN_OPTIONS="$tsan_options suppressions=$PWD/tests/engine/tsan.supp" \
     timeout 900 build-tsan/tests/engine/strata_engine_tsan_tests \
     --gtest_filter='IncrementalTlas.*:Differential.ThousandsOfInstancesMatchAFreshBuildThroughMerges*:ClusteredBlas.RendersDuringLocalEdits*:*BlasSharing.*:*LevelOfDetail.PicksNameTheLevelTheFrameShows*'
 

@@ -264,6 +264,7 @@ Imported<void> validate_asset(const Asset& asset, const ErrorSink& sink) {
                                                " of only " + std::to_string(asset.textures.size()));
     }
     // Step 3: the node tree, parents first, and the world transforms it produces.
+    std::size_t keyframes = 0;
     for (std::size_t i = 0; i < asset.nodes.size(); ++i) {
         const AssetNode& node = asset.nodes[i];
         const std::string where =
@@ -272,6 +273,19 @@ Imported<void> validate_asset(const Asset& asset, const ErrorSink& sink) {
             return sink.invalid(
                 where, "its parent " + std::to_string(node.parent) + " does not come before it");
         if (!node.local.is_finite()) return sink.invalid(where, "transform is not finite");
+        keyframes += node.animation.size();
+        if (keyframes > MAX_IMPORTED_KEYFRAMES)
+            return sink.too_large(where, "the animation brings more than " +
+                                             std::to_string(MAX_IMPORTED_KEYFRAMES) + " keyframes");
+        for (std::size_t k = 0; k < node.animation.size(); ++k) {
+            const Keyframe& key = node.animation[k];
+            if (!(std::abs(key.time) <= MAX_SCENE_TIME) ||
+                (k > 0 && !(key.time > node.animation[k - 1].time)) ||
+                transform_problem(key.transform))
+                return sink.invalid(where, "keyframe " + std::to_string(k) +
+                                               " has a time out of order or range, or a "
+                                               "transform the scene cannot use");
+        }
         for (int mesh : node.meshes)
             if (mesh < 0 || mesh >= int(asset.meshes.size()))
                 return sink.invalid(where, "refers to mesh " + std::to_string(mesh) + " of only " +

@@ -90,7 +90,13 @@ struct AssetNode {
     int parent = -1;  ///< index into Asset::nodes; -1: a root
     Affine local;
     std::vector<int> meshes;  ///< indices into Asset::meshes
+    /// Its local transform at times in seconds (glTF's first animation; empty: still), each
+    /// key keeping the transform rule, times increasing: the scene's keyframe animation.
+    std::vector<Keyframe> animation;
 };
+
+/// Most keyframes one import brings, over all its nodes (a too-large error beyond).
+inline constexpr std::size_t MAX_IMPORTED_KEYFRAMES = std::size_t(1) << 20;
 
 /// A whole imported file. Nodes are ordered parents first (a node's parent has a lower index).
 struct Asset {

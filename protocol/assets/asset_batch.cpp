@@ -196,16 +196,27 @@ TreeShape tree_shape(const std::vector<AssetNode>& nodes) {
     return shape;
 }
 
-/// Adds one instance of each of `node`'s meshes under the group `parent` at `transform`; `id`
-/// is the node's, and tells its instances apart when it has several meshes.
+/// An animated node's keyframes go to its group or instances, interpolated as glTF does (its
+/// rotations by slerp).
+template <class Edit>
+void set_animation(Edit& e, const std::vector<Keyframe>& keys) {
+    e.animation = keys;
+    if (!keys.empty()) e.motion_interpolation = MotionInterpolation::Srt;
+}
+
+/// Adds one instance of each of `node`'s meshes under the group `parent` at `transform`
+/// (animated as `keys` say); `id` is the node's, and tells its instances apart when it has
+/// several meshes.
 void add_instances(const AssetNode& node, const std::string& id, const Affine& transform,
-                   const std::string& parent, AssetBatch& out) {
+                   const std::vector<Keyframe>& keys, const std::string& parent,
+                   AssetBatch& out) {
     for (std::size_t k = 0; k < node.meshes.size(); ++k) {
         AddInstance e;
         e.id = id + (node.meshes.size() > 1 ? "." + std::to_string(k) : "");
         e.name = display_name(node.name);
         e.mesh = out.meshes[std::size_t(node.meshes[k])];
         e.transform = transform;
+        set_animation(e, keys);
         e.parent = parent;
         const std::string instance_id = e.id;
         add_edit(out, std::move(e), instance_id, out.instances);
@@ -236,8 +247,13 @@ void add_nodes(const std::vector<AssetNode>& nodes, const std::vector<bool>& has
         placed[i] = true;
         const std::string& parent_group =
             parent >= 0 && !flatten ? group_of[std::size_t(parent)] : p;
+        if (flatten && !node.animation.empty())
+            out.warnings.push_back(label("node", i, node.name) +
+                                   "'s animation not imported: the node tree is flattened");
+        static const std::vector<Keyframe> STILL;
         // A node with children is a group; a leaf's instances carry its transform themselves.
         Affine instance_transform = t;
+        const std::vector<Keyframe>* instance_keys = flatten ? &STILL : &node.animation;
         std::string instance_parent = parent_group;
         if (has_children[i] && !flatten) {
             AddGroup g;
@@ -245,6 +261,8 @@ void add_nodes(const std::vector<AssetNode>& nodes, const std::vector<bool>& has
             g.name = display_name(node.name);
             g.parent = parent_group;
             g.transform = node.local;
+            set_animation(g, node.animation);
+            instance_keys = &STILL;
             group_of[i] = g.id;
             const std::string id = g.id;
             add_edit(out, std::move(g), id, out.groups);
@@ -253,8 +271,8 @@ void add_nodes(const std::vector<AssetNode>& nodes, const std::vector<bool>& has
         } else {
             group_of[i] = parent_group;
         }
-        add_instances(node, p + ".node" + std::to_string(i), instance_transform, instance_parent,
-                      out);
+        add_instances(node, p + ".node" + std::to_string(i), instance_transform, *instance_keys,
+                      instance_parent, out);
     }
 }
 

@@ -80,7 +80,7 @@ void put_asset(ByteWriter& w, const Asset& a) {
     }
     w(uint64_t(a.nodes.size()));
     for (const AssetNode& n : a.nodes) {
-        w(n.name, int32_t(n.parent), n.local);
+        w(n.name, int32_t(n.parent), n.local, n.animation);
         put_ints(w, n.meshes);
     }
     w(a.warnings);
@@ -116,11 +116,11 @@ void get_asset(ByteReader& r, Asset& a) {
         r(t.name, t.mime_type, t.uri, t.color_space);
         get_bytes(r, t.bytes);
     }
-    if (!get_count(r, n, 4 + 4 + 48 + 8, "node")) return;
+    if (!get_count(r, n, 4 + 4 + 48 + 8 + 8, "node")) return;
     a.nodes.resize(n);
     for (AssetNode& node : a.nodes) {
         int32_t parent = -1;
-        r(node.name, parent, node.local);
+        r(node.name, parent, node.local, node.animation);
         node.parent = parent;
         get_ints(r, node.meshes);
     }

@@ -8,6 +8,7 @@
 #include <limits>
 #include <map>
 
+#include <glm/gtc/quaternion.hpp>
 #include <nlohmann/json.hpp>
 
 #include "engine/scene/budget.h"
@@ -343,6 +344,7 @@ public:
         warn_unread_features();
         if (auto ok = read_materials(); !ok) return Unexpected(ok.error());
         if (auto ok = read_nodes(); !ok) return Unexpected(ok.error());
+        if (auto ok = read_animation(); !ok) return Unexpected(ok.error());
         bake_texture_transforms();
         if (auto ok = check_budget(m_asset, m_limits, m_sink); !ok) return Unexpected(ok.error());
         if (auto ok = validate_asset(m_asset, m_sink); !ok) return Unexpected(ok.error());
@@ -1095,6 +1097,7 @@ private:
             return {};
         }
         // Step 2: depth first with an explicit stack (a deep chain must not overflow ours).
+        m_asset_node.assign(count, -1);
         std::vector<bool> seen(count, false);
         std::vector<std::pair<int, int>> stack;  // (glTF node, parent asset node)
         for (auto it = roots.rbegin(); it != roots.rend(); ++it) stack.emplace_back(*it, -1);
@@ -1124,11 +1127,164 @@ private:
                 node.meshes = meshes.value();
             }
             const int self = int(m_asset.nodes.size());
+            m_asset_node[std::size_t(g)] = self;
             m_asset.nodes.push_back(std::move(node));
             for (auto c = n.children.rbegin(); c != n.children.rend(); ++c)
                 stack.emplace_back(*c, self);
         }
         return {};
+    }
+
+    // Step: animation ----------------------------------------------------------------------------
+
+    /// One channel of a node: its key times and values (xyz, or a quaternion's xyzw).
+    struct Channel {
+        std::vector<float> times;
+        std::vector<Vec4> values;
+        bool step = false;  ///< STEP: each value holds until the next key
+    };
+    /// A node's translation, rotation and scale channels (empty: the node's own value).
+    using NodeChannels = std::array<Channel, 3>;
+
+    /// The first animation's translation, rotation and scale channels, as keyframes of the nodes
+    /// they move (glTF's animations are node TRS over seconds: the scene's keyframe animation).
+    /// Morph weights are named in a warning; a node whose keys the scene cannot use keeps its
+    /// rest transform, with a warning.
+    Imported<void> read_animation() {
+        if (m_model.animations.empty()) return {};
+        const tinygltf::Animation& anim = m_model.animations[0];
+        std::map<int, NodeChannels> moved;  // glTF node -> its channels
+        for (std::size_t c = 0; c < anim.channels.size(); ++c) {
+            const tinygltf::AnimationChannel& ch = anim.channels[c];
+            const std::string where = "animations[0].channels[" + std::to_string(c) + "]";
+            if (ch.target_path == "weights") {
+                warn_once("animations[0]: morph target weights not imported");
+                continue;
+            }
+            const int path = ch.target_path == "translation" ? 0
+                             : ch.target_path == "rotation"  ? 1
+                             : ch.target_path == "scale"     ? 2
+                                                             : -1;
+            if (path < 0)
+                return m_sink.invalid(where, "target.path '" + ch.target_path.substr(0, 64) +
+                                                 "' is not translation, rotation, scale or "
+                                                 "weights");
+            if (ch.target_node < 0 || std::size_t(ch.target_node) >= m_asset_node.size())
+                return m_sink.invalid(where, "target.node " + std::to_string(ch.target_node) +
+                                                 " does not exist");
+            if (ch.sampler < 0 || std::size_t(ch.sampler) >= anim.samplers.size())
+                return m_sink.invalid(where, "sampler " + std::to_string(ch.sampler) +
+                                                 " does not exist");
+            if (m_asset_node[std::size_t(ch.target_node)] < 0) continue;  // not imported
+            auto channel = read_channel(anim.samplers[std::size_t(ch.sampler)], path, where);
+            if (!channel) return Unexpected(channel.error());
+            moved[ch.target_node][std::size_t(path)] = std::move(channel.value());
+        }
+        for (auto& [g, channels] : moved) {
+            const std::string where = "nodes[" + std::to_string(g) + "]";
+            if (m_model.nodes[std::size_t(g)].matrix.size() == 16)
+                return m_sink.invalid(where, "is animated but has a matrix (glTF: only TRS)");
+            node_keyframes(m_model.nodes[std::size_t(g)], channels, where,
+                           m_asset.nodes[std::size_t(m_asset_node[std::size_t(g)])]);
+        }
+        return {};
+    }
+
+    /// A sampler's keys: increasing finite times within MAX_SCENE_TIME, float values (three, or
+    /// a non-zero quaternion for rotation); CUBICSPLINE keeps the values, not the tangents.
+    Imported<Channel> read_channel(const tinygltf::AnimationSampler& s, int path,
+                                   const std::string& where) {
+        auto input = accessor(s.input, where + "'s input");
+        if (!input) return Unexpected(input.error());
+        auto output = accessor(s.output, where + "'s output");
+        if (!output) return Unexpected(output.error());
+        const AccessorView& in = input.value();
+        const AccessorView& out = output.value();
+        const int width = path == 1 ? 4 : 3;
+        if (in.component != TINYGLTF_COMPONENT_TYPE_FLOAT || in.width != 1 ||
+            out.component != TINYGLTF_COMPONENT_TYPE_FLOAT || out.width != width)
+            return m_sink.unsupported(where, "keys must be float scalars and float VEC" +
+                                                 std::to_string(width) + " values");
+        const bool cubic = s.interpolation == "CUBICSPLINE";
+        if (in.count == 0 || in.count > MAX_ANIMATION_KEYS)
+            return m_sink.invalid(where, std::to_string(in.count) + " keys: 1 to " +
+                                             std::to_string(MAX_ANIMATION_KEYS));
+        if (out.count != in.count * (cubic ? 3 : 1))
+            return m_sink.invalid(where, std::to_string(out.count) + " values for " +
+                                             std::to_string(in.count) + " keys");
+        if (cubic)
+            warn_once(where + ": CUBICSPLINE tangents ignored (keys interpolated linearly)");
+        Channel ch;
+        ch.step = s.interpolation == "STEP";
+        for (std::size_t k = 0; k < in.count; ++k) {
+            const float t = in.get(k, 0);
+            if (!(std::abs(t) <= MAX_SCENE_TIME) || (k > 0 && !(t > ch.times.back())))
+                return m_sink.invalid(where, "key " + std::to_string(k) +
+                                                 ": times must be finite and increasing");
+            Vec4 v(0.0f);
+            const std::size_t at = cubic ? 3 * k + 1 : k;  // a cubic key: in, value, out
+            for (int c = 0; c < width; ++c) v[c] = out.get(at, c);
+            if (!is_finite(Vec3(v)) || !std::isfinite(v.w) ||
+                (path == 1 && glm::length(v) < 1e-6f))
+                return m_sink.invalid(where, "value " + std::to_string(k) +
+                                                 " is not finite (or a zero quaternion)");
+            ch.times.push_back(t);
+            ch.values.push_back(v);
+        }
+        return ch;
+    }
+
+    /// A channel's value at time `t` (its ends outside its keys).
+    static Vec4 sample(const Channel& ch, float t, bool rotation) {
+        if (!(t > ch.times.front())) return ch.values.front();
+        if (!(t < ch.times.back())) return ch.values.back();
+        const std::size_t k = std::size_t(
+            std::upper_bound(ch.times.begin(), ch.times.end(), t) - ch.times.begin());
+        const Vec4 a = ch.values[k - 1], b = ch.values[k];
+        if (ch.step) return a;
+        const float u = (t - ch.times[k - 1]) / (ch.times[k] - ch.times[k - 1]);
+        if (!rotation) return a + (b - a) * u;
+        const glm::quat q = glm::slerp(glm::normalize(glm::quat(a.w, a.x, a.y, a.z)),
+                                       glm::normalize(glm::quat(b.w, b.x, b.y, b.z)), u);
+        return {q.x, q.y, q.z, q.w};
+    }
+
+    /// Keyframes at every time any channel has a key, missing channels at the node's own TRS.
+    void node_keyframes(const tinygltf::Node& n, const NodeChannels& channels,
+                        const std::string& where, AssetNode& node) {
+        std::vector<float> times;
+        for (const Channel& ch : channels)
+            times.insert(times.end(), ch.times.begin(), ch.times.end());
+        std::sort(times.begin(), times.end());
+        times.erase(std::unique(times.begin(), times.end()), times.end());
+        const auto rest = [&](const std::vector<double>& v, Vec4 fallback) {
+            for (std::size_t i = 0; i < v.size() && i < 4; ++i) fallback[int(i)] = float(v[i]);
+            return fallback;
+        };
+        const Vec4 fixed[3] = {rest(n.translation, Vec4(0.0f)), rest(n.rotation, {0, 0, 0, 1}),
+                               rest(n.scale, Vec4(1.0f))};
+        std::vector<Keyframe> keys;
+        keys.reserve(std::min(times.size(), MAX_ANIMATION_KEYS));
+        for (std::size_t k = 0; k < times.size() && k < MAX_ANIMATION_KEYS; ++k) {
+            Vec4 trs[3];
+            for (int c = 0; c < 3; ++c)
+                trs[c] = channels[std::size_t(c)].times.empty()
+                             ? fixed[c]
+                             : sample(channels[std::size_t(c)], times[k], c == 1);
+            const Affine t = Affine::trs(Vec3(trs[0]), Affine::rotation_quaternion(trs[1]),
+                                         Vec3(trs[2]));
+            if (const char* why = transform_problem(t)) {
+                warn_once(where + ": its animation is not imported: at " +
+                          std::to_string(times[k]) + " s its transform is unusable (" + why +
+                          ")");
+                return;
+            }
+            keys.push_back({times[k], t});
+        }
+        if (times.size() > MAX_ANIMATION_KEYS)
+            warn_once(where + ": keys past " + std::to_string(MAX_ANIMATION_KEYS) +
+                      " not imported");
+        node.animation = std::move(keys);
     }
 
     /// What the file holds that no Strata object can carry: named in warnings, never dropped
@@ -1137,7 +1293,9 @@ private:
         const auto count = [&](std::size_t n, const char* what) {
             if (n > 0) warn_once(std::to_string(n) + " " + what + " not imported");
         };
-        count(m_model.animations.size(), "animations");
+        if (const std::size_t total = m_model.animations.size(); total > 1)
+            warn_once(std::to_string(total - 1) + (total == 2 ? " animation" : " animations") +
+                      " after the first not imported");
         count(m_model.skins.size(), "skins");
         count(m_model.cameras.size(), "cameras");
         std::string unread;
@@ -1180,6 +1338,7 @@ private:
     /// Per material (read_material_textures): the texture coordinate sets its textures read.
     std::vector<MaterialUvs> m_material_uvs;
     std::map<int, std::vector<int>> m_meshes;  ///< glTF mesh -> asset meshes
+    std::vector<int> m_asset_node;  ///< glTF node -> asset node, -1: not in the imported scene
     /// (glTF image, colour space) -> asset texture
     std::map<std::pair<int, TextureColorSpace>, int> m_images;
     /// (buffer view holding an image, colour space) -> asset texture
