@@ -369,7 +369,7 @@ Status Engine::render_primary(const PrimarySettings& settings, Frame& out) {
 Result<Frame> Engine::render_frame(const RenderRequest& request) {
     if (Status s = check_render_request(request); !s) return Unexpected(s.error());
     auto frame = launch_at(request.time, [&](const FrameState& state, const TlasStrategy& tlas,
-                            const RebuildReport& report) -> Result<Frame> {
+                                             const RebuildReport& report) -> Result<Frame> {
         auto rendered = m_renderer.render(tlas, state, request);
         if (rendered) rendered->info.report = report;
         return rendered;
@@ -386,7 +386,8 @@ Result<std::vector<Frame>> Engine::render_bands(const RenderRequest& request,
         if (Status s = check_render_request(band); !s) return Unexpected(s.error());
     }
     auto frames = launch_at(request.time, [&](const FrameState& state, const TlasStrategy& tlas,
-                             const RebuildReport& report) -> Result<std::vector<Frame>> {
+                                              const RebuildReport& report)
+                                              -> Result<std::vector<Frame>> {
         std::vector<Frame> out;
         for (const RowBand& b : bands) {
             band.band = b;

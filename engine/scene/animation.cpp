@@ -5,7 +5,6 @@
 
 #include "engine/scene/field_table.h"
 
-
 namespace strata {
 
 namespace {

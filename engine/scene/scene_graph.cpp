@@ -156,6 +156,17 @@ void prune_animated(std::vector<Handle>& list, const Slots& slots) {
     });
 }
 
+/// Whether a group's world, and its keys' (at rest), are finite under `parent_world`: what its
+/// subtree's composition needs.
+bool finite_under(const GroupRecord& group, const Affine& parent_world) {
+    const Affine world = parent_world * group.transform;
+    bool finite = world.is_finite();
+    for (const Affine& k : group.motion) finite = finite && (world * k).is_finite();
+    for (const Keyframe& k : group.animation)
+        finite = finite && (parent_world * k.transform).is_finite();
+    return finite;
+}
+
 }  // namespace
 
 void Scene::refresh_instance_world(InstanceHandle h, InstanceRecord& r) {
@@ -269,17 +280,6 @@ Status Scene::check_world_transforms() const {
         }
         return {};
     };
-    // A group's world, and its keys' (at rest), must be finite to compose.
-    auto check_group = [&](GroupHandle g, const Affine& parent_world) -> Status {
-        const GroupRecord& group = m_groups.at(g);
-        const Affine world = parent_world * group.transform;
-        bool finite = world.is_finite();
-        for (const Affine& k : group.motion) finite = finite && (world * k).is_finite();
-        for (const Keyframe& k : group.animation)
-            finite = finite && (parent_world * k.transform).is_finite();
-        if (!finite) return refuse(g, "group '" + group.id + "'", nullptr);
-        return {};
-    };
     // Entries: a group and its parent's world.
     std::vector<std::pair<GroupHandle, Affine>> stack;
     for (GroupHandle top : m_world_groups) {
@@ -290,8 +290,9 @@ Status Scene::check_world_transforms() const {
         while (!stack.empty()) {
             const auto [g, parent_world] = stack.back();
             stack.pop_back();
-            if (Status s = check_group(g, parent_world); !s) return s;
             const GroupRecord& group = m_groups.at(g);
+            if (!finite_under(group, parent_world))
+                return refuse(g, "group '" + group.id + "'", nullptr);
             const Affine world = parent_world * group.transform;
             for (InstanceHandle h : group.children.instances) {
                 if (Status s = check_instance(g, world, m_instances.at(h)); !s) return s;
