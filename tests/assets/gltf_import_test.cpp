@@ -756,35 +756,14 @@ TEST(GltfImport, AssimpsBrokenFilesAreRefusedWithTheirReason) {
     }
 }
 
-}  // namespace
-}  // namespace strata::assets::test
-
-namespace strata::assets::test {
-namespace {
-
-/// Adds a float accessor of `values` (`type` "SCALAR", "VEC3" or "VEC4") in a buffer and view of
-/// its own; returns its index.
-int add_accessor(nlohmann::json& doc, const std::vector<float>& values, const char* type,
-                 std::size_t width) {
-    const std::string bytes(reinterpret_cast<const char*>(values.data()), values.size() * 4);
-    const std::size_t buffer = doc["buffers"].size(), view = doc["bufferViews"].size();
-    doc["buffers"].push_back({{"byteLength", bytes.size()},
-                              {"uri", "data:application/octet-stream;base64," +
-                                          protocol::encode_base64(bytes)}});
-    doc["bufferViews"].push_back({{"buffer", buffer}, {"byteLength", bytes.size()}});
-    doc["accessors"].push_back({{"bufferView", view},
-                                {"componentType", 5126},
-                                {"count", values.size() / width},
-                                {"type", type}});
-    return int(doc["accessors"].size()) - 1;
-}
-
 /// Animation 0 channel: node `node`'s `path` over `times`, `values` flat.
 void add_channel(nlohmann::json& doc, int node, const char* path, const std::vector<float>& times,
                  const std::vector<float>& values, const char* interpolation = "LINEAR") {
     const std::size_t width = std::string(path) == "rotation" ? 4 : 3;
-    const int input = add_accessor(doc, times, "SCALAR", 1);
-    const int output = add_accessor(doc, values, width == 4 ? "VEC4" : "VEC3", width);
+    const std::size_t input =
+        add_accessor(doc, bytes_of_vector(times), 5126, times.size(), "SCALAR");
+    const std::size_t output = add_accessor(doc, bytes_of_vector(values), 5126,
+                                            values.size() / width, width == 4 ? "VEC4" : "VEC3");
     if (!doc.contains("animations")) doc["animations"] = {{{"channels", nlohmann::json::array()},
                                                            {"samplers", nlohmann::json::array()}}};
     nlohmann::json& anim = doc["animations"][0];
