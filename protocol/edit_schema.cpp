@@ -146,7 +146,7 @@ constexpr std::string_view SHARED_DEFS = R"json({
   "keyframe": {
     "type": "object",
     "properties": {
-      "time": {"type": "number", "minimum": -1e7, "maximum": 1e7,
+      "time": {"type": "number",
                "description": "scene time in seconds; increasing along an animation"},
       "transform": {"$ref": "#/$defs/transform"}
     },
