@@ -4,10 +4,14 @@ the animated instances alone, a render's or a pick's own `time` leaves the scene
 wraps, the clock is part of the scene document and undo, and bad keyframes are refused with
 their pointer and change nothing."""
 
+import os
 import unittest
 
 from strata_client import UnprocessableError, animation
 from test_client import ServerTestCase
+
+ANIMATED_GLTF = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "fuzz",
+                             "asset_corpus", "gltf", "animated-nodes.gltf")
 
 # The pick camera looks down -z at x = 0: the ball is under the centre pixel only where x = 0.
 CAMERA = {"eye": [0, 0, 10], "target": [0, 0, 0], "up": [0, 1, 0], "fov_y_deg": 20}
@@ -95,6 +99,25 @@ class AnimationTest(ServerTestCase):
         hit = self.client.pick(50, 50, 101, 101, camera=aimed)
         self.assertEqual(hit.instance if hit else None, "rider")
         self.assertEqual(len(self.client.scene("groups", "lift")["animation"]), 2)
+
+    def test_a_gltf_animation_is_imported_as_keyframes_the_clock_plays(self):
+        # Node 0 (a group) steps its scale to 3 at 1 s; node 1 below it slides and turns; node 2
+        # (a root leaf) has a cubic-spline channel, whose tangents are dropped with a warning.
+        answer = self.client.import_asset(ANIMATED_GLTF, prefix="anim")
+        self.assertIn("animations[0].channels[3]: CUBICSPLINE tangents ignored (keys "
+                      "interpolated linearly)", answer.warnings)
+        group = self.client.scene("groups", "anim.group0")
+        self.assertEqual((len(group["animation"]), group["motion_interpolation"]), (2, "srt"))
+        leaf = self.client.scene("instances", "anim.node1")
+        self.assertEqual([k["time"] for k in leaf["animation"]], [0, 1, 2])
+        self.client.edit([animation.set_time(1.0)])
+        report = self.client.commit()
+        self.assertEqual(report.tlas.action, "update")
+        # At 1 s: the group scaled 3 and lifted 5, the leaf at x = 1 turned 45 degrees, scaled 2.
+        world = self.client.scene("instances", "anim.node1")["world_transform"]
+        self.assertAlmostEqual(world[3], 3.0, places=4)  # x: 3 * 1
+        self.assertAlmostEqual(world[7], 5.0, places=4)  # y: 5 + 3 * 0
+        self.assertAlmostEqual(world[0], 3 * 2 * 0.7071068, places=4)
 
     def test_bad_keyframes_and_times_are_refused_with_their_pointer(self):
         version = self.client.scene()["version"]
