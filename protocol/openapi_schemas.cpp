@@ -297,6 +297,9 @@ J mesh_schema() {
              {"triangles", count()},
              {"primitives", described(count(), "triangles, points or curve segments")},
              {"strands", described(count(), "a curve mesh's strands (0 for other kinds)")},
+             {"motion_keys",
+              described(count(), "its vertex keys over the frame: 1 when still, else 1 + the "
+                                 "motion_positions per vertex")},
              {"instances", count()},
              {"material", or_null(ref("id"))},
              {"build", ref("build")}, {"bounds", or_null(ref("Bounds"))}};

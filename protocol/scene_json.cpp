@@ -113,6 +113,7 @@ Json mesh_json(const Scene& s, MeshHandle h, const MeshRecord& m) {
            {"triangles", m.triangles.size()},
            {"primitives", m.primitive_count()},
            {"strands", m.strands.size()},
+           {"motion_keys", m.motion_keys()},
            {"instances", m.users.size()},
            {"material", material_ref(s, m.material)},
            {"build",

@@ -57,7 +57,8 @@ constexpr AnswerField LIST_FIELDS[] = {
 const std::vector<std::string> REBUILD_REASONS = {
     "added",         "topology_changed", "rebuild_requested", "refit_not_allowed",
     "bounds_growth", "triangle_growth",  "refit_limit",       "clustered",
-    "shared",        "unshared",         "positions_changed", "refit_requested"};
+    "shared",        "unshared",         "positions_changed", "refit_requested",
+    "keys_changed"};
 const std::vector<std::string> REFIT_REASONS = {"positions_changed", "refit_requested",
                                                 "triangles_replaced"};
 const std::vector<std::string> TLAS_ACTIONS = {"none", "update", "rebuild"};

@@ -28,13 +28,15 @@ export function decompose(m) {
 }
 
 /// What a mesh document holds, in words: "12 triangles", "300 points", "40 round bspline curve
-/// segments in 10 strands".
+/// segments in 10 strands", and its vertex keys when it deforms over the frame ("12 triangles,
+/// 3 vertex keys").
 export function meshPrimitives(m) {
-  if (m.kind === 'points') return `${m.vertices} points`;
+  const keys = m.motion_keys > 1 ? `, ${m.motion_keys} vertex keys` : '';
+  if (m.kind === 'points') return `${m.vertices} points${keys}`;
   if (m.kind === 'curves') {
-    return `${m.primitives} ${m.style} ${m.basis} curve segments in ${m.strands} strands`;
+    return `${m.primitives} ${m.style} ${m.basis} curve segments in ${m.strands} strands${keys}`;
   }
-  return `${m.triangles} triangles`;
+  return `${m.triangles} triangles${keys}`;
 }
 
 /// Where an object under a level-of-detail group is drawn, in words ("from 0 to 40", "from 40

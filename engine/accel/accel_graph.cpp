@@ -55,6 +55,12 @@ MeshAction decide(const MeshRecord& mesh, const BlasRecord* built, const BlasSto
         a.entry.reason = BuildReason::Added;
     } else if (dirty.has(MeshDirty::Topology)) {
         a.entry.reason = BuildReason::TopologyChanged;
+    } else if (dirty.has(MeshDirty::Keys)) {
+        // Embree fixes a geometry's time steps when it is built: a new count is a new BVH.
+        a.entry.reason = BuildReason::KeysChanged;
+        a.entry.detail = "vertex keys " + std::string(mesh.motion_positions.empty()
+                                                          ? "removed: the mesh is still"
+                                                          : "added: the BVH bounds every key");
     } else if (dirty.has(MeshDirty::RebuildRequested)) {
         a.entry.reason = BuildReason::RebuildRequested;
     } else if (blas.frozen(*built)) {
@@ -62,13 +68,16 @@ MeshAction decide(const MeshRecord& mesh, const BlasRecord* built, const BlasSto
         a.entry.detail =
             "its BLAS is (or was) shared with another scene, which may still trace it: this "
             "one builds its own";
-    } else if (mesh.kind != MeshKind::Triangles) {
-        // Embree 3 builds sphere and curve BVHs with a builder that has no refit (only
-        // triangle, quad, user and instance geometry refit): moved points are a rebuild.
+    } else if (mesh.kind != MeshKind::Triangles || mesh.motion_keys() > 1) {
+        // Embree 3 builds sphere, curve and motion-blur BVHs with builders that have no refit
+        // (only still triangle, quad, user and instance geometry refit): a move is a rebuild.
         a.entry.reason = dirty.has(MeshDirty::Points) ? BuildReason::PositionsChanged
                                                       : BuildReason::RefitRequested;
-        a.entry.detail = std::string(mesh_kind_name(mesh.kind)) +
-                         ": Embree has no refit for them, so their BVH is rebuilt";
+        a.entry.detail = mesh.kind != MeshKind::Triangles
+                             ? std::string(mesh_kind_name(mesh.kind)) +
+                                   ": Embree has no refit for them, so their BVH is rebuilt"
+                             : "vertex keys: Embree has no refit for a motion-blur BVH, so it "
+                               "is rebuilt";
     } else if (!built->clusters && dirty.has(MeshDirty::Triangles)) {
         // A whole BLAS has no smaller part to rebuild: a big one turns clustered at this first
         // local edit, others are rebuilt.
@@ -196,7 +205,8 @@ CommitPlan AccelGraph::plan(const Scene& scene) const {
     constexpr DirtyBits<MeshDirty> GEOMETRY_BITS = MeshDirty::Added | MeshDirty::Points |
                                                    MeshDirty::Topology | MeshDirty::Triangles |
                                                    MeshDirty::RefitRequested |
-                                                   MeshDirty::RebuildRequested;
+                                                   MeshDirty::RebuildRequested |
+                                                   MeshDirty::Keys;
     for (MeshHandle h : changes.meshes()) {
         const BlasRecord* built = m_blas.find(h);
         const auto rec = scene.mesh(h);

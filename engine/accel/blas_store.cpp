@@ -26,23 +26,29 @@ SceneSetup setup_for(const BuildOptions& o) {
     return {RTC_BUILD_QUALITY_LOW, RTC_BUILD_QUALITY_LOW, RTC_SCENE_FLAG_DYNAMIC};
 }
 
-void copy_vertices(RTCGeometry g, const std::vector<Vec3>& positions, uint32_t begin, uint32_t end) {
+/// Vertices [begin, end) of key `key` into that time step's buffer: float3 for triangles, x y z
+/// and the radius for points and curves.
+void copy_vertices(RTCGeometry g, const MeshRecord& mesh, unsigned key, uint32_t begin,
+                   uint32_t end) {
     static_assert(sizeof(Vec3) == 3 * sizeof(float));
-    auto* dst = static_cast<float*>(rtcGetGeometryBufferData(g, RTC_BUFFER_TYPE_VERTEX, 0));
-    std::memcpy(dst + std::size_t(begin) * 3, positions.data() + begin,
-                std::size_t(end - begin) * sizeof(Vec3));
-}
-
-/// Points and curves: x y z and the radius of vertices [begin, end) into the float4 buffer.
-void copy_vertices_radii(RTCGeometry g, const MeshRecord& mesh, uint32_t begin, uint32_t end) {
-    auto* dst = static_cast<float*>(rtcGetGeometryBufferData(g, RTC_BUFFER_TYPE_VERTEX, 0));
-    const std::vector<Vec3>& p = mesh.positions;
+    auto* dst = static_cast<float*>(rtcGetGeometryBufferData(g, RTC_BUFFER_TYPE_VERTEX, key));
+    if (mesh.kind == MeshKind::Triangles && key == 0) {
+        std::memcpy(dst + std::size_t(begin) * 3, mesh.positions.data() + begin,
+                    std::size_t(end - begin) * sizeof(Vec3));
+        return;
+    }
+    const std::size_t stride = mesh.kind == MeshKind::Triangles ? 3 : 4;
+    // Key 0 is the positions; key k >= 1 of vertex i is motion_positions[i * per + k - 1].
+    const std::size_t per = mesh.motion_keys() - 1;
+    const Vec3* src = key == 0 ? mesh.positions.data() : mesh.motion_positions.data() + key - 1;
+    const std::size_t step = key == 0 ? 1 : per;
     for (uint32_t i = begin; i < end; ++i) {
-        float* v = dst + std::size_t(i) * 4;
-        v[0] = p[i].x;
-        v[1] = p[i].y;
-        v[2] = p[i].z;
-        v[3] = mesh.radii[i];
+        const Vec3& p = src[std::size_t(i) * step];
+        float* v = dst + std::size_t(i) * stride;
+        v[0] = p.x;
+        v[1] = p.y;
+        v[2] = p.z;
+        if (stride == 4) v[3] = mesh.radii[i];
     }
 }
 
@@ -96,7 +102,7 @@ MeshMetrics measure_primitives(const MeshRecord& mesh) {
     if (mesh.kind == MeshKind::Points) {
         for (uint32_t i = 0; i < p.size(); ++i) {
             const Bounds3 b = vertex_bounds(i);
-            area += b.surface_area();
+            area += double(b.surface_area());
             total.extend(b);
         }
         return {total.surface_area(), area};
@@ -105,7 +111,7 @@ MeshMetrics measure_primitives(const MeshRecord& mesh) {
     for (uint32_t first : curve_segment_starts(mesh.basis, mesh.strands)) {
         Bounds3 b;
         for (uint32_t k = 0; k < span; ++k) b.extend(vertex_bounds(first + k));
-        area += b.surface_area();
+        area += double(b.surface_area());
         total.extend(b);
     }
     return {total.surface_area(), area};
@@ -221,7 +227,7 @@ Status BlasStore::build(MeshHandle h, const MeshRecord& mesh, const MeshMetrics&
     // Step: a whole BLAS another engine built for exactly this content is held, not built.
     BlasPool* pool = m_device.pool();
     const bool poolable = pool && !(clustered && may_cluster(mesh)) && !mesh.build.compact &&
-                          mesh.kind == MeshKind::Triangles;
+                          mesh.kind == MeshKind::Triangles && mesh.motion_keys() == 1;
     const int flags = scene_flags(mesh.build, false);
     const uint64_t key = poolable ? shared_blas_key(mesh, flags) : 0;
     if (poolable) {
@@ -352,8 +358,9 @@ void BlasStore::set_layout(BlasRecord& r, const MeshRecord& mesh, bool clustered
         r.clusters.reset();
         --m_clustered;
     }
-    // Points and curves start from a new geometry at every build (a new count is a new BVH).
-    if (mesh.kind != MeshKind::Triangles && r.geometry) {
+    // Points and curves start from a new geometry at every build (a new count is a new BVH), and
+    // so does a mesh whose vertex keys changed (Embree fixes a geometry's time steps).
+    if ((mesh.kind != MeshKind::Triangles || r.keys != mesh.motion_keys()) && r.geometry) {
         rtcDetachGeometry(r.scene, 0);
         rtcReleaseGeometry(r.geometry);
         r.geometry = nullptr;
@@ -361,6 +368,8 @@ void BlasStore::set_layout(BlasRecord& r, const MeshRecord& mesh, bool clustered
     if (!clustered) {
         if (!r.geometry) {
             r.geometry = rtcNewGeometry(m_device.get(), geometry_type(mesh));
+            r.keys = static_cast<uint32_t>(mesh.motion_keys());
+            rtcSetGeometryTimeStepCount(r.geometry, r.keys);
             rtcSetGeometryBuildQuality(r.geometry, setup_for(r.options).geometry_quality);
             rtcAttachGeometryByID(r.scene, r.geometry, 0);
             r.vertex_count = r.triangle_count = 0;
@@ -382,31 +391,37 @@ void BlasStore::upload_whole(BlasRecord& r, const MeshRecord& mesh, uint32_t ver
                              uint32_t triangle_count) {
     // (Re)allocate buffers when sizes change, then upload everything.
     if (r.vertex_count != vertex_count) {
-        rtcSetNewGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                sizeof(Vec3), vertex_count);
+        for (unsigned k = 0; k < r.keys; ++k)
+            rtcSetNewGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_VERTEX, k, RTC_FORMAT_FLOAT3,
+                                    sizeof(Vec3), vertex_count);
     }
     if (r.triangle_count != triangle_count) {
         rtcSetNewGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                 sizeof(Triangle), triangle_count);
     }
-    if (!rtcGetGeometryBufferData(r.geometry, RTC_BUFFER_TYPE_VERTEX, 0) ||
-        !rtcGetGeometryBufferData(r.geometry, RTC_BUFFER_TYPE_INDEX, 0))
-        return;  // allocation failed: the device reports it
-    copy_vertices(r.geometry, mesh.positions, 0, vertex_count);
+    for (unsigned k = 0; k < r.keys; ++k)
+        if (!rtcGetGeometryBufferData(r.geometry, RTC_BUFFER_TYPE_VERTEX, k))
+            return;  // allocation failed: the device reports it
+    if (!rtcGetGeometryBufferData(r.geometry, RTC_BUFFER_TYPE_INDEX, 0)) return;
+    for (unsigned k = 0; k < r.keys; ++k) {
+        copy_vertices(r.geometry, mesh, k, 0, vertex_count);
+        rtcUpdateGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_VERTEX, k);
+    }
     copy_triangles(r.geometry, mesh.triangles);
     // Marking the index buffer modified moves the geometry's topology version, which is what
     // makes a REFIT-quality geometry rebuild instead of refit.
-    rtcUpdateGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_VERTEX, 0);
     rtcUpdateGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_INDEX, 0);
     rtcCommitGeometry(r.geometry);
 }
 
 void BlasStore::upload_points_or_curves(BlasRecord& r, const MeshRecord& mesh) {
     const auto vertex_count = static_cast<uint32_t>(mesh.positions.size());
-    if (!rtcSetNewGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4,
-                                 4 * sizeof(float), vertex_count))
-        return;  // allocation failed: the device reports it
-    copy_vertices_radii(r.geometry, mesh, 0, vertex_count);
+    for (unsigned k = 0; k < r.keys; ++k) {
+        if (!rtcSetNewGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_VERTEX, k, RTC_FORMAT_FLOAT4,
+                                     4 * sizeof(float), vertex_count))
+            return;  // allocation failed: the device reports it
+        copy_vertices(r.geometry, mesh, k, 0, vertex_count);
+    }
     if (mesh.kind == MeshKind::Curves) {
         const std::vector<uint32_t> starts = curve_segment_starts(mesh.basis, mesh.strands);
         auto* dst = rtcSetNewGeometryBuffer(r.geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT,
@@ -421,7 +436,8 @@ Status BlasStore::refit(MeshHandle h, const MeshRecord& mesh, ClusterWork* work)
     BlasRecord* r = h.index < m_records.size() ? &m_records[h.index] : nullptr;
     STRATA_CHECK(r && r->scene && r->generation == h.generation);
     STRATA_CHECK(r->vertex_count == mesh.positions.size());
-    STRATA_CHECK(mesh.kind == MeshKind::Triangles);  // points and curves rebuild (accel_graph.cpp)
+    // Points, curves and meshes with vertex keys rebuild (accel_graph.cpp).
+    STRATA_CHECK(mesh.kind == MeshKind::Triangles && mesh.motion_keys() == 1 && r->keys == 1);
     if (r->shared) {
         // Shared since the commit was planned: this engine builds its own copy.
         if (!m_device.pool()->withdraw(r->shared, m_device))
@@ -438,7 +454,7 @@ Status BlasStore::refit(MeshHandle h, const MeshRecord& mesh, ClusterWork* work)
         for (const VertexRanges::Range& range : mesh.dirty.points.ranges()) {
             const uint32_t begin = std::min(range.begin, r->vertex_count);
             const uint32_t end = std::min(range.end, r->vertex_count);
-            if (begin < end) copy_vertices(r->geometry, mesh.positions, begin, end);
+            if (begin < end) copy_vertices(r->geometry, mesh, 0, begin, end);
         }
         rtcUpdateGeometryBuffer(r->geometry, RTC_BUFFER_TYPE_VERTEX, 0);
         rtcCommitGeometry(r->geometry);

@@ -61,6 +61,7 @@ struct BlasRecord {
     uint32_t generation = 0;  ///< generation of the mesh handle it was built for
     uint32_t vertex_count = 0;
     uint32_t triangle_count = 0;
+    uint32_t keys = 1;  ///< the whole geometry's time steps (MeshRecord::motion_keys)
     BuildOptions options;
     BuildBaseline baseline;  ///< drift reference for the refit policy
     int64_t bytes = 0;       ///< Embree memory its builds and refits allocated (not shared)
@@ -116,7 +117,8 @@ public:
     /// Whether `mesh` may have a clustered BLAS (big enough, refit allowed, not compacted).
     bool may_cluster(const MeshRecord& mesh) const {
         return mesh.kind == MeshKind::Triangles && mesh.build.allow_refit &&
-               !mesh.build.compact && m_cluster_policy.clusters(mesh.triangles.size());
+               !mesh.build.compact && mesh.motion_positions.empty() &&
+               m_cluster_policy.clusters(mesh.triangles.size());
     }
     /// The Embree memory `r` counts in this store's device: a shared BLAS's is its owner's.
     int64_t bytes_of(const BlasRecord& r) const;

@@ -27,6 +27,7 @@ const char* build_reason_name(BuildReason r) {
         case BuildReason::Unshared: return "unshared";
         case BuildReason::PositionsChanged: return "positions_changed";
         case BuildReason::TrianglesReplaced: return "triangles_replaced";
+        case BuildReason::KeysChanged: return "keys_changed";
         case BuildReason::RefitRequested: return "refit_requested";
     }
     return "added";

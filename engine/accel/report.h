@@ -26,9 +26,10 @@ enum class BuildReason : uint8_t {
     PositionsChanged,  ///< refit: vertex positions moved
     RefitRequested,    ///< refit: mark_dirty {mesh, refit}
     TrianglesReplaced,  ///< clusters re-made: a local topology edit on a clustered BLAS
+    KeysChanged,        ///< rebuild: vertex keys (motion_positions) added or removed
 };
 /// The last BuildReason: names and schemas list them all up to it.
-inline constexpr BuildReason LAST_BUILD_REASON = BuildReason::TrianglesReplaced;
+inline constexpr BuildReason LAST_BUILD_REASON = BuildReason::KeysChanged;
 
 const char* tlas_action_name(TlasAction a);
 const char* build_reason_name(BuildReason r);

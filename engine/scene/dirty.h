@@ -24,6 +24,7 @@ enum class MeshDirty : uint32_t {
     RebuildRequested = 1u << 4,  ///< mark_dirty {mesh, rebuild}
     Attributes = 1u << 5,        ///< normals or uvs changed: shading only, no BLAS work
     Triangles = 1u << 6,         ///< runs of triangles replaced (TriangleSplices), same vertices
+    Keys = 1u << 7,              ///< vertex keys (motion_positions) added, removed or recounted
 };
 
 /// What changed in an instance.

@@ -34,6 +34,8 @@ struct AddMesh {
     CurveBasis basis = CurveBasis::Linear;
     CurveStyle style = CurveStyle::Round;
     std::vector<float> radii = {};        ///< points and curves: one per vertex
+    /// Vertex keys 1..k for deformation blur, vertex after vertex (vertex_attributes.h).
+    std::vector<Vec3> motion_positions = {};
     std::vector<uint32_t> strands = {};   ///< curves: control vertices per strand
 };
 
@@ -50,6 +52,7 @@ struct UpdateMeshPositions {
     std::optional<std::vector<Vec4>> tangents = std::nullopt;
     std::optional<std::vector<Vec2>> uvs1 = std::nullopt;
     std::optional<std::vector<float>> radii = std::nullopt;
+    std::optional<std::vector<Vec3>> motion_positions = std::nullopt;
 };
 
 /// New positions for listed vertices: vertex `vertices[i]` takes `positions[i]` (a vertex listed
@@ -74,6 +77,7 @@ struct ReplaceMeshTopology {
     std::optional<std::vector<Vec4>> tangents = std::nullopt;
     std::optional<std::vector<Vec2>> uvs1 = std::nullopt;
     std::optional<std::vector<float>> radii = std::nullopt;
+    std::optional<std::vector<Vec3>> motion_positions = std::nullopt;
     /// A curve mesh's new strands (mesh_kind.h); absent: unchanged.
     std::optional<std::vector<uint32_t>> strands = std::nullopt;
 };

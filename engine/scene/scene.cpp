@@ -272,11 +272,16 @@ Bounds3 MeshRecord::bounds() const {
     Bounds3 b;
     if (radii.empty()) {
         for (const Vec3& p : positions) b.extend(p);
+        for (const Vec3& p : motion_positions) b.extend(p);
         return b;
     }
+    // Points and curves: each key's vertex grown by its radius (the same at every key).
+    const std::size_t keys = motion_keys();
     for (std::size_t i = 0; i < positions.size(); ++i) {
-        b.extend(positions[i] - Vec3(radii[i]));
-        b.extend(positions[i] + Vec3(radii[i]));
+        for (std::size_t k = 0; k < keys; ++k) {
+            b.extend(key_position(k, i) - Vec3(radii[i]));
+            b.extend(key_position(k, i) + Vec3(radii[i]));
+        }
     }
     return b;
 }

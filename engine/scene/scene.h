@@ -40,11 +40,23 @@ struct MeshRecord {
     CurveBasis basis = CurveBasis::Linear;
     CurveStyle style = CurveStyle::Round;
     std::vector<float> radii;        ///< points and curves: one per vertex; triangles: empty
+    /// Vertex keys 1..k over the frame, k per vertex (vertex_attributes.h); empty: still.
+    std::vector<Vec3> motion_positions;
     std::vector<uint32_t> strands;   ///< curves: control vertices per strand; others: empty
 
-    /// Its object-space bounds: the vertices, grown by their radii for points and curves (a
-    /// curve's control vertices bound its segments in every basis Strata has).
+    /// Its object-space bounds over the frame: the vertices at every key, grown by their radii
+    /// for points and curves (a curve's control vertices bound its segments in every basis
+    /// Strata has).
     Bounds3 bounds() const;
+    /// Its vertex keys over the frame: 1 (still), or 1 + the motion positions per vertex.
+    std::size_t motion_keys() const {
+        return 1 + values_per_vertex<MotionPositionsAttribute>(motion_positions.size(),
+                                                               positions.size());
+    }
+    /// Position of vertex `v` at key `key` (key < motion_keys()).
+    const Vec3& key_position(std::size_t key, std::size_t v) const {
+        return key == 0 ? positions[v] : motion_positions[v * (motion_keys() - 1) + key - 1];
+    }
     /// Its primitives: triangles, points or curve segments.
     std::size_t primitive_count() const {
         switch (kind) {

@@ -153,10 +153,29 @@ Status check_radii(const std::vector<float>& radii, uint64_t first_vertex) {
     return {};
 }
 
-/// The checks of attribute `A`'s values, the first of them at vertex `first_vertex`.
+/// Vertex keys, `keys` per vertex, the first at vertex `first_vertex`: every coordinate finite.
+Status check_motion_positions(const std::vector<Vec3>& values, uint64_t first_vertex,
+                              std::size_t keys) {
+    for (std::size_t i = 0; i < values.size(); ++i) {
+        if (is_finite(values[i])) continue;
+        const int k = std::isfinite(values[i].x) ? (std::isfinite(values[i].y) ? 2 : 1) : 0;
+        return failure(ErrorCode::NotFinite,
+                       "vertex " + std::to_string(first_vertex + i / keys) + " at key " +
+                           std::to_string(1 + i % keys) + " has a NaN or infinite " + "xyz"[k] +
+                           " coordinate",
+                       "motion_positions/" + std::to_string(i * 3 + k));
+    }
+    return {};
+}
+
+/// The checks of attribute `A`'s values, the first of them at vertex `first_vertex`, `per_vertex`
+/// values a vertex.
 template <class A>
-Status check_values(A, const std::vector<typename A::Value>& values, uint64_t first_vertex) {
-    if constexpr (std::is_same_v<A, NormalsAttribute>)
+Status check_values(A, const std::vector<typename A::Value>& values, uint64_t first_vertex,
+                    std::size_t per_vertex = 1) {
+    if constexpr (std::is_same_v<A, MotionPositionsAttribute>)
+        return check_motion_positions(values, first_vertex, per_vertex);
+    else if constexpr (std::is_same_v<A, NormalsAttribute>)
         return check_normals(values, first_vertex);
     else if constexpr (std::is_same_v<A, TangentsAttribute>)
         return check_tangents(values, first_vertex);
@@ -164,13 +183,6 @@ Status check_values(A, const std::vector<typename A::Value>& values, uint64_t fi
         return check_radii(values, first_vertex);
     else
         return check_uvs(values, first_vertex, A::name);
-}
-
-/// Whether a mesh of `kind` may carry attribute `A`: radii are for points and curves, the
-/// shading attributes (normals, uvs, tangents) for triangles.
-template <class A>
-bool attribute_fits(MeshKind kind) {
-    return A::geometric == (kind != MeshKind::Triangles);
 }
 
 /// Refuses an attribute `e` gives (non-empty for an add, present for an update) that a mesh of
@@ -187,13 +199,14 @@ Status check_attribute_kinds(const E& e, MeshKind kind, const std::string& mesh)
             given = A::of(e).has_value();
             removed = given && A::of(e)->empty();
         }
-        if (given && !attribute_fits<A>(kind))
+        if (given && !A::fits(kind))
             return failure(ErrorCode::InvalidArgument,
                            std::string(A::name) + " are for " +
-                               (A::geometric ? "points and curves" : "triangle meshes") +
+                               (A::fits(MeshKind::Triangles) ? "triangle meshes"
+                                                             : "points and curves") +
                                ", and mesh '" + mesh + "' is " + mesh_kind_name(kind),
                            std::string(A::name));
-        if constexpr (A::geometric) {
+        if constexpr (std::is_same_v<A, RadiiAttribute>) {
             if ((std::is_same_v<E, AddMesh> && !given && kind != MeshKind::Triangles) || removed)
                 return failure(ErrorCode::InvalidArgument,
                                std::string(mesh_kind_name(kind)) + " mesh '" + mesh +
@@ -238,34 +251,57 @@ Status check_primitives(const AddMesh& e) {
     return {};
 }
 
-/// A whole attribute array for a mesh of `vertex_count` vertices: one per vertex.
-template <class T>
-Status check_attribute_count(const std::vector<T>& values, std::size_t vertex_count,
-                             std::string_view field) {
-    if (values.size() == vertex_count) return {};
-    return failure(ErrorCode::InvalidArgument,
-                   std::string(field) + " has " + std::to_string(values.size()) +
-                       " entries but the mesh has " + std::to_string(vertex_count) +
-                       " vertices (one per vertex)",
-                   std::string(field));
-}
-
-/// An attribute update from vertex `offset`: an empty array removes the attribute; a mesh that
-/// has none takes it only whole; otherwise the range must lie inside the mesh.
-template <class T>
-Status check_attribute_range(const std::vector<T>& values, uint32_t offset,
-                             const std::vector<T>& current, std::size_t vertex_count,
-                             const std::string& mesh, std::string_view name) {
-    const std::string field(name);
-    if (values.empty()) return {};
-    if (current.empty()) {
-        if (offset == 0 && values.size() == vertex_count) return {};
+/// A whole array of attribute `A` for a mesh of `vertex_count` vertices (not 0): one value per
+/// vertex, or for a keyed attribute k per vertex, k from 1 to MAX_MOTION_KEYS - 1.
+template <class A>
+Status check_attribute_count(A, std::size_t count, std::size_t vertex_count) {
+    const std::string field(A::name);
+    if constexpr (A::keyed) {
+        if (count > MAX_MESH_ELEMENTS)
+            return failure(ErrorCode::TooLarge, "too many " + field, field);
+        const std::size_t k = values_per_vertex<A>(count, vertex_count);
+        if (count % vertex_count == 0 && k >= 1 && k < MAX_MOTION_KEYS) return {};
         return failure(ErrorCode::InvalidArgument,
-                       "mesh '" + mesh + "' has no " + field + " yet: give one per vertex (" +
-                           std::to_string(vertex_count) + ") from offset 0",
+                       field + " has " + std::to_string(count) + " entries for " +
+                           std::to_string(vertex_count) +
+                           " vertices: give k per vertex, vertex after vertex (keys 1 to k, k "
+                           "from 1 to " + std::to_string(MAX_MOTION_KEYS - 1) + ")",
                        field);
     }
-    const uint64_t end = uint64_t(offset) + values.size();
+    if (count == vertex_count) return {};
+    return failure(ErrorCode::InvalidArgument,
+                   field + " has " + std::to_string(count) + " entries but the mesh has " +
+                       std::to_string(vertex_count) + " vertices (one per vertex)",
+                   field);
+}
+
+/// An update of attribute `A` from vertex `offset`: an empty array removes the attribute; a mesh
+/// that has none takes it only whole; otherwise the range must lie inside the mesh, and a keyed
+/// attribute keeps its values per vertex (remove it first to change them).
+template <class A>
+Status check_attribute_range(A a, const std::vector<typename A::Value>& values, uint32_t offset,
+                             const MeshRecord& r, const std::string& mesh) {
+    const std::string field(A::name);
+    const std::size_t vertex_count = r.positions.size();
+    const auto& current = A::of(r);
+    if (values.empty()) return {};
+    if (current.empty()) {
+        if (offset == 0 && check_attribute_count(a, values.size(), vertex_count)) return {};
+        return failure(ErrorCode::InvalidArgument,
+                       "mesh '" + mesh + "' has no " + field + " yet: give " +
+                           (A::keyed ? "k" : "one") + " per vertex (" +
+                           std::to_string(vertex_count) + " vertices) from offset 0",
+                       field);
+    }
+    const std::size_t per = values_per_vertex<A>(current.size(), vertex_count);
+    if (values.size() % per != 0)
+        return failure(ErrorCode::InvalidArgument,
+                       "mesh '" + mesh + "' has " + std::to_string(per) + " " + field +
+                           " per vertex and " + field + " has " + std::to_string(values.size()) +
+                           " entries: give whole vertices (remove them with [] to change the "
+                           "number of keys)",
+                       field);
+    const uint64_t end = uint64_t(offset) + values.size() / per;
     if (end > vertex_count)
         return failure(ErrorCode::OutOfRange,
                        field + " for vertices [" + std::to_string(offset) + ", " +
@@ -275,12 +311,12 @@ Status check_attribute_range(const std::vector<T>& values, uint32_t offset,
     return {};
 }
 
-/// A new mesh's attribute `a`: none (empty), or one valid value per vertex.
+/// A new mesh's attribute `a`: none (empty), or valid values for each vertex.
 template <class A>
 Status check_whole(A a, const std::vector<typename A::Value>& values, std::size_t vertex_count) {
     if (values.empty()) return {};
-    if (Status s = check_attribute_count(values, vertex_count, A::name); !s) return s;
-    return check_values(a, values, 0);
+    if (Status s = check_attribute_count(a, values.size(), vertex_count); !s) return s;
+    return check_values(a, values, 0, values_per_vertex<A>(values.size(), vertex_count));
 }
 
 /// An update of attribute `a` (when given) over vertices from `offset`.
@@ -288,11 +324,11 @@ template <class A>
 Status check_update(A a, const UpdateMeshPositions& e, const MeshRecord& r) {
     const auto& values = A::of(e);
     if (!values) return {};
-    if (Status s = check_attribute_range(*values, e.offset, A::of(r), r.positions.size(), e.mesh,
-                                         A::name);
-        !s)
-        return s;
-    return check_values(a, *values, e.offset);
+    if (Status s = check_attribute_range(a, *values, e.offset, r, e.mesh); !s) return s;
+    const auto& current = A::of(r);
+    const std::size_t n = r.positions.size();
+    return check_values(a, *values, e.offset,
+                        values_per_vertex<A>(current.empty() ? values->size() : current.size(), n));
 }
 
 /// A topology change's attribute `a`: when given, whole for the new vertex count (or [] to
@@ -323,7 +359,8 @@ void patch_attributes(MeshRecord& r, UpdateMeshPositions& e, undo::MeshAttribute
         if (values->empty() || dst.empty()) {
             dst = std::move(*values);
         } else {
-            std::copy(values->begin(), values->end(), dst.begin() + e.offset);
+            const std::size_t per = values_per_vertex<A>(dst.size(), r.positions.size());
+            std::copy(values->begin(), values->end(), dst.begin() + std::ptrdiff_t(e.offset * per));
         }
     });
 }
@@ -412,7 +449,7 @@ Status Scene::apply_edit(UpdateMeshPositions&& e, UndoLog& undo) {
     const bool attributes = gives_attributes(e);
     if (e.positions.empty() && !attributes)
         return failure(ErrorCode::InvalidArgument,
-                       "no positions, normals, uvs, uvs1, tangents or radii given", "positions");
+                       "no positions or vertex attributes given", "positions");
     if (Status s = check_attribute_kinds(e, r.kind, e.mesh); !s) return s;
     const uint64_t end = uint64_t(e.offset) + e.positions.size();
     if (!e.positions.empty()) {
@@ -437,13 +474,24 @@ Status Scene::apply_edit(UpdateMeshPositions&& e, UndoLog& undo) {
         return s;
 
     save_mesh(h, undo);
-    // Step: the other attributes (shading only: no BLAS work; radii refit like positions).
+    // Step: the other attributes (the shading ones are no BLAS work).
     if (attributes) {
         if (gives_shading_attributes(e)) mark(h, MeshDirty::Attributes);
-        if (e.radii) {
+        // Geometric ones (radii, vertex keys) move the BLAS like positions; keys added or
+        // removed change its time steps.
+        for_each_vertex_attribute([&](auto a) {
+            using A = decltype(a);
+            const auto& values = A::of(e);
+            const auto& current = A::of(r);
+            if (!A::geometric || !values || (values->empty() && current.empty())) return;
+            if (A::keyed && (values->empty() || current.empty())) {
+                mark(h, MeshDirty::Keys);
+                return;
+            }
             mark(h, MeshDirty::Points);
-            r.dirty.points.add(e.offset, static_cast<uint32_t>(e.offset + e.radii->size()));
-        }
+            const std::size_t per = values_per_vertex<A>(current.size(), r.positions.size());
+            r.dirty.points.add(e.offset, static_cast<uint32_t>(e.offset + values->size() / per));
+        });
         undo::MeshAttributes old{h};
         patch_attributes(r, e, old);
         undo.records.emplace_back(std::move(old));

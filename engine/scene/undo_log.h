@@ -84,6 +84,7 @@ struct MeshAttributes {
     std::optional<std::vector<Vec4>> tangents = std::nullopt;
     std::optional<std::vector<Vec2>> uvs1 = std::nullopt;
     std::optional<std::vector<float>> radii = std::nullopt;
+    std::optional<std::vector<Vec3>> motion_positions = std::nullopt;
 };
 
 /// An instance's editable state before an edit changed it.

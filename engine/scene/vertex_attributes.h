@@ -4,11 +4,15 @@
 // ReplaceMeshTopology (an optional vector, absent: unchanged, empty: removed) and
 // undo::MeshAttributes (what an edit replaced). The rules, undo, the inverse batch, the journal
 // codec and the wire walk this list, so a new attribute is a new entry here plus its checks.
+//
+// An attribute holds one value per vertex, or, when `keyed`, the same number k >= 1 of values per
+// vertex, vertex after vertex (values_per_vertex): its array is k times the vertex count.
 
 #include <cstdint>
 #include <string_view>
 
 #include "engine/core/math.h"
+#include "engine/scene/mesh_kind.h"
 
 namespace strata {
 
@@ -20,6 +24,8 @@ struct NormalsAttribute {
     /// Journal tag of the mesh edits' tagged field; 0: in their first extension layout.
     static constexpr uint8_t tag = 0;
     static constexpr bool geometric = false;  ///< true: it shapes the BLAS (a change refits)
+    static constexpr bool keyed = false;
+    static constexpr bool fits(MeshKind k) { return k == MeshKind::Triangles; }
     template <class S>
     static auto& of(S& s) {
         return s.normals;
@@ -33,6 +39,8 @@ struct UvsAttribute {
     static constexpr unsigned index = 1;
     static constexpr uint8_t tag = 0;
     static constexpr bool geometric = false;
+    static constexpr bool keyed = false;
+    static constexpr bool fits(MeshKind k) { return k == MeshKind::Triangles; }
     template <class S>
     static auto& of(S& s) {
         return s.uvs;
@@ -46,6 +54,8 @@ struct Uvs1Attribute {
     static constexpr unsigned index = 2;
     static constexpr uint8_t tag = 33;
     static constexpr bool geometric = false;
+    static constexpr bool keyed = false;
+    static constexpr bool fits(MeshKind k) { return k == MeshKind::Triangles; }
     template <class S>
     static auto& of(S& s) {
         return s.uvs1;
@@ -59,6 +69,8 @@ struct TangentsAttribute {
     static constexpr unsigned index = 3;
     static constexpr uint8_t tag = 32;
     static constexpr bool geometric = false;
+    static constexpr bool keyed = false;
+    static constexpr bool fits(MeshKind k) { return k == MeshKind::Triangles; }
     template <class S>
     static auto& of(S& s) {
         return s.tangents;
@@ -73,11 +85,42 @@ struct RadiiAttribute {
     static constexpr unsigned index = 4;
     static constexpr uint8_t tag = 34;
     static constexpr bool geometric = true;
+    static constexpr bool keyed = false;
+    static constexpr bool fits(MeshKind k) { return k != MeshKind::Triangles; }
     template <class S>
     static auto& of(S& s) {
         return s.radii;
     }
 };
+
+/// Vertex keys for deformation blur (OptiX's vertex motion keys): the positions of each vertex at
+/// keys 1 to k of the frame, vertex after vertex; `positions` are key 0, and the k + 1 keys are
+/// evenly spaced over ray time [0, 1] and interpolated linearly. Geometry: a change of them (or of
+/// the positions) rebuilds the BLAS, as Embree 3 has no refit for motion-blur BVHs; keys added or
+/// removed change its time steps (MeshDirty::Keys).
+struct MotionPositionsAttribute {
+    using Value = Vec3;
+    static constexpr std::string_view name = "motion_positions";
+    static constexpr unsigned index = 5;
+    static constexpr uint8_t tag = 36;
+    static constexpr bool geometric = true;
+    static constexpr bool keyed = true;
+    static constexpr bool fits(MeshKind) { return true; }
+    template <class S>
+    static auto& of(S& s) {
+        return s.motion_positions;
+    }
+};
+
+/// Values of attribute `A` per vertex in an array of `count` values over `vertex_count`
+/// vertices: 1, or for a keyed attribute count / vertex_count (0 for none).
+template <class A>
+constexpr std::size_t values_per_vertex(std::size_t count, std::size_t vertex_count) {
+    if constexpr (A::keyed)
+        return vertex_count == 0 ? 0 : count / vertex_count;
+    else
+        return 1;
+}
 
 /// Calls `f` with each attribute's descriptor, in declaration order.
 template <class F>
@@ -87,6 +130,7 @@ void for_each_vertex_attribute(F&& f) {
     f(Uvs1Attribute{});
     f(TangentsAttribute{});
     f(RadiiAttribute{});
+    f(MotionPositionsAttribute{});
 }
 
 /// Calls `f` with each attribute's descriptor until one returns a failed status; that status, or

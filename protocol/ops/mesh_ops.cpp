@@ -204,7 +204,7 @@ Edit listed_vertices(OpFields& f, std::string mesh, std::optional<std::vector<Ve
                            std::string(other) + " does not go with vertices (positions only)");
     }
     for_each_vertex_attribute([&](auto a) {
-        for (const std::string key : {std::string(a.name), std::string(a.name) + "_b64"})
+        for (const std::string& key : {std::string(a.name), std::string(a.name) + "_b64"})
             if (f.get(key))
                 r.schema_error(f.pointer(key), key + " does not go with vertices (positions only)");
     });
@@ -254,8 +254,8 @@ Edit parse_update_mesh(OpFields& f) {
     }
     if (!positions && !attributes)
         r.schema_error(f.pointer("positions"),
-                       "update_mesh needs positions, normals, uvs, uvs1, tangents or radii (or "
-                       "indices or strands)");
+                       "update_mesh needs positions, normals, uvs, uvs1, tangents, radii or "
+                       "motion_positions (or indices or strands)");
     e.mesh = std::move(mesh);
     if (positions) e.positions = std::move(*positions);
     f.read("offset", e.offset);
@@ -282,8 +282,9 @@ Edit parse_remove_mesh(OpFields& f) {
 constexpr EditOp OPS[] = {
     {"add_mesh",
      "A new mesh from flat arrays, base64 arrays or a procedural shape; optionally with "
-     "per-vertex normals, uvs (two sets) and tangents. With kind points or curves: spheres "
-     "or strands of curve segments with a radius per vertex.",
+     "per-vertex normals, uvs (two sets) and tangents, and vertex keys for deformation blur "
+     "(motion_positions). With kind points or curves: spheres or strands of curve segments "
+     "with a radius per vertex.",
      R"json({
   "type": "object",
   "properties": {
@@ -302,6 +303,8 @@ constexpr EditOp OPS[] = {
     "tangents_b64": {"$ref": "#/$defs/base64"},
     "radii": {"$ref": "#/$defs/radii"},
     "radii_b64": {"$ref": "#/$defs/base64"},
+    "motion_positions": {"$ref": "#/$defs/positions", "description": "vertex keys for deformation blur: k positions per vertex (keys 1 to k; positions are key 0), vertex after vertex; the k + 1 keys span the frame evenly"},
+    "motion_positions_b64": {"$ref": "#/$defs/base64"},
     "strands": {"$ref": "#/$defs/strands"},
     "strands_b64": {"$ref": "#/$defs/base64"},
     "shape": {"$ref": "#/$defs/shape"},
@@ -314,6 +317,7 @@ constexpr EditOp OPS[] = {
                     {"required": ["uvs1", "uvs1_b64"]},
                     {"required": ["tangents", "tangents_b64"]},
                     {"required": ["radii", "radii_b64"]},
+                    {"required": ["motion_positions", "motion_positions_b64"]},
                     {"required": ["strands", "strands_b64"]}]},
   "oneOf": [
     {
@@ -341,7 +345,8 @@ constexpr EditOp OPS[] = {
 })json",
      parse_add_mesh, edit_kinds<AddMesh>(), field_properties<MeshFields, true>},
     {"update_mesh",
-     "New positions, normals, uvs (either set), tangents or radii for a vertex range (offset "
+     "New positions, normals, uvs (either set), tangents, radii or vertex keys for a vertex "
+     "range (offset "
      "in vertices), new positions for listed vertices (vertices), or with indices (or a curve "
      "mesh's strands, or a points mesh's positions of a new length) a topology change.",
      R"json({
@@ -362,6 +367,8 @@ constexpr EditOp OPS[] = {
     "tangents_b64": {"$ref": "#/$defs/base64"},
     "radii": {"$ref": "#/$defs/radii"},
     "radii_b64": {"$ref": "#/$defs/base64"},
+    "motion_positions": {"$ref": "#/$defs/positions", "description": "vertex keys for deformation blur: k positions per vertex (keys 1 to k; positions are key 0), vertex after vertex; the k + 1 keys span the frame evenly"},
+    "motion_positions_b64": {"$ref": "#/$defs/base64"},
     "strands": {"$ref": "#/$defs/strands"},
     "strands_b64": {"$ref": "#/$defs/base64"},
     "resize": {"type": "boolean", "description": "points: positions (and radii) are the mesh's whole new vertex array, of any length"},
@@ -381,6 +388,7 @@ constexpr EditOp OPS[] = {
       {"required": ["uvs1", "uvs1_b64"]},
       {"required": ["tangents", "tangents_b64"]},
       {"required": ["radii", "radii_b64"]},
+      {"required": ["motion_positions", "motion_positions_b64"]},
       {"required": ["strands", "strands_b64"]},
       {"required": ["vertices", "vertices_b64"]},
       {"required": ["indices", "offset"]},
@@ -407,7 +415,8 @@ constexpr EditOp OPS[] = {
                       {"required": ["uvs_b64"]}, {"required": ["uvs1"]},
                       {"required": ["uvs1_b64"]}, {"required": ["tangents"]},
                       {"required": ["tangents_b64"]}, {"required": ["radii"]},
-                      {"required": ["radii_b64"]}, {"required": ["strands"]},
+                      {"required": ["radii_b64"]}, {"required": ["motion_positions"]},
+                      {"required": ["motion_positions_b64"]}, {"required": ["strands"]},
                       {"required": ["strands_b64"]}, {"required": ["resize"]}]}
   },
   "anyOf": [{"required": ["positions"]}, {"required": ["positions_b64"]},
@@ -417,6 +426,7 @@ constexpr EditOp OPS[] = {
             {"required": ["uvs1"]}, {"required": ["uvs1_b64"]},
             {"required": ["tangents"]}, {"required": ["tangents_b64"]},
             {"required": ["radii"]}, {"required": ["radii_b64"]},
+            {"required": ["motion_positions"]}, {"required": ["motion_positions_b64"]},
             {"required": ["strands"]}, {"required": ["strands_b64"]}]
 })json",
      parse_update_mesh,

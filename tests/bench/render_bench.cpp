@@ -496,21 +496,31 @@ BENCHMARK(BM_EngineRenderCoverage)
     ->ComputeStatistics("min", min_of);
 
 /// BM_EngineRender on instances_10k with motion (argument 1: every instance moves half a unit
-/// over two motion keys and the shutter is open all frame; 0: the same scene without keys): what
-/// motion blur costs a frame, in the same run.
+/// over two motion keys; 2: instead their sphere deforms over two vertex keys, its vertices
+/// pushed out by a tenth of its radius; both with the shutter open all frame; 0: the same scene
+/// without keys): what motion and deformation blur cost a frame, in the same run.
 void BM_EngineRenderMotion(benchmark::State& state) {
-    const bool moving = state.range(0) != 0;
-    static std::unique_ptr<Engine> engines[2];
-    std::unique_ptr<Engine>& engine = engines[moving];
+    const int arg = int(state.range(0));
+    const bool moving = arg != 0;
+    static std::unique_ptr<Engine> engines[3];
+    std::unique_ptr<Engine>& engine = engines[arg];
     if (!engine) {
-        engine = make_engine(instances_10k());
+        const SceneDesc desc = instances_10k();
+        engine = make_engine(desc);
         if (moving) {
             EditBatch b;
-            for (int i = 0; i < 10000; ++i) {
+            for (int i = 0; i < 10000 && arg == 1; ++i) {
                 UpdateInstance u{"i" + std::to_string(i)};
                 u.motion = std::vector<Affine>{Affine::identity(),
                                                Affine::translation({0.5f, 0.0f, 0.0f})};
                 b.edits.emplace_back(std::move(u));
+            }
+            if (arg == 2) {
+                UpdateMeshPositions keys{"m0", 0, {}};
+                keys.motion_positions.emplace();
+                for (const Vec3& p : desc.meshes[0].positions)
+                    keys.motion_positions->push_back(1.1f * p);
+                b.edits.emplace_back(std::move(keys));
             }
             SetCamera shutter;
             shutter.shutter_open = 0.0f;
@@ -519,12 +529,14 @@ void BM_EngineRenderMotion(benchmark::State& state) {
             STRATA_CHECK(engine->apply(std::move(b)).has_value());
         }
     }
-    state.SetLabel(moving ? "instances_10k/motion" : "instances_10k/still");
+    state.SetLabel(arg == 2 ? "instances_10k/deforming" : moving ? "instances_10k/motion"
+                                                                 : "instances_10k/still");
     render_frames(state, *engine);
 }
 BENCHMARK(BM_EngineRenderMotion)
     ->Arg(0)
     ->Arg(1)
+    ->Arg(2)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->ComputeStatistics("min", min_of);

@@ -157,8 +157,10 @@ class ViewerWithoutToken(ViewerInChromium):
         words = self.browser.evaluate(
             "import('/web/inspector.js').then((m) => [m.meshPrimitives({kind: 'points', vertices: 3}),"
             " m.meshPrimitives({kind: 'curves', primitives: 8, style: 'flat', basis: 'bezier',"
-            " strands: 2})])")
-        self.assertEqual(words, ["3 points", "8 flat bezier curve segments in 2 strands"])
+            " strands: 2}), m.meshPrimitives({kind: 'triangles', triangles: 12, motion_keys: 3}),"
+            " m.meshPrimitives({kind: 'points', vertices: 3, motion_keys: 1})])")
+        self.assertEqual(words, ["3 points", "8 flat bezier curve segments in 2 strands",
+                                 "12 triangles, 3 vertex keys", "3 points"])
         ranges = self.browser.evaluate(
             "import('/web/inspector.js').then((m) => [m.lodRange({lod_near: 0, lod_far: 1e15}),"
             " m.lodRange({lod_near: 0, lod_far: 40}), m.lodRange({lod_near: 40, lod_far: 1e15})])")

@@ -55,6 +55,20 @@ void RandomEdits::random_curves(AddMesh& e, CurveBasis basis) {
     }
 }
 
+std::vector<Vec3> RandomEdits::random_keys(const std::vector<Vec3>& around, uint32_t k) {
+    std::vector<Vec3> keys;
+    keys.reserve(around.size() * k);
+    for (const Vec3& p : around)
+        for (uint32_t j = 1; j <= k; ++j)
+            keys.push_back(p + float(j) * Vec3(uniform(-0.1f, 0.1f), uniform(-0.1f, 0.1f),
+                                               uniform(-0.1f, 0.1f)));
+    return keys;
+}
+
+void RandomEdits::maybe_keys(AddMesh& e) {
+    if (chance(0.2)) e.motion_positions = random_keys(e.positions, uint32_t(integer(1, 3)));
+}
+
 AddMesh RandomEdits::random_mesh(const std::string& id) {
     MeshData data;
     if (chance(0.25)) {
@@ -69,6 +83,7 @@ AddMesh RandomEdits::random_mesh(const std::string& id) {
         e.build.allow_refit = chance(0.75);
         e.build.compact = chance(0.25);
         if (!m_materials.empty() && chance(0.5)) e.material = pick(m_materials);
+        maybe_keys(e);
         m_positions[id] = e.positions;
         return e;
     }
@@ -90,6 +105,7 @@ AddMesh RandomEdits::random_mesh(const std::string& id) {
     e.build.allow_refit = chance(0.75);
     e.build.compact = chance(0.25);
     if (!m_materials.empty() && chance(0.5)) e.material = pick(m_materials);
+    maybe_keys(e);
     m_positions[id] = std::move(data.positions);
     return e;
 }
@@ -112,6 +128,9 @@ ReplaceMeshTopology RandomEdits::random_topology(const std::string& id) {
     t.triangles = std::move(shape.triangles);
     if (info.kind != MeshKind::Triangles) t.radii = std::move(shape.radii);
     if (info.kind == MeshKind::Curves) t.strands = std::move(shape.strands);
+    // New vertex keys for the new vertices, or none (kept ones would not fit a new count).
+    t.motion_positions = chance(0.3) ? random_keys(*t.positions, uint32_t(integer(1, 2)))
+                                     : std::vector<Vec3>{};
     return t;
 }
 
@@ -127,7 +146,8 @@ void RandomEdits::add_mesh(EditBatch& b) {
     if (m_meshes.count(id)) id += "x" + std::to_string(m_counter);
     if (m_meshes.count(id)) return;
     AddMesh add = random_mesh(id);
-    m_meshes[id] = MeshInfo{uint32_t(add.positions.size()), 0, add.kind, add.basis};
+    m_meshes[id] = MeshInfo{uint32_t(add.positions.size()), 0, add.kind, add.basis,
+                            uint32_t(add.motion_positions.size() / add.positions.size())};
     b.edits.emplace_back(std::move(add));
 }
 
@@ -240,11 +260,25 @@ void RandomEdits::add_edit(EditBatch& b) {
             u.radii.emplace();
             for (uint32_t i = 0; i < count; ++i) u.radii->push_back(uniform(0.03f, 0.3f));
         }
+        // Vertex keys: new ones for the range, removed, or added whole.
+        MeshInfo& info = m_meshes[id];
+        if (info.keys > 0 && chance(0.4)) {
+            u.motion_positions = random_keys(
+                std::vector<Vec3>(pos.begin() + u.offset, pos.begin() + u.offset + count),
+                info.keys);
+        } else if (info.keys > 0 && chance(0.1)) {
+            u.motion_positions = std::vector<Vec3>{};
+            info.keys = 0;
+        } else if (info.keys == 0 && u.offset == 0 && chance(0.1)) {
+            info.keys = uint32_t(integer(1, 3));
+            u.motion_positions = random_keys(pos, info.keys);
+        }
         e.emplace_back(std::move(u));
     } else if (kind < 73) {  // topology change: a different shape under the same id
         const std::string id = pick(meshes);
         ReplaceMeshTopology t = random_topology(id);
         m_meshes[id].vertices = uint32_t(t.positions->size());
+        m_meshes[id].keys = uint32_t(t.motion_positions->size() / t.positions->size());
         e.emplace_back(std::move(t));
     } else if (kind < 76) {  // remove_mesh, removing its instances first in the same batch
         const std::string id = pick(meshes);

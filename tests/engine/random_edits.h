@@ -32,7 +32,12 @@ private:
         int instances = 0;
         MeshKind kind = MeshKind::Triangles;
         CurveBasis basis = CurveBasis::Linear;
+        uint32_t keys = 0;  ///< motion positions per vertex (vertex keys after the first)
     };
+    /// `k` vertex keys per vertex near each of `around`, vertex after vertex.
+    std::vector<Vec3> random_keys(const std::vector<Vec3>& around, uint32_t k);
+    /// Sometimes vertex keys for a new mesh `e` (1 to 3 after its positions).
+    void maybe_keys(AddMesh& e);
     /// Points or curves: positions, radii and (curves) strands, in `e`.
     void random_points(AddMesh& e);
     void random_curves(AddMesh& e, CurveBasis basis);

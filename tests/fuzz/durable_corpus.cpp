@@ -127,6 +127,19 @@ std::vector<Edit> every_kind() {
     regrown.radii = std::vector<float>(5, 0.1f);
     regrown.strands = std::vector<uint32_t>{5};
     edits.emplace_back(std::move(regrown));
+    // Vertex keys (a tagged attribute): given whole, a range of them, removed.
+    AddMesh sheet;
+    sheet.id = "sheet";
+    sheet.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    sheet.triangles = {{0, 1, 2}};
+    sheet.motion_positions = {{0, 0, 1}, {1, 0, 1}, {0, 1, 1}};
+    edits.emplace_back(std::move(sheet));
+    UpdateMeshPositions bent{"sheet", 2, {}};
+    bent.motion_positions = std::vector<Vec3>{{0, 1, 2}};
+    edits.emplace_back(std::move(bent));
+    UpdateMeshPositions still{"sheet", 0, {}};
+    still.motion_positions = std::vector<Vec3>{};
+    edits.emplace_back(std::move(still));
     edits.emplace_back(RemoveInstance{"a"});
     edits.emplace_back(RemoveMesh{"tri"});
     edits.emplace_back(RemoveMaterial{"red"});

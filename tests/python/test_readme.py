@@ -41,7 +41,7 @@ class ReadmeExamplesTest(unittest.TestCase):
         with open(README, encoding="utf-8") as f:
             found = examples(f.read())
         # The quick start, asyncio, named scenes, undo, bulk, mesh edits and LOD examples.
-        self.assertEqual(len(found), 8)
+        self.assertEqual(len(found), 9)
         with ServerProcess(SERVER, server_args) as server, tempfile.TemporaryDirectory() as cwd:
             for code, expected in found:
                 self.assertIn(README_URL, code)

@@ -1,8 +1,8 @@
 """Mesh edits with packed arrays (protocol/README.md, "add_mesh", "update_mesh" and
 "replace_triangles"): new positions for listed vertices, a run of triangles replaced by others,
-and points and curve meshes with their radii, with their arrays packed as base64 little-endian
-(float32 positions and radii, uint32 indices and strands). On a big mesh the server then refits
-or rebuilds only the clusters the edit touches.
+points and curve meshes with their radii, and vertex keys for deformation blur, with their arrays
+packed as base64 little-endian (float32 positions and radii, uint32 indices and strands). On a
+big mesh the server then refits or rebuilds only the clusters the edit touches.
 
     from strata_client import mesh_edits
 
@@ -11,6 +11,8 @@ or rebuilds only the clusters the edit touches.
     strata.edit([mesh_edits.add_points("stars", centres, radii),
                  mesh_edits.add_curves("fur", control_points, radii, strands=[4] * 1000,
                                        basis="bspline")])
+    # A cloth blurred along its motion over the frame: its vertices at 3 evenly spaced times.
+    strata.edit([mesh_edits.vertex_keys("cloth", [at_open, at_middle, at_close])])
 
 Arrays may be numpy arrays (positions (n, 3) or flat, triangles (n, 3) or flat, vertex ids (n,))
 or sequences of numbers or of triples; numpy is imported only when an array is given.
@@ -18,7 +20,7 @@ or sequences of numbers or of triples; numpy is imported only when an array is g
 
 import base64
 import struct
-from typing import Any, Dict, Iterable, List
+from typing import Any, Dict, Iterable, List, Sequence
 
 
 def _flat(values: Any, width: int, what: str) -> List[Any]:
@@ -61,6 +63,34 @@ def pack_indices(values: Any, width: int = 3) -> str:
 def pack_radii(radii: Any) -> str:
     """Base64 of little-endian float32s, one per vertex."""
     return _pack(radii, 1, "<f4", "f", "radius")
+
+
+def pack_vertex_keys(keys: Sequence[Any]) -> str:
+    """Base64 of keys 1.. of `keys` (each the positions of the same vertices at one key, key 0
+    first) as motion_positions wants them: vertex after vertex, its keys 1.. in order."""
+    if len(keys) < 2:
+        raise ValueError("vertex keys: give at least 2 keys (key 0 is the positions)")
+    import numpy  # noqa: PLC0415 (interleaving is numpy's job)
+    arrays = [numpy.asarray(k, dtype="<f4").reshape(-1, 3) for k in keys]
+    if any(a.shape != arrays[0].shape for a in arrays):
+        raise ValueError("vertex keys: every key has the same number of vertices")
+    return pack_positions(numpy.stack(arrays[1:], axis=1).reshape(-1, 3))
+
+
+def vertex_keys(mesh: str, keys: Sequence[Any], offset: int = 0) -> Dict[str, Any]:
+    """An update_mesh op giving vertices offset.. of `mesh` the positions of each key over the
+    frame: keys[0] becomes their positions (key 0), keys[1:] their motion_positions. A mesh
+    without vertex keys takes them only whole (offset 0, every vertex); a mesh with them keeps
+    its number of keys (send motion_positions [] first to change it). Each such edit rebuilds
+    the mesh's BLAS (Embree 3 has no refit for motion-blur BVHs)."""
+    return {"op": "update_mesh", "mesh": mesh, "offset": int(offset),
+            "positions_b64": pack_positions(keys[0]),
+            "motion_positions_b64": pack_vertex_keys(keys)}
+
+
+def remove_vertex_keys(mesh: str) -> Dict[str, Any]:
+    """An update_mesh op removing `mesh`'s vertex keys: it stays at its positions all frame."""
+    return {"op": "update_mesh", "mesh": mesh, "motion_positions": []}
 
 
 def add_points(mesh_id: str, positions: Any, radii: Any, **fields: Any) -> Dict[str, Any]:
