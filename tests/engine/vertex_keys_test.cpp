@@ -123,6 +123,7 @@ TEST_P(VertexKeys, KeyEditsRebuildTheirMeshAlone) {
         EXPECT_EQ(r.rebuilt[0].reason, BuildReason::PositionsChanged);
         EXPECT_NE(r.rebuilt[0].detail.find("no refit"), std::string::npos);
         EXPECT_EQ(r.blas_refits, 0u);
+        EXPECT_EQ(r.tlas_action, TlasAction::Update);  // its one instance: the README's rows
     }
 
     // Keys removed, then added back with another count: each a rebuild of that mesh alone; still
@@ -133,6 +134,7 @@ TEST_P(VertexKeys, KeyEditsRebuildTheirMeshAlone) {
     RebuildReport r = commit_ok(*engine);
     ASSERT_EQ(test::ids(r.rebuilt), std::vector<std::string>{"ball"});
     EXPECT_EQ(r.rebuilt[0].reason, BuildReason::KeysChanged);
+    EXPECT_EQ(r.tlas_action, TlasAction::Update);
     EXPECT_EQ(engine->read([](const Scene& s) {
         return s.meshes().at(s.find_mesh("ball")).motion_keys();
     }),
