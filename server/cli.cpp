@@ -192,7 +192,8 @@ void add_render_limit_options(CLI::App& app, ServerConfig& c) {
                    "Most triangles over the scene's meshes (an edit batch beyond it: 413)")
         ->check(CLI::Range(uint64_t(1), uint64_t(1) << 32));
     app.add_option("--max-scene-vertices", c.max_scene_vertices,
-                   "Most vertices over the scene's meshes (an edit batch beyond it: 413)")
+                   "Most vertices over the scene's meshes, each vertex key (motion_positions) "
+                   "counting as one (an edit batch beyond it: 413)")
         ->check(CLI::Range(uint64_t(1), uint64_t(1) << 32));
     app.add_option("--max-scene-instances", c.max_scene_instances,
                    "Most instances in the scene, about 1 KB of memory each (an edit batch "

@@ -9,14 +9,19 @@ std::string budget_message(const MeshTotals& totals, const SceneBudget& budget) 
                " (max_scene_instances)";
     const bool triangles = totals.budget_triangles() > budget.max_triangles;
     if (totals.texture_bytes > budget.max_texture_bytes && !triangles &&
-        totals.vertices <= budget.max_vertices)
+        totals.budget_vertices() <= budget.max_vertices)
         return "the scene's textures would take " + std::to_string(totals.texture_bytes) +
                " bytes (texels and image files), over its budget of " +
                std::to_string(budget.max_texture_bytes) + " (max_texture_mb)";
-    if (!triangles)
+    if (!triangles && totals.key_positions == 0)
         return "the scene would hold " + std::to_string(totals.vertices) +
                " vertices, over its budget of " + std::to_string(budget.max_vertices) +
                " (max_scene_vertices)";
+    if (!triangles)
+        return "the scene would hold " + std::to_string(totals.vertices) + " vertices and " +
+               std::to_string(totals.key_positions) + " vertex keys (motion_positions), " +
+               std::to_string(totals.budget_vertices()) + " positions in all, over its budget of " +
+               std::to_string(budget.max_vertices) + " (max_scene_vertices)";
     return "the scene would hold " + std::to_string(totals.triangles) + " triangles in " +
            std::to_string(totals.meshes) + " meshes, and " + std::to_string(totals.groups) +
            " groups, which count " + std::to_string(totals.budget_triangles()) +

@@ -30,6 +30,9 @@ struct SceneBudget {
 /// What the scene holds: its meshes' totals (each mesh counted once), and its instances.
 struct MeshTotals {
     uint64_t vertices = 0;
+    /// Vertex keys after the first (motion_positions): each takes a vertex's memory in the scene
+    /// and the BLAS, so the vertex budget counts them.
+    uint64_t key_positions = 0;
     uint64_t triangles = 0;
     uint64_t texture_bytes = 0;  ///< decoded texels and image files of every texture
     uint64_t meshes = 0;
@@ -40,8 +43,11 @@ struct MeshTotals {
     uint64_t budget_triangles() const {
         return triangles + meshes * MESH_OVERHEAD_TRIANGLES + groups * GROUP_OVERHEAD_TRIANGLES;
     }
+    /// Vertex positions as the budget counts them: every key of every vertex.
+    uint64_t budget_vertices() const { return vertices + key_positions; }
     bool grew_from(const MeshTotals& before) const {
-        return vertices > before.vertices || budget_triangles() > before.budget_triangles() ||
+        return budget_vertices() > before.budget_vertices() ||
+               budget_triangles() > before.budget_triangles() ||
                texture_bytes > before.texture_bytes || instances > before.instances;
     }
 };
@@ -49,7 +55,7 @@ struct MeshTotals {
 /// True when `totals` exceed `budget`.
 inline bool over_budget(const MeshTotals& totals, const SceneBudget& budget) {
     return totals.budget_triangles() > budget.max_triangles ||
-           totals.vertices > budget.max_vertices ||
+           totals.budget_vertices() > budget.max_vertices ||
            totals.texture_bytes > budget.max_texture_bytes ||
            totals.instances > budget.max_instances;
 }

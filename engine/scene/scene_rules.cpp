@@ -423,6 +423,7 @@ Status Scene::apply_edit(AddMesh&& e, UndoLog& undo) {
     }
 
     m_totals.vertices += e.positions.size();
+    m_totals.key_positions += e.motion_positions.size();
     m_totals.triangles += e.triangles.size();
     ++m_totals.meshes;
     MeshRecord r;
@@ -485,6 +486,7 @@ Status Scene::apply_edit(UpdateMeshPositions&& e, UndoLog& undo) {
             const auto& current = A::of(r);
             if (!A::geometric || !values || (values->empty() && current.empty())) return;
             if (A::keyed && (values->empty() || current.empty())) {
+                m_totals.key_positions = m_totals.key_positions - current.size() + values->size();
                 mark(h, MeshDirty::Keys);
                 return;
             }
@@ -577,6 +579,9 @@ Status Scene::apply_edit(ReplaceMeshTopology&& e, UndoLog& undo) {
         return s;
 
     save_mesh(h, undo);
+    if (e.motion_positions)
+        m_totals.key_positions =
+            m_totals.key_positions - r.motion_positions.size() + e.motion_positions->size();
     if (gives_attributes(e)) {
         if (gives_shading_attributes(e)) mark(h, MeshDirty::Attributes);
         undo::MeshAttributes old{h};
@@ -670,6 +675,7 @@ void Scene::remove_mesh(MeshHandle h, UndoLog& undo) {
     // Listed by its now stale handle, so the commit releases its BLAS.
     mark(h, {});
     m_totals.vertices -= r.positions.size();
+    m_totals.key_positions -= r.motion_positions.size();
     m_totals.triangles -= r.triangles.size();
     --m_totals.meshes;
     m_mesh_ids.erase(r.id);

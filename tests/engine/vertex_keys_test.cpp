@@ -210,5 +210,44 @@ TEST(VertexKeys, BadKeysAreRefusedAndChangeNothing) {
     EXPECT_GT(keyed_version, version);
 }
 
+TEST(VertexKeys, TheVertexBudgetCountsEveryKey) {
+    // 100 positions: a box's 8 vertices with 3 keys each (8 + 16) fit, 12 keys each (8 + 88) too,
+    // 13 (8 + 96) do not; removal, topology changes, a refused batch and clear keep the count.
+    EngineConfig config;
+    config.budget = {1u << 20, 100};
+    auto created = Engine::create(config);
+    ASSERT_TRUE(created.has_value());
+    Engine& engine = *created.value();
+    const AddMesh box = test::mesh_edit("box", make_box(Vec3(1.0f)));
+    auto key_positions = [&] {
+        return engine.read([](const Scene& s) { return s.mesh_totals().key_positions; });
+    };
+    apply_ok(engine, with_keys(box, 3));
+    EXPECT_EQ(key_positions(), 16u);
+    UpdateMeshPositions removed{"box", 0, {}};
+    removed.motion_positions = std::vector<Vec3>{};
+    UpdateMeshPositions twelve{"box", 0, {}};
+    twelve.motion_positions = std::vector<Vec3>(8 * 11, Vec3(0.5f));
+    apply_ok(engine, removed, twelve);
+    EXPECT_EQ(key_positions(), 88u);
+    UpdateMeshPositions thirteen = twelve;
+    thirteen.motion_positions = std::vector<Vec3>(8 * 12, Vec3(0.5f));
+    EditBatch over;
+    over.edits.emplace_back(removed);
+    over.edits.emplace_back(thirteen);
+    auto r = engine.apply(std::move(over));
+    ASSERT_FALSE(r.has_value());
+    EXPECT_EQ(r.error().code, ErrorCode::TooLarge);
+    EXPECT_NE(r.error().message.find("96 vertex keys"), std::string::npos) << r.error().message;
+    EXPECT_EQ(key_positions(), 88u);  // the refused batch changed nothing
+    // A topology change to 4 vertices with 2 keys each, then the mesh removed by a clear.
+    ReplaceMeshTopology fewer{"box", std::vector<Vec3>(4, Vec3(0.0f)), {{0, 1, 2}, {0, 2, 3}}};
+    fewer.motion_positions = std::vector<Vec3>(4 * 2, Vec3(1.0f));
+    apply_ok(engine, fewer);
+    EXPECT_EQ(key_positions(), 8u);
+    apply_ok(engine, Clear{});
+    EXPECT_EQ(key_positions(), 0u);
+}
+
 }  // namespace
 }  // namespace strata
