@@ -33,6 +33,9 @@ std::string item_line(const std::string& collection, const Json& item) {
         line += "  vertices=" + std::to_string(item.value("vertices", uint64_t(0))) +
                 "  triangles=" + std::to_string(item.value("triangles", uint64_t(0))) +
                 "  instances=" + std::to_string(item.value("instances", uint64_t(0)));
+        // A deforming mesh (vertex keys for deformation blur) says how many keys it has.
+        if (const uint64_t keys = item.value("motion_keys", uint64_t(1)); keys > 1)
+            line += "  keys=" + std::to_string(keys);
     } else if (collection == "lights") {
         line += "  type=" + item.value("type", std::string("?"));
     } else if (collection == "textures") {

@@ -249,6 +249,16 @@ class ServerCommandsTest(unittest.TestCase):
         code, out, err = strata("scene", "list", "lights", env=self.env)
         self.assertEqual(code, 0, err)
         self.assertEqual(out, "lamp  type=spot\n")
+        # A mesh with vertex keys says how many it has.
+        code, _, err = strata("edit", "-", env=self.env, stdin=json.dumps({"edits": [
+            {"op": "add_mesh", "id": "sheet", "positions": [0, 0, 0, 1, 0, 0, 0, 1, 0],
+             "indices": [0, 1, 2], "motion_positions": [0, 0, 1, 1, 0, 1, 0, 1, 1]}]}))
+        self.assertEqual(code, 0, err)
+        code, out, err = strata("scene", "list", "meshes", env=self.env)
+        self.assertEqual(code, 0, err)
+        self.assertIn("sheet  vertices=3  triangles=1  instances=0  keys=2\n", out)
+        self.assertIn("ball  vertices=", out)
+        self.assertNotIn("keys=", out.split("ball", 1)[1].split("\n", 1)[0])
         code, out, err = strata("--json", "scene", "get", "light", "lamp", env=self.env)
         self.assertEqual(code, 0, err)
         self.assertEqual(json.loads(out)["type"], "spot")
