@@ -347,6 +347,29 @@ Status check_replaced(A a, const ReplaceMeshTopology& e, const MeshRecord& r,
                    field);
 }
 
+/// What the geometric attributes `e` gives (radii, vertex keys) do to the BLAS, before they are
+/// written: moved like positions over their vertex range (added to the record's dirty ranges), or
+/// for vertex keys added or removed, new time steps (MeshDirty::Keys, counted in `totals`).
+DirtyBits<MeshDirty> geometric_changes(MeshRecord& r, const UpdateMeshPositions& e,
+                                       MeshTotals& totals) {
+    DirtyBits<MeshDirty> bits;
+    for_each_vertex_attribute([&](auto a) {
+        using A = decltype(a);
+        const auto& values = A::of(e);
+        const auto& current = A::of(r);
+        if (!A::geometric || !values || (values->empty() && current.empty())) return;
+        if (A::keyed && (values->empty() || current.empty())) {
+            totals.key_positions = totals.key_positions - current.size() + values->size();
+            bits |= MeshDirty::Keys;
+            return;
+        }
+        bits |= MeshDirty::Points;
+        const std::size_t per = values_per_vertex<A>(current.size(), r.positions.size());
+        r.dirty.points.add(e.offset, static_cast<uint32_t>(e.offset + values->size() / per));
+    });
+    return bits;
+}
+
 /// Each attribute `e` gives, written over the record's from `offset` (an empty array clears it;
 /// a record without it takes the array whole), what it held kept in `old`.
 void patch_attributes(MeshRecord& r, UpdateMeshPositions& e, undo::MeshAttributes& old) {
@@ -478,22 +501,8 @@ Status Scene::apply_edit(UpdateMeshPositions&& e, UndoLog& undo) {
     // Step: the other attributes (the shading ones are no BLAS work).
     if (attributes) {
         if (gives_shading_attributes(e)) mark(h, MeshDirty::Attributes);
-        // Geometric ones (radii, vertex keys) move the BLAS like positions; keys added or
-        // removed change its time steps.
-        for_each_vertex_attribute([&](auto a) {
-            using A = decltype(a);
-            const auto& values = A::of(e);
-            const auto& current = A::of(r);
-            if (!A::geometric || !values || (values->empty() && current.empty())) return;
-            if (A::keyed && (values->empty() || current.empty())) {
-                m_totals.key_positions = m_totals.key_positions - current.size() + values->size();
-                mark(h, MeshDirty::Keys);
-                return;
-            }
-            mark(h, MeshDirty::Points);
-            const std::size_t per = values_per_vertex<A>(current.size(), r.positions.size());
-            r.dirty.points.add(e.offset, static_cast<uint32_t>(e.offset + values->size() / per));
-        });
+        if (const DirtyBits<MeshDirty> moved = geometric_changes(r, e, m_totals); moved.any())
+            mark(h, moved);
         undo::MeshAttributes old{h};
         patch_attributes(r, e, old);
         undo.records.emplace_back(std::move(old));
