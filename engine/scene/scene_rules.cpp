@@ -41,15 +41,18 @@ Status unknown(const char* kind, const std::string& id, const char* field) {
 }
 
 /// `first_vertex` is the mesh vertex the array starts at (for messages); the field path indexes
-/// the flat number array of the request.
+/// the flat number array of the request. With `keys`, the array holds keys 1..keys of each vertex
+/// (motion_positions), and the message names the key.
 Status check_positions(const std::vector<Vec3>& positions, const char* field,
-                       uint64_t first_vertex = 0) {
+                       uint64_t first_vertex = 0, std::size_t keys = 0) {
     for (std::size_t i = 0; i < positions.size(); ++i) {
         if (is_finite(positions[i])) continue;
         const int k = std::isfinite(positions[i].x) ? (std::isfinite(positions[i].y) ? 2 : 1) : 0;
+        const std::size_t per = std::max<std::size_t>(keys, 1);
+        std::string vertex = "vertex " + std::to_string(first_vertex + i / per);
+        if (keys) vertex += " at key " + std::to_string(1 + i % keys);
         return failure(ErrorCode::NotFinite,
-                       "vertex " + std::to_string(first_vertex + i) + " has a NaN or infinite " +
-                           "xyz"[k] + " coordinate",
+                       vertex + " has a NaN or infinite " + "xyz"[k] + " coordinate",
                        std::string(field) + "/" + std::to_string(i * 3 + k));
     }
     return {};
@@ -153,28 +156,13 @@ Status check_radii(const std::vector<float>& radii, uint64_t first_vertex) {
     return {};
 }
 
-/// Vertex keys, `keys` per vertex, the first at vertex `first_vertex`: every coordinate finite.
-Status check_motion_positions(const std::vector<Vec3>& values, uint64_t first_vertex,
-                              std::size_t keys) {
-    for (std::size_t i = 0; i < values.size(); ++i) {
-        if (is_finite(values[i])) continue;
-        const int k = std::isfinite(values[i].x) ? (std::isfinite(values[i].y) ? 2 : 1) : 0;
-        return failure(ErrorCode::NotFinite,
-                       "vertex " + std::to_string(first_vertex + i / keys) + " at key " +
-                           std::to_string(1 + i % keys) + " has a NaN or infinite " + "xyz"[k] +
-                           " coordinate",
-                       "motion_positions/" + std::to_string(i * 3 + k));
-    }
-    return {};
-}
-
 /// The checks of attribute `A`'s values, the first of them at vertex `first_vertex`, `per_vertex`
 /// values a vertex.
 template <class A>
 Status check_values(A, const std::vector<typename A::Value>& values, uint64_t first_vertex,
                     std::size_t per_vertex = 1) {
     if constexpr (std::is_same_v<A, MotionPositionsAttribute>)
-        return check_motion_positions(values, first_vertex, per_vertex);
+        return check_positions(values, "motion_positions", first_vertex, per_vertex);
     else if constexpr (std::is_same_v<A, NormalsAttribute>)
         return check_normals(values, first_vertex);
     else if constexpr (std::is_same_v<A, TangentsAttribute>)
