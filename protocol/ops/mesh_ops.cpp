@@ -252,10 +252,12 @@ Edit parse_update_mesh(OpFields& f) {
             [&](auto a) { decltype(a)::of(topology) = std::move(decltype(a)::of(e)); });
         return topology;
     }
-    if (!positions && !attributes)
+    if (!positions && !attributes) {
+        std::string names;  // the vertex attributes, as their list declares them
+        for_each_vertex_attribute([&](auto a) { names += ", " + std::string(a.name); });
         r.schema_error(f.pointer("positions"),
-                       "update_mesh needs positions, normals, uvs, uvs1, tangents, radii or "
-                       "motion_positions (or indices or strands)");
+                       "update_mesh needs positions" + names + " (or indices or strands)");
+    }
     e.mesh = std::move(mesh);
     if (positions) e.positions = std::move(*positions);
     f.read("offset", e.offset);
