@@ -1,7 +1,11 @@
 #include "engine/render/frame_state.h"
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
 
 #include "engine/render/tangents.h"
 
@@ -148,20 +152,14 @@ bool FrameState::emits(const Scene& scene, uint32_t slot) const {
     return e.x > 0.0f || e.y > 0.0f || e.z > 0.0f;
 }
 
-bool FrameState::refresh_instance(const Scene& scene, uint32_t slot) {
-    if (slot >= instances.size()) {
-        instances.resize(slot + 1);
-        instance_ids.resize(slot + 1);
-        m_emitter.resize(slot + 1, 0);
-    }
+FrameState::EmitterChange FrameState::refresh_instance(const Scene& scene, uint32_t slot) {
     InstanceShade& shade = instances[slot];
     const bool was = m_emitter[slot] != 0;
     if (!scene.instances().alive_at(slot)) {
         shade = InstanceShade{};
         instance_ids[slot].clear();
         m_emitter[slot] = 0;
-        m_emitters -= was;
-        return was;
+        return {-int64_t(was), was};
     }
     const InstanceRecord& r = scene.instances().at_slot(slot);
     instance_ids[slot] = r.id;
@@ -175,8 +173,47 @@ bool FrameState::refresh_instance(const Scene& scene, uint32_t slot) {
     shade.interpolation = r.world_interpolation;
     const bool now = emits(scene, slot);
     m_emitter[slot] = now;
-    m_emitters = m_emitters - was + now;
-    return was || now;
+    return {int64_t(now) - int64_t(was), was || now};
+}
+
+bool FrameState::refresh_instances(const Scene& scene, std::span<const InstanceHandle> handles) {
+    // Step: the tables grow to the highest slot listed.
+    uint32_t end = uint32_t(instances.size());
+    bool ascending = true;  // then no slot is listed twice (a slot reused within one batch is)
+    for (std::size_t i = 0; i < handles.size(); ++i) {
+        end = std::max(end, handles[i].index + 1);
+        ascending = ascending && (i == 0 || handles[i - 1].index < handles[i].index);
+    }
+    if (end > instances.size()) {
+        instances.resize(end);
+        instance_ids.resize(end);
+        m_emitter.resize(end, 0);
+    }
+    // Step: each slot's own entries, in parallel for the many a bulk edit or first build lists.
+    auto refresh = [&](std::size_t begin, std::size_t stop) {
+        EmitterChange sum;
+        for (std::size_t i = begin; i < stop; ++i) {
+            const EmitterChange c = refresh_instance(scene, handles[i].index);
+            sum.count += c.count;
+            sum.touched = sum.touched || c.touched;
+        }
+        return sum;
+    };
+    constexpr std::size_t PARALLEL_FROM = 4096;
+    const EmitterChange total =
+        !ascending || handles.size() < PARALLEL_FROM
+            ? refresh(0, handles.size())
+            : tbb::parallel_reduce(
+                  tbb::blocked_range<std::size_t>(0, handles.size(), 1024), EmitterChange{},
+                  [&](const tbb::blocked_range<std::size_t>& r, EmitterChange sum) {
+                      const EmitterChange c = refresh(r.begin(), r.end());
+                      return EmitterChange{sum.count + c.count, sum.touched || c.touched};
+                  },
+                  [](const EmitterChange& a, const EmitterChange& b) {
+                      return EmitterChange{a.count + b.count, a.touched || b.touched};
+                  });
+    m_emitters = std::size_t(int64_t(m_emitters) + total.count);
+    return total.touched;
 }
 
 void FrameState::rebuild_lights(const Scene& scene) {
@@ -244,9 +281,7 @@ void FrameState::sync(const Scene& scene) {
                  glm::any(glm::greaterThan(after.emission, Vec3(0.0f)));
     }
     for (MeshHandle h : changes.meshes()) refresh_mesh(scene, h);
-    bool emitters_changed = false;
-    for (InstanceHandle h : changes.instances())
-        emitters_changed = refresh_instance(scene, h.index) || emitters_changed;
+    bool emitters_changed = refresh_instances(scene, changes.instances());
     if (rescan) {
         // A material's emission changed: which instances emit is read again (O(instances), and
         // only for such edits).

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -131,6 +132,8 @@ public:
     bool is_emitter(uint32_t slot) const {
         return slot < m_emitter.size() && m_emitter[slot] != 0;
     }
+    /// How many instance slots is_emitter().
+    std::size_t emitter_instances() const { return m_emitters; }
 
     /// Material `material` (an index into `materials`) at a hit on the mesh `mesh` (nullptr:
     /// no attributes) at barycentrics (u, v) of triangle `prim`: its factors, times its textures
@@ -158,8 +161,15 @@ public:
     FrameIdNames id_names(const FrameBuffers& buffers) const;
 
 private:
-    /// Refreshes an instance's shading data; returns true when it is or was an emitter.
-    bool refresh_instance(const Scene& scene, uint32_t slot);
+    /// What refreshing instances did to the emitter table.
+    struct EmitterChange {
+        int64_t count = 0;     ///< emitters gained minus emitters lost
+        bool touched = false;  ///< one of them is or was an emitter
+    };
+    /// Refreshes the shading data of the instance in `slot` (the tables already reach it).
+    EmitterChange refresh_instance(const Scene& scene, uint32_t slot);
+    /// Refreshes every listed instance; returns whether one of them is or was an emitter.
+    bool refresh_instances(const Scene& scene, std::span<const InstanceHandle> handles);
     /// Whether the instance in `slot` should be an emitter now (the slot's shade is current).
     bool emits(const Scene& scene, uint32_t slot) const;
     void rebuild_lights(const Scene& scene);

@@ -89,6 +89,10 @@ public:
             m_packet.mask[i] = mask;
             m_packet.id[i] = i;
             m_packet.flags[i] = 0;
+            // Embree writes these on hits only; shading that reads every lane must not meet
+            // indeterminate values on a miss.
+            m_packet.ng_x[i] = m_packet.ng_y[i] = m_packet.ng_z[i] = 0.0f;
+            m_packet.u[i] = m_packet.v[i] = 0.0f;
         }
     }
 

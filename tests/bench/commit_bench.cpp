@@ -4,7 +4,9 @@
 //
 //   build/tests/bench/strata_commit_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 #include <string>
 
 #include <benchmark/benchmark.h>
@@ -104,6 +106,41 @@ void BM_TlasRebuild(benchmark::State& state) {
     }
 }
 BENCHMARK(BM_TlasRebuild)->Arg(10000)->Arg(100000)->Unit(benchmark::kMillisecond);
+
+/// The first commit of `n` instances added in one bulk edit (issue 24): every instance's Embree
+/// geometry made and the static TLAS tier built. The apply before it is untimed.
+void BM_FirstBuild(benchmark::State& state) {
+    const int64_t n = state.range(0);
+    AddInstances bulk;
+    bulk.ids.prefix = "i";
+    bulk.ids.count = uint64_t(n);
+    bulk.meshes = {"pebble"};
+    for (int64_t i = 0; i < n; ++i) bulk.transforms.push_back(grid_transform(i, n, 0.0f));
+    std::vector<CommitPhases> phases;
+    for (auto _ : state) {
+        state.PauseTiming();
+        auto engine = make_engine();
+        (void)engine->apply(EditBatch{{add_mesh_edit("pebble", make_sphere(0.5f, 12)), bulk}});
+        state.ResumeTiming();
+        auto report = engine->commit();
+        state.PauseTiming();
+        if (!report) state.SkipWithError(report.error().describe().c_str());
+        phases.push_back(report->phases);
+        engine.reset();
+        state.ResumeTiming();
+    }
+    // Medians of the commit's phases: where the first build goes.
+    auto median_of = [&](double CommitPhases::*field) {
+        std::vector<double> v;
+        for (const CommitPhases& p : phases) v.push_back(p.*field);
+        std::sort(v.begin(), v.end());
+        return v.empty() ? 0.0 : v[v.size() / 2];
+    };
+    state.counters["plan_ms"] = median_of(&CommitPhases::plan_ms);
+    state.counters["tlas_ms"] = median_of(&CommitPhases::tlas_ms);
+    state.counters["sync_ms"] = median_of(&CommitPhases::sync_ms);
+}
+BENCHMARK(BM_FirstBuild)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 /// One instanced mesh of about 1M triangles whose vertices wobble each frame; `keyed`: it has a
 /// second vertex key (deformation blur), and each frame gives both keys.

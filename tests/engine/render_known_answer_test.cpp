@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "engine/render/camera_rays.h"
 #include "engine/render/shading.h"
 #include "tests/engine/render_test_util.h"
 #include "tests/engine/texture_test_util.h"
@@ -249,6 +250,27 @@ TEST(RenderKnownAnswer, ARayThroughAVertexSharedByManyTrianglesHitsTheSurface) {
     }
 }
 
+/// Applies `edits` as one batch and traces a width x height primary frame.
+FrameBuffers primary_frame(Engine& engine, std::vector<Edit> edits, uint32_t width,
+                           uint32_t height) {
+    EditBatch batch;
+    batch.edits = std::move(edits);
+    EXPECT_TRUE(engine.apply(std::move(batch)).has_value());
+    PrimarySettings s;
+    s.width = width;
+    s.height = height;
+    return std::move(engine.render_primary(s).value().buffers);
+}
+
+/// The instance slots (the instance_id AOV's values) of instances `ids`.
+std::vector<uint32_t> instance_slots(Engine& engine, const std::vector<std::string>& ids) {
+    return engine.read([&](const Scene& sc) {
+        std::vector<uint32_t> out;
+        for (const std::string& id : ids) out.push_back(sc.find_instance(id).index);
+        return out;
+    });
+}
+
 TEST(RenderKnownAnswer, ThePrimaryPreviewIsBaseColourLitBySunAndSkyPlusEmissionTimesTextures) {
     // A quad with uvs, four times with four materials: plain; the same with white base-colour
     // and emissive textures (the textured path, which must give the same colour); a red
@@ -278,19 +300,9 @@ TEST(RenderKnownAnswer, ThePrimaryPreviewIsBaseColourLitBySunAndSkyPlusEmissionT
         edits.emplace_back(std::move(i));
     }
     edits.emplace_back(SetCamera{Vec3(0, 12, 0.01f), Vec3(0), Vec3(0, 0, -1), 60.0f});
-    EditBatch batch;
-    batch.edits = std::move(edits);
-    ASSERT_TRUE(engine->apply(std::move(batch)).has_value());
-
-    PrimarySettings s;
-    s.width = 64;
-    s.height = 32;
-    const FrameBuffers f = std::move(engine->render_primary(s).value().buffers);
-    const auto ids = engine->read([&](const Scene& sc) {
-        std::vector<uint32_t> out;
-        for (const char* m : materials) out.push_back(sc.find_instance(m).index);
-        return out;
-    });
+    const FrameBuffers f = primary_frame(*engine, std::move(edits), 64, 32);
+    const std::vector<uint32_t> ids =
+        instance_slots(*engine, {materials[0], materials[1], materials[2], materials[3]});
     std::vector<Vec3> colour(4, Vec3(-1.0f));
     for (std::size_t p = 0; p < f.pixel_count(); ++p)
         for (int k = 0; k < 4; ++k)
@@ -302,6 +314,80 @@ TEST(RenderKnownAnswer, ThePrimaryPreviewIsBaseColourLitBySunAndSkyPlusEmissionT
     EXPECT_NEAR(colour[2].y, plain.emission.y, 1e-5f);
     EXPECT_LT(glm::length(colour[3] - plain.base_color), 1e-6f) << "unlit: the base colour";
     EXPECT_GT(colour[0].x, plain.base_color.x * 0.1f + plain.emission.x) << "lit by sun and sky";
+}
+
+TEST(RenderKnownAnswer, ThePrimaryPassGivesEveryPixelItsOwnInstancesNormalAndShade) {
+    // Rotated, unevenly scaled spheres close together, lit and unlit, in an image whose edges
+    // cut packets and tiles: packets see one instance, several, or none, and every pixel must
+    // get its own instance's normal (the inverse transpose of its transform) and the preview
+    // formula over exactly that normal.
+    auto engine = test::make_engine();
+    Material matte;
+    matte.base_color = Vec3(0.7f, 0.5f, 0.3f);
+    matte.emission = Vec3(0.05f, 0.0f, 0.02f);
+    Material glow = matte;
+    glow.unlit = true;
+    SetLighting light;
+    light.sun_direction = Vec3(0.3f, 0.9f, 0.5f);
+    light.sun_color = Vec3(1.0f, 0.9f, 0.8f);
+    light.sky_color = Vec3(0.2f, 0.3f, 0.6f);
+    light.sky_intensity = 0.5f;
+    std::vector<Edit> edits = {mesh_edit("ball", make_sphere(1.0f, 48)),
+                               AddMaterial{"matte", matte}, AddMaterial{"glow", glow}, light};
+    std::vector<Affine> transforms;
+    for (int k = 0; k < 12; ++k) {
+        const Vec3 at(float(k % 4) * 2.3f - 3.45f, float(k / 4) * 1.9f - 1.9f, 0.0f);
+        const Affine t = Affine::trs(at, Affine::rotation_euler_deg(Vec3(20.0f * k, 35.0f, 10.0f)),
+                                     Vec3(1.25f, 0.7f, 0.9f));
+        AddInstance i = instance_edit("i" + std::to_string(k), "ball");
+        i.transform = t;
+        i.material = k % 3 == 2 ? "glow" : "matte";
+        edits.emplace_back(std::move(i));
+        transforms.push_back(t);
+    }
+    Camera camera;
+    camera.eye = Vec3(0.3f, 0.2f, 11.0f);
+    edits.emplace_back(SetCamera{camera.eye, camera.target, camera.up, camera.fov_y_deg});
+    constexpr uint32_t WIDTH = 61, HEIGHT = 37;
+    const FrameBuffers f = primary_frame(*engine, std::move(edits), WIDTH, HEIGHT);
+    std::vector<std::string> names;
+    for (int k = 0; k < 12; ++k) names.push_back("i" + std::to_string(k));
+    const std::vector<uint32_t> slots = instance_slots(*engine, names);
+    const Vec3 sky = *light.sky_color * *light.sky_intensity;
+    const Vec3 sun = glm::normalize(*light.sun_direction);
+    const CameraRays rays(camera, WIDTH, HEIGHT);
+    std::vector<int> hits(12, 0);
+    for (uint32_t y = 0; y < HEIGHT; ++y) {
+        for (uint32_t x = 0; x < WIDTH; ++x) {
+            const std::size_t p = std::size_t(y) * WIDTH + x;
+            const Vec3 n = f.normal[p], colour = f.color[p];
+            if (f.instance_id[p] == INVALID_ID) {
+                EXPECT_EQ(f.depth[p], std::numeric_limits<float>::infinity()) << x << "," << y;
+                EXPECT_EQ(f.primitive_id[p], INVALID_ID);
+                EXPECT_EQ(n, Vec3(0.0f));
+                EXPECT_EQ(colour, sky);
+                continue;
+            }
+            const auto k = std::size_t(std::find(slots.begin(), slots.end(), f.instance_id[p]) -
+                                       slots.begin());
+            ASSERT_LT(k, slots.size()) << "pixel " << x << "," << y;
+            ++hits[k];
+            // The sphere's own normal at the hit, taken to world space.
+            const Vec3 dir = rays.direction(float(x) + 0.5f, float(y) + 0.5f);
+            const Vec3 hit = transforms[k].inverse().transform_point(camera.eye + dir * f.depth[p]);
+            const Vec3 expected =
+                glm::normalize(transforms[k].normal_matrix() * glm::normalize(hit));
+            EXPECT_NEAR(glm::length(n), 1.0f, 1e-5f);
+            EXPECT_GT(glm::dot(n, expected), 0.97f) << "pixel " << x << "," << y;
+            EXPECT_LE(glm::dot(n, dir), 0.0f) << "faces the camera";
+            const Vec3 lit =
+                matte.base_color * (*light.sun_color * std::max(0.0f, glm::dot(n, sun)) + sky) +
+                matte.emission;
+            const Vec3 want = k % 3 == 2 ? glow.base_color : lit;
+            for (int c = 0; c < 3; ++c) EXPECT_FLOAT_EQ(colour[c], want[c]) << x << "," << y;
+        }
+    }
+    for (int k = 0; k < 12; ++k) EXPECT_GT(hits[std::size_t(k)], 20) << "instance " << k;
 }
 
 }  // namespace
