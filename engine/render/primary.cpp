@@ -4,7 +4,9 @@
 #include <cmath>
 #include <limits>
 
+#if defined(__SSE2__)
 #include <immintrin.h>
+#endif
 
 #include "engine/render/camera_rays.h"
 #include "engine/render/tiles.h"
@@ -99,6 +101,7 @@ private:
     }
 };
 
+#if defined(__SSE2__)
 /// Lanes of `a` where `mask` is set, of `b` elsewhere.
 inline __m128 select(__m128 mask, __m128 a, __m128 b) {
     return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b));
@@ -125,6 +128,8 @@ inline void store_vec3x4(const float* x, const float* y, const float* z, Vec3* o
     _mm_storeu_ps(f + 4, _mm_shuffle_ps(y1z1, xy23, _MM_SHUFFLE(1, 0, 2, 0)));  // y1 z1 x2 y2
     _mm_storeu_ps(f + 8, _mm_shuffle_ps(z2x3, y3z3, _MM_SHUFFLE(2, 0, 2, 0)));  // z2 x3 y3 z3
 }
+
+#endif
 
 /// Where the primary AOVs of one pixel (and the pixels after it in its row) go.
 struct PrimaryOut {
@@ -182,6 +187,9 @@ struct PacketShade {
     /// at the given addresses: nine vector stores instead of 36 scalar ones, so the stores of a
     /// packet do not fill the store buffer while the next packet is traced.
     void store_row(uint32_t i0, const RayHit16& packet, const PrimaryOut& out) const {
+#if !defined(__SSE2__)
+        store_lanes(i0, PACKET_SIZE, packet, out);
+#else
         const __m128 hit_mask = _mm_cmpneq_ps(_mm_load_ps(hit + i0), _mm_setzero_ps());
         const __m128i hit_bits = _mm_castps_si128(hit_mask);
         const __m128 inf = _mm_set1_ps(std::numeric_limits<float>::infinity());
@@ -193,12 +201,14 @@ struct PacketShade {
                          select(hit_bits, load_ints(packet.prim_id + i0), miss));
         store_vec3x4(n[0] + i0, n[1] + i0, n[2] + i0, out.normal);
         store_vec3x4(color[0] + i0, color[1] + i0, color[2] + i0, out.color);
+#endif
     }
 
-    /// store_row() for a row that leaves the image: only the valid lanes are written.
-    void store_lanes(uint32_t i0, const ValidMask16& valid, const RayHit16& packet,
+    /// store_row() for the first `lanes` lanes of a row, lane by lane (a row the image's edge
+    /// cuts).
+    void store_lanes(uint32_t i0, uint32_t lanes, const RayHit16& packet,
                      const PrimaryOut& out) const {
-        for (uint32_t j = 0; j < PACKET_SIZE && valid[i0 + j]; ++j) {
+        for (uint32_t j = 0; j < lanes; ++j) {
             const uint32_t i = i0 + j;
             const bool h = hit[i] != 0.0f;
             out.distance[j] = h ? packet.tfar[i] : std::numeric_limits<float>::infinity();
@@ -288,14 +298,16 @@ void render_primary(const TlasStrategy& tlas, const FrameState& frame,
                 tlas.intersect16(valid, packet, true, test ? &*test : nullptr);
                 s.shade(frame, valid, packet, sun, light.sun_color, background);
 
-                // Step: write the hit buffers, a packet row at a time.
-                for (uint32_t r = 0; r < PACKET_SIZE; ++r) {
+                // Step: write the hit buffers, a packet row at a time (the image's edges cut
+                // rows short and leave rows out).
+                const uint32_t lanes = std::min(PACKET_SIZE, tile.x1 - x0);
+                for (uint32_t r = 0; r < PACKET_SIZE && y0 + r < tile.y1; ++r) {
                     const uint32_t i0 = r * PACKET_SIZE;
                     const PrimaryOut row = pixels.at(std::size_t(y0 + r) * settings.width + x0);
-                    if (valid[i0 + PACKET_SIZE - 1])
+                    if (lanes == PACKET_SIZE)
                         s.store_row(i0, packet, row);
                     else
-                        s.store_lanes(i0, valid, packet, row);
+                        s.store_lanes(i0, lanes, packet, row);
                 }
             }
         }
