@@ -9,8 +9,10 @@
 #                                            fuzzers use (the sanitized libraries compile once)
 #   4. build-tsan/ (ThreadSanitizer)         the engine tests that run background TLAS merges beside
 #                                            commits, launches and edits, engines sharing one
-#                                            Embree device, and renders whose threads share the
-#                                            level-of-detail wrappers (only those are built)
+#                                            Embree device, renders whose threads share the
+#                                            level-of-detail wrappers, and a commit that refreshes
+#                                            thousands of instances in parallel (only those are
+#                                            built)
 #   5. build-fuzz/ (clang, libFuzzer)        every fuzzer (scripts/run-fuzz.sh), bounded runs
 #   6. build-docker/ (mmdebstrap, chroot)    docker/: lint, and the image's runtime stage run in a
 #                                            fresh Debian 12 root (scripts/check-docker.sh)
@@ -41,7 +43,7 @@ STRATA_TARGETS=strata_engine_tsan_tests scripts/build.sh build-tsan \
 tsan_options="halt_on_error=1 history_size=7 second_deadlock_stack=1"
 TSAN_OPTIONS="$tsan_options suppressions=$PWD/tests/engine/tsan.supp" \
     timeout 900 build-tsan/tests/engine/strata_engine_tsan_tests \
-    --gtest_filter='IncrementalTlas.*:Differential.ThousandsOfInstancesMatchAFreshBuildThroughMerges*:ClusteredBlas.RendersDuringLocalEdits*:*BlasSharing.*:*LevelOfDetail.PicksNameTheLevelTheFrameShows*'
+    --gtest_filter='IncrementalTlas.*:Differential.ThousandsOfInstancesMatchAFreshBuildThroughMerges*:ClusteredBlas.RendersDuringLocalEdits*:*BlasSharing.*:*LevelOfDetail.PicksNameTheLevelTheFrameShows*:BulkInstances.AFirstCommitOfMany*'
 
 step "fuzzing: edit batches, HTTP requests, journal, snapshots, assets, textures (build-fuzz/)"
 scripts/run-fuzz.sh

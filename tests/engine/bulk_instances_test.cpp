@@ -546,6 +546,56 @@ TEST(BulkInstances, NumberedInstancesInSlotOrderAreWrittenAsARange) {
     EXPECT_LT(test::encoded(image).size(), 100000u * 52u) << "the transforms, and little beside";
 }
 
+TEST(BulkInstances, AFirstCommitOfManyRefreshesTheirShadingInParallelAndCountsEmitters) {
+    // Past a few thousand listed instances the launch state refreshes them in parallel: every
+    // instance's shade and emitter flag must come out as one by one, and the emitter table must
+    // hold each emitting instance's triangles once.
+    auto engine = test::make_engine();
+    Material glow;
+    glow.emission = Vec3(2.0f);
+    constexpr uint32_t N = 9000;
+    AddInstances plain, lit;
+    plain.ids.prefix = "p";
+    lit.ids.prefix = "e";
+    plain.meshes = lit.meshes = {"quad"};
+    lit.materials = {"glow"};
+    for (uint32_t i = 0; i < N; ++i) {
+        AddInstances& to = i % 3 == 0 ? lit : plain;
+        to.transforms.push_back(Affine::translation(Vec3(float(i % 100), 0.0f, float(i / 100))));
+    }
+    plain.ids.count = plain.transforms.size();
+    lit.ids.count = lit.transforms.size();
+    // The material first: a batch that adds an emissive material recounts every instance.
+    test::apply_ok(*engine, test::mesh_edit("quad", make_plane(Vec3(0.4f, 0.0f, 0.4f), 1, 1)),
+             AddMaterial{"glow", glow});
+    test::commit_ok(*engine);
+    test::apply_ok(*engine, plain, lit);
+    auto check = [&](std::size_t emitting) {
+        const auto launched =
+            engine->launch([&](const FrameState& f, const TlasStrategy&, const RebuildReport&) {
+                std::size_t flagged = 0;
+                for (uint32_t slot = 0; slot < f.instances.size(); ++slot) {
+                    const bool glows =
+                        !f.instance_ids[slot].empty() && f.instance_ids[slot][0] == 'e';
+                    EXPECT_EQ(f.is_emitter(slot), glows) << f.instance_ids[slot];
+                    EXPECT_EQ(f.instances[slot].material != DEFAULT_MATERIAL, glows);
+                    flagged += f.is_emitter(slot);
+                }
+                EXPECT_EQ(flagged, emitting);
+                EXPECT_EQ(f.emitter_instances(), emitting);
+                EXPECT_EQ(f.lights.emitter_count(), 2 * emitting) << "two triangles an instance";
+                return true;
+            });
+        ASSERT_TRUE(launched.has_value());
+    };
+    check(lit.ids.count);
+    RemoveInstances gone;
+    gone.ids.prefix = "e";
+    gone.ids.count = lit.ids.count / 2;
+    test::apply_ok(*engine, gone);
+    check(lit.ids.count - gone.ids.count);
+}
+
 TEST(BulkInstances, JournalLayoutReadsBack) {
     AddInstances add;
     add.ids.list = {"a", "b"};
