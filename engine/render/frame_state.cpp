@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <optional>
 
 #include <tbb/blocked_range.h>
@@ -192,11 +193,8 @@ bool FrameState::refresh_instances(const Scene& scene, std::span<const InstanceH
     // Step: each slot's own entries, in parallel for the many a bulk edit or first build lists.
     auto refresh = [&](std::size_t begin, std::size_t stop) {
         EmitterChange sum;
-        for (std::size_t i = begin; i < stop; ++i) {
-            const EmitterChange c = refresh_instance(scene, handles[i].index);
-            sum.count += c.count;
-            sum.touched = sum.touched || c.touched;
-        }
+        for (std::size_t i = begin; i < stop; ++i)
+            sum = sum + refresh_instance(scene, handles[i].index);
         return sum;
     };
     constexpr std::size_t PARALLEL_FROM = 4096;
@@ -205,13 +203,10 @@ bool FrameState::refresh_instances(const Scene& scene, std::span<const InstanceH
             ? refresh(0, handles.size())
             : tbb::parallel_reduce(
                   tbb::blocked_range<std::size_t>(0, handles.size(), 1024), EmitterChange{},
-                  [&](const tbb::blocked_range<std::size_t>& r, EmitterChange sum) {
-                      const EmitterChange c = refresh(r.begin(), r.end());
-                      return EmitterChange{sum.count + c.count, sum.touched || c.touched};
+                  [&](const tbb::blocked_range<std::size_t>& r, const EmitterChange& sum) {
+                      return sum + refresh(r.begin(), r.end());
                   },
-                  [](const EmitterChange& a, const EmitterChange& b) {
-                      return EmitterChange{a.count + b.count, a.touched || b.touched};
-                  });
+                  std::plus<>());
     m_emitters = std::size_t(int64_t(m_emitters) + total.count);
     return total.touched;
 }

@@ -165,6 +165,10 @@ private:
     struct EmitterChange {
         int64_t count = 0;     ///< emitters gained minus emitters lost
         bool touched = false;  ///< one of them is or was an emitter
+
+        EmitterChange operator+(const EmitterChange& o) const {
+            return {count + o.count, touched || o.touched};
+        }
     };
     /// Refreshes the shading data of the instance in `slot` (the tables already reach it).
     EmitterChange refresh_instance(const Scene& scene, uint32_t slot);
