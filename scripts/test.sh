@@ -28,7 +28,8 @@ step "building (build/)"
 scripts/build.sh build -DCMAKE_BUILD_TYPE=RelWithDebInfo
 
 step "running the test suite"
-ctest --test-dir build --output-on-failure --timeout 600
+# Tests that time themselves or load the whole machine are RUN_SERIAL; the rest share the cores.
+ctest --test-dir build --output-on-failure --timeout 600 --parallel "$(nproc)"
 
 step "engine tests under AddressSanitizer and UndefinedBehaviorSanitizer (build-fuzz/, clang)"
 STRATA_FUZZ_ALSO=strata_engine_tests scripts/run-fuzz.sh --build-only
