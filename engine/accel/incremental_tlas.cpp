@@ -126,7 +126,7 @@ public:
                 if (holds(h)) edit_static(scene, blas, h);
             }
             rtcCommitScene(m_static);
-            rtcCommitScene(m_dynamic);
+            commit_dynamic_tier();
             m_static_serial = m_serial;
             m_report.static_rebuild = sync_reason;
             return m_device.status("rebuilding the static TLAS tier");
@@ -154,7 +154,7 @@ public:
         scene.instances().for_each(
             [&](InstanceHandle h, const InstanceRecord&) { edit_static(scene, blas, h); });
         rtcCommitScene(m_static);
-        rtcCommitScene(m_dynamic);
+        commit_dynamic_tier();
         m_static_serial = m_serial;
         m_report.static_rebuild = "requested";
         return m_device.status("rebuilding the TLAS");
@@ -180,6 +180,7 @@ public:
         t.static_instances = m_static_count;
         t.dynamic_instances = m_dyn.size();
         t.stale_copies = m_stale_count;
+        t.dynamic_slots = m_dyn_peak;
         t.merge_running = m_merge && !m_merge->done();
         m_report = TlasTiers{};
         return t;
@@ -379,6 +380,7 @@ private:
             s.dyn = int32_t(m_dyn.size());
             rtcAttachGeometryByID(m_dynamic, e.geometry, uint32_t(s.dyn));
             m_dyn.push_back(e);
+            m_dyn_peak = std::max(m_dyn_peak, m_dyn.size());
         }
         DynEntry& e = m_dyn[std::size_t(s.dyn)];
         if (e.blas != blas_scene) {
@@ -484,8 +486,8 @@ private:
 
     /// Commits the dynamic tier if it changed and starts a merge if there is work for one.
     void finish_commit() {
-        if (m_dyn_dirty) rtcCommitScene(m_dynamic);
-        m_dyn_dirty = false;
+        renew_sparse_dynamic_scene();
+        if (m_dyn_dirty) commit_dynamic_tier();
         if (!m_policy.background_merge || m_merge || m_touched.empty()) return;
         std::vector<MergeEntry> entries;
         entries.reserve(m_touched.size());
@@ -505,6 +507,28 @@ private:
         }
         m_merge = std::make_unique<TlasMerge>(m_device, m_arena, m_static_setup, m_static_geoms,
                                               std::move(entries), m_serial);
+    }
+
+    /// An Embree scene's geometry table never shrinks, and every commit of the scene walks all
+    /// of it: a dynamic tier that once held 100,000 instances and now holds 100 would cost a
+    /// walk of 100,000 slots at each update. Once the tier has drained far below its peak, its
+    /// geometries move to a fresh scene (the slots the old one walked go with it).
+    void renew_sparse_dynamic_scene() {
+        if (m_dyn_peak <= SPARSE_FACTOR * m_dyn.size() + SPARSE_SLACK) return;
+        RTCScene fresh = new_scene(m_dynamic_setup);
+        for (uint32_t id = 0; id < m_dyn.size(); ++id)
+            rtcAttachGeometryByID(fresh, m_dyn[id].geometry, id);
+        rtcReleaseScene(m_dynamic);
+        m_dynamic = fresh;
+        m_dyn_peak = m_dyn.size();
+        m_dyn_dirty = true;
+    }
+
+    /// Commits the dynamic tier (in a fresh scene if it has drained).
+    void commit_dynamic_tier() {
+        renew_sparse_dynamic_scene();
+        rtcCommitScene(m_dynamic);
+        m_dyn_dirty = false;
     }
 
     void cancel_merge() {
@@ -627,6 +651,10 @@ private:
 
     RTCScene m_dynamic = nullptr;
     std::vector<DynEntry> m_dyn;  ///< by dynamic-tier geometry id
+    std::size_t m_dyn_peak = 0;   ///< the most geometries m_dynamic has held at once
+    /// A dynamic tier moves to a fresh scene when its scene has more than SPARSE_FACTOR times
+    /// its geometries plus SPARSE_SLACK slots (a walk of 1,024 empty slots costs microseconds).
+    static constexpr std::size_t SPARSE_FACTOR = 4, SPARSE_SLACK = 1024;
     bool m_dyn_dirty = false;
 
     MergeArena m_arena{m_device};  ///< before m_merge: outlives every merge

@@ -74,6 +74,9 @@ struct TlasTiers {
     uint64_t static_instances = 0;   ///< in the static tier (embree: every visible instance)
     uint64_t dynamic_instances = 0;  ///< in the dynamic tier (edited since the static build)
     uint64_t stale_copies = 0;       ///< static-tier copies of edited instances, skipped by rays
+    /// Geometry slots of the dynamic tier's Embree scene, which each update walks: at least
+    /// dynamic_instances, at most a bounded multiple of it once the tier has drained.
+    uint64_t dynamic_slots = 0;
     /// Why this commit rebuilt the static tier itself: "" (it did not), "requested",
     /// "small_scene", "dynamic_tier_full" or "first_build".
     const char* static_rebuild = "";

@@ -109,6 +109,42 @@ TEST(IncrementalTlas, EditsMadeWhileAMergeBuildsStayInTheDynamicTierAfterTheSwap
     EXPECT_EQ(later.tlas.dynamic_instances, 0u);
 }
 
+// Embree never shrinks a scene's geometry table and walks all of it at each commit of the scene.
+// A dynamic tier that held thousands of instances and drained moves to a fresh scene, and the
+// instances edited since still trace as a fresh build of the scene does.
+TEST(IncrementalTlas, ADrainedDynamicTierMovesToAFreshSceneAndTracesAsAFreshBuild) {
+    test::ManyInstances gen(8);
+    auto engine = engine_with(incremental(0.9));
+    ASSERT_TRUE(engine->apply(gen.initial_batch(5000)).has_value());
+    test::commit_ok(*engine);
+    ASSERT_TRUE(engine->apply(gen.moves(3000)).has_value());
+    const RebuildReport big = test::commit_ok(*engine);  // starts a merge
+    ASSERT_EQ(rebuild_reason(big), "");
+    ASSERT_GT(big.tlas.dynamic_instances, 2000u);
+    EXPECT_EQ(big.tlas.dynamic_slots, big.tlas.dynamic_instances);
+
+    engine->wait_for_background();
+    ASSERT_TRUE(engine->apply(gen.moves(3)).has_value());
+    const RebuildReport drained = test::commit_ok(*engine);
+    ASSERT_TRUE(drained.tlas.merge_swapped);
+    EXPECT_GE(drained.tlas.dynamic_instances, 1u);
+    EXPECT_LE(drained.tlas.dynamic_instances, 3u);
+    EXPECT_EQ(drained.tlas.dynamic_slots, drained.tlas.dynamic_instances);
+
+    EngineConfig reference;
+    reference.accel.tlas = TlasKind::Embree;
+    auto scratch = engine_with(reference);
+    ASSERT_TRUE(scratch->apply(engine->read([](const Scene& s) { return s.to_batch(); }))
+                    .has_value());
+    const test::HitFrame shown = test::render(*engine, 0xFFFFFFFFu, nullptr, 192, 128);
+    const test::HitFrame fresh = test::render(*scratch, 0xFFFFFFFFu, nullptr, 192, 128);
+    const std::string diff = test::compare(shown, fresh);
+    EXPECT_TRUE(diff.empty()) << diff;
+    std::size_t hits = 0;
+    for (const auto& id : shown.instance_ids) hits += !id.empty();
+    EXPECT_GT(hits, shown.instance_ids.size() / 10) << "the frame shows the instances";
+}
+
 TEST(IncrementalTlas, SmallScenesRebuildTheWholeTlasAtEachUpdate) {
     test::ManyInstances gen(5);
     auto engine = engine_with(incremental());
