@@ -34,6 +34,22 @@ std::string rebuild_reason(const RebuildReport& r) {
     return r.tlas.static_rebuild;
 }
 
+/// `engine`'s frame has the hits of a fresh Embree build of its scene, and shows instances.
+void expect_the_hits_of_a_fresh_build(Engine& engine) {
+    EngineConfig reference;
+    reference.accel.tlas = TlasKind::Embree;
+    auto scratch = engine_with(reference);
+    ASSERT_TRUE(scratch->apply(engine.read([](const Scene& s) { return s.to_batch(); }))
+                    .has_value());
+    const test::HitFrame shown = test::render(engine, 0xFFFFFFFFu, nullptr, 192, 128);
+    const test::HitFrame fresh = test::render(*scratch, 0xFFFFFFFFu, nullptr, 192, 128);
+    const std::string diff = test::compare(shown, fresh);
+    EXPECT_TRUE(diff.empty()) << diff;
+    std::size_t hits = 0;
+    for (const auto& id : shown.instance_ids) hits += !id.empty();
+    EXPECT_GT(hits, shown.instance_ids.size() / 10) << "the frame shows the instances";
+}
+
 TEST(IncrementalTlas, TheFirstBuildPutsEveryInstanceInTheStaticTier) {
     test::ManyInstances gen(1);
     auto engine = engine_with(incremental());
@@ -130,19 +146,28 @@ TEST(IncrementalTlas, ADrainedDynamicTierMovesToAFreshSceneAndTracesAsAFreshBuil
     EXPECT_GE(drained.tlas.dynamic_instances, 1u);
     EXPECT_LE(drained.tlas.dynamic_instances, 3u);
     EXPECT_EQ(drained.tlas.dynamic_slots, drained.tlas.dynamic_instances);
+    expect_the_hits_of_a_fresh_build(*engine);
+}
 
-    EngineConfig reference;
-    reference.accel.tlas = TlasKind::Embree;
-    auto scratch = engine_with(reference);
-    ASSERT_TRUE(scratch->apply(engine->read([](const Scene& s) { return s.to_batch(); }))
-                    .has_value());
-    const test::HitFrame shown = test::render(*engine, 0xFFFFFFFFu, nullptr, 192, 128);
-    const test::HitFrame fresh = test::render(*scratch, 0xFFFFFFFFu, nullptr, 192, 128);
-    const std::string diff = test::compare(shown, fresh);
-    EXPECT_TRUE(diff.empty()) << diff;
-    std::size_t hits = 0;
-    for (const auto& id : shown.instance_ids) hits += !id.empty();
-    EXPECT_GT(hits, shown.instance_ids.size() / 10) << "the frame shows the instances";
+TEST(IncrementalTlas, ADynamicTierOverItsLimitWaitsForTheMergeUnderWayInsteadOfRebuilding) {
+    test::ManyInstances gen(10);
+    auto engine = engine_with(incremental(0.10));  // 200 of 2000
+    ASSERT_TRUE(engine->apply(gen.initial_batch(2000)).has_value());
+    test::commit_ok(*engine);
+    ASSERT_TRUE(engine->apply(gen.moves(150)).has_value());
+    const RebuildReport first = test::commit_ok(*engine);  // starts a merge of these moves
+    ASSERT_GT(first.tlas.dynamic_instances, 100u);
+
+    // Over the limit with the earlier moves: the merge that holds them is waited for and swapped
+    // in, and only the new moves stay dynamic.
+    ASSERT_TRUE(engine->apply(gen.moves(100)).has_value());
+    const RebuildReport r = test::commit_ok(*engine);
+    EXPECT_EQ(rebuild_reason(r), "");
+    EXPECT_TRUE(r.tlas.merge_swapped);
+    EXPECT_GE(r.tlas.dynamic_instances, 90u);
+    EXPECT_LE(r.tlas.dynamic_instances, 100u);
+    EXPECT_EQ(engine->counters().tlas_static_rebuilds, 1u);  // the first build only
+    expect_the_hits_of_a_fresh_build(*engine);
 }
 
 TEST(IncrementalTlas, SmallScenesRebuildTheWholeTlasAtEachUpdate) {
