@@ -324,7 +324,8 @@ void ClusteredBlas::apply_splice(const MeshRecord& mesh, ClusterSplice& splice) 
 
 void ClusteredBlas::refit(const MeshRecord& mesh, ClusterWork& work) {
     if (!work.splice.empty()) apply_splice(mesh, work.splice);
-    copy_ranges(m_vertices, mesh);    for (std::size_t i = 0; i < work.refit.size(); ++i) {
+    copy_ranges(m_vertices, mesh);
+    for (std::size_t i = 0; i < work.refit.size(); ++i) {
         const uint32_t c = work.refit[i];
         rtcUpdateGeometryBuffer(m_geometries[c], RTC_BUFFER_TYPE_VERTEX, 0);
         rtcCommitGeometry(m_geometries[c]);
