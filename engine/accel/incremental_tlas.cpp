@@ -493,8 +493,7 @@ private:
 
     /// Commits the dynamic tier if it changed and starts a merge if there is work for one.
     void finish_commit() {
-        renew_sparse_dynamic_scene();
-        if (m_dyn_dirty) commit_dynamic_tier();
+        if (m_dyn_dirty || dynamic_scene_sparse()) commit_dynamic_tier();
         if (!m_policy.background_merge || m_merge || m_touched.empty()) return;
         std::vector<MergeEntry> entries;
         entries.reserve(m_touched.size());
@@ -521,7 +520,7 @@ private:
     /// walk of 100,000 slots at each update. Once the tier has drained far below its peak, its
     /// geometries move to a fresh scene (the slots the old one walked go with it).
     void renew_sparse_dynamic_scene() {
-        if (m_dyn_peak <= SPARSE_FACTOR * m_dyn.size() + SPARSE_SLACK) return;
+        if (!dynamic_scene_sparse()) return;
         RTCScene fresh = new_scene(m_dynamic_setup);
         for (uint32_t id = 0; id < m_dyn.size(); ++id)
             rtcAttachGeometryByID(fresh, m_dyn[id].geometry, id);
@@ -529,6 +528,10 @@ private:
         m_dynamic = fresh;
         m_dyn_peak = m_dyn.size();
         m_dyn_dirty = true;
+    }
+
+    bool dynamic_scene_sparse() const {
+        return m_dyn_peak > SPARSE_FACTOR * m_dyn.size() + SPARSE_SLACK;
     }
 
     /// Commits the dynamic tier (in a fresh scene if it has drained).

@@ -567,7 +567,7 @@ TEST(BulkInstances, AFirstCommitOfManyRefreshesTheirShadingInParallelAndCountsEm
     lit.ids.count = lit.transforms.size();
     // The material first: a batch that adds an emissive material recounts every instance.
     test::apply_ok(*engine, test::mesh_edit("quad", make_plane(Vec3(0.4f, 0.0f, 0.4f), 1, 1)),
-             AddMaterial{"glow", glow});
+                   AddMaterial{"glow", glow});
     test::commit_ok(*engine);
     test::apply_ok(*engine, plain, lit);
     auto check = [&](std::size_t emitting) {
