@@ -177,10 +177,12 @@ J tlas_report_schema() {
          {"static_instances", count()},
          {"dynamic_instances", count()},
          {"stale_copies", count()},
+         {"static_array", boolean()},
          {"static_rebuild",
           {{"enum", {"first_build", "small_scene", "dynamic_tier_full", "requested"}}}},
          {"merge", merge}},
-        {"ms", "static_instances", "dynamic_instances", "stale_copies", "static_rebuild", "merge"});
+        {"ms", "static_instances", "dynamic_instances", "stale_copies", "static_array",
+         "static_rebuild", "merge"});
 }
 
 J report_schema() {

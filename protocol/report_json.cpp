@@ -38,6 +38,7 @@ Json report_to_json(const RebuildReport& r) {
         tlas["static_instances"] = r.tlas.static_instances;
         tlas["dynamic_instances"] = r.tlas.dynamic_instances;
         tlas["stale_copies"] = r.tlas.stale_copies;
+        tlas["static_array"] = r.tlas.static_array;
         if (r.tlas.static_rebuild[0] != '\0') tlas["static_rebuild"] = r.tlas.static_rebuild;
         Json merge = {{"swapped", r.tlas.merge_swapped}, {"running", r.tlas.merge_running}};
         if (r.tlas.merge_swapped) merge["build_ms"] = r.tlas.merge_build_ms;

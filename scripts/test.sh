@@ -35,6 +35,14 @@ step "engine tests under AddressSanitizer and UndefinedBehaviorSanitizer (build-
 STRATA_FUZZ_ALSO=strata_engine_tests scripts/run-fuzz.sh --build-only
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     build-fuzz/tests/engine/strata_engine_tests
+# Again for the suites that trace instances, with every static TLAS tier an instance array
+# (CTest runs the whole suite that way; tests/engine/CMakeLists.txt).
+STRATA_TEST_ARRAY_MIN_INSTANCES=0 \
+    ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+    build-fuzz/tests/engine/strata_engine_tests --gtest_brief=1 --gtest_filter="$(printf %s \
+    'Differential.*:IncrementalTlas.*:*LevelOfDetail*:*Motion*:Picking.*:*CoverageRender*:' \
+    '*LeastWorkGroups*:BulkInstances.*:Groups.*:SeparatedInstances.*' \
+    '-IncrementalTlas.ARemovedMeshLeavesTheBlasMemoryEvenWhileStaleCopiesReferenceIt')"
 
 step "engine concurrency tests under ThreadSanitizer (build-tsan/)"
 STRATA_TARGETS=strata_engine_tsan_tests scripts/build.sh build-tsan \
@@ -47,6 +55,7 @@ tsan_options="halt_on_error=1 history_size=7 second_deadlock_stack=1"
 tsan_groups=(
     'IncrementalTlas.*'
     'Differential.ThousandsOfInstancesMatchAFreshBuildThroughMerges*'
+    'InstanceArray.AStale*:Differential.ThousandsOfInstancesInAnInstanceArray*ThroughMerges'
     'ClusteredBlas.RendersDuringLocalEdits*'
     '*BlasSharing.*'
     '*LevelOfDetail.PicksNameTheLevelTheFrameShows*'

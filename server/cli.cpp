@@ -273,6 +273,10 @@ void add_scene_options(CLI::App& app, ServerConfig& c) {
     app.add_option("--tlas-background-merge", c.tlas_background_merge,
                    "Incremental TLAS: rebuild the static tier with the edits in the background "
                    "and swap it in at a later commit (true or false)");
+    app.add_option("--tlas-array-min-instances", c.tlas_array_min_instances,
+                   "Incremental TLAS: a static tier of at least this many instances is one "
+                   "instance array instead of an Embree geometry per instance (less memory, "
+                   "faster rays in big scenes); scenes with motion keys never use one");
 }
 
 /// Lets every option added so far but --help also come from the environment, --x-y from

@@ -36,6 +36,7 @@ EngineConfig engine_config(const ServerConfig& c) {
     config.accel.tlas_policy.max_dynamic_fraction = c.tlas_max_dynamic_fraction;
     config.accel.tlas_policy.min_instances = c.tlas_min_instances;
     config.accel.tlas_policy.background_merge = c.tlas_background_merge;
+    config.accel.tlas_policy.array_min_instances = c.tlas_array_min_instances;
     return config;
 }
 

@@ -75,6 +75,7 @@ struct ServerConfig {
     double tlas_max_dynamic_fraction = 0.10;
     uint32_t tlas_min_instances = 1024;
     bool tlas_background_merge = true;
+    uint32_t tlas_array_min_instances = 65536;  ///< TlasPolicy's (cli_test checks they agree)
 
     // Replicas (server/replica/replica.h): the shared edit log, and read-your-writes waits.
     std::string log_url;              ///< redis://HOST:PORT/STREAM; empty: no shared log

@@ -10,6 +10,7 @@ set(EMBREE_ALLOWED
     engine/accel/embree_tlas.cpp
     engine/accel/instance_transform.cpp
     engine/accel/lod_scenes.cpp
+    engine/accel/instance_array.cpp
     engine/accel/clustered_blas.cpp
     engine/accel/embree_trace.h
     engine/accel/incremental_tlas.cpp

@@ -93,7 +93,12 @@ public:
         m_bytes[int(c)].fetch_sub(bytes, std::memory_order_relaxed);
         to.m_bytes[int(c)].fetch_add(bytes, std::memory_order_relaxed);
     }
-    /// Bytes Embree currently holds for category `c`.
+    /// Counts `bytes` (negative: fewer) that Strata holds for category `c` beside Embree's own
+    /// allocations (an instance array's table).
+    void account(MemoryCategory c, int64_t bytes) {
+        m_bytes[int(c)].fetch_add(bytes, std::memory_order_relaxed);
+    }
+    /// Bytes held for category `c`: Embree's, and what account() added.
     int64_t bytes(MemoryCategory c) const { return m_bytes[int(c)].load(std::memory_order_relaxed); }
 
     /// The first Embree error since the last call, if any (and clears it). A build cancelled on

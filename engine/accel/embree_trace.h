@@ -81,4 +81,55 @@ void deactivate_unused_lanes(const ValidMask16& valid, Packet& rays) {
     }
 }
 
+/// Lane i of an N-wide ray as a single ray.
+inline RTCRay single_ray(RTCRayN* ray, unsigned n, unsigned i) {
+    RTCRay r;
+    r.org_x = RTCRayN_org_x(ray, n, i);
+    r.org_y = RTCRayN_org_y(ray, n, i);
+    r.org_z = RTCRayN_org_z(ray, n, i);
+    r.tnear = RTCRayN_tnear(ray, n, i);
+    r.dir_x = RTCRayN_dir_x(ray, n, i);
+    r.dir_y = RTCRayN_dir_y(ray, n, i);
+    r.dir_z = RTCRayN_dir_z(ray, n, i);
+    r.time = RTCRayN_time(ray, n, i);
+    r.tfar = RTCRayN_tfar(ray, n, i);
+    r.mask = RTCRayN_mask(ray, n, i);
+    r.id = RTCRayN_id(ray, n, i);
+    r.flags = RTCRayN_flags(ray, n, i);
+    return r;
+}
+
+/// Stores single ray `r` in lane i of a 16-wide packet.
+inline void store_lane(RTCRay16& out, unsigned i, const RTCRay& r) {
+    out.org_x[i] = r.org_x, out.org_y[i] = r.org_y, out.org_z[i] = r.org_z;
+    out.dir_x[i] = r.dir_x, out.dir_y[i] = r.dir_y, out.dir_z[i] = r.dir_z;
+    out.tnear[i] = r.tnear, out.tfar[i] = r.tfar, out.time[i] = r.time;
+    out.mask[i] = r.mask, out.id[i] = r.id, out.flags[i] = r.flags;
+}
+
+/// Writes a hit (distance and hit record) into lane i of N-wide `rayhit`.
+inline void put_hit(RTCRayHitN* rayhit, unsigned n, unsigned i, float t, const RTCHit& h) {
+    RTCRayN_tfar(RTCRayHitN_RayN(rayhit, n), n, i) = t;
+    RTCHitN* hit = RTCRayHitN_HitN(rayhit, n);
+    RTCHitN_Ng_x(hit, n, i) = h.Ng_x;
+    RTCHitN_Ng_y(hit, n, i) = h.Ng_y;
+    RTCHitN_Ng_z(hit, n, i) = h.Ng_z;
+    RTCHitN_u(hit, n, i) = h.u;
+    RTCHitN_v(hit, n, i) = h.v;
+    RTCHitN_primID(hit, n, i) = h.primID;
+    RTCHitN_geomID(hit, n, i) = h.geomID;
+    RTCHitN_instID(hit, n, i, 0) = h.instID[0];
+}
+
+/// Writes lane k of 16-wide `from` (a trace of a copy of the rays) into lane i of `rayhit`.
+inline void put_hit(RTCRayHitN* rayhit, unsigned n, unsigned i, const RTCRayHit16& from,
+                    unsigned k) {
+    RTCHit h;
+    h.Ng_x = from.hit.Ng_x[k], h.Ng_y = from.hit.Ng_y[k], h.Ng_z = from.hit.Ng_z[k];
+    h.u = from.hit.u[k], h.v = from.hit.v[k];
+    h.primID = from.hit.primID[k], h.geomID = from.hit.geomID[k];
+    h.instID[0] = from.hit.instID[0][k];
+    put_hit(rayhit, n, i, from.ray.tfar[k], h);
+}
+
 }  // namespace strata::embree_trace

@@ -1,9 +1,10 @@
 // The incremental TLAS: what a commit costs grows with the instances it changes, not with the
 // instances the scene holds.
 //
-//   static tier   an Embree instance scene over (almost) every visible instance, attached by slot.
-//                 It is rebuilt rarely: in the background by a merge, or in the commit itself
-//                 under the fallback policy (TlasPolicy).
+//   static tier   an Embree scene over (almost) every visible instance: instance geometries
+//                 attached by slot, or in big scenes an instance array (instance_array.h) whose
+//                 primitive i is slot i. It is rebuilt rarely: in the background by a merge, or
+//                 in the commit itself under the fallback policy (TlasPolicy).
 //   dynamic tier  a small Embree instance scene over the instances added or edited since the
 //                 static tier was built, attached by dense index (m_dyn maps it to the slot).
 //                 Every update rebuilds it, at a cost proportional to its size.
@@ -33,6 +34,7 @@
 #include "engine/accel/embree_device.h"
 #include "engine/accel/instance_transform.h"
 #include "engine/accel/embree_trace.h"
+#include "engine/accel/instance_array.h"
 #include "engine/accel/tlas.h"
 #include "engine/accel/tlas_merge.h"
 #include "engine/scene/scene.h"
@@ -90,6 +92,8 @@ public:
         release_everything();
         rtcReleaseScene(m_static);
         rtcReleaseScene(m_dynamic);
+        m_table.reset();  // after the scene that reads it
+        account_table();
     }
 
     const char* name() const override { return "incremental"; }
@@ -125,16 +129,7 @@ public:
         }
 
         if (sync_reason) {
-            // Step (fallback): fold both tiers into the static one, apply the edits to it in
-            // place, and rebuild it now, like the embree strategy does.
-            absorb_dynamic_tier();
-            for (InstanceHandle h : delta.changed) edit_static(scene, blas, h);
-            for (InstanceHandle h : delta.blas_changed) {
-                if (holds(h)) edit_static(scene, blas, h);
-            }
-            rtcCommitScene(m_static);
-            commit_dynamic_tier();
-            m_static_serial = m_serial;
+            fold_into_static(scene, blas, delta);
             m_report.static_rebuild = sync_reason;
             return m_device.status("rebuilding the static TLAS tier");
         }
@@ -154,13 +149,8 @@ public:
         MemoryScope memory(m_device, MemoryCategory::Tlas);
         sweep_lod(blas);
         ++m_serial;
-        cancel_merge();
-        release_everything();
-        rtcReleaseScene(m_static);
-        m_static = new_scene(m_static_setup);
-        scene.instances().for_each(
-            [&](InstanceHandle h, const InstanceRecord&) { edit_static(scene, blas, h); });
-        rtcCommitScene(m_static);
+        rebuild_static(scene, blas);
+        commit_static();
         commit_dynamic_tier();
         m_static_serial = m_serial;
         m_report.static_rebuild = "requested";
@@ -188,6 +178,7 @@ public:
         t.dynamic_instances = m_dyn.size();
         t.stale_copies = m_stale_count;
         t.dynamic_slots = m_dyn_peak;
+        t.static_array = m_array;
         t.merge_running = m_merge && !m_merge->done();
         m_report = TlasTiers{};
         return t;
@@ -287,6 +278,7 @@ private:
     struct Slot {
         uint32_t generation = 0;  ///< of the instance held
         bool held = false;
+        bool keyed = false;    ///< the instance held has motion keys (counted in m_keyed)
         bool touched = false;  ///< listed in m_touched
         int32_t dyn = -1;      ///< index in the dynamic tier, -1 none
         uint64_t edited = 0;   ///< commit serial of the last edit
@@ -320,6 +312,17 @@ private:
         return slot < m_static_geoms.size() ? m_static_geoms[slot] : nullptr;
     }
 
+    /// Whether the static tier holds a copy of the instance in `slot`.
+    bool in_static(uint32_t slot) const {
+        if (!m_array) return static_geometry(slot) != nullptr;
+        return slot < m_table->size() && (*m_table)[slot].blas != nullptr;
+    }
+
+    /// Whether a full build of the static tier for `scene` makes an instance array.
+    bool want_array(const Scene& scene) const {
+        return scene.instances().size() >= m_policy.array_min_instances && m_keyed == 0;
+    }
+
     void set_stale(uint32_t slot, bool stale) {
         if (bool(m_stale[slot]) == stale) return;
         m_stale[slot] = stale;
@@ -338,20 +341,24 @@ private:
             s.touched = true;
             m_touched.push_back(slot);
         }
-        set_stale(slot, static_geometry(slot) != nullptr);
+        set_stale(slot, in_static(slot));
     }
 
-    void hold(uint32_t slot, uint32_t generation) {
+    void hold(uint32_t slot, uint32_t generation, bool keyed) {
         Slot& s = m_slots[slot];
         if (!s.held) ++m_held;
         s.held = true;
         s.generation = generation;
+        m_keyed += uint64_t(keyed) - uint64_t(s.keyed);
+        s.keyed = keyed;
     }
 
     void drop(uint32_t slot) {
         Slot& s = m_slots[slot];
         if (s.held) --m_held;
+        if (s.keyed) --m_keyed;
         s.held = false;
+        s.keyed = false;
     }
 
     /// Brings the dynamic tier in line with the scene for `h` (the update path).
@@ -368,7 +375,7 @@ private:
         }
         const InstanceRecord& r = *inst.value();
         touch(h.index);
-        hold(h.index, h.generation);
+        hold(h.index, h.generation, !r.world_motion.empty());
         if (r.world_visible) {
             put_dynamic(h.index, r, blas);
         } else {
@@ -431,7 +438,18 @@ private:
         ++m_static_count;
     }
 
+    /// Writes the instance in `slot` into the array.
+    void put_static_entry(uint32_t slot, const InstanceEntry& e) {
+        if (slot >= m_table->size()) m_table->resize(std::size_t(slot) + 1);
+        m_static_count += uint64_t(e.blas != nullptr) - uint64_t((*m_table)[slot].blas != nullptr);
+        (*m_table)[slot] = e;
+    }
+
     void release_static(uint32_t slot) {
+        if (m_array) {
+            if (in_static(slot)) put_static_entry(slot, {});
+            return;
+        }
         RTCGeometry g = static_geometry(slot);
         if (!g) return;
         rtcDetachGeometry(m_static, slot);
@@ -451,9 +469,15 @@ private:
         }
         m_touched.clear();
         for (uint32_t id = 0; id < m_dyn.size(); ++id) {
+            DynEntry& d = m_dyn[id];
             rtcDetachGeometry(m_dynamic, id);
-            attach_static(m_dyn[id].slot, m_dyn[id].geometry);  // our reference moves over
-            m_slots[m_dyn[id].slot].dyn = -1;
+            if (m_array) {
+                put_static_entry(d.slot, instance_entry(d.blas, d.transform, d.mask));
+                rtcReleaseGeometry(d.geometry);
+            } else {
+                attach_static(d.slot, d.geometry);  // our reference moves over
+            }
+            m_slots[d.slot].dyn = -1;
         }
         m_dyn.clear();
         m_dyn_dirty = false;
@@ -472,7 +496,7 @@ private:
         }
         if (!inst) return;
         const InstanceRecord& r = *inst.value();
-        hold(h.index, h.generation);
+        hold(h.index, h.generation, !r.world_motion.empty());
         s.edited = m_serial;
         if (!r.world_visible) {
             release_static(h.index);
@@ -480,6 +504,10 @@ private:
         }
         STRATA_CHECK(blas.scene(r.mesh.index) != nullptr);
         RTCScene blas_scene = instanced_scene(m_device, blas, h.index, r);
+        if (m_array) {
+            put_static_entry(h.index, instance_entry(blas_scene, r.world.m, r.mask));
+            return;
+        }
         RTCGeometry g = static_geometry(h.index);
         if (!g) {
             g = rtcNewGeometry(m_device.get(), RTC_GEOMETRY_TYPE_INSTANCE);
@@ -491,10 +519,70 @@ private:
         rtcCommitGeometry(g);
     }
 
+    /// The fallback: folds both tiers into the static one, applies `delta` to it in place and
+    /// rebuilds it now, like the embree strategy does. When the scene's size or its motion keys
+    /// call for the other kind of static tier, that is built afresh from the scene instead.
+    void fold_into_static(const Scene& scene, const BlasStore& blas, const TlasDelta& delta) {
+        if (want_array(scene) != m_array) {
+            rebuild_static(scene, blas);
+        } else {
+            absorb_dynamic_tier();
+            for (InstanceHandle h : delta.changed) edit_static(scene, blas, h);
+            for (InstanceHandle h : delta.blas_changed) {
+                if (holds(h)) edit_static(scene, blas, h);
+            }
+            // The edits may have brought motion keys in or taken the last ones out.
+            if (want_array(scene) != m_array) rebuild_static(scene, blas);
+        }
+        commit_static();
+        commit_dynamic_tier();
+        m_static_serial = m_serial;
+    }
+
+    /// Builds the static tier from scratch from `scene`, as an instance array when want_array()
+    /// says so, emptying the dynamic tier; the caller commits it (commit_static).
+    void rebuild_static(const Scene& scene, const BlasStore& blas) {
+        const bool array = want_array(scene);
+        cancel_merge();
+        release_everything();
+        rtcReleaseScene(m_static);
+        m_array = array;
+        if (m_array) {
+            m_table = std::make_shared<InstanceTable>();
+            m_table->reserve(scene.instances().size());
+            m_static = new_instance_array_scene(m_device.get(), m_static_setup, *m_table);
+        } else {
+            m_table.reset();
+            m_static = new_scene(m_static_setup);
+        }
+        scene.instances().for_each(
+            [&](InstanceHandle h, const InstanceRecord&) { edit_static(scene, blas, h); });
+        // Motion keys showed up while writing the array: geometries instead.
+        if (m_array && m_keyed) rebuild_static(scene, blas);
+    }
+
+    void commit_static() {
+        if (m_array && m_static_count == 0) InstanceTable().swap(*m_table);  // frees its buffer
+        if (m_array) update_instance_array_scene(m_static, *m_table);
+        rtcCommitScene(m_static);
+        account_table();
+    }
+
+    /// Counts the array's table as TLAS memory (a replaced table is counted out when its
+    /// successor comes in, though its thread may free it a little later).
+    void account_table() {
+        const auto bytes = int64_t(m_table ? m_table->capacity() * sizeof(InstanceEntry) : 0);
+        m_device.account(MemoryCategory::Tlas, bytes - m_table_bytes);
+        m_table_bytes = bytes;
+    }
+
     /// Commits the dynamic tier if it changed and starts a merge if there is work for one.
     void finish_commit() {
         if (m_dyn_dirty || dynamic_scene_sparse()) commit_dynamic_tier();
         if (!m_policy.background_merge || m_merge || m_touched.empty()) return;
+        // An array holds no motion keys: keyed instances stay in the dynamic tier until it
+        // fills and the fallback builds geometries.
+        if (m_array && m_keyed) return;
         std::vector<MergeEntry> entries;
         entries.reserve(m_touched.size());
         for (uint32_t slot : m_touched) {
@@ -511,8 +599,14 @@ private:
             }
             entries.push_back(e);
         }
-        m_merge = std::make_unique<TlasMerge>(m_device, m_arena, m_static_setup, m_static_geoms,
-                                              std::move(entries), m_serial);
+        if (m_array) {
+            m_merge = std::make_unique<TlasMerge>(m_device, m_arena, m_static_setup,
+                                                  std::shared_ptr<const InstanceTable>(m_table),
+                                                  std::move(entries), m_serial);
+        } else {
+            m_merge = std::make_unique<TlasMerge>(m_device, m_arena, m_static_setup,
+                                                  m_static_geoms, std::move(entries), m_serial);
+        }
     }
 
     /// An Embree scene's geometry table never shrinks, and every commit of the scene walks all
@@ -565,26 +659,13 @@ private:
             m_merge.reset();
             return;
         }
-        std::vector<RTCGeometry> geoms;
-        RTCScene scene = m_merge->take_scene(geoms);
         const uint64_t serial = m_merge->serial();
-
-        // Step: the new table. Geometries of unedited instances are shared with the old table
-        // (one reference between them); the ones the merge replaced or dropped go with the old
-        // scene. Releasing that scene drops a reference per instance and frees its BVH: O(all
-        // instances), so a thread of its own does it, off the commit.
-        std::vector<RTCGeometry> replaced;
-        for (const MergeEntry& e : m_merge->entries()) {
-            RTCGeometry old = static_geometry(e.slot);
-            RTCGeometry now = geoms[e.slot];
-            m_static_count += uint64_t(now != nullptr) - uint64_t(old != nullptr);
-            if (old && old != now) replaced.push_back(old);
+        if (m_array) {
+            swap_in_array();
+        } else {
+            swap_in_geometries();
         }
-        retire(m_static, std::move(replaced), std::move(m_static_geoms));
-        m_static = scene;
-        m_static_geoms = std::move(geoms);
         m_static_serial = serial;
-        if (m_static_geoms.size() > m_slots.size()) grow(uint32_t(m_static_geoms.size() - 1));
 
         // Step: instances the new static tier covers leave the dynamic tier.
         for (const MergeEntry& e : m_merge->entries()) {
@@ -594,7 +675,7 @@ private:
                 set_stale(e.slot, false);
                 s.touched = false;
             } else {
-                set_stale(e.slot, static_geometry(e.slot) != nullptr);
+                set_stale(e.slot, in_static(e.slot));
             }
         }
         m_touched.erase(std::remove_if(m_touched.begin(), m_touched.end(),
@@ -605,17 +686,54 @@ private:
         m_merge.reset();
     }
 
+    /// The merge's static tier of geometries replaces the current one. Geometries of unedited
+    /// instances are shared with the old table (one reference between them); the ones the
+    /// merge replaced or dropped go with the old scene. Releasing that scene drops a reference
+    /// per instance and frees its BVH: O(all instances), so a thread of its own does it.
+    void swap_in_geometries() {
+        std::vector<RTCGeometry> geoms;
+        RTCScene scene = m_merge->take_scene(geoms);
+        std::vector<RTCGeometry> replaced;
+        for (const MergeEntry& e : m_merge->entries()) {
+            RTCGeometry old = static_geometry(e.slot);
+            RTCGeometry now = geoms[e.slot];
+            m_static_count += uint64_t(now != nullptr) - uint64_t(old != nullptr);
+            if (old && old != now) replaced.push_back(old);
+        }
+        retire(m_static, std::move(replaced), std::move(m_static_geoms), nullptr);
+        m_static = scene;
+        m_static_geoms = std::move(geoms);
+        if (m_static_geoms.size() > m_slots.size()) grow(uint32_t(m_static_geoms.size() - 1));
+    }
+
+    /// The merge's instance array replaces the current one (the old scene and table are
+    /// released on a thread of their own, as above).
+    void swap_in_array() {
+        std::shared_ptr<InstanceTable> table;
+        RTCScene scene = m_merge->take_scene(table);
+        for (const MergeEntry& e : m_merge->entries())
+            m_static_count += uint64_t(e.blas != nullptr) - uint64_t(in_static(e.slot));
+        retire(m_static, {}, {}, std::move(m_table));
+        m_static = scene;
+        m_table = std::move(table);
+        account_table();
+        if (m_table->size() > m_slots.size()) grow(uint32_t(m_table->size() - 1));
+    }
+
     /// Releases a replaced static tier on a thread of its own. The commit never waits for one:
     /// finished ones are joined at the next swap, the rest when the TLAS goes or a test waits.
-    void retire(RTCScene scene, std::vector<RTCGeometry> geoms, std::vector<RTCGeometry> table) {
+    void retire(RTCScene scene, std::vector<RTCGeometry> geoms, std::vector<RTCGeometry> table,
+                std::shared_ptr<InstanceTable> array) {
         reap_retired(false);
         auto done = std::make_shared<std::atomic<bool>>(false);
-        std::thread t([&device = m_device, scene, done, geoms = std::move(geoms), table = std::move(table)] {
+        std::thread t([&device = m_device, scene, done, geoms = std::move(geoms),
+                       table = std::move(table), array = std::move(array)]() mutable {
             {
                 TlasMemoryScope memory(device);
                 for (RTCGeometry g : geoms) rtcReleaseGeometry(g);
                 rtcReleaseScene(scene);
             }
+            array.reset();  // after the scene that read it
             done->store(true, std::memory_order_release);
             (void)table;  // freed here too
         });
@@ -640,12 +758,15 @@ private:
             rtcReleaseGeometry(m_dyn[id].geometry);
         }
         m_dyn.clear();
-        for (uint32_t slot = 0; slot < m_static_geoms.size(); ++slot) release_static(slot);
+        if (!m_array) {
+            for (uint32_t slot = 0; slot < m_static_geoms.size(); ++slot) release_static(slot);
+        }
         m_static_geoms.clear();
+        if (m_table) m_table->clear();
         m_slots.clear();
         m_stale.clear();
         m_touched.clear();
-        m_held = m_static_count = m_stale_count = 0;
+        m_held = m_static_count = m_stale_count = m_keyed = 0;
         m_dyn_dirty = true;
     }
 
@@ -660,6 +781,10 @@ private:
 
     RTCScene m_static = nullptr;
     std::vector<RTCGeometry> m_static_geoms;  ///< by slot; read by a running merge
+    bool m_array = false;  ///< the static tier is an instance array over m_table, not geometries
+    std::shared_ptr<InstanceTable> m_table;  ///< by slot (array); read by a running merge
+    int64_t m_table_bytes = 0;               ///< of m_table, counted as TLAS memory
+    uint64_t m_keyed = 0;                    ///< held instances with motion keys
     uint64_t m_static_count = 0;
     uint64_t m_static_serial = 0;  ///< the edits the static tier covers
     std::vector<uint8_t> m_stale;  ///< by slot; read by the static tier's filter

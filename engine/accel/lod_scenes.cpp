@@ -19,6 +19,9 @@ struct LodScenes::Wrapper {
 namespace {
 
 using embree_trace::FilterContext;
+using embree_trace::put_hit;
+using embree_trace::single_ray;
+using embree_trace::store_lane;
 
 /// The slot of the instance whose wrapper the ray is in, or INVALID_ID when it is a stale copy
 /// (the incremental TLAS's static tier skips those).
@@ -33,24 +36,6 @@ bool lane_selected(const LodScenes& lod, const RTCIntersectContext* context, uin
     const Vec3 org(RTCRayN_org_x(ray, n, i), RTCRayN_org_y(ray, n, i), RTCRayN_org_z(ray, n, i));
     const Vec3* eye = reinterpret_cast<const FilterContext*>(context)->lod_eye;
     return lod.selects(slot, eye, org, RTCRayN_time(ray, n, i));
-}
-
-/// Lane i of an N-wide ray as a single ray.
-RTCRay single_ray(RTCRayN* ray, unsigned n, unsigned i) {
-    RTCRay r;
-    r.org_x = RTCRayN_org_x(ray, n, i);
-    r.org_y = RTCRayN_org_y(ray, n, i);
-    r.org_z = RTCRayN_org_z(ray, n, i);
-    r.tnear = RTCRayN_tnear(ray, n, i);
-    r.dir_x = RTCRayN_dir_x(ray, n, i);
-    r.dir_y = RTCRayN_dir_y(ray, n, i);
-    r.dir_z = RTCRayN_dir_z(ray, n, i);
-    r.time = RTCRayN_time(ray, n, i);
-    r.tfar = RTCRayN_tfar(ray, n, i);
-    r.mask = RTCRayN_mask(ray, n, i);
-    r.id = RTCRayN_id(ray, n, i);
-    r.flags = RTCRayN_flags(ray, n, i);
-    return r;
 }
 
 void wrapper_bounds(const RTCBoundsFunctionArguments* args) {
@@ -76,28 +61,10 @@ bool gather(const LodScenes& lod, const RTCIntersectContext* context, uint32_t s
             out.tfar[i] = 0.0f;
             continue;
         }
-        const RTCRay r = single_ray(ray, n, i);
-        out.org_x[i] = r.org_x, out.org_y[i] = r.org_y, out.org_z[i] = r.org_z;
-        out.dir_x[i] = r.dir_x, out.dir_y[i] = r.dir_y, out.dir_z[i] = r.dir_z;
-        out.tnear[i] = r.tnear, out.tfar[i] = r.tfar, out.time[i] = r.time;
-        out.mask[i] = r.mask, out.id[i] = r.id, out.flags[i] = r.flags;
+        store_lane(out, i, single_ray(ray, n, i));
         any = true;
     }
     return any;
-}
-
-/// Writes a BLAS hit (distance and hit record) into lane i of N-wide `rayhit`.
-void put_hit(RTCRayHitN* rayhit, unsigned n, unsigned i, float t, const RTCHit& h) {
-    RTCRayN_tfar(RTCRayHitN_RayN(rayhit, n), n, i) = t;
-    RTCHitN* hit = RTCRayHitN_HitN(rayhit, n);
-    RTCHitN_Ng_x(hit, n, i) = h.Ng_x;
-    RTCHitN_Ng_y(hit, n, i) = h.Ng_y;
-    RTCHitN_Ng_z(hit, n, i) = h.Ng_z;
-    RTCHitN_u(hit, n, i) = h.u;
-    RTCHitN_v(hit, n, i) = h.v;
-    RTCHitN_primID(hit, n, i) = h.primID;
-    RTCHitN_geomID(hit, n, i) = h.geomID;
-    RTCHitN_instID(hit, n, i, 0) = h.instID[0];
 }
 
 // Single rays trace the BLAS as single rays, packets as packets (coherent camera rays keep
@@ -126,13 +93,8 @@ void wrapper_intersect(const RTCIntersectFunctionNArguments* args) {
         local.hit.geomID[i] = local.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect16(lanes.lanes, w->blas, args->context, &local);
     for (unsigned i = 0; i < n; ++i) {
-        if (!lanes[i] || local.hit.geomID[i] == RTC_INVALID_GEOMETRY_ID) continue;
-        RTCHit h;
-        h.Ng_x = local.hit.Ng_x[i], h.Ng_y = local.hit.Ng_y[i], h.Ng_z = local.hit.Ng_z[i];
-        h.u = local.hit.u[i], h.v = local.hit.v[i];
-        h.primID = local.hit.primID[i], h.geomID = local.hit.geomID[i];
-        h.instID[0] = local.hit.instID[0][i];
-        put_hit(args->rayhit, n, i, local.ray.tfar[i], h);
+        if (lanes[i] && local.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID)
+            put_hit(args->rayhit, n, i, local, i);
     }
 }
 

@@ -66,6 +66,11 @@ struct TlasPolicy {
     /// Rebuild the static tier with the edits applied in the background and swap it in at the
     /// next commit after it finishes. Off: the dynamic tier drains only through the fallback.
     bool background_merge = true;
+    /// A static tier of at least this many instances is built as an instance array
+    /// (instance_array.h: 64 bytes an instance instead of an Embree geometry, and faster rays
+    /// past tens of thousands of instances), unless an instance has motion keys; smaller ones
+    /// are Embree instance geometries, which trace faster there (tests/bench/NOTES.md).
+    uint32_t array_min_instances = 65536;
 };
 
 /// What the TLAS looks like after a commit, for the rebuild report.
@@ -77,6 +82,7 @@ struct TlasTiers {
     /// Geometry slots of the dynamic tier's Embree scene, which each update walks: at least
     /// dynamic_instances, at most a bounded multiple of it once the tier has drained.
     uint64_t dynamic_slots = 0;
+    bool static_array = false;  ///< the static tier is an instance array (TlasPolicy)
     /// Why this commit rebuilt the static tier itself: "" (it did not), "requested",
     /// "small_scene", "dynamic_tier_full" or "first_build".
     const char* static_rebuild = "";

@@ -65,9 +65,27 @@ TlasMerge::TlasMerge(EmbreeDevice& device, MergeArena& arena, TlasSceneSetup set
       m_setup(setup),
       m_entries(std::move(entries)),
       m_serial(serial) {
-    m_thread = std::thread([this, &static_geoms] {
+    start([this, &static_geoms] { return make_geometries(static_geoms); });
+}
+
+TlasMerge::TlasMerge(EmbreeDevice& device, MergeArena& arena, TlasSceneSetup setup,
+                     std::shared_ptr<const InstanceTable> table, std::vector<MergeEntry> entries,
+                     uint64_t serial)
+    : m_device(device),
+      m_arena(arena),
+      m_setup(setup),
+      m_entries(std::move(entries)),
+      m_serial(serial),
+      m_from(std::move(table)) {
+    start([this] { return make_array(*m_from); });
+}
+
+void TlasMerge::start(std::function<RTCSceneTy*()> make) {
+    m_thread = std::thread([this, make = std::move(make)] {
         m_device.set_thread_category(int(MemoryCategory::Tlas));
-        run(static_geoms);
+        Stopwatch clock;
+        build(make());
+        m_build_ms = clock.ms();
         m_device.set_thread_category(-1);
         m_done.store(true, std::memory_order_release);
     });
@@ -83,11 +101,9 @@ void TlasMerge::join() {
     if (m_thread.joinable()) m_thread.join();
 }
 
-void TlasMerge::run(const std::vector<RTCGeometryTy*>& static_geoms) {
-    Stopwatch clock;
-    RTCDevice device = m_device.get();
-
+RTCScene TlasMerge::make_geometries(const std::vector<RTCGeometryTy*>& static_geoms) {
     // Step: the new geometry table, with new geometries for the edited instances.
+    RTCDevice device = m_device.get();
     m_geoms = static_geoms;
     uint32_t max_slot = 0;
     for (const MergeEntry& e : m_entries) max_slot = std::max(max_slot, e.slot);
@@ -107,16 +123,29 @@ void TlasMerge::run(const std::vector<RTCGeometryTy*>& static_geoms) {
         m_geoms[e.slot] = g;
     }
 
-    // Step: attach by slot (a hit's instID is the slot) and build, cancellable throughout.
+    // Step: attach by slot (a hit's instID is the slot).
     RTCScene scene = rtcNewScene(device);
     rtcSetSceneBuildQuality(scene, RTCBuildQuality(m_setup.quality));
     rtcSetSceneFlags(scene, RTCSceneFlags(m_setup.flags));
-    rtcSetSceneProgressMonitorFunction(scene, keep_going, &m_cancel);
     for (uint32_t slot = 0; slot < m_geoms.size(); ++slot) {
         if ((slot & 4095) == 0 && m_cancel.load(std::memory_order_relaxed)) break;
         if (m_geoms[slot]) rtcAttachGeometryByID(scene, m_geoms[slot], slot);
     }
-    // Only the build runs inside the low-priority arena.
+    return scene;
+}
+
+RTCScene TlasMerge::make_array(const InstanceTable& from) {
+    m_table = std::make_shared<InstanceTable>(from);
+    for (const MergeEntry& e : m_entries) {
+        if (e.slot >= m_table->size()) m_table->resize(std::size_t(e.slot) + 1);
+        (*m_table)[e.slot] = e.blas ? instance_entry(e.blas, e.transform, e.mask) : InstanceEntry{};
+    }
+    return new_instance_array_scene(m_device.get(), m_setup, *m_table);
+}
+
+void TlasMerge::build(RTCScene scene) {
+    // Cancellable throughout; only the build runs inside the low-priority arena.
+    rtcSetSceneProgressMonitorFunction(scene, keep_going, &m_cancel);
     if (!m_cancel.load(std::memory_order_relaxed)) m_arena.execute([&] { rtcCommitScene(scene); });
     rtcSetSceneProgressMonitorFunction(scene, nullptr, nullptr);
     // A cancelled build leaves the scene unusable; any other failure reports through the device.
@@ -125,7 +154,6 @@ void TlasMerge::run(const std::vector<RTCGeometryTy*>& static_geoms) {
     } else {
         m_scene = scene;
     }
-    m_build_ms = clock.ms();
 }
 
 RTCSceneTy* TlasMerge::take_scene(std::vector<RTCGeometryTy*>& geoms) {
@@ -134,6 +162,13 @@ RTCSceneTy* TlasMerge::take_scene(std::vector<RTCGeometryTy*>& geoms) {
     geoms = std::move(m_geoms);
     m_geoms.clear();
     m_created.clear();  // now owned through `geoms`
+    return scene;
+}
+
+RTCSceneTy* TlasMerge::take_scene(std::shared_ptr<InstanceTable>& table) {
+    RTCSceneTy* scene = m_scene;
+    m_scene = nullptr;
+    table = std::move(m_table);
     return scene;
 }
 

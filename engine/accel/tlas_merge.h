@@ -1,13 +1,15 @@
 #pragma once
-// A background build of the incremental TLAS's next static tier: the current static tier's
-// instance geometries with the edits since its build applied (moved and re-added instances get
-// new geometries, removed and hidden ones are left out), built into a new Embree instance scene
-// on a thread of its own in a low-priority TBB arena, so it never holds up edits, commits or
-// launches. The commit that finds it finished swaps it in (incremental_tlas.cpp).
+// A background build of the incremental TLAS's next static tier: the current static tier with
+// the edits since its build applied, built on a thread of its own in a low-priority TBB arena, so
+// it never holds up edits, commits or launches. The commit that finds it finished swaps it in
+// (incremental_tlas.cpp). A static tier of instance geometries gets new geometries for moved and
+// re-added instances (removed and hidden ones are left out) in a new Embree instance scene; an
+// instance array (instance_array.h) gets a copy of its table with the edits written in.
 //
-// What it reads while it runs is never written meanwhile: the static tier's geometry table and
-// geometries only change when a merge is swapped in or after it was cancelled and joined, and
-// BLASes are only rebuilt or refit after TlasStrategy::before_blas_changes cancelled it.
+// What it reads while it runs is never written meanwhile: the static tier's geometry table,
+// geometries and instance table only change when a merge is swapped in or after it was cancelled
+// and joined, and BLASes are only rebuilt or refit after TlasStrategy::before_blas_changes
+// cancelled it.
 
 #include <array>
 #include <atomic>
@@ -18,6 +20,7 @@
 #include <vector>
 
 #include "engine/accel/embree_device.h"
+#include "engine/accel/instance_array.h"
 #include "engine/core/math.h"
 #include "engine/scene/types.h"
 
@@ -72,6 +75,11 @@ public:
     TlasMerge(EmbreeDevice& device, MergeArena& arena, TlasSceneSetup setup,
               const std::vector<RTCGeometryTy*>& static_geoms, std::vector<MergeEntry> entries,
               uint64_t serial);
+    /// The same for a static tier that is an instance array over `table` (entries with motion
+    /// keys cannot be written into one: the caller starts no such merge).
+    TlasMerge(EmbreeDevice& device, MergeArena& arena, TlasSceneSetup setup,
+              std::shared_ptr<const InstanceTable> table, std::vector<MergeEntry> entries,
+              uint64_t serial);
     /// Cancels, joins and releases whatever was built and not taken.
     ~TlasMerge();
     TlasMerge(const TlasMerge&) = delete;
@@ -93,9 +101,14 @@ public:
     /// Takes the built scene and its geometry table (one reference per geometry: those shared
     /// with the old table carry no new reference, so the caller releases the ones it replaces).
     RTCSceneTy* take_scene(std::vector<RTCGeometryTy*>& geoms);
+    /// Takes the built instance-array scene and its table.
+    RTCSceneTy* take_scene(std::shared_ptr<InstanceTable>& table);
 
 private:
-    void run(const std::vector<RTCGeometryTy*>& static_geoms);
+    void start(std::function<RTCSceneTy*()> make);
+    RTCSceneTy* make_geometries(const std::vector<RTCGeometryTy*>& static_geoms);
+    RTCSceneTy* make_array(const InstanceTable& from);
+    void build(RTCSceneTy* scene);
     void discard();
 
     EmbreeDevice& m_device;
@@ -108,6 +121,8 @@ private:
     RTCSceneTy* m_scene = nullptr;
     std::vector<RTCGeometryTy*> m_geoms;    ///< by slot: the new static tier
     std::vector<RTCGeometryTy*> m_created;  ///< geometries the merge created (ours to release)
+    std::shared_ptr<const InstanceTable> m_from;  ///< the array merged from (array merges)
+    std::shared_ptr<InstanceTable> m_table;       ///< the new static tier's (array merges)
     double m_build_ms = 0.0;
     std::thread m_thread;
 };

@@ -4,14 +4,16 @@ resident memory per instance, with bulk ops against one add_instance edit per in
 run by CTest.
 
     tests/bench/load_bench.py [BUILD_DIR] [--instances N] [--runs R] [--chunk C]
-                              [--modes single,bulk] [--moves K]
+                              [--modes single,bulk,bulk_geometries] [--moves K]
 
 Each run starts a fresh strata-server, adds one 224-triangle sphere (commits it, renders once),
 then times, from the first edit request to the end of the first 64x36 frame:
   - "single": batches of 50,000 add_instance edits (one JSON object each, transform as 12
     numbers), the way in before bulk ops;
   - "bulk": add_instances edits of `--chunk` instances each (ids as a numbered range,
-    transforms as base64 float32 3x4 rows).
+    transforms as base64 float32 3x4 rows);
+  - "bulk_geometries": the same with the static TLAS tier kept as one Embree instance geometry
+    per instance (--tlas-array-min-instances at its maximum), the way before instance arrays.
 Request bodies are built before the clock starts (client-side generation excluded). Resident
 memory (VmRSS of the server) is read after the sphere's frame, after the edits (the scene) and
 after the frame (the TLAS too); bytes per instance are the growth divided by N, beside what
@@ -106,9 +108,10 @@ def move_one(conn, n, k):
     return times
 
 
-def load(binary, bodies, n, moves):
+def load(binary, bodies, n, moves, server_args):
     server = ServerProcess(binary, ["--max-body-mb", "512",
-                                    "--max-scene-instances", str(max(n + 1, 1 << 23))])
+                                    "--max-scene-instances", str(max(n + 1, 1 << 23))]
+                           + server_args)
     try:
         conn = http.client.HTTPConnection("127.0.0.1", server.port, timeout=600)
         post(conn, "/v1/edits", json.dumps(MESH).encode())
@@ -149,12 +152,14 @@ def main():
     a = p.parse_args()
     binary = os.path.join(a.build, "server", "strata-server")
     xs = transforms(a.instances)
-    make = {"single": single_bodies, "bulk": lambda x: bulk_bodies(x, a.chunk)}
+    make = {"single": single_bodies, "bulk": lambda x: bulk_bodies(x, a.chunk),
+            "bulk_geometries": lambda x: bulk_bodies(x, a.chunk)}
+    server_args = {"bulk_geometries": ["--tlas-array-min-instances", str(2**32 - 1)]}
     modes = {m: make[m](xs) for m in a.modes.split(",")}
     results = {m: [] for m in modes}
     for run in range(a.runs):
         for mode, bodies in modes.items():
-            r = load(binary, bodies, a.instances, a.moves)
+            r = load(binary, bodies, a.instances, a.moves, server_args.get(mode, []))
             results[mode].append(r)
             print(f"run {run} {mode}: " + ", ".join(f"{k} {v:.3f}" for k, v in r.items()),
                   flush=True)

@@ -1,7 +1,7 @@
 // TLAS strategies against plain Embree, in one run. Never run by CTest.
 //
 //   build/tests/bench/strata_tlas_bench [--reps N] [--max-instances N] [--verbose 1]
-//       [--rows move,batch,addremove,trace,memory]
+//       [--rows move,batch,addremove,trace,memory,arrays]
 //
 // Scene: n instances of one ~200-triangle sphere (make_sphere(0.45, 16): 224 triangles) on a
 // square grid, 2 TBB threads (STRATA_BENCH_THREADS overrides). Engine side: an Engine with the
@@ -12,7 +12,9 @@
 // (quality HIGH), where an edit is rtcSetGeometryTransform / attach / detach, then
 // rtcCommitScene. Every row is the median of --reps repetitions (default 21). Trace rows time
 // 640x360 primary rays in 4x4 packets, the engine's TLAS and the plain scene alternately, and
-// report the median of per-pair speed ratios.
+// report the median of per-pair speed ratios. The arrays rows trace fresh builds whose static
+// tier is Embree instance geometries, then an instance array (TlasPolicy::array_min_instances),
+// at sizes around the policy's threshold and above.
 
 #include <algorithm>
 #include <chrono>
@@ -20,6 +22,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <random>
 #include <string>
@@ -70,6 +73,17 @@ Camera camera_for(int64_t n) {
     c.target = Vec3(0.5f * extent, 0.0f, 0.45f * extent);
     c.up = Vec3(0.0f, 1.0f, 0.0f);
     c.fov_y_deg = 55.0f;
+    return c;
+}
+
+/// The whole grid from beyond its far edge: most rays pass many distant instances' boxes.
+Camera overview_for(int64_t n) {
+    const float extent = float(side_of(n)) * SPACING;
+    Camera c;
+    c.eye = Vec3(0.5f * extent, 0.25f * extent, 1.1f * extent);
+    c.target = Vec3(0.5f * extent, 0.0f, 0.55f * extent);
+    c.up = Vec3(0.0f, 1.0f, 0.0f);
+    c.fov_y_deg = 45.0f;
     return c;
 }
 
@@ -170,6 +184,7 @@ struct EngineScene {
     std::unique_ptr<Engine> engine;
     std::vector<Affine> transforms;  ///< by instance index "i<k>"
     int64_t n = 0;
+    double first_build_tlas_ms = 0.0;  ///< the first commit's TLAS phase
 };
 
 EngineScene engine_scene(int64_t n, const MeshData& mesh, const TlasPolicy& policy) {
@@ -204,7 +219,8 @@ EngineScene engine_scene(int64_t n, const MeshData& mesh, const TlasPolicy& poli
         std::fprintf(stderr, "apply: %s\n", applied.error().describe().c_str());
         std::exit(1);
     }
-    (void)s.engine->commit();
+    auto first = s.engine->commit();
+    if (first) s.first_build_tlas_ms = first->phases.tlas_ms;
     return s;
 }
 
@@ -481,6 +497,32 @@ void trace_rows(const Options& o, const MeshData& mesh) {
     }
 }
 
+/// Trace speed of a fresh static tier of each kind against plain Embree, from the trace rows'
+/// camera and from overview_for's, and the commit that built it (its TLAS phase).
+void array_rows(const Options& o, const MeshData& mesh) {
+    const int reps = std::max(o.reps, 15);
+    for (const int64_t n : {10000, 20000, 40000, 100000, 1000000}) {
+        if (n > o.max_instances) continue;
+        PlainEmbree plain(mesh);
+        double near[2] = {}, far[2] = {}, build_ms[2] = {};
+        for (const bool array : {false, true}) {
+            TlasPolicy policy;
+            policy.array_min_instances = array ? 0 : std::numeric_limits<uint32_t>::max();
+            EngineScene s = engine_scene(n, mesh, policy);
+            build_ms[array] = s.first_build_tlas_ms;
+            if (!array) plain.build(s.transforms);
+            near[array] = speed_ratio(*s.engine, plain.tlas(), camera_for(n), reps);
+            far[array] = speed_ratio(*s.engine, plain.tlas(), overview_for(n), reps);
+        }
+        std::printf(
+            "| trace, fresh build (%lldk) | speed vs plain Embree, geometries / instance array: "
+            "near %.3fx / %.3fx, overview %.3fx / %.3fx; first build tlas_ms %.1f / %.1f\n",
+            static_cast<long long>(n / 1000), near[0], near[1], far[0], far[1], build_ms[0],
+            build_ms[1]);
+        std::fflush(stdout);
+    }
+}
+
 /// TLAS memory after a fresh build and at its peak while a merge holds a second static tier.
 void memory_rows(const Options& o, const MeshData& mesh) {
     for (int64_t n : {int64_t(100000), int64_t(1000000)}) {
@@ -539,5 +581,6 @@ int main(int argc, char** argv) {
     if (wants("addremove")) add_remove_rows(o, mesh);
     if (wants("trace")) trace_rows(o, mesh);
     if (wants("memory")) memory_rows(o, mesh);
+    if (wants("arrays")) array_rows(o, mesh);
     return 0;
 }

@@ -30,7 +30,7 @@ protected:
         EngineConfig config;
         config.accel.tlas = GetParam();
         config.accel.shared_device = device;
-        auto e = Engine::create(config);
+        auto e = test::create_engine(config);
         EXPECT_TRUE(e.has_value());
         return std::move(e.value());
     }

@@ -321,7 +321,7 @@ TEST(BulkInstances, EmptyBulkEditsDoNothing) {
 TEST(BulkInstances, InstanceBudgetRefusesTheBatch) {
     EngineConfig config;
     config.budget.max_instances = 100;
-    auto made = Engine::create(config);
+    auto made = test::create_engine(config);
     ASSERT_TRUE(made.has_value());
     Engine& engine = *made.value();
     base_scene(engine);

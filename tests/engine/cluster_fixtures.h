@@ -35,7 +35,7 @@ inline EngineConfig clustered_config(uint32_t min_triangles) {
 }
 
 inline std::unique_ptr<Engine> make(const EngineConfig& config) {
-    auto e = Engine::create(config);
+    auto e = test::create_engine(config);
     EXPECT_TRUE(e.has_value());
     return std::move(e.value());
 }

@@ -155,7 +155,7 @@ TEST(Compaction, ARebuildMeasuresAgainAndARemovedMeshLeavesTheSummary) {
 TEST(Compaction, ABigCompactedMeshIsBuiltWholeNeverAsClusters) {
     EngineConfig config;
     config.accel.clusters.min_triangles = 1000;
-    auto created = Engine::create(config);
+    auto created = test::create_engine(config);
     ASSERT_TRUE(created.has_value());
     Engine& engine = *created.value();
     const BuildOptions compact = options(BuildPreference::FastTrace, true, true);

@@ -81,7 +81,7 @@ EngineConfig tlas_config(TlasKind kind, double max_dynamic_fraction, bool merges
 }
 
 std::unique_ptr<Engine> make_engine_with(const EngineConfig& config) {
-    auto engine = Engine::create(config);
+    auto engine = test::create_engine(config);
     EXPECT_TRUE(engine.has_value());
     return std::move(engine.value());
 }
@@ -93,6 +93,8 @@ struct TierCoverage {
     int after_swap = 0;    ///< launches whose commit swapped a merge in
     int with_stale = 0;    ///< launches that traced past stale static copies
     int fallbacks = 0;     ///< commits that rebuilt the static tier for the policy
+    int arrays = 0;      ///< launches whose commit reported an instance-array static tier
+    int geometries = 0;  ///< launches whose commit reported a static tier of geometries
     uint64_t max_dynamic = 0;
 };
 
@@ -102,6 +104,8 @@ void note(TierCoverage& c, const RebuildReport& r) {
     c.after_swap += r.tlas.merge_swapped;
     c.with_stale += r.tlas.stale_copies > 0;
     c.fallbacks += std::string(r.tlas.static_rebuild) == "dynamic_tier_full";
+    c.arrays += r.tlas.static_array;
+    c.geometries += r.tlas.static_instances > 0 && !r.tlas.static_array;
     c.max_dynamic = std::max(c.max_dynamic, r.tlas.dynamic_instances);
 }
 
@@ -186,8 +190,9 @@ void expect_matches_fresh_build(Engine& engine, uint32_t mask, const std::string
 }
 
 void run_many_instances(const EngineConfig& config, uint64_t seed, int rounds,
-                        TierCoverage& coverage) {
+                        TierCoverage& coverage, bool motion_keys = true) {
     test::ManyInstances gen(seed);
+    if (!motion_keys) gen.without_motion_keys();
     auto engine = make_engine_with(config);
     ASSERT_TRUE(engine->apply(gen.initial_batch(MANY)).has_value());
     expect_matches_fresh_build(*engine, 0xFFFFFFFFu, "first build", coverage, true);
@@ -229,6 +234,34 @@ TEST(Differential, ThousandsOfInstancesMatchAFreshBuildThroughMergesAndSwaps) {
     EXPECT_GE(coverage.with_stale, 20);
     EXPECT_GE(coverage.during_merge, 5);
     EXPECT_GE(coverage.after_swap, 5);
+}
+
+// The same with the static tier an instance array (engine/accel/instance_array.h) against
+// Embree's own instances: the same hits, edges and single rays included, through merges
+// (which copy the array) and the fallback (which edits it in place). With motion keys in the
+// scene the static tier is geometries (instance_array_test.cpp).
+void run_instance_array(bool merges) {
+    TierCoverage coverage;
+    EngineConfig config = tlas_config(TlasKind::Incremental, merges ? 0.25 : 0.03, merges);
+    config.accel.tlas_policy.array_min_instances = 0;
+    // Without motion keys: a scene with some has instance geometries (instance_array_test.cpp).
+    run_many_instances(config, merges ? 0x7140004u : 0x7140005u, 16, coverage, false);
+    EXPECT_GE(coverage.arrays, 5);
+    EXPECT_EQ(coverage.geometries, 0);
+    EXPECT_GE(coverage.with_stale, 5);
+    if (merges) {
+        EXPECT_GE(coverage.after_swap, 2);
+    } else {
+        EXPECT_GE(coverage.fallbacks, 1);
+    }
+}
+
+TEST(Differential, ThousandsOfInstancesInAnInstanceArrayMatchAFreshBuildThroughMerges) {
+    run_instance_array(true);
+}
+
+TEST(Differential, ThousandsOfInstancesInAnInstanceArrayMatchAFreshBuildThroughTheFallback) {
+    run_instance_array(false);
 }
 
 TEST(Differential, ThousandsOfInstancesMatchAFreshBuildThroughTheSynchronousFallback) {
@@ -399,7 +432,7 @@ TEST(Differential, GroupsMatchAFlatSceneBuiltFromTheWorldTransforms) {
         RandomGroups edits(0x6A0F0000u + uint64_t(seq));
         EngineConfig config;
         config.accel.tlas = seq % 2 ? TlasKind::Embree : TlasKind::Incremental;
-        auto engine = std::move(Engine::create(config).value());
+        auto engine = std::move(test::create_engine(config).value());
         ASSERT_TRUE(engine->apply(edits.initial()).has_value());
         for (int batch = 0; batch < 16; ++batch) {
             const auto groups_before = edits.groups();

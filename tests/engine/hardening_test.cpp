@@ -64,7 +64,7 @@ MeshData sphere_of(uint64_t triangles) {
 std::unique_ptr<Engine> engine_with_budget(uint64_t triangles, uint64_t vertices) {
     EngineConfig config;
     config.budget = {triangles, vertices};
-    auto engine = Engine::create(config);
+    auto engine = test::create_engine(config);
     EXPECT_TRUE(engine.has_value());
     return std::move(engine.value());
 }

@@ -25,7 +25,7 @@ EngineConfig incremental(double max_dynamic_fraction = 0.10, bool merges = true,
 }
 
 std::unique_ptr<Engine> engine_with(const EngineConfig& config) {
-    auto engine = Engine::create(config);
+    auto engine = test::create_engine(config);
     EXPECT_TRUE(engine.has_value());
     return std::move(engine.value());
 }

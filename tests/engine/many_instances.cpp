@@ -125,7 +125,7 @@ EditBatch ManyInstances::mixed_batch(int edits, bool allow_mesh_edits) {
             UpdateInstance u;
             u.instance = l->id;
             u.mask = chance(0.5) ? 0xFFFFFFFFu : (chance(0.5) ? 0x1u : 0x2u);
-            u.motion = random_keys(l->id, uint32_t(i));
+            if (m_keys) u.motion = random_keys(l->id, uint32_t(i));
             b.edits.emplace_back(std::move(u));
         } else {
             // A wobble refits a mesh's BLAS: every instance of it changes bounds.

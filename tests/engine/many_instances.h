@@ -26,6 +26,8 @@ public:
     /// A random ray mask for a launch (usually all bits).
     uint32_t ray_mask() { return chance(0.75) ? 0xFFFFFFFFu : (chance(0.5) ? 0x1u : 0x2u); }
     std::size_t live() const { return m_live.size(); }
+    /// Mask edits leave motion keys alone from now on (scenes that must stay without keys).
+    void without_motion_keys() { m_keys = false; }
 
 private:
     struct Live {
@@ -46,6 +48,7 @@ private:
     std::vector<std::vector<Vec3>> m_shapes;  ///< each mesh's first positions
     int m_cells = 1;
     int m_next = 0;
+    bool m_keys = true;  ///< mask edits may set or clear motion keys
 };
 
 }  // namespace strata::test

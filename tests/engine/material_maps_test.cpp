@@ -268,7 +268,7 @@ SetCamera straight_on() {
 /// The quad mesh (with `tangents`, when given) in front of the camera; the caller adds material
 /// "m" and quad_instance().
 std::unique_ptr<Engine> quad_scene(EngineConfig config = {}, std::vector<Vec4> tangents = {}) {
-    auto engine = Engine::create(config);
+    auto engine = test::create_engine(config);
     EXPECT_TRUE(engine.has_value());
     AddMesh quad = quad_mesh("quad");
     quad.tangents = std::move(tangents);
@@ -350,7 +350,7 @@ TEST(MaterialMapsRender, UnlitShowsTheTexturedBaseColourExactly) {
 /// The centre colour of the unlit quad whose base-colour texture (red left, blue right) reads
 /// set `set`, the mesh's uvs pointing at the red texel and its uvs1 (when given) at the blue one.
 Vec3 colour_through_uv_set(uint32_t set, bool with_uvs1) {
-    auto engine = Engine::create();
+    auto engine = test::create_engine();
     EXPECT_TRUE(engine.has_value());
     AddMesh quad = quad_mesh("quad");
     quad.uvs = std::vector<Vec2>(4, Vec2(0.25f, 0.5f));

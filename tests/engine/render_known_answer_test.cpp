@@ -222,7 +222,7 @@ struct PoleHit {
 PoleHit look_down_at_pole(bool watertight, uint32_t segments, float radius) {
     EngineConfig config;
     config.accel.watertight = watertight;
-    auto engine = std::move(Engine::create(config).value());
+    auto engine = std::move(test::create_engine(config).value());
     SetCamera down;
     down.eye = Vec3(0.0f, 12.0f, 0.01f);
     down.target = Vec3(0.0f);

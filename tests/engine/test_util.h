@@ -1,6 +1,7 @@
 #pragma once
 // Small builders shared by the engine tests.
 
+#include <cstdlib>
 #include <memory>
 #include <string>
 #include <utility>
@@ -35,8 +36,23 @@ inline Light point_light(Vec3 at, float intensity) {
     return l;
 }
 
+/// Engine::create for the engine tests. STRATA_TEST_ARRAY_MIN_INSTANCES in the environment
+/// overrides the TLAS policy's array_min_instances (CTest runs the suite again with 0: every
+/// static tier an instance array).
+inline Result<std::unique_ptr<Engine>> create_engine(EngineConfig config = {}) {
+    if (const char* v = std::getenv("STRATA_TEST_ARRAY_MIN_INSTANCES"))
+        config.accel.tlas_policy.array_min_instances = uint32_t(std::strtoul(v, nullptr, 10));
+    return Engine::create(config);
+}
+
+/// Whether the suite runs with every static tier an instance array (create_engine).
+inline bool arrays_forced() {
+    const char* v = std::getenv("STRATA_TEST_ARRAY_MIN_INSTANCES");
+    return v && std::strtoul(v, nullptr, 10) == 0;
+}
+
 inline std::unique_ptr<Engine> make_engine() {
-    auto engine = Engine::create();
+    auto engine = create_engine();
     EXPECT_TRUE(engine.has_value()) << (engine.has_value() ? "" : engine.error().describe());
     return std::move(engine.value());
 }
@@ -45,7 +61,7 @@ inline std::unique_ptr<Engine> make_engine() {
 inline std::unique_ptr<Engine> make_engine(TlasKind tlas) {
     EngineConfig config;
     config.accel.tlas = tlas;
-    auto created = Engine::create(config);
+    auto created = create_engine(config);
     if (!created.has_value()) {
         ADD_FAILURE() << created.error().describe();
         return nullptr;

@@ -277,7 +277,7 @@ TEST(TextureRules, TexturesCountAgainstTheTextureBudget) {
     const uint64_t one = 4 * TEXTURE_BYTES_PER_TEXEL + test::four_colour_png().size();
     EngineConfig config;
     config.budget.max_texture_bytes = 4 * one + one / 2;
-    auto engine = std::move(Engine::create(config).value());
+    auto engine = std::move(test::create_engine(config).value());
     apply_ok(*engine, texture_edit("a"), texture_edit("b"), texture_edit("c"), texture_edit("d"));
     const Error e = refused(*engine, batch(texture_edit("e")));
     EXPECT_EQ(e.code, ErrorCode::TooLarge);
@@ -440,7 +440,7 @@ TEST(TextureRules, OnlyTheImagesOwnBytesAreKeptAndTheFileCountsAgainstTheBudget)
     // A file larger than the budget left is refused before its texels are decoded.
     EngineConfig config;
     config.budget.max_texture_bytes = 4 * TEXTURE_BYTES_PER_TEXEL + png.size() - 1;
-    auto small = std::move(Engine::create(config).value());
+    auto small = std::move(test::create_engine(config).value());
     const Error e = refused(*small, batch(texture_edit("p", png)));
     EXPECT_EQ(e.code, ErrorCode::TooLarge);
     EXPECT_THAT(e.message, HasSubstr("bytes left in the texture budget"));

@@ -165,7 +165,7 @@ TEST(RemoveMaterial, RefusedWhileUsed) {
 std::unique_ptr<Engine> engine_with(HistoryLimits limits = {}) {
     EngineConfig config;
     config.history = limits;
-    auto engine = Engine::create(config);
+    auto engine = test::create_engine(config);
     EXPECT_TRUE(engine.has_value());
     return std::move(engine.value());
 }

@@ -215,7 +215,7 @@ TEST(VertexKeys, TheVertexBudgetCountsEveryKey) {
     // 13 (8 + 96) do not; removal, topology changes, a refused batch and clear keep the count.
     EngineConfig config;
     config.budget = {1u << 20, 100};
-    auto created = Engine::create(config);
+    auto created = test::create_engine(config);
     ASSERT_TRUE(created.has_value());
     Engine& engine = *created.value();
     const AddMesh box = test::mesh_edit("box", make_box(Vec3(1.0f)));

@@ -34,6 +34,7 @@ class TypedResultsTest(SceneTestCase):
         self.assertEqual((report.tlas.action, report.tlas.instances), ("update", 1))
         self.assertIsInstance(report.tlas.merge, TlasMerge)
         self.assertFalse(report.tlas.merge.swapped)
+        self.assertIs(report.tlas.static_array, False)  # one instance: an instance geometry
         self.assertEqual(len(report.rebuilt), 1)
         entry = report.rebuilt[0]
         self.assertIsInstance(entry, BlasEntry)

@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include "engine/accel/tlas.h"
 #include "server/auth.h"
 #include "server/past_scenes.h"
 
@@ -97,11 +98,13 @@ TEST(CommandLine, TheTlasStrategyIsIncrementalUnlessToldOtherwise) {
         ScopedEnv env{{"STRATA_TLAS", "embree"}};
         EXPECT_EQ(parse({}).config.tlas, "embree");
     }
+    EXPECT_EQ(parse({}).config.tlas_array_min_instances, TlasPolicy{}.array_min_instances);
     CommandLine cl = parse({"--tlas-max-dynamic-fraction", "0.2", "--tlas-min-instances", "10",
-                            "--tlas-background-merge", "false"});
+                            "--tlas-background-merge", "false", "--tlas-array-min-instances", "0"});
     EXPECT_DOUBLE_EQ(cl.config.tlas_max_dynamic_fraction, 0.2);
     EXPECT_EQ(cl.config.tlas_min_instances, 10u);
     EXPECT_FALSE(cl.config.tlas_background_merge);
+    EXPECT_EQ(cl.config.tlas_array_min_instances, 0u);
 
     std::vector<std::string> args = {"strata-server", "--tlas", "partitioned"};
     std::vector<char*> argv;
