@@ -25,7 +25,10 @@ const InstanceEntry& entry_of(void* user, unsigned prim) {
     return (*static_cast<const InstanceTable*>(user))[prim];
 }
 
-/// Whether Embree's kernels on this CPU fuse multiply-adds (its AVX2 and AVX-512 kernels do).
+/// Whether Embree's kernels on this CPU fuse multiply-adds (its AVX2 and AVX-512 kernels do; a
+/// device configured down to an older ISA would not, and its hits would differ in the last bit).
+/// Everything else here is plain float arithmetic: the build targets no FMA CPU, and ISO C++
+/// does not contract a * b + c on its own.
 bool embree_fuses() {
     static const bool fused = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
     return fused;
