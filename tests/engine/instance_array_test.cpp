@@ -86,9 +86,10 @@ TEST(InstanceArray, AStaleCopyOfARemovedMeshsInstanceIsNeverTraced) {
     EditBatch b;
     b.edits.emplace_back(test::mesh_edit("rock", make_box({0.5f, 0.5f, 0.5f})));
     b.edits.emplace_back(test::mesh_edit("ball", make_sphere(0.5f, 64)));
-    for (int i = 0; i < 2000; ++i)
-        b.edits.emplace_back(
-            test::instance_edit("r" + std::to_string(i), "rock", {float(i % 50), 0, float(i / 50)}));
+    for (int i = 0; i < 2000; ++i) {
+        const Vec3 at(float(i % 50), 0.0f, float(i / 50));
+        b.edits.emplace_back(test::instance_edit("r" + std::to_string(i), "rock", at));
+    }
     b.edits.emplace_back(test::instance_edit("ball-1", "ball", {3, 0.5f, 3}));
     ASSERT_TRUE(engine->apply(std::move(b)).has_value());
     const RebuildReport before = test::commit_ok(*engine);
