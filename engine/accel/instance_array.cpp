@@ -34,6 +34,12 @@ bool embree_fuses() {
     return fused;
 }
 
+/// Whether this CPU runs the sixteen-lane paths below (to_object16, put_hits16).
+bool has_avx512() {
+    static const bool avx512 = __builtin_cpu_supports("avx512f");
+    return avx512;
+}
+
 /// An entry's inverse transform: columns, then the translation.
 struct Inverse {
     float l[3][3];
@@ -122,9 +128,8 @@ __attribute__((target("avx512f"))) void to_object16(const Inverse& t, const Soa&
 
 void to_object(const InstanceEntry& e, const Soa& in, const Soa& out, const int* live,
                unsigned lanes) {
-    static const bool avx512 = __builtin_cpu_supports("avx512f");
     const Inverse t = inverse_of(e);
-    if (lanes == 16 && avx512 && embree_fuses()) {
+    if (lanes == 16 && has_avx512() && embree_fuses()) {
         to_object16(t, in, out);  // dead lanes too: their results are never read
     } else if (embree_fuses()) {
         to_object_fused(t, in, out, live, lanes);
@@ -254,8 +259,7 @@ void array_intersect(const RTCIntersectFunctionNArguments* args) {
     for (unsigned i = 0; i < 16; ++i)
         local.hit.geomID[i] = local.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect16(lanes.lanes, e.blas, &context.ctx, &local);
-    static const bool avx512 = __builtin_cpu_supports("avx512f");
-    if (n == 16 && avx512) {
+    if (n == 16 && has_avx512()) {
         put_hits16(args->rayhit, local);
         return;
     }
