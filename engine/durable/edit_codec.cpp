@@ -563,6 +563,26 @@ void write_tagged(ByteWriter& w, const E& e) {
     write_extras(w, e);
 }
 
+/// Where the field tagged `tag` comes in write_tagged's order for edits of kind `E` (table rows,
+/// texture slots, vertex attributes, strands); -1 when no field of `E` has that tag.
+template <class E>
+int write_rank(uint8_t tag) {
+    int rank = 0, found = -1;
+    auto at = [&](uint8_t t) {
+        if (t == tag && found < 0) found = rank;
+        ++rank;
+    };
+    for_each_carried_row<E>([&](const auto& row) {
+        if (row.info.tag != 0) at(row.info.tag);
+    });
+    if constexpr (HAS_SLOTS<E>)
+        for (const TextureSlotInfo& s : TEXTURE_SLOTS)
+            if (s.tag != 0) at(s.tag);
+    if constexpr (HAS_ATTRIBUTES<E>) for_each_tagged_attribute([&](auto a) { at(a.tag); });
+    if constexpr (HAS_STRANDS<E>) at(STRANDS_TAG);
+    return found;
+}
+
 template <class E>
 void read_tagged(ByteReader& r, E& e) {
     if constexpr (std::is_void_v<typename Carries<E>::Kind> && !HAS_SLOTS<E> && !HAS_ATTRIBUTES<E>)
@@ -570,12 +590,18 @@ void read_tagged(ByteReader& r, E& e) {
     uint8_t count = 0;
     r(count);
     if (r.ok() && count == 0) r.fail("an empty tagged section");
-    uint64_t seen = 0;
+    int last_rank = -1;
     auto& v = carried(e);
     for (uint8_t i = 0; i < count && r.ok(); ++i) {
         uint8_t tag = 0;
         r(tag);
         if (!r.ok()) return;
+        // Only the writer's order decodes: any other would re-encode differently.
+        const int rank = write_rank<E>(tag);
+        if (rank < 0) return r.fail("unknown field tag " + std::to_string(tag));
+        if (rank <= last_rank)
+            return r.fail("field tag " + std::to_string(tag) + " twice or out of order");
+        last_rank = rank;
         bool known = false;
         for_each_carried_row<E>([&](const auto& row) {
             if (row.info.tag == 0 || row.info.tag != tag) return;
@@ -590,11 +616,7 @@ void read_tagged(ByteReader& r, E& e) {
                     r.fail("tagged field " + std::to_string(tag) + " holds its default");
             }
         });
-        if (!known) known = read_extra(r, e, tag);
-        if (!known) return r.fail("unknown field tag " + std::to_string(tag));
-        if (seen & (uint64_t{1} << tag))
-            return r.fail("field tag " + std::to_string(tag) + " twice");
-        seen |= uint64_t{1} << tag;
+        if (!known) read_extra(r, e, tag);
     }
 }
 

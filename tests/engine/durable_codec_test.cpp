@@ -394,6 +394,28 @@ TEST(EditCodec, AnExtensionBitWithNothingToExtendIsRefused) {
     }
 }
 
+TEST(EditCodec, TaggedFieldsOutOfTheWritersOrderAreRefused) {
+    // Found by journal_record_fuzzer: an update_instance whose tagged fields came as motion,
+    // animation, lod_far decoded, then re-encoded in table order (motion, lod_far, animation).
+    UpdateInstance u;
+    u.instance = "a";
+    u.lod_far = 3.0f;
+    u.animation = std::vector<Keyframe>{{0.0f, Affine{}}, {1.5f, Affine::translation({1, 2, 3})}};
+    const std::string written = encoded(EditBatch{{u}});
+    ASSERT_TRUE(durable::decode_batch(written).has_value());
+    // Swap the two tagged fields: [count][4][float][6][u64 count][2 keys] -> [6]...[4][float].
+    const std::size_t section = written.size() - (2 + 4 + 1 + 8 + 2 * sizeof(Keyframe));
+    ASSERT_EQ(uint8_t(written[section]), 2u);
+    ASSERT_EQ(uint8_t(written[section + 1]), 4u);
+    const std::string lod = written.substr(section + 1, 5);
+    const std::string animation = written.substr(section + 6);
+    const std::string swapped = written.substr(0, section + 1) + animation + lod;
+    auto back = durable::decode_batch(swapped);
+    ASSERT_FALSE(back.has_value()) << "decoded to " << encoded(back.value()).size() << " bytes";
+    EXPECT_NE(back.error().message.find("field tag 4 twice or out of order"), std::string::npos)
+        << back.error().message;
+}
+
 TEST(JournalFormat, ATornRecordAtTheEndIsToldFromDamageInTheMiddle) {
     std::string file = durable::segment_header(0);
     std::vector<std::size_t> starts;
