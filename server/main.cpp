@@ -8,6 +8,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include "engine/core/memory_trim.h"
 #include "engine/core/timer.h"
 #include "engine/durable/durable_store.h"
 #include "protocol/demo/demo_models.h"
@@ -315,6 +316,7 @@ int main(int argc, char** argv) {
     if (auto* code = std::get_if<int>(&parsed)) return *code;
     auto& cl = std::get<server::CommandLine>(parsed);
     if (cl.healthcheck) return server::run_healthcheck(cl.config.host, cl.config.port);
+    fix_mmap_threshold();
 
     spdlog::set_default_logger(server::make_safe_logger("strata"));
     spdlog::set_level(spdlog::level::from_str(cl.log_level));
