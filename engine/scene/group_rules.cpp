@@ -33,7 +33,7 @@ Status Scene::apply_edit(AddGroup&& e, UndoLog& undo) {
     if (animated) m_animated_groups.push_back(h);
     ++m_totals.groups;
     children_of(parent.value()).groups.push_back(h);
-    m_group_ids.emplace(std::move(e.id), h);
+    m_group_ids.insert(e.id, h);
     mark(h, GroupDirty::Added);
     return {};
 }

@@ -12,12 +12,6 @@ namespace strata {
 
 namespace {
 
-template <class Map, class H>
-H lookup(const Map& map, std::string_view id) {
-    auto it = map.find(std::string(id));
-    return it == map.end() ? H{} : it->second;
-}
-
 Error stale(const char* kind) {
     return make_error(ErrorCode::StaleHandle, std::string(kind) + " handle is stale or invalid");
 }
@@ -47,22 +41,22 @@ void apply_to(Material& m, const UpdateMaterial& e) {
 }
 
 MeshHandle Scene::find_mesh(std::string_view id) const {
-    return lookup<decltype(m_mesh_ids), MeshHandle>(m_mesh_ids, id);
+    return m_mesh_ids.find(id, m_meshes);
 }
 InstanceHandle Scene::find_instance(std::string_view id) const {
-    return lookup<decltype(m_instance_ids), InstanceHandle>(m_instance_ids, id);
+    return m_instance_ids.find(id, m_instances);
 }
 MaterialHandle Scene::find_material(std::string_view id) const {
-    return lookup<decltype(m_material_ids), MaterialHandle>(m_material_ids, id);
+    return m_material_ids.find(id, m_materials);
 }
 GroupHandle Scene::find_group(std::string_view id) const {
-    return lookup<decltype(m_group_ids), GroupHandle>(m_group_ids, id);
+    return m_group_ids.find(id, m_groups);
 }
 LightHandle Scene::find_light(std::string_view id) const {
-    return lookup<decltype(m_light_ids), LightHandle>(m_light_ids, id);
+    return m_light_ids.find(id, m_lights);
 }
 TextureHandle Scene::find_texture(std::string_view id) const {
-    return lookup<decltype(m_texture_ids), TextureHandle>(m_texture_ids, id);
+    return m_texture_ids.find(id, m_textures);
 }
 
 Result<const MeshRecord*> Scene::mesh(MeshHandle h) const {
@@ -243,12 +237,9 @@ uint64_t Scene::instance_bytes() const {
     const uint64_t slots = (uint64_t(m_instances.slot_count()) + Slots::CHUNK - 1) /
                            Slots::CHUNK * Slots::CHUNK;
     uint64_t bytes = slots * (sizeof(InstanceRecord) + sizeof(uint32_t) + sizeof(uint8_t));
-    // An unordered_map node: the next pointer, the key and value, the cached hash.
-    using Node = std::pair<const std::string, InstanceHandle>;
-    constexpr uint64_t NODE = (sizeof(void*) + sizeof(Node) + sizeof(std::size_t) + 15) / 16 * 16;
-    bytes += m_instance_ids.size() * NODE + m_instance_ids.bucket_count() * sizeof(void*);
+    bytes += m_instance_ids.bytes();
     m_instances.for_each([&](InstanceHandle, const InstanceRecord& r) {
-        bytes += 2 * heap_bytes(r.id) + heap_bytes(r.name);  // the id: in the record and the map
+        bytes += heap_bytes(r.id) + heap_bytes(r.name);
     });
     return bytes + m_instances.size() * 2 * sizeof(InstanceHandle);  // users and children
 }

@@ -8,11 +8,11 @@
 #include <memory>
 #include <string>
 #include <string_view>
-#include <unordered_map>
 #include <vector>
 
 #include "engine/core/cow.h"
 #include "engine/core/handle.h"
+#include "engine/core/id_index.h"
 #include "engine/core/result.h"
 #include "engine/image/texture.h"
 #include "engine/scene/budget.h"
@@ -400,12 +400,12 @@ private:
     /// `dirty` went from 0). Both only grow during a batch, so undo restores their lengths.
     std::vector<InstanceHandle> m_world_instances;
     std::vector<GroupHandle> m_world_groups;
-    std::unordered_map<std::string, GroupHandle> m_group_ids;
-    std::unordered_map<std::string, MeshHandle> m_mesh_ids;
-    std::unordered_map<std::string, InstanceHandle> m_instance_ids;
-    std::unordered_map<std::string, MaterialHandle> m_material_ids;
-    std::unordered_map<std::string, LightHandle> m_light_ids;
-    std::unordered_map<std::string, TextureHandle> m_texture_ids;
+    IdIndex<GroupHandle> m_group_ids;
+    IdIndex<MeshHandle> m_mesh_ids;
+    IdIndex<InstanceHandle> m_instance_ids;
+    IdIndex<MaterialHandle> m_material_ids;
+    IdIndex<LightHandle> m_light_ids;
+    IdIndex<TextureHandle> m_texture_ids;
     Camera m_camera;
     Lighting m_lighting;
     Timeline m_timeline;

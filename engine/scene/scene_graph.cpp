@@ -109,7 +109,7 @@ void Scene::remove_group(GroupHandle g, UndoLog& undo) {
     GroupRecord& r = m_groups.at(g);
     STRATA_CHECK(r.children.empty());
     detach_child(children_of(r.parent).groups, m_groups, r.child_slot);
-    m_group_ids.erase(r.id);
+    m_group_ids.erase(r.id, g);
     m_changes.mark(SceneDirty::Groups);
     --m_totals.groups;
     undo.records.emplace_back(undo::Removed<GroupHandle, GroupRecord>{g, m_groups.take(g)});

@@ -449,7 +449,7 @@ Status Scene::apply_edit(AddMesh&& e, UndoLog& undo) {
     bool reused = false;
     const MeshHandle h = m_meshes.insert(std::move(r), &reused);
     undo.records.emplace_back(undo::Inserted<MeshHandle>{h, reused});
-    m_mesh_ids.emplace(std::move(e.id), h);
+    m_mesh_ids.insert(e.id, h);
     mark(h, MeshDirty::Added);
     return {};
 }
@@ -675,7 +675,7 @@ void Scene::remove_mesh(MeshHandle h, UndoLog& undo) {
     m_totals.key_positions -= r.motion_positions.size();
     m_totals.triangles -= r.triangles.size();
     --m_totals.meshes;
-    m_mesh_ids.erase(r.id);
+    m_mesh_ids.erase(r.id, h);
     undo.records.emplace_back(undo::Removed<MeshHandle, MeshRecord>{h, m_meshes.take(h)});
 }
 
@@ -705,7 +705,7 @@ Status Scene::apply_edit(AddMaterial&& e, UndoLog& undo) {
     const MaterialHandle h =
         m_materials.insert(MaterialRecord{e.id, e.material, {}, textures}, &reused);
     undo.records.emplace_back(undo::Inserted<MaterialHandle>{h, reused});
-    m_material_ids.emplace(std::move(e.id), h);
+    m_material_ids.insert(e.id, h);
     mark(h, MaterialDirty::Added);
     return {};
 }
@@ -760,7 +760,7 @@ Status Scene::apply_edit(RemoveMaterial&& e, UndoLog& undo) {
 void Scene::remove_material(MaterialHandle h, UndoLog& undo) {
     mark(h, {});
     MaterialRecord& r = m_materials.at(h);
-    m_material_ids.erase(r.id);
+    m_material_ids.erase(r.id, h);
     undo.records.emplace_back(
         undo::Removed<MaterialHandle, MaterialRecord>{h, m_materials.take(h)});
 }
@@ -803,7 +803,7 @@ Status Scene::apply_edit(AddTexture&& e, UndoLog& undo) {
     bool reused = false;
     const TextureHandle h = m_textures.insert(std::move(r), &reused);
     undo.records.emplace_back(undo::Inserted<TextureHandle>{h, reused});
-    m_texture_ids.emplace(std::move(e.id), h);
+    m_texture_ids.insert(e.id, h);
     m_changes.mark(SceneDirty::Textures);
     return {};
 }
@@ -830,7 +830,7 @@ Status Scene::apply_edit(RemoveTexture&& e, UndoLog& undo) {
 void Scene::remove_texture(TextureHandle h, UndoLog& undo) {
     TextureRecord& r = m_textures.at(h);
     m_totals.texture_bytes -= r.image->bytes() + r.encoded->size();
-    m_texture_ids.erase(r.id);
+    m_texture_ids.erase(r.id, h);
     m_changes.mark(SceneDirty::Textures);
     undo.records.emplace_back(undo::Removed<TextureHandle, TextureRecord>{h, m_textures.take(h)});
 }
@@ -875,7 +875,7 @@ void Scene::insert_instance(InstanceRecord&& r, std::string&& id, UndoLog& undo)
     mesh.users.mut().push_back(h);
     siblings.push_back(h);
     mark_instance_world(h);
-    m_instance_ids.emplace(std::move(id), h);
+    m_instance_ids.insert(id, h);
     ++m_totals.instances;
     mark(h, InstanceDirty::Added);
 }
@@ -953,7 +953,7 @@ void Scene::remove_instance(InstanceHandle h, UndoLog& undo) {
     detach_child(children_of(r.parent).instances, m_instances, r.child_slot);
     // Listed by its now stale handle, so the commit takes it out of the TLAS.
     mark(h, {});
-    m_instance_ids.erase(r.id);
+    m_instance_ids.erase(r.id, h);
     --m_totals.instances;
     undo.records.emplace_back(
         undo::Removed<InstanceHandle, InstanceRecord>{h, m_instances.take(h)});
@@ -989,7 +989,7 @@ Status Scene::apply_edit(AddLight&& e, UndoLog& undo) {
     bool reused = false;
     const LightHandle h = m_lights.insert(LightRecord{e.id, e.light}, &reused);
     undo.records.emplace_back(undo::Inserted<LightHandle>{h, reused});
-    m_light_ids.emplace(std::move(e.id), h);
+    m_light_ids.insert(e.id, h);
     m_changes.mark(SceneDirty::Lights);
     return {};
 }
@@ -1016,7 +1016,7 @@ Status Scene::apply_edit(RemoveLight&& e, UndoLog& undo) {
 }
 
 void Scene::remove_light(LightHandle h, UndoLog& undo) {
-    m_light_ids.erase(m_lights.at(h).id);
+    m_light_ids.erase(m_lights.at(h).id, h);
     undo.records.emplace_back(undo::Removed<LightHandle, LightRecord>{h, m_lights.take(h)});
     m_changes.mark(SceneDirty::Lights);
 }

@@ -26,23 +26,23 @@ struct Reverser {
     SlotArray<MeshRecord, MeshTag>& meshes;
     SlotArray<InstanceRecord, InstanceTag>& instances;
     SlotArray<MaterialRecord, MaterialTag>& materials;
-    std::unordered_map<std::string, MeshHandle>& mesh_ids;
-    std::unordered_map<std::string, InstanceHandle>& instance_ids;
-    std::unordered_map<std::string, MaterialHandle>& material_ids;
+    IdIndex<MeshHandle>& mesh_ids;
+    IdIndex<InstanceHandle>& instance_ids;
+    IdIndex<MaterialHandle>& material_ids;
     SlotArray<GroupRecord, GroupTag>& groups;
-    std::unordered_map<std::string, GroupHandle>& group_ids;
+    IdIndex<GroupHandle>& group_ids;
     SlotArray<LightRecord, LightTag>& lights;
-    std::unordered_map<std::string, LightHandle>& light_ids;
+    IdIndex<LightHandle>& light_ids;
     Children& root;
     SlotArray<TextureRecord, TextureTag>& textures;
-    std::unordered_map<std::string, TextureHandle>& texture_ids;
+    IdIndex<TextureHandle>& texture_ids;
 
     Children& children_of(GroupHandle parent) {
         return parent.is_null() ? root : groups.at(parent).children;
     }
 
     void operator()(undo::Inserted<MeshHandle>& r) {
-        mesh_ids.erase(meshes.at(r.handle).id);
+        mesh_ids.erase(meshes.at(r.handle).id, r.handle);
         meshes.undo_insert(r.handle, r.reused_slot);
     }
 
@@ -54,17 +54,17 @@ struct Reverser {
         std::vector<InstanceHandle>& siblings = children_of(inst.parent).instances;
         STRATA_CHECK(!siblings.empty() && siblings.back() == r.handle);
         siblings.pop_back();
-        instance_ids.erase(inst.id);
+        instance_ids.erase(inst.id, r.handle);
         instances.undo_insert(r.handle, r.reused_slot);
     }
 
     void operator()(undo::Inserted<MaterialHandle>& r) {
-        material_ids.erase(materials.at(r.handle).id);
+        material_ids.erase(materials.at(r.handle).id, r.handle);
         materials.undo_insert(r.handle, r.reused_slot);
     }
 
     void operator()(undo::Removed<MeshHandle, MeshRecord>& r) {
-        mesh_ids.emplace(r.record.id, r.handle);
+        mesh_ids.insert(r.record.id, r.handle);
         meshes.undo_erase(r.handle, std::move(r.record));
     }
 
@@ -83,7 +83,7 @@ struct Reverser {
         }
         undo_detach_child(children_of(r.record.parent).instances, instances, r.handle,
                           r.record.child_slot);
-        instance_ids.emplace(r.record.id, r.handle);
+        instance_ids.insert(r.record.id, r.handle);
         instances.undo_erase(r.handle, std::move(r.record));
     }
 
@@ -92,14 +92,14 @@ struct Reverser {
         std::vector<GroupHandle>& siblings = children_of(g.parent).groups;
         STRATA_CHECK(!siblings.empty() && siblings.back() == r.handle);
         siblings.pop_back();
-        group_ids.erase(g.id);
+        group_ids.erase(g.id, r.handle);
         groups.undo_insert(r.handle, r.reused_slot);
     }
 
     void operator()(undo::Removed<GroupHandle, GroupRecord>& r) {
         undo_detach_child(children_of(r.record.parent).groups, groups, r.handle,
                           r.record.child_slot);
-        group_ids.emplace(r.record.id, r.handle);
+        group_ids.insert(r.record.id, r.handle);
         groups.undo_erase(r.handle, std::move(r.record));
     }
 
@@ -128,17 +128,17 @@ struct Reverser {
     }
 
     void operator()(undo::Removed<MaterialHandle, MaterialRecord>& r) {
-        material_ids.emplace(r.record.id, r.handle);
+        material_ids.insert(r.record.id, r.handle);
         materials.undo_erase(r.handle, std::move(r.record));
     }
 
     void operator()(undo::Inserted<TextureHandle>& r) {
-        texture_ids.erase(textures.at(r.handle).id);
+        texture_ids.erase(textures.at(r.handle).id, r.handle);
         textures.undo_insert(r.handle, r.reused_slot);
     }
 
     void operator()(undo::Removed<TextureHandle, TextureRecord>& r) {
-        texture_ids.emplace(r.record.id, r.handle);
+        texture_ids.insert(r.record.id, r.handle);
         textures.undo_erase(r.handle, std::move(r.record));
     }
 
@@ -196,12 +196,12 @@ struct Reverser {
     }
 
     void operator()(undo::Inserted<LightHandle>& r) {
-        light_ids.erase(lights.at(r.handle).id);
+        light_ids.erase(lights.at(r.handle).id, r.handle);
         lights.undo_insert(r.handle, r.reused_slot);
     }
 
     void operator()(undo::Removed<LightHandle, LightRecord>& r) {
-        light_ids.emplace(r.record.id, r.handle);
+        light_ids.insert(r.record.id, r.handle);
         lights.undo_erase(r.handle, std::move(r.record));
     }
 
