@@ -85,7 +85,7 @@ void read_updates(OpFields& f, typename K::Update& u) {
 template <class K>
 void write_fields(Json& j, const typename K::Record& r) {
     for_each_field<K>([&](const auto& row) {
-        j[std::string(row.info.name)] = detail::field_json(row.info, r.*(row.record));
+        j[std::string(row.info.name)] = detail::field_json(row.info, record_value(r, row.record));
     });
 }
 

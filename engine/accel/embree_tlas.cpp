@@ -144,8 +144,8 @@ private:
             rtcSetGeometryInstancedScene(t.geometry, blas_scene);
             t.blas = blas_scene;
         }
-        set_instance_transform(t.geometry, r.world.m.data(), r.world_motion,
-                               r.world_interpolation);
+        set_instance_transform(t.geometry, r.world.m.data(), r.rare->world_motion,
+                               r.rare->world_interpolation);
         rtcSetGeometryMask(t.geometry, r.mask);
         if (r.world_visible) {
             rtcEnableGeometry(t.geometry);

@@ -375,7 +375,7 @@ private:
         }
         const InstanceRecord& r = *inst.value();
         touch(h.index);
-        hold(h.index, h.generation, !r.world_motion.empty());
+        hold(h.index, h.generation, !r.rare->world_motion.empty());
         if (r.world_visible) {
             put_dynamic(h.index, r, blas);
         } else {
@@ -402,8 +402,8 @@ private:
             e.blas = blas_scene;
         }
         e.transform = r.world.m;
-        e.keys = r.world_motion;
-        e.interpolation = r.world_interpolation;
+        e.keys = r.rare->world_motion;
+        e.interpolation = r.rare->world_interpolation;
         e.mask = r.mask;
         set_instance_transform(e.geometry, e.transform.data(), e.keys, e.interpolation);
         rtcSetGeometryMask(e.geometry, e.mask);
@@ -496,7 +496,7 @@ private:
         }
         if (!inst) return;
         const InstanceRecord& r = *inst.value();
-        hold(h.index, h.generation, !r.world_motion.empty());
+        hold(h.index, h.generation, !r.rare->world_motion.empty());
         s.edited = m_serial;
         if (!r.world_visible) {
             release_static(h.index);
@@ -514,7 +514,8 @@ private:
             attach_static(h.index, g);
         }
         rtcSetGeometryInstancedScene(g, blas_scene);
-        set_instance_transform(g, r.world.m.data(), r.world_motion, r.world_interpolation);
+        set_instance_transform(g, r.world.m.data(), r.rare->world_motion,
+                               r.rare->world_interpolation);
         rtcSetGeometryMask(g, r.mask);
         rtcCommitGeometry(g);
     }

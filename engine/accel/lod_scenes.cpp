@@ -159,7 +159,7 @@ LodScenes::Wrapper& LodScenes::wrapper(uint32_t mesh_slot) {
 RTCScene LodScenes::instanced_scene(const BlasStore& blas, uint32_t slot,
                                     const InstanceRecord& r) {
     RTCScene mesh_blas = blas.scene(r.mesh.index);
-    if (r.world_lod.empty()) {
+    if (r.rare->world_lod.empty()) {
         m_instances.erase(slot);
         return mesh_blas;
     }
@@ -176,7 +176,9 @@ RTCScene LodScenes::instanced_scene(const BlasStore& blas, uint32_t slot,
         rtcCommitGeometry(rtcGetGeometry(w.scene, 0));
         rtcCommitScene(w.scene);
     }
-    m_instances[slot] = Instance{r.world, r.world_motion, r.world_interpolation, r.world_lod};
+    const InstanceRare& rare = *r.rare;
+    m_instances[slot] =
+        Instance{r.world, rare.world_motion, rare.world_interpolation, rare.world_lod};
     return w.scene;
 }
 

@@ -27,7 +27,7 @@ RTCSceneTy* TlasStrategy::instanced_scene(EmbreeDevice& device, const BlasStore&
                                           uint32_t slot, const InstanceRecord& r) {
     note_blas(blas, slot, r.mesh.index);
     if (!m_lod) {
-        if (r.world_lod.empty()) return blas.scene(r.mesh.index);
+        if (r.rare->world_lod.empty()) return blas.scene(r.mesh.index);
         m_lod = std::make_unique<LodScenes>(device);
     }
     return m_lod->instanced_scene(blas, slot, r);

@@ -146,7 +146,7 @@ bool FrameState::emits(const Scene& scene, uint32_t slot) const {
     // Only triangles are sampled as lights; emitting points and curves are found by bounces, and
     // so are the levels of LOD groups (the table is made here, before a launch's camera chooses
     // which level is drawn).
-    if (!scene.instances().at_slot(slot).world_lod.empty()) return false;
+    if (!scene.instances().at_slot(slot).rare->world_lod.empty()) return false;
     const MeshRecord* mesh = scene.meshes().get(scene.instances().at_slot(slot).mesh);
     if (!mesh || mesh->kind != MeshKind::Triangles) return false;
     const Vec3& e = materials[instances[slot].material].emission;
@@ -170,8 +170,8 @@ FrameState::EmitterChange FrameState::refresh_instance(const Scene& scene, uint3
     shade.mesh_slot = r.mesh.index;
     shade.user_id = r.user_id;
     shade.normal_matrix = r.world.normal_matrix();
-    shade.motion = r.world_motion;
-    shade.interpolation = r.world_interpolation;
+    shade.motion = r.rare->world_motion;
+    shade.interpolation = r.rare->world_interpolation;
     const bool now = emits(scene, slot);
     m_emitter[slot] = now;
     return {int64_t(now) - int64_t(was), was || now};

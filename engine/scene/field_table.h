@@ -22,8 +22,10 @@
 #include <string_view>
 #include <tuple>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
+#include "engine/core/boxed.h"
 #include "engine/core/check.h"
 #include "engine/core/math.h"
 #include "engine/core/result.h"
@@ -92,13 +94,41 @@ struct FieldInfo {
 /// The update edit of a kind that has none.
 struct NoUpdate {};
 
-/// One row. `K` is the kind, `T` the field's value type.
-template <class K, class T>
+/// Where a row's value lives in a record: a member (`T Record::*`), or a member of the box of
+/// rarely set fields a record holds (`InBox`), allocated by the first value other than the
+/// default.
+template <class Record, class Box, class T>
+struct InBox {
+    Boxed<Box> Record::*box;
+    T Box::*member;
+};
+
+template <class R, class T>
+const T& record_value(const R& r, T R::*member) {
+    return r.*member;
+}
+template <class R, class Box, class T>
+const T& record_value(const R& r, InBox<R, Box, T> at) {
+    return (*(r.*(at.box))).*(at.member);
+}
+template <class R, class T, class V>
+void set_record_value(R& r, T R::*member, V&& v) {
+    r.*member = std::forward<V>(v);
+}
+template <class R, class Box, class T, class V>
+void set_record_value(R& r, InBox<R, Box, T> at, V&& v) {
+    Boxed<Box>& box = r.*(at.box);
+    if (!box && v == Boxed<Box>::defaults().*(at.member)) return;
+    box.mut().*(at.member) = std::forward<V>(v);
+}
+
+/// One row. `K` is the kind, `T` the field's value type, `At` where records hold it.
+template <class K, class T, class At = T K::Record::*>
 struct Field {
     using Kind = K;
     using Type = T;
     FieldInfo info;
-    T K::Record::*record;
+    At record;
     T K::Add::*add;
     std::optional<T> K::Update::*update;  ///< null when the kind has no update op
     typename K::Dirty dirty;              ///< what an update of it marks; 0: nothing
@@ -111,9 +141,19 @@ constexpr Field<K, T> field(FieldInfo info, T K::Record::*record, T K::Add::*add
                             typename K::Dirty dirty) {
     return {info, record, add, update, dirty};
 }
+/// A row of kind `K` whose records keep it in their box of rarely set fields.
+template <class K, class Box, class T>
+constexpr Field<K, T, InBox<typename K::Record, Box, T>> field(
+    FieldInfo info, InBox<typename K::Record, Box, T> record, T K::Add::*add,
+    std::type_identity_t<std::optional<T> K::Update::*> update, typename K::Dirty dirty) {
+    return {info, record, add, update, dirty};
+}
 
 /// The three places of member `m` in a kind whose record, add and update edits all name it `m`.
 #define STRATA_FIELD_OF(K, m) &K::Record::m, &K::Add::m, &K::Update::m
+/// The same for a member `m` that records keep in their box `box` of type `Box`.
+#define STRATA_BOXED_FIELD_OF(K, Box, box, m) \
+    InBox<K::Record, Box, decltype(Box::m)>{&K::Record::box, &Box::m}, &K::Add::m, &K::Update::m
 
 /// Kind `K`'s table, built once.
 template <class K>
@@ -129,10 +169,12 @@ constexpr void for_each_field(Fn&& fn) {
 template <class Row, class V>
 constexpr auto& field_in(const Row& row, V& v) {
     using K = typename Row::Kind;
-    if constexpr (std::is_same_v<std::remove_const_t<V>, typename K::Record>)
+    if constexpr (!std::is_same_v<std::remove_const_t<V>, typename K::Record>)
+        return v.*(row.add);
+    else if constexpr (std::is_member_object_pointer_v<decltype(row.record)>)
         return v.*(row.record);
     else
-        return v.*(row.add);
+        return record_value(v, row.record);  // read-only: boxed rows are written by value
 }
 
 /// The row of kind `K` named `name` (a name no row has is a bug in Strata: checked).
@@ -158,15 +200,18 @@ using FieldValues = typename ValuesOf<std::remove_const_t<decltype(FIELDS<K>)>>:
 
 template <class K>
 FieldValues<K> save_fields(const typename K::Record& r) {
-    return std::apply([&](const auto&... row) { return FieldValues<K>{r.*(row.record)...}; },
-                      FIELDS<K>);
+    return std::apply(
+        [&](const auto&... row) { return FieldValues<K>{record_value(r, row.record)...}; },
+        FIELDS<K>);
 }
 
 template <class K>
 void restore_fields(typename K::Record& r, FieldValues<K>&& saved) {
     std::apply(
         [&](const auto&... row) {
-            std::apply([&](auto&... value) { ((r.*(row.record) = std::move(value)), ...); }, saved);
+            std::apply(
+                [&](auto&... value) { (set_record_value(r, row.record, std::move(value)), ...); },
+                saved);
         },
         FIELDS<K>);
 }
@@ -186,13 +231,14 @@ typename K::Update update_from(FieldValues<K>&& saved) {
 /// Copies every field of an add edit into a new record.
 template <class K>
 void copy_added(typename K::Record& r, typename K::Add& a) {
-    for_each_field<K>([&](const auto& row) { r.*(row.record) = std::move(a.*(row.add)); });
+    for_each_field<K>(
+        [&](const auto& row) { set_record_value(r, row.record, std::move(a.*(row.add))); });
 }
 
 /// The fields of a record as an add edit has them (for the batch that rebuilds a scene).
 template <class K>
 void copy_to_add(typename K::Add& a, const typename K::Record& r) {
-    for_each_field<K>([&](const auto& row) { a.*(row.add) = r.*(row.record); });
+    for_each_field<K>([&](const auto& row) { a.*(row.add) = record_value(r, row.record); });
 }
 
 /// Copies the fields an update sets onto a record; returns the dirty bits of what it set.
@@ -202,7 +248,7 @@ DirtyBits<typename K::Dirty> apply_update(typename K::Record& r, const typename 
     for_each_field<K>([&](const auto& row) {
         if (!row.update) return;
         if (const auto& set = u.*(row.update)) {
-            r.*(row.record) = *set;
+            set_record_value(r, row.record, *set);
             bits |= row.dirty;
         }
     });
@@ -214,7 +260,7 @@ template <class K>
 typename K::Update update_to(const typename K::Record& r) {
     typename K::Update u{};
     for_each_field<K>([&](const auto& row) {
-        if (row.update) u.*(row.update) = r.*(row.record);
+        if (row.update) u.*(row.update) = record_value(r, row.record);
     });
     return u;
 }

@@ -192,20 +192,22 @@ constexpr auto InstanceFields::table() {
                   0,
                   true},
                  STRATA_FIELD_OF(K, user_id), InstanceDirty::UserId),
-        field<K>({"name", NAME_DOC, {}, {}, 1, true}, STRATA_FIELD_OF(K, name), InstanceDirty{}),
+        field<K>({"name", NAME_DOC, {}, {}, 1, true},
+                 STRATA_BOXED_FIELD_OF(K, InstanceRare, rare, name), InstanceDirty{}),
         field<K>({"motion",
                   "Motion keys for motion blur: 2 to 129 transforms in the instance's own space, "
                   "evenly spaced over the frame (time 0 to 1) and interpolated linearly; the "
                   "instance at time t is its world transform times the keys at t. [] or absent: "
                   "no motion.",
                   {}, {}, 2},
-                 STRATA_FIELD_OF(K, motion), InstanceDirty::Transform),
-        field<K>({"lod_near", LOD_NEAR_DOC, LOD_DISTANCE, {}, 3}, STRATA_FIELD_OF(K, lod_near),
-                 InstanceDirty::Lod),
-        field<K>({"lod_far", LOD_FAR_DOC, LOD_DISTANCE, {}, 4}, STRATA_FIELD_OF(K, lod_far),
-                 InstanceDirty::Lod),
+                 STRATA_BOXED_FIELD_OF(K, InstanceRare, rare, motion), InstanceDirty::Transform),
+        field<K>({"lod_near", LOD_NEAR_DOC, LOD_DISTANCE, {}, 3},
+                 STRATA_BOXED_FIELD_OF(K, InstanceRare, rare, lod_near), InstanceDirty::Lod),
+        field<K>({"lod_far", LOD_FAR_DOC, LOD_DISTANCE, {}, 4},
+                 STRATA_BOXED_FIELD_OF(K, InstanceRare, rare, lod_far), InstanceDirty::Lod),
         field<K>({"motion_interpolation", INTERPOLATION_DOC, {}, INTERPOLATIONS, 5},
-                 STRATA_FIELD_OF(K, motion_interpolation), InstanceDirty::Transform),
+                 STRATA_BOXED_FIELD_OF(K, InstanceRare, rare, motion_interpolation),
+                 InstanceDirty::Transform),
         field<K>({"animation",
                   "Keyframes: the instance's transform (relative to its parent, as transform) at "
                   "scene times in seconds, increasing; non-empty, they and the scene's time "
@@ -214,9 +216,10 @@ constexpr auto InstanceFields::table() {
                   "Over a frame it moves as they say, so an open shutter blurs it. Not with "
                   "motion. [] or absent: none.",
                   {}, {}, 6},
-                 STRATA_FIELD_OF(K, animation), InstanceDirty::Transform),
+                 STRATA_BOXED_FIELD_OF(K, InstanceRare, rare, animation), InstanceDirty::Transform),
         field<K>({"animation_loop", ANIMATION_LOOP_DOC, {}, {}, 7},
-                 STRATA_FIELD_OF(K, animation_loop), InstanceDirty::Transform),
+                 STRATA_BOXED_FIELD_OF(K, InstanceRare, rare, animation_loop),
+                 InstanceDirty::Transform),
     };
 }
 

@@ -239,7 +239,8 @@ uint64_t Scene::instance_bytes() const {
     uint64_t bytes = slots * (sizeof(InstanceRecord) + sizeof(uint32_t) + sizeof(uint8_t));
     bytes += m_instance_ids.bytes();
     m_instances.for_each([&](InstanceHandle, const InstanceRecord& r) {
-        bytes += heap_bytes(r.id) + heap_bytes(r.name);
+        bytes += heap_bytes(r.id);
+        if (r.rare) bytes += sizeof(InstanceRare) + heap_bytes(r.rare->name);
     });
     return bytes + m_instances.size() * 2 * sizeof(InstanceHandle);  // users and children
 }

@@ -10,6 +10,7 @@
 #include <string_view>
 #include <vector>
 
+#include "engine/core/boxed.h"
 #include "engine/core/cow.h"
 #include "engine/core/handle.h"
 #include "engine/core/id_index.h"
@@ -80,39 +81,53 @@ struct Children {
     bool empty() const { return groups.empty() && instances.empty(); }
 };
 
+/// An instance's fields that nearly every instance leaves at their defaults (a million instances
+/// hold one pointer each instead): held in InstanceRecord::rare, allocated by the first value
+/// set that is not a default.
+struct InstanceRare {
+    std::string name;            ///< display name (object_fields.h)
+    std::vector<Affine> motion;  ///< motion keys in its own space (object_fields.h)
+    float lod_near = 0.0f;       ///< under an LOD group: where it is drawn (lod.h)
+    float lod_far = LOD_NO_LIMIT;
+    MotionInterpolation motion_interpolation = MotionInterpolation::Linear;  ///< of its keys
+    bool animation_loop = false;  ///< its animation repeats (animation.h)
+    /// Keyframes at scene times (animation.h); non-empty: they, not `transform`, place it.
+    std::vector<Keyframe> animation;
+    /// Its world keys over the frame (animation.h: its keys and its groups' composed): what the
+    /// TLAS interpolates, as `world_interpolation` says (empty: still during the frame).
+    std::vector<Affine> world_motion;
+    MotionInterpolation world_interpolation = MotionInterpolation::Linear;  ///< of world_motion
+    /// The LOD groups above it and their conditions, from the flattening (lod.h).
+    LodBands world_lod;
+};
+
 struct InstanceRecord {
     std::string id;
     MeshHandle mesh;
     MaterialHandle material;  ///< null: the mesh's default
     Affine transform;         ///< relative to the parent group (world when at the root)
     bool visible = true;      ///< its own flag; hidden too when a group above it is hidden
-    // Three one-byte fields in the padding before `parent` (a million instances hold them).
-    MotionInterpolation motion_interpolation = MotionInterpolation::Linear;  ///< of its keys
-    bool animation_loop = false;  ///< its animation repeats (animation.h)
-    MotionInterpolation world_interpolation = MotionInterpolation::Linear;  ///< of world_motion
+    bool world_visible = true;
     GroupHandle parent;       ///< null: the root
     uint32_t child_slot = 0;  ///< position in the parent's `Children::instances`
     /// Product of the ancestors' transforms and its own, and whether it and every ancestor are
     /// visible: what the TLAS and shading use. Brought up to date at the end of each applied
     /// batch for the subtrees that batch dirtied.
     Affine world;
-    bool world_visible = true;
     uint32_t mask = 0xFFFFFFFFu;
     uint32_t user_id = 0;
     uint32_t user_slot = 0;  ///< position in the mesh's `users`
     DirtyBits<InstanceDirty> dirty;  ///< since the last commit
-    std::string name = {};           ///< display name (object_fields.h)
-    std::vector<Affine> motion = {};  ///< motion keys in its own space (object_fields.h)
-    /// Its world keys over the frame (animation.h: its keys and its groups' composed): what the
-    /// TLAS interpolates, as `world_interpolation` says (empty: still during the frame).
-    std::vector<Affine> world_motion = {};
-    float lod_near = 0.0f;  ///< under an LOD group: where it is drawn (lod.h)
-    float lod_far = LOD_NO_LIMIT;
-    /// The LOD groups above it and their conditions, from the flattening (lod.h).
-    LodBands world_lod = {};
-    /// Keyframes at scene times (animation.h); non-empty: they, not `transform`, place it.
-    std::vector<Keyframe> animation = {};
+    Boxed<InstanceRare> rare;
 };
+
+/// The rarely set fields of an instance (its box) or of a group (the record itself), for code
+/// shared by both kinds.
+inline const InstanceRare& rare_of(const InstanceRecord& r) {
+    return *r.rare;
+}
+struct GroupRecord;
+inline const GroupRecord& rare_of(const GroupRecord& g);
 
 /// A scene-graph node: its transform and visibility apply to everything below it.
 struct GroupRecord {
@@ -139,6 +154,10 @@ struct GroupRecord {
     std::vector<Affine> world_keys = {};
     MotionInterpolation world_interpolation = MotionInterpolation::Linear;
 };
+
+inline const GroupRecord& rare_of(const GroupRecord& g) {
+    return g;
+}
 
 struct MaterialRecord {
     std::string id;

@@ -131,13 +131,16 @@ namespace {
 /// case, kept off the pose machinery).
 template <class Record>
 bool still(const Record& r, const GroupRecord* parent) {
-    return r.motion.empty() && r.animation.empty() && (!parent || parent->world_keys.empty());
+    const auto& rare = rare_of(r);
+    return rare.motion.empty() && rare.animation.empty() && (!parent || parent->world_keys.empty());
 }
 
 template <class Record>
 FramePose pose_of(const Record& r, const GroupRecord* parent, const Timeline& clock) {
+    const auto& rare = rare_of(r);
     FramePose pose = local_pose(
-        {r.transform, r.motion, r.animation, r.animation_loop, r.motion_interpolation}, clock);
+        {r.transform, rare.motion, rare.animation, rare.animation_loop, rare.motion_interpolation},
+        clock);
     if (!parent) return pose;
     return compose({parent->world, parent->world_keys, parent->world_interpolation}, pose);
 }
@@ -152,7 +155,7 @@ void prune_animated(std::vector<Handle>& list, const Slots& slots) {
     list.erase(std::unique(list.begin(), list.end()), list.end());
     std::erase_if(list, [&](Handle h) {
         const auto* r = slots.get(h);
-        return !r || r->animation.empty();
+        return !r || rare_of(*r).animation.empty();
     });
 }
 
@@ -173,7 +176,8 @@ void Scene::refresh_instance_world(InstanceHandle h, InstanceRecord& r) {
     const GroupRecord* p = m_groups.get(r.parent);
     Affine world;
     std::vector<Affine> keys;
-    MotionInterpolation how = r.motion_interpolation;
+    const InstanceRare& rare = *r.rare;
+    MotionInterpolation how = rare.motion_interpolation;
     if (still(r, p)) {
         world = p ? p->world * r.transform : r.transform;
     } else {
@@ -186,19 +190,23 @@ void Scene::refresh_instance_world(InstanceHandle h, InstanceRecord& r) {
     LodBands lod;
     if (p) {
         visible = visible && p->world_visible;
-        lod = child_lod_bands(&p->world_lod, p->lod, p->world, r.lod_near, r.lod_far);
+        lod = child_lod_bands(&p->world_lod, p->lod, p->world, rare.lod_near, rare.lod_far);
     }
     m_changes.count_world_transforms();
     DirtyBits<InstanceDirty> bits;
-    if (!(world == r.world) || keys != r.world_motion || how != r.world_interpolation)
+    if (!(world == r.world) || keys != rare.world_motion || how != rare.world_interpolation)
         bits |= InstanceDirty::Transform;
     if (visible != r.world_visible) bits |= InstanceDirty::Visibility;
-    if (lod != r.world_lod) bits |= InstanceDirty::Lod;
+    if (lod != rare.world_lod) bits |= InstanceDirty::Lod;
     r.world = world;
     r.world_visible = visible;
-    r.world_lod = std::move(lod);
-    r.world_motion = std::move(keys);
-    r.world_interpolation = how;
+    // Still instances outside LOD groups (nearly all) leave their box empty.
+    if (r.rare || !lod.empty() || !keys.empty() || how != MotionInterpolation::Linear) {
+        InstanceRare& box = r.rare.mut();
+        box.world_lod = std::move(lod);
+        box.world_motion = std::move(keys);
+        box.world_interpolation = how;
+    }
     if (bits.any()) mark(h, bits);
 }
 
@@ -266,14 +274,15 @@ Status Scene::check_world_transforms() const {
         const Affine world = parent_world * i.transform;
         if (const char* why = transform_problem(world))
             return refuse(g, "instance '" + i.id + "'", world.is_finite() ? why : nullptr);
-        for (std::size_t k = 0; k < i.motion.size(); ++k) {
-            const Affine key = world * i.motion[k];
+        const InstanceRare& rare = *i.rare;
+        for (std::size_t k = 0; k < rare.motion.size(); ++k) {
+            const Affine key = world * rare.motion[k];
             if (const char* why = transform_problem(key))
                 return refuse(g, "instance '" + i.id + "' (motion key " + std::to_string(k) + ")",
                               key.is_finite() ? why : nullptr);
         }
-        for (std::size_t k = 0; k < i.animation.size(); ++k) {
-            const Affine key = parent_world * i.animation[k].transform;
+        for (std::size_t k = 0; k < rare.animation.size(); ++k) {
+            const Affine key = parent_world * rare.animation[k].transform;
             if (const char* why = transform_problem(key))
                 return refuse(g, "instance '" + i.id + "' (keyframe " + std::to_string(k) + ")",
                               key.is_finite() ? why : nullptr);
@@ -304,7 +313,7 @@ Status Scene::check_world_transforms() const {
         const InstanceRecord* i = m_instances.get(h);
         const GroupRecord* parent = i ? m_groups.get(i->parent) : nullptr;
         // A root instance's transform passed the field rule; its motion keys times it did not.
-        if (i && !parent && !i->motion.empty()) {
+        if (i && !parent && !i->rare->motion.empty()) {
             if (Status s = check_instance(i->parent, Affine::identity(), *i); !s) return s;
         }
         if (!parent || under_dirty(i->parent)) continue;

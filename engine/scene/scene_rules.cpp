@@ -868,7 +868,7 @@ void Scene::insert_instance(InstanceRecord&& r, std::string&& id, UndoLog& undo)
     std::vector<InstanceHandle>& siblings = children_of(r.parent).instances;
     r.child_slot = static_cast<uint32_t>(siblings.size());
     bool reused = false;
-    const bool animated = !r.animation.empty();
+    const bool animated = !r.rare->animation.empty();
     const InstanceHandle h = m_instances.insert(std::move(r), &reused);
     undo.records.emplace_back(undo::Inserted<InstanceHandle>{h, reused});
     if (animated) m_animated.push_back(h);
@@ -889,7 +889,7 @@ Status Scene::apply_edit(UpdateInstance&& e, UndoLog& undo) {
         if (material.is_null()) return unknown("material", **e.material, "material");
     }
     if (Status s = check_update<InstanceFields>(e); !s) return s;
-    const InstanceRecord& current = m_instances.at(h);
+    const InstanceRare& current = *m_instances.at(h).rare;
     if (Status s = check_lod_range(e.lod_near.value_or(current.lod_near),
                                    e.lod_far.value_or(current.lod_far));
         !s)

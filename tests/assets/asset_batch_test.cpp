@@ -315,7 +315,7 @@ TEST(AssetBatch, NamesFromTheFileBecomeDisplayNamesTheSceneAccepts) {
         EXPECT_EQ(s.material(s.find_material("car.material0")).value()->material.name,
                   "Paint \xEF\xBF\xBD\xEF\xBF\xBD");
         EXPECT_EQ(s.group(s.find_group("car.group0")).value()->name, "Car");
-        const std::string& leaf_name = s.instance(s.find_instance("car.node1")).value()->name;
+        const std::string& leaf_name = s.instance(s.find_instance("car.node1")).value()->rare->name;
         EXPECT_EQ(leaf_name, std::string(MAX_NAME_BYTES, 'x'));
     });
 }

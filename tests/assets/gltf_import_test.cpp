@@ -805,8 +805,8 @@ TEST(GltfAnimation, NodeChannelsBecomeKeyframesAtTheUnionOfTheirTimes) {
     ASSERT_TRUE(engine->apply(std::move(at_one)).has_value());
     engine->read([&](const Scene& s) {
         const InstanceRecord& inst = s.instances().at(s.find_instance("anim.node1"));
-        EXPECT_EQ(inst.animation.size(), 3u);
-        EXPECT_EQ(inst.motion_interpolation, MotionInterpolation::Srt);
+        EXPECT_EQ(inst.rare->animation.size(), 3u);
+        EXPECT_EQ(inst.rare->motion_interpolation, MotionInterpolation::Srt);
         // The group's scale steps to 3 at 1 s: the leaf's point lands at 3 * p + (0, 5, 0).
         const Vec3 w = inst.world.transform_point(Vec3(1, 0, 0));
         EXPECT_NEAR(w.x, 3.0f * p.x, 1e-3f);

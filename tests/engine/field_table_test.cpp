@@ -52,7 +52,7 @@ void expect_updates_reach_the_record() {
     typename K::Record edited{};
     DirtyBits<typename K::Dirty> every_bit;
     for_each_field<K>([&](const auto& row) {
-        edited.*(row.record) = changed(edited.*(row.record));
+        set_record_value(edited, row.record, changed(record_value(edited, row.record)));
         every_bit |= row.dirty;
     });
     typename K::Record fresh{};

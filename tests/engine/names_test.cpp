@@ -50,7 +50,7 @@ void expect_names(const Scene& s) {
     EXPECT_EQ(s.material(s.find_material("m")).value()->material.name, "Rough red");
     EXPECT_EQ(s.mesh(s.find_mesh("tri")).value()->name, "Crate \xc3\xa9");
     EXPECT_EQ(s.group(s.find_group("g")).value()->name, "Left wing");
-    EXPECT_EQ(s.instance(s.find_instance("i")).value()->name, "Crate #1");
+    EXPECT_EQ(s.instance(s.find_instance("i")).value()->rare->name, "Crate #1");
     EXPECT_EQ(s.lights().get(s.find_light("l"))->light.name, "Key light");
 }
 
@@ -95,7 +95,7 @@ TEST(Names, ARenameIsUndoneWithItsBatch) {
     rename.instance = "i";
     rename.name = "Crate #2";
     ASSERT_TRUE(s.apply(EditBatch{{rename}}).has_value());
-    EXPECT_EQ(s.instance(s.find_instance("i")).value()->name, "Crate #2");
+    EXPECT_EQ(s.instance(s.find_instance("i")).value()->rare->name, "Crate #2");
     // A rename is no acceleration work: nothing is marked for the commit.
     EXPECT_TRUE(s.changes().instances().empty());
 }
