@@ -170,8 +170,10 @@ FrameState::EmitterChange FrameState::refresh_instance(const Scene& scene, uint3
     shade.mesh_slot = r.mesh.index;
     shade.user_id = r.user_id;
     shade.normal_matrix = r.world.normal_matrix();
-    shade.motion = r.rare->world_motion;
-    shade.interpolation = r.rare->world_interpolation;
+    if (r.rare->world_motion.empty())
+        shade.motion = {};
+    else
+        shade.motion.mut() = {r.rare->world_motion, r.rare->world_interpolation};
     const bool now = emits(scene, slot);
     m_emitter[slot] = now;
     return {int64_t(now) - int64_t(was), was || now};

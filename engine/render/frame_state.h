@@ -13,6 +13,7 @@
 #include <glm/glm.hpp>
 
 #include "engine/accel/ray.h"
+#include "engine/core/boxed.h"
 #include "engine/image/texture.h"
 #include "engine/render/frame.h"
 #include "engine/render/light_table.h"
@@ -23,18 +24,23 @@ namespace strata {
 /// Index of the built-in default material in FrameState::materials.
 constexpr uint32_t DEFAULT_MATERIAL = 0;
 
+/// An instance's world-space motion keys over the frame (at least two).
+struct ShadeMotion {
+    std::vector<Affine> keys;
+    MotionInterpolation interpolation = MotionInterpolation::Linear;
+};
+
 struct InstanceShade {
     uint32_t material = DEFAULT_MATERIAL;  ///< index into FrameState::materials
     uint32_t mesh_slot = 0;
     uint32_t user_id = 0;           ///< the client's number, for the user_id AOV
     glm::mat3 normal_matrix{1.0f};  ///< object-to-world for normals (without motion)
-    std::vector<Affine> motion;     ///< world-space motion keys; empty: none
-    MotionInterpolation interpolation = MotionInterpolation::Linear;  ///< of `motion`
+    Boxed<ShadeMotion> motion;      ///< empty: still over the frame (nearly every instance)
 
     /// Object-to-world for normals at ray time `time`.
     glm::mat3 normals_at(float time) const {
-        return motion.empty() ? normal_matrix
-                              : motion_at(motion, time, interpolation).normal_matrix();
+        return motion ? motion_at(motion->keys, time, motion->interpolation).normal_matrix()
+                      : normal_matrix;
     }
 };
 

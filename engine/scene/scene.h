@@ -121,14 +121,6 @@ struct InstanceRecord {
     Boxed<InstanceRare> rare;
 };
 
-/// The rarely set fields of an instance (its box) or of a group (the record itself), for code
-/// shared by both kinds.
-inline const InstanceRare& rare_of(const InstanceRecord& r) {
-    return *r.rare;
-}
-struct GroupRecord;
-inline const GroupRecord& rare_of(const GroupRecord& g);
-
 /// A scene-graph node: its transform and visibility apply to everything below it.
 struct GroupRecord {
     std::string id;
@@ -155,6 +147,11 @@ struct GroupRecord {
     MotionInterpolation world_interpolation = MotionInterpolation::Linear;
 };
 
+/// The rarely set fields of an instance (its box) or of a group (the record itself), for code
+/// shared by both kinds.
+inline const InstanceRare& rare_of(const InstanceRecord& r) {
+    return *r.rare;
+}
 inline const GroupRecord& rare_of(const GroupRecord& g) {
     return g;
 }
