@@ -5,8 +5,8 @@
 //                 attached by slot, or in big scenes an instance array (instance_array.h) whose
 //                 primitive i is slot i. It is rebuilt rarely: in the background by a merge, or
 //                 in the commit itself under the fallback policy (TlasPolicy).
-//   dynamic tier  a small Embree instance scene over the instances added or edited since the
-//                 static tier was built, attached by dense index (m_dyn maps it to the slot).
+//   dynamic tier  a small Embree scene over the instances added or edited since the static
+//                 tier was built, by dense index (m_dyn maps it to the slot; dynamic_tier.h).
 //                 Every update rebuilds it, at a cost proportional to its size.
 //   stale copies  an instance edited since the static build still sits in the static tier at its
 //                 old place. Rays skip it through an intersection-context filter that reads a
@@ -31,10 +31,11 @@
 #include <vector>
 
 #include "engine/accel/blas_store.h"
+#include "engine/accel/dynamic_tier.h"
 #include "engine/accel/embree_device.h"
-#include "engine/accel/instance_transform.h"
 #include "engine/accel/embree_trace.h"
 #include "engine/accel/instance_array.h"
+#include "engine/accel/instance_transform.h"
 #include "engine/accel/tlas.h"
 #include "engine/accel/tlas_merge.h"
 #include "engine/scene/scene.h"
@@ -72,18 +73,17 @@ class IncrementalTlas final : public TlasStrategy {
 public:
     IncrementalTlas(EmbreeDevice& device, BuildPreference prefer, bool watertight,
                     const TlasPolicy& policy)
-        : m_device(device), m_policy(policy) {
-        const int robust = watertight ? RTC_SCENE_FLAG_ROBUST : 0;
-        m_static_setup = {
-            prefer == BuildPreference::FastTrace ? RTC_BUILD_QUALITY_MEDIUM : RTC_BUILD_QUALITY_LOW,
-            RTC_SCENE_FLAG_DYNAMIC | robust};
-        // The dynamic tier is rebuilt at every update and stays small: build speed first.
-        m_dynamic_setup = {RTC_BUILD_QUALITY_LOW, RTC_SCENE_FLAG_DYNAMIC | robust};
+        : m_device(device),
+          m_policy(policy),
+          m_static_setup{prefer == BuildPreference::FastTrace ? RTC_BUILD_QUALITY_MEDIUM
+                                                              : RTC_BUILD_QUALITY_LOW,
+                         RTC_SCENE_FLAG_DYNAMIC | (watertight ? RTC_SCENE_FLAG_ROBUST : 0)},
+          // Rebuilt at every update and kept small: build speed first (dynamic_tier.h).
+          m_dyn(device.get(), {RTC_BUILD_QUALITY_LOW, m_static_setup.flags},
+                policy.dynamic_medium_max) {
         m_static = new_scene(m_static_setup);
-        m_dynamic = new_scene(m_dynamic_setup);
         // Empty committed scenes are traceable; launches may come before any instance exists.
         rtcCommitScene(m_static);
-        rtcCommitScene(m_dynamic);
     }
 
     ~IncrementalTlas() override {
@@ -91,7 +91,6 @@ public:
         reap_retired(true);
         release_everything();
         rtcReleaseScene(m_static);
-        rtcReleaseScene(m_dynamic);
         m_table.reset();  // after the scene that reads it
         account_table();
     }
@@ -151,7 +150,7 @@ public:
         ++m_serial;
         rebuild_static(scene, blas);
         commit_static();
-        commit_dynamic_tier();
+        m_dyn.commit();
         m_static_serial = m_serial;
         m_report.static_rebuild = "requested";
         return m_device.status("rebuilding the TLAS");
@@ -177,7 +176,9 @@ public:
         t.static_instances = m_static_count;
         t.dynamic_instances = m_dyn.size();
         t.stale_copies = m_stale_count;
-        t.dynamic_slots = m_dyn_peak;
+        t.dynamic_slots = m_dyn.scene_slots();
+        t.dynamic_quality = m_dyn.quality_name();
+        t.dynamic_array = m_dyn.is_array();
         t.static_array = m_array;
         t.merge_running = m_merge && !m_merge->done();
         m_report = TlasTiers{};
@@ -198,11 +199,11 @@ public:
         std::memcpy(&saved, &ray.ng_x, sizeof saved);
         ray.inst_id = INVALID_ID;
         FilterContext dynamic = dynamic_context(coherent, options);
-        rtcIntersect1(m_dynamic, &dynamic.ctx, reinterpret_cast<RTCRayHit*>(&ray));
+        rtcIntersect1(m_dyn.scene(), &dynamic.ctx, reinterpret_cast<RTCRayHit*>(&ray));
         if (ray.inst_id == INVALID_ID) {
             std::memcpy(&ray.ng_x, &saved, sizeof saved);
         } else {
-            ray.inst_id = m_dyn[ray.inst_id].slot;
+            ray.inst_id = m_dyn.entries()[ray.inst_id].slot;
         }
     }
 
@@ -221,12 +222,13 @@ public:
                     reinterpret_cast<const char*>(&rays) + HIT_BEGIN, HIT_BYTES);
         for (uint32_t i = 0; i < 16; ++i) rays.inst_id[i] = INVALID_ID;
         FilterContext dynamic = dynamic_context(coherent, options);
-        rtcIntersect16(valid.lanes, m_dynamic, &dynamic.ctx, reinterpret_cast<RTCRayHit16*>(&rays));
+        rtcIntersect16(valid.lanes, m_dyn.scene(), &dynamic.ctx,
+                       reinterpret_cast<RTCRayHit16*>(&rays));
         for (uint32_t i = 0; i < 16; ++i) {
             if (!valid.lanes[i]) {
                 rays.inst_id[i] = saved.inst_id[i];
             } else if (rays.inst_id[i] != INVALID_ID) {
-                rays.inst_id[i] = m_dyn[rays.inst_id[i]].slot;
+                rays.inst_id[i] = m_dyn.entries()[rays.inst_id[i]].slot;
             } else {
                 rays.ng_x[i] = saved.ng_x[i];
                 rays.ng_y[i] = saved.ng_y[i];
@@ -257,7 +259,7 @@ public:
         }
         if (!any) return;
         FilterContext dynamic = dynamic_context(false, options);
-        rtcOccluded16(open.lanes, m_dynamic, &dynamic.ctx, reinterpret_cast<RTCRay16*>(&rays));
+        rtcOccluded16(open.lanes, m_dyn.scene(), &dynamic.ctx, reinterpret_cast<RTCRay16*>(&rays));
     }
 
 private:
@@ -269,7 +271,7 @@ private:
     /// The dynamic tier's: applies the options, its instance ids read as slots through m_dyn.
     FilterContext dynamic_context(bool coherent, const TraceOptions& options) const {
         FilterContext c = filter_context(coherent, *this, options);
-        c.slots = reinterpret_cast<const char*>(m_dyn.data()) + offsetof(DynEntry, slot);
+        c.slots = reinterpret_cast<const char*>(m_dyn.entries().data()) + offsetof(DynEntry, slot);
         c.slot_stride = sizeof(DynEntry);
         return c;
     }
@@ -282,17 +284,6 @@ private:
         bool touched = false;  ///< listed in m_touched
         int32_t dyn = -1;      ///< index in the dynamic tier, -1 none
         uint64_t edited = 0;   ///< commit serial of the last edit
-    };
-
-    /// One instance of the dynamic tier, with the state a merge copies.
-    struct DynEntry {
-        RTCGeometry geometry = nullptr;
-        uint32_t slot = 0;
-        RTCScene blas = nullptr;
-        std::array<float, 12> transform{};
-        std::vector<Affine> keys;  ///< world-space motion keys; empty: none
-        MotionInterpolation interpolation = MotionInterpolation::Linear;
-        uint32_t mask = 0;
     };
 
     RTCScene new_scene(const TlasSceneSetup& setup) {
@@ -387,28 +378,9 @@ private:
         STRATA_CHECK(blas.scene(r.mesh.index) != nullptr);
         RTCScene blas_scene = instanced_scene(m_device, blas, slot, r);
         Slot& s = m_slots[slot];
-        if (s.dyn < 0) {
-            DynEntry e;
-            e.geometry = rtcNewGeometry(m_device.get(), RTC_GEOMETRY_TYPE_INSTANCE);
-            e.slot = slot;
-            s.dyn = int32_t(m_dyn.size());
-            rtcAttachGeometryByID(m_dynamic, e.geometry, uint32_t(s.dyn));
-            m_dyn.push_back(e);
-            m_dyn_peak = std::max(m_dyn_peak, m_dyn.size());
-        }
-        DynEntry& e = m_dyn[std::size_t(s.dyn)];
-        if (e.blas != blas_scene) {
-            rtcSetGeometryInstancedScene(e.geometry, blas_scene);
-            e.blas = blas_scene;
-        }
-        e.transform = r.world.m;
-        e.keys = r.rare->world_motion;
-        e.interpolation = r.rare->world_interpolation;
-        e.mask = r.mask;
-        set_instance_transform(e.geometry, e.transform.data(), e.keys, e.interpolation);
-        rtcSetGeometryMask(e.geometry, e.mask);
-        rtcCommitGeometry(e.geometry);
-        m_dyn_dirty = true;
+        if (s.dyn < 0) s.dyn = int32_t(m_dyn.add(slot));
+        m_dyn.set(uint32_t(s.dyn), blas_scene, r.world.m, r.rare->world_motion,
+                  r.rare->world_interpolation, r.mask);
     }
 
     /// Takes `slot` out of the dynamic tier; the last entry moves into its index.
@@ -416,18 +388,9 @@ private:
         Slot& s = m_slots[slot];
         if (s.dyn < 0) return;
         const auto id = uint32_t(s.dyn);
-        const auto last = uint32_t(m_dyn.size() - 1);
-        rtcDetachGeometry(m_dynamic, id);
-        rtcReleaseGeometry(m_dyn[id].geometry);
-        if (id != last) {
-            rtcDetachGeometry(m_dynamic, last);
-            rtcAttachGeometryByID(m_dynamic, m_dyn[last].geometry, id);
-            m_dyn[id] = m_dyn[last];
-            m_slots[m_dyn[id].slot].dyn = int32_t(id);
-        }
-        m_dyn.pop_back();
+        m_dyn.remove(id);
+        if (id < m_dyn.size()) m_slots[m_dyn.entries()[id].slot].dyn = int32_t(id);
         s.dyn = -1;
-        m_dyn_dirty = true;
     }
 
     void attach_static(uint32_t slot, RTCGeometry g) {
@@ -469,18 +432,15 @@ private:
         }
         m_touched.clear();
         for (uint32_t id = 0; id < m_dyn.size(); ++id) {
-            DynEntry& d = m_dyn[id];
-            rtcDetachGeometry(m_dynamic, id);
+            const DynEntry& d = m_dyn.entries()[id];
             if (m_array) {
                 put_static_entry(d.slot, instance_entry(d.blas, d.transform, d.mask));
-                rtcReleaseGeometry(d.geometry);
             } else {
-                attach_static(d.slot, d.geometry);  // our reference moves over
+                attach_static(d.slot, m_dyn.take_geometry(id));  // our reference moves over
             }
             m_slots[d.slot].dyn = -1;
         }
         m_dyn.clear();
-        m_dyn_dirty = false;
     }
 
     /// Brings the static tier in line with the scene for `h`, editing geometries in place (the
@@ -536,7 +496,7 @@ private:
             if (want_array(scene) != m_array) rebuild_static(scene, blas);
         }
         commit_static();
-        commit_dynamic_tier();
+        m_dyn.commit();
         m_static_serial = m_serial;
     }
 
@@ -569,17 +529,22 @@ private:
         account_table();
     }
 
-    /// Counts the array's table as TLAS memory (a replaced table is counted out when its
-    /// successor comes in, though its thread may free it a little later).
+    /// Counts the arrays' tables (the static tier's, the dynamic tier's) as TLAS memory (a
+    /// replaced table is counted out when its successor comes in, though its thread may free it
+    /// a little later).
     void account_table() {
-        const auto bytes = int64_t(m_table ? m_table->capacity() * sizeof(InstanceEntry) : 0);
+        const auto bytes = int64_t(m_table ? m_table->capacity() * sizeof(InstanceEntry) : 0) +
+                           m_dyn.table_bytes();
         m_device.account(MemoryCategory::Tlas, bytes - m_table_bytes);
         m_table_bytes = bytes;
     }
 
     /// Commits the dynamic tier if it changed and starts a merge if there is work for one.
     void finish_commit() {
-        if (m_dyn_dirty || dynamic_scene_sparse()) commit_dynamic_tier();
+        if (m_dyn.needs_commit()) {
+            m_dyn.commit();
+            account_table();
+        }
         if (!m_policy.background_merge || m_merge || m_touched.empty()) return;
         // An array holds no motion keys: keyed instances stay in the dynamic tier until it
         // fills and the fallback builds geometries.
@@ -591,7 +556,7 @@ private:
             e.slot = slot;
             const Slot& s = m_slots[slot];
             if (s.dyn >= 0) {
-                const DynEntry& d = m_dyn[std::size_t(s.dyn)];
+                const DynEntry& d = m_dyn.entries()[std::size_t(s.dyn)];
                 e.blas = d.blas;
                 e.transform = d.transform;
                 e.keys = d.keys;
@@ -608,32 +573,6 @@ private:
             m_merge = std::make_unique<TlasMerge>(m_device, m_arena, m_static_setup,
                                                   m_static_geoms, std::move(entries), m_serial);
         }
-    }
-
-    /// An Embree scene's geometry table never shrinks, and every commit of the scene walks all
-    /// of it: a dynamic tier that once held 100,000 instances and now holds 100 would cost a
-    /// walk of 100,000 slots at each update. Once the tier has drained far below its peak, its
-    /// geometries move to a fresh scene (the slots the old one walked go with it).
-    void renew_sparse_dynamic_scene() {
-        if (!dynamic_scene_sparse()) return;
-        RTCScene fresh = new_scene(m_dynamic_setup);
-        for (uint32_t id = 0; id < m_dyn.size(); ++id)
-            rtcAttachGeometryByID(fresh, m_dyn[id].geometry, id);
-        rtcReleaseScene(m_dynamic);
-        m_dynamic = fresh;
-        m_dyn_peak = m_dyn.size();
-        m_dyn_dirty = true;
-    }
-
-    bool dynamic_scene_sparse() const {
-        return m_dyn_peak > SPARSE_FACTOR * m_dyn.size() + SPARSE_SLACK;
-    }
-
-    /// Commits the dynamic tier (in a fresh scene if it has drained).
-    void commit_dynamic_tier() {
-        renew_sparse_dynamic_scene();
-        rtcCommitScene(m_dynamic);
-        m_dyn_dirty = false;
     }
 
     void cancel_merge() {
@@ -754,10 +693,6 @@ private:
     }
 
     void release_everything() {
-        for (uint32_t id = 0; id < m_dyn.size(); ++id) {
-            rtcDetachGeometry(m_dynamic, id);
-            rtcReleaseGeometry(m_dyn[id].geometry);
-        }
         m_dyn.clear();
         if (!m_array) {
             for (uint32_t slot = 0; slot < m_static_geoms.size(); ++slot) release_static(slot);
@@ -768,13 +703,12 @@ private:
         m_stale.clear();
         m_touched.clear();
         m_held = m_static_count = m_stale_count = m_keyed = 0;
-        m_dyn_dirty = true;
     }
 
     EmbreeDevice& m_device;
     TlasPolicy m_policy;
     TlasSceneSetup m_static_setup;
-    TlasSceneSetup m_dynamic_setup;
+    DynamicTier m_dyn;
 
     std::vector<Slot> m_slots;  ///< by instance slot
     uint64_t m_held = 0;
@@ -791,14 +725,6 @@ private:
     std::vector<uint8_t> m_stale;  ///< by slot; read by the static tier's filter
     uint64_t m_stale_count = 0;
     std::vector<uint32_t> m_touched;  ///< slots edited since the static build
-
-    RTCScene m_dynamic = nullptr;
-    std::vector<DynEntry> m_dyn;  ///< by dynamic-tier geometry id
-    std::size_t m_dyn_peak = 0;   ///< the most geometries m_dynamic has held at once
-    /// A dynamic tier moves to a fresh scene when its scene has more than SPARSE_FACTOR times
-    /// its geometries plus SPARSE_SLACK slots (a walk of 1,024 empty slots costs microseconds).
-    static constexpr std::size_t SPARSE_FACTOR = 4, SPARSE_SLACK = 1024;
-    bool m_dyn_dirty = false;
 
     MergeArena m_arena{m_device};  ///< before m_merge: outlives every merge
     std::unique_ptr<TlasMerge> m_merge;

@@ -71,6 +71,12 @@ struct TlasPolicy {
     /// past tens of thousands of instances), unless an instance has motion keys; smaller ones
     /// are Embree instance geometries, which trace faster there (tests/bench/NOTES.md).
     uint32_t array_min_instances = 65536;
+    /// A dynamic tier of at most this many instances is built at MEDIUM quality (one SAH build),
+    /// one of more than twice as many at LOW (Embree's two-level builder), and one in between
+    /// keeps the quality it has. MEDIUM is the faster build of a few hundred instances and LOW of
+    /// thousands on many threads; each rebuilds every instance of the tier at every update
+    /// (tests/bench/NOTES.md). 0: always LOW.
+    uint32_t dynamic_medium_max = 1024;
 };
 
 /// What the TLAS looks like after a commit, for the rebuild report.
@@ -82,6 +88,10 @@ struct TlasTiers {
     /// Geometry slots of the dynamic tier's Embree scene, which each update walks: at least
     /// dynamic_instances, at most a bounded multiple of it once the tier has drained.
     uint64_t dynamic_slots = 0;
+    /// The build quality of the dynamic tier's last commit (TlasPolicy::dynamic_medium_max):
+    /// "medium" or "low"; "" for a strategy without one.
+    const char* dynamic_quality = "";
+    bool dynamic_array = false;  ///< the dynamic tier is an instance array (dynamic_tier.h)
     bool static_array = false;  ///< the static tier is an instance array (TlasPolicy)
     /// Why this commit rebuilt the static tier itself: "" (it did not), "requested",
     /// "small_scene", "dynamic_tier_full" or "first_build".

@@ -20,7 +20,8 @@ after the frame (the TLAS too); bytes per instance are the growth divided by N, 
 /v1/stats estimates (`memory_bytes.per_instance`). Each figure is
 the median over R runs (default 3); modes alternate within a run. With --moves K, K commits that
 each move one instance (set_transform) follow the first frame, and the commits' own times (the
-report's `ms`) are summarised as p50 and p99. Needs numpy.
+report's `ms`) are summarised as p50 and p99, beside the p50 and p99 of each commit phase, the
+dynamic TLAS tier's size and the number of commits that swapped in a finished merge. Needs numpy.
 """
 
 import argparse
@@ -97,15 +98,31 @@ def percentile(values, p):
 
 
 def move_one(conn, n, k):
-    """K commits each moving one instance; the commits' report times (ms)."""
-    times = []
+    """K commits each moving one instance: the commits' reports."""
+    reports = []
     for j in range(k):
         target = (j * 7919) % n
         edit = {"edits": [{"op": "set_transform", "instance": f"b{target}",
                            "transform": {"translate": [j % 50, 3, 0]}}]}
         post(conn, "/v1/edits", json.dumps(edit).encode())
-        times.append(json.loads(post(conn, "/v1/commit", b"{}"))["ms"])
-    return times
+        reports.append(json.loads(post(conn, "/v1/commit", b"{}")))
+    return reports
+
+
+def move_summary(reports):
+    """p50 / p99 of the commits' times and of their phases, the dynamic tier's size, and how
+    many commits swapped in a finished merge."""
+    out = {"move_one_p50_ms": percentile([r["ms"] for r in reports], 50),
+           "move_one_p99_ms": percentile([r["ms"] for r in reports], 99)}
+    for phase in ("plan_ms", "blas_ms", "tlas_ms", "sync_ms"):
+        values = [r["phases"][phase] for r in reports]
+        out[f"move_{phase[:-3]}_p50_ms"] = percentile(values, 50)
+        out[f"move_{phase[:-3]}_p99_ms"] = percentile(values, 99)
+    dynamic = [r["tlas"]["dynamic_instances"] for r in reports]
+    out["move_dynamic_p50"] = percentile(dynamic, 50)
+    out["move_dynamic_max"] = max(dynamic)
+    out["move_swaps"] = sum(1 for r in reports if r["tlas"]["merge"]["swapped"])
+    return out
 
 
 def load(binary, bodies, n, moves, server_args):
@@ -132,9 +149,7 @@ def load(binary, bodies, n, moves, server_args):
                   "bytes_per_instance": (frame - base) / n,
                   "stats_per_instance": stats["memory_bytes"]["per_instance"]}
         if moves:
-            times = move_one(conn, n, moves)
-            result["move_one_p50_ms"] = percentile(times, 50)
-            result["move_one_p99_ms"] = percentile(times, 99)
+            result.update(move_summary(move_one(conn, n, moves)))
         conn.close()
         return result
     finally:

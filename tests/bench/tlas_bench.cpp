@@ -1,7 +1,7 @@
 // TLAS strategies against plain Embree, in one run. Never run by CTest.
 //
 //   build/tests/bench/strata_tlas_bench [--reps N] [--max-instances N] [--verbose 1]
-//       [--rows move,batch,addremove,trace,memory,arrays]
+//       [--rows move,batch,addremove,trace,memory,arrays] [--dynamic-medium-max N]
 //
 // Scene: n instances of one ~200-triangle sphere (make_sphere(0.45, 16): 224 triangles) on a
 // square grid, 2 TBB threads (STRATA_BENCH_THREADS overrides). Engine side: an Engine with the
@@ -337,6 +337,7 @@ struct Options {
     int reps = 21;
     int64_t max_instances = 1000000;
     std::string rows = "move,batch,addremove,trace,memory";
+    TlasPolicy policy;  ///< the engine side's (--dynamic-medium-max sets one field)
 };
 
 void print_row(const char* work, double engine_tlas, double engine_total, double plain,
@@ -352,7 +353,7 @@ void move_rows(const Options& o, const MeshData& mesh) {
     std::vector<double> medians;
     for (int64_t n : {int64_t(10000), int64_t(100000), int64_t(1000000)}) {
         if (n > o.max_instances) continue;
-        EngineScene s = engine_scene(n, mesh, TlasPolicy{});
+        EngineScene s = engine_scene(n, mesh, o.policy);
         PlainEmbree plain(mesh);
         plain.build(s.transforms);
         std::vector<double> tlas, total, base;
@@ -385,7 +386,7 @@ void move_rows(const Options& o, const MeshData& mesh) {
 /// Move 1% of 100k instances in one batch.
 void batch_row(const Options& o, const MeshData& mesh) {
     const int64_t n = std::min<int64_t>(100000, o.max_instances);
-    EngineScene s = engine_scene(n, mesh, TlasPolicy{});
+    EngineScene s = engine_scene(n, mesh, o.policy);
     PlainEmbree plain(mesh);
     plain.build(s.transforms);
     std::mt19937 rng(2);
@@ -415,7 +416,7 @@ void batch_row(const Options& o, const MeshData& mesh) {
 /// Add one instance, then remove it, each its own commit.
 void add_remove_rows(const Options& o, const MeshData& mesh) {
     const int64_t n = std::min<int64_t>(100000, o.max_instances);
-    EngineScene s = engine_scene(n, mesh, TlasPolicy{});
+    EngineScene s = engine_scene(n, mesh, o.policy);
     PlainEmbree plain(mesh);
     plain.build(s.transforms);
     std::vector<double> add_tlas, add_total, add_base, rm_tlas, rm_total, rm_base;
@@ -453,7 +454,7 @@ void trace_rows(const Options& o, const MeshData& mesh) {
     const Camera camera = camera_for(n);
     const int reps = std::max(o.reps, 15);
     for (bool merges : {true, false}) {
-        TlasPolicy policy;
+        TlasPolicy policy = o.policy;
         policy.background_merge = merges;
         EngineScene s = engine_scene(n, mesh, policy);
         PlainEmbree plain(mesh);
@@ -506,7 +507,7 @@ void array_rows(const Options& o, const MeshData& mesh) {
         PlainEmbree plain(mesh);
         double near[2] = {}, far[2] = {}, build_ms[2] = {};
         for (const bool array : {false, true}) {
-            TlasPolicy policy;
+            TlasPolicy policy = o.policy;
             policy.array_min_instances = array ? 0 : std::numeric_limits<uint32_t>::max();
             EngineScene s = engine_scene(n, mesh, policy);
             build_ms[array] = s.first_build_tlas_ms;
@@ -527,7 +528,7 @@ void array_rows(const Options& o, const MeshData& mesh) {
 void memory_rows(const Options& o, const MeshData& mesh) {
     for (int64_t n : {int64_t(100000), int64_t(1000000)}) {
         if (n > o.max_instances) continue;
-        EngineScene s = engine_scene(n, mesh, TlasPolicy{});
+        EngineScene s = engine_scene(n, mesh, o.policy);
         const int64_t fresh = s.engine->memory_bytes(MemoryCategory::Tlas);
         (void)s.engine->apply(EditBatch{{SetTransform{"i1", place(1, n, 0.5f)}}});
         commit(*s.engine);
@@ -561,6 +562,8 @@ int main(int argc, char** argv) {
         if (flag == "--max-instances") o.max_instances = std::atoll(argv[i + 1]);
         if (flag == "--rows") o.rows = argv[i + 1];
         if (flag == "--verbose") g_verbose = std::atoi(argv[i + 1]) != 0;
+        if (flag == "--dynamic-medium-max")
+            o.policy.dynamic_medium_max = uint32_t(std::strtoul(argv[i + 1], nullptr, 10));
     }
     const char* env = std::getenv("STRATA_BENCH_THREADS");
     const int threads = env ? std::max(1, std::atoi(env)) : 2;

@@ -126,8 +126,9 @@ TEST(IncrementalTlas, EditsMadeWhileAMergeBuildsStayInTheDynamicTierAfterTheSwap
 }
 
 // Embree never shrinks a scene's geometry table and walks all of it at each commit of the scene.
-// A dynamic tier that held thousands of instances and drained moves to a fresh scene, and the
-// instances edited since still trace as a fresh build of the scene does.
+// A dynamic tier of geometries (an entry has motion keys) that held thousands of instances and
+// drained moves to a fresh scene, and the instances edited since still trace as a fresh build of
+// the scene does.
 TEST(IncrementalTlas, ADrainedDynamicTierMovesToAFreshSceneAndTracesAsAFreshBuild) {
     test::ManyInstances gen(8);
     auto engine = engine_with(incremental(0.9));
@@ -137,15 +138,107 @@ TEST(IncrementalTlas, ADrainedDynamicTierMovesToAFreshSceneAndTracesAsAFreshBuil
     const RebuildReport big = test::commit_ok(*engine);  // starts a merge
     ASSERT_EQ(rebuild_reason(big), "");
     ASSERT_GT(big.tlas.dynamic_instances, 2000u);
-    EXPECT_EQ(big.tlas.dynamic_slots, big.tlas.dynamic_instances);
+    EXPECT_TRUE(big.tlas.dynamic_array);
+    // Motion keys, after the merge started: the tier becomes geometries and keeps this one.
+    UpdateInstance keyed{"i4998"};
+    keyed.motion = std::vector<Affine>{Affine::translation({0, 0.25f, 0}),
+                                       Affine::translation({0.5f, 0.25f, 0})};
+    test::apply_ok(*engine, keyed);
+    const RebuildReport geometries = test::commit_ok(*engine);
+    ASSERT_FALSE(geometries.tlas.dynamic_array);
+    EXPECT_EQ(geometries.tlas.dynamic_slots, geometries.tlas.dynamic_instances);
 
     engine->wait_for_background();
     ASSERT_TRUE(engine->apply(gen.moves(3)).has_value());
     const RebuildReport drained = test::commit_ok(*engine);
     ASSERT_TRUE(drained.tlas.merge_swapped);
+    EXPECT_FALSE(drained.tlas.dynamic_array);
     EXPECT_GE(drained.tlas.dynamic_instances, 1u);
-    EXPECT_LE(drained.tlas.dynamic_instances, 3u);
+    EXPECT_LE(drained.tlas.dynamic_instances, 4u);
     EXPECT_EQ(drained.tlas.dynamic_slots, drained.tlas.dynamic_instances);
+    expect_the_hits_of_a_fresh_build(*engine);
+}
+
+/// Moves instances "i<first>" .. "i<first + count - 1>", each to a place of its own (no ties),
+/// in one commit, and returns the commit's tiers.
+TlasTiers move_instances(Engine& engine, uint32_t first, uint32_t count) {
+    EditBatch b;
+    for (uint32_t i = first; i < first + count; ++i) {
+        const float f = float(i);
+        b.edits.emplace_back(SetTransform{"i" + std::to_string(i),
+                                          Affine::translation({0.37f * f, 0.011f * f, 0.5f})});
+    }
+    EXPECT_TRUE(engine.apply(std::move(b)).has_value());
+    return test::commit_ok(engine).tlas;
+}
+
+/// Gives instance `id` two motion keys (empty `keys`: takes them away) in one commit.
+TlasTiers set_motion(Engine& engine, const std::string& id, std::vector<Affine> keys) {
+    UpdateInstance u{id};
+    u.motion = std::move(keys);
+    test::apply_ok(engine, u);
+    return test::commit_ok(engine).tlas;
+}
+
+const std::vector<Affine> TWO_KEYS{Affine::translation({0, 0.25f, 0}),
+                                   Affine::translation({0.5f, 0.25f, 0})};
+
+// The dynamic tier is an instance array (one user geometry, the fast build) until an entry has
+// motion keys, which an array cannot hold: then Embree instance geometries, and an array again
+// once the keys are gone. Every form traces as a fresh build does.
+TEST(IncrementalTlas, TheDynamicTierIsAnArrayUntilAnEntryHasMotionKeys) {
+    test::ManyInstances gen(10);
+    auto engine = engine_with(incremental(0.9, false));
+    ASSERT_TRUE(engine->apply(gen.initial_batch(3000)).has_value());
+    test::commit_ok(*engine);
+    const TlasTiers moved = move_instances(*engine, 0, 50);
+    EXPECT_EQ(moved.dynamic_instances, 50u);
+    EXPECT_TRUE(moved.dynamic_array);
+    EXPECT_STREQ(moved.dynamic_quality, "low");
+    expect_the_hits_of_a_fresh_build(*engine);
+    const TlasTiers keyed = set_motion(*engine, "i7", TWO_KEYS);
+    EXPECT_EQ(keyed.dynamic_instances, 50u);
+    EXPECT_FALSE(keyed.dynamic_array);
+    EXPECT_EQ(keyed.dynamic_slots, 50u);
+    expect_the_hits_of_a_fresh_build(*engine);
+    const TlasTiers more = move_instances(*engine, 50, 10);  // geometries while i7 has keys
+    EXPECT_EQ(more.dynamic_instances, 60u);
+    EXPECT_FALSE(more.dynamic_array);
+    const TlasTiers plain = set_motion(*engine, "i7", {});
+    EXPECT_EQ(plain.dynamic_instances, 60u);
+    EXPECT_TRUE(plain.dynamic_array);
+    expect_the_hits_of_a_fresh_build(*engine);
+}
+
+// A dynamic tier of Embree geometries builds at MEDIUM quality while it is small and at LOW
+// once it is large, and one in between keeps what it had.
+TEST(IncrementalTlas, TheDynamicTierOfGeometriesBuildsAtTheQualityForItsSize) {
+    test::ManyInstances gen(9);
+    EngineConfig config = incremental(0.9, false);
+    config.accel.tlas_policy.dynamic_medium_max = 100;
+    auto engine = engine_with(config);
+    ASSERT_TRUE(engine->apply(gen.initial_batch(3000)).has_value());
+    test::commit_ok(*engine);
+    const TlasTiers few = set_motion(*engine, "i2999", TWO_KEYS);  // geometries from here on
+    EXPECT_EQ(few.dynamic_instances, 1u);
+    EXPECT_FALSE(few.dynamic_array);
+    EXPECT_STREQ(few.dynamic_quality, "medium");
+    const TlasTiers between = move_instances(*engine, 0, 150);  // 151: between 100 and 200
+    EXPECT_EQ(between.dynamic_instances, 151u);
+    EXPECT_STREQ(between.dynamic_quality, "medium");
+    const TlasTiers many = move_instances(*engine, 150, 100);
+    EXPECT_EQ(many.dynamic_instances, 251u);
+    EXPECT_STREQ(many.dynamic_quality, "low");
+    expect_the_hits_of_a_fresh_build(*engine);
+    const TlasTiers still = move_instances(*engine, 0, 10);  // the same 251 instances
+    EXPECT_EQ(still.dynamic_instances, 251u);
+    EXPECT_STREQ(still.dynamic_quality, "low");
+    // A requested rebuild empties the tier; the next keyed edit builds at MEDIUM again.
+    test::apply_ok(*engine, MarkDirty{std::nullopt, DirtyAction::Rebuild});
+    EXPECT_EQ(test::commit_ok(*engine).tlas.dynamic_instances, 0u);
+    const TlasTiers again = set_motion(*engine, "i5", TWO_KEYS);
+    EXPECT_EQ(again.dynamic_instances, 1u);
+    EXPECT_STREQ(again.dynamic_quality, "medium");
     expect_the_hits_of_a_fresh_build(*engine);
 }
 
