@@ -6,7 +6,6 @@
 #include <embree3/rtcore.h>
 
 #include "engine/accel/instance_transform.h"
-#include "engine/core/check.h"
 
 namespace strata {
 

@@ -134,21 +134,21 @@ TEST(IncrementalTlas, ADrainedDynamicTierMovesToAFreshSceneAndTracesAsAFreshBuil
     auto engine = engine_with(incremental(0.9));
     ASSERT_TRUE(engine->apply(gen.initial_batch(5000)).has_value());
     test::commit_ok(*engine);
-    ASSERT_TRUE(engine->apply(gen.moves(3000)).has_value());
-    const RebuildReport big = test::commit_ok(*engine);  // starts a merge
-    ASSERT_EQ(rebuild_reason(big), "");
-    ASSERT_GT(big.tlas.dynamic_instances, 2000u);
-    EXPECT_TRUE(big.tlas.dynamic_array);
-    // Motion keys, after the merge started: the tier becomes geometries and keeps this one.
-    UpdateInstance keyed{"i4998"};
+    UpdateInstance keyed{"i4998"};  // motion keys: the tier is Embree geometries, not an array
     keyed.motion = std::vector<Affine>{Affine::translation({0, 0.25f, 0}),
                                        Affine::translation({0.5f, 0.25f, 0})};
     test::apply_ok(*engine, keyed);
-    const RebuildReport geometries = test::commit_ok(*engine);
-    ASSERT_FALSE(geometries.tlas.dynamic_array);
-    EXPECT_EQ(geometries.tlas.dynamic_slots, geometries.tlas.dynamic_instances);
+    ASSERT_TRUE(engine->apply(gen.moves(3000)).has_value());
+    const RebuildReport big = test::commit_ok(*engine);  // starts a merge
+    if (big.tlas.static_array) GTEST_SKIP() << "an instance array takes no merges of keyed edits";
+    ASSERT_EQ(rebuild_reason(big), "");
+    ASSERT_GT(big.tlas.dynamic_instances, 2000u);
+    ASSERT_FALSE(big.tlas.dynamic_array);
+    EXPECT_EQ(big.tlas.dynamic_slots, big.tlas.dynamic_instances);
 
     engine->wait_for_background();
+    // Edited again after the merge started, the keyed instance stays in the tier.
+    test::apply_ok(*engine, SetTransform{"i4998", Affine::translation({0, 0.5f, 0})});
     ASSERT_TRUE(engine->apply(gen.moves(3)).has_value());
     const RebuildReport drained = test::commit_ok(*engine);
     ASSERT_TRUE(drained.tlas.merge_swapped);
