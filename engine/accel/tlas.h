@@ -71,11 +71,12 @@ struct TlasPolicy {
     /// past tens of thousands of instances), unless an instance has motion keys; smaller ones
     /// are Embree instance geometries, which trace faster there (tests/bench/NOTES.md).
     uint32_t array_min_instances = 65536;
-    /// A dynamic tier of at most this many instances is built at MEDIUM quality (one SAH build),
-    /// one of more than twice as many at LOW (Embree's two-level builder), and one in between
-    /// keeps the quality it has. MEDIUM is the faster build of a few hundred instances and LOW of
-    /// thousands on many threads; each rebuilds every instance of the tier at every update
-    /// (tests/bench/NOTES.md). 0: always LOW.
+    /// A dynamic tier of instance geometries (while one of its instances has motion keys;
+    /// otherwise it is an instance array, dynamic_tier.h) of at most this many instances is
+    /// built at MEDIUM quality (one SAH build), one of more than twice as many at LOW (Embree's
+    /// two-level builder), and one in between keeps the quality it has. MEDIUM is the faster
+    /// build of a few hundred instances and LOW of thousands on many threads; each rebuilds every
+    /// instance of the tier at every update (tests/bench/NOTES.md). 0: always LOW.
     uint32_t dynamic_medium_max = 1024;
 };
 
