@@ -14,6 +14,7 @@ set(EMBREE_ALLOWED
     engine/accel/clustered_blas.cpp
     engine/accel/embree_trace.h
     engine/accel/incremental_tlas.cpp
+    engine/accel/dynamic_tier.cpp
     engine/accel/tlas_merge.cpp)
 file(GLOB_RECURSE ENGINE_FILES RELATIVE "${ROOT}" "${ROOT}/engine/*.h" "${ROOT}/engine/*.cpp")
 set(problems "")
