@@ -169,20 +169,20 @@ J tlas_report_schema() {
                             {"build_ms", number()},
                             {"cancelled", boolean()}},
                            {"build_ms", "cancelled"});
-    return object(
-        {{"action", names_of(TlasAction::Rebuild, tlas_action_name)},
-         {"instances", count()},
-         {"strategy", {{"enum", {"incremental", "embree"}}}},
-         {"ms", number()},
-         {"static_instances", count()},
-         {"dynamic_instances", count()},
-         {"stale_copies", count()},
-         {"static_array", boolean()},
-         {"static_rebuild",
-          {{"enum", {"first_build", "small_scene", "dynamic_tier_full", "requested"}}}},
-         {"merge", merge}},
-        {"ms", "static_instances", "dynamic_instances", "stale_copies", "static_array",
-         "static_rebuild", "merge"});
+    return object({{"action", names_of(TlasAction::Rebuild, tlas_action_name)},
+                   {"instances", count()},
+                   {"strategy", {{"enum", {"incremental", "embree"}}}},
+                   {"ms", number()},
+                   {"static_instances", count()},
+                   {"dynamic_instances", count()},
+                   {"stale_copies", count()},
+                   {"static_array", boolean()},
+                   {"dynamic_array", boolean()},
+                   {"static_rebuild",
+                    {{"enum", {"first_build", "small_scene", "dynamic_tier_full", "requested"}}}},
+                   {"merge", merge}},
+                  {"ms", "static_instances", "dynamic_instances", "stale_copies", "static_array",
+                   "dynamic_array", "static_rebuild", "merge"});
 }
 
 J report_schema() {

@@ -39,6 +39,7 @@ Json report_to_json(const RebuildReport& r) {
         tlas["dynamic_instances"] = r.tlas.dynamic_instances;
         tlas["stale_copies"] = r.tlas.stale_copies;
         tlas["static_array"] = r.tlas.static_array;
+        tlas["dynamic_array"] = r.tlas.dynamic_array;
         if (r.tlas.static_rebuild[0] != '\0') tlas["static_rebuild"] = r.tlas.static_rebuild;
         Json merge = {{"swapped", r.tlas.merge_swapped}, {"running", r.tlas.merge_running}};
         if (r.tlas.merge_swapped) merge["build_ms"] = r.tlas.merge_build_ms;

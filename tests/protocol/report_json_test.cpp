@@ -71,6 +71,7 @@ TEST(ReportJson, TheTlasMemberShowsTheIncrementalTiersAndTheMerge) {
     r.tlas.static_instances = 1000;
     r.tlas.dynamic_instances = 3;
     r.tlas.stale_copies = 2;
+    r.tlas.dynamic_array = true;
     r.tlas.merge_swapped = true;
     r.tlas.merge_build_ms = 42.5;
     r.tlas.merge_running = false;
@@ -79,6 +80,8 @@ TEST(ReportJson, TheTlasMemberShowsTheIncrementalTiersAndTheMerge) {
     EXPECT_EQ(j["static_instances"], 1000);
     EXPECT_EQ(j["dynamic_instances"], 3);
     EXPECT_EQ(j["stale_copies"], 2);
+    EXPECT_EQ(j["dynamic_array"], true);
+    EXPECT_EQ(j["static_array"], false);
     EXPECT_EQ(j["merge"]["swapped"], true);
     EXPECT_EQ(j["merge"]["build_ms"], 42.5);
     EXPECT_EQ(j["merge"]["running"], false);

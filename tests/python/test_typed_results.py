@@ -35,6 +35,7 @@ class TypedResultsTest(SceneTestCase):
         self.assertIsInstance(report.tlas.merge, TlasMerge)
         self.assertFalse(report.tlas.merge.swapped)
         self.assertIs(report.tlas.static_array, False)  # one instance: an instance geometry
+        self.assertIs(report.tlas.dynamic_array, True)  # no motion keys: an instance array
         self.assertEqual(len(report.rebuilt), 1)
         entry = report.rebuilt[0]
         self.assertIsInstance(entry, BlasEntry)

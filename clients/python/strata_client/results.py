@@ -96,6 +96,7 @@ class TlasReport(JsonObject):
     dynamic_instances: Optional[int] = None
     stale_copies: Optional[int] = None
     static_array: Optional[bool] = None
+    dynamic_array: Optional[bool] = None
     static_rebuild: Optional[str] = None
     merge: Optional[TlasMerge] = _member(TlasMerge.from_json, default=None)
 
