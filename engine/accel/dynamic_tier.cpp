@@ -65,18 +65,12 @@ void DynamicTier::write(uint32_t id) {
         m_peak = std::max(m_peak, m_entries.size());
         return;
     }
-    rtcSetGeometryInstancedScene(e.geometry, e.blas);
-    set_instance_transform(e.geometry, e.transform.data(), e.keys, e.interpolation);
-    rtcSetGeometryMask(e.geometry, e.mask);
-    rtcCommitGeometry(e.geometry);
+    set_instance(e.geometry, e.blas, e.transform.data(), e.keys, e.interpolation, e.mask);
 }
 
 RTCGeometry DynamicTier::new_geometry(const DynEntry& e) const {
     RTCGeometry g = rtcNewGeometry(m_device, RTC_GEOMETRY_TYPE_INSTANCE);
-    rtcSetGeometryInstancedScene(g, e.blas);
-    set_instance_transform(g, e.transform.data(), e.keys, e.interpolation);
-    rtcSetGeometryMask(g, e.mask);
-    rtcCommitGeometry(g);
+    set_instance(g, e.blas, e.transform.data(), e.keys, e.interpolation, e.mask);
     return g;
 }
 

@@ -473,11 +473,8 @@ private:
             g = rtcNewGeometry(m_device.get(), RTC_GEOMETRY_TYPE_INSTANCE);
             attach_static(h.index, g);
         }
-        rtcSetGeometryInstancedScene(g, blas_scene);
-        set_instance_transform(g, r.world.m.data(), r.rare->world_motion,
-                               r.rare->world_interpolation);
-        rtcSetGeometryMask(g, r.mask);
-        rtcCommitGeometry(g);
+        set_instance(g, blas_scene, r.world.m.data(), r.rare->world_motion,
+                     r.rare->world_interpolation, r.mask);
     }
 
     /// The fallback: folds both tiers into the static one, applies `delta` to it in place and

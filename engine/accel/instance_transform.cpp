@@ -34,4 +34,12 @@ void set_instance_transform(RTCGeometry g, const float* world, const std::vector
     }
 }
 
+void set_instance(RTCGeometry g, RTCScene blas, const float* world, const std::vector<Affine>& keys,
+                  MotionInterpolation how, uint32_t mask) {
+    rtcSetGeometryInstancedScene(g, blas);
+    set_instance_transform(g, world, keys, how);
+    rtcSetGeometryMask(g, mask);
+    rtcCommitGeometry(g);
+}
+
 }  // namespace strata

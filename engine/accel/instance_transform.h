@@ -2,12 +2,14 @@
 // An instance's transform in a TLAS: one transform, or motion keys (Embree time steps, evenly
 // spaced over ray time [0, 1], interpolated linearly or, as quaternion decompositions, by SRT).
 
+#include <cstdint>
 #include <vector>
 
 #include "engine/core/math.h"
 #include "engine/scene/types.h"
 
 struct RTCGeometryTy;
+struct RTCSceneTy;
 
 namespace strata {
 
@@ -16,5 +18,10 @@ namespace strata {
 /// interpolated as `how` says. The caller commits the geometry.
 void set_instance_transform(RTCGeometryTy* g, const float* world, const std::vector<Affine>& keys,
                             MotionInterpolation how);
+
+/// Makes instance geometry `g` an instance of `blas` placed as set_instance_transform() says,
+/// seen by rays whose mask shares a bit with `mask`, and commits it.
+void set_instance(RTCGeometryTy* g, RTCSceneTy* blas, const float* world,
+                  const std::vector<Affine>& keys, MotionInterpolation how, uint32_t mask);
 
 }  // namespace strata

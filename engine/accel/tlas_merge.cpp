@@ -115,10 +115,7 @@ RTCScene TlasMerge::make_geometries(const std::vector<RTCGeometryTy*>& static_ge
             continue;
         }
         RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_INSTANCE);
-        rtcSetGeometryInstancedScene(g, e.blas);
-        set_instance_transform(g, e.transform.data(), e.keys, e.interpolation);
-        rtcSetGeometryMask(g, e.mask);
-        rtcCommitGeometry(g);
+        set_instance(g, e.blas, e.transform.data(), e.keys, e.interpolation, e.mask);
         m_created.push_back(g);
         m_geoms[e.slot] = g;
     }
